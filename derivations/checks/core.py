@@ -1,0 +1,193 @@
+"""Verdict registry and the comparison tools every check uses.
+
+A check is a function decorated with :func:`claim`; it computes and returns a
+:class:`Verdict`.  Comparisons are always done two ways: exactly (ratio of canonical
+trigonometric normal forms, see :func:`derivations.beam.trig_normal_form`) and by
+50-digit evaluation at seeded random parameter points.
+"""
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import mpmath as mp
+import sympy as sp
+
+from ..beam import _FROM_ATOMS, _TO_ATOMS, beta, trig_normal_form
+
+HOLDS = "holds"
+SIGN = "holds_up_to_sign_convention"
+ERRATUM = "erratum"
+UNDECIDABLE = "undecidable"
+VERDICTS = (HOLDS, SIGN, ERRATUM, UNDECIDABLE)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of one claim check."""
+
+    id: str
+    where: str
+    verdict: str
+    evidence: str
+    correct: str = ""
+    printed: str = ""
+
+    def as_dict(self) -> dict:
+        return {"id": self.id, "where": self.where, "verdict": self.verdict,
+                "correct": self.correct, "evidence": self.evidence, "printed": self.printed}
+
+
+@dataclass(frozen=True)
+class Check:
+    id: str
+    where: str
+    printed: str
+    run: Callable[[], tuple[str, str, str]]
+
+
+REGISTRY: dict[str, Check] = {}
+
+
+def claim(claim_id: str, where: str, printed: str):
+    """Register a check; the function returns ``(verdict, evidence, correct)``."""
+    def wrap(fn: Callable[[], tuple[str, str, str]]):
+        if claim_id in REGISTRY:
+            raise ValueError(f"claim {claim_id!r} registered twice")
+        REGISTRY[claim_id] = Check(claim_id, where, printed, fn)
+        return fn
+    return wrap
+
+
+def run_check(check: Check) -> Verdict:
+    verdict, evidence, correct = check.run()
+    if verdict not in VERDICTS:
+        raise ValueError(f"{check.id}: unknown verdict {verdict!r}")
+    return Verdict(check.id, check.where, verdict, evidence, correct, check.printed)
+
+
+# --- comparing expressions -----------------------------------------------------------------
+
+DIGITS = 50
+N_POINTS = 20
+
+
+def random_points(symbols: Iterable[sp.Symbol], n: int = N_POINTS, seed: int = 2006,
+                  beta_range=(0.05, 25.0)) -> list[dict]:
+    """Seeded random parameter points; ``beta`` log-uniform, other symbols in [0.2, 5]."""
+    rng = random.Random(seed)
+    symbols = sorted(set(symbols), key=str)
+    points = []
+    for _ in range(n):
+        point = {}
+        for sym in symbols:
+            if sym == beta:
+                lo, hi = beta_range
+                point[sym] = mp.mpf(lo) * (mp.mpf(hi) / lo) ** mp.mpf(rng.random())
+            else:
+                point[sym] = mp.mpf(rng.uniform(0.2, 5.0)) * (1 if sym.is_positive else rng.choice((-1, 1)))
+        points.append(point)
+    return points
+
+
+def evaluate(expr: sp.Expr, point: dict) -> mp.mpc:
+    """Evaluate with ``DIGITS`` significant digits (mpmath, exact inputs)."""
+    with mp.workdps(DIGITS + 10):
+        f = sp.lambdify(list(point), expr, "mpmath")
+        return mp.mpmathify(f(*point.values()))
+
+
+@dataclass
+class Comparison:
+    """printed / derived, computed exactly and numerically."""
+
+    exact_ratio: sp.Expr | None
+    numeric_ratios: list = field(default_factory=list)
+
+    @property
+    def constant(self) -> bool:
+        r = self.numeric_ratios
+        return bool(r) and max(abs(v - r[0]) for v in r) <= mp.mpf(10) ** (-(DIGITS - 10)) * max(1, abs(r[0]))
+
+    @property
+    def spread(self) -> float:
+        r = self.numeric_ratios
+        return float(max(abs(v - r[0]) for v in r)) if r else float("nan")
+
+    def is_(self, value) -> bool:
+        """True when the ratio is exactly ``value`` (both exact and at every point)."""
+        exact_ok = self.exact_ratio is not None and sp.simplify(self.exact_ratio - value) == 0
+        numeric_ok = all(abs(v - complex(value)) < mp.mpf(10) ** (-(DIGITS - 10)) for v in self.numeric_ratios)
+        return exact_ok and numeric_ok
+
+    def summary(self) -> str:
+        exact = "n/a" if self.exact_ratio is None else sp.sstr(self.exact_ratio)
+        if self.constant:
+            num = f"{mp.nstr(self.numeric_ratios[0], 8)} at all {len(self.numeric_ratios)} points"
+        else:
+            vals = sorted(float(abs(v)) for v in self.numeric_ratios)
+            num = f"|ratio| varies from {vals[0]:.3g} to {vals[-1]:.3g}"
+        return f"printed/derived: exact {exact}; {DIGITS}-digit {num}"
+
+
+def _atom_form(expr: sp.Expr) -> sp.Expr:
+    num, den = sp.fraction(sp.together(sp.sympify(expr)))
+    return trig_normal_form(num).subs(_TO_ATOMS) / trig_normal_form(den).subs(_TO_ATOMS)
+
+
+def compare(printed: sp.Expr, derived: sp.Expr, seed: int = 2006) -> Comparison:
+    """Ratio printed/derived: exact (normal forms, cancelled) and at random 50-digit points."""
+    ratio = sp.cancel(_atom_form(printed) / _atom_form(derived))
+    exact = ratio.subs(_FROM_ATOMS)
+    syms = (sp.sympify(printed).free_symbols | sp.sympify(derived).free_symbols)
+    values = []
+    for point in random_points(syms, seed=seed):
+        p, d = evaluate(printed, point), evaluate(derived, point)
+        values.append(p / d)
+    return Comparison(exact if not exact.has(*_TO_ATOMS) else None, values)
+
+
+def describe(expr: sp.Expr) -> str:
+    """Compact printable form of an expression for the evidence and errata."""
+    return sp.sstr(sp.factor(expr))
+
+
+def digits_check(printed: str, value) -> tuple[bool, str]:
+    """Is the printed decimal the correctly rounded ``value`` at the printed precision?"""
+    dec = printed.split(".")[1] if "." in printed else ""
+    q = mp.mpf(10) ** (-len(dec))
+    rounded = mp.nint(mp.mpf(value) / q) * q
+    text = f"{float(rounded):.{len(dec)}f}"
+    return text == printed, text
+
+
+def sign_flip_verdict(anchors: dict[str, bool], convention: str) -> tuple[str, str]:
+    """Verdict for a printed result that is exactly minus the derived one.
+
+    ``anchors`` maps the paper's own related printed results (same quantity, same boundary
+    conditions) to whether their sign agrees with the derivation.  If any does, the printed
+    sign contradicts the paper itself: an erratum.  Otherwise the flip is a convention.
+    """
+    agreeing = [name for name, agrees in anchors.items() if agrees]
+    if agreeing:
+        return ERRATUM, ("overall sign opposite to the derivation and to the paper's own "
+                         + ", ".join(agreeing))
+    return SIGN, f"overall sign opposite to the derivation; convention: {convention}"
+
+
+def same_resonances(a: sp.Expr, b: sp.Expr) -> tuple[bool, str]:
+    """Do two characteristic functions have the same zeros for beta > 0?
+
+    True when their exact ratio is free of cos, sin, cosh, sinh and, as a rational
+    function of beta, has neither zeros nor poles at positive beta.
+    """
+    ratio = sp.cancel(_atom_form(a) / _atom_form(b))
+    if ratio.has(*_TO_ATOMS.values()):
+        return False, "ratio contains trigonometric terms"
+    num, den = sp.fraction(sp.factor(ratio))
+    for part in (num, den):
+        poly = sp.Poly(part, beta)
+        if any(r.is_positive for r in sp.real_roots(poly)) if poly.degree() > 0 else False:
+            return False, f"ratio {sp.sstr(ratio)} vanishes or diverges at positive beta"
+    return True, f"ratio {sp.sstr(ratio)} has no zero or pole at beta > 0"

@@ -1,0 +1,1 @@
+# generated — do not edit. Written by pfmdyn; see derivations/ for the source.

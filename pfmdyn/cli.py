@@ -1,0 +1,46 @@
+"""The ``pfmdyn`` command line: one console script, one module per subcommand.
+
+Each subcommand module ``pfmdyn.<name>`` (listed in :data:`COMMANDS`) defines
+``add_arguments(parser)`` and ``run(args) -> int``.  Modules are imported lazily so that
+``pfmdyn --help`` stays fast and numeric commands never import SymPy.  User errors are
+raised as :class:`UserError` and printed as one line, never as a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# subcommand -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "verify": ("pfmdyn.verify", "derive every result and give each claim of the paper a verdict"),
+    "deconvolve": ("pfmdyn.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
+}
+
+
+class UserError(Exception):
+    """A problem with the user's input; reported as one line, exit status 2."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (module, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.set_defaults(_module=module)
+        # Argument definitions are cheap; import only the chosen module's arguments lazily.
+        if argv is None and len(sys.argv) > 1 and sys.argv[1] != name:
+            continue
+        if argv is not None and (not argv or argv[0] != name):
+            continue
+        importlib.import_module(module).add_arguments(p)
+    args = parser.parse_args(argv)
+    try:
+        return int(importlib.import_module(args._module).run(args) or 0)
+    except UserError as exc:
+        print(f"pfmdyn {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
