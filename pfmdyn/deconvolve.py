@@ -1,0 +1,363 @@
+"""``pfmdyn deconvolve``: separate electrostatic and electromechanical response (Section VI.4).
+
+At each frequency the complex response is linear in the tip bias (Eq. 41),
+
+.. math::
+
+    R(V) = \\tilde d_{eff} + \\tilde G_{elec} (V - V_{surf}) = b + c V,
+
+so a least-squares line through the measured :math:`R(V)` gives the electrostatic slope
+:math:`\\tilde G_{elec} = c`, the intercept :math:`b` and, for a known surface potential,
+:math:`\\tilde d_{eff} = b + c V_{surf}`.  The error map :math:`R - (b + cV)` shows where the
+response is not linear in bias (Fig. 14 of the paper: mostly near resonances).
+
+Uncertainties assume independent noise of equal variance on the real and imaginary parts of
+every point; that variance is estimated from the residuals of each frequency's fit, so it
+needs at least three biases (with two, the standard errors are NaN).  All reported standard
+errors are those of the real part, which equal those of the imaginary part.
+
+References
+----------
+Jesse, Baddorf, Kalinin (2006), Sections VI.2-VI.4, Eq. 41.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from pfmdyn.cli import UserError
+from pfmdyn.spectra_io import frequency_group_starts, read_spectra
+
+
+@dataclass(frozen=True)
+class Deconvolution:
+    """Per-frequency fit results (arrays of length M) and per-point residuals (length N).
+
+    Attributes
+    ----------
+    frequency_hz, n_bias : ndarray
+        The M frequencies and the number of biases measured at each.
+    g_elec, intercept, d_eff : ndarray of complex
+        Slope :math:`c`, intercept :math:`b` and :math:`b + c V_{surf}`.
+    g_elec_se, d_eff_se : ndarray
+        Standard errors of the real (equally, imaginary) parts.
+    v_null, v_null_se : ndarray
+        Nulling bias (:func:`nulling_bias`) and its standard error (V).
+    surface_potential_v : float
+        The :math:`V_{surf}` used for ``d_eff``.
+    point_frequency_hz, point_bias_v : ndarray
+        Coordinates of the N measured points.
+    residual : ndarray of complex
+        Error map :math:`R - (b + cV)` at every measured point.
+    """
+
+    frequency_hz: np.ndarray
+    n_bias: np.ndarray
+    g_elec: np.ndarray
+    intercept: np.ndarray
+    d_eff: np.ndarray
+    g_elec_se: np.ndarray
+    d_eff_se: np.ndarray
+    v_null: np.ndarray
+    v_null_se: np.ndarray
+    surface_potential_v: float
+    point_frequency_hz: np.ndarray
+    point_bias_v: np.ndarray
+    residual: np.ndarray
+
+
+class TipQuality(NamedTuple):
+    """Weighted mean and spread of the nulling bias over frequency (V)."""
+
+    mean_v: float
+    spread_v: float
+
+
+def nulling_bias(intercept, slope):
+    """Real bias at which the fitted response :math:`|b + cV|` is smallest.
+
+    :math:`V_{null} = -\\operatorname{Re}(b\\bar c)/|c|^2`.  When :math:`b/c` is real the
+    fitted response vanishes there; writing :math:`b = d_{eff} - c V_{surf}` this is
+    :math:`V_{null} = V_{surf} - d_{eff}/G_{elec}` (the paper's :math:`V_{surf} \\pm
+    d_{eff}/G_{elec}`, the sign depending on the domain).  Otherwise the response has no real
+    zero and :math:`V_{null}` is the bias of its minimum amplitude.
+
+    Parameters
+    ----------
+    intercept, slope : array_like of complex
+        :math:`b` and :math:`c` of the fitted lines.
+
+    Returns
+    -------
+    ndarray
+        :math:`V_{null}` in volts (non-finite where the slope is zero).
+
+    Examples
+    --------
+    >>> float(nulling_bias(2 - 4j, -1 + 2j))  # b + cV = (1 - 2j)(2 - V)
+    2.0
+    """
+    intercept, slope = np.asarray(intercept), np.asarray(slope)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a zero slope has no nulling bias
+        return -np.real(intercept * np.conj(slope)) / _power(slope)
+
+
+def _power(z):
+    """|z|**2 without the rounding of a square root followed by a square."""
+    return z.real**2 + z.imag**2
+
+
+def tip_quality(v_null, v_null_se=None) -> TipQuality:
+    """Spread of the nulling bias over frequency: the tip-quality indicator of Section VI.3.
+
+    On a sample with a known, appreciable piezoresponse, :math:`V_{null}(\\omega) = V_{surf} -
+    d_{eff}(\\omega)/G_{elec}(\\omega)` moves with frequency because the electromechanical and
+    electrostatic responses have different spectra: a large spread means a good tip.  A
+    near-constant :math:`V_{null} \\approx V_{surf}` (spread near zero) means the signal is
+    electrostatic-dominated, e.g. a worn tip that has lost electrical contact.  (On a
+    non-piezoelectric sample the spread is near zero whatever the tip.)
+
+    Parameters
+    ----------
+    v_null : array_like
+        Nulling bias at each frequency (V); non-finite values are ignored.
+    v_null_se : array_like, optional
+        Standard errors used as inverse-variance weights, so that frequencies where the
+        electrostatic slope is tiny and :math:`V_{null}` is ill-determined count little.  If
+        omitted, or if any is zero or non-finite, all frequencies weigh the same.
+
+    Returns
+    -------
+    TipQuality
+        Weighted mean and weighted standard deviation of :math:`V_{null}` (V).
+
+    Examples
+    --------
+    >>> tip_quality([1.0, 3.0, 2.0, 2.0])
+    TipQuality(mean_v=2.0, spread_v=0.7071067811865476)
+    """
+    v_null = np.asarray(v_null, dtype=float)
+    with np.errstate(divide="ignore"):
+        weights = np.ones_like(v_null) if v_null_se is None else np.asarray(v_null_se, dtype=float) ** -2.0
+    keep = np.isfinite(v_null)
+    if not np.all(np.isfinite(weights[keep])):
+        weights = np.ones_like(v_null)
+    v_null, weights = v_null[keep], weights[keep]
+    mean = np.sum(weights * v_null) / np.sum(weights)
+    spread = np.sqrt(np.sum(weights * (v_null - mean) ** 2) / np.sum(weights))
+    return TipQuality(float(mean), float(spread))
+
+
+def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolution:
+    """Fit :math:`R = b + cV` at every frequency and derive :math:`G_{elec}`, :math:`d_{eff}`, :math:`V_{null}`.
+
+    Parameters
+    ----------
+    frequency_hz, bias_v : array_like
+        Point coordinates, grouped by frequency (as :func:`pfmdyn.spectra_io.read_spectra`
+        guarantees), with at least two distinct biases per frequency.
+    response : array_like of complex
+        Measured response :math:`x + iy` at every point.
+    surface_potential_v : float
+        :math:`V_{surf}` (V), e.g. from a non-contact measurement.
+
+    Returns
+    -------
+    Deconvolution
+        Per-frequency results and the error map.
+
+    Examples
+    --------
+    >>> v = np.array([-1.0, 0.0, 1.0, 2.0])
+    >>> r = (3 + 1j) + (2 - 1j) * (v - 0.5)  # d_eff = 3 + 1j, G_elec = 2 - 1j, V_surf = 0.5
+    >>> fit = deconvolve(np.full(4, 1e5), v, r, surface_potential_v=0.5)
+    >>> complex(fit.d_eff[0]), complex(fit.g_elec[0]), round(float(fit.v_null[0]), 12)
+    ((3+1j), (2-1j), -0.5)
+    """
+    frequency_hz = np.asarray(frequency_hz, dtype=float)
+    bias_v = np.asarray(bias_v, dtype=float)
+    response = np.asarray(response, dtype=complex)
+    starts = frequency_group_starts(frequency_hz)
+    n = np.diff(np.append(starts, len(frequency_hz)))
+    group = np.repeat(np.arange(len(starts)), n)
+
+    # Centred sums keep the fit well conditioned when the bias range sits far from zero.
+    mean_v = np.add.reduceat(bias_v, starts) / n
+    centred = bias_v - mean_v[group]
+    sxx = np.add.reduceat(centred**2, starts)
+    if np.any(sxx <= 0):
+        raise ValueError("every frequency needs at least two distinct bias values")
+    slope = np.add.reduceat(centred * response, starts) / sxx
+    mean_r = np.add.reduceat(response, starts) / n
+    intercept = mean_r - slope * mean_v
+    residual = response - (intercept[group] + slope[group] * bias_v)
+
+    dof = 2 * (n - 2)  # real and imaginary parts each lose two degrees of freedom
+    with np.errstate(invalid="ignore", divide="ignore"):
+        noise_var = np.where(dof > 0, np.add.reduceat(np.abs(residual) ** 2, starts) / dof, np.nan)
+
+    def variance(u_b, u_c):
+        """Variance of u_b*b + u_c*c for one real/imaginary component, from (X^T X)^-1."""
+        return noise_var * (u_b**2 / n + (u_b * mean_v - u_c) ** 2 / sxx)
+
+    v_null = nulling_bias(intercept, slope)
+    # Delta method: gradient of -Re(b conj c)/|c|^2 with respect to (b, c), per component.
+    power = _power(slope)
+    v_null_var = sum(
+        variance(-part(slope) / power, -(part(intercept) + 2 * v_null * part(slope)) / power)
+        for part in (np.real, np.imag)
+    )
+    return Deconvolution(
+        frequency_hz=frequency_hz[starts],
+        n_bias=n,
+        g_elec=slope,
+        intercept=intercept,
+        d_eff=intercept + slope * surface_potential_v,
+        g_elec_se=np.sqrt(variance(0.0, 1.0)),
+        d_eff_se=np.sqrt(variance(1.0, surface_potential_v)),
+        v_null=v_null,
+        v_null_se=np.sqrt(v_null_var),
+        surface_potential_v=float(surface_potential_v),
+        point_frequency_hz=frequency_hz,
+        point_bias_v=bias_v,
+        residual=residual,
+    )
+
+
+def write_tables(result: Deconvolution, out_dir: Path) -> list[Path]:
+    """Write the per-frequency results and the error map as CSV files.
+
+    Parameters
+    ----------
+    result : Deconvolution
+        From :func:`deconvolve`.
+    out_dir : Path
+        Existing output directory.
+
+    Returns
+    -------
+    list of Path
+        ``deconvolution.csv`` and ``error_map.csv``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     [p.name for p in write_tables(fit, Path(tmp))]
+    ['deconvolution.csv', 'error_map.csv']
+    """
+    per_frequency = {
+        "frequency_hz": result.frequency_hz,
+        "n_bias": result.n_bias,
+        "g_elec_x": result.g_elec.real,
+        "g_elec_y": result.g_elec.imag,
+        "g_elec_abs": np.abs(result.g_elec),
+        "g_elec_se": result.g_elec_se,
+        "intercept_x": result.intercept.real,
+        "intercept_y": result.intercept.imag,
+        "d_eff_x": result.d_eff.real,
+        "d_eff_y": result.d_eff.imag,
+        "d_eff_abs": np.abs(result.d_eff),
+        "d_eff_se": result.d_eff_se,
+        "v_null_v": result.v_null,
+        "v_null_se_v": result.v_null_se,
+    }
+    error_map = {
+        "frequency_hz": result.point_frequency_hz,
+        "bias_v": result.point_bias_v,
+        "residual_x": result.residual.real,
+        "residual_y": result.residual.imag,
+        "residual_abs": np.abs(result.residual),
+    }
+    preamble = [f"# surface_potential_v: {result.surface_potential_v:.12g}"]
+    paths = [out_dir / "deconvolution.csv", out_dir / "error_map.csv"]
+    for path, columns, comments in zip(paths, (per_frequency, error_map), (preamble, [])):
+        with open(path, "w", newline="") as handle:
+            handle.writelines(line + "\n" for line in comments)
+            writer = csv.writer(handle)
+            writer.writerow(columns)
+            writer.writerows(zip(*(np.vectorize(lambda v: f"{v:.12g}", otypes=[str])(c) for c in columns.values())))
+    return paths
+
+
+def summary(result: Deconvolution, unit: str) -> str:
+    """Short human-readable summary of a deconvolution.
+
+    Parameters
+    ----------
+    result : Deconvolution
+        From :func:`deconvolve`.
+    unit : str
+        Unit of the response, for the printout.
+
+    Returns
+    -------
+    str
+        A few lines: counts, median amplitudes, nulling bias and the tip-quality indicator.
+
+    Examples
+    --------
+    >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    >>> print(summary(fit, "pm").splitlines()[0])
+    frequencies: 1 (100 kHz to 100 kHz); biases per frequency: 3
+    """
+    quality = tip_quality(result.v_null, result.v_null_se)
+    low, high = result.frequency_hz[[0, -1]] / 1e3
+    biases = f"{result.n_bias.min()}" if result.n_bias.min() == result.n_bias.max() else (
+        f"{result.n_bias.min()} to {result.n_bias.max()}"
+    )
+    return "\n".join([
+        f"frequencies: {len(result.frequency_hz)} ({low:.4g} kHz to {high:.4g} kHz); biases per frequency: {biases}",
+        f"median |d_eff|: {np.median(np.abs(result.d_eff)):.4g} {unit} (V_surf = {result.surface_potential_v:g} V);"
+        f" median |G_elec|: {np.median(np.abs(result.g_elec)):.4g} {unit}/V",
+        f"nulling bias: weighted mean {quality.mean_v:.4g} V; tip-quality indicator (its spread over frequency):"
+        f" {quality.spread_v:.3g} V (near 0 with V_null ~ V_surf: electrostatic-dominated or worn tip)",
+    ])
+
+
+def add_arguments(parser) -> None:
+    """Define the command-line arguments of ``pfmdyn deconvolve``.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> parser = argparse.ArgumentParser()
+    >>> add_arguments(parser)
+    >>> parser.parse_args(["d.csv", "--surface-potential", "0.5", "--out", "res"]).surface_potential
+    0.5
+    """
+    parser.add_argument("data", metavar="DATA.csv", help="frequency-bias CSV (see pfmdyn.spectra_io for the format)")
+    parser.add_argument("--surface-potential", metavar="V", type=float, required=True,
+                        help="surface potential V_surf in volts, used for d_eff = b + c V_surf")
+    parser.add_argument("--out", metavar="DIR", type=Path, required=True,
+                        help="directory for the CSV tables and PNG plots (created if missing)")
+
+
+def run(args) -> int:
+    """Read, fit, then write tables and plots; nothing is written if the input is bad."""
+    if not np.isfinite(args.surface_potential):
+        raise UserError("--surface-potential must be a finite number of volts")
+    if args.out.exists() and not args.out.is_dir():
+        raise UserError(f"{args.out}: exists and is not a directory")
+    data = read_spectra(args.data)
+    result = deconvolve(data.frequency_hz, data.bias_v, data.response, args.surface_potential)
+    unit = data.metadata.get("response_unit", "a.u.")
+
+    from pfmdyn import plotting  # matplotlib is imported only when plots are written
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    written = write_tables(result, args.out)
+    written += [
+        plotting.plot_spectra(result, args.out / "spectra.png", unit),
+        plotting.plot_nulling_bias(result, args.out / "nulling_bias.png"),
+        plotting.plot_error_map(result, args.out / "error_map.png", unit),
+    ]
+    print(f"{data.path}:")
+    print(summary(result, unit))
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0

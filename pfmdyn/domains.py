@@ -1,0 +1,370 @@
+"""Contrast between antiparallel domains with an electrostatic background (Section IV.3).
+
+Over :math:`c^+` and :math:`c^-` domains the first-harmonic response is (Eqs. 37-38)
+
+.. math::
+
+    PR_\\pm = \\pm d_{eff} + d_{el} e^{i\\psi}, \\qquad d_{el} = G_{elec}(V_{dc} - V_{av}),
+
+where :math:`\\psi` is the phase of the electrostatic relative to the electromechanical
+response.  Throughout this module ``d_eff`` and ``d_el`` are real and signed (the sign of
+``d_el`` follows that of :math:`V_{dc} - V_{av}`), ``psi`` is in radians, and all functions
+broadcast over NumPy arrays.
+
+**Phase-difference convention.**  :math:`\\Delta\\varphi = \\arg PR_+ - \\arg PR_-`, wrapped to
+the half-open interval :math:`(-\\pi, \\pi]` (so a pure piezoresponse gives exactly
+:math:`+\\pi`).  Since :math:`PR_+ \\overline{PR_-} = d_{el}^2 - d_{eff}^2 - 2 i\\, d_{el} d_{eff}
+\\sin\\psi`, the correct counterpart of the paper's Eq. 39 is
+
+.. math::
+
+    \\tan\\Delta\\varphi = \\frac{2 d_{el} d_{eff} \\sin\\psi}{d_{eff}^2 - d_{el}^2}.
+
+Two families of functions are provided:
+
+* exact results and the correct leading-order limits (derived by hand from the line above;
+  ``tests/test_domains.py`` checks them against complex arithmetic and checks the order of
+  their error);
+* ``paper_*`` functions returning the paper's formulas **as printed, see the errata**, kept
+  only so that the printed and the correct forms can be compared.
+
+References
+----------
+Jesse, Baddorf, Kalinin (2006), "Dynamic behavior in piezoresponse force microscopy",
+Section IV.3, Eqs. 37-40.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def electrostatic_amplitude(g_elec, v_dc, v_av):
+    """Electrostatic term :math:`d_{el} = G_{elec}(V_{dc} - V_{av})` of Eqs. 37-38.
+
+    Parameters
+    ----------
+    g_elec : array_like
+        Electrostatic contribution per volt of tip-surface potential difference.
+    v_dc, v_av : array_like
+        Tip dc bias and average surface potential (V).
+
+    Returns
+    -------
+    ndarray
+        :math:`d_{el}`, in the units of ``g_elec`` times volts.
+
+    Examples
+    --------
+    >>> float(electrostatic_amplitude(2.0, 1.5, 0.5))
+    2.0
+    """
+    return np.asarray(g_elec) * (np.asarray(v_dc) - np.asarray(v_av))
+
+
+def domain_responses(d_eff, d_el, psi):
+    """Complex responses :math:`PR_+` and :math:`PR_-` over antiparallel domains (Eqs. 37-38).
+
+    Parameters
+    ----------
+    d_eff : array_like
+        Electromechanical response of the :math:`c^+` domain (real, signed).
+    d_el : array_like
+        Electrostatic term :math:`G_{elec}(V_{dc} - V_{av})` (real, signed).
+    psi : array_like
+        Phase of the electrostatic relative to the electromechanical response (rad).
+
+    Returns
+    -------
+    pr_plus, pr_minus : ndarray of complex
+        :math:`\\pm d_{eff} + d_{el} e^{i\\psi}`.
+
+    Examples
+    --------
+    >>> [complex(pr) for pr in domain_responses(1.0, 0.5, 0.0)]
+    [(1.5+0j), (-0.5+0j)]
+    """
+    background = np.asarray(d_el) * np.exp(1j * np.asarray(psi, dtype=float))
+    d_eff = np.asarray(d_eff)
+    return d_eff + background, -d_eff + background
+
+
+def domain_amplitudes(d_eff, d_el, psi):
+    """Exact amplitudes :math:`|PR_\\pm| = \\sqrt{d_{eff}^2 + d_{el}^2 \\pm 2 d_{eff} d_{el}\\cos\\psi}`.
+
+    Evaluated as ``hypot(d_eff ± d_el cos psi, d_el sin psi)``, which cannot round to the
+    square root of a negative number.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`.
+
+    Returns
+    -------
+    amp_plus, amp_minus : ndarray
+        :math:`|PR_+|` and :math:`|PR_-|`.
+
+    Examples
+    --------
+    >>> [round(float(a), 12) for a in domain_amplitudes(3.0, 4.0, np.pi / 2)]
+    [5.0, 5.0]
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    in_phase, quadrature = d_el * np.cos(psi), d_el * np.sin(psi)
+    return np.hypot(d_eff + in_phase, quadrature), np.hypot(-d_eff + in_phase, quadrature)
+
+
+def _half_open(angle):
+    """Map -pi to pi: atan2 returns -pi when the imaginary part is a negative zero."""
+    return np.where(angle <= -np.pi, np.pi, angle)
+
+
+def _wrap(angle):
+    """Wrap angles to (-pi, pi]."""
+    return _half_open(np.angle(np.exp(1j * np.asarray(angle, dtype=float))))
+
+
+def phase_difference(d_eff, d_el, psi):
+    """Exact phase difference :math:`\\Delta\\varphi = \\arg PR_+ - \\arg PR_-` in (-pi, pi].
+
+    Computed as ``atan2(-2 d_el d_eff sin psi, d_el**2 - d_eff**2)``, the argument of
+    :math:`PR_+ \\overline{PR_-}`.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`.
+
+    Returns
+    -------
+    ndarray
+        Phase difference in radians, in :math:`(-\\pi, \\pi]`.
+
+    Examples
+    --------
+    >>> float(phase_difference(1.0, 0.0, 0.3))  # pure piezoresponse: exactly pi
+    3.141592653589793
+    >>> abs(float(phase_difference(0.0, 1.0, 0.3)))  # pure electrostatics: no contrast
+    0.0
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    return _half_open(np.arctan2(-2.0 * d_el * d_eff * np.sin(psi), d_el**2 - d_eff**2))
+
+
+def amplitudes_small_electrostatic(d_eff, d_el, psi):
+    """Leading-order amplitudes for :math:`|d_{el}| \\ll |d_{eff}|`.
+
+    :math:`|PR_\\pm| \\approx |d_{eff}| \\pm \\operatorname{sgn}(d_{eff})\\, d_{el}\\cos\\psi`
+    (which is :math:`d_{eff} \\pm d_{el}\\cos\\psi` for :math:`d_{eff} > 0`); the absolute
+    error is :math:`O(d_{el}^2/|d_{eff}|)`.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`; ``d_eff`` must be nonzero.
+
+    Returns
+    -------
+    amp_plus, amp_minus : ndarray
+        Approximate :math:`|PR_+|` and :math:`|PR_-|`.
+
+    Examples
+    --------
+    >>> [float(a) for a in amplitudes_small_electrostatic(1.0, 0.01, 0.0)]
+    [1.01, 0.99]
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    shift = np.sign(d_eff) * d_el * np.cos(psi)
+    return np.abs(d_eff) + shift, np.abs(d_eff) - shift
+
+
+def phase_difference_small_electrostatic(d_eff, d_el, psi):
+    """Leading-order phase difference for :math:`|d_{el}| \\ll |d_{eff}|`.
+
+    :math:`\\Delta\\varphi \\approx \\pi + 2 (d_{el}/d_{eff}) \\sin\\psi`, wrapped to
+    (-pi, pi]; equivalently :math:`|\\Delta\\varphi| \\approx \\pi - 2 |d_{el}/d_{eff}|
+    |\\sin\\psi|`.  The deviation from 180 degrees is *first* order in the electrostatic term
+    and the error is :math:`O((d_{el}/d_{eff})^3)`.  (The paper's Eq. 40, see
+    :func:`paper_eq40_phase_difference`, has a second-order deviation instead.)
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`; ``d_eff`` must be nonzero.
+
+    Returns
+    -------
+    ndarray
+        Approximate phase difference in radians, in (-pi, pi].
+
+    Examples
+    --------
+    >>> round(float(phase_difference_small_electrostatic(1.0, -0.01, np.pi / 2)), 6)
+    3.121593
+    """
+    ratio = np.asarray(d_el) / np.asarray(d_eff)
+    return _wrap(np.pi + 2.0 * ratio * np.sin(np.asarray(psi, dtype=float)))
+
+
+def amplitudes_small_piezo(d_eff, d_el, psi):
+    """Leading-order amplitudes for :math:`|d_{eff}| \\ll |d_{el}|`.
+
+    :math:`|PR_\\pm| \\approx |d_{el}| \\pm \\operatorname{sgn}(d_{el})\\, d_{eff}\\cos\\psi`;
+    the absolute error is :math:`O(d_{eff}^2/|d_{el}|)`.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`; ``d_el`` must be nonzero.
+
+    Returns
+    -------
+    amp_plus, amp_minus : ndarray
+        Approximate :math:`|PR_+|` and :math:`|PR_-|`.
+
+    Examples
+    --------
+    >>> [float(a) for a in amplitudes_small_piezo(0.01, -1.0, 0.0)]
+    [0.99, 1.01]
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    shift = np.sign(d_el) * d_eff * np.cos(psi)
+    return np.abs(d_el) + shift, np.abs(d_el) - shift
+
+
+def phase_difference_small_piezo(d_eff, d_el, psi):
+    """Leading-order phase difference for :math:`|d_{eff}| \\ll |d_{el}|`.
+
+    :math:`\\Delta\\varphi \\approx -2 (d_{eff}/d_{el}) \\sin\\psi`, with error
+    :math:`O((d_{eff}/d_{el})^3)`: the contrast between the domains nearly vanishes.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`; ``d_el`` must be nonzero.
+
+    Returns
+    -------
+    ndarray
+        Approximate phase difference in radians.
+
+    Examples
+    --------
+    >>> float(phase_difference_small_piezo(0.01, 1.0, np.pi / 2))
+    -0.02
+    """
+    ratio = np.asarray(d_eff) / np.asarray(d_el)
+    return -2.0 * ratio * np.sin(np.asarray(psi, dtype=float))
+
+
+def paper_eq39_amplitudes(d_eff, d_el, phi):
+    """Eq. 39 amplitudes as printed, see the errata: :math:`\\sqrt{d_{eff}^2 + d_{el}^2 \\pm d_{eff} d_{el}\\cos\\varphi}`.
+
+    The printed cross term lacks the factor 2 of :func:`domain_amplitudes` (and the printed
+    angle is :math:`\\varphi`, where :math:`\\psi` is meant).  Kept for comparison only.
+
+    Parameters
+    ----------
+    d_eff, d_el : array_like
+        As in :func:`domain_responses`.
+    phi : array_like
+        The angle in the printed formula (rad).
+
+    Returns
+    -------
+    amp_plus, amp_minus : ndarray
+        The printed :math:`PR_+` and :math:`PR_-`.
+
+    Examples
+    --------
+    >>> [float(a) for a in paper_eq39_amplitudes(1.0, 1.0, 0.0)]  # exact: 2 and 0
+    [1.7320508075688772, 1.0]
+    """
+    d_eff, d_el, phi = np.asarray(d_eff), np.asarray(d_el), np.asarray(phi, dtype=float)
+    common, cross = d_eff**2 + d_el**2, d_eff * d_el * np.cos(phi)
+    return np.sqrt(common + cross), np.sqrt(common - cross)
+
+
+def paper_eq39_tan_phase(d_el, psi, pr_plus, pr_minus):
+    """Eq. 39 phase shift as printed, see the errata.
+
+    :math:`\\tan\\varphi = 2 d_{el}(PR_- - PR_+)\\sin\\psi / (d_{el}^2(1 - \\cos 2\\psi) + 2 PR_+ PR_-)`.
+    The paper does not say whether :math:`PR_\\pm` are amplitudes or signed responses; they
+    are taken as given.  The correct relation is
+    :math:`\\tan\\Delta\\varphi = 2 d_{el} d_{eff}\\sin\\psi / (d_{eff}^2 - d_{el}^2)` (module
+    docstring).  Kept for comparison only.
+
+    Parameters
+    ----------
+    d_el, psi : array_like
+        As in :func:`domain_responses`.
+    pr_plus, pr_minus : array_like
+        The quantities :math:`PR_+` and :math:`PR_-` of the printed formula.
+
+    Returns
+    -------
+    ndarray
+        The printed :math:`\\tan\\varphi`.
+
+    Examples
+    --------
+    >>> float(paper_eq39_tan_phase(1.0, np.pi / 2, 1.0, 1.0))
+    0.0
+    """
+    d_el, psi = np.asarray(d_el), np.asarray(psi, dtype=float)
+    pr_plus, pr_minus = np.asarray(pr_plus), np.asarray(pr_minus)
+    numerator = 2.0 * d_el * (pr_minus - pr_plus) * np.sin(psi)
+    return numerator / (d_el**2 * (1.0 - np.cos(2.0 * psi)) + 2.0 * pr_plus * pr_minus)
+
+
+def paper_eq40_phase_difference(d_eff, d_el, psi):
+    """Eq. 40 as printed, see the errata: :math:`\\Delta\\varphi = \\pi - \\sin(2\\psi)\\, d_{el}^2/d_{eff}^2`.
+
+    The correct small-electrostatic limit, :func:`phase_difference_small_electrostatic`,
+    deviates from pi at first order in :math:`d_{el}/d_{eff}` with a :math:`\\sin\\psi`
+    dependence.  Kept for comparison only.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`.
+
+    Returns
+    -------
+    ndarray
+        The printed phase difference (rad).
+
+    Examples
+    --------
+    >>> round(float(paper_eq40_phase_difference(1.0, 0.1, np.pi / 4)), 6)
+    3.131593
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    return np.pi - np.sin(2.0 * psi) * d_el**2 / d_eff**2
+
+
+def paper_small_piezo_phase_difference(d_eff, d_el, psi):
+    """Small-piezoresponse phase difference as printed (Section IV.3), see the errata.
+
+    :math:`\\Delta\\varphi = 2\\sin(2\\psi)\\, d_{eff} / (d_{el}(\\cos 2\\psi - 3))`.  The correct
+    limit is :math:`-2 (d_{eff}/d_{el})\\sin\\psi` (:func:`phase_difference_small_piezo`);
+    the printed form equals it times :math:`\\cos\\psi/(1 + \\sin^2\\psi)`.  Kept for
+    comparison only.
+
+    Parameters
+    ----------
+    d_eff, d_el, psi : array_like
+        As in :func:`domain_responses`.
+
+    Returns
+    -------
+    ndarray
+        The printed phase difference (rad).
+
+    Examples
+    --------
+    >>> round(float(paper_small_piezo_phase_difference(0.01, 1.0, np.pi / 3)), 6)  # correct: -0.017321
+    -0.004949
+    """
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    return 2.0 * np.sin(2.0 * psi) * d_eff / (d_el * (np.cos(2.0 * psi) - 3.0))

@@ -1,0 +1,254 @@
+"""Reading and validating frequency-bias spectroscopy CSV files.
+
+The format, shared by every command that reads measured spectra::
+
+    # spring_constant_n_per_m: 4.5      <- optional metadata, "# key: value", before the header
+    # response_unit: pm                 <- other comment lines are allowed there too
+    frequency_hz,bias_v,x,y             <- or amplitude,phase_deg instead of x,y
+    10000,-5,1.2,-0.3
+    10000,-4,1.1,-0.2
+    ...
+
+* ``x, y`` are the lock-in in-phase and quadrature signals; ``amplitude, phase_deg`` the
+  same response in polar form (phase in degrees).  Either pair gives the complex response
+  :math:`x + i y = A e^{i\\varphi}`.  Other columns are ignored.
+* Rows are grouped by frequency in ascending order (as a frequency sweep at each bias is
+  usually stored transposed, this is checked rather than silently re-sorted); within one
+  frequency the biases may come in any order, must not repeat, and there must be at least
+  two distinct ones so that a line can be fitted.
+* Blank lines are skipped.  Every problem is reported as one :class:`~pfmdyn.cli.UserError`
+  naming the file and the line.
+"""
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pfmdyn.cli import UserError
+
+COORDINATE_COLUMNS = ("frequency_hz", "bias_v")
+RESPONSE_VARIANTS = (("x", "y"), ("amplitude", "phase_deg"))
+EXPECTED_COLUMNS = COORDINATE_COLUMNS + tuple(name for pair in RESPONSE_VARIANTS for name in pair)
+_EXPECTED_TEXT = "frequency_hz, bias_v and either x, y or amplitude, phase_deg"
+
+
+@dataclass(frozen=True)
+class Spectra:
+    """A validated frequency-bias data set, one entry per CSV data row.
+
+    Attributes
+    ----------
+    path : str
+        The file it was read from (for messages).
+    frequency_hz, bias_v : ndarray
+        Drive frequency (Hz, positive, grouped ascending) and tip dc bias (V).
+    response : ndarray of complex
+        :math:`x + i y` (or :math:`A e^{i\\varphi}`), in the file's units.
+    response_columns : tuple of str
+        ``("x", "y")`` or ``("amplitude", "phase_deg")``: which pair the file used.
+    metadata : dict of str to str
+        The ``# key: value`` lines before the header, values as written (stripped).
+    """
+
+    path: str
+    frequency_hz: np.ndarray
+    bias_v: np.ndarray
+    response: np.ndarray
+    response_columns: tuple[str, str]
+    metadata: dict[str, str] = field(default_factory=dict)
+
+
+def frequency_group_starts(frequency_hz):
+    """Index of the first row of each frequency in frequency-grouped data.
+
+    Parameters
+    ----------
+    frequency_hz : array_like
+        Frequencies, grouped (equal values adjacent).
+
+    Returns
+    -------
+    ndarray of int
+        Start index of every group, suitable for :func:`numpy.add.reduceat`.
+
+    Examples
+    --------
+    >>> frequency_group_starts([1.0, 1.0, 2.0, 2.0, 2.0, 5.0]).tolist()
+    [0, 2, 5]
+    """
+    frequency_hz = np.asarray(frequency_hz)
+    return np.concatenate(([0], np.flatnonzero(np.diff(frequency_hz)) + 1))
+
+
+def read_spectra(path) -> Spectra:
+    """Read and validate a frequency-bias CSV file (format in the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Returns
+    -------
+    Spectra
+        The validated data.
+
+    Raises
+    ------
+    pfmdyn.cli.UserError
+        One line naming the file, the line number and the problem.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> text = "# response_unit: pm\\nfrequency_hz,bias_v,x,y\\n1e4,-1,1,0\\n1e4,1,3,0\\n"
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "d.csv")
+    ...     _ = open(name, "w").write(text)
+    ...     data = read_spectra(name)
+    >>> data.response.tolist(), data.metadata
+    ([(1+0j), (3+0j)], {'response_unit': 'pm'})
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise UserError(f"{path}: not a UTF-8 text file") from None
+    where = str(path)
+    metadata, header_line = _read_preamble(where, lines)
+    names = _split(lines[header_line - 1])
+    response_columns = _check_header(where, header_line, names)
+    wanted = COORDINATE_COLUMNS + response_columns
+    indices = [names.index(name) for name in wanted]
+    rows, line_numbers = [], []
+    for number in range(header_line + 1, len(lines) + 1):
+        text = lines[number - 1]
+        if not text.strip():
+            continue
+        if text.lstrip().startswith("#"):
+            raise UserError(f"{where}, line {number}: comment lines are only allowed before the header")
+        fields = _split(text)
+        if len(fields) != len(names):
+            raise UserError(f"{where}, line {number}: expected {len(names)} fields as in the header, found {len(fields)}")
+        rows.append([_number(where, number, name, fields[i]) for name, i in zip(wanted, indices)])
+        line_numbers.append(number)
+    if not rows:
+        raise UserError(f"{where}, line {header_line}: header but no data rows")
+    table = np.array(rows, dtype=float)
+    _check_rows(where, table, np.array(line_numbers), response_columns)
+    first, second = table[:, 2], table[:, 3]
+    if response_columns == ("x", "y"):
+        response = first + 1j * second
+    else:
+        response = first * np.exp(1j * np.deg2rad(second))
+    return Spectra(str(path), table[:, 0], table[:, 1], response, response_columns, metadata)
+
+
+def _split(line: str) -> list[str]:
+    """Fields of one CSV line, whitespace-stripped (data files contain no multi-line quotes)."""
+    return [cell.strip() for cell in next(csv.reader([line]))]
+
+
+def _read_preamble(where: str, lines: list[str]) -> tuple[dict[str, str], int]:
+    """Collect ``# key: value`` metadata; return it with the 1-based line number of the header."""
+    metadata: dict[str, str] = {}
+    for number, text in enumerate(lines, start=1):
+        stripped = text.strip()
+        if not stripped:
+            continue
+        if not stripped.startswith("#"):
+            return metadata, number
+        key, colon, value = stripped[1:].partition(":")
+        if colon and key.strip():
+            key = key.strip()
+            if key in metadata:
+                raise UserError(f"{where}, line {number}: metadata key '{key}' given twice")
+            metadata[key] = value.strip()
+    if not lines:
+        raise UserError(f"{where}, line 1: the file is empty")
+    raise UserError(f"{where}, line {len(lines)}: no header line (only comments or blank lines)")
+
+
+def _check_header(where: str, number: int, names: list[str]) -> tuple[str, str]:
+    """Check the header and return the response column pair it uses."""
+    for position, name in enumerate(names):
+        if not name:
+            raise UserError(f"{where}, line {number}: column {position + 1} of the header has no name")
+        if names.count(name) > 1:
+            raise UserError(f"{where}, line {number}: column '{name}' appears more than once")
+    present = [pair for pair in RESPONSE_VARIANTS if set(pair) <= set(names)]
+    if len(present) == 2:
+        raise UserError(f"{where}, line {number}: both x, y and amplitude, phase_deg columns; keep one pair")
+    unknown = [name for name in names if name not in EXPECTED_COLUMNS]
+    # Without a complete pair, report against the pair the header most resembles.
+    pair = present[0] if present else max(
+        RESPONSE_VARIANTS,
+        key=lambda candidate: sum(name in names or bool(_closest(name, unknown)) for name in candidate),
+    )
+    for name in COORDINATE_COLUMNS + pair:
+        if name not in names:
+            hint = _closest(name, unknown)
+            found = f" (found '{hint}': did you mean '{name}'?)" if hint else ""
+            raise UserError(f"{where}, line {number}: missing column '{name}'{found}; expected {_EXPECTED_TEXT}")
+    return pair
+
+
+def _closest(expected: str, candidates: list[str]) -> str | None:
+    """The header name most similar to an expected column name, compared case-insensitively."""
+    lowered = {candidate.lower(): candidate for candidate in candidates}
+    match = difflib.get_close_matches(expected, list(lowered), n=1, cutoff=0.6)
+    return lowered[match[0]] if match else None
+
+
+def _number(where: str, number: int, name: str, cell: str) -> float:
+    """Parse one cell as a finite float."""
+    if not cell:
+        raise UserError(f"{where}, line {number}: column '{name}' is empty")
+    try:
+        value = float(cell)
+    except ValueError:
+        raise UserError(f"{where}, line {number}: column '{name}': '{cell}' is not a number") from None
+    if not math.isfinite(value):
+        raise UserError(f"{where}, line {number}: column '{name}' is '{cell}'; a finite number is required")
+    return value
+
+
+def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, response_columns: tuple[str, str]) -> None:
+    """Check value ranges, frequency grouping, duplicates and the number of biases per frequency."""
+    frequency, bias = table[:, 0], table[:, 1]
+    bad = np.flatnonzero(frequency <= 0)
+    if bad.size:
+        row = bad[0]
+        raise UserError(f"{where}, line {line_numbers[row]}: frequency_hz must be positive, got {frequency[row]:.12g}")
+    if response_columns == ("amplitude", "phase_deg") and (table[:, 2] < 0).any():
+        row = np.flatnonzero(table[:, 2] < 0)[0]
+        raise UserError(f"{where}, line {line_numbers[row]}: amplitude must be non-negative, got {table[row, 2]:.12g}")
+    decreasing = np.flatnonzero(np.diff(frequency) < 0)
+    if decreasing.size:
+        row = decreasing[0] + 1
+        raise UserError(
+            f"{where}, line {line_numbers[row]}: frequency {frequency[row]:.12g} Hz follows {frequency[row - 1]:.12g} Hz;"
+            " rows must be grouped by frequency in ascending order"
+        )
+    starts = frequency_group_starts(frequency)
+    for start, stop in zip(starts, np.append(starts[1:], len(frequency))):
+        first_line: dict[float, int] = {}
+        for row in range(start, stop):
+            if bias[row] in first_line:
+                raise UserError(
+                    f"{where}, line {line_numbers[row]}: duplicate row for frequency {frequency[row]:.12g} Hz"
+                    f" and bias {bias[row]:.12g} V (first at line {first_line[bias[row]]})"
+                )
+            first_line[bias[row]] = line_numbers[row]
+        if len(first_line) < 2:
+            raise UserError(
+                f"{where}, line {line_numbers[start]}: only one bias value at frequency {frequency[start]:.12g} Hz;"
+                " the linear fit needs at least two distinct biases"
+            )

@@ -1,0 +1,105 @@
+"""Reading frequency-bias CSV files: metadata, both response formats, and one-line errors for bad input."""
+import numpy as np
+import pytest
+
+from pfmdyn import cli
+from pfmdyn.spectra_io import frequency_group_starts, read_spectra
+
+GOOD = """\
+# instrument: MFP-3D
+# spring_constant_n_per_m: 4.5
+# free-text comments without a colon are ignored
+frequency_hz,bias_v,x,y,temperature_k
+1000,-1,1.0,0.5,300
+1000,1,3.0,-0.5,300
+
+2000,1,2.0,0.0,300
+2000,-1,0.0,2.0,300
+"""
+
+
+def write(tmp_path, text, name="data.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_reads_metadata_rows_and_ignores_extra_columns(tmp_path):
+    data = read_spectra(write(tmp_path, GOOD))
+    assert data.metadata == {"instrument": "MFP-3D", "spring_constant_n_per_m": "4.5"}
+    assert data.frequency_hz.tolist() == [1000, 1000, 2000, 2000]
+    assert data.bias_v.tolist() == [-1, 1, 1, -1]
+    assert data.response.tolist() == [1 + 0.5j, 3 - 0.5j, 2, 2j]
+    assert frequency_group_starts(data.frequency_hz).tolist() == [0, 2]
+
+
+def test_polar_columns_give_the_complex_response(tmp_path):
+    text = "frequency_hz,bias_v,amplitude,phase_deg\n1e3,0,2,90\n1e3,1,1,180\n"
+    data = read_spectra(write(tmp_path, text))
+    np.testing.assert_allclose(data.response, [2j, -1], atol=1e-15)
+    assert data.response_columns == ("amplitude", "phase_deg") and data.metadata == {}
+
+
+def test_byte_order_mark_and_spaces_are_tolerated(tmp_path):
+    text = "\ufefffrequency_hz, bias_v, x, y\n1e3, 0, 1, 0\n1e3, 1, 2, 0\n"
+    (tmp_path / "bom.csv").write_text(text, encoding="utf-8")
+    assert read_spectra(tmp_path / "bom.csv").response.tolist() == [1, 2]
+
+
+HEADER = "frequency_hz,bias_v,x,y\n"
+BAD_INPUTS = {
+    "empty file": ("", "line 1: the file is empty"),
+    "only comments": ("# a: 1\n# b: 2\n", "line 2: no header line"),
+    "misspelled column": ("frequncy_hz,bias_v,x,y\n1,0,1,1\n",
+                          "line 1: missing column 'frequency_hz' (found 'frequncy_hz': did you mean 'frequency_hz'?)"),
+    "misspelled response column": ("frequency_hz,bias_v,amplitude,phase\n1,0,1,1\n",
+                                   "line 1: missing column 'phase_deg' (found 'phase': did you mean 'phase_deg'?)"),
+    "missing column": ("frequency_hz,bias_v,x\n1,0,1\n", "line 1: missing column 'y'; expected frequency_hz, bias_v"),
+    "both response pairs": ("frequency_hz,bias_v,x,y,amplitude,phase_deg\n", "line 1: both x, y and amplitude"),
+    "duplicate column": ("frequency_hz,bias_v,x,y,x\n", "line 1: column 'x' appears more than once"),
+    "no data rows": (HEADER, "line 1: header but no data rows"),
+    "NaN cell": (HEADER + "1,0,1,1\n1,1,nan,1\n", "line 3: column 'x' is 'nan'; a finite number is required"),
+    "empty cell": (HEADER + "1,0,1,1\n1,1,,1\n", "line 3: column 'x' is empty"),
+    "non-numeric cell": (HEADER + "1,0,1,1\n1,1,1,1.2.3\n", "line 3: column 'y': '1.2.3' is not a number"),
+    "short row": (HEADER + "1,0,1,1\n1,1,1\n", "line 3: expected 4 fields as in the header, found 3"),
+    "negative frequency": (HEADER + "-5,0,1,1\n-5,1,1,1\n", "line 2: frequency_hz must be positive, got -5"),
+    "negative amplitude": ("frequency_hz,bias_v,amplitude,phase_deg\n1,0,1,0\n1,1,-1,0\n",
+                           "line 3: amplitude must be non-negative"),
+    "one bias": (HEADER + "1,0,1,1\n1,1,1,1\n2,0,1,1\n3,0,1,1\n3,1,1,1\n",
+                 "line 4: only one bias value at frequency 2 Hz"),
+    "one bias, repeated": (HEADER + "1,0,1,1\n1,0,2,2\n", "line 3: duplicate row for frequency 1 Hz and bias 0 V (first at line 2)"),
+    "duplicate row": ("# k: v\n" + HEADER + "1,0,1,1\n1,1,1,1\n1,0,2,2\n",
+                      "line 5: duplicate row for frequency 1 Hz and bias 0 V (first at line 3)"),
+    "unsorted frequencies": (HEADER + "2,0,1,1\n2,1,1,1\n1,0,1,1\n1,1,1,1\n",
+                             "line 4: frequency 1 Hz follows 2 Hz; rows must be grouped by frequency in ascending order"),
+    "ungrouped frequencies": (HEADER + "1,0,1,1\n2,0,1,1\n1,1,1,1\n2,1,1,1\n", "line 4: frequency 1 Hz follows 2 Hz"),
+    "comment after header": (HEADER + "1,0,1,1\n# late: 1\n1,1,1,1\n", "line 3: comment lines are only allowed before the header"),
+    "metadata key twice": ("# k: 1\n# k: 2\n" + HEADER + "1,0,1,1\n1,1,1,1\n", "line 2: metadata key 'k' given twice"),
+}
+
+
+@pytest.mark.parametrize("case", BAD_INPUTS, ids=list(BAD_INPUTS))
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, case):
+    text, expected = BAD_INPUTS[case]
+    path = write(tmp_path, text)
+    out = tmp_path / "out"
+    status = cli.main(["deconvolve", str(path), "--surface-potential", "0", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == 2
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith(f"pfmdyn deconvolve: error: {path}, ")
+    assert expected in lines[0]
+    assert not out.exists()
+
+
+def test_unreadable_files_are_one_line_errors(tmp_path, capsys):
+    missing = tmp_path / "missing.csv"
+    binary = tmp_path / "binary.csv"
+    binary.write_bytes(b"\xff\xfe\x00\x81")
+    for path, expected in ((missing, "cannot read the file"), (binary, "not a UTF-8 text file")):
+        assert cli.main(["deconvolve", str(path), "--surface-potential", "0", "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and str(path) in err and expected in err
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,108 @@
+"""The claim checks and the verdict gate of ``pfmdyn verify``."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import sympy as sp
+import yaml
+
+from pfmdyn import cli, verify
+from pfmdyn.derivations.checks import core
+from pfmdyn.derivations.paper import printed as P
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "claims.yaml"
+
+
+def _verdict(claim_id):
+    return core.run_check(core.REGISTRY[claim_id]).verdict
+
+
+@pytest.fixture(scope="module")
+def all_verdicts():
+    return verify.compute(progress=False)
+
+
+def test_every_registered_claim_has_a_recorded_verdict_equal_to_the_computed_one(all_verdicts):
+    recorded = verify.load_recorded()
+    assert {v.id: v.verdict for v in all_verdicts} == recorded
+
+
+@pytest.mark.skipif(not SHARED.exists(), reason="shared claims file not present")
+def test_every_shared_claim_id_is_checked():
+    ids = [e["id"] for e in yaml.safe_load(SHARED.read_text())]
+    assert set(ids) <= set(core.REGISTRY)
+
+
+def test_committed_errata_list_is_up_to_date(all_verdicts):
+    from pfmdyn import generated
+    path = Path(generated.__file__).parent / "errata.md"
+    assert path.read_text() == verify.render_errata(all_verdicts)
+
+
+def test_every_erratum_carries_a_correction_and_evidence(all_verdicts):
+    for v in all_verdicts:
+        assert v.evidence, v.id
+        if v.verdict == core.ERRATUM:
+            assert v.correct, v.id
+
+
+# --- the gate can fail ---------------------------------------------------------------------------
+
+def test_flipping_the_sign_of_a_printed_equation_changes_its_verdict(monkeypatch):
+    assert _verdict("eq6.Av") == core.HOLDS
+    monkeypatch.setitem(P.ELASTIC, P.d1, -P.ELASTIC[P.d1])
+    # No other printed equation pins the sign of A_v, so the flip reads as a convention.
+    assert _verdict("eq6.Av") == core.SIGN
+    monkeypatch.setitem(P.ELASTIC, P.d1, 2 * P.ELASTIC[P.d1])
+    assert _verdict("eq6.Av") == core.ERRATUM
+
+
+def test_changing_a_factor_in_a_printed_equation_changes_its_verdict(monkeypatch):
+    assert _verdict("eq20.pinned_response") == core.HOLDS
+    monkeypatch.setattr(P, "theta_nlc", 2 * P.theta_nlc)
+    assert _verdict("eq20.pinned_response") == core.ERRATUM
+
+
+def test_correcting_a_printed_erratum_makes_it_hold(monkeypatch):
+    assert _verdict("eq35.roots") == core.ERRATUM
+    monkeypatch.setattr(P, "torsion_force_roots", (2 * P.n - 1) * sp.pi / (2 * P.L))
+    assert _verdict("eq35.roots") == core.HOLDS
+    assert _verdict("eq20.roots") == core.ERRATUM
+    monkeypatch.setattr(P, "pinned_roots", ("3.927", "7.069", "10.21"))
+    assert _verdict("eq20.roots") == core.HOLDS
+
+
+def test_a_sign_flip_without_contradicting_anchor_is_a_convention():
+    verdict, why = core.sign_flip_verdict({"other equation": False}, "f0 towards the surface")
+    assert verdict == core.SIGN and "f0 towards the surface" in why
+    assert core.sign_flip_verdict({"other equation": True}, "")[0] == core.ERRATUM
+
+
+def test_gate_exits_nonzero_when_a_verdict_differs_from_the_record(tmp_path, monkeypatch, capsys):
+    record = {**verify.load_recorded(), "eq6.Av": core.ERRATUM}
+    path = tmp_path / "recorded.yaml"
+    path.write_text(yaml.safe_dump(record))
+    monkeypatch.setattr(verify, "recorded_path", lambda: path)
+    assert cli.main(["verify", "--only", "eq6.Av", "--quiet"]) == 1
+    assert "eq6.Av: computed holds, recorded erratum" in capsys.readouterr().err
+
+
+def test_gate_exits_nonzero_when_a_claim_has_no_verdict(tmp_path, monkeypatch, capsys):
+    path = tmp_path / "recorded.yaml"
+    path.write_text(yaml.safe_dump({}))
+    monkeypatch.setattr(verify, "recorded_path", lambda: path)
+    assert cli.main(["verify", "--only", "k.from_beam", "--quiet"]) == 1
+    assert "no recorded verdict" in capsys.readouterr().err
+
+
+def test_json_output_and_unknown_id(tmp_path, capsys):
+    out = tmp_path / "v.json"
+    assert cli.main(["verify", "--only", "eq6.Av", "--only", "eq35.roots", "--json", str(out), "--quiet"]) == 0
+    data = json.loads(out.read_text())
+    assert [c["id"] for c in data["claims"]] == ["eq6.Av", "eq35.roots"]
+    assert set(data["claims"][1]) >= {"id", "verdict", "correct", "evidence"}
+    assert cli.main(["verify", "--only", "no.such.claim", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown claim id" in err[0]
