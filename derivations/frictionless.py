@@ -51,8 +51,8 @@ def solve() -> TipSolution:
     """Frictionless contact with spring k1 (Eq. 23).
 
     >>> from .beam import beta, k, L
-    >>> sp.limit(solve().theta(d1), beta, 0)   # static: 3 k1 / (2 (k + k1) L)
-    3*k1/(2*L*k + 2*L*k1)
+    >>> sp.factor(sp.limit(solve().theta(d1), beta, 0))   # static
+    3*k1/(2*L*(k + k1))
     """
     return solve_tip_problem(problem)
 
