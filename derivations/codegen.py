@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import textwrap
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -38,8 +39,10 @@ from sympy.printing.pycode import PythonCodePrinter
 from . import elastic_contact, free_end, frictionless, indentation, pinned, sliding_friction, torsion
 from .beam import H, L, beta, d1, d2, f0, k, k1, k2, q0
 
-__all__ = ["Function", "Family", "families", "split", "series_branch", "switch_point",
-           "render_family", "render_characteristic", "render_all", "write", "GENERATED"]
+__all__ = ["Function", "Family", "families", "split", "from_atoms", "scaled", "series_branch",
+           "switch_point", "source_hash", "render_family", "characteristic_families",
+           "dimensionless", "beta1_free", "render_characteristic", "render_all", "write",
+           "GENERATED"]
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
 """The committed output folder (``generated/`` at the repository root)."""
@@ -55,10 +58,11 @@ _ch, _sh = sp.symbols("_ch _sh")
 _MAX_CANCELLATION = 64
 # Series truncation target, relative to the function's value at the switch point.
 _SERIES_TOL = 2.0**-56
-# Beyond Re(beta) = 300, e**-beta < 1e-130: far below the rounding error of the O(1)
+# Beyond Re(beta) = 100, e**-beta < 4e-44: far below the rounding error of the O(1)
 # terms every scaled basis function contains, so the argument of exp is clipped there to
-# avoid an underflow (which `np.errstate(all="raise")` would report).
-_CLIP = 300
+# avoid underflow (which `np.errstate(all="raise")` reports), also inside complex
+# division, whose intermediate products are of order e**-4 Re(beta).
+_CLIP = 100
 
 
 @dataclass(frozen=True)
@@ -143,7 +147,12 @@ def _to_atoms(expr: sp.Expr, var: sp.Symbol) -> sp.Expr:
     return expr.subs({sp.cos(var): _c, sp.sin(var): _s, sp.cosh(var): _ch, sp.sinh(var): _sh})
 
 
-def _from_atoms(expr: sp.Expr, var: sp.Symbol) -> sp.Expr:
+def from_atoms(expr: sp.Expr, var: sp.Symbol) -> sp.Expr:
+    """Replace the atoms ``_c, _s, _ch, _sh`` by cos, sin, cosh, sinh of ``var``.
+
+    >>> from_atoms(_c*_ch + 1, beta)
+    cos(beta)*cosh(beta) + 1
+    """
     return expr.subs({_c: sp.cos(var), _s: sp.sin(var), _ch: sp.cosh(var), _sh: sp.sinh(var)})
 
 
@@ -190,17 +199,23 @@ def scaled(h: sp.Expr, degree: int) -> sp.Expr:
 
 
 def _mp_value(h: sp.Expr, var_value, var: sp.Symbol):
-    f = sp.lambdify(var, _from_atoms(h, var), "mpmath")
+    f = sp.lambdify(var, from_atoms(h, var), "mpmath")
     return f(var_value)
 
 
 def _cancellation(h: sp.Expr, x: float, degree: int) -> float:
-    """Sum of |terms| over |value| of the scaled closed form of ``h`` at ``x`` (mpmath)."""
+    """Error amplification of the scaled closed form of ``h`` at ``x`` (mpmath).
+
+    Sum of |terms| over |value|, where a term holding ``tanh`` counts ``1/(1 - e**-2x)``
+    times: ``tanh = (1 - e**2)/(1 + e**2)`` cancels in floating point at small ``x``.
+    """
     with mp.workdps(60):
         vals = {_c: mp.cos(x), _s: mp.sin(x), _tanh: mp.tanh(x), _sech: mp.sech(x)}
-        terms = [t.subs(vals) for t in sp.Add.make_args(scaled(h, degree))]
-        total = abs(sum(mp.mpf(sp.Float(t, 60)) for t in terms))
-        return float(sum(abs(mp.mpf(sp.Float(t, 60))) for t in terms) / total)
+        tanh_cond = 1 / -mp.expm1(-2 * mp.mpf(x))
+        terms = [(mp.mpf(sp.Float(t.subs(vals), 60)), tanh_cond if t.has(_tanh) else 1)
+                 for t in sp.Add.make_args(scaled(h, degree))]
+        total = abs(sum(t for t, _ in terms))
+        return float(sum(abs(t) * c for t, c in terms) / total)
 
 
 def switch_point(h: sp.Expr, degree: int) -> float:
@@ -217,6 +232,19 @@ def switch_point(h: sp.Expr, degree: int) -> float:
     return x
 
 
+def _taylor(h: sp.Expr, var: sp.Symbol, order: int) -> sp.Poly:
+    """Taylor polynomial of ``h`` (in atoms) up to ``var**(order - 1)``, exact rationals."""
+    f = sp.factorial
+    atoms = {
+        _c: sum((-1)**j * var**(2*j) / f(2*j) for j in range(order // 2 + 1)),
+        _s: sum((-1)**j * var**(2*j + 1) / f(2*j + 1) for j in range(order // 2 + 1)),
+        _ch: sum(var**(2*j) / f(2*j) for j in range(order // 2 + 1)),
+        _sh: sum(var**(2*j + 1) / f(2*j + 1) for j in range(order // 2 + 1)),
+    }
+    full = sp.Poly(sp.expand(h.subs(atoms)), var)
+    return sp.Poly.from_dict({m: c for m, c in full.as_dict().items() if m[0] < order}, var)
+
+
 def series_branch(h: sp.Expr, var: sp.Symbol, at: float) -> tuple[int, int, list[sp.Rational]]:
     """Taylor series of ``h`` as ``var**p * P(var**q)``: returns ``(p, q, coefficients of P)``.
 
@@ -224,25 +252,21 @@ def series_branch(h: sp.Expr, var: sp.Symbol, at: float) -> tuple[int, int, list
     error matches rounding error at the switch point ``at`` and is smaller below it.
 
     >>> series_branch(_c*_ch - 1, beta, 0.7)
-    (4, 4, [-1/6, 1/2520])
+    (4, 4, [-1/6, 1/2520, -1/7484400, 1/81729648000])
     """
-    expr = _from_atoms(h, var)
     with mp.workdps(40):
         target = abs(_mp_value(h, mp.mpf(at), var)) * _SERIES_TOL
-    order = 8
+    order = 12
     while True:
-        ser = sp.Poly(sp.series(expr, var, 0, order).removeO(), var)
+        ser = _taylor(h, var, order)
         exps = sorted(m[0] for m in ser.monoms())
         p = exps[0]
         q = math.gcd(*[e - p for e in exps[1:]]) if len(exps) > 1 else 4
-        # The last retained term bounds the truncation only if there is room for one more.
-        if exps[-1] + q < order:
-            coeffs = [ser.coeff_monomial(var**e) for e in range(p, exps[-1] + 1, q)]
-            nxt = exps[-1] + q
-            full = sp.Poly(sp.series(expr, var, 0, nxt + 1).removeO(), var)
-            omitted = abs(full.coeff_monomial(var**nxt)) * mp.mpf(at) ** nxt
-            if omitted < target:
-                return p, q, coeffs
+        nxt = exps[-1] + q
+        # The first omitted term bounds the truncation error (factorial decay).
+        omitted = abs(_taylor(h, var, nxt + 1).coeff_monomial(var**nxt)) * mp.mpf(at) ** nxt
+        if len(exps) > 2 and omitted < target:
+            return p, q, [ser.coeff_monomial(var**e) for e in range(p, exps[-1] + 1, q)]
         order += 4
 
 
@@ -311,10 +335,22 @@ def render_family(fam: Family) -> str:
     hsyms = [sp.Symbol(f"_h{i}") for i in range(len(basis))]
     combos = [sum(coeff * hsyms[basis.index(h)] for coeff, h in parts) for parts in splits]
 
+    if degree:
+        evaluation = textwrap.fill(
+            f"each evaluated once per call: by its Taylor series for ``|{vname}| < SWITCH`` "
+            f"(where the closed form cancels), else in closed form divided by "
+            f"``cosh({vname})**{degree}`` with ``tanh`` and ``sech`` built from "
+            f"``exp(-{vname})``, so nothing overflows up to ``{vname} = 1e3`` and beyond.", 88)
+    else:
+        evaluation = textwrap.fill(
+            "each evaluated once per call in closed form: there are no hyperbolics and no "
+            "cancellation near 0, so no series branch (``SWITCH = 0``).", 88)
     out = [_header(fam.source, source_hash(fam.source_exprs()))]
     names = ", ".join(str(p) for p in fam.parameters)
-    doc_basis = "\n".join(f"    h{i} = {sp.sstr(_from_atoms(h, var))}" for i, h in enumerate(basis))
-    out.append(f'''"""{fam.description} ({fam.equations} of Jesse, Baddorf, Kalinin 2006).
+    doc_basis = "\n".join(f"    h{i} = {sp.sstr(from_atoms(h, var))}" for i, h in enumerate(basis))
+    out.append(f'''"""{fam.module}: {fam.description}.
+
+Source: {fam.source}, {fam.equations} of Jesse, Baddorf, Kalinin 2006; signs as there.
 
 Transfer coefficients as NumPy functions of ``{vname}``, vectorised over ``{vname}`` (real or
 complex, ``Re {vname} > 0``) and broadcasting over the parameters ({names}).
@@ -323,14 +359,11 @@ Every numerator and the denominator are sums of parameter monomials times the ba
 
 {doc_basis}
 
-each evaluated once per call: by its Taylor series for ``|{vname}| < SWITCH`` (where the
-closed form cancels), else in closed form divided by ``cosh({vname})**{degree}`` with
-``tanh`` and ``sech`` built from ``exp(-{vname})``, so nothing overflows up to
-``{vname} = 1e3`` and beyond.
+{evaluation}
 """
 import numpy as np
 
-__all__ = [{", ".join(repr(f.name) for f in fam.functions)}, "PARAMETERS", "DRIVES", "SWITCH"]
+__all__ = {sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"])!r}
 
 PARAMETERS = {tuple(str(p) for p in fam.parameters)!r}
 DRIVES = {tuple(name for name, _ in fam.functions[0].outputs)!r}
@@ -347,11 +380,12 @@ def _basis({vname}):
     if switch > 0:
         body.append(f"    small = np.abs({vname}) < SWITCH")
         body.append(f"    x = {vname}[small]")
-        for i, h in enumerate(basis):
-            p, q, coeffs = series_branch(h, var, switch)
+        series = [series_branch(h, var, switch) for h in basis]
+        for q in sorted({q for _, q, _ in series}):
+            body.append(f"    _u{q} = x**{q}")
+        for i, (p, q, coeffs) in enumerate(series):
             lead = f"x**{p} * " if p > 1 else ("x * " if p == 1 else "")
-            u = "x" if q == 1 else f"x**{q}"
-            body.append(f"    out[{i}, small] = {lead}({_horner(coeffs, u)})")
+            body.append(f"    out[{i}, small] = {lead}({_horner(coeffs, f'_u{q}')})")
         body.append("    large = ~small")
         body.append(f"    x = {vname}[large]")
         target = "large"
@@ -380,6 +414,12 @@ def _basis({vname}):
         used = sorted({s for e in [den, *nums] for s in e.free_symbols if s in hsyms},
                       key=lambda s: int(str(s)[2:]))
         lines, reduced = _cse_lines([den, *nums])
+        if len(used) == len(hsyms):
+            unpack = f"{', '.join(map(str, used))} = _basis({vname})"
+        else:
+            # Only part of the basis enters this function: pick its rows.
+            rows = [int(str(s)[2:]) for s in used]
+            unpack = f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
         doc_out = "\n".join(f"        per unit {name}" for name, _ in fn.outputs)
         out.append(f'''
 
@@ -396,12 +436,13 @@ def {fn.name}({vname}, {names}):
     tuple of ndarray
 {doc_out}
     """
-    {", ".join(str(s) for s in used)}{"," if len(used) == 1 else ""} = _basis({vname})[{[int(str(s)[2:]) for s in used]}]
+    {unpack}
     {vname} = np.asarray({vname})
 ''')
         out.append("\n".join(lines) + ("\n" if lines else ""))
         out.append(f"    _r = 1.0 / ({reduced[0]})\n")
-        out.append(f"    return ({', '.join(f'({r}) * _r' for r in reduced[1:])},)\n")
+        values = [f"({r}) * _r" for r in reduced[1:]]
+        out.append(f"    return ({', '.join(values)}{',' if len(values) == 1 else ''})\n")
     return "".join(out)
 
 
@@ -454,7 +495,7 @@ def dimensionless(den: sp.Expr, var: sp.Symbol) -> sp.Expr:
     # Only the dimensionless parameters, the variable and the atoms may remain.
     result = sp.expand(sign * poly.as_expr())
     assert result.free_symbols <= {var, k1_over_k, k2_ratio, k2t_HL, _c, _s, _ch, _sh}, result
-    return _from_atoms(result, var)
+    return from_atoms(result, var)
 
 
 def beta1_free(dps: int = 30) -> str:
@@ -527,10 +568,14 @@ FLINT = _FlintMath()
         body = scaled(atoms, degree) if degree else atoms
         sig = "z, m" + (", *, " + ", ".join(params) if params else "")
         pdoc = "".join(f"\n    {p} : {_PARAM_DOC[p]}" for p in params)
-        lines = ["    _c = m.cos(z)", "    _s = m.sin(z)"]
+        used = body.free_symbols
+        lines = [line for atom, line in [(_c, "    _c = m.cos(z)"), (_s, "    _s = m.sin(z)")]
+                 if atom in used]
         if degree:
-            lines += ["    _e = m.exp(-z)", "    _e2 = _e * _e",
-                      "    _tanh = (1 - _e2) / (1 + _e2)", "    _sech = 2 * _e / (1 + _e2)"]
+            lines += ["    _e = m.exp(-z)", "    _e2 = _e * _e"]
+            lines += [line for atom, line in [(_tanh, "    _tanh = (1 - _e2) / (1 + _e2)"),
+                                              (_sech, "    _sech = 2 * _e / (1 + _e2)")]
+                      if atom in used]
         shown = sp.sstr(expr.subs(var, z))
         scale = f" / cosh(z)**{degree}" if degree else ""
         out.append(f'''

@@ -3,3 +3,14 @@
 The numeric API never needs SymPy; the symbolic source lives in :mod:`pfmdyn.derivations`.
 """
 __version__ = "0.1.0"
+
+from .cantilever import Cantilever
+from .transfer import (free_end_transfer, frictionless_stiff_transfer, frictionless_transfer,
+                       indentation_stiff_transfer, indentation_transfer, pinned_transfer,
+                       sliding_friction_transfer, tip_slope_transfer, torsion_elastic_transfer,
+                       torsion_force_transfer)
+
+__all__ = ["Cantilever", "free_end_transfer", "frictionless_stiff_transfer",
+           "frictionless_transfer", "indentation_stiff_transfer", "indentation_transfer",
+           "pinned_transfer", "sliding_friction_transfer", "tip_slope_transfer",
+           "torsion_elastic_transfer", "torsion_force_transfer"]

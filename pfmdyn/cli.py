@@ -14,7 +14,9 @@ import sys
 # subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "verify": ("pfmdyn.verify", "derive every result and give each claim of the paper a verdict"),
+    "codegen": ("pfmdyn.codegen", "write generated/ from derivations/ (--check: fail if stale)"),
     "deconvolve": ("pfmdyn.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
+    "book": ("pfmdyn.book", "build the verified book"),
 }
 
 
