@@ -1,0 +1,316 @@
+"""``pfmdyn book``: build the verified book (jupyter-book 1.x, every page executed).
+
+The book's chapters (MyST notebooks in ``book/``) compute everything at build time.  The
+verdicts of ``pfmdyn verify`` are computed once per build, before Sphinx starts, written to
+``<out>/verdicts.json`` and passed to the notebook kernels through the environment variable
+:data:`VERDICTS_ENV`; the chapters read them with :func:`verdicts`.  The build is strict:
+notebook execution is forced, a cell that raises fails the build, and Sphinx warnings are
+errors (``-W -n``).
+
+This module also holds the small display helpers the chapters share (:func:`claims_table`,
+:func:`math`), so that the pages contain prose and computation only.
+"""
+from __future__ import annotations
+
+import hashlib
+import html
+import json
+import os
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+from .cli import UserError
+
+VERDICTS_ENV = "PFMDYN_BOOK_VERDICTS"
+"""Path of the verdicts JSON written by ``pfmdyn book`` for the chapters to read."""
+
+VERDICT_ORDER = ("holds", "holds_up_to_sign_convention", "erratum", "undecidable")
+
+# Chapter (book page) that discusses each claim, by claim-id prefix; the first match wins.
+CHAPTERS: tuple[tuple[str, str], ...] = (
+    ("eq2.", "model"), ("k.", "model"), ("A.", "model"),
+    ("eq5.", "elastic_contact"), ("eq6", "elastic_contact"), ("eq7.", "elastic_contact"),
+    ("eq8.", "elastic_contact"), ("eq9.", "elastic_contact"), ("eq10.", "elastic_contact"),
+    ("contact.", "elastic_contact"),
+    ("eq11", "limits"), ("eq12", "limits"), ("eq13", "limits"), ("eq14", "limits"),
+    ("eq15", "limits"), ("eq16", "limits"), ("eq17", "limits"), ("eq18", "limits"),
+    ("eq19.", "pinned"), ("eq20.roots", "roots"), ("eq20.", "pinned"),
+    ("eq22.roots", "roots"), ("eq22.contact_to_free_ratio", "roots"), ("eq22.", "free_end"),
+    ("eq23.", "frictionless"), ("eq24.", "frictionless"),
+    ("eq26.", "sliding_friction"),
+    ("eq28.resonances_increase_with_k1", "roots"),
+    ("eq27.", "indentation"), ("eq28.", "indentation"), ("eq29.", "indentation"),
+    ("eq35.roots", "roots"), ("eq30.", "torsion"), ("eq33.", "torsion"), ("eq35.", "torsion"),
+    ("exp.", "roots"), ("table1.", "roots"),
+    ("eq36.", "domains"), ("fig6.", "domains"), ("fig7.", "domains"), ("eq39.", "domains"),
+    ("eq40.", "domains"),
+    ("eq41.", "deconvolution"),
+)
+
+
+def chapter_of(claim_id: str) -> str | None:
+    """The book page discussing a claim (``None`` if no chapter does).
+
+    >>> chapter_of("eq22.roots"), chapter_of("eq22.static"), chapter_of("nope")
+    ('roots', 'free_end', None)
+    """
+    for prefix, page in CHAPTERS:
+        if claim_id.startswith(prefix):
+            return page
+    return None
+
+
+# --- verdicts, computed once per build -------------------------------------------------------
+
+def _source_digest() -> str:
+    """sha256 of the derivation sources: the key of the fallback verdict cache."""
+    from . import derivations
+    root = Path(derivations.__file__).resolve().parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.suffix in (".py", ".yaml") and "__pycache__" not in path.parts:
+            h.update(str(path.relative_to(root)).encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def compute_verdicts() -> list[dict]:
+    """All verdicts of ``pfmdyn verify`` as plain dictionaries."""
+    from .verify import compute
+    return [v.as_dict() for v in compute(progress=False)]
+
+
+def write_verdicts(path: Path) -> list[dict]:
+    """Compute the verdicts and write them to ``path`` (JSON)."""
+    data = compute_verdicts()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"digest": _source_digest(), "claims": data}, indent=1))
+    return data
+
+
+_CACHE: list[dict] | None = None
+
+
+def verdicts() -> list[dict]:
+    """The verdicts of this build, in registry order.
+
+    Read from the file named by :data:`VERDICTS_ENV` (set by ``pfmdyn book``).  When a page
+    is executed outside ``pfmdyn book`` (e.g. ``jupyter-book build book``), they are
+    computed once and cached in the temporary directory under a digest of the derivation
+    sources, so a changed derivation is never served stale.
+    """
+    global _CACHE
+    if _CACHE is None:
+        env = os.environ.get(VERDICTS_ENV)
+        if env:
+            _CACHE = json.loads(Path(env).read_text())["claims"]
+        else:
+            path = Path(tempfile.gettempdir()) / f"pfmdyn-book-verdicts-{_source_digest()}.json"
+            _CACHE = json.loads(path.read_text())["claims"] if path.exists() else write_verdicts(path)
+    return _CACHE
+
+
+def claims(*ids: str) -> list[dict]:
+    """The verdicts with these exact ids; a missing id raises (so a renamed claim fails the build)."""
+    by_id = {v["id"]: v for v in verdicts()}
+    missing = [i for i in ids if i not in by_id]
+    if missing:
+        raise KeyError(f"no verdict for claim id(s) {missing}")
+    return [by_id[i] for i in ids]
+
+
+def claims_of(page: str) -> list[dict]:
+    """The verdicts a chapter discusses (see :data:`CHAPTERS`), in registry order."""
+    return [v for v in verdicts() if chapter_of(v["id"]) == page]
+
+
+def counts() -> Counter:
+    """Number of claims per verdict."""
+    return Counter(v["verdict"] for v in verdicts())
+
+
+# --- display helpers for the chapters ---------------------------------------------------------
+
+_BADGE = {"holds": "holds", "holds_up_to_sign_convention": "sign convention",
+          "erratum": "erratum", "undecidable": "undecidable"}
+
+
+def _badge(verdict: str) -> str:
+    return f'<span class="pfm-verdict pfm-{verdict}">{_BADGE.get(verdict, verdict)}</span>'
+
+
+class HTML:
+    """Raw HTML output (rendered as is by myst-nb)."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def _repr_html_(self) -> str:
+        return self.text
+
+
+def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "correct"),
+                 link: bool = False) -> HTML:
+    """An HTML table of verdicts; every cell is escaped text."""
+    heads = {"id": "claim", "where": "where", "printed": "as printed", "verdict": "verdict",
+             "evidence": "evidence", "correct": "correct form", "chapter": "chapter"}
+    out = ['<table class="pfm-claims"><thead><tr>']
+    out += [f"<th>{heads[c]}</th>" for c in columns]
+    out.append("</tr></thead><tbody>")
+    for v in rows:
+        out.append(f'<tr class="pfm-row-{v["verdict"]}">')
+        for c in columns:
+            if c == "verdict":
+                cell = _badge(v["verdict"])
+            elif c == "id":
+                cell = f"<code>{html.escape(v['id'])}</code>"
+            elif c == "chapter":
+                page = chapter_of(v["id"])
+                cell = f'<a href="{page}.html">{page}</a>' if page and link else html.escape(page or "—")
+            else:
+                cell = html.escape(v.get(c) or "")
+            out.append(f"<td>{cell}</td>")
+        out.append("</tr>")
+    out.append("</tbody></table>")
+    return HTML("".join(out))
+
+
+def errata_list(rows: list[dict]) -> HTML:
+    """One block per erratum: id, where, verdict, then printed / correct / proof / chapter."""
+    out = []
+    for v in rows:
+        page = chapter_of(v["id"])
+        chapter = f'<a href="{page}.html">{page}</a>' if page else "—"
+        out.append(
+            f'<div class="pfm-erratum"><p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
+            f'({html.escape(v["where"])}) {_badge(v["verdict"])}</p><dl>'
+            f'<dt>As printed</dt><dd>{html.escape(v.get("printed") or "")}</dd>'
+            f'<dt>Correct</dt><dd>{html.escape(v.get("correct") or "(see proof)")}</dd>'
+            f'<dt>Proof</dt><dd>{html.escape(v.get("evidence") or "")}</dd>'
+            f'<dt>Chapter</dt><dd>{chapter}</dd></dl></div>')
+    return HTML("".join(out))
+
+
+def latex(expr) -> str:
+    r"""LaTeX of a SymPy object, folding ``\sin{\left(\beta \right)}`` to ``\sin {\beta}``.
+
+    >>> import sympy as sp
+    >>> latex(sp.sin(sp.Symbol("beta")))
+    '\\sin {\\beta}'
+    """
+    import sympy as sp
+    if isinstance(expr, str):
+        return expr
+    return sp.latex(expr, fold_func_brackets=True, symbol_names=_TIP_NAMES)
+
+
+def math(lhs: str, expr):
+    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string)."""
+    from IPython.display import Math
+    body = latex(expr)
+    return Math(f"{lhs} = {body}" if lhs else body)
+
+
+def aligned(rows, *, relation: str = "="):
+    """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math."""
+    from IPython.display import Math
+    lines = [f"{latex(lhs)} &{relation} {latex(rhs)}" for lhs, rhs in rows]
+    return Math(r"\begin{aligned}" + r" \\[3pt] ".join(lines) + r"\end{aligned}")
+
+
+_TIP_NAMES: dict = {}
+
+
+def tip_values():
+    """Symbols standing for ``u0(L) ... u0'''(L)``, typeset as such by :func:`latex`."""
+    import sympy as sp
+    syms = sp.symbols("U_0:4")
+    _TIP_NAMES.update({s: f"u_0{p}(L)" for s, p in zip(syms, ("", "'", "''", "'''"))})
+    return list(syms)
+
+
+def ratios(rows):
+    r"""Display printed/derived for ``(label, printed, derived)`` rows: the exact ratio of the
+    canonical trigonometric normal forms, or "not constant" (then the 50-digit spread).
+    """
+    from .derivations.checks.core import compare
+    out = []
+    for label, printed, derived in rows:
+        cmp = compare(printed, derived)
+        if cmp.exact_ratio is not None and cmp.constant:
+            value = cmp.exact_ratio
+        else:
+            value = (r"\text{not a constant: }|\text{ratio}| \in [%.3g, %.3g]"
+                     % tuple(sorted(float(abs(v)) for v in cmp.numeric_ratios)[::len(cmp.numeric_ratios) - 1]))
+        out.append((rf"\dfrac{{{label}\big|_\text{{printed}}}}{{{label}\big|_\text{{derived}}}}", value))
+    return aligned(out)
+
+
+def conditions(exprs):
+    """Display boundary conditions, given as expressions that vanish, as ``expr = 0``."""
+    return aligned([(e, 0) for e in exprs])
+
+
+# --- the subcommand ------------------------------------------------------------------------------
+
+def book_dir() -> Path:
+    """The ``book/`` folder of the source tree."""
+    here = Path(__file__).resolve().parent.parent / "book"
+    if not (here / "_config.yml").exists():
+        raise UserError(f"book sources not found at {here} (pfmdyn book needs the source tree)")
+    return here
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--out", metavar="DIR", default=None,
+                        help="build directory; the HTML goes to DIR/html (default: book/_build)")
+
+
+def build(out: Path, *, quiet: bool = False) -> int:
+    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success)."""
+    try:
+        from jupyter_book.sphinx import build_sphinx
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise UserError(f"jupyter-book is not installed ({exc}); pip install -e '.[book]'") from exc
+    src = book_dir()
+    out = out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    verdict_file = out / "verdicts.json"
+    write_verdicts(verdict_file)
+    if not quiet:
+        print(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}",
+              file=sys.stderr)
+    os.environ[VERDICTS_ENV] = str(verdict_file)
+    result = build_sphinx(
+        src, out / "html",
+        doctreedir=out / ".doctrees",
+        noconfig=True,
+        path_config=str(src / "_config.yml"),
+        confoverrides={"external_toc_path": (src / "_toc.yml").as_posix(), "nitpicky": True,
+                       "latex_individualpages": False},
+        builder="html",
+        warningiserror=True,
+        keep_going=True,
+        freshenv=True,
+        quiet=quiet,
+    )
+    if isinstance(result, BaseException):
+        return 1
+    return int(result or 0)
+
+
+def run(args) -> int:
+    out = Path(args.out) if args.out else book_dir() / "_build"
+    t0 = time.perf_counter()
+    status = build(out)
+    elapsed = time.perf_counter() - t0
+    index = out.resolve() / "html" / "index.html"
+    if status != 0:
+        print(f"pfmdyn book: build failed (status {status}) after {elapsed:.0f} s", file=sys.stderr)
+        return 1
+    print(f"pfmdyn book: built in {elapsed:.0f} s; open {index}")
+    return 0

@@ -1,0 +1,110 @@
+"""The book builds (every page executed, warnings are errors) and renders offline.
+
+One build per test session (module-scoped fixture, ~1-2 minutes).  The rendering checks open
+built pages in headless Chromium with the network off (``unshare --net`` when available) and
+read the DOM after scripts ran: MathJax must have typeset the math, and figures must load.
+"""
+from __future__ import annotations
+
+import html
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("jupyter_book", reason="jupyter-book is not installed (pip install -e '.[book]')")
+
+CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("book")
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "pfmdyn.cli", "book", "--out", str(out)],
+                          capture_output=True, text=True, timeout=900)
+    elapsed = time.perf_counter() - t0
+    print(f"book build: {elapsed:.0f} s")
+    return proc, out / "html", elapsed
+
+
+def test_build_succeeds(built):
+    proc, html_dir, _ = built
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-5000:]
+    assert "open " in proc.stdout and str(html_dir / "index.html") in proc.stdout
+    for page in ("index", "model", "elastic_contact", "frictionless", "pinned", "free_end",
+                 "sliding_friction", "indentation", "torsion", "limits", "roots", "domains",
+                 "deconvolution", "errata", "verdicts"):
+        assert (html_dir / f"{page}.html").exists(), page
+
+
+def test_no_remote_resources(built):
+    """No page loads a script, stylesheet, font or image from the network."""
+    _, html_dir, _ = built
+    remote = re.compile(r"""(?:src|href)\s*=\s*["'](?:https?:)?//""", re.I)
+    cdn = re.compile(r"cdn\.|jsdelivr|unpkg|googleapis|cdnjs", re.I)
+    for page in html_dir.glob("*.html"):
+        text = page.read_text(encoding="utf-8")
+        for tag in re.findall(r"<(?:script|link|img)\b[^>]*>", text, re.I):
+            assert not remote.search(tag), f"{page.name}: {tag}"
+        assert not cdn.search(text), f"{page.name} names a CDN"
+
+
+def test_numbers_come_from_the_verdicts(built):
+    """The errata page states the erratum count of this build's verdicts."""
+    import json
+    _, html_dir, _ = built
+    claims = json.loads((html_dir.parent / "verdicts.json").read_text())["claims"]
+    n_errata = sum(c["verdict"] == "erratum" for c in claims)
+    text = re.sub(r"<[^>]+>", "", (html_dir / "errata.html").read_text(encoding="utf-8"))
+    assert f"{len(claims)} claims, {n_errata} are errata" in " ".join(text.split())
+    assert text.count("As printed") == sum(c["verdict"] in ("erratum", "holds_up_to_sign_convention")
+                                           for c in claims)
+
+
+def _dump_dom(page: Path, tmp_path: Path) -> str:
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           "--no-first-run", f"--user-data-dir={tmp_path / 'chromium-profile'}",
+           "--virtual-time-budget=15000", "--dump-dom", page.as_uri()]
+    unshare = shutil.which("unshare")
+    if unshare and hasattr(os, "geteuid") and os.geteuid() == 0:
+        probe = subprocess.run([unshare, "--net", "true"], capture_output=True)
+        if probe.returncode == 0:
+            cmd = [unshare, "--net", *cmd]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout
+
+
+def _visible_text(dom: str) -> str:
+    dom = re.sub(r"<(script|style|mjx-assistive-mml)\b.*?</\1>", " ", dom, flags=re.S | re.I)
+    return html.unescape(re.sub(r"<[^>]+>", " ", dom))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
+@pytest.mark.parametrize("page", ["errata", "limits"])
+def test_math_typeset_offline(built, tmp_path, page):
+    _, html_dir, _ = built
+    dom = _dump_dom(html_dir / f"{page}.html", tmp_path)
+    assert dom.count("<mjx-container") >= 3, "MathJax did not typeset the page"
+    text = _visible_text(dom)
+    for raw in ("$$", r"\[", r"\(", r"\begin{aligned}", r"\frac"):
+        assert raw not in text, f"raw TeX {raw!r} left in {page}.html"
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
+@pytest.mark.parametrize("page", ["limits", "domains", "deconvolution"])
+def test_figures_load(built, tmp_path, page):
+    _, html_dir, _ = built
+    dom = _dump_dom(html_dir / f"{page}.html", tmp_path)
+    sources = [s for s in re.findall(r"<img\b[^>]*\bsrc=\"([^\"]+)\"", dom) if s.endswith(".png")]
+    assert sources, f"no figure on {page}.html"
+    for src in sources:
+        assert not src.startswith(("http:", "https:", "//"))
+        assert (html_dir / src).resolve().is_file(), src
