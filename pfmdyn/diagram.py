@@ -1,0 +1,519 @@
+"""Frequency-bias response diagrams of vertical PFM (Section IV.2, Figs. 6 and 7) and ``pfmdyn diagram``.
+
+The vertical signal is the measured height ``A = (2L/3) theta`` (Section III.2) per unit
+``V_ac`` for frictionless contact (Eq. 23, ``k2 -> 0``: vertical coupling only, which is
+what the text of IV.2 describes; Eq. 28, which the paper cites for Fig. 6, has no
+distributed load, see ``generated/errata.md``, ``fig6.model_reference``).  Three drives add:
+
+* electromechanical, ``d1 = d_eff V_ac`` (bias independent);
+* local electrostatic, ``f0 = F_loc dV V_ac`` on the tip;
+* non-local electrostatic, ``q0 = eps0 w dV V_ac / H**2`` per unit length of the cantilever
+  (the first harmonic of ``eps0 w (V_tip - V_surf)**2 / (2 H**2)``; Eq. 36 has an extra 1/2,
+  erratum ``eq36.q0``),
+
+with ``dV = V_dc - V_surf``.  Signs follow the project convention (``u``, ``d1``, ``f0``,
+``q0`` positive away from the surface) with the drives exactly as written above.  Because
+the bias enters linearly, the transfer coefficients are evaluated once per frequency and
+the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
+
+:func:`plot_diagram` draws the amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour
+(Fig. 7) maps; ``run``/``add_arguments`` are the ``pfmdyn diagram`` subcommand.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .cantilever import Cantilever
+
+__all__ = ["EPSILON_0", "SILICON_DENSITY", "TABLE1", "ResponseMap", "table1_cantilever",
+           "cantilever_from_spring_constant", "response_map", "nulling_bias",
+           "low_frequency_crossover_bias", "KINDS", "plot_diagram"]
+
+EPSILON_0 = 8.8541878128e-12
+"""Vacuum permittivity, F/m."""
+SILICON_DENSITY = 2330.0
+"""kg/m**3."""
+TABLE1 = {  # width, thickness, length (m), spring constant (N/m): Table 1 of the paper
+    "A": (24e-6, 8e-6, 224e-6, 45.0),
+    "B": (24e-6, 3e-6, 224e-6, 2.4),
+    "C": (24e-6, 1.05e-6, 224e-6, 0.1),
+}
+# Parameters of Section IV.2 (SI): tip height, d_eff, contact stiffness (F_loc is 0 in
+# Fig. 6, 14 nN/V or 0.7 nN/V in Fig. 7, so it has no single default but 0).
+PAPER_TIP_HEIGHT = 15e-6
+PAPER_D_EFF = 5e-12
+PAPER_K1 = 1000.0
+
+
+def cantilever_from_spring_constant(*, spring_constant, length, width, thickness,
+                                    density=SILICON_DENSITY, quality_factor=math.inf) -> Cantilever:
+    """Rectangular cantilever whose Young's modulus is chosen to reproduce ``spring_constant``.
+
+    ``E = 4 k L**3 / (w h**3)`` (from ``k = E w h**3 / (4 L**3)``, Section III.2); the first
+    free resonance then follows from the geometry and ``density``.  Table 1 prints ``k``
+    and the geometry but no modulus; this keeps the printed ``k`` exact (the implied
+    moduli, 162-167 GPa, are those of silicon).
+
+    Parameters
+    ----------
+    spring_constant : float
+        ``k`` in N/m (> 0).
+    length, width, thickness : float
+        ``L``, ``w``, ``h`` in m (> 0).
+    density : float, optional
+        kg/m**3, silicon by default.
+    quality_factor : float, optional
+        ``Q`` of the loss factor ``1/Q``; ``inf`` (default) is the paper's lossless model.
+
+    Returns
+    -------
+    Cantilever
+
+    Examples
+    --------
+    >>> c = cantilever_from_spring_constant(spring_constant=45.0, length=224e-6,
+    ...                                     width=24e-6, thickness=8e-6)
+    >>> round(c.spring_constant, 6), round(c.resonance_frequency / 1e3, 1)   # N/m, kHz
+    (45.0, 216.5)
+    """
+    for name, value in [("spring_constant", spring_constant), ("length", length),
+                        ("width", width), ("thickness", thickness), ("density", density)]:
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be positive and finite, got {value!r}")
+    modulus = 4 * spring_constant * length**3 / (width * thickness**3)
+    return Cantilever.from_geometry(length=length, width=width, thickness=thickness,
+                                    youngs_modulus=modulus, density=density,
+                                    quality_factor=quality_factor)
+
+
+def table1_cantilever(name, *, quality_factor=math.inf) -> Cantilever:
+    """Cantilever ``"A"``, ``"B"`` or ``"C"`` of Table 1 (silicon, printed ``k``).
+
+    Examples
+    --------
+    >>> [round(table1_cantilever(n).resonance_frequency / 1e3, 1) for n in "ABC"]   # kHz
+    [216.5, 81.6, 28.2]
+    """
+    if name not in TABLE1:
+        raise ValueError(f"unknown cantilever {name!r}: choose one of {', '.join(TABLE1)}")
+    width, thickness, length, k = TABLE1[name]
+    return cantilever_from_spring_constant(spring_constant=k, length=length, width=width,
+                                           thickness=thickness, quality_factor=quality_factor)
+
+
+@dataclass(frozen=True)
+class ResponseMap:
+    """Vertical PFM response ``A`` per unit ``V_ac`` (m/V) on a frequency x bias grid.
+
+    The per-frequency coefficients are stored; the 2-D components (shape
+    ``(frequency.size, bias.size)``, complex) are computed on access.
+
+    Attributes
+    ----------
+    frequency_hz, bias_v : ndarray
+        Grid axes; ``bias_v`` is ``V_dc``.
+    surface_potential_v : float
+        ``V_surf``; the electrostatic drives scale with ``dV = V_dc - V_surf``.
+    piezo_coefficient : ndarray
+        Electromechanical ``A`` per ``V_ac`` (m/V), per frequency.
+    local_coefficient, nonlocal_coefficient : ndarray
+        Local and non-local electrostatic ``A`` per ``V_ac`` per volt of ``dV`` (m/V**2).
+    """
+
+    frequency_hz: np.ndarray
+    bias_v: np.ndarray
+    surface_potential_v: float
+    piezo_coefficient: np.ndarray
+    local_coefficient: np.ndarray
+    nonlocal_coefficient: np.ndarray
+
+    @property
+    def _delta_v(self) -> np.ndarray:
+        return (self.bias_v - self.surface_potential_v)[None, :]
+
+    @property
+    def piezo(self) -> np.ndarray:
+        """Electromechanical part ``A_piezo`` (bias independent, broadcast to the grid)."""
+        return np.broadcast_to(self.piezo_coefficient[:, None], (self.frequency_hz.size, self.bias_v.size))
+
+    @property
+    def local(self) -> np.ndarray:
+        """Local electrostatic part ``A_el``."""
+        return self.local_coefficient[:, None] * self._delta_v
+
+    @property
+    def nonlocal_(self) -> np.ndarray:
+        """Non-local (cantilever buckling) part ``A_nl``; trailing ``_``: ``nonlocal`` is a keyword."""
+        return self.nonlocal_coefficient[:, None] * self._delta_v
+
+    @property
+    def total(self) -> np.ndarray:
+        """``A_piezo + A_el + A_nl``."""
+        electrostatic = self.local_coefficient + self.nonlocal_coefficient
+        return self.piezo_coefficient[:, None] + electrostatic[:, None] * self._delta_v
+
+    def _magnitudes(self):
+        """``|A_piezo|, |A_el|, |A_nl|`` as real outer products (no complex 2-D arrays: faster)."""
+        delta = np.abs(self._delta_v)
+        return (np.abs(self.piezo_coefficient)[:, None], np.abs(self.local_coefficient)[:, None] * delta,
+                np.abs(self.nonlocal_coefficient)[:, None] * delta)
+
+    def dominance(self) -> np.ndarray:
+        """``|A_piezo| / (|A_piezo| + |A_nl|)`` (Fig. 6 b,d,f): 1 electromechanical, 0 non-local.
+
+        The paper plots ``A_piezo/(A_piezo + A_nl)``; with complex (or sign-changing) parts
+        that ratio is unbounded near the nulling bias, so magnitudes are used: the map
+        then reads as the electromechanical share in [0, 1].  The local part is left out,
+        as in Fig. 6.  NaN where both parts vanish.
+        """
+        piezo, _, nonlocal_ = self._magnitudes()
+        with np.errstate(invalid="ignore"):
+            return piezo / (piezo + nonlocal_)
+
+    def shares(self) -> np.ndarray:
+        """Shares ``|A_el|, |A_nl|, |A_piezo|`` over their sum, last axis (R, G, B) as in Fig. 7.
+
+        NaN where all three parts vanish.
+        """
+        piezo, local, nonlocal_ = self._magnitudes()
+        parts = np.broadcast_arrays(local, nonlocal_, piezo)   # R, G, B
+        total = local + nonlocal_ + piezo
+        out = np.empty(total.shape + (3,))
+        with np.errstate(invalid="ignore"):
+            for i, part in enumerate(parts):
+                np.divide(part, total, out=out[..., i])
+        return out
+
+
+def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force):
+    """Per-frequency ``(frequency, P, G_loc, G_nl)``: A per V_ac, and per V_ac per volt of dV."""
+    if not isinstance(cantilever, Cantilever):
+        raise TypeError(f"cantilever must be a Cantilever, got {type(cantilever).__name__}")
+    for name, value in [("width", width), ("k1", k1), ("H", H)]:
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be positive and finite, got {value!r}")
+    for name, value in [("d_eff", d_eff), ("local_force", local_force)]:
+        if not np.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value!r}")
+    frequency = np.atleast_1d(np.asarray(frequency_hz, dtype=float))
+    if frequency.ndim != 1:
+        raise ValueError("frequency_hz must be one-dimensional")
+    t = cantilever.frictionless_response(frequency, k1=k1)
+    to_height = 2 * cantilever.length / 3   # A = 2 theta L / 3 (Section III.2)
+    return (frequency, to_height * d_eff * t.vertical, to_height * local_force * t.local_force,
+            to_height * EPSILON_0 * width / H**2 * t.distributed_load)
+
+
+def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
+                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0) -> ResponseMap:
+    """Vertical PFM response per unit ``V_ac`` over frequency x bias (Figs. 6-7).
+
+    Parameters
+    ----------
+    cantilever : Cantilever
+        E.g. from :func:`table1_cantilever`; its ``quality_factor`` sets the losses.
+    frequency_hz : array_like, 1-D
+        Drive frequencies, Hz (> 0).
+    bias_v : array_like, 1-D
+        DC tip bias ``V_dc``, V.
+    width : float
+        Cantilever width ``w``, m (the non-local load is ``eps0 w dV V_ac / H**2``).
+    k1 : float, optional
+        Vertical contact stiffness, N/m (Section IV.2: 1000).
+    H : float, optional
+        Tip height = cantilever-surface separation, m (15 um).
+    d_eff : float, optional
+        Effective piezoelectric coefficient, m/V (5 pm/V); the sign is the domain's.
+    local_force : float, optional
+        ``F_loc``, N/V: ``f0 = F_loc dV V_ac`` (Fig. 7: 14 nN/V or 0.7 nN/V; Fig. 6: 0).
+    surface_potential_v : float, optional
+        ``V_surf``, V.
+
+    Returns
+    -------
+    ResponseMap
+        Coefficients per frequency; the bias enters linearly, so a 2000 x 2000 map costs
+        2000 transfer evaluations plus one broadcast.
+
+    Examples
+    --------
+    >>> c = table1_cantilever("A")
+    >>> m = response_map(c, [1e3], [0.0, 10.0], width=24e-6)
+    >>> round(float(abs(m.total[0, 0])) * 1e12, 3)   # pm/V: k1/(k + k1) d_eff at low frequency
+    4.785
+    >>> m.dominance()[0].round(3)
+    array([1. , 0.8])
+    """
+    frequency, piezo, local, nonlocal_ = _coefficients(
+        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
+    bias = np.atleast_1d(np.asarray(bias_v, dtype=float))
+    if bias.ndim != 1 or not np.all(np.isfinite(bias)):
+        raise ValueError("bias_v must be a finite one-dimensional array")
+    if not np.isfinite(surface_potential_v):
+        raise ValueError(f"surface_potential_v must be finite, got {surface_potential_v!r}")
+    return ResponseMap(frequency, bias, float(surface_potential_v), piezo, local, nonlocal_)
+
+
+def nulling_bias(cantilever, frequency_hz, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
+                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0) -> np.ndarray:
+    """DC bias minimising ``|A|`` at each frequency (where the PFM signal is nulled).
+
+    With ``A = P + G (V - V_surf)``, ``G = G_loc + G_nl``, the real ``V`` minimising
+    ``|A|**2`` is ``V_null = V_surf - Re(P conj(G)) / |G|**2``.  Without losses ``P/G`` is
+    real and ``A(V_null) = 0`` exactly; with losses ``|A(V_null)|`` is the residual
+    ``|Im(P conj(G))| / |G|``.  NaN where ``G = 0`` (no electrostatic drive).
+
+    Parameters are those of :func:`response_map`.
+
+    Returns
+    -------
+    ndarray
+        ``V_null`` per frequency, V.
+
+    Examples
+    --------
+    >>> c = table1_cantilever("B")
+    >>> v = nulling_bias(c, [1e3, 5e5], width=24e-6)
+    >>> m = response_map(c, [1e3, 5e5], v, width=24e-6)
+    >>> bool(abs(m.total[0, 0]) < 1e-9 * abs(m.piezo[0, 0]))
+    True
+    """
+    _, piezo, local, nonlocal_ = _coefficients(
+        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
+    g = local + nonlocal_
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return surface_potential_v - np.real(piezo * np.conj(g)) / np.abs(g) ** 2
+
+
+def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
+                                 d_eff=PAPER_D_EFF) -> float:
+    """``|dV|`` at which ``|A_nl| = |A_piezo|`` far below the first contact resonance (Fig. 6 arrow).
+
+    Static frictionless contact (Eq. 23 at ``beta -> 0``): ``A_piezo = k1 d_eff / (k + k1)``
+    and ``A_nl = L (8k - k1) q0 / (24 k (k + k1))`` per ``V_ac``, so
+    ``dV = 24 k |d_eff| H**2 k1 / (eps0 w L |k1 - 8k|)`` (``k1 >> k``: ``24 k |d_eff| H**2 /
+    (eps0 w L)``, the erratum ``eq36.spring_constant_condition``).  Infinite at ``k1 = 8k``,
+    where the static non-local slope vanishes.
+
+    Examples
+    --------
+    >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
+    [39.883, 1.388, 0.057]
+    """
+    k, length = cantilever.spring_constant, cantilever.length
+    with np.errstate(divide="ignore"):
+        return float(24 * k * abs(d_eff) * H**2 * k1
+                     / (EPSILON_0 * width * length * np.abs(np.float64(k1 - 8 * k))))
+
+
+# --- plotting: Figure objects saved directly (Agg), no pyplot, so no GUI backend is selected
+# and a notebook's pyplot state is left alone.  Bias is horizontal (V) and frequency vertical
+# (kHz), as in the paper's measured diagrams (Figs. 8-10): the bias-independent resonance
+# lines are horizontal and the linear-in-bias region opens as a V.
+
+KINDS = ("amplitude", "phase", "dominance", "rgb")
+
+
+def _rgb_image(response: ResponseMap) -> np.ndarray:
+    """Shares (R local, G non-local, B electromechanical) scaled so the largest is 1.
+
+    Dividing by the per-pixel maximum rather than the sum shows a dominant mechanism at full
+    intensity and an even mixture as a bright blend, instead of darkening every mixture.
+    """
+    shares = response.shares()
+    with np.errstate(invalid="ignore"):
+        image = shares / shares.max(axis=-1, keepdims=True)
+    return np.nan_to_num(image)
+
+
+def plot_diagram(response: ResponseMap, kind: str, path, *, title: str = "",
+                 log_frequency: bool = False) -> Path:
+    """Draw one diagram of ``response`` and save it as PNG.
+
+    Parameters
+    ----------
+    response : ResponseMap
+        From :func:`pfmdyn.diagram.response_map`.
+    kind : {"amplitude", "phase", "dominance", "rgb"}
+        ``|A|`` on a log colour scale (Fig. 6 a,c,e); phase of ``A`` in degrees;
+        ``|A_piezo|/(|A_piezo| + |A_nl|)`` in grey (white electromechanical, Fig. 6 b,d,f);
+        the three-colour map of Fig. 7 (blue electromechanical, red local, green non-local).
+    path : str or Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+    log_frequency : bool, optional
+        Logarithmic frequency axis.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> m = response_map(table1_cantilever("C"), np.linspace(1e4, 1e6, 40),
+    ...                  np.linspace(-5, 5, 30), width=24e-6, local_force=14e-9)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_diagram(m, "rgb", Path(tmp) / "d.png").stat().st_size > 0
+    True
+    """
+    # Imported here so that the computational API does not pay for matplotlib.
+    from matplotlib.colors import LogNorm
+    from matplotlib.figure import Figure
+
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    ax = fig.subplots()
+    bias, khz = response.bias_v, response.frequency_hz / 1e3
+    mesh = dict(shading="nearest", rasterized=True)
+    if kind == "amplitude":
+        amplitude = np.abs(response.total)
+        # Without losses the peaks are unbounded and the nulls exact zeros: percentiles keep
+        # the colour scale on the map rather than on a few pixels next to a root.
+        positive = amplitude[amplitude > 0]
+        low, high = np.percentile(positive, [1.0, 99.5]) if positive.size else (1e-12, 1e-11)
+        image = ax.pcolormesh(bias, khz, np.maximum(amplitude, low), cmap="inferno",
+                              norm=LogNorm(low, max(high, low * 10)), **mesh)
+        fig.colorbar(image, ax=ax, label="amplitude $|A|/V_{ac}$ (m/V)", extend="both")
+    elif kind == "phase":
+        image = ax.pcolormesh(bias, khz, np.angle(response.total, deg=True), cmap="twilight",
+                              vmin=-180, vmax=180, **mesh)
+        fig.colorbar(image, ax=ax, label="phase of $A$ (deg)", ticks=[-180, -90, 0, 90, 180])
+    elif kind == "dominance":
+        image = ax.pcolormesh(bias, khz, response.dominance(), cmap="gray", vmin=0, vmax=1, **mesh)
+        fig.colorbar(image, ax=ax,
+                     label=r"$|A_{piezo}|/(|A_{piezo}|+|A_{nl}|)$ (1 = electromechanical)")
+    else:
+        ax.pcolormesh(bias, khz, _rgb_image(response), **mesh)
+        handles = [ax.fill_between([], [], color=c, label=label) for c, label in
+                   [("blue", "electromechanical"), ("red", "local electrostatic"),
+                    ("lime", "non-local electrostatic")]]
+        ax.legend(handles=handles, loc="upper left", fontsize="small", framealpha=0.8)
+    if log_frequency:
+        ax.set_yscale("log")
+    ax.set_xlabel(r"bias $V_{dc}$ (V)" if response.surface_potential_v == 0
+                  else rf"bias $V_{{dc}}$ (V), $V_{{surf}}$ = {response.surface_potential_v:g} V")
+    ax.set_ylabel("frequency (kHz)")
+    ax.set_title(title, fontsize="medium")
+    fig.savefig(path, dpi=130)
+    return Path(path)
+
+
+# --- command line -------------------------------------------------------------------------
+
+def add_arguments(parser) -> None:
+    """Options of ``pfmdyn diagram``."""
+    parser.add_argument("--cantilever", default="A", metavar="A|B|C|custom",
+                        help="Table 1 cantilever, or 'custom' with --k --length --width --thickness")
+    parser.add_argument("--k", type=float, help="custom: spring constant, N/m")
+    parser.add_argument("--length", type=float, help="custom: length, um")
+    parser.add_argument("--width", type=float, help="custom: width, um")
+    parser.add_argument("--thickness", type=float, help="custom: thickness, um")
+    parser.add_argument("--density", type=float, help="custom: density, kg/m^3 (silicon, 2330)")
+    parser.add_argument("--quality-factor", type=float, default=math.inf,
+                        help="Q of the loss factor 1/Q (default: lossless, as in the paper)")
+    parser.add_argument("--k1", type=float, default=PAPER_K1, help="contact stiffness, N/m (1000)")
+    parser.add_argument("--tip-height", type=float, default=PAPER_TIP_HEIGHT * 1e6, help="H, um (15)")
+    parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF * 1e12, help="d_eff, pm/V (5)")
+    parser.add_argument("--local-force", type=float, default=0.0, metavar="NN_PER_V",
+                        help="F_loc, nN/V (0 as in Fig. 6; 14 or 0.7 as in Fig. 7)")
+    parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V")
+    parser.add_argument("--kind", choices=KINDS,
+                        default="amplitude", help="what to draw (default amplitude)")
+    parser.add_argument("--fmin", type=float, default=1e3, help="lowest frequency, Hz (1e3)")
+    parser.add_argument("--fmax", type=float, default=3e6, help="highest frequency, Hz (3e6)")
+    parser.add_argument("--log-frequency", action="store_true", help="log-spaced frequency axis")
+    parser.add_argument("--vmin", type=float, default=-10.0, help="lowest V_dc, V (-10)")
+    parser.add_argument("--vmax", type=float, default=10.0, help="highest V_dc, V (10)")
+    parser.add_argument("--frequency-points", type=int, default=1000)
+    parser.add_argument("--bias-points", type=int, default=401)
+    parser.add_argument("--out", required=True, type=Path, help="PNG file to write")
+    parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
+
+
+def _cli_cantilever(args):
+    """``(Cantilever, width in m)`` from the options; errors as :class:`UserError`."""
+    from .cli import UserError
+    custom = {"k": args.k, "length": args.length, "width": args.width, "thickness": args.thickness,
+              "density": args.density}
+    if args.cantilever == "custom":
+        missing = [f"--{name}" for name, value in custom.items() if value is None and name != "density"]
+        if missing:
+            raise UserError(f"--cantilever custom needs {' '.join(missing)}")
+        for name, value in custom.items():   # checked here to report the user's units
+            if value is not None and not (np.isfinite(value) and value > 0):
+                raise UserError(f"--{name} must be positive and finite, got {value:g}")
+        try:
+            lever = cantilever_from_spring_constant(
+                spring_constant=args.k, length=args.length * 1e-6, width=args.width * 1e-6,
+                thickness=args.thickness * 1e-6,
+                density=SILICON_DENSITY if args.density is None else args.density,
+                quality_factor=args.quality_factor)
+        except ValueError as exc:
+            raise UserError(str(exc)) from None
+        return lever, args.width * 1e-6
+    if args.cantilever not in TABLE1:
+        raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
+    given = [f"--{name}" for name, value in custom.items() if value is not None]
+    if given:
+        raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
+    try:
+        lever = table1_cantilever(args.cantilever, quality_factor=args.quality_factor)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    return lever, TABLE1[args.cantilever][0]
+
+
+def _write_csv(path, response: ResponseMap) -> None:
+    f, v = np.meshgrid(response.frequency_hz, response.bias_v, indexing="ij")
+    total = response.total
+    columns = np.column_stack([f.ravel(), v.ravel(), np.abs(total).ravel(),
+                               np.angle(total, deg=True).ravel(), response.shares().reshape(-1, 3)])
+    np.savetxt(path, columns, delimiter=",", fmt="%.10g", comments="",
+               header="frequency_hz,bias_v,amplitude_m_per_v,phase_deg,"
+                      "local_share,nonlocal_share,piezo_share")
+
+
+def run(args) -> int:
+    """Compute the diagram, write the PNG (and CSV)."""
+    from .cli import UserError
+    lever, width = _cli_cantilever(args)
+    if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
+        raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
+    if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):
+        raise UserError(f"need --vmin < --vmax (finite), got {args.vmin:g} and {args.vmax:g} V")
+    if args.frequency_points < 2 or args.bias_points < 2:
+        raise UserError("--frequency-points and --bias-points must be at least 2")
+    if args.out.suffix.lower() != ".png":
+        raise UserError(f"--out must name a .png file, got {str(args.out)!r}")
+    for path in (args.out, args.csv):
+        if path is not None and not path.parent.is_dir():
+            raise UserError(f"directory {str(path.parent)!r} does not exist")
+    spacing = np.geomspace if args.log_frequency else np.linspace
+    frequency = spacing(args.fmin, args.fmax, args.frequency_points)
+    bias = np.linspace(args.vmin, args.vmax, args.bias_points)
+    try:
+        response = response_map(lever, frequency, bias, width=width, k1=args.k1,
+                                H=args.tip_height * 1e-6, d_eff=args.d_eff * 1e-12,
+                                local_force=args.local_force * 1e-9,
+                                surface_potential_v=args.surface_potential)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    name = args.cantilever if args.cantilever != "custom" else "custom"
+    title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
+             f"$f_1$ = {lever.resonance_frequency / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
+             f"H = {args.tip_height:g} µm, $d_{{eff}}$ = {args.d_eff:g} pm/V, "
+             f"$F_{{loc}}$ = {args.local_force:g} nN/V, Q = {args.quality_factor:g}")
+    plot_diagram(response, args.kind, args.out, title=title, log_frequency=args.log_frequency)
+    print(f"wrote {args.out}")
+    if args.csv is not None:
+        _write_csv(args.csv, response)
+        print(f"wrote {args.csv}")
+    return 0

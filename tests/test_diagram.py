@@ -1,0 +1,181 @@
+"""Frequency-bias response diagrams (Section IV.2, Figs. 6-7) and the ``pfmdyn diagram`` command."""
+import csv
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from pfmdyn import cli
+from pfmdyn.cantilever import BETA1_FREE
+from pfmdyn.diagram import (EPSILON_0, TABLE1, low_frequency_crossover_bias, nulling_bias,
+                            response_map, table1_cantilever)
+from pfmdyn.generated import characteristic
+
+K1, H, D_EFF, F_LOC, WIDTH = 1000.0, 15e-6, 5e-12, 14e-9, 24e-6
+
+
+def to_hz(lever, beta):
+    """Invert ``beta = BETA1_FREE sqrt(f / f1)`` (Cantilever.beta without losses)."""
+    return lever.resonance_frequency * (np.asarray(beta) / BETA1_FREE) ** 2
+
+
+def contact_resonances_hz(lever, f_max):
+    """Zeros of the frictionless characteristic function (Eq. 23's N), in Hz, below f_max."""
+    ratio = K1 / lever.spring_constant
+    z = np.linspace(0.5, np.sqrt(f_max / lever.resonance_frequency) * BETA1_FREE, 20000)
+    g = characteristic.frictionless(z, np, k1_over_k=ratio)
+    brackets = np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]
+    roots = [brentq(lambda x: characteristic.frictionless(x, np, k1_over_k=ratio), z[i], z[i + 1],
+                    xtol=1e-14) for i in brackets]
+    return to_hz(lever, roots)
+
+
+@pytest.mark.parametrize("name", ["A", "B", "C"])
+def test_resonance_lines_sit_at_the_derived_roots_and_do_not_move_with_bias(name):
+    lever = table1_cantilever(name)
+    resonances = contact_resonances_hz(lever, 3e6)
+    assert len(resonances) >= 2
+    for f_n in resonances:
+        frequency = np.linspace(0.99 * f_n, 1.01 * f_n, 2001)
+        m = response_map(lever, frequency, [-10.0, 0.0, 3.0, 10.0], width=WIDTH, local_force=F_LOC)
+        peaks = frequency[np.argmax(np.abs(m.total), axis=0)]
+        step = frequency[1] - frequency[0]
+        assert np.all(np.abs(peaks - f_n) <= step), (name, f_n, peaks)
+
+
+@pytest.mark.parametrize("name", ["A", "B", "C"])
+def test_low_frequency_crossover_bias(name):
+    lever = table1_cantilever(name)
+    k, length = lever.spring_constant, lever.length
+    expected = 24 * k * D_EFF * H**2 / (EPSILON_0 * WIDTH * length) * K1 / abs(K1 - 8 * k)
+    assert low_frequency_crossover_bias(lever, width=WIDTH) == pytest.approx(expected, rel=1e-12)
+    m = response_map(lever, [10.0], [expected], width=WIDTH)   # 10 Hz: static limit
+    assert abs(m.piezo_coefficient[0] / m.nonlocal_coefficient[0]) == pytest.approx(expected, rel=1e-6)
+    assert m.dominance()[0, 0] == pytest.approx(0.5, rel=1e-6)
+
+
+def test_bias_independent_band_and_linear_region_where_the_equations_say():
+    lever = table1_cantilever("C")
+    v_cross = low_frequency_crossover_bias(lever, width=WIDTH)
+    frequency = np.geomspace(100.0, 20e3, 50)   # well below the first contact resonance
+    bias = np.array([0.0, 0.01 * v_cross, -0.01 * v_cross, 100 * v_cross, 200 * v_cross, -200 * v_cross])
+    amplitude = np.abs(response_map(lever, frequency, bias, width=WIDTH).total)
+    np.testing.assert_allclose(amplitude[:, 1:3], amplitude[:, [0, 0]], rtol=0.02)   # flat band
+    np.testing.assert_allclose(amplitude[:, 4] / amplitude[:, 3], 2.0, rtol=0.02)      # linear
+    np.testing.assert_allclose(amplitude[:, 5] / amplitude[:, 4], 1.0, rtol=0.02)      # a V
+    # A stiffer cantilever has a wider flat band: the crossover scales with k (Fig. 6 arrow).
+    crossovers = [low_frequency_crossover_bias(table1_cantilever(n), width=WIDTH) for n in "ABC"]
+    assert crossovers[0] > crossovers[1] > crossovers[2]
+
+
+@pytest.mark.parametrize("name", ["A", "C"])
+def test_dominance_is_one_at_zero_bias_and_vanishes_at_large_bias(name):
+    frequency = np.linspace(1e3, 3e6, 3001)
+    m = response_map(table1_cantilever(name), frequency, [0.0, 1.0, -10.0, 1e6], width=WIDTH)
+    share = m.dominance()
+    assert np.all(share[:, 0] == 1.0)
+    assert np.all(share[:, 1] > share[:, 2]) and np.all(share[:, 2] > share[:, 3])
+    # Except next to the zeros of the non-local transfer (A_q = 0: the buckling mode leaves
+    # the tip slope unchanged), where the non-local part vanishes at every bias.
+    nonlocal_ = m.nonlocal_coefficient.real   # real without losses
+    zeros = frequency[np.nonzero(np.sign(nonlocal_[:-1]) != np.sign(nonlocal_[1:]))[0]]
+    far = np.all(np.abs(frequency[:, None] - zeros[None, :]) > 0.01 * zeros, axis=1)
+    assert zeros.size >= 1 and np.all(share[far, 3] < 1e-2)
+
+
+@pytest.mark.parametrize("name", ["A", "B", "C"])
+def test_nonlocal_share_is_enhanced_at_antiresonances_not_at_resonances(name):
+    lever = table1_cantilever(name)
+    anti = to_hz(lever, np.pi * np.arange(1, 5))   # zeros of A_v: sin(beta) = 0
+    anti = anti[anti < 3e6]
+    bias = [1.0]
+    for f_a in anti:
+        frequency = np.linspace(0.9 * f_a, 1.1 * f_a, 4001)
+        share = response_map(lever, frequency, bias, width=WIDTH).dominance()[:, 0]
+        assert abs(frequency[np.argmin(share)] - f_a) <= frequency[1] - frequency[0]
+        assert share.min() < 0.05 * np.median(share)
+    for f_n in contact_resonances_hz(lever, 3e6):
+        share = response_map(lever, f_n * np.array([0.999, 1.001]), bias, width=WIDTH).dominance()
+        assert share[0, 0] == pytest.approx(share[1, 0], abs=0.01)
+
+
+@pytest.mark.parametrize("local_force", [F_LOC, 0.7e-9, -0.7e-9])
+def test_local_versus_electromechanical_boundary_is_frequency_independent(local_force):
+    boundary = D_EFF * K1 / abs(local_force)   # |d_eff| k1 = |F_loc| |dV|
+    frequency = np.concatenate([np.geomspace(10.0, 3e6, 500),
+                                contact_resonances_hz(table1_cantilever("B"), 3e6) * (1 + 1e-6)])
+    m = response_map(table1_cantilever("B"), frequency, [-boundary, boundary], width=WIDTH,
+                     local_force=local_force, surface_potential_v=0.0)
+    shares = m.shares()
+    np.testing.assert_allclose(shares[..., 0], shares[..., 2], rtol=1e-9)
+
+
+def test_nulling_bias_nulls_the_signal_and_minimises_it_with_losses():
+    lever = table1_cantilever("B")
+    frequency = np.linspace(1e3, 3e6, 301)
+    v_null = nulling_bias(lever, frequency, width=WIDTH, local_force=0.7e-9, surface_potential_v=0.3)
+    m = response_map(lever, frequency, [0.0], width=WIDTH, local_force=0.7e-9, surface_potential_v=0.3)
+    total = m.piezo_coefficient + (m.local_coefficient + m.nonlocal_coefficient) * (v_null - 0.3)
+    assert np.all(np.abs(total) <= 1e-9 * np.abs(m.piezo_coefficient))
+    lossy = table1_cantilever("B", quality_factor=30.0)
+    for f in [5e4, 7e5, 2e6]:
+        v0 = nulling_bias(lossy, [f], width=WIDTH)[0]
+        amplitude = np.abs(response_map(lossy, [f], v0 + np.array([-1e-3, 0.0, 1e-3]), width=WIDTH).total[0])
+        assert amplitude[1] < amplitude[0] and amplitude[1] < amplitude[2]
+
+
+def test_validation():
+    lever = table1_cantilever("A")
+    with pytest.raises(ValueError, match="unknown cantilever"):
+        table1_cantilever("D")
+    with pytest.raises(ValueError, match="k1"):
+        response_map(lever, [1e3], [0.0], width=WIDTH, k1=-1.0)
+    with pytest.raises(ValueError, match="width"):
+        response_map(lever, [1e3], [0.0], width=0.0)
+    with pytest.raises(ValueError, match="frequency"):
+        response_map(lever, [-1e3], [0.0], width=WIDTH)
+
+
+def test_cli_writes_png_and_csv(tmp_path):
+    png, table = tmp_path / "d.png", tmp_path / "d.csv"
+    code = cli.main(["diagram", "--cantilever", "custom", "--k", "3", "--length", "225", "--width", "30",
+                     "--thickness", "3", "--kind", "rgb", "--local-force", "14", "--log-frequency",
+                     "--frequency-points", "30", "--bias-points", "11", "--out", str(png), "--csv", str(table)])
+    assert code == 0 and png.stat().st_size > 0
+    with open(table) as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 30 * 11
+    assert list(rows[0]) == ["frequency_hz", "bias_v", "amplitude_m_per_v", "phase_deg",
+                             "local_share", "nonlocal_share", "piezo_share"]
+    for kind in ["amplitude", "phase", "dominance"]:
+        assert cli.main(["diagram", "--kind", kind, "--frequency-points", "20", "--bias-points", "9",
+                         "--out", str(tmp_path / f"{kind}.png")]) == 0
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--cantilever", "D"], "unknown cantilever"),
+    (["--cantilever", "custom", "--k", "-1", "--length", "200", "--width", "30", "--thickness", "2"], "--k must be positive"),
+    (["--cantilever", "custom", "--k", "1", "--length", "200", "--width", "30", "--thickness", "-2"],
+     "--thickness must be positive"),
+    (["--quality-factor", "0"], "quality_factor"),
+    (["--cantilever", "custom", "--k", "1"], "needs --length --width --thickness"),
+    (["--cantilever", "B", "--k", "1"], "apply only to --cantilever custom"),
+    (["--fmin", "2e6", "--fmax", "1e6"], "--fmin < --fmax"),
+    (["--vmin", "1", "--vmax", "1"], "--vmin < --vmax"),
+    (["--k1", "-5"], "k1"),
+])
+def test_cli_errors_are_one_line(tmp_path, capsys, argv, message):
+    assert cli.main(["diagram", *argv, "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_cli_rejects_non_png_output(tmp_path, capsys):
+    assert cli.main(["diagram", "--out", str(tmp_path / "x.jpg")]) == 2
+    assert ".png" in capsys.readouterr().err
+
+
+def test_table1_spring_constants_are_the_printed_ones():
+    for name, (_, _, _, k) in TABLE1.items():
+        assert table1_cantilever(name).spring_constant == pytest.approx(k, rel=1e-12)
