@@ -481,13 +481,20 @@ def dimensionless(den: sp.Expr, var: sp.Symbol) -> sp.Expr:
 
     >>> dimensionless(free_end.solve().denominator, beta)
     cos(beta)*cosh(beta) + 1
+    >>> from .torsion import L, solve_force, xi
+    >>> dimensionless(solve_force().denominator.subs(xi, beta / L), beta)
+    cos(beta)
     """
     expr = _to_atoms(sp.expand(den.subs(_DIMENSIONLESS)), var)
     expr = sp.expand(sp.together(expr))
     num, _ = sp.fraction(sp.together(expr))
     gens = sorted(num.free_symbols, key=str)
     poly = sp.Poly(num, *gens)
-    _, poly = poly.terms_gcd()
+    # Monomial content in the variable and the parameters has no positive zeros and goes;
+    # a common power of cos, sin, cosh or sinh does have zeros and stays.
+    exponents, poly = poly.terms_gcd()
+    atoms = {_c, _s, _ch, _sh}
+    poly = sp.Poly(poly.as_expr() * sp.Mul(*[g**e for g, e in zip(gens, exponents) if g in atoms]), *gens)
     _, poly = poly.clear_denoms()
     _, poly = poly.primitive()
     lead = sp.Poly(poly.as_expr(), var).LC()

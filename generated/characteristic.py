@@ -163,15 +163,15 @@ def torsion_elastic(z, m, *, k2t_HL):
 
 
 def torsion_force(z, m):
-    """torsion-force: ``(1)`` (from derivations/torsion.py: solve_force()).
+    """torsion-force: ``(cos(z))`` (from derivations/torsion.py: solve_force()).
 
     Parameters
     ----------
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
     """
-
-    return 1
+    _c = m.cos(z)
+    return _c
 
 
 FAMILIES = {

@@ -45,7 +45,7 @@ CHAPTERS: tuple[tuple[str, str], ...] = (
     ("eq27.", "indentation"), ("eq28.", "indentation"), ("eq29.", "indentation"),
     ("eq35.roots", "roots"), ("eq30.", "torsion"), ("eq33.", "torsion"), ("eq35.", "torsion"),
     ("exp.", "roots"), ("table1.", "roots"),
-    ("eq36.", "domains"), ("fig6.", "domains"), ("fig7.", "domains"), ("eq39.", "domains"),
+    ("eq36.", "domains"), ("fig6.", "diagrams"), ("fig7.", "diagrams"), ("eq39.", "domains"),
     ("eq40.", "domains"),
     ("eq41.", "deconvolution"),
 )

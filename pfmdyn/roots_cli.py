@@ -1,0 +1,124 @@
+"""``pfmdyn roots``: certified resonance roots of one family, as a table and as JSON.
+
+Example: ``pfmdyn roots elastic --n 5 --digits 30 --k1-over-k 10 --k2-ratio 0.1 --json r.json``.
+Parameter values are read as exact decimals (``1e6``, ``0.1``); see :mod:`pfmdyn.roots`.
+"""
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+
+from .cli import UserError
+from .generated import characteristic
+from .roots import FAMILIES, PARAMETER_HELP, RootResult, family_roots
+
+__all__ = ["OPTIONS", "add_arguments", "parse_parameters", "positive_int", "run", "table"]
+
+OPTIONS = {"k1_over_k": "--k1-over-k", "k2_ratio": "--k2-ratio", "k2t_HL": "--k2t-hl"}
+"""Dimensionless parameter -> command-line option."""
+
+
+def add_arguments(parser) -> None:
+    """Arguments of ``pfmdyn roots``.
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> p.parse_args(["free", "--n", "2"]).n
+    '2'
+    """
+    parser.add_argument("family", help=f"one of: {', '.join(FAMILIES)}")
+    # Numbers are parsed in run() so that every bad value is reported as one line.
+    parser.add_argument("--n", default="5", help="number of roots, counted from the lowest (default 5)")
+    parser.add_argument("--digits", default="15", help="significant digits (default 15)")
+    for name, option in OPTIONS.items():
+        parser.add_argument(option, dest=name, default=None, help=PARAMETER_HELP[name])
+    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+
+
+def positive_int(text: str, what: str) -> int:
+    """``text`` as an integer > 0, else a :class:`UserError`.
+
+    >>> positive_int("12", "--n")
+    12
+    """
+    try:
+        value = int(text)
+    except ValueError:
+        raise UserError(f"{what} must be an integer, got {text!r}") from None
+    if value <= 0:
+        raise UserError(f"{what} must be positive, got {value}")
+    return value
+
+
+def parse_parameters(family: str, given: dict) -> dict:
+    """The family's parameters from ``{name: text or None}``, checked, as decimal strings.
+
+    >>> parse_parameters("frictionless", {"k1_over_k": "1e6", "k2_ratio": None, "k2t_HL": None})
+    {'k1_over_k': '1e6'}
+    """
+    if family not in FAMILIES:
+        raise UserError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
+    wanted = characteristic.PARAMETERS[family]
+    extra = [OPTIONS[n] for n, v in given.items() if v is not None and n not in wanted]
+    if extra:
+        raise UserError(f"family {family!r} takes no {', '.join(extra)}")
+    out = {}
+    for name in wanted:
+        text = given.get(name)
+        if text is None:
+            raise UserError(f"family {family!r} needs {OPTIONS[name]} ({PARAMETER_HELP[name]})")
+        try:
+            value = Fraction(text)
+        except (ValueError, ZeroDivisionError):
+            raise UserError(f"{OPTIONS[name]} must be a finite decimal number, got {text!r}") from None
+        if value < 0:
+            raise UserError(f"{OPTIONS[name]} must be non-negative (a stiffness), got {text}")
+        out[name] = text
+    return out
+
+
+def table(result: RootResult) -> str:
+    """A readable table of a :class:`~pfmdyn.roots.RootResult`.
+
+    >>> print(table(family_roots("pinned", 1, 6)))
+    pinned: first 1 roots of the characteristic equation in beta, 6 significant digits
+    certified: the list is complete on (0, 4.67699] and each interval holds exactly one simple root
+      n  root     interval
+      1  3.92660  [3.92660231, 3.92660232]
+    """
+    var = "xi L" if result.family.startswith("torsion") else "beta"
+    params = ", ".join(f"{k} = {v}" for k, v in result.parameters.items())
+    head = (f"{result.family}{f' ({params})' if params else ''}: first {len(result.roots) or 'n'} roots of the "
+            f"characteristic equation in {var}, {result.digits} significant digits")
+    if not result.certified:
+        return f"{head}\nnot certified: {result.reason}"
+    width = max(len(r) for r in result.roots)
+    rows = [f"{i:>3}  {r:<{width}}  [{lo}, {hi}]" for i, (r, (lo, hi)) in enumerate(zip(result.roots, result.intervals), 1)]
+    return "\n".join([head, f"certified: the list is complete on (0, {result.z_max}] and each interval holds "
+                      "exactly one simple root", f"  n  {'root':<{width}}  interval", *rows])
+
+
+def run(args) -> int:
+    """Compute, print and optionally write the roots; exit status 1 when not certified.
+
+    >>> import argparse
+    >>> run(argparse.Namespace(family="torsion-force", n="1", digits="5", k1_over_k=None,
+    ...                        k2_ratio=None, k2t_HL=None, json=None))
+    torsion-force: first 1 roots of the characteristic equation in xi L, 5 significant digits
+    certified: the list is complete on (0, 2.32079] and each interval holds exactly one simple root
+      n  root    interval
+      1  1.5708  [1.5707963, 1.5707964]
+    0
+    """
+    params = parse_parameters(args.family, {name: getattr(args, name) for name in OPTIONS})
+    n, digits = positive_int(args.n, "--n"), positive_int(args.digits, "--digits")
+    result = family_roots(args.family, n, digits, **params)
+    print(table(result))
+    if args.json:
+        try:
+            with open(args.json, "w", encoding="utf-8") as fh:
+                json.dump(result.to_json(), fh, indent=1)
+                fh.write("\n")
+        except OSError as exc:
+            raise UserError(f"cannot write {args.json}: {exc.strerror}") from None
+    return 0 if result.certified else 1
