@@ -36,7 +36,8 @@ import mpmath as mp
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from . import elastic_contact, free_end, frictionless, indentation, pinned, sliding_friction, torsion
+from . import (codegen_setback, elastic_contact, free_end, frictionless, indentation, pinned,
+               sliding_friction, tilt, tip_mass, torsion)
 from .beam import H, L, beta, d1, d2, f0, k, k1, k2, q0
 
 __all__ = ["Function", "Family", "families", "split", "from_atoms", "scaled", "series_branch",
@@ -136,6 +137,12 @@ def families() -> tuple[Family, ...]:
                   indentation.solve(), (("d1", d1), ("f0", f0)), (k, k1, L), deflection=True),
         _flexural("indentation_stiff", "derivations/indentation.py: solve_stiff()", "Eq. 29",
                   indentation.solve_stiff(), (("d1", d1),), (k, L)),
+        _flexural("tip_mass", "derivations/tip_mass.py: solve()", "Eqs. 4-5 with tip inertia",
+                  tip_mass.solve(), (("d1", d1), ("d2", d2), ("f0", f0), ("q0", q0)),
+                  (k, k1, k2, H, L, tip_mass.mu)),
+        _flexural("tilt", "derivations/tilt.py: solve()", "Eqs. 4-5 with a tilted cantilever",
+                  tilt.solve(), (("d1", d1), ("d2", d2), ("f0", f0), ("q0", q0)),
+                  (k, tilt.kvv, tilt.kll, tilt.kvl, H, L)),
         _torsion("torsion_elastic", "derivations/torsion.py: solve_elastic()", "Eqs. 32-33",
                  torsion.solve_elastic(), (torsion.k2t, H, L)),
         _torsion("torsion_force", "derivations/torsion.py: solve_force()", "Eqs. 34-35",
@@ -611,6 +618,7 @@ def render_all() -> dict[str, str]:
     """File name -> text of every generated file (deterministic)."""
     files = {f"{fam.module}.py": render_family(fam) for fam in families()}
     files["characteristic.py"] = render_characteristic()
+    files["tip_setback.py"] = codegen_setback.render(_header)
     return dict(sorted(files.items()))
 
 

@@ -17,6 +17,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "codegen": ("pfmdyn.codegen", "write generated/ from derivations/ (--check: fail if stale)"),
     "deconvolve": ("pfmdyn.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
     "book": ("pfmdyn.book", "build the verified book"),
+    "discrepancy": ("pfmdyn.discrepancy", "find where model and measurement disagree and name the missing effect"),
     "roots": ("pfmdyn.roots_cli", "certified resonance roots of a family to any number of digits"),
     "branches": ("pfmdyn.branches", "resonance branches against contact stiffness (CSV + PNG)"),
     "diagram": ("pfmdyn.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),

@@ -19,6 +19,8 @@ from pfmdyn import cli
 from pfmdyn.codegen import stale_files
 from pfmdyn.derivations import codegen
 from pfmdyn.derivations.beam import H, L, beta, k, k1, k2
+from pfmdyn.derivations.tilt import kll, kvl, kvv
+from pfmdyn.derivations.tip_mass import mu
 from pfmdyn.derivations.torsion import k2t
 from pfmdyn.generated import characteristic
 
@@ -83,6 +85,8 @@ def _params(fam, draw_or_rng):
     values = {k: kk, k1: kk * 10 ** u(-3, 3), H: 10 ** u(-6, -4.5), L: 10 ** u(-5, -3.3)}
     values[k2] = kk * values[L] ** 2 / values[H] ** 2 * 10 ** u(-3, 3)
     values[k2t] = 10 ** u(-3, 3) / (values[H] * values[L])
+    values.update({mu: 10 ** u(-3, 0), kvv: values[k1], kll: values[k2],
+                   kvl: 0.3 * (values[k1] * values[k2]) ** 0.5})
     return tuple(values[p] for p in fam.parameters)
 
 

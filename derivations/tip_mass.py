@@ -1,0 +1,72 @@
+"""Elastic contact with a point mass at the tip (extension of Eqs. 4a,b).
+
+Equation: Eq. 2, ``u0'''' = kappa**4 u0 + q0/EI``, with the clamped end of Eq. 3.  The
+tip carries a point mass ``m_t`` (rotary inertia neglected: the tip is short next to
+``L``).  In harmonic motion ``u0 e^{i omega t}`` its inertia is a force
+``+m_t omega**2 u0(L)`` on the beam end (positive away from the surface when the tip is
+displaced that way), which adds to the local force ``f0`` in the shear condition::
+
+    EI u0''(L)  = k2 H (d2 - H u0'(L))                              (Eq. 4a, unchanged)
+    EI u0'''(L) = -f0 + k1 (u0(L) - d1) - m_t omega**2 u0(L)        (Eq. 4b + inertia)
+
+Dimensionless mass ratio ``mu = m_t / (rho S L)`` (tip mass over beam mass).  From
+``kappa**4 = omega**2 rho S / EI`` and ``kappa = beta / L``,
+``omega**2 = beta**4 EI / (rho S L**4)``, so with ``EI = k L**3 / 3``::
+
+    m_t omega**2 = mu rho S L * beta**4 EI / (rho S L**4) = mu beta**4 EI / L**3
+                 = mu k beta**4 / 3.
+
+(``mu beta**4 EI / L**3``: the factor 3 belongs to ``EI = k L**3/3``, not to ``m_t omega**2``.)
+At ``mu = 0`` the problem is Eq. 4; at ``k1 = k2 = 0`` it is the free cantilever with a
+tip mass, whose first root falls below 1.8751 as ``mu`` grows.  Signs as in
+:mod:`derivations.beam`.
+"""
+from __future__ import annotations
+
+import sympy as sp
+
+from .beam import EI, H, TipProblem, TipSolution, beta, d1, d2, f0, k, k1, k2, q0, solve_tip_problem
+
+__all__ = ["mu", "inertial_stiffness", "tip_conditions", "problem", "solve", "DRIVES"]
+
+mu = sp.Symbol("mu", nonnegative=True)
+"""Tip mass over cantilever mass, ``m_t / (rho S L)``."""
+
+DRIVES = (d1, d2, f0, q0)
+
+
+def inertial_stiffness() -> sp.Expr:
+    """``m_t omega**2`` in the derivation's variables: ``mu k beta**4 / 3``.
+
+    >>> inertial_stiffness()
+    beta**4*k*mu/3
+    """
+    return mu * k * beta**4 / 3
+
+
+def tip_conditions(U):
+    """Eq. 4a and Eq. 4b with the tip inertia; ``U = [u(L), u'(L), u''(L), u'''(L)]``.
+
+    >>> [sp.expand(e) for e in tip_conditions([1, 0, 0, 0])]
+    [-H*d2*k2, beta**4*k*mu/3 + d1*k1 + f0 - k1]
+    """
+    return [EI * U[2] - k2 * H * (d2 - H * U[1]),
+            EI * U[3] - (-f0 + k1 * (U[0] - d1) - inertial_stiffness() * U[0])]
+
+
+problem = TipProblem(
+    "tip_mass", tip_conditions, (d1, d2, f0), load=True,
+    description="elastic contact (Eqs. 4a,b) with a point mass mu rho S L at the tip",
+)
+
+
+def solve() -> TipSolution:
+    """Slope and deflection per unit d1, d2, f0, q0 with the tip mass.
+
+    >>> from .elastic_contact import solve as elastic
+    >>> from .beam import is_identically_zero
+    >>> sol = solve()
+    >>> is_identically_zero(sol.theta(f0).subs(mu, 0) - elastic().theta(f0))
+    True
+    """
+    return solve_tip_problem(problem)

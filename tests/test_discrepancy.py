@@ -1,0 +1,141 @@
+"""Discrepancy loop on independent finite-element data (tests/fe_beam.py) with hidden effects."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+# The independent FE generator lives beside the tests (importlib mode: not on sys.path).
+sys.path.insert(0, str(Path(__file__).parent))
+from fe_beam import FEBeam, resonances, spectrum  # noqa: E402
+from pfmdyn import cli
+from pfmdyn.discrepancy import analyse
+from pfmdyn.discrepancy_io import read
+from pfmdyn.discrepancy_model import Model
+from pfmdyn.discrepancy_resonances import analyse_resonances, paper_tables
+from pfmdyn.generated import elastic_contact, tip_setback
+
+FREQ = np.linspace(150e3, 1300e3, 240)
+
+
+def _beam(**hidden):
+    return FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=150, **hidden)
+
+
+def _run(tmp_path, text):
+    path = tmp_path / "data.csv"
+    path.write_text(text)
+    return analyse(read(path), progress=False)
+
+
+def test_generated_composite_against_finite_elements():
+    """Set-back, tip mass, tilt and damping together: generated code vs the FE beam."""
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, Q=80, mu=0.15, gamma=0.9,
+                  alpha=0.2, n_elements=200)
+    f = np.array([30e3, 200e3, 500e3, 900e3])
+    meta = type("M", (), {"k": 2.4, "H": 1e-5, "L": 223e-6, "f1": 63.2e3})
+    model = Model(meta, ("damping", "tip_mass", "tip_setback", "tilt"))
+    internal = [math.log10(120.0), 2.0, 1 / 80, 0.15, 0.9, 0.2]
+    # The bare-beam f1 sets the frequency scale of the FE beam: undo the tip-mass rescaling.
+    v = model.values(internal)
+    beta = 1.8751040687119611 * np.sqrt(f / 63.2e3) * (1 - 1j / 80) ** 0.25
+    got = np.array(tip_setback.slope(beta, 2.4, *model.springs(v), 1e-5, 223e-6, 0.15, 0.9)).T
+    ratio = got / beam.slope(f)
+    # Complex modulus K/(1 - i/Q) in FE vs beta**4 (1 - i/Q): a constant factor (1 - i/Q).
+    np.testing.assert_allclose(ratio, 1 / (1 - 1j / 80), rtol=2e-5)
+
+
+def test_composite_reduces_to_eq5():
+    b = np.array([0.5, 2.0, 7.0, 30.0])
+    e = elastic_contact.slope(b, 2.4, 120.0, 100.0, 1e-5, 223e-6)
+    s = tip_setback.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.0, 1.0)
+    np.testing.assert_allclose(np.array(s), np.array(e), rtol=1e-10)
+
+
+def test_baseline_exact_names_nothing(tmp_path):
+    report = _run(tmp_path, spectrum(_beam(), FREQ))
+    assert report["missing_effects"] == []
+    assert report["gap_after"] < 1.3
+    assert abs(report["parameters"]["k1"]["value"] - 120.0) < 1.0
+
+
+@pytest.mark.parametrize("hidden,name,polar", [
+    ({"Q": 100.0}, "damping", False),
+    ({"mu": 0.2}, "tip_mass", True),
+    ({"gamma": 0.9}, "tip_setback", False),
+    ({"alpha": 0.3}, "tilt", True),
+])
+def test_hidden_effect_is_named(tmp_path, hidden, name, polar):
+    text = spectrum(_beam(**hidden), FREQ, polar=polar, seed=3)
+    report = _run(tmp_path, text)
+    assert report["missing_effects"][:1] == [name]
+    assert report["gap_before"] > 5
+    assert report["gap_after"] < 1.3
+    step = report["steps"][0]
+    assert step["criterion_gain"] > 10 and step["parameters"]
+
+
+def test_cli_hidden_background(tmp_path):
+    """Cross-talk hidden in polar data, through the command line: JSON report and plot."""
+    data = tmp_path / "d.csv"
+    data.write_text(spectrum(_beam(), FREQ, background=0.5, polar=True, seed=5))
+    out, png = tmp_path / "o.json", tmp_path / "o.png"
+    assert cli.main(["discrepancy", str(data), "--json", str(out), "--plot", str(png)]) == 0
+    report = json.loads(out.read_text())
+    assert report["missing_effects"] == ["background"]
+    assert report["gap_before"] > 5 and report["gap_after"] < 1.3
+    step = report["steps"][0]
+    assert step["criterion_gain"] > 10 and set(step["parameters"]) == {"k1", "k2"}
+    assert png.stat().st_size > 1000
+
+
+def test_vertical_only_start_finds_lateral_stiffness(tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_text(spectrum(_beam(), FREQ, seed=7))
+    report = analyse(read(path), vertical_only=True, progress=False)
+    assert report["missing_effects"] == ["lateral_stiffness"]
+    assert abs(report["parameters"]["k2"]["value"] - 100.0) < 2.0
+
+
+@pytest.mark.parametrize("edit,message", [
+    (lambda t: t.replace("# length_m: 0.000223\n", ""), "missing metadata"),
+    (lambda t: t.replace("frequency_hz,bias_v,x,y", "frequency_hz,bias_v,x,y,z").replace("\n1", ",0\n1"),
+     "unknown column"),
+    (lambda t: "\n".join(t.splitlines()[:12]) + "\n", "at least"),
+])
+def test_bad_input_is_one_line(tmp_path, capsys, edit, message):
+    data = tmp_path / "d.csv"
+    data.write_text(edit(spectrum(_beam(), FREQ[:10])))
+    assert cli.main(["discrepancy", str(data), "--json", str(tmp_path / "o.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
+def test_resonances_table_is_read(tmp_path):
+    path = tmp_path / "r.csv"
+    path.write_text(resonances(_beam(mu=0.1)))
+    data = read(path)
+    assert data.kind == "resonances" and list(data.condition).count("contact") == 2
+
+
+def test_resonances_hidden_tip_mass(tmp_path):
+    """FE eigenfrequencies with a tip mass: the free mode ratios call for tip_mass."""
+    path = tmp_path / "r.csv"
+    text = resonances(_beam(mu=0.15), n_free=3, n_contact=2)
+    path.write_text(text.replace("# description", "# frequency_uncertainty_hz: 50\n# description"))
+    report = analyse_resonances(read(path), progress=False)
+    assert report["missing_effects"] == ["tip_mass"]
+    assert report["gap_after"] < 1.0 < report["gap_before"]
+    assert abs(report["parameters"]["mu"]["value"] - 0.15) < 0.01
+
+
+def test_paper_resonances():
+    """Section VI.1: tip 2's free modes (ratios above 6.27:1) are explained by a tip mass."""
+    tables = paper_tables()
+    tip2 = analyse_resonances(tables["tip 2"], progress=False)
+    assert tip2["missing_effects"] == ["tip_mass"] and tip2["gap_after"] < 1.0
+    assert 0.02 < tip2["parameters"]["mu"]["value"] < 0.1
