@@ -5,18 +5,8 @@ The resonances of a family are the real zeros ``z > 0`` of its characteristic fu
 torsion).  The scaled forms vanish at ``z = 0`` as well (the beam at rest, not a mode),
 so **a root is a zero with z > 0**; the zero at the origin is never reported.
 
-How a list of roots is certified (python-flint ``arb`` balls throughout):
-
-1. *Near the origin*: the Taylor coefficients at 0 are computed exactly in rationals
-   (``fmpq_series``), giving the order ``p`` of the trivial zero; on ``[0, a]`` the
-   enclosure of ``f(z)/z**p`` (Taylor polynomial plus a Lagrange remainder bounded over the
-   ball) must exclude 0, which proves ``(0, a]`` root-free.
-2. *Isolation*: ``arb_series.find_roots`` on ``[a, b]`` discards only pieces whose ball
-   ``f(X)`` excludes 0 and keeps pieces with a sign change and ``f'(X)`` excluding 0, so
-   the list is complete on ``(0, b]`` and every bracket holds exactly one simple root.
-3. *Refinement*: interval Newton ``N(X) = m - f(m)/f'(X)`` intersected with ``X`` (the
-   root stays inside by the mean value theorem), precision doubling with the accuracy, and
-   a rigorous bisection step whenever Newton fails to halve the width.
+How a list of roots is certified: :mod:`pfmdyn.certify` (exact series near the origin,
+complete isolation with ``arb_series.find_roots``, interval Newton refinement).
 
 When any proof fails (a double root, an undecidable sign, fewer roots than asked below the
 search limit) the result says ``certified = False`` with the reason and carries no numbers.
