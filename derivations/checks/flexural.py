@@ -212,7 +212,8 @@ def _eq26_ref():
     if pinned_ok:
         return HOLDS, evidence, ""
     if free_ok:
-        return ERRATUM, evidence, "the resonances of Eq. 26 are those of the free cantilever, Eq. (22): 1 + cos b cosh b = 0"
+        return (ERRATUM, evidence, "the resonances of Eq. 26 are those of the free cantilever, Eq. (22): "
+                f"{describe(free_end.solve().denominator)} = 0")
     return ERRATUM, evidence, "the resonances of Eq. 26 match neither Eq. (20) nor Eq. (22)"
 
 

@@ -219,7 +219,11 @@ def _lateral_ratio():
                 f"The printed 2(1-nu)/(1-2nu) is >= {printed_min} for 0 <= nu < 1/2, so it can never be 0.85")
     if same:
         return HOLDS, evidence, ""
-    return ERRATUM, evidence, "k1/k2 = (2 - nu)/(2 (1 - nu)) ~ 1.17, i.e. k2/k1 = 2(1 - nu)/(2 - nu) ~ 0.85 for nu ~ 0.25"
+    nu_match = sp.nsolve(1 / derived - sp.Rational(P.lateral_ratio_value), cm.nu, 0.25)
+    quarter = derived.subs(cm.nu, sp.Rational(1, 4))
+    return (ERRATUM, evidence,
+            f"k1/k2 = {derived} ({float(quarter):.2f} at nu = 0.25); the printed 0.85 is k2/k1, "
+            f"reached at nu = {float(nu_match):.2f}")
 
 
 @claim("contact.local_electrostatic_amplitude", "III.1", "F_loc = 1.4e-8 N/V, k1 ~ 1000 N/m: A_el = 14 V pm")
