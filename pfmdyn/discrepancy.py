@@ -274,17 +274,22 @@ def summary(report: dict) -> str:
             lines.append(f"{head}; added {s['effect']} (delta BIC {s['criterion_gain']:.1f}, "
                          f"gap {s['gap_before']:.2f} -> {s['gap_after']:.2f})")
     for name, p in report["parameters"].items():
-        lines.append(f"  {name} = {p['value']:.5g} +- {p['stderr']:.2g} {p['unit']}")
+        if p["value"] is None:      # e.g. springs from a table of free modes only
+            lines.append(f"  {name} not determined by these data")
+        else:
+            lines.append(f"  {name} = {p['value']:.5g} +- {p['stderr']:.2g} {p['unit']}")
     return "\n".join(lines)
 
 
-def _plot(data, report, path) -> None:
+def _figure(data, report):
+    """Figure of data, baseline, final model and residuals at the lowest and highest bias."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     base, final = report["_fits"]
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    for b in np.unique(data.bias_v)[[0, -1]]:
+    biases = np.unique(data.bias_v)[[0, -1]]
+    for b in biases:
         sel = data.bias_v == b
         f = data.frequency_hz[sel] / 1e3
         axes[0].semilogy(f, np.abs(data.response[sel]), ".", ms=2, label=f"data {b:g} V")
@@ -292,11 +297,23 @@ def _plot(data, report, path) -> None:
         axes[0].semilogy(f, np.abs(final.prediction[sel]), "-", lw=1, label="final model")
         axes[1].plot(f, np.abs(base.residual[sel]), lw=1, label=f"residual before ({b:g} V)")
         axes[1].plot(f, np.abs(final.residual[sel]), lw=1, label=f"residual after ({b:g} V)")
+    # An undamped baseline fitted to damped data may collapse towards zero (or spike at its
+    # poles); the log axis follows the data so that the model curves cannot squash them.
+    shown = np.abs(data.response[np.isin(data.bias_v, biases)])
+    shown = shown[shown > 0]
+    if len(shown):
+        axes[0].set_ylim(shown.min() / 3, shown.max() * 3)
     axes[0].set_ylabel("|response|")
     axes[1].set_ylabel("|residual|")
     axes[1].set_xlabel("frequency (kHz)")
     for ax in axes:
         ax.legend(fontsize=7)
+    return fig
+
+
+def _plot(data, report, path) -> None:
+    import matplotlib.pyplot as plt
+    fig = _figure(data, report)
     fig.savefig(path, dpi=120)
     plt.close(fig)
 

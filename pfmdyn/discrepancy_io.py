@@ -14,6 +14,8 @@ Format (SI units)::
     1,free,63200
     ...
 
+A resonances table may hold free modes only; the contact springs are then not determined.
+
 Spectra are read by :func:`pfmdyn.spectra_io.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
 problem is one :class:`~pfmdyn.cli.UserError` line.
@@ -163,7 +165,7 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
         if modes[-1] < 1 or not freqs[-1] > 0:
             raise UserError(f"{path}: data row {n}: mode >= 1 and frequency_hz > 0 required")
         conds.append(cond)
-    if len(freqs) < MIN_RESONANCES or "contact" not in conds:
-        raise UserError(f"{path}: {len(freqs)} resonances; at least {MIN_RESONANCES}, "
-                        "including one in contact, are needed")
+    # Free modes alone still constrain the effects that change mode ratios (a tip mass).
+    if len(freqs) < MIN_RESONANCES:
+        raise UserError(f"{path}: {len(freqs)} resonances; at least {MIN_RESONANCES} are needed")
     return ResonanceData(metadata, np.array(modes), np.array(conds), np.array(freqs))

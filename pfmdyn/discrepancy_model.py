@@ -168,15 +168,21 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine: bool
         vals = tip_setback.characteristic(grid, *args)
     idx = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0)
     lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[idx], vals[idx + 1]
-    # Illinois regula falsi on all brackets at once (one vectorised call per iteration): the
-    # end kept is given half its value, so both ends move and the bracket shrinks.
+    # Illinois regula falsi on all brackets at once (one vectorised call per iteration): when
+    # the same end is replaced twice running, the end kept is given half its value, so both
+    # ends move.  Halving only then keeps the superlinear order (halving at every step
+    # would fall back to bisection-like linear convergence).
+    replaced = np.zeros(len(idx))          # -1: lo replaced last time, +1: hi, 0: neither
     for _ in range(60 if refine and len(idx) else 0):
         mid = hi - fhi * (hi - lo) / (fhi - flo)
         with np.errstate(all="ignore"):
             fmid = tip_setback.characteristic(mid, *args)
         left = np.sign(fmid) == np.sign(flo)
-        lo, flo, fhi = np.where(left, mid, lo), np.where(left, fmid, flo / 2), np.where(left, fhi / 2, fhi)
+        side = np.where(left, -1.0, 1.0)
+        halve = np.where(side == replaced, 0.5, 1.0)
+        lo, flo, fhi = np.where(left, mid, lo), np.where(left, fmid, flo * halve), np.where(left, fhi * halve, fhi)
         hi, fhi = np.where(left, hi, mid), np.where(left, fhi, fmid)
+        replaced = side
         if np.all((hi - lo) < 1e-12 * hi) or np.all(fmid == 0):
             break
     roots = hi - fhi * (hi - lo) / (fhi - flo) if len(idx) else grid[idx]

@@ -8,13 +8,16 @@ the metadata's free resonance and ``beta1`` the first free root of the same mode
 free mode 1 is reproduced by construction.  Residuals are ``(f_model - f) / sigma`` with
 ``sigma`` the metadata's ``frequency_uncertainty_hz`` (default 0.1 % of each frequency);
 the gap is their RMS.  With ``sigma`` known, the criterion is ``BIC = chi2 + k ln n``.
-Damping and background leave undamped resonances unchanged and are not candidates.
+Damping and background leave undamped resonances unchanged and are not candidates.  A
+table of free modes only leaves the springs undetermined: they are not fitted (nor counted
+in BIC), and tilt and lateral_stiffness, which act only through them, are not candidates.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.
 """
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -23,7 +26,7 @@ from tqdm import tqdm
 from .discrepancy_io import Metadata, ResonanceData
 from .discrepancy_model import Model, resonances
 
-__all__ = ["CANDIDATES", "fit_resonances", "analyse_resonances", "paper_tables"]
+__all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "analyse_resonances", "paper_tables"]
 
 CANDIDATES = ("tip_mass", "tip_setback", "tilt")
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
@@ -35,14 +38,28 @@ def _sigma(data: ResonanceData) -> np.ndarray:
     return np.full(len(data.frequency_hz), u) if u else 1e-3 * data.frequency_hz
 
 
+@lru_cache(maxsize=1024)
+def _free_modes(meta: Metadata, mu: float, gamma: float, f_max: float, refine: bool) -> np.ndarray:
+    """Free resonances (Hz) below ``f_max``; read-only (cached and shared).
+
+    Free modes ignore the springs and the tilt, so the many fits that vary only those
+    (starts, finite-difference Jacobians) reuse one root search.
+    """
+    roots = resonances(Model(meta, ("tip_mass", "tip_setback")), [0.0, 0.0, mu, gamma], False, f_max, refine)
+    roots.flags.writeable = False
+    return roots
+
+
 def _residual(model, internal, data, refine=True) -> np.ndarray:
     out = np.empty(len(data.frequency_hz))
     f_max = 1.5 * data.frequency_hz.max()
+    v = model.values(internal)
     for contact in (False, True):
         sel = data.condition == ("contact" if contact else "free")
         if not sel.any():
             continue
-        roots = resonances(model, internal, contact, f_max, refine=refine)
+        roots = (resonances(model, internal, True, f_max, refine=refine) if contact
+                 else _free_modes(model.meta, float(v["mu"]), float(v["gamma"]), f_max, refine))
         modes = data.mode[sel] - 1
         # A missing mode counts as a predicted frequency of f_max: a large, smooth penalty.
         pred = np.where(modes < len(roots), roots[np.minimum(modes, max(len(roots) - 1, 0))]
@@ -51,34 +68,73 @@ def _residual(model, internal, data, refine=True) -> np.ndarray:
     return out / _sigma(data)
 
 
+SPRINGS = ("k1", "k2")
+"""Contact springs: they act on contact modes only, so free-only tables leave them undetermined."""
+
+
 def fit_resonances(model: Model, data: ResonanceData) -> dict:
     """Fit the springs and the model's effect parameters to the resonances (multi-start).
 
+    Without contact rows the springs are held fixed (any value: free modes ignore them)
+    and reported with ``value`` None and ``determined`` False; they do not count in BIC.
     Returns a dict with ``internal``, ``chi2``, ``bic``, ``gap``, ``parameters``.
+
+    >>> free = paper_tables()["tip 2"]
+    >>> result = fit_resonances(Model(free.metadata, ("tip_mass",)), free)
+    >>> result["parameters"]["k1"]["determined"], round(result["parameters"]["mu"]["value"], 2)
+    (False, 0.05)
     """
     m = model.meta
+    params = model.parameters
+    n_springs = 1 if model.vertical_only else 2
+    contact = bool(np.any(data.condition == "contact"))
     a = np.log10(m.k) + np.linspace(-1, 5, 19)
     b = np.log10(m.k * m.L**2 / m.H**2) + np.linspace(-4, 2, 7)
-    springs = [np.array([x]) for x in a] if model.vertical_only else [np.array([x, y]) for x in a for y in b]
+    if not contact:
+        springs = [np.array([a[9], b[3]][:n_springs])]      # held fixed; free modes ignore them
+    elif model.vertical_only:
+        springs = [np.array([x]) for x in a]
+    else:
+        springs = [np.array([x, y]) for x in a for y in b]
+    # k2 added by lateral_stiffness (vertical-only start) is seeded over the spring grid b.
+    seeds = dict(_SEEDS, k2=tuple(b))
     extra = [np.array([])]
-    for p in model.parameters[len(springs[0]):]:
-        extra = [np.append(e, v) for e in extra for v in _SEEDS[p.name]]
+    for p in params[n_springs:]:
+        extra = [np.append(e, v) for e in extra for v in seeds[p.name]]
     grid = [np.concatenate([s, e]) for s in springs for e in extra]
+    # Only the fitted coordinates move; fixed springs stay at their grid value.
+    fitted = np.array([contact or p.name not in SPRINGS for p in params])
+
+    def full(x, template):
+        out = template.copy()
+        out[fitted] = x
+        return out
+
     ranked = sorted((float(np.sum(_residual(model, g, data, refine=False) ** 2)), i)
                     for i, g in enumerate(grid))
-    params = model.parameters
-    bounds = (np.array([p.lower for p in params]), np.array([p.upper for p in params]))
-    best = min((least_squares(lambda x: _residual(model, x, data), grid[i], bounds=bounds,
-                              diff_step=1e-7, max_nfev=100) for _, i in ranked[:3]),
-               key=lambda r: r.cost)
-    chi2, n, k = 2 * best.cost, len(data.frequency_hz), len(params)
-    cov = np.linalg.pinv(best.jac.T @ best.jac)
-    values = {}
+    bounds = (np.array([p.lower for p in params])[fitted], np.array([p.upper for p in params])[fitted])
+    if fitted.any():
+        fits = []
+        for _, i in ranked[:3]:
+            res = least_squares(lambda x: _residual(model, full(x, grid[i]), data), grid[i][fitted],
+                                bounds=bounds, diff_step=1e-7, max_nfev=100)
+            fits.append((res.cost, full(res.x, grid[i]), res.jac))
+        _, internal, jac = min(fits, key=lambda t: t[0])
+    else:
+        internal, jac = grid[ranked[0][1]], np.zeros((len(data.frequency_hz), 0))
+    residual = _residual(model, internal, data)
+    chi2, n, k = float(np.sum(residual**2)), len(data.frequency_hz), int(fitted.sum())
+    cov = np.linalg.pinv(jac.T @ jac)
+    values, j = {}, 0
     for i, p in enumerate(params):
-        sd = math.sqrt(max(cov[i, i], 0.0))
-        values[p.name] = {"value": p.value(best.x[i]), "stderr": p.stderr(best.x[i], sd), "unit": p.unit}
-    residual = _residual(model, best.x, data)
-    return {"model": model, "internal": best.x, "chi2": chi2, "bic": chi2 + k * math.log(n),
+        if not fitted[i]:
+            values[p.name] = {"value": None, "stderr": None, "unit": p.unit, "determined": False}
+            continue
+        sd = math.sqrt(max(cov[j, j], 0.0))
+        values[p.name] = {"value": float(p.value(internal[i])), "stderr": float(p.stderr(internal[i], sd)),
+                          "unit": p.unit, "determined": True}
+        j += 1
+    return {"model": model, "internal": internal, "chi2": chi2, "bic": chi2 + k * math.log(n),
             "gap": float(math.sqrt(np.mean(residual**2))), "residual": residual,
             "parameters": values}
 
@@ -103,6 +159,9 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     current = fit_resonances(Model(data.metadata, (), vertical_only), data)
     baseline, steps = current, []
     library = list(CANDIDATES) + (["lateral_stiffness"] if vertical_only else [])
+    if not np.any(data.condition == "contact"):
+        # Tilt and k2 act through the contact springs only: no free-mode signature.
+        library = [e for e in library if e not in ("tilt", "lateral_stiffness")]
     bar = tqdm(desc="discrepancy", unit="fit", disable=not progress)
     while True:
         where = _locate(data, current)

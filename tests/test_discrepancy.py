@@ -5,6 +5,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import FEBeam, resonances, spectrum  # noqa: E402
 from pfmdyn import cli
-from pfmdyn.discrepancy import analyse
+from pfmdyn.discrepancy import _figure, analyse
 from pfmdyn.discrepancy_io import read
 from pfmdyn.discrepancy_model import Model
 from pfmdyn.discrepancy_resonances import analyse_resonances, paper_tables
@@ -93,6 +94,19 @@ def test_cli_hidden_background(tmp_path):
     assert png.stat().st_size > 1000
 
 
+def test_plot_axis_follows_data(tmp_path):
+    """A baseline collapsed to ~0 (undamped model on damped data) must not set the log axis."""
+    f = np.repeat(np.linspace(1e5, 2e5, 50), 2)
+    data = SimpleNamespace(frequency_hz=f, bias_v=np.tile([0.0, 1.0], 50),
+                           response=(1 + f / 1e5) * np.exp(1j * f / 1e4))
+    collapsed = SimpleNamespace(prediction=1e-12 * data.response, residual=data.response)
+    exact = SimpleNamespace(prediction=data.response, residual=0 * data.response)
+    fig = _figure(data, {"_fits": (collapsed, exact)})
+    low, high = fig.axes[0].get_ylim()
+    fig.clear()
+    assert 0.5 < low < 2 and 3 < high < 10
+
+
 def test_vertical_only_start_finds_lateral_stiffness(tmp_path):
     path = tmp_path / "d.csv"
     path.write_text(spectrum(_beam(), FREQ, seed=7))
@@ -131,6 +145,62 @@ def test_resonances_hidden_tip_mass(tmp_path):
     assert report["missing_effects"] == ["tip_mass"]
     assert report["gap_after"] < 1.0 < report["gap_before"]
     assert abs(report["parameters"]["mu"]["value"] - 0.15) < 0.01
+
+
+def _noisy_resonances(beam, n_contact, sigma=50.0, seed=1):
+    """FE resonances (3 free modes) plus Gaussian noise of ``sigma`` Hz, declared as the uncertainty."""
+    rng = np.random.default_rng(seed)
+    lines = []
+    for line in resonances(beam, n_free=3, n_contact=n_contact).splitlines():
+        cells = line.split(",")
+        if line.startswith("# description"):
+            lines.append(f"# frequency_uncertainty_hz: {sigma}")
+        elif len(cells) == 3 and cells[0].isdigit():
+            line = f"{cells[0]},{cells[1]},{float(cells[2]) + sigma * rng.standard_normal()!r}"
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("hidden,n_contact,vertical_only,named,check", [
+    # Exact baseline beam: only noise is left, nothing may be added.
+    ({}, 2, False, [], ("k1", 120.0, 1.0)),
+    # Set-back moves contact modes only: with 3 free + 4 contact modes tilt (also a
+    # contact-only effect) cannot mimic it.
+    ({"gamma": 0.9}, 4, False, ["tip_setback"], ("gamma", 0.9, 0.002)),
+    # A vertical-only start misses k2, which the contact modes call for.
+    ({}, 3, True, ["lateral_stiffness"], ("k2", 100.0, 2.0)),
+])
+def test_resonances_hidden_effect(tmp_path, hidden, n_contact, vertical_only, named, check):
+    path = tmp_path / "r.csv"
+    path.write_text(_noisy_resonances(_beam(**hidden), n_contact))
+    report = analyse_resonances(read(path), vertical_only=vertical_only, progress=False)
+    assert report["missing_effects"] == named
+    assert report["gap_after"] < 1.0
+    if named:
+        assert report["gap_before"] > 5 and report["steps"][0]["criterion_gain"] > 10
+    name, value, tol = check
+    assert abs(report["parameters"][name]["value"] - value) < tol
+
+
+def test_cli_free_modes_only(tmp_path, capsys):
+    """Paper tip 2 (free modes only) through the command line: tip mass, springs undetermined."""
+    tip2 = paper_tables()["tip 2"]
+    m = tip2.metadata
+    rows = "".join(f"{n},{c},{float(f)!r}\n" for n, c, f in zip(tip2.mode, tip2.condition, tip2.frequency_hz))
+    data = tmp_path / "tip2.csv"
+    data.write_text(f"# spring_constant_n_per_m: {m.k}\n# length_m: {m.L}\n# width_m: {m.width}\n"
+                    f"# tip_height_m: {m.H}\n# free_resonance_hz: {m.f1}\n"
+                    f"# frequency_uncertainty_hz: {m.frequency_uncertainty_hz}\n"
+                    f"mode,condition,frequency_hz\n{rows}")
+    out, png = tmp_path / "o.json", tmp_path / "o.png"
+    assert cli.main(["discrepancy", str(data), "--json", str(out), "--plot", str(png)]) == 0
+    report = json.loads(out.read_text())
+    assert report["missing_effects"] == ["tip_mass"] and report["gap_after"] < 1.0
+    for spring in ("k1", "k2"):
+        assert report["parameters"][spring] == {"value": None, "stderr": None, "unit": "N/m",
+                                                "determined": False}
+    assert 0.02 < report["parameters"]["mu"]["value"] < 0.1
+    assert "k1 not determined" in capsys.readouterr().out and png.stat().st_size > 1000
 
 
 def test_paper_resonances():
