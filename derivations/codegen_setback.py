@@ -62,7 +62,7 @@ def render(header) -> str:
     den_lines, den = _cse_lines([scaled2(sol.denominator, degrees)])
     names = ", ".join(map(str, PARAMETERS))
     da, db = degrees[tip_setback.ATOMS_A], degrees[tip_setback.ATOMS_B]
-    atoms = f'''    beta = np.asarray(beta)
+    atoms = '''    beta = np.asarray(beta)
     a = gamma * beta
     b = (1.0 - gamma) * beta
     _ca, _sa, _cb, _sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)

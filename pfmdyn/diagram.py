@@ -293,21 +293,21 @@ def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_
                                  d_eff=PAPER_D_EFF) -> float:
     """``|dV|`` at which ``|A_nl| = |A_piezo|`` far below the first contact resonance (Fig. 6 arrow).
 
-    Static frictionless contact (Eq. 23 at ``beta -> 0``): ``A_piezo = k1 d_eff / (k + k1)``
-    and ``A_nl = L (8k - k1) q0 / (24 k (k + k1))`` per ``V_ac``, so
-    ``dV = 24 k |d_eff| H**2 k1 / (eps0 w L |k1 - 8k|)`` (``k1 >> k``: ``24 k |d_eff| H**2 /
-    (eps0 w L)``, the erratum ``eq36.spring_constant_condition``).  Infinite at ``k1 = 8k``,
-    where the static non-local slope vanishes.
+    The ratio of the electromechanical coefficient to the non-local one per volt, taken from
+    the generated transfer functions at a frequency ``1e-6 f1`` (their series branch: the
+    static limit of Eq. 23).  For ``k1 >> k`` it grows in proportion to ``k``; it is
+    infinite at ``k1 = 8k``, where the static non-local slope vanishes.
 
     Examples
     --------
     >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
     [39.883, 1.388, 0.057]
     """
-    k, length = cantilever.spring_constant, cantilever.length
+    static = [1e-6 * cantilever.resonance_frequency]
+    _, piezo, _, nonlocal_ = _coefficients(cantilever, static, width=width, k1=k1, H=H,
+                                           d_eff=d_eff, local_force=0.0)
     with np.errstate(divide="ignore"):
-        return float(24 * k * abs(d_eff) * H**2 * k1
-                     / (EPSILON_0 * width * length * np.abs(np.float64(k1 - 8 * k))))
+        return float(np.abs(piezo[0]) / np.abs(nonlocal_[0]))
 
 
 # --- plotting: Figure objects saved directly (Agg), no pyplot, so no GUI backend is selected

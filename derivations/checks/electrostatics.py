@@ -6,7 +6,7 @@ import sympy as sp
 
 from .. import domain_contrast as dc
 from .. import elastic_contact, frictionless, indentation, pinned
-from ..beam import H, L, beta, d1, f0, k, k1, k2, q0
+from ..beam import H, L, beta, d1, f0, k, k1, q0
 from ..limits import envelope_exponent, low_frequency
 from ..paper import printed as P
 from .core import ERRATUM, HOLDS, claim, compare, digits_check

@@ -5,7 +5,7 @@ import sympy as sp
 
 from .. import (elastic_contact, free_end, frictionless, indentation, pinned,
                 sliding_friction)
-from ..beam import EI, H, L, beta, d1, d2, f0, k, k1, k2, q0, x
+from ..beam import H, L, beta, d1, d2, f0, k, k1, k2, q0, x
 from ..limits import low_frequency, param_limit
 from ..paper import printed as P
 from ..sliding_friction import f_l

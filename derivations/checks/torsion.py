@@ -5,7 +5,7 @@ import mpmath as mp
 import sympy as sp
 
 from .. import torsion as T
-from ..beam import H, L
+from ..beam import L
 from ..paper import printed as P
 from ..roots import certified_roots
 from .core import ERRATUM, HOLDS, claim, compare
