@@ -22,7 +22,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from .cli import UserError
+from .errors import UserError
 
 VERDICTS_ENV = "PFMDYN_BOOK_VERDICTS"
 """Path of the verdicts JSON written by ``pfmdyn book`` for the chapters to read."""

@@ -30,7 +30,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .cli import UserError
+from .errors import UserError
 from .generated import characteristic
 from .roots import CertificationError, certify, characteristic_function
 from .roots_cli import parse_parameters, positive_int

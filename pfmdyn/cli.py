@@ -11,6 +11,8 @@ import argparse
 import importlib
 import sys
 
+from .errors import UserError
+
 # subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "verify": ("pfmdyn.verify", "derive every result and give each claim of the paper a verdict"),
@@ -22,10 +24,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "branches": ("pfmdyn.branches", "resonance branches against contact stiffness (CSV + PNG)"),
     "diagram": ("pfmdyn.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
 }
-
-
-class UserError(Exception):
-    """A problem with the user's input; reported as one line, exit status 2."""
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pfmdyn.cli import UserError
+from pfmdyn.errors import UserError
 from pfmdyn.spectra_io import frequency_group_starts, read_spectra
 
 

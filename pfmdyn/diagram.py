@@ -440,7 +440,7 @@ def add_arguments(parser) -> None:
 
 def _cli_cantilever(args):
     """``(Cantilever, width in m)`` from the options; errors as :class:`UserError`."""
-    from .cli import UserError
+    from .errors import UserError
     custom = {"k": args.k, "length": args.length, "width": args.width, "thickness": args.thickness,
               "density": args.density}
     if args.cantilever == "custom":
@@ -483,7 +483,7 @@ def _write_csv(path, response: ResponseMap) -> None:
 
 def run(args) -> int:
     """Compute the diagram, write the PNG (and CSV)."""
-    from .cli import UserError
+    from .errors import UserError
     lever, width = _cli_cantilever(args)
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from tqdm import tqdm
 
-from .cli import UserError
+from .errors import UserError
 from .discrepancy_io import SpectrumData, read
 from scipy.optimize import least_squares
 

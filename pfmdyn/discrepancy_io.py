@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli import UserError
+from .errors import UserError
 from .spectra_io import EXPECTED_COLUMNS, read_spectra
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read"]

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from fractions import Fraction
 
-from .cli import UserError
+from .errors import UserError
 from .generated import characteristic
 from .roots import FAMILIES, PARAMETER_HELP, RootResult, family_roots
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import yaml
 
-from .cli import UserError
+from .errors import UserError
 
 HERE = Path(__file__).resolve().parent
 RECORDED = "recorded_verdicts.yaml"
