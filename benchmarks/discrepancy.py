@@ -18,8 +18,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from fe_beam import FEBeam, spectrum  # noqa: E402
 
-from pfmdyn.discrepancy import analyse  # noqa: E402
-from pfmdyn.discrepancy_io import read  # noqa: E402
+from pfmdyn.discrepancy.spectrum import analyse  # noqa: E402
+from pfmdyn.io.tables import read  # noqa: E402
 
 TARGET_S = 60.0
 HIDDEN = {"Q": 100.0, "mu": 0.2}

@@ -12,8 +12,8 @@ import time
 import mpmath as mp
 import numpy as np
 
-from pfmdyn import branches
-from pfmdyn.roots import family_roots
+from pfmdyn.roots import branches
+from pfmdyn.roots.core import family_roots
 
 EQUATIONS = {"free": (lambda b: mp.cos(b) + mp.sech(b), lambda n: (2 * n - 1) * mp.pi / 2),
              "pinned": (lambda b: mp.cos(b) * mp.tanh(b) - mp.sin(b), lambda n: (4 * n + 1) * mp.pi / 4)}

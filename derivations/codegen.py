@@ -21,7 +21,7 @@ the parameters, ``beta`` and cos, sin, cosh, sinh of ``beta``.  The pipeline is
 dimensionless, scaled form, written against a math namespace ``m`` (NumPy, mpmath or
 python-flint), for certified root finding.
 
-Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.codegen`).
+Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).
 """
 from __future__ import annotations
 

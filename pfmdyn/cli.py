@@ -1,6 +1,6 @@
-"""The ``pfmdyn`` command line: one console script, one module per subcommand.
+"""The ``pfmdyn`` command line: one console script, one module per subcommand in pfmdyn.commands.
 
-Each subcommand module ``pfmdyn.<name>`` (listed in :data:`COMMANDS`) defines
+Each subcommand module ``pfmdyn.commands.<name>`` (listed in :data:`COMMANDS`) defines
 ``add_arguments(parser)`` and ``run(args) -> int``.  Modules are imported lazily so that
 ``pfmdyn --help`` stays fast and numeric commands never import SymPy.  User errors are
 raised as :class:`UserError` and printed as one line, never as a traceback.
@@ -16,13 +16,13 @@ from .errors import UserError
 # subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "verify": ("pfmdyn.verify", "derive every result and give each claim of the paper a verdict"),
-    "codegen": ("pfmdyn.codegen", "write generated/ from derivations/ (--check: fail if stale)"),
-    "deconvolve": ("pfmdyn.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
+    "codegen": ("pfmdyn.commands.codegen", "write generated/ from derivations/ (--check: fail if stale)"),
+    "deconvolve": ("pfmdyn.commands.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
     "book": ("pfmdyn.book", "build the verified book"),
-    "discrepancy": ("pfmdyn.discrepancy", "find where model and measurement disagree and name the missing effect"),
-    "roots": ("pfmdyn.roots_cli", "certified resonance roots of a family to any number of digits"),
-    "branches": ("pfmdyn.branches", "resonance branches against contact stiffness (CSV + PNG)"),
-    "diagram": ("pfmdyn.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
+    "discrepancy": ("pfmdyn.commands.discrepancy", "find where model and measurement disagree and name the missing effect"),
+    "roots": ("pfmdyn.commands.roots", "certified resonance roots of a family to any number of digits"),
+    "branches": ("pfmdyn.commands.branches", "resonance branches against contact stiffness (CSV + PNG)"),
+    "diagram": ("pfmdyn.commands.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
 }
 
 

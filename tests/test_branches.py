@@ -7,8 +7,9 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from pfmdyn import branches, cli
-from pfmdyn.roots import family_roots
+from pfmdyn import cli
+from pfmdyn.roots import branches
+from pfmdyn.roots.core import family_roots
 
 
 @pytest.mark.parametrize("family, fixed", [("indentation", {}), ("elastic", {"k1_over_k": "0"}),

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pfmdyn import cli
-from pfmdyn.codegen import stale_files
+from pfmdyn.commands.codegen import stale_files
 from pfmdyn.derivations import codegen
 from pfmdyn.derivations.beam import H, L, beta, k, k1, k2
 from pfmdyn.derivations.tilt import kll, kvl, kvv

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
-from pfmdyn.deconvolve import deconvolve, nulling_bias, tip_quality
-from pfmdyn.spectra_io import read_spectra
+from pfmdyn.analysis.deconvolve import deconvolve, nulling_bias, tip_quality
+from pfmdyn.io.spectra import read_spectra
 
 V_SURF = 0.4
 BIASES = np.linspace(-5, 5, 21)

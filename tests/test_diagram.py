@@ -7,7 +7,7 @@ from scipy.optimize import brentq
 
 from pfmdyn import cli
 from pfmdyn.cantilever import BETA1_FREE
-from pfmdyn.diagram import (EPSILON_0, TABLE1, low_frequency_crossover_bias, nulling_bias,
+from pfmdyn.analysis.diagram import (EPSILON_0, TABLE1, low_frequency_crossover_bias, nulling_bias,
                             response_map, table1_cantilever)
 from pfmdyn.generated import characteristic
 

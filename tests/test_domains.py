@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from pfmdyn import domains
+from pfmdyn.analysis import domains
 
 RNG = np.random.default_rng(37)
 D_EFF = RNG.uniform(-3, 3, 200)

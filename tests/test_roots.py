@@ -12,7 +12,7 @@ from pfmdyn.derivations import free_end, pinned, torsion
 from pfmdyn.derivations.beam import L, beta, k
 from pfmdyn.derivations.roots import certified_roots
 from pfmdyn.generated import characteristic
-from pfmdyn.roots import FAMILIES, family_roots
+from pfmdyn.roots.core import FAMILIES, family_roots
 
 PARAMS = {"elastic": {"k1_over_k": "3.5", "k2_ratio": "0.25"}, "frictionless": {"k1_over_k": "2"},
           "indentation": {"k1_over_k": "1e6"}, "torsion-elastic": {"k2t_HL": "0.1"}}
@@ -99,7 +99,7 @@ def test_engine_matches_sympy_denominators():
 
 def test_uncertified_result_has_reason_and_no_numbers():
     # A function with a double root: isolation cannot prove simplicity and must say so.
-    from pfmdyn.roots import CertificationError, certify
+    from pfmdyn.roots.core import CertificationError, certify
     with pytest.raises(CertificationError, match="isolation failed"):
         certify(lambda s: (s - 2) ** 2 * (s + 1), 1, 10, lower="0.5")
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
-from pfmdyn.spectra_io import frequency_group_starts, read_spectra
+from pfmdyn.io.spectra import frequency_group_starts, read_spectra
 
 GOOD = """\
 # instrument: MFP-3D

@@ -1,4 +1,4 @@
-"""PNG plots of a frequency-bias deconvolution (:mod:`pfmdyn.deconvolve`).
+"""PNG plots of a frequency-bias deconvolution (:mod:`pfmdyn.analysis.deconvolve`).
 
 Figures are built with :class:`matplotlib.figure.Figure` and saved directly, without pyplot,
 so no GUI backend is ever selected and the global matplotlib state of a notebook importing
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from pfmdyn.deconvolve import Deconvolution
+from ..analysis.deconvolve import Deconvolution
 
 
 def plot_spectra(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
@@ -22,7 +22,7 @@ def plot_spectra(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
     Parameters
     ----------
     result : Deconvolution
-        From :func:`pfmdyn.deconvolve.deconvolve`.
+        From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     path : Path
         PNG file to write.
     unit : str, optional
@@ -36,7 +36,7 @@ def plot_spectra(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
     Examples
     --------
     >>> import tempfile
-    >>> from pfmdyn.deconvolve import deconvolve
+    >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     plot_spectra(fit, Path(tmp) / "s.png").stat().st_size > 0
@@ -78,7 +78,7 @@ def plot_nulling_bias(result: Deconvolution, path: Path) -> Path:
     Parameters
     ----------
     result : Deconvolution
-        From :func:`pfmdyn.deconvolve.deconvolve`.
+        From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     path : Path
         PNG file to write.
 
@@ -90,7 +90,7 @@ def plot_nulling_bias(result: Deconvolution, path: Path) -> Path:
     Examples
     --------
     >>> import tempfile
-    >>> from pfmdyn.deconvolve import deconvolve
+    >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     plot_nulling_bias(fit, Path(tmp) / "v.png").stat().st_size > 0
@@ -130,7 +130,7 @@ def plot_error_map(result: Deconvolution, path: Path, unit: str = "a.u.") -> Pat
     Parameters
     ----------
     result : Deconvolution
-        From :func:`pfmdyn.deconvolve.deconvolve`.
+        From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     path : Path
         PNG file to write.
     unit : str, optional
@@ -144,7 +144,7 @@ def plot_error_map(result: Deconvolution, path: Path, unit: str = "a.u.") -> Pat
     Examples
     --------
     >>> import tempfile
-    >>> from pfmdyn.deconvolve import deconvolve
+    >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     plot_error_map(fit, Path(tmp) / "e.png").stat().st_size > 0

@@ -8,9 +8,9 @@ from __future__ import annotations
 import json
 from fractions import Fraction
 
-from .errors import UserError
-from .generated import characteristic
-from .roots import FAMILIES, PARAMETER_HELP, RootResult, family_roots
+from ..errors import UserError
+from ..generated import characteristic
+from ..roots.core import FAMILIES, PARAMETER_HELP, RootResult, family_roots
 
 __all__ = ["OPTIONS", "add_arguments", "parse_parameters", "positive_int", "run", "table"]
 
@@ -78,7 +78,7 @@ def parse_parameters(family: str, given: dict) -> dict:
 
 
 def table(result: RootResult) -> str:
-    """A readable table of a :class:`~pfmdyn.roots.RootResult`.
+    """A readable table of a :class:`~pfmdyn.roots.core.RootResult`.
 
     >>> print(table(family_roots("pinned", 1, 6)))
     pinned: first 1 roots of the characteristic equation in beta, 6 significant digits

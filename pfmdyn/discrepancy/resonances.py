@@ -2,7 +2,7 @@
 
 The model is the set of undamped characteristic roots (generated
 :func:`pfmdyn.generated.tip_setback.characteristic`, found by
-:func:`pfmdyn.discrepancy_model.resonances`): free modes with the contact springs off,
+:func:`pfmdyn.discrepancy.model.resonances`): free modes with the contact springs off,
 contact modes with them on.  Frequencies follow ``f = f1 (beta / beta1)**2`` with ``f1``
 the metadata's free resonance and ``beta1`` the first free root of the same model, so the
 free mode 1 is reproduced by construction.  Residuals are ``(f_model - f) / sigma`` with
@@ -23,8 +23,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from tqdm import tqdm
 
-from .discrepancy_io import Metadata, ResonanceData
-from .discrepancy_model import Model, resonances
+from ..io.tables import Metadata, ResonanceData
+from .model import Model, resonances
 
 __all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "analyse_resonances", "paper_tables"]
 

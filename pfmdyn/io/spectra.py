@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pfmdyn.errors import UserError
+from ..errors import UserError
 
 COORDINATE_COLUMNS = ("frequency_hz", "bias_v")
 RESPONSE_VARIANTS = (("x", "y"), ("amplitude", "phase_deg"))

@@ -31,8 +31,8 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import brentq, least_squares
 
-from .generated import tip_setback
-from .generated.characteristic import BETA1_FREE
+from ..generated import tip_setback
+from ..generated.characteristic import BETA1_FREE
 
 __all__ = ["Parameter", "EFFECTS", "Model", "Fit", "fit", "free_root", "resonances", "project"]
 

@@ -1,6 +1,6 @@
 """``pfmdyn discrepancy``: where the paper's model and a measurement disagree, and why.
 
-The loop (issue 6): fit the baseline (:mod:`pfmdyn.discrepancy_model`); locate where the
+The loop (issue 6): fit the baseline (:mod:`pfmdyn.discrepancy.model`); locate where the
 residual concentrates (band, nearest resonance, signature); fit every candidate effect
 of the library on top of the current model; keep the one with the largest BIC gain if
 that gain exceeds :data:`BIC_THRESHOLD` (10: "very strong" evidence on the Kass-Raftery
@@ -14,20 +14,17 @@ A model that explains the data reaches ``gap ~ 1``.
 """
 from __future__ import annotations
 
-import argparse
-import json
 import math
 
 import numpy as np
 from tqdm import tqdm
 
-from .errors import UserError
-from .discrepancy_io import SpectrumData, read
+from ..io.tables import SpectrumData
 from scipy.optimize import least_squares
 
-from .discrepancy_model import EFFECTS, Fit, Model, project, fit, resonances
+from .model import EFFECTS, Fit, Model, project, fit, resonances
 
-__all__ = ["BIC_THRESHOLD", "noise_sigma", "signature", "analyse", "add_arguments", "run"]
+__all__ = ["BIC_THRESHOLD", "noise_sigma", "signature", "analyse", "summary"]
 
 BIC_THRESHOLD = 10.0
 
@@ -279,111 +276,3 @@ def summary(report: dict) -> str:
         else:
             lines.append(f"  {name} = {p['value']:.5g} +- {p['stderr']:.2g} {p['unit']}")
     return "\n".join(lines)
-
-
-def _figure(data, report):
-    """Figure of data, baseline, final model and residuals at the lowest and highest bias."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    base, final = report["_fits"]
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    biases = np.unique(data.bias_v)[[0, -1]]
-    for b in biases:
-        sel = data.bias_v == b
-        f = data.frequency_hz[sel] / 1e3
-        axes[0].semilogy(f, np.abs(data.response[sel]), ".", ms=2, label=f"data {b:g} V")
-        axes[0].semilogy(f, np.abs(base.prediction[sel]), "--", lw=1, label="baseline")
-        axes[0].semilogy(f, np.abs(final.prediction[sel]), "-", lw=1, label="final model")
-        axes[1].plot(f, np.abs(base.residual[sel]), lw=1, label=f"residual before ({b:g} V)")
-        axes[1].plot(f, np.abs(final.residual[sel]), lw=1, label=f"residual after ({b:g} V)")
-    # An undamped baseline fitted to damped data may collapse towards zero (or spike at its
-    # poles); the log axis follows the data so that the model curves cannot squash them.
-    shown = np.abs(data.response[np.isin(data.bias_v, biases)])
-    shown = shown[shown > 0]
-    if len(shown):
-        axes[0].set_ylim(shown.min() / 3, shown.max() * 3)
-    axes[0].set_ylabel("|response|")
-    axes[1].set_ylabel("|residual|")
-    axes[1].set_xlabel("frequency (kHz)")
-    for ax in axes:
-        ax.legend(fontsize=7)
-    return fig
-
-
-def _plot(data, report, path) -> None:
-    import matplotlib.pyplot as plt
-    fig = _figure(data, report)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of ``pfmdyn discrepancy``.
-
-    >>> p = argparse.ArgumentParser(); add_arguments(p)
-    >>> p.parse_args(["d.csv", "--json", "o.json"]).json
-    'o.json'
-    """
-    parser.add_argument("data", help="CSV: metadata lines, then a spectrum or resonances table")
-    parser.add_argument("--json", required=True, help="write the report here")
-    parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
-    parser.add_argument("--vertical-only", action="store_true",
-                        help="start from the model without k2 (adds lateral_stiffness to the library)")
-
-
-def _finite(obj):
-    """JSON-safe copy: NumPy scalars to Python, non-finite numbers (e.g. Q = inf) to null."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
-
-
-def _plot_resonances(data, report, path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    labels = [f"{c} {m}" for c, m in zip(data.condition, data.mode)]
-    x = np.arange(len(labels))
-    measured = np.array(report["measured_hz"])
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    axes[0].plot(x, measured / 1e3, "o", label="data")
-    axes[0].plot(x, np.array(report["baseline_hz"]) / 1e3, "x", label="baseline")
-    axes[0].plot(x, np.array(report["predicted_hz"]) / 1e3, "+", ms=12, label="final model")
-    axes[1].bar(x - 0.2, np.array(report["baseline_hz"]) - measured, 0.4, label="residual before")
-    axes[1].bar(x + 0.2, np.array(report["predicted_hz"]) - measured, 0.4, label="residual after")
-    axes[0].set_ylabel("frequency (kHz)")
-    axes[1].set_ylabel("model - data (Hz)")
-    axes[1].set_xticks(x, labels)
-    for ax in axes:
-        ax.legend(fontsize=7)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def run(args: argparse.Namespace) -> int:
-    """Run ``pfmdyn discrepancy``; returns the exit status."""
-    data = read(args.data)
-    if isinstance(data, SpectrumData):
-        report = analyse(data, vertical_only=args.vertical_only)
-        if args.plot:
-            _plot(data, report, args.plot)
-        report.pop("_fits")
-    else:
-        from .discrepancy_resonances import analyse_resonances
-        report = analyse_resonances(data, vertical_only=args.vertical_only)
-        if args.plot:
-            _plot_resonances(data, report, args.plot)
-    try:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(_finite(report), fh, indent=2)
-    except OSError as exc:
-        raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
-    print(summary(report))
-    return 0

@@ -16,7 +16,7 @@ Format (SI units)::
 
 A resonances table may hold free modes only; the contact springs are then not determined.
 
-Spectra are read by :func:`pfmdyn.spectra_io.read_spectra` (it owns the spectrum rules);
+Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
 problem is one :class:`~pfmdyn.cli.UserError` line.
 """
@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import UserError
-from .spectra_io import EXPECTED_COLUMNS, read_spectra
+from ..errors import UserError
+from .spectra import EXPECTED_COLUMNS, read_spectra
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read"]
 

@@ -11,7 +11,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from .errors import UserError
+from ..errors import UserError
 
 __all__ = ["add_arguments", "run", "stale_files"]
 

@@ -1,0 +1,1 @@
+"""The paper's analyses as tools: response diagrams, deconvolution, domain contrast."""

@@ -1,0 +1,1 @@
+"""One thin module per ``pfmdyn`` subcommand: argparse, call the library, print/write."""

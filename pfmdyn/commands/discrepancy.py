@@ -1,0 +1,62 @@
+"""``pfmdyn discrepancy``: name the effects missing from the paper's model, as JSON (and PNG)."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+from ..discrepancy.spectrum import analyse, summary
+from ..errors import UserError
+from ..io.tables import SpectrumData, read
+from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``pfmdyn discrepancy``.
+
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> p.parse_args(["d.csv", "--json", "o.json"]).json
+    'o.json'
+    """
+    parser.add_argument("data", help="CSV: metadata lines, then a spectrum or resonances table")
+    parser.add_argument("--json", required=True, help="write the report here")
+    parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
+    parser.add_argument("--vertical-only", action="store_true",
+                        help="start from the model without k2 (adds lateral_stiffness to the library)")
+
+
+def _finite(obj):
+    """JSON-safe copy: NumPy scalars to Python, non-finite numbers (e.g. Q = inf) to null."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``pfmdyn discrepancy``; returns the exit status."""
+    data = read(args.data)
+    if isinstance(data, SpectrumData):
+        report = analyse(data, vertical_only=args.vertical_only)
+        if args.plot:
+            plot_spectrum_report(data, report, args.plot)
+        report.pop("_fits")
+    else:
+        from ..discrepancy.resonances import analyse_resonances
+        report = analyse_resonances(data, vertical_only=args.vertical_only)
+        if args.plot:
+            plot_resonance_report(data, report, args.plot)
+    try:
+        with open(args.json, "w", encoding="utf-8") as fh:
+            json.dump(_finite(report), fh, indent=2)
+    except OSError as exc:
+        raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+    print(summary(report))
+    return 0

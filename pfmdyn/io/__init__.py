@@ -1,0 +1,1 @@
+"""Reading data: measured spectra and resonance tables (CSV) and instrument files."""

@@ -1,0 +1,1 @@
+"""Figures: each module draws the results of one analysis; no analysis imports them."""

@@ -1,0 +1,1 @@
+"""Certified resonance roots and the branches they form against contact stiffness."""
