@@ -67,13 +67,18 @@ class SpectrumData:
 
 @dataclass(frozen=True)
 class ResonanceData:
-    """Measured resonances: mode number (1-based), condition ('free'/'contact'), Hz."""
+    """Measured resonances: mode number (1-based), condition ('free'/'contact'), Hz.
+
+    ``quality_factor`` (one per row, NaN where unknown) when the source gives it, e.g. an
+    instrument's thermal or contact tune fit.
+    """
 
     metadata: Metadata
     mode: np.ndarray
     condition: np.ndarray
     frequency_hz: np.ndarray
     kind: str = "resonances"
+    quality_factor: np.ndarray | None = None
 
 
 def _metadata(where: str, meta: dict) -> Metadata:
