@@ -34,10 +34,10 @@ __all__ = ["FIELDS", "OPTIONS", "Channel", "InstrumentRecord", "read_instrument"
 
 FIELDS = {
     "spring_constant_n_per_m": ("spring constant", "N/m"),
-    "free_resonance_hz": ("free resonance (thermal fit)", "Hz"),
-    "free_quality_factor": ("free Q (thermal fit)", ""),
-    "contact_resonance_hz": ("contact resonance (tune fit)", "Hz"),
-    "contact_quality_factor": ("contact Q (tune fit)", ""),
+    "free_resonance_hz": ("free resonance", "Hz"),
+    "free_quality_factor": ("free Q", ""),
+    "contact_resonance_hz": ("contact resonance", "Hz"),
+    "contact_quality_factor": ("contact Q", ""),
     "length_m": ("lever length", "m"),
     "width_m": ("lever width", "m"),
     "tip_height_m": ("tip height", "m"),
@@ -174,7 +174,7 @@ def read_instrument(path) -> InstrumentRecord:
     >>> read_instrument("scan.xyz")
     Traceback (most recent call last):
     ...
-    pfmdyn.errors.UserError: scan.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps)
+    pfmdyn.errors.UserError: scan.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv
     """
     path = Path(path)
     reader = _reader(path)
@@ -230,7 +230,7 @@ def to_discrepancy_input(path, overrides: dict | None = None):
         peaks = fit_thermal_peaks(freq, asd)
         if not peaks:
             raise UserError(f"{name}: no resonance peak found in the thermal spectrum")
-        modes = np.arange(1, len(peaks) + 1)
+        modes = np.array([p.mode for p in peaks])
         conditions = np.array(["free"] * len(peaks))
         freqs = np.array([p.frequency_hz for p in peaks])
         qs = np.array([p.quality_factor for p in peaks])
