@@ -139,7 +139,6 @@ def _exact(value: float) -> str:
     return str(Fraction(value).limit_denominator(10**15)) if value else "0"
 
 
-@lru_cache(maxsize=64)
 def k1_limits(modes: int, k2_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Certified soft (k1 = 0) and stiff (k1 -> oo) limits of the first ``modes`` branches, as z.
 
@@ -147,6 +146,13 @@ def k1_limits(modes: int, k2_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray
     >>> soft.round(4).tolist(), stiff.round(4).tolist()
     ([1.8751, 4.6941], [3.9266, 7.0686])
     """
+    # One cached certification (at least 4 modes) serves every caller at this k2 ratio.
+    soft, stiff = _k1_limits(max(int(modes), 4), float(k2_ratio))
+    return soft[:modes], stiff[:modes]
+
+
+@lru_cache(maxsize=256)
+def _k1_limits(modes: int, k2_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     from ..generated import characteristic
     from ..roots.core import certify, characteristic_function
 
