@@ -6,6 +6,7 @@ wave's dimension labels, the instrument's settings in the wave note (see
 """
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -31,11 +32,37 @@ def _load(path: Path) -> dict:
         from igor2 import binarywave
     except ImportError:
         raise MissingExtraError("igor2", "files") from None
+    # On a short data block igor2 logs the whole raw buffer and returns bytes: silence it, check below.
+    logger = logging.getLogger("igor2")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
     try:
-        return binarywave.load(str(path))["wave"]
+        wave = binarywave.load(str(path))["wave"]
     except Exception as exc:    # igor2 raises struct, value and index errors on damaged files
-        reason = " ".join(str(exc).split()) or type(exc).__name__
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): {reason}") from None
+    finally:
+        logger.setLevel(level)
+    _check_length(path, wave)
+    data = wave.get("wData")
+    expected = int(np.prod([n for n in np.ravel(wave["wave_header"].get("nDim", [0])) if n > 0] or [0]))
+    if not isinstance(data, np.ndarray) or data.dtype.kind not in "iufc" or data.size != expected:
+        raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): "
+                        f"the data block does not hold the {expected} points its header announces")
+    return wave
+
+
+def _check_length(path: Path, wave: dict) -> None:
+    """A version-5 file is at least as long as its header's section sizes add up to."""
+    sizes = wave.get("bin_header", {})
+    if "dimLabelsSize" not in sizes:
+        return
+    keys = ("wfmSize", "formulaSize", "noteSize", "dataEUnitsSize", "dimEUnitsSize", "dimLabelsSize",
+            "sIndicesSize", "optionsSize1", "optionsSize2")
+    needed = 64 + sum(int(np.sum(sizes.get(k, 0))) for k in keys)
+    if path.stat().st_size < needed:
+        raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): "
+                        f"{path.stat().st_size} bytes, its header announces {needed}")
 
 
 def _dimension_units(wave: dict, ndim: int) -> list[str]:

@@ -9,6 +9,7 @@ listed with their channels.
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,10 @@ def _load(path: Path):
     except ImportError:
         raise MissingExtraError("nsfopen", "files") from None
     try:
-        return read(str(path))
+        with warnings.catch_warnings():
+            # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
+            warnings.simplefilter("ignore")
+            return read(str(path))
     except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}") from None
