@@ -116,6 +116,15 @@ def _a_of_z(z, b):
     return -(p + b * r) / (q + b * s)
 
 
+def _a_and_slope(z, b):
+    """``a = -A/B`` and ``da/dz = -(A' + a B')/B`` from one complex-step evaluation of A and B."""
+    zc = z + 1j * _STEP
+    fa = elastic(zc, np, k1_over_k=0.0, k2_ratio=b)
+    fb = elastic(zc, np, k1_over_k=1.0, k2_ratio=b) - fa
+    a = -fa.real / fb.real
+    return a, -(fa.imag + a * fb.imag) / (_STEP * fb.real)
+
+
 def z_from_frequency(frequency_hz, free_resonance_hz):
     """``z = z1 sqrt(f/f1)``: the dimensionless root of a resonance at ``f`` (Hz).
 
@@ -253,8 +262,7 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
             ratio = float(np.ravel(_ratio(z))[np.argmin(np.ravel(inside))])
             raise UserError(out_of_range_message(ratio, proof, next_soft))
         zc = np.where(inside, z, 0.5 * (proof.soft_z + proof.stiff_z))
-        a = _a_of_z(zc, float(k2_ratio))
-        dadz = _a_of_z(zc + 1j * _STEP, float(k2_ratio)).imag / _STEP
+        a, dadz = _a_and_slope(zc, float(k2_ratio))
         rel_z = 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc, np.asarray(free_uncertainty_hz) / f1)
         k1 = a * k
         sigma = np.hypot(k * dadz * zc * rel_z, a * np.asarray(spring_constant_uncertainty))
