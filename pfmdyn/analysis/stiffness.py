@@ -42,9 +42,9 @@ import numpy as np
 from ..errors import UserError
 from ..generated.characteristic import BETA1_FREE, elastic
 
-__all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "z_from_frequency",
-           "k1_over_k_from_z", "contact_stiffness", "k1_k2_from_modes", "branch_proof",
-           "reduced_modulus"]
+__all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
+           "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "k1_k2_from_modes",
+           "branch_proof", "mindlin_k2_over_k1", "reduced_modulus"]
 
 _STEP = 1e-30      # complex step: exact first derivatives, no cancellation
 
@@ -160,21 +160,44 @@ def k1_limits(modes: int, k2_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray
     return soft[:modes], stiff[:modes]
 
 
+def _certified_roots(g, modes: int) -> np.ndarray:
+    from ..generated import characteristic
+    from ..roots.core import certify
+
+    flint_g = lambda s: g(s, characteristic.FLINT)    # noqa: E731
+    balls, _ = certify(flint_g, modes, 17, f_exact=flint_g)
+    return np.array([float(b.mid()) for b in balls])
+
+
 @lru_cache(maxsize=256)
 def _k1_limits(modes: int, k2_ratio: float) -> tuple[np.ndarray, np.ndarray]:
-    from ..generated import characteristic
-    from ..roots.core import certify, characteristic_function
+    from ..roots.core import characteristic_function
 
     f_soft = characteristic_function("elastic", k1_over_k=0, k2_ratio=_exact(k2_ratio))
     big = 2**64
     f_big = characteristic_function("elastic", k1_over_k=big, k2_ratio=_exact(k2_ratio))
-    out = []
     # B = (F(big) - F(0))/big exactly (F affine in k1); a huge value keeps ball radii negligible.
-    for g in (f_soft, lambda z, m: (f_big(z, m) - f_soft(z, m)) / big):
-        flint_g = lambda s, g=g: g(s, characteristic.FLINT)    # noqa: E731 (binds g per limit)
-        balls, _ = certify(flint_g, modes, 17, f_exact=flint_g)
-        out.append(np.array([float(b.mid()) for b in balls]))
-    return out[0], out[1]
+    return _certified_roots(f_soft, modes), _certified_roots(lambda z, m: (f_big(z, m) - f_soft(z, m)) / big, modes)
+
+
+@lru_cache(maxsize=8)
+def coupled_limits(modes: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Certified limits when k2 grows with k1: free end (both 0) and the roots of ``S`` (both -> oo).
+
+    ``S``, the coefficient of ``k1 k2``, vanishes where ``cos z cosh z = 1``: tip held in
+    height and slope, the clamped-clamped beam.
+
+    >>> [v.round(4).tolist() for v in coupled_limits(2)]
+    [[1.8751, 4.6941], [4.73, 7.8532]]
+    """
+    from ..roots.core import characteristic_function
+
+    # The roots of F(z; big, big) are those of S to ~1/big (far below double precision); the
+    # exact difference of four F's would cancel terms of order z**4 inside the balls.
+    big = 2**64
+    stiff = characteristic_function("elastic", k1_over_k=big, k2_ratio=big)
+    soft = characteristic_function("elastic", k1_over_k=0, k2_ratio=0)
+    return _certified_roots(soft, modes), _certified_roots(lambda z, m: stiff(z, m) / big**2, modes)
 
 
 def _ratio(z):
@@ -361,6 +384,71 @@ def _modes_match(z, modes, a, b) -> bool:
     """Each z lies strictly between the certified limits of its branch at this k2 ratio."""
     soft, stiff = k1_limits(max(modes) + 1, float(b))
     return all(soft[m - 1] < zi < stiff[m - 1] for zi, m in zip(z, modes))
+
+
+def mindlin_k2_over_k1(poisson_ratio):
+    """k2/k1 of a rigid sphere on an isotropic sample: ``2 (1 - nu)/(2 - nu)``.
+
+    The inverse of derivations/contact_mechanics.py: mindlin_ratio (k1/k2, Hertz normal and
+    Mindlin tangential stiffness); a hand-written one-liner pending codegen of that relation.
+
+    >>> round(mindlin_k2_over_k1(0.3), 6)
+    0.823529
+    """
+    if not 0 <= poisson_ratio < 0.5 + 1e-12:
+        raise UserError(f"Poisson's ratio must be in [0, 0.5], got {poisson_ratio}")
+    return 2 * (1 - poisson_ratio) / (2 - poisson_ratio)
+
+
+def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k1: float, length_m: float,
+                              tip_height_m: float, mode: int = 1, contact_uncertainty_hz=0.0,
+                              free_uncertainty_hz=0.0, out_of_range: str = "raise") -> StiffnessResult:
+    """k1 when the longitudinal stiffness follows it, ``k2 = c k1`` (e.g. Mindlin), vectorised.
+
+    Then ``b = c (H/L)**2 a`` and ``F = P + a (Q + c' R) + c' a**2 S = 0`` (``c' = c H**2/L**2``):
+    a quadratic in ``a`` per pixel.  Between the certified limits (:func:`coupled_limits`)
+    a resonance is accepted when the quadratic has exactly one positive root (checked per
+    value: the path is not affine, so uniqueness is verified, not assumed); two positive
+    roots are reported as ambiguous (NaN or an error).
+
+    >>> r = coupled_contact_stiffness(5.0 * 60e3, 60e3, 1.0, k2_over_k1=0.8235, length_m=240e-6, tip_height_m=15e-6)
+    >>> round(float(r.k1_n_per_m), 3)
+    394.337
+    """
+    if out_of_range not in ("raise", "nan"):
+        raise ValueError("out_of_range must be 'raise' or 'nan'")
+    if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length_m, tip_height_m)):
+        raise UserError("k2/k1, lever length and tip height must be positive and finite")
+    c = k2_over_k1 * (tip_height_m / length_m) ** 2
+    soft, stiff = coupled_limits(max(4, mode + 1))
+    fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_hz, free_hz, spring_constant))
+    with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
+        z = z_from_frequency(fc, f1)
+        p, q, r, s_ = _parts(z)
+        lin, quad = q + c * r, c * s_
+        disc = np.sqrt(lin**2 - 4 * quad * p)
+        roots = np.stack([(-lin + disc) / (2 * quad), (-lin - disc) / (2 * quad)])
+        positive = np.isfinite(roots) & (roots > 0)
+        count = positive.sum(axis=0)
+        inside = (z > soft[mode - 1]) & (z < stiff[mode - 1]) & (count == 1)
+        if out_of_range == "raise" and not np.all(inside):
+            bad = np.ravel(~inside).argmax()
+            ratio = float(np.ravel(_ratio(z))[bad])
+            if np.ravel(count)[bad] == 2:
+                raise UserError(f"contact/free ratio {ratio:.6g}: two k1 values give this resonance when k2 = "
+                                f"{k2_over_k1:g} k1; a second contact mode decides")
+            raise UserError(f"contact/free ratio {ratio:.6g} of mode {mode} is outside ({_ratio(soft[mode - 1]):.6g}, "
+                            f"{_ratio(stiff[mode - 1]):.6g}), what k1 with k2 = {k2_over_k1:g} k1 can produce: "
+                            "a tip mass, the tip set back from the end, or another mode could explain it")
+        a = np.where(positive[0], roots[0], roots[1])
+        fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=c * a).imag / _STEP
+        dadz = -fz / (lin + 2 * quad * a)
+        sigma = k * np.abs(dadz) * z * 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc,
+                                                      np.asarray(free_uncertainty_hz) / f1)
+        k1, sigma, a = (np.where(inside, v, np.nan) for v in (a * k, sigma, a))
+    proof = BranchProof(mode, float("nan"), float(soft[mode - 1]), float(stiff[mode - 1]),
+                        float(_ratio(soft[mode - 1])), float(_ratio(stiff[mode - 1])))
+    return StiffnessResult(k1, sigma, a, z, proof)
 
 
 def reduced_modulus(k1, tip_radius_m, load_n):
