@@ -171,3 +171,27 @@ def test_cli_errors_are_one_line_and_write_nothing(tmp_path, capsys, argv, words
     err = capsys.readouterr().err
     assert err.startswith("pfmdyn stiffness: error:") and err.count("\n") == 1 and words in err
     assert not out.exists()
+
+
+def test_k1_recovered_when_k2_follows_k1_mindlin():
+    from pfmdyn.analysis.stiffness import coupled_contact_stiffness, mindlin_k2_over_k1
+    k, length, f1, ratio = draw_levers(31, 6)
+    height = np.random.default_rng(32).uniform(5e-6, 20e-6, 6)
+    c = mindlin_k2_over_k1(0.3)
+    for ki, li, fi, ri, hi in zip(k, length, f1, ratio, height):
+        b = float(float(ri) * c * (hi / li) ** 2)
+        fc = certified_contact_hz(fi, 1, k1_over_k=ri, k2_ratio=repr(b))
+        r = coupled_contact_stiffness(fc, fi, ki, k2_over_k1=c, length_m=li, tip_height_m=hi)
+        assert abs(float(r.k1_n_per_m) / (float(ri) * ki) - 1) < 1e-9
+    with pytest.raises(UserError, match="tip mass"):
+        coupled_contact_stiffness(6.5 * 60e3, 60e3, 1.0, k2_over_k1=c, length_m=2e-4, tip_height_m=1e-5)
+
+
+def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
+    base = ["stiffness", "--free", "60e3", "--contact", "300e3", "--spring-constant", "1", "--poisson", "0.3"]
+    one_line = cli.main(base + ["--length", "2.4e-4"])
+    assert one_line == 2 and "give --tip-height" in capsys.readouterr().err
+    out = tmp_path / "k.json"
+    assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["k1_n_per_m"] > 0 and doc["k2_n_per_m"] == pytest.approx(1.4 / 1.7 * doc["k1_n_per_m"])   # 2(1-nu)/(2-nu)

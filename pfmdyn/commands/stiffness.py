@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import UserError
 
 __all__ = ["add_arguments", "run", "gather"]
@@ -52,6 +54,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spring-constant", default=None, metavar="N/m", help="cantilever spring constant k")
     parser.add_argument("--k2-ratio", default=None, metavar="X",
                         help="longitudinal contact stiffness k2 H^2/(k L^2) held fixed (one contact mode; default 0)")
+    parser.add_argument("--k2-over-k1", default=None, metavar="X",
+                        help="k2 grows with k1 as k2 = X k1 (needs --length and --tip-height or a file giving them)")
+    parser.add_argument("--poisson", default=None, metavar="NU",
+                        help="Mindlin coupling k2/k1 = 2(1-nu)/(2-nu) for a sample of Poisson's ratio NU")
     parser.add_argument("--contact-uncertainty", default=None, metavar="HZ", help="standard uncertainty of each contact frequency")
     parser.add_argument("--free-uncertainty", default=None, metavar="HZ", help="standard uncertainty of f1")
     parser.add_argument("--spring-constant-uncertainty", default=None, metavar="N/m", help="standard uncertainty of k")
@@ -115,9 +121,21 @@ def gather(args) -> dict:
     return inputs
 
 
+def _coupling(args) -> float | None:
+    """k2/k1 from --k2-over-k1 or --poisson (Mindlin), or None."""
+    from ..analysis.stiffness import mindlin_k2_over_k1
+
+    if args.k2_over_k1 is not None and args.poisson is not None:
+        raise UserError("give --k2-over-k1 or --poisson, not both")
+    if args.poisson is not None:
+        nu = _number(args.poisson, "--poisson", allow_zero=True)
+        return mindlin_k2_over_k1(nu)
+    return _number(args.k2_over_k1, "--k2-over-k1")
+
+
 def run(args) -> int:
     """Compute k1 (and k2), print them with the branch proof, write JSON if asked."""
-    from ..analysis.stiffness import contact_stiffness, k1_k2_from_modes, reduced_modulus
+    from ..analysis.stiffness import coupled_contact_stiffness, contact_stiffness, k1_k2_from_modes, reduced_modulus
     from .inspect import write_json
 
     inputs = gather(args)
@@ -126,7 +144,21 @@ def run(args) -> int:
     sig_k = _number(args.spring_constant_uncertainty, "--spring-constant-uncertainty", allow_zero=True) or 0.0
     k2_fixed = _number(args.k2_ratio, "--k2-ratio", allow_zero=True)
     free, k = inputs["free"], inputs["k"]
-    if len(inputs["contacts"]) == 1:
+    coupling = _coupling(args)
+    if coupling is not None:
+        if len(inputs["contacts"]) != 1 or k2_fixed is not None:
+            raise UserError("--k2-over-k1/--poisson take one contact mode and no --k2-ratio")
+        for key, option in (("L", "--length"), ("H", "--tip-height")):
+            if not inputs[key]:
+                raise UserError(f"k2 = {coupling:g} k1 needs the lever length and tip height: give {option}")
+        r = coupled_contact_stiffness(inputs["contacts"][0], free, k, k2_over_k1=coupling, length_m=inputs["L"],
+                                      tip_height_m=inputs["H"], mode=inputs["modes"][0],
+                                      contact_uncertainty_hz=sig_c, free_uncertainty_hz=sig_f)
+        k1, dk1 = float(r.k1_n_per_m), float(np.hypot(r.k1_uncertainty_n_per_m, r.k1_over_k * sig_k))
+        k2_ratio, dk2, proofs = coupling * k1 / k * (inputs["H"] / inputs["L"]) ** 2, 0.0, []
+        coupled_note = (f"k2 = {coupling:g} k1 along the branch; certified limits f/f1 = {r.proof.soft_ratio:.6g} "
+                        f"(free) and {r.proof.stiff_ratio:.6g} (clamped-clamped); one positive k1 (checked)")
+    elif len(inputs["contacts"]) == 1:
         r = contact_stiffness(inputs["contacts"][0], free, k, mode=inputs["modes"][0], k2_ratio=k2_fixed or 0.0,
                               contact_uncertainty_hz=sig_c, free_uncertainty_hz=sig_f,
                               spring_constant_uncertainty=sig_k, certify_root=True)
@@ -141,9 +173,10 @@ def run(args) -> int:
                       "spring_constant_n_per_m": k, "contact_uncertainty_hz": sig_c, "free_uncertainty_hz": sig_f},
            "k1_n_per_m": k1, "k1_uncertainty_n_per_m": dk1, "k1_over_k": k1 / k,
            "k2_ratio": k2_ratio, "k2_ratio_uncertainty": dk2,
-           "branch_proof": [p.text() for p in proofs]}
+           "branch_proof": [p.text() for p in proofs] or [coupled_note]}
     lines = [f"k1 = {k1:.6g} +/- {dk1:.2g} N/m  (k1/k = {k1 / k:.6g})",
-             f"k2 H^2/(k L^2) = {k2_ratio:.6g}" + (f" +/- {dk2:.2g}" if len(proofs) > 1 else " (held fixed)")]
+             f"k2 H^2/(k L^2) = {k2_ratio:.6g}" + (f" +/- {dk2:.2g}" if len(proofs) > 1 else
+                                                  " (held fixed)" if proofs else " (follows k1)")]
     if inputs["L"] and inputs["H"]:
         out["k2_n_per_m"] = k2_ratio * k * inputs["L"] ** 2 / inputs["H"] ** 2
         lines.append(f"k2 = {out['k2_n_per_m']:.6g} N/m  (L = {inputs['L']:g} m, H = {inputs['H']:g} m)")
@@ -155,7 +188,7 @@ def run(args) -> int:
         out.update(reduced_modulus_pa=e_star, reduced_modulus_uncertainty_pa=1.5 * e_star * dk1 / k1,
                    tip_radius_m=radius, load_n=load)
         lines.append(f"E* = {e_star:.6g} +/- {out['reduced_modulus_uncertainty_pa']:.2g} Pa  (Hertz, R = {radius:g} m, P = {load:g} N)")
-    lines.extend("branch proof, " + p.text() for p in proofs)
+    lines.extend("branch proof, " + text for text in out["branch_proof"])
     print("\n".join(lines))
     if args.json:
         write_json(args.json, out)
