@@ -196,3 +196,14 @@ def test_missing_extra_is_named(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "igor2", None)
     with pytest.raises(UserError, match=r"pip install 'pfmdyn\[files\]'"):
         read_instrument(path)
+
+
+def test_empty_and_unknown_files(tmp_path):
+    empty = tmp_path / "empty.nid"
+    empty.write_bytes(b"")
+    with pytest.raises(UserError, match="the file is empty"):
+        read_instrument(empty)
+    with pytest.raises(UserError, match="unknown instrument file type '.spm'"):
+        read_instrument(tmp_path / "scan.spm")
+    with pytest.raises(UserError, match="no such file"):
+        read_instrument(tmp_path / "absent.ibw")

@@ -37,7 +37,10 @@ def _scan(h5, h5py):
     def visit(name, obj):
         base = name.rsplit("/", 1)[-1]
         if isinstance(obj, h5py.Group):
-            if base == "original_metadata" or base.startswith("Measurement_"):
+            # pyNSID nests dictionaries as sub-groups of (original_)metadata; pyUSID keeps
+            # acquisition settings on the Measurement_* groups.
+            parts = name.split("/")
+            if base.startswith("Measurement_") or "original_metadata" in parts or "metadata" in parts:
                 metadata.update({k: v for k, v in obj.attrs.items()})
         elif _is_main(base, obj):
             mains.append((name, obj))

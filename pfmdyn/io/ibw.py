@@ -85,13 +85,23 @@ def _data_unit(wave: dict) -> str:
     return _text(wave.get("data_units") or b"") or _text(wave["wave_header"].get("dataUnits", b""))
 
 
-def _layer_labels(wave: dict, layers: int) -> list[str]:
+def _labels(wave: dict, dim: int, count: int) -> list[str]:
+    """Names of the ``count`` entries along dimension ``dim`` (Asylum layers or columns)."""
     labels = wave.get("labels") or []
     names = []
-    if len(labels) > 2 and labels[2]:
-        # Entry 0 labels the dimension itself; entries 1.. the layers.
-        names = [asylum.channel_name(_text(b)) for b in list(labels[2])[1:]]
-    return [names[i] if i < len(names) and names[i] else f"layer{i}" for i in range(layers)]
+    if len(labels) > dim and labels[dim]:
+        # Entry 0 labels the dimension itself; entries 1.. its entries.
+        names = [asylum.channel_name(_text(b)) for b in list(labels[dim])[1:]]
+    return [names[i] if i < len(names) and names[i] else f"channel{i}" for i in range(count)]
+
+
+def _is_image(data: np.ndarray, units: list, note: dict) -> bool:
+    """x and y in metres, or the note's scan size matching the first two dimensions."""
+    if data.ndim < 2 or min(data.shape[:2]) < 2:
+        return False
+    if units[0] == units[1] == "m":
+        return True
+    return note.get("ScanPoints") == str(data.shape[0]) and note.get("ScanLines") == str(data.shape[1])
 
 
 def read_ibw(path) -> InstrumentRecord:
@@ -107,21 +117,26 @@ def read_ibw(path) -> InstrumentRecord:
     units = _dimension_units(wave, data.ndim)
     instrument = "Asylum Research (Igor binary wave)"
     spectrum = None
-    if data.ndim >= 2 and (units[0] == units[1] == "m" or "ScanSize" in note):
+    if _is_image(data, units, note):
         layers = data.shape[2] if data.ndim == 3 else 1
-        labels = _layer_labels(wave, layers) if data.ndim == 3 else [name]
+        labels = _labels(wave, 2, layers) if data.ndim == 3 else [name]
         channels = [Channel(label, asylum.channel_unit(label) or _data_unit(wave), data.shape[:2])
                     for label in labels]
         kind = "image"
     else:
-        channels = [Channel(name, _data_unit(wave), data.shape)]
+        if data.ndim == 2 and data.shape[1] > 1:    # columns named by the labels of dimension 1
+            labels = _labels(wave, 1, data.shape[1])
+            channels = [Channel(label, asylum.channel_unit(label) or _data_unit(wave), data.shape[:1])
+                        for label in labels]
+        else:
+            channels = [Channel(name, _data_unit(wave), data.shape)]
         if units[0] == "Hz" and data.ndim == 1:
             header = wave["wave_header"]
             x0, dx = float(np.ravel(header.get("sfB", header.get("hsB", 0)))[0]), float(np.ravel(header.get("sfA", header.get("hsA", 1)))[0])
             spectrum = (x0 + dx * np.arange(data.size), data.astype(float), _data_unit(wave))
             kind = "spectrum"
-        else:
-            kind = "resonance metadata" if "contact_resonance_hz" in found or "free_resonance_hz" in found else "spectrum"
+        else:       # force curves and other waves against time or distance
+            kind = "curve"
     return make_record(path, kind, instrument, channels, found, spectrum=spectrum)
 
 

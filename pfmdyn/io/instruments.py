@@ -51,7 +51,7 @@ OPTIONS = {"spring_constant_n_per_m": "--spring-constant", "length_m": "--length
            "free_resonance_hz": "--free-resonance"}
 """Field that may be given on the command line -> its option."""
 
-KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata")
+KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
 
 @dataclass(frozen=True)
@@ -180,7 +180,16 @@ def read_instrument(path) -> InstrumentRecord:
     reader = _reader(path)
     if not path.is_file():
         raise UserError(f"{path}: no such file")
-    return reader(path)
+    if path.stat().st_size == 0:
+        raise UserError(f"{path}: the file is empty")
+    try:
+        return reader(path)
+    except UserError:
+        raise
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError) as exc:
+        # A file the library opened but whose layout this reader does not know: one line, no traceback.
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise UserError(f"{path}: could not interpret the file ({type(exc).__name__}: {reason})") from None
 
 
 def required_field(record: InstrumentRecord, name: str, overrides: dict | None = None) -> float:
@@ -236,12 +245,15 @@ def to_discrepancy_input(path, overrides: dict | None = None):
         qs = np.array([p.quality_factor for p in peaks])
         overrides.setdefault("free_resonance_hz", freqs[0])
     else:
-        f_contact = required_field(record, "contact_resonance_hz")
         f_free = required_field(record, "free_resonance_hz", overrides)
-        modes, conditions = np.array([1, 1]), np.array(["free", "contact"])
-        freqs = np.array([f_free, f_contact])
-        qs = np.array([record.fields.get("free_quality_factor", np.nan),
-                       record.fields.get("contact_quality_factor", np.nan)])
+        q_free = record.fields.get("free_quality_factor", np.nan)
+        if "contact_resonance_hz" in record.fields:
+            modes, conditions = np.array([1, 1]), np.array(["free", "contact"])
+            freqs = np.array([f_free, record.fields["contact_resonance_hz"]])
+            qs = np.array([q_free, record.fields.get("contact_quality_factor", np.nan)])
+        else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
+            modes, conditions = np.array([1]), np.array(["free"])
+            freqs, qs = np.array([f_free]), np.array([q_free])
     values = [required_field(record, key, overrides) for key in
               ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m", "free_resonance_hz")]
     metadata = Metadata(*values, description=f"{record.instrument}: {name}")

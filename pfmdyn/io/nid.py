@@ -25,6 +25,29 @@ _PREFIX = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "μ": 1e-6,
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
 _THERMAL_KEYS = {"frequency": ("free_resonance_hz", "Hz"), "q factor": ("free_quality_factor", ""),
                  "spring constant": ("spring_constant_n_per_m", "N/m")}
+# Scan settings of images and spectroscopy files.
+_SCAN_KEYS = {"tip voltage": ("tip_bias_v", "V"), "vibration freq.": ("drive_frequency_hz", "Hz"),
+              "spring constant": ("spring_constant_n_per_m", "N/m")}
+
+
+def _unit(text: str) -> str:
+    """A unit as Nanosurf wrote it, repaired if UTF-8 was read as Latin-1; degrees as 'deg'."""
+    try:
+        text = text.encode("latin-1").decode("utf-8")
+    except (UnicodeEncodeError, UnicodeDecodeError):
+        pass
+    return "deg" if text.strip() == "°" else text.strip()
+
+
+def _fields(info: dict, keys: dict) -> dict:
+    found = {}
+    for key, value in info.items():
+        target = keys.get(str(key).strip().rstrip(":").strip().lower())
+        if target:
+            number = si_value(value, target[1])
+            if number is not None:
+                found[target[0]] = number
+    return found
 
 
 def si_value(text: str, unit: str) -> float | None:
@@ -74,7 +97,7 @@ def _channels(nid, sections) -> list[tuple]:
     for i, (name, values) in enumerate(nid.data.items()):
         header = headers[i] if i < len(headers) else {}
         data = np.asarray(values, dtype=float)
-        out.append((name, data, str(header.get("Dim2Unit", "")), header))
+        out.append((name, data, _unit(str(header.get("Dim2Unit", ""))), header))
     return out
 
 
@@ -92,12 +115,7 @@ def read_nid(path) -> InstrumentRecord:
     found, notes, spectrum = {}, [], None
     if thermal:
         kind = "thermal spectrum"
-        for key, value in info.items():
-            target = _THERMAL_KEYS.get(str(key).strip().rstrip(":").strip().lower())
-            if target:
-                number = si_value(value, target[1])
-                if number is not None:
-                    found[target[0]] = number
+        found = _fields(info, _THERMAL_KEYS)
         name, data, unit, header = channels[0]
         n = data.shape[-1]
         f0 = float(header.get("Dim0Min", 0.0))
@@ -107,7 +125,8 @@ def read_nid(path) -> InstrumentRecord:
         if lever:
             notes.append(f"cantilever type {lever}: its length and width are not in the file")
     else:
-        kind = "image" if group.startswith("image") else "spectrum"
+        kind = "image" if group.startswith("image") else "curve" if group.startswith("spec") else "spectrum"
+        found = _fields(info, _SCAN_KEYS)
     listed = [Channel(" ".join(str(p) for p in name) if isinstance(name, tuple) else str(name), unit,
                       data.shape[1:] if data.ndim > 1 and data.shape[0] == 1 else data.shape)
               for name, data, unit, _ in channels]
