@@ -87,8 +87,9 @@ def _from_file(path: str, overrides: dict) -> dict:
                 "contacts": data.frequency_hz[contact].tolist(), "modes": data.mode[contact].tolist(),
                 "k": overrides.get("spring_constant_n_per_m") or meta.k, "L": meta.L, "H": meta.H}
     record = read_instrument(path)
+    contact = record.fields.get("contact_resonance_hz")
     return {"free": required_field(record, "free_resonance_hz", overrides),
-            "contacts": [required_field(record, "contact_resonance_hz")], "modes": [1],
+            "contacts": [contact] if contact else [], "modes": [1],
             "k": required_field(record, "spring_constant_n_per_m", overrides),
             "L": record.fields.get("length_m"), "H": record.fields.get("tip_height_m")}
 
@@ -110,7 +111,8 @@ def gather(args) -> dict:
         if not contacts:
             inputs["contacts"], modes = found["contacts"], modes or found["modes"]
     if not inputs["contacts"]:
-        raise UserError("no contact resonance: give --contact HZ (or a file holding one)")
+        where = f" in {Path(args.file).name}" if args.file else ""
+        raise UserError(f"no contact resonance{where}: give --contact HZ")
     for key, option in (("free", "--free"), ("k", "--spring-constant")):
         if inputs[key] is None:
             raise UserError(f"no {'free resonance' if key == 'free' else 'spring constant'}: give {option}")
