@@ -12,10 +12,14 @@ evaluated from the generated function itself (at ``a = 0`` and ``a = 1``).  Henc
 * **one contact mode** (``b`` given, default 0): ``a = -A(z)/B(z)``, in closed form,
   vectorised over any array of frequencies (a map);
 * **two contact modes**: the two equations ``F(z_i; a, b) = 0`` reduce to a quadratic in
-  ``a`` (module :func:`k1_k2_from_modes`); three or more are fitted by least squares.
+  ``a`` (:func:`k1_k2_from_modes`); three or more are fitted by least squares;
+* **k2 tied to k1** (``k2 = c k1``, e.g. Mindlin): a quadratic in ``a`` per value
+  (:func:`coupled_contact_stiffness`), with the uniqueness of its positive root checked.
 
-Why the answer is unique (the *branch proof*, :func:`branch_proof`): ``B(z) != 0`` at the
-measured ``z`` (checked), so exactly one ``a`` makes ``z`` a resonance.  Branch ``n`` runs
+Why the answer is unique (the *branch proof*, :func:`branch_proof`): where ``B(z) != 0``
+exactly one ``a`` makes ``z`` a resonance (``B(z) = 0`` inside a branch would need
+``A(z) = 0`` too, making ``z`` a resonance for every ``a``, which the certified distinct
+limits exclude).  Branch ``n`` runs
 continuously from its certified soft limit (``a = 0``: roots of ``A``) to its certified
 stiff limit (``a -> oo``: roots of ``B``, the pinned end when ``b = 0``); being the graph of
 the single-valued inverse ``a(z) = -A/B`` it is injective, hence strictly monotonic, in
