@@ -23,6 +23,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "roots": ("pfmdyn.commands.roots", "certified resonance roots of a family to any number of digits"),
     "branches": ("pfmdyn.commands.branches", "resonance branches against contact stiffness (CSV + PNG)"),
     "diagram": ("pfmdyn.commands.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
+    "inspect": ("pfmdyn.commands.inspect", "what pfmdyn reads from an instrument file (.ibw, .h5, .nid, sweeps)"),
+    "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (and k2) from contact resonances"),
 }
 
 

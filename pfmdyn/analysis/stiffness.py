@@ -1,0 +1,470 @@
+"""Contact stiffness from contact resonances: the inverse problem of contact-resonance AFM.
+
+Model: the elastic-contact family (Eqs. 4a,b and 5 of Jesse, Baddorf, Kalinin 2006; vertical
+spring ``k1`` and longitudinal spring ``k2`` at tip height ``H``), whose resonances are the
+zeros ``z > 0`` of the generated characteristic function ``F(z; a, b)`` with ``a = k1/k``
+and ``b = k2 H**2/(k L**2)``.  A resonance at ``f`` on a lever whose first free resonance
+is ``f1`` has ``z = z1 sqrt(f/f1)`` (``z1 = 1.8751...``, since ``omega ~ z**2``).
+
+``F`` is affine in ``a`` (and bilinear in ``a, b``): ``F = A(z) + a B(z)``, with ``A``, ``B``
+evaluated from the generated function itself (at ``a = 0`` and ``a = 1``).  Hence:
+
+* **one contact mode** (``b`` given, default 0): ``a = -A(z)/B(z)``, in closed form,
+  vectorised over any array of frequencies (a map);
+* **two contact modes**: the two equations ``F(z_i; a, b) = 0`` reduce to a quadratic in
+  ``a`` (:func:`k1_k2_from_modes`); three or more are fitted by least squares;
+* **k2 tied to k1** (``k2 = c k1``, e.g. Mindlin): a quadratic in ``a`` per value
+  (:func:`coupled_contact_stiffness`), with the uniqueness of its positive root checked.
+
+Why the answer is unique (the *branch proof*, :func:`branch_proof`): where ``B(z) != 0``
+exactly one ``a`` makes ``z`` a resonance (``B(z) = 0`` inside a branch would need
+``A(z) = 0`` too, making ``z`` a resonance for every ``a``, which the certified distinct
+limits exclude).  Branch ``n`` runs
+continuously from its certified soft limit (``a = 0``: roots of ``A``) to its certified
+stiff limit (``a -> oo``: roots of ``B``, the pinned end when ``b = 0``); being the graph of
+the single-valued inverse ``a(z) = -A/B`` it is injective, hence strictly monotonic, in
+``a``.  A measured ratio strictly between the limits of mode ``n`` is therefore reached at
+exactly one ``k1 > 0``, and the recovered ``k1`` is confirmed by the ``n``-th certified
+root of :func:`pfmdyn.roots.core.family_roots` (for single results).  Ratios outside the
+limits are no k1 of this model: the message names the effect that could explain them.
+
+Uncertainties: first-order propagation of the frequency (and spring-constant) standard
+uncertainties, with derivatives by complex step of the same generated functions.
+
+Hertz: ``k1 = (6 E*^2 R P)^(1/3)`` (derived in ``derivations/contact_mechanics.py``,
+:func:`hertz_stiffness`), so ``E* = sqrt(k1^3/(6 R P))`` (:func:`reduced_modulus`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import UserError
+from ..generated.characteristic import BETA1_FREE, elastic
+
+__all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
+           "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "k1_k2_from_modes",
+           "branch_proof", "mindlin_k2_over_k1", "reduced_modulus"]
+
+_STEP = 1e-30      # complex step: exact first derivatives, no cancellation
+
+
+@dataclass(frozen=True)
+class BranchProof:
+    """Certified limits of branch ``mode`` of the k1 sweep at fixed ``k2_ratio``, as z and as f/f1."""
+
+    mode: int
+    k2_ratio: float
+    soft_z: float
+    stiff_z: float
+    soft_ratio: float
+    stiff_ratio: float
+    certified_z: float | None = None
+
+    def text(self) -> str:
+        """One paragraph saying why the solution is unique."""
+        out = (f"mode {self.mode}: certified limits f/f1 = {self.soft_ratio:.6g} (k1 = 0) and "
+               f"{self.stiff_ratio:.6g} (k1 -> inf) at k2 H^2/(k L^2) = {self.k2_ratio:g}; the characteristic "
+               "function is affine in k1, so each resonance between the limits belongs to exactly one k1 "
+               "and the branch is strictly monotonic in k1: the solution is unique")
+        if self.certified_z is not None:
+            out += f"; check: certified root {self.mode} at the recovered k1 is z = {self.certified_z:.12g}"
+        return out
+
+
+@dataclass(frozen=True)
+class StiffnessResult:
+    """k1 (N/m) with its standard uncertainty, k1/k, the z used and the branch limits (arrays)."""
+
+    k1_n_per_m: np.ndarray
+    k1_uncertainty_n_per_m: np.ndarray
+    k1_over_k: np.ndarray
+    z: np.ndarray
+    proof: BranchProof
+
+
+@dataclass(frozen=True)
+class TwoModeResult:
+    """k1 (N/m), k2_ratio = k2 H^2/(k L^2), their covariance, the proofs per mode, the fit residual."""
+
+    k1_n_per_m: float
+    k2_ratio: float
+    covariance: np.ndarray
+    proofs: tuple
+    residual_z: float = 0.0
+
+    @property
+    def k1_uncertainty_n_per_m(self) -> float:
+        return float(math.sqrt(max(self.covariance[0, 0], 0.0)))
+
+    @property
+    def k2_ratio_uncertainty(self) -> float:
+        return float(math.sqrt(max(self.covariance[1, 1], 0.0)))
+
+
+def _parts(z):
+    """``F = P + a Q + b R + a b S``: the four parts of the bilinear characteristic function."""
+    p = elastic(z, np, k1_over_k=0.0, k2_ratio=0.0)
+    q = elastic(z, np, k1_over_k=1.0, k2_ratio=0.0) - p
+    r = elastic(z, np, k1_over_k=0.0, k2_ratio=1.0) - p
+    s = elastic(z, np, k1_over_k=1.0, k2_ratio=1.0) - p - q - r
+    return p, q, r, s
+
+
+def _a_of_z(z, b):
+    p, q, r, s = _parts(z)
+    return -(p + b * r) / (q + b * s)
+
+
+def _a_and_slope(z, b):
+    """``a = -A/B`` and ``da/dz = -(A' + a B')/B`` from one complex-step evaluation of A and B."""
+    zc = z + 1j * _STEP
+    fa = elastic(zc, np, k1_over_k=0.0, k2_ratio=b)
+    fb = elastic(zc, np, k1_over_k=1.0, k2_ratio=b) - fa
+    a = -fa.real / fb.real
+    return a, -(fa.imag + a * fb.imag) / (_STEP * fb.real)
+
+
+def z_from_frequency(frequency_hz, free_resonance_hz):
+    """``z = z1 sqrt(f/f1)``: the dimensionless root of a resonance at ``f`` (Hz).
+
+    >>> round(float(z_from_frequency(4e5, 1e5)), 10)
+    3.7502081374
+    """
+    return BETA1_FREE * np.sqrt(np.asarray(frequency_hz, dtype=float) / np.asarray(free_resonance_hz, dtype=float))
+
+
+def k1_over_k_from_z(z, k2_ratio: float = 0.0):
+    """``k1/k = -A(z)/B(z)`` (module docstring), vectorised; no range check.
+
+    >>> round(float(k1_over_k_from_z(3.0)), 6)
+    7.117618
+    """
+    with np.errstate(under="ignore", divide="ignore", invalid="ignore"):
+        return _a_of_z(np.asarray(z, dtype=float), float(k2_ratio))
+
+
+def _exact(value: float) -> str:
+    return str(Fraction(value).limit_denominator(10**15)) if value else "0"
+
+
+def k1_limits(modes: int, k2_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Certified soft (k1 = 0) and stiff (k1 -> oo) limits of the first ``modes`` branches, as z.
+
+    >>> soft, stiff = k1_limits(2)
+    >>> soft.round(4).tolist(), stiff.round(4).tolist()
+    ([1.8751, 4.6941], [3.9266, 7.0686])
+    """
+    # One cached certification (at least 4 modes) serves every caller at this k2 ratio.
+    soft, stiff = _k1_limits(max(int(modes), 4), float(k2_ratio))
+    return soft[:modes], stiff[:modes]
+
+
+def _certified_roots(g, modes: int) -> np.ndarray:
+    from ..generated import characteristic
+    from ..roots.core import certify
+
+    flint_g = lambda s: g(s, characteristic.FLINT)    # noqa: E731
+    balls, _ = certify(flint_g, modes, 17, f_exact=flint_g)
+    return np.array([float(b.mid()) for b in balls])
+
+
+@lru_cache(maxsize=256)
+def _k1_limits(modes: int, k2_ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    from ..roots.core import characteristic_function
+
+    f_soft = characteristic_function("elastic", k1_over_k=0, k2_ratio=_exact(k2_ratio))
+    big = 2**64
+    f_big = characteristic_function("elastic", k1_over_k=big, k2_ratio=_exact(k2_ratio))
+    # B = (F(big) - F(0))/big exactly (F affine in k1); a huge value keeps ball radii negligible.
+    return _certified_roots(f_soft, modes), _certified_roots(lambda z, m: (f_big(z, m) - f_soft(z, m)) / big, modes)
+
+
+@lru_cache(maxsize=8)
+def coupled_limits(modes: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Certified limits when k2 grows with k1: free end (both 0) and the roots of ``S`` (both -> oo).
+
+    ``S``, the coefficient of ``k1 k2``, vanishes where ``cos z cosh z = 1``: tip held in
+    height and slope, the clamped-clamped beam.
+
+    >>> [v.round(4).tolist() for v in coupled_limits(2)]
+    [[1.8751, 4.6941], [4.73, 7.8532]]
+    """
+    from ..roots.core import characteristic_function
+
+    # The roots of F(z; big, big) are those of S to ~1/big (far below double precision); the
+    # exact difference of four F's would cancel terms of order z**4 inside the balls.
+    big = 2**64
+    stiff = characteristic_function("elastic", k1_over_k=big, k2_ratio=big)
+    soft = characteristic_function("elastic", k1_over_k=0, k2_ratio=0)
+    return _certified_roots(soft, modes), _certified_roots(lambda z, m: stiff(z, m) / big**2, modes)
+
+
+def _ratio(z):
+    return (np.asarray(z) / BETA1_FREE) ** 2
+
+
+def branch_proof(mode: int, k2_ratio: float = 0.0, k1_over_k: float | None = None) -> BranchProof:
+    """The limits of branch ``mode``; with ``k1_over_k``, also its certified root there.
+
+    >>> p = branch_proof(1)
+    >>> round(p.soft_ratio, 6), round(p.stiff_ratio, 4)
+    (1.0, 4.3851)
+    """
+    soft, stiff = k1_limits(mode + 1, float(k2_ratio))
+    root = None
+    if k1_over_k is not None:
+        from ..roots.core import family_roots
+        result = family_roots("elastic", mode, 17, k1_over_k=_exact(k1_over_k), k2_ratio=_exact(k2_ratio))
+        root = float(result.roots[mode - 1]) if result.certified else None
+    return BranchProof(mode, float(k2_ratio), float(soft[mode - 1]), float(stiff[mode - 1]),
+                       float(_ratio(soft[mode - 1])), float(_ratio(stiff[mode - 1])), root)
+
+
+def out_of_range_message(ratio: float, proof: BranchProof, next_soft_ratio: float) -> str:
+    """Why a contact/free ratio is no k1 of the model, naming the effect that could explain it."""
+    n = proof.mode
+    if ratio <= proof.soft_ratio:
+        return (f"contact/free ratio {ratio:.6g} of mode {n} is at or below its free limit {proof.soft_ratio:.6g}: "
+                "no contact stiffness lowers a resonance; an added mass at the tip (or liquid loading), a free "
+                "resonance measured elsewhere, or a lower mode could explain it")
+    beyond = "between that limit and free mode {} ({:.6g})".format(n + 1, next_soft_ratio) \
+        if ratio < next_soft_ratio else "beyond it"
+    return (f"contact/free ratio {ratio:.6g} of mode {n} is above its stiff (pinned) limit {proof.stiff_ratio:.6g} "
+            f"for k2 H^2/(k L^2) = {proof.k2_ratio:g} ({beyond}): k1 alone cannot reach it; a longitudinal contact "
+            "stiffness k2 (give --k2-ratio, or a second contact mode) or the peak being a higher mode could explain it")
+
+
+def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2_ratio: float = 0.0,
+                      contact_uncertainty_hz=0.0, free_uncertainty_hz=0.0, spring_constant_uncertainty=0.0,
+                      out_of_range: str = "raise", certify_root: bool = False) -> StiffnessResult:
+    """Vertical contact stiffness k1 (N/m) from contact resonances of one mode, vectorised.
+
+    Parameters
+    ----------
+    contact_hz : array_like, contact resonance(s) of mode ``mode`` (Hz), any shape (a map)
+    free_hz : first free resonance (Hz), broadcast against ``contact_hz``
+    spring_constant : k (N/m), broadcast
+    mode : flexural mode number of the contact resonance (1-based)
+    k2_ratio : longitudinal contact stiffness ``k2 H**2/(k L**2)`` held fixed (default 0)
+    contact_uncertainty_hz, free_uncertainty_hz, spring_constant_uncertainty : standard uncertainties
+    out_of_range : ``"raise"`` (a :class:`UserError` naming the effect) or ``"nan"`` (NaN there, for maps)
+    certify_root : also compute the certified root at the recovered k1 (scalar input only)
+
+    Returns
+    -------
+    StiffnessResult
+
+    Examples
+    --------
+    >>> r = contact_stiffness(300e3, 75e3, 2.0, contact_uncertainty_hz=100.0)
+    >>> round(float(r.k1_n_per_m), 4), round(float(r.k1_uncertainty_n_per_m), 4)
+    (109.7483, 0.393)
+    >>> contact_stiffness([300e3, 350e3], 75e3, 2.0, out_of_range="nan").k1_n_per_m.round(3).tolist()
+    [109.748, nan]
+    """
+    if out_of_range not in ("raise", "nan"):
+        raise ValueError("out_of_range must be 'raise' or 'nan'")
+    if not (isinstance(mode, (int, np.integer)) and mode >= 1):
+        raise UserError(f"mode must be a positive integer, got {mode!r}")
+    if not (math.isfinite(k2_ratio) and k2_ratio >= 0):
+        raise UserError(f"k2 ratio must be non-negative and finite, got {k2_ratio}")
+    fc = np.asarray(contact_hz, dtype=float)
+    f1 = np.asarray(free_hz, dtype=float)
+    k = np.asarray(spring_constant, dtype=float)
+    for name, value in (("contact frequency", fc), ("free resonance", f1), ("spring constant", k)):
+        bad = ~(np.isfinite(value) & (value > 0))
+        if np.any(bad) and (out_of_range == "raise" or name != "contact frequency"):
+            raise UserError(f"{name} must be positive and finite (Hz, N/m)")
+    proof = branch_proof(mode, k2_ratio)
+    next_soft = float(_ratio(k1_limits(mode + 1, float(k2_ratio))[0][mode]))
+    with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
+        z = z_from_frequency(fc, f1)
+        inside = (z > proof.soft_z) & (z < proof.stiff_z)
+        if out_of_range == "raise" and not np.all(inside):
+            ratio = float(np.ravel(_ratio(z))[np.argmin(np.ravel(inside))])
+            raise UserError(out_of_range_message(ratio, proof, next_soft))
+        zc = np.where(inside, z, 0.5 * (proof.soft_z + proof.stiff_z))
+        a, dadz = _a_and_slope(zc, float(k2_ratio))
+        rel_z = 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc, np.asarray(free_uncertainty_hz) / f1)
+        k1 = a * k
+        sigma = np.hypot(k * dadz * zc * rel_z, a * np.asarray(spring_constant_uncertainty))
+        k1, sigma, a = (np.where(inside, v, np.nan) for v in (k1, sigma, a))
+    if certify_root and np.ndim(k1) == 0 and inside:
+        proof = branch_proof(mode, k2_ratio, float(a))
+    return StiffnessResult(k1, sigma, a, z, proof)
+
+
+def _solve_pair(z1, z2):
+    """All (a, b) with a > 0, b >= 0 making z1 and z2 roots: a quadratic in a (module docstring)."""
+    p1, q1, r1, s1 = _parts(z1)
+    p2, q2, r2, s2 = _parts(z2)
+    coeffs = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
+    out = []
+    for a in np.roots(coeffs):
+        if abs(a.imag) > 1e-9 * abs(a) or a.real <= 0:
+            continue
+        a = a.real
+        b = -(p1 + a * q1) / (r1 + a * s1)
+        if b >= -1e-12 * max(1.0, a):
+            out.append((float(a), max(float(b), 0.0)))
+    return out
+
+
+def _f_and_grad(z, a, b):
+    """F and its derivatives in z, a, b at the points z (complex step in z; exact in a, b)."""
+    p, q, r, s = _parts(z)
+    fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=b).imag / _STEP
+    return p + a * q + b * r + a * b * s, fz, q + b * s, r + a * s
+
+
+def k1_k2_from_modes(contact_hz, modes, free_hz, spring_constant, *, contact_uncertainty_hz=None,
+                     free_uncertainty_hz=0.0, spring_constant_uncertainty=0.0) -> TwoModeResult:
+    """k1 and ``k2_ratio`` from two or more contact resonances of known mode numbers.
+
+    Two modes: the quadratic in ``a`` (unique positive solution required, else an error
+    that asks for a third mode).  More: least squares in z from the pair solutions.
+
+    >>> from pfmdyn.roots.core import family_roots
+    >>> z = [float(x) for x in family_roots("elastic", 2, 20, k1_over_k=40, k2_ratio="0.05").roots]
+    >>> f = [75e3 * (zi / BETA1_FREE) ** 2 for zi in z]
+    >>> r = k1_k2_from_modes(f, [1, 2], 75e3, 2.0)
+    >>> round(r.k1_n_per_m, 9), round(r.k2_ratio, 12)
+    (80.0, 0.05)
+    """
+    fc = np.asarray(contact_hz, dtype=float)
+    modes = [int(m) for m in modes]
+    if fc.ndim != 1 or len(fc) != len(modes) or len(fc) < 2:
+        raise UserError("two or more contact resonances, each with its mode number, are needed for k1 and k2")
+    if len(set(modes)) != len(modes) or min(modes) < 1:
+        raise UserError(f"contact mode numbers must be distinct and >= 1, got {modes}")
+    if not (np.all(np.isfinite(fc)) and np.all(fc > 0) and free_hz > 0 and spring_constant > 0):
+        raise UserError("frequencies and spring constant must be positive and finite")
+    z = z_from_frequency(fc, free_hz)
+    with np.errstate(under="ignore"):
+        candidates = _solve_pair(z[0], z[1])
+        if len(fc) > 2:
+            candidates = [_least_squares(z, a, b) for a, b in candidates]
+        valid = [(a, b) for a, b in candidates if _modes_match(z, modes, a, b)]
+    if not valid:
+        raise UserError("no k1 > 0, k2 >= 0 of the elastic-contact model gives these contact resonances as modes "
+                        f"{modes}: check the mode numbers; tip mass or damping may be missing from the model")
+    if len(valid) > 1 and abs(valid[0][0] - valid[1][0]) > 1e-9 * valid[0][0]:
+        sols = "; ".join(f"k1 = {a * spring_constant:.6g} N/m, k2 ratio = {b:.6g}" for a, b in valid)
+        raise UserError(f"two solutions fit these modes ({sols}): a third contact mode decides")
+    a, b = valid[0]
+    f, fz, fa, fb = _f_and_grad(z, a, b)
+    jac = np.column_stack([fa, fb])
+    # d(a,b)/dz from the implicit function theorem (least squares: its pseudo-inverse).
+    dab_dz = -np.linalg.pinv(jac) * fz
+    sig_c = np.zeros_like(fc) if contact_uncertainty_hz is None else np.broadcast_to(contact_uncertainty_hz, fc.shape)
+    dz_dfc = z / (2 * fc)
+    dz_df1 = -z / (2 * free_hz)
+    cov_ab = (dab_dz * (dz_dfc * sig_c) ** 2) @ dab_dz.T
+    g = dab_dz @ dz_df1
+    cov_ab = cov_ab + np.outer(g, g) * free_uncertainty_hz**2
+    scale = np.diag([spring_constant, 1.0])
+    cov = scale @ cov_ab @ scale
+    cov[0, 0] += (a * spring_constant_uncertainty) ** 2
+    proofs = tuple(branch_proof(m, b) for m in modes)
+    return TwoModeResult(a * spring_constant, b, cov, proofs, float(np.sqrt(np.mean((f / fz) ** 2))))
+
+
+def _least_squares(z, a, b):
+    from scipy.optimize import least_squares
+
+    def residual(x):
+        f, fz, _, _ = _f_and_grad(z, x[0], x[1])
+        return f / fz
+    sol = least_squares(residual, [a, b], bounds=([0, 0], [np.inf, np.inf]), x_scale=[max(a, 1e-3), max(b, 1e-3)])
+    return float(sol.x[0]), float(sol.x[1])
+
+
+def _modes_match(z, modes, a, b) -> bool:
+    """Each z lies strictly between the certified limits of its branch at this k2 ratio."""
+    soft, stiff = k1_limits(max(modes) + 1, float(b))
+    return all(soft[m - 1] < zi < stiff[m - 1] for zi, m in zip(z, modes))
+
+
+def mindlin_k2_over_k1(poisson_ratio):
+    """k2/k1 of a rigid sphere on an isotropic sample: ``2 (1 - nu)/(2 - nu)``.
+
+    The inverse of derivations/contact_mechanics.py: mindlin_ratio (k1/k2, Hertz normal and
+    Mindlin tangential stiffness); a hand-written one-liner pending codegen of that relation.
+
+    >>> round(mindlin_k2_over_k1(0.3), 6)
+    0.823529
+    """
+    if not 0 <= poisson_ratio < 0.5 + 1e-12:
+        raise UserError(f"Poisson's ratio must be in [0, 0.5], got {poisson_ratio}")
+    return 2 * (1 - poisson_ratio) / (2 - poisson_ratio)
+
+
+def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k1: float, length_m: float,
+                              tip_height_m: float, mode: int = 1, contact_uncertainty_hz=0.0,
+                              free_uncertainty_hz=0.0, out_of_range: str = "raise") -> StiffnessResult:
+    """k1 when the longitudinal stiffness follows it, ``k2 = c k1`` (e.g. Mindlin), vectorised.
+
+    Then ``b = c (H/L)**2 a`` and ``F = P + a (Q + c' R) + c' a**2 S = 0`` (``c' = c H**2/L**2``):
+    a quadratic in ``a`` per pixel.  Between the certified limits (:func:`coupled_limits`)
+    a resonance is accepted when the quadratic has exactly one positive root (checked per
+    value: the path is not affine, so uniqueness is verified, not assumed); two positive
+    roots are reported as ambiguous (NaN or an error).
+
+    >>> r = coupled_contact_stiffness(5.0 * 60e3, 60e3, 1.0, k2_over_k1=0.8235, length_m=240e-6, tip_height_m=15e-6)
+    >>> round(float(r.k1_n_per_m), 3)
+    394.337
+    """
+    if out_of_range not in ("raise", "nan"):
+        raise ValueError("out_of_range must be 'raise' or 'nan'")
+    if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length_m, tip_height_m)):
+        raise UserError("k2/k1, lever length and tip height must be positive and finite")
+    c = k2_over_k1 * (tip_height_m / length_m) ** 2
+    soft, stiff = coupled_limits(max(4, mode + 1))
+    fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_hz, free_hz, spring_constant))
+    with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
+        z = z_from_frequency(fc, f1)
+        p, q, r, s_ = _parts(z)
+        lin, quad = q + c * r, c * s_
+        disc = np.sqrt(lin**2 - 4 * quad * p)
+        roots = np.stack([(-lin + disc) / (2 * quad), (-lin - disc) / (2 * quad)])
+        positive = np.isfinite(roots) & (roots > 0)
+        count = positive.sum(axis=0)
+        inside = (z > soft[mode - 1]) & (z < stiff[mode - 1]) & (count == 1)
+        if out_of_range == "raise" and not np.all(inside):
+            bad = np.ravel(~inside).argmax()
+            ratio = float(np.ravel(_ratio(z))[bad])
+            if np.ravel(count)[bad] == 2:
+                raise UserError(f"contact/free ratio {ratio:.6g}: two k1 values give this resonance when k2 = "
+                                f"{k2_over_k1:g} k1; a second contact mode decides")
+            raise UserError(f"contact/free ratio {ratio:.6g} of mode {mode} is outside ({_ratio(soft[mode - 1]):.6g}, "
+                            f"{_ratio(stiff[mode - 1]):.6g}), what k1 with k2 = {k2_over_k1:g} k1 can produce: "
+                            "a tip mass, the tip set back from the end, or another mode could explain it")
+        a = np.where(positive[0], roots[0], roots[1])
+        fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=c * a).imag / _STEP
+        dadz = -fz / (lin + 2 * quad * a)
+        sigma = k * np.abs(dadz) * z * 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc,
+                                                      np.asarray(free_uncertainty_hz) / f1)
+        k1, sigma, a = (np.where(inside, v, np.nan) for v in (a * k, sigma, a))
+    proof = BranchProof(mode, float("nan"), float(soft[mode - 1]), float(stiff[mode - 1]),
+                        float(_ratio(soft[mode - 1])), float(_ratio(stiff[mode - 1])))
+    return StiffnessResult(k1, sigma, a, z, proof)
+
+
+def reduced_modulus(k1, tip_radius_m, load_n):
+    """Reduced modulus E* (Pa) of a Hertz contact of stiffness k1 (N/m), tip radius R (m), load P (N).
+
+    Inverts ``k1 = (6 E*^2 R P)^(1/3)`` (derivations/contact_mechanics.py: hertz_stiffness);
+    a hand-written one-liner pending codegen of that relation.
+
+    >>> round(float(reduced_modulus(100.0, 25e-9, 100e-9)), -6)   # Pa
+    8165000000.0
+    """
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    if np.any(r <= 0) or np.any(p <= 0):
+        raise UserError("tip radius and load must be positive (m, N)")
+    return np.sqrt(k1**3 / (6 * r * p))

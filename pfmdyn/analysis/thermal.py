@@ -1,0 +1,138 @@
+"""Resonances in a thermal-noise spectrum: peaks found and fitted with a damped oscillator.
+
+Near an isolated flexural mode the thermal amplitude spectral density of a cantilever is
+that of a damped harmonic oscillator over a white floor,
+
+    ASD(f)**2 = w**2 + A**2 f0**4 / ((f0**2 - f**2)**2 + (f f0 / Q)**2),
+
+(the beam's modal response, one mode at a time: pfmdyn's transfer functions with loss
+``1/Q`` reduce to it near each root).  Peaks are located on the logarithm of the median-
+smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
+that the floor and the peak weigh alike.
+
+Which peaks are flexural modes: the tallest peak is mode 1 (in a displacement spectrum the
+fundamental dominates); a higher peak is mode ``n`` when its ratio to mode 1 lies within
+25 % of the free beam's ``(z_n/z_1)**2`` (certified free roots, :mod:`pfmdyn.roots.core`);
+other peaks (electrical pick-up, torsion, the stage) are left out.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UserError
+
+__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks"]
+
+
+@dataclass(frozen=True)
+class ThermalPeak:
+    """One fitted flexural mode (1-based): f0 (Hz), Q, peak amplitude A and white floor w (units of the ASD), 1-sigma errors."""
+
+    mode: int
+    frequency_hz: float
+    quality_factor: float
+    amplitude: float
+    white: float
+    frequency_uncertainty_hz: float
+    quality_factor_uncertainty: float
+
+
+def oscillator_asd(f, f0, q, amplitude, white):
+    """Amplitude spectral density of a damped oscillator over a white floor (module formula).
+
+    >>> round(float(oscillator_asd(1e5, 1e5, 100.0, 1.0, 0.0)), 6)   # A Q at resonance
+    100.0
+    """
+    f = np.asarray(f, dtype=float)
+    return np.sqrt(white**2 + amplitude**2 * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / q) ** 2))
+
+
+def _smooth(y, width):
+    pad = width // 2
+    padded = np.pad(y, pad, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * pad + 1)
+    return np.median(windows, axis=-1)
+
+
+def _flexural_modes(candidates, max_modes):
+    """Mode number of each candidate peak (tallest first), 0 for a peak that is no flexural mode."""
+    from ..roots.core import family_roots
+
+    if len(candidates) == 0:
+        return []
+    z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
+    ratios = (z / z[0]) ** 2
+    out, taken = [1], {1}
+    for f in candidates[1:]:
+        r = f / candidates[0]
+        n = int(np.argmin(np.abs(r / ratios - 1))) + 1
+        ok = abs(r / ratios[n - 1] - 1) < 0.25 and n not in taken
+        out.append(n if ok else 0)
+        taken.add(n if ok else 0)
+    return out
+
+
+def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_peaks: int = 5) -> list[ThermalPeak]:
+    """Resonances of a thermal spectrum, lowest first, each fitted with :func:`oscillator_asd`.
+
+    Parameters
+    ----------
+    frequency_hz, asd : 1-D arrays, equally spaced frequencies from (near) 0
+    min_prominence : a peak must rise this factor above the smoothed floor around it
+    max_peaks : at most this many (the most prominent), returned in frequency order
+
+    Examples
+    --------
+    >>> f = np.linspace(0, 4e5, 8001)
+    >>> rng = np.random.default_rng(0)
+    >>> asd = oscillator_asd(f, 1.8e5, 400.0, 2e-15, 5e-14) * rng.gamma(100, 0.01, f.size)
+    >>> asd[(f > 2e4) & (f < 2.1e4)] *= 4          # a bump that is no flexural mode
+    >>> [p] = fit_thermal_peaks(f, asd)
+    >>> p.mode, round(p.frequency_hz, -2), abs(p.quality_factor - 400) < 3 * p.quality_factor_uncertainty
+    (1, 180000.0, True)
+    """
+    from scipy.optimize import curve_fit
+    from scipy.signal import find_peaks
+
+    f, y = np.asarray(frequency_hz, dtype=float), np.asarray(asd, dtype=float)
+    if f.ndim != 1 or f.shape != y.shape or f.size < 50:
+        raise UserError("a thermal spectrum needs equal 1-D frequency and ASD arrays of at least 50 points")
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(y)) and np.all(np.diff(f) > 0)):
+        raise UserError("a thermal spectrum needs finite values and increasing frequencies")
+    step = f[1] - f[0]
+    # The lowest bins hold the DC offset and 1/f noise, never a flexural mode of interest.
+    start = max(3, int(0.01 * f.size))
+    logy = np.log10(np.maximum(y, np.finfo(float).tiny))
+    floor = _smooth(logy, max(11, f.size // 50))
+    peaks, props = find_peaks(_smooth(logy, 5)[start:] - floor[start:], prominence=np.log10(min_prominence),
+                              height=np.log10(min_prominence))
+    order = np.argsort(props["prominences"])[::-1]
+    modes = _flexural_modes(f[peaks[order] + start], max_peaks)
+    out = []
+    for mode, i in sorted((m, peaks[j] + start) for m, j in zip(modes, order) if m):
+        f0, top, base = f[i], y[i], 10 ** floor[i]
+        above = np.flatnonzero(y > top / np.sqrt(2))
+        # Half-power width from the contiguous run around the peak (at least two bins).
+        lo, hi = i, i
+        while lo - 1 in above:
+            lo -= 1
+        while hi + 1 in above:
+            hi += 1
+        q0 = f0 / max((hi - lo + 1) * step, 2 * step)
+        half = max(6 * f0 / q0, 20 * step)
+        window = (f > f0 - half) & (f < f0 + half)
+        guess = (f0, q0, top / q0, base)
+        model = lambda x, a, b, c, d: np.log(oscillator_asd(x, a, abs(b), abs(c), abs(d)))   # noqa: E731
+        try:
+            popt, pcov = curve_fit(model, f[window], np.log(np.maximum(y[window], np.finfo(float).tiny)),
+                                   p0=guess, maxfev=5000)
+        except (RuntimeError, ValueError):
+            continue
+        err = np.sqrt(np.clip(np.diag(pcov), 0, None)) if np.all(np.isfinite(pcov)) else np.full(4, np.nan)
+        if not (f[window][0] < popt[0] < f[window][-1]):
+            continue
+        out.append(ThermalPeak(mode, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
+                               float(err[0]), float(err[1])))
+    return out

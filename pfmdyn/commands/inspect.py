@@ -1,0 +1,71 @@
+"""``pfmdyn inspect FILE``: what pfmdyn understood from an instrument file.
+
+Prints the kind of file, its channels with units, the cantilever fields found (SI) and the
+ones missing; ``--json PATH`` writes the same as JSON (numbers as numbers).  Example:
+``pfmdyn inspect scan.ibw --json scan.json``.
+"""
+from __future__ import annotations
+
+import json
+
+from ..errors import UserError
+from ..io.instruments import FIELDS, InstrumentRecord, read_instrument
+
+__all__ = ["add_arguments", "run", "report", "write_json"]
+
+
+def add_arguments(parser) -> None:
+    """Arguments of ``pfmdyn inspect``.
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> p.parse_args(["scan.ibw", "--json", "out.json"]).json
+    'out.json'
+    """
+    parser.add_argument("file", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
+    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+
+
+def report(record: InstrumentRecord) -> str:
+    """The human-readable report of a record.
+
+    >>> from pfmdyn.io.instruments import Channel, make_record
+    >>> r = make_record("a.ibw", "image", "Asylum", [Channel("HeightRetrace", "m", (2, 2))],
+    ...                 {"spring_constant_n_per_m": 0.5})
+    >>> print(report(r).splitlines()[0])
+    a.ibw: image (Asylum)
+    """
+    lines = [f"{record.path}: {record.kind} ({record.instrument})", "channels:"]
+    for c in record.channels:
+        shape = " x ".join(str(n) for n in c.shape)
+        lines.append(f"  {c.name:<40} [{c.unit or '?'}]  {shape}")
+    lines.append("cantilever fields found (SI):" if record.fields else "cantilever fields found: none")
+    for name, value in record.fields.items():
+        what, unit = FIELDS[name]
+        lines.append(f"  {what:<32} {value:.6g} {unit}".rstrip())
+    if record.missing:
+        lines.append("missing: " + ", ".join(FIELDS[name][0] for name in record.missing))
+    lines.extend(f"note: {note}" for note in record.notes)
+    return "\n".join(lines)
+
+
+def write_json(path: str, document: dict) -> None:
+    """Write ``document`` as JSON; non-finite numbers are refused, never written as NaN."""
+    try:
+        text = json.dumps(document, indent=2, allow_nan=False)
+    except ValueError:
+        raise UserError("result holds a non-finite number; not written") from None
+    try:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+    except OSError as exc:
+        raise UserError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def run(args) -> int:
+    """Read the file, print the report, write JSON if asked."""
+    record = read_instrument(args.file)
+    print(report(record))
+    if args.json:
+        write_json(args.json, record.to_json())
+    return 0

@@ -1,0 +1,96 @@
+"""Asylum Research conventions: the ``key: value`` note and the channel names of its images.
+
+The same note appears in ``.ibw`` files and, as HDF5 attributes, in their pycroscopy NSID
+conversions; both readers map it here.  Keys (Asylum software, MFP-3D and Cypher):
+
+* ``SpringConstant`` (N/m), ``ThermalFrequency`` (Hz) and ``ThermalQ``: the fit of the
+  thermal tune of the free cantilever (tip away from the surface);
+* ``TuneFreqResult`` (Hz) and ``TuneQResult``: the last tune fit, which in PFM and
+  contact-resonance work is made in contact, i.e. a contact resonance;
+* ``CustomLeverLength``, ``CustomLeverWidth`` (m), ``DriveFrequency`` (Hz), ``TipVoltage`` (V).
+
+No tip height is recorded.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit"]
+
+NOTE_KEYS = {
+    "spring_constant_n_per_m": "SpringConstant",
+    "free_resonance_hz": "ThermalFrequency",
+    "free_quality_factor": "ThermalQ",
+    "contact_resonance_hz": "TuneFreqResult",
+    "contact_quality_factor": "TuneQResult",
+    "length_m": "CustomLeverLength",
+    "width_m": "CustomLeverWidth",
+    "drive_frequency_hz": "DriveFrequency",
+    "tip_bias_v": "TipVoltage",
+}
+"""pfmdyn field -> Asylum note key (values already in SI units)."""
+
+# Units of Asylum image channels by their data type (the name without Trace/Retrace).
+_UNITS = {"Height": "m", "ZSensor": "m", "Amplitude": "m", "Amplitude1": "m", "Amplitude2": "m",
+          "Deflection": "m", "Phase": "deg", "Phase1": "deg", "Phase2": "deg", "Frequency": "Hz",
+          "Potential": "V", "Bias": "V", "UserIn0": "V", "UserIn1": "V", "UserIn2": "V", "Current": "A", "Dissipation": "W"}
+
+
+def parse_note(text: str) -> dict:
+    """The note's ``key: value`` lines as a dict of strings (any line end; later keys win).
+
+    >>> parse_note("SpringConstant: 8.3589\\rImagingMode:PFM Mode\\rno colon here")
+    {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode'}
+    """
+    out = {}
+    for line in re.split(r"\r\n|\r|\n", text):
+        key, colon, value = line.partition(":")
+        if colon and key.strip():
+            out[key.strip()] = value.strip()
+    return out
+
+
+def _number(value) -> float | None:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
+
+
+def cantilever_fields(note: dict) -> dict:
+    """pfmdyn fields (SI) found in an Asylum note (values as strings or numbers).
+
+    >>> cantilever_fields({"SpringConstant": "0.46538", "ThermalQ": "NaN", "TipVoltage": 3})
+    {'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}
+    """
+    found = {}
+    for name, key in NOTE_KEYS.items():
+        value = _number(note.get(key))
+        if value is not None:
+            found[name] = value
+    return found
+
+
+def channel_name(label: str) -> str:
+    """An image layer's label, cleaned of the padding igor2 leaves from the previous label.
+
+    Labels are fixed 32-byte fields; igor2 drops the NUL but keeps the stale bytes after it
+    (``PhaseRetrace`` + ``race``).  Asylum names end in ``Trace`` or ``Retrace``.
+
+    >>> channel_name("PhaseRetracerace"), channel_name("UserIn0Tracetrace"), channel_name("Custom")
+    ('PhaseRetrace', 'UserIn0Trace', 'Custom')
+    """
+    match = re.match(r"(.*?(?:Retrace|Trace))", label)
+    return match.group(1) if match else label
+
+
+def channel_unit(name: str) -> str:
+    """SI unit of an Asylum channel from its name ('' when unknown).
+
+    >>> channel_unit("AmplitudeRetrace"), channel_unit("PhaseTrace"), channel_unit("UserIn0Retrace"), channel_unit("Foo")
+    ('m', 'deg', 'V', '')
+    """
+    base = re.sub(r"(Retrace|Trace)$", "", name)
+    return _UNITS.get(base, "")

@@ -1,0 +1,260 @@
+"""Instrument files in, pfmdyn's cantilever description out (SI units), whatever wrote them.
+
+Formats (each read with the maintained library of its field; they come with the
+``pfmdyn[files]`` extra):
+
+* Asylum Research ``.ibw`` (Igor binary wave, :mod:`igor2`): images with the instrument's
+  ``key: value`` note (spring constant, thermal-tune fit, contact-tune fit, lever size);
+* pycroscopy ``.h5`` / ``.hdf5`` (:mod:`h5py`): NSID images (the Asylum note kept in
+  ``original_metadata``) and USID datasets (``Raw_Data`` with spectroscopic values);
+* Nanosurf ``.nid`` (:mod:`NSFopen`): thermal tunes (amplitude spectral density and the
+  instrument's fit), images and spectra;
+* plain-text drive sweeps: Cytomass/pyIMD ``.txt`` and Nanonis oscillation-control ``.dat``.
+
+:func:`read_instrument` returns an :class:`InstrumentRecord`: what the file is, its channels
+with units, the cantilever fields found (SI) and the ones missing.
+:func:`to_discrepancy_input` turns a file into the resonance table of ``pfmdyn
+discrepancy`` (:class:`pfmdyn.io.tables.ResonanceData`): an image's metadata gives free
+mode 1 and contact mode 1 with their Q; a thermal spectrum gives the free modes fitted in
+it.  A field that neither the file nor the command line gives is an error naming the
+option, never a silent default.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UserError
+
+__all__ = ["FIELDS", "OPTIONS", "Channel", "InstrumentRecord", "read_instrument",
+           "to_discrepancy_input", "required_field"]
+
+FIELDS = {
+    "spring_constant_n_per_m": ("spring constant", "N/m"),
+    "free_resonance_hz": ("free resonance", "Hz"),
+    "free_quality_factor": ("free Q", ""),
+    "contact_resonance_hz": ("contact resonance", "Hz"),
+    "contact_quality_factor": ("contact Q", ""),
+    "length_m": ("lever length", "m"),
+    "width_m": ("lever width", "m"),
+    "tip_height_m": ("tip height", "m"),
+    "drive_frequency_hz": ("drive frequency", "Hz"),
+    "tip_bias_v": ("tip bias", "V"),
+}
+"""Cantilever field -> (what it is, SI unit).  Every record lists each as found or missing."""
+
+OPTIONS = {"spring_constant_n_per_m": "--spring-constant", "length_m": "--length",
+           "width_m": "--width", "tip_height_m": "--tip-height",
+           "free_resonance_hz": "--free-resonance"}
+"""Field that may be given on the command line -> its option."""
+
+KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One data channel: name, unit (SI, '' when the file does not say) and shape."""
+
+    name: str
+    unit: str
+    shape: tuple
+
+
+@dataclass(frozen=True)
+class InstrumentRecord:
+    """What pfmdyn understood from an instrument file.
+
+    ``fields`` maps names of :data:`FIELDS` to SI values found in the file; ``missing``
+    lists the others.  ``spectrum`` is ``(frequency_hz, values, unit)`` for spectra.
+    """
+
+    path: str
+    kind: str
+    instrument: str
+    channels: tuple
+    fields: dict
+    missing: tuple = ()
+    notes: tuple = ()
+    spectrum: tuple | None = field(default=None, repr=False, compare=False)
+
+    def to_json(self) -> dict:
+        """The JSON document of ``pfmdyn inspect --json``: numbers stay numbers."""
+        return {"path": self.path, "kind": self.kind, "instrument": self.instrument,
+                "channels": [{"name": c.name, "unit": c.unit, "shape": list(c.shape)}
+                             for c in self.channels],
+                "fields": {name: {"value": value, "unit": FIELDS[name][1]}
+                           for name, value in self.fields.items()},
+                "missing": list(self.missing), "notes": list(self.notes)}
+
+
+def make_record(path, kind, instrument, channels, found: dict, notes=(), spectrum=None) -> InstrumentRecord:
+    """A record from raw field values: keeps positive finite numbers, lists the rest missing.
+
+    Instruments write NaN or 0 for a value never measured; neither is a cantilever property.
+
+    >>> r = make_record("x.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length_m": float("nan")})
+    >>> r.fields, "length_m" in r.missing
+    ({'spring_constant_n_per_m': 2.0}, True)
+    """
+    assert kind in KINDS, kind
+    fields = {}
+    for name in FIELDS:
+        value = found.get(name)
+        if value is None:
+            continue
+        value = float(value)
+        # Tip bias may be zero or negative; every other field is a positive quantity.
+        if math.isfinite(value) and (value > 0 or (name == "tip_bias_v")):
+            fields[name] = value
+    missing = tuple(name for name in FIELDS if name not in fields)
+    return InstrumentRecord(str(path), kind, instrument, tuple(channels), fields, missing,
+                            tuple(notes), spectrum)
+
+
+def _reader(path: Path):
+    suffix = path.suffix.lower()
+    if suffix == ".ibw":
+        from .ibw import read_ibw
+        return read_ibw
+    if suffix in (".h5", ".hdf5"):
+        from .hdf5 import read_hdf5
+        return read_hdf5
+    if suffix == ".nid":
+        from .nid import read_nid
+        return read_nid
+    if suffix in (".txt", ".dat"):
+        from .sweeps import read_sweep
+        return read_sweep
+    if suffix == ".csv":
+        return _read_csv
+    raise UserError(f"{path}: unknown instrument file type '{suffix}'; pfmdyn reads .ibw (Asylum), "
+                    ".h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv")
+
+
+# Unit suffixes of CSV column names (pfmdyn's own files and its decodings of instrument files).
+_CSV_UNITS = {"_hz": "Hz", "_m_per_sqrthz": "m/sqrt(Hz)", "_n_per_m": "N/m", "_deg": "deg",
+              "_v": "V", "_m": "m"}
+
+
+def _read_csv(path: Path) -> InstrumentRecord:
+    """A CSV table: columns with the units their names end in, ``# key: value`` metadata."""
+    import csv
+
+    try:
+        lines = [line for line in path.read_text(encoding="utf-8-sig").splitlines() if line.strip()]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UserError(f"{path}: cannot read the file ({exc})") from None
+    meta = {}
+    while lines and lines[0].lstrip().startswith("#"):
+        key, colon, value = lines.pop(0).strip()[1:].partition(":")
+        meta[key.strip()] = value.strip() if colon else None
+    if not lines:
+        raise UserError(f"{path}: no header line")
+    header = [c.strip() for c in next(csv.reader([lines[0]]))]
+    units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in header]
+    found = {}
+    for key in FIELDS:
+        try:
+            found[key] = float(meta[key])
+        except (KeyError, TypeError, ValueError):
+            pass
+    kind = "resonance metadata" if "mode" in header and "condition" in header else "spectrum"
+    channels = [Channel(c, u, (len(lines) - 1,)) for c, u in zip(header, units)]
+    return make_record(path, kind, "CSV table", channels, found)
+
+
+def read_instrument(path) -> InstrumentRecord:
+    """Read an instrument file (type from its extension) into an :class:`InstrumentRecord`.
+
+    Every problem with the file is one :class:`~pfmdyn.errors.UserError` line.
+
+    >>> read_instrument("scan.xyz")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: scan.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv
+    """
+    path = Path(path)
+    reader = _reader(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise UserError(f"{path}: the file is empty")
+    try:
+        return reader(path)
+    except UserError:
+        raise
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError) as exc:
+        # A file the library opened but whose layout this reader does not know: one line, no traceback.
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise UserError(f"{path}: could not interpret the file ({type(exc).__name__}: {reason})") from None
+
+
+def required_field(record: InstrumentRecord, name: str, overrides: dict | None = None) -> float:
+    """A field from the command line (``overrides``) or else the file; missing -> error naming the option.
+
+    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0})
+    >>> required_field(r, "spring_constant_n_per_m"), required_field(r, "length_m", {"length_m": 2e-4})
+    (2.0, 0.0002)
+    >>> required_field(r, "tip_height_m")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: tip height not in a.ibw: give --tip-height
+    """
+    overrides = overrides or {}
+    if overrides.get(name) is not None:
+        value = float(overrides[name])
+        if not (math.isfinite(value) and value > 0):
+            raise UserError(f"{OPTIONS.get(name, name)} must be positive and finite, got {overrides[name]}")
+        return value
+    if name in record.fields:
+        return record.fields[name]
+    option = OPTIONS.get(name)
+    hint = f": give {option}" if option else ""
+    raise UserError(f"{FIELDS[name][0]} not in {Path(record.path).name}{hint}")
+
+
+def to_discrepancy_input(path, overrides: dict | None = None):
+    """The resonance table of ``pfmdyn discrepancy`` that an instrument file implies.
+
+    An image (or any file with resonance metadata): free mode 1 from the thermal fit and
+    contact mode 1 from the tune fit, each with its Q.  A thermal spectrum: the free modes
+    fitted in it (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`), each with its Q.
+    ``overrides`` (keys of :data:`OPTIONS`, from the command line) win over the file.
+
+    Returns
+    -------
+    pfmdyn.io.tables.ResonanceData
+    """
+    from .tables import Metadata, ResonanceData
+
+    record = read_instrument(path)
+    overrides = dict(overrides or {})
+    name = Path(record.path).name
+    if record.kind == "thermal spectrum":
+        from ..analysis.thermal import fit_thermal_peaks
+        freq, asd, _ = record.spectrum
+        peaks = fit_thermal_peaks(freq, asd)
+        if not peaks:
+            raise UserError(f"{name}: no resonance peak found in the thermal spectrum")
+        modes = np.array([p.mode for p in peaks])
+        conditions = np.array(["free"] * len(peaks))
+        freqs = np.array([p.frequency_hz for p in peaks])
+        qs = np.array([p.quality_factor for p in peaks])
+        overrides.setdefault("free_resonance_hz", freqs[0])
+    else:
+        f_free = required_field(record, "free_resonance_hz", overrides)
+        q_free = record.fields.get("free_quality_factor", np.nan)
+        if "contact_resonance_hz" in record.fields:
+            modes, conditions = np.array([1, 1]), np.array(["free", "contact"])
+            freqs = np.array([f_free, record.fields["contact_resonance_hz"]])
+            qs = np.array([q_free, record.fields.get("contact_quality_factor", np.nan)])
+        else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
+            modes, conditions = np.array([1]), np.array(["free"])
+            freqs, qs = np.array([f_free]), np.array([q_free])
+    values = [required_field(record, key, overrides) for key in
+              ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m", "free_resonance_hz")]
+    metadata = Metadata(*values, description=f"{record.instrument}: {name}")
+    return ResonanceData(metadata, modes, conditions, freqs, quality_factor=qs)

@@ -1,0 +1,133 @@
+"""Nanosurf ``.nid`` files, read with :mod:`NSFopen` (the ``nsfopen`` package).
+
+A thermal tune (``[DataSet-Info]`` section "-- Thermal Tuning --") holds the measured
+amplitude spectral density ("Spectrum FFT", m/sqrt(Hz) against Hz) and the instrument's fit
+("Spectrum Fit"), whose result is written as text with units: ``Frequency:=179.8kHz``,
+``Q Factor:=442``, ``Spring Constant:=27.13 N/m``.  Images and spectroscopy files are
+listed with their channels.
+"""
+from __future__ import annotations
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MissingExtraError, UserError
+from .instruments import Channel, InstrumentRecord, make_record
+
+__all__ = ["read_nid", "si_value"]
+
+_PREFIX = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "μ": 1e-6, "m": 1e-3,
+           "": 1.0, "k": 1e3, "M": 1e6, "G": 1e9}
+
+# Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
+_THERMAL_KEYS = {"frequency": ("free_resonance_hz", "Hz"), "q factor": ("free_quality_factor", ""),
+                 "spring constant": ("spring_constant_n_per_m", "N/m")}
+# Scan settings of images and spectroscopy files.
+_SCAN_KEYS = {"tip voltage": ("tip_bias_v", "V"), "vibration freq.": ("drive_frequency_hz", "Hz"),
+              "spring constant": ("spring_constant_n_per_m", "N/m")}
+
+
+def _unit(text: str) -> str:
+    """A unit as Nanosurf wrote it, repaired if UTF-8 was read as Latin-1; degrees as 'deg'."""
+    try:
+        text = text.encode("latin-1").decode("utf-8")
+    except (UnicodeEncodeError, UnicodeDecodeError):
+        pass
+    return "deg" if text.strip() == "°" else text.strip()
+
+
+def _fields(info: dict, keys: dict) -> dict:
+    found = {}
+    for key, value in info.items():
+        target = keys.get(str(key).strip().rstrip(":").strip().lower())
+        if target:
+            number = si_value(value, target[1])
+            if number is not None:
+                found[target[0]] = number
+    return found
+
+
+def si_value(text: str, unit: str) -> float | None:
+    """A Nanosurf value with its unit (``'179.8kHz'``, ``'27.13 N/m'``) in SI; None if not that unit.
+
+    >>> si_value("179.8kHz", "Hz"), si_value("27.13 N/m", "N/m"), si_value("442 ", ""), si_value("40 °C", "Hz")
+    (179800.0, 27.13, 442.0, None)
+    """
+    match = re.fullmatch(r"\s*([-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?)\s*(\S*)\s*", str(text))
+    if not match:
+        return None
+    number, suffix = float(match.group(1)), match.group(2)
+    if not unit:
+        return number if suffix == "" else None
+    if not suffix.endswith(unit) or suffix[: len(suffix) - len(unit)] not in _PREFIX:
+        return None
+    return number * _PREFIX[suffix[: len(suffix) - len(unit)]]
+
+
+def _load(path: Path):
+    try:
+        from NSFopen.read import read
+    except ImportError:
+        raise MissingExtraError("nsfopen", "files") from None
+    try:
+        with warnings.catch_warnings():
+            # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
+            warnings.simplefilter("ignore")
+            return read(str(path))
+    except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}") from None
+
+
+def _sections(nid) -> dict:
+    try:
+        return dict(nid.param["HeaderDump"])
+    except (KeyError, TypeError):
+        return {}
+
+
+def _channels(nid, sections) -> list[tuple]:
+    """(name tuple, data array, unit, dataset header) for each channel, in file order."""
+    out = []
+    keys = [k for k in sections if re.fullmatch(r"DataSet-\d+:\d+", k)]
+    headers = [sections[k] for k in sorted(keys, key=lambda k: tuple(int(n) for n in re.findall(r"\d+", k)))]
+    for i, (name, values) in enumerate(nid.data.items()):
+        header = headers[i] if i < len(headers) else {}
+        data = np.asarray(values, dtype=float)
+        out.append((name, data, _unit(str(header.get("Dim2Unit", ""))), header))
+    return out
+
+
+def read_nid(path) -> InstrumentRecord:
+    """Read a Nanosurf ``.nid`` file: channels with units; for a thermal tune, its fit and spectrum."""
+    path = Path(path)
+    nid = _load(path)
+    sections = _sections(nid)
+    channels = _channels(nid, sections)
+    if not channels:
+        raise UserError(f"{path}: the NID file holds no data sets")
+    info = sections.get("DataSet-Info", {}) or {}
+    thermal = any("thermal tuning" in str(k).lower() for k in info)
+    group = str(channels[0][0][0]).lower() if isinstance(channels[0][0], tuple) else ""
+    found, notes, spectrum = {}, [], None
+    if thermal:
+        kind = "thermal spectrum"
+        found = _fields(info, _THERMAL_KEYS)
+        name, data, unit, header = channels[0]
+        n = data.shape[-1]
+        f0 = float(header.get("Dim0Min", 0.0))
+        frequency = f0 + np.linspace(0.0, float(header.get("Dim0Range", n - 1)), n)
+        spectrum = (frequency, data.reshape(-1, n)[0], unit)
+        lever = info.get("Cantilever type")
+        if lever:
+            notes.append(f"cantilever type {lever}: its length and width are not in the file")
+    else:
+        kind = "image" if group.startswith("image") else "curve" if group.startswith("spec") else "spectrum"
+        found = _fields(info, _SCAN_KEYS)
+    listed = [Channel(" ".join(str(p) for p in name) if isinstance(name, tuple) else str(name), unit,
+                      data.shape[1:] if data.ndim > 1 and data.shape[0] == 1 else data.shape)
+              for name, data, unit, _ in channels]
+    return make_record(path, kind, "Nanosurf (NID)", listed, found, notes, spectrum)

@@ -1,0 +1,95 @@
+"""Drive-frequency sweeps written as text: Cytomass/pyIMD ``.txt`` and Nanonis ``.dat``.
+
+Both are ``key<TAB>value`` header lines followed by a tab-separated table whose column
+names carry their units, ``Amplitude (V)``:
+
+* Cytomass ``.txt``: the table follows the line ``Sweep data``; header keys end in a colon
+  (``Q factor:``, ``Peak amplitude frequency (Hz):``).
+* Nanonis oscillation control ``.dat``: the table follows ``[DATA]``; the frequency is
+  ``OC M1 Center Freq. (Hz)`` plus ``OC M1 Freq. Shift (Hz)``; the fit is ``f_res (Hz)``, ``Q``.
+
+No library of the field reads the Cytomass format, and the Nanonis one is a plain table, so
+this module parses both directly (with :mod:`numpy`).
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UserError
+from .instruments import Channel, InstrumentRecord, make_record
+
+__all__ = ["read_sweep", "split_unit"]
+
+# Header key (colon stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
+_KEYS = {"Peak amplitude frequency (Hz)": "free_resonance_hz", "Q factor": "free_quality_factor",
+         "f_res (Hz)": "free_resonance_hz", "Q": "free_quality_factor"}
+_TABLE_START = ("Sweep data", "[DATA]")
+
+
+def split_unit(column: str) -> tuple[str, str]:
+    """``'Amplitude (V)'`` -> ``('Amplitude', 'V')``; no parentheses -> unit ''.
+
+    >>> split_unit("OC M1 Freq. Shift (Hz)"), split_unit("Index")
+    (('OC M1 Freq. Shift', 'Hz'), ('Index', ''))
+    """
+    match = re.fullmatch(r"\s*(.*?)\s*\(([^()]*)\)\s*", column)
+    return (match.group(1), match.group(2)) if match else (column.strip(), "")
+
+
+def _split(path: Path) -> tuple[dict, list[str], np.ndarray]:
+    try:
+        lines = re.split(r"\r\n|\r|\n", path.read_text(encoding="latin-1"))
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read the file ({exc})") from None
+    starts = [i for i, line in enumerate(lines) if line.strip() in _TABLE_START]
+    if not starts or starts[0] + 1 >= len(lines):
+        raise UserError(f"{path}: not a drive sweep (no 'Sweep data' or '[DATA]' line before a table)")
+    header = {}
+    for line in lines[:starts[0]]:
+        cells = [c.strip() for c in line.split("\t")]
+        if len(cells) >= 2 and cells[0] and cells[1]:
+            header[cells[0].rstrip(":").strip()] = cells[1]
+    columns = [c.strip() for c in lines[starts[0] + 1].split("\t") if c.strip()]
+    rows = []
+    for n, line in enumerate(lines[starts[0] + 2:], start=1):
+        cells = [c for c in line.strip().split("\t") if c.strip()]
+        if not cells:
+            continue
+        try:
+            row = [float(c) for c in cells]
+        except ValueError:
+            raise UserError(f"{path}: table row {n} is not numbers: {line.strip()[:60]!r}") from None
+        if len(row) != len(columns):
+            raise UserError(f"{path}: table row {n} has {len(row)} values for {len(columns)} columns")
+        rows.append(row)
+    if not rows:
+        raise UserError(f"{path}: the sweep table has no rows")
+    return header, columns, np.array(rows)
+
+
+def read_sweep(path) -> InstrumentRecord:
+    """Read a Cytomass ``.txt`` or Nanonis ``.dat`` drive sweep: channels and the resonance fit."""
+    path = Path(path)
+    header, columns, table = _split(path)
+    names = [split_unit(c) for c in columns]
+    found = {}
+    for key, value in header.items():
+        if key in _KEYS:
+            try:
+                found.setdefault(_KEYS[key], float(value))
+            except ValueError:
+                pass
+    hz = [i for i, (_, unit) in enumerate(names) if unit == "Hz"]
+    if not hz:
+        raise UserError(f"{path}: no frequency column (a column in Hz) in the sweep table")
+    # Nanonis gives a centre frequency and a shift from it; their sum is the drive frequency.
+    frequency = table[:, hz].sum(axis=1)
+    channels = [Channel(name, unit, (len(table),)) for i, (name, unit) in enumerate(names) if i not in hz]
+    nanonis = any(k.startswith("Oscillation Control") for k in header)
+    instrument = "Nanonis oscillation control" if nanonis else "Cytomass frequency sweep"
+    spectrum = (frequency, table[:, [i for i in range(len(names)) if i not in hz][0]],
+                channels[0].unit) if channels else None
+    return make_record(path, "spectrum", instrument, channels, found, spectrum=spectrum)

@@ -1,0 +1,197 @@
+"""Contact stiffness from contact resonances: recovery from certified roots, uncertainty, range, CLI.
+
+Test data come from an independent route: the certified roots of the elastic-contact family
+(:func:`pfmdyn.roots.core.family_roots`, ball arithmetic) at known k1/k, never from the
+closed-form inversion under test.  Levers are drawn over real ranges with fixed seeds.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from pfmdyn import cli
+from pfmdyn.analysis.stiffness import (branch_proof, contact_stiffness, k1_k2_from_modes, k1_over_k_from_z,
+                                       reduced_modulus)
+from pfmdyn.errors import UserError
+from pfmdyn.generated.characteristic import BETA1_FREE
+from pfmdyn.roots.core import family_roots
+
+
+def draw_levers(seed, n):
+    """k (N/m), L (m), f1 (Hz) and k1/k as exact decimal strings, over the real ranges."""
+    rng = np.random.default_rng(seed)
+    k = 10 ** rng.uniform(np.log10(0.05), np.log10(50), n)
+    length = rng.uniform(100e-6, 500e-6, n)
+    # f1 of a silicon lever of that length and stiffness is 10-500 kHz; any value tests the scaling.
+    f1 = 10 ** rng.uniform(4, np.log10(5e5), n)
+    ratio = [f"{10 ** x:.6e}" for x in rng.uniform(0, 4, n)]
+    return k, length, f1, ratio
+
+
+def certified_contact_hz(f1, mode, digits=25, **params):
+    z = float(family_roots("elastic", mode, digits, **params).roots[mode - 1])
+    return f1 * (z / BETA1_FREE) ** 2
+
+
+def test_k1_recovered_to_1e9_from_certified_roots_over_real_levers():
+    k, _, f1, ratio = draw_levers(12, 10)
+    modes = [1, 2, 3, 1, 2, 1, 1, 3, 2, 1]
+    worst = 0.0
+    for ki, fi, ri, mode in zip(k, f1, ratio, modes):
+        fc = certified_contact_hz(fi, mode, k1_over_k=ri, k2_ratio=0)
+        got = contact_stiffness(fc, fi, ki, mode=mode).k1_n_per_m
+        worst = max(worst, abs(float(got) / (float(ri) * ki) - 1))
+    assert worst < 1e-9, worst
+
+
+def test_k1_recovered_with_a_fixed_longitudinal_spring():
+    k, _, f1, ratio = draw_levers(7, 6)
+    b = np.random.default_rng(8).uniform(0, 2, 6)
+    for ki, fi, ri, bi in zip(k, f1, ratio, b):
+        b_text = f"{bi:.4f}"
+        fc = certified_contact_hz(fi, 1, k1_over_k=ri, k2_ratio=b_text)
+        got = contact_stiffness(fc, fi, ki, k2_ratio=float(b_text)).k1_n_per_m
+        assert abs(float(got) / (float(ri) * ki) - 1) < 1e-9
+
+
+def test_vectorised_map_matches_scalar_and_marks_impossible_pixels():
+    f1, k = 60e3, 3.0
+    fc = np.array([[certified_contact_hz(f1, 1, k1_over_k=r, k2_ratio=0) for r in ("1", "30", "3000")],
+                   [f1 * 0.9, f1 * 5.0, certified_contact_hz(f1, 1, k1_over_k="10000", k2_ratio=0)]])
+    r = contact_stiffness(fc, f1, k, out_of_range="nan")
+    assert r.k1_n_per_m.shape == (2, 3)
+    np.testing.assert_allclose(r.k1_n_per_m[0], [3.0, 90.0, 9000.0], rtol=1e-9)
+    assert np.isnan(r.k1_n_per_m[1, :2]).all() and abs(r.k1_n_per_m[1, 2] / 30000 - 1) < 1e-9
+
+
+def test_noise_scatter_matches_the_propagated_uncertainty():
+    """Frequencies with Gaussian noise: k1 scatter equals the first-order propagated sigma."""
+    rng = np.random.default_rng(3)
+    f1, k, sig_c, sig_f = 70e3, 1.5, 30.0, 10.0
+    fc_true = certified_contact_hz(f1, 1, k1_over_k="80", k2_ratio=0)
+    n = 4000
+    fc = fc_true + sig_c * rng.standard_normal(n)
+    f1s = f1 + sig_f * rng.standard_normal(n)
+    got = contact_stiffness(fc, f1s, k).k1_n_per_m
+    sigma = float(contact_stiffness(fc_true, f1, k, contact_uncertainty_hz=sig_c,
+                                    free_uncertainty_hz=sig_f).k1_uncertainty_n_per_m)
+    assert abs(np.std(got) / sigma - 1) < 0.06
+    assert abs(np.mean(got) - 120.0) < 4 * sigma / math.sqrt(n) + 1e-3 * sigma
+    inside = np.abs(got - 120.0) < 2 * sigma
+    assert 0.93 < inside.mean() < 0.97
+
+
+def test_two_modes_give_k1_and_k2_and_their_uncertainty():
+    k, _, f1, ratio = draw_levers(21, 4)
+    for ki, fi, ri, b in zip(k, f1, ratio, ("0.01", "0.2", "0.05", "1.5")):
+        fc = [certified_contact_hz(fi, m, k1_over_k=ri, k2_ratio=b) for m in (1, 2)]
+        r = k1_k2_from_modes(fc, [1, 2], fi, ki)
+        assert abs(r.k1_n_per_m / (float(ri) * ki) - 1) < 1e-8
+        assert abs(r.k2_ratio / float(b) - 1) < 1e-8
+    # Monte Carlo against the propagated covariance (one lever).
+    rng = np.random.default_rng(5)
+    fc = np.array([certified_contact_hz(60e3, m, k1_over_k="50", k2_ratio="0.1") for m in (1, 2)])
+    sig = 20.0
+    ref = k1_k2_from_modes(fc, [1, 2], 60e3, 2.0, contact_uncertainty_hz=sig)
+    draws = np.array([[(s := k1_k2_from_modes(fc + sig * rng.standard_normal(2), [1, 2], 60e3, 2.0)).k1_n_per_m,
+                       s.k2_ratio] for _ in range(100)])
+    assert abs(draws[:, 0].std() / ref.k1_uncertainty_n_per_m - 1) < 0.25     # 100 draws: 7 % scatter
+    assert abs(draws[:, 1].std() / ref.k2_ratio_uncertainty - 1) < 0.25
+
+
+def test_three_modes_fitted_by_least_squares():
+    fc = [certified_contact_hz(50e3, m, k1_over_k="200", k2_ratio="0.3") for m in (1, 2, 3)]
+    r = k1_k2_from_modes(fc, [1, 2, 3], 50e3, 0.8)
+    assert abs(r.k1_n_per_m / 160.0 - 1) < 1e-7 and abs(r.k2_ratio / 0.3 - 1) < 1e-7
+    assert r.residual_z < 1e-9
+
+
+def test_branch_limits_are_the_certified_free_and_pinned_roots_and_k1_is_monotonic():
+    free = family_roots("free", 3, 17).roots
+    pinned = family_roots("pinned", 3, 17).roots
+    for mode in (1, 2, 3):
+        p = branch_proof(mode)
+        assert abs(p.soft_z - float(free[mode - 1])) < 1e-14 and abs(p.stiff_z - float(pinned[mode - 1])) < 1e-14
+        z = np.linspace(p.soft_z, p.stiff_z, 2001)[1:-1]
+        a = k1_over_k_from_z(z)
+        assert np.all(a > 0) and np.all(np.diff(a) > 0)
+
+
+@pytest.mark.parametrize("ratio, words", [(5.0, ("pinned", "k2", "higher mode")), (0.8, ("mass",))])
+def test_ratios_outside_the_model_name_the_effect(ratio, words):
+    with pytest.raises(UserError) as err:
+        contact_stiffness(ratio * 60e3, 60e3, 2.0)
+    assert "\n" not in str(err.value) and all(w in str(err.value) for w in words)
+
+
+def test_reduced_modulus_inverts_the_derived_hertz_stiffness():
+    import sympy as sp
+    from pfmdyn.derivations import contact_mechanics as cm
+    k1 = float(cm.hertz_stiffness().subs({cm.E_star: 7e10, cm.R: 30e-9, cm.P: 2e-7}))
+    assert abs(float(reduced_modulus(k1, 30e-9, 2e-7)) / 7e10 - 1) < 1e-12
+    assert sp.simplify(cm.hertz_stiffness() ** 3 - 6 * cm.E_star**2 * cm.R * cm.P) == 0
+
+
+def test_cli_numbers_json_and_reduced_modulus(tmp_path, capsys):
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    out = tmp_path / "k1.json"
+    code = cli.main(["stiffness", "--free", "75e3", "--contact", repr(fc), "--spring-constant", "2",
+                     "--contact-uncertainty", "50", "--reduced-modulus", "--tip-radius", "20e-9",
+                     "--load", "1e-7", "--json", str(out)])
+    assert code == 0
+    doc = json.loads(out.read_text())
+    assert abs(doc["k1_n_per_m"] / 80 - 1) < 1e-9 and isinstance(doc["k1_uncertainty_n_per_m"], float)
+    assert doc["reduced_modulus_pa"] > 0 and "unique" in doc["branch_proof"][0]
+    assert "k1 = 80" in capsys.readouterr().out
+
+
+def test_cli_two_modes_from_a_resonance_table(tmp_path):
+    fc = [certified_contact_hz(60e3, m, k1_over_k="25", k2_ratio="0.04") for m in (1, 2)]
+    table = tmp_path / "res.csv"
+    table.write_text("# spring_constant_n_per_m: 4\n# length_m: 2e-4\n# width_m: 3e-5\n# tip_height_m: 1e-5\n"
+                     f"# free_resonance_hz: 60000\nmode,condition,frequency_hz\n2,contact,{fc[1]!r}\n"
+                     f"1,free,60000\n1,contact,{fc[0]!r}\n")
+    out = tmp_path / "k.json"
+    assert cli.main(["stiffness", str(table), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert abs(doc["k1_n_per_m"] / 100 - 1) < 1e-8 and abs(doc["k2_ratio"] / 0.04 - 1) < 1e-8
+    assert abs(doc["k2_n_per_m"] / (0.04 * 4 * 4e-8 / 1e-10) - 1) < 1e-8
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--free", "60e3", "--contact", "400e3", "--spring-constant", "2"], "pinned"),
+    (["--free", "60e3", "--contact", "2e5"], "--spring-constant"),
+    (["--free", "-1", "--contact", "2e5", "--spring-constant", "2"], "--free"),
+    (["--free", "60e3", "--contact", "2e5", "--spring-constant", "2", "--reduced-modulus"], "--tip-radius"),
+])
+def test_cli_errors_are_one_line_and_write_nothing(tmp_path, capsys, argv, words):
+    out = tmp_path / "k.json"
+    assert cli.main(["stiffness", *argv, "--json", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pfmdyn stiffness: error:") and err.count("\n") == 1 and words in err
+    assert not out.exists()
+
+
+def test_k1_recovered_when_k2_follows_k1_mindlin():
+    from pfmdyn.analysis.stiffness import coupled_contact_stiffness, mindlin_k2_over_k1
+    k, length, f1, ratio = draw_levers(31, 6)
+    height = np.random.default_rng(32).uniform(5e-6, 20e-6, 6)
+    c = mindlin_k2_over_k1(0.3)
+    for ki, li, fi, ri, hi in zip(k, length, f1, ratio, height):
+        b = float(float(ri) * c * (hi / li) ** 2)
+        fc = certified_contact_hz(fi, 1, k1_over_k=ri, k2_ratio=repr(b))
+        r = coupled_contact_stiffness(fc, fi, ki, k2_over_k1=c, length_m=li, tip_height_m=hi)
+        assert abs(float(r.k1_n_per_m) / (float(ri) * ki) - 1) < 1e-9
+    with pytest.raises(UserError, match="tip mass"):
+        coupled_contact_stiffness(6.5 * 60e3, 60e3, 1.0, k2_over_k1=c, length_m=2e-4, tip_height_m=1e-5)
+
+
+def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
+    base = ["stiffness", "--free", "60e3", "--contact", "300e3", "--spring-constant", "1", "--poisson", "0.3"]
+    one_line = cli.main(base + ["--length", "2.4e-4"])
+    assert one_line == 2 and "give --tip-height" in capsys.readouterr().err
+    out = tmp_path / "k.json"
+    assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["k1_n_per_m"] > 0 and doc["k2_n_per_m"] == pytest.approx(1.4 / 1.7 * doc["k1_n_per_m"])   # 2(1-nu)/(2-nu)
