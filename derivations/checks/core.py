@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Callable, Iterable
 
 import mpmath as mp
@@ -16,11 +17,21 @@ import sympy as sp
 
 from ..beam import _FROM_ATOMS, _TO_ATOMS, beta, trig_normal_form
 
-HOLDS = "holds"
-SIGN = "holds_up_to_sign_convention"
-ERRATUM = "erratum"
-UNDECIDABLE = "undecidable"
-VERDICTS = (HOLDS, SIGN, ERRATUM, UNDECIDABLE)
+
+class Outcome(str, Enum):
+    """The four verdicts a check can give (compare equal to their names as strings)."""
+
+    HOLDS = "holds"
+    SIGN = "holds_up_to_sign_convention"
+    ERRATUM = "erratum"
+    UNDECIDABLE = "undecidable"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+HOLDS, SIGN, ERRATUM, UNDECIDABLE = Outcome.HOLDS, Outcome.SIGN, Outcome.ERRATUM, Outcome.UNDECIDABLE
+VERDICTS = tuple(Outcome)
 
 
 @dataclass(frozen=True)
@@ -33,10 +44,14 @@ class Verdict:
     evidence: str
     correct: str = ""
     printed: str = ""
+    chapter: str = ""
+    kind: str = "claim"
+    latex: dict = field(default_factory=dict, compare=False)
 
     def as_dict(self) -> dict:
-        return {"id": self.id, "where": self.where, "verdict": self.verdict,
-                "correct": self.correct, "evidence": self.evidence, "printed": self.printed}
+        return {"id": self.id, "where": self.where, "verdict": str(self.verdict), "kind": self.kind,
+                "chapter": self.chapter, "correct": self.correct, "evidence": self.evidence,
+                "printed": self.printed, "latex": self.latex}
 
 
 @dataclass(frozen=True)
@@ -44,27 +59,37 @@ class Check:
     id: str
     where: str
     printed: str
-    run: Callable[[], tuple[str, str, str]]
+    run: Callable[[], tuple]
+    chapter: str = ""
+    kind: str = "claim"
 
 
 REGISTRY: dict[str, Check] = {}
 
 
-def claim(claim_id: str, where: str, printed: str):
-    """Register a check; the function returns ``(verdict, evidence, correct)``."""
-    def wrap(fn: Callable[[], tuple[str, str, str]]):
+def claim(claim_id: str, where: str, printed: str, *, chapter: str = "", kind: str = "claim"):
+    """Register a check; the function returns ``(verdict, evidence, correct)`` and optionally a
+    fourth item, a dict of LaTeX forms (``printed``, ``correct``, ``decisive``) for the errata.
+
+    ``chapter`` names the book page that discusses the claim; ``kind`` is ``claim`` for the
+    shared registry's ids, ``cross-reference``, ``symbol`` or ``statement`` for the text audit.
+    """
+    def wrap(fn: Callable[[], tuple]):
         if claim_id in REGISTRY:
             raise ValueError(f"claim {claim_id!r} registered twice")
-        REGISTRY[claim_id] = Check(claim_id, where, printed, fn)
+        REGISTRY[claim_id] = Check(claim_id, where, printed, fn, chapter, kind)
         return fn
     return wrap
 
 
 def run_check(check: Check) -> Verdict:
-    verdict, evidence, correct = check.run()
+    result = check.run()
+    verdict, evidence, correct = result[:3]
+    latex = result[3] if len(result) > 3 else {}
     if verdict not in VERDICTS:
         raise ValueError(f"{check.id}: unknown verdict {verdict!r}")
-    return Verdict(check.id, check.where, verdict, evidence, correct, check.printed)
+    return Verdict(check.id, check.where, Outcome(verdict), evidence, correct, check.printed,
+                   check.chapter, check.kind, latex)
 
 
 # --- comparing expressions -----------------------------------------------------------------
