@@ -82,6 +82,21 @@ def claim(claim_id: str, where: str, printed: str, *, chapter: str = "", kind: s
     return wrap
 
 
+_RESULTS: dict[str, "Verdict"] = {}
+
+
+def clear_results() -> None:
+    """Forget the verdicts computed so far (a new run starts from scratch)."""
+    _RESULTS.clear()
+
+
+def result(claim_id: str) -> "Verdict":
+    """The verdict of a registered claim, computed once per run (statements reuse registry checks)."""
+    if claim_id not in _RESULTS:
+        _RESULTS[claim_id] = run_check(REGISTRY[claim_id])
+    return _RESULTS[claim_id]
+
+
 def run_check(check: Check) -> Verdict:
     result = check.run()
     verdict, evidence, correct = result[:3]
