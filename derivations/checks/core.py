@@ -8,6 +8,7 @@ trigonometric normal forms, see :func:`derivations.beam.trig_normal_form`) and b
 from __future__ import annotations
 
 import random
+from functools import lru_cache
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Callable, Iterable
@@ -133,9 +134,18 @@ def random_points(symbols: Iterable[sp.Symbol], n: int = N_POINTS, seed: int = 2
 
 def evaluate(expr: sp.Expr, point: dict) -> mp.mpc:
     """Evaluate with ``DIGITS`` significant digits (mpmath, exact inputs)."""
-    with mp.workdps(DIGITS + 10):
-        f = sp.lambdify(list(point), expr, "mpmath")
-        return mp.mpmathify(f(*point.values()))
+    return _evaluator(sp.sympify(expr), tuple(point))(point)
+
+
+@lru_cache(maxsize=4096)
+def _evaluator(expr: sp.Expr, symbols: tuple):
+    """One mpmath function per expression and symbol order (lambdify is the slow step)."""
+    f = sp.lambdify(list(symbols), expr, "mpmath")
+
+    def at(point: dict) -> mp.mpc:
+        with mp.workdps(DIGITS + 10):
+            return mp.mpmathify(f(*(point[s] for s in symbols)))
+    return at
 
 
 @dataclass
