@@ -311,6 +311,58 @@ def _frictionless_from_4a():
             f"Eq. 4a: EI u0''(L) = {moment} -> 0 as k2 -> 0, i.e. u0''(L) = 0", "")
 
 
+def _sentences_of(tag: str) -> list[str]:
+    return next((s.sentences for s in T.sections() if s.tag == tag), [])
+
+
+def _tip1_null_consistency():
+    """'Similarly to tip 1, the nulling bias is frequency independent': what did tip 1's paragraph say?"""
+    tip1 = next((t for t in _sentences_of("VI1") if re.search(r"nulling bias is (\w+ )?frequency", t)), "")
+    said = re.search(r"nulling bias is ((?:\w+ )?frequency (?:in)?dependent)", tip1)
+    said = said.group(1) if said else "(not found)"
+    evidence = (f"tip 1 (contact and non-contact, SiO2): the nulling bias '{said}'; tip 2: 'similarly to tip 1, "
+                f"... frequency independent'")
+    if said != "frequency independent":
+        return ERRATUM, evidence + ": the two descriptions of tip 1 disagree", \
+            "the tip-1 nulling bias was described as weakly frequency dependent (model for SiO2, d_eff = 0: V_null = V_surf exactly)"
+    return HOLDS, evidence, ""
+
+
+def _nominal_resonance():
+    """Section V's nominal Co-Cr resonance against the measured non-contact resonance of tip 1 (Co-Cr)."""
+    nominal = next((t for t in _sentences_of("V") if "Co-Cr" in t), "")
+    m = re.search(r"Co-Cr[^)]*resonant frequency ~\s*([\d.]+)\s*kHz", nominal)
+    measured = next((t for t in _sentences_of("VI1") if "non-contact regime, resonances are" in t), "")
+    w1 = re.search(r"\\omega_1 = ([\d.]+)", measured)
+    if not (m and w1):
+        return UNDECIDABLE, "nominal or measured value not found in the text", ""
+    f_nom, f_meas = mp.mpf(m.group(1)), mp.mpf(w1.group(1))
+    digits = len(m.group(1).replace(".", "").lstrip("0"))
+    half_ulp = mp.mpf(10) ** (len(m.group(1).split(".")[0]) - digits) / 2
+    evidence = (f"Section V: Co-Cr tips, resonant frequency ~{m.group(1)} kHz; Section VI.1, tip 1 (Co-Cr) in "
+                f"non-contact: w1 = {w1.group(1)} kHz, {mp.nstr(100 * (f_nom - f_meas) / f_meas, 3)} % lower than nominal; "
+                f"'~{m.group(1)}' allows +-{mp.nstr(half_ulp, 2)} kHz")
+    if abs(f_nom - f_meas) > half_ulp:
+        return ERRATUM, evidence, f"~{mp.nstr(f_meas, 2)} kHz (as measured) or a stated manufacturer tolerance"
+    return HOLDS, evidence, ""
+
+
+def _fig15_grains():
+    """Curves of Fig. 15 named by grain in the text vs the data set deconvolved (Fig. 14's sentence)."""
+    data = next((t for t in _sentences_of("VI4") if re.search(r"Shown in Fig\. 14", t)), "")
+    used = set(re.findall(r"grain (\d)", data))
+    named = set(re.findall(r"grain (\d)", next((t for t in _sentences_of("VI4") if "greatest for PZT" in t), "")))
+    cap = T.captions().get(15)
+    cap_grains = set(re.findall(r"grain (\d)", cap.text)) if cap else set()
+    evidence = (f"the deconvolved PZT data (Fig. 14 sentence) are of grain(s) {sorted(used)} with a good and a "
+                f"deteriorated tip; the Fig. 15 sentence names grain(s) {sorted(named)}; the Fig. 15 caption names "
+                f"grain(s) {sorted(cap_grains) or 'none'} (its PZT curves: good tip, deteriorated tip)")
+    if named - used - cap_grains:
+        return ERRATUM, evidence, ("the PZT curves of Fig. 15 are grain " + ", ".join(sorted(used))
+                                   + " with a good and with a deteriorated tip")
+    return HOLDS, evidence, ""
+
+
 # --- which decider speaks to which sentence -------------------------------------------------------
 
 DECIDERS: list[tuple[str, str, Callable]] = [
@@ -366,6 +418,9 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("IV3", r"limit of a small piezoelectric contribution", same_as("eq40.small_piezo")),
     ("V", r"linear in the tip-surface potential difference", _linear_in_bias),
     ("VI1", r"checkerboard", _phase_flip_at_lines),
+    ("VI1", r"Similarly to tip 1, the nulling bias is frequency independent", _tip1_null_consistency),
+    ("V", r"Co-Cr coated tips", _nominal_resonance),
+    ("VI4", r"greatest for PZT grain", _fig15_grains),
     ("VI1", r"non-contact mode are identical to that for", _noncontact_resonances_sample_free),
     ("VI1", r"nulling bias is now strongly frequency dependent", _null_frequency_dependent),
     ("VI2", r"nulling bias is \$V_\{null\}", _null_bias("formula")),

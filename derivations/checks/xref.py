@@ -180,8 +180,9 @@ def check_table(ref: T.Reference):
         return ERRATUM, f"there is no Table {number}", ""
     rows = [line for line in re.findall(r"\|\s*([A-Z])\s*\|", sec.body)]
     m = re.search(r"\b(" + "|".join(_NUMBER_WORDS) + r")\s+(\w+)", ref.sentence)
-    evidence = f"Table {number} exists ({'printed as ' + ref.text + ', ' if ref.targets[0] != number else ''}" \
-               f"rows {', '.join(rows)})"
+    evidence = f"Table {number} exists (rows {', '.join(rows)})"
+    if ref.targets[0] != number:
+        return ERRATUM, f"{evidence}; cited as {ref.text}, headed Table {number}", f"Table {number}"
     if m and m.group(2).rstrip("s")[:6] in sec.body.lower():
         if _NUMBER_WORDS[m.group(1)] != len(rows):
             return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", ""
@@ -425,6 +426,22 @@ def check_caption_panels(number: int):
     return HOLDS, f"caption of Fig. {number}: panels {','.join(cap.panels) or '(one)'}; every described property covers its panels without gaps", ""
 
 
+_UNIT = r"(?:[kMG]?Hz|m?V|[nμpm]m|pm/V|N/m|%|°|Å)"
+
+
+def check_units():
+    """Every measured value with an uncertainty (x ± y) carries a unit."""
+    bare = []
+    for sec in T.text_sections():
+        for m in re.finditer(r"([\d.]+\s*(?:±|\\pm)\s*[\d.]*\d)", sec.body):
+            after = sec.body[m.end():m.end() + 12].lstrip("$ ")
+            if not re.match(_UNIT, after):
+                bare.append(f"Section {sec.number}: '{m.group(1)}' followed by '{after[:8].strip()}'")
+    if bare:
+        return ERRATUM, "values with an uncertainty but no unit: " + "; ".join(bare), ""
+    return HOLDS, "every value x ± y in the text carries a unit", ""
+
+
 # --- registration ----------------------------------------------------------------------------------
 
 def _where(tag: str) -> str:
@@ -453,12 +470,14 @@ def register() -> int:
         n += 1
     claim("structure.sections", "section headings", "section numbers I-VI, Conclusions",
           chapter=CHAPTER, kind="cross-reference")(check_section_numbering)
+    claim("structure.units", "values with uncertainties", "x ± y carries a unit",
+          chapter=CHAPTER, kind="cross-reference")(check_units)
     claim("structure.equations", "equation labels", "equations (1)-(41) with sub-labels",
           chapter=CHAPTER, kind="cross-reference")(check_equation_numbering)
     for number in T.captions():
         claim(f"structure.caption{number}", f"caption of Fig. {number}", "panel groups of the caption",
               chapter=CHAPTER, kind="cross-reference")(lambda k=number: check_caption_panels(k))
-    return n + 2 + len(T.captions())
+    return n + 3 + len(T.captions())
 
 
 register()
