@@ -189,27 +189,59 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
                 page = v.get("chapter") or None
                 cell = f'<a href="{page}.html">{page}</a>' if page and link else html.escape(page or "—")
             else:
-                cell = html.escape(v.get(c) or "")
+                cell = text_cell(v.get(c) or "")
             out.append(f"<td>{cell}</td>")
         out.append("</tr>")
     out.append("</tbody></table>")
     return HTML("".join(out))
 
 
-def errata_list(rows: list[dict]) -> HTML:
-    """One block per erratum: id, where, verdict, then printed / correct / proof / chapter."""
+def text_cell(text: str) -> str:
+    """Escaped text for a table cell: ``$...$`` spans become MathJax math, SymPy's ``**`` and
+    ``*`` become ``^`` and a middle dot.
+
+    >>> text_cell("x**2 < $\\frac{a}{b}$")
+    'x^2 &lt; <span class="math notranslate nohighlight">\\(\\frac{a}{b}\\)</span>'
+    """
+    import re
+
+    from .verify import prose
+    parts = re.split(r"(\$[^$]+\$)", text)
     out = []
+    for part in parts:
+        if len(part) > 2 and part.startswith("$") and part.endswith("$"):
+            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[1:-1])}\\)</span>')
+        else:
+            out.append(html.escape(prose(part)))
+    return "".join(out)
+
+
+def errata(rows: list[dict]) -> None:
+    """Display each erratum: head, printed and correct forms as typeset math (long ones broken
+    over lines), the proof as one sentence and the decisive expression."""
+    from types import SimpleNamespace
+
+    from IPython.display import Math, display
+
+    from .verify import SIGN_CONVENTION, forms
     for v in rows:
-        page = v.get("chapter") or None
-        chapter = f'<a href="{page}.html">{page}</a>' if page else "—"
-        out.append(
-            f'<div class="pfm-erratum"><p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
-            f'({html.escape(v["where"])}) {_badge(v["verdict"])}</p><dl>'
-            f'<dt>As printed</dt><dd>{html.escape(v.get("printed") or "")}</dd>'
-            f'<dt>Correct</dt><dd>{html.escape(v.get("correct") or "(see proof)")}</dd>'
-            f'<dt>Proof</dt><dd>{html.escape(v.get("evidence") or "")}</dd>'
-            f'<dt>Chapter</dt><dd>{chapter}</dd></dl></div>')
-    return HTML("".join(out))
+        f = forms(SimpleNamespace(**v))
+        page = v.get("chapter")
+        chapter = f' — <a href="{page}.html">{page}</a>' if page else ""
+        display(HTML(f'<p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
+                     f'({html.escape(v["where"])}) {_badge(v["verdict"])}{chapter}</p>'))
+        for label, key, fallback in (("As printed", "printed", v.get("printed")), ("Correct", "correct", v.get("correct"))):
+            if key in f:
+                display(HTML(f"<p><b>{label}:</b></p>"))
+                for tex in f[key]:
+                    display(Math(tex))
+            else:
+                display(HTML(f"<p><b>{label}:</b> {text_cell(fallback or '(see proof)')}</p>"))
+        display(HTML(f"<p><b>Proof:</b> {text_cell(f['proof'])}.{' Decisive:' if 'decisive' in f else ''}</p>"))
+        if "decisive" in f:
+            display(Math(f["decisive"]))
+        if "sign" in (v.get("evidence") or ""):
+            display(HTML(f"<p><i>Sign convention:</i> {html.escape(SIGN_CONVENTION)}.</p>"))
 
 
 def latex(expr) -> str:

@@ -8,10 +8,8 @@ each.  :func:`gate` compares them with ``derivations/recorded_verdicts.yaml``;
 :func:`render_errata` writes the errata as Markdown with LaTeX.  Nothing here writes a file
 unless asked to (:func:`record`, :func:`write_errata`).
 
-Sign convention (it decides the verdicts marked so): ``f0`` and ``q0`` are positive when they
-point away from the surface, i.e. along +u, the direction in which the tip deflection u is
-counted; the capacitive force between tip and surface is attractive, so a physical ``f0`` or
-``q0`` is negative (towards the surface) for either sign of the bias.
+The sign convention of the electrostatic drives is :data:`SIGN_CONVENTION`
+(:mod:`derivations.paper.convention`).
 """
 from __future__ import annotations
 
@@ -23,12 +21,11 @@ from pathlib import Path
 
 import yaml
 
+from .derivations.paper.convention import SIGN_CONVENTION
 from .errors import UserError
 
 RECORDED = "recorded_verdicts.yaml"
 
-SIGN_CONVENTION = ("f0 and q0 count positive away from the surface (along +u, the tip deflection); the capacitive "
-                   "tip-surface force is attractive, so physical f0 and q0 are negative")
 
 KIND_ORDER = ("claim", "cross-reference", "symbol", "statement")
 

@@ -8,8 +8,9 @@ trigonometric normal forms, see :func:`derivations.beam.trig_normal_form`) and b
 from __future__ import annotations
 
 import random
-from functools import lru_cache
+import re
 from dataclasses import dataclass, field
+from functools import lru_cache
 from enum import Enum
 from typing import Callable, Iterable
 
@@ -17,6 +18,10 @@ import mpmath as mp
 import sympy as sp
 
 from ..beam import _FROM_ATOMS, _TO_ATOMS, beta, trig_normal_form
+from ..paper.convention import SIGN_CONVENTION
+
+# Evidence that turns on the sign of f0, q0 or d1 (an overall sign flip, a ratio -1 or -8).
+SIGN_DEPENDENT = re.compile(r"overall sign|opposite (?:sign|directions)|exact -1\b|ratio -\d|sign opposite")
 
 
 class Outcome(str, Enum):
@@ -104,6 +109,8 @@ def run_check(check: Check) -> Verdict:
     latex = result[3] if len(result) > 3 else {}
     if verdict not in VERDICTS:
         raise ValueError(f"{check.id}: unknown verdict {verdict!r}")
+    if SIGN_DEPENDENT.search(evidence) and "sign convention:" not in evidence and not evidence.startswith("same zeros"):
+        evidence = f"{evidence}; sign convention: {SIGN_CONVENTION}"
     return Verdict(check.id, check.where, Outcome(verdict), evidence, correct, check.printed,
                    check.chapter, check.kind, latex)
 
