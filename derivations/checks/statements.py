@@ -343,7 +343,7 @@ def _nominal_resonance():
                 f"non-contact: w1 = {w1.group(1)} kHz, {mp.nstr(100 * (f_nom - f_meas) / f_meas, 3)} % lower than nominal; "
                 f"'~{m.group(1)}' allows +-{mp.nstr(half_ulp, 2)} kHz")
     if abs(f_nom - f_meas) > half_ulp:
-        return ERRATUM, evidence, f"~{mp.nstr(f_meas, 2)} kHz (as measured) or a stated manufacturer tolerance"
+        return ERRATUM, evidence, f"~{int(mp.nint(f_meas))} kHz (as measured for tip 1) or a stated manufacturer tolerance"
     return HOLDS, evidence, ""
 
 

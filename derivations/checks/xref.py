@@ -41,7 +41,7 @@ def _describe(caption, panel: str) -> str:
 
 def check_figure(ref: T.Reference):
     caps = T.captions()
-    problems, notes = [], []
+    problems, notes, fixes = [], [], []
     named = T.keywords(ref.context)
     for fig, panels in ref.targets:
         cap = caps.get(fig)
@@ -51,6 +51,9 @@ def check_figure(ref: T.Reference):
         if missing:
             listed = ",".join(cap.panels) or "none"
             problems.append(f"Fig. {fig} has no panel {','.join(missing)} (caption lists panels {listed})")
+            fits = [p for p in cap.panels if all(cap.described.get(p, {}).get(c, set()) & w for c, w in named.items())]
+            fixes.append(f"Fig. {fig} {','.join(fits)}" if named and fits else
+                         f"a panel of Fig. {fig} among {listed}")
             continue
         cited = panels or tuple(cap.described) or ("",)
         for cat, words in named.items():
@@ -64,6 +67,7 @@ def check_figure(ref: T.Reference):
                 wrong = [] if any(w & words for w in described.values()) else list(described)
             if wrong:
                 fits = [p for p in cap.panels if cap.described.get(p, {}).get(cat, set()) & words]
+                fixes.append(f"Fig. {fig} {','.join(fits)}" if fits else f"a figure whose caption shows {'/'.join(sorted(words))}")
                 problems.append(f"the sentence names {cat} {'/'.join(sorted(words))}, but the caption of Fig. {fig} "
                                 f"gives " + "; ".join(f"panel {p}: {'/'.join(sorted(described[p]))}" for p in wrong)
                                 + (f" (panels with {'/'.join(sorted(words))}: {','.join(fits)})" if fits else ""))
@@ -72,7 +76,7 @@ def check_figure(ref: T.Reference):
         if panels:
             notes.append("caption: " + "; ".join(f"{p}: {_describe(cap, p)}" for p in panels))
     if problems:
-        return ERRATUM, "; ".join(problems), ""
+        return ERRATUM, "; ".join(problems), "; ".join(dict.fromkeys(fixes))
     return HOLDS, "; ".join(notes) or "the figure exists; the sentence names no property the caption describes", ""
 
 
@@ -131,16 +135,24 @@ def _with_antecedent(ref: T.Reference, clause: str) -> str:
     return clause
 
 
+def _cites_data(tag: str) -> bool:
+    """Does the section cite a figure of measured data (a caption naming a sample material)?"""
+    caps = T.captions()
+    return any(r.kind == "figure" and any(fig in caps and "material" in T.keywords(caps[fig].text)
+                                          for fig, _ in r.targets)
+               for r in T.references() if r.section == tag)
+
+
 MIN_SIMILARITY = 0.1      # below this no section is a clear match and wording decides nothing
 
 
 def check_section(ref: T.Reference):
     secs, docs, _ = _section_vectors()
-    out_verdict, notes = HOLDS, []
+    out_verdict, notes, fixes = HOLDS, [], []
     for target in ref.targets:
         sec = T.section(target)
         if sec is None:
-            return ERRATUM, f"there is no Section {target}", ""
+            return ERRATUM, f"there is no Section {target}", "a section that exists"
         clause = _with_antecedent(ref, _clause(ref.sentence, ref, target))
         words = [w for w in _words(clause)]
         own = next((s for s in secs if s.tag == ref.section), None)
@@ -156,15 +168,19 @@ def check_section(ref: T.Reference):
         if re.search(r"\b(?:given|derived|described by)\s+in\b|\bis given in\b", clause) and "$$" not in sec.body:
             out_verdict = ERRATUM
             why += f"; the sentence says the result is given there, but Section {target} displays no equation"
-        elif re.search(r"experimental", clause) and not any(
-                r.kind == "figure" for r in T.references() if r.section == sec.tag):
+            with_eqs = [n for n in sorted(scores, key=scores.get, reverse=True) if "$$" in T.section(n).body]
+            fixes.append(f"Section {with_eqs[0]}" if with_eqs else "a section with equations")
+        elif re.search(r"experimental", clause) and not _cites_data(sec.tag):
             out_verdict = ERRATUM
             why += f"; the sentence promises experimental results, but Section {target} cites no figure"
+            with_figs = [n for n in sorted(scores, key=scores.get, reverse=True) if _cites_data(T.section(n).tag)]
+            fixes.append(f"Section {with_figs[0]}" if with_figs else "a section with results")
         elif best != target and scores[best] >= MIN_SIMILARITY and scores[target] < 0.5 * scores[best]:
             out_verdict = ERRATUM
             why += f"; the sentence fits Section {best} better than the one cited"
+            fixes.append(f"Section {best}")
         notes.append(why)
-    return out_verdict, "; ".join(notes), ""
+    return out_verdict, "; ".join(notes), "; ".join(fixes)
 
 
 # --- tables --------------------------------------------------------------------------------------
@@ -177,7 +193,7 @@ def check_table(ref: T.Reference):
     number = str(T.ROMAN.get(number, number))
     sec = T.section(f"table{number}")
     if sec is None:
-        return ERRATUM, f"there is no Table {number}", ""
+        return ERRATUM, f"there is no Table {number}", "a table that exists"
     rows = [line for line in re.findall(r"\|\s*([A-Z])\s*\|", sec.body)]
     m = re.search(r"\b(" + "|".join(_NUMBER_WORDS) + r")\s+(\w+)", ref.sentence)
     evidence = f"Table {number} exists (rows {', '.join(rows)})"
@@ -185,7 +201,7 @@ def check_table(ref: T.Reference):
         return ERRATUM, f"{evidence}; cited as {ref.text}, headed Table {number}", f"Table {number}"
     if m and m.group(2).rstrip("s")[:6] in sec.body.lower():
         if _NUMBER_WORDS[m.group(1)] != len(rows):
-            return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", ""
+            return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", f"{len(rows)} {m.group(2)}"
         evidence += f"; the sentence counts {m.group(1)} {m.group(2)}, the table has {len(rows)} rows"
     return HOLDS, evidence, ""
 
@@ -246,7 +262,7 @@ def _before(ref: T.Reference) -> str:
 def _owns_phrase(ref: T.Reference, pattern: str) -> bool:
     """Does a phrase of the sentence speak about this reference (the nearest one before it,
     or the first one after it when none precedes)?"""
-    eq_refs = [r for r in T.references() if r.sentence == ref.sentence and r.kind == "equation"]
+    eq_refs = [r for r in T.references() if r.sentence == ref.sentence and r.kind == "equation"] or [ref]
     for m in re.finditer(pattern, ref.sentence):
         before = [r for r in eq_refs if r.start < m.start()]
         owner = max(before, key=lambda r: r.start) if before else min(eq_refs, key=lambda r: r.start)
@@ -258,20 +274,22 @@ def _owns_phrase(ref: T.Reference, pattern: str) -> bool:
 def check_equation(ref: T.Reference):
     sentence = re.sub(r"\$\$.*?\$\$", " ", ref.sentence)
     sentence = re.sub(r"(?:below|above|near|far from) the (?:first )?resonan\w*", " ", sentence)
-    notes, problems = [], []
+    notes, problems, fixes = [], [], []
     for target in ref.targets:
         labels = _labels(target)
         if not labels:
-            return ERRATUM, f"no equation is printed with label ({target})", ""
+            return ERRATUM, f"no equation is printed with label ({target})", "an equation that exists"
         tex = " ".join(_content(lab) for lab in labels)
         family = _families().get(labels[0], "")
         for sym in re.findall(r"\$([^$]*?)\\to", re.sub(r"\$\$.*?\$\$", " ", _before(ref))):
             sym = sym.strip().split("=")[-1].strip()
             if sym and sym not in tex:
                 problems.append(f"the sentence takes {sym} to a limit, but Eq. ({target}) has no {sym}")
+                fixes.append(f"an equation containing {sym}")
         free_ref = _owns_phrase(ref, r"free cantilever")
         if free_ref and family not in ("free", "elastic", ""):
             free = [lab for lab, fam in _families().items() if fam == "free" and lab[:2] != "21"]
+            fixes.append(f"Eq. ({', '.join(free)})")
             problems.append(f"the sentence needs a free cantilever, but Eq. ({target}) is solved with the "
                             f"{family} tip conditions (free-end solution: Eq. ({', '.join(free)}))")
         elif free_ref:
@@ -279,15 +297,21 @@ def check_equation(ref: T.Reference):
                          + ("(the free end is its k1 = k2 = 0 case)" if family == "elastic" else ""))
         if re.search(r"clamped end", sentence) and family == "boundary condition" and "(0)" not in tex:
             problems.append(f"Eq. ({target}) is not a condition at the clamped end x = 0")
+            fixes.append("Eq. (3a,b)")
         if re.search(r"resonan|roots|denominator", sentence) and family != "boundary condition":
             if not _TRIG.search(tex):
                 problems.append(f"the sentence needs resonances, but Eq. ({target}) has no frequency-dependent denominator")
+                fixes.append("an equation with a resonant denominator")
             else:
                 notes.append(f"Eq. ({target}) has a trigonometric (resonant) denominator")
         if re.search(r"potential difference|\\Delta V|bias", sentence) and family not in ("boundary condition",):
             zeroed = set(re.findall(r"\$(f|f_0|q_0|d_1)\s*=\s*0\$", sentence))
             drives = {d for d in ("f_0", "q_0") if d in tex} - {("f_0" if z == "f" else z) for z in zeroed}
             if re.search(r"\\Delta V|potential difference", sentence) and not drives and re.search(r"calculated|according", sentence):
+                with_q0 = [lab for lab in T.equations() if "q_0" in _content(lab) and _TRIG.search(_content(lab))
+                           and _families().get(lab) not in ("boundary condition",)]
+                fixes.append(f"an equation with the distributed load q0, e.g. Eq. ({with_q0[0]})" if with_q0 else
+                             "an equation with the distributed load q0")
                 problems.append(f"the sentence computes a bias dependence from Eq. ({target}), whose electrostatic "
                                 f"drives {sorted(d for d in ('f_0', 'q_0') if d in tex) or 'none'} the sentence sets "
                                 f"to zero or lacks (no q_0: no non-local term)")
@@ -297,16 +321,18 @@ def check_equation(ref: T.Reference):
             want = {"electromechanical": {"d_1"}, "electrostatic": {"f_0", "q_0"}}[purely[0]]
             if drives and not drives <= want:
                 problems.append(f"Eq. ({target}) has drives {sorted(drives)}, not only {purely[0]} ones")
+                fixes.append(f"Eq. ({target}) with the other drives set to zero")
             else:
                 notes.append(f"Eq. ({target}) drives: {sorted(drives)} ({purely[0]})")
         if re.search(r"boundary condition", sentence) and family == "boundary condition":
             for term in re.findall(r"u_0'+\(L\)", sentence):
                 if term not in tex:
                     problems.append(f"Eq. ({target}) does not contain {term}")
+                    fixes.append(f"the boundary condition on {term}")
             notes.append(f"Eq. ({target}) is a boundary condition: ${tex[:60]}$")
         notes.append(f"Eq. ({target}) printed in Section {T.equation_section(labels[0])}")
     if problems:
-        return ERRATUM, "; ".join(problems), ""
+        return ERRATUM, "; ".join(problems), "; ".join(dict.fromkeys(fixes))
     return HOLDS, "; ".join(dict.fromkeys(notes)), ""
 
 
@@ -349,6 +375,11 @@ def _neighbours(symbol: str) -> list[str]:
     return out
 
 
+def _used_in(symbol: str, tag: str) -> bool:
+    sec = next((s for s in T.sections() if s.tag == tag), None)
+    return bool(sec) and any(T.canonical(m.group(0)) == symbol for m in re.finditer(r"\\?[A-Za-z]+_(?:\{[^{}]+\}|.)", sec.body))
+
+
 def _definitions(symbol: str) -> list[str]:
     """Right-hand sides printed as '$symbol = ...$' anywhere in the text."""
     pat = re.compile(r"\$\s*" + re.escape(symbol).replace(r"_", r"_\{?") + r"\}?\s*=\s*([^$]+)\$")
@@ -364,9 +395,16 @@ def check_symbol(symbol: str):
             sb = {x for x in re.findall(r"[A-Z]_\{[a-z]+\}", b)}
             clash = [(x, y) for x in sa for y in sb if x[0] == y[0] and x != y and x[:1] == "G"]
             if clash:
+                base = _split(symbol)[0]
+                subs = {re.sub(r"[^a-z]", "", x.split("_")[1]) for x in clash[0]}
+                alt = [o for o in T.symbols() if _split(o)[0] == base and _split(o)[1] in subs and o != symbol]
+                fix = f"${alt[0]}$ in the definition with {'/'.join(sorted(clash[0]))}" if alt else "two different symbols"
                 return (ERRATUM, f"${symbol}$ is defined twice with different meanings: ${symbol} = {a.strip()}$ and "
-                        f"${symbol} = {b.strip()}$ ({clash[0][0]} vs {clash[0][1]})", "")
+                        f"${symbol} = {b.strip()}$ ({clash[0][0]} vs {clash[0][1]})", fix)
     near = _neighbours(symbol) if use.uses == 1 and not use.definition else []
+    # The likeliest intended symbol: one used in the same section, then one whose subscript the misprint contains.
+    near.sort(key=lambda n: (T.symbols()[n].section != use.section and not _used_in(n, use.section),
+                             _split(n)[1] not in _split(symbol)[1]))
     if near:
         return (ERRATUM, f"${symbol}$ is used once (Section {use.section}) and never defined; it is one edit away "
                 f"from {', '.join('$' + n + '$ (used ' + str(T.symbols()[n].uses) + ' times)' for n in near)}",
@@ -405,24 +443,36 @@ def check_equation_numbering():
     evidence = f"{len(labels)} labels, equations 1-{max(numbers)}; missing numbers: {gaps or 'none'}; " \
                f"missing sub-labels: {letter_gaps or 'none'}"
     if gaps or letter_gaps:
-        return ERRATUM, evidence, ""
+        relabel = []
+        for gap in letter_gaps:
+            n, letter = re.match(r"(\d+)([a-f])", gap).groups()
+            later = [lab for lab in labels if re.fullmatch(rf"{n}[a-f]", lab) and lab[-1] > letter]
+            if later:
+                relabel.append(f"({later[0]}) should be ({gap})")
+        return ERRATUM, evidence, "; ".join(relabel) or f"number the equations without gaps"
     return HOLDS, evidence, ""
 
 
 def check_caption_panels(number: int):
     """Within one caption: panel groups that share a property split the panels without gaps."""
     cap = T.captions()[number]
-    problems = []
+    problems, missing = [], set()
     for cat in sorted({c for d in cap.described.values() for c in d}):
         covered = [p for p in cap.panels if cat in cap.described.get(p, {})]
         if len(covered) < 4:
             continue
         gaps = [p for p in cap.panels if covered[0] < p < covered[-1] and p not in covered]
         if gaps:
+            missing.update(gaps)
             problems.append(f"{cat}: panels {','.join(covered)} are described, panel {','.join(gaps)} "
                             f"(listed in the caption) is not")
     if problems:
-        return ERRATUM, f"caption of Fig. {number}: " + "; ".join(problems), ""
+        fixes = []
+        for m in re.finditer(r"\(([a-l])\s*[-–]\s*([a-l])\)", cap.text):
+            before = chr(ord(m.group(1)) - 1)
+            if before in missing:
+                fixes.append(f"({m.group(1)}-{m.group(2)}) should read ({before}-{m.group(2)})")
+        return ERRATUM, f"caption of Fig. {number}: " + "; ".join(problems), "; ".join(fixes) or "describe every listed panel"
     return HOLDS, f"caption of Fig. {number}: panels {','.join(cap.panels) or '(one)'}; every described property covers its panels without gaps", ""
 
 
@@ -438,7 +488,10 @@ def check_units():
             if not re.match(_UNIT, after):
                 bare.append(f"Section {sec.number}: '{m.group(1)}' followed by '{after[:8].strip()}'")
     if bare:
-        return ERRATUM, "values with an uncertainty but no unit: " + "; ".join(bare), ""
+        units = Counter(re.findall(r"(?:±|\\pm)\s*[\d.]+\s*\$?\s*(" + _UNIT + ")", " ".join(s.body for s in T.text_sections())))
+        unit = units.most_common(1)[0][0] if units else "a unit"
+        return ERRATUM, "values with an uncertainty but no unit: " + "; ".join(bare), \
+            f"add the unit ({unit}, the unit of the other values with uncertainties)"
     return HOLDS, "every value x ± y in the text carries a unit", ""
 
 
