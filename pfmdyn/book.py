@@ -197,7 +197,7 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
 
 
 def text_cell(text: str) -> str:
-    """Escaped text for a table cell: ``$...$`` spans become MathJax math, SymPy's ``**`` and
+    r"""Escaped text for a table cell: ``$...$`` spans become MathJax math, SymPy's ``**`` and
     ``*`` become ``^`` and a middle dot.
 
     >>> text_cell("x**2 < $\\frac{a}{b}$")
@@ -258,16 +258,27 @@ def latex(expr) -> str:
 
 
 def math(lhs: str, expr):
-    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string)."""
+    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string); a long
+    expression is broken over lines that fit the text column."""
     from IPython.display import Math
-    body = latex(expr)
-    return Math(f"{lhs} = {body}" if lhs else body)
+    if isinstance(expr, str):
+        return Math(f"{lhs} = {expr}" if lhs else expr)
+    return aligned([(lhs, expr)])
 
 
 def aligned(rows, *, relation: str = "="):
-    """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math."""
+    """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math, each broken
+    over lines where it would be wider than the text column (:func:`pfmdyn.verify.latex_rows`)."""
     from IPython.display import Math
-    lines = [f"{latex(lhs)} &{relation} {latex(rhs)}" for lhs, rhs in rows]
+
+    from .verify import latex_rows
+    lines = []
+    for lhs, rhs in rows:
+        lhs_tex = latex(lhs)
+        if isinstance(rhs, str):
+            lines.append(f"{lhs_tex} &{relation} {rhs}")
+        else:
+            lines += latex_rows(lhs_tex, rhs, relation=relation, printer=latex)
     return Math(r"\begin{aligned}" + r" \\[3pt] ".join(lines) + r"\end{aligned}")
 
 

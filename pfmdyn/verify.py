@@ -199,25 +199,28 @@ def _visible(tex: str) -> int:
     return len(re.sub(r"[{}]", "", re.sub(r"\\[a-zA-Z]+", "x", tex)))
 
 
-def _lines(expr, width: int) -> list[str]:
+def _lines(expr, width: int, printer=None) -> list[str]:
     """LaTeX of ``expr`` cut into lines at top-level + signs (and inside a long bracketed
     factor), each at most about ``width`` characters wide."""
     import sympy as sp
-    tex = latex(expr)
+    printer = printer or latex
+    tex = printer(expr)
     if _visible(tex) <= width:
         return [tex]
     if isinstance(expr, sp.Mul) and any(isinstance(f, sp.Add) for f in expr.args):
-        big = max((f for f in expr.args if isinstance(f, sp.Add)), key=lambda f: len(latex(f)))
-        inner = _lines(big, width - 4)
-        pre = latex(expr / big)
-        return [rf"{pre} \Big( {inner[0]}"] + inner[1:-1] + [rf"{inner[-1]} \Big)"] if len(inner) > 1 \
-            else [rf"{pre} \Big( {inner[0]} \Big)"]
+        big = max((f for f in expr.args if isinstance(f, sp.Add)), key=lambda f: len(printer(f)))
+        inner = _lines(big, width - 4, printer)
+        pre = printer(expr / big)
+        if len(inner) == 1:
+            return [rf"{pre} \Big( {inner[0]} \Big)"]
+        return [rf"{pre} \Big( {inner[0]}"] + inner[1:-1] + [rf"{inner[-1]} \Big)"]
     if not isinstance(expr, sp.Add):
         return [tex]
     lines, current = [], ""
-    for term in expr.args:
-        for piece in _lines(term, width):
-            piece = piece if (not current or piece.startswith("-")) else "+ " + piece
+    for i, term in enumerate(expr.args):
+        for j, piece in enumerate(_lines(term, width, printer)):
+            if i and not j and not piece.startswith("-"):
+                piece = "+ " + piece            # the sign joining this term to the previous one
             if current and _visible(current + piece) > width:
                 lines.append(current)
                 current = piece
@@ -234,11 +237,34 @@ def latex(expr) -> str:
     return sp.latex(expr, symbol_names=names, fold_func_brackets=True)
 
 
-def display_latex(lhs: str, expr, width: int = LINE_WIDTH) -> str:
-    r"""``lhs = expr`` as display LaTeX, broken over lines so that none is wider than ``width``.
+def latex_rows(lhs: str, expr, *, relation: str = "=", width: int = LINE_WIDTH, printer=None) -> list[str]:
+    """Rows of an ``aligned`` block showing ``lhs = expr``, none wider than ``width``.
 
-    A long fraction is shown as ``lhs = \mathcal{N}/\mathcal{D}`` with numerator and
-    denominator each broken at their + signs.
+    A long fraction becomes ``lhs = N/D`` followed by the rows of N and of D.
+    """
+    import sympy as sp
+    printer = printer or latex
+    expr = sp.sympify(expr)
+    tex = printer(expr)
+    if _visible(f"{lhs} {relation} {tex}") <= width:
+        return [f"{lhs} &{relation} {tex}"]
+    num, den = sp.fraction(sp.together(expr)) if not isinstance(expr, sp.Add) else (expr, sp.S.One)
+    rows = []
+    if den != 1 and (_visible(printer(num)) > width // 2 or _visible(printer(den)) > width // 2):
+        rows.append(rf"{lhs} &{relation} \frac{{\mathcal{{N}}}}{{\mathcal{{D}}}}")
+        parts = ((r"\mathcal{N}", num), (r"\mathcal{D}", den))
+    else:
+        parts = ((lhs, expr),)
+    for name, part in parts:
+        lines = _lines(part, width - 6, printer)
+        rel = relation if name == lhs else "="
+        rows.append(f"{name} &{rel} {lines[0]}")
+        rows += [f"&\\quad {line}" for line in lines[1:]]
+    return rows
+
+
+def display_latex(lhs: str, expr, width: int = LINE_WIDTH, printer=None) -> str:
+    r"""``lhs = expr`` as display LaTeX, broken over lines so that none is wider than ``width``.
 
     >>> import sympy as sp
     >>> x = sp.Symbol("x")
@@ -247,24 +273,9 @@ def display_latex(lhs: str, expr, width: int = LINE_WIDTH) -> str:
     >>> print(display_latex("y", sum(x**i for i in range(40)), width=40).splitlines()[0])
     \begin{aligned}
     """
-    import sympy as sp
-    expr = sp.sympify(expr)
-    head = f"{lhs} = " if lhs else ""
-    full = head + latex(expr)
-    if _visible(full) <= width:
-        return full
-    num, den = sp.fraction(sp.together(expr)) if not isinstance(expr, sp.Add) else (expr, sp.S.One)
-    rows = []
-    if den != 1 and (_visible(latex(num)) > width // 2 or _visible(latex(den)) > width // 2):
-        rows.append(rf"{lhs} &= \frac{{\mathcal{{N}}}}{{\mathcal{{D}}}}")
-        for name, part in ((r"\mathcal{N}", num), (r"\mathcal{D}", den)):
-            lines = _lines(part, width - 6)
-            rows.append(f"{name} &= {lines[0]}")
-            rows += [f"&\\quad {line}" for line in lines[1:]]
-    else:
-        lines = _lines(expr, width - 6)
-        rows.append(f"{lhs} &= {lines[0]}")
-        rows += [f"&\\quad {line}" for line in lines[1:]]
+    rows = latex_rows(lhs, expr, width=width, printer=printer)
+    if len(rows) == 1:
+        return rows[0].replace(" &=", " =", 1)
     return "\\begin{aligned}\n" + " \\\\\n".join(rows) + "\n\\end{aligned}"
 
 

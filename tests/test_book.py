@@ -115,18 +115,28 @@ FAMILY_CHAPTERS = ("elastic_contact", "frictionless", "pinned", "free_end", "sli
 # Run in the page after MathJax has typeset it: the width of the text column and of every
 # typeset equation, written into the DOM for --dump-dom to read.
 _PROBE = """<script>
-window.addEventListener('load', function () {
-  function done() {
-    var col = document.querySelector('article.bd-article') || document.querySelector('main');
+function pfmReport(data) {
+  var out = document.createElement('pre'); out.id = 'pfm-probe';
+  out.textContent = JSON.stringify(data); document.body.appendChild(out);
+}
+function pfmMeasure() {
+  try {
+    var col = document.querySelector('.bd-article') || document.querySelector('article') ||
+              document.querySelector('main') || document.body;
     var widths = Array.from(document.querySelectorAll('mjx-container mjx-math')).map(function (m) {
       return m.getBoundingClientRect().width; });
-    var out = document.createElement('pre'); out.id = 'pfm-probe';
-    out.textContent = JSON.stringify({column: col.getBoundingClientRect().width, widths: widths});
-    document.body.appendChild(out);
-  }
-  if (window.MathJax && MathJax.startup && MathJax.startup.promise) { MathJax.startup.promise.then(done); }
-  else { setTimeout(done, 5000); }
-});
+    pfmReport({column: col.getBoundingClientRect().width, widths: widths});
+  } catch (e) { pfmReport({error: String(e)}); }
+}
+// MathJax's startup promise does not settle under --virtual-time-budget: wait instead until the
+// number of typeset equations has been stable for one second (or ten seconds have passed).
+function pfmWait(n, last, stable) {
+  var count = document.querySelectorAll('mjx-container').length;
+  stable = (count > 0 && count === last) ? stable + 1 : 0;
+  if (stable >= 10 || n >= 100) { pfmMeasure(); }
+  else { setTimeout(function () { pfmWait(n + 1, count, stable); }, 100); }
+}
+window.addEventListener('load', function () { pfmWait(0, -1, 0); });
 </script>"""
 
 
@@ -141,7 +151,9 @@ def _probe(html_dir: Path, page: str, tmp_path: Path) -> tuple[str, dict]:
         probe.unlink()
     m = re.search(r'<pre id="pfm-probe">(.*?)</pre>', dom, re.S)
     assert m, f"the width probe did not run on {page}.html"
-    return dom, json.loads(html.unescape(m.group(1)))
+    sizes = json.loads(html.unescape(m.group(1)))
+    assert "error" not in sizes, sizes
+    return dom, sizes
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")

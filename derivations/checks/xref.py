@@ -383,24 +383,48 @@ def _used_in(symbol: str, tag: str) -> bool:
 def _definitions(symbol: str) -> list[str]:
     """Right-hand sides printed as '$symbol = ...$' anywhere in the text."""
     pat = re.compile(r"\$\s*" + re.escape(symbol).replace(r"_", r"_\{?") + r"\}?\s*=\s*([^$]+)\$")
-    return [m.group(1) for s in T.text_sections() for m in pat.finditer(s.body)]
+    # A value or a condition ("d_1 = d_2 = 0", "k = 2.4") sets the symbol; it does not define it.
+    value = re.compile(r"^(?:[^=]*=\s*)?[-+\d.\s]*$")
+    return [m.group(1) for s in T.text_sections() for m in pat.finditer(s.body) if not value.match(m.group(1))]
+
+
+_TOKEN = re.compile(r"\\?[A-Za-z]+_(?:\{[^{}]+\}|[A-Za-z0-9])")
+
+
+def _meaning_clash(symbol: str, defs: list[str]):
+    """Two definitions of one symbol that mean different things: their right-hand sides use
+    different capacitance gradients (G_loc vs G_nl), or share no subscripted symbol at all."""
+    for i, a in enumerate(defs):
+        for b in defs[i + 1:]:
+            ta = {T.canonical(x) for x in _TOKEN.findall(a)}
+            tb = {T.canonical(x) for x in _TOKEN.findall(b)}
+            gradients = [(x, y) for x in ta for y in tb if x[:2] == y[:2] == "G_" and x != y]
+            if gradients:
+                return a, b, f"{gradients[0][0]} vs {gradients[0][1]}"
+            if ta and tb and not ta & tb:
+                return a, b, f"{'/'.join(sorted(ta))} vs {'/'.join(sorted(tb))}"
+    return None
 
 
 def check_symbol(symbol: str):
     use = T.symbols()[symbol]
     defs = _definitions(symbol)
-    for i, a in enumerate(defs):
-        for b in defs[i + 1:]:
-            sa = {x for x in re.findall(r"[A-Z]_\{[a-z]+\}", a)}
-            sb = {x for x in re.findall(r"[A-Z]_\{[a-z]+\}", b)}
-            clash = [(x, y) for x in sa for y in sb if x[0] == y[0] and x != y and x[:1] == "G"]
-            if clash:
-                base = _split(symbol)[0]
-                subs = {re.sub(r"[^a-z]", "", x.split("_")[1]) for x in clash[0]}
-                alt = [o for o in T.symbols() if _split(o)[0] == base and _split(o)[1] in subs and o != symbol]
-                fix = f"${alt[0]}$ in the definition with {'/'.join(sorted(clash[0]))}" if alt else "two different symbols"
-                return (ERRATUM, f"${symbol}$ is defined twice with different meanings: ${symbol} = {a.strip()}$ and "
-                        f"${symbol} = {b.strip()}$ ({clash[0][0]} vs {clash[0][1]})", fix)
+    clash = _meaning_clash(symbol, defs)
+    if clash:
+        a, b, why = clash
+        base = _split(symbol)[0]
+        subs = {re.sub(r"[^a-z]", "", x.split("_")[1]) for x in why.split(" vs ") if "_" in x}
+        alt = [o for o in T.symbols() if _split(o)[0] == base and _split(o)[1] in subs and o != symbol]
+        fix = f"${alt[0]}$ in the definition with {why}" if alt else "a distinct symbol for each meaning"
+        return (ERRATUM, f"${symbol}$ is defined with different meanings: " + " and ".join(
+            f"${symbol} = {d.strip()[:80]}$" for d in (a, b)) + f" ({why})", fix)
+    if use.uses == 1 and use.definition:
+        base = _split(symbol)[0]
+        mine = [d.strip() for d in defs]
+        other = [d for d in _definitions(base) if any(m and m in d for m in mine)]
+        if other:
+            return (ERRATUM, f"${symbol} = {mine[0]}$ is the definition of ${base}$ (${base} = {other[0].strip()}$) "
+                    f"under another name, used once; the formula that follows uses ${base}$", f"${base}$")
     near = _neighbours(symbol) if use.uses == 1 and not use.definition else []
     # The likeliest intended symbol: one used in the same section, then one whose subscript the misprint contains.
     near.sort(key=lambda n: (T.symbols()[n].section != use.section and not _used_in(n, use.section),
