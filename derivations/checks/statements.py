@@ -315,6 +315,20 @@ def _sentences_of(tag: str) -> list[str]:
     return next((s.sentences for s in T.sections() if s.tag == tag), [])
 
 
+def _stiff_cantilever_vs_k1():
+    """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
+    from .. import elastic_contact
+    from ..beam import d1, f0, k, k1
+    sol = elastic_contact.solve()
+    ratio = sp.simplify(sol.theta(d1) * d1 / (sol.theta(f0) * f0))
+    evidence = (f"derived A_piezo/A_el = {ratio} at every frequency: it grows with the tip-surface junction's k1 and "
+                f"does not contain the cantilever's spring constant k ({ratio.has(k)})")
+    if ratio.has(k1) and not ratio.has(k):
+        return ERRATUM, evidence + "; the sentence calls k1 the cantilever's spring constant", \
+            "a stiff tip-surface junction (k1 -> oo, e.g. a high indentation force), not a stiff cantilever"
+    return HOLDS, evidence, ""
+
+
 def _tip1_null_consistency():
     """'Similarly to tip 1, the nulling bias is frequency independent': what did tip 1's paragraph say?"""
     tip1 = next((t for t in _sentences_of("VI1") if re.search(r"nulling bias is (\w+ )?frequency", t)), "")
@@ -386,6 +400,7 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("III2", r"higher power of frequency", _scaling_order("nonlocal_fastest")),
     ("III2", r"scale in a similar manner", same_as("eq15_18.piezo_to_local_ratio")),
     ("III2", r"less pronounced for the longitudinal", _scaling_order("longitudinal_slowest")),
+    ("III2", r"cantilever with a high spring constant", _stiff_cantilever_vs_k1),
     ("III2", r"cannot be distinguished by a choice of the operating frequency", same_as("eq15_18.piezo_to_local_ratio")),
     ("III3", r"8 times larger", same_as("eq22.nonlocal_8x")),
     ("III3", r"4\.4 times", same_as("eq22.contact_to_free_ratio")),
