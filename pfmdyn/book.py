@@ -206,10 +206,12 @@ def text_cell(text: str) -> str:
     import re
 
     from .verify import prose
-    parts = re.split(r"(\$[^$]+\$)", text)
+    parts = re.split(r"(\$\$.+?\$\$|\$[^$]+\$)", text, flags=re.S)
     out = []
     for part in parts:
-        if len(part) > 2 and part.startswith("$") and part.endswith("$"):
+        if len(part) > 4 and part.startswith("$$") and part.endswith("$$"):
+            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[2:-2].strip())}\\)</span>')
+        elif len(part) > 2 and part.startswith("$") and part.endswith("$"):
             out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[1:-1])}\\)</span>')
         else:
             out.append(html.escape(prose(part)))

@@ -388,7 +388,7 @@ def _definitions(symbol: str) -> list[str]:
     return [m.group(1) for s in T.text_sections() for m in pat.finditer(s.body) if not value.match(m.group(1))]
 
 
-_TOKEN = re.compile(r"\\?[A-Za-z]+_(?:\{[^{}]+\}|[A-Za-z0-9])")
+_TOKEN = re.compile(r"(?:\\[A-Za-z]+|[A-Za-z])_(?:\{[^{}]+\}|[A-Za-z0-9])")
 
 
 def _meaning_clash(symbol: str, defs: list[str]):
@@ -406,6 +406,15 @@ def _meaning_clash(symbol: str, defs: list[str]):
     return None
 
 
+def _quote_definition(symbol: str, rhs: str) -> str:
+    """A definition for the evidence: the equation number of a displayed one, else the formula."""
+    tag = re.search(r"\\tag\{([^}]*)\}|\\quad\s*\((\d+[a-f]?)\)", rhs)
+    if tag:
+        return f"${symbol}$ of Eq. ({tag.group(1) or tag.group(2)})"
+    rhs = rhs.strip()
+    return f"${symbol} = {rhs}$" if len(rhs) <= 80 else f"${symbol}$ = (a {len(rhs)}-character formula)"
+
+
 def check_symbol(symbol: str):
     use = T.symbols()[symbol]
     defs = _definitions(symbol)
@@ -417,7 +426,7 @@ def check_symbol(symbol: str):
         alt = [o for o in T.symbols() if _split(o)[0] == base and _split(o)[1] in subs and o != symbol]
         fix = f"${alt[0]}$ in the definition with {why}" if alt else "a distinct symbol for each meaning"
         return (ERRATUM, f"${symbol}$ is defined with different meanings: " + " and ".join(
-            f"${symbol} = {d.strip()[:80]}$" for d in (a, b)) + f" ({why})", fix)
+            _quote_definition(symbol, d) for d in (a, b)) + f" ({why})", fix)
     if use.uses == 1 and use.definition:
         base = _split(symbol)[0]
         mine = [d.strip() for d in defs]
