@@ -315,6 +315,20 @@ def _sentences_of(tag: str) -> list[str]:
     return next((s.sentences for s in T.sections() if s.tag == tag), [])
 
 
+def _eight_times():
+    """'8 times larger than that for the clamped cantilever': the number (registry) and the name
+    of the cantilever it is compared with (the section's own name for the Eq. 20 case)."""
+    verdict, evidence, correct = same_as("eq22.nonlocal_8x")()
+    sentence = next(t for t in _sentences_of("III3") if "8 times larger" in t)
+    called = re.search(r"than that for the (\w+) cantilever", sentence)
+    named = next((m.group(1) for t in _sentences_of("III3") for m in [re.search(r"such a (\w+) cantilever", t)] if m), "")
+    evidence += f"; the sentence calls the Eq. 20 case the '{called.group(1) if called else '?'}' cantilever, " \
+                f"the section calls it '{named}' ('clamped' is the paper's name for the end x = 0, Eqs. 3a,b)"
+    if called and named and called.group(1) != named:
+        return ERRATUM, evidence, f"8 times larger than for the {named} cantilever (Eq. 20)"
+    return verdict, evidence, correct
+
+
 def _stiff_cantilever_vs_k1():
     """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
     from .. import elastic_contact
@@ -402,7 +416,7 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("III2", r"less pronounced for the longitudinal", _scaling_order("longitudinal_slowest")),
     ("III2", r"cantilever with a high spring constant", _stiff_cantilever_vs_k1),
     ("III2", r"cannot be distinguished by a choice of the operating frequency", same_as("eq15_18.piezo_to_local_ratio")),
-    ("III3", r"8 times larger", same_as("eq22.nonlocal_8x")),
+    ("III3", r"8 times larger", _eight_times),
     ("III3", r"4\.4 times", same_as("eq22.contact_to_free_ratio")),
     ("III3", r"independent of the ratio between the distributed", same_as("eq22.resonances_independent")),
     ("III4", r"changing the boundary condition given in Eq\. \(4a\)", _frictionless_from_4a),

@@ -406,6 +406,18 @@ def _meaning_clash(symbol: str, defs: list[str]):
     return None
 
 
+def _condition_before(symbol: str) -> str | None:
+    """The previous sentence when it states an inequality on the plain symbol (``$k \\gg ...$``)."""
+    base = _split(symbol)[0]
+    for sec in T.text_sections():
+        for i, sentence in enumerate(sec.sentences):
+            if re.search(re.escape(symbol).replace("_", r"_\{?"), sentence) and i:
+                prev = sec.sentences[i - 1]
+                if re.search(r"\$\s*" + re.escape(base) + r"\s*(?:\\gg|>|\\geq)", prev):
+                    return prev
+    return None
+
+
 def _quote_definition(symbol: str, rhs: str) -> str:
     """A definition for the evidence: the equation number of a displayed one, else the formula."""
     tag = re.search(r"\\tag\{([^}]*)\}|\\quad\s*\((\d+[a-f]?)\)", rhs)
@@ -444,6 +456,10 @@ def check_symbol(symbol: str):
                 f"${near[0]}$")
     if use.definition:
         return HOLDS, f"defined: \"{use.definition[:160]}\"", ""
+    condition = _condition_before(symbol) if use.uses == 1 else None
+    if condition:
+        return (ERRATUM, f"${symbol}$ is used once and never defined; the sentence before states the condition "
+                f"on ${_split(symbol)[0]}$: \"{condition[:120]}\"", f"${_split(symbol)[0]}$")
     if use.uses >= 2:
         return HOLDS, f"used {use.uses} times with one meaning, first in Section {use.section}; not a variant of another symbol", ""
     return UNDECIDABLE, f"used once (Section {use.section}) without an explicit definition; no symbol it could be a misprint of", ""
