@@ -329,6 +329,47 @@ def _eight_times():
     return verdict, evidence, correct
 
 
+def _symbol_verdict(symbol: str) -> Callable:
+    """Decide a sentence by the audit of a symbol it defines."""
+    def decide():
+        from .xref import check_symbol
+        verdict, evidence, correct = check_symbol(symbol)
+        return verdict, f"the symbol audit of ${symbol}$: {evidence}", correct
+    return decide
+
+
+def _stiffness_ratio():
+    """'k1 ~ 1000 N/m is significantly higher than k ~ 1-50 N/m' and 'relatively weak' bias dependence."""
+    sentence = next(t for t in _sentences_of("III1") if "relatively weak" in t)
+    k1 = re.search(r"k_1 \\sim (\d+)", sentence)
+    k_hi = re.search(r"k \\sim [\d.]+-(\d+)", sentence)
+    slope = next((re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t) for t in _sentences_of("III1")
+                  if re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t)), None)
+    if not (k1 and k_hi and slope):
+        return UNDECIDABLE, "numbers not found in the text", ""
+    ratio = mp.mpf(k1.group(1)) / mp.mpf(k_hi.group(1))
+    per_volt = mp.mpf(slope.group(2)) / mp.mpf(slope.group(1))
+    ok = ratio >= 10 and per_volt < mp.mpf("0.1")
+    return (HOLDS if ok else ERRATUM,
+            f"k1/k >= {mp.nstr(ratio, 3)} for the printed ranges (k1/(k + k1) >= {mp.nstr(ratio / (1 + ratio), 3)}: the tip "
+            f"follows the surface); the printed k1(V) changes by {mp.nstr(100 * per_volt, 2)} % per volt", "")
+
+
+def _order_of_ratios():
+    """'A_v/N, A_l/N, A_e/N, A_q/N describe ... vertical, longitudinal, local force, distributed force, respectively'."""
+    from ..beam import d1, d2, f0, q0
+    roles = {d1: "vertical", d2: "longitudinal", f0: "local", q0: "distributed"}
+    names = {id(P.A_v): "A_v", id(P.A_l): "A_l", id(P.A_e): "A_e", id(P.A_q): "A_q"}
+    printed = [(names.get(id(a), "?"), roles[d]) for d, a in P.ELASTIC.items()]
+    sentence = next(t for t in _sentences_of("III2") if "respectively" in t and "A_v(\\beta)/N" in t)
+    order_a = re.findall(r"(A_[vleq])\(\\beta\)/N", sentence)
+    order_roles = [w for w in re.findall(r"vertical|longitudinal|local|distributed", sentence)]
+    pairs = list(zip(order_a, order_roles))
+    ok = pairs == printed
+    return (HOLDS if ok else ERRATUM,
+            f"Eq. 5 pairs {printed} (each A_x multiplies the drive d1, d2, f0, q0 of Eqs. 4a,b); the sentence pairs {pairs}", "")
+
+
 def _stiff_cantilever_vs_k1():
     """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
     from .. import elastic_contact
@@ -400,6 +441,10 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("II", r"purely electromechanical response, the piezoresponse amplitude is equal", _domains("pure_em")),
     ("II", r"vary linearly with the tip-surface potential", _linear_in_bias),
     ("II", r"no slip condition", _longitudinal_more_sensitive),
+    ("II", r"non-local contribution can be well-approximated as being position independent", _symbol_verdict("A_{el}")),
+    ("III1", r"relatively weak", _stiffness_ratio),
+    ("III2", r"describe the frequency dependence of the PFM signal", _order_of_ratios),
+    ("IV1", r"capacitive force can be approximated", same_as("eq36.q0")),
     ("III", r"Sections III\.4 and III\.5", _sections_lateral_stiffness),
     ("III", r"torsional and vertical oscillations\) are generally different", _torsion_vs_flexure_resonances),
     ("III1", r"tip deflection is almost equal", same_as("contact.low_frequency_transfer")),
@@ -455,6 +500,10 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("VI2", r"nulling bias is \$V_\{null\}", _null_bias("formula")),
     ("VI2", r"nulling bias is equal to the surface potential", _null_bias("limits")),
     ("VI2", r"there is no nulling bias", _null_bias("limits")),
+    ("VI2", r"close to nulling potential, the phase changes by 180", _domains("pure_em")),
+    ("VI2", r"opposite for these two grains", _null_bias("formula")),
+    ("VI3", r"virtually bias independent", _null_bias("bias")),
+    ("VI1", r"frequency independent nulling bias is", _null_bias("limits")),
     ("VI3", r"strongly bias dependent for a good tip", _null_bias("bias")),
     ("VI4", r"coincide for a given sample", same_as("eq10.resonances_independent")),
     ("VI4", r"resonant frequencies of a cantilever in contact with the surface are identical",
