@@ -24,7 +24,7 @@ def test_every_reference_and_statement_has_an_id_and_a_verdict():
     refs, stmts = T.references(), statements.statements()
     assert len(refs) >= 100 and len(stmts) >= 90 and len(T.symbols()) >= 50
     ids = [i for i in core.REGISTRY if i.startswith(("xref.", "text.", "symbol.", "structure."))]
-    assert len(ids) == len(set(ids)) == len(refs) + len(stmts) + len(T.symbols()) + 3 + len(T.captions())
+    assert len(ids) == len(set(ids)) == len(refs) + len(stmts) + len(T.symbols()) + 4 + len(T.captions())
     kinds = {r.kind for r in refs}
     assert kinds == {"equation", "figure", "section", "table"}
 

@@ -147,3 +147,9 @@ def test_errata_show_printed_and_correct_forms_as_latex(all_verdicts):
     assert block.count("$$") >= 4 and r"\sinh" in block and "**" not in block.replace("**Printed:**", "").replace(
         "**Correct:**", "").replace("**Proof:**", "")
     assert "sign convention" in block.lower()
+
+
+def test_the_book_orders_the_one_set_of_verdict_names():
+    from pfmdyn import book
+    assert book.VERDICT_ORDER == tuple(o.value for o in core.Outcome)
+    assert core.Outcome("erratum") == "erratum" and str(core.Outcome.SIGN) == "holds_up_to_sign_convention"

@@ -544,6 +544,28 @@ def check_units():
     return HOLDS, "every value x ± y in the text carries a unit", ""
 
 
+def check_citations():
+    """References are numbered in order of first citation; an author named before a citation
+    appears in the entry (for the entries the transcription contains)."""
+    cites = T.citations()
+    first: list[int] = []
+    for _, numbers, _ in cites:
+        first += [n for n in numbers if n not in first]
+    out_of_order = [(a, b) for a, b in zip(first, first[1:]) if b < a]
+    bib = T.bibliography()
+    named, wrong = [], []
+    for tag, numbers, before in cites:
+        m = re.search(r"(?:by |et al\.?|\b)([A-Z][a-z]+)(?: et al\.?)?\.?\s*$", before)
+        if m and len(numbers) == 1 and numbers[0] in bib and m.group(1) not in ("Note", "Finally", "Here"):
+            (named if m.group(1) in bib[numbers[0]] else wrong).append(f"{m.group(1)} [{numbers[0]}]")
+    evidence = (f"{len(cites)} citations of references 1-{max(first)}; first citations in order: "
+                f"{'yes' if not out_of_order else out_of_order}; authors found in their entries: {named or 'none checkable'}")
+    if out_of_order or wrong:
+        return ERRATUM, evidence + (f"; authors not in the cited entry: {wrong}" if wrong else ""), \
+            "number the references in order of first citation" if out_of_order else "cite the entry of that author"
+    return HOLDS, evidence, ""
+
+
 # --- registration ----------------------------------------------------------------------------------
 
 def _where(tag: str) -> str:
@@ -572,6 +594,8 @@ def register() -> int:
         n += 1
     claim("structure.sections", "section headings", "section numbers I-VI, Conclusions",
           chapter=CHAPTER, kind="cross-reference")(check_section_numbering)
+    claim("structure.citations", "reference list", "references numbered by first citation; named authors",
+          chapter=CHAPTER, kind="cross-reference")(check_citations)
     claim("structure.units", "values with uncertainties", "x ± y carries a unit",
           chapter=CHAPTER, kind="cross-reference")(check_units)
     claim("structure.equations", "equation labels", "equations (1)-(41) with sub-labels",
@@ -579,7 +603,7 @@ def register() -> int:
     for number in T.captions():
         claim(f"structure.caption{number}", f"caption of Fig. {number}", "panel groups of the caption",
               chapter=CHAPTER, kind="cross-reference")(lambda k=number: check_caption_panels(k))
-    return n + 3 + len(T.captions())
+    return n + 4 + len(T.captions())
 
 
 register()

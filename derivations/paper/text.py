@@ -365,6 +365,32 @@ def references() -> tuple[Reference, ...]:
     return tuple(out)
 
 
+# --- citations -----------------------------------------------------------------------------------------
+
+@lru_cache(maxsize=1)
+def bibliography() -> dict[int, str]:
+    """Reference number -> entry, for the entries the transcription contains."""
+    path = paper_path()
+    if path is None:
+        return {}
+    return {int(m.group(1)): m.group(2) for m in
+            re.finditer(r"^\[(\d+)\]\s+(.+)$", path.read_text(encoding="utf-8"), re.M)}
+
+
+@lru_cache(maxsize=1)
+def citations() -> tuple[tuple[str, tuple[int, ...], str], ...]:
+    """(section tag, reference numbers, words just before) for every bracketed citation."""
+    out = []
+    for sec in text_sections():
+        for m in re.finditer(r"\[(\d+(?:\s*[,\-–]\s*\d+)*)\]", sec.body):
+            numbers = []
+            for part in re.split(r"\s*,\s*", m.group(1)):
+                lo, _, hi = part.partition("-")
+                numbers += list(range(int(lo), int(hi or lo) + 1))
+            out.append((sec.tag, tuple(numbers), sec.body[max(0, m.start() - 60):m.start()]))
+    return tuple(out)
+
+
 # --- symbols -----------------------------------------------------------------------------------------
 
 _INLINE = re.compile(r"\$\$.+?\$\$|\$[^$]+\$", re.S)
