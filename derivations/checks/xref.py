@@ -168,7 +168,12 @@ def check_section(ref: T.Reference):
         if re.search(r"\b(?:given|derived|described by)\s+in\b|\bis given in\b", clause) and "$$" not in sec.body:
             out_verdict = ERRATUM
             why += f"; the sentence says the result is given there, but Section {target} displays no equation"
-            with_eqs = [n for n in sorted(scores, key=scores.get, reverse=True) if "$$" in T.section(n).body]
+            # The drives the sentence lists must all appear in the section's displayed equations.
+            needed = {tok for word, tok in (("electromechanical", "d_1"), ("non-local", "q_0"),
+                                            ("local", "f_0")) if word in clause}
+            with_eqs = [n for n in sorted(scores, key=scores.get, reverse=True)
+                        if all(tok in " ".join(re.findall(r"\$\$.*?\$\$", T.section(n).body, re.S)) for tok in needed)
+                        and "$$" in T.section(n).body]
             fixes.append(f"Section {with_eqs[0]}" if with_eqs else "a section with equations")
         elif re.search(r"experimental", clause) and not _cites_data(sec.tag):
             out_verdict = ERRATUM
