@@ -114,7 +114,9 @@ function pfmMeasure() {
               document.querySelector('main') || document.body;
     var widths = Array.from(document.querySelectorAll('mjx-container mjx-math')).map(function (m) {
       return m.getBoundingClientRect().width; });
-    pfmReport({column: col.getBoundingClientRect().width, widths: widths});
+    var tables = Array.from(document.querySelectorAll('table')).map(function (t) {
+      return t.getBoundingClientRect().width; });
+    pfmReport({column: col.getBoundingClientRect().width, widths: widths, tables: tables});
   } catch (e) { pfmReport({error: String(e)}); }
 }
 // MathJax's startup promise does not settle under --virtual-time-budget: wait instead until the
@@ -146,10 +148,10 @@ def _probe(html_dir: Path, page: str, tmp_path: Path) -> tuple[str, dict]:
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
-@pytest.mark.parametrize("page", ("errata", "limits") + FAMILY_CHAPTERS)
+@pytest.mark.parametrize("page", ("errata", "limits", "audit", "verdicts") + FAMILY_CHAPTERS)
 def test_equations_typeset_and_fit_the_column(built, tmp_path, page):
     """Offline, at 1300 px: MathJax output present, no raw TeX or SymPy powers left in the
-    text, and no typeset equation wider than the text column."""
+    text, and no typeset equation or table wider than the text column (nothing cut off)."""
     _, html_dir, _ = built
     dom, sizes = _probe(html_dir, page, tmp_path)
     assert dom.count("<mjx-container") >= 1, f"MathJax did not typeset {page}.html"
@@ -159,3 +161,5 @@ def test_equations_typeset_and_fit_the_column(built, tmp_path, page):
         assert raw not in text, f"raw {raw!r} left in the text of {page}.html"
     too_wide = [round(w) for w in sizes["widths"] if w > sizes["column"] + 1]
     assert not too_wide, f"{page}.html: equations {too_wide} px wide in a {sizes['column']:.0f} px column"
+    wide_tables = [round(w) for w in sizes["tables"] if w > sizes["column"] + 1]
+    assert not wide_tables, f"{page}.html: tables {wide_tables} px wide in a {sizes['column']:.0f} px column"
