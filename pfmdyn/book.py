@@ -182,7 +182,7 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
                 if link:
                     cell = f'<a href="verdicts.html#{anchor(v["id"])}">{cell}</a>'
             elif c == "where":
-                cell = html.escape(v.get("where") or "")
+                cell = text_cell(v.get("where") or "")
                 if link == "anchor":
                     cell = f'<span id="{anchor(v["id"])}"></span>{cell}' 
             elif c == "chapter":

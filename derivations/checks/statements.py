@@ -43,7 +43,7 @@ def same_as(*claim_ids: str) -> Callable:
         verdicts = [_registry(i) for i in claim_ids]
         worst = next((v for v in verdicts if v.verdict != HOLDS), verdicts[0])
         return worst.verdict, "same statement as " + "; ".join(
-            f"{v.id} ({v.verdict}): {v.evidence[:200]}" for v in verdicts), worst.correct
+            f"{v.id} ({v.verdict}): {T.clip(v.evidence, 200)}" for v in verdicts), worst.correct
     return decide
 
 
@@ -555,7 +555,7 @@ def register() -> int:
     if not T.sections():
         return 0
     for cid, number, sentence, decide in statements():
-        claim(cid, number, sentence[:300], chapter=CHAPTER, kind="statement")(decide)
+        claim(cid, number, T.clip(sentence, 300), chapter=CHAPTER, kind="statement")(decide)
     return len(statements())
 
 

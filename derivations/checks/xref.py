@@ -334,7 +334,8 @@ def check_equation(ref: T.Reference):
                 if term not in tex:
                     problems.append(f"Eq. ({target}) does not contain {term}")
                     fixes.append(f"the boundary condition on {term}")
-            notes.append(f"Eq. ({target}) is a boundary condition: ${tex[:60]}$")
+            terms = sorted(set(re.findall(r"u_0'*\([L0]\)", tex)))
+            notes.append(f"Eq. ({target}) is a boundary condition on {', '.join(terms)}")
         notes.append(f"Eq. ({target}) printed in Section {T.equation_section(labels[0])}")
     if problems:
         return ERRATUM, "; ".join(problems), "; ".join(dict.fromkeys(fixes))
@@ -460,11 +461,11 @@ def check_symbol(symbol: str):
                 f"from {', '.join('$' + n + '$ (used ' + str(T.symbols()[n].uses) + ' times)' for n in near)}",
                 f"${near[0]}$")
     if use.definition:
-        return HOLDS, f"defined: \"{use.definition[:160]}\"", ""
+        return HOLDS, f"defined: \"{T.clip(use.definition, 160)}\"", ""
     condition = _condition_before(symbol) if use.uses == 1 else None
     if condition:
         return (ERRATUM, f"${symbol}$ is used once and never defined; the sentence before states the condition "
-                f"on ${_split(symbol)[0]}$: \"{condition[:120]}\"", f"${_split(symbol)[0]}$")
+                f"on ${_split(symbol)[0]}$: \"{T.clip(condition, 120)}\"", f"${_split(symbol)[0]}$")
     if use.uses >= 2:
         return HOLDS, f"used {use.uses} times with one meaning, first in Section {use.section}; not a variant of another symbol", ""
     return UNDECIDABLE, f"used once (Section {use.section}) without an explicit definition; no symbol it could be a misprint of", ""
@@ -588,7 +589,7 @@ def register() -> int:
     for ref in T.references():
         counters[ref.section] += 1
         cid = f"xref.{ref.section}.{counters[ref.section]}"
-        claim(cid, f"{_where(ref.section)}, {ref.text}", f"{ref.kind} reference: {ref.sentence[:200]}",
+        claim(cid, f"{_where(ref.section)}, {ref.text}", f"{ref.kind} reference: {T.clip(ref.sentence, 200)}",
               chapter=CHAPTER, kind="cross-reference")(lambda r=ref: runners[r.kind](r))
         n += 1
     sym_counters: Counter = Counter()

@@ -149,6 +149,25 @@ def text_sections() -> list[Section]:
     return [s for s in sections() if s.number not in ("table1", "captions")]
 
 
+def clip(text: str, n: int) -> str:
+    """``text`` cut to about ``n`` characters without leaving a formula open (``$`` or ``$$``).
+
+    >>> clip("a $x + y$ b $$z$$ c", 6)
+    'a …'
+    >>> clip("short", 10)
+    'short'
+    """
+    if len(text) <= n:
+        return text
+    cut = text[:n]
+    spans = list(re.finditer(r"\$\$.+?\$\$|\$[^$]+\$", text))
+    for m in spans:
+        if m.start() < n < m.end():      # the cut falls inside a formula: stop before it
+            cut = text[:m.start()]
+            break
+    return cut.rstrip() + " …"
+
+
 # --- equations ------------------------------------------------------------------------------------
 
 _DISPLAY = re.compile(r"\$\$(.+?)\$\$", re.S)
