@@ -11,6 +11,8 @@
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import mpmath as mp
 import sympy as sp
 
@@ -37,9 +39,15 @@ def param_limit(expr: sp.Expr, sym: sp.Symbol, to) -> sp.Expr:
     return sp.cancel(pn.LC() / pd.LC())
 
 
+@lru_cache(maxsize=None)
+def _series(order: int) -> dict:
+    """Taylor polynomials of cos, sin, cosh, sinh in beta (computed once per order)."""
+    return {f(beta): sp.series(f(beta), beta, 0, order).removeO() for f in (sp.cos, sp.sin, sp.cosh, sp.sinh)}
+
+
 def _taylor(expr: sp.Expr, order: int) -> sp.Expr:
-    series = {f: sp.series(f(beta), beta, 0, order).removeO() for f in (sp.cos, sp.sin, sp.cosh, sp.sinh)}
-    e = sp.expand(expr.subs({f(beta): series[f] for f in series}))
+    series = _series(order)
+    e = sp.expand(expr.subs(series))
     return sum(e.coeff(beta, n) * beta**n for n in range(order))
 
 

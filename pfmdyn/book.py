@@ -28,39 +28,18 @@ VERDICTS_ENV = "PFMDYN_BOOK_VERDICTS"
 """Path of the verdicts JSON written by ``pfmdyn book`` for the chapters to read."""
 
 VERDICT_ORDER = ("holds", "holds_up_to_sign_convention", "erratum", "undecidable")
-
-# Chapter (book page) that discusses each claim, by claim-id prefix; the first match wins.
-CHAPTERS: tuple[tuple[str, str], ...] = (
-    ("eq2.", "model"), ("k.", "model"), ("A.", "model"),
-    ("eq5.", "elastic_contact"), ("eq6", "elastic_contact"), ("eq7.", "elastic_contact"),
-    ("eq8.", "elastic_contact"), ("eq9.", "elastic_contact"), ("eq10.", "elastic_contact"),
-    ("contact.", "elastic_contact"),
-    ("eq11", "limits"), ("eq12", "limits"), ("eq13", "limits"), ("eq14", "limits"),
-    ("eq15", "limits"), ("eq16", "limits"), ("eq17", "limits"), ("eq18", "limits"),
-    ("eq19.", "pinned"), ("eq20.roots", "roots"), ("eq20.", "pinned"),
-    ("eq22.roots", "roots"), ("eq22.contact_to_free_ratio", "roots"), ("eq22.", "free_end"),
-    ("eq23.", "frictionless"), ("eq24.", "frictionless"),
-    ("eq26.", "sliding_friction"),
-    ("eq28.resonances_increase_with_k1", "roots"),
-    ("eq27.", "indentation"), ("eq28.", "indentation"), ("eq29.", "indentation"),
-    ("eq35.roots", "roots"), ("eq30.", "torsion"), ("eq33.", "torsion"), ("eq35.", "torsion"),
-    ("exp.", "roots"), ("table1.", "roots"),
-    ("eq36.", "domains"), ("fig6.", "diagrams"), ("fig7.", "diagrams"), ("eq39.", "domains"),
-    ("eq40.", "domains"),
-    ("eq41.", "deconvolution"),
-)
+"""The verdict names in display order (the values of ``derivations.checks.core.Outcome``)."""
 
 
 def chapter_of(claim_id: str) -> str | None:
-    """The book page discussing a claim (``None`` if no chapter does).
+    """The book page discussing a claim, as declared by its check (``@claim(..., chapter=...)``).
 
     >>> chapter_of("eq22.roots"), chapter_of("eq22.static"), chapter_of("nope")
     ('roots', 'free_end', None)
     """
-    for prefix, page in CHAPTERS:
-        if claim_id.startswith(prefix):
-            return page
-    return None
+    from .derivations.checks import core
+    check = core.REGISTRY.get(claim_id)
+    return (check.chapter or None) if check else None
 
 
 # --- verdicts, computed once per build -------------------------------------------------------
@@ -123,13 +102,28 @@ def claims(*ids: str) -> list[dict]:
 
 
 def claims_of(page: str) -> list[dict]:
-    """The verdicts a chapter discusses (see :data:`CHAPTERS`), in registry order."""
-    return [v for v in verdicts() if chapter_of(v["id"]) == page]
+    """The verdicts a chapter discusses (declared by ``@claim(..., chapter=page)``), in registry order."""
+    return [v for v in verdicts() if v.get("chapter") == page]
 
 
-def counts() -> Counter:
-    """Number of claims per verdict."""
-    return Counter(v["verdict"] for v in verdicts())
+def counts(kind: str | None = None) -> Counter:
+    """Number of claims per verdict (of one kind: claim, cross-reference, symbol, statement)."""
+    return Counter(v["verdict"] for v in verdicts() if kind is None or v.get("kind", "claim") == kind)
+
+
+def counts_table() -> "HTML":
+    """Verdict counts: the registry's claims, the text audit's references, symbols and statements."""
+    kinds = (("claim", "registry claims"), ("cross-reference", "cross-references"), ("symbol", "symbols"),
+             ("statement", "statements"))
+    per = {kind: counts(kind) for kind, _ in kinds}
+    out = ['<table class="pfm-claims pfm-counts"><thead><tr><th>verdict</th>']
+    out += [f"<th>{label}</th>" for _, label in kinds] + ["<th>total</th></tr></thead><tbody>"]
+    for verdict in VERDICT_ORDER + ("total",):
+        cells = [sum(per[k].values()) if verdict == "total" else per[k][verdict] for k, _ in kinds]
+        head = "total" if verdict == "total" else _badge(verdict)
+        out.append(f"<tr><td>{head}</td>" + "".join(f"<td>{c}</td>" for c in cells) + f"<td>{sum(cells)}</td></tr>")
+    out.append("</tbody></table>")
+    return HTML("".join(out))
 
 
 # --- display helpers for the chapters ---------------------------------------------------------
@@ -152,9 +146,27 @@ class HTML:
         return self.text
 
 
+def anchor(claim_id: str) -> str:
+    """HTML id of a claim's row on the verdicts page.
+
+    >>> anchor("eq22.roots")
+    'claim-eq22-roots'
+    """
+    return "claim-" + "".join(ch if ch.isalnum() else "-" for ch in claim_id)
+
+
+def chapter_table(page: str) -> "HTML":
+    """The verdict table that ends a chapter: its claims, each linked to its full evidence."""
+    return claims_table(claims_of(page), columns=("id", "where", "verdict", "evidence"), link=True)
+
+
 def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "correct"),
-                 link: bool = False) -> HTML:
-    """An HTML table of verdicts; every cell is escaped text."""
+                 link=False) -> HTML:
+    """An HTML table of verdicts; every cell is escaped text.
+
+    ``link=True`` links ids to their row on the verdicts page; ``link="anchor"`` makes this
+    table the target of those links (the verdicts page).
+    """
     heads = {"id": "claim", "where": "where", "printed": "as printed", "verdict": "verdict",
              "evidence": "evidence", "correct": "correct form", "chapter": "chapter"}
     out = ['<table class="pfm-claims"><thead><tr>']
@@ -167,31 +179,71 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
                 cell = _badge(v["verdict"])
             elif c == "id":
                 cell = f"<code>{html.escape(v['id'])}</code>"
+                if link:
+                    cell = f'<a href="verdicts.html#{anchor(v["id"])}">{cell}</a>'
+            elif c == "where":
+                cell = text_cell(v.get("where") or "")
+                if link == "anchor":
+                    cell = f'<span id="{anchor(v["id"])}"></span>{cell}' 
             elif c == "chapter":
-                page = chapter_of(v["id"])
+                page = v.get("chapter") or None
                 cell = f'<a href="{page}.html">{page}</a>' if page and link else html.escape(page or "—")
             else:
-                cell = html.escape(v.get(c) or "")
+                cell = text_cell(v.get(c) or "")
             out.append(f"<td>{cell}</td>")
         out.append("</tr>")
     out.append("</tbody></table>")
     return HTML("".join(out))
 
 
-def errata_list(rows: list[dict]) -> HTML:
-    """One block per erratum: id, where, verdict, then printed / correct / proof / chapter."""
+def text_cell(text: str) -> str:
+    r"""Escaped text for a table cell: ``$...$`` spans become MathJax math, SymPy's ``**`` and
+    ``*`` become ``^`` and a middle dot.
+
+    >>> text_cell("x**2 < $\\frac{a}{b}$")
+    'x^2 &lt; <span class="math notranslate nohighlight">\\(\\frac{a}{b}\\)</span>'
+    """
+    import re
+
+    from .verify import prose
+    parts = re.split(r"(\$\$.+?\$\$|\$[^$]+\$)", text, flags=re.S)
     out = []
+    for part in parts:
+        if len(part) > 4 and part.startswith("$$") and part.endswith("$$"):
+            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[2:-2].strip())}\\)</span>')
+        elif len(part) > 2 and part.startswith("$") and part.endswith("$"):
+            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[1:-1])}\\)</span>')
+        else:
+            out.append(html.escape(prose(part)))
+    return "".join(out)
+
+
+def errata(rows: list[dict]) -> None:
+    """Display each erratum: head, printed and correct forms as typeset math (long ones broken
+    over lines), the proof as one sentence and the decisive expression."""
+    from types import SimpleNamespace
+
+    from IPython.display import Math, display
+
+    from .verify import SIGN_CONVENTION, forms
     for v in rows:
-        page = chapter_of(v["id"])
-        chapter = f'<a href="{page}.html">{page}</a>' if page else "—"
-        out.append(
-            f'<div class="pfm-erratum"><p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
-            f'({html.escape(v["where"])}) {_badge(v["verdict"])}</p><dl>'
-            f'<dt>As printed</dt><dd>{html.escape(v.get("printed") or "")}</dd>'
-            f'<dt>Correct</dt><dd>{html.escape(v.get("correct") or "(see proof)")}</dd>'
-            f'<dt>Proof</dt><dd>{html.escape(v.get("evidence") or "")}</dd>'
-            f'<dt>Chapter</dt><dd>{chapter}</dd></dl></div>')
-    return HTML("".join(out))
+        f = forms(SimpleNamespace(**v))
+        page = v.get("chapter")
+        chapter = f' — <a href="{page}.html">{page}</a>' if page else ""
+        display(HTML(f'<p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
+                     f'({html.escape(v["where"])}) {_badge(v["verdict"])}{chapter}</p>'))
+        for label, key, fallback in (("As printed", "printed", v.get("printed")), ("Correct", "correct", v.get("correct"))):
+            if key in f:
+                display(HTML(f"<p><b>{label}:</b></p>"))
+                for tex in f[key]:
+                    display(Math(tex))
+            else:
+                display(HTML(f"<p><b>{label}:</b> {text_cell(fallback or '(see proof)')}</p>"))
+        display(HTML(f"<p><b>Proof:</b> {text_cell(f['proof'])}.{' Decisive:' if 'decisive' in f else ''}</p>"))
+        if "decisive" in f:
+            display(Math(f["decisive"]))
+        if "sign" in (v.get("evidence") or ""):
+            display(HTML(f"<p><i>Sign convention:</i> {html.escape(SIGN_CONVENTION)}.</p>"))
 
 
 def latex(expr) -> str:
@@ -208,16 +260,27 @@ def latex(expr) -> str:
 
 
 def math(lhs: str, expr):
-    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string)."""
+    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string); a long
+    expression is broken over lines that fit the text column."""
     from IPython.display import Math
-    body = latex(expr)
-    return Math(f"{lhs} = {body}" if lhs else body)
+    if isinstance(expr, str):
+        return Math(f"{lhs} = {expr}" if lhs else expr)
+    return aligned([(lhs, expr)])
 
 
 def aligned(rows, *, relation: str = "="):
-    """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math."""
+    """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math, each broken
+    over lines where it would be wider than the text column (:func:`pfmdyn.verify.latex_rows`)."""
     from IPython.display import Math
-    lines = [f"{latex(lhs)} &{relation} {latex(rhs)}" for lhs, rhs in rows]
+
+    from .verify import latex_rows
+    lines = []
+    for lhs, rhs in rows:
+        lhs_tex = latex(lhs)
+        if isinstance(rhs, str):
+            lines.append(f"{lhs_tex} &{relation} {rhs}")
+        else:
+            lines += latex_rows(lhs_tex, rhs, relation=relation, printer=latex)
     return Math(r"\begin{aligned}" + r" \\[3pt] ".join(lines) + r"\end{aligned}")
 
 
@@ -264,11 +327,6 @@ def book_dir() -> Path:
     return here
 
 
-def add_arguments(parser) -> None:
-    parser.add_argument("--out", metavar="DIR", default=None,
-                        help="build directory; the HTML goes to DIR/html (default: book/_build)")
-
-
 def build(out: Path, *, quiet: bool = False) -> int:
     """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success)."""
     try:
@@ -301,16 +359,3 @@ def build(out: Path, *, quiet: bool = False) -> int:
     if isinstance(result, BaseException):
         return 1
     return int(result or 0)
-
-
-def run(args) -> int:
-    out = Path(args.out) if args.out else book_dir() / "_build"
-    t0 = time.perf_counter()
-    status = build(out)
-    elapsed = time.perf_counter() - t0
-    index = out.resolve() / "html" / "index.html"
-    if status != 0:
-        print(f"pfmdyn book: build failed (status {status}) after {elapsed:.0f} s", file=sys.stderr)
-        return 1
-    print(f"pfmdyn book: built in {elapsed:.0f} s; open {index}")
-    return 0

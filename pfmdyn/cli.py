@@ -15,10 +15,10 @@ from .errors import UserError
 
 # subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "verify": ("pfmdyn.verify", "derive every result and give each claim of the paper a verdict"),
+    "verify": ("pfmdyn.commands.verify", "derive every result and give each claim of the paper a verdict"),
     "codegen": ("pfmdyn.commands.codegen", "write generated/ from derivations/ (--check: fail if stale)"),
     "deconvolve": ("pfmdyn.commands.deconvolve", "separate electrostatic and electromechanical response in frequency-bias data"),
-    "book": ("pfmdyn.book", "build the verified book"),
+    "book": ("pfmdyn.commands.book", "build the verified book"),
     "discrepancy": ("pfmdyn.commands.discrepancy", "find where model and measurement disagree and name the missing effect"),
     "roots": ("pfmdyn.commands.roots", "certified resonance roots of a family to any number of digits"),
     "branches": ("pfmdyn.commands.branches", "resonance branches against contact stiffness (CSV + PNG)"),

@@ -12,7 +12,7 @@ from pfmdyn import cli, verify
 from pfmdyn.derivations.checks import core
 from pfmdyn.derivations.paper import printed as P
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "claims.yaml"
+SHARED = verify.shared_claims_path() or Path("/nonexistent/claims.yaml")
 
 
 def _verdict(claim_id):
@@ -81,7 +81,7 @@ def test_a_sign_flip_without_contradicting_anchor_is_a_convention():
 
 
 def test_gate_exits_nonzero_when_a_verdict_differs_from_the_record(tmp_path, monkeypatch, capsys):
-    record = {**verify.load_recorded(), "eq6.Av": core.ERRATUM}
+    record = {**verify.load_recorded(), "eq6.Av": str(core.ERRATUM)}
     path = tmp_path / "recorded.yaml"
     path.write_text(yaml.safe_dump(record))
     monkeypatch.setattr(verify, "recorded_path", lambda: path)
@@ -106,3 +106,50 @@ def test_json_output_and_unknown_id(tmp_path, capsys):
     assert cli.main(["verify", "--only", "no.such.claim", "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown claim id" in err[0]
+
+
+# --- library: no files unless asked; summary; LaTeX errata ---------------------------------------
+
+def test_verify_writes_no_file_unless_asked(tmp_path, monkeypatch):
+    from pfmdyn import generated
+    errata = Path(generated.__file__).parent / "errata.md"
+    before = (errata.stat().st_mtime_ns, verify.recorded_path().stat().st_mtime_ns)
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["verify", "--only", "eq6.Av", "--quiet"]) == 0
+    assert (errata.stat().st_mtime_ns, verify.recorded_path().stat().st_mtime_ns) == before
+    assert list(tmp_path.iterdir()) == []
+    assert cli.main(["verify", "--only", "eq22.free_response", "--quiet", "--errata", str(tmp_path / "e.md")]) == 0
+    assert "\\theta_f" in (tmp_path / "e.md").read_text()
+
+
+def test_summary_line_counts_each_kind(all_verdicts):
+    line = verify.summary(all_verdicts)
+    n = verify.counts(all_verdicts)["n"]
+    assert line.startswith(f"{len(all_verdicts)} claims: ")
+    assert f"registry {n['claim']}" in line
+    if n["cross-reference"]:
+        assert f"{n['cross-reference']} references" in line and f"{n['statement']} statements" in line
+
+
+def test_long_expressions_are_broken_to_the_line_width():
+    x = sp.Symbol("x")
+    long = sum(sp.cos(i * x) * x**i for i in range(1, 25)) / (1 + sum(sp.sinh(i * x) for i in range(1, 20)))
+    tex = verify.display_latex(r"\theta", long)
+    assert tex.startswith(r"\begin{aligned}")
+    rows = tex.splitlines()[1:-1]
+    assert len(rows) > 4 and all(verify._visible(r) <= verify.LINE_WIDTH + 8 for r in rows)
+    assert verify.display_latex("y", x + 1) == "y = x + 1"
+
+
+def test_errata_show_printed_and_correct_forms_as_latex(all_verdicts):
+    text = verify.render_errata(all_verdicts)
+    block = text.split("`eq22.free_response`")[1].split("\n## ")[0]
+    assert block.count("$$") >= 4 and r"\sinh" in block and "**" not in block.replace("**Printed:**", "").replace(
+        "**Correct:**", "").replace("**Proof:**", "")
+    assert "sign convention" in block.lower()
+
+
+def test_the_book_orders_the_one_set_of_verdict_names():
+    from pfmdyn import book
+    assert book.VERDICT_ORDER == tuple(o.value for o in core.Outcome)
+    assert core.Outcome("erratum") == "erratum" and str(core.Outcome.SIGN) == "holds_up_to_sign_convention"

@@ -8,19 +8,36 @@ trigonometric normal forms, see :func:`derivations.beam.trig_normal_form`) and b
 from __future__ import annotations
 
 import random
+import re
 from dataclasses import dataclass, field
+from functools import lru_cache
+from enum import Enum
 from typing import Callable, Iterable
 
 import mpmath as mp
 import sympy as sp
 
 from ..beam import _FROM_ATOMS, _TO_ATOMS, beta, trig_normal_form
+from ..paper.convention import SIGN_CONVENTION
 
-HOLDS = "holds"
-SIGN = "holds_up_to_sign_convention"
-ERRATUM = "erratum"
-UNDECIDABLE = "undecidable"
-VERDICTS = (HOLDS, SIGN, ERRATUM, UNDECIDABLE)
+# Evidence that turns on the sign of f0, q0 or d1 (an overall sign flip, a ratio -1 or -8).
+SIGN_DEPENDENT = re.compile(r"overall sign|opposite (?:sign|directions)|exact -1\b|ratio -\d|sign opposite")
+
+
+class Outcome(str, Enum):
+    """The four verdicts a check can give (compare equal to their names as strings)."""
+
+    HOLDS = "holds"
+    SIGN = "holds_up_to_sign_convention"
+    ERRATUM = "erratum"
+    UNDECIDABLE = "undecidable"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+HOLDS, SIGN, ERRATUM, UNDECIDABLE = Outcome.HOLDS, Outcome.SIGN, Outcome.ERRATUM, Outcome.UNDECIDABLE
+VERDICTS = tuple(Outcome)
 
 
 @dataclass(frozen=True)
@@ -33,10 +50,14 @@ class Verdict:
     evidence: str
     correct: str = ""
     printed: str = ""
+    chapter: str = ""
+    kind: str = "claim"
+    latex: dict = field(default_factory=dict, compare=False)
 
     def as_dict(self) -> dict:
-        return {"id": self.id, "where": self.where, "verdict": self.verdict,
-                "correct": self.correct, "evidence": self.evidence, "printed": self.printed}
+        return {"id": self.id, "where": self.where, "verdict": str(self.verdict), "kind": self.kind,
+                "chapter": self.chapter, "correct": self.correct, "evidence": self.evidence,
+                "printed": self.printed, "latex": self.latex}
 
 
 @dataclass(frozen=True)
@@ -44,27 +65,54 @@ class Check:
     id: str
     where: str
     printed: str
-    run: Callable[[], tuple[str, str, str]]
+    run: Callable[[], tuple]
+    chapter: str = ""
+    kind: str = "claim"
 
 
 REGISTRY: dict[str, Check] = {}
 
 
-def claim(claim_id: str, where: str, printed: str):
-    """Register a check; the function returns ``(verdict, evidence, correct)``."""
-    def wrap(fn: Callable[[], tuple[str, str, str]]):
+def claim(claim_id: str, where: str, printed: str, *, chapter: str = "", kind: str = "claim"):
+    """Register a check; the function returns ``(verdict, evidence, correct)`` and optionally a
+    fourth item, a dict of LaTeX forms (``printed``, ``correct``, ``decisive``) for the errata.
+
+    ``chapter`` names the book page that discusses the claim; ``kind`` is ``claim`` for the
+    shared registry's ids, ``cross-reference``, ``symbol`` or ``statement`` for the text audit.
+    """
+    def wrap(fn: Callable[[], tuple]):
         if claim_id in REGISTRY:
             raise ValueError(f"claim {claim_id!r} registered twice")
-        REGISTRY[claim_id] = Check(claim_id, where, printed, fn)
+        REGISTRY[claim_id] = Check(claim_id, where, printed, fn, chapter, kind)
         return fn
     return wrap
 
 
+_RESULTS: dict[str, "Verdict"] = {}
+
+
+def clear_results() -> None:
+    """Forget the verdicts computed so far (a new run starts from scratch)."""
+    _RESULTS.clear()
+
+
+def result(claim_id: str) -> "Verdict":
+    """The verdict of a registered claim, computed once per run (statements reuse registry checks)."""
+    if claim_id not in _RESULTS:
+        _RESULTS[claim_id] = run_check(REGISTRY[claim_id])
+    return _RESULTS[claim_id]
+
+
 def run_check(check: Check) -> Verdict:
-    verdict, evidence, correct = check.run()
+    result = check.run()
+    verdict, evidence, correct = result[:3]
+    latex = result[3] if len(result) > 3 else {}
     if verdict not in VERDICTS:
         raise ValueError(f"{check.id}: unknown verdict {verdict!r}")
-    return Verdict(check.id, check.where, verdict, evidence, correct, check.printed)
+    if SIGN_DEPENDENT.search(evidence) and "sign convention:" not in evidence and not evidence.startswith("same zeros"):
+        evidence = f"{evidence}; sign convention: {SIGN_CONVENTION}"
+    return Verdict(check.id, check.where, Outcome(verdict), evidence, correct, check.printed,
+                   check.chapter, check.kind, latex)
 
 
 # --- comparing expressions -----------------------------------------------------------------
@@ -93,9 +141,18 @@ def random_points(symbols: Iterable[sp.Symbol], n: int = N_POINTS, seed: int = 2
 
 def evaluate(expr: sp.Expr, point: dict) -> mp.mpc:
     """Evaluate with ``DIGITS`` significant digits (mpmath, exact inputs)."""
-    with mp.workdps(DIGITS + 10):
-        f = sp.lambdify(list(point), expr, "mpmath")
-        return mp.mpmathify(f(*point.values()))
+    return _evaluator(sp.sympify(expr), tuple(point))(point)
+
+
+@lru_cache(maxsize=4096)
+def _evaluator(expr: sp.Expr, symbols: tuple):
+    """One mpmath function per expression and symbol order (lambdify is the slow step)."""
+    f = sp.lambdify(list(symbols), expr, "mpmath")
+
+    def at(point: dict) -> mp.mpc:
+        with mp.workdps(DIGITS + 10):
+            return mp.mpmathify(f(*(point[s] for s in symbols)))
+    return at
 
 
 @dataclass

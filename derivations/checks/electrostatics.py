@@ -26,7 +26,7 @@ def nonlocal_height() -> sp.Expr:
     return sp.simplify((2 * L / 3 * theta).subs(P.S_area, L * P.w_c))
 
 
-@claim("eq36.q0", "IV.1", "F_cap = eps0 S dV^2/(2 H^2); q0 = eps0 S V_ac dV/(2 L H^2)")
+@claim("eq36.q0", "IV.1", "F_cap = eps0 S dV^2/(2 H^2); q0 = eps0 S V_ac dV/(2 L H^2)", chapter="domains")
 def _q0():
     derived = q0_first_harmonic()
     cmp = compare(P.q0_cap, derived)
@@ -34,7 +34,7 @@ def _q0():
     return (HOLDS, evidence, "") if cmp.is_(1) else (ERRATUM, evidence, f"q0 = {derived}")
 
 
-@claim("eq36.A_nl", "IV.1", "A_nl = -L w eps0 V_ac dV/(48 k H^2)")
+@claim("eq36.A_nl", "IV.1", "A_nl = -L w eps0 V_ac dV/(48 k H^2)", chapter="domains")
 def _a_nl():
     derived = nonlocal_height()
     cmp = compare(P.A_nl, derived)
@@ -44,7 +44,7 @@ def _a_nl():
     return (HOLDS, evidence, "") if cmp.is_(1) else (ERRATUM, evidence, f"A_nl = {derived}")
 
 
-@claim("eq36.PR", "IV.1, Eq. 36", "PR = d_eff + L w eps0 V_ac dV/(48 k H^2)")
+@claim("eq36.PR", "IV.1, Eq. 36", "PR = d_eff + L w eps0 V_ac dV/(48 k H^2)", chapter="domains")
 def _pr():
     derived = sp.simplify(nonlocal_height() / P.V_ac)          # PR = A / V_ac
     cmp = compare(P.PR_eq36_extra, derived)
@@ -53,7 +53,7 @@ def _pr():
     return (HOLDS, evidence, "") if cmp.is_(1) else (ERRATUM, evidence, f"PR = d_eff + ({derived})")
 
 
-@claim("eq36.spring_constant_condition", "IV.1", "k >> L w eps0 dV/(48 d_eff H^2) = 0.55 N/m for the printed inputs")
+@claim("eq36.spring_constant_condition", "IV.1", "k >> L w eps0 dV/(48 d_eff H^2) = 0.55 N/m for the printed inputs", chapter="domains")
 def _keff():
     values = {key: mp.mpf(v) for key, v in P.KEFF_INPUTS.items()}
     eps0 = mp.mpf("8.8541878128e-12")
@@ -87,7 +87,7 @@ def _crossover_bias(cantilever: str, model) -> mp.mpf:
     return mp.mpf(str(sp.N(ratio.subs(v), 20)))
 
 
-@claim("fig6.crossover_scales_with_k", "IV.2, Fig. 6", "low-frequency crossover bias (EM vs non-local) proportional to k")
+@claim("fig6.crossover_scales_with_k", "IV.2, Fig. 6", "low-frequency crossover bias (EM vs non-local) proportional to k", chapter="diagrams")
 def _crossover():
     sol = frictionless.solve()
     static = {d: low_frequency(sol.theta(d)) for d in (d1, q0)}
@@ -108,7 +108,7 @@ def _crossover():
     return HOLDS if ok else ERRATUM, evidence, ""
 
 
-@claim("fig6.resonances_keep_ratio", "IV.2, Fig. 6", "anti-resonances enhance the non-local share; resonances leave the ratio unchanged")
+@claim("fig6.resonances_keep_ratio", "IV.2, Fig. 6", "anti-resonances enhance the non-local share; resonances leave the ratio unchanged", chapter="diagrams")
 def _keep_ratio():
     sol = frictionless.solve()
     share = sp.cancel(sol.theta(d1) * d1 / (sol.theta(d1) * d1 + sol.theta(q0) * q0))
@@ -123,7 +123,7 @@ def _keep_ratio():
     return HOLDS if ok else ERRATUM, evidence, ""
 
 
-@claim("fig6.high_frequency_em", "IV.2, Fig. 6", "the electromechanical share grows at high frequency")
+@claim("fig6.high_frequency_em", "IV.2, Fig. 6", "the electromechanical share grows at high frequency", chapter="diagrams")
 def _high_em():
     sol = frictionless.solve()
     values = {s: v for s, v in _fig_values("B").items()}
@@ -132,7 +132,7 @@ def _high_em():
     return HOLDS if p > 0.25 else ERRATUM, evidence, ""
 
 
-@claim("fig7.local_boundary_frequency_independent", "IV.2, Fig. 7", "local-electrostatic vs EM boundary independent of frequency")
+@claim("fig7.local_boundary_frequency_independent", "IV.2, Fig. 7", "local-electrostatic vs EM boundary independent of frequency", chapter="diagrams")
 def _local_boundary():
     ratio = sp.simplify(elastic_contact.transfer()[d1] * d1 / (elastic_contact.transfer()[f0] * f0))
     return (HOLDS if not ratio.has(beta) else ERRATUM,
@@ -140,7 +140,7 @@ def _local_boundary():
             f"|d1| k1 = |f0|, free of frequency", "")
 
 
-@claim("fig7.local_force_value", "IV.2 and caption of Fig. 7", "Fig. 7: f = 14 and 0.7 N/V; text: 14 nN/V")
+@claim("fig7.local_force_value", "IV.2 and caption of Fig. 7", "Fig. 7: f = 14 and 0.7 N/V; text: 14 nN/V", chapter="diagrams")
 def _local_force():
     k1v, d = mp.mpf(P.CONTACT_K1), mp.mpf(P.D_EFF_FIG)
     text = mp.mpf(P.LOCAL_FORCE_TEXT) / k1v
@@ -152,7 +152,7 @@ def _local_force():
     return (HOLDS if consistent else ERRATUM, evidence, "" if consistent else "f = 14 nN/V and 0.7 nN/V in the caption of Fig. 7")
 
 
-@claim("fig6.model_reference", "IV.2, Fig. 6 (text)", "Fig. 6 (EM and non-local parts) is computed from Eq. (28) with f = 0")
+@claim("fig6.model_reference", "IV.2, Fig. 6 (text)", "Fig. 6 (EM and non-local parts) is computed from Eq. (28) with f = 0", chapter="diagrams")
 def _fig6_reference():
     printed_has_load = P.theta_indentation.has(q0)
     derived_has_load = q0 in indentation.solve().slope
@@ -168,7 +168,7 @@ def _fig6_reference():
 # --- domain contrast ----------------------------------------------------------------------------
 
 
-@claim("eq39.amplitudes", "IV.3, Eqs. 37-39", "|PR+-| = sqrt(d_eff^2 + d_el^2 +- d_eff d_el cos(phi))")
+@claim("eq39.amplitudes", "IV.3, Eqs. 37-39", "|PR+-| = sqrt(d_eff^2 + d_el^2 +- d_eff d_el cos(phi))", chapter="domains")
 def _amplitudes():
     plus, minus = dc.amplitudes_squared()
     sub = {P.d_eff: dc.d_eff, P.d_el: dc.d_el, P.psi: dc.psi, P.phi: dc.psi}
@@ -180,7 +180,7 @@ def _amplitudes():
     return (HOLDS, evidence, "") if ok else (ERRATUM, evidence, "|PR+-| = sqrt(d_eff^2 + d_el^2 +- 2 d_eff d_el cos psi)")
 
 
-@claim("eq39.phase_shift", "IV.3, Eq. 39", "tan(phi) = 2 d_el (PR- - PR+) sin psi/(d_el^2 (1 - cos 2 psi) + 2 PR+ PR-)")
+@claim("eq39.phase_shift", "IV.3, Eq. 39", "tan(phi) = 2 d_el (PR- - PR+) sin psi/(d_el^2 (1 - cos 2 psi) + 2 PR+ PR-)", chapter="domains")
 def _phase_shift():
     plus, minus = (sp.sqrt(a) for a in dc.amplitudes_squared())
     sub = {P.d_eff: dc.d_eff, P.d_el: dc.d_el, P.psi: dc.psi}
@@ -212,17 +212,17 @@ def _small_limit(small: str, printed_amp, printed_phase, big, tiny):
     return ERRATUM, evidence, f"|PR+-| = {first_order.subs(sp.cos(dc.psi), sp.Symbol('cos(psi)'))} (+- on the second term), Delta phi = {phase}"
 
 
-@claim("eq40.small_electrostatic", "IV.3, Eq. 40", "d_el -> 0: PR+- = d_eff +- d_el cos(phi), Delta phi = pi - sin(2 psi) d_el^2/d_eff^2")
+@claim("eq40.small_electrostatic", "IV.3, Eq. 40", "d_el -> 0: PR+- = d_eff +- d_el cos(phi), Delta phi = pi - sin(2 psi) d_el^2/d_eff^2", chapter="domains")
 def _small_el():
     return _small_limit("electrostatic", P.small_el_amp, P.small_el_phase, dc.d_eff, dc.d_el)
 
 
-@claim("eq40.small_piezo", "IV.3", "d_eff -> 0: PR+- = d_el +- d_eff cos(phi), Delta phi = 2 sin(2 psi) d_eff/(d_el (cos 2 psi - 3))")
+@claim("eq40.small_piezo", "IV.3", "d_eff -> 0: PR+- = d_el +- d_eff cos(phi), Delta phi = 2 sin(2 psi) d_eff/(d_el (cos 2 psi - 3))", chapter="domains")
 def _small_piezo():
     return _small_limit("piezoelectric", P.small_piezo_amp, P.small_piezo_phase, dc.d_el, dc.d_eff)
 
 
-@claim("eq41.deconvolution", "VI.4, Eq. 41", "fit y = b + c V per frequency: G_elec = c, d_eff = b + c V_surf")
+@claim("eq41.deconvolution", "VI.4, Eq. 41", "fit y = b + c V per frequency: G_elec = c, d_eff = b + c V_surf", chapter="deconvolution")
 def _eq41():
     slope, intercept = dc.linear_fit_in_bias()
     d, G, Vs = sp.symbols("d G V_surf", real=True)

@@ -29,7 +29,7 @@ def _equation_verdict(printed, derived, anchors=None, convention=""):
     return ERRATUM, cmp.summary(), correct
 
 
-@claim("eq2.frequency_domain", "III.2, Eqs. 1-2", "u0'''' = kappa^4 u0 + q0/EI, kappa^4 = w^2 rho S_c/EI")
+@claim("eq2.frequency_domain", "III.2, Eqs. 1-2", "u0'''' = kappa^4 u0 + q0/EI, kappa^4 = w^2 rho S_c/EI", chapter="model")
 def _eq2():
     E_I, rho, S, w, t = sp.symbols("EI rho S_c omega t", positive=True)
     u0 = sp.Function("u0")
@@ -43,7 +43,7 @@ def _eq2():
             f"Eq. 1 with u = u0 e^(iwt), q = q0 e^(iwt), divided by e^(iwt): {sp.sstr(reduced)} = 0", "")
 
 
-@claim("k.from_beam", "III.2", "k = 3EI/L^3 = E w h^3/(4 L^3), I = w h^3/12")
+@claim("k.from_beam", "III.2", "k = 3EI/L^3 = E w h^3/(4 L^3), I = w h^3/12", chapter="model")
 def _k():
     E, I, F, w, h = sp.symbols("E I F w h", positive=True)
     u = sp.Function("u")
@@ -60,7 +60,7 @@ def _k():
             f" = {sp.sstr(rect)} for I = w h^3/12", "")
 
 
-@claim("A.from_theta", "III.2", "A = 2 theta L/3 for a purely vertical displacement")
+@claim("A.from_theta", "III.2", "A = 2 theta L/3 for a purely vertical displacement", chapter="model")
 def _a_from_theta():
     sol = free_end.solve()
     ratio = sp.simplify(low_frequency(sol.tip_deflection(f0)) / low_frequency(sol.theta(f0)))
@@ -71,7 +71,7 @@ def _a_from_theta():
 
 
 @claim("eq5.general_solution", "III.2, Eqs. 3-5",
-       "theta_tot = (A_v d1 + A_l d2 + A_e f0 + A_q q0)/N with BCs Eq. 3a,b and 4a,b")
+       "theta_tot = (A_v d1 + A_l d2 + A_e f0 + A_q q0)/N with BCs Eq. 3a,b and 4a,b", chapter="elastic_contact")
 def _eq5():
     printed = sum(P.ELASTIC[d] * d for d in P.ELASTIC) / P.N
     return _equation_verdict(printed, _total(elastic_contact.solve()))
@@ -87,10 +87,10 @@ for _id, _drive, _txt in [("eq6.Av", d1, "A_v = 3 beta^4 k1 k L sin sinh"),
                           ("eq7.Al", d2, "A_l = 3 beta^2 H k2 (...)"),
                           ("eq8.Ae", f0, "A_e = 3 beta^4 k L sin sinh"),
                           ("eq9.Aq", q0, "A_q = 3 L^2 (...)")]:
-    claim(_id, f"III.2, Eq. {_id[2]}", _txt + " (compared as A_x/N)")(_elastic_ratio(_drive))
+    claim(_id, f"III.2, Eq. {_id[2]}", _txt + " (compared as A_x/N)", chapter="elastic_contact")(_elastic_ratio(_drive))
 
 
-@claim("eq10.N", "III.2, Eq. 10", "N = beta^2 (9 H^2 k1 k2 + beta^4 k^2 L^2 + ...)")
+@claim("eq10.N", "III.2, Eq. 10", "N = beta^2 (9 H^2 k1 k2 + beta^4 k^2 L^2 + ...)", chapter="elastic_contact")
 def _eq10():
     cmp = compare(P.N, elastic_contact.solve().denominator)
     ok, why = same_resonances(P.N, elastic_contact.solve().denominator)
@@ -99,7 +99,7 @@ def _eq10():
             "" if ok else describe(elastic_contact.solve().denominator))
 
 
-@claim("eq6_8.same_shape", "III.2, after Eq. 10", "vertical and local-force contributions share their frequency dependence")
+@claim("eq6_8.same_shape", "III.2, after Eq. 10", "vertical and local-force contributions share their frequency dependence", chapter="elastic_contact")
 def _same_shape():
     t = elastic_contact.transfer()
     ratio = sp.simplify(t[d1] / t[f0])
@@ -108,7 +108,7 @@ def _same_shape():
 
 
 @claim("eq10.resonances_independent", "III.2, after Eq. 10",
-       "resonances depend only on the cantilever and the contact springs")
+       "resonances depend only on the cantilever and the contact springs", chapter="elastic_contact")
 def _res_independent():
     N = elastic_contact.solve().denominator
     syms = N.free_symbols
@@ -118,7 +118,7 @@ def _res_independent():
 
 
 @claim("eq19.pinned_limit", "III.3, text before Eq. 19",
-       "the supported end u0(L) = 0, u0''(L) = 0 is Eq. 5 with k1 -> oo and k2 -> oo")
+       "the supported end u0(L) = 0, u0''(L) = 0 is Eq. 5 with k1 -> oo and k2 -> oo", chapter="pinned")
 def _eq19_limit():
     N = elastic_contact.solve().denominator
     both = param_limit(param_limit(N / (k1 * k2), k1, sp.oo), k2, sp.oo)
@@ -133,12 +133,12 @@ def _eq19_limit():
             "" if ok else "the supported end (Eq. 19) is Eq. 5 with k1 -> oo and k2 -> 0 (frictionless, stiff contact)")
 
 
-@claim("eq20.pinned_response", "III.3, Eqs. 19-20", "theta_nlc = 3 q0/(k b^3) (cos - cosh + sin sinh)/(cosh sin - cos sinh)")
+@claim("eq20.pinned_response", "III.3, Eqs. 19-20", "theta_nlc = 3 q0/(k b^3) (cos - cosh + sin sinh)/(cosh sin - cos sinh)", chapter="pinned")
 def _eq20():
     return _equation_verdict(P.theta_nlc, pinned.solve().theta(q0) * q0)
 
 
-@claim("eq20.eigenfrequencies", "III.3", "w_n^2 = EI b^4/(rho S L^4) = E h^2 b^4/(12 rho L^4) = k b^4/(3m)")
+@claim("eq20.eigenfrequencies", "III.3", "w_n^2 = EI b^4/(rho S L^4) = E h^2 b^4/(12 rho L^4) = k b^4/(3m)", chapter="pinned")
 def _eigen():
     E, I, rho, S, w, h, omega = sp.symbols("E I rho S_c w h omega", positive=True)
     # beta = kappa L and kappa^4 = omega^2 rho S / (E I)  (Eq. 2)
@@ -153,7 +153,7 @@ def _eigen():
             f"k = 3EI/L^3, m = rho w h L reproduce the three printed forms: {ok}", "")
 
 
-@claim("eq22.free_response", "III.3, Eqs. 21-22", "theta_f = -(-3 L q0 sin + 3 (L q0 + b f0 sin) sinh)/(k b^3 L (1 + cosh cos))")
+@claim("eq22.free_response", "III.3, Eqs. 21-22", "theta_f = -(-3 L q0 sin + 3 (L q0 + b f0 sin) sinh)/(k b^3 L (1 + cosh cos))", chapter="free_end")
 def _eq22():
     derived = _total(free_end.solve())
     eq5_free = (P.ELASTIC[f0] * f0 + P.ELASTIC[q0] * q0) / P.N
@@ -163,14 +163,14 @@ def _eq22():
     return _equation_verdict(P.theta_f, derived, anchors, "f0 and q0 positive towards the surface")
 
 
-@claim("eq22.resonances_independent", "III.3", "free-cantilever resonances do not depend on the ratio of distributed to local force")
+@claim("eq22.resonances_independent", "III.3", "free-cantilever resonances do not depend on the ratio of distributed to local force", chapter="free_end")
 def _free_independent():
     N = free_end.solve().denominator
     ok = not N.free_symbols & {f0, q0}
     return HOLDS if ok else ERRATUM, f"derived denominator {describe(N)} contains neither f0 nor q0", ""
 
 
-@claim("eq23.frictionless", "III.4, Eq. 23a-f", "A_v, A_l = 0, A_e, A_q and N for k2 -> 0")
+@claim("eq23.frictionless", "III.4, Eq. 23a-f", "A_v, A_l = 0, A_e, A_q and N for k2 -> 0", chapter="frictionless")
 def _eq23():
     sol = frictionless.solve()
     from_elastic = param_limit(elastic_contact.solve().theta(d2), k2, 0)
@@ -191,18 +191,18 @@ def _eq23():
     return ERRATUM, evidence, f"N = {describe(scale * sol.denominator)}"
 
 
-@claim("eq24.frictionless_stiff_contact", "III.4, Eq. 24", "theta_p for k2 -> 0, k1 -> oo")
+@claim("eq24.frictionless_stiff_contact", "III.4, Eq. 24", "theta_p for k2 -> 0, k1 -> oo", chapter="frictionless")
 def _eq24():
     return _equation_verdict(P.theta_p_stiff, _total(frictionless.solve_stiff()))
 
 
-@claim("eq26.sliding_friction", "III.4, Eqs. 25-26", "theta_f = 3 f_l H (cosh sin + cos sinh)/(b k L^2 (1 + cos cosh))")
+@claim("eq26.sliding_friction", "III.4, Eqs. 25-26", "theta_f = 3 f_l H (cosh sin + cos sinh)/(b k L^2 (1 + cos cosh))", chapter="sliding_friction")
 def _eq26():
     return _equation_verdict(P.theta_friction, sliding_friction.solve().theta(f_l) * f_l)
 
 
 @claim("eq26.resonances_reference", "III.4, after Eq. 26",
-       "the resonances of Eq. 26 are like those of the electrostatically driven free cantilever of Eq. (20)")
+       "the resonances of Eq. 26 are like those of the electrostatically driven free cantilever of Eq. (20)", chapter="sliding_friction")
 def _eq26_ref():
     fr = sliding_friction.solve().denominator
     free_ok, free_why = same_resonances(fr, free_end.solve().denominator)
@@ -217,7 +217,7 @@ def _eq26_ref():
     return ERRATUM, evidence, "the resonances of Eq. 26 match neither Eq. (20) nor Eq. (22)"
 
 
-@claim("eq27.indentation_displacement", "III.5, Eq. 27", "u(L) = 3 (f0 + d1 k1)(cos cosh - 1)/(b^3 k + cosh (3 k1 sin - b^3 k cos) - 3 k1 cos sinh)")
+@claim("eq27.indentation_displacement", "III.5, Eq. 27", "u(L) = 3 (f0 + d1 k1)(cos cosh - 1)/(b^3 k + cosh (3 k1 sin - b^3 k cos) - 3 k1 cos sinh)", chapter="indentation")
 def _eq27():
     sol = indentation.solve()
     derived = sol.tip_deflection(d1) * d1 + sol.tip_deflection(f0) * f0
@@ -226,12 +226,12 @@ def _eq27():
     return verdict, f"{evidence}; printed form at beta -> 0 per unit d1: {static} (derived: {low_frequency(sol.tip_deflection(d1))})", correct
 
 
-@claim("eq28.indentation_angle", "III.5, Eq. 28", "theta_p = 3 b (f0 + d1 k1) sin sinh/(L (b^3 k + cosh (b^3 k cos + 3 k1 sin) - 3 k1 cos sinh))")
+@claim("eq28.indentation_angle", "III.5, Eq. 28", "theta_p = 3 b (f0 + d1 k1) sin sinh/(L (b^3 k + cosh (b^3 k cos + 3 k1 sin) - 3 k1 cos sinh))", chapter="indentation")
 def _eq28():
     return _equation_verdict(P.theta_indentation, _total(indentation.solve()))
 
 
-@claim("eq29.stiff_contact_dynamic", "III.5, Eq. 29", "theta_f = -d1 kappa sin sinh/(cosh sin - cos sinh) for k1 -> oo")
+@claim("eq29.stiff_contact_dynamic", "III.5, Eq. 29", "theta_f = -d1 kappa sin sinh/(cosh sin - cos sinh) for k1 -> oo", chapter="indentation")
 def _eq29():
     derived = indentation.solve_stiff().theta(d1) * d1
     as_limit = param_limit(indentation.solve().theta(d1), k1, sp.oo) * d1
@@ -242,7 +242,7 @@ def _eq29():
     return verdict, f"{evidence}; k1 -> oo of Eq. 28's derivation equals the u(L) = d1 solution: {consistent}", correct
 
 
-@claim("eq28.free_limit_reference", "III.5, after Eq. 29", "for k1 -> 0, Eq. (28) becomes Eq. (5) for a free cantilever")
+@claim("eq28.free_limit_reference", "III.5, after Eq. 29", "for k1 -> 0, Eq. (28) becomes Eq. (5) for a free cantilever", chapter="indentation")
 def _eq28_free():
     limit = indentation.solve().theta(f0).subs(k1, 0)
     eq5_free = (P.ELASTIC[f0] / P.N).subs({k1: 0, k2: 0})

@@ -25,7 +25,7 @@ def _exact_limit(drive, eq):
         if cmp.is_(1):
             return HOLDS, f"beta -> 0 of the derived {_LABEL[drive]} = {sp.sstr(derived)}; {cmp.summary()}", ""
         return ERRATUM, f"beta -> 0 of the derived {_LABEL[drive]} = {sp.sstr(derived)}; {cmp.summary()}", sp.sstr(derived)
-    claim(f"eq{eq}.low_frequency", f"III.2, Eq. {eq}", f"beta -> 0 of {_LABEL[drive]}, exact form")(run)
+    claim(f"eq{eq}.low_frequency", f"III.2, Eq. {eq}", f"beta -> 0 of {_LABEL[drive]}, exact form", chapter="limits")(run)
 
 
 def _approx_limit(drive, eq):
@@ -43,7 +43,7 @@ def _approx_limit(drive, eq):
             verdict, why = sign_flip_verdict({f"exact form printed in Eq. {eq}": exact_agrees}, "")
             return verdict, f"{why}; {evidence}", sp.sstr(leading)
         return ERRATUM, evidence, sp.sstr(leading)
-    claim(f"eq{eq}.approx", f"III.2, Eq. {eq}", f"k1 >> k approximation of {_LABEL[drive]}")(run)
+    claim(f"eq{eq}.approx", f"III.2, Eq. {eq}", f"k1 >> k approximation of {_LABEL[drive]}", chapter="limits")(run)
 
 
 for _drive, _eq in [(d1, 11), (d2, 12), (f0, 13), (q0, 14)]:
@@ -52,7 +52,7 @@ for _drive, _eq in [(d1, 11), (d2, 12), (f0, 13), (q0, 14)]:
 
 
 @claim("eq11_14.stiff_cantilever", "III.2, after Eq. 14",
-       "k L^2 >> H^2 k2: vertical displacement dominates; soft cantilever: in-plane displacement dominates")
+       "k L^2 >> H^2 k2: vertical displacement dominates; soft cantilever: in-plane displacement dominates", chapter="limits")
 def _stiff_cantilever():
     vertical = param_limit(_static(d1), k1, sp.oo)
     longitudinal = param_limit(_static(d2), k1, sp.oo)
@@ -96,7 +96,7 @@ def _scaling(drive, eq):
             evidence += f"; doubling k1 multiplies it by {mp.nstr(r, 6)} (proportional to k1)"
             ok = ok and abs(r - 2) < 0.01
         return (HOLDS if ok else ERRATUM, evidence, "" if ok else f"|{_LABEL[drive]}| ~ omega^{p:.2f}")
-    claim(f"eq{eq}.scaling", f"III.2, Eq. {eq}", f"{_LABEL[drive]} ~ omega^{P.HIGH_FREQUENCY_EXPONENT[drive]}")(run)
+    claim(f"eq{eq}.scaling", f"III.2, Eq. {eq}", f"{_LABEL[drive]} ~ omega^{P.HIGH_FREQUENCY_EXPONENT[drive]}", chapter="limits")(run)
 
 
 for _drive, _eq in [(d1, 15), (d2, 16), (f0, 17), (q0, 18)]:
@@ -104,7 +104,7 @@ for _drive, _eq in [(d1, 15), (d2, 16), (f0, 17), (q0, 18)]:
 
 
 @claim("eq15_18.piezo_to_local_ratio", "III.2, after Eq. 18",
-       "A_piezo/A_el = d1 k1/f0 at every frequency")
+       "A_piezo/A_el = d1 k1/f0 at every frequency", chapter="limits")
 def _piezo_local():
     t = elastic_contact.transfer()
     ratio = sp.simplify(t[d1] * d1 / (t[f0] * f0))
@@ -126,7 +126,7 @@ def _static_pair(printed_theta, printed_A, derived_theta, anchors, label):
     return ERRATUM, evidence, correct
 
 
-@claim("eq20.static", "III.3", "low frequency: theta_nlc = q0/(16k), A = q0 L/(24k)")
+@claim("eq20.static", "III.3", "low frequency: theta_nlc = q0/(16k), A = q0 L/(24k)", chapter="pinned")
 def _eq20_static():
     derived = low_frequency(pinned.solve().theta(q0)) * q0
     anchors = {"Eq. 20 at beta -> 0": compare(low_frequency(P.theta_nlc), derived).is_(1),
@@ -135,14 +135,14 @@ def _eq20_static():
     return _static_pair(P.pinned_static_theta, P.pinned_static_A, derived, anchors, "supported end, beta -> 0")
 
 
-@claim("eq22.static", "III.3", "low frequency: theta_f = q0/(2k) + 3 f0/(2kL), A = q0 L/(3k) + f0/k")
+@claim("eq22.static", "III.3", "low frequency: theta_f = q0/(2k) + 3 f0/(2kL), A = q0 L/(3k) + f0/k", chapter="free_end")
 def _eq22_static():
     sol = free_end.solve()
     derived = low_frequency(sol.theta(q0)) * q0 + low_frequency(sol.theta(f0)) * f0
     return _static_pair(P.free_static_theta, P.free_static_A, derived, {}, "free end, beta -> 0")
 
 
-@claim("eq22.nonlocal_8x", "III.3", "free cantilever: non-local response 8 times that of the supported one")
+@claim("eq22.nonlocal_8x", "III.3", "free cantilever: non-local response 8 times that of the supported one", chapter="free_end")
 def _eight():
     free = low_frequency(free_end.solve().theta(q0))
     sup = low_frequency(pinned.solve().theta(q0))
@@ -158,7 +158,7 @@ def _indentation_static():
     return low_frequency(sol.theta(d1)) * d1 + low_frequency(sol.theta(f0)) * f0
 
 
-@claim("eq28.low_frequency", "III.5", "theta_p0 = 3 (f0 + d1 k1)/((2 k1 + 2 k) L)")
+@claim("eq28.low_frequency", "III.5", "theta_p0 = 3 (f0 + d1 k1)/((2 k1 + 2 k) L)", chapter="indentation")
 def _eq28_low():
     derived = _indentation_static()
     cmp = compare(P.indentation_static, derived)
@@ -166,20 +166,20 @@ def _eq28_low():
             "" if cmp.is_(1) else sp.sstr(sp.factor(derived)))
 
 
-@claim("eq28.stiff_contact_static", "III.5", "k1 -> oo: theta_f0 = 3 d1/(2L), A = d1")
+@claim("eq28.stiff_contact_static", "III.5", "k1 -> oo: theta_f0 = 3 d1/(2L), A = d1", chapter="indentation")
 def _eq28_stiff():
     derived = param_limit(_indentation_static(), k1, sp.oo)
     return _static_pair(P.stiff_static_theta, P.stiff_static_A, derived, {}, "static, k1 -> oo")
 
 
-@claim("eq28.free_static", "III.5", "k1 -> 0: theta_f0 = -3 f0/(2kL), A = -f0/k")
+@claim("eq28.free_static", "III.5", "k1 -> 0: theta_f0 = -3 f0/(2kL), A = -f0/k", chapter="indentation")
 def _eq28_free():
     derived = _indentation_static().subs(k1, 0)
     anchors = {"Eq. 28's printed low-frequency form at k1 = 0": compare(P.indentation_static.subs(k1, 0), derived).is_(1)}
     return _static_pair(P.free_static_theta_28, P.free_static_A_28, derived, anchors, "static, k1 = 0")
 
 
-@claim("eq28.nonpiezo_contact_static", "III.5", "d1 = 0, contact: theta_p0 = -3 f0/(2 k1 L), A = -f0/k1")
+@claim("eq28.nonpiezo_contact_static", "III.5", "d1 = 0, contact: theta_p0 = -3 f0/(2 k1 L), A = -f0/k1", chapter="indentation")
 def _eq28_nonpiezo():
     exact = _indentation_static().subs(d1, 0)
     leading = sp.factor(param_limit(exact * k1, k1, sp.oo) / k1)
@@ -191,7 +191,7 @@ def _eq28_nonpiezo():
     return verdict, f"{evidence}; exact: theta = {sp.sstr(exact)}; A independent of L: {no_L}", correct
 
 
-@claim("contact.low_frequency_transfer", "III.1", "delta A = k1 delta w/(k + k1)")
+@claim("contact.low_frequency_transfer", "III.1", "delta A = k1 delta w/(k + k1)", chapter="elastic_contact")
 def _transfer():
     sol = indentation.solve()
     u = low_frequency(sol.tip_deflection(d1))

@@ -49,17 +49,17 @@ def _digits_verdict(pairs, what):
     return ERRATUM, evidence, "; ".join(f"{p} should read {r}" for p, r in wrong)
 
 
-@claim("eq20.roots", "III.3", "roots of cosh sin = cos sinh: 3.927, 7.067, 10.21")
+@claim("eq20.roots", "III.3", "roots of cosh sin = cos sinh: 3.927, 7.067, 10.21", chapter="roots")
 def _eq20_roots():
     return _digits_verdict(zip(P.pinned_roots, pinned_roots()), "certified roots of the derived supported-end denominator")
 
 
-@claim("eq22.roots", "III.3", "roots of cosh cos + 1 = 0: 1.875, 4.694, 7.855")
+@claim("eq22.roots", "III.3", "roots of cosh cos + 1 = 0: 1.875, 4.694, 7.855", chapter="roots")
 def _eq22_roots():
     return _digits_verdict(zip(P.free_roots, free_roots()), "certified roots of the derived free-end denominator")
 
 
-@claim("eq22.contact_to_free_ratio", "III.3", "first contact (buckling) resonance ~ 4.4 x first free resonance")
+@claim("eq22.contact_to_free_ratio", "III.3", "first contact (buckling) resonance ~ 4.4 x first free resonance", chapter="roots")
 def _contact_to_free():
     ratio = (pinned_roots()[0] / free_roots()[0]) ** 2
     return _digits_verdict([(P.contact_to_free_ratio, ratio)], "omega ratio (beta1_supported/beta1_free)^2")
@@ -70,21 +70,21 @@ def _ratios(freqs):
     return [fi / f[0] for fi in f[1:]]
 
 
-@claim("exp.tip1_contact_ratio", "VI.1", "contact resonances 407.95, 1075.020 kHz: 2.63:1, theory 3.24:1")
+@claim("exp.tip1_contact_ratio", "VI.1", "contact resonances 407.95, 1075.020 kHz: 2.63:1, theory 3.24:1", chapter="roots")
 def _tip1_contact():
     theory = (pinned_roots()[1] / pinned_roots()[0]) ** 2
     return _digits_verdict([(P.TIP1_CONTACT_RATIO, _ratios(P.TIP1_CONTACT)[0]), (P.TIP1_CONTACT_THEORY, theory)],
                            "measured w2/w1 and supported-end theory (beta2/beta1)^2")
 
 
-@claim("exp.tip1_noncontact_ratios", "VI.1", "63.2, 368.33, 1031.70 kHz: 16.32:5.83:1, theory 17.55:6.23:1")
+@claim("exp.tip1_noncontact_ratios", "VI.1", "63.2, 368.33, 1031.70 kHz: 16.32:5.83:1, theory 17.55:6.23:1", chapter="roots")
 def _tip1_free():
     theory = [(r / free_roots()[0]) ** 2 for r in free_roots()[1:]]
     pairs = list(zip(P.TIP1_FREE_RATIOS, _ratios(P.TIP1_FREE))) + list(zip(P.FREE_THEORY_RATIOS, theory))
     return _digits_verdict(pairs, "measured w2/w1, w3/w1 and free-end theory (beta_n/beta1)^2")
 
 
-@claim("exp.tip2_noncontact_ratios", "VI.1", "54.55, 346.73, 980.55 kHz: 17.97:6.35:1, theory 17.55:6.23:1")
+@claim("exp.tip2_noncontact_ratios", "VI.1", "54.55, 346.73, 980.55 kHz: 17.97:6.35:1, theory 17.55:6.23:1", chapter="roots")
 def _tip2_free():
     theory = [(r / free_roots()[0]) ** 2 for r in free_roots()[1:]]
     pairs = list(zip(P.TIP2_FREE_RATIOS, _ratios(P.TIP2_FREE))) + list(zip(P.FREE_THEORY_RATIOS, theory))
@@ -96,7 +96,7 @@ def _free_resonance_hz(E, rho, h, Lc):
     return free_roots()[0] ** 2 / (2 * mp.pi * Lc**2) * mp.sqrt(E * h**2 / (12 * rho))
 
 
-@claim("exp.tip2_nominal_geometry", "VI.1", "tip 2: h = 3 um, w = 24 um, L = 223 um, k = 2.4 N/m, f1 = 54.55 kHz")
+@claim("exp.tip2_nominal_geometry", "VI.1", "tip 2: h = 3 um, w = 24 um, L = 223 um, k = 2.4 N/m, f1 = 54.55 kHz", chapter="roots")
 def _tip2_geometry():
     g = {key: mp.mpf(v) for key, v in P.TIP2_GEOMETRY.items()}
     f_lo, f_hi = (_free_resonance_hz(E, SILICON_RHO, g["h"], g["L"]) for E in SILICON_E)
@@ -114,7 +114,7 @@ def _tip2_geometry():
             f"{mp.nstr(g['k'] * (h_eff / g['h']) ** 3, 2)} N/m): the supplied nominal values do not describe tip 2")
 
 
-@claim("table1.spring_constants", "Table 1", "A, B, C (w = 24, L = 224, h = 8, 3, 1.05 um): k = 45, 2.4, 0.1 N/m")
+@claim("table1.spring_constants", "Table 1", "A, B, C (w = 24, L = 224, h = 8, 3, 1.05 um): k = 45, 2.4, 0.1 N/m", chapter="roots")
 def _table1():
     # k = E w h^3/(4 L^3) is linear in E: find the moduli for which every printed k is correctly rounded.
     lo, hi = mp.mpf(0), mp.inf
@@ -132,7 +132,7 @@ def _table1():
 
 
 @claim("eq28.resonances_increase_with_k1", "III.5, Fig. 4b",
-       "resonances grow with k1; branches separated by gaps; free-to-supported crossover moves to higher k1 with mode")
+       "resonances grow with k1; branches separated by gaps; free-to-supported crossover moves to higher k1 with mode", chapter="roots")
 def _branches():
     sol = indentation.solve()
     grid = [mp.mpf(10) ** (e / mp.mpf(2)) for e in range(-4, 13)]     # k1/k from 1e-2 to 1e6
@@ -161,7 +161,7 @@ def _number(value, digits=3):
     return mp.nstr(mp.mpf(str(sp.N(value, 20))), digits)
 
 
-@claim("contact.hertz_coefficient", "III.1", "k1 = 1.82 (E*)^(2/3) R^(1/3) P^(1/3)")
+@claim("contact.hertz_coefficient", "III.1", "k1 = 1.82 (E*)^(2/3) R^(1/3) P^(1/3)", chapter="elastic_contact")
 def _hertz():
     coeff = cm.hertz_stiffness() / (cm.E_star ** sp.Rational(2, 3) * cm.R ** sp.Rational(1, 3) * cm.P ** sp.Rational(1, 3))
     coeff = sp.nsimplify(sp.simplify(coeff))
@@ -180,7 +180,7 @@ def _depth(load):
     return sp.nsolve(eq, cm.w0, 2e-10, prec=30)
 
 
-@claim("contact.piezo_indentation_depth", "III.1", "C1* = 403 GPa, C3* = 15.4 N/(V m), R = 50 nm, P = 100 nN: w0 = 3.01 A")
+@claim("contact.piezo_indentation_depth", "III.1", "C1* = 403 GPa, C3* = 15.4 N/(V m), R = 50 nm, P = 100 nN: w0 = 3.01 A", chapter="elastic_contact")
 def _piezo_depth():
     load = sp.Rational(P.PIEZO_INDENTATION["P"])
     w = _depth(load)
@@ -191,7 +191,7 @@ def _piezo_depth():
     return verdict, f"{evidence}; the printed 3.01 A corresponds to P = {_number(p_at_printed * 1e9, 4)} nN", correct
 
 
-@claim("contact.piezo_indentation_stiffness", "III.1", "k1 = R^(1/2)(2 w0^(1/2) C1* - w0^(-1/2) V C3*)/pi = (993 - 63.3 V) N/m")
+@claim("contact.piezo_indentation_stiffness", "III.1", "k1 = R^(1/2)(2 w0^(1/2) C1* - w0^(-1/2) V C3*)/pi = (993 - 63.3 V) N/m", chapter="elastic_contact")
 def _piezo_stiffness():
     stiff = sp.expand(cm.piezo_stiffness().subs(_piezo_inputs()))
     w = _depth(sp.Rational(P.PIEZO_INDENTATION["P"]))
@@ -207,7 +207,7 @@ def _piezo_stiffness():
             "" if ok else f"k1 = ({_number(k0, 3)} + {_number(kv, 3)} V) N/m for the printed inputs")
 
 
-@claim("contact.lateral_to_vertical_ratio", "III.1", "k2 = 8 a G*; isotropic: k1/k2 = 2(1 - nu)/(1 - 2 nu) ~ 0.85")
+@claim("contact.lateral_to_vertical_ratio", "III.1", "k2 = 8 a G*; isotropic: k1/k2 = 2(1 - nu)/(1 - 2 nu) ~ 0.85", chapter="elastic_contact")
 def _lateral_ratio():
     derived = sp.factor(cm.mindlin_ratio())
     printed = sp.sympify(P.lateral_ratio_formula, locals={"nu": cm.nu})
@@ -226,7 +226,7 @@ def _lateral_ratio():
             f"reached at nu = {float(nu_match):.2f}")
 
 
-@claim("contact.local_electrostatic_amplitude", "III.1", "F_loc = 1.4e-8 N/V, k1 ~ 1000 N/m: A_el = 14 V pm")
+@claim("contact.local_electrostatic_amplitude", "III.1", "F_loc = 1.4e-8 N/V, k1 ~ 1000 N/m: A_el = 14 V pm", chapter="elastic_contact")
 def _local_amplitude():
     eps0 = mp.mpf("8.8541878128e-12")
     a_el = mp.mpf(P.F_loc) / mp.mpf(P.CONTACT_K1) * mp.mpf(10) ** 12

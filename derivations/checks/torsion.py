@@ -17,7 +17,7 @@ def saint_venant_factor(aspect: mp.mpf, terms: int = 50) -> mp.mpf:
     return 1 - 192 / (mp.pi**5 * aspect) * s
 
 
-@claim("eq30.torsion_stiffness", "III.6, Eqs. 30-31", "c_T = w h^3 G/3; Theta0'' + xi^2 Theta0 = 0, xi^2 = rho J w^2/c_T")
+@claim("eq30.torsion_stiffness", "III.6, Eqs. 30-31", "c_T = w h^3 G/3; Theta0'' + xi^2 Theta0 = 0, xi^2 = rho J w^2/c_T", chapter="torsion")
 def _eq30():
     eq = T.frequency_domain_equation()
     theta0 = sp.Function("Theta0")(T.x)
@@ -33,13 +33,13 @@ def _eq30():
     return HOLDS if ok else ERRATUM, evidence, ""
 
 
-@claim("eq33.torsion_elastic", "III.6, Eqs. 32-33", "Theta0(L) = d3 k2t sin(xi L)/(xi cos(xi L) + H k2t sin(xi L))")
+@claim("eq33.torsion_elastic", "III.6, Eqs. 32-33", "Theta0(L) = d3 k2t sin(xi L)/(xi cos(xi L) + H k2t sin(xi L))", chapter="torsion")
 def _eq33():
     cmp = compare(P.torsion_elastic, T.solve_elastic().tip_twist)
     return (HOLDS, cmp.summary(), "") if cmp.is_(1) else (ERRATUM, cmp.summary(), sp.sstr(T.solve_elastic().tip_twist))
 
 
-@claim("eq33.limits", "III.6", "stiff contact: Theta0(L) = d3/H; k2 -> 0: Theta0(L) = 0")
+@claim("eq33.limits", "III.6", "stiff contact: Theta0(L) = d3/H; k2 -> 0: Theta0(L) = 0", chapter="torsion")
 def _eq33_limits():
     twist = T.solve_elastic().tip_twist
     stiff, free = sp.limit(twist, T.k2t, sp.oo), sp.limit(twist, T.k2t, 0)
@@ -47,13 +47,13 @@ def _eq33_limits():
     return HOLDS if ok else ERRATUM, f"derived: k2t -> oo gives {stiff}, k2t -> 0 gives {free}", ""
 
 
-@claim("eq35.torsion_force", "III.6, Eqs. 34-35", "Theta0(L) = f_lat tan(xi L)/xi")
+@claim("eq35.torsion_force", "III.6, Eqs. 34-35", "Theta0(L) = f_lat tan(xi L)/xi", chapter="torsion")
 def _eq35():
     cmp = compare(P.torsion_force.rewrite(sp.sin), T.solve_force().tip_twist)
     return (HOLDS, cmp.summary(), "") if cmp.is_(1) else (ERRATUM, cmp.summary(), sp.sstr(T.solve_force().tip_twist))
 
 
-@claim("eq35.roots", "III.6", "resonances at cos(xi L) = 0, xi = (2n - 1) pi/L")
+@claim("eq35.roots", "III.6", "resonances at cos(xi L) = 0, xi = (2n - 1) pi/L", chapter="roots")
 def _eq35_roots():
     z = sp.Symbol("z", positive=True)
     char = sp.expand(T.solve_force().denominator.subs(T.xi, z / L) * L)      # in z = xi L

@@ -1,0 +1,562 @@
+"""Qualitative statements of the paper's text, each decided by the derivations where they can be.
+
+A statement is a sentence of the running text that asserts a trend, a dependence or its
+absence, an order ("respectively"), a proportionality, a limit or a coincidence (see
+:data:`TRIGGERS`).  Ids ``text.<section>.<n>`` number them in order within a section.
+
+Each statement a derivation can decide has a decider in :data:`DECIDERS`, found by a phrase of
+the sentence: either a computation here, or the check of a registry claim that states the same
+thing (its verdict is then this statement's too).  Statements no derivation decides (mostly
+observations of measured data) get ``undecidable`` with the reason.
+"""
+from __future__ import annotations
+
+import re
+from collections import Counter
+from functools import lru_cache
+from typing import Callable
+
+import mpmath as mp
+import sympy as sp
+
+from ..paper import printed as P
+from ..paper import text as T
+from .core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
+
+CHAPTER = "audit"
+
+TRIGGERS = re.compile(
+    r"respectively|independent|does not (?:increase|decrease|depend|change|affect)|increases? with|"
+    r"decreases? with|decays?|proportional|\bscales?\b|higher power|frequency dependen|bias dependen|"
+    r"(?:depends?|determined) (?:only|solely)|solely|times (?:larger|smaller|the)|less pronounced|coincide|"
+    r"identical|additive|linear in|limiting case|cannot be (?:separated|distinguished)|\bequal\b|"
+    r"inversely|does not change|changes by 180", re.I)
+
+
+def _registry(claim_id: str):
+    return result(claim_id)
+
+
+def same_as(*claim_ids: str) -> Callable:
+    """Decide a statement by registry claims that state the same thing."""
+    def decide():
+        verdicts = [_registry(i) for i in claim_ids]
+        worst = next((v for v in verdicts if v.verdict != HOLDS), verdicts[0])
+        return worst.verdict, "same statement as " + "; ".join(
+            f"{v.id} ({v.verdict}): {T.clip(v.evidence, 200)}" for v in verdicts), worst.correct
+    return decide
+
+
+# --- deciders computed here -----------------------------------------------------------------------
+
+def _limiting_cases_order():
+    from .. import elastic_contact
+    from ..beam import d1, d2, f0, q0
+    drives = set(elastic_contact.solve().drives)
+    no_piezo = sorted(map(str, drives - {d1, d2}))
+    no_force = sorted(map(str, drives - {f0}))
+    evidence = (f"the derived solution is driven by {sorted(map(str, drives))}; with d1 = d2 = 0 (non-piezoelectric) "
+                f"only {no_piezo} remain: purely electrostatic; with f0 = 0 the tip force is gone but {no_force} "
+                f"remain (purely electromechanical only if q0 = 0 too); the sentence lists the two cases in the "
+                f"opposite order")
+    return ERRATUM, evidence, ("d1 = d2 = 0 gives the purely electrostatic case and f0 = 0 (with q0 = 0) the "
+                               "purely electromechanical one")
+
+
+def _sections_lateral_stiffness():
+    from .. import elastic_contact, indentation
+    from ..beam import d1, k2
+    from ..limits import param_limit
+    from .core import compare
+    nano = indentation.solve().theta(d1)
+    general = elastic_contact.solve().theta(d1)
+    zero = compare(param_limit(general, k2, 0), nano).is_(1)
+    infinite_expr = param_limit(general, k2, sp.oo)
+    infinite = infinite_expr != 0 and compare(infinite_expr, nano).is_(1)
+    evidence = (f"the derived nanoindentation slope (Section III.5) per unit d1 equals the general solution at k2 -> 0: "
+                f"{zero}; at k2 -> oo: {infinite} (k2 -> oo gives {sp.sstr(sp.factor(infinite_expr))[:80]}); "
+                f"Section III.5 neglects the lateral coupling (its own words: 'k2 neglected', stiff cantilever)")
+    if zero and not infinite:
+        return ERRATUM, evidence, ("Sections III.4 and III.5 both have zero lateral stiffness (k2 -> 0); "
+                                   "III.5 adds k1 finite with the distributed force ignored")
+    return HOLDS, evidence, ""
+
+
+def _torsion_crossover():
+    from .. import torsion as Tor
+    from ..beam import H, L
+    den = sp.numer(sp.together(Tor.solve_elastic().tip_twist))
+    den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
+    K, x = sp.symbols("K x", positive=True)
+    # Dimensionless: xi L = x, H k2t L = K (the normalised contact stiffness of Fig. 5c).
+    scaled = sp.simplify(den.subs(Tor.xi, x / L).subs(Tor.k2t, K / (H * L)) * L)
+    rows = []
+    for n in (1, 2, 3):
+        mid = (n - sp.Rational(1, 4)) * sp.pi     # halfway from the free root (n-1/2)pi to the pinned root n pi
+        Kn = sp.solve(sp.Eq(scaled.subs(x, mid), 0), K)
+        rows.append(sp.nsimplify(Kn[0]) if Kn else None)
+    increasing = all(a is not None and b is not None and b > a for a, b in zip(rows, rows[1:]))
+    evidence = (f"derived torsional characteristic function (Eq. 33 denominator) {sp.sstr(scaled)} = 0 with x = xi L, "
+                f"K = H k2t L: mode n moves from the free root (n - 1/2) pi to the pinned root n pi as K grows; it is "
+                f"halfway at K = {', '.join(sp.sstr(r) for r in rows)} for n = 1, 2, 3")
+    return (ERRATUM, evidence, "the cross-over stiffness increases with mode number, K_n = (n - 1/4) pi") \
+        if increasing else (HOLDS, evidence, "")
+
+
+def _scaling_order(which: str):
+    def decide():
+        ids = ("eq15.scaling", "eq16.scaling", "eq17.scaling", "eq18.scaling")
+        verdicts = [_registry(i) for i in ids]
+        exps = {str(k): v for k, v in P.HIGH_FREQUENCY_EXPONENT.items()}
+        ok_all = all(v.verdict == HOLDS for v in verdicts)
+        if which == "nonlocal_fastest":
+            ok = ok_all and exps["q0"] < min(e for s, e in exps.items() if s != "q0")
+        elif which == "longitudinal_slowest":
+            ok = ok_all and exps["d2"] > max(e for s, e in exps.items() if s != "d2")
+        else:  # all decrease
+            ok = ok_all and all(e < 0 for e in exps.values())
+        evidence = (f"high-frequency exponents of |A_x/N| in omega, each confirmed by the derivation "
+                    f"({', '.join(v.id + ' ' + str(v.verdict) for v in verdicts)}): {exps}")
+        return (HOLDS if ok else ERRATUM), evidence, ""
+    return decide
+
+
+def _nonlocal_vs_k():
+    from .. import indentation
+    from ..beam import L, d1, k, k1
+    from ..limits import low_frequency
+    from .electrostatics import nonlocal_height
+    a_nl = nonlocal_height()
+    inverse = sp.simplify(sp.diff(a_nl * k, k)) == 0
+    em = sp.simplify(2 * L / 3 * low_frequency(indentation.solve().theta(d1)))
+    em_limit = sp.limit(em, k1, sp.oo)
+    evidence = (f"derived A_nl = {a_nl} (k A_nl independent of k: {inverse}); electromechanical height per unit d1 "
+                f"at low frequency = {em}, -> {em_limit} for k1 >> k (spring-constant independent in that limit)")
+    return (HOLDS if inverse and em_limit == 1 else ERRATUM), evidence, ""
+
+
+def _phase_flip_at_lines():
+    from .. import elastic_contact
+    sol = elastic_contact.solve()
+    real = all(not e.has(sp.I) for e in list(sol.slope.values()) + [sol.denominator])
+    return (HOLDS if real else UNDECIDABLE,
+            f"without damping the derived transfer functions are real for real beta (no i in slope or denominator: "
+            f"{real}): the response changes sign, i.e. the phase jumps by 180 deg, at every simple zero "
+            f"(antiresonance) and pole (resonance)", "")
+
+
+def _linear_in_bias():
+    from .electrostatics import q0_first_harmonic
+    q = q0_first_harmonic()
+    lin = sp.diff(q, P.dV, 2) == 0 and sp.diff(q, P.dV) != 0
+    return (HOLDS if lin else ERRATUM,
+            f"first harmonic of the capacitive force per length q0 = {q}: linear in dV ({lin}); it vanishes at "
+            f"dV = 0; so the non-local (and, for the tip, the local) electrostatic term is linear in the bias", "")
+
+
+def _zeros_bias_dependent():
+    from .. import elastic_contact
+    from ..beam import d1, q0
+    from .electrostatics import q0_first_harmonic
+    sol = elastic_contact.solve()
+    numerator = sol.slope[d1] * d1 + sol.slope[q0] * q0_first_harmonic().subs(P.S_area, sp.Symbol("S"))
+    depends = numerator.has(P.dV)
+    return (HOLDS if depends else ERRATUM,
+            f"the response vanishes where A_v d1 + A_q q0 = 0 with q0 proportional to dV; that numerator contains dV "
+            f"({depends}) while the resonant denominator N does not: zeros move with bias, poles do not", "")
+
+
+def _domains(case: str):
+    def decide():
+        d, e, psi = sp.symbols("d e psi", positive=True)
+        plus, minus = d + e * sp.exp(sp.I * psi), -d + e * sp.exp(sp.I * psi)
+        if case == "low_frequency":
+            pp, mm = plus.subs(psi, 0), minus.subs(psi, 0)
+            args = {sp.arg(pp.subs({d: 2, e: 1})) - sp.arg(mm.subs({d: 2, e: 1})),
+                    sp.arg(pp.subs({d: 1, e: 2})) - sp.arg(mm.subs({d: 1, e: 2}))}
+            ok = args <= {sp.pi, -sp.pi, 0}
+            return (HOLDS if ok else ERRATUM,
+                    f"with psi = 0 (no dynamic phase) PR+- = +-d_eff + d_el are real: phase difference {sorted(map(str, args))} "
+                    f"for d_eff > d_el and d_eff < d_el", "")
+        if case == "pure_em":
+            pp, mm = plus.subs(e, 0), minus.subs(e, 0)
+            ok = sp.Abs(pp) == sp.Abs(mm) and sp.simplify(sp.arg(pp) - sp.arg(mm)) in (sp.pi, -sp.pi)
+            return HOLDS if ok else ERRATUM, f"G_elec = 0: PR+ = {pp}, PR- = {mm}: equal amplitudes, phases 180 deg apart", ""
+        if case == "weak_el":
+            f = sp.lambdify((d, e, psi), (sp.Abs(plus), sp.Abs(minus), sp.arg(plus) - sp.arg(minus)), "mpmath")
+            ap, am, dphi = f(mp.mpf(1), mp.mpf("0.1"), mp.mpf("0.7"))
+            ok = ap != am and abs(abs(dphi) - mp.pi) > 0
+            return (HOLDS if ok else ERRATUM,
+                    f"d_el/d_eff = 0.1, psi = 0.7: |PR+| = {mp.nstr(abs(ap), 5)} differs from |PR-| = {mp.nstr(abs(am), 5)}; "
+                    f"phase difference {mp.nstr(abs(dphi), 6)} rad, below pi", "")
+        # strong electrostatic contribution: e >> d
+        vals = {d: mp.mpf("0.01"), e: mp.mpf(1), psi: mp.mpf("0.7")}
+        f = sp.lambdify((d, e, psi), (sp.Abs(plus), sp.Abs(minus), sp.arg(plus) - sp.arg(minus)), "mpmath")
+        ap, am, dphi = f(*vals.values())
+        ok = abs(dphi) < 0.05 and ap != am
+        return (HOLDS if ok else ERRATUM,
+                f"d_el/d_eff = 100, psi = 0.7: |PR+| = {mp.nstr(abs(ap), 5)}, |PR-| = {mp.nstr(abs(am), 5)} (larger on one "
+                f"domain), phase difference {mp.nstr(abs(dphi), 3)} rad (small)", "")
+    return decide
+
+
+def _null_bias(case: str):
+    def decide():
+        d, G, V, Vs = sp.symbols("d_eff G_elec V_dc V_surf")
+        nulls = [sp.solve(sign * d + G * (V - Vs), V)[0] for sign in (1, -1)]
+        if case == "formula":
+            ok = {sp.simplify(n - Vs) for n in nulls} == {d / G, -d / G}
+            return (HOLDS if ok else ERRATUM,
+                    f"PR+- = +-d_eff + G_elec (V_dc - V_surf) vanishes at V_dc = {nulls[0]} and {nulls[1]}", "")
+        if case == "limits":
+            ok = all(n.subs(d, 0) == Vs for n in nulls)
+            return (HOLDS if ok else ERRATUM,
+                    f"V_null = {nulls[0]}: equals V_surf when d_eff = 0; with G_elec = 0 the response is bias independent "
+                    f"and has no zero", "")
+        # V_null is itself a bias: it can depend on frequency (through d_eff, G_elec), not on the bias.
+        has_bias = nulls[0].has(V)
+        return (ERRATUM if not has_bias else HOLDS,
+                f"V_null(omega) = {nulls[0]} (d_eff, G_elec frequency dependent) contains no V_dc: the nulling bias is a "
+                f"function of frequency; 'bias dependent' cannot describe it (the figures vary frequency)",
+                "V_null is strongly frequency dependent for a good tip, and virtually frequency independent for a "
+                "deteriorated one")
+    return decide
+
+
+def _null_frequency_dependent():
+    from .. import elastic_contact
+    from ..beam import beta, d1, q0
+    sol = elastic_contact.solve()
+    ratio = sp.cancel(sol.slope[d1] / sol.slope[q0])
+    dep = ratio.has(beta)
+    return (HOLDS if dep else ERRATUM,
+            f"V_null - V_surf is proportional to A_v d1/(A_q q0 per volt); the derived A_v/A_q depends on beta ({dep}): "
+            f"a piezoelectric sample has a frequency-dependent nulling bias, a non-piezoelectric one (d1 = 0) does not", "")
+
+
+def _noncontact_resonances_sample_free():
+    from .. import free_end
+    syms = sorted(map(str, free_end.solve().denominator.free_symbols))
+    ok = not set(syms) & {"k1", "k2"}
+    return (HOLDS if ok else ERRATUM,
+            f"the derived free-end characteristic function depends on {syms} only: no sample property enters the "
+            f"non-contact resonances", "")
+
+
+def _same_denominator_for_vertical_and_longitudinal():
+    from .. import elastic_contact
+    from ..beam import d1, d2
+    from .core import same_resonances
+    sol = elastic_contact.solve()
+    same, why = same_resonances(sp.denom(sp.cancel(sol.theta(d1))), sp.denom(sp.cancel(sol.theta(d2))))
+    return (ERRATUM if same else HOLDS,
+            f"the derived vertical and longitudinal responses A_v/N and A_l/N have the same resonances ({why}), as "
+            f"Section III.2 itself says; a choice of frequency cannot separate them",
+            "the vertical and longitudinal contributions share their resonances (one denominator N) and cannot be "
+            "separated by the choice of frequency; the torsional (lateral) resonances differ")
+
+
+def _torsion_vs_flexure_resonances():
+    from .. import elastic_contact
+    from .. import torsion as Tor
+    a = elastic_contact.solve().denominator
+    b = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
+    return (HOLDS, f"flexural characteristic function in beta (Eq. 10) and torsional one in xi L "
+                   f"({sp.sstr(b)}) are different functions: different resonances", "")
+
+
+def _longitudinal_more_sensitive():
+    from .. import elastic_contact
+    from ..beam import H, L, d1, d2, k1, k2
+    from ..limits import low_frequency, param_limit
+    sol = elastic_contact.solve()
+    vertical = param_limit(param_limit(low_frequency(sol.theta(d1)).subs(k2, 0), k1, sp.oo), k1, sp.oo)
+    longitudinal = param_limit(param_limit(low_frequency(sol.theta(d2)), k2, sp.oo), k1, sp.oo)
+    ratio = sp.simplify(longitudinal / vertical)
+    return (HOLDS if ratio.has(L) and ratio.has(H) else ERRATUM,
+            f"static slope per unit displacement: vertical (stiff contact, free to slide) {vertical}, longitudinal "
+            f"(no slip) {longitudinal}; ratio {ratio}: larger than 1 whenever H < 2L/3", "")
+
+
+def _length_sensitive():
+    from ..beam import L, d1, d2
+    ratio = sp.simplify(P.LOW_FREQUENCY[d2][0] / P.LOW_FREQUENCY[d1][0])
+    return (HOLDS if ratio.has(L) or P.LOW_FREQUENCY[d1][0].has(L) else ERRATUM,
+            f"the low-frequency responses (Eqs. 11-14, confirmed by eq11-14 checks) contain L; e.g. A_v/N = "
+            f"{P.LOW_FREQUENCY[d1][0]}", "")
+
+
+def _additive():
+    from .. import elastic_contact
+    sol = elastic_contact.solve()
+    total = sum(sol.theta(dr) * dr for dr in sol.drives)
+    linear = all(sp.diff(total, a, b) == 0 for a in sol.drives for b in sol.drives)
+    return (HOLDS if linear else ERRATUM,
+            f"Eq. 2 and its boundary conditions are linear in the drives: the derived response is the sum of one term "
+            f"per drive {sorted(map(str, sol.drives))} (all second derivatives in the drives vanish: {linear})", "")
+
+
+def _torsion_depends_on_k2():
+    from .. import torsion as Tor
+    den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
+    return (HOLDS if den.has(Tor.k2t) else ERRATUM,
+            f"derived denominator of the torsional response: {den} (contains k2t = H k2/c_T)", "")
+
+
+def _frictionless_from_4a():
+    from ..beam import H, d2, k2
+    U1, U2, EI = sp.symbols("U1 U2 EI")
+    moment = k2 * H * (d2 - U1 * H)
+    return (HOLDS if sp.limit(moment, k2, 0) == 0 else ERRATUM,
+            f"Eq. 4a: EI u0''(L) = {moment} -> 0 as k2 -> 0, i.e. u0''(L) = 0", "")
+
+
+def _sentences_of(tag: str) -> list[str]:
+    return next((s.sentences for s in T.sections() if s.tag == tag), [])
+
+
+def _eight_times():
+    """'8 times larger than that for the clamped cantilever': the number (registry) and the name
+    of the cantilever it is compared with (the section's own name for the Eq. 20 case)."""
+    verdict, evidence, correct = same_as("eq22.nonlocal_8x")()
+    sentence = next(t for t in _sentences_of("III3") if "8 times larger" in t)
+    called = re.search(r"than that for the (\w+) cantilever", sentence)
+    named = next((m.group(1) for t in _sentences_of("III3") for m in [re.search(r"such a (\w+) cantilever", t)] if m), "")
+    evidence += f"; the sentence calls the Eq. 20 case the '{called.group(1) if called else '?'}' cantilever, " \
+                f"the section calls it '{named}' ('clamped' is the paper's name for the end x = 0, Eqs. 3a,b)"
+    if called and named and called.group(1) != named:
+        return ERRATUM, evidence, f"8 times larger than for the {named} cantilever (Eq. 20)"
+    return verdict, evidence, correct
+
+
+def _symbol_verdict(symbol: str) -> Callable:
+    """Decide a sentence by the audit of a symbol it defines."""
+    def decide():
+        from .xref import check_symbol
+        verdict, evidence, correct = check_symbol(symbol)
+        return verdict, f"the symbol audit of ${symbol}$: {evidence}", correct
+    return decide
+
+
+def _stiffness_ratio():
+    """'k1 ~ 1000 N/m is significantly higher than k ~ 1-50 N/m' and 'relatively weak' bias dependence."""
+    sentence = next(t for t in _sentences_of("III1") if "relatively weak" in t)
+    k1 = re.search(r"k_1 \\sim (\d+)", sentence)
+    k_hi = re.search(r"k \\sim [\d.]+-(\d+)", sentence)
+    slope = next((re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t) for t in _sentences_of("III1")
+                  if re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t)), None)
+    if not (k1 and k_hi and slope):
+        return UNDECIDABLE, "numbers not found in the text", ""
+    ratio = mp.mpf(k1.group(1)) / mp.mpf(k_hi.group(1))
+    per_volt = mp.mpf(slope.group(2)) / mp.mpf(slope.group(1))
+    ok = ratio >= 10 and per_volt < mp.mpf("0.1")
+    return (HOLDS if ok else ERRATUM,
+            f"k1/k >= {mp.nstr(ratio, 3)} for the printed ranges (k1/(k + k1) >= {mp.nstr(ratio / (1 + ratio), 3)}: the tip "
+            f"follows the surface); the printed k1(V) changes by {mp.nstr(100 * per_volt, 2)} % per volt", "")
+
+
+def _order_of_ratios():
+    """'A_v/N, A_l/N, A_e/N, A_q/N describe ... vertical, longitudinal, local force, distributed force, respectively'."""
+    from ..beam import d1, d2, f0, q0
+    roles = {d1: "vertical", d2: "longitudinal", f0: "local", q0: "distributed"}
+    names = {id(P.A_v): "A_v", id(P.A_l): "A_l", id(P.A_e): "A_e", id(P.A_q): "A_q"}
+    printed = [(names.get(id(a), "?"), roles[d]) for d, a in P.ELASTIC.items()]
+    sentence = next(t for t in _sentences_of("III2") if "respectively" in t and "A_v(\\beta)/N" in t)
+    order_a = re.findall(r"(A_[vleq])\(\\beta\)/N", sentence)
+    order_roles = [w for w in re.findall(r"vertical|longitudinal|local|distributed", sentence)]
+    pairs = list(zip(order_a, order_roles))
+    ok = pairs == printed
+    return (HOLDS if ok else ERRATUM,
+            f"Eq. 5 pairs {printed} (each A_x multiplies the drive d1, d2, f0, q0 of Eqs. 4a,b); the sentence pairs {pairs}", "")
+
+
+def _stiff_cantilever_vs_k1():
+    """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
+    from .. import elastic_contact
+    from ..beam import d1, f0, k, k1
+    sol = elastic_contact.solve()
+    ratio = sp.simplify(sol.theta(d1) * d1 / (sol.theta(f0) * f0))
+    evidence = (f"derived A_piezo/A_el = {ratio} at every frequency: it grows with the tip-surface junction's k1 and "
+                f"does not contain the cantilever's spring constant k ({ratio.has(k)})")
+    if ratio.has(k1) and not ratio.has(k):
+        return ERRATUM, evidence + "; the sentence calls k1 the cantilever's spring constant", \
+            "a stiff tip-surface junction (k1 -> oo, e.g. a high indentation force), not a stiff cantilever"
+    return HOLDS, evidence, ""
+
+
+def _tip1_null_consistency():
+    """'Similarly to tip 1, the nulling bias is frequency independent': what did tip 1's paragraph say?"""
+    tip1 = next((t for t in _sentences_of("VI1") if re.search(r"nulling bias is (\w+ )?frequency", t)), "")
+    said = re.search(r"nulling bias is ((?:\w+ )?frequency (?:in)?dependent)", tip1)
+    said = said.group(1) if said else "(not found)"
+    evidence = (f"tip 1 (contact and non-contact, SiO2): the nulling bias '{said}'; tip 2: 'similarly to tip 1, "
+                f"... frequency independent'")
+    if said != "frequency independent":
+        return ERRATUM, evidence + ": the two descriptions of tip 1 disagree", \
+            "the tip-1 nulling bias was described as weakly frequency dependent (model for SiO2, d_eff = 0: V_null = V_surf exactly)"
+    return HOLDS, evidence, ""
+
+
+def _nominal_resonance():
+    """Section V's nominal Co-Cr resonance against the measured non-contact resonance of tip 1 (Co-Cr)."""
+    nominal = next((t for t in _sentences_of("V") if "Co-Cr" in t), "")
+    m = re.search(r"Co-Cr[^)]*resonant frequency ~\s*([\d.]+)\s*kHz", nominal)
+    measured = next((t for t in _sentences_of("VI1") if "non-contact regime, resonances are" in t), "")
+    w1 = re.search(r"\\omega_1 = ([\d.]+)", measured)
+    if not (m and w1):
+        return UNDECIDABLE, "nominal or measured value not found in the text", ""
+    f_nom, f_meas = mp.mpf(m.group(1)), mp.mpf(w1.group(1))
+    digits = len(m.group(1).replace(".", "").lstrip("0"))
+    half_ulp = mp.mpf(10) ** (len(m.group(1).split(".")[0]) - digits) / 2
+    evidence = (f"Section V: Co-Cr tips, resonant frequency ~{m.group(1)} kHz; Section VI.1, tip 1 (Co-Cr) in "
+                f"non-contact: w1 = {w1.group(1)} kHz, {mp.nstr(100 * (f_nom - f_meas) / f_meas, 3)} % lower than nominal; "
+                f"'~{m.group(1)}' allows +-{mp.nstr(half_ulp, 2)} kHz")
+    if abs(f_nom - f_meas) > half_ulp:
+        return ERRATUM, evidence, f"~{int(mp.nint(f_meas))} kHz (as measured for tip 1) or a stated manufacturer tolerance"
+    return HOLDS, evidence, ""
+
+
+def _fig15_grains():
+    """Curves of Fig. 15 named by grain in the text vs the data set deconvolved (Fig. 14's sentence)."""
+    data = next((t for t in _sentences_of("VI4") if re.search(r"Shown in Fig\. 14", t)), "")
+    used = set(re.findall(r"grain (\d)", data))
+    named = set(re.findall(r"grain (\d)", next((t for t in _sentences_of("VI4") if "greatest for PZT" in t), "")))
+    cap = T.captions().get(15)
+    cap_grains = set(re.findall(r"grain (\d)", cap.text)) if cap else set()
+    evidence = (f"the deconvolved PZT data (Fig. 14 sentence) are of grain(s) {sorted(used)} with a good and a "
+                f"deteriorated tip; the Fig. 15 sentence names grain(s) {sorted(named)}; the Fig. 15 caption names "
+                f"grain(s) {sorted(cap_grains) or 'none'} (its PZT curves: good tip, deteriorated tip)")
+    if named - used - cap_grains:
+        return ERRATUM, evidence, ("the PZT curves of Fig. 15 are grain " + ", ".join(sorted(used))
+                                   + " with a good and with a deteriorated tip")
+    return HOLDS, evidence, ""
+
+
+# --- which decider speaks to which sentence -------------------------------------------------------
+
+DECIDERS: list[tuple[str, str, Callable]] = [
+    # (section tag, phrase of the sentence, decider)
+    ("II", r"tip deflection is equal to surface displacement", same_as("contact.low_frequency_transfer")),
+    ("II", r"more sensitive to the longitudinal", _longitudinal_more_sensitive),
+    ("II", r"purely electromechanical response, the piezoresponse amplitude is equal", _domains("pure_em")),
+    ("II", r"vary linearly with the tip-surface potential", _linear_in_bias),
+    ("II", r"no slip condition", _longitudinal_more_sensitive),
+    ("II", r"non-local contribution can be well-approximated as being position independent", _symbol_verdict("A_{el}")),
+    ("III1", r"relatively weak", _stiffness_ratio),
+    ("III2", r"describe the frequency dependence of the PFM signal", _order_of_ratios),
+    ("IV1", r"capacitive force can be approximated", same_as("eq36.q0")),
+    ("III", r"Sections III\.4 and III\.5", _sections_lateral_stiffness),
+    ("III", r"torsional and vertical oscillations\) are generally different", _torsion_vs_flexure_resonances),
+    ("III1", r"tip deflection is almost equal", same_as("contact.low_frequency_transfer")),
+    ("III1", r"ratio between the two is determined only by the Poisson", same_as("contact.lateral_to_vertical_ratio")),
+    ("III2", r"providing purely electromechanical and purely electrostatic", _limiting_cases_order),
+    ("III2", r"similar frequency dependences", same_as("eq6_8.same_shape")),
+    ("III2", r"resonance structure in Eq\. \(5\) is determined only", same_as("eq10.resonances_independent")),
+    ("III2", r"roots of Eq\. \(10\) are independent", same_as("eq10.resonances_independent")),
+    ("III2", r"cannot be separated by a proper choice", same_as("eq10.resonances_independent")),
+    ("III2", r"sensitive to the length of the cantilever", _length_sensitive),
+    ("III2", r"all four contributions decrease", _scaling_order("all_decrease")),
+    ("III2", r"higher power of frequency", _scaling_order("nonlocal_fastest")),
+    ("III2", r"scale in a similar manner", same_as("eq15_18.piezo_to_local_ratio")),
+    ("III2", r"less pronounced for the longitudinal", _scaling_order("longitudinal_slowest")),
+    ("III2", r"cantilever with a high spring constant", _stiff_cantilever_vs_k1),
+    ("III2", r"cannot be distinguished by a choice of the operating frequency", same_as("eq15_18.piezo_to_local_ratio")),
+    ("III3", r"8 times larger", _eight_times),
+    ("III3", r"4\.4 times", same_as("eq22.contact_to_free_ratio")),
+    ("III3", r"independent of the ratio between the distributed", same_as("eq22.resonances_independent")),
+    ("III4", r"changing the boundary condition given in Eq\. \(4a\)", _frictionless_from_4a),
+    ("III4", r"resonances are similar to that of a free cantilever", same_as("eq26.resonances_reference")),
+    ("III5", r"independent of the cantilever length", same_as("eq28.nonpiezo_contact_static")),
+    ("III5", r"measured signal is equal to surface displacement", same_as("eq28.stiff_contact_static")),
+    ("III5", r"resonant frequencies for the cantilever increase", same_as("eq28.resonances_increase_with_k1")),
+    ("III5", r"Eq\. \(28\) becomes Eq\. \(5\)", same_as("eq28.free_limit_reference")),
+    ("III6", r"depend on the stiffness constant", _torsion_depends_on_k2),
+    ("III6", r"does not increase with the mode number", _torsion_crossover),
+    ("III6", r"infinitely stiff contact", same_as("eq33.limits")),
+    ("IV1", r"inversely proportional to the cantilever spring constant", _nonlocal_vs_k),
+    ("IV1", r"non-local interactions are formally absent", _linear_in_bias),
+    ("IV2", r"phase changes by 180° across resonance", _phase_flip_at_lines),
+    ("IV2", r"independent of \$\\Delta V\$", _linear_in_bias),
+    ("IV2", r"linear in \$\\Delta V\$", _linear_in_bias),
+    ("IV2", r"position of the resonances is determined solely", same_as("eq10.resonances_independent")),
+    ("IV2", r"zeroes on the response diagram are strongly bias dependent", _zeros_bias_dependent),
+    ("IV2", r"scales proportionally to the cantilever spring constant", same_as("fig6.crossover_scales_with_k")),
+    ("IV2", r"relative contribution of the electromechanical contrast increases", same_as("fig6.high_frequency_em")),
+    ("IV2", r"resonances do not affect the relative", same_as("fig6.resonances_keep_ratio")),
+    ("IV2", r"boundary between the local electrostatic and\s+electromechanical", same_as("fig7.local_boundary_frequency_independent")),
+    ("IV2", r"frequency independent ratio between local", same_as("fig7.local_boundary_frequency_independent")),
+    ("IV3", r"always 180° or 0°", _domains("low_frequency")),
+    ("IV3", r"response amplitudes are equal in", _domains("pure_em")),
+    ("IV3", r"strong electrostatic contribution, the phase changes weakly", _domains("strong_el")),
+    ("IV3", r"small non-local electrostatic contribution", _domains("weak_el")),
+    ("IV3", r"limit of a small piezoelectric contribution", same_as("eq40.small_piezo")),
+    ("V", r"linear in the tip-surface potential difference", _linear_in_bias),
+    ("VI1", r"checkerboard", _phase_flip_at_lines),
+    ("VI1", r"Similarly to tip 1, the nulling bias is frequency independent", _tip1_null_consistency),
+    ("V", r"Co-Cr coated tips", _nominal_resonance),
+    ("VI4", r"greatest for PZT grain", _fig15_grains),
+    ("VI1", r"non-contact mode are identical to that for", _noncontact_resonances_sample_free),
+    ("VI1", r"nulling bias is now strongly frequency dependent", _null_frequency_dependent),
+    ("VI2", r"nulling bias is \$V_\{null\}", _null_bias("formula")),
+    ("VI2", r"nulling bias is equal to the surface potential", _null_bias("limits")),
+    ("VI2", r"there is no nulling bias", _null_bias("limits")),
+    ("VI2", r"close to nulling potential, the phase changes by 180", _domains("pure_em")),
+    ("VI2", r"opposite for these two grains", _null_bias("formula")),
+    ("VI3", r"virtually bias independent", _null_bias("bias")),
+    ("VI1", r"frequency independent nulling bias is", _null_bias("limits")),
+    ("VI3", r"strongly bias dependent for a good tip", _null_bias("bias")),
+    ("VI4", r"coincide for a given sample", same_as("eq10.resonances_independent")),
+    ("VI4", r"resonant frequencies of a cantilever in contact with the surface are identical",
+     same_as("eq28.resonances_increase_with_k1")),
+    ("VI4", r"determined unambiguously", same_as("eq41.deconvolution")),
+    ("conclusions", r"determined solely by the cantilever spring constant", same_as("eq10.resonances_independent")),
+    ("conclusions", r"decays faster with frequency", _scaling_order("nonlocal_fastest")),
+    ("conclusions", r"are additive", _additive),
+    ("conclusions", r"does not change significantly at the resonances", same_as("fig6.resonances_keep_ratio")),
+    ("conclusions", r"electromechanical and local electrostatic contributions is frequency independent",
+     same_as("eq15_18.piezo_to_local_ratio")),
+    ("conclusions", r"vertical and longitudinal vibration modes are generally different",
+     _same_denominator_for_vertical_and_longitudinal),
+    ("conclusions", r"determined unambiguously as the slope", same_as("eq41.deconvolution")),
+]
+
+
+def _undecided(sec: str, sentence: str):
+    measured = sec.startswith("VI") or sec in ("V",) or re.search(r"experiment|measured|observed|Fig\.", sentence)
+    why = ("an observation of measured data; the model does not decide it" if measured else
+           "a qualitative or methodological remark that no derivation in pfmdyn decides")
+    return UNDECIDABLE, why, ""
+
+
+@lru_cache(maxsize=1)
+def statements() -> tuple[tuple[str, str, str, Callable], ...]:
+    """(id, section number, sentence, decider) for every extracted statement."""
+    out, counters, used = [], Counter(), set()
+    for sec in T.text_sections():
+        if sec.tag in ("abstract", "I"):
+            continue                     # the abstract and introduction restate, they do not claim anew
+        for sentence in sec.sentences:
+            flat = re.sub(r"\$\$.*?\$\$", " ", sentence)
+            deciders = [(i, d) for i, (tag, pat, d) in enumerate(DECIDERS)
+                        if tag == sec.tag and re.search(pat, sentence)]
+            if not deciders and not TRIGGERS.search(flat):
+                continue
+            counters[sec.tag] += 1
+            used.update(i for i, _ in deciders)
+            decide = deciders[0][1] if deciders else (lambda s=sec.tag, t=sentence: _undecided(s, t))
+            out.append((f"text.{sec.tag}.{counters[sec.tag]}", sec.number, sentence, decide))
+    unused = [DECIDERS[i][:2] for i in range(len(DECIDERS)) if i not in used]
+    if out and unused:
+        raise RuntimeError(f"deciders that match no sentence of the transcription: {unused}")
+    return tuple(out)
+
+
+def register() -> int:
+    if not T.sections():
+        return 0
+    for cid, number, sentence, decide in statements():
+        claim(cid, number, T.clip(sentence, 300), chapter=CHAPTER, kind="statement")(decide)
+    return len(statements())
+
+
+register()

@@ -1,0 +1,80 @@
+"""The audit of the paper's text: extraction from the transcription and checks against targets.
+
+Skipped when the transcription (shared/paper/ beside the source tree, or $PFMDYN_PAPER) is absent.
+Each check is shown to fail on a wrong target and to pass on the right one.
+"""
+from __future__ import annotations
+
+import pytest
+
+from pfmdyn.derivations.checks import core, statements, xref
+from pfmdyn.derivations.paper import text as T
+
+pytestmark = pytest.mark.skipif(not T.sections(), reason="paper transcription not found")
+
+
+def _ref(kind, section, sentence, ref_text, targets):
+    start = sentence.index(ref_text)
+    r = T.Reference(kind, section, sentence, ref_text, targets, start, start + len(ref_text))
+    return T.Reference(kind, section, sentence, ref_text, targets, start, start + len(ref_text),
+                       T._context(sentence, [r], r) if kind == "figure" else sentence)
+
+
+def test_every_reference_and_statement_has_an_id_and_a_verdict():
+    refs, stmts = T.references(), statements.statements()
+    assert len(refs) >= 100 and len(stmts) >= 90 and len(T.symbols()) >= 50
+    ids = [i for i in core.REGISTRY if i.startswith(("xref.", "text.", "symbol.", "structure."))]
+    assert len(ids) == len(set(ids)) == len(refs) + len(stmts) + len(T.symbols()) + 4 + len(T.captions())
+    kinds = {r.kind for r in refs}
+    assert kinds == {"equation", "figure", "section", "table"}
+
+
+def test_captions_are_parsed_into_panels_with_properties():
+    fig10 = T.captions()[10]
+    assert fig10.panels == tuple("abcdefghijkl")
+    assert fig10.described["e"]["regime"] == {"contact"} and fig10.described["c"]["direction"] == {"lateral"}
+    assert T.captions()[2].panels == ("a", "b")
+
+
+@pytest.mark.parametrize("sentence, ref_text, targets, verdict", [
+    ("For comparison, Fig. 8 c,d are the response diagrams from the LiNbO$_3$ surface.", "Fig. 8 c,d",
+     ((8, ("c", "d")),), core.ERRATUM),
+    ("For comparison, Fig. 8 e,f are the response diagrams from the LiNbO$_3$ surface.", "Fig. 8 e,f",
+     ((8, ("e", "f")),), core.HOLDS),
+    ("This mechanism is illustrated in Fig. 2d.", "Fig. 2d", ((2, ("d",)),), core.ERRATUM),
+    ("This mechanism is illustrated in Fig. 2b.", "Fig. 2b", ((2, ("b",)),), core.HOLDS),
+])
+def test_panel_references_are_checked_against_the_caption(sentence, ref_text, targets, verdict):
+    assert xref.check_figure(_ref("figure", "VI1", sentence, ref_text, targets))[0] == verdict
+
+
+def test_section_references_are_checked_against_the_section():
+    wrong = "Tip wear effect of force-bias response spectrum is illustrated in Section IV.3."
+    right = wrong.replace("IV.3", "VI.3")
+    assert xref.check_section(_ref("section", "VI", wrong, "Section IV.3", ("IV.3",)))[0] == core.ERRATUM
+    assert xref.check_section(_ref("section", "VI", right, "Section VI.3", ("VI.3",)))[0] == core.HOLDS
+    missing = wrong.replace("IV.3", "IX.3")
+    assert xref.check_section(_ref("section", "VI", missing, "Section IX.3", ("IX.3",)))[0] == core.ERRATUM
+
+
+def test_equation_references_need_the_right_tip_conditions():
+    s = "The resonances are similar to that of a free cantilever under the electrostatic forces given in Eq. (20)."
+    assert xref.check_equation(_ref("equation", "III4", s, "Eq. (20)", ("20",)))[0] == core.ERRATUM
+    s22 = s.replace("(20)", "(22)")
+    assert xref.check_equation(_ref("equation", "III4", s22, "Eq. (22)", ("22",)))[0] == core.HOLDS
+    s99 = s.replace("(20)", "(99)")
+    assert xref.check_equation(_ref("equation", "III4", s99, "Eq. (99)", ("99",)))[0] == core.ERRATUM
+
+
+def test_symbol_misprints_are_found_and_defined_symbols_pass():
+    assert xref.check_symbol("d_{elf}")[0] == core.ERRATUM
+    assert "d_{el}" in xref.check_symbol("d_{elf}")[1]
+    assert xref.check_symbol("d_{eff}")[0] == core.HOLDS
+    assert xref.check_symbol("A_{el}")[0] == core.ERRATUM       # defined with G_loc and with G_nl
+
+
+def test_a_statement_decider_follows_the_derivation():
+    verdict, evidence, correct = statements._torsion_crossover()
+    assert verdict == core.ERRATUM and "(n - 1/4) pi" in correct
+    assert statements._limiting_cases_order()[0] == core.ERRATUM
+    assert statements._scaling_order("nonlocal_fastest")()[0] == core.HOLDS
