@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .instruments import Channel, InstrumentRecord, make_record
+from .record import Channel, InstrumentRecord, make_record
 
 __all__ = ["read_hdf5"]
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .instruments import Channel, InstrumentRecord, make_record
+from .record import Channel, InstrumentRecord, make_record
 
 __all__ = ["read_ibw"]
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MissingExtraError, UserError
-from .instruments import Channel, InstrumentRecord, make_record
+from .record import Channel, InstrumentRecord, make_record
 
 __all__ = ["read_nid", "si_value"]
 

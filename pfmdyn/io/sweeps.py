@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from .instruments import Channel, InstrumentRecord, make_record
+from .record import Channel, InstrumentRecord, make_record
 
 __all__ = ["read_sweep", "split_unit"]
 
