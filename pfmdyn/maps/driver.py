@@ -1,0 +1,175 @@
+"""Run the per-pixel fit over a whole map on Dask and stream the maps to Zarr, resumably.
+
+The map is cut into pixel blocks (``block`` x ``block`` pixels, all frequencies).  Each block is
+one Dask task that reads its spectra, fits them with :func:`pfmdyn.maps.fit.fit_block` and writes
+its region of every output array in ``OUT/maps.zarr``; a per-block flag array ``done`` is set last,
+so a rerun after an interruption skips finished blocks.  Nothing holds the whole map in memory.
+"""
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import MissingExtraError, UserError
+from .fit import QUANTITIES, BeamMapModel, fit_block
+
+__all__ = ["MapInput", "open_map", "run_map"]
+
+METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
+
+
+def _require(module: str):
+    try:
+        return __import__(module)
+    except ImportError:
+        raise MissingExtraError(module, "maps") from None
+
+
+@dataclass(frozen=True)
+class MapInput:
+    """Where the spectra are (``path`` and dataset name) and the model metadata."""
+
+    path: str
+    model: BeamMapModel
+    shape: tuple[int, int]
+
+
+def open_map(path: str, overrides: dict | None = None) -> MapInput:
+    """Read the plain layout: ``response`` (ny, nx, n_freq) complex, ``frequency_hz``, root attributes.
+
+    The file is an HDF5 file (``.h5``/``.hdf5``) or a Zarr group (a directory).
+    """
+    if not os.path.exists(path):
+        raise UserError(f"{path}: no such file or directory")
+    with _open(path) as root:
+        for name in ("response", "frequency_hz"):
+            if name not in root:
+                raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz)")
+        attrs = dict(root.attrs)
+        attrs.update(overrides or {})
+        missing = [key for key in METADATA if key not in attrs]
+        if missing:
+            raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
+        f = np.asarray(root["frequency_hz"][...], float)
+        shape = root["response"].shape
+    if len(shape) != 3 or shape[2] != f.size:
+        raise UserError(f"{path}: response must have shape (ny, nx, {f.size}), got {shape}")
+    if not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(np.diff(f) <= 0):
+        raise UserError(f"{path}: frequency_hz must be positive, finite and increasing")
+    meta = {short: float(attrs[key]) for key, short in METADATA.items()}
+    return MapInput(path, BeamMapModel(frequency_hz=f, **meta), shape[:2])
+
+
+class _open:
+    """Context manager giving the root group of an HDF5 file or a Zarr directory."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __enter__(self):
+        if os.path.isdir(self.path):
+            return _require("zarr").open_group(self.path, mode="r")
+        self._file = _require("h5py").File(self.path, "r")
+        return self._file
+
+    def __exit__(self, *exc):
+        if hasattr(self, "_file"):
+            self._file.close()
+
+
+def _blocks(shape, block):
+    ny, nx = shape
+    return [(by, bx) for by in range(math.ceil(ny / block)) for bx in range(math.ceil(nx / block))]
+
+
+def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
+    zarr = _require("zarr")
+    ys, xs = slice(by * block, (by + 1) * block), slice(bx * block, (bx + 1) * block)
+    with _open(source.path) as root:
+        response = np.asarray(root["response"][ys, xs, :])
+    if not np.all(np.isfinite(response)):
+        raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
+    result = fit_block(source.model, response, **options)
+    group = zarr.open_group(out, mode="r+")
+    for name, value in result.items():
+        group[name][ys, xs] = value
+    group["done"][by, bx] = 1
+    return response.shape[0] * response.shape[1]
+
+
+def _output(out, source: MapInput, block: int):
+    zarr = _require("zarr")
+    group = zarr.open_group(out, mode="a")
+    ny, nx = source.shape
+    grid = (math.ceil(ny / block), math.ceil(nx / block))
+    if "done" in group and group["done"].shape != grid:
+        raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
+    for name, (unit, text) in QUANTITIES.items():
+        if name not in group:
+            arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
+            arr.attrs.update(units=unit, description=text)
+    if "done" not in group:
+        group.zeros("done", shape=grid, chunks=grid, dtype="u1")
+    group.attrs.update(source=os.path.abspath(source.path), block=block)
+    return group
+
+
+def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str | None = None,
+            progress: bool = True, **options) -> dict:
+    """Fit every pixel of ``source`` and write ``out_dir/maps.zarr``; returns a summary.
+
+    ``scheduler``: None (Dask's local threaded scheduler on all cores), ``"sync"`` (one thread),
+    or ``tcp://HOST:PORT`` (a running ``dask.distributed`` scheduler).  Blocks flagged done in an
+    existing output are skipped.
+    """
+    dask = _require("dask")
+    import dask.delayed  # noqa: F401  (submodule import)
+    os.makedirs(out_dir, exist_ok=True)
+    out = os.path.join(out_dir, "maps.zarr")
+    group = _output(out, source, block)
+    done = np.asarray(group["done"][...])
+    todo = [b for b in _blocks(source.shape, block) if not done[b]]
+    tasks = [dask.delayed(_process)(source, out, by, bx, block, options) for by, bx in todo]
+    start = time.perf_counter()
+    pixels = _compute(tasks, scheduler, progress, len(_blocks(source.shape, block)) - len(todo))
+    elapsed = time.perf_counter() - start
+    gap = np.asarray(group["gap"][...])
+    summary = {"blocks_run": len(todo), "pixels_fitted": pixels,
+               "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
+               "explained_fraction": float(np.nanmean(group["explained"][...])),
+               "median_gap": float(np.nanmedian(gap)), "out": out}
+    return summary
+
+
+def _compute(tasks, scheduler, progress, already):
+    """Run the block tasks, with a tqdm bar of blocks done and pixels per second."""
+    from tqdm.auto import tqdm
+    bar = tqdm(total=len(tasks) + already, initial=already, unit="block", disable=not progress)
+    pixels = 0
+    if scheduler and "://" in scheduler:
+        distributed = _require("distributed")
+        with distributed.Client(scheduler) as client:
+            for future in distributed.as_completed(client.compute(tasks)):
+                pixels += future.result()
+                bar.update(1)
+                bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
+    else:
+        import dask
+        from dask.callbacks import Callback
+
+        class _Bar(Callback):
+            def _posttask(self, key, result, dsk, state, worker_id):
+                nonlocal pixels
+                if isinstance(result, int):
+                    pixels += result
+                    bar.update(1)
+                    bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
+
+        with _Bar():
+            dask.compute(*tasks, scheduler="sync" if scheduler == "sync" else "threads")
+    bar.close()
+    return pixels
