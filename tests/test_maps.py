@@ -7,6 +7,8 @@ and a stiff inclusion, a known Q and complex Gaussian noise.
 from __future__ import annotations
 
 import shutil
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +16,8 @@ import pytest
 h5py = pytest.importorskip("h5py")
 zarr = pytest.importorskip("zarr")
 pytest.importorskip("dask")
+# The independent FE generator lives beside the tests (importlib mode: not on sys.path).
+sys.path.insert(0, str(Path(__file__).parent))
 
 from fe_beam import FEBeam  # noqa: E402
 from pfmdyn.cli import main  # noqa: E402
@@ -65,8 +69,10 @@ def local_run(synthetic, tmp_path_factory):
 def test_k1_recovered_within_uncertainty(synthetic, local_run):
     _, k1 = synthetic
     m = _maps(local_run)
-    within = np.abs(m["k1"] - k1) <= 2 * m["k1_stderr"]
-    assert within.mean() >= 0.95, within.mean()
+    z = (m["k1"] - k1) / m["k1_stderr"]
+    assert np.mean(np.abs(z) <= 3) >= 0.95, np.mean(np.abs(z) <= 3)
+    # the reported standard error is calibrated: about 68 % of pixels within one of it
+    assert 0.6 <= np.mean(np.abs(z) <= 1) <= 0.8, np.mean(np.abs(z) <= 1)
     assert np.median(np.abs(m["quality_factor"] / Q - 1)) < 0.05
     # domains: d_eff phases differ by pi between the halves
     dphi = np.angle(np.exp(1j * (m["phase"][:, :N // 2].mean() - m["phase"][:, N // 2:].mean())))
