@@ -62,7 +62,8 @@ def _maps(out):
 def local_run(synthetic, tmp_path_factory):
     path, _ = synthetic
     out = tmp_path_factory.mktemp("local")
-    assert main(["map", str(path), "--out", str(out), "--no-progress"]) == 0
+    assert main(["map", str(path), "--out", str(out), "--no-progress", "--png"]) == 0
+    assert (out / "k1.png").stat().st_size > 1000
     return out
 
 
@@ -118,3 +119,10 @@ def test_bad_input_is_one_line_error(tmp_path, capsys):
         h["frequency_hz"] = [1.0]
     assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "missing dataset 'response'" in capsys.readouterr().err
+
+
+def test_missing_extra_names_it(synthetic, tmp_path, monkeypatch, capsys):
+    path, _ = synthetic
+    monkeypatch.setitem(sys.modules, "zarr", None)        # import zarr raises ImportError
+    assert main(["map", str(path), "--out", str(tmp_path)]) == 2
+    assert "pip install 'pfmdyn[maps]'" in capsys.readouterr().err

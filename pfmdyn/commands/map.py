@@ -34,6 +34,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gap-threshold", type=float, default=0.2,
                         help="relative residual above which a pixel is marked unexplained (default 0.2)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
     for flag, key in _OVERRIDES.items():
         parser.add_argument("--" + flag.replace("_", "-"), type=float, default=None,
                             help=f"override the file's {key}")
@@ -51,6 +52,10 @@ def run(args) -> int:
     s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, progress=not args.no_progress,
                 q0=args.quality_factor, gap_threshold=args.gap_threshold)
     ny, nx = source.shape
+    if args.png:
+        from ..maps.driver import read_maps
+        from ..plots.maps import plot_maps
+        plot_maps(*read_maps(s["out"]), args.out)
     print(f"{ny}x{nx} pixels, {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s); "
           f"explained {100 * s['explained_fraction']:.1f} %, median gap {s['median_gap']:.3g}; maps in {s['out']}")
     return 0

@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import MissingExtraError, UserError
 from .fit import QUANTITIES, BeamMapModel, fit_block
 
-__all__ = ["MapInput", "open_map", "run_map"]
+__all__ = ["MapInput", "open_map", "run_map", "read_maps"]
 
 METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
 
@@ -173,3 +173,10 @@ def _compute(tasks, scheduler, progress, already):
             dask.compute(*tasks, scheduler="sync" if scheduler == "sync" else "threads")
     bar.close()
     return pixels
+
+
+def read_maps(out: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """The fitted maps of ``out`` (a ``maps.zarr`` directory) and their units."""
+    group = _require("zarr").open_group(out, mode="r")
+    maps = {name: np.asarray(group[name][...]) for name in QUANTITIES if name in group}
+    return maps, {name: group[name].attrs.get("units", "") for name in maps}
