@@ -113,18 +113,25 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     _, r = _residual(model, p, y)
     cost = np.sum(r**2, axis=1)
     lam = np.full(len(y), 1e-2)
+    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
     for _ in range(iterations):
-        J = _jacobian(model, p, y, r)
+        if active.size == 0:
+            break
+        pa, ra, ya, la = p[active], r[active], y[active], lam[active]
+        J = _jacobian(model, pa, ya, ra)
         JtJ = np.einsum("nki,nkj->nij", J, J)
-        grad = np.einsum("nki,nk->ni", J, r)
-        A = JtJ + lam[:, None, None] * (JtJ * np.eye(2) + 1e-12 * np.eye(2))
+        grad = np.einsum("nki,nk->ni", J, ra)
+        A = JtJ + la[:, None, None] * (JtJ * np.eye(2) + 1e-12 * np.eye(2))
         step = -np.linalg.solve(A, grad[..., None])[..., 0]
-        trial = np.clip(p + step, np.log([k1_range[0] / 10, 1.0]), np.log([k1_range[1] * 10, 1e5]))
-        _, r_new = _residual(model, trial, y)
+        trial = np.clip(pa + step, np.log([k1_range[0] / 10, 1.0]), np.log([k1_range[1] * 10, 1e5]))
+        _, r_new = _residual(model, trial, ya)
         c_new = np.sum(r_new**2, axis=1)
-        better = c_new < cost
-        p[better], r[better], cost[better] = trial[better], r_new[better], c_new[better]
-        lam = np.where(better, lam / 3, lam * 4)
+        better = c_new < cost[active]
+        idx = active[better]
+        p[idx], r[idx], cost[idx] = trial[better], r_new[better], c_new[better]
+        lam[active] = np.where(better, la / 3, la * 4)
+        small = np.max(np.abs(step), axis=1) < 1e-8
+        active = active[~((better & small) | (lam[active] > 1e8))]
     J = _jacobian(model, p, y, r)
     JtJ = np.einsum("nki,nkj->nij", J, J)
     dof = max(r.shape[1] - 4, 1)
