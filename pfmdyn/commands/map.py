@@ -4,6 +4,7 @@
 
     pfmdyn map scan.h5 --out result/                       # Dask local scheduler, all cores
     pfmdyn map scan.h5 --out result/ --scheduler tcp://host:8786
+    pfmdyn map be_usid.h5 --out result/ --spring-constant 2 --length 225e-6   # pycroscopy USID
 
 The input holds ``response`` (ny, nx, n_freq, complex), ``frequency_hz`` and the cantilever
 metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
@@ -23,7 +24,7 @@ _OVERRIDES = {"spring_constant": "spring_constant_n_per_m", "length": "length_m"
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
-    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response, frequency_hz")
+    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response, frequency_hz; or USID BE HDF5")
     parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
     parser.add_argument("--model", default="elastic", choices=["elastic"],
                         help="per-pixel model: elastic contact, k1 + loss 1/Q + complex d_eff (default)")

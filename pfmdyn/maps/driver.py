@@ -10,76 +10,15 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MissingExtraError, UserError
-from .fit import QUANTITIES, BeamMapModel, fit_block
+from ..errors import UserError
+from .fit import QUANTITIES, fit_block
+from .readers import MapInput, open_map, read_block
+from .readers import require as _require
 
 __all__ = ["MapInput", "open_map", "run_map", "read_maps"]
-
-METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
-
-
-def _require(module: str):
-    try:
-        return __import__(module)
-    except ImportError:
-        raise MissingExtraError(module, "maps") from None
-
-
-@dataclass(frozen=True)
-class MapInput:
-    """Where the spectra are (``path`` and dataset name) and the model metadata."""
-
-    path: str
-    model: BeamMapModel
-    shape: tuple[int, int]
-
-
-def open_map(path: str, overrides: dict | None = None) -> MapInput:
-    """Read the plain layout: ``response`` (ny, nx, n_freq) complex, ``frequency_hz``, root attributes.
-
-    The file is an HDF5 file (``.h5``/``.hdf5``) or a Zarr group (a directory).
-    """
-    if not os.path.exists(path):
-        raise UserError(f"{path}: no such file or directory")
-    with _open(path) as root:
-        for name in ("response", "frequency_hz"):
-            if name not in root:
-                raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz)")
-        attrs = dict(root.attrs)
-        attrs.update(overrides or {})
-        missing = [key for key in METADATA if key not in attrs]
-        if missing:
-            raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-        f = np.asarray(root["frequency_hz"][...], float)
-        shape = root["response"].shape
-    if len(shape) != 3 or shape[2] != f.size:
-        raise UserError(f"{path}: response must have shape (ny, nx, {f.size}), got {shape}")
-    if not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(np.diff(f) <= 0):
-        raise UserError(f"{path}: frequency_hz must be positive, finite and increasing")
-    meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    return MapInput(path, BeamMapModel(frequency_hz=f, **meta), shape[:2])
-
-
-class _open:
-    """Context manager giving the root group of an HDF5 file or a Zarr directory."""
-
-    def __init__(self, path):
-        self.path = path
-
-    def __enter__(self):
-        if os.path.isdir(self.path):
-            return _require("zarr").open_group(self.path, mode="r")
-        self._file = _require("h5py").File(self.path, "r")
-        return self._file
-
-    def __exit__(self, *exc):
-        if hasattr(self, "_file"):
-            self._file.close()
-
 
 def _blocks(shape, block):
     ny, nx = shape
@@ -89,8 +28,7 @@ def _blocks(shape, block):
 def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
     zarr = _require("zarr")
     ys, xs = slice(by * block, (by + 1) * block), slice(bx * block, (bx + 1) * block)
-    with _open(source.path) as root:
-        response = np.asarray(root["response"][ys, xs, :])
+    response = read_block(source, ys, xs)
     if not np.all(np.isfinite(response)):
         raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
     result = fit_block(source.model, response, **options)
