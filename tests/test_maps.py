@@ -55,7 +55,8 @@ def synthetic(tmp_path_factory):
 
 def _maps(out):
     group = zarr.open_group(str(out / "maps.zarr"), mode="r")
-    return {name: np.asarray(group[name][...]) for name in ("k1", "k1_stderr", "quality_factor", "phase", "gap")}
+    return {name: np.asarray(group[name][...]) for name in ("k1", "k1_stderr", "quality_factor", "phase", "gap")
+            if name in group}
 
 
 @pytest.fixture(scope="module")
@@ -154,3 +155,17 @@ def test_usid_layout_gives_the_plain_layout_maps(synthetic, local_run, tmp_path)
                  "--spring-constant", str(K), "--length", str(L)]) == 0
     for name, value in _maps(tmp_path / "o").items():
         np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)
+
+
+def test_contact_frequency_map_to_k1(synthetic, tmp_path):
+    pytest.importorskip("pfmdyn.analysis.stiffness")
+    _, k1 = synthetic
+    beams = {v: FEBeam(K, L, F1, H, k1=v, n_elements=200) for v in np.unique(k1)}
+    free = beams[150.0].free_resonances(1)[0]
+    fc = {v: b.contact_resonances(1)[0] for v, b in beams.items()}
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.vectorize(fc.get)(k1)
+        h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
+    assert main(["map", str(path), "--out", str(tmp_path)]) == 0
+    np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)

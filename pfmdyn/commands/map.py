@@ -8,7 +8,8 @@
 
 The input holds ``response`` (ny, nx, n_freq, complex), ``frequency_hz`` and the cantilever
 metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
-units in the attributes.  Rerunning an interrupted command resumes where it stopped.
+units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
+becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  Rerunning an interrupted command resumes where it stopped.
 """
 from __future__ import annotations
 
@@ -49,6 +50,12 @@ def run(args) -> int:
         if not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     overrides = {key: getattr(args, flag) for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
+    from ..maps.contact import contact_map, is_contact_map
+    if is_contact_map(args.data):
+        s = contact_map(args.data, args.out, overrides)
+        print(f"contact-frequency map: k1 at {100 * s['explained_fraction']:.1f} % of pixels, "
+              f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
+        return 0
     source = open_map(args.data, overrides)
     s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, progress=not args.no_progress,
                 q0=args.quality_factor, gap_threshold=args.gap_threshold)
