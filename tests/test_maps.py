@@ -169,3 +169,14 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
         h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
     assert main(["map", str(path), "--out", str(tmp_path)]) == 0
     np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
+
+
+def test_zarr_group_input(synthetic, local_run, tmp_path):
+    path, _ = synthetic
+    group = zarr.open_group(str(tmp_path / "be.zarr"), mode="w")
+    with h5py.File(path, "r") as h:
+        group["response"] = h["response"][:16, :16]
+        group["frequency_hz"] = h["frequency_hz"][...]
+        group.attrs.update({key: float(v) for key, v in h.attrs.items()})
+    assert main(["map", str(tmp_path / "be.zarr"), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    np.testing.assert_array_equal(_maps(tmp_path / "o")["k1"], _maps(local_run)["k1"][:16, :16])
