@@ -1,0 +1,182 @@
+"""``pfmdyn map``: synthetic band-excitation maps from the finite-element beam (tests/fe_beam.py).
+
+The spectra come from the independent FE cantilever, one solve per distinct k1 value, never from
+the fitting code path.  The map has two ferroelectric domains (d_eff phase 0 and pi, different k1)
+and a stiff inclusion, a known Q and complex Gaussian noise.
+"""
+from __future__ import annotations
+
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+h5py = pytest.importorskip("h5py")
+zarr = pytest.importorskip("zarr")
+pytest.importorskip("dask")
+# The independent FE generator lives beside the tests (importlib mode: not on sys.path).
+sys.path.insert(0, str(Path(__file__).parent))
+
+from fe_beam import FEBeam  # noqa: E402
+from pfmdyn.cli import main  # noqa: E402
+from pfmdyn.maps.driver import open_map, run_map  # noqa: E402
+
+K, L, F1, H, Q = 2.0, 225e-6, 75e3, 10e-6, 60.0
+N = 32
+
+
+def _k1_pattern():
+    yy, xx = np.mgrid[:N, :N]
+    k1 = np.where(xx < N // 2, 150.0, 400.0)
+    k1[(yy - 20) ** 2 + (xx - 9) ** 2 < 16] = 1500.0
+    return k1, np.where(xx < N // 2, 1.0, -1.0)
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    k1, sign = _k1_pattern()
+    beams = {v: FEBeam(K, L, F1, H, k1=v, Q=Q, n_elements=60) for v in np.unique(k1)}
+    first = [b.contact_resonances(1)[0] for b in beams.values()]
+    f = np.linspace(0.85 * min(first), 1.15 * max(first), 64)
+    shapes = {v: b.slope(f)[:, 0] for v, b in beams.items()}
+    clean = np.stack([sign[i, j] * 2e-3 * shapes[k1[i, j]] for i in range(N) for j in range(N)]).reshape(N, N, -1)
+    rng = np.random.default_rng(7)
+    noise = 0.005 * np.abs(clean).max(axis=2, keepdims=True) * (rng.standard_normal(clean.shape)
+                                                               + 1j * rng.standard_normal(clean.shape))
+    path = tmp_path_factory.mktemp("map") / "be.h5"
+    with h5py.File(path, "w") as h:
+        h["response"] = clean + noise
+        h["frequency_hz"] = f
+        h.attrs.update(spring_constant_n_per_m=K, length_m=L, width_m=40e-6, tip_height_m=H, free_resonance_hz=F1)
+    return path, k1
+
+
+def _maps(out):
+    group = zarr.open_group(str(out / "maps.zarr"), mode="r")
+    return {name: np.asarray(group[name][...]) for name in ("k1", "k1_stderr", "quality_factor", "phase", "gap")
+            if name in group}
+
+
+@pytest.fixture(scope="module")
+def local_run(synthetic, tmp_path_factory):
+    path, _ = synthetic
+    out = tmp_path_factory.mktemp("local")
+    assert main(["map", str(path), "--out", str(out), "--no-progress", "--png"]) == 0
+    assert (out / "k1.png").stat().st_size > 1000
+    return out
+
+
+def test_k1_recovered_within_uncertainty(synthetic, local_run):
+    _, k1 = synthetic
+    m = _maps(local_run)
+    z = (m["k1"] - k1) / m["k1_stderr"]
+    assert np.mean(np.abs(z) <= 3) >= 0.95, np.mean(np.abs(z) <= 3)
+    # the reported standard error is calibrated: about 68 % of pixels within one of it
+    assert 0.6 <= np.mean(np.abs(z) <= 1) <= 0.8, np.mean(np.abs(z) <= 1)
+    assert np.median(np.abs(m["quality_factor"] / Q - 1)) < 0.05
+    # domains: d_eff phases differ by pi between the halves
+    dphi = np.angle(np.exp(1j * (m["phase"][:, :N // 2].mean() - m["phase"][:, N // 2:].mean())))
+    assert abs(abs(dphi) - np.pi) < 0.1
+    group = zarr.open_group(str(local_run / "maps.zarr"), mode="r")
+    assert group["k1"].attrs["units"] == "N/m" and group["k1"].shape == (N, N)
+
+
+def test_interrupted_run_resumes_to_identical_maps(synthetic, local_run, tmp_path):
+    path, _ = synthetic
+    out = tmp_path / "resumed"
+    shutil.copytree(local_run, out)
+    group = zarr.open_group(str(out / "maps.zarr"), mode="r+")
+    done = np.asarray(group["done"][...])
+    done[1:, :] = 0                                   # as if stopped after the first row of blocks
+    group["done"][...] = done
+    group["k1"][16:, :] = np.nan
+    summary = run_map(open_map(str(path)), str(out), progress=False)
+    assert summary["blocks_run"] == 2                 # only the unfinished blocks
+    np.testing.assert_array_equal(_maps(out)["k1"], _maps(local_run)["k1"])
+
+
+def test_distributed_cluster_gives_identical_maps(synthetic, local_run, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    path, _ = synthetic
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        run_map(open_map(str(path)), str(tmp_path), scheduler=cluster.scheduler_address, progress=False)
+    for name, value in _maps(tmp_path).items():
+        np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)
+
+
+def test_bad_input_is_one_line_error(tmp_path, capsys):
+    path = tmp_path / "bad.h5"
+    with h5py.File(path, "w") as h:
+        h["response"] = np.ones((2, 2, 3), complex)
+        h["frequency_hz"] = [3.0, 2.0, 1.0]
+        h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=F1)
+    assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "frequency_hz must be positive, finite and increasing" in capsys.readouterr().err
+    path.unlink()
+    with h5py.File(path, "w") as h:
+        h["frequency_hz"] = [1.0]
+    assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "missing dataset 'response'" in capsys.readouterr().err
+
+
+def test_missing_extra_names_it(synthetic, tmp_path, monkeypatch, capsys):
+    path, _ = synthetic
+    monkeypatch.setitem(sys.modules, "zarr", None)        # import zarr raises ImportError
+    assert main(["map", str(path), "--out", str(tmp_path)]) == 2
+    assert "pip install 'pfmdyn[maps]'" in capsys.readouterr().err
+
+
+def _write_usid(path, response, f, attrs):
+    """BE data the way BGlib writes it: positions x spectral values, with ancillary references."""
+    ny, nx, nf = response.shape
+    with h5py.File(path, "w") as h:
+        h.attrs.update(attrs)
+        chan = h.create_group("Measurement_000/Channel_000")
+        raw = chan.create_dataset("Raw_Data", data=response.reshape(ny * nx, nf))
+        yy, xx = np.divmod(np.arange(ny * nx), nx)
+        pos = chan.create_dataset("Position_Indices", data=np.stack([xx, yy], axis=1).astype(np.uint32))
+        pos.attrs["labels"] = ["X", "Y"]
+        spec = chan.create_dataset("Spectroscopic_Values", data=f[None, :])
+        spec.attrs["labels"] = ["Frequency"]
+        spec.attrs["units"] = ["Hz"]
+        raw.attrs["Position_Indices"], raw.attrs["Spectroscopic_Values"] = pos.ref, spec.ref
+
+
+def test_usid_layout_gives_the_plain_layout_maps(synthetic, local_run, tmp_path):
+    path, _ = synthetic
+    with h5py.File(path, "r") as h:
+        response, f = h["response"][...], h["frequency_hz"][...]
+    usid = tmp_path / "be_usid.h5"
+    _write_usid(usid, response, f, {"tip_height_m": H, "free_resonance_hz": F1})
+    assert main(["map", str(usid), "--out", str(tmp_path / "o"), "--no-progress",
+                 "--spring-constant", str(K), "--length", str(L)]) == 0
+    for name, value in _maps(tmp_path / "o").items():
+        np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)
+
+
+def test_contact_frequency_map_to_k1(synthetic, tmp_path):
+    pytest.importorskip("pfmdyn.analysis.stiffness")
+    _, k1 = synthetic
+    beams = {v: FEBeam(K, L, F1, H, k1=v, n_elements=80) for v in np.unique(k1)}
+    free = beams[150.0].free_resonances(1)[0]
+    fc = {v: b.contact_resonances(1)[0] for v, b in beams.items()}
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.vectorize(fc.get)(k1)
+        h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
+    assert main(["map", str(path), "--out", str(tmp_path)]) == 0
+    np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
+
+
+def test_zarr_group_input(synthetic, local_run, tmp_path):
+    path, _ = synthetic
+    group = zarr.open_group(str(tmp_path / "be.zarr"), mode="w")
+    with h5py.File(path, "r") as h:
+        group["response"] = h["response"][:16, :16]
+        group["frequency_hz"] = h["frequency_hz"][...]
+        group.attrs.update({key: float(v) for key, v in h.attrs.items()})
+    assert main(["map", str(tmp_path / "be.zarr"), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    np.testing.assert_array_equal(_maps(tmp_path / "o")["k1"], _maps(local_run)["k1"][:16, :16])
