@@ -156,6 +156,7 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     _, r = _residual(model, p, y)
     cost = np.sum(r**2, axis=1)
     lam = np.full(len(y), 1e-2)
+    dof = max(r.shape[1] - n_p - 2 * n_bands, 1)
     active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
     for _ in range(iterations):
         if active.size == 0:
@@ -173,11 +174,13 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
         idx = active[better]
         p[idx], r[idx], cost[idx] = trial[better], r_new[better], c_new[better]
         lam[active] = np.where(better, la / 3, la * 4)
-        small = np.max(np.abs(step), axis=1) < 1e-8
+        # Converged when the predicted decrease of the cost (Gauss-Newton decrement) is below
+        # 1e-6 of the noise variance: the step is then ~1e-3 standard errors.
+        decrement = -np.einsum("ni,ni->n", step, grad)
+        small = (decrement < 1e-6 * cost[active] / dof) | (np.max(np.abs(step), axis=1) < 1e-8)
         active = active[~((better & small) | (lam[active] > 1e8))]
     J = _jacobian(model, p, y, r)
     JtJ = np.einsum("nki,nkj->nij", J, J)
-    dof = max(r.shape[1] - n_p - 2 * n_bands, 1)
     cov = np.linalg.pinv(JtJ) * (cost / dof)[:, None, None]
     c, _ = _residual(model, p, y)
     k1 = np.exp(p[:, 0])
