@@ -180,3 +180,22 @@ def test_zarr_group_input(synthetic, local_run, tmp_path):
         group.attrs.update({key: float(v) for key, v in h.attrs.items()})
     assert main(["map", str(tmp_path / "be.zarr"), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
     np.testing.assert_array_equal(_maps(tmp_path / "o")["k1"], _maps(local_run)["k1"][:16, :16])
+
+
+def test_two_contact_bands_separate_k1_and_k2(tmp_path, capsys):
+    beam = FEBeam(K, L, F1, H, k1=100.0, k2=60.0, Q=80.0, n_elements=60)
+    f_contact = beam.contact_resonances(2)
+    f = np.concatenate([np.linspace(0.93, 1.07, 40) * f_contact[0], np.linspace(0.95, 1.05, 40) * f_contact[1]])
+    rng = np.random.default_rng(3)
+    y = np.broadcast_to(2e-3 * np.exp(0.3j) * beam.slope(f)[:, 0], (3, 4, f.size))
+    y = y + 0.01 * np.median(np.abs(y)) * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
+    with h5py.File(tmp_path / "two.h5", "w") as h:
+        h["response"], h["frequency_hz"] = y, f
+        h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H,
+                       free_resonance_hz=float(FEBeam(K, L, F1, H, n_elements=60).free_resonances(1)[0]))
+    assert main(["map", str(tmp_path / "two.h5"), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    assert "k1 and k2" in capsys.readouterr().out
+    group = zarr.open_group(str(tmp_path / "o" / "maps.zarr"), mode="r")
+    for name, true in (("k1", 100.0), ("k2", 60.0)):
+        z = (np.asarray(group[name][...]) - true) / np.asarray(group[f"{name}_stderr"][...])
+        assert np.all(np.abs(z) < 4), (name, z)

@@ -27,8 +27,10 @@ def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
     parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response, frequency_hz; or USID BE HDF5")
     parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
-    parser.add_argument("--model", default="elastic", choices=["elastic"],
-                        help="per-pixel model: elastic contact, k1 + loss 1/Q + complex d_eff (default)")
+    parser.add_argument("--model", default="auto", choices=["auto", "elastic"],
+                        help="per-pixel model: elastic contact, k1 + loss 1/Q + complex d_eff per band, "
+                             "and k2 when the frequencies hold two or more contact-mode bands; "
+                             "auto (default) picks that from the bands and reports it")
     parser.add_argument("--block", type=int, default=16, help="pixels per block side (default 16)")
     parser.add_argument("--scheduler", default=None,
                         help="'sync', or tcp://HOST:PORT of a dask.distributed scheduler (default: local, all cores)")
@@ -57,6 +59,10 @@ def run(args) -> int:
               f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
         return 0
     source = open_map(args.data, overrides)
+    n_bands = len(source.model.bands)
+    print(f"model ({args.model}): elastic contact + loss 1/Q, "
+          f"{'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
+          f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})")
     s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, progress=not args.no_progress,
                 q0=args.quality_factor, gap_threshold=args.gap_threshold)
     ny, nx = source.shape
