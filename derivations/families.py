@@ -9,7 +9,10 @@ A family is one set of tip conditions for Eq. 2.  Each :class:`Family` row names
 * ``roots``: the name under which ``pfmdyn roots`` and ``pfmdyn branches`` know its
   characteristic function (``None``: not offered there);
 * ``function``, ``result``: the public wrapper in :mod:`pfmdyn.transfer` and its result
-  class (``None``: no wrapper).
+  class (``None``: no wrapper);
+* ``kind``: ``flexural``, ``torsion`` or ``setback`` (which renderer writes it);
+* ``branch``, ``figure``: the stiffness parameter ``pfmdyn branches`` sweeps, and the
+  paper's figure the sweep reproduces (``None``: no branch diagram).
 
 Codegen, the root finders and the transfer wrappers all read this table (numeric code
 through ``generated/families.py``, written from it).  Plain data: importing it needs no
@@ -37,6 +40,8 @@ class Family:
     function: str | None = None
     result: str | None = None
     kind: str = "flexural"
+    branch: str | None = None
+    figure: str | None = None
 
     @property
     def source(self) -> str:
@@ -53,16 +58,19 @@ FAMILIES: tuple[Family, ...] = (
            roots="pinned", function="pinned_transfer", result="PinnedTransfer"),
     Family("elastic_contact", "elastic_contact", "solve", "Eqs. 5-10", _CONTACT,
            ("k", "k1", "k2", "H", "L"),
-           roots="elastic", function="tip_slope_transfer", result="ElasticTransfer"),
+           roots="elastic", function="tip_slope_transfer", result="ElasticTransfer",
+           branch="k2_ratio", figure="Fig. 4e"),
     Family("frictionless", "frictionless", "solve", "Eq. 23", ("d1", "f0", "q0"), ("k", "k1", "L"),
-           roots="frictionless", function="frictionless_transfer", result="FrictionlessTransfer"),
+           roots="frictionless", function="frictionless_transfer", result="FrictionlessTransfer",
+           branch="k1_over_k", figure="Fig. 4b"),
     Family("frictionless_stiff", "frictionless", "solve_stiff", "Eq. 24", ("d1", "q0"), ("k", "L"),
            function="frictionless_stiff_transfer", result="FrictionlessStiffTransfer"),
     Family("sliding_friction", "sliding_friction", "solve", "Eqs. 25-26", ("f_l",), ("k", "H", "L"),
            roots="friction", function="sliding_friction_transfer", result="FrictionTransfer"),
     Family("indentation", "indentation", "solve", "Eqs. 27-28", ("d1", "f0"), ("k", "k1", "L"),
            outputs=("slope", "deflection"),
-           roots="indentation", function="indentation_transfer", result="IndentationTransfer"),
+           roots="indentation", function="indentation_transfer", result="IndentationTransfer",
+           branch="k1_over_k", figure="Fig. 4b"),
     Family("indentation_stiff", "indentation", "solve_stiff", "Eq. 29", ("d1",), ("k", "L"),
            function="indentation_stiff_transfer", result="IndentationStiffTransfer"),
     Family("tip_mass", "tip_mass", "solve", "Eqs. 4-5 with tip inertia", _CONTACT,
@@ -71,7 +79,7 @@ FAMILIES: tuple[Family, ...] = (
            ("k", "kvv", "kll", "kvl", "H", "L")),
     Family("torsion_elastic", "torsion", "solve_elastic", "Eqs. 32-33", ("d3",), ("k2t", "H", "L"),
            outputs=("twist",), roots="torsion-elastic", function="torsion_elastic_transfer",
-           result="TorsionTransfer", kind="torsion"),
+           result="TorsionTransfer", kind="torsion", branch="k2t_HL", figure="Fig. 5c"),
     Family("torsion_force", "torsion", "solve_force", "Eqs. 34-35", ("f_lat",), ("L",),
            outputs=("twist",), roots="torsion-force", function="torsion_force_transfer",
            result="TorsionTransfer", kind="torsion"),
@@ -93,9 +101,9 @@ PARAMETER_HELP = {
     "kvl": "vertical-longitudinal coupling stiffness in beam axes (N/m)",
     "gamma": "tip position over cantilever length, 0 < gamma <= 1",
     "k2t": "lateral contact stiffness (N/m)",
-    "k1_over_k": "k1 / k, vertical contact stiffness over the cantilever spring constant",
-    "k2_ratio": "k2 H**2 / (k L**2), longitudinal contact stiffness seen through the lever arm H",
-    "k2t_HL": "k2t H L = H**2 k2 L / c_T, lateral contact stiffness over torsional stiffness",
+    "k1_over_k": "k1/k: vertical contact stiffness over the cantilever spring constant",
+    "k2_ratio": "k2 H^2/(k L^2): longitudinal contact stiffness seen through the lever arm H",
+    "k2t_HL": "H^2 k2 L/c_T: lateral contact stiffness over the torsional stiffness",
 }
 """Parameter name -> meaning (dimensional parameters with units; dimensionless ones last)."""
 

@@ -6,7 +6,8 @@ The family registry (:mod:`derivations.families`) says what is generated.  The p
 * :mod:`.stabilise`: split by parameter monomial, switch point, series branch, clipped exp;
 * one renderer per output kind: :mod:`.transfer` (one module per one-argument family),
   :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.setback`
-  (``tip_setback.py``, two arguments).
+  (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
+  registry as plain data for numeric code).
 
 :func:`render_all` maps every output file name to its text; a renderer is added by adding
 its files there.  Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).
@@ -16,7 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..trig import from_atoms
-from . import setback
+from . import registry, setback
 from .characteristic import beta1_free, characteristic_families, dimensionless, render_characteristic
 from .stabilise import series_branch, split, switch_point
 from .transfer import Family, Function, families, render_family
@@ -34,6 +35,7 @@ def render_all() -> dict[str, str]:
     files = {f"{fam.module}.py": render_family(fam) for fam in families()}
     files["characteristic.py"] = render_characteristic()
     files["tip_setback.py"] = setback.render()
+    files["families.py"] = registry.render()
     return dict(sorted(files.items()))
 
 
