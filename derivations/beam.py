@@ -17,7 +17,7 @@ Sign conventions used throughout ``derivations``:
 The general solution comes from :func:`sympy.dsolve`; each boundary-condition family
 (one module each) adds two conditions at ``x = L``. The resulting 4x4 linear system is
 solved by Cramer's rule and every entry is brought to a canonical trigonometric normal
-form (see :func:`trig_normal_form`), so results are exact and fast to obtain.
+form (see :func:`derivations.trig.normal_form`), so results are exact and fast to obtain.
 """
 from __future__ import annotations
 
@@ -26,6 +26,8 @@ from functools import lru_cache
 from typing import Callable, Mapping, Sequence
 
 import sympy as sp
+
+from .trig import function_normal_form, to_atoms
 
 # Symbols shared by every flexural family.  Positive where physics says so: it lets
 # SymPy cancel |x| and square roots without case splits.
@@ -36,32 +38,6 @@ d1, d2, f0, q0 = sp.symbols("d1 d2 f0 q0", real=True)
 EI = k * L**3 / 3
 kappa = beta / L
 
-# Atoms of the trigonometric normal form.
-_c, _s, _ch, _sh = sp.symbols("_c _s _ch _sh")
-_TO_ATOMS = {sp.cos(beta): _c, sp.sin(beta): _s, sp.cosh(beta): _ch, sp.sinh(beta): _sh}
-_FROM_ATOMS = {v: key for key, v in _TO_ATOMS.items()}
-
-
-def trig_normal_form(expr: sp.Expr) -> sp.Expr:
-    """Canonical form of a polynomial in cos, sin, cosh, sinh of ``beta``.
-
-    Powers of ``sin`` and ``sinh`` above one are removed with ``sin**2 = 1 - cos**2`` and
-    ``sinh**2 = cosh**2 - 1``.  The two relations have coprime leading monomials, so they
-    form a Groebner basis and the result is unique: two expressions are identical exactly
-    when their normal forms are.
-
-    >>> trig_normal_form(sp.sin(beta)**2 + sp.cos(beta)**2 + sp.cosh(beta)**2 - sp.sinh(beta)**2)
-    2
-    """
-    e = sp.expand(sp.sympify(expr).subs(_TO_ATOMS))
-    poly = sp.Poly(e, _s, _sh)
-    out = sp.S.Zero
-    for (i, j), coeff in poly.terms():
-        out += (coeff * (_s if i % 2 else 1) * (1 - _c**2) ** (i // 2)
-                * (_sh if j % 2 else 1) * (_ch**2 - 1) ** (j // 2))
-    return sp.expand(out).subs(_FROM_ATOMS)
-
-
 def is_identically_zero(expr: sp.Expr) -> bool:
     """Exact zero test for rational functions of beta, its trig/hyperbolic functions and parameters.
 
@@ -69,7 +45,7 @@ def is_identically_zero(expr: sp.Expr) -> bool:
     True
     """
     num, _ = sp.fraction(sp.together(sp.expand_trig(sp.sympify(expr))))
-    return trig_normal_form(num) == 0
+    return function_normal_form(num, beta) == 0
 
 
 @lru_cache(maxsize=None)
@@ -143,7 +119,7 @@ def _clear_and_reduce(exprs: list[sp.Expr]) -> list[sp.Expr]:
     together = [sp.together(e) for e in exprs]
     dens = [sp.fraction(e)[1] for e in together]
     common = sp.lcm_list(dens)
-    nums = [trig_normal_form(sp.cancel(e * common)) for e in together]
+    nums = [function_normal_form(sp.cancel(e * common), beta) for e in together]
     nonzero = [n for n in nums if n != 0]
     g = sp.gcd_list(nonzero) if len(nonzero) > 1 else sp.S.One
     return [sp.expand(sp.cancel(n / g)) for n in nums]
@@ -184,7 +160,7 @@ def solve_tip_problem(problem: TipProblem) -> TipSolution:
     n = len(excitations)
     denominator, slope, deflection = reduced[0], reduced[1:1 + n], reduced[1 + n:]
     # Fix the overall sign: leading coefficient (lex order) of the denominator positive.
-    atoms = denominator.subs(_TO_ATOMS)
+    atoms = to_atoms(denominator, beta)
     sign = -1 if sp.Poly(atoms, *sorted(atoms.free_symbols, key=str)).LC() < 0 else 1
     return TipSolution(
         problem,

@@ -35,41 +35,17 @@ import sympy as sp
 from .beam import EI, H, L, beta, d1, d2, f0, general_solution, kappa, q0, x
 from .tilt import kll, kvl, kvv
 from .tip_mass import inertial_stiffness
+from .trig import atoms, from_atoms, normal_form, to_atoms
 
-__all__ = ["gamma", "eta", "ATOMS_A", "ATOMS_B", "field_matrix", "normal_form",
-           "SetbackSolution", "solve", "to_functions", "DRIVES"]
+__all__ = ["gamma", "eta", "ATOMS_A", "ATOMS_B", "field_matrix", "SetbackSolution", "solve", "to_functions", "DRIVES"]
 
 gamma, eta = sp.symbols("gamma eta", positive=True)
 """Tip position ``a = gamma L`` and overhang ``eta = 1 - gamma`` (fractions of L)."""
 
-# Atoms (cos, sin, cosh, sinh) of a = gamma beta and of b = eta beta.
-ATOMS_A = sp.symbols("_ca _sa _cha _sha")
-ATOMS_B = sp.symbols("_cb _sb _chb _shb")
+ATOMS_A, ATOMS_B = atoms("a"), atoms("b")
+"""Atoms (cos, sin, cosh, sinh) of ``a = gamma beta`` and of ``b = eta beta``."""
 
 DRIVES = (d1, d2, f0, q0)
-
-
-def _atoms_of(arg: sp.Expr, atoms) -> dict:
-    c, s, ch, sh = atoms
-    return {sp.cos(arg): c, sp.sin(arg): s, sp.cosh(arg): ch, sp.sinh(arg): sh}
-
-
-def normal_form(expr: sp.Expr) -> sp.Expr:
-    """Canonical form of a polynomial in both atom sets: odd powers of sin and sinh at most 1.
-
-    >>> ca, sa = ATOMS_A[:2]
-    >>> normal_form(sa**2 + ca**2)
-    1
-    """
-    out = sp.expand(expr)
-    for c, s, ch, sh in (ATOMS_A, ATOMS_B):
-        poly = sp.Poly(out, s, sh)
-        out = sp.S.Zero
-        for (i, j), coeff in poly.terms():
-            out += (coeff * (s if i % 2 else 1) * (1 - c**2) ** (i // 2)
-                    * (sh if j % 2 else 1) * (ch**2 - 1) ** (j // 2))
-        out = sp.expand(out)
-    return out
 
 
 @lru_cache(maxsize=None)
@@ -87,10 +63,10 @@ def field_matrix(fraction: sp.Symbol) -> sp.Matrix:
     u, consts = general_solution()
     u = u.subs(q0, 0)
     phi = sp.Matrix([[sp.diff(u, x, n).diff(c) for c in consts] for n in range(4)])
-    atoms = ATOMS_A if fraction == gamma else ATOMS_B
-    at_l = phi.subs(x, fraction * L).subs(_atoms_of(beta * fraction, atoms))
+    at = ATOMS_A if fraction == gamma else ATOMS_B
+    at_l = to_atoms(phi.subs(x, fraction * L), beta * fraction, at)
     F = at_l * phi.subs(x, 0).inv()
-    return F.applyfunc(lambda e: normal_form(sp.cancel(e)))
+    return F.applyfunc(lambda e: normal_form(sp.cancel(e), ATOMS_A, ATOMS_B))
 
 
 @dataclass(frozen=True)
@@ -118,7 +94,7 @@ def _reduce(exprs: list[sp.Expr]) -> list[sp.Expr]:
     """
     terms = [t for e in exprs for t in sp.Add.make_args(sp.expand(e))]
     common = sp.lcm_list([t.as_numer_denom()[1] for t in terms])
-    nums = [normal_form(sp.expand(e * common)) for e in exprs]
+    nums = [normal_form(sp.expand(e * common), ATOMS_A, ATOMS_B) for e in exprs]
     gens = sorted(set().union(*[n.free_symbols for n in nums]), key=str)
     polys = [sp.Poly(n, *gens) for n in nums]
     nonzero = [p for p in polys if not p.is_zero]
@@ -174,6 +150,4 @@ def to_functions(expr: sp.Expr) -> sp.Expr:
     >>> to_functions(ATOMS_B[0])
     cos(beta*(1 - gamma))
     """
-    out = {a: f(beta * gamma) for a, f in zip(ATOMS_A, (sp.cos, sp.sin, sp.cosh, sp.sinh))}
-    out.update({b: f(beta * (1 - gamma)) for b, f in zip(ATOMS_B, (sp.cos, sp.sin, sp.cosh, sp.sinh))})
-    return expr.subs(out)
+    return from_atoms(from_atoms(expr, beta * gamma, ATOMS_A), beta * (1 - gamma), ATOMS_B)

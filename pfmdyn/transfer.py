@@ -17,17 +17,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .generated import (elastic_contact, free_end, frictionless, frictionless_stiff, indentation,
-                        indentation_stiff, pinned, sliding_friction, torsion_elastic, torsion_force)
+from .generated import (elastic_contact, families, free_end, frictionless, frictionless_stiff,
+                        indentation, indentation_stiff, pinned, sliding_friction, torsion_elastic,
+                        torsion_force)
 
-__all__ = [
-    "ElasticTransfer", "FrictionlessTransfer", "FrictionlessStiffTransfer", "FreeEndTransfer",
-    "PinnedTransfer", "FrictionTransfer", "IndentationTransfer", "IndentationStiffTransfer",
-    "TorsionTransfer",
-    "tip_slope_transfer", "frictionless_transfer", "frictionless_stiff_transfer",
-    "free_end_transfer", "pinned_transfer", "sliding_friction_transfer", "indentation_transfer",
-    "indentation_stiff_transfer", "torsion_elastic_transfer", "torsion_force_transfer",
-]
+# The registry (derivations/families.py) names every wrapper and its result class.
+__all__ = sorted({name for f in families.FAMILIES for name in (f.function, f.result) if name})
 
 
 class ElasticTransfer(NamedTuple):

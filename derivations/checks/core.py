@@ -2,7 +2,7 @@
 
 A check is a function decorated with :func:`claim`; it computes and returns a
 :class:`Verdict`.  Comparisons are always done two ways: exactly (ratio of canonical
-trigonometric normal forms, see :func:`derivations.beam.trig_normal_form`) and by
+trigonometric normal forms, see :func:`derivations.trig.normal_form`) and by
 50-digit evaluation at seeded random parameter points.
 """
 from __future__ import annotations
@@ -17,7 +17,8 @@ from typing import Callable, Iterable
 import mpmath as mp
 import sympy as sp
 
-from ..beam import _FROM_ATOMS, _TO_ATOMS, beta, trig_normal_form
+from ..beam import beta
+from ..trig import ATOMS, from_atoms, normal_form, to_atoms
 from ..paper.convention import SIGN_CONVENTION
 
 # Evidence that turns on the sign of f0, q0 or d1 (an overall sign flip, a ratio -1 or -8).
@@ -190,19 +191,19 @@ class Comparison:
 
 def _atom_form(expr: sp.Expr) -> sp.Expr:
     num, den = sp.fraction(sp.together(sp.sympify(expr)))
-    return trig_normal_form(num).subs(_TO_ATOMS) / trig_normal_form(den).subs(_TO_ATOMS)
+    return normal_form(to_atoms(num, beta)) / normal_form(to_atoms(den, beta))
 
 
 def compare(printed: sp.Expr, derived: sp.Expr, seed: int = 2006) -> Comparison:
     """Ratio printed/derived: exact (normal forms, cancelled) and at random 50-digit points."""
     ratio = sp.cancel(_atom_form(printed) / _atom_form(derived))
-    exact = ratio.subs(_FROM_ATOMS)
+    exact = from_atoms(ratio, beta)
     syms = (sp.sympify(printed).free_symbols | sp.sympify(derived).free_symbols)
     values = []
     for point in random_points(syms, seed=seed):
         p, d = evaluate(printed, point), evaluate(derived, point)
         values.append(p / d)
-    return Comparison(exact if not exact.has(*_TO_ATOMS) else None, values)
+    return Comparison(exact if not ratio.has(*ATOMS.functions) else None, values)
 
 
 def describe(expr: sp.Expr) -> str:
@@ -240,7 +241,7 @@ def same_resonances(a: sp.Expr, b: sp.Expr) -> tuple[bool, str]:
     function of beta, has neither zeros nor poles at positive beta.
     """
     ratio = sp.cancel(_atom_form(a) / _atom_form(b))
-    if ratio.has(*_TO_ATOMS.values()):
+    if ratio.has(*ATOMS.functions):
         return False, "ratio contains trigonometric terms"
     num, den = sp.fraction(sp.factor(ratio))
     for part in (num, den):

@@ -8,7 +8,7 @@ from .. import domain_contrast as dc
 from .. import elastic_contact, frictionless, indentation, pinned
 from ..beam import H, L, beta, d1, f0, k, k1, q0
 from ..limits import envelope_exponent, low_frequency
-from ..paper import printed as P
+from ..paper import inputs, printed as P
 from .core import ERRATUM, HOLDS, claim, compare, digits_check
 
 tau = sp.Symbol("tau", real=True)
@@ -56,7 +56,7 @@ def _pr():
 @claim("eq36.spring_constant_condition", "IV.1", "k >> L w eps0 dV/(48 d_eff H^2) = 0.55 N/m for the printed inputs", chapter="domains")
 def _keff():
     values = {key: mp.mpf(v) for key, v in P.KEFF_INPUTS.items()}
-    eps0 = mp.mpf("8.8541878128e-12")
+    eps0 = mp.mpf(inputs.EPSILON_0)
     common = values["L"] * values["w"] * eps0 * values["dV"] / (values["d_eff"] * values["H"] ** 2)
     printed_formula = common / 48
     # |A_nl|/V_ac < d_eff with the derived A_nl:
@@ -82,7 +82,7 @@ def _crossover_bias(cantilever: str, model) -> mp.mpf:
     """Low-frequency bias |dV| where |A_piezo| = |A_nl| (d1 = d_eff V_ac, q0 from the capacitive force)."""
     v = {s: sp.Rational(x) for s, x in _fig_values(cantilever).items()}
     q_per_volt = (q0_first_harmonic() / (P.V_ac * P.dV)).subs({P.S_area: L * P.w_c, P.w_c: sp.Rational(P.TABLE1[cantilever]["w"]),
-                                                             P.eps0: sp.Rational("8.8541878128e-12")})
+                                                             P.eps0: sp.Rational(inputs.EPSILON_0)})
     ratio = sp.Abs(model[d1] * sp.Rational(P.D_EFF_FIG) / (model[q0] * q_per_volt))
     return mp.mpf(str(sp.N(ratio.subs(v), 20)))
 

@@ -13,14 +13,12 @@ import sympy as sp
 from .. import contact_mechanics as cm
 from .. import free_end, indentation, pinned
 from ..beam import L, beta, k, k1
-from ..paper import printed as P
+from ..paper import inputs, printed as P
 from ..roots import certified_roots
 from .core import ERRATUM, HOLDS, claim, digits_check
 
-# Silicon, the material of the cantilevers in Table 1 (not given in the paper): the Young's
-# modulus spans the crystal directions; density of crystalline Si.
-SILICON_E = (130e9, 188e9)
-SILICON_RHO = 2330.0
+SILICON_E = tuple(map(float, inputs.SILICON_E))
+SILICON_RHO = float(inputs.SILICON_DENSITY)
 
 
 @lru_cache(maxsize=None)
@@ -228,7 +226,7 @@ def _lateral_ratio():
 
 @claim("contact.local_electrostatic_amplitude", "III.1", "F_loc = 1.4e-8 N/V, k1 ~ 1000 N/m: A_el = 14 V pm", chapter="elastic_contact")
 def _local_amplitude():
-    eps0 = mp.mpf("8.8541878128e-12")
+    eps0 = mp.mpf(inputs.EPSILON_0)
     a_el = mp.mpf(P.F_loc) / mp.mpf(P.CONTACT_K1) * mp.mpf(10) ** 12
     sphere = mp.pi * eps0 * mp.mpf("50e-9") / mp.mpf("0.1e-9")      # pi eps0 R / z, sphere near a plane
     verdict, evidence, correct = _digits_verdict([(P.A_el_pm, a_el)], "A_el = F_loc/k1 in pm per volt")

@@ -14,6 +14,7 @@ import sympy as sp
 from ..beam import H, L, beta as b, d1, d2, f0, k, k1, k2, kappa, q0
 from ..sliding_friction import f_l
 from ..torsion import d3, f_lat, k2t, xi
+from .inputs import CONTACT_K1, D_EFF_FIG, K1_OVER_K2, TABLE1, TIP_HEIGHT  # noqa: F401 (P.TABLE1, ...)
 
 c, s, ch, sh = sp.cos(b), sp.sin(b), sp.cosh(b), sp.sinh(b)
 
@@ -85,12 +86,7 @@ n = sp.Symbol("n", positive=True, integer=True)
 torsion_force_roots = (2 * n - 1) * sp.pi / L                                   # xi_n as printed
 
 # --- Printed parameters used in Sections IV-VI -------------------------------------------------
-TABLE1 = {"A": {"w": "24e-6", "h": "8e-6", "L": "224e-6", "k": "45"},
-          "B": {"w": "24e-6", "h": "3e-6", "L": "224e-6", "k": "2.4"},
-          "C": {"w": "24e-6", "h": "1.05e-6", "L": "224e-6", "k": "0.1"}}
-TIP_HEIGHT = "15e-6"            # H, Section IV.2
-CONTACT_K1 = "1000"             # N/m, Section IV.2
-K1_OVER_K2 = "0.85"             # Section III.1
+# TABLE1, TIP_HEIGHT, CONTACT_K1, K1_OVER_K2, D_EFF_FIG: see paper/inputs.py (imported above).
 
 # --- Section III.1: contact mechanics numbers --------------------------------------------------
 hertz_coefficient = "1.82"
@@ -119,7 +115,6 @@ PR_eq36_extra = L * w_c * eps0 * V_ac * dV / (48 * k * H**2)              # PR =
 KEFF_INPUTS = {"d_eff": "50e-12", "dV": "5", "L": "225e-6", "w": "30e-6", "H": "15e-6"}
 keff_printed = "0.55"
 # --- Section IV.2 / Fig. 7 --------------------------------------------------------------------
-D_EFF_FIG = "5e-12"                       # m/V
 LOCAL_FORCE_TEXT = "14e-9"                # N/V, Section IV.2
 LOCAL_FORCE_CAPTION = ("14", "0.7")       # N/V, caption of Fig. 7
 

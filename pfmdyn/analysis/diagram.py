@@ -27,25 +27,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cantilever import Cantilever
+from ..generated import paper_inputs
 
 __all__ = ["EPSILON_0", "SILICON_DENSITY", "TABLE1", "ResponseMap", "table1_cantilever",
            "cantilever_from_spring_constant", "response_map", "nulling_bias",
            "low_frequency_crossover_bias"]
 
-EPSILON_0 = 8.8541878128e-12
+EPSILON_0 = paper_inputs.EPSILON_0
 """Vacuum permittivity, F/m."""
-SILICON_DENSITY = 2330.0
+SILICON_DENSITY = paper_inputs.SILICON_DENSITY
 """kg/m**3."""
-TABLE1 = {  # width, thickness, length (m), spring constant (N/m): Table 1 of the paper
-    "A": (24e-6, 8e-6, 224e-6, 45.0),
-    "B": (24e-6, 3e-6, 224e-6, 2.4),
-    "C": (24e-6, 1.05e-6, 224e-6, 0.1),
-}
+TABLE1 = {name: (c["w"], c["h"], c["L"], c["k"]) for name, c in paper_inputs.TABLE1.items()}
+"""Table 1 of the paper: width, thickness, length (m), spring constant (N/m)."""
 # Parameters of Section IV.2 (SI): tip height, d_eff, contact stiffness (F_loc is 0 in
 # Fig. 6, 14 nN/V or 0.7 nN/V in Fig. 7, so it has no single default but 0).
-PAPER_TIP_HEIGHT = 15e-6
-PAPER_D_EFF = 5e-12
-PAPER_K1 = 1000.0
+PAPER_TIP_HEIGHT = paper_inputs.TIP_HEIGHT
+PAPER_D_EFF = paper_inputs.D_EFF_FIG
+PAPER_K1 = paper_inputs.CONTACT_K1
 
 
 def cantilever_from_spring_constant(*, spring_constant, length, width, thickness,

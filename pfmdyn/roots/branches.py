@@ -29,12 +29,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..generated import characteristic
+from ..generated import characteristic, families
 from .core import CertificationError, certify, characteristic_function
 
 __all__ = ["SWEPT", "LABELS", "FIGURE", "branch_limits", "sweep", "crossovers", "frequency_ratio"]
 
-SWEPT = {"indentation": "k1_over_k", "frictionless": "k1_over_k", "elastic": "k2_ratio", "torsion-elastic": "k2t_HL"}
+SWEPT = {f.roots: f.branch for f in families.FAMILIES if f.branch}
 """Branch family -> the stiffness parameter swept along the x axis."""
 
 LABELS = {
@@ -46,7 +46,7 @@ LABELS = {
 }
 """Swept parameter -> (x-axis label, soft-limit label, stiff-limit label)."""
 
-FIGURE = {"indentation": "Fig. 4b", "frictionless": "Fig. 4b", "elastic": "Fig. 4e", "torsion-elastic": "Fig. 5c"}
+FIGURE = {f.roots: f.figure for f in families.FAMILIES if f.branch}
 """Branch family -> the paper\'s figure it reproduces."""
 
 

@@ -26,16 +26,13 @@ from fractions import Fraction
 import flint
 
 from .certify import CertificationError, certify, floor_string, interval_strings, rounded
-from ..generated import characteristic
+from ..generated import characteristic, families
 
 __all__ = ["FAMILIES", "PARAMETER_HELP", "CertificationError", "RootResult", "characteristic_function",
            "certify", "family_roots", "interval_strings"]
 
-PARAMETER_HELP = {
-    "k1_over_k": "k1/k: vertical contact stiffness over the cantilever spring constant",
-    "k2_ratio": "k2 H^2/(k L^2): longitudinal contact stiffness seen through the lever arm H",
-    "k2t_HL": "H^2 k2 L/c_T: lateral contact stiffness over the torsional stiffness",
-}
+PARAMETER_HELP = {name: families.PARAMETER_HELP[name]
+                  for name in sorted({p for ps in characteristic.PARAMETERS.values() for p in ps})}
 """Dimensionless parameter name -> definition."""
 
 

@@ -1,0 +1,52 @@
+"""Code generation: the derived transfer functions as stable NumPy code in ``generated/``.
+
+The family registry (:mod:`derivations.families`) says what is generated.  The package:
+
+* :mod:`.printing`: printer, CSE, Horner series, header and source hash;
+* :mod:`.stabilise`: split by parameter monomial, switch point, series branch, clipped exp;
+* one renderer per output kind: :mod:`.transfer` (one module per one-argument family),
+  :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.setback`
+  (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
+  registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``).
+
+:func:`render_all` maps every output file name to its text; a renderer is added by adding
+its files there.  Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..trig import from_atoms
+from . import inputs, registry, setback
+from .characteristic import beta1_free, characteristic_families, dimensionless, render_characteristic
+from .stabilise import series_branch, split, switch_point
+from .transfer import Family, Function, families, render_family
+
+__all__ = ["Function", "Family", "families", "split", "from_atoms", "series_branch", "switch_point",
+           "render_family", "characteristic_families", "dimensionless", "beta1_free",
+           "render_characteristic", "render_all", "write", "GENERATED"]
+
+GENERATED = Path(__file__).resolve().parent.parent.parent / "generated"
+"""The committed output folder (``generated/`` at the repository root)."""
+
+
+def render_all() -> dict[str, str]:
+    """File name -> text of every generated file (deterministic)."""
+    files = {f"{fam.module}.py": render_family(fam) for fam in families()}
+    files["characteristic.py"] = render_characteristic()
+    files["tip_setback.py"] = setback.render()
+    files["families.py"] = registry.render()
+    files["paper_inputs.py"] = inputs.render()
+    return dict(sorted(files.items()))
+
+
+def write(folder: Path) -> list[str]:
+    """Write every generated file into ``folder``; return the names of files that changed."""
+    folder.mkdir(parents=True, exist_ok=True)
+    changed = []
+    for name, text in render_all().items():
+        path = folder / name
+        if not path.exists() or path.read_text(encoding="utf-8") != text:
+            path.write_text(text, encoding="utf-8")
+            changed.append(name)
+    return changed

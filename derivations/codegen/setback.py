@@ -1,0 +1,94 @@
+"""Renderer of ``generated/tip_setback.py``: the two-segment (set-back tip) family.
+
+The set-back solution (:mod:`derivations.tip_setback`) is a polynomial in the atoms of two
+arguments, ``a = gamma beta`` and ``b = (1 - gamma) beta``, so the one-argument basis of
+:mod:`derivations.codegen.transfer` does not apply.  The same stabilisation is used per
+argument: every numerator and the denominator are divided by ``cosh(a)**da cosh(b)**db``
+(the highest hyperbolic degree in each, :func:`derivations.trig.scaled`), with ``tanh``
+and ``sech`` built from ``exp(-a)``, ``exp(-b)``; nothing overflows.  There is no series
+branch: the closed form cancels like the elastic family's below ``beta ~ 1`` (about
+``beta**-6`` lost relative to the largest term, 1e-12 at ``beta = 0.3``), which is
+documented as the domain of validity.  The scaled denominator is exported as
+``characteristic`` for root finding.
+"""
+from __future__ import annotations
+
+from .. import families as registry, tip_setback
+from ..trig import hyperbolic_degree, scaled
+from .printing import cse_lines, header, source_hash
+from .stabilise import clipped_exp
+from .transfer import symbol
+
+__all__ = ["render"]
+
+
+def render() -> str:
+    """Source text of ``generated/tip_setback.py``."""
+    row = registry.by_module("tip_setback")
+    params = [symbol(p, tip_setback) for p in row.parameters]
+    sol = tip_setback.solve()
+    drives = tip_setback.DRIVES
+    assert tuple(map(str, drives)) == row.drives
+    exprs = [sol.denominator] + [sol.slope[d] for d in drives]
+    sets = (tip_setback.ATOMS_A, tip_setback.ATOMS_B)
+    degrees = {at: max(hyperbolic_degree(e, at) for e in exprs) for at in sets}
+    lines, reduced = cse_lines([scaled(e, degrees) for e in exprs])
+    den_lines, den = cse_lines([scaled(sol.denominator, degrees)])
+    names = ", ".join(map(str, params))
+    da, db = degrees[tip_setback.ATOMS_A], degrees[tip_setback.ATOMS_B]
+    atoms = f'''    beta = np.asarray(beta)
+    a = gamma * beta
+    b = (1.0 - gamma) * beta
+    _ca, _sa, _cb, _sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    _ea = {clipped_exp("a", "np.real(a)")}
+    _eb = {clipped_exp("b", "np.real(b)")}
+    _tanha = (1.0 - _ea * _ea) / (1.0 + _ea * _ea)
+    _secha = 2.0 * _ea / (1.0 + _ea * _ea)
+    _tanhb = (1.0 - _eb * _eb) / (1.0 + _eb * _eb)
+    _sechb = 2.0 * _eb / (1.0 + _eb * _eb)
+'''
+    params_doc = f'''    Parameters
+    ----------
+    beta : array_like, real or complex, ``Re beta > 0.3`` (see module)
+    {names} : array_like, broadcast against ``beta``; ``0 < gamma <= 1``
+'''
+    return (header(row.source, source_hash(exprs)) + f'''"""tip_setback: tip at x = gamma L with springs kvv, kll, kvl, tip mass mu; slope read at L.
+
+Source: {row.source}, an extension of Eqs. 4-5 of Jesse, Baddorf,
+Kalinin 2006; signs as there.  ``gamma = 1``, ``mu = 0``, ``kvv = k1``, ``kll = k2``,
+``kvl = 0`` is Eq. 5 (elastic contact).
+
+Numerators and denominator are polynomials in cos, sin, cosh, sinh of ``a = gamma beta``
+and ``b = (1 - gamma) beta``, divided by ``cosh(a)**{da} cosh(b)**{db}`` with ``tanh``, ``sech``
+built from ``exp(-a)``, ``exp(-b)`` so nothing overflows.  No series branch: use
+``Re beta > 0.3``, where about 1e-12 relative to the largest term is lost at worst.
+"""
+import numpy as np
+
+__all__ = {sorted(["PARAMETERS", "DRIVES", *row.outputs])!r}
+
+PARAMETERS = {tuple(map(str, params))!r}
+DRIVES = {row.drives!r}
+
+
+def slope(beta, {names}):
+    """Tip slope theta = u0'(L) per unit drive.
+
+{params_doc}
+    Returns
+    -------
+    tuple of ndarray
+        per unit d1, d2 (beam-frame surface displacements), f0, q0
+    """
+{atoms}''' + "\n".join(lines) + f'''
+    _r = 1.0 / ({reduced[0]})
+    return ({", ".join(f"({r}) * _r" for r in reduced[1:])})
+
+
+def characteristic(beta, {names}):
+    """Scaled denominator: its real zeros in ``beta`` are the resonances.
+
+{params_doc}    """
+{atoms}''' + "\n".join(den_lines) + f'''
+    return {den[0]}
+''')

@@ -1,0 +1,240 @@
+"""Renderer of the transfer modules: one ``generated/<module>.py`` per one-argument family.
+
+Every family is a ratio ``numerator / denominator`` of polynomials in the parameters, the
+variable (``beta``, or ``z = xi L`` for torsion) and cos, sin, cosh, sinh of it.  Each
+polynomial is *split* by parameter monomial, ``sum_m p_m * beta**a_m * h_m(beta)``
+(:func:`derivations.codegen.stabilise.split`); the ``h`` form the family's *basis*, shared
+by all its transfer coefficients and evaluated once per call, stabilised (series below a
+switch point, scaled closed form above).  Printed with CSE, headed with the source's hash.
+"""
+from __future__ import annotations
+
+import importlib
+import textwrap
+from dataclasses import dataclass
+from functools import lru_cache
+
+import sympy as sp
+
+from .. import beam, families as registry, tilt, tip_mass, torsion
+from ..trig import ATOMS, from_atoms, hyperbolic_degree, scaled
+from .printing import cse_lines, header, horner, source_hash
+from .stabilise import clipped_exp, series_branch, split, switch_point
+
+__all__ = ["Function", "Family", "families", "symbol", "render_family", "z"]
+
+z = sp.Symbol("z", positive=True)
+"""Dimensionless variable of the torsion families: ``z = xi L``."""
+
+_SUMMARY = {
+    "slope": "tip slope theta = u0'(L) per unit drive",
+    "deflection": "tip displacement u0(L) per unit drive",
+    "twist": "tip twist Theta0(L) per unit drive",
+}
+
+
+@dataclass(frozen=True)
+class Function:
+    """One generated function: outputs ``numerator_i / denominator`` for the named drives."""
+
+    name: str
+    summary: str
+    outputs: tuple[tuple[str, sp.Expr], ...]
+
+
+@dataclass(frozen=True)
+class Family:
+    """A registry family with its derived expressions: one generated module."""
+
+    module: str
+    source: str
+    equations: str
+    description: str
+    variable: sp.Symbol
+    parameters: tuple[sp.Symbol, ...]
+    denominator: sp.Expr
+    functions: tuple[Function, ...]
+
+    def source_exprs(self) -> list[sp.Expr]:
+        """Denominator then every numerator, in output order (hashed into the header)."""
+        return [self.denominator] + [e for f in self.functions for _, e in f.outputs]
+
+
+def symbol(name: str, module) -> sp.Symbol:
+    """The SymPy symbol of parameter ``name`` as the derivation ``module`` uses it.
+
+    >>> symbol("mu", beam)
+    mu
+    """
+    for ns in (module, beam, tilt, tip_mass):
+        if isinstance(getattr(ns, name, None), sp.Symbol):
+            return getattr(ns, name)
+    raise KeyError(f"no symbol {name!r} for {module.__name__}")
+
+
+def _derive(row: registry.Family) -> Family:
+    module = importlib.import_module(f"{__package__.rsplit('.', 1)[0]}.{row.derivation}")
+    sol = getattr(module, row.solver)()
+    params = tuple(symbol(p, module) for p in row.parameters)
+    if row.kind == "torsion":
+        # Write in z = xi L and multiply numerator and denominator by L: polynomials again.
+        L = symbol("L", module)
+        assert (str(sol.drive),) == row.drives, (sol.drive, row.drives)
+        num = sp.expand(L * sol.numerator.subs(torsion.xi, z / L) / sol.drive)
+        den = sp.expand(L * sol.denominator.subs(torsion.xi, z / L))
+        fns = (Function("twist", _SUMMARY["twist"], ((row.drives[0], num),)),)
+        return Family(row.module, row.source, row.equations, sol.name, z, params, den, fns)
+    by_output = {"slope": sol.slope, "deflection": sol.deflection}
+    fns = []
+    for output in row.outputs:
+        exprs = {str(d): e for d, e in by_output[output].items()}
+        fns.append(Function(output, _SUMMARY[output], tuple((d, exprs[d]) for d in row.drives)))
+    return Family(row.module, row.source, row.equations, sol.problem.description, beam.beta,
+                  params, sol.denominator, tuple(fns))
+
+
+@lru_cache(maxsize=None)
+def families() -> tuple[Family, ...]:
+    """Every one-argument family of the registry with its derived expressions, in registry order.
+
+    >>> [f.module for f in families()][:3]
+    ['free_end', 'pinned', 'elastic_contact']
+    """
+    return tuple(_derive(row) for row in registry.FAMILIES if row.kind != "setback")
+
+
+def _basis(fam: Family):
+    """Distinct basis functions ``h`` of a family and each output's split over them."""
+    basis: list[sp.Expr] = []
+    splits = []
+    for expr in fam.source_exprs():
+        parts = split(expr, fam.variable, fam.parameters)
+        for _, h in parts:
+            if h not in basis:
+                basis.append(h)
+        splits.append(parts)
+    basis.sort(key=sp.default_sort_key)
+    return basis, splits
+
+
+def render_family(fam: Family) -> str:
+    """Source text of the generated module of one family."""
+    var = fam.variable
+    vname = str(var)
+    basis, splits = _basis(fam)
+    degree = max(hyperbolic_degree(h) for h in basis)
+    switch = max(switch_point(h, degree) for h in basis)
+    hsyms = [sp.Symbol(f"_h{i}") for i in range(len(basis))]
+    combos = [sum(coeff * hsyms[basis.index(h)] for coeff, h in parts) for parts in splits]
+
+    if degree:
+        evaluation = textwrap.fill(
+            f"each evaluated once per call: by its Taylor series for ``|{vname}| < SWITCH`` "
+            f"(where the closed form cancels), else in closed form divided by "
+            f"``cosh({vname})**{degree}`` with ``tanh`` and ``sech`` built from "
+            f"``exp(-{vname})``, so nothing overflows up to ``{vname} = 1e3`` and beyond.", 88)
+    else:
+        evaluation = textwrap.fill(
+            "each evaluated once per call in closed form: there are no hyperbolics and no "
+            "cancellation near 0, so no series branch (``SWITCH = 0``).", 88)
+    out = [header(fam.source, source_hash(fam.source_exprs()))]
+    names = ", ".join(str(p) for p in fam.parameters)
+    doc_basis = "\n".join(f"    h{i} = {sp.sstr(from_atoms(h, var))}" for i, h in enumerate(basis))
+    out.append(f'''"""{fam.module}: {fam.description}.
+
+Source: {fam.source}, {fam.equations} of Jesse, Baddorf, Kalinin 2006; signs as there.
+
+Transfer coefficients as NumPy functions of ``{vname}``, vectorised over ``{vname}`` (real or
+complex, ``Re {vname} > 0``) and broadcasting over the parameters ({names}).
+
+Every numerator and the denominator are sums of parameter monomials times the basis
+
+{doc_basis}
+
+{evaluation}
+"""
+import numpy as np
+
+__all__ = {sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"])!r}
+
+PARAMETERS = {tuple(str(p) for p in fam.parameters)!r}
+DRIVES = {tuple(name for name, _ in fam.functions[0].outputs)!r}
+SWITCH = {switch!r}
+"""``|{vname}|`` below which the basis is evaluated by its series."""
+
+
+def _basis({vname}):
+    """The basis functions h0... at ``{vname}`` (series or scaled closed form, see module)."""
+    {vname} = np.asarray({vname})
+    out = np.empty(({len(basis)},) + {vname}.shape, np.result_type({vname}, float))
+''')
+    body = []
+    if switch > 0:
+        body.append(f"    small = np.abs({vname}) < SWITCH")
+        body.append(f"    x = {vname}[small]")
+        series = [series_branch(h, var, switch) for h in basis]
+        for q in sorted({q for _, q, _ in series}):
+            body.append(f"    _u{q} = x**{q}")
+        for i, (p, q, coeffs) in enumerate(series):
+            lead = f"x**{p} * " if p > 1 else ("x * " if p == 1 else "")
+            body.append(f"    out[{i}, small] = {lead}({horner(coeffs, f'_u{q}')})")
+        body.append("    large = ~small")
+        body.append(f"    x = {vname}[large]")
+        target = "large"
+    else:
+        body.append(f"    x = {vname}")
+        target = "..."
+    body.append("    _c = np.cos(x)")
+    body.append("    _s = np.sin(x)")
+    if degree:
+        body.append(f"    _e = {clipped_exp('x', 'x.real')}")
+        body.append("    _e2 = _e * _e")
+        body.append("    _tanh = (1.0 - _e2) / (1.0 + _e2)")
+        body.append("    _sech = 2.0 * _e / (1.0 + _e2)")
+    lines, reduced = cse_lines([scaled(h, {ATOMS: degree}) for h in basis])
+    body.extend(lines)
+    body.extend(f"    out[{i}, {target}] = {r}" for i, r in enumerate(reduced))
+    body.append("    return out")
+    out.append("\n".join(body) + "\n")
+
+    start = 1
+    for fn in fam.functions:
+        n = len(fn.outputs)
+        den = combos[0]
+        nums = combos[start:start + n]
+        start += n
+        used = sorted({s for e in [den, *nums] for s in e.free_symbols if s in hsyms},
+                      key=lambda s: int(str(s)[2:]))
+        lines, reduced = cse_lines([den, *nums])
+        if len(used) == len(hsyms):
+            unpack = f"{', '.join(map(str, used))} = _basis({vname})"
+        else:
+            # Only part of the basis enters this function: pick its rows.
+            rows = [int(str(s)[2:]) for s in used]
+            unpack = f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
+        doc_out = "\n".join(f"        per unit {name}" for name, _ in fn.outputs)
+        out.append(f'''
+
+def {fn.name}({vname}, {names}):
+    """{fn.summary[0].upper() + fn.summary[1:]}.
+
+    Parameters
+    ----------
+    {vname} : array_like, real or complex, ``Re {vname} > 0``
+    {names} : array_like, broadcast against ``{vname}``
+
+    Returns
+    -------
+    tuple of ndarray
+{doc_out}
+    """
+    {unpack}
+    {vname} = np.asarray({vname})
+''')
+        out.append("\n".join(lines) + ("\n" if lines else ""))
+        out.append(f"    _r = 1.0 / ({reduced[0]})\n")
+        values = [f"({r}) * _r" for r in reduced[1:]]
+        out.append(f"    return ({', '.join(values)}{',' if len(values) == 1 else ''})\n")
+    return "".join(out)
+
+
