@@ -20,6 +20,7 @@ __all__ = ["Formula", "formulas"]
 E, width, thickness, density, beta1 = sp.symbols(
     "youngs_modulus width thickness density beta1", positive=True)
 k1, radius, load, frequency = sp.symbols("k1 tip_radius load frequency", positive=True)
+b_re, b_im, c_re, c_im, bias = sp.symbols("b_re b_im c_re c_im bias", real=True)
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,9 @@ def formulas() -> tuple[Formula, ...]:
     # beta**4 = omega**2 rho S L**4 / EI (Eq. 2), EI = E I, S = w t; beta1: first free root.
     omega = _only(sp.solve(sp.Eq(beta1**4, frequency**2 * density * width * thickness * L**4
                                  / (E * inertia)), frequency))
+    # Response b + c V, linear in the DC bias V (drives f0 and q0 are proportional to V - V_surf).
+    power = (b_re + c_re * bias)**2 + (b_im + c_im * bias)**2
+    null = _only(sp.solve(sp.diff(power, bias), bias))
     free = solve_free_end()
     height_per_slope = sp.limit(free.tip_deflection(f0) / free.theta(f0), beta, 0)
     return (
@@ -67,6 +71,9 @@ def formulas() -> tuple[Formula, ...]:
         Formula("height_per_slope", (L,), height_per_slope,
                 "static tip deflection per tip slope under a tip force, u0(L)/theta = 2L/3",
                 "derivations/free_end.py: solve(), beta -> 0"),
+        Formula("nulling_bias", (b_re, b_im, c_re, c_im), null,
+                "real bias V minimising |b + c V| (the response vanishes there when b/c is real)",
+                "derivations/formulas.py: d|b + c V|**2/dV = 0"),
         Formula("reduced_modulus", (k1, radius, load),
                 _only(sp.solve(sp.Eq(cm.hertz_stiffness().subs({cm.R: radius, cm.P: load}), k1),
                                cm.E_star)),

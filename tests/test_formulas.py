@@ -36,6 +36,15 @@ def test_contact_formulas_match_hand_typed_ones():
     np.testing.assert_allclose(formulas.mindlin_k2_over_k1(nu), 2 * (1 - nu) / (2 - nu), rtol=1e-15)
 
 
+def test_nulling_bias_matches_hand_typed_one():
+    b = RNG.normal(size=20) + 1j * RNG.normal(size=20)
+    c = RNG.normal(size=20) + 1j * RNG.normal(size=20)
+    np.testing.assert_allclose(formulas.nulling_bias(b.real, b.imag, c.real, c.imag),
+                               -np.real(b * np.conj(c)) / np.abs(c) ** 2, rtol=1e-13)
+    v = RNG.normal(size=20)
+    assert np.allclose(formulas.nulling_bias((-c * v).real, (-c * v).imag, c.real, c.imag), v)
+
+
 def _generated_names():
     names = set()
     for path in GENERATED.glob("*.py"):
@@ -61,7 +70,8 @@ def test_no_module_under_pfmdyn_redefines_a_generated_formula():
 
 
 @pytest.mark.parametrize("text", ["2 * cantilever.length / 3", "np.sqrt(k1**3 / (6 * r * p))",
-                                  "3 * youngs_modulus * inertia / length**3"])
+                                  "3 * youngs_modulus * inertia / length**3",
+                                  "np.real(piezo * np.conj(g))", "np.real(intercept * np.conj(slope))"])
 def test_hand_typed_versions_are_gone(text):
     hits = [p.name for p in PACKAGE.rglob("*.py") if text in p.read_text(encoding="utf-8")]
     assert not hits, hits

@@ -282,8 +282,9 @@ def nulling_bias(cantilever, frequency_hz, *, width, k1=PAPER_K1, H=PAPER_TIP_HE
     _, piezo, local, nonlocal_ = _coefficients(
         cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
     g = local + nonlocal_
+    # The response is piezo + g (V - V_surf): intercept piezo - g V_surf, slope g.
     with np.errstate(invalid="ignore", divide="ignore"):
-        return surface_potential_v - np.real(piezo * np.conj(g)) / np.abs(g) ** 2
+        return surface_potential_v + formulas.nulling_bias(piezo.real, piezo.imag, g.real, g.imag)
 
 
 def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
