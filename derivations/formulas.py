@@ -21,6 +21,7 @@ E, width, thickness, density, beta1 = sp.symbols(
     "youngs_modulus width thickness density beta1", positive=True)
 k1, radius, load, frequency = sp.symbols("k1 tip_radius load frequency", positive=True)
 b_re, b_im, c_re, c_im, bias = sp.symbols("b_re b_im c_re c_im bias", real=True)
+eps0, tip_height, v_ac, dv, tau = sp.symbols("epsilon_0 H V_ac dV tau", positive=True)
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,10 @@ def formulas() -> tuple[Formula, ...]:
     # Response b + c V, linear in the DC bias V (drives f0 and q0 are proportional to V - V_surf).
     power = (b_re + c_re * bias)**2 + (b_im + c_im * bias)**2
     null = _only(sp.solve(sp.diff(power, bias), bias))
+    # Parallel-plate force of the cantilever (area L w) at separation H; first harmonic per
+    # unit length and per V_ac dV.  Its magnitude: the sign (attractive) is the caller's.
+    plate = eps0 * L * width * (dv + v_ac * sp.cos(tau))**2 / (2 * tip_height**2)
+    harmonic = sp.integrate(plate * sp.cos(tau), (tau, 0, 2 * sp.pi)) / sp.pi
     free = solve_free_end()
     height_per_slope = sp.limit(free.tip_deflection(f0) / free.theta(f0), beta, 0)
     return (
@@ -74,6 +79,10 @@ def formulas() -> tuple[Formula, ...]:
         Formula("nulling_bias", (b_re, b_im, c_re, c_im), null,
                 "real bias V minimising |b + c V| (the response vanishes there when b/c is real)",
                 "derivations/formulas.py: d|b + c V|**2/dV = 0"),
+        Formula("capacitive_load_per_volt2", (eps0, width, tip_height),
+                sp.simplify(harmonic / (L * v_ac * dv)),
+                "magnitude of the first-harmonic capacitive load q0 per unit length per V_ac dV (N/m per V**2)",
+                "derivations/formulas.py: parallel-plate force eps0 L w (dV + V_ac cos)**2/(2 H**2)"),
         Formula("reduced_modulus", (k1, radius, load),
                 _only(sp.solve(sp.Eq(cm.hertz_stiffness().subs({cm.R: radius, cm.P: load}), k1),
                                cm.E_star)),

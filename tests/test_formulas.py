@@ -45,6 +45,12 @@ def test_nulling_bias_matches_hand_typed_one():
     assert np.allclose(formulas.nulling_bias((-c * v).real, (-c * v).imag, c.real, c.imag), v)
 
 
+def test_capacitive_load_matches_hand_typed_one():
+    w, H = RNG.uniform(20e-6, 50e-6, 10), RNG.uniform(5e-6, 20e-6, 10)
+    np.testing.assert_allclose(formulas.capacitive_load_per_volt2(8.8541878128e-12, w, H),
+                               8.8541878128e-12 * w / H**2, rtol=1e-15)
+
+
 def _generated_names():
     names = set()
     for path in GENERATED.glob("*.py"):
@@ -71,7 +77,8 @@ def test_no_module_under_pfmdyn_redefines_a_generated_formula():
 
 @pytest.mark.parametrize("text", ["2 * cantilever.length / 3", "np.sqrt(k1**3 / (6 * r * p))",
                                   "3 * youngs_modulus * inertia / length**3",
-                                  "np.real(piezo * np.conj(g))", "np.real(intercept * np.conj(slope))"])
+                                  "np.real(piezo * np.conj(g))", "np.real(intercept * np.conj(slope))",
+                                  "EPSILON_0 * width / H**2"])
 def test_hand_typed_versions_are_gone(text):
     hits = [p.name for p in PACKAGE.rglob("*.py") if text in p.read_text(encoding="utf-8")]
     assert not hits, hits

@@ -202,7 +202,7 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force)
     t = cantilever.frictionless_response(frequency, k1=k1)
     to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
     return (frequency, to_height * d_eff * t.vertical, to_height * local_force * t.local_force,
-            to_height * EPSILON_0 * width / H**2 * t.distributed_load)
+            to_height * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
 
 
 def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
