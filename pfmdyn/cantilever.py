@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import transfer
+from .generated import formulas
 from .generated.characteristic import BETA1_FREE
 
 __all__ = ["Cantilever", "BETA1_FREE"]
@@ -68,11 +69,10 @@ class Cantilever:
                             ("youngs_modulus", youngs_modulus), ("density", density)]:
             if not value > 0:
                 raise ValueError(f"{name} must be positive, got {value!r}")
-        inertia = width * thickness**3 / 12
-        k = 3 * youngs_modulus * inertia / length**3
-        f1 = BETA1_FREE**2 / (2 * math.pi * length**2) * math.sqrt(
-            youngs_modulus * inertia / (density * width * thickness))
-        return cls(k, f1, length, quality_factor)
+        k = formulas.spring_constant_from_geometry(youngs_modulus, width, thickness, length)
+        f1 = formulas.free_resonance_from_geometry(youngs_modulus, width, thickness, length,
+                                                   density, BETA1_FREE)
+        return cls(float(k), float(f1), length, quality_factor)
 
     def beta(self, frequency) -> np.ndarray:
         """Dimensionless frequency ``beta`` (complex) for frequencies in Hz (> 0).

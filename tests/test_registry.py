@@ -64,3 +64,10 @@ def test_no_other_list_of_families():
             if len(hits) >= 2:
                 offenders.append(f"{path.relative_to(PACKAGE)}:{node.lineno}: {sorted(hits)}")
     assert not offenders, offenders
+
+
+def test_package_exports_every_registry_wrapper():
+    import pfmdyn
+
+    assert set(pfmdyn.__all__) == {"Cantilever"} | {f.function for f in WRAPPED}
+    assert all(hasattr(pfmdyn, name) for name in pfmdyn.__all__)

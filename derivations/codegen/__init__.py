@@ -7,7 +7,8 @@ The family registry (:mod:`derivations.families`) says what is generated.  The p
 * one renderer per output kind: :mod:`.transfer` (one module per one-argument family),
   :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.setback`
   (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
-  registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``).
+  registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``), :mod:`.formulas` (``formulas.py``, closed-form
+  relations).
 
 :func:`render_all` maps every output file name to its text; a renderer is added by adding
 its files there.  Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).
@@ -17,7 +18,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..trig import from_atoms
-from . import inputs, registry, setback
+from . import formulas, inputs, registry, setback
 from .characteristic import beta1_free, characteristic_families, dimensionless, render_characteristic
 from .stabilise import series_branch, split, switch_point
 from .transfer import Family, Function, families, render_family
@@ -37,6 +38,7 @@ def render_all() -> dict[str, str]:
     files["tip_setback.py"] = setback.render()
     files["families.py"] = registry.render()
     files["paper_inputs.py"] = inputs.render()
+    files["formulas.py"] = formulas.render()
     return dict(sorted(files.items()))
 
 

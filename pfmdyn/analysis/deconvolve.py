@@ -27,6 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..generated import formulas
 from ..io.spectra import frequency_group_starts
 
 
@@ -100,7 +101,7 @@ def nulling_bias(intercept, slope):
     """
     intercept, slope = np.asarray(intercept), np.asarray(slope)
     with np.errstate(divide="ignore", invalid="ignore"):  # a zero slope has no nulling bias
-        return -np.real(intercept * np.conj(slope)) / _power(slope)
+        return formulas.nulling_bias(intercept.real, intercept.imag, slope.real, slope.imag)
 
 
 def _power(z):

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cantilever import Cantilever
-from ..generated import paper_inputs
+from ..generated import formulas, paper_inputs
 
 __all__ = ["EPSILON_0", "SILICON_DENSITY", "TABLE1", "ResponseMap", "table1_cantilever",
            "cantilever_from_spring_constant", "response_map", "nulling_bias",
@@ -81,7 +81,7 @@ def cantilever_from_spring_constant(*, spring_constant, length, width, thickness
                         ("width", width), ("thickness", thickness), ("density", density)]:
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    modulus = 4 * spring_constant * length**3 / (width * thickness**3)
+    modulus = formulas.youngs_modulus_from_spring_constant(spring_constant, width, thickness, length)
     return Cantilever.from_geometry(length=length, width=width, thickness=thickness,
                                     youngs_modulus=modulus, density=density,
                                     quality_factor=quality_factor)
@@ -200,9 +200,9 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force)
     if frequency.ndim != 1:
         raise ValueError("frequency_hz must be one-dimensional")
     t = cantilever.frictionless_response(frequency, k1=k1)
-    to_height = 2 * cantilever.length / 3   # A = 2 theta L / 3 (Section III.2)
+    to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
     return (frequency, to_height * d_eff * t.vertical, to_height * local_force * t.local_force,
-            to_height * EPSILON_0 * width / H**2 * t.distributed_load)
+            to_height * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
 
 
 def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
@@ -282,8 +282,9 @@ def nulling_bias(cantilever, frequency_hz, *, width, k1=PAPER_K1, H=PAPER_TIP_HE
     _, piezo, local, nonlocal_ = _coefficients(
         cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
     g = local + nonlocal_
+    # The response is piezo + g (V - V_surf): intercept piezo - g V_surf, slope g.
     with np.errstate(invalid="ignore", divide="ignore"):
-        return surface_potential_v - np.real(piezo * np.conj(g)) / np.abs(g) ** 2
+        return surface_potential_v + formulas.nulling_bias(piezo.real, piezo.imag, g.real, g.imag)
 
 
 def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,

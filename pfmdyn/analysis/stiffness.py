@@ -44,6 +44,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import UserError
+from ..generated import formulas
 from ..generated.characteristic import BETA1_FREE, elastic
 
 __all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
@@ -394,14 +395,14 @@ def mindlin_k2_over_k1(poisson_ratio):
     """k2/k1 of a rigid sphere on an isotropic sample: ``2 (1 - nu)/(2 - nu)``.
 
     The inverse of derivations/contact_mechanics.py: mindlin_ratio (k1/k2, Hertz normal and
-    Mindlin tangential stiffness); a hand-written one-liner pending codegen of that relation.
+    Mindlin tangential stiffness), generated (generated/formulas.py).
 
     >>> round(mindlin_k2_over_k1(0.3), 6)
     0.823529
     """
     if not 0 <= poisson_ratio < 0.5 + 1e-12:
         raise UserError(f"Poisson's ratio must be in [0, 0.5], got {poisson_ratio}")
-    return 2 * (1 - poisson_ratio) / (2 - poisson_ratio)
+    return formulas.mindlin_k2_over_k1(poisson_ratio)
 
 
 def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k1: float, length_m: float,
@@ -458,8 +459,8 @@ def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k
 def reduced_modulus(k1, tip_radius_m, load_n):
     """Reduced modulus E* (Pa) of a Hertz contact of stiffness k1 (N/m), tip radius R (m), load P (N).
 
-    Inverts ``k1 = (6 E*^2 R P)^(1/3)`` (derivations/contact_mechanics.py: hertz_stiffness);
-    a hand-written one-liner pending codegen of that relation.
+    Inverts ``k1 = (6 E*^2 R P)^(1/3)`` (derivations/contact_mechanics.py: hertz_stiffness),
+    generated (generated/formulas.py).
 
     >>> round(float(reduced_modulus(100.0, 25e-9, 100e-9)), -6)   # Pa
     8165000000.0
@@ -467,4 +468,4 @@ def reduced_modulus(k1, tip_radius_m, load_n):
     k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
     if np.any(r <= 0) or np.any(p <= 0):
         raise UserError("tip radius and load must be positive (m, N)")
-    return np.sqrt(k1**3 / (6 * r * p))
+    return formulas.reduced_modulus(k1, r, p)

@@ -1,0 +1,94 @@
+"""Closed-form relations used numerically, each derived here from the derivations it rests on.
+
+Numeric code calls them from ``generated/formulas.py`` (written by ``pfmdyn codegen``,
+:mod:`derivations.codegen.formulas`); hand-typed versions survive only as independent
+checks in the tests.  Each :class:`Formula` names its arguments (SI) and its source.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import sympy as sp
+
+from . import contact_mechanics as cm
+from .beam import EI, L, beta, f0, k
+from .free_end import solve as solve_free_end
+
+__all__ = ["Formula", "formulas"]
+
+E, width, thickness, density, beta1 = sp.symbols(
+    "youngs_modulus width thickness density beta1", positive=True)
+k1, radius, load, frequency = sp.symbols("k1 tip_radius load frequency", positive=True)
+b_re, b_im, c_re, c_im, bias = sp.symbols("b_re b_im c_re c_im bias", real=True)
+eps0, tip_height, v_ac, dv, tau = sp.symbols("epsilon_0 H V_ac dV tau", positive=True)
+
+
+@dataclass(frozen=True)
+class Formula:
+    """``name(*arguments) = expr``: one generated function."""
+
+    name: str
+    arguments: tuple[sp.Symbol, ...]
+    expr: sp.Expr
+    summary: str
+    source: str
+
+
+def _only(solutions):
+    assert len(solutions) == 1, solutions
+    return solutions[0]
+
+
+@lru_cache(maxsize=None)
+def formulas() -> tuple[Formula, ...]:
+    """Every formula, in a fixed order.
+
+    >>> {f.name: f.expr for f in formulas()}["spring_constant_from_geometry"]
+    thickness**3*width*youngs_modulus/(4*L**3)
+    """
+    inertia = width * thickness**3 / 12
+    spring = _only(sp.solve(sp.Eq(EI, E * inertia), k))
+    # beta**4 = omega**2 rho S L**4 / EI (Eq. 2), EI = E I, S = w t; beta1: first free root.
+    omega = _only(sp.solve(sp.Eq(beta1**4, frequency**2 * density * width * thickness * L**4
+                                 / (E * inertia)), frequency))
+    # Response b + c V, linear in the DC bias V (drives f0 and q0 are proportional to V - V_surf).
+    power = (b_re + c_re * bias)**2 + (b_im + c_im * bias)**2
+    null = _only(sp.solve(sp.diff(power, bias), bias))
+    # Parallel-plate force of the cantilever (area L w) at separation H; first harmonic per
+    # unit length and per V_ac dV.  Its magnitude: the sign (attractive) is the caller's.
+    plate = eps0 * L * width * (dv + v_ac * sp.cos(tau))**2 / (2 * tip_height**2)
+    harmonic = sp.integrate(plate * sp.cos(tau), (tau, 0, 2 * sp.pi)) / sp.pi
+    free = solve_free_end()
+    height_per_slope = sp.limit(free.tip_deflection(f0) / free.theta(f0), beta, 0)
+    return (
+        Formula("spring_constant_from_geometry", (E, width, thickness, L), spring,
+                "spring constant k (N/m) of a rectangular beam: EI = k L**3 / 3 with I = w t**3 / 12",
+                "derivations/beam.py: EI"),
+        Formula("youngs_modulus_from_spring_constant", (k, width, thickness, L),
+                _only(sp.solve(sp.Eq(k, spring), E)),
+                "Young's modulus (Pa) giving spring constant k: the inverse of spring_constant_from_geometry",
+                "derivations/beam.py: EI"),
+        Formula("free_resonance_from_geometry", (E, width, thickness, L, density, beta1),
+                omega / (2 * sp.pi),
+                "first free resonance f1 (Hz) from beta1**4 = omega**2 rho S L**4 / EI",
+                "derivations/beam.py: kappa, Eq. 2"),
+        Formula("height_per_slope", (L,), height_per_slope,
+                "static tip deflection per tip slope under a tip force, u0(L)/theta = 2L/3",
+                "derivations/free_end.py: solve(), beta -> 0"),
+        Formula("nulling_bias", (b_re, b_im, c_re, c_im), null,
+                "real bias V minimising |b + c V| (the response vanishes there when b/c is real)",
+                "derivations/formulas.py: d|b + c V|**2/dV = 0"),
+        Formula("capacitive_load_per_volt2", (eps0, width, tip_height),
+                sp.simplify(harmonic / (L * v_ac * dv)),
+                "magnitude of the first-harmonic capacitive load q0 per unit length per V_ac dV (N/m per V**2)",
+                "derivations/formulas.py: parallel-plate force eps0 L w (dV + V_ac cos)**2/(2 H**2)"),
+        Formula("reduced_modulus", (k1, radius, load),
+                _only(sp.solve(sp.Eq(cm.hertz_stiffness().subs({cm.R: radius, cm.P: load}), k1),
+                               cm.E_star)),
+                "reduced modulus E* (Pa) of a Hertz contact of stiffness k1 at tip radius R and load P",
+                "derivations/contact_mechanics.py: hertz_stiffness()"),
+        Formula("mindlin_k2_over_k1", (cm.nu,), sp.factor(1 / cm.mindlin_ratio()),
+                "k2/k1 of a rigid sphere on an isotropic sample (Hertz normal, Mindlin tangential)",
+                "derivations/contact_mechanics.py: mindlin_ratio()"),
+    )
