@@ -179,3 +179,17 @@ def test_cli_rejects_non_png_output(tmp_path, capsys):
 def test_table1_spring_constants_are_the_printed_ones():
     for name, (_, _, _, k) in TABLE1.items():
         assert table1_cantilever(name).spring_constant == pytest.approx(k, rel=1e-12)
+
+
+def test_attractive_electrostatics_is_the_default_and_mirrors_the_nulling_bias():
+    """The capacitive force is attractive (project convention): flipping its sign mirrors V_null about V_surf."""
+    lever = table1_cantilever("B")
+    frequency = np.array([2e3, 3e5, 9e5])
+    attractive = nulling_bias(lever, frequency, width=WIDTH, local_force=0.7e-9, surface_potential_v=0.4)
+    assert np.array_equal(attractive, nulling_bias(lever, frequency, width=WIDTH, local_force=0.7e-9,
+                                                   surface_potential_v=0.4, electrostatic_sign=-1))
+    printed = nulling_bias(lever, frequency, width=WIDTH, local_force=0.7e-9, surface_potential_v=0.4,
+                           electrostatic_sign=1)
+    np.testing.assert_allclose(attractive - 0.4, -(printed - 0.4), rtol=1e-12)
+    with pytest.raises(ValueError, match="electrostatic_sign"):
+        nulling_bias(lever, frequency, width=WIDTH, electrostatic_sign=2)

@@ -6,13 +6,15 @@ what the text of IV.2 describes; Eq. 28, which the paper cites for Fig. 6, has n
 distributed load, see ``generated/errata.md``, ``fig6.model_reference``).  Three drives add:
 
 * electromechanical, ``d1 = d_eff V_ac`` (bias independent);
-* local electrostatic, ``f0 = F_loc dV V_ac`` on the tip;
-* non-local electrostatic, ``q0 = eps0 w dV V_ac / H**2`` per unit length of the cantilever
-  (the first harmonic of ``eps0 w (V_tip - V_surf)**2 / (2 H**2)``; Eq. 36 has an extra 1/2,
-  erratum ``eq36.q0``),
+* local electrostatic, ``f0 = s F_loc dV V_ac`` on the tip;
+* non-local electrostatic, ``q0 = s eps0 w dV V_ac / H**2`` per unit length of the cantilever
+  (the first harmonic of the force ``s eps0 w (V_tip - V_surf)**2 / (2 H**2)``; Eq. 36 has an
+  extra 1/2, erratum ``eq36.q0``),
 
-with ``dV = V_dc - V_surf``.  Signs follow the project convention (``u``, ``d1``, ``f0``,
-``q0`` positive away from the surface) with the drives exactly as written above.  Because
+with ``dV = V_dc - V_surf``.  Signs follow the project convention
+(``pfmdyn.derivations.paper.convention``: ``u``, ``d1``, ``f0``, ``q0`` positive away from the
+surface).  The capacitive force is attractive, so ``s = electrostatic_sign = -1`` by default;
+``+1`` gives the paper's drives as printed (a repulsive force), for comparison.  Because
 the bias enters linearly, the transfer coefficients are evaluated once per frequency and
 the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
 
@@ -186,8 +188,10 @@ class ResponseMap:
         return out
 
 
-def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force):
+def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force, electrostatic_sign=-1):
     """Per-frequency ``(frequency, P, G_loc, G_nl)``: A per V_ac, and per V_ac per volt of dV."""
+    if electrostatic_sign not in (-1, 1):
+        raise ValueError(f"electrostatic_sign must be -1 (attractive) or +1, got {electrostatic_sign!r}")
     if not isinstance(cantilever, Cantilever):
         raise TypeError(f"cantilever must be a Cantilever, got {type(cantilever).__name__}")
     for name, value in [("width", width), ("k1", k1), ("H", H)]:
@@ -201,12 +205,14 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force)
         raise ValueError("frequency_hz must be one-dimensional")
     t = cantilever.frictionless_response(frequency, k1=k1)
     to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
-    return (frequency, to_height * d_eff * t.vertical, to_height * local_force * t.local_force,
-            to_height * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
+    s = electrostatic_sign * to_height
+    return (frequency, to_height * d_eff * t.vertical, s * local_force * t.local_force,
+            s * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
 
 
 def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
-                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0) -> ResponseMap:
+                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0,
+                 electrostatic_sign=-1) -> ResponseMap:
     """Vertical PFM response per unit ``V_ac`` over frequency x bias (Figs. 6-7).
 
     Parameters
@@ -226,9 +232,12 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     d_eff : float, optional
         Effective piezoelectric coefficient, m/V (5 pm/V); the sign is the domain's.
     local_force : float, optional
-        ``F_loc``, N/V: ``f0 = F_loc dV V_ac`` (Fig. 7: 14 nN/V or 0.7 nN/V; Fig. 6: 0).
+        ``F_loc``, N/V: ``f0 = s F_loc dV V_ac`` (Fig. 7: 14 nN/V or 0.7 nN/V; Fig. 6: 0).
     surface_potential_v : float, optional
         ``V_surf``, V.
+    electrostatic_sign : {-1, +1}, optional
+        ``s``: -1 (default) for the attractive capacitive force of the project's convention,
+        +1 for the drives as the paper prints them.
 
     Returns
     -------
@@ -246,7 +255,8 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     array([1. , 0.8])
     """
     frequency, piezo, local, nonlocal_ = _coefficients(
-        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
+        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force,
+        electrostatic_sign=electrostatic_sign)
     bias = np.atleast_1d(np.asarray(bias_v, dtype=float))
     if bias.ndim != 1 or not np.all(np.isfinite(bias)):
         raise ValueError("bias_v must be a finite one-dimensional array")
@@ -256,7 +266,8 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
 
 
 def nulling_bias(cantilever, frequency_hz, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
-                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0) -> np.ndarray:
+                 d_eff=PAPER_D_EFF, local_force=0.0, surface_potential_v=0.0,
+                 electrostatic_sign=-1) -> np.ndarray:
     """DC bias minimising ``|A|`` at each frequency (where the PFM signal is nulled).
 
     With ``A = P + G (V - V_surf)``, ``G = G_loc + G_nl``, the real ``V`` minimising
@@ -280,7 +291,8 @@ def nulling_bias(cantilever, frequency_hz, *, width, k1=PAPER_K1, H=PAPER_TIP_HE
     True
     """
     _, piezo, local, nonlocal_ = _coefficients(
-        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force)
+        cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force,
+        electrostatic_sign=electrostatic_sign)
     g = local + nonlocal_
     # The response is piezo + g (V - V_surf): intercept piezo - g V_surf, slope g.
     with np.errstate(invalid="ignore", divide="ignore"):

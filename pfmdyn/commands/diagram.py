@@ -30,6 +30,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--local-force", type=float, default=0.0, metavar="NN_PER_V",
                         help="F_loc, nN/V (0 as in Fig. 6; 14 or 0.7 as in Fig. 7)")
     parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V")
+    parser.add_argument("--electrostatic-sign", type=int, choices=(-1, 1), default=-1,
+                        help="-1: attractive capacitive force (default, the project's convention); "
+                             "+1: the drives as the paper prints them")
     parser.add_argument("--kind", choices=KINDS,
                         default="amplitude", help="what to draw (default amplitude)")
     parser.add_argument("--fmin", type=float, default=1e3, help="lowest frequency, Hz (1e3)")
@@ -106,7 +109,8 @@ def run(args) -> int:
         response = response_map(lever, frequency, bias, width=width, k1=args.k1,
                                 H=args.tip_height * 1e-6, d_eff=args.d_eff * 1e-12,
                                 local_force=args.local_force * 1e-9,
-                                surface_potential_v=args.surface_potential)
+                                surface_potential_v=args.surface_potential,
+                                electrostatic_sign=args.electrostatic_sign)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
