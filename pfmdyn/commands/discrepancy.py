@@ -23,8 +23,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("data", help="CSV: metadata lines, then a spectrum or resonances table")
     parser.add_argument("--json", required=True, help="write the report here")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
+    for option, key, what in OVERRIDES:
+        parser.add_argument(option, type=float, dest=key, metavar="VALUE",
+                            help=f"{what} (overrides the file's metadata)")
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
+
+
+OVERRIDES = (("--spring-constant", "spring_constant_n_per_m", "cantilever spring constant, N/m"),
+             ("--length", "length_m", "cantilever length, m"),
+             ("--width", "width_m", "cantilever width, m"),
+             ("--tip-height", "tip_height_m", "tip height, m"),
+             ("--free-resonance", "free_resonance_hz", "first free flexural resonance, Hz"))
 
 
 def _finite(obj):
@@ -42,7 +52,7 @@ def _finite(obj):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
-    data = read(args.data)
+    data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
     if isinstance(data, SpectrumData):
         report = analyse(data, vertical_only=args.vertical_only)
         if args.plot:
