@@ -187,18 +187,16 @@ EFFECTS = ("damping", "tip_mass", "tip_setback", "tilt", "background", "lateral_
 """Hidden-effect classes of :func:`random_case` (the vocabulary of ``pfmdyn discrepancy``)."""
 
 
-def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrument",
-                n_elements: int = 120) -> tuple[str, dict]:
-    """A random cantilever and contact with the ``hidden`` effects: CSV text and the truth.
+def random_beam(rng, hidden=(), n_elements: int = 120) -> tuple[FEBeam, dict, np.ndarray]:
+    """A random silicon lever in contact with the ``hidden`` geometric effects and damping.
 
-    Silicon levers: k log-uniform 0.05-50 N/m, L 100-500 um, w 20-60 um (thickness from k,
-    f1 from the geometry), H 3-20 um; k1/k log-uniform 1-1e4 (redrawn until the band holds
-    2-4 contact modes below 25 f1), k2/k1 0-1.5 (0 unless ``lateral_stiffness`` is hidden,
-    which is meant to be analysed ``--vertical-only``), 3-7 biases, noise 0.3-2 % of the
-    median |response|.  Damping picks one mechanism at random: internal (Q 20-300),
-    viscous (free mode-1 Q 5-100) or a contact dashpot (first contact mode Q 20-300).
+    k log-uniform 0.05-50 N/m, L 100-500 um, w 20-60 um (thickness from k, f1 from the
+    geometry), H 3-20 um; k1/k log-uniform 1-1e4 (redrawn until 2-4 contact modes lie
+    below 25 f1), k2/k1 0-1.5 (0.3-1.5 when ``lateral_stiffness`` is hidden, which is meant
+    to be analysed ``--vertical-only``).  Damping picks one mechanism at random: internal
+    (Q 20-300), viscous (free mode-1 Q 5-100) or a contact dashpot (first contact mode
+    Q about 20-300).  Returns the beam, the truth and its first six contact resonances.
     """
-    rng = np.random.default_rng(seed)
     E, rho = 169e9, 2330.0
     while True:
         k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
@@ -217,8 +215,8 @@ def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrume
         beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, n_elements=n_elements,
                       **{p: truth[p] for p in ("mu", "gamma", "alpha") if p in truth})
         contact = beam.contact_resonances(6)
-        n_modes = int(rng.integers(2, 5))
-        if contact[n_modes - 1] < 25 * f1:
+        truth["contact_modes"] = int(rng.integers(2, 5))
+        if contact[truth["contact_modes"] - 1] < 25 * f1:
             break
     if "damping" in hidden:
         mechanism = str(rng.choice(["internal", "viscous", "contact"]))
@@ -233,14 +231,40 @@ def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrume
             truth["eta"] = k1 / (2 * math.pi * contact[0] * 10 ** rng.uniform(math.log10(20), math.log10(300)))
         beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, n_elements=n_elements,
                       **{p: truth[p] for p in ("mu", "gamma", "alpha", "Q", "viscous_hz", "eta") if p in truth})
+    return beam, truth, contact
+
+
+def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrument",
+                n_elements: int = 120) -> tuple[str, dict]:
+    """A random spectrum (:func:`random_beam`) with the ``hidden`` effects: CSV text and the truth.
+
+    The band covers the 2-4 drawn contact modes, 3-7 biases, noise 0.3-2 % of the median
+    |response|, x/y or polar columns at random, rows in ``order``.
+    """
+    rng = np.random.default_rng(seed)
+    beam, truth, contact = random_beam(rng, hidden, n_elements)
+    n_modes = truth["contact_modes"]
     lo, hi = 0.5 * contact[0], min(0.5 * (contact[n_modes - 1] + contact[n_modes]), 1.15 * contact[n_modes - 1])
     n_bias = int(rng.integers(3, 8))
     biases = tuple(np.round(np.linspace(-3, 3, n_bias), 3))
     noise = 10 ** rng.uniform(math.log10(0.003), math.log10(0.02))
-    truth.update(contact_modes=n_modes, band_hz=(lo, hi), biases=n_bias, noise=noise)
+    truth.update(band_hz=(lo, hi), biases=n_bias, noise=noise)
     background = rng.uniform(0.05, 0.3) if "background" in hidden else 0.0
     text = spectrum(beam, np.linspace(lo, hi, n_freq), biases, noise=noise, background=background,
                     polar=bool(rng.integers(2)), seed=seed, order=order)
-    # The width in the metadata is the drawn one (the spectrum's header says 3e-5 otherwise).
-    text = text.replace("# width_m: 3e-05", f"# width_m: {w!r}")
-    return text, truth
+    return text.replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}"), truth
+
+
+def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_elements: int = 120) -> tuple[str, dict]:
+    """A random resonance table: 3 free and 2-4 contact modes with Gaussian noise of
+    ``relative_uncertainty`` (declared as ``frequency_uncertainty_hz`` from mode 1), shuffled rows."""
+    rng = np.random.default_rng(seed)
+    beam, truth, _ = random_beam(rng, tuple(h for h in hidden if h != "damping"), n_elements)
+    free = beam.free_resonances(3)
+    contact = beam.contact_resonances(truth["contact_modes"])
+    sigma = float(relative_uncertainty * free[0])
+    rows = [f"{i + 1},free,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(free)]
+    rows += [f"{i + 1},contact,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(contact)]
+    rows = [rows[i] for i in rng.permutation(len(rows))]
+    head = _metadata(beam, "FE synthetic resonances").replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}")
+    return head + f"# frequency_uncertainty_hz: {sigma!r}\nmode,condition,frequency_hz\n" + "\n".join(rows) + "\n", truth

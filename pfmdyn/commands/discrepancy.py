@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.spectrum import analyse, summary
 from ..errors import UserError
 from ..io.tables import SpectrumData, read
@@ -53,16 +54,21 @@ def _finite(obj):
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
     data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
-    if isinstance(data, SpectrumData):
-        report = analyse(data, vertical_only=args.vertical_only)
-        if args.plot:
+    try:
+        if isinstance(data, SpectrumData):
+            report = analyse(data, vertical_only=args.vertical_only)
+        else:
+            report = analyse_resonances(data, vertical_only=args.vertical_only)
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        # Data that read correctly but defeat the numerics still get one line, not a traceback.
+        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
+                        "check the metadata (spring constant, length, tip height, free resonance)") from None
+    if args.plot:
+        if isinstance(data, SpectrumData):
             plot_spectrum_report(data, report, args.plot)
-        report.pop("_fits")
-    else:
-        from ..discrepancy.resonances import analyse_resonances
-        report = analyse_resonances(data, vertical_only=args.vertical_only)
-        if args.plot:
+        else:
             plot_resonance_report(data, report, args.plot)
+    report.pop("_fits", None)
     try:
         with open(args.json, "w", encoding="utf-8") as fh:
             json.dump(_finite(report), fh, indent=2)

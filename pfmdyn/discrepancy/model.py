@@ -150,6 +150,46 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     return m.f1 * (roots / b1) ** 2
 
 
+def characteristic_args(model: Model, internal, contact: bool) -> tuple:
+    """Parameters of :func:`pfmdyn.generated.tip_setback.characteristic` for the model."""
+    c = model.coords(internal)
+    m = model.meta
+    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+
+
+def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
+    """``d f_n / d internal_j`` (Hz) at undamped resonances ``frequency_hz`` of the model.
+
+    Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
+    ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
+    the free root ``beta_1`` (tip mass, set-back).  One vectorised evaluation of ``F`` per
+    parameter replaces a root search per parameter.
+    """
+    internal = np.asarray(internal, float)
+    m = model.meta
+    f = np.asarray(frequency_hz, float)
+    F = tip_setback.characteristic
+    c = model.coords(internal)
+    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    beta = b1 * np.sqrt(f / m.f1)
+    a0, af0 = characteristic_args(model, internal, contact), characteristic_args(model, internal, False)
+    with np.errstate(all="ignore"):
+        hb = 1e-7 * beta
+        f_beta = (F(beta + hb, *a0) - F(beta - hb, *a0)) / (2 * hb)
+        f_b1 = (F(b1 * (1 + 1e-7), *af0) - F(b1 * (1 - 1e-7), *af0)) / (2e-7 * b1)
+        out = np.empty((len(f), len(internal)))
+        for j in range(len(internal)):
+            h = 1e-7 * max(1.0, abs(internal[j]))
+            xs = internal.copy()
+            xs[j] += h
+            d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
+            d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
+            out[:, j] = 2 * f * (d_beta / beta - d_b1 / b1)
+    out[~np.isfinite(out)] = 0.0
+    return out
+
+
 @dataclass
 class FitResult:
     """One fit: internal parameters, covariance, residuals (data units), noise, criteria.
@@ -319,6 +359,25 @@ class _Problem:
         return out
 
 
+def covariance(jac: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """``scale (J^T J)^-1`` by SVD; a parameter with a share in a direction the data do not
+    constrain (singular value below 1e-8 of the largest) gets infinite variance.
+
+    >>> covariance(np.array([[1.0, 1.0], [2.0, 2.0]])).diagonal().tolist()
+    [inf, inf]
+    """
+    if not jac.size:
+        return np.zeros((jac.shape[1], jac.shape[1]))
+    jac = np.where(np.isfinite(jac), jac, 0.0)
+    # Eigen-decomposition of J^T J (p x p): squared singular values, cheap for tall J.
+    w, v = np.linalg.eigh(jac.T @ jac)
+    good = w > 1e-16 * max(w.max(), 1e-300)
+    cov = (v[:, good] / w[good]) @ v[:, good].T * scale
+    loose = np.any(np.abs(v[:, ~good]) > 1e-3, axis=1) if (~good).any() else np.zeros(len(w), bool)
+    cov[loose, :] = np.where(loose[:, None] & loose[None, :], np.inf, 0.0)[loose, :]
+    return cov
+
+
 def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
     """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
 
@@ -332,15 +391,12 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     for start in starts:
         x0 = np.clip(start, lower, upper)
         res = least_squares(problem.residual, x0, jac=jac, bounds=(lower, upper), method="trf",
-                            diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0, ftol=1e-10, xtol=1e-10)
+                            diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
         if best is None or res.cost < best.cost:
             best = res
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
-    try:
-        cov = np.linalg.pinv(best.jac.T @ best.jac) * (2 * best.cost / max(n - k, 1))
-    except (np.linalg.LinAlgError, ValueError):
-        cov = np.full((len(lower), len(lower)), np.nan)
+    cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
     A, c, _, _ = problem._at(best.x)
     pred = A @ c
     return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)

@@ -54,7 +54,8 @@ def run(problem, progress: bool = True) -> dict:
     """Run the loop on ``problem``; return baseline, final fit and the steps.
 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
-    -> fit`` (the best fit with that effect added) and ``locate(fit) -> dict``.
+    -> fit`` (the best fit with that effect added), ``locate(fit) -> dict`` and optionally
+    ``polish(fit) -> fit`` (converge a trial that is accepted).
     """
     current = problem.baseline()
     baseline, steps = current, []
@@ -76,7 +77,8 @@ def run(problem, progress: bool = True) -> dict:
                               "gap_before": current.gap, "gap_after": trials[best].gap,
                               "criterion_gain": current.bic - trials[best].bic,
                               "parameters": trials[best].parameters()})
-                current = trials[best]
+                current = _polish(problem, trials[best])
+                steps[-1].update(gap_after=current.gap, parameters=current.parameters())
                 continue
             pair = _best_pair(problem, current, trials, bar) if current.gap > NEAR_NOISE else None
             if pair is None:
@@ -92,12 +94,21 @@ def run(problem, progress: bool = True) -> dict:
                               "gap_before": before.gap, "gap_after": after.gap,
                               "criterion_gain": before.bic - after.bic, "parameters": after.parameters(),
                               "note": f"added together with {second if name == first else first}"})
-            current = fit
+            current = _polish(problem, fit)
+            steps[-1].update(gap_after=current.gap, parameters=current.parameters())
     unexplained = None
     if current.gap > UNEXPLAINED:
         loc = problem.locate(current)
         unexplained = {"gap": current.gap, "where": loc.get("band_hz", loc.get("worst"))}
     return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained}
+
+
+def _polish(problem, trial):
+    """The trial fit converged fully, when the problem stops trials early (never worse)."""
+    if not hasattr(problem, "polish"):
+        return trial
+    polished = problem.polish(trial)
+    return polished if polished.bic <= trial.bic else trial
 
 
 def _best_pair(problem, current, trials, bar):
@@ -106,11 +117,10 @@ def _best_pair(problem, current, trials, bar):
     found = None
     for i, a in enumerate(ranked):
         for b in ranked[i + 1:]:
-            for first, second in ((a, b),) if problem.symmetric else ((a, b), (b, a)):
-                if second not in problem.candidates(trials[first]):
-                    continue
-                fit = problem.trial(trials[first], second)
-                bar.update()
-                if material(current, fit) and (found is None or fit.bic < found[1].bic):
-                    found = ((first, second), fit)
+            if b not in problem.candidates(trials[a]):
+                continue
+            fit = problem.trial(trials[a], b)
+            bar.update()
+            if material(current, fit) and (found is None or fit.bic < found[1].bic):
+                found = ((a, b), fit)
     return found

@@ -154,10 +154,13 @@ def _peak_residual(model, internal, peaks, band, refine):
     return np.array(there + [back])
 
 
+TRIAL_NFEV = 30
+"""Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
+then converged (:meth:`SpectrumProblem.polish`)."""
+
+
 class SpectrumProblem:
     """What :func:`pfmdyn.discrepancy.select.run` needs for a spectrum (see there)."""
-
-    symmetric = True
 
     def __init__(self, data: SpectrumData, vertical_only: bool = False):
         self.data, self.vertical_only = data, vertical_only
@@ -171,7 +174,7 @@ class SpectrumProblem:
                         if e != "lateral_stiffness" or vertical_only]
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
-        self.k1_grid, self.k2_grid = spring_grid(m, 31, 12)
+        self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
 
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
@@ -223,7 +226,7 @@ class SpectrumProblem:
         quick = sorted((self.cost(smooth, np.append(g, 0.05)), i) for i, g in enumerate(grid))
         damped = fit(smooth, self.data, [np.append(grid[i], 0.05) for _, i in quick[:2]], self.sigma, max_nfev=40)
         starts.append(damped.internal[:-1])
-        return fit(model, self.data, starts, self.sigma)
+        return fit(model, self.data, starts, self.sigma, max_nfev=80)
 
     def cost(self, model, internal) -> float:
         """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
@@ -259,7 +262,8 @@ class SpectrumProblem:
         effect = EFFECTS[component]
         if component == "lateral_stiffness":
             extra = [np.append(current.internal[1:], v) for v in self.k2_grid]
-            return fit(model, self.data, self.resonance_starts(model, extra, count=3), self.sigma)
+            return fit(model, self.data, self.resonance_starts(model, extra, count=3), self.sigma,
+                       max_nfev=TRIAL_NFEV)
         # The nested start (effect switched off) guarantees the fit is never worse.
         starts = [np.append(current.internal, effect.null)] if effect.parameters else [current.internal]
         if effect.moves_resonances:
@@ -269,7 +273,11 @@ class SpectrumProblem:
             starts += self.resonance_starts(model, extra, count=2)
         elif seeds:
             starts = [np.append(current.internal, v) for v in seeds]
-        return fit(model, self.data, starts, self.sigma)
+        return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
+
+    def polish(self, trial: FitResult) -> FitResult:
+        """Converge an accepted trial fully (trials stop early: they only rank candidates)."""
+        return fit(trial.model, self.data, [trial.internal], self.sigma, max_nfev=200)
 
     def locate(self, current: FitResult) -> dict:
         """Where the residual concentrates, and the measured peak widths."""
