@@ -181,6 +181,11 @@ class ResonanceProblem:
     def trial(self, current: FitResult, name: str) -> FitResult:
         return fit_resonances(current.model.with_effect(name), self.data)
 
+    def without(self, current: FitResult, component: str) -> FitResult:
+        effects = list(current.model.effects)
+        effects.remove(component)
+        return fit_resonances(Model(self.data.metadata, tuple(effects), self.vertical_only), self.data)
+
     def locate(self, current: FitResult) -> dict:
         return _locate(self.data, current)
 

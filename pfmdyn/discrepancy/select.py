@@ -13,7 +13,9 @@ With a misfit far above the noise any extra parameter wins the BIC, so the crite
 alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  The
 material candidate with the largest BIC gain is added.  When none is material, pairs of
 the three best candidates are tried (two effects can be needed together before either
-helps on its own), and the loop stops when no pair is material either.  A final gap above
+helps on its own), and the loop stops when no pair is material either.  A backward pass
+then removes every component that is no longer material in the final model (an effect
+that only helped a fit out of a local minimum, a damping mechanism replaced by another).  A final gap above
 :data:`UNEXPLAINED` (2) is reported as ``unexplained``, with where it concentrates.
 """
 from __future__ import annotations
@@ -54,7 +56,8 @@ def run(problem, progress: bool = True) -> dict:
     """Run the loop on ``problem``; return baseline, final fit and the steps.
 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
-    -> fit`` (the best fit with that effect added), ``locate(fit) -> dict`` and optionally
+    -> fit`` (the best fit with that effect added), ``without(fit, component) -> fit``
+    (refit with one component removed), ``locate(fit) -> dict`` and optionally
     ``polish(fit) -> fit`` (converge a trial that is accepted).
     """
     current = problem.baseline()
@@ -96,11 +99,33 @@ def run(problem, progress: bool = True) -> dict:
                               "note": f"added together with {second if name == first else first}"})
             current = _polish(problem, fit)
             steps[-1].update(gap_after=current.gap, parameters=current.parameters())
+    current = _prune(problem, current, steps)
     unexplained = None
     if current.gap > UNEXPLAINED:
         loc = problem.locate(current)
         unexplained = {"gap": current.gap, "where": loc.get("band_hz", loc.get("worst"))}
     return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained}
+
+
+def _prune(problem, current, steps):
+    """Backward pass: drop every effect component that the final model does not need.
+
+    Greedy steps can add an effect that only helped the fit out of a local minimum (its
+    parameter ends at its null value) or a damping mechanism that a later one replaced.
+    A component goes when it is no longer material, i.e. when the model without it would
+    not be extended by it again.
+    """
+    while len(current.model.effects) > 0:
+        trials = {c: problem.without(current, c) for c in current.model.effects}
+        spare = [c for c, t in trials.items() if t is not None and not material(t, current)]
+        if not spare:
+            return current
+        drop = min(spare, key=lambda c: trials[c].bic)
+        steps.append({"effect": None, "removed": drop, "gap_before": current.gap, "gap_after": trials[drop].gap,
+                      "decision": f"removed {drop}: not material in the final model (BIC gain "
+                      f"{trials[drop].bic - current.bic:.1f}, gap {trials[drop].gap:.3g} -> {current.gap:.3g})"})
+        current = trials[drop]
+    return current
 
 
 def _polish(problem, trial):

@@ -177,9 +177,16 @@ class SpectrumProblem:
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
 
     # -- starts --------------------------------------------------------------------------
-    def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
-        """Starts whose resonances match the data's peaks: grid over the springs times ``extra``
-        (values of the remaining parameters), best ``count`` refined by least squares on peaks."""
+    def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2,
+                         refined: int = 6) -> list[np.ndarray]:
+        """Starts whose resonances match the data's peaks.
+
+        A grid over the springs times ``extra`` (values of the remaining parameters) is
+        ranked by how well its undamped resonances match the peaks; the best ``refined``
+        are matched by least squares on the peaks.  Peak positions alone often leave a
+        family of exact matches (two peaks, three parameters), so those are ranked by the
+        full misfit of the spectrum, and the best ``count`` are returned.
+        """
         if not len(self.peaks):
             return []
         n_springs = 1 if model.vertical_only else 2
@@ -191,11 +198,12 @@ class SpectrumProblem:
         ranked = sorted((float(np.sum(_peak_residual(model, g, self.peaks, self.band, False) ** 2)), i)
                         for i, g in enumerate(grid))
         starts = []
-        for _, i in ranked[:count]:
+        for _, i in ranked[:refined]:
             res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
-                                bounds=(lower, upper), diff_step=1e-6, max_nfev=40)
-            starts.append(res.x)
-        return starts
+                                bounds=(lower, upper), diff_step=1e-6, max_nfev=30)
+            if not any(np.allclose(res.x, s_, atol=1e-3) for s_ in starts):
+                starts.append(res.x)
+        return sorted(starts, key=lambda x: self.cost(model, x))[:count]
 
     def damping_seeds(self) -> dict[str, float]:
         """Start values of each damping mechanism's parameter from the measured peak widths."""
@@ -252,7 +260,7 @@ class SpectrumProblem:
         """Best fit of the current model plus ``name`` (for damping: best mechanism by BIC)."""
         if name == "damping":
             seeds = self.damping_seeds()
-            fits = [self._fit_with(current, DAMPING[mech], [seeds[mech], EFFECTS[DAMPING[mech]].seeds[1]])
+            fits = [self._fit_with(current, DAMPING[mech], [seeds[mech]])
                     for mech in DAMPING if DAMPING[mech] not in current.model.effects]
             return min(fits, key=lambda f: f.bic)
         return self._fit_with(current, name, None)
@@ -272,8 +280,23 @@ class SpectrumProblem:
             extra = [np.concatenate([others, [v]]) for v in effect.seeds]
             starts += self.resonance_starts(model, extra, count=2)
         elif seeds:
+            # Damping: the current springs, and springs re-matched to the peaks (the undamped
+            # fit may sit in another basin), both with the width-based loss as start.
+            springs = 1 if model.vertical_only else 2
             starts = [np.append(current.internal, v) for v in seeds]
+            starts += self.resonance_starts(model, [np.append(current.internal[springs:], seeds[0])], count=1)
         return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
+
+    def without(self, current: FitResult, component: str) -> FitResult:
+        """Refit with one component removed, from the current values of the others."""
+        keep = [i for i, p in enumerate(current.model.parameters)
+                if p not in EFFECTS[component].parameters or p.name in ("k1", "k2")]
+        if component == "lateral_stiffness":
+            keep = [i for i, p in enumerate(current.model.parameters) if p.name != "k2"]
+        effects = list(current.model.effects)
+        effects.remove(component)
+        model = Model(current.model.meta, tuple(effects), current.model.vertical_only)
+        return fit(model, self.data, [current.internal[keep]], self.sigma, max_nfev=100)
 
     def polish(self, trial: FitResult) -> FitResult:
         """Converge an accepted trial fully (trials stop early: they only rank candidates)."""
@@ -324,6 +347,9 @@ def summary(report: dict) -> str:
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}"]
     for i, s in enumerate(report["steps"], 1):
+        if "removed" in s:
+            lines.append(f"step {i}: {s['decision']}")
+            continue
         loc = s["located"]
         where = (f"residual in {loc['band_hz'][0] / 1e3:.1f}-{loc['band_hz'][1] / 1e3:.1f} kHz"
                  if "band_hz" in loc else f"largest residual at {loc['worst']}")
