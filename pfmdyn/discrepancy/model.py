@@ -48,7 +48,7 @@ def free_root(k, H, L, mu, gamma) -> float:
     if mu == 0.0:
         return BETA1_FREE
     char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
-    return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-15))
+    return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
 
 
 def rotated(k1, k2, alpha):

@@ -178,7 +178,7 @@ class SpectrumProblem:
 
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2,
-                         refined: int = 6) -> list[np.ndarray]:
+                         refined: int = 4) -> list[np.ndarray]:
         """Starts whose resonances match the data's peaks.
 
         A grid over the springs times ``extra`` (values of the remaining parameters) is
@@ -200,7 +200,7 @@ class SpectrumProblem:
         starts = []
         for _, i in ranked[:refined]:
             res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
-                                bounds=(lower, upper), diff_step=1e-6, max_nfev=30)
+                                bounds=(lower, upper), diff_step=1e-6, max_nfev=20)
             if not any(np.allclose(res.x, s_, atol=1e-3) for s_ in starts):
                 starts.append(res.x)
         return sorted(starts, key=lambda x: self.cost(model, x))[:count]
