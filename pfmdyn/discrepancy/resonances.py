@@ -31,7 +31,9 @@ from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, 
 
 __all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "ResonanceProblem", "analyse_resonances", "paper_tables"]
 
-CANDIDATES = ("tip_mass", "tip_setback", "tilt")
+CANDIDATES = ("tilt", "tip_mass", "tip_setback")
+"""Effects a resonance table can show, in the order ties are broken (tilt is always present
+in a real contact, set-back changes only contact modes, like tilt)."""
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
 
 
@@ -165,7 +167,7 @@ class ResonanceProblem:
 
     def __init__(self, data: ResonanceData, vertical_only: bool = False):
         self.data, self.vertical_only = data, vertical_only
-        library = list(CANDIDATES) + (["lateral_stiffness"] if vertical_only else [])
+        library = (["lateral_stiffness"] if vertical_only else []) + list(CANDIDATES)
         if not np.any(data.condition == "contact"):
             library = [e for e in library if e not in ("tilt", "lateral_stiffness")]
         self.library = library

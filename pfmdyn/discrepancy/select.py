@@ -11,7 +11,9 @@ step every candidate effect is fitted on top of the current model (by the data k
 
 With a misfit far above the noise any extra parameter wins the BIC, so the criterion
 alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  The
-material candidate with the largest BIC gain is added.  When none is material, pairs of
+material candidate with the largest BIC gain is added (candidates within
+:data:`BIC_THRESHOLD` of it are indistinguishable: the first in the library's order is
+taken and the others are listed in the step).  When none is material, pairs of
 the three best candidates are tried (two effects can be needed together before either
 helps on its own), and the loop stops when no pair is material either.  A backward pass
 then removes every component that is no longer material in the final model (an effect
@@ -75,8 +77,13 @@ def run(problem, progress: bool = True) -> dict:
             table = [_row(n, current, t) for n, t in trials.items()]
             good = [n for n in names if material(current, trials[n])]
             if good:
-                best = max(good, key=lambda n: current.bic - trials[n].bic)
+                top = min(trials[n].bic for n in good)
+                # Candidates within the BIC threshold of the best are not told apart by the
+                # data: take the first in the library's order and say which were equivalent.
+                tied = [n for n in good if trials[n].bic - top <= BIC_THRESHOLD]
+                best = tied[0]
                 steps.append({"effect": best, "located": where, "candidates": table,
+                              "indistinguishable_from": tied[1:],
                               "gap_before": current.gap, "gap_after": trials[best].gap,
                               "criterion_gain": current.bic - trials[best].bic,
                               "parameters": trials[best].parameters()})

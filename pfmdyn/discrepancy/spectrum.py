@@ -170,8 +170,9 @@ class SpectrumProblem:
             self.sigma = 1e-12 * float(np.max(np.abs(data.response))) or 1e-300
         self.peaks = data_peaks(data)
         self.widths = peak_widths(data)
-        self.library = [e for e in ("damping", "tip_mass", "tip_setback", "tilt", "background", "lateral_stiffness")
-                        if e != "lateral_stiffness" or vertical_only]
+        # Library order breaks ties between candidates the data do not tell apart.
+        self.library = (["lateral_stiffness"] if vertical_only else []) + [
+            "damping", "tip_mass", "tilt", "tip_setback", "background"]
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
