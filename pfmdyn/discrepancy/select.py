@@ -22,6 +22,8 @@ that only helped a fit out of a local minimum, a damping mechanism replaced by a
 """
 from __future__ import annotations
 
+import time
+
 from tqdm import tqdm
 
 __all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "UNEXPLAINED", "material", "run"]
@@ -30,6 +32,9 @@ BIC_THRESHOLD = 10.0
 MIN_REDUCTION = 0.25
 NEAR_NOISE = 1.5
 UNEXPLAINED = 2.0
+TIME_BUDGET_S = 40.0
+"""Forward steps start only within this many seconds of the start (then prune and report),
+so that a hard file still ends in a report within about a minute."""
 
 CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
              f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %)")
@@ -54,7 +59,7 @@ def _row(name, old, new) -> dict:
     return {"effect": name, "bic": new.bic, "delta_bic": old.bic - new.bic, "gap": new.gap}
 
 
-def run(problem, progress: bool = True) -> dict:
+def run(problem, progress: bool = True, time_budget_s: float = TIME_BUDGET_S) -> dict:
     """Run the loop on ``problem``; return baseline, final fit and the steps.
 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
@@ -62,11 +67,16 @@ def run(problem, progress: bool = True) -> dict:
     (refit with one component removed), ``locate(fit) -> dict`` and optionally
     ``polish(fit) -> fit`` (converge a trial that is accepted).
     """
+    started = time.perf_counter()
     current = problem.baseline()
     baseline, steps = current, []
     with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
         while True:
             where = problem.locate(current)
+            if time.perf_counter() - started > time_budget_s:
+                steps.append({"effect": None, "located": where, "candidates": [],
+                              "decision": f"stop: time budget of {time_budget_s:g} s used"})
+                break
             names = problem.candidates(current)
             if not names:
                 break
@@ -122,6 +132,14 @@ def _prune(problem, current, steps):
     A component goes when it is no longer material, i.e. when the model without it would
     not be extended by it again.
     """
+    for alternative in getattr(problem, "alternatives", lambda fit: [])(current):
+        # e.g. one damping mechanism in place of another, or of two that mimic it together.
+        if alternative.bic < current.bic:
+            steps.append({"effect": None, "removed": ", ".join(current.model.effects),
+                          "gap_before": current.gap, "gap_after": alternative.gap,
+                          "decision": f"replaced {', '.join(current.model.effects)} by "
+                          f"{', '.join(alternative.model.effects)} (BIC lower by {current.bic - alternative.bic:.1f})"})
+            current = alternative
     while len(current.model.effects) > 0:
         trials = {c: problem.without(current, c) for c in current.model.effects}
         spare = [c for c, t in trials.items() if t is not None and not material(t, current)]

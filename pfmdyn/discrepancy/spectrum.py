@@ -299,6 +299,24 @@ class SpectrumProblem:
         model = Model(current.model.meta, tuple(effects), current.model.vertical_only)
         return fit(model, self.data, [current.internal[keep]], self.sigma, max_nfev=100)
 
+    def alternatives(self, current: FitResult) -> list[FitResult]:
+        """The final model with its damping mechanism(s) replaced by each single other one."""
+        present = [c for c in current.model.effects if c.startswith("damping_")]
+        if not present:
+            return []
+        others = [c for c in current.model.effects if c not in present]
+        keep = [i for i, p in enumerate(current.model.parameters)
+                if not any(p in EFFECTS[c].parameters for c in present)]
+        seeds = self.damping_seeds()
+        out = []
+        for mech, component in DAMPING.items():
+            if present == [component]:
+                continue
+            model = Model(current.model.meta, tuple(others) + (component,), current.model.vertical_only)
+            out.append(fit(model, self.data, [np.append(current.internal[keep], seeds[mech])], self.sigma,
+                           max_nfev=100))
+        return out
+
     def polish(self, trial: FitResult) -> FitResult:
         """Converge an accepted trial fully (trials stop early: they only rank candidates)."""
         return fit(trial.model, self.data, [trial.internal], self.sigma, max_nfev=200)
