@@ -28,11 +28,12 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..generated import damping, tip_setback
+from ..generated.tilt_rotation import rotated
 from ..generated.characteristic import BETA1_FREE
 from ..roots.bracket import grid_roots, refine
 from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "project", "rotated"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "project"]
 
 _DEFAULTS = {"k2": 0.0, "Q": 0.0, "Q_viscous": 0.0, "contact_loss": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
@@ -49,12 +50,6 @@ def free_root(k, H, L, mu, gamma) -> float:
         return BETA1_FREE
     char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
     return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
-
-
-def rotated(k1, k2, alpha):
-    """``kvv, kll, kvl``: the spring tensor ``R diag(k1, k2) R^T`` in beam axes (derivations/tilt.py)."""
-    c, s = math.cos(alpha), math.sin(alpha)
-    return k1 * c * c + k2 * s * s, k1 * s * s + k2 * c * c, (k1 - k2) * s * c
 
 
 @dataclass(frozen=True)

@@ -116,7 +116,7 @@ def peak_widths(data: SpectrumData) -> tuple[np.ndarray, np.ndarray]:
     >>> f = np.linspace(50, 150, 2001); y = 1 / (100**2 - f**2 + 1j * f * 2.0)
     >>> p, w = peak_widths(SimpleNamespace(frequency_hz=f, bias_v=np.zeros_like(f), response=y))
     >>> p.round(1).tolist(), w.round(2).tolist()
-    [[100.0], [2.0]]
+    ([100.0], [2.0])
     """
     freq_u, inverse = np.unique(data.frequency_hz, return_inverse=True)
     size = np.bincount(inverse, np.abs(data.response))
@@ -260,13 +260,17 @@ class SpectrumProblem:
     def trial(self, current: FitResult, name: str) -> FitResult:
         """Best fit of the current model plus ``name`` (for damping: best mechanism by BIC)."""
         if name == "damping":
+            # Each mechanism from the current springs; the best one also from springs
+            # re-matched to the peaks (the undamped fit may sit in another basin).
             seeds = self.damping_seeds()
-            fits = [self._fit_with(current, DAMPING[mech], [seeds[mech]])
-                    for mech in DAMPING if DAMPING[mech] not in current.model.effects]
-            return min(fits, key=lambda f: f.bic)
+            fits = {mech: self._fit_with(current, DAMPING[mech], [seeds[mech]])
+                    for mech in DAMPING if DAMPING[mech] not in current.model.effects}
+            best = min(fits, key=lambda m: fits[m].bic)
+            rematched = self._fit_with(current, DAMPING[best], [seeds[best]], rematch=True)
+            return min([rematched] + list(fits.values()), key=lambda f: f.bic)
         return self._fit_with(current, name, None)
 
-    def _fit_with(self, current: FitResult, component: str, seeds) -> FitResult:
+    def _fit_with(self, current: FitResult, component: str, seeds, rematch: bool = False) -> FitResult:
         model = current.model.with_effect(component)
         effect = EFFECTS[component]
         if component == "lateral_stiffness":
@@ -280,12 +284,11 @@ class SpectrumProblem:
             others = current.internal[springs:]
             extra = [np.concatenate([others, [v]]) for v in effect.seeds]
             starts += self.resonance_starts(model, extra, count=2)
-        elif seeds:
-            # Damping: the current springs, and springs re-matched to the peaks (the undamped
-            # fit may sit in another basin), both with the width-based loss as start.
+        elif seeds and rematch:
             springs = 1 if model.vertical_only else 2
+            starts = self.resonance_starts(model, [np.append(current.internal[springs:], seeds[0])], count=1)
+        elif seeds:
             starts = [np.append(current.internal, v) for v in seeds]
-            starts += self.resonance_starts(model, [np.append(current.internal[springs:], seeds[0])], count=1)
         return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
 
     def without(self, current: FitResult, component: str) -> FitResult:
