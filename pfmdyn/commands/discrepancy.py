@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from ..discrepancy.resonances import analyse_resonances
+from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy.spectrum import analyse, summary
 from ..errors import UserError
 from ..io.tables import SpectrumData, read
@@ -56,9 +57,9 @@ def run(args: argparse.Namespace) -> int:
     data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
     try:
         if isinstance(data, SpectrumData):
-            report = analyse(data, vertical_only=args.vertical_only)
+            report = analyse(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
         else:
-            report = analyse_resonances(data, vertical_only=args.vertical_only)
+            report = analyse_resonances(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         # Data that read correctly but defeat the numerics still get one line, not a traceback.
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "

@@ -192,7 +192,8 @@ class ResonanceProblem:
         return _locate(self.data, current)
 
 
-def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = True) -> dict:
+def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = True,
+                       time_budget_s: float | None = None) -> dict:
     """Discrepancy loop on a resonances table; same report keys as the spectrum loop.
 
     Examples
@@ -201,7 +202,7 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     """
     from .spectrum import report
 
-    result = select.run(ResonanceProblem(data, vertical_only), progress)
+    result = select.run(ResonanceProblem(data, vertical_only), progress, time_budget_s)
     sigma = _sigma(data)
     base, final = result["baseline"], result["final"]
     return report(result, gap_definition="RMS of (f_model - f_measured) / frequency uncertainty",

@@ -336,7 +336,8 @@ class SpectrumProblem:
         return where
 
 
-def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = True) -> dict:
+def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = True,
+            time_budget_s: float | None = None) -> dict:
     """Run the discrepancy loop on a spectrum; return the JSON-ready report.
 
     Examples
@@ -344,7 +345,7 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Tr
     See ``tests/test_discrepancy.py`` (finite-element data with hidden effects).
     """
     problem = SpectrumProblem(data, vertical_only)
-    result = select.run(problem, progress)
+    result = select.run(problem, progress, time_budget_s)
     return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
                   "from second differences along frequency", noise_sigma=problem.sigma,
                   _fits=(result["baseline"], result["final"]))
