@@ -12,7 +12,7 @@ import pytest
 
 # The independent FE generator lives beside the tests (importlib mode: not on sys.path).
 sys.path.insert(0, str(Path(__file__).parent))
-from fe_beam import FEBeam, resonances, spectrum  # noqa: E402
+from fe_beam import FEBeam, random_case, resonances, spectrum  # noqa: E402
 from pfmdyn import cli
 from pfmdyn.discrepancy.spectrum import analyse
 from pfmdyn.plots.discrepancy import spectrum_figure
@@ -257,3 +257,14 @@ def test_overrides_order_and_quality_factors(tmp_path):
     path.write_text(head + "1,contact,3e5,80\n1,free,6e4,200\n1,free,6.1e4,200\n")
     with pytest.raises(Exception, match="free mode 1 given twice"):
         read(path)
+
+
+def test_random_lever_in_instrument_order(tmp_path):
+    """One fixed-seed case of the benchmark's generator (benchmarks/discrepancy.py): a random
+    lever with viscous damping and a set-back tip, rows one bias sweep after another."""
+    text, truth = random_case(19002, ("damping", "tip_setback"))
+    report = _run(tmp_path, text)
+    assert sorted(report["missing_effects"]) == ["damping", "tip_setback"]
+    assert report["damping_mechanisms"] == [truth["damping_mechanism"]] == ["viscous"]
+    assert report["gap_after"] < 1.5 and report["unexplained"] is None
+    assert abs(report["parameters"]["gamma"]["value"] - truth["gamma"]) < 0.01
