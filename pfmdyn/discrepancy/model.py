@@ -140,7 +140,7 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
     args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
     top = b1 * math.sqrt(f_max / m.f1)
-    grid = np.linspace(0.3, top, max(300, int(40 * top)))
+    grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
     return m.f1 * (roots / b1) ** 2
 

@@ -201,7 +201,7 @@ class SpectrumProblem:
         starts = []
         for _, i in ranked[:refined]:
             res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
-                                bounds=(lower, upper), diff_step=1e-6, max_nfev=20)
+                                bounds=(lower, upper), diff_step=1e-6, max_nfev=15)
             if not any(np.allclose(res.x, s_, atol=1e-3) for s_ in starts):
                 starts.append(res.x)
         return sorted(starts, key=lambda x: self.cost(model, x))[:count]
