@@ -17,15 +17,14 @@ in BIC), and tilt and lateral_stiffness, which act only through them, are not ca
 """
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
-from tqdm import tqdm
 
 from ..io.tables import Metadata, ResonanceData
 from . import select
+from .report import report
 from .effects import EFFECTS, spring_grid
 from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, resonances
 
@@ -200,8 +199,6 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     --------
     See ``tests/test_discrepancy.py`` (FE resonances, and the paper's tips 1 and 2).
     """
-    from .spectrum import report
-
     result = select.run(ResonanceProblem(data, vertical_only), progress, time_budget_s)
     sigma = _sigma(data)
     base, final = result["baseline"], result["final"]
