@@ -32,7 +32,7 @@ BIC_THRESHOLD = 10.0
 MIN_REDUCTION = 0.25
 NEAR_NOISE = 1.5
 UNEXPLAINED = 2.0
-TIME_BUDGET_S = 45.0
+TIME_BUDGET_S = 35.0
 """``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
 start (then prune and report), so that a hard file still ends in a report within about a
 minute.  Library calls have no budget unless given one."""
