@@ -18,8 +18,9 @@ A resonances table may hold free modes only; the contact springs are then not de
 Rows may come in any order (they are sorted by condition, then mode); a repeated
 (condition, mode) with a different frequency is an error.  An optional ``quality_factor``
 column gives each mode's Q.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
-.txt/.dat) are read by :func:`pfmdyn.io.instruments.to_discrepancy_input`; their short
-tables (one or two resonances) are accepted.  ``overrides`` (metadata keys, from the
+.txt/.dat) are read by :func:`pfmdyn.io.instruments.to_discrepancy_input` (``pfmdyn
+discrepancy`` dispatches them); :func:`check_resonance_rows` accepts their short tables
+(one or two resonances).  ``overrides`` (metadata keys, from the
 command line) win over the file's values.
 
 Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
@@ -38,7 +39,7 @@ import numpy as np
 from ..errors import UserError
 from .spectra import EXPECTED_COLUMNS, read_spectra
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
 REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m",
                  "free_resonance_hz")
@@ -147,11 +148,9 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     """
     path = Path(path)
     if path.suffix.lower() in INSTRUMENT_SUFFIXES:
-        from .instruments import to_discrepancy_input
-        data = to_discrepancy_input(path, overrides)
-        if isinstance(data, ResonanceData):
-            _check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, minimum=1)
-        return data
+        # pfmdyn.io.instruments imports this module's data classes: the command dispatches
+        # instrument files (read_input) so that the two modules do not import each other.
+        raise UserError(f"{path}: an instrument file; read it with pfmdyn.io.instruments.to_discrepancy_input")
     meta, header, rows = _preamble(path)
     metadata = _metadata(str(path), meta, overrides)
     if "mode" in header or "condition" in header:
@@ -194,12 +193,12 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
             raise UserError(f"{path}: data row {n}: mode >= 1 and a finite frequency_hz > 0 required")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
-    order = _check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
+    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
                          quality_factor=qs[order] if q_idx is not None else None)
 
 
-def _check_resonance_rows(where, modes, conds, freqs, minimum) -> np.ndarray:
+def check_resonance_rows(where, modes, conds, freqs, minimum) -> np.ndarray:
     """Row order sorting by (condition, mode); duplicates that disagree and too few rows are errors."""
     # Free modes alone still constrain the effects that change mode ratios (a tip mass).
     if len(freqs) < minimum:
