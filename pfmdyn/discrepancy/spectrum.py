@@ -306,20 +306,42 @@ class SpectrumProblem:
 
     def alternatives(self, current: FitResult) -> list[FitResult]:
         """The final model with its damping mechanism(s) replaced by each single other one."""
+        out = self._moved_alternatives(current) if current.gap > select.NEAR_NOISE else []
         present = [c for c in current.model.effects if c.startswith("damping_")]
         if not present:
-            return []
+            return out
         others = [c for c in current.model.effects if c not in present]
         keep = [i for i, p in enumerate(current.model.parameters)
                 if not any(p in EFFECTS[c].parameters for c in present)]
         seeds = self.damping_seeds()
-        out = []
         for mech, component in DAMPING.items():
             if present == [component]:
                 continue
             model = Model(current.model.meta, tuple(others) + (component,), current.model.vertical_only)
             out.append(fit(model, self.data, [np.append(current.internal[keep], seeds[mech])], self.sigma,
                            max_nfev=100))
+        return out
+
+    def _moved_alternatives(self, current: FitResult) -> list[FitResult]:
+        """When the gap stays far above the noise: each effect that moves resonances swapped
+        for another one (a set-back and a tip mass shift the same two peaks alike, and the
+        greedy path may have taken the wrong one), from peak-matched starts."""
+        moving = ("tip_mass", "tip_setback", "tilt")
+        out = []
+        for old in [e for e in current.model.effects if e in moving]:
+            for new in [e for e in moving if e not in current.model.effects]:
+                effects = tuple(new if e == old else e for e in current.model.effects)
+                model = Model(current.model.meta, effects, current.model.vertical_only)
+                springs = 1 if model.vertical_only else 2
+                values = dict(zip([p.name for p in current.model.parameters], current.internal))
+                extra = []
+                for seed in EFFECTS[new].seeds:
+                    row = [seed if p in EFFECTS[new].parameters else values[p.name]
+                           for p in model.parameters[springs:]]
+                    extra.append(np.array(row, float))
+                starts = self.resonance_starts(model, extra, count=2)
+                if starts:
+                    out.append(fit(model, self.data, starts, self.sigma, max_nfev=100))
         return out
 
     def polish(self, trial: FitResult) -> FitResult:
