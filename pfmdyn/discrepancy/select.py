@@ -133,14 +133,17 @@ def _prune(problem, current, steps):
     A component goes when it is no longer material, i.e. when the model without it would
     not be extended by it again.
     """
-    for alternative in getattr(problem, "alternatives", lambda fit: [])(current):
+    for _ in range(2):      # two rounds: e.g. a swapped effect, then a swapped mechanism
+        options = getattr(problem, "alternatives", lambda fit: [])(current)
+        best = min(options, key=lambda f: f.bic, default=None)
+        if best is None or best.bic >= current.bic:
+            break
         # e.g. one damping mechanism in place of another, or of two that mimic it together.
-        if alternative.bic < current.bic:
-            steps.append({"effect": None, "removed": ", ".join(current.model.effects),
-                          "gap_before": current.gap, "gap_after": alternative.gap,
-                          "decision": f"replaced {', '.join(current.model.effects)} by "
-                          f"{', '.join(alternative.model.effects)} (BIC lower by {current.bic - alternative.bic:.1f})"})
-            current = alternative
+        steps.append({"effect": None, "removed": ", ".join(current.model.effects),
+                      "gap_before": current.gap, "gap_after": best.gap,
+                      "decision": f"replaced {', '.join(current.model.effects)} by "
+                      f"{', '.join(best.model.effects)} (BIC lower by {current.bic - best.bic:.1f})"})
+        current = best
     while len(current.model.effects) > 0:
         trials = {c: problem.without(current, c) for c in current.model.effects}
         spare = [c for c, t in trials.items() if t is not None and not material(t, current)]
