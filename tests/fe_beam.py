@@ -3,11 +3,15 @@
 Nothing here uses ``derivations/`` or ``generated/``: the beam is discretised into
 ``n_elements`` two-node elements with the textbook Hermite-cubic stiffness and consistent
 mass matrices, clamped at node 0, and solved in the frequency domain,
-``(K / (1 - i/Q) - omega**2 M) U = F``; the complex modulus is the loss model of
-:mod:`pfmdyn.cantilever` (``beta**4 -> beta**4 (1 - i/Q)``).  The tip node may sit inside
-the beam (set-back), carry a lumped mass, and hold a 2x2 spring tensor on
-``(u, H u')`` (tilt); a uniform load uses the consistent load vector.  The output is the
-slope at the last node.  Test data follow :func:`spectrum` and :func:`resonances`.
+``(K_beam (1 + i/Q) + K_tip + i omega (C + D) - omega**2 M) U = F``.  Three damping
+mechanisms: internal friction (complex modulus of the beam, ``Q``), a viscous force per
+unit length ``c u_t`` (``C = c M_beam / (rho S)``; ``viscous_hz = c / (2 pi rho S)`` is the
+half-power width every mode shares), and a dashpot ``eta`` in parallel with ``k1`` at the
+tip (``D``, rotated with ``k1`` by the tilt).  The tip node may sit inside the beam
+(set-back), carry a lumped mass, and hold a 2x2 spring tensor on ``(u, H u')`` (tilt); a
+uniform load uses the consistent load vector.  The output is the slope at the last node.
+Test data follow :func:`spectrum` and :func:`resonances`; :func:`random_case` draws a
+cantilever, contact and hidden effects over realistic ranges.
 """
 from __future__ import annotations
 
@@ -35,9 +39,11 @@ class FEBeam:
     mu: float = 0.0
     gamma: float = 1.0
     alpha: float = 0.0
+    viscous_hz: float = 0.0
+    eta: float = 0.0
     n_elements: int = 200
 
-    def _matrices(self):
+    def _matrices(self, parts: bool = False):
         n, le = self.n_elements, self.L / self.n_elements
         EI = self.k * self.L**3 / 3
         rhoS = BETA1**4 * EI / ((2 * math.pi * self.f1) ** 2 * self.L**4)
@@ -47,6 +53,7 @@ class FEBeam:
                                          [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le**2, -22 * le, 4 * le**2]])
         size = 2 * (n + 1)
         K, M, q = np.zeros((size, size)), np.zeros((size, size)), np.zeros(size)
+        T, D = np.zeros((size, size)), np.zeros((size, size))     # tip springs, tip dashpot
         for e in range(n):
             s = slice(2 * e, 2 * e + 4)
             K[s, s] += ke
@@ -58,44 +65,61 @@ class FEBeam:
         kll = self.k1 * s_ * s_ + self.k2 * c * c
         kvl = (self.k1 - self.k2) * s_ * c
         iu, it = 2 * tip, 2 * tip + 1
+        C = M * (2 * math.pi * self.viscous_hz)        # c / (rho S) times the beam's mass matrix
         # Springs act on (u, H u'): K_spring = T^T Kt T with T = diag(1, H).
-        K[iu, iu] += kvv
-        K[iu, it] += kvl * self.H
-        K[it, iu] += kvl * self.H
-        K[it, it] += kll * self.H**2
+        for target, (vv, ll, vl) in ((T, (kvv, kll, kvl)), (D, (self.eta * c * c, self.eta * s_ * s_, self.eta * s_ * c))):
+            target[iu, iu] += vv
+            target[iu, it] += vl * self.H
+            target[it, iu] += vl * self.H
+            target[it, it] += ll * self.H**2
         M[iu, iu] += self.mu * rhoS * self.L
+        # Surface displacements d1 (along k1) and d2 (along k2) load through springs and dashpot:
+        # per unit d the load is (spring + i omega dashpot) column; returned as two parts.
         loads = np.zeros((size, 4))
         loads[iu, 0], loads[it, 0] = kvv, kvl * self.H          # per unit d1
         loads[iu, 1], loads[it, 1] = kvl, kll * self.H          # per unit d2
         loads[iu, 2] = 1.0                                       # per unit f0
         loads[:, 3] = q                                          # per unit q0
+        dash = np.zeros((size, 4))
+        dash[iu, 0], dash[it, 0] = self.eta * c * c, self.eta * s_ * c * self.H
+        dash[iu, 1], dash[it, 1] = self.eta * s_ * c, self.eta * s_ * s_ * self.H
         # Rotations times L have the units of displacements: keeps the SI matrices well scaled.
         scale = np.tile([1.0, 1.0 / self.L], n + 1)
-        K, M, loads = K * np.outer(scale, scale), M * np.outer(scale, scale), loads * scale[:, None]
+        sc = np.outer(scale, scale)
         keep = slice(2, size)                                    # clamp node 0
-        return K[keep, keep], M[keep, keep], loads[keep]
+        out = [X * sc for X in (K, T, M, C, D)] + [loads * scale[:, None], dash * scale[:, None]]
+        out = [X[keep, keep] if X.shape[1] == size else X[keep] for X in out]
+        if parts:
+            return out
+        K, T, M, _, _, F, _ = out
+        return K + T, M, F
 
     def slope(self, frequency_hz) -> np.ndarray:
         """Tip slope at L per unit (d1, d2, f0, q0): complex array of shape (n_freq, 4)."""
-        K, M, F = self._matrices()
-        Kc = K / (1 - 1j / self.Q) if math.isfinite(self.Q) else K.astype(complex)
+        Kb, T, M, C, D, F, Fd = self._matrices(parts=True)
+        loss = 1 + 1j / self.Q if math.isfinite(self.Q) else 1.0
+        K = Kb * loss + T
         out = np.empty((len(frequency_hz), 4), complex)
         # Hermite elements couple neighbouring nodes only: half-bandwidth 3 in banded storage.
         size = len(K)
         rows, cols = np.nonzero(np.abs(np.subtract.outer(np.arange(size), np.arange(size))) <= 3)
-        kb = np.zeros((7, size), complex)
-        mb = np.zeros((7, size))
-        kb[3 + rows - cols, cols] = Kc[rows, cols]
-        mb[3 + rows - cols, cols] = M[rows, cols]
+
+        def band(X):
+            b = np.zeros((7, size), complex)
+            b[3 + rows - cols, cols] = X[rows, cols]
+            return b
+
+        kb, mb, cb = band(K), band(M), band(C + D)
         for i, f in enumerate(np.asarray(frequency_hz, float)):
-            ab = kb - (2 * math.pi * f) ** 2 * mb
-            out[i] = scipy.linalg.solve_banded((3, 3), ab, F)[-1] / self.L
+            w = 2 * math.pi * f
+            ab = kb + 1j * w * cb - w**2 * mb
+            out[i] = scipy.linalg.solve_banded((3, 3), ab, F + 1j * w * Fd)[-1] / self.L
         return out
 
     def free_resonances(self, count: int = 3) -> np.ndarray:
         """First ``count`` free flexural resonances (Hz) with the tip mass, no contact."""
         free = FEBeam(self.k, self.L, self.f1, self.H, mu=self.mu, gamma=self.gamma,
-                      n_elements=self.n_elements)
+                      n_elements=self.n_elements)    # undamped: the resonances of the table
         K, M, _ = free._matrices()
         w2 = scipy.linalg.eigh(K, M, eigvals_only=True)[:count]
         return np.sqrt(w2) / (2 * math.pi)
@@ -114,8 +138,11 @@ def _metadata(beam: FEBeam, description: str) -> str:
 
 
 def spectrum(beam: FEBeam, frequency_hz, biases=(-2.0, -1.0, 0.0, 1.0, 2.0), *, noise=0.01,
-             background=0.0, polar=False, seed=0) -> str:
+             background=0.0, polar=False, seed=0, order="frequency") -> str:
     """CSV text of a frequency-bias spectrum; ``noise`` relative to the median |response|.
+
+    ``order``: ``"frequency"`` (rows grouped by frequency), ``"instrument"`` (one sweep per
+    bias, one after another) or ``"shuffled"``.
 
     Drives: d1 = 1 pm, d2 = 0.3 pm, f0 = 2 nN (V - 0.3), q0 = 0.5 nN/m... (V - 0.3) per
     volt, read through the complex gain 1e6 exp(0.4 i); ``background`` adds cross-talk
@@ -134,13 +161,18 @@ def spectrum(beam: FEBeam, frequency_hz, biases=(-2.0, -1.0, 0.0, 1.0, 2.0), *, 
     R = R + background * scale * (f / f.max()) * (1 + 0.5 * np.array(biases))[:, None] * np.exp(1.1j)
     R = R + noise * scale * (rng.standard_normal(R.shape) + 1j * rng.standard_normal(R.shape)) / math.sqrt(2)
     cols = "amplitude,phase_deg" if polar else "x,y"
-    lines = [_metadata(beam, "FE synthetic spectrum") + f"frequency_hz,bias_v,{cols}"]
+    lines = []
     for j, fj in enumerate(f):
         for i, V in enumerate(biases):
             z = R[i, j]
             a, b = (abs(z), math.degrees(np.angle(z))) if polar else (z.real, z.imag)
             lines.append(f"{float(fj)!r},{float(V)!r},{float(a)!r},{float(b)!r}")
-    return "\n".join(lines) + "\n"
+    if order == "instrument":
+        lines = [lines[j * len(biases) + i] for i in range(len(biases)) for j in range(len(f))]
+    elif order == "shuffled":
+        lines = [lines[i] for i in rng.permutation(len(lines))]
+    header = _metadata(beam, "FE synthetic spectrum") + f"frequency_hz,bias_v,{cols}"
+    return "\n".join([header] + lines) + "\n"
 
 
 def resonances(beam: FEBeam, n_free=3, n_contact=2) -> str:
@@ -149,3 +181,90 @@ def resonances(beam: FEBeam, n_free=3, n_contact=2) -> str:
     lines += [f"{i + 1},free,{float(v)!r}" for i, v in enumerate(beam.free_resonances(n_free))]
     lines += [f"{i + 1},contact,{float(v)!r}" for i, v in enumerate(beam.contact_resonances(n_contact))]
     return "\n".join(lines) + "\n"
+
+
+EFFECTS = ("damping", "tip_mass", "tip_setback", "tilt", "background", "lateral_stiffness")
+"""Hidden-effect classes of :func:`random_case` (the vocabulary of ``pfmdyn discrepancy``)."""
+
+
+def random_beam(rng, hidden=(), n_elements: int = 120) -> tuple[FEBeam, dict, np.ndarray]:
+    """A random silicon lever in contact with the ``hidden`` geometric effects and damping.
+
+    k log-uniform 0.05-50 N/m, L 100-500 um, w 20-60 um (thickness from k, f1 from the
+    geometry), H 3-20 um; k1/k log-uniform 1-1e4 (redrawn until 2-4 contact modes lie
+    below 25 f1), k2/k1 0-1.5 (0.3-1.5 when ``lateral_stiffness`` is hidden, which is meant
+    to be analysed ``--vertical-only``).  Damping picks one mechanism at random: internal
+    (Q 20-300), viscous (free mode-1 Q 5-100) or a contact dashpot (first contact mode
+    Q about 20-300).  Returns the beam, the truth and its first six contact resonances.
+    """
+    E, rho = 169e9, 2330.0
+    while True:
+        k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
+        L, w, H = rng.uniform(100e-6, 500e-6), rng.uniform(20e-6, 60e-6), rng.uniform(3e-6, 20e-6)
+        t = (4 * k * L**3 / (E * w)) ** (1 / 3)
+        f1 = BETA1**2 / (2 * math.pi) * t / L**2 * math.sqrt(E / 12 / rho)
+        k1 = k * 10 ** rng.uniform(0, 4)
+        k2 = k1 * rng.uniform(0.3 if "lateral_stiffness" in hidden else 0.0, 1.5)
+        truth = {"k": k, "L": L, "width": w, "H": H, "f1": f1, "k1": k1, "k2": k2}
+        if "tip_mass" in hidden:
+            truth["mu"] = rng.uniform(0.1, 0.5)
+        if "tip_setback" in hidden:
+            truth["gamma"] = rng.uniform(0.8, 0.95)
+        if "tilt" in hidden:
+            truth["alpha"] = rng.choice([-1, 1]) * rng.uniform(0.15, 0.4)
+        beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, n_elements=n_elements,
+                      **{p: truth[p] for p in ("mu", "gamma", "alpha") if p in truth})
+        contact = beam.contact_resonances(6)
+        truth["contact_modes"] = int(rng.integers(2, 5))
+        if contact[truth["contact_modes"] - 1] < 25 * f1:
+            break
+    if "damping" in hidden:
+        mechanism = str(rng.choice(["internal", "viscous", "contact"]))
+        truth["damping_mechanism"] = mechanism
+        if mechanism == "internal":
+            truth["Q"] = 10 ** rng.uniform(math.log10(20), math.log10(300))
+        elif mechanism == "viscous":
+            truth["viscous_hz"] = f1 / 10 ** rng.uniform(math.log10(5), math.log10(100))
+        else:
+            # A dashpot eta alone damps contact mode 1 to about Q = k1 / (omega eta) times the
+            # share of the modal energy in k1; aim at Q 20-300 for the mode.
+            truth["eta"] = k1 / (2 * math.pi * contact[0] * 10 ** rng.uniform(math.log10(20), math.log10(300)))
+        beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, n_elements=n_elements,
+                      **{p: truth[p] for p in ("mu", "gamma", "alpha", "Q", "viscous_hz", "eta") if p in truth})
+    return beam, truth, contact
+
+
+def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrument",
+                n_elements: int = 120) -> tuple[str, dict]:
+    """A random spectrum (:func:`random_beam`) with the ``hidden`` effects: CSV text and the truth.
+
+    The band covers the 2-4 drawn contact modes, 3-7 biases, noise 0.3-2 % of the median
+    |response|, x/y or polar columns at random, rows in ``order``.
+    """
+    rng = np.random.default_rng(seed)
+    beam, truth, contact = random_beam(rng, hidden, n_elements)
+    n_modes = truth["contact_modes"]
+    lo, hi = 0.5 * contact[0], min(0.5 * (contact[n_modes - 1] + contact[n_modes]), 1.15 * contact[n_modes - 1])
+    n_bias = int(rng.integers(3, 8))
+    biases = tuple(np.round(np.linspace(-3, 3, n_bias), 3))
+    noise = 10 ** rng.uniform(math.log10(0.003), math.log10(0.02))
+    truth.update(band_hz=(lo, hi), biases=n_bias, noise=noise)
+    background = rng.uniform(0.05, 0.3) if "background" in hidden else 0.0
+    text = spectrum(beam, np.linspace(lo, hi, n_freq), biases, noise=noise, background=background,
+                    polar=bool(rng.integers(2)), seed=seed, order=order)
+    return text.replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}"), truth
+
+
+def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_elements: int = 120) -> tuple[str, dict]:
+    """A random resonance table: 3 free and 2-4 contact modes with Gaussian noise of
+    ``relative_uncertainty`` (declared as ``frequency_uncertainty_hz`` from mode 1), shuffled rows."""
+    rng = np.random.default_rng(seed)
+    beam, truth, _ = random_beam(rng, tuple(h for h in hidden if h != "damping"), n_elements)
+    free = beam.free_resonances(3)
+    contact = beam.contact_resonances(truth["contact_modes"])
+    sigma = float(relative_uncertainty * free[0])
+    rows = [f"{i + 1},free,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(free)]
+    rows += [f"{i + 1},contact,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(contact)]
+    rows = [rows[i] for i in rng.permutation(len(rows))]
+    head = _metadata(beam, "FE synthetic resonances").replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}")
+    return head + f"# frequency_uncertainty_hz: {sigma!r}\nmode,condition,frequency_hz\n" + "\n".join(rows) + "\n", truth

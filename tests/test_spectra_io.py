@@ -28,8 +28,8 @@ def test_reads_metadata_rows_and_ignores_extra_columns(tmp_path):
     data = read_spectra(write(tmp_path, GOOD))
     assert data.metadata == {"instrument": "MFP-3D", "spring_constant_n_per_m": "4.5"}
     assert data.frequency_hz.tolist() == [1000, 1000, 2000, 2000]
-    assert data.bias_v.tolist() == [-1, 1, 1, -1]
-    assert data.response.tolist() == [1 + 0.5j, 3 - 0.5j, 2, 2j]
+    assert data.bias_v.tolist() == [-1, 1, -1, 1]
+    assert data.response.tolist() == [1 + 0.5j, 3 - 0.5j, 2j, 2]
     assert frequency_group_starts(data.frequency_hz).tolist() == [0, 2]
 
 
@@ -70,9 +70,6 @@ BAD_INPUTS = {
     "one bias, repeated": (HEADER + "1,0,1,1\n1,0,2,2\n", "line 3: duplicate row for frequency 1 Hz and bias 0 V (first at line 2)"),
     "duplicate row": ("# k: v\n" + HEADER + "1,0,1,1\n1,1,1,1\n1,0,2,2\n",
                       "line 5: duplicate row for frequency 1 Hz and bias 0 V (first at line 3)"),
-    "unsorted frequencies": (HEADER + "2,0,1,1\n2,1,1,1\n1,0,1,1\n1,1,1,1\n",
-                             "line 4: frequency 1 Hz follows 2 Hz; rows must be grouped by frequency in ascending order"),
-    "ungrouped frequencies": (HEADER + "1,0,1,1\n2,0,1,1\n1,1,1,1\n2,1,1,1\n", "line 4: frequency 1 Hz follows 2 Hz"),
     "comment after header": (HEADER + "1,0,1,1\n# late: 1\n1,1,1,1\n", "line 3: comment lines are only allowed before the header"),
     "metadata key twice": ("# k: 1\n# k: 2\n" + HEADER + "1,0,1,1\n1,1,1,1\n", "line 2: metadata key 'k' given twice"),
 }
@@ -103,3 +100,21 @@ def test_unreadable_files_are_one_line_errors(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and str(path) in err and expected in err
     assert not (tmp_path / "o").exists()
+
+
+def test_any_row_order_reads_the_same_set_of_rows(tmp_path):
+    """Instrument order (one sweep per bias), frequency-grouped and shuffled rows are one table;
+    an identical repeated row is kept once."""
+    rng = np.random.default_rng(4)
+    rows = [(f, v, f * v + 1.0, f - v) for v in (-1.0, 0.5, 2.0) for f in (3e3, 1e3, 2e3, 5e3)]
+    orders = {"instrument": rows, "grouped": sorted(rows),
+              "shuffled": [rows[i] for i in rng.permutation(len(rows))] + [rows[0]]}
+    read = {}
+    for name, order in orders.items():
+        text = HEADER + "".join(f"{f!r},{v!r},{x!r},{y!r}\n" for f, v, x, y in order)
+        read[name] = read_spectra(write(tmp_path, text, f"{name}.csv"))
+    for data in read.values():
+        assert data.frequency_hz.tolist() == read["grouped"].frequency_hz.tolist()
+        assert data.bias_v.tolist() == read["grouped"].bias_v.tolist()
+        assert data.response.tolist() == read["grouped"].response.tolist()
+    assert read["grouped"].frequency_hz.tolist()[:3] == [1e3, 1e3, 1e3]

@@ -8,7 +8,8 @@ The family registry (:mod:`derivations.families`) says what is generated.  The p
   :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.setback`
   (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
   registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``), :mod:`.formulas` (``formulas.py``, closed-form
-  relations).
+  relations), :mod:`.effects` (``damping.py``, ``tilt_rotation.py``: the discrepancy
+  model's damping substitution and tilt rotation).
 
 :func:`render_all` maps every output file name to its text; a renderer is added by adding
 its files there.  Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).
@@ -18,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..trig import from_atoms
-from . import formulas, inputs, registry, setback
+from . import effects, formulas, inputs, registry, setback
 from .characteristic import beta1_free, characteristic_families, dimensionless, render_characteristic
 from .stabilise import series_branch, split, switch_point
 from .transfer import Family, Function, families, render_family
@@ -39,6 +40,8 @@ def render_all() -> dict[str, str]:
     files["families.py"] = registry.render()
     files["paper_inputs.py"] = inputs.render()
     files["formulas.py"] = formulas.render()
+    files["damping.py"] = effects.render_damping()
+    files["tilt_rotation.py"] = effects.render_rotation()
     return dict(sorted(files.items()))
 
 

@@ -4,77 +4,39 @@ The baseline is Eq. 5 as printed: undamped, tip at the free end, massless tip, s
 ``k1``, ``k2`` at tip height ``H``.  The measured response at frequency ``f`` and bias
 ``V`` is ``G theta``, with ``d1``, ``d2`` bias-independent and ``f0``, ``q0`` both
 proportional to ``V - V_surf``.  ``G`` and the drives enter only as products, so the
-model is linear in five complex coefficients of the columns::
+model is linear in the complex coefficients of the columns::
 
-    T_f, T_d2, T_q, V T_f, V T_q        (T_x = tip slope per unit x; T_d1 = k1 T_f)
+    T_d1, T_d2, T_q, V T_f, V T_q        (T_x = tip slope per unit x)
 
-which are solved by linear least squares inside the nonlinear fit of the other
-parameters (variable projection).  Effects (:data:`EFFECTS`) add nonlinear parameters or
-columns; all geometric ones share the generated two-segment solution
-(:mod:`pfmdyn.generated.tip_setback`, which is Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt),
-so they compose:
-
-* ``damping``: ``beta**4 -> beta**4 (1 - i/Q)`` (complex modulus), parameter ``Q``;
-* ``tip_mass``: point mass ``mu rho S L`` at the tip; the free resonance in the metadata
-  is then that of the loaded beam, which sets the frequency scale;
-* ``tip_setback``: tip at ``gamma L``, slope read at ``L``;
-* ``tilt``: springs rotated by ``alpha`` into beam axes (:mod:`pfmdyn.derivations.tilt`);
-* ``lateral_stiffness``: ``k2`` itself, for a vertical-only starting model;
-* ``background``: additive cross-talk ``(b0 + b1 V) f / f_max``, two linear columns.
+(``T_d1 = k1 T_f`` without a contact dashpot, so ``T_d1`` also carries the constant part
+of ``f0``; with the dashpot ``T_f`` is a sixth column), solved by linear least squares
+inside the nonlinear fit of the other parameters (variable projection).  The effects
+(:mod:`pfmdyn.discrepancy.effects`) share the generated two-segment solution
+(:mod:`pfmdyn.generated.tip_setback`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
+compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
+(complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
+(:mod:`pfmdyn.derivations.tilt`), background as two linear columns
+``(b0 + b1 V) f / f_max``.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from scipy.optimize import brentq, least_squares
+from scipy.optimize import least_squares
 
-from ..generated import tip_setback
+from ..generated import damping, tip_setback
+from ..generated.tilt_rotation import rotated
 from ..generated.characteristic import BETA1_FREE
+from ..roots.bracket import grid_roots, refine
+from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
-__all__ = ["Parameter", "EFFECTS", "Model", "Fit", "fit", "free_root", "resonances", "project"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "project"]
 
-
-@dataclass(frozen=True)
-class Parameter:
-    """A nonlinear parameter: name, unit, internal transform, start values, bounds (internal)."""
-
-    name: str
-    unit: str
-    log: bool
-    starts: tuple[float, ...]
-    lower: float
-    upper: float
-    inverse: bool = False
-
-    def value(self, internal: float) -> float:
-        """Physical value of an internal coordinate (log10 for scales, 1/x for ``Q``)."""
-        if self.inverse:
-            return math.inf if internal <= 0 else 1.0 / internal
-        return 10.0**internal if self.log else internal
-
-    def stderr(self, internal: float, sd: float) -> float:
-        """Uncertainty of the physical value from that of the internal one (delta method)."""
-        if self.inverse:
-            return math.inf if internal <= 0 else sd / internal**2
-        return self.value(internal) * math.log(10) * sd if self.log else sd
-
-
-EFFECTS: dict[str, tuple[Parameter, ...]] = {
-    # Internally the loss factor 1/Q: 0 (no damping) is inside the bounds, so the
-    # undamped model is exactly nested.
-    "damping": (Parameter("Q", "", False, (0.03, 0.005, 0.001), 0.0, 0.5, inverse=True),),
-    "tip_mass": (Parameter("mu", "", False, (0.05, 0.3), 0.0, 3.0),),
-    "tip_setback": (Parameter("gamma", "", False, (0.95, 0.85), 0.5, 1.0),),
-    "tilt": (Parameter("alpha", "rad", False, (0.15, -0.15), -0.8, 0.8),),
-    "lateral_stiffness": (Parameter("k2", "N/m", True, (), -3.0, 6.0),),
-    "background": (),
-}
-"""Effect name -> its nonlinear parameters (``background`` is linear only)."""
-
-_SPRINGS = (Parameter("k1", "N/m", True, (), -3.0, 6.0),)
+_DEFAULTS = {"k2": 0.0, "Q": 0.0, "Q_viscous": 0.0, "contact_loss": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
+"""Internal coordinates of absent effects (their null values)."""
 
 
 @lru_cache(maxsize=4096)
@@ -86,13 +48,13 @@ def free_root(k, H, L, mu, gamma) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: float(tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma))  # noqa: E731
-    return brentq(char, 0.3, BETA1_FREE + 1e-9, xtol=1e-14)
+    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
+    return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
 
 
 @dataclass(frozen=True)
 class Model:
-    """Baseline (with or without ``k2``) plus an ordered tuple of named effects."""
+    """Baseline (with or without ``k2``) plus an ordered tuple of effect components."""
 
     meta: object
     effects: tuple[str, ...] = ()
@@ -100,178 +62,336 @@ class Model:
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
-        """Nonlinear parameters in order: k1, [k2], then each effect's."""
-        base = _SPRINGS if self.vertical_only else _SPRINGS + EFFECTS["lateral_stiffness"]
-        return base + tuple(p for e in self.effects for p in EFFECTS[e])
+        """Nonlinear parameters in order: k1, [k2], then each effect's (k2 for lateral_stiffness)."""
+        springs = spring_parameters(self.meta, self.vertical_only)
+        extra = ()
+        if "lateral_stiffness" in self.effects and self.vertical_only:
+            extra = spring_parameters(self.meta, False)[1:]
+        return springs + extra + tuple(p for e in self.effects for p in EFFECTS[e].parameters)
 
-    def values(self, internal) -> dict[str, float]:
-        """Physical parameter values by name, defaults for absent effects."""
-        out = {"k2": 0.0, "Q": math.inf, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
-        out.update({p.name: p.value(v) for p, v in zip(self.parameters, internal)})
+    def with_effect(self, component: str) -> "Model":
+        """This model plus one effect component."""
+        return Model(self.meta, self.effects + (component,), self.vertical_only)
+
+    @property
+    def public_effects(self) -> list[str]:
+        """Report names of the effects, in order, without repeats (damping once)."""
+        return list(dict.fromkeys(public_name(e) for e in self.effects))
+
+    @property
+    def damping_mechanisms(self) -> list[str]:
+        """Damping mechanisms present (``internal``, ``viscous``, ``contact``)."""
+        return [e.split("_", 1)[1] for e in self.effects if e.startswith("damping_")]
+
+    def coords(self, internal) -> dict[str, float]:
+        """Internal coordinates by name (springs converted to N/m), null values for absent effects."""
+        out = dict(_DEFAULTS)
+        for p, v in zip(self.parameters, internal):
+            out[p.name] = 10.0**v if p.name in ("k1", "k2") else float(v)
         return out
 
-    def beta(self, frequency_hz, v: dict):
-        """Complex dimensionless frequency for the metadata's free resonance."""
-        m = self.meta
-        b1 = free_root(m.k, m.H, m.L, float(v["mu"]), float(v["gamma"]))
-        loss = (1 - 1j / v["Q"]) ** 0.25 if math.isfinite(v["Q"]) else 1.0
-        return b1 * np.sqrt(np.asarray(frequency_hz) / m.f1) * loss
-
-    def springs(self, v: dict) -> tuple[float, float, float]:
-        """``kvv, kll, kvl`` from ``k1, k2, alpha`` (tilt rotation)."""
-        c, s = math.cos(v["alpha"]), math.sin(v["alpha"])
-        k1, k2 = v["k1"], v["k2"]
-        return k1 * c * c + k2 * s * s, k1 * s * s + k2 * c * c, (k1 - k2) * s * c
+    def values(self, internal) -> dict[str, float]:
+        """Physical parameter values by name."""
+        return {p.name: p.value(v) for p, v in zip(self.parameters, internal)}
 
     def slopes(self, frequency_hz, internal):
         """Tip slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays."""
-        v = self.values(internal)
+        c = self.coords(internal)
         m = self.meta
+        r = np.asarray(frequency_hz, dtype=float) / m.f1
+        b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            return tip_setback.slope(self.beta(frequency_hz, v), m.k, *self.springs(v), m.H, m.L,
-                                     v["mu"], v["gamma"])
+            beta_f, k_f, k1_f, mu_f = damping.factors(r, c["Q"], c["Q_viscous"], c["contact_loss"])
+            kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
+            return tip_setback.slope(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                     c["mu"] * mu_f, c["gamma"])
+
+    @property
+    def n_linear(self) -> int:
+        """Number of complex linear coefficients."""
+        return 5 + ("damping_contact" in self.effects) + (2 if "background" in self.effects else 0)
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
-        _, t_d2, t_f, t_q = (t[inverse] for t in self.slopes(freq_unique, internal))
-        cols = [t_f, t_d2, t_q, bias * t_f, bias * t_q]
+        t_d1, t_d2, t_f, t_q = (t[inverse] for t in self.slopes(freq_unique, internal))
+        cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
+        if "damping_contact" in self.effects:
+            cols.append(t_f)
         if "background" in self.effects:
             ramp = freq_unique[inverse] / freq_unique.max()
             cols += [ramp, bias * ramp]
         return np.stack(cols, axis=1)
 
-    @property
-    def n_linear(self) -> int:
-        """Number of complex linear coefficients."""
-        return 7 if "background" in self.effects else 5
 
-
-def resonances(model: Model, internal, contact: bool, f_max: float, refine: bool = True) -> np.ndarray:
+def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots: bool = True) -> np.ndarray:
     """Undamped resonances (Hz) below ``f_max``: real zeros of the generated characteristic.
 
-    Sign changes on a grid in ``beta`` bracket the roots; ``brentq`` refines them (or
-    linear interpolation when ``refine`` is False, for coarse start-up searches).  The
-    characteristic function is entire (no poles), so every sign change is a root.
+    Sign changes on a grid in ``beta`` bracket the roots (:func:`pfmdyn.roots.bracket.grid_roots`);
+    the characteristic function is entire (no poles), so every sign change is a root.
 
     >>> from types import SimpleNamespace
     >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
     >>> (resonances(Model(meta), [-9.0, -9.0], True, 7e4) / 1e4).round(4).tolist()   # 6.267:1
     [1.0, 6.2669]
     """
-    v = model.values(internal)
+    c = model.coords(internal)
     m = model.meta
-    kvv, kll, kvl = model.springs(v) if contact else (0.0, 0.0, 0.0)
-    b1 = free_root(m.k, m.H, m.L, float(v["mu"]), float(v["gamma"]))
-    args = (m.k, kvv, kll, kvl, m.H, m.L, v["mu"], v["gamma"])
-    grid = np.linspace(0.3, b1 * math.sqrt(f_max / m.f1), 300)
-    with np.errstate(all="ignore"):
-        vals = tip_setback.characteristic(grid, *args)
-    idx = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0)
-    lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[idx], vals[idx + 1]
-    # Illinois regula falsi on all brackets at once (one vectorised call per iteration): when
-    # the same end is replaced twice running, the end kept is given half its value, so both
-    # ends move.  Halving only then keeps the superlinear order (halving at every step
-    # would fall back to bisection-like linear convergence).
-    replaced = np.zeros(len(idx))          # -1: lo replaced last time, +1: hi, 0: neither
-    for _ in range(60 if refine and len(idx) else 0):
-        mid = hi - fhi * (hi - lo) / (fhi - flo)
-        with np.errstate(all="ignore"):
-            fmid = tip_setback.characteristic(mid, *args)
-        left = np.sign(fmid) == np.sign(flo)
-        side = np.where(left, -1.0, 1.0)
-        halve = np.where(side == replaced, 0.5, 1.0)
-        lo, flo, fhi = np.where(left, mid, lo), np.where(left, fmid, flo * halve), np.where(left, fhi * halve, fhi)
-        hi, fhi = np.where(left, hi, mid), np.where(left, fhi, fmid)
-        replaced = side
-        if np.all((hi - lo) < 1e-12 * hi) or np.all(fmid == 0):
-            break
-    roots = hi - fhi * (hi - lo) / (fhi - flo) if len(idx) else grid[idx]
+    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+    top = b1 * math.sqrt(f_max / m.f1)
+    grid = np.linspace(0.3, top, max(150, int(12 * top)))
+    roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
     return m.f1 * (roots / b1) ** 2
 
 
+def characteristic_args(model: Model, internal, contact: bool) -> tuple:
+    """Parameters of :func:`pfmdyn.generated.tip_setback.characteristic` for the model."""
+    c = model.coords(internal)
+    m = model.meta
+    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+
+
+def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
+    """``d f_n / d internal_j`` (Hz) at undamped resonances ``frequency_hz`` of the model.
+
+    Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
+    ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
+    the free root ``beta_1`` (tip mass, set-back).  One vectorised evaluation of ``F`` per
+    parameter replaces a root search per parameter.
+    """
+    internal = np.asarray(internal, float)
+    m = model.meta
+    f = np.asarray(frequency_hz, float)
+    F = tip_setback.characteristic
+    c = model.coords(internal)
+    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    beta = b1 * np.sqrt(f / m.f1)
+    a0, af0 = characteristic_args(model, internal, contact), characteristic_args(model, internal, False)
+    with np.errstate(all="ignore"):
+        hb = 1e-7 * beta
+        f_beta = (F(beta + hb, *a0) - F(beta - hb, *a0)) / (2 * hb)
+        f_b1 = (F(b1 * (1 + 1e-7), *af0) - F(b1 * (1 - 1e-7), *af0)) / (2e-7 * b1)
+        out = np.empty((len(f), len(internal)))
+        for j in range(len(internal)):
+            h = 1e-7 * max(1.0, abs(internal[j]))
+            xs = internal.copy()
+            xs[j] += h
+            d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
+            d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
+            out[:, j] = 2 * f * (d_beta / beta - d_b1 / b1)
+    out[~np.isfinite(out)] = 0.0
+    return out
+
+
 @dataclass
-class Fit:
-    """Result of one fit: internal parameters, covariance, residuals and criteria."""
+class FitResult:
+    """One fit: internal parameters, covariance, residuals (data units), noise, criteria.
+
+    ``gap`` is the noise-normalised RMS residual (1 = fitted to the noise); ``bic`` the
+    Bayesian information criterion, with the noise variance profiled out (spectra) or
+    known (resonance tables).  ``fitted`` marks the parameters the data determine.
+    """
 
     model: Model
     internal: np.ndarray
     covariance: np.ndarray
     residual: np.ndarray
-    prediction: np.ndarray
-    rss: float
-    n: int
+    sigma: object
     k: int
+    sigma_known: bool = False
+    prediction: np.ndarray | None = None
+    fitted: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def chi2(self) -> float:
+        """Sum of squared noise-normalised residuals (complex ones count twice, real + imag)."""
+        return float(np.sum(np.abs(self.residual / self.sigma) ** 2))
+
+    @property
+    def n(self) -> int:
+        """Number of real data values."""
+        return (2 if np.iscomplexobj(self.residual) else 1) * len(self.residual)
+
+    @property
+    def gap(self) -> float:
+        """``sqrt(mean |r / sigma|**2)``: 1 when the residual is noise."""
+        return float(math.sqrt(self.chi2 / max(len(self.residual), 1)))
 
     @property
     def bic(self) -> float:
-        """Gaussian BIC with the noise variance profiled out: ``n ln(RSS/n) + k ln n``."""
-        return self.n * math.log(self.rss / self.n) + self.k * math.log(self.n)
+        """``chi2 + k ln n`` (noise known) or ``n ln(RSS/n) + k ln n`` (noise profiled)."""
+        if self.sigma_known:
+            return self.chi2 + self.k * math.log(self.n)
+        return self.n * math.log(max(self.chi2, 1e-300) / self.n) + self.k * math.log(self.n)
 
     def parameters(self) -> dict[str, dict]:
-        """Physical values with 1-sigma uncertainties (delta method from the internal ones)."""
-        out = {}
+        """Physical values with 1-sigma uncertainties; undetermined ones have value None."""
+        out, j = {}, 0
+        fitted = self.fitted if self.fitted is not None else np.ones(len(self.internal), bool)
         for i, p in enumerate(self.model.parameters):
-            sd = math.sqrt(max(self.covariance[i, i], 0.0))
-            out[p.name] = {"value": p.value(self.internal[i]), "stderr": p.stderr(self.internal[i], sd),
-                           "unit": p.unit}
+            if not fitted[i]:
+                out[p.name] = {"value": None, "stderr": None, "unit": p.unit, "determined": False}
+                continue
+            sd = math.sqrt(max(self.covariance[j, j], 0.0)) if self.covariance.size else math.nan
+            value, err = p.value(self.internal[i]), p.stderr(self.internal[i], sd)
+            # A parameter whose uncertainty exceeds its value is not determined by these data.
+            determined = bool(math.isfinite(err) and (err < abs(value) or (p.inverse and err < 1e12)))
+            out[p.name] = {"value": value, "stderr": err, "unit": p.unit, "determined": determined}
+            j += 1
+        if "damping_contact" in self.model.effects and out.get("k1", {}).get("value"):
+            loss = out["contact_loss"]["value"]
+            out["eta"] = {"value": loss * out["k1"]["value"] / (2 * math.pi * self.model.meta.f1),
+                          "stderr": None, "unit": "N s/m", "determined": out["contact_loss"]["determined"]}
+        if "damping_viscous" in self.model.effects and out["Q_viscous"]["value"]:
+            out["viscous_width_hz"] = {"value": self.model.meta.f1 / out["Q_viscous"]["value"], "stderr": None,
+                                       "unit": "Hz", "determined": out["Q_viscous"]["determined"]}
         return out
+
+    def report(self) -> str:
+        """lmfit-style text: effects, fit statistics, parameters.
+
+        >>> from types import SimpleNamespace
+        >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+        >>> r = FitResult(Model(meta, ("tip_mass",), True), np.array([2.0, 0.1]), np.eye(2) * 1e-4,
+        ...               np.ones(4), 1.0, 2, sigma_known=True)
+        >>> print(r.report().splitlines()[1])
+        [[Fit statistics]] chi2 = 4, gap = 1, BIC = 6.77259
+        """
+        lines = [f"[[Model]] baseline + {', '.join(self.model.effects) or 'nothing'}",
+                 f"[[Fit statistics]] chi2 = {self.chi2:.6g}, gap = {self.gap:.6g}, BIC = {self.bic:.6g}",
+                 "[[Variables]]"]
+        for name, p in self.parameters().items():
+            if p["value"] is None:
+                lines.append(f"    {name}: not determined by these data")
+            else:
+                err = "" if p["stderr"] is None else f" +/- {p['stderr']:.3g}"
+                lines.append(f"    {name}: {p['value']:.6g}{err} {p['unit']}".rstrip())
+        return "\n".join(lines)
 
 
 def project(A: np.ndarray, y: np.ndarray):
-    """Linear least squares (column-scaled, reduced QR); returns coefficients and prediction.
+    """Linear least squares (column-scaled normal equations, eigenvalue cutoff).
+
+    Returns the coefficients and the prediction.  Near-dependent column combinations
+    (eigenvalues of the scaled Gram matrix below 1e-13 of the largest) get no weight
+    rather than a huge one.
 
     >>> A = np.array([[1.0, 0.0], [0.0, 1e-9], [1.0, 1e-9]])
     >>> c, pred = project(A, np.array([1.0, 2e-9, 1.0 + 2e-9]))
     >>> np.round(c.real, 6).tolist()
     [1.0, 2.0]
     """
+    c, _, As, norms = _solve(A, y)
+    return c / norms, As @ c
+
+
+def _solve(A, y):
+    """Scaled columns ``As = A / norms``, pseudo-inverse of their Gram matrix, coefficients."""
     norms = np.linalg.norm(A, axis=0)
     norms[~(np.isfinite(norms) & (norms > 0))] = np.inf
-    A = A / norms
-    q, r = np.linalg.qr(A)
-    # Near-dependent columns (tiny diagonal of R) get no coefficient rather than a huge one.
-    diag = np.abs(np.diag(r))
-    keep = diag > 1e-10 * diag.max()
-    c = np.zeros(A.shape[1], complex)
-    rhs = q.conj().T @ y
-    c[keep] = np.linalg.solve(r[np.ix_(keep, keep)], rhs[keep])
-    return c / norms, A @ c
+    As = A / norms
+    As[~np.isfinite(As)] = 0.0
+    w, V = np.linalg.eigh(As.conj().T @ As)
+    keep = w > 1e-13 * max(w.max(), 1e-300)
+    ginv = (V[:, keep] / w[keep]) @ V[:, keep].conj().T
+    return ginv @ (As.conj().T @ y), ginv, As, norms
 
 
-def fit(model: Model, data, starts: list[np.ndarray], sigma: float) -> Fit:
-    """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
+JACOBIAN = "projection"
+"""How :func:`fit` differentiates: ``"projection"`` (variable-projection Jacobian from finite
+differences of the design matrix only, Kaufman's approximation) or ``"finite-difference"``
+(SciPy's two-point differences of the whole residual, the reference in benchmarks)."""
 
-    Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
-    the complex linear coefficients by projection at every evaluation.
-    """
-    freq_u, inverse = np.unique(data.frequency_hz, return_inverse=True)
-    y, bias = data.response, data.bias_v
+
+def bounds(model: Model):
+    """Lower and upper internal bounds of the model's parameters."""
     params = model.parameters
-    lower = np.array([p.lower for p in params])
-    upper = np.array([p.upper for p in params])
+    return np.array([p.lower for p in params]), np.array([p.upper for p in params])
 
-    def residual(internal):
-        A = model.design(freq_u, inverse, bias, internal)
-        _, pred = project(A, y)
-        r = (y - pred) / sigma
+
+class _Problem:
+    """Residual and Jacobian of one model on one spectrum, with the last projection cached."""
+
+    def __init__(self, model, data, sigma):
+        self.model, self.sigma = model, sigma
+        self.freq_u, self.inverse = np.unique(data.frequency_hz, return_inverse=True)
+        self.y, self.bias = data.response, data.bias_v
+        self._key, self._state = None, None
+
+    def _at(self, x):
+        key = tuple(np.asarray(x, float))
+        if key != self._key:
+            A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
+            c, ginv, As, norms = _solve(A, self.y)
+            self._key, self._state = key, (A, c / norms, ginv, As)
+        return self._state
+
+    def residual(self, x):
+        A, c, _, _ = self._at(x)
+        r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
         return np.where(np.isfinite(r), r, 1e6)
 
+    def jacobian(self, x):
+        A, c, ginv, As = self._at(x)
+        x = np.asarray(x, float)
+        lower, upper = bounds(self.model)
+        out = np.empty((2 * len(self.y), len(x)))
+        for j in range(len(x)):
+            h = 1e-7 * max(1.0, abs(x[j]))
+            step = h if x[j] + h <= upper[j] else -h
+            xs = x.copy()
+            xs[j] += step
+            dA = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) / step
+            v = dA @ c
+            v = v - As @ (ginv @ (As.conj().T @ v))       # (I - P) dA c
+            col = -v / self.sigma
+            out[:, j] = np.concatenate([col.real, col.imag])
+        out[~np.isfinite(out)] = 0.0
+        return out
+
+
+def covariance(jac: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """``scale (J^T J)^-1`` by SVD; a parameter with a share in a direction the data do not
+    constrain (singular value below 1e-8 of the largest) gets infinite variance.
+
+    >>> covariance(np.array([[1.0, 1.0], [2.0, 2.0]])).diagonal().tolist()
+    [inf, inf]
+    """
+    if not jac.size:
+        return np.zeros((jac.shape[1], jac.shape[1]))
+    jac = np.where(np.isfinite(jac), jac, 0.0)
+    # Eigen-decomposition of J^T J (p x p): squared singular values, cheap for tall J.
+    w, v = np.linalg.eigh(jac.T @ jac)
+    good = w > 1e-16 * max(w.max(), 1e-300)
+    cov = (v[:, good] / w[good]) @ v[:, good].T * scale
+    loose = np.any(np.abs(v[:, ~good]) > 1e-3, axis=1) if (~good).any() else np.zeros(len(w), bool)
+    cov[loose, :] = np.where(loose[:, None] & loose[None, :], np.inf, 0.0)[loose, :]
+    return cov
+
+
+def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
+    """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
+
+    Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
+    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`).
+    """
+    problem = _Problem(model, data, sigma)
+    lower, upper = bounds(model)
+    jac = problem.jacobian if JACOBIAN == "projection" else "2-point"
     best = None
     for start in starts:
         x0 = np.clip(start, lower, upper)
-        res = least_squares(residual, x0, bounds=(lower, upper), x_scale=1.0, method="trf",
-                            diff_step=1e-7, max_nfev=200)
+        res = least_squares(problem.residual, x0, jac=jac, bounds=(lower, upper), method="trf",
+                            diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
         if best is None or res.cost < best.cost:
             best = res
-    n = 2 * len(y)
-    k = len(params) + 2 * model.n_linear
-    rss = 2 * best.cost * sigma**2
-    J = best.jac
-    dof = max(n - k, 1)
-    try:
-        cov = np.linalg.pinv(J.T @ J) * (2 * best.cost / dof)
-    except np.linalg.LinAlgError:
-        cov = np.full((len(params), len(params)), np.nan)
-    _, pred = project(model.design(freq_u, inverse, bias, best.x), y)
-    return Fit(model, best.x, cov, y - pred, pred, rss, n, k)
+    k = len(lower) + 2 * model.n_linear
+    n = 2 * len(problem.y)
+    cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
+    A, c, _, _ = problem._at(best.x)
+    pred = A @ c
+    return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)

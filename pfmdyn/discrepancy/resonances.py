@@ -7,7 +7,8 @@ contact modes with them on.  Frequencies follow ``f = f1 (beta / beta1)**2`` wit
 the metadata's free resonance and ``beta1`` the first free root of the same model, so the
 free mode 1 is reproduced by construction.  Residuals are ``(f_model - f) / sigma`` with
 ``sigma`` the metadata's ``frequency_uncertainty_hz`` (default 0.1 % of each frequency);
-the gap is their RMS.  With ``sigma`` known, the criterion is ``BIC = chi2 + k ln n``.
+the gap is their RMS.  With ``sigma`` known, the criterion is ``BIC = chi2 + k ln n``; the
+loop and its stopping rule are :func:`pfmdyn.discrepancy.select.run`'s.
 Damping and background leave undamped resonances unchanged and are not candidates.  A
 table of free modes only leaves the springs undetermined: they are not fitted (nor counted
 in BIC), and tilt and lateral_stiffness, which act only through them, are not candidates.
@@ -16,21 +17,23 @@ in BIC), and tilt and lateral_stiffness, which act only through them, are not ca
 """
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
-from tqdm import tqdm
 
 from ..io.tables import Metadata, ResonanceData
-from .model import Model, resonances
+from . import select
+from .report import report
+from .effects import EFFECTS, spring_grid
+from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, resonances
 
-__all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "analyse_resonances", "paper_tables"]
+__all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "ResonanceProblem", "analyse_resonances", "paper_tables"]
 
-CANDIDATES = ("tip_mass", "tip_setback", "tilt")
+CANDIDATES = ("tilt", "tip_mass", "tip_setback")
+"""Effects a resonance table can show, in the order ties are broken (tilt is always present
+in a real contact, set-back changes only contact modes, like tilt)."""
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
-BIC_THRESHOLD = 10.0
 
 
 def _sigma(data: ResonanceData) -> np.ndarray:
@@ -45,7 +48,9 @@ def _free_modes(meta: Metadata, mu: float, gamma: float, f_max: float, refine: b
     Free modes ignore the springs and the tilt, so the many fits that vary only those
     (starts, finite-difference Jacobians) reuse one root search.
     """
-    roots = resonances(Model(meta, ("tip_mass", "tip_setback")), [0.0, 0.0, mu, gamma], False, f_max, refine)
+    model = Model(meta, ("tip_mass", "tip_setback"))
+    lower, _ = bounds(model)
+    roots = resonances(model, [lower[0], lower[1], mu, gamma], False, f_max, refine)
     roots.flags.writeable = False
     return roots
 
@@ -53,12 +58,12 @@ def _free_modes(meta: Metadata, mu: float, gamma: float, f_max: float, refine: b
 def _residual(model, internal, data, refine=True) -> np.ndarray:
     out = np.empty(len(data.frequency_hz))
     f_max = 1.5 * data.frequency_hz.max()
-    v = model.values(internal)
+    v = model.coords(internal)
     for contact in (False, True):
         sel = data.condition == ("contact" if contact else "free")
         if not sel.any():
             continue
-        roots = (resonances(model, internal, True, f_max, refine=refine) if contact
+        roots = (resonances(model, internal, True, f_max, refine_roots=refine) if contact
                  else _free_modes(model.meta, float(v["mu"]), float(v["gamma"]), f_max, refine))
         modes = data.mode[sel] - 1
         # A missing mode counts as a predicted frequency of f_max: a large, smooth penalty.
@@ -68,30 +73,41 @@ def _residual(model, internal, data, refine=True) -> np.ndarray:
     return out / _sigma(data)
 
 
+def _jacobian(model, internal, data) -> np.ndarray:
+    """``d residual / d internal`` by implicit differentiation of the characteristic."""
+    out = np.zeros((len(data.frequency_hz), len(internal)))
+    pred = data.frequency_hz + _residual(model, internal, data) * _sigma(data)
+    f_max = 1.5 * data.frequency_hz.max()
+    for contact in (False, True):
+        sel = (data.condition == ("contact" if contact else "free")) & (pred < f_max)
+        if sel.any():
+            out[sel] = resonance_sensitivity(model, internal, contact, pred[sel])
+    return out / _sigma(data)[:, None]
+
+
 SPRINGS = ("k1", "k2")
 """Contact springs: they act on contact modes only, so free-only tables leave them undetermined."""
 
 
-def fit_resonances(model: Model, data: ResonanceData) -> dict:
+def fit_resonances(model: Model, data: ResonanceData) -> FitResult:
     """Fit the springs and the model's effect parameters to the resonances (multi-start).
 
     Without contact rows the springs are held fixed (any value: free modes ignore them)
     and reported with ``value`` None and ``determined`` False; they do not count in BIC.
-    Returns a dict with ``internal``, ``chi2``, ``bic``, ``gap``, ``parameters``.
+    Starts come from grids scaled to the cantilever (:func:`pfmdyn.discrepancy.effects.spring_grid`)
+    and are clipped into the bounds, so no lever is outside them.
 
     >>> free = paper_tables()["tip 2"]
     >>> result = fit_resonances(Model(free.metadata, ("tip_mass",)), free)
-    >>> result["parameters"]["k1"]["determined"], round(result["parameters"]["mu"]["value"], 2)
+    >>> result.parameters()["k1"]["determined"], round(result.parameters()["mu"]["value"], 2)
     (False, 0.05)
     """
-    m = model.meta
     params = model.parameters
     n_springs = 1 if model.vertical_only else 2
     contact = bool(np.any(data.condition == "contact"))
-    a = np.log10(m.k) + np.linspace(-1, 5, 19)
-    b = np.log10(m.k * m.L**2 / m.H**2) + np.linspace(-4, 2, 7)
+    a, b = spring_grid(model.meta, 14, 5)
     if not contact:
-        springs = [np.array([a[9], b[3]][:n_springs])]      # held fixed; free modes ignore them
+        springs = [np.array([a[7], b[2]][:n_springs])]      # held fixed; free modes ignore them
     elif model.vertical_only:
         springs = [np.array([x]) for x in a]
     else:
@@ -101,7 +117,8 @@ def fit_resonances(model: Model, data: ResonanceData) -> dict:
     extra = [np.array([])]
     for p in params[n_springs:]:
         extra = [np.append(e, v) for e in extra for v in seeds[p.name]]
-    grid = [np.concatenate([s, e]) for s in springs for e in extra]
+    lower, upper = bounds(model)
+    grid = [np.clip(np.concatenate([s_, e]), lower, upper) for s_ in springs for e in extra]
     # Only the fitted coordinates move; fixed springs stay at their grid value.
     fitted = np.array([contact or p.name not in SPRINGS for p in params])
 
@@ -112,35 +129,25 @@ def fit_resonances(model: Model, data: ResonanceData) -> dict:
 
     ranked = sorted((float(np.sum(_residual(model, g, data, refine=False) ** 2)), i)
                     for i, g in enumerate(grid))
-    bounds = (np.array([p.lower for p in params])[fitted], np.array([p.upper for p in params])[fitted])
     if fitted.any():
         fits = []
-        for _, i in ranked[:3]:
+        for _, i in ranked[:2]:
             res = least_squares(lambda x: _residual(model, full(x, grid[i]), data), grid[i][fitted],
-                                bounds=bounds, diff_step=1e-7, max_nfev=100)
+                                jac=lambda x: _jacobian(model, full(x, grid[i]), data)[:, fitted],
+                                bounds=(lower[fitted], upper[fitted]), max_nfev=50)
             fits.append((res.cost, full(res.x, grid[i]), res.jac))
         _, internal, jac = min(fits, key=lambda t: t[0])
     else:
         internal, jac = grid[ranked[0][1]], np.zeros((len(data.frequency_hz), 0))
     residual = _residual(model, internal, data)
-    chi2, n, k = float(np.sum(residual**2)), len(data.frequency_hz), int(fitted.sum())
-    cov = np.linalg.pinv(jac.T @ jac)
-    values, j = {}, 0
-    for i, p in enumerate(params):
-        if not fitted[i]:
-            values[p.name] = {"value": None, "stderr": None, "unit": p.unit, "determined": False}
-            continue
-        sd = math.sqrt(max(cov[j, j], 0.0))
-        values[p.name] = {"value": float(p.value(internal[i])), "stderr": float(p.stderr(internal[i], sd)),
-                          "unit": p.unit, "determined": True}
-        j += 1
-    return {"model": model, "internal": internal, "chi2": chi2, "bic": chi2 + k * math.log(n),
-            "gap": float(math.sqrt(np.mean(residual**2))), "residual": residual,
-            "parameters": values}
+    cov = covariance(jac)
+    sigma = _sigma(data)
+    return FitResult(model, internal, cov, residual * sigma, sigma, int(fitted.sum()), sigma_known=True,
+                     fitted=fitted)
 
 
-def _locate(data: ResonanceData, result: dict) -> dict:
-    r = result["residual"]
+def _locate(data: ResonanceData, result: FitResult) -> dict:
+    r = result.residual / result.sigma
     free = data.condition == "free"
     share = float(np.sum(r[free] ** 2) / max(np.sum(r**2), 1e-300))
     worst = int(np.argmax(np.abs(r)))
@@ -149,50 +156,57 @@ def _locate(data: ResonanceData, result: dict) -> dict:
             "signature": "mode-ratio error" if share > 0.5 else "peak shift"}
 
 
-def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = True) -> dict:
+class ResonanceProblem:
+    """What :func:`pfmdyn.discrepancy.select.run` needs for a resonance table.
+
+    Damping and background leave undamped resonances unchanged and are not candidates;
+    without contact rows neither are tilt and lateral_stiffness (they act through the
+    contact springs only).
+    """
+
+    def __init__(self, data: ResonanceData, vertical_only: bool = False):
+        self.data, self.vertical_only = data, vertical_only
+        library = (["lateral_stiffness"] if vertical_only else []) + list(CANDIDATES)
+        if not np.any(data.condition == "contact"):
+            library = [e for e in library if e not in ("tilt", "lateral_stiffness")]
+        self.library = library
+
+    def baseline(self) -> FitResult:
+        return fit_resonances(Model(self.data.metadata, (), self.vertical_only), self.data)
+
+    def candidates(self, current: FitResult) -> list[str]:
+        # A fit needs fewer parameters than resonances.
+        room = len(self.data.frequency_hz) - current.k
+        return [e for e in self.library if e not in current.model.effects and room > len(EFFECTS[e].parameters)]
+
+    def trial(self, current: FitResult, name: str) -> FitResult:
+        return fit_resonances(current.model.with_effect(name), self.data)
+
+    def without(self, current: FitResult, component: str) -> FitResult:
+        effects = list(current.model.effects)
+        effects.remove(component)
+        return fit_resonances(Model(self.data.metadata, tuple(effects), self.vertical_only), self.data)
+
+    def locate(self, current: FitResult) -> dict:
+        return _locate(self.data, current)
+
+
+def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = True,
+                       time_budget_s: float | None = None) -> dict:
     """Discrepancy loop on a resonances table; same report keys as the spectrum loop.
 
     Examples
     --------
     See ``tests/test_discrepancy.py`` (FE resonances, and the paper's tips 1 and 2).
     """
-    current = fit_resonances(Model(data.metadata, (), vertical_only), data)
-    baseline, steps = current, []
-    library = list(CANDIDATES) + (["lateral_stiffness"] if vertical_only else [])
-    if not np.any(data.condition == "contact"):
-        # Tilt and k2 act through the contact springs only: no free-mode signature.
-        library = [e for e in library if e not in ("tilt", "lateral_stiffness")]
-    bar = tqdm(desc="discrepancy", unit="fit", disable=not progress)
-    while True:
-        where = _locate(data, current)
-        candidates = [e for e in library if e not in current["model"].effects]
-        if not candidates:
-            break
-        trials = {}
-        for e in candidates:
-            trials[e] = fit_resonances(Model(data.metadata, current["model"].effects + (e,), vertical_only), data)
-            bar.update()
-        gains = {e: current["bic"] - t["bic"] for e, t in trials.items()}
-        best = max(gains, key=gains.get)
-        table = [{"effect": e, "bic": trials[e]["bic"], "delta_bic": gains[e], "gap": trials[e]["gap"]}
-                 for e in candidates]
-        if gains[best] <= BIC_THRESHOLD:
-            steps.append({"effect": None, "located": where, "candidates": table,
-                          "decision": f"stop: best gain {gains[best]:.1f} <= {BIC_THRESHOLD}"})
-            break
-        steps.append({"effect": best, "located": where, "candidates": table,
-                      "gap_before": current["gap"], "gap_after": trials[best]["gap"],
-                      "criterion_gain": gains[best], "parameters": trials[best]["parameters"]})
-        current = trials[best]
-    bar.close()
-    return {"missing_effects": list(current["model"].effects), "gap_before": baseline["gap"],
-            "gap_after": current["gap"],
-            "gap_definition": "RMS of (f_model - f_measured) / frequency uncertainty",
-            "criterion": f"BIC = chi2 + k ln n; add if gain > {BIC_THRESHOLD}", "steps": steps,
-            "parameters": current["parameters"], "baseline_parameters": baseline["parameters"],
-            "measured_hz": data.frequency_hz.tolist(),
-            "baseline_hz": (data.frequency_hz + baseline["residual"] * _sigma(data)).tolist(),
-            "predicted_hz": (data.frequency_hz + current["residual"] * _sigma(data)).tolist()}
+    result = select.run(ResonanceProblem(data, vertical_only), progress, time_budget_s)
+    sigma = _sigma(data)
+    base, final = result["baseline"], result["final"]
+    return report(result, gap_definition="RMS of (f_model - f_measured) / frequency uncertainty",
+                  measured_hz=data.frequency_hz.tolist(),
+                  baseline_hz=(data.frequency_hz + base.residual).tolist(),
+                  predicted_hz=(data.frequency_hz + final.residual).tolist(),
+                  frequency_uncertainty_hz=sigma.tolist())
 
 
 def paper_tables() -> dict[str, ResonanceData]:

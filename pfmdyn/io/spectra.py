@@ -12,10 +12,12 @@ The format, shared by every command that reads measured spectra::
 * ``x, y`` are the lock-in in-phase and quadrature signals; ``amplitude, phase_deg`` the
   same response in polar form (phase in degrees).  Either pair gives the complex response
   :math:`x + i y = A e^{i\\varphi}`.  Other columns are ignored.
-* Rows are grouped by frequency in ascending order (as a frequency sweep at each bias is
-  usually stored transposed, this is checked rather than silently re-sorted); within one
-  frequency the biases may come in any order, must not repeat, and there must be at least
-  two distinct ones so that a line can be fitted.
+* A table is a set of rows: any row order is accepted (a sweep at each bias written one
+  after another, as instruments do, or frequency-grouped, or shuffled).  After reading, the
+  rows are sorted by frequency, then bias.  A (frequency, bias) pair given twice with the
+  same response is kept once; with different responses it is an error.  Unless the caller
+  says otherwise, every frequency needs at least two distinct biases so that a line can be
+  fitted.
 * Blank lines are skipped.  Every problem is reported as one :class:`~pfmdyn.cli.UserError`
   naming the file and the line.
 """
@@ -46,7 +48,7 @@ class Spectra:
     path : str
         The file it was read from (for messages).
     frequency_hz, bias_v : ndarray
-        Drive frequency (Hz, positive, grouped ascending) and tip dc bias (V).
+        Drive frequency (Hz, positive; rows sorted by frequency, then bias) and tip dc bias (V).
     response : ndarray of complex
         :math:`x + i y` (or :math:`A e^{i\\varphi}`), in the file's units.
     response_columns : tuple of str
@@ -85,13 +87,16 @@ def frequency_group_starts(frequency_hz):
     return np.concatenate(([0], np.flatnonzero(np.diff(frequency_hz)) + 1))
 
 
-def read_spectra(path) -> Spectra:
+def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     """Read and validate a frequency-bias CSV file (format in the module docstring).
 
     Parameters
     ----------
     path : str or Path
         The CSV file.
+    biases_per_frequency : int
+        Least number of distinct biases required at every frequency (2 for a line fit per
+        frequency; 1 when the caller fits all rows together).
 
     Returns
     -------
@@ -142,7 +147,7 @@ def read_spectra(path) -> Spectra:
     if not rows:
         raise UserError(f"{where}, line {header_line}: header but no data rows")
     table = np.array(rows, dtype=float)
-    _check_rows(where, table, np.array(line_numbers), response_columns)
+    table = _check_rows(where, table, np.array(line_numbers), response_columns, biases_per_frequency)
     first, second = table[:, 2], table[:, 3]
     if response_columns == ("x", "y"):
         response = first + 1j * second
@@ -220,9 +225,11 @@ def _number(where: str, number: int, name: str, cell: str) -> float:
     return value
 
 
-def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, response_columns: tuple[str, str]) -> None:
-    """Check value ranges, frequency grouping, duplicates and the number of biases per frequency."""
-    frequency, bias = table[:, 0], table[:, 1]
+def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, response_columns: tuple[str, str],
+                biases_per_frequency: int = 2) -> np.ndarray:
+    """Check value ranges, duplicates and biases per frequency; return the rows sorted by
+    (frequency, bias), identical repeated rows kept once."""
+    frequency = table[:, 0]
     bad = np.flatnonzero(frequency <= 0)
     if bad.size:
         row = bad[0]
@@ -230,25 +237,25 @@ def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, respons
     if response_columns == ("amplitude", "phase_deg") and (table[:, 2] < 0).any():
         row = np.flatnonzero(table[:, 2] < 0)[0]
         raise UserError(f"{where}, line {line_numbers[row]}: amplitude must be non-negative, got {table[row, 2]:.12g}")
-    decreasing = np.flatnonzero(np.diff(frequency) < 0)
-    if decreasing.size:
-        row = decreasing[0] + 1
+    order = np.lexsort((line_numbers, table[:, 1], table[:, 0]))     # stable: file order among equals
+    table, line_numbers = table[order], line_numbers[order]
+    same = (np.diff(table[:, 0]) == 0) & (np.diff(table[:, 1]) == 0)
+    clash = np.flatnonzero(same & np.any(np.diff(table[:, 2:], axis=0) != 0, axis=1))
+    if clash.size:
+        row = clash[0] + 1
         raise UserError(
-            f"{where}, line {line_numbers[row]}: frequency {frequency[row]:.12g} Hz follows {frequency[row - 1]:.12g} Hz;"
-            " rows must be grouped by frequency in ascending order"
+            f"{where}, line {line_numbers[row]}: duplicate row for frequency {table[row, 0]:.12g} Hz"
+            f" and bias {table[row, 1]:.12g} V (first at line {line_numbers[row - 1]}) with a different response"
         )
-    starts = frequency_group_starts(frequency)
-    for start, stop in zip(starts, np.append(starts[1:], len(frequency))):
-        first_line: dict[float, int] = {}
-        for row in range(start, stop):
-            if bias[row] in first_line:
-                raise UserError(
-                    f"{where}, line {line_numbers[row]}: duplicate row for frequency {frequency[row]:.12g} Hz"
-                    f" and bias {bias[row]:.12g} V (first at line {first_line[bias[row]]})"
-                )
-            first_line[bias[row]] = line_numbers[row]
-        if len(first_line) < 2:
-            raise UserError(
-                f"{where}, line {line_numbers[start]}: only one bias value at frequency {frequency[start]:.12g} Hz;"
-                " the linear fit needs at least two distinct biases"
-            )
+    keep = np.concatenate(([True], ~same))
+    table, line_numbers = table[keep], line_numbers[keep]
+    starts = frequency_group_starts(table[:, 0])
+    counts = np.diff(np.append(starts, len(table)))
+    few = np.flatnonzero(counts < biases_per_frequency)
+    if few.size:
+        start = starts[few[0]]
+        raise UserError(
+            f"{where}, line {line_numbers[start]}: only one bias value at frequency {table[start, 0]:.12g} Hz;"
+            " the linear fit needs at least two distinct biases"
+        )
+    return table

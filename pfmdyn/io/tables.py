@@ -15,6 +15,13 @@ Format (SI units)::
     ...
 
 A resonances table may hold free modes only; the contact springs are then not determined.
+Rows may come in any order (they are sorted by condition, then mode); a repeated
+(condition, mode) with a different frequency is an error.  An optional ``quality_factor``
+column gives each mode's Q.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
+.txt/.dat) are read by :func:`pfmdyn.io.instruments.to_discrepancy_input` (``pfmdyn
+discrepancy`` dispatches them); :func:`check_resonance_rows` accepts their short tables
+(one or two resonances).  ``overrides`` (metadata keys, from the
+command line) win over the file's values.
 
 Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
@@ -32,11 +39,13 @@ import numpy as np
 from ..errors import UserError
 from .spectra import EXPECTED_COLUMNS, read_spectra
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
 REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m",
                  "free_resonance_hz")
 RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
+OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
+INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
 MIN_SPECTRUM_ROWS = 20
 MIN_RESONANCES = 3
 
@@ -81,7 +90,9 @@ class ResonanceData:
     quality_factor: np.ndarray | None = None
 
 
-def _metadata(where: str, meta: dict) -> Metadata:
+def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
+    meta = dict(meta)
+    meta.update({key: value for key, value in (overrides or {}).items() if value is not None})
     missing = [key for key in REQUIRED_KEYS if key not in meta]
     if missing:
         raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
@@ -118,8 +129,11 @@ def _preamble(path: Path) -> tuple[dict, list[str], list[str]]:
     return meta, header, rest[1:]
 
 
-def read(path) -> SpectrumData | ResonanceData:
+def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     """Read a discrepancy input file (format in the module docstring).
+
+    ``overrides``: metadata keys (:data:`REQUIRED_KEYS`) given on the command line,
+    applied over the file's values.
 
     >>> import tempfile, os
     >>> text = ("# spring_constant_n_per_m: 2.4\\n# length_m: 2e-4\\n# width_m: 3e-5\\n"
@@ -133,15 +147,19 @@ def read(path) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
+    if path.suffix.lower() in INSTRUMENT_SUFFIXES:
+        # pfmdyn.io.instruments imports this module's data classes: the command dispatches
+        # instrument files (read_input) so that the two modules do not import each other.
+        raise UserError(f"{path}: an instrument file; read it with pfmdyn.io.instruments.to_discrepancy_input")
     meta, header, rows = _preamble(path)
-    metadata = _metadata(str(path), meta)
+    metadata = _metadata(str(path), meta, overrides)
     if "mode" in header or "condition" in header:
         return _resonances(path, metadata, header, rows)
     unknown = [c for c in header if c not in EXPECTED_COLUMNS]
     if unknown:
         raise UserError(f"{path}: unknown column(s) {', '.join(unknown)}; expected frequency_hz, "
                         "bias_v and x, y or amplitude, phase_deg (or mode, condition, frequency_hz)")
-    spectra = read_spectra(path)
+    spectra = read_spectra(path, biases_per_frequency=1)
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
                         f"{MIN_SPECTRUM_ROWS} are needed to fit the model")
@@ -149,12 +167,14 @@ def read(path) -> SpectrumData | ResonanceData:
 
 
 def _resonances(path, metadata, header, rows) -> ResonanceData:
-    if sorted(header) != sorted(RESONANCE_COLUMNS):
-        extra = sorted(set(header) - set(RESONANCE_COLUMNS)) or sorted(set(RESONANCE_COLUMNS) - set(header))
-        raise UserError(f"{path}: resonances table needs exactly the columns mode, condition, "
-                        f"frequency_hz (problem: {', '.join(extra)})")
+    allowed = RESONANCE_COLUMNS + OPTIONAL_RESONANCE_COLUMNS
+    problem = sorted(set(header) - set(allowed)) + sorted(set(RESONANCE_COLUMNS) - set(header))
+    if problem or len(set(header)) != len(header):
+        raise UserError(f"{path}: resonances table needs the columns mode, condition, frequency_hz "
+                        f"(and optionally quality_factor) once each (problem: {', '.join(problem) or 'repeated column'})")
     idx = [header.index(c) for c in RESONANCE_COLUMNS]
-    modes, conds, freqs = [], [], []
+    q_idx = header.index("quality_factor") if "quality_factor" in header else None
+    modes, conds, freqs, qs = [], [], [], []
     for n, line in enumerate(rows, start=1):
         cells = [c.strip() for c in next(csv.reader([line]))]
         if len(cells) != len(header):
@@ -165,12 +185,31 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
         try:
             modes.append(int(mode))
             freqs.append(float(freq))
+            qs.append(float(cells[q_idx]) if q_idx is not None and cells[q_idx] else math.nan)
         except ValueError:
-            raise UserError(f"{path}: data row {n}: mode must be an integer and frequency_hz a number") from None
-        if modes[-1] < 1 or not freqs[-1] > 0:
-            raise UserError(f"{path}: data row {n}: mode >= 1 and frequency_hz > 0 required")
+            raise UserError(f"{path}: data row {n}: mode must be an integer, frequency_hz and "
+                            "quality_factor numbers") from None
+        if modes[-1] < 1 or not (math.isfinite(freqs[-1]) and freqs[-1] > 0):
+            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite frequency_hz > 0 required")
         conds.append(cond)
+    modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
+    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
+    return ResonanceData(metadata, modes[order], conds[order], freqs[order],
+                         quality_factor=qs[order] if q_idx is not None else None)
+
+
+def check_resonance_rows(where, modes, conds, freqs, minimum) -> np.ndarray:
+    """Row order sorting by (condition, mode); duplicates that disagree and too few rows are errors."""
     # Free modes alone still constrain the effects that change mode ratios (a tip mass).
-    if len(freqs) < MIN_RESONANCES:
-        raise UserError(f"{path}: {len(freqs)} resonances; at least {MIN_RESONANCES} are needed")
-    return ResonanceData(metadata, np.array(modes), np.array(conds), np.array(freqs))
+    if len(freqs) < minimum:
+        raise UserError(f"{where}: {len(freqs)} resonances; at least {minimum} are needed")
+    order = np.lexsort((modes, conds == "contact"))
+    seen, keep = {}, []
+    for i in order:
+        key = (str(conds[i]), int(modes[i]))
+        if key in seen and seen[key] != freqs[i]:
+            raise UserError(f"{where}: {key[0]} mode {key[1]} given twice with different frequencies")
+        if key not in seen:
+            keep.append(i)
+        seen[key] = freqs[i]
+    return np.array(keep, int)

@@ -1,0 +1,54 @@
+"""The report of ``pfmdyn discrepancy`` (both data kinds): JSON-ready dict and summary text."""
+from __future__ import annotations
+
+from . import select
+from .effects import public_name
+
+__all__ = ["report", "summary"]
+
+
+def report(result: dict, **extra) -> dict:
+    """The JSON-ready report of a loop result (both data kinds)."""
+    baseline, final = result["baseline"], result["final"]
+    steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
+    out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
+           "damping_mechanisms": final.model.damping_mechanisms, "unexplained": result["unexplained"],
+           "criterion": select.CRITERION, "steps": steps, "parameters": final.parameters(),
+           "baseline_parameters": baseline.parameters(), "fit_report": final.report()}
+    out.update(extra)
+    return out
+
+
+def summary(report: dict) -> str:
+    """Readable multi-line summary of a report."""
+    mech = report.get("damping_mechanisms") or []
+    named = [e + (f" ({', '.join(mech)})" if e == "damping" and mech else "") for e in report["missing_effects"]]
+    lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
+             f"(1 = noise level); missing effects: {', '.join(named) or 'none'}"]
+    for i, s in enumerate(report["steps"], 1):
+        if "removed" in s:
+            lines.append(f"step {i}: {s['decision']}")
+            continue
+        loc = s["located"]
+        where = (f"residual in {loc['band_hz'][0] / 1e3:.1f}-{loc['band_hz'][1] / 1e3:.1f} kHz"
+                 if "band_hz" in loc else f"largest residual at {loc['worst']}")
+        head = f"step {i}: {where}, signature '{loc['signature']}'"
+        if s["effect"] is None:
+            lines.append(f"{head}; {s['decision']}")
+        else:
+            lines.append(f"{head}; added {s['effect']} (delta BIC {s['criterion_gain']:.1f}, "
+                         f"gap {s['gap_before']:.2f} -> {s['gap_after']:.2f})")
+    if report.get("unexplained"):
+        where = report["unexplained"]["where"]
+        place = (f"at {where[0] / 1e3:.4g}-{where[1] / 1e3:.4g} kHz" if isinstance(where, (list, tuple))
+                 else f"at {where}")
+        lines.append(f"no effect of the library explains the residual {place} "
+                     f"(gap {report['unexplained']['gap']:.3g} x noise)")
+    for name, p in report["parameters"].items():
+        if p["value"] is None:      # e.g. springs from a table of free modes only
+            lines.append(f"  {name} not determined by these data")
+        else:
+            err = "" if p["stderr"] is None else f" +- {p['stderr']:.2g}"
+            note = "" if p.get("determined", True) else " (not determined by these data)"
+            lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
+    return "\n".join(lines)

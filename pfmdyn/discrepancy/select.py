@@ -1,0 +1,180 @@
+"""The one selection loop of ``pfmdyn discrepancy`` (spectra and resonance tables alike).
+
+Greedy forward selection over the effect library with an honest stopping rule.  At each
+step every candidate effect is fitted on top of the current model (by the data kind's
+*problem*: :class:`pfmdyn.discrepancy.spectrum.SpectrumProblem` or
+:class:`pfmdyn.discrepancy.resonances.ResonanceProblem`).  A candidate is *material* when
+
+* it lowers the BIC by more than :data:`BIC_THRESHOLD` (10, "very strong" evidence), and
+* it shrinks the gap by at least :data:`MIN_REDUCTION` (25 %), or brings it within
+  :data:`NEAR_NOISE` (1.5) times the noise while shrinking it by at least 5 %.
+
+With a misfit far above the noise any extra parameter wins the BIC, so the criterion
+alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  The
+material candidate with the largest BIC gain is added (candidates within
+:data:`BIC_THRESHOLD` of it are indistinguishable: the first in the library's order is
+taken and the others are listed in the step).  When none is material, pairs of
+the three best candidates are tried (two effects can be needed together before either
+helps on its own), and the loop stops when no pair is material either.  A backward pass
+then removes every component that is no longer material in the final model (an effect
+that only helped a fit out of a local minimum, a damping mechanism replaced by another).  A final gap above
+:data:`UNEXPLAINED` (2) is reported as ``unexplained``, with where it concentrates.
+"""
+from __future__ import annotations
+
+import time
+
+from tqdm import tqdm
+
+__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "UNEXPLAINED", "material", "run"]
+
+BIC_THRESHOLD = 10.0
+MIN_REDUCTION = 0.25
+NEAR_NOISE = 1.5
+UNEXPLAINED = 2.0
+TIME_BUDGET_S = 35.0
+"""``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
+start (then prune and report), so that a hard file still ends in a report within about a
+minute.  Library calls have no budget unless given one."""
+
+CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
+             f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %)")
+
+
+def material(old, new) -> bool:
+    """Whether ``new`` (a fit with one more effect) explains a material part of ``old``'s misfit.
+
+    >>> from types import SimpleNamespace as S
+    >>> material(S(bic=0.0, gap=123.3), S(bic=-1108.0, gap=122.0))      # 1 % of the misfit
+    False
+    >>> material(S(bic=0.0, gap=40.0), S(bic=-900.0, gap=1.1))
+    True
+    """
+    gain = old.bic - new.bic
+    if not gain > BIC_THRESHOLD:
+        return False
+    return new.gap <= (1 - MIN_REDUCTION) * old.gap or (new.gap <= NEAR_NOISE and new.gap <= 0.95 * old.gap)
+
+
+def _row(name, old, new) -> dict:
+    return {"effect": name, "bic": new.bic, "delta_bic": old.bic - new.bic, "gap": new.gap}
+
+
+def run(problem, progress: bool = True, time_budget_s: float | None = None) -> dict:
+    """Run the loop on ``problem``; return baseline, final fit and the steps.
+
+    ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
+    -> fit`` (the best fit with that effect added), ``without(fit, component) -> fit``
+    (refit with one component removed), ``locate(fit) -> dict`` and optionally
+    ``polish(fit) -> fit`` (converge a trial that is accepted).
+    """
+    started = time.perf_counter()
+    current = problem.baseline()
+    baseline, steps = current, []
+    with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
+        while True:
+            where = problem.locate(current)
+            if time_budget_s is not None and time.perf_counter() - started > time_budget_s:
+                steps.append({"effect": None, "located": where, "candidates": [],
+                              "decision": f"stop: time budget of {time_budget_s:g} s used"})
+                break
+            names = problem.candidates(current)
+            if not names:
+                break
+            trials = {}
+            for name in names:
+                trials[name] = problem.trial(current, name)
+                bar.update()
+            table = [_row(n, current, t) for n, t in trials.items()]
+            good = [n for n in names if material(current, trials[n])]
+            if good:
+                top = min(trials[n].bic for n in good)
+                # Candidates within the BIC threshold of the best are not told apart by the
+                # data: take the first in the library's order and say which were equivalent.
+                tied = [n for n in good if trials[n].bic - top <= BIC_THRESHOLD]
+                best = tied[0]
+                steps.append({"effect": best, "located": where, "candidates": table,
+                              "indistinguishable_from": tied[1:],
+                              "gap_before": current.gap, "gap_after": trials[best].gap,
+                              "criterion_gain": current.bic - trials[best].bic,
+                              "parameters": trials[best].parameters()})
+                current = _polish(problem, trials[best])
+                steps[-1].update(gap_after=current.gap, parameters=current.parameters())
+                continue
+            pair = _best_pair(problem, current, trials, bar) if current.gap > NEAR_NOISE else None
+            if pair is None:
+                gains = {n: current.bic - t.bic for n, t in trials.items()}
+                best = max(gains, key=gains.get)
+                steps.append({"effect": None, "located": where, "candidates": table,
+                              "decision": f"stop: no material candidate (best {best}: BIC gain "
+                              f"{gains[best]:.1f}, gap {current.gap:.3g} -> {trials[best].gap:.3g})"})
+                break
+            (first, second), fit = pair
+            for name, before, after in ((first, current, trials[first]), (second, trials[first], fit)):
+                steps.append({"effect": name, "located": where, "candidates": table if name == first else [],
+                              "gap_before": before.gap, "gap_after": after.gap,
+                              "criterion_gain": before.bic - after.bic, "parameters": after.parameters(),
+                              "note": f"added together with {second if name == first else first}"})
+            current = _polish(problem, fit)
+            steps[-1].update(gap_after=current.gap, parameters=current.parameters())
+    current = _prune(problem, current, steps)
+    unexplained = None
+    if current.gap > UNEXPLAINED:
+        loc = problem.locate(current)
+        unexplained = {"gap": current.gap, "where": loc.get("band_hz", loc.get("worst"))}
+    return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained}
+
+
+def _prune(problem, current, steps):
+    """Backward pass: drop every effect component that the final model does not need.
+
+    Greedy steps can add an effect that only helped the fit out of a local minimum (its
+    parameter ends at its null value) or a damping mechanism that a later one replaced.
+    A component goes when it is no longer material, i.e. when the model without it would
+    not be extended by it again.
+    """
+    for _ in range(2):      # two rounds: e.g. a swapped effect, then a swapped mechanism
+        options = getattr(problem, "alternatives", lambda fit: [])(current)
+        best = min(options, key=lambda f: f.bic, default=None)
+        if best is None or best.bic >= current.bic:
+            break
+        # e.g. one damping mechanism in place of another, or of two that mimic it together.
+        steps.append({"effect": None, "removed": ", ".join(current.model.effects),
+                      "gap_before": current.gap, "gap_after": best.gap,
+                      "decision": f"replaced {', '.join(current.model.effects)} by "
+                      f"{', '.join(best.model.effects)} (BIC lower by {current.bic - best.bic:.1f})"})
+        current = best
+    while len(current.model.effects) > 0:
+        trials = {c: problem.without(current, c) for c in current.model.effects}
+        spare = [c for c, t in trials.items() if t is not None and not material(t, current)]
+        if not spare:
+            return current
+        drop = min(spare, key=lambda c: trials[c].bic)
+        steps.append({"effect": None, "removed": drop, "gap_before": current.gap, "gap_after": trials[drop].gap,
+                      "decision": f"removed {drop}: not material in the final model (BIC gain "
+                      f"{trials[drop].bic - current.bic:.1f}, gap {trials[drop].gap:.3g} -> {current.gap:.3g})"})
+        current = trials[drop]
+    return current
+
+
+def _polish(problem, trial):
+    """The trial fit converged fully, when the problem stops trials early (never worse)."""
+    if not hasattr(problem, "polish"):
+        return trial
+    polished = problem.polish(trial)
+    return polished if polished.bic <= trial.bic else trial
+
+
+def _best_pair(problem, current, trials, bar):
+    """The material pair of effects (among the three best single ones) with the largest gain."""
+    ranked = sorted(trials, key=lambda n: current.bic - trials[n].bic, reverse=True)[:3]
+    found = None
+    for i, a in enumerate(ranked):
+        for b in ranked[i + 1:]:
+            if b not in problem.candidates(trials[a]):
+                continue
+            fit = problem.trial(trials[a], b)
+            bar.update()
+            if material(current, fit) and (found is None or fit.bic < found[1].bic):
+                found = ((a, b), fit)
+    return found

@@ -1,0 +1,77 @@
+"""``pfmdyn discrepancy`` never ends in a traceback: cantilevers drawn over realistic ranges.
+
+Property (hypothesis, derandomised for CI): any file that reads ends in a report (exit 0)
+or in one line ``pfmdyn discrepancy: error: ...`` (exit 2).  Tables and spectra come from
+the independent finite-element beam (``tests/fe_beam.py``), coarse so that examples are
+fast: k 0.05-50 N/m, L 100-500 um, w 20-60 um, H 3-20 um, k1/k 1-1e4, k2/k1 0-1.5,
+Q 5-500, 3-7 biases, 2-4 contact modes.  Wide sweeps with pass rates are in
+``benchmarks/discrepancy.py``.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+sys.path.insert(0, str(Path(__file__).parent))
+from fe_beam import FEBeam, spectrum  # noqa: E402
+from pfmdyn import cli  # noqa: E402
+
+levers = st.fixed_dictionaries({
+    "k": st.floats(0.05, 50.0), "L": st.floats(100e-6, 500e-6), "w": st.floats(20e-6, 60e-6),
+    "H": st.floats(3e-6, 20e-6), "k1_ratio": st.floats(0.0, 4.0), "k2_ratio": st.floats(0.0, 1.5),
+    "Q": st.floats(5.0, 500.0), "biases": st.integers(3, 7), "contact_modes": st.integers(2, 4),
+})
+
+
+def _beam(p, **extra) -> FEBeam:
+    # f1 of a silicon lever of that stiffness and length (thickness from k and width).
+    t = (4 * p["k"] * p["L"] ** 3 / (169e9 * p["w"])) ** (1 / 3)
+    f1 = float(1.8751**2 / (2 * np.pi) * t / p["L"] ** 2 * np.sqrt(169e9 / 12 / 2330))
+    k1 = p["k"] * 10 ** p["k1_ratio"]
+    return FEBeam(p["k"], p["L"], f1, p["H"], k1=k1, k2=k1 * p["k2_ratio"], n_elements=40, **extra)
+
+
+def _run(path: Path, capsys) -> int:
+    status = cli.main(["discrepancy", str(path), "--json", str(path.with_suffix(".json"))])
+    captured = capsys.readouterr()
+    assert status in (0, 2), captured.err
+    if status == 2:
+        assert captured.err.count("\n") == 1 and captured.err.startswith("pfmdyn discrepancy: error: ")
+    else:
+        report = json.loads(path.with_suffix(".json").read_text())
+        assert {"missing_effects", "gap_before", "gap_after", "steps", "parameters",
+                "damping_mechanisms", "unexplained"} <= set(report)
+    return status
+
+
+@settings(max_examples=8, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(p=levers, shuffle=st.integers(0, 2**16))
+def test_tables_end_in_a_report_or_one_line(tmp_path, capsys, p, shuffle):
+    beam = _beam(p)
+    n = p["contact_modes"]
+    rows = [f"{i + 1},free,{float(f)!r}" for i, f in enumerate(beam.free_resonances(3))]
+    rows += [f"{i + 1},contact,{float(f)!r}" for i, f in enumerate(beam.contact_resonances(n))]
+    rows = [rows[i] for i in np.random.default_rng(shuffle).permutation(len(rows))]
+    path = tmp_path / "table.csv"
+    path.write_text(f"# spring_constant_n_per_m: {beam.k!r}\n# length_m: {beam.L!r}\n# width_m: {p['w']!r}\n"
+                    f"# tip_height_m: {beam.H!r}\n# free_resonance_hz: {beam.f1!r}\n"
+                    "mode,condition,frequency_hz\n" + "\n".join(rows) + "\n")
+    # Exact FE eigenfrequencies of a valid lever: always a report.
+    assert _run(path, capsys) == 0
+
+
+@settings(max_examples=3, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(p=levers)
+def test_spectra_end_in_a_report_or_one_line(tmp_path, capsys, p):
+    beam = _beam(p, Q=p["Q"])
+    top = beam.contact_resonances(p["contact_modes"])[-1]
+    freq = np.linspace(0.5 * beam.contact_resonances(1)[0], 1.1 * top, 60)
+    path = tmp_path / "spectrum.csv"
+    path.write_text(spectrum(beam, freq, tuple(np.linspace(-2, 2, p["biases"])), order="instrument"))
+    assert _run(path, capsys) == 0
