@@ -6,7 +6,7 @@ the stiff limit (``s -> oo``) the roots of ``f1``; both are computed certified b
 :mod:`pfmdyn.roots`.  Branch ``n`` rises from soft root ``n`` to stiff root ``n``, and the
 sweep brackets it there: ``f = s f1`` at the soft root and ``f = f0`` at the stiff root, whose
 signs are checked to differ, so each bracket holds a root for every ``s > 0``.  The sweep
-itself is double precision: vectorised Illinois (regula falsi) steps on all stiffness
+itself is double precision: the one bracketing solver (:mod:`pfmdyn.roots.bracket`) on all stiffness
 values and modes at once.  The crossover of a branch is the stiffness at which it passes
 midway between its limits; affinity gives it in closed form, ``s = -f0(z_mid)/f1(z_mid)``.
 
@@ -30,6 +30,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..generated import characteristic, families
+from .bracket import refine
 from .core import CertificationError, certify, characteristic_function
 
 __all__ = ["SWEPT", "LABELS", "FIGURE", "branch_limits", "sweep", "crossovers", "frequency_ratio"]
@@ -101,20 +102,9 @@ def sweep(family: str, stiffness: np.ndarray, modes: int = 5, **fixed) -> np.nda
     a, b = np.broadcast_to(soft, (s.size, modes)).copy(), np.broadcast_to(stiff, (s.size, modes)).copy()
     with np.errstate(under="ignore"):       # exp(-z) underflows harmlessly at large z
         fa, fb = f(a, s), f(b, s)
-        if np.any(np.sign(fa) * np.sign(fb) > 0):
-            raise CertificationError(f"{family}: a branch is not bracketed by its soft and stiff limits")
-        for _ in range(100):
-            done = (np.abs(b - a) <= 4e-16 * np.abs(b)) | (fb == 0)
-            if done.all():
-                break
-            step = np.where(done, 0.0, fb * (b - a) / np.where(done, 1.0, fb - fa))
-            c = b - step
-            fc = f(c, s)
-            flip = np.sign(fc) * np.sign(fb) < 0
-            # Illinois: keep the bracket; halve the stale end's value so it cannot stall.
-            a, fa = np.where(flip, b, a), np.where(flip, fb, fa / 2)
-            b, fb = np.where(done, b, c), np.where(done, fb, fc)
-    return b
+    if np.any(np.sign(fa) * np.sign(fb) > 0):
+        raise CertificationError(f"{family}: a branch is not bracketed by its soft and stiff limits")
+    return refine(lambda z: f(z, s), a, b, fa, fb)
 
 
 def crossovers(family: str, modes: int = 5, **fixed) -> tuple[np.ndarray, np.ndarray]:
