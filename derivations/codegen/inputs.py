@@ -12,6 +12,8 @@ __all__ = ["render"]
 def _floats(value):
     if isinstance(value, dict):
         return {k: _floats(v) for k, v in value.items()}
+    if isinstance(value, tuple):
+        return tuple(_floats(v) for v in value)
     return float(value)
 
 

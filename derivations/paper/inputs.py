@@ -6,8 +6,8 @@ written from this module by ``pfmdyn codegen``.
 """
 from __future__ import annotations
 
-__all__ = ["TABLE1", "TIP_HEIGHT", "CONTACT_K1", "K1_OVER_K2", "D_EFF_FIG", "EPSILON_0",
-           "SILICON_DENSITY", "SILICON_E", "NUMERIC"]
+__all__ = ["TABLE1", "TIP_HEIGHT", "CONTACT_K1", "K1_OVER_K2", "D_EFF_FIG", "TIP1_CONTACT", "TIP1_FREE",
+           "TIP2_FREE", "TIP2_GEOMETRY", "EPSILON_0", "SILICON_DENSITY", "SILICON_E", "NUMERIC"]
 
 TABLE1 = {"A": {"w": "24e-6", "h": "8e-6", "L": "224e-6", "k": "45"},
           "B": {"w": "24e-6", "h": "3e-6", "L": "224e-6", "k": "2.4"},
@@ -18,6 +18,13 @@ CONTACT_K1 = "1000"             # N/m, Section IV.2
 K1_OVER_K2 = "0.85"             # Section III.1
 D_EFF_FIG = "5e-12"             # m/V, Section IV.2 / Figs. 6-7
 
+# Section VI.1: measured resonances (kHz) of tip 1 (Co-Cr) and tip 2 (Nanosensors), and tip 2's
+# geometry as supplied (h is the thickness; f1 its first free resonance, Hz).
+TIP1_CONTACT = ("407.95", "1075.020")
+TIP1_FREE = ("63.2", "368.33", "1031.70")
+TIP2_FREE = ("54.55", "346.73", "980.55")
+TIP2_GEOMETRY = {"h": "3e-6", "w": "24e-6", "L": "223e-6", "k": "2.4", "f1": "54.55e3"}
+
 EPSILON_0 = "8.8541878128e-12"
 """Vacuum permittivity, F/m (CODATA 2018)."""
 # Silicon, the material of the cantilevers in Table 1 (not given in the paper): the Young's
@@ -26,5 +33,7 @@ SILICON_DENSITY = "2330"        # kg/m**3
 SILICON_E = ("130e9", "188e9")  # Pa
 
 NUMERIC = {"TABLE1": TABLE1, "TIP_HEIGHT": TIP_HEIGHT, "CONTACT_K1": CONTACT_K1,
-           "D_EFF_FIG": D_EFF_FIG, "EPSILON_0": EPSILON_0, "SILICON_DENSITY": SILICON_DENSITY}
+           "D_EFF_FIG": D_EFF_FIG, "EPSILON_0": EPSILON_0, "SILICON_DENSITY": SILICON_DENSITY,
+           "TIP1_CONTACT_KHZ": TIP1_CONTACT, "TIP1_FREE_KHZ": TIP1_FREE, "TIP2_FREE_KHZ": TIP2_FREE,
+           "TIP2_GEOMETRY": TIP2_GEOMETRY}
 """The inputs numeric code uses, as written to ``generated/paper_inputs.py`` (as floats)."""

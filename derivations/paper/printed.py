@@ -14,7 +14,8 @@ import sympy as sp
 from ..beam import H, L, beta as b, d1, d2, f0, k, k1, k2, kappa, q0
 from ..sliding_friction import f_l
 from ..torsion import d3, f_lat, k2t, xi
-from .inputs import CONTACT_K1, D_EFF_FIG, K1_OVER_K2, TABLE1, TIP_HEIGHT  # noqa: F401 (P.TABLE1, ...)
+from .inputs import (CONTACT_K1, D_EFF_FIG, K1_OVER_K2, TABLE1, TIP1_CONTACT, TIP1_FREE,  # noqa: F401 (P.TABLE1, ...)
+                     TIP2_FREE, TIP2_GEOMETRY, TIP_HEIGHT)
 
 c, s, ch, sh = sp.cos(b), sp.sin(b), sp.cosh(b), sp.sinh(b)
 
@@ -98,14 +99,11 @@ lateral_ratio_value = "0.85"
 F_loc, A_el_pm = "1.4e-8", "14"              # N/V, pm/V (with k1 = 1000 N/m)
 
 # --- Section VI.1: measured resonances (kHz) and printed ratios ---------------------------------
-TIP1_CONTACT = ("407.95", "1075.020")
+# (the measured resonances and tip 2's geometry are inputs: derivations/paper/inputs.py)
 TIP1_CONTACT_RATIO, TIP1_CONTACT_THEORY = "2.63", "3.24"
-TIP1_FREE = ("63.2", "368.33", "1031.70")
 TIP1_FREE_RATIOS = ("5.83", "16.32")         # w2/w1, w3/w1
-TIP2_FREE = ("54.55", "346.73", "980.55")
 TIP2_FREE_RATIOS = ("6.35", "17.97")
 FREE_THEORY_RATIOS = ("6.23", "17.55")
-TIP2_GEOMETRY = {"h": "3e-6", "w": "24e-6", "L": "223e-6", "k": "2.4", "f1": "54.55e3"}
 
 # --- Section IV.1: cantilever (non-local) contribution ------------------------------------------
 eps0, S_area, V_ac, dV, w_c = sp.symbols("epsilon0 S V_ac DeltaV w", positive=True)

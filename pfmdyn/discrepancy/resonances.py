@@ -22,6 +22,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..generated import paper_inputs
 from ..io.tables import Metadata, ResonanceData
 from . import select
 from .report import report
@@ -216,12 +217,15 @@ def paper_tables() -> dict[str, ResonanceData]:
     the paper's h = 3 um is the thickness).  Tip height is not given: 10 um is assumed.
     Tip 2 has no contact resonances in the text, so only its free modes are tabulated.
     """
+    g = paper_inputs.TIP2_GEOMETRY
+
     def table(free, contact, sigma):
+        free, contact = list(free), list(contact)
         modes = list(range(1, len(free) + 1)) + list(range(1, len(contact) + 1))
         conds = ["free"] * len(free) + ["contact"] * len(contact)
-        meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, free[0] * 1e3, "Jesse et al. 2006, Section VI.1",
+        meta = Metadata(g["k"], g["L"], g["w"], 10e-6, free[0] * 1e3, "Jesse et al. 2006, Section VI.1",
                         sigma)
         return ResonanceData(meta, np.array(modes), np.array(conds), np.array(free + contact) * 1e3)
 
-    return {"tip 1": table([63.2, 368.33, 1031.70], [407.95, 1075.020], 300.0),
-            "tip 2": table([54.55, 346.73, 980.55], [], 100.0)}
+    return {"tip 1": table(paper_inputs.TIP1_FREE_KHZ, paper_inputs.TIP1_CONTACT_KHZ, 300.0),
+            "tip 2": table(paper_inputs.TIP2_FREE_KHZ, (), 100.0)}
