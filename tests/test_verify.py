@@ -11,8 +11,12 @@ import yaml
 from pfmdyn import cli, verify
 from pfmdyn.derivations.checks import core
 from pfmdyn.derivations.paper import printed as P
+from pfmdyn.derivations.paper import text
 
 SHARED = verify.shared_claims_path() or Path("/nonexistent/claims.yaml")
+# The text audit reads the paper's transcription beside the source tree; without it only the
+# registry's claims are computed.
+PAPER = text.paper_path()
 
 
 def _verdict(claim_id):
@@ -26,6 +30,8 @@ def all_verdicts():
 
 def test_every_registered_claim_has_a_recorded_verdict_equal_to_the_computed_one(all_verdicts):
     recorded = verify.load_recorded()
+    if PAPER is None:
+        recorded = {i: v for i, v in recorded.items() if i in core.REGISTRY}
     assert {v.id: v.verdict for v in all_verdicts} == recorded
 
 
@@ -35,6 +41,7 @@ def test_every_shared_claim_id_is_checked():
     assert set(ids) <= set(core.REGISTRY)
 
 
+@pytest.mark.skipif(PAPER is None, reason="the errata list holds the text audit's, which needs the paper")
 def test_committed_errata_list_is_up_to_date(all_verdicts):
     from pfmdyn import generated
     path = Path(generated.__file__).parent / "errata.md"

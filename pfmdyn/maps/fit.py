@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cantilever import Cantilever
+from ..generated import damping, elastic_contact
 
 __all__ = ["BeamMapModel", "fit_block", "QUANTITIES", "bands"]
 
@@ -76,11 +77,14 @@ class BeamMapModel:
         """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
         f = np.asarray(self.frequency_hz, float)
         beta1 = Cantilever(self.k, self.f1, self.L).beta(f)
-        loss = (1 - 1j / np.asarray(q, float)[:, None]) ** 0.25
-        from ..transfer import tip_slope_transfer
+        # Internal friction as derived (derivations/damping.py): the complex modulus E (1 + i/Q)
+        # turns beta**4 into beta**4 / (1 + i/Q) and, relative to EI, the contact springs into
+        # k / (1 + i/Q).
+        beta_factor, modulus, _, _ = damping.factors(1.0, 1.0 / np.asarray(q, float)[:, None], 0.0, 0.0)
         k2 = np.asarray(k2, float)
-        return tip_slope_transfer(beta1[None, :] * loss, k=self.k, k1=np.asarray(k1, float)[:, None],
-                                  k2=k2[:, None] if k2.ndim else k2, H=self.H, L=self.L).vertical
+        k2 = k2[:, None] if k2.ndim else k2
+        return elastic_contact.slope(beta1[None, :] * beta_factor, self.k,
+                                     np.asarray(k1, float)[:, None] / modulus, k2 / modulus, self.H, self.L)[0]
 
 
 def _project(g, y, band_list):
