@@ -46,19 +46,19 @@ def tan_phase_difference() -> sp.Expr:
 
 
 def phase_difference_series(small: str, order: int = 3) -> sp.Expr:
-    """Phase difference ``arg(PR-) - arg(PR+)`` (mod 2 pi) to first order in the small ratio.
+    """Phase difference ``arg(PR+) - arg(PR-)`` (mod 2 pi, the module's convention) to first order.
 
     ``small="electrostatic"``: epsilon = d_el/d_eff; ``PR+/PR- = -(1 + z)/(1 - z)`` with
     ``z = epsilon e^(i psi)``.  Otherwise epsilon = d_eff/d_el and ``PR+/PR- = (1 + z)/(1 - z)``
     with ``z = epsilon e^(-i psi)``.  ``Im log((1 + z)/(1 - z))`` is expanded term by term.
 
     >>> phase_difference_series("electrostatic"), phase_difference_series("piezoelectric")
-    (-2*epsilon*sin(psi) + pi, 2*epsilon*sin(psi))
+    (2*epsilon*sin(psi) + pi, -2*epsilon*sin(psi))
     """
     z = eps * sp.exp(sp.I * psi) if small == "electrostatic" else eps * sp.exp(-sp.I * psi)
     log_ratio = sp.series(sp.log((1 + z) / (1 - z)), eps, 0, order).removeO()
     im = sp.simplify(sp.im(sp.expand_complex(sp.expand(log_ratio))))
-    return sp.expand(sp.pi - im) if small == "electrostatic" else sp.expand(-im)
+    return sp.expand(sp.pi + im) if small == "electrostatic" else sp.expand(im)
 
 
 def linear_fit_in_bias() -> tuple[sp.Expr, sp.Expr]:

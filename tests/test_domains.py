@@ -125,3 +125,17 @@ def test_printed_small_piezo_phase_is_the_correct_limit_times_cos_over_one_plus_
     correct = domains.phase_difference_small_piezo(1e-3, 1.0, PSI_GENERIC)
     np.testing.assert_allclose(printed / correct, np.cos(PSI_GENERIC) / (1 + np.sin(PSI_GENERIC) ** 2), rtol=1e-12)
     assert np.max(np.abs(printed - domains.phase_difference(1e-3, 1.0, PSI_GENERIC))) > 1e-3
+
+
+@pytest.mark.parametrize("small", ["electrostatic", "piezoelectric"])
+def test_one_phase_convention_in_derivation_and_numeric_code(small):
+    """The derived series and the numeric leading-order forms both mean arg PR+ - arg PR-."""
+    from pfmdyn.derivations import domain_contrast as dc
+    d_eff, d_el, psi = (1.0, 0.01, 0.7) if small == "electrostatic" else (0.01, 1.0, 0.7)
+    eps = d_el / d_eff if small == "electrostatic" else d_eff / d_el
+    derived = float(dc.phase_difference_series(small).subs({dc.eps: eps, dc.psi: psi}))
+    numeric = (domains.phase_difference_small_electrostatic if small == "electrostatic"
+               else domains.phase_difference_small_piezo)(d_eff, d_el, psi)
+    exact = domains.phase_difference(d_eff, d_el, psi)
+    for value in (numeric, exact):
+        assert abs(np.angle(np.exp(1j * (derived - value)))) < 1e-4

@@ -206,7 +206,7 @@ def _small_limit(small: str, printed_amp, printed_phase, big, tiny):
         compare(pr_phase, phase).is_(1)
     ratio = tiny / big
     evidence = (f"first order in {ratio}: |PR+| = {first_order} (printed, phi read as psi: {amp_ok}); "
-                f"phase difference arg PR- - arg PR+ = {phase} + O(({ratio})^3); printed {sp.sstr(pr_phase)}")
+                f"phase difference arg PR+ - arg PR- = {phase} + O(({ratio})^3) (mod 2 pi); printed {sp.sstr(pr_phase)}")
     if amp_ok and phase_ok:
         return HOLDS, evidence, ""
     return ERRATUM, evidence, f"|PR+-| = {first_order.subs(sp.cos(dc.psi), sp.Symbol('cos(psi)'))} (+- on the second term), Delta phi = {phase}"
