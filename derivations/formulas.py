@@ -12,6 +12,7 @@ from functools import lru_cache
 import sympy as sp
 
 from . import contact_mechanics as cm
+from . import domain_contrast as dc
 from .beam import EI, L, beta, f0, k
 from .free_end import solve as solve_free_end
 
@@ -91,4 +92,34 @@ def formulas() -> tuple[Formula, ...]:
         Formula("mindlin_k2_over_k1", (cm.nu,), sp.factor(1 / cm.mindlin_ratio()),
                 "k2/k1 of a rigid sphere on an isotropic sample (Hertz normal, Mindlin tangential)",
                 "derivations/contact_mechanics.py: mindlin_ratio()"),
+        *_domain_contrast(),
+    )
+
+
+def _domain_contrast() -> tuple[Formula, ...]:
+    """|PR+-|, arg PR+ - arg PR- and their leading orders (Section IV.3), any real signs.
+
+    The derivation's symbols are positive; the numeric functions take any real d_eff, d_el,
+    so the arguments here are real symbols substituted in.
+    """
+    d, e, p = sp.symbols("d_eff d_el psi", real=True)
+    real = {dc.d_eff: d, dc.d_el: e, dc.psi: p}
+    plus, minus = (sp.sqrt(a.subs(real)) for a in dc.amplitudes_squared())
+    pr_plus, pr_minus = (r.subs(real) for r in dc.responses())
+    product = sp.expand(sp.expand_complex(pr_plus * sp.conjugate(pr_minus)))
+    phase = sp.atan2(sp.trigsimp(sp.im(product)), sp.trigsimp(sp.re(product)))
+    small_el = dc.phase_difference_series("electrostatic").subs(dc.psi, p).subs(dc.eps, e / d)
+    small_piezo = dc.phase_difference_series("piezoelectric").subs(dc.psi, p).subs(dc.eps, d / e)
+    source = "derivations/domain_contrast.py"
+    return (
+        Formula("domain_amplitude_plus", (d, e, p), plus, "|PR+| over the c+ domain", f"{source}: amplitudes_squared()"),
+        Formula("domain_amplitude_minus", (d, e, p), minus, "|PR-| over the c- domain", f"{source}: amplitudes_squared()"),
+        Formula("domain_phase_difference", (d, e, p), phase,
+                "arg PR+ - arg PR- in (-pi, pi], the argument of PR+ conj(PR-)", f"{source}: responses()"),
+        Formula("domain_phase_difference_small_electrostatic", (d, e, p), small_el,
+                "leading order of arg PR+ - arg PR- for |d_el| << |d_eff| (before wrapping to (-pi, pi])",
+                f"{source}: phase_difference_series('electrostatic')"),
+        Formula("domain_phase_difference_small_piezo", (d, e, p), small_piezo,
+                "leading order of arg PR+ - arg PR- for |d_eff| << |d_el|",
+                f"{source}: phase_difference_series('piezoelectric')"),
     )

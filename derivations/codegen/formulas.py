@@ -21,12 +21,15 @@ def render() -> str:
     """Source text of ``generated/formulas.py``."""
     items = formulas()
     printer = _Printer({"fully_qualified_modules": False})
+    bodies = [printer.doprint(f.expr) for f in items]
+    # The NumPy names the bodies use, as the printer recorded them.
+    names = ", ".join(sorted(set().union(*printer.module_imports.values())))
     out = [header("derivations/formulas.py: formulas()", source_hash([f.expr for f in items])),
            '''"""Closed-form relations (SI), vectorised over NumPy arrays; see derivations/formulas.py."""
-from numpy import pi, sqrt
+from numpy import ''' + names + '''
 
 __all__ = ''' + repr(sorted(f.name for f in items)) + "\n"]
-    for f in items:
+    for f, body in zip(items, bodies):
         args = ", ".join(map(str, f.arguments))
         out.append(f'''
 
@@ -35,6 +38,6 @@ def {f.name}({args}):
 
     ``{sp.sstr(f.expr)}``, from {f.source}.
     """
-    return {printer.doprint(f.expr)}
+    return {body}
 ''')
     return "".join(out)

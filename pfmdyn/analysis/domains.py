@@ -37,6 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..generated import formulas
+
 
 def electrostatic_amplitude(g_elec, v_dc, v_av):
     """Electrostatic term :math:`d_{el} = G_{elec}(V_{dc} - V_{av})` of Eqs. 37-38.
@@ -110,8 +112,7 @@ def domain_amplitudes(d_eff, d_el, psi):
     [5.0, 5.0]
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    in_phase, quadrature = d_el * np.cos(psi), d_el * np.sin(psi)
-    return np.hypot(d_eff + in_phase, quadrature), np.hypot(-d_eff + in_phase, quadrature)
+    return formulas.domain_amplitude_plus(d_eff, d_el, psi), formulas.domain_amplitude_minus(d_eff, d_el, psi)
 
 
 def _half_open(angle):
@@ -148,7 +149,7 @@ def phase_difference(d_eff, d_el, psi):
     0.0
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return _half_open(np.arctan2(-2.0 * d_el * d_eff * np.sin(psi), d_el**2 - d_eff**2))
+    return _half_open(formulas.domain_phase_difference(d_eff, d_el, psi))
 
 
 def amplitudes_small_electrostatic(d_eff, d_el, psi):
@@ -202,8 +203,8 @@ def phase_difference_small_electrostatic(d_eff, d_el, psi):
     >>> round(float(phase_difference_small_electrostatic(1.0, -0.01, np.pi / 2)), 6)
     3.121593
     """
-    ratio = np.asarray(d_el) / np.asarray(d_eff)
-    return _wrap(np.pi + 2.0 * ratio * np.sin(np.asarray(psi, dtype=float)))
+    return _wrap(formulas.domain_phase_difference_small_electrostatic(
+        np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)))
 
 
 def amplitudes_small_piezo(d_eff, d_el, psi):
@@ -253,8 +254,8 @@ def phase_difference_small_piezo(d_eff, d_el, psi):
     >>> float(phase_difference_small_piezo(0.01, 1.0, np.pi / 2))
     -0.02
     """
-    ratio = np.asarray(d_eff) / np.asarray(d_el)
-    return -2.0 * ratio * np.sin(np.asarray(psi, dtype=float))
+    return formulas.domain_phase_difference_small_piezo(np.asarray(d_eff), np.asarray(d_el),
+                                                        np.asarray(psi, dtype=float))
 
 
 def paper_eq39_amplitudes(d_eff, d_el, phi):
