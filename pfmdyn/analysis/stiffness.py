@@ -49,7 +49,7 @@ from ..generated.characteristic import BETA1_FREE, elastic
 
 __all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
            "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "k1_k2_from_modes",
-           "branch_proof", "mindlin_k2_over_k1", "reduced_modulus"]
+           "branch_proof", "mindlin_k2_over_k1", "reduced_modulus", "reduced_modulus_uncertainty"]
 
 _STEP = 1e-30      # complex step: exact first derivatives, no cancellation
 
@@ -469,3 +469,20 @@ def reduced_modulus(k1, tip_radius_m, load_n):
     if np.any(r <= 0) or np.any(p <= 0):
         raise UserError("tip radius and load must be positive (m, N)")
     return formulas.reduced_modulus(k1, r, p)
+
+
+def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius_m, load_n):
+    """Standard uncertainty of :func:`reduced_modulus` from that of k1 (R and P taken as exact).
+
+    The slope dE*/dk1 is the complex-step derivative of the generated Hertz inversion, so it
+    follows whatever that relation is.
+
+    >>> e, de = reduced_modulus(100.0, 25e-9, 100e-9), reduced_modulus_uncertainty(100.0, 1.0, 25e-9, 100e-9)
+    >>> round(float(de / e), 6)   # E* ~ k1**(3/2): 1.5 % per 1 % of k1
+    0.015
+    """
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    reduced_modulus(k1, r, p)                       # same input checks
+    h = 1e-20 * np.maximum(np.abs(k1), 1.0)
+    slope = np.imag(formulas.reduced_modulus(k1 + 1j * h, r, p)) / h
+    return np.abs(slope) * np.asarray(k1_uncertainty, dtype=float)

@@ -137,7 +137,8 @@ def _coupling(args) -> float | None:
 
 def run(args) -> int:
     """Compute k1 (and k2), print them with the branch proof, write JSON if asked."""
-    from ..analysis.stiffness import coupled_contact_stiffness, contact_stiffness, k1_k2_from_modes, reduced_modulus
+    from ..analysis.stiffness import (coupled_contact_stiffness, contact_stiffness, k1_k2_from_modes, reduced_modulus,
+                                      reduced_modulus_uncertainty)
     from .inspect import write_json
 
     inputs = gather(args)
@@ -176,7 +177,9 @@ def run(args) -> int:
            "k1_n_per_m": k1, "k1_uncertainty_n_per_m": dk1, "k1_over_k": k1 / k,
            "k2_ratio": k2_ratio, "k2_ratio_uncertainty": dk2,
            "branch_proof": [p.text() for p in proofs] or [coupled_note]}
-    lines = [f"k1 = {k1:.6g} +/- {dk1:.2g} N/m  (k1/k = {k1 / k:.6g})",
+    # Without frequency or spring-constant uncertainties there is nothing to propagate.
+    spread = f" +/- {dk1:.2g}" if dk1 > 0 else " (no uncertainty given: --contact-uncertainty, --free-uncertainty)"
+    lines = [f"k1 = {k1:.6g}{spread} N/m  (k1/k = {k1 / k:.6g})",
              f"k2 H^2/(k L^2) = {k2_ratio:.6g}" + (f" +/- {dk2:.2g}" if len(proofs) > 1 else
                                                   " (held fixed)" if proofs else " (follows k1)")]
     if inputs["L"] and inputs["H"]:
@@ -187,7 +190,7 @@ def run(args) -> int:
         if radius is None or load is None:
             raise UserError("--reduced-modulus needs --tip-radius (m) and --load (N)")
         e_star = float(reduced_modulus(k1, radius, load))
-        out.update(reduced_modulus_pa=e_star, reduced_modulus_uncertainty_pa=1.5 * e_star * dk1 / k1,
+        out.update(reduced_modulus_pa=e_star, reduced_modulus_uncertainty_pa=float(reduced_modulus_uncertainty(k1, dk1, radius, load)),
                    tip_radius_m=radius, load_n=load)
         lines.append(f"E* = {e_star:.6g} +/- {out['reduced_modulus_uncertainty_pa']:.2g} Pa  (Hertz, R = {radius:g} m, P = {load:g} N)")
     lines.extend("branch proof, " + text for text in out["branch_proof"])
