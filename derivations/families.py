@@ -116,7 +116,7 @@ PARAMETER_HELP = {
     "kll": "longitudinal contact stiffness in beam axes (N/m)",
     "kvl": "vertical-longitudinal coupling stiffness in beam axes (N/m)",
     "gamma": "tip position over cantilever length, 0 < gamma <= 1",
-    "k2t": "lateral contact stiffness (N/m)",
+    "k2t": "lateral contact stiffness over the torsional rigidity, H k2 / c_T (1/m**2)",
     "k1_over_k": "k1/k: vertical contact stiffness over the cantilever spring constant",
     "k2_ratio": "k2 H^2/(k L^2): longitudinal contact stiffness seen through the lever arm H",
     "k2t_HL": "H^2 k2 L/c_T: lateral contact stiffness over the torsional stiffness",

@@ -111,6 +111,16 @@ def _domain_contrast() -> tuple[Formula, ...]:
     small_el = dc.phase_difference_series("electrostatic").subs(dc.psi, p).subs(dc.eps, e / d)
     small_piezo = dc.phase_difference_series("piezoelectric").subs(dc.psi, p).subs(dc.eps, d / e)
     source = "derivations/domain_contrast.py"
+    # Leading-order amplitudes, for d_eff > 0 (small electrostatic part) or d_el > 0 (small
+    # piezoresponse); numeric code reaches other signs by PR -> -PR, which keeps |PR|.
+    leading = []
+    for name, small, regime in (("electrostatic", "electrostatic", "|d_el| << d_eff (d_eff > 0)"),
+                                ("piezo", "piezoelectric", "|d_eff| << d_el (d_el > 0)")):
+        for sign, amplitude in zip("+-", dc.amplitude_series(small)):
+            leading.append(Formula(
+                f"domain_amplitude_{'plus' if sign == '+' else 'minus'}_small_{name}", (d, e, p),
+                amplitude.subs(real), f"leading order of |PR{sign}| for {regime}",
+                f"{source}: amplitude_series('{small}')"))
     return (
         Formula("domain_amplitude_plus", (d, e, p), plus, "|PR+| over the c+ domain", f"{source}: amplitudes_squared()"),
         Formula("domain_amplitude_minus", (d, e, p), minus, "|PR-| over the c- domain", f"{source}: amplitudes_squared()"),
@@ -122,4 +132,5 @@ def _domain_contrast() -> tuple[Formula, ...]:
         Formula("domain_phase_difference_small_piezo", (d, e, p), small_piezo,
                 "leading order of arg PR+ - arg PR- for |d_eff| << |d_el|",
                 f"{source}: phase_difference_series('piezoelectric')"),
+        *leading,
     )

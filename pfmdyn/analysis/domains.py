@@ -22,9 +22,9 @@ the half-open interval :math:`(-\\pi, \\pi]` (so a pure piezoresponse gives exac
 
 Two families of functions are provided:
 
-* exact results and the correct leading-order limits (derived by hand from the line above;
-  ``tests/test_domains.py`` checks them against complex arithmetic and checks the order of
-  their error);
+* exact results and the correct leading-order limits, generated from
+  ``derivations/domain_contrast.py`` (``generated/formulas.py``); ``tests/test_domains.py``
+  checks them against complex arithmetic and checks the order of their error;
 * ``paper_*`` functions returning the paper's formulas **as printed, see the errata**, kept
   only so that the printed and the correct forms can be compared.
 
@@ -175,8 +175,10 @@ def amplitudes_small_electrostatic(d_eff, d_el, psi):
     [1.01, 0.99]
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    shift = np.sign(d_eff) * d_el * np.cos(psi)
-    return np.abs(d_eff) + shift, np.abs(d_eff) - shift
+    # Derived for d_eff > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
+    args = (np.abs(d_eff), np.sign(d_eff) * d_el, psi)
+    return (formulas.domain_amplitude_plus_small_electrostatic(*args),
+            formulas.domain_amplitude_minus_small_electrostatic(*args))
 
 
 def phase_difference_small_electrostatic(d_eff, d_el, psi):
@@ -229,8 +231,9 @@ def amplitudes_small_piezo(d_eff, d_el, psi):
     [0.99, 1.01]
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    shift = np.sign(d_el) * d_eff * np.cos(psi)
-    return np.abs(d_el) + shift, np.abs(d_el) - shift
+    # Derived for d_el > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
+    args = (np.sign(d_el) * d_eff, np.abs(d_el), psi)
+    return formulas.domain_amplitude_plus_small_piezo(*args), formulas.domain_amplitude_minus_small_piezo(*args)
 
 
 def phase_difference_small_piezo(d_eff, d_el, psi):
