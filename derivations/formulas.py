@@ -15,6 +15,7 @@ from . import contact_mechanics as cm
 from . import domain_contrast as dc
 from .beam import EI, L, beta, f0, k
 from .free_end import solve as solve_free_end
+from .paper import printed as P
 
 __all__ = ["Formula", "formulas"]
 
@@ -93,6 +94,7 @@ def formulas() -> tuple[Formula, ...]:
                 "k2/k1 of a rigid sphere on an isotropic sample (Hertz normal, Mindlin tangential)",
                 "derivations/contact_mechanics.py: mindlin_ratio()"),
         *_domain_contrast(),
+        *_domain_contrast_printed(),
     )
 
 
@@ -133,4 +135,31 @@ def _domain_contrast() -> tuple[Formula, ...]:
                 "leading order of arg PR+ - arg PR- for |d_eff| << |d_el|",
                 f"{source}: phase_difference_series('piezoelectric')"),
         *leading,
+    )
+
+
+def _domain_contrast_printed() -> tuple[Formula, ...]:
+    """The paper's Eqs. 39-40 and its small-piezoresponse phase as printed (see the errata),
+    from their one transcription in ``derivations/paper/printed.py``, for comparison only.
+
+    Eq. 39's phase takes ``PR+-`` as given (the paper leaves open whether they are
+    amplitudes or signed responses), so they are arguments of their own there.
+    """
+    d, e, p, phi = sp.symbols("d_eff d_el psi phi", real=True)
+    pr_plus, pr_minus = sp.symbols("pr_plus pr_minus", real=True)
+    real = {P.d_eff: d, P.d_el: e, P.psi: p, P.phi: phi}
+    tan_phase = P.tan_phase.xreplace({P.PR_plus_amp: pr_plus, P.PR_minus_amp: pr_minus}).subs(real)
+    source = "derivations/paper/printed.py"
+    return (
+        Formula("paper_eq39_amplitude_plus", (d, e, phi), P.PR_plus_amp.subs(real),
+                "|PR+| of Eq. 39 as printed (an erratum: the cross term lacks a factor 2)", f"{source}: PR_plus_amp"),
+        Formula("paper_eq39_amplitude_minus", (d, e, phi), P.PR_minus_amp.subs(real),
+                "|PR-| of Eq. 39 as printed (an erratum)", f"{source}: PR_minus_amp"),
+        Formula("paper_eq39_tan_phase", (e, p, pr_plus, pr_minus), tan_phase,
+                "tan of the phase shift of Eq. 39 as printed (an erratum), PR+- as given", f"{source}: tan_phase"),
+        Formula("paper_eq40_phase_difference", (d, e, p), P.small_el_phase.subs(real),
+                "small-electrostatic phase difference of Eq. 40 as printed (an erratum)", f"{source}: small_el_phase"),
+        Formula("paper_small_piezo_phase_difference", (d, e, p), P.small_piezo_phase.subs(real),
+                "small-piezoresponse phase difference of Section IV.3 as printed (an erratum)",
+                f"{source}: small_piezo_phase"),
     )

@@ -128,8 +128,8 @@ def counts_table() -> "HTML":
 
 # --- display helpers for the chapters ---------------------------------------------------------
 
-_BADGE = {"holds": "holds", "holds_up_to_sign_convention": "sign convention",
-          "erratum": "erratum", "undecidable": "undecidable"}
+_BADGE = {"holds_up_to_sign_convention": "sign convention"}
+"""Badge labels that differ from the verdict's name."""
 
 
 def _badge(verdict: str) -> str:
