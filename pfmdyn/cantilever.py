@@ -109,18 +109,18 @@ _OWN = ("k", "L")
 def _response_method(row):
     """``Cantilever.<row.method>``: the family's transfer at frequencies in Hz, with losses."""
     extra = [p for p in row.parameters if p not in _OWN]
-    options = [inspect.Parameter("output", inspect.Parameter.KEYWORD_ONLY, default="slope")
-               if "deflection" in row.outputs else None]
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    displacement = "deflection" in row.outputs   # then ``output`` chooses slope or displacement
     signature = inspect.Signature(
-        [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
-         inspect.Parameter("frequency", inspect.Parameter.POSITIONAL_OR_KEYWORD)]
-        + [inspect.Parameter(p, inspect.Parameter.KEYWORD_ONLY) for p in extra]
-        + [o for o in options if o], return_annotation=f"transfer.{row.result}")
+        [inspect.Parameter(p, inspect.Parameter.POSITIONAL_OR_KEYWORD) for p in ("self", "frequency")]
+        + [inspect.Parameter(p, keyword) for p in extra]
+        + ([inspect.Parameter("output", keyword, default="slope")] if displacement else []),
+        return_annotation=f"transfer.{row.result}")
 
     def response(self, frequency, **kwargs):
         given = signature.bind(self, frequency, **kwargs).arguments
         beta, k = self._damped(frequency)
-        values = {p: transfer._parameter(p, given[p], zero_ok=p in transfer._ZERO_OK) for p in extra}
+        values = transfer.check_parameters({p: given[p] for p in extra})
         return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
                                  given.get("output"))
 
@@ -129,7 +129,7 @@ def _response_method(row):
     response.__name__ = row.method
     response.__qualname__ = f"Cantilever.{row.method}"
     response.__signature__ = signature
-    response.__doc__ = f"""Tip {'slope' if not options[0] else 'slope or deflection'} per unit {', '.join(row.drives)} \
+    response.__doc__ = f"""Tip {'slope or displacement' if displacement else 'slope'} per unit {', '.join(row.drives)} \
 ({row.equations}) at ``frequency`` in Hz.
 
     :func:`pfmdyn.transfer.{row.function}` at this cantilever's ``beta`` and ``k`` with

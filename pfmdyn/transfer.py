@@ -135,11 +135,19 @@ def evaluate(family: str, beta, values: dict, output: str | None = None) -> tupl
     return globals()[row.result](*fn(beta, *(values[p] for p in row.parameters)))
 
 
+def check_parameters(values: dict) -> dict:
+    """Each named parameter as a float array, or the wrappers' one-line error (contact
+    stiffnesses may vanish, every other parameter must be positive).
+
+    >>> check_parameters({"k1": 0.0, "L": 2e-4})
+    {'k1': array(0.), 'L': array(0.0002)}
+    """
+    return {p: _parameter(p, v, zero_ok=p in _ZERO_OK) for p, v in values.items()}
+
+
 def _checked(family: str, beta, output: str | None = None, *, frequency: str = "beta", **values) -> tuple:
-    """Validate ``beta`` and every parameter (one-line errors), then :func:`evaluate`."""
-    beta = _frequency(frequency, beta)
-    return evaluate(family, beta, {p: _parameter(p, v, zero_ok=p in _ZERO_OK) for p, v in values.items()},
-                    output)
+    """Validate ``beta`` and every parameter, then :func:`evaluate`."""
+    return evaluate(family, _frequency(frequency, beta), check_parameters(values), output)
 
 
 def tip_slope_transfer(beta, *, k, k1, k2, H, L) -> ElasticTransfer:
