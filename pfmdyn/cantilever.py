@@ -84,6 +84,9 @@ class Cantilever:
     def beta(self, frequency) -> np.ndarray:
         """Dimensionless frequency ``beta`` (complex) for frequencies in Hz (> 0).
 
+        ``beta = BETA1_FREE sqrt(f / f1) (1 + i/Q)**(-1/4)``: the internal friction's
+        substitution (``generated/damping.py``); the spring constant becomes ``k (1 + i/Q)``.
+
         >>> c = Cantilever(1.0, 1e5, 1e-4)
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
         3.750208
