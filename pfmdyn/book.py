@@ -16,6 +16,7 @@ import hashlib
 import html
 import json
 import os
+import re
 import sys
 import tempfile
 import time
@@ -186,7 +187,7 @@ def family_table(page: str) -> "HTML":
         roots = " / ".join(n for n in (f.roots, f.branch and f"{f.branch} ({f.figure})") if n)
         cells = (f"<code>generated/{f.module}.py</code> ({html.escape(f.equations)})",
                  f"<code>{html.escape(f.source)}</code>", html.escape(", ".join(f.drives)),
-                 html.escape(params), "<br>".join(f"<code>{n}</code>" for n in python),
+                 re.sub(r"\*\*(\d+)", r"<sup>\1</sup>", html.escape(params)), "<br>".join(f"<code>{n}</code>" for n in python),
                  html.escape(roots or "—"))
         out.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     out.append("</tbody></table>")
