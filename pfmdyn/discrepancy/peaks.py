@@ -181,9 +181,11 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
             res = least_squares(lambda s: on_peaks(np.concatenate([s, g[n_springs:]])), g[:n_springs],
                                 bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=15)
             matched.append((2 * res.cost, np.concatenate([res.x, g[n_springs:]])))
-    matched.sort(key=lambda t: t[0])
+    # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
+    exact = sorted((x for r, x in matched if r < 1e-6), key=cost)
+    rest = [x for _, x in sorted((t for t in matched if t[0] >= 1e-6), key=lambda t: t[0])]
     starts = []
-    for _, x in matched[:joint]:
+    for x in (exact + rest)[:joint]:
         if len(x) > n_springs:
             x = least_squares(on_peaks, x, bounds=(lower, upper), diff_step=1e-6, max_nfev=20).x
         if not any(np.allclose(x, s, atol=1e-3) for s in starts):
@@ -200,23 +202,28 @@ def _along_matches(x, on_peaks, cost, n_springs, lower, upper) -> np.ndarray:
     moved by a fraction of its width) an undamped spectrum's misfit is a needle.
     """
     j = len(x) - 1
-    state = {"springs": x[:n_springs]}
+    seen = {float(x[j]): x[:n_springs]}       # springs matched so far, by parameter value
 
     def matched(v):
         y = x.copy()
         y[j] = v
-        res = least_squares(lambda s: on_peaks(np.concatenate([s, y[n_springs:]])), state["springs"],
-                            bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=10)
-        y[:n_springs] = res.x
+        near = seen[min(seen, key=lambda u: abs(u - v))]
+        res = least_squares(lambda s: on_peaks(np.concatenate([s, y[n_springs:]])), near,
+                            bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=20)
+        y[:n_springs] = seen[float(v)] = res.x
         return y
 
     def along(v):
-        y = matched(v)
-        state["springs"] = y[:n_springs]
-        return cost(y)
+        return cost(matched(v))
 
-    reach = 0.25 * (upper[j] - lower[j])
-    span = (max(lower[j], x[j] - reach), min(upper[j], x[j] + reach))
-    res = minimize_scalar(along, bounds=span, method="bounded", options={"xatol": 1e-4 * (upper[j] - lower[j])})
-    y = matched(res.x)
+    # A scan outward from the start (each match continues from its neighbour), then Brent
+    # between the best point's neighbours.
+    reach = 0.3 * (upper[j] - lower[j])
+    grid = np.linspace(max(lower[j], x[j] - reach), min(upper[j], x[j] + reach), 25)
+    order = sorted(range(len(grid)), key=lambda i: abs(grid[i] - x[j]))
+    values = {i: along(grid[i]) for i in order}
+    i = min(values, key=values.get)
+    span = (grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)])
+    res = minimize_scalar(along, bounds=span, method="bounded", options={"xatol": 1e-5 * (upper[j] - lower[j])})
+    y = min((matched(res.x), matched(grid[i])), key=cost)
     return y if cost(y) < cost(x) else x
