@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 import re
 
+from .record import FIELDS, si_value
+
 __all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit"]
 
 NOTE_KEYS = {
@@ -59,18 +61,35 @@ def _number(value) -> float | None:
     return number if math.isfinite(number) else None
 
 
-def cantilever_fields(note: dict) -> dict:
-    """pfmdyn fields (SI) found in an Asylum note (values as strings or numbers).
+def cantilever_fields(note: dict) -> tuple[dict, list[str]]:
+    """pfmdyn fields (SI) found in an Asylum note, and a line for each value not understood.
+
+    Values are numbers in SI (as Asylum writes them) or text with a unit, prefixed or not
+    (``'300 kHz'``).  NaN means never measured; a unit of the wrong kind is reported.
 
     >>> cantilever_fields({"SpringConstant": "0.46538", "ThermalQ": "NaN", "TipVoltage": 3})
-    {'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}
+    ({'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}, [])
+    >>> cantilever_fields({"DriveFrequency": "300 kHz", "CustomLeverLength": "225 furlong"})
+    ({'drive_frequency_hz': 300000.0}, ["CustomLeverLength '225 furlong' not understood as m: lever length left out"])
     """
-    found = {}
+    found, problems = {}, []
     for name, key in NOTE_KEYS.items():
-        value = _number(note.get(key))
-        if value is not None:
-            found[name] = value
-    return found
+        value = note.get(key)
+        if value is None:
+            continue
+        if hasattr(value, "item") and getattr(value, "size", 1) == 1:
+            value = value.item()         # HDF5 attributes come as NumPy scalars
+        if isinstance(value, bytes):
+            value = value.decode("utf-8", "replace")
+        number = _number(value)
+        if number is None and isinstance(value, str) and value.strip().lower() not in ("nan", ""):
+            number = si_value(value, FIELDS[name][1])
+            if number is None:
+                problems.append(f"{key} {value.strip()!r} not understood as {FIELDS[name][1] or 'a number'}: "
+                                f"{FIELDS[name][0]} left out")
+        if number is not None and math.isfinite(number):
+            found[name] = number
+    return found, problems
 
 
 def channel_name(label: str) -> str:

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import Channel, InstrumentRecord, make_record
+from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_unit
 
 __all__ = ["read_hdf5"]
 
@@ -58,20 +60,55 @@ def _is_main(base: str, dataset) -> bool:
     return base == "Raw_Data" or ("quantity" in dataset.attrs and "units" in dataset.attrs)
 
 
-def _spectroscopic_hz(h5, dataset) -> bool:
-    """True when a USID main dataset has a spectroscopic dimension in Hz."""
+def _frequency_axis(h5, dataset):
+    """(frequency in Hz, its dimension) of a main dataset, or None when no dimension is a frequency.
+
+    USID: a row of ``Spectroscopic_Values`` whose unit is a frequency (the last dimension);
+    NSID: a dimension scale whose ``units`` is a frequency.  Any SI prefix (kHz, MHz).
+    """
     ref = dataset.attrs.get("Spectroscopic_Values")
-    if ref is None:
-        return False
+    if ref is not None:
+        try:
+            table = h5[ref]
+        except (KeyError, ValueError, TypeError):
+            return None
+        units = [_text(u) for u in np.ravel(table.attrs.get("units", []))]
+        for row, unit in enumerate(units):
+            converted = si_unit(unit)
+            if converted and converted[0] == "Hz":
+                values = np.asarray(table[row if table.ndim > 1 else slice(None)]).ravel()
+                # Several spectroscopic dimensions repeat the frequencies: keep one cycle.
+                return np.unique(values) * converted[1], dataset.ndim - 1
+        return None
+    for dim in range(dataset.ndim):
+        for scale in dataset.dims[dim].values():
+            converted = si_unit(_text(scale.attrs.get("units", "")))
+            if converted and converted[0] == "Hz" and scale.shape == (dataset.shape[dim],):
+                return np.asarray(scale[()], dtype=float) * converted[1], dim
+    return None
+
+
+def _spectroscopic_size(h5, dataset) -> int:
+    ref = dataset.attrs.get("Spectroscopic_Values")
     try:
-        units = h5[ref].attrs.get("units", [])
+        return int(h5[ref].shape[-1]) if ref is not None else 0
     except (KeyError, ValueError, TypeError):
-        return False
-    return any(_text(u) == "Hz" for u in (units if hasattr(units, "__iter__") and not isinstance(units, (str, bytes)) else [units]))
+        return 0
+
+
+def _names(mains) -> list[str]:
+    """Channel names: the ``quantity`` of each dataset, with the dataset's name when two share one."""
+    quantities = [_text(d.attrs.get("quantity", "")) or name.rsplit("/", 1)[-1] for name, d in mains]
+    return [q if quantities.count(q) == 1 else f"{q} ({name.rsplit('/', 1)[-1]})"
+            for q, (name, _) in zip(quantities, mains)]
 
 
 def read_hdf5(path) -> InstrumentRecord:
-    """Read an NSID or USID ``.h5`` file: main datasets as channels, cantilever fields found."""
+    """Read an NSID or USID ``.h5`` file: main datasets as channels, cantilever fields found.
+
+    A dataset with a frequency dimension is a spectrum; a single one (one position) is
+    returned in SI as the record's ``spectrum``.
+    """
     path = Path(path)
     try:
         import h5py
@@ -86,21 +123,33 @@ def read_hdf5(path) -> InstrumentRecord:
         if not mains:
             raise UserError(f"{path}: no pycroscopy dataset found (expected NSID/USID groups "
                             "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units')")
-        channels, kinds = [], set()
-        for name, dataset in mains:
-            quantity = _text(dataset.attrs.get("quantity", name.rsplit("/", 1)[-1]))
-            channels.append(Channel(quantity, _text(dataset.attrs.get("units", "")), tuple(dataset.shape)))
+        channels, kinds, notes, spectra = [], set(), [], []
+        for label, (name, dataset) in zip(_names(mains), mains):
+            unit = _text(dataset.attrs.get("units", ""))
+            channels.append(make_channel(label, unit, dataset.shape))
             data_type = _text(dataset.attrs.get("data_type", "")).upper()
-            if data_type == "IMAGE" or (data_type == "" and dataset.ndim == 2 and "Spectroscopic_Values" not in dataset.attrs):
-                kinds.add("image")
-            elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE") or _spectroscopic_hz(h5, dataset):
+            axis = _frequency_axis(h5, dataset)
+            if axis is not None and data_type not in ("IMAGE", "IMAGE_STACK"):
                 kinds.add("spectrum")
+                frequency, dim = axis
+                points = dataset.size // max(len(frequency), 1)
+                if points == 1:
+                    spectra.append(si_spectrum(path, frequency, "Hz", np.ravel(dataset[()]), unit))
+                else:
+                    notes.append(f"{label}: a spectrum of {len(frequency)} frequencies ({frequency.min():.6g} "
+                                 f"to {frequency.max():.6g} Hz) at each of {points} positions")
+            elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE"):
+                kinds.add("spectrum")
+                notes.append(f"{label}: its spectral dimension has no frequency unit")
+            elif data_type == "" and _spectroscopic_size(h5, dataset) > 1:
+                kinds.add("curve")          # USID curves against bias, time, ... (not a frequency)
             else:
                 kinds.add("image")
         convention = "NSID" if any("data_type" in d.attrs for _, d in mains) else "USID"
-    found = asylum.cantilever_fields(metadata)
+    found, problems = asylum.cantilever_fields(metadata)
     for key in _BE_DRIVE:
         if key in metadata and "drive_frequency_hz" not in found:
             found["drive_frequency_hz"] = metadata[key]
-    kind = "spectrum" if "spectrum" in kinds else "image"
-    return make_record(path, kind, f"pycroscopy HDF5 ({convention})", channels, found)
+    kind = next(k for k in ("spectrum", "image", "curve") if k in kinds)
+    return make_record(path, kind, f"pycroscopy HDF5 ({convention})", channels, found,
+                       notes + problems, spectra[0] if len(spectra) == 1 else None)

@@ -13,17 +13,17 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import Channel, InstrumentRecord, make_record
+from .record import InstrumentRecord, decode_text, make_channel, make_record, si_spectrum, si_unit
 
 __all__ = ["read_ibw"]
 
 
 def _text(value) -> str:
-    """igor2 gives units and labels as bytes or arrays of single bytes."""
+    """igor2 gives units and labels as bytes or arrays of single bytes (UTF-8 from Igor 7 on)."""
     if isinstance(value, np.ndarray):
         value = b"".join(v if isinstance(v, bytes) else bytes(v) for v in value.ravel())
     if isinstance(value, bytes):
-        value = value.split(b"\0")[0].decode("latin-1")
+        value = decode_text(value.split(b"\0")[0])
     return str(value).strip()
 
 
@@ -85,61 +85,79 @@ def _data_unit(wave: dict) -> str:
     return _text(wave.get("data_units") or b"") or _text(wave["wave_header"].get("dataUnits", b""))
 
 
-def _labels(wave: dict, dim: int, count: int) -> list[str]:
-    """Names of the ``count`` entries along dimension ``dim`` (Asylum layers or columns)."""
+def _labels(wave: dict, dim: int, count: int) -> list[str] | None:
+    """Names of the ``count`` entries along dimension ``dim`` (Asylum layers or columns); None if unlabelled."""
     labels = wave.get("labels") or []
-    names = []
-    if len(labels) > dim and labels[dim]:
-        # Entry 0 labels the dimension itself; entries 1.. its entries.
-        names = [asylum.channel_name(_text(b)) for b in list(labels[dim])[1:]]
+    if len(labels) <= dim or not labels[dim]:
+        return None
+    # Entry 0 labels the dimension itself; entries 1.. its entries.
+    names = [asylum.channel_name(_text(b)) for b in list(labels[dim])[1:]]
+    if not any(names):
+        return None
     return [names[i] if i < len(names) and names[i] else f"channel{i}" for i in range(count)]
 
 
 def _is_image(data: np.ndarray, units: list, note: dict) -> bool:
-    """x and y in metres, or the note's scan size matching the first two dimensions."""
+    """x and y lengths (any prefix), or the note's scan size matching the first two dimensions."""
     if data.ndim < 2 or min(data.shape[:2]) < 2:
         return False
-    if units[0] == units[1] == "m":
+    if all((si_unit(u) or ("",))[0] == "m" for u in units[:2]):
         return True
     return note.get("ScanPoints") == str(data.shape[0]) and note.get("ScanLines") == str(data.shape[1])
 
 
+def _axis(wave: dict, dim: int, n: int) -> np.ndarray:
+    """Values along dimension ``dim`` from the wave's scaling (start, step), in its own unit."""
+    header = wave["wave_header"]
+    start = np.ravel(header.get("sfB", header.get("hsB", 0.0)))
+    step = np.ravel(header.get("sfA", header.get("hsA", 1.0)))
+    return float(start[min(dim, start.size - 1)]) + float(step[min(dim, step.size - 1)]) * np.arange(n)
+
+
 def read_ibw(path) -> InstrumentRecord:
-    """Read an Asylum ``.ibw`` file: channels with units and the cantilever fields of its note."""
+    """Read an Asylum ``.ibw`` file: channels with units and the cantilever fields of its note.
+
+    Layers (or columns) named by dimension labels are channels; an unlabelled wave is one
+    channel.  A first (or, for images, third) dimension in a frequency unit makes a spectrum.
+    """
     path = Path(path)
     wave = _load(path)
     data = np.asarray(wave.get("wData"))
-    name = _text(wave["wave_header"].get("bname", b"")) or path.stem
-    note = asylum.parse_note(_text_note(wave.get("note", b"")))
-    found = asylum.cantilever_fields(note)
     if data.size == 0:
         raise UserError(f"{path}: the wave holds no data")
+    name = _text(wave["wave_header"].get("bname", b"")) or path.stem
+    note = asylum.parse_note(decode_text(wave.get("note", b"")))
+    found, notes = asylum.cantilever_fields(note)
     units = _dimension_units(wave, data.ndim)
-    instrument = "Asylum Research (Igor binary wave)"
+    in_hz = [(si_unit(u) or ("",))[0] == "Hz" for u in units]
+    image = _is_image(data, units, note)
+    layer_dim = 2 if image else 1
+    labels = _labels(wave, layer_dim, data.shape[layer_dim]) if data.ndim == layer_dim + 1 else None
+    if labels:
+        # Asylum layers, or the columns of a tune: one data unit cannot describe them all
+        # (Asylum writes 'm' for its phase layers too), so the channel's name says first.
+        named = [(label, asylum.channel_unit(label) or _data_unit(wave)) for label in labels]
+        shape = data.shape[:layer_dim]
+    else:       # one channel: the wave's own data unit first (it may be prefixed, 'nm')
+        named, shape = [(name, _data_unit(wave) or asylum.channel_unit(name))], data.shape
+    channels = [make_channel(label, unit, shape) for label, unit in named]
     spectrum = None
-    if _is_image(data, units, note):
-        layers = data.shape[2] if data.ndim == 3 else 1
-        labels = _labels(wave, 2, layers) if data.ndim == 3 else [name]
-        channels = [Channel(label, asylum.channel_unit(label) or _data_unit(wave), data.shape[:2])
-                    for label in labels]
+    if image and data.ndim == 3 and in_hz[2] and not labels:
+        kind = "spectrum"        # a spectrum at each pixel (band excitation, tune maps)
+        f = _axis(wave, 2, data.shape[2]) * si_unit(units[2])[1]
+        notes.append(f"a spectrum of {data.shape[2]} frequencies ({f[0]:.6g} to {f[-1]:.6g} Hz) at each "
+                     f"of {data.shape[0]} x {data.shape[1]} pixels")
+    elif image:
         kind = "image"
-    else:
-        if data.ndim == 2 and data.shape[1] > 1:    # columns named by the labels of dimension 1
-            labels = _labels(wave, 1, data.shape[1])
-            channels = [Channel(label, asylum.channel_unit(label) or _data_unit(wave), data.shape[:1])
-                        for label in labels]
-        else:
-            channels = [Channel(name, _data_unit(wave), data.shape)]
-        if units[0] == "Hz" and data.ndim == 1:
-            header = wave["wave_header"]
-            x0, dx = float(np.ravel(header.get("sfB", header.get("hsB", 0)))[0]), float(np.ravel(header.get("sfA", header.get("hsA", 1)))[0])
-            spectrum = (x0 + dx * np.arange(data.size), data.astype(float), _data_unit(wave))
-            kind = "spectrum"
-        else:       # force curves and other waves against time or distance
-            kind = "curve"
-    return make_record(path, kind, instrument, channels, found, spectrum=spectrum)
-
-
-def _text_note(note) -> str:
-    # The note is latin-1 text with carriage-return line ends (Igor's Windows/Mac heritage).
-    return note.decode("latin-1") if isinstance(note, bytes) else str(note)
+        if data.ndim > 2 and not labels:
+            notes.append(f"a stack of {data.shape[2]} images along '{units[2] or 'index'}'")
+    elif in_hz[0]:
+        kind = "spectrum"
+        values = data if data.ndim == 1 else data.reshape(data.shape[0], -1)[:, 0]
+        spectrum = si_spectrum(path, _axis(wave, 0, data.shape[0]), units[0], values, named[0][1])
+    else:       # force curves and other waves against time or distance
+        kind = "curve"
+    for channel in channels:
+        if channel.unit and si_unit(channel.unit) is None:
+            notes.append(f"{channel.name}: unit '{channel.unit}' is not an SI unit; values left as stored")
+    return make_record(path, kind, "Asylum Research (Igor binary wave)", channels, found, notes, spectrum)
