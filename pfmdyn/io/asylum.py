@@ -40,15 +40,17 @@ _UNITS = {"Height": "m", "ZSensor": "m", "Amplitude": "m", "Amplitude1": "m", "A
 
 
 def parse_note(text: str) -> dict:
-    """The note's ``key: value`` lines as a dict of strings (any line end; later keys win).
+    """The note's ``key: value`` (or ``key=value``) lines as a dict of strings (any line end; later keys win).
 
-    >>> parse_note("SpringConstant: 8.3589\\rImagingMode:PFM Mode\\rno colon here")
-    {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode'}
+    >>> parse_note("SpringConstant: 8.3589\\rImagingMode:PFM Mode\\nTime: 12:30\\r\\nWidth = 2\\rno pair here")
+    {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode', 'Time': '12:30', 'Width': '2'}
     """
     out = {}
     for line in re.split(r"\r\n|\r|\n", text):
-        key, colon, value = line.partition(":")
-        if colon and key.strip():
+        key, sep, value = line.partition(":")
+        if not sep:
+            key, sep, value = line.partition("=")
+        if sep and key.strip():
             out[key.strip()] = value.strip()
     return out
 

@@ -114,6 +114,23 @@ def _axis(wave: dict, dim: int, n: int) -> np.ndarray:
     return float(start[min(dim, start.size - 1)]) + float(step[min(dim, step.size - 1)]) * np.arange(n)
 
 
+def _channel_unit(name: str, data_unit: str) -> str:
+    """The unit of a layer or column: the wave's one data unit, unless the name says otherwise.
+
+    A wave has one data unit for all its layers.  Asylum writes 'm' for a layered image, which
+    its phase, frequency and voltage layers do not have; and a phase is an angle whatever
+    unit the wave's other columns are in.  Then the name's unit is the channel's.
+
+    >>> _channel_unit("PhaseRetrace", "m"), _channel_unit("HeightRetrace", "nm"), _channel_unit("Amplitude", "V")
+    ('deg', 'nm', 'V')
+    """
+    by_name = asylum.channel_unit(name)
+    kind = (si_unit(data_unit) or (data_unit,))[0]
+    if not data_unit or (by_name and by_name != kind and (by_name == "deg" or kind == "m")):
+        return by_name or data_unit
+    return data_unit
+
+
 def read_ibw(path) -> InstrumentRecord:
     """Read an Asylum ``.ibw`` file: channels with units and the cantilever fields of its note.
 
@@ -133,13 +150,8 @@ def read_ibw(path) -> InstrumentRecord:
     image = _is_image(data, units, note)
     layer_dim = 2 if image else 1
     labels = _labels(wave, layer_dim, data.shape[layer_dim]) if data.ndim == layer_dim + 1 else None
-    if labels:
-        # Asylum layers, or the columns of a tune: one data unit cannot describe them all
-        # (Asylum writes 'm' for its phase layers too), so the channel's name says first.
-        named = [(label, asylum.channel_unit(label) or _data_unit(wave)) for label in labels]
-        shape = data.shape[:layer_dim]
-    else:       # one channel: the wave's own data unit first (it may be prefixed, 'nm')
-        named, shape = [(name, _data_unit(wave) or asylum.channel_unit(name))], data.shape
+    names, shape = (labels, data.shape[:layer_dim]) if labels else ([name], data.shape)
+    named = [(label, _channel_unit(label, _data_unit(wave))) for label in names]
     channels = [make_channel(label, unit, shape) for label, unit in named]
     spectrum = None
     if image and data.ndim == 3 and in_hz[2] and not labels:
