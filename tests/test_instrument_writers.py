@@ -356,3 +356,43 @@ def test_ibw_to_nsid_through_scifireaders_agrees(tmp_path):
     assert converted.fields == direct.fields
     assert [(c.name, c.unit, c.shape) for c in converted.channels] == \
         [(c.name, c.unit, c.shape) for c in direct.channels]
+
+
+def test_ibw_force_curve_columns_and_stale_label_bytes(tmp_path):
+    """Asylum force curves: columns Raw, Defl, ZSnsr against time.  Igor leaves stale bytes
+    after each label's NUL (its buffer held a longer label before); they are not the name."""
+    t = np.arange(200) * 1e-4
+    curve = np.column_stack([np.sin(t), np.cos(t), t]).astype("f4")
+    path = igor_wave(tmp_path / "Force0001.ibw", curve, "Force0001", [(0.0, 1e-4, "s")], "m",
+                     {1: ["Raw", "Defl", "ZSnsr"]}, asylum_note({"SpringConstant": "0.81"}))
+    raw = path.read_bytes()
+    path.write_bytes(raw.replace(b"Defl\0\0\0\0\0\0", b"Defl\0ectio").replace(b"Raw\0\0\0", b"Raw\0ac"))
+    record = read_instrument(path)
+    assert record.kind == "curve" and record.fields == {"spring_constant_n_per_m": 0.81}
+    assert [(c.name, c.unit, c.shape) for c in record.channels] == [(n, "m", (200,)) for n in ("Raw", "Defl", "ZSnsr")]
+
+
+def test_ibw_long_names_version_7(tmp_path):
+    """Igor Pro 8+ saves waves with long names as version 7, which igor2 itself refuses."""
+    igorwriter = pytest.importorskip("igorwriter")
+    wave = igorwriter.IgorWave(np.ones((8, 8, 2), "f4"), name="PFM_scan_of_the_PZT_film_at_room_temperature",
+                               long_name_support=True)
+    for dim in "xy":
+        wave.set_dimscale(dim, 0.0, 1e-7, "m")
+    wave.set_dimlabel(2, 0, "HeightRetrace")
+    wave.set_dimlabel(2, 1, "PhaseRetrace")
+    wave.set_note(asylum_note({"SpringConstant": "2.5"}))
+    wave.save(str(tmp_path / "long.ibw"))
+    record = read_instrument(tmp_path / "long.ibw")
+    assert [(c.name, c.unit) for c in record.channels] == [("HeightRetrace", "m"), ("PhaseRetrace", "deg")]
+    assert record.fields == {"spring_constant_n_per_m": 2.5}
+
+
+def test_ibw_axis_in_unknown_unit_is_said(tmp_path):
+    record = read_instrument(igor_wave(tmp_path / "h.ibw", np.ones(20), "Amp", [(1.0, 1.0, "Hertz")], "V"))
+    assert record.kind == "curve" and record.spectrum is None
+    assert any("'Hertz', which pfmdyn cannot convert" in n for n in record.notes)
+    # Units longer than 3 bytes are 'extended', each dimension's in turn: read apart, not run together.
+    image = read_instrument(igor_wave(tmp_path / "a.ibw", np.ones((8, 6)), "HeightTrace",
+                                      image_scales("Angstrom", 5.0), "Angstrom"))
+    assert image.kind == "image" and [(c.unit, c.scale) for c in image.channels] == [("m", 1e-10)]

@@ -36,7 +36,10 @@ NOTE_KEYS = {
 # Units of Asylum image channels by their data type (the name without Trace/Retrace).
 _UNITS = {"Height": "m", "ZSensor": "m", "Amplitude": "m", "Amplitude1": "m", "Amplitude2": "m",
           "Deflection": "m", "Phase": "deg", "Phase1": "deg", "Phase2": "deg", "Frequency": "Hz",
-          "Potential": "V", "Bias": "V", "UserIn0": "V", "UserIn1": "V", "UserIn2": "V", "Current": "A", "Dissipation": "W"}
+          "Potential": "V", "Bias": "V", "UserIn0": "V", "UserIn1": "V", "UserIn2": "V", "Current": "A",
+          "Dissipation": "W",
+          # force curves: raw and sensed piezo, deflection, amplitude, frequency
+          "Raw": "m", "ZSnsr": "m", "LVDT": "m", "Defl": "m", "Amp": "m", "Freq": "Hz"}
 
 
 def parse_note(text: str) -> dict:

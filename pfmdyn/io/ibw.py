@@ -6,6 +6,7 @@ wave's dimension labels, the instrument's settings in the wave note (see
 """
 from __future__ import annotations
 
+import io
 import logging
 from pathlib import Path
 
@@ -36,8 +37,16 @@ def _load(path: Path) -> dict:
     logger = logging.getLogger("igor2")
     level = logger.level
     logger.setLevel(logging.CRITICAL)
+    raw = path.read_bytes()
+    version = _version(raw)
+    if version == 7:
+        # Igor Pro 8+ long names: a version-5 layout with variable-length names after it,
+        # which igor2 does not accept; its fixed sections read as version 5.
+        order = "little" if raw[0] == 7 else "big"
+        raw = (5).to_bytes(2, order) + raw[2:]
     try:
-        wave = binarywave.load(str(path))["wave"]
+        loaded = binarywave.load(io.BytesIO(raw))
+        wave = dict(loaded["wave"], version=version)
     except Exception as exc:    # igor2 raises struct, value and index errors on damaged files
         reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): {reason}") from None
@@ -50,6 +59,15 @@ def _load(path: Path) -> dict:
         raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): "
                         f"the data block does not hold the {expected} points its header announces")
     return wave
+
+
+def _version(raw: bytes) -> int:
+    """The file's version (first two bytes, either byte order); 0 if neither reads as one."""
+    for order in ("little", "big"):
+        version = int.from_bytes(raw[:2], order)
+        if version in (1, 2, 3, 5, 7):
+            return version
+    return 0
 
 
 def _check_length(path: Path, wave: dict) -> None:
@@ -66,8 +84,16 @@ def _check_length(path: Path, wave: dict) -> None:
 
 
 def _dimension_units(wave: dict, ndim: int) -> list[str]:
+    """Each dimension's unit: in the header (up to 3 bytes) or, longer, in the extended units.
+
+    igor2 gives the extended units of all dimensions as one byte string; the header's
+    ``dimEUnitsSize`` says where each ends.
+    """
     header = wave["wave_header"]
-    extended = wave.get("dimension_units")
+    extended = wave.get("dimension_units") or b""
+    if isinstance(extended, bytes):
+        sizes = np.cumsum([0] + [int(n) for n in np.ravel(wave.get("bin_header", {}).get("dimEUnitsSize", [0] * 4))])
+        extended = [extended[sizes[i]:sizes[i + 1]] for i in range(len(sizes) - 1)]
     units = []
     for i in range(ndim):
         unit = ""
@@ -75,7 +101,7 @@ def _dimension_units(wave: dict, ndim: int) -> list[str]:
             unit = _text(np.asarray(header["dimUnits"])[i])
         elif i == 0 and "xUnits" in header:
             unit = _text(header["xUnits"])
-        if not unit and isinstance(extended, (list, tuple)) and i < len(extended):
+        if not unit and i < len(extended):
             unit = _text(extended[i])
         units.append(unit)
     return units
@@ -85,13 +111,37 @@ def _data_unit(wave: dict) -> str:
     return _text(wave.get("data_units") or b"") or _text(wave["wave_header"].get("dataUnits", b""))
 
 
-def _labels(wave: dict, dim: int, count: int) -> list[str] | None:
-    """Names of the ``count`` entries along dimension ``dim`` (Asylum layers or columns); None if unlabelled."""
-    labels = wave.get("labels") or []
-    if len(labels) <= dim or not labels[dim]:
+_SECTIONS = ("wfmSize", "formulaSize", "noteSize", "dataEUnitsSize", "dimEUnitsSize")
+
+
+def _file_labels(path: Path, wave: dict, dim: int) -> list[str] | None:
+    """Dimension labels of a version-5 file, read from the file itself.
+
+    Each label is a 32-byte field ending in NUL; Igor leaves whatever was in its buffer after
+    the NUL, and igor2 joins those stale bytes to the label (``PhaseRetrace`` + ``race``).
+    The labels follow the header, data, formula, note and extended units.
+    """
+    sizes = wave.get("bin_header", {})
+    if "dimLabelsSize" not in sizes or wave.get("version") not in (5, 7):
         return None
+    lengths = [int(n) for n in np.ravel(sizes["dimLabelsSize"])]
+    offset = 64 + sum(int(np.sum(sizes.get(k, 0))) for k in _SECTIONS) + sum(lengths[:dim])
+    with open(path, "rb") as fh:
+        fh.seek(offset)
+        raw = fh.read(lengths[dim])
+    if wave["version"] == 7:        # each label as long as it is, NUL-terminated
+        return [decode_text(label).strip() for label in raw.split(b"\0")[:-1]]
+    return [decode_text(raw[i:i + 32].split(b"\0")[0]).strip() for i in range(0, len(raw) - 31, 32)]
+
+
+def _labels(path: Path, wave: dict, dim: int, count: int) -> list[str] | None:
+    """Names of the ``count`` entries along dimension ``dim`` (Asylum layers or columns); None if unlabelled."""
+    names = _file_labels(path, wave, dim)
+    if names is None:       # other versions: igor2's reading, stale bytes cut after Trace/Retrace
+        labels = wave.get("labels") or []
+        names = [asylum.channel_name(_text(b)) for b in labels[dim]] if len(labels) > dim else []
     # Entry 0 labels the dimension itself; entries 1.. its entries.
-    names = [asylum.channel_name(_text(b)) for b in list(labels[dim])[1:]]
+    names = names[1:]
     if not any(names):
         return None
     return [names[i] if i < len(names) and names[i] else f"channel{i}" for i in range(count)]
@@ -149,7 +199,7 @@ def read_ibw(path) -> InstrumentRecord:
     in_hz = [(si_unit(u) or ("",))[0] == "Hz" for u in units]
     image = _is_image(data, units, note)
     layer_dim = 2 if image else 1
-    labels = _labels(wave, layer_dim, data.shape[layer_dim]) if data.ndim == layer_dim + 1 else None
+    labels = _labels(path, wave, layer_dim, data.shape[layer_dim]) if data.ndim == layer_dim + 1 else None
     names, shape = (labels, data.shape[:layer_dim]) if labels else ([name], data.shape)
     named = [(label, _channel_unit(label, _data_unit(wave))) for label in names]
     channels = [make_channel(label, unit, shape) for label, unit in named]
@@ -169,6 +219,10 @@ def read_ibw(path) -> InstrumentRecord:
         spectrum = si_spectrum(path, _axis(wave, 0, data.shape[0]), units[0], values, named[0][1])
     else:       # force curves and other waves against time or distance
         kind = "curve"
+    for dim, unit in enumerate(units):
+        if unit and si_unit(unit) is None:
+            notes.append(f"dimension {dim} is in '{unit}', which pfmdyn cannot convert to SI; "
+                         "not taken as a frequency or length axis")
     for channel in channels:
         if channel.unit and si_unit(channel.unit) is None:
             notes.append(f"{channel.name}: unit '{channel.unit}' is not an SI unit; values left as stored")
