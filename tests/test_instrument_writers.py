@@ -238,7 +238,7 @@ def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
     assert [(c.name, c.unit, c.shape) for c in record.channels] == [("Piezoresponse", "V", (12, 24))]
     assert record.fields == {"spring_constant_n_per_m": 1.8, "free_resonance_hz": 65000.0,
                              "contact_resonance_hz": 320000.0, "drive_frequency_hz": 3.2e5}
-    assert "24 frequencies (300000 to 340000 Hz) at each of 12 positions" in record.notes[0]
+    assert "12 spectra of 24 frequencies (300000 to 340000 Hz)" in record.notes[0]
     assert to_discrepancy_input(path, {"length_m": 2e-4, "width_m": 3e-5, **TIP}).frequency_hz.tolist() == \
         [65000.0, 320000.0]
     # Without cantilever attributes: the same data, every field missing, a one-line error.
@@ -396,3 +396,18 @@ def test_ibw_axis_in_unknown_unit_is_said(tmp_path):
     image = read_instrument(igor_wave(tmp_path / "a.ibw", np.ones((8, 6)), "HeightTrace",
                                       image_scales("Angstrom", 5.0), "Angstrom"))
     assert image.kind == "image" and [(c.unit, c.scale) for c in image.channels] == [("m", 1e-10)]
+
+
+def test_usid_beps_frequency_and_dc_steps(tmp_path, usid):
+    """Switching spectroscopy (BEPS): the frequency row repeats for each DC step."""
+    import h5py
+    path = tmp_path / "beps.h5"
+    f = np.linspace(3.0e5, 3.4e5, 10)
+    with h5py.File(path, "w") as h5:
+        usid.hdf_utils.write_main_dataset(
+            h5.create_group("Measurement_000/Channel_000"), np.ones((6, 40), "c8"), "Raw_Data", "Piezoresponse",
+            "mV", [usid.Dimension("X", "m", np.arange(3) * 1e-7), usid.Dimension("Y", "m", np.arange(2) * 1e-7)],
+            [usid.Dimension("Frequency", "Hz", f), usid.Dimension("DC_Offset", "V", np.linspace(-5, 5, 4))])
+    record = read_instrument(path)
+    assert record.kind == "spectrum" and [(c.unit, c.scale) for c in record.channels] == [("V", 1e-3)]
+    assert "24 spectra of 10 frequencies (300000 to 340000 Hz)" in record.notes[0]

@@ -136,8 +136,8 @@ def read_hdf5(path) -> InstrumentRecord:
                 if points == 1:
                     spectra.append(si_spectrum(path, frequency, "Hz", np.ravel(dataset[()]), unit))
                 else:
-                    notes.append(f"{label}: a spectrum of {len(frequency)} frequencies ({frequency.min():.6g} "
-                                 f"to {frequency.max():.6g} Hz) at each of {points} positions")
+                    notes.append(f"{label}: {points} spectra of {len(frequency)} frequencies ({frequency.min():.6g} "
+                                 f"to {frequency.max():.6g} Hz)")
             elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE"):
                 kinds.add("spectrum")
                 notes.append(f"{label}: its spectral dimension has no frequency unit")

@@ -53,6 +53,8 @@ def _load(path: Path) -> dict:
     finally:
         logger.setLevel(level)
     _check_length(path, wave)
+    if int(np.ravel(wave["wave_header"].get("type", 1))[0]) == 0:
+        raise UserError(f"{path}: a text wave (Igor type 0), not measured data")
     data = wave.get("wData")
     expected = int(np.prod([n for n in np.ravel(wave["wave_header"].get("nDim", [0])) if n > 0] or [0]))
     if not isinstance(data, np.ndarray) or data.dtype.kind not in "iufc" or data.size != expected:
