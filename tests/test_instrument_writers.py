@@ -411,3 +411,19 @@ def test_usid_beps_frequency_and_dc_steps(tmp_path, usid):
     record = read_instrument(path)
     assert record.kind == "spectrum" and [(c.unit, c.scale) for c in record.channels] == [("V", 1e-3)]
     assert "24 spectra of 10 frequencies (300000 to 340000 Hz)" in record.notes[0]
+
+
+def test_pfmdyn_map_layout_and_root_attributes(tmp_path):
+    """The plain layout ``pfmdyn map`` reads: response (ny, nx, n_freq), frequency_hz, root attributes."""
+    import h5py
+    path = tmp_path / "map.h5"
+    with h5py.File(path, "w") as h5:
+        h5["response"] = np.ones((3, 4, 16), "c8")
+        h5["frequency_hz"] = np.linspace(3e5, 3.3e5, 16)
+        h5.attrs.update({"spring_constant_n_per_m": 3.1, "length_m": 2.25e-4, "tip_height_m": 1.2e-5,
+                         "free_resonance_hz": 7.1e4})
+    record = read_instrument(path)
+    assert record.kind == "spectrum" and record.instrument == "HDF5 (pfmdyn map layout)"
+    assert record.fields == {"spring_constant_n_per_m": 3.1, "length_m": 2.25e-4, "tip_height_m": 1.2e-5,
+                             "free_resonance_hz": 7.1e4}
+    assert "12 spectra of 16 frequencies (300000 to 330000 Hz)" in record.notes[0]

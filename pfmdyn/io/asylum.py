@@ -66,8 +66,10 @@ def _number(value) -> float | None:
     return number if math.isfinite(number) else None
 
 
-def cantilever_fields(note: dict) -> tuple[dict, list[str]]:
+def cantilever_fields(note: dict, keys: dict = NOTE_KEYS) -> tuple[dict, list[str]]:
     """pfmdyn fields (SI) found in an Asylum note, and a line for each value not understood.
+
+    ``keys`` maps pfmdyn fields to the note's keys (Asylum's by default).
 
     Values are numbers in SI (as Asylum writes them) or text with a unit, prefixed or not
     (``'300 kHz'``).  NaN means never measured; a unit of the wrong kind is reported.
@@ -78,7 +80,7 @@ def cantilever_fields(note: dict) -> tuple[dict, list[str]]:
     ({'drive_frequency_hz': 300000.0}, ["CustomLeverLength '225 furlong' not understood as m: lever length left out"])
     """
     found, problems = {}, []
-    for name, key in NOTE_KEYS.items():
+    for name, key in keys.items():
         value = note.get(key)
         if value is None:
             continue

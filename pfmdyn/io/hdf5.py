@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_unit
+from .record import FIELDS, InstrumentRecord, make_channel, make_record, si_spectrum, si_unit
 
 __all__ = ["read_hdf5"]
 
@@ -27,6 +27,9 @@ _BE_DRIVE = ("BE_center_frequency_[Hz]", "BE_center_frequency")
 
 
 def _text(value) -> str:
+    """An attribute as text: str, bytes or a one-element array of either."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.item()
     if isinstance(value, bytes):
         return value.decode("utf-8", "replace")
     return str(value)
@@ -34,7 +37,8 @@ def _text(value) -> str:
 
 def _scan(h5, h5py):
     """Main datasets (path, dataset) and the metadata attributes of the file, merged."""
-    mains, metadata = [], {}
+    # pfmdyn's own map files keep the cantilever on the root (named as pfmdyn's fields).
+    mains, metadata = [], dict(h5.attrs)
 
     def visit(name, obj):
         base = name.rsplit("/", 1)[-1]
@@ -57,6 +61,8 @@ def _is_main(base: str, dataset) -> bool:
         return False
     if base.startswith(("Position_", "Spectroscopic_")):
         return False
+    if base == "response" and "frequency_hz" in dataset.parent:     # pfmdyn's plain map layout
+        return True
     return base == "Raw_Data" or ("quantity" in dataset.attrs and "units" in dataset.attrs)
 
 
@@ -66,6 +72,8 @@ def _frequency_axis(h5, dataset):
     USID: a row of ``Spectroscopic_Values`` whose unit is a frequency (the last dimension);
     NSID: a dimension scale whose ``units`` is a frequency.  Any SI prefix (kHz, MHz).
     """
+    if dataset.name.rsplit("/", 1)[-1] == "response" and "frequency_hz" in dataset.parent:
+        return np.asarray(dataset.parent["frequency_hz"][()], dtype=float).ravel(), dataset.ndim - 1
     ref = dataset.attrs.get("Spectroscopic_Values")
     if ref is not None:
         try:
@@ -122,7 +130,8 @@ def read_hdf5(path) -> InstrumentRecord:
         mains, metadata = _scan(h5, h5py)
         if not mains:
             raise UserError(f"{path}: no pycroscopy dataset found (expected NSID/USID groups "
-                            "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units')")
+                            "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units', "
+                            "or pfmdyn's map layout: response, frequency_hz)")
         channels, kinds, notes, spectra = [], set(), [], []
         for label, (name, dataset) in zip(_names(mains), mains):
             unit = _text(dataset.attrs.get("units", ""))
@@ -145,11 +154,16 @@ def read_hdf5(path) -> InstrumentRecord:
                 kinds.add("curve")          # USID curves against bias, time, ... (not a frequency)
             else:
                 kinds.add("image")
-        convention = "NSID" if any("data_type" in d.attrs for _, d in mains) else "USID"
+        convention = ("NSID" if any("data_type" in d.attrs for _, d in mains) else
+                      "USID" if any(name.endswith("Raw_Data") or "quantity" in d.attrs for name, d in mains)
+                      else "")
     found, problems = asylum.cantilever_fields(metadata)
+    own, own_problems = asylum.cantilever_fields(metadata, {name: name for name in FIELDS})
+    found, problems = {**own, **found}, problems + own_problems
     for key in _BE_DRIVE:
         if key in metadata and "drive_frequency_hz" not in found:
             found["drive_frequency_hz"] = metadata[key]
     kind = next(k for k in ("spectrum", "image", "curve") if k in kinds)
-    return make_record(path, kind, f"pycroscopy HDF5 ({convention})", channels, found,
+    instrument = f"pycroscopy HDF5 ({convention})" if convention else "HDF5 (pfmdyn map layout)"
+    return make_record(path, kind, instrument, channels, found,
                        notes + problems, spectra[0] if len(spectra) == 1 else None)
