@@ -427,3 +427,18 @@ def test_pfmdyn_map_layout_and_root_attributes(tmp_path):
     assert record.fields == {"spring_constant_n_per_m": 3.1, "length_m": 2.25e-4, "tip_height_m": 1.2e-5,
                              "free_resonance_hz": 7.1e4}
     assert "12 spectra of 16 frequencies (300000 to 330000 Hz)" in record.notes[0]
+
+
+def test_damaged_hdf5_is_one_line(tmp_path, monkeypatch, capsys):
+    """HDF5 raises RuntimeError on broken B-trees and heaps (seen on files with flipped bytes)."""
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "broken.h5"
+    with h5py.File(path, "w") as h5:
+        h5["x"] = np.ones(3)
+
+    def broken(self, func):
+        raise RuntimeError("Object visitation failed (incorrect B-tree node type)")
+    monkeypatch.setattr(h5py.Group, "visititems", broken)
+    assert cli.main(["inspect", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "broken.h5: could not interpret the file (RuntimeError" in err

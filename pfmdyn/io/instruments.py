@@ -22,6 +22,7 @@ option, never a silent default.
 from __future__ import annotations
 
 import math
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -109,8 +110,10 @@ def read_instrument(path) -> InstrumentRecord:
         return reader(path)
     except UserError:
         raise
-    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError) as exc:
-        # A file the library opened but whose layout this reader does not know: one line, no traceback.
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError,
+            RuntimeError, ArithmeticError, struct.error) as exc:
+        # A file the library opened but whose layout this reader does not know, or a damaged one
+        # (HDF5 raises RuntimeError on broken B-trees): one line, no traceback.
         reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise UserError(f"{path}: could not interpret the file ({type(exc).__name__}: {reason})") from None
 
