@@ -105,6 +105,7 @@ def test_ibw_note_missing_keys_and_nan_are_missing_not_zero(tmp_path, capsys):
     bare = read_instrument(igor_wave(tmp_path / "nonote.ibw", np.ones((8, 8), "f4"), "HeightTrace",
                                      image_scales(), "m"))
     assert bare.kind == "image" and not bare.fields and bare.channels[0].unit == "m"
+    assert bare.instrument == "Igor binary wave" and record.instrument == "Asylum Research (Igor binary wave)"
 
 
 @pytest.mark.parametrize("unicode", [True, False])
@@ -162,6 +163,10 @@ def test_ibw_stacks(tmp_path):
     record = read_instrument(spectral)
     assert record.kind == "spectrum" and [(c.unit, c.shape) for c in record.channels] == [("V", (8, 6, 30))]
     assert "30 frequencies (300000 to 329000 Hz)" in record.notes[0]
+    # Pixels without a length unit: still a spectrum at each pixel, not 30 channels.
+    plain = read_instrument(igor_wave(tmp_path / "be2.ibw", rng.random((8, 6, 30)), "BE", [(0, 1, ""), (0, 1, ""),
+                                                                                         (3e5, 1e3, "Hz")]))
+    assert plain.kind == "spectrum" and [c.shape for c in plain.channels] == [(8, 6, 30)]
     frames = read_instrument(igor_wave(tmp_path / "t.ibw", rng.random((8, 6, 5)), "Movie",
                                        image_scales() + [(0.0, 2.0, "s")], "nm"))
     assert frames.kind == "image" and [(c.name, c.unit, c.shape, c.scale) for c in frames.channels] == \

@@ -206,7 +206,7 @@ def read_ibw(path) -> InstrumentRecord:
     named = [(label, _channel_unit(label, _data_unit(wave))) for label in names]
     channels = [make_channel(label, unit, shape) for label, unit in named]
     spectrum = None
-    if image and data.ndim == 3 and in_hz[2] and not labels:
+    if data.ndim == 3 and in_hz[2] and not labels:
         kind = "spectrum"        # a spectrum at each pixel (band excitation, tune maps)
         f = _axis(wave, 2, data.shape[2]) * si_unit(units[2])[1]
         notes.append(f"a spectrum of {data.shape[2]} frequencies ({f[0]:.6g} to {f[-1]:.6g} Hz) at each "
@@ -218,6 +218,8 @@ def read_ibw(path) -> InstrumentRecord:
     elif in_hz[0]:
         kind = "spectrum"
         values = data if data.ndim == 1 else data.reshape(data.shape[0], -1)[:, 0]
+        if data.ndim > 1 and not labels:
+            notes.append(f"{data.size // data.shape[0]} spectra in the wave; the record's spectrum is the first")
         spectrum = si_spectrum(path, _axis(wave, 0, data.shape[0]), units[0], values, named[0][1])
     else:       # force curves and other waves against time or distance
         kind = "curve"
@@ -228,4 +230,7 @@ def read_ibw(path) -> InstrumentRecord:
     for channel in channels:
         if channel.unit and si_unit(channel.unit) is None:
             notes.append(f"{channel.name}: unit '{channel.unit}' is not an SI unit; values left as stored")
-    return make_record(path, kind, "Asylum Research (Igor binary wave)", channels, found, notes, spectrum)
+    # Asylum's software writes its settings in the note; other Igor waves are said to be just that.
+    asylum_note = bool(found) or any(key in note for key in ("ImagingMode", "ScanSize", "MicroscopeModel"))
+    instrument = "Asylum Research (Igor binary wave)" if asylum_note else "Igor binary wave"
+    return make_record(path, kind, instrument, channels, found, notes, spectrum)
