@@ -34,7 +34,7 @@ ASYLUM = {"SpringConstant": ("2.7193", "spring_constant_n_per_m", 2.7193),
           "DriveFrequency": ("330000", "drive_frequency_hz", 330000.0),
           "CustomLeverLength": ("2.25e-4", "length_m", 2.25e-4),
           "CustomLeverWidth": ("4e-5", "width_m", 4e-5)}
-LAYERS = {"HeightRetrace": "m", "AmplitudeRetrace": "m", "PhaseRetrace": "deg", "ZSensorRetrace": "m"}
+LAYERS = {"HeightRetrace": "m", "AmplitudeRetrace": "m", "PhaseRetrace": "deg", "UserIn0Retrace": "V"}
 TIP = {"tip_height_m": 1.4e-5}
 
 

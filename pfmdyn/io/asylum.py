@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 import re
 
-from .record import FIELDS, si_value
+from .record import FIELDS, si_unit, si_value
 
-__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit"]
+__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
 
 NOTE_KEYS = {
     "spring_constant_n_per_m": "SpringConstant",
@@ -120,3 +120,25 @@ def channel_unit(name: str) -> str:
     """
     base = re.sub(r"(Retrace|Trace)$", "", name)
     return _UNITS.get(base, "")
+
+
+def layer_unit(name: str, data_unit: str) -> str:
+    """The unit of an image layer or column: the stated data unit, unless the name says otherwise.
+
+    An Igor wave has one data unit for all its layers, and Asylum writes 'm' for a layered
+    image, which its phase, frequency and voltage layers do not have (SciFiReaders copies
+    that 'm' into NSID files).  A phase is an angle whatever the wave's unit says, unless
+    that unit is an angle too.  Then the name's unit is the channel's.
+
+    >>> layer_unit("PhaseRetrace", "m"), layer_unit("HeightRetrace", "nm"), layer_unit("Amplitude", "V")
+    ('deg', 'nm', 'V')
+    >>> layer_unit("UserIn0Retrace", "m"), layer_unit("PhaseTrace", "rad"), layer_unit("Custom", "")
+    ('V', 'rad', '')
+    """
+    by_name = channel_unit(name)
+    kind = (si_unit(data_unit) or (data_unit,))[0]
+    if not data_unit:
+        return by_name
+    if by_name and by_name != kind and kind not in ("deg", "rad") and (by_name == "deg" or kind == "m"):
+        return by_name
+    return data_unit

@@ -134,7 +134,7 @@ def read_hdf5(path) -> InstrumentRecord:
                             "or pfmdyn's map layout: response, frequency_hz)")
         channels, kinds, notes, spectra = [], set(), [], []
         for label, (name, dataset) in zip(_names(mains), mains):
-            unit = _text(dataset.attrs.get("units", ""))
+            unit = asylum.layer_unit(_text(dataset.attrs.get("quantity", "")), _text(dataset.attrs.get("units", "")))
             channels.append(make_channel(label, unit, dataset.shape))
             data_type = _text(dataset.attrs.get("data_type", "")).upper()
             axis = _frequency_axis(h5, dataset)

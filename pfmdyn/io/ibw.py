@@ -166,23 +166,6 @@ def _axis(wave: dict, dim: int, n: int) -> np.ndarray:
     return float(start[min(dim, start.size - 1)]) + float(step[min(dim, step.size - 1)]) * np.arange(n)
 
 
-def _channel_unit(name: str, data_unit: str) -> str:
-    """The unit of a layer or column: the wave's one data unit, unless the name says otherwise.
-
-    A wave has one data unit for all its layers.  Asylum writes 'm' for a layered image, which
-    its phase, frequency and voltage layers do not have; and a phase is an angle whatever
-    unit the wave's other columns are in.  Then the name's unit is the channel's.
-
-    >>> _channel_unit("PhaseRetrace", "m"), _channel_unit("HeightRetrace", "nm"), _channel_unit("Amplitude", "V")
-    ('deg', 'nm', 'V')
-    """
-    by_name = asylum.channel_unit(name)
-    kind = (si_unit(data_unit) or (data_unit,))[0]
-    if not data_unit or (by_name and by_name != kind and (by_name == "deg" or kind == "m")):
-        return by_name or data_unit
-    return data_unit
-
-
 def read_ibw(path) -> InstrumentRecord:
     """Read an Asylum ``.ibw`` file: channels with units and the cantilever fields of its note.
 
@@ -203,7 +186,7 @@ def read_ibw(path) -> InstrumentRecord:
     layer_dim = 2 if image else 1
     labels = _labels(path, wave, layer_dim, data.shape[layer_dim]) if data.ndim == layer_dim + 1 else None
     names, shape = (labels, data.shape[:layer_dim]) if labels else ([name], data.shape)
-    named = [(label, _channel_unit(label, _data_unit(wave))) for label in names]
+    named = [(label, asylum.layer_unit(label, _data_unit(wave))) for label in names]
     channels = [make_channel(label, unit, shape) for label, unit in named]
     spectrum = None
     if data.ndim == 3 and in_hz[2] and not labels:
