@@ -447,3 +447,21 @@ def test_damaged_hdf5_is_one_line(tmp_path, monkeypatch, capsys):
     assert cli.main(["inspect", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "broken.h5: could not interpret the file (RuntimeError" in err
+
+
+def test_nanosurf_thermal_tune_in_prefixed_units(tmp_path):
+    """nsfopen's own thermal tune, its axis units rewritten as kHz and nm/sqrt(Hz): scaled to SI."""
+    spec = importlib.util.find_spec("NSFopen")
+    if spec is None:
+        pytest.skip("nsfopen is not installed")
+    source = next(iter(spec.submodule_search_locations)) + "/example/Spring_Constant/thermal.nid"
+    raw = open(source, "rb").read()
+    assert raw.count(b"Dim0Unit=Hz") == 2 and raw.count(b"Dim2Unit=m/") == 2
+    path = tmp_path / "thermal_khz.nid"
+    path.write_bytes(raw.replace(b"Dim0Unit=Hz", b"Dim0Unit=kHz").replace(b"Dim2Unit=m/", b"Dim2Unit=nm/"))
+    original, prefixed = read_instrument(source), read_instrument(path)
+    assert prefixed.spectrum[2] == original.spectrum[2] == "m/sqrt(Hz)"
+    # Relabelled, the same stored numbers mean kHz and nm/sqrt(Hz).
+    np.testing.assert_allclose(prefixed.spectrum[0], original.spectrum[0] * 1e3)
+    np.testing.assert_allclose(prefixed.spectrum[1], original.spectrum[1] * 1e-9)
+    assert [c.scale for c in prefixed.channels][:1] == [1e-9]

@@ -12,7 +12,10 @@ Formats (each read with the maintained library of its field; they come with the
 * plain-text drive sweeps: Cytomass/pyIMD ``.txt`` and Nanonis oscillation-control ``.dat``.
 
 :func:`read_instrument` returns an :class:`InstrumentRecord`: what the file is, its channels
-with units, the cantilever fields found (SI) and the ones missing.
+with units, the cantilever fields found (SI) and the ones missing.  Prefixed units (``kHz``,
+``nm``, ``pN/nm``, ``mV``) are converted to SI (:func:`pfmdyn.io.record.si_unit`): a channel
+keeps the factor from its stored values, spectra and fields are converted; a unit that is
+not SI is kept as written and said in the record's notes, never guessed.
 :func:`to_discrepancy_input` turns a file into the resonance table of ``pfmdyn
 discrepancy`` (:class:`pfmdyn.io.tables.ResonanceData`): an image's metadata gives free
 mode 1 and contact mode 1 with their Q; a thermal spectrum gives the free modes fitted in
