@@ -177,6 +177,10 @@ def test_ibw_units_not_si_are_kept_and_said(tmp_path):
     record = read_instrument(igor_wave(tmp_path / "a.ibw", np.ones((8, 8)), "Counts", image_scales(), "cts"))
     assert record.channels[0].unit == "cts" and record.channels[0].scale == 1.0
     assert any("'cts' is not an SI unit" in n for n in record.notes)
+    sidpy_default = nsid_dataset(np.ones((4, 4)), "Count", "Count", "generic",
+                                 [("x", np.arange(4.0), "m", "spatial"), ("y", np.arange(4.0), "m", "spatial")], "IMAGE")
+    record = read_instrument(write_nsid(tmp_path / "g.h5", {"Count": sidpy_default}))
+    assert record.channels[0].unit == "generic" and any("'generic' is not an SI unit" in n for n in record.notes)
 
 
 @pytest.mark.parametrize("text, expected", [
@@ -328,6 +332,13 @@ def test_nsid_spectrum_in_khz_and_pm(tmp_path):
     loops = nsid_dataset(amplitude, "Loop", "Amplitude", "pm", [("bias", f_khz, "V", "spectral")], "SPECTRUM")
     record = read_instrument(write_nsid(tmp_path / "loop.h5", {"Loop": loops}))
     assert record.spectrum is None and "no frequency unit" in record.notes[0]
+    # Band excitation as a spectral image (x, y, frequency in MHz).
+    cube = nsid_dataset(np.ones((3, 2, 5), "c8"), "BE", "Response", "mV",
+                        [("x", np.arange(3.0), "um", "spatial"), ("y", np.arange(2.0), "um", "spatial"),
+                         ("frequency", np.linspace(0.30, 0.34, 5), "MHz", "spectral")], "SPECTRAL_IMAGE")
+    record = read_instrument(write_nsid(tmp_path / "cube.h5", {"BE": cube}))
+    assert record.kind == "spectrum" and [(c.unit, c.scale) for c in record.channels] == [("V", 1e-3)]
+    assert "6 spectra of 5 frequencies (300000 to 340000 Hz)" in record.notes[0]
 
 
 def _scifireaders_ibw():

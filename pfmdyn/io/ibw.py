@@ -210,9 +210,6 @@ def read_ibw(path) -> InstrumentRecord:
         if unit and si_unit(unit) is None:
             notes.append(f"dimension {dim} is in '{unit}', which pfmdyn cannot convert to SI; "
                          "not taken as a frequency or length axis")
-    for channel in channels:
-        if channel.unit and si_unit(channel.unit) is None:
-            notes.append(f"{channel.name}: unit '{channel.unit}' is not an SI unit; values left as stored")
     # Asylum's software writes its settings in the note; other Igor waves are said to be just that.
     asylum_note = bool(found) or any(key in note for key in ("ImagingMode", "ScanSize", "MicroscopeModel"))
     instrument = "Asylum Research (Igor binary wave)" if asylum_note else "Igor binary wave"

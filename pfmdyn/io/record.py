@@ -91,6 +91,9 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
         if math.isfinite(value) and (value > 0 or (name == "tip_bias_v")):
             fields[name] = value
     missing = tuple(name for name in FIELDS if name not in fields)
+    # A unit pfmdyn cannot convert is kept as written; say so rather than let it pass as SI.
+    notes = list(notes) + [f"{c.name}: unit '{c.unit}' is not an SI unit pfmdyn knows; values left as stored"
+                           for c in channels if c.unit and si_unit(c.unit) is None]
     return InstrumentRecord(str(path), kind, instrument, tuple(channels), fields, missing,
                             tuple(notes), spectrum)
 
