@@ -239,7 +239,7 @@ def write_usid_be(path, usid, unit="Hz", positions=(4, 3), attrs=None):
 
 @pytest.mark.parametrize("unit", ["Hz", "kHz"])
 def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
-    attrs = {"BE_center_frequency_[Hz]": 3.2e5, "SpringConstant": 1.8, "ThermalFrequency": 65000.0,
+    attrs = {"BE_center_frequency_[Hz]": "3.2e5", "SpringConstant": 1.8, "ThermalFrequency": 65000.0,
              "TuneFreqResult": "320 kHz"}
     path, _ = write_usid_be(tmp_path / "be.h5", usid, unit, attrs=attrs)
     record = read_instrument(path)
@@ -251,9 +251,10 @@ def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
     assert to_discrepancy_input(path, {"length_m": 2e-4, "width_m": 3e-5, **TIP}).frequency_hz.tolist() == \
         [65000.0, 320000.0]
     # Without cantilever attributes: the same data, every field missing, a one-line error.
-    bare, response = write_usid_be(tmp_path / "bare.h5", usid, unit, positions=(1, 1))
+    bare, response = write_usid_be(tmp_path / "bare.h5", usid, unit, positions=(1, 1),
+                                   attrs={"BE_center_frequency_[Hz]": "n/a"})
     record = read_instrument(bare)
-    assert not record.fields
+    assert not record.fields and any("BE_center_frequency_[Hz] 'n/a' not understood" in n for n in record.notes)
     freq, values, unit_out = record.spectrum
     assert unit_out == "V" and freq[0] == 3e5 and freq[-1] == pytest.approx(3.4e5)
     np.testing.assert_allclose(values, response[0], rtol=1e-6)

@@ -157,12 +157,12 @@ def read_hdf5(path) -> InstrumentRecord:
         convention = ("NSID" if any("data_type" in d.attrs for _, d in mains) else
                       "USID" if any(name.endswith("Raw_Data") or "quantity" in d.attrs for name, d in mains)
                       else "")
-    found, problems = asylum.cantilever_fields(metadata)
-    own, own_problems = asylum.cantilever_fields(metadata, {name: name for name in FIELDS})
-    found, problems = {**own, **found}, problems + own_problems
-    for key in _BE_DRIVE:
-        if key in metadata and "drive_frequency_hz" not in found:
-            found["drive_frequency_hz"] = metadata[key]
+    # Asylum's names first, then pfmdyn's own, then the band-excitation settings.
+    found, problems = {}, []
+    for keys in (asylum.NOTE_KEYS, {name: name for name in FIELDS},
+                 *({"drive_frequency_hz": key} for key in _BE_DRIVE)):
+        more, said = asylum.cantilever_fields(metadata, keys)
+        found, problems = {**more, **found}, problems + said
     kind = next(k for k in ("spectrum", "image", "curve") if k in kinds)
     instrument = f"pycroscopy HDF5 ({convention})" if convention else "HDF5 (pfmdyn map layout)"
     return make_record(path, kind, instrument, channels, found,
