@@ -11,6 +11,7 @@ SI) or a one-line error naming what is missing.  Expected numbers are the ones w
 import importlib.util
 import json
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -467,7 +468,7 @@ def test_nanosurf_thermal_tune_in_prefixed_units(tmp_path):
     if spec is None:
         pytest.skip("nsfopen is not installed")
     source = next(iter(spec.submodule_search_locations)) + "/example/Spring_Constant/thermal.nid"
-    raw = open(source, "rb").read()
+    raw = Path(source).read_bytes()
     assert raw.count(b"Dim0Unit=Hz") == 2 and raw.count(b"Dim2Unit=m/") == 2
     path = tmp_path / "thermal_khz.nid"
     path.write_bytes(raw.replace(b"Dim0Unit=Hz", b"Dim0Unit=kHz").replace(b"Dim2Unit=m/", b"Dim2Unit=nm/"))

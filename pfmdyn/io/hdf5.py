@@ -18,7 +18,14 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import FIELDS, InstrumentRecord, make_channel, make_record, si_spectrum, si_unit
+from .record import (
+    FIELDS,
+    InstrumentRecord,
+    make_channel,
+    make_record,
+    si_spectrum,
+    si_unit,
+)
 
 __all__ = ["read_hdf5"]
 
@@ -67,13 +74,13 @@ def _is_main(base: str, dataset) -> bool:
 
 
 def _frequency_axis(h5, dataset):
-    """(frequency in Hz, its dimension) of a main dataset, or None when no dimension is a frequency.
+    """Frequencies (Hz) of a main dataset's frequency dimension, or None when it has none.
 
-    USID: a row of ``Spectroscopic_Values`` whose unit is a frequency (the last dimension);
+    USID: a row of ``Spectroscopic_Values`` whose unit is a frequency (one cycle of it);
     NSID: a dimension scale whose ``units`` is a frequency.  Any SI prefix (kHz, MHz).
     """
     if dataset.name.rsplit("/", 1)[-1] == "response" and "frequency_hz" in dataset.parent:
-        return np.asarray(dataset.parent["frequency_hz"][()], dtype=float).ravel(), dataset.ndim - 1
+        return np.asarray(dataset.parent["frequency_hz"][()], dtype=float).ravel()
     ref = dataset.attrs.get("Spectroscopic_Values")
     if ref is not None:
         try:
@@ -86,13 +93,13 @@ def _frequency_axis(h5, dataset):
             if converted and converted[0] == "Hz":
                 values = np.asarray(table[row if table.ndim > 1 else slice(None)]).ravel()
                 # Several spectroscopic dimensions repeat the frequencies: keep one cycle.
-                return np.unique(values) * converted[1], dataset.ndim - 1
+                return np.unique(values) * converted[1]
         return None
     for dim in range(dataset.ndim):
         for scale in dataset.dims[dim].values():
             converted = si_unit(_text(scale.attrs.get("units", "")))
             if converted and converted[0] == "Hz" and scale.shape == (dataset.shape[dim],):
-                return np.asarray(scale[()], dtype=float) * converted[1], dim
+                return np.asarray(scale[()], dtype=float) * converted[1]
     return None
 
 
@@ -137,10 +144,9 @@ def read_hdf5(path) -> InstrumentRecord:
             unit = asylum.layer_unit(_text(dataset.attrs.get("quantity", "")), _text(dataset.attrs.get("units", "")))
             channels.append(make_channel(label, unit, dataset.shape))
             data_type = _text(dataset.attrs.get("data_type", "")).upper()
-            axis = _frequency_axis(h5, dataset)
-            if axis is not None and data_type not in ("IMAGE", "IMAGE_STACK"):
+            frequency = _frequency_axis(h5, dataset)
+            if frequency is not None and data_type not in ("IMAGE", "IMAGE_STACK"):
                 kinds.add("spectrum")
-                frequency, dim = axis
                 points = dataset.size // max(len(frequency), 1)
                 if points == 1:
                     spectra.append(si_spectrum(path, frequency, "Hz", np.ravel(dataset[()]), unit))

@@ -14,7 +14,14 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import InstrumentRecord, decode_text, make_channel, make_record, si_spectrum, si_unit
+from .record import (
+    InstrumentRecord,
+    decode_text,
+    make_channel,
+    make_record,
+    si_spectrum,
+    si_unit,
+)
 
 __all__ = ["read_ibw"]
 

@@ -19,7 +19,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from .record import FIELDS, InstrumentRecord, make_channel, make_record, si_spectrum, si_unit, si_value
+from .record import (
+    FIELDS,
+    InstrumentRecord,
+    make_channel,
+    make_record,
+    si_spectrum,
+    si_unit,
+    si_value,
+)
 
 __all__ = ["read_sweep", "split_unit"]
 
