@@ -314,6 +314,10 @@ def test_nsid_images_with_asylum_metadata(tmp_path):
         ("Height (HeightTrace)", "m", (16, 12), 1e-9), ("Height (HeightRetrace)", "m", (16, 12), 1e-9),
         ("Phase", "deg", (16, 12), 1.0)]
     assert_fields(record, ASYLUM)
+    # The whole Asylum note kept as one text attribute, as some converters do.
+    whole = nsid_dataset(np.ones((16, 12)), "HeightRetrace", "HeightRetrace", "m", dims, "IMAGE",
+                         {"note": asylum_note({k: v[0] for k, v in ASYLUM.items()})})
+    assert_fields(read_instrument(write_nsid(tmp_path / "whole.h5", {"HeightRetrace": whole})), ASYLUM)
     out = tmp_path / "r.json"
     assert cli.main(["inspect", str(path), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())

@@ -59,6 +59,12 @@ def _scan(h5, h5py):
             mains.append((name, obj))
 
     h5.visititems(visit)
+    # Some converters keep the instrument's whole note as one text attribute ('Key: value' lines).
+    for value in list(metadata.values()):
+        text = _text(value)
+        if "\n" in text or "\r" in text:
+            for key, item in asylum.parse_note(text).items():
+                metadata.setdefault(key, item)
     return mains, metadata
 
 
