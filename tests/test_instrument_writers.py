@@ -91,7 +91,7 @@ def test_ibw_asylum_image_layers_and_note(tmp_path, end):
 
 
 def test_ibw_note_missing_keys_and_nan_are_missing_not_zero(tmp_path, capsys):
-    note = asylum_note({"SpringConstant": "NaN", "TuneFreqResult": "331250", "ThermalQ": "0"})
+    note = asylum_note({"SpringConstant": "NaN", "TuneFreqResult": "331250\0\0", "ThermalQ": "0"})
     path = igor_wave(tmp_path / "bare.ibw", np.ones((16, 12, 2), "f4"), "bare", image_scales(), "m",
                      {2: ["HeightTrace", "PhaseTrace"]}, note)
     record = read_instrument(path)

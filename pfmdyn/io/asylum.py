@@ -49,7 +49,8 @@ def parse_note(text: str) -> dict:
     {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode', 'Time': '12:30', 'Width': '2'}
     """
     out = {}
-    for line in re.split(r"\r\n|\r|\n", text):
+    # Igor pads some notes with NULs, which are not whitespace to str.strip.
+    for line in re.split(r"\r\n|\r|\n", text.replace("\0", "")):
         key, sep, value = line.partition(":")
         if not sep:
             key, sep, value = line.partition("=")
