@@ -482,3 +482,19 @@ def test_nanosurf_thermal_tune_in_prefixed_units(tmp_path):
     np.testing.assert_allclose(prefixed.spectrum[0], original.spectrum[0] * 1e3)
     np.testing.assert_allclose(prefixed.spectrum[1], original.spectrum[1] * 1e-9)
     assert [c.scale for c in prefixed.channels][:1] == [1e-9]
+
+
+def test_ibw_thermal_tune_gives_the_free_mode(tmp_path):
+    """A thermal tune saved as a wave: amplitude spectral density in pm/sqrt(Hz) against Hz."""
+    f = np.arange(8001) * 50.0
+    f0, q = 7.13e4, 151.0
+    sho = np.sqrt(1.0 / ((f0**2 - f**2) ** 2 + (f * f0 / q) ** 2)) * f0**2      # 1 at low frequency
+    asd_pm = (0.02 * sho + 0.05) * np.random.default_rng(8).gamma(100, 0.01, f.size)
+    note = asylum_note({"SpringConstant": "2.7193", "CustomLeverLength": "2.25e-4", "CustomLeverWidth": "4e-5"})
+    path = igor_wave(tmp_path / "Thermal.ibw", asd_pm, "ThermalData", [(0.0, 50.0, "Hz")], "pm/sqrt(Hz)", note=note)
+    record = read_instrument(path)
+    assert record.kind == "thermal spectrum" and record.spectrum[2] == "m/sqrt(Hz)"
+    data = to_discrepancy_input(path, TIP)
+    assert data.condition.tolist() == ["free"] and data.mode.tolist() == [1]
+    assert data.frequency_hz[0] == pytest.approx(f0, rel=2e-3) and data.quality_factor[0] == pytest.approx(q, rel=0.15)
+    assert data.metadata.k == 2.7193

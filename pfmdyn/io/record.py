@@ -75,12 +75,16 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
     """A record from raw field values: keeps positive finite numbers, lists the rest missing.
 
     Instruments write NaN or 0 for a value never measured; neither is a cantilever property.
+    A spectrum whose values are an amplitude spectral density (a unit per ``sqrt(Hz)``) is a
+    thermal spectrum, whatever the format.
 
     >>> r = make_record("x.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length_m": float("nan")})
     >>> r.fields, "length_m" in r.missing
     ({'spring_constant_n_per_m': 2.0}, True)
     """
     assert kind in KINDS, kind
+    if kind == "spectrum" and spectrum is not None and str(spectrum[2]).endswith("/sqrt(Hz)"):
+        kind = "thermal spectrum"
     fields = {}
     for name in FIELDS:
         value = found.get(name)
