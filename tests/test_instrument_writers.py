@@ -189,6 +189,7 @@ def test_ibw_units_not_si_are_kept_and_said(tmp_path):
     ("um", ("m", 1e-6)), ("µm", ("m", 1e-6)), ("nm/V", ("m/V", 1e-9)), ("pm/V", ("m/V", 1e-12)),
     ("fm/√Hz", ("m/sqrt(Hz)", 1e-15)), ("nm/sqrt(Hz)", ("m/sqrt(Hz)", 1e-9)), ("Å", ("m", 1e-10)),
     ("nN", ("N", 1e-9)), ("N/m", ("N/m", 1.0)), ("°", ("deg", 1.0)), ("", ("", 1.0)),
+    ("pm/rtHz", ("m/sqrt(Hz)", 1e-12)), ("V/Hz^0.5", ("V/sqrt(Hz)", 1.0)), ("mm^2", ("m^2", 1e-6)),
     ("a.u.", None), ("counts", None), ("kfoo", None), ("m/", None)])
 def test_prefixed_units_to_si(text, expected):
     got = si_unit(text)

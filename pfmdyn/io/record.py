@@ -117,7 +117,7 @@ def _si_factor(term: str):
     root = re.fullmatch(r"(?:sqrt\((.+)\)|√\(?(.+?)\)?|rt(.+))", term)
     if root:
         term, power = next(g for g in root.groups() if g), 0.5
-    exponent = re.fullmatch(r"(.+?)(?:\^(-?\d+)|([²³]))", term)
+    exponent = re.fullmatch(r"(.+?)(?:\^\(?(-?\d+(?:\.\d+)?)\)?|([²³]))", term)
     if exponent:
         term = exponent.group(1)
         power *= float(exponent.group(2)) if exponent.group(2) else {"²": 2.0, "³": 3.0}[exponent.group(3)]
@@ -139,8 +139,8 @@ def si_unit(unit: str):
 
     >>> si_unit("kHz"), si_unit("pN/nm"), si_unit("mV"), si_unit("µm"), si_unit("Hz")
     (('Hz', 1000.0), ('N/m', 0.001), ('V', 0.001), ('m', 1e-06), ('Hz', 1.0))
-    >>> si_unit("fm/√Hz"), si_unit("°"), si_unit("a.u."), si_unit("furlong")
-    (('m/sqrt(Hz)', 1e-15), ('deg', 1.0), None, None)
+    >>> si_unit("fm/√Hz"), si_unit("V/Hz^0.5"), si_unit("°"), si_unit("a.u."), si_unit("furlong")
+    (('m/sqrt(Hz)', 1e-15), ('V/sqrt(Hz)', 1.0), ('deg', 1.0), None, None)
     """
     unit = str(unit).strip()
     if not unit:
