@@ -127,7 +127,7 @@ def read_nid(path) -> InstrumentRecord:
         n = data.shape[-1]
         f0 = float(header.get("Dim0Min", 0.0))
         frequency = f0 + np.linspace(0.0, float(header.get("Dim0Range", n - 1)), n)
-        spectrum = si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", "Hz"))),
+        spectrum = si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", ""))) or "Hz",
                                data.reshape(-1, n)[0], unit)
         lever = info.get("Cantilever type")
         if lever:
