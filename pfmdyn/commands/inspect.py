@@ -38,7 +38,8 @@ def report(record: InstrumentRecord) -> str:
     lines = [f"{record.path}: {record.kind} ({record.instrument})", "channels:"]
     for c in record.channels:
         shape = " x ".join(str(n) for n in c.shape)
-        lines.append(f"  {c.name:<40} [{c.unit or '?'}]  {shape}")
+        stored = f"  (stored values x {c.scale:g})" if c.scale != 1 else ""
+        lines.append(f"  {c.name:<40} [{c.unit or '?'}]  {shape}{stored}")
     lines.append("cantilever fields found (SI):" if record.fields else "cantilever fields found: none")
     for name, value in record.fields.items():
         what, unit = FIELDS[name]

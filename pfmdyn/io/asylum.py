@@ -16,7 +16,9 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit"]
+from .record import FIELDS, si_unit, si_value
+
+__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
 
 NOTE_KEYS = {
     "spring_constant_n_per_m": "SpringConstant",
@@ -34,19 +36,25 @@ NOTE_KEYS = {
 # Units of Asylum image channels by their data type (the name without Trace/Retrace).
 _UNITS = {"Height": "m", "ZSensor": "m", "Amplitude": "m", "Amplitude1": "m", "Amplitude2": "m",
           "Deflection": "m", "Phase": "deg", "Phase1": "deg", "Phase2": "deg", "Frequency": "Hz",
-          "Potential": "V", "Bias": "V", "UserIn0": "V", "UserIn1": "V", "UserIn2": "V", "Current": "A", "Dissipation": "W"}
+          "Potential": "V", "Bias": "V", "UserIn0": "V", "UserIn1": "V", "UserIn2": "V", "Current": "A",
+          "Dissipation": "W",
+          # force curves: raw and sensed piezo, deflection, amplitude, frequency
+          "Raw": "m", "ZSnsr": "m", "LVDT": "m", "Defl": "m", "Amp": "m", "Freq": "Hz"}
 
 
 def parse_note(text: str) -> dict:
-    """The note's ``key: value`` lines as a dict of strings (any line end; later keys win).
+    """The note's ``key: value`` (or ``key=value``) lines as a dict of strings (any line end; later keys win).
 
-    >>> parse_note("SpringConstant: 8.3589\\rImagingMode:PFM Mode\\rno colon here")
-    {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode'}
+    >>> parse_note("SpringConstant: 8.3589\\rImagingMode:PFM Mode\\nTime: 12:30\\r\\nWidth = 2\\rno pair here")
+    {'SpringConstant': '8.3589', 'ImagingMode': 'PFM Mode', 'Time': '12:30', 'Width': '2'}
     """
     out = {}
-    for line in re.split(r"\r\n|\r|\n", text):
-        key, colon, value = line.partition(":")
-        if colon and key.strip():
+    # Igor pads some notes with NULs, which are not whitespace to str.strip.
+    for line in re.split(r"\r\n|\r|\n", text.replace("\0", "")):
+        key, sep, value = line.partition(":")
+        if not sep:
+            key, sep, value = line.partition("=")
+        if sep and key.strip():
             out[key.strip()] = value.strip()
     return out
 
@@ -59,18 +67,37 @@ def _number(value) -> float | None:
     return number if math.isfinite(number) else None
 
 
-def cantilever_fields(note: dict) -> dict:
-    """pfmdyn fields (SI) found in an Asylum note (values as strings or numbers).
+def cantilever_fields(note: dict, keys: dict = NOTE_KEYS) -> tuple[dict, list[str]]:
+    """pfmdyn fields (SI) found in an Asylum note, and a line for each value not understood.
+
+    ``keys`` maps pfmdyn fields to the note's keys (Asylum's by default).
+
+    Values are numbers in SI (as Asylum writes them) or text with a unit, prefixed or not
+    (``'300 kHz'``).  NaN means never measured; a unit of the wrong kind is reported.
 
     >>> cantilever_fields({"SpringConstant": "0.46538", "ThermalQ": "NaN", "TipVoltage": 3})
-    {'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}
+    ({'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}, [])
+    >>> cantilever_fields({"DriveFrequency": "300 kHz", "CustomLeverLength": "225 furlong"})
+    ({'drive_frequency_hz': 300000.0}, ["CustomLeverLength '225 furlong' not understood as m: lever length left out"])
     """
-    found = {}
-    for name, key in NOTE_KEYS.items():
-        value = _number(note.get(key))
-        if value is not None:
-            found[name] = value
-    return found
+    found, problems = {}, []
+    for name, key in keys.items():
+        value = note.get(key)
+        if value is None:
+            continue
+        if hasattr(value, "item") and getattr(value, "size", 1) == 1:
+            value = value.item()         # HDF5 attributes come as NumPy scalars
+        if isinstance(value, bytes):
+            value = value.decode("utf-8", "replace")
+        number = _number(value)
+        if number is None and isinstance(value, str) and value.strip().lower() not in ("nan", ""):
+            number = si_value(value, FIELDS[name][1])
+            if number is None:
+                problems.append(f"{key} {value.strip()!r} not understood as {FIELDS[name][1] or 'a number'}: "
+                                f"{FIELDS[name][0]} left out")
+        if number is not None and math.isfinite(number):
+            found[name] = number
+    return found, problems
 
 
 def channel_name(label: str) -> str:
@@ -94,3 +121,25 @@ def channel_unit(name: str) -> str:
     """
     base = re.sub(r"(Retrace|Trace)$", "", name)
     return _UNITS.get(base, "")
+
+
+def layer_unit(name: str, data_unit: str) -> str:
+    """The unit of an image layer or column: the stated data unit, unless the name says otherwise.
+
+    An Igor wave has one data unit for all its layers, and Asylum writes 'm' for a layered
+    image, which its phase, frequency and voltage layers do not have (SciFiReaders copies
+    that 'm' into NSID files).  A phase is an angle whatever the wave's unit says, unless
+    that unit is an angle too.  Then the name's unit is the channel's.
+
+    >>> layer_unit("PhaseRetrace", "m"), layer_unit("HeightRetrace", "nm"), layer_unit("Amplitude", "V")
+    ('deg', 'nm', 'V')
+    >>> layer_unit("UserIn0Retrace", "m"), layer_unit("PhaseTrace", "rad"), layer_unit("Custom", "")
+    ('V', 'rad', '')
+    """
+    by_name = channel_unit(name)
+    kind = (si_unit(data_unit) or (data_unit,))[0]
+    if not data_unit:
+        return by_name
+    if by_name and by_name != kind and kind not in ("deg", "rad") and (by_name == "deg" or kind == "m"):
+        return by_name
+    return data_unit

@@ -14,9 +14,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import MissingExtraError, UserError
 from . import asylum
-from .record import Channel, InstrumentRecord, make_record
+from .record import (
+    FIELDS,
+    InstrumentRecord,
+    make_channel,
+    make_record,
+    si_spectrum,
+    si_unit,
+)
 
 __all__ = ["read_hdf5"]
 
@@ -25,6 +34,9 @@ _BE_DRIVE = ("BE_center_frequency_[Hz]", "BE_center_frequency")
 
 
 def _text(value) -> str:
+    """An attribute as text: str, bytes or a one-element array of either."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.item()
     if isinstance(value, bytes):
         return value.decode("utf-8", "replace")
     return str(value)
@@ -32,7 +44,8 @@ def _text(value) -> str:
 
 def _scan(h5, h5py):
     """Main datasets (path, dataset) and the metadata attributes of the file, merged."""
-    mains, metadata = [], {}
+    # pfmdyn's own map files keep the cantilever on the root (named as pfmdyn's fields).
+    mains, metadata = [], dict(h5.attrs)
 
     def visit(name, obj):
         base = name.rsplit("/", 1)[-1]
@@ -46,6 +59,12 @@ def _scan(h5, h5py):
             mains.append((name, obj))
 
     h5.visititems(visit)
+    # Some converters keep the instrument's whole note as one text attribute ('Key: value' lines).
+    for value in list(metadata.values()):
+        text = _text(value)
+        if "\n" in text or "\r" in text:
+            for key, item in asylum.parse_note(text).items():
+                metadata.setdefault(key, item)
     return mains, metadata
 
 
@@ -55,23 +74,62 @@ def _is_main(base: str, dataset) -> bool:
         return False
     if base.startswith(("Position_", "Spectroscopic_")):
         return False
+    if base == "response" and "frequency_hz" in dataset.parent:     # pfmdyn's plain map layout
+        return True
     return base == "Raw_Data" or ("quantity" in dataset.attrs and "units" in dataset.attrs)
 
 
-def _spectroscopic_hz(h5, dataset) -> bool:
-    """True when a USID main dataset has a spectroscopic dimension in Hz."""
+def _frequency_axis(h5, dataset):
+    """Frequencies (Hz) of a main dataset's frequency dimension, or None when it has none.
+
+    USID: a row of ``Spectroscopic_Values`` whose unit is a frequency (one cycle of it);
+    NSID: a dimension scale whose ``units`` is a frequency.  Any SI prefix (kHz, MHz).
+    """
+    if dataset.name.rsplit("/", 1)[-1] == "response" and "frequency_hz" in dataset.parent:
+        return np.asarray(dataset.parent["frequency_hz"][()], dtype=float).ravel()
     ref = dataset.attrs.get("Spectroscopic_Values")
-    if ref is None:
-        return False
+    if ref is not None:
+        try:
+            table = h5[ref]
+        except (KeyError, ValueError, TypeError):
+            return None
+        units = [_text(u) for u in np.ravel(table.attrs.get("units", []))]
+        for row, unit in enumerate(units):
+            converted = si_unit(unit)
+            if converted and converted[0] == "Hz":
+                values = np.asarray(table[row if table.ndim > 1 else slice(None)]).ravel()
+                # Several spectroscopic dimensions repeat the frequencies: keep one cycle.
+                return np.unique(values) * converted[1]
+        return None
+    for dim in range(dataset.ndim):
+        for scale in dataset.dims[dim].values():
+            converted = si_unit(_text(scale.attrs.get("units", "")))
+            if converted and converted[0] == "Hz" and scale.shape == (dataset.shape[dim],):
+                return np.asarray(scale[()], dtype=float) * converted[1]
+    return None
+
+
+def _spectroscopic_size(h5, dataset) -> int:
+    ref = dataset.attrs.get("Spectroscopic_Values")
     try:
-        units = h5[ref].attrs.get("units", [])
+        return int(h5[ref].shape[-1]) if ref is not None else 0
     except (KeyError, ValueError, TypeError):
-        return False
-    return any(_text(u) == "Hz" for u in (units if hasattr(units, "__iter__") and not isinstance(units, (str, bytes)) else [units]))
+        return 0
+
+
+def _names(mains) -> list[str]:
+    """Channel names: the ``quantity`` of each dataset, with the dataset's name when two share one."""
+    quantities = [_text(d.attrs.get("quantity", "")) or name.rsplit("/", 1)[-1] for name, d in mains]
+    return [q if quantities.count(q) == 1 else f"{q} ({name.rsplit('/', 1)[-1]})"
+            for q, (name, _) in zip(quantities, mains)]
 
 
 def read_hdf5(path) -> InstrumentRecord:
-    """Read an NSID or USID ``.h5`` file: main datasets as channels, cantilever fields found."""
+    """Read an NSID or USID ``.h5`` file: main datasets as channels, cantilever fields found.
+
+    A dataset with a frequency dimension is a spectrum; a single one (one position) is
+    returned in SI as the record's ``spectrum``.
+    """
     path = Path(path)
     try:
         import h5py
@@ -85,22 +143,39 @@ def read_hdf5(path) -> InstrumentRecord:
         mains, metadata = _scan(h5, h5py)
         if not mains:
             raise UserError(f"{path}: no pycroscopy dataset found (expected NSID/USID groups "
-                            "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units')")
-        channels, kinds = [], set()
-        for name, dataset in mains:
-            quantity = _text(dataset.attrs.get("quantity", name.rsplit("/", 1)[-1]))
-            channels.append(Channel(quantity, _text(dataset.attrs.get("units", "")), tuple(dataset.shape)))
+                            "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units', "
+                            "or pfmdyn's map layout: response, frequency_hz)")
+        channels, kinds, notes, spectra = [], set(), [], []
+        for label, (name, dataset) in zip(_names(mains), mains):
+            unit = asylum.layer_unit(_text(dataset.attrs.get("quantity", "")), _text(dataset.attrs.get("units", "")))
+            channels.append(make_channel(label, unit, dataset.shape))
             data_type = _text(dataset.attrs.get("data_type", "")).upper()
-            if data_type == "IMAGE" or (data_type == "" and dataset.ndim == 2 and "Spectroscopic_Values" not in dataset.attrs):
-                kinds.add("image")
-            elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE") or _spectroscopic_hz(h5, dataset):
+            frequency = _frequency_axis(h5, dataset)
+            if frequency is not None and data_type not in ("IMAGE", "IMAGE_STACK"):
                 kinds.add("spectrum")
+                points = dataset.size // max(len(frequency), 1)
+                if points == 1:
+                    spectra.append(si_spectrum(path, frequency, "Hz", np.ravel(dataset[()]), unit))
+                else:
+                    notes.append(f"{label}: {points} spectra of {len(frequency)} frequencies ({frequency.min():.6g} "
+                                 f"to {frequency.max():.6g} Hz)")
+            elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE"):
+                kinds.add("spectrum")
+                notes.append(f"{label}: its spectral dimension has no frequency unit")
+            elif data_type == "" and _spectroscopic_size(h5, dataset) > 1:
+                kinds.add("curve")          # USID curves against bias, time, ... (not a frequency)
             else:
                 kinds.add("image")
-        convention = "NSID" if any("data_type" in d.attrs for _, d in mains) else "USID"
-    found = asylum.cantilever_fields(metadata)
-    for key in _BE_DRIVE:
-        if key in metadata and "drive_frequency_hz" not in found:
-            found["drive_frequency_hz"] = metadata[key]
-    kind = "spectrum" if "spectrum" in kinds else "image"
-    return make_record(path, kind, f"pycroscopy HDF5 ({convention})", channels, found)
+        convention = ("NSID" if any("data_type" in d.attrs for _, d in mains) else
+                      "USID" if any(name.endswith("Raw_Data") or "quantity" in d.attrs for name, d in mains)
+                      else "")
+    # Asylum's names first, then pfmdyn's own, then the band-excitation settings.
+    found, problems = {}, []
+    for keys in (asylum.NOTE_KEYS, {name: name for name in FIELDS},
+                 *({"drive_frequency_hz": key} for key in _BE_DRIVE)):
+        more, said = asylum.cantilever_fields(metadata, keys)
+        found, problems = {**more, **found}, problems + said
+    kind = next(k for k in ("spectrum", "image", "curve") if k in kinds)
+    instrument = f"pycroscopy HDF5 ({convention})" if convention else "HDF5 (pfmdyn map layout)"
+    return make_record(path, kind, instrument, channels, found,
+                       notes + problems, spectra[0] if len(spectra) == 1 else None)

@@ -12,7 +12,10 @@ Formats (each read with the maintained library of its field; they come with the
 * plain-text drive sweeps: Cytomass/pyIMD ``.txt`` and Nanonis oscillation-control ``.dat``.
 
 :func:`read_instrument` returns an :class:`InstrumentRecord`: what the file is, its channels
-with units, the cantilever fields found (SI) and the ones missing.
+with units, the cantilever fields found (SI) and the ones missing.  Prefixed units (``kHz``,
+``nm``, ``pN/nm``, ``mV``) are converted to SI (:func:`pfmdyn.io.record.si_unit`): a channel
+keeps the factor from its stored values, spectra and fields are converted; a unit that is
+not SI is kept as written and said in the record's notes, never guessed.
 :func:`to_discrepancy_input` turns a file into the resonance table of ``pfmdyn
 discrepancy`` (:class:`pfmdyn.io.tables.ResonanceData`): an image's metadata gives free
 mode 1 and contact mode 1 with their Q; a thermal spectrum gives the free modes fitted in
@@ -22,6 +25,7 @@ option, never a silent default.
 from __future__ import annotations
 
 import math
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -109,8 +113,10 @@ def read_instrument(path) -> InstrumentRecord:
         return reader(path)
     except UserError:
         raise
-    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError) as exc:
-        # A file the library opened but whose layout this reader does not know: one line, no traceback.
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError,
+            RuntimeError, ArithmeticError, struct.error) as exc:
+        # A file the library opened but whose layout this reader does not know, or a damaged one
+        # (HDF5 raises RuntimeError on broken B-trees): one line, no traceback.
         reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise UserError(f"{path}: could not interpret the file ({type(exc).__name__}: {reason})") from None
 

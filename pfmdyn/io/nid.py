@@ -15,12 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MissingExtraError, UserError
-from .record import Channel, InstrumentRecord, make_record
+from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_value
 
-__all__ = ["read_nid", "si_value"]
-
-_PREFIX = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "μ": 1e-6, "m": 1e-3,
-           "": 1.0, "k": 1e3, "M": 1e6, "G": 1e9}
+__all__ = ["read_nid"]
 
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
 _THERMAL_KEYS = {"frequency": ("free_resonance_hz", "Hz"), "q factor": ("free_quality_factor", ""),
@@ -48,23 +45,6 @@ def _fields(info: dict, keys: dict) -> dict:
             if number is not None:
                 found[target[0]] = number
     return found
-
-
-def si_value(text: str, unit: str) -> float | None:
-    """A Nanosurf value with its unit (``'179.8kHz'``, ``'27.13 N/m'``) in SI; None if not that unit.
-
-    >>> si_value("179.8kHz", "Hz"), si_value("27.13 N/m", "N/m"), si_value("442 ", ""), si_value("40 °C", "Hz")
-    (179800.0, 27.13, 442.0, None)
-    """
-    match = re.fullmatch(r"\s*([-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?)\s*(\S*)\s*", str(text))
-    if not match:
-        return None
-    number, suffix = float(match.group(1)), match.group(2)
-    if not unit:
-        return number if suffix == "" else None
-    if not suffix.endswith(unit) or suffix[: len(suffix) - len(unit)] not in _PREFIX:
-        return None
-    return number * _PREFIX[suffix[: len(suffix) - len(unit)]]
 
 
 def _load(path: Path):
@@ -147,7 +127,8 @@ def read_nid(path) -> InstrumentRecord:
         n = data.shape[-1]
         f0 = float(header.get("Dim0Min", 0.0))
         frequency = f0 + np.linspace(0.0, float(header.get("Dim0Range", n - 1)), n)
-        spectrum = (frequency, data.reshape(-1, n)[0], unit)
+        spectrum = si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", ""))) or "Hz",
+                               data.reshape(-1, n)[0], unit)
         lever = info.get("Cantilever type")
         if lever:
             notes.append(f"cantilever type {lever}: its length and width are not in the file")
@@ -158,7 +139,7 @@ def read_nid(path) -> InstrumentRecord:
                   if isinstance(name, tuple) and str(name[0]).lower().startswith("spec")]
         if kind == "image" and curves:
             notes.append(f"also holds {len(curves[0])} spectroscopy curves per channel")
-    listed = [Channel(" ".join(str(p) for p in name) if isinstance(name, tuple) else str(name), unit,
+    listed = [make_channel(" ".join(str(p) for p in name) if isinstance(name, tuple) else str(name), unit,
                       data.shape[1:] if data.ndim > 1 and data.shape[0] == 1 else data.shape)
               for name, data, unit, _ in channels]
     return make_record(path, kind, "Nanosurf (NID)", listed, found, notes, spectrum)

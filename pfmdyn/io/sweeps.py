@@ -19,13 +19,21 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from .record import Channel, InstrumentRecord, make_record
+from .record import (
+    FIELDS,
+    InstrumentRecord,
+    make_channel,
+    make_record,
+    si_spectrum,
+    si_unit,
+    si_value,
+)
 
 __all__ = ["read_sweep", "split_unit"]
 
-# Header key (colon stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
-_KEYS = {"Peak amplitude frequency (Hz)": "free_resonance_hz", "Q factor": "free_quality_factor",
-         "f_res (Hz)": "free_resonance_hz", "Q": "free_quality_factor"}
+# Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
+_KEYS = {"Peak amplitude frequency": "free_resonance_hz", "Q factor": "free_quality_factor",
+         "f_res": "free_resonance_hz", "Q": "free_quality_factor"}
 _TABLE_START = ("Sweep data", "[DATA]")
 
 
@@ -75,21 +83,25 @@ def read_sweep(path) -> InstrumentRecord:
     path = Path(path)
     header, columns, table = _split(path)
     names = [split_unit(c) for c in columns]
-    found = {}
+    found, notes = {}, []
     for key, value in header.items():
-        if key in _KEYS:
-            try:
-                found.setdefault(_KEYS[key], float(value))
-            except ValueError:
-                pass
-    hz = [i for i, (_, unit) in enumerate(names) if unit == "Hz"]
+        name, unit = split_unit(key)
+        if name in _KEYS:
+            # A unit in the key ('(kHz)') scales the value; a unit of the wrong kind is reported.
+            number = si_value(f"{value} {unit}", FIELDS[_KEYS[name]][1])
+            if number is None and value.strip().lower() != "nan":
+                notes.append(f"header '{key}' = {value!r} not understood as {FIELDS[_KEYS[name]][1] or 'a number'}")
+            elif number is not None:
+                found.setdefault(_KEYS[name], number)
+    converted = [si_unit(unit) for _, unit in names]
+    hz = [i for i, c in enumerate(converted) if c and c[0] == "Hz"]
     if not hz:
-        raise UserError(f"{path}: no frequency column (a column in Hz) in the sweep table")
+        raise UserError(f"{path}: no frequency column (a column in Hz or kHz) in the sweep table")
     # Nanonis gives a centre frequency and a shift from it; their sum is the drive frequency.
-    frequency = table[:, hz].sum(axis=1)
-    channels = [Channel(name, unit, (len(table),)) for i, (name, unit) in enumerate(names) if i not in hz]
+    frequency = sum(table[:, i] * converted[i][1] for i in hz)
+    others = [i for i in range(len(names)) if i not in hz]
+    channels = [make_channel(names[i][0], names[i][1], (len(table),)) for i in others]
     nanonis = any(k.startswith("Oscillation Control") for k in header)
     instrument = "Nanonis oscillation control" if nanonis else "Cytomass frequency sweep"
-    spectrum = (frequency, table[:, [i for i in range(len(names)) if i not in hz][0]],
-                channels[0].unit) if channels else None
-    return make_record(path, "spectrum", instrument, channels, found, spectrum=spectrum)
+    spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], names[others[0]][1]) if others else None
+    return make_record(path, "spectrum", instrument, channels, found, notes, spectrum)
