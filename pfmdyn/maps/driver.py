@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ..errors import UserError
-from .fit import QUANTITIES, fit_block
+from .fit import MECHANISMS, fit_block, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 
@@ -33,8 +33,8 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
         raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
     result = fit_block(source.model, response, **options)
     group = zarr.open_group(out, mode="r+")
-    for name, value in result.items():
-        group[name][ys, xs] = value
+    for name in quantities(source.model.mechanisms):
+        group[name][ys, xs] = result[name]
     group["done"][by, bx] = 1
     return response.shape[0] * response.shape[1]
 
@@ -46,7 +46,7 @@ def _output(out, source: MapInput, block: int):
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     if "done" in group and group["done"].shape != grid:
         raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
-    for name, (unit, text) in QUANTITIES.items():
+    for name, (unit, text) in quantities(source.model.mechanisms).items():
         if name not in group:
             arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
             arr.attrs.update(units=unit, description=text)
@@ -116,5 +116,5 @@ def _compute(tasks, scheduler, progress, already):
 def read_maps(out: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """The fitted maps of ``out`` (a ``maps.zarr`` directory) and their units."""
     group = _require("zarr").open_group(out, mode="r")
-    maps = {name: np.asarray(group[name][...]) for name in QUANTITIES if name in group}
+    maps = {name: np.asarray(group[name][...]) for name in quantities(MECHANISMS) if name in group}
     return maps, {name: group[name].attrs.get("units", "") for name in maps}
