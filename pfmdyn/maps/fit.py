@@ -21,7 +21,7 @@ projected residual, the marginal covariance of the full problem (Golub and Perey
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -224,6 +224,51 @@ def _bounds(model, k1_range):
     return np.array(lower), np.array(upper)
 
 
+def _initial(model, y, q0, k1_range, iterations, tolerance):
+    """Starting parameters: the (k1, Q) grid; with extra damping mechanisms, the fitted baseline
+    with the extras switched off (nested, so the fit never ends worse than the baseline)."""
+    if model.mechanisms != ("internal",):
+        base = replace(model, mechanisms=("internal",))
+        p_base = _levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
+                                      _bounds(base, k1_range), iterations, tolerance)[0]
+        return np.stack([p_base[:, base.parameters.index(n)] if n in base.parameters else np.zeros(len(y))
+                         for n in model.parameters], axis=1)
+    log_k1, log_q = _start(model, y, q0, k1_range)
+    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + math.log(0.5)}  # Mindlin: k2 ~ 0.7-0.9 k1
+    return np.stack([start[n] for n in model.parameters], axis=1)
+
+
+def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
+    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost)."""
+    lower, upper = bounds
+    n_p, band_list = p.shape[1], model.bands
+    c, r, J = _project(*model.design(p), y, band_list)
+    cost = np.sum(r**2, axis=1)
+    lam = np.full(len(y), 1e-3)
+    dof = max(r.shape[1] - n_p - 2 * len(band_list), 1)
+    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
+    for _ in range(iterations):
+        Ja, ra, la = J[active], r[active], lam[active]
+        JtJ = np.einsum("nki,nkj->nij", Ja, Ja)
+        grad = np.einsum("nki,nk->ni", Ja, ra)
+        A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
+        step = np.clip(p[active] - np.linalg.solve(A, grad[..., None])[..., 0], lower, upper) - p[active]
+        # predicted decrease of the cost (Gauss-Newton); tiny: the pixel has converged
+        decrement = -np.einsum("ni,ni->n", step, grad)
+        moving = (decrement > tolerance * cost[active] / dof) & (la < 1e8)
+        active, step = active[moving], step[moving]
+        if active.size == 0:
+            break
+        trial = p[active] + step
+        c_t, r_t, J_t = _project(*model.design(trial), y[active], band_list)
+        cost_t = np.sum(r_t**2, axis=1)
+        better = cost_t < cost[active]
+        idx = active[better]
+        p[idx], c[idx], r[idx], J[idx], cost[idx] = trial[better], c_t[better], r_t[better], J_t[better], cost_t[better]
+        lam[active] = np.where(better, lam[active] / 3, lam[active] * 4)
+    return p, c, r, J, cost
+
+
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
               gap_threshold=0.2, tolerance=1e-4) -> dict[str, np.ndarray]:
     """Fit every pixel of ``response`` (``(..., n_freq)`` complex) at once.
@@ -250,35 +295,9 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     y = y / scale[:, None]
     k1_range = k1_range or (model.k, 1e4 * model.k)
     names = model.parameters
-    n_p, band_list = len(names), model.bands
-    log_k1, log_q = _start(model, y, q0, k1_range)
-    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + math.log(0.5)}  # Mindlin: k2 ~ 0.7-0.9 k1
-    p = np.stack([start.get(n, np.zeros(len(y))) for n in names], axis=1)
-    lower, upper = _bounds(model, k1_range)
-    c, r, J = _project(*model.design(p), y, band_list)
-    cost = np.sum(r**2, axis=1)
-    lam = np.full(len(y), 1e-3)
-    dof = max(r.shape[1] - n_p - 2 * len(band_list), 1)
-    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
-    for _ in range(iterations):
-        Ja, ra, la = J[active], r[active], lam[active]
-        JtJ = np.einsum("nki,nkj->nij", Ja, Ja)
-        grad = np.einsum("nki,nk->ni", Ja, ra)
-        A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
-        step = np.clip(p[active] - np.linalg.solve(A, grad[..., None])[..., 0], lower, upper) - p[active]
-        # predicted decrease of the cost (Gauss-Newton); tiny: the pixel has converged
-        decrement = -np.einsum("ni,ni->n", step, grad)
-        moving = (decrement > tolerance * cost[active] / dof) & (la < 1e8)
-        active, step = active[moving], step[moving]
-        if active.size == 0:
-            break
-        trial = p[active] + step
-        c_t, r_t, J_t = _project(*model.design(trial), y[active], band_list)
-        cost_t = np.sum(r_t**2, axis=1)
-        better = cost_t < cost[active]
-        idx = active[better]
-        p[idx], c[idx], r[idx], J[idx], cost[idx] = trial[better], c_t[better], r_t[better], J_t[better], cost_t[better]
-        lam[active] = np.where(better, lam[active] / 3, lam[active] * 4)
+    p = _initial(model, y, q0, k1_range, iterations, tolerance)
+    p, c, r, J, cost = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
+    dof = max(r.shape[1] - len(names) - 2 * len(model.bands), 1)
     JtJ = np.einsum("nki,nkj->nij", J, J)
     cov = np.linalg.pinv(JtJ) * (cost / dof)[:, None, None]
     sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
