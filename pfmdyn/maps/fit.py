@@ -41,14 +41,18 @@ _QUANTITIES = {
     "k2": ("N/m", "longitudinal contact stiffness (two or more bands; else NaN)"),
     "k2_stderr": ("N/m", "standard error of k2"),
     "quality_factor": ("1", "quality factor Q of the beam loss 1/Q (internal friction)"),
+    "quality_factor_stderr": ("1", "standard error of Q"),
     "viscous_loss": ("1", "viscous drag g = c / (rho S omega1): 1/Q of free mode 1 under drag alone"),
+    "viscous_loss_stderr": ("1", "standard error of viscous_loss"),
     "contact_loss": ("1", "contact dashpot x = omega1 eta / k1: loss tangent of the contact at f1"),
+    "contact_loss_stderr": ("1", "standard error of contact_loss"),
     "amplitude": ("response units per unit d1", "d_eff amplitude |c| (first band)"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
     "gap": ("1", "relative residual |y - model| / |y|"),
     "explained": ("1", "1 where the model explains the pixel (gap below threshold), else 0"),
 }
-_ONLY = {"viscous_loss": "viscous", "contact_loss": "contact"}
+_ONLY = {"viscous_loss": "viscous", "viscous_loss_stderr": "viscous",
+         "contact_loss": "contact", "contact_loss_stderr": "contact"}
 # forward-difference steps (internal coordinates): relative error ~1e-6, far below the noise
 _STEP = {"log_k1": 1e-6, "log_q": 1e-6, "log_k2": 1e-6, "g": 1e-7, "x": 1e-7}
 # parameters that move beta (the transcendental basis) vs those entering only the springs
@@ -58,8 +62,8 @@ _MOVES_BETA = ("log_q", "g")
 def quantities(mechanisms=("internal",)) -> dict[str, tuple[str, str]]:
     """Output arrays (name -> (unit, description)) of a model with these damping mechanisms.
 
-    >>> list(quantities(("internal", "viscous")))[4:7]
-    ['quality_factor', 'viscous_loss', 'amplitude']
+    >>> list(quantities(("internal", "viscous")))[4:8]
+    ['quality_factor', 'quality_factor_stderr', 'viscous_loss', 'viscous_loss_stderr']
     """
     return {name: v for name, v in _QUANTITIES.items() if _ONLY.get(name, "internal") in mechanisms}
 
@@ -306,7 +310,9 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
     gap = np.sqrt(cost)
     out = {"k1": k1, "k1_stderr": k1 * sd["log_k1"], "k2": k2, "k2_stderr": k2 * sd.get("log_k2", np.nan),
-           "quality_factor": np.exp(col["log_q"]), "viscous_loss": col.get("g"), "contact_loss": col.get("x"),
+           "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * sd["log_q"],
+           "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
+           "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
            "amplitude": np.abs(c[:, 0]) * scale, "phase": np.angle(c[:, 0]), "gap": gap,
            "explained": (gap < gap_threshold).astype(float), "cost": cost}
     keep = [*quantities(model.mechanisms), "cost"]
