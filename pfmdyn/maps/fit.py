@@ -53,10 +53,6 @@ _QUANTITIES = {
 }
 _ONLY = {"viscous_loss": "viscous", "viscous_loss_stderr": "viscous",
          "contact_loss": "contact", "contact_loss_stderr": "contact"}
-# forward-difference steps (internal coordinates): relative error ~1e-6, far below the noise
-_STEP = {"log_k1": 1e-6, "log_q": 1e-6, "log_k2": 1e-6, "g": 1e-7, "x": 1e-7}
-# parameters that move beta (the transcendental basis) vs those entering only the springs
-_MOVES_BETA = ("log_q", "g")
 
 
 def quantities(mechanisms=("internal",)) -> dict[str, tuple[str, str]]:
@@ -134,23 +130,25 @@ class BeamMapModel:
         names = ["log_k1", "log_q"] + (["log_k2"] if len(self.bands) > 1 else [])
         return tuple(names + [{"viscous": "g", "contact": "x"}[m] for m in self.mechanisms if m != "internal"])
 
-    def _slope(self, inv_q, g, k1, k2, x):
-        """Tip slope per unit d1; (inv_q, g) set beta, (k1, k2, x) only the springs.
+    def _arguments(self, inv_q, g, k1, k2, x):
+        """``beta`` and the springs relative to the complex EI, with the damping factors.
 
-        The two groups broadcast separately, so derivatives along the springs share one
-        evaluation of the transcendental basis (which depends on beta alone).
+        Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
+        on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
+        contact springs are divided by that factor (the dashpot multiplies ``k1``).
         """
         f = np.asarray(self.frequency_hz, float)
         r = f / self.f1
         beta0 = Cantilever(self.k, self.f1, self.L).beta(f)
         # Without drag the beta factor does not depend on r: keep it one number per pixel.
-        beta_factor, k_factor, _, _ = damping.factors(r if "viscous" in self.mechanisms else 1.0, inv_q, g, 0.0)
+        r_beta = r if "viscous" in self.mechanisms else 1.0
+        beta_factor, k_factor, _, _ = damping.factors(r_beta, inv_q, g, 0.0)
         k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
-        return elastic_contact.slope(beta0 * beta_factor, self.k * k_factor, k1 * k1_factor, k2, self.H, self.L)[0]
+        return beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor
 
     def _physical(self, p):
-        """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(..., n_p)``), each ``(..., 1)``."""
-        col = {name: p[..., i, None] for i, name in enumerate(self.parameters)}
+        """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(n, n_p)``), each ``(n, 1)``."""
+        col = {name: p[:, i, None] for i, name in enumerate(self.parameters)}
         zero = np.zeros_like(col["log_k1"])
         return (np.exp(-col["log_q"]), col.get("g", zero), np.exp(col["log_k1"]),
                 np.exp(col["log_k2"]) if "log_k2" in col else zero, col.get("x", zero))
@@ -158,35 +156,30 @@ class BeamMapModel:
     def shape_functions(self, k1, q, k2=0.0, g=0.0, x=0.0) -> np.ndarray:
         """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
         col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
-        return self._slope(*(c[:, None] for c in col))
+        _, _, _, beta, k1e, k2e, _ = self._arguments(*(c[:, None] for c in col))
+        return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0]
 
-    def design(self, p, jacobian=True):
+    def design(self, p):
         """Transfer function ``(n, n_freq)`` at internal parameters ``p`` ``(n, n_p)`` and its
-        derivatives ``(n_p, n, n_freq)`` (None unless ``jacobian``).
-
-        Forward differences of the generated transfer function, evaluated together: one call
-        with the springs' steps stacked (one basis evaluation), one with the steps that move
-        beta.  The one place derivatives are made: generated Jacobians replace this body alone.
+        derivatives ``(n_p, n, n_freq)``: one call of the generated values-and-partials (w.r.t.
+        ``beta``, ``k1``, ``k2``), chained with the generated derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
-        if not jacobian:
-            return self._slope(inv_q, g, k1, k2, x), None
-        names = self.parameters
-        springs = [i for i, n in enumerate(names) if n not in _MOVES_BETA]
-        movers = [i for i, n in enumerate(names) if n in _MOVES_BETA]
-        stacked = np.repeat(p[None], 1 + len(springs), axis=0)
-        for row, i in enumerate(springs, start=1):
-            stacked[row, :, i] += _STEP[names[i]]
-        _, _, sk1, sk2, sx = self._physical(stacked)
-        values = self._slope(inv_q, g, sk1, sk2, sx)
-        moved = np.repeat(p[None], len(movers), axis=0)
-        for row, i in enumerate(movers):
-            moved[row, :, i] += _STEP[names[i]]
-        m_inv_q, m_g, _, _, _ = self._physical(moved)
-        beta_moved = self._slope(m_inv_q, m_g, k1, k2, x)
-        d = np.empty((len(names),) + values.shape[1:], complex)
-        d[springs] = (values[1:] - values[0]) / np.array([_STEP[names[i]] for i in springs])[:, None, None]
-        d[movers] = (beta_moved - values[0]) / np.array([_STEP[names[i]] for i in movers])[:, None, None]
+        beta0, r, r_beta, beta, k1e, k2e, k_factor = self._arguments(inv_q, g, k1, k2, x)
+        values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
+        d_beta, d_k1, d_k2 = partials[0]
+        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, _ = damping.d_factors(r_beta, inv_q, g, 0.0)
+        # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
+        spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
+        chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
+                 "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
+                 "g": d_beta * beta0 * dbf_g}
+        if "contact" in self.mechanisms:
+            dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2]
+            chain["x"] = d_k1 * k1 * dk1f_x / k_factor
+        d = np.empty((len(self.parameters),) + values[0].shape, complex)
+        for i, name in enumerate(self.parameters):
+            d[i] = chain[name]
         return values[0], d
 
 
