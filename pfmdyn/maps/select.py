@@ -30,7 +30,8 @@ __all__ = ["choose_model", "sample_pixels"]
 
 
 def sample_pixels(source: MapInput, count: int = 16) -> np.ndarray:
-    """Spectra ``(n, n_freq)`` at the centres of a ``sqrt(count)`` x ``sqrt(count)`` grid of cells."""
+    """Spectra ``(n, n_freq)`` at the centres of a ``sqrt(count)`` x ``sqrt(count)`` grid of cells
+    (fewer on a map with fewer rows or columns); only those spectra are read."""
     ny, nx = source.shape
     side = max(1, int(math.isqrt(count)))
     ys = np.unique(((np.arange(side) + 0.5) * ny / side).astype(int))
@@ -64,6 +65,22 @@ def choose_model(source: MapInput, count: int = 16, **options) -> tuple[tuple[st
 
     ``options`` go to :func:`pfmdyn.maps.fit.fit_block`.  Rows carry the model name, its BIC
     and gap totalled over the sample pixels, and whether it was chosen.
+
+    Examples
+    --------
+    >>> import tempfile, h5py
+    >>> from pfmdyn.maps.driver import open_map
+    >>> from pfmdyn.maps.fit import BeamMapModel
+    >>> f = np.linspace(2.2e5, 4.2e5, 64)
+    >>> y = BeamMapModel(2.0, 225e-6, 75e3, 10e-6, f).shape_functions(np.full(16, 400.0), np.full(16, 60.0))
+    >>> y = y + 1e-3 * np.abs(y).max() * np.random.default_rng(0).standard_normal(y.shape)
+    >>> path = tempfile.mkdtemp() + "/be.h5"
+    >>> with h5py.File(path, "w") as h:
+    ...     h["response"], h["frequency_hz"] = y.reshape(4, 4, -1), f
+    ...     h.attrs.update(spring_constant_n_per_m=2.0, length_m=225e-6, tip_height_m=10e-6, free_resonance_hz=75e3)
+    >>> mechanisms, rows = choose_model(open_map(path))
+    >>> mechanisms, [row["model"] for row in rows]
+    (('internal',), ['elastic', 'elastic+viscous', 'elastic+contact', 'elastic+viscous+contact'])
     """
     y = sample_pixels(source, count)
     extras = MECHANISMS[1:]
