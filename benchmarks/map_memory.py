@@ -27,7 +27,7 @@ K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 BLOCK = 16
 
 # Runs `pfmdyn map` under an address-space limit; prints peak RSS (MiB) of this process and of
-# its largest worker, and VmPeak.
+# its largest worker (forked from it), and VmPeak.
 _RUNNER = """
 import json, resource, sys
 limit = int(sys.argv[1])
@@ -35,10 +35,11 @@ if limit:
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 from pfmdyn.cli import main
 code = main(["map", *sys.argv[2:]])
-vm = [line for line in open("/proc/self/status") if line.startswith("VmPeak")][0].split()[1]
-print(json.dumps({"code": code, "rss_self": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+status = {line.split(":")[0]: line.split()[1] for line in open("/proc/self/status") if line.startswith("Vm")}
+# VmHWM, not ru_maxrss: the latter keeps the launching process's peak across exec
+print(json.dumps({"code": code, "rss_self": int(status["VmHWM"]) / 1024,
                   "rss_workers": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
-                  "vm_peak": int(vm) / 1024}))
+                  "vm_peak": int(status["VmPeak"]) / 1024}))
 """
 
 
