@@ -203,14 +203,28 @@ def _project(g, dg, y, band_list):
 
 
 def _start(model, y, q0, k1_range):
-    """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0)."""
-    k1_grid, q_grid = np.meshgrid(np.geomspace(*k1_range, 48), q0 * np.geomspace(0.25, 4, 5))
-    k1_grid, q_grid = k1_grid.ravel(), q_grid.ravel()
-    g = model.shape_functions(k1_grid, q_grid)
+    """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0), refined
+    by the vertex of the parabola through the best grid value and its neighbours on each axis."""
+    log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
+    k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
+    g = model.shape_functions(k1_grid.ravel(), q_grid.ravel())
     proj = sum(np.abs(y[:, b] @ g[:, b].conj().T) ** 2 / np.sum(np.abs(g[:, b]) ** 2, axis=1)
-               for b in model.bands)
-    best = np.argmax(proj, axis=1)
-    return np.log(k1_grid[best]), np.log(q_grid[best])
+               for b in model.bands).reshape(len(y), *k1_grid.shape)
+    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), k1_grid.shape)
+    rows = np.arange(len(y))
+    return (_vertex(proj[rows, iq], ik, log_k1), _vertex(proj[rows, :, ik], iq, log_q))
+
+
+def _vertex(values, best, axis):
+    """Abscissa of the parabola's vertex through ``values[best - 1 : best + 2]`` on an evenly
+    spaced ``axis`` (the grid value itself at an edge or without curvature)."""
+    inner = np.clip(best, 1, len(axis) - 2)
+    rows = np.arange(len(values))
+    lo, mid, hi = (values[rows, inner + d] for d in (-1, 0, 1))
+    curvature = lo - 2 * mid + hi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = np.where((best == inner) & (curvature < 0), 0.5 * (lo - hi) / curvature, 0.0)
+    return axis[best] + np.clip(shift, -0.5, 0.5) * (axis[1] - axis[0])
 
 
 def _bounds(model, k1_range):
@@ -267,7 +281,7 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2, tolerance=1e-4) -> dict[str, np.ndarray]:
+              gap_threshold=0.2, tolerance=1e-3) -> dict[str, np.ndarray]:
     """Fit every pixel of ``response`` (``(..., n_freq)`` complex) at once.
 
     Returns the arrays of :func:`quantities` of the model, each of the pixel shape
