@@ -159,13 +159,16 @@ class BeamMapModel:
         _, _, _, beta, k1e, k2e, _ = self._arguments(*(c[:, None] for c in col))
         return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0]
 
-    def design(self, p):
+    def design(self, p, jacobian=True):
         """Transfer function ``(n, n_freq)`` at internal parameters ``p`` ``(n, n_p)`` and its
-        derivatives ``(n_p, n, n_freq)``: one call of the generated values-and-partials (w.r.t.
-        ``beta``, ``k1``, ``k2``), chained with the generated derivatives of the damping factors.
+        derivatives ``(n_p, n, n_freq)`` (None unless ``jacobian``): one call of the generated
+        values-and-partials (w.r.t. ``beta``, ``k1``, ``k2``), chained with the generated
+        derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
         beta0, r, r_beta, beta, k1e, k2e, k_factor = self._arguments(inv_q, g, k1, k2, x)
+        if not jacobian:
+            return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0], None
         values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
         d_beta, d_k1, d_k2 = partials[0]
         (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, _ = damping.d_factors(r_beta, inv_q, g, 0.0)
@@ -250,7 +253,12 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
 
 
 def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
-    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost)."""
+    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost).
+
+    A step predicted to gain less than 100 ``tolerance`` is the last one (Gauss-Newton converges
+    quadratically: the next would gain below ``tolerance``), so its point gets values only; ``J``
+    then stays the Jacobian of the previous point, a fraction of a standard error away.
+    """
     lower, upper = bounds
     n_p, band_list = p.shape[1], model.bands
     c, r, J = _project(*model.design(p), y, band_list)
@@ -264,19 +272,29 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
         grad = np.einsum("nki,nk->ni", Ja, ra)
         A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
         step = np.clip(p[active] - np.linalg.solve(A, grad[..., None])[..., 0], lower, upper) - p[active]
-        # predicted decrease of the cost (Gauss-Newton); tiny: the pixel has converged
-        decrement = -np.einsum("ni,ni->n", step, grad)
-        moving = (decrement > tolerance * cost[active] / dof) & (la < 1e8)
-        active, step = active[moving], step[moving]
+        # predicted decrease of the cost (Gauss-Newton) in units of the tolerance
+        gain = -np.einsum("ni,ni->n", step, grad) / (tolerance * cost[active] / dof)
+        moving = (gain > 1) & (la < 1e8)
+        active, step, gain = active[moving], step[moving], gain[moving]
         if active.size == 0:
             break
-        trial = p[active] + step
-        c_t, r_t, J_t = _project(*model.design(trial), y[active], band_list)
-        cost_t = np.sum(r_t**2, axis=1)
-        better = cost_t < cost[active]
-        idx = active[better]
-        p[idx], c[idx], r[idx], J[idx], cost[idx] = trial[better], c_t[better], r_t[better], J_t[better], cost_t[better]
-        lam[active] = np.where(better, lam[active] / 3, lam[active] * 4)
+        finished = np.zeros(len(active), bool)
+        for last in (False, True):
+            sel = (gain < 100) == last
+            if not sel.any():
+                continue
+            act = active[sel]
+            trial = p[act] + step[sel]
+            c_t, r_t, J_t = _project(*model.design(trial, jacobian=not last), y[act], band_list)
+            cost_t = np.sum(r_t**2, axis=1)
+            better = cost_t < cost[act]
+            idx = act[better]
+            p[idx], c[idx], r[idx], cost[idx] = trial[better], c_t[better], r_t[better], cost_t[better]
+            if not last:
+                J[idx] = J_t[better]
+            lam[act] = np.where(better, lam[act] / 3, lam[act] * 4)
+            finished[np.flatnonzero(sel)[better]] = last
+        active = active[~finished]
     return p, c, r, J, cost
 
 
