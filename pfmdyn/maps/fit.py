@@ -29,7 +29,11 @@ from ..cantilever import Cantilever
 from ..errors import UserError
 from ..generated import damping, elastic_contact
 
-__all__ = ["BeamMapModel", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
+__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
+
+CHUNK = 256
+"""Pixels fitted together: large enough to make the per-call overhead negligible, small enough
+for the ``(pixels, frequencies)`` temporaries to stay in cache (1024 at once is ~1.5x slower)."""
 
 MECHANISMS = ("internal", "viscous", "contact")
 """Damping mechanisms a map model may hold (``internal`` always: the baseline)."""
@@ -300,7 +304,7 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
               gap_threshold=0.2, tolerance=1e-3) -> dict[str, np.ndarray]:
-    """Fit every pixel of ``response`` (``(..., n_freq)`` complex) at once.
+    """Fit every pixel of ``response`` (``(..., n_freq)`` complex), :data:`CHUNK` pixels at once.
 
     Returns the arrays of :func:`quantities` of the model, each of the pixel shape
     ``response.shape[:-1]``, plus ``cost`` (the squared relative residual).  A pixel stops when
@@ -319,10 +323,16 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     y = np.asarray(response, complex)
     shape = y.shape[:-1]
     y = y.reshape(-1, y.shape[-1])
+    k1_range = k1_range or (model.k, 1e4 * model.k)
+    settings = (q0, k1_range, iterations, gap_threshold, tolerance)
+    parts = [_fit_pixels(model, y[i:i + CHUNK], *settings) for i in range(0, max(len(y), 1), CHUNK)]
+    return {name: np.concatenate([part[name] for part in parts]).reshape(shape) for name in parts[0]}
+
+
+def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance):
     scale = np.linalg.norm(y, axis=1)
     scale[scale == 0] = 1.0
     y = y / scale[:, None]
-    k1_range = k1_range or (model.k, 1e4 * model.k)
     names = model.parameters
     p = _initial(model, y, q0, k1_range, iterations, tolerance)
     p, c, r, J, cost = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
@@ -340,5 +350,4 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
            "amplitude": np.abs(c[:, 0]) * scale, "phase": np.angle(c[:, 0]), "gap": gap,
            "explained": (gap < gap_threshold).astype(float), "cost": cost}
-    keep = [*quantities(model.mechanisms), "cost"]
-    return {name: out[name].reshape(shape) for name in keep}
+    return {name: out[name] for name in [*quantities(model.mechanisms), "cost"]}
