@@ -23,7 +23,7 @@ from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 
-__all__ = ["MapInput", "open_map", "run_map", "read_maps"]
+__all__ = ["MapInput", "check_scheduler", "open_map", "run_map", "read_maps"]
 
 def _blocks(shape, block):
     ny, nx = shape
@@ -126,11 +126,19 @@ def _pool(workers: int):
     return pool
 
 
+def check_scheduler(scheduler: str | None) -> None:
+    """Raise a one-line error unless ``scheduler`` is one :func:`run_map` accepts.
+
+    >>> check_scheduler("tcp://127.0.0.1:8786")
+    """
+    if scheduler not in (None, "processes", "threads", "sync") and "://" not in scheduler:
+        raise UserError(f"unknown scheduler {scheduler!r}: use processes, threads, sync or tcp://HOST:PORT")
+
+
 def _compute(tasks, scheduler, workers, progress, already, total):
     """Run the block tasks, with a tqdm bar of blocks done (of the whole map) and pixels per second."""
     from tqdm.auto import tqdm
-    if scheduler not in (None, "processes", "threads", "sync") and "://" not in scheduler:
-        raise UserError(f"unknown scheduler {scheduler!r}: use processes, threads, sync or tcp://HOST:PORT")
+    check_scheduler(scheduler)
     kwargs = {"scheduler": scheduler or "processes"}
     if kwargs["scheduler"] in ("processes", "threads"):
         kwargs["num_workers"] = max(1, min(workers or os.cpu_count() or 1, len(tasks)))

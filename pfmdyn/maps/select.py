@@ -11,7 +11,7 @@ it near the noise).  Forward steps add the best material candidate until none is
 Every combination of mechanisms is fitted once (four small fits); the noise variance of each
 pixel is the smallest residual variance ``RSS / (n_freq - n_parameters / 2)`` any of them
 reaches (the usual full-model estimate, robust to one combination stopping in a local
-minimum).  Estimates from the spectrum alone (differences) fail here: a band-excitation
+minimum), floored at 1 ppm of the signal.  Estimates from the spectrum alone (differences) fail here: a band-excitation
 band samples a sharp resonance with a few points per width.
 """
 from __future__ import annotations
@@ -90,8 +90,10 @@ def choose_model(source: MapInput, count: int = 16, **options) -> tuple[tuple[st
             mechanisms = ("internal", *combo)
             scores[mechanisms] = _Score(mechanisms, source, y, options)
     sigma2 = np.min([s.rss / (y.shape[1] - s.k_pixel / 2) for s in scores.values()], axis=0)
+    # floor: 1 ppm of the signal, the model's own numerical precision (noise-free data choose nothing)
+    sigma2 = np.maximum(sigma2, 1e-12 * np.mean(np.abs(y) ** 2, axis=1))
     for s in scores.values():
-        s.judge(np.maximum(sigma2, 1e-300), y)
+        s.judge(sigma2, y)
     current = scores[("internal",)]
     while True:
         trials = [scores[tuple(m for m in MECHANISMS if m in current.mechanisms or m == extra)]
