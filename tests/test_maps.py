@@ -186,7 +186,8 @@ def test_zarr_group_input(synthetic, local_run, tmp_path):
 
 def _two_band_map(tmp_path, name, **damping):
     """A 3 x 4 map of one FE beam (k1 = 100, k2 = 60 N/m) over its first two contact modes;
-    returns the file and the dashpot's loss tangent at the free resonance (x = omega1 eta / k1)."""
+    returns the file and the true extra damping parameter: the dashpot's loss tangent at the free
+    resonance (x = omega1 eta / k1) or the drag's g = c / (rho S omega1) = viscous_hz / f1."""
     undamped = FEBeam(K, L, F1, H, k1=100.0, k2=60.0, n_elements=60)
     f_contact = undamped.contact_resonances(2)
     if "eta" in damping:    # dashpot giving contact mode 1 a loss tangent of ~1/60
@@ -200,10 +201,11 @@ def _two_band_map(tmp_path, name, **damping):
     with h5py.File(tmp_path / name, "w") as h:
         h["response"], h["frequency_hz"] = y, f
         h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=free)
-    return tmp_path / name, 2 * np.pi * free * beam.eta / beam.k1
+    return tmp_path / name, 2 * np.pi * free * beam.eta / beam.k1 + beam.viscous_hz / free
 
 
-@pytest.mark.parametrize("damping, chosen", [({"Q": 80.0}, "elastic"), ({"eta": 60.0}, "elastic+contact")])
+@pytest.mark.parametrize("damping, chosen", [({"Q": 80.0}, "elastic"), ({"eta": 60.0}, "elastic+contact"),
+                                             ({"viscous_hz": F1 / 40}, "elastic+viscous")])
 def test_two_contact_bands_separate_k1_and_k2_and_auto_names_the_damping(tmp_path, capsys, damping, chosen):
     path, x = _two_band_map(tmp_path, "two.h5", **damping)
     assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
@@ -215,8 +217,9 @@ def test_two_contact_bands_separate_k1_and_k2_and_auto_names_the_damping(tmp_pat
     for name, true in (("k1", 100.0), ("k2", 60.0)):
         z = (np.asarray(group[name][...]) - true) / np.asarray(group[f"{name}_stderr"][...])
         assert np.all(np.abs(z) < 4), (name, z)
-    if chosen == "elastic+contact":
-        z = (np.asarray(group["contact_loss"][...]) - x) / np.asarray(group["contact_loss_stderr"][...])
+    extra = {"elastic+contact": "contact_loss", "elastic+viscous": "viscous_loss"}.get(chosen)
+    if extra:
+        z = (np.asarray(group[extra][...]) - x) / np.asarray(group[f"{extra}_stderr"][...])
         assert np.all(np.abs(z) < 4), z
 
 
