@@ -20,6 +20,7 @@ projected residual, the marginal covariance of the full problem (Golub and Perey
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -212,14 +213,22 @@ def _project(g, dg, y, band_list):
 def _start(model, y, q0, k1_range):
     """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0), refined
     by the vertex of the parabola through the best grid value and its neighbours on each axis."""
-    log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
-    k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
-    g = model.shape_functions(k1_grid.ravel(), q_grid.ravel())
+    log_k1, log_q, g = _grid(model.k, model.L, model.f1, model.H, np.asarray(model.frequency_hz, float).tobytes(),
+                            q0, tuple(k1_range))
     proj = sum(np.abs(y[:, b] @ g[:, b].conj().T) ** 2 / np.sum(np.abs(g[:, b]) ** 2, axis=1)
-               for b in model.bands).reshape(len(y), *k1_grid.shape)
-    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), k1_grid.shape)
+               for b in model.bands).reshape(len(y), len(log_q), len(log_k1))
+    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), proj.shape[1:])
     rows = np.arange(len(y))
     return (_vertex(proj[rows, iq], ik, log_k1), _vertex(proj[rows, :, ik], iq, log_q))
+
+
+@functools.lru_cache(maxsize=8)
+def _grid(k, L, f1, H, frequency_bytes, q0, k1_range):
+    """Shape functions of the start grid, computed once per cantilever, frequencies and range."""
+    log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
+    k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
+    model = BeamMapModel(k, L, f1, H, np.frombuffer(frequency_bytes))
+    return log_k1, log_q, model.shape_functions(k1_grid.ravel(), q_grid.ravel())
 
 
 def _vertex(values, best, axis):
