@@ -13,6 +13,7 @@ becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  R
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..errors import UserError
@@ -49,25 +50,23 @@ def add_arguments(parser) -> None:
                             help=f"override the file's {key}")
 
 
-def _model(args, source, fit_options):
-    """Damping mechanisms from --model; auto reuses an interrupted run's choice, else selects."""
-    import dataclasses
+def _mechanisms(args, source, fit_options):
+    """Damping mechanisms from --model (and the selection rows when auto): auto reuses an
+    interrupted run's choice, else selects on pixels spread over the map."""
     import os
     from ..maps.fit import model_name, parse_model
     if args.model != "auto":
-        return dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=parse_model(args.model))), None
+        return parse_model(args.model), None
     from ..maps.readers import require
     out = os.path.join(args.out, "maps.zarr")
     if os.path.isdir(out) and "model" in (attrs := require("zarr").open_group(out, mode="r").attrs):
         print(f"model (auto, as chosen by the interrupted run): {attrs['model']}")
-        rows = attrs.get("model_selection")
-        return dataclasses.replace(source, model=dataclasses.replace(
-            source.model, mechanisms=parse_model(attrs["model"]))), rows
+        return parse_model(attrs["model"]), attrs.get("model_selection")
     from ..maps.select import choose_model
     mechanisms, rows = choose_model(source, **fit_options)
     print(f"model (auto, on pixels spread over the map): {model_name(mechanisms)}; " + ", ".join(
         f"{r['model']} BIC {r['bic']:.1f} gap {r['gap']:.3g}" for r in rows))
-    return dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms)), rows
+    return mechanisms, rows
 
 
 def run(args) -> int:
@@ -87,7 +86,8 @@ def run(args) -> int:
         return 0
     source = open_map(args.data, overrides)
     fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold}
-    source, rows = _model(args, source, fit_options)
+    mechanisms, rows = _mechanisms(args, source, fit_options)
+    source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
     n_bands = len(source.model.bands)
     print(f"fitting: {'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
           f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})")
