@@ -4,7 +4,8 @@ Writes a synthetic band-excitation map (plain Zarr layout, ``response`` chunked 
 blocks) one row of chunks at a time, so this script never holds it either.  Then runs
 ``pfmdyn map`` on it in a subprocess whose address space is limited (``RLIMIT_AS``, inherited by
 the worker processes) to what the same command needs on a tiny map plus a quarter of the map's
-size, and prints each process's peak RSS against the data size.
+size (a control shows that limit refuses the whole map at once), and prints each process's peak
+RSS against the data size.
 
     python benchmarks/map_memory.py [--mib 256] [--n-freq 256]
 """
@@ -40,6 +41,21 @@ status = {line.split(":")[0]: line.split()[1] for line in open("/proc/self/statu
 print(json.dumps({"code": code, "rss_self": int(status["VmHWM"]) / 1024,
                   "rss_workers": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
                   "vm_peak": int(status["VmPeak"]) / 1024}))
+"""
+
+
+# Control: with the modules `pfmdyn map` imports, the same limit refuses the whole map at once.
+_LOAD_WHOLE = """
+import resource, sys
+limit = int(sys.argv[1])
+resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+import dask, h5py, tqdm, zarr
+import pfmdyn.cli, pfmdyn.maps.driver, pfmdyn.maps.select
+try:
+    zarr.open_group(sys.argv[2], mode="r")["response"][...]
+    print("held")
+except MemoryError:
+    print("MemoryError")
 """
 
 
@@ -89,6 +105,9 @@ def main():
         print(f"tiny map: VmPeak {tiny['vm_peak']:.0f} MiB, peak RSS {tiny['rss_self']:.0f} MiB "
               f"(workers {tiny['rss_workers']:.0f} MiB); limit for the big map: VmPeak + data/4 = "
               f"{limit / 2**20:.0f} MiB", flush=True)
+        control = subprocess.run([sys.executable, "-c", _LOAD_WHOLE, str(limit), os.path.join(tmp, "big.zarr")],
+                                 capture_output=True, text=True).stdout.strip()
+        print(f"control, loading the whole map under that limit: {control or 'failed'}", flush=True)
         t = time.perf_counter()
         big = run(os.path.join(tmp, "big.zarr"), os.path.join(tmp, "big_out"), limit)
         seconds = time.perf_counter() - t
