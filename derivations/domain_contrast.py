@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-__all__ = ["responses", "amplitudes_squared", "tan_phase_difference", "phase_difference_series", "linear_fit_in_bias"]
+__all__ = ["responses", "amplitudes_squared", "amplitude_series", "tan_phase_difference", "phase_difference_series",
+           "linear_fit_in_bias"]
 
 d_eff, d_el, psi = sp.symbols("d_eff d_el psi", positive=True)
 eps = sp.Symbol("epsilon", positive=True)
@@ -32,6 +33,26 @@ def amplitudes_squared() -> tuple[sp.Expr, sp.Expr]:
     d_eff**2 + 2*d_eff*d_el*cos(psi) + d_el**2
     """
     return tuple(sp.expand(sp.simplify(sp.expand_complex(r * sp.conjugate(r)))) for r in responses())
+
+
+def amplitude_series(small: str, order: int = 2) -> tuple[sp.Expr, sp.Expr]:
+    """|PR+| and |PR-| to first order in the small one of d_el/d_eff, d_eff/d_el.
+
+    ``small="electrostatic"``: ``|PR+-| = d_eff sqrt(1 +- 2 epsilon cos psi + epsilon**2)``
+    with epsilon = d_el/d_eff; otherwise the roles of d_eff and d_el swap (epsilon =
+    d_eff/d_el).  The square root is expanded in epsilon and epsilon put back, so the
+    result is in d_eff, d_el, psi (both positive here, as the module's symbols).
+
+    >>> amplitude_series("electrostatic"), amplitude_series("piezoelectric")
+    ((d_eff + d_el*cos(psi), d_eff - d_el*cos(psi)), (d_eff*cos(psi) + d_el, -d_eff*cos(psi) + d_el))
+    """
+    large, tiny = (d_eff, d_el) if small == "electrostatic" else (d_el, d_eff)
+    out = []
+    for amplitude in amplitudes_squared():
+        unit = sp.expand(amplitude.subs(tiny, eps * large) / large**2)
+        series = sp.series(sp.sqrt(unit), eps, 0, order).removeO()
+        out.append(sp.expand(large * series.subs(eps, tiny / large)))
+    return tuple(out)
 
 
 def tan_phase_difference() -> sp.Expr:

@@ -15,6 +15,7 @@ from . import contact_mechanics as cm
 from . import domain_contrast as dc
 from .beam import EI, L, beta, f0, k
 from .free_end import solve as solve_free_end
+from .paper import printed as P
 
 __all__ = ["Formula", "formulas"]
 
@@ -93,6 +94,7 @@ def formulas() -> tuple[Formula, ...]:
                 "k2/k1 of a rigid sphere on an isotropic sample (Hertz normal, Mindlin tangential)",
                 "derivations/contact_mechanics.py: mindlin_ratio()"),
         *_domain_contrast(),
+        *_domain_contrast_printed(),
     )
 
 
@@ -111,6 +113,16 @@ def _domain_contrast() -> tuple[Formula, ...]:
     small_el = dc.phase_difference_series("electrostatic").subs(dc.psi, p).subs(dc.eps, e / d)
     small_piezo = dc.phase_difference_series("piezoelectric").subs(dc.psi, p).subs(dc.eps, d / e)
     source = "derivations/domain_contrast.py"
+    # Leading-order amplitudes, for d_eff > 0 (small electrostatic part) or d_el > 0 (small
+    # piezoresponse); numeric code reaches other signs by PR -> -PR, which keeps |PR|.
+    leading = []
+    for name, small, regime in (("electrostatic", "electrostatic", "|d_el| << d_eff (d_eff > 0)"),
+                                ("piezo", "piezoelectric", "|d_eff| << d_el (d_el > 0)")):
+        for sign, amplitude in zip("+-", dc.amplitude_series(small)):
+            leading.append(Formula(
+                f"domain_amplitude_{'plus' if sign == '+' else 'minus'}_small_{name}", (d, e, p),
+                amplitude.subs(real), f"leading order of |PR{sign}| for {regime}",
+                f"{source}: amplitude_series('{small}')"))
     return (
         Formula("domain_amplitude_plus", (d, e, p), plus, "|PR+| over the c+ domain", f"{source}: amplitudes_squared()"),
         Formula("domain_amplitude_minus", (d, e, p), minus, "|PR-| over the c- domain", f"{source}: amplitudes_squared()"),
@@ -122,4 +134,32 @@ def _domain_contrast() -> tuple[Formula, ...]:
         Formula("domain_phase_difference_small_piezo", (d, e, p), small_piezo,
                 "leading order of arg PR+ - arg PR- for |d_eff| << |d_el|",
                 f"{source}: phase_difference_series('piezoelectric')"),
+        *leading,
+    )
+
+
+def _domain_contrast_printed() -> tuple[Formula, ...]:
+    """The paper's Eqs. 39-40 and its small-piezoresponse phase as printed (see the errata),
+    from their one transcription in ``derivations/paper/printed.py``, for comparison only.
+
+    Eq. 39's phase takes ``PR+-`` as given (the paper leaves open whether they are
+    amplitudes or signed responses), so they are arguments of their own there.
+    """
+    d, e, p, phi = sp.symbols("d_eff d_el psi phi", real=True)
+    pr_plus, pr_minus = sp.symbols("pr_plus pr_minus", real=True)
+    real = {P.d_eff: d, P.d_el: e, P.psi: p, P.phi: phi}
+    tan_phase = P.tan_phase.xreplace({P.PR_plus_amp: pr_plus, P.PR_minus_amp: pr_minus}).subs(real)
+    source = "derivations/paper/printed.py"
+    return (
+        Formula("paper_eq39_amplitude_plus", (d, e, phi), P.PR_plus_amp.subs(real),
+                "|PR+| of Eq. 39 as printed (an erratum: the cross term lacks a factor 2)", f"{source}: PR_plus_amp"),
+        Formula("paper_eq39_amplitude_minus", (d, e, phi), P.PR_minus_amp.subs(real),
+                "|PR-| of Eq. 39 as printed (an erratum)", f"{source}: PR_minus_amp"),
+        Formula("paper_eq39_tan_phase", (e, p, pr_plus, pr_minus), tan_phase,
+                "tan of the phase shift of Eq. 39 as printed (an erratum), PR+- as given", f"{source}: tan_phase"),
+        Formula("paper_eq40_phase_difference", (d, e, p), P.small_el_phase.subs(real),
+                "small-electrostatic phase difference of Eq. 40 as printed (an erratum)", f"{source}: small_el_phase"),
+        Formula("paper_small_piezo_phase_difference", (d, e, p), P.small_piezo_phase.subs(real),
+                "small-piezoresponse phase difference of Section IV.3 as printed (an erratum)",
+                f"{source}: small_piezo_phase"),
     )

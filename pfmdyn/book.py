@@ -128,8 +128,8 @@ def counts_table() -> "HTML":
 
 # --- display helpers for the chapters ---------------------------------------------------------
 
-_BADGE = {"holds": "holds", "holds_up_to_sign_convention": "sign convention",
-          "erratum": "erratum", "undecidable": "undecidable"}
+_BADGE = {"holds_up_to_sign_convention": "sign convention"}
+"""Badge labels that differ from the verdict's name."""
 
 
 def _badge(verdict: str) -> str:
@@ -153,6 +153,44 @@ def anchor(claim_id: str) -> str:
     'claim-eq22-roots'
     """
     return "claim-" + "".join(ch if ch.isalnum() else "-" for ch in claim_id)
+
+
+def families_of(page: str) -> list:
+    """The registry rows (``derivations/families.py``) a family chapter derives, in registry order.
+
+    >>> [f.module for f in families_of("frictionless")]
+    ['frictionless', 'frictionless_stiff']
+    """
+    from .generated import families
+    rows = [f for f in families.FAMILIES if f.chapter == page]
+    if not rows:
+        raise KeyError(f"no family of the registry has chapter {page!r}")
+    return rows
+
+
+def family_table(page: str) -> "HTML":
+    """What the chapter's families are in numeric code, from the family registry: generated
+    module, drives, parameters with their meaning, public function, :class:`pfmdyn.Cantilever`
+    method and the ``pfmdyn roots`` / ``pfmdyn branches`` names.
+
+    >>> "<code>pfmdyn.free_end_transfer</code>" in family_table("free_end").text
+    True
+    """
+    from .generated import families
+    heads = ("family", "derived in", "per unit", "parameters", "Python", "roots / branches")
+    out = ['<table class="pfm-claims pfm-families"><thead><tr>']
+    out += [f"<th>{h}</th>" for h in heads] + ["</tr></thead><tbody>"]
+    for f in families_of(page):
+        params = "; ".join(f"{p}: {families.PARAMETER_HELP[p]}" for p in f.parameters)
+        python = [f"pfmdyn.{f.function}"] + ([f"Cantilever.{f.method}"] if f.method else [])
+        roots = " / ".join(n for n in (f.roots, f.branch and f"{f.branch} ({f.figure})") if n)
+        cells = (f"<code>generated/{f.module}.py</code> ({html.escape(f.equations)})",
+                 f"<code>{html.escape(f.source)}</code>", html.escape(", ".join(f.drives)),
+                 html.escape(params), "<br>".join(f"<code>{n}</code>" for n in python),
+                 html.escape(roots or "—"))
+        out.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    out.append("</tbody></table>")
+    return HTML("".join(out))
 
 
 def chapter_table(page: str) -> "HTML":

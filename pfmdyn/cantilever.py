@@ -3,19 +3,26 @@
 The dimensionless frequency of the derivations is ``beta`` with ``beta**4 = omega**2 rho S
 L**4 / EI``.  For a given cantilever it follows from the first free resonance ``f1``:
 ``beta = BETA1_FREE * sqrt(f / f1)``, ``BETA1_FREE = 1.8751040687...`` (the first root of
-``1 + cos(beta) cosh(beta)``, stored in ``generated/characteristic.py``).  Losses enter
-through a loss factor ``1/Q``: ``beta**4 -> beta**4 (1 - i/Q)``, which gives ``beta`` a
-small imaginary part; responses are complex.
+``1 + cos(beta) cosh(beta)``, stored in ``generated/characteristic.py``).  Losses are the
+internal friction derived in ``derivations/damping.py`` (a complex modulus ``E (1 + i/Q)``),
+applied by its generated substitution (``generated/damping.py``): ``beta**4 -> beta**4 /
+(1 + i/Q)`` and ``k -> k (1 + i/Q)``, the model the discrepancy workflow and the maps fit.
+Responses are complex.
+
+The per-family methods (``elastic_response``, ``free_response``, ...) are made from the
+family registry (``derivations/families.py``, field ``method``): each evaluates the family's
+generated transfer function with this cantilever's ``beta``, ``k`` and ``L``.
 """
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import transfer
-from .generated import formulas
+from .generated import damping, families, formulas
 from .generated.characteristic import BETA1_FREE
 
 __all__ = ["Cantilever", "BETA1_FREE"]
@@ -34,7 +41,7 @@ class Cantilever:
     length : float
         ``L`` in m.
     quality_factor : float
-        ``Q`` of the loss factor ``1/Q`` (``inf``: lossless).
+        ``Q`` of the complex modulus ``E (1 + i/Q)`` (``inf``: lossless).
 
     Examples
     --------
@@ -77,46 +84,67 @@ class Cantilever:
     def beta(self, frequency) -> np.ndarray:
         """Dimensionless frequency ``beta`` (complex) for frequencies in Hz (> 0).
 
+        ``beta = BETA1_FREE sqrt(f / f1) (1 + i/Q)**(-1/4)``: the internal friction's
+        substitution (``generated/damping.py``); the spring constant becomes ``k (1 + i/Q)``.
+
         >>> c = Cantilever(1.0, 1e5, 1e-4)
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
         3.750208
         """
+        return self._damped(frequency)[0]
+
+    def _damped(self, frequency):
+        """``(beta, k)`` with the internal friction substituted (``derivations/damping.py``)."""
         f = np.asarray(frequency, dtype=float)
         if not np.all(np.isfinite(f)) or np.any(f <= 0):
             raise ValueError("frequency must be positive and finite (Hz)")
-        loss = (1 - 1j / self.quality_factor) ** 0.25
-        return BETA1_FREE * np.sqrt(f / self.resonance_frequency) * loss
+        r = f / self.resonance_frequency
+        beta_factor, k_factor, _, _ = damping.factors(r, 1.0 / self.quality_factor, 0.0, 0.0)
+        return BETA1_FREE * np.sqrt(r) * beta_factor, self.spring_constant * k_factor
 
-    def elastic_response(self, frequency, *, k1, k2, H) -> transfer.ElasticTransfer:
-        """Tip slope per unit d1, d2, f0, q0 (elastic contact, Eq. 5) at ``frequency`` in Hz.
 
-        >>> c = Cantilever(1.0, 1e5, 1e-4)
-        >>> r = c.elastic_response([1e3, 1e6], k1=10.0, k2=5.0, H=1e-5)
-        >>> r.vertical.dtype, r.vertical.shape
-        (dtype('complex128'), (2,))
-        """
-        return transfer.tip_slope_transfer(self.beta(frequency), k=self.spring_constant,
-                                           k1=k1, k2=k2, H=H, L=self.length)
+_EXAMPLE = {"k1": 10.0, "k2": 5.0, "H": 1e-5}
+"""Parameter values of the generated methods' doctests (N/m, m)."""
+_OWN = ("k", "L")
+"""Registry parameters the cantilever supplies itself."""
 
-    def free_response(self, frequency) -> transfer.FreeEndTransfer:
-        """Tip slope per unit f0 and q0 of the free cantilever (Eqs. 21-22)."""
-        return transfer.free_end_transfer(self.beta(frequency), k=self.spring_constant, L=self.length)
 
-    def pinned_response(self, frequency) -> transfer.PinnedTransfer:
-        """Tip slope per unit q0 of the supported cantilever (Eqs. 19-20)."""
-        return transfer.pinned_transfer(self.beta(frequency), k=self.spring_constant)
+def _response_method(row):
+    """``Cantilever.<row.method>``: the family's transfer at frequencies in Hz, with losses."""
+    extra = [p for p in row.parameters if p not in _OWN]
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    displacement = "deflection" in row.outputs   # then ``output`` chooses slope or displacement
+    signature = inspect.Signature(
+        [inspect.Parameter(p, inspect.Parameter.POSITIONAL_OR_KEYWORD) for p in ("self", "frequency")]
+        + [inspect.Parameter(p, keyword) for p in extra]
+        + ([inspect.Parameter("output", keyword, default="slope")] if displacement else []),
+        return_annotation=f"transfer.{row.result}")
 
-    def frictionless_response(self, frequency, *, k1) -> transfer.FrictionlessTransfer:
-        """Tip slope per unit d1, f0, q0 for frictionless contact (Eq. 23)."""
-        return transfer.frictionless_transfer(self.beta(frequency), k=self.spring_constant,
-                                              k1=k1, L=self.length)
+    def response(self, frequency, **kwargs):
+        given = signature.bind(self, frequency, **kwargs).arguments
+        beta, k = self._damped(frequency)
+        values = transfer.check_parameters({p: given[p] for p in extra})
+        return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
+                                 given.get("output"))
 
-    def sliding_friction_response(self, frequency, *, H) -> transfer.FrictionTransfer:
-        """Tip slope per unit friction force (Eqs. 25-26)."""
-        return transfer.sliding_friction_transfer(self.beta(frequency), k=self.spring_constant,
-                                                  H=H, L=self.length)
+    call = ", ".join(["[1e3, 1e6]"] + [f"{p}={_EXAMPLE[p]!r}" for p in extra])
+    fields = getattr(transfer, row.result)._fields
+    response.__name__ = row.method
+    response.__qualname__ = f"Cantilever.{row.method}"
+    response.__signature__ = signature
+    response.__doc__ = f"""Tip {'slope or displacement' if displacement else 'slope'} per unit {', '.join(row.drives)} \
+({row.equations}) at ``frequency`` in Hz.
 
-    def indentation_response(self, frequency, *, k1, output="slope") -> transfer.IndentationTransfer:
-        """Tip slope or displacement per unit d1 and f0 (Eqs. 27-28)."""
-        return transfer.indentation_transfer(self.beta(frequency), k=self.spring_constant,
-                                             k1=k1, L=self.length, output=output)
+    :func:`pfmdyn.transfer.{row.function}` at this cantilever's ``beta`` and ``k`` with
+    its internal friction substituted; parameters ({', '.join(extra) or 'none'}) as there.
+
+    >>> r = Cantilever(1.0, 1e5, 1e-4, quality_factor=100.0).{row.method}({call})
+    >>> r._fields, r[0].shape, r[0].dtype
+    ({fields!r}, (2,), dtype('complex128'))
+    """
+    return response
+
+
+for _row in families.FAMILIES:
+    if _row.method:
+        setattr(Cantilever, _row.method, _response_method(_row))

@@ -47,6 +47,10 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as exc:
         print(f"pfmdyn {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # Output piped into `head` and closed early: not an error of ours or the user's.
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

@@ -13,13 +13,12 @@ never imports SymPy.
 """
 from __future__ import annotations
 
+import importlib
 from typing import NamedTuple
 
 import numpy as np
 
-from .generated import (elastic_contact, families, free_end, frictionless, frictionless_stiff,
-                        indentation, indentation_stiff, pinned, sliding_friction, torsion_elastic,
-                        torsion_force)
+from .generated import families
 
 # The registry (derivations/families.py) names every wrapper and its result class.
 __all__ = sorted({name for f in families.FAMILIES for name in (f.function, f.result) if name})
@@ -109,6 +108,48 @@ def _parameter(name: str, value, *, zero_ok: bool = False) -> np.ndarray:
     return arr.astype(float)
 
 
+_ZERO_OK = frozenset({"k1", "k2", "k2t"})
+"""Parameters that may vanish (contact stiffnesses: no contact); all others must be positive."""
+_OUTPUTS = {"slope": "slope", "displacement": "deflection", "twist": "twist"}
+"""Public output name -> generated function (tip slope, tip deflection, tip twist)."""
+
+
+def evaluate(family: str, beta, values: dict, output: str | None = None) -> tuple:
+    """Internal path: the family's result at ``beta`` for parameters already checked.
+
+    ``values`` maps each of the registry row's parameters to an array; unlike the public
+    wrappers, complex values are accepted (the damped cantilever's ``k (1 + i/Q)``,
+    :class:`pfmdyn.Cantilever`).  ``output``: ``"slope"``, ``"displacement"`` or ``"twist"``
+    (default: the row's first output).
+
+    >>> r = complex(evaluate("pinned", 1e-6, {"k": 1.0 + 0.01j}).distributed_load * 16 * (1 + 0.01j))
+    >>> round(r.real, 12), round(r.imag, 12)   # -1/(16 k), k complex
+    (-1.0, 0.0)
+    """
+    row = families.by_module(family)
+    name = row.outputs[0] if output is None else _OUTPUTS.get(output)
+    if name not in row.outputs:
+        allowed = [o for o, n in _OUTPUTS.items() if n in row.outputs]
+        raise ValueError(f"output must be {' or '.join(map(repr, allowed))}, got {output!r}")
+    fn = getattr(importlib.import_module(f"{__package__}.generated.{family}"), name)
+    return globals()[row.result](*fn(beta, *(values[p] for p in row.parameters)))
+
+
+def check_parameters(values: dict) -> dict:
+    """Each named parameter as a float array, or the wrappers' one-line error (contact
+    stiffnesses may vanish, every other parameter must be positive).
+
+    >>> check_parameters({"k1": 0.0, "L": 2e-4})
+    {'k1': array(0.), 'L': array(0.0002)}
+    """
+    return {p: _parameter(p, v, zero_ok=p in _ZERO_OK) for p, v in values.items()}
+
+
+def _checked(family: str, beta, output: str | None = None, *, frequency: str = "beta", **values) -> tuple:
+    """Validate ``beta`` and every parameter, then :func:`evaluate`."""
+    return evaluate(family, _frequency(frequency, beta), check_parameters(values), output)
+
+
 def tip_slope_transfer(beta, *, k, k1, k2, H, L) -> ElasticTransfer:
     """Tip slope per unit drive for elastic tip-surface contact (Eqs. 5-10).
 
@@ -137,10 +178,7 @@ def tip_slope_transfer(beta, *, k, k1, k2, H, L) -> ElasticTransfer:
     >>> round(float(t.local_force[0] * 100.0 / t.vertical[0]), 12)   # A_v = k1 A_e
     1.0
     """
-    beta = _frequency("beta", beta)
-    args = [_parameter("k", k), _parameter("k1", k1, zero_ok=True),
-            _parameter("k2", k2, zero_ok=True), _parameter("H", H), _parameter("L", L)]
-    return ElasticTransfer(*elastic_contact.slope(beta, *args))
+    return _checked("elastic_contact", beta, k=k, k1=k1, k2=k2, H=H, L=L)
 
 
 def frictionless_transfer(beta, *, k, k1, L) -> FrictionlessTransfer:
@@ -152,9 +190,7 @@ def frictionless_transfer(beta, *, k, k1, L) -> FrictionlessTransfer:
     >>> round(float(t.vertical), 9)   # static: 3 k1 / (2 (k + k1) L)
     0.75
     """
-    beta = _frequency("beta", beta)
-    return FrictionlessTransfer(*frictionless.slope(
-        beta, _parameter("k", k), _parameter("k1", k1, zero_ok=True), _parameter("L", L)))
+    return _checked("frictionless", beta, k=k, k1=k1, L=L)
 
 
 def frictionless_stiff_transfer(beta, *, k, L) -> FrictionlessStiffTransfer:
@@ -165,9 +201,7 @@ def frictionless_stiff_transfer(beta, *, k, L) -> FrictionlessStiffTransfer:
     >>> round(float(frictionless_stiff_transfer(1e-6, k=1.0, L=2.0).vertical), 9)   # 3/(2L)
     0.75
     """
-    beta = _frequency("beta", beta)
-    return FrictionlessStiffTransfer(*frictionless_stiff.slope(
-        beta, _parameter("k", k), _parameter("L", L)))
+    return _checked("frictionless_stiff", beta, k=k, L=L)
 
 
 def free_end_transfer(beta, *, k, L) -> FreeEndTransfer:
@@ -179,8 +213,7 @@ def free_end_transfer(beta, *, k, L) -> FreeEndTransfer:
     >>> round(float(t.local_force), 9), round(float(t.distributed_load), 9)   # 3/(2kL), 1/(2k)
     (0.75, 0.25)
     """
-    beta = _frequency("beta", beta)
-    return FreeEndTransfer(*free_end.slope(beta, _parameter("k", k), _parameter("L", L)))
+    return _checked("free_end", beta, k=k, L=L)
 
 
 def pinned_transfer(beta, *, k) -> PinnedTransfer:
@@ -191,8 +224,7 @@ def pinned_transfer(beta, *, k) -> PinnedTransfer:
     >>> round(float(pinned_transfer(1e-6, k=1.0).distributed_load), 9)   # -1/(16 k)
     -0.0625
     """
-    beta = _frequency("beta", beta)
-    return PinnedTransfer(*pinned.slope(beta, _parameter("k", k)))
+    return _checked("pinned", beta, k=k)
 
 
 def sliding_friction_transfer(beta, *, k, H, L) -> FrictionTransfer:
@@ -203,9 +235,7 @@ def sliding_friction_transfer(beta, *, k, H, L) -> FrictionTransfer:
     >>> round(float(sliding_friction_transfer(1e-6, k=1.0, H=1.0, L=1.0).friction), 9)   # 3H/(kL**2)
     3.0
     """
-    beta = _frequency("beta", beta)
-    return FrictionTransfer(*sliding_friction.slope(
-        beta, _parameter("k", k), _parameter("H", H), _parameter("L", L)))
+    return _checked("sliding_friction", beta, k=k, H=H, L=L)
 
 
 def indentation_transfer(beta, *, k, k1, L, output: str = "slope") -> IndentationTransfer:
@@ -222,13 +252,7 @@ def indentation_transfer(beta, *, k, k1, L, output: str = "slope") -> Indentatio
     >>> round(float(t.vertical), 9)   # static: k1 / (k + k1)
     0.75
     """
-    beta = _frequency("beta", beta)
-    args = (_parameter("k", k), _parameter("k1", k1, zero_ok=True), _parameter("L", L))
-    if output == "slope":
-        return IndentationTransfer(*indentation.slope(beta, *args))
-    if output == "displacement":
-        return IndentationTransfer(*indentation.deflection(beta, *args))
-    raise ValueError(f"output must be 'slope' or 'displacement', got {output!r}")
+    return _checked("indentation", beta, output, k=k, k1=k1, L=L)
 
 
 def indentation_stiff_transfer(beta, *, k, L) -> IndentationStiffTransfer:
@@ -239,8 +263,7 @@ def indentation_stiff_transfer(beta, *, k, L) -> IndentationStiffTransfer:
     >>> round(float(indentation_stiff_transfer(1e-6, k=1.0, L=1.0)[0]), 9)
     1.5
     """
-    beta = _frequency("beta", beta)
-    return IndentationStiffTransfer(*indentation_stiff.slope(beta, _parameter("k", k), _parameter("L", L)))
+    return _checked("indentation_stiff", beta, k=k, L=L)
 
 
 def torsion_elastic_transfer(xi_L, *, k2t, H, L) -> TorsionTransfer:
@@ -260,9 +283,7 @@ def torsion_elastic_transfer(xi_L, *, k2t, H, L) -> TorsionTransfer:
     >>> round(float(torsion_elastic_transfer(1.0, k2t=1e12, H=1e-5, L=1e-4).lateral) * 1e-5, 2)
     1.0
     """
-    z = _frequency("xi_L", xi_L)
-    return TorsionTransfer(*torsion_elastic.twist(
-        z, _parameter("k2t", k2t, zero_ok=True), _parameter("H", H), _parameter("L", L)))
+    return _checked("torsion_elastic", xi_L, frequency="xi_L", k2t=k2t, H=H, L=L)
 
 
 def torsion_force_transfer(xi_L, *, L) -> TorsionTransfer:
@@ -274,5 +295,4 @@ def torsion_force_transfer(xi_L, *, L) -> TorsionTransfer:
     >>> math.isclose(float(torsion_force_transfer(0.5, L=2.0).lateral), math.tan(0.5) * 2 / 0.5)
     True
     """
-    z = _frequency("xi_L", xi_L)
-    return TorsionTransfer(*torsion_force.twist(z, _parameter("L", L)))
+    return _checked("torsion_force", xi_L, frequency="xi_L", L=L)

@@ -139,3 +139,13 @@ def test_one_phase_convention_in_derivation_and_numeric_code(small):
     exact = domains.phase_difference(d_eff, d_el, psi)
     for value in (numeric, exact):
         assert abs(np.angle(np.exp(1j * (derived - value)))) < 1e-4
+
+
+def test_generated_leading_amplitudes_match_the_hand_typed_forms():
+    """Independent check: |PR+-| ~ |a| +- sgn(a) b cos(psi), a the large part and b the small one."""
+    shift = np.sign(D_EFF) * D_EL * np.cos(PSI)
+    np.testing.assert_allclose(domains.amplitudes_small_electrostatic(D_EFF, D_EL, PSI),
+                               (np.abs(D_EFF) + shift, np.abs(D_EFF) - shift), rtol=1e-13, atol=1e-15)
+    shift = np.sign(D_EL) * D_EFF * np.cos(PSI)
+    np.testing.assert_allclose(domains.amplitudes_small_piezo(D_EFF, D_EL, PSI),
+                               (np.abs(D_EL) + shift, np.abs(D_EL) - shift), rtol=1e-13, atol=1e-15)

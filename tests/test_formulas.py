@@ -78,7 +78,7 @@ def test_no_module_under_pfmdyn_redefines_a_generated_formula():
 @pytest.mark.parametrize("text", ["2 * cantilever.length / 3", "np.sqrt(k1**3 / (6 * r * p))",
                                   "3 * youngs_modulus * inertia / length**3",
                                   "np.real(piezo * np.conj(g))", "np.real(intercept * np.conj(slope))",
-                                  "EPSILON_0 * width / H**2"])
+                                  "EPSILON_0 * width / H**2", "2 * v_null * part(slope)"])
 def test_hand_typed_versions_are_gone(text):
     hits = [p.name for p in PACKAGE.rglob("*.py") if text in p.read_text(encoding="utf-8")]
     assert not hits, hits

@@ -3,6 +3,7 @@
 Expected values are the ones listed in shared/realdata/README.md (copied from the files'
 headers by hand, not by these readers).
 """
+import importlib.util
 import json
 import os
 import sys
@@ -207,3 +208,22 @@ def test_empty_and_unknown_files(tmp_path):
         read_instrument(tmp_path / "scan.spm")
     with pytest.raises(UserError, match="no such file"):
         read_instrument(tmp_path / "absent.ibw")
+
+
+_NSFOPEN = importlib.util.find_spec("NSFopen")
+NSFOPEN_EXAMPLES = sorted(Path(_NSFOPEN.origin).parent.glob("example/*/*.nid")) if _NSFOPEN else []
+
+
+@pytest.mark.skipif(not NSFOPEN_EXAMPLES, reason="nsfopen's example files are not installed")
+def test_nanosurf_examples_inspect_with_each_channel_unit_from_its_own_header():
+    """The example files nsfopen ships (images, thermal tune, force spectroscopy with curves
+    of unequal length and processed data sets): each channel's unit from its own header."""
+    units = {}
+    for path in NSFOPEN_EXAMPLES:
+        for channel in read_instrument(path).channels:
+            units.setdefault(channel.name.split()[-1], set()).add(channel.unit)
+    assert units["Phase"] == {"deg"} and units["Amplitude"] == {"V"}
+    assert units["Deflection"] == {"m", "N"} and units["Density"] == {"m/sqrt(Hz)"}
+    spectroscopy = read_instrument(next(p for p in NSFOPEN_EXAMPLES if p.stem == "spectroscopy"))
+    curves = [c for c in spectroscopy.channels if c.name.startswith("Spec")]
+    assert len(curves) == 4 and all(c.shape == (100, 1024) for c in curves)

@@ -71,3 +71,23 @@ def test_package_exports_every_registry_wrapper():
 
     assert set(pfmdyn.__all__) == {"Cantilever"} | {f.function for f in WRAPPED}
     assert all(hasattr(pfmdyn, name) for name in pfmdyn.__all__)
+
+
+def test_book_family_chapters_follow_the_registry():
+    """Every family chapter of the book derives registry rows and shows them with book.family_table."""
+    import yaml
+
+    book_dir = PACKAGE.parent / "book"
+    toc = yaml.safe_load((book_dir / "_toc.yml").read_text())
+    part = next(p for p in toc["parts"] if p["caption"] == "Boundary-condition families")
+    pages = {c["file"] for c in part["chapters"]} - {"numeric"}   # numeric: the generated code itself
+    assert pages == {f.chapter for f in families.FAMILIES if f.chapter}
+    for page in pages:
+        assert "book.family_table(" in (book_dir / f"{page}.md").read_text(), page
+
+
+def test_cantilever_methods_are_the_registry_rows():
+    from pfmdyn import Cantilever
+
+    made = {name for name, value in vars(Cantilever).items() if name.endswith("_response") and callable(value)}
+    assert made == {f.method for f in families.FAMILIES if f.method}

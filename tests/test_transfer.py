@@ -1,6 +1,7 @@
 """Public numeric API: static limits, cross-family consistency, validation, physical units."""
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -9,7 +10,7 @@ import sympy as sp
 
 import pfmdyn
 from pfmdyn import Cantilever
-from pfmdyn.derivations import elastic_contact
+from pfmdyn.derivations import elastic_contact, families
 from pfmdyn.derivations.beam import H, L, beta, d1, d2, f0, k, k1, k2, q0
 from pfmdyn.generated.characteristic import BETA1_FREE, BETA1_FREE_STR
 
@@ -125,3 +126,42 @@ def test_free_resonance_in_hz():
     assert f[np.argmax(np.abs(r))] == pytest.approx(7e4, rel=1e-3)
     contact = c.elastic_response(f, k1=50.0, k2=10.0, H=1e-5)
     assert np.all(np.isfinite(contact.vertical))
+
+
+@pytest.mark.parametrize("row", [f for f in families.FAMILIES if f.method], ids=lambda f: f.method)
+def test_cantilever_methods_follow_the_registry(row):
+    """Each registry row with a ``method`` is a Cantilever method: the wrapper at c.beta(f) when lossless."""
+    c = Cantilever(2.0, 7e4, 1.5e-4)
+    extra = [p for p in row.parameters if p not in ("k", "L")]
+    method = getattr(c, row.method)
+    keywords = [p.name for p in inspect.signature(method).parameters.values() if p.default is p.empty
+                and p.kind is p.KEYWORD_ONLY]
+    assert keywords == extra
+    f = np.array([3e3, 7.1e4, 9e5])
+    values = {p: P[p] for p in extra}
+    wrapper = getattr(pfmdyn, row.function)(c.beta(f).real, **{"k": 2.0, "L": 1.5e-4, **values}
+                                            if "L" in row.parameters else {"k": 2.0, **values})
+    np.testing.assert_allclose(np.array(method(f, **values)), np.array(wrapper), rtol=1e-12)
+
+
+def test_cantilever_losses_are_the_derived_complex_modulus():
+    """E -> E (1 + i/Q): beta**4 / (1 + i/Q) and k (1 + i/Q), typed here independently; the maps
+    (pfmdyn.maps.fit) apply the same model by dividing the contact springs by 1 + i/Q instead."""
+    from pfmdyn.maps.fit import BeamMapModel
+
+    q, k_, f1, length = 40.0, 3.0, 7e4, 2e-4
+    c = Cantilever(k_, f1, length, quality_factor=q)
+    f = np.linspace(2e5, 6e5, 7)
+    beta_q = BETA1_FREE * np.sqrt(f / f1) * (1 + 1j / q) ** -0.25
+    expected = pfmdyn.transfer.evaluate("elastic_contact", beta_q,
+                                        dict(k=k_ * (1 + 1j / q), k1=300.0, k2=60.0, H=1e-5, L=length))
+    got = c.elastic_response(f, k1=300.0, k2=60.0, H=1e-5)
+    np.testing.assert_allclose(np.array(got), np.array(expected), rtol=1e-12)
+    maps = BeamMapModel(k=k_, L=length, f1=f1, H=1e-5, frequency_hz=f)
+    np.testing.assert_allclose(maps.shape_functions(np.array([300.0]), np.array([q]), np.array([60.0]))[0],
+                               got.vertical, rtol=1e-10)
+    # The free mode's half-power width is f1/Q (to O(1/Q**2)): the loss factor is the mode's 1/Q.
+    fine = np.linspace(0.9 * f1, 1.1 * f1, 20001)
+    amp = np.abs(Cantilever(k_, f1, length, quality_factor=q).free_response(fine).local_force)
+    band = fine[amp >= amp.max() / np.sqrt(2)]
+    assert (band[-1] - band[0]) == pytest.approx(f1 / q, rel=0.02)

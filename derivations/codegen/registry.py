@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import inspect
 
 from .. import families as registry
 from .printing import header
@@ -21,6 +22,9 @@ def render() -> str:
         "    Family(" + ", ".join(f"{n}={getattr(row, n)!r}" for n in fields) + "),\n"
         for row in registry.FAMILIES)
     help_rows = "".join(f"    {k!r}: {v!r},\n" for k, v in registry.PARAMETER_HELP.items())
+    # The registry's properties, copied as source text so that both classes answer alike.
+    properties = "".join("\n" + inspect.getsource(v.fget) for v in vars(registry.Family).values()
+                         if isinstance(v, property))
     body = f'''"""The family registry (from derivations/families.py), as plain data for numeric code.
 
 See :mod:`pfmdyn.derivations.families` for the meaning of the fields.
@@ -33,7 +37,7 @@ __all__ = ["Family", "FAMILIES", "PARAMETER_HELP", "by_module", "by_roots"]
 class Family(NamedTuple):
     """One boundary-condition family (fields as in derivations/families.py)."""
 
-''' + "".join(f"    {n}: {t}\n" for n, t in _types(fields)) + f'''
+''' + "".join(f"    {n}: {t}\n" for n, t in _types(fields)) + properties + f'''
 
 FAMILIES = (
 {rows})

@@ -104,9 +104,20 @@ def nulling_bias(intercept, slope):
         return formulas.nulling_bias(intercept.real, intercept.imag, slope.real, slope.imag)
 
 
-def _power(z):
-    """|z|**2 without the rounding of a square root followed by a square."""
-    return z.real**2 + z.imag**2
+def _nulling_bias_gradient(intercept, slope):
+    """Derivatives of the generated nulling bias with respect to (Re b, Im b, Re c, Im c).
+
+    By complex steps (exact to rounding, no cancellation): the formula is a rational
+    function of the four parts, so it accepts a complex increment in any one of them.
+    """
+    parts = [intercept.real, intercept.imag, slope.real, slope.imag]
+    scales = [np.abs(intercept)] * 2 + [np.abs(slope)] * 2
+    out = []
+    for i, scale in enumerate(scales):
+        h = np.where(scale > 0, 1e-20 * scale, 1e-300)   # far below each part's size
+        stepped = [p + 1j * h if j == i else p for j, p in enumerate(parts)]
+        out.append(np.imag(formulas.nulling_bias(*stepped)) / h)
+    return out
 
 
 def tip_quality(v_null, v_null_se=None) -> TipQuality:
@@ -203,12 +214,10 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
         return noise_var * (u_b**2 / n + (u_b * mean_v - u_c) ** 2 / sxx)
 
     v_null = nulling_bias(intercept, slope)
-    # Delta method: gradient of -Re(b conj c)/|c|^2 with respect to (b, c), per component.
-    power = _power(slope)
-    v_null_var = sum(
-        variance(-part(slope) / power, -(part(intercept) + 2 * v_null * part(slope)) / power)
-        for part in (np.real, np.imag)
-    )
+    # Delta method: the real parts of (b, c) and their imaginary parts are independent pairs.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_b_re, d_b_im, d_c_re, d_c_im = _nulling_bias_gradient(intercept, slope)
+    v_null_var = variance(d_b_re, d_c_re) + variance(d_b_im, d_c_im)
     return Deconvolution(
         frequency_hz=frequency_hz[starts],
         n_bias=n,

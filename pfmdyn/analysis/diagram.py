@@ -66,7 +66,8 @@ def cantilever_from_spring_constant(*, spring_constant, length, width, thickness
     density : float, optional
         kg/m**3, silicon by default.
     quality_factor : float, optional
-        ``Q`` of the loss factor ``1/Q``; ``inf`` (default) is the paper's lossless model.
+        ``Q`` of the internal friction (complex modulus ``E (1 + i/Q)``, :class:`Cantilever`);
+        ``inf`` (default) is the paper's lossless model.
 
     Returns
     -------

@@ -22,11 +22,12 @@ the half-open interval :math:`(-\\pi, \\pi]` (so a pure piezoresponse gives exac
 
 Two families of functions are provided:
 
-* exact results and the correct leading-order limits (derived by hand from the line above;
-  ``tests/test_domains.py`` checks them against complex arithmetic and checks the order of
-  their error);
+* exact results and the correct leading-order limits, generated from
+  ``derivations/domain_contrast.py`` (``generated/formulas.py``); ``tests/test_domains.py``
+  checks them against complex arithmetic and checks the order of their error;
 * ``paper_*`` functions returning the paper's formulas **as printed, see the errata**, kept
-  only so that the printed and the correct forms can be compared.
+  only so that the printed and the correct forms can be compared (generated from their one
+  transcription, ``derivations/paper/printed.py``).
 
 References
 ----------
@@ -175,8 +176,10 @@ def amplitudes_small_electrostatic(d_eff, d_el, psi):
     [1.01, 0.99]
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    shift = np.sign(d_eff) * d_el * np.cos(psi)
-    return np.abs(d_eff) + shift, np.abs(d_eff) - shift
+    # Derived for d_eff > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
+    args = (np.abs(d_eff), np.sign(d_eff) * d_el, psi)
+    return (formulas.domain_amplitude_plus_small_electrostatic(*args),
+            formulas.domain_amplitude_minus_small_electrostatic(*args))
 
 
 def phase_difference_small_electrostatic(d_eff, d_el, psi):
@@ -229,8 +232,9 @@ def amplitudes_small_piezo(d_eff, d_el, psi):
     [0.99, 1.01]
     """
     d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    shift = np.sign(d_el) * d_eff * np.cos(psi)
-    return np.abs(d_el) + shift, np.abs(d_el) - shift
+    # Derived for d_el > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
+    args = (np.sign(d_el) * d_eff, np.abs(d_el), psi)
+    return formulas.domain_amplitude_plus_small_piezo(*args), formulas.domain_amplitude_minus_small_piezo(*args)
 
 
 def phase_difference_small_piezo(d_eff, d_el, psi):
@@ -281,9 +285,8 @@ def paper_eq39_amplitudes(d_eff, d_el, phi):
     >>> [float(a) for a in paper_eq39_amplitudes(1.0, 1.0, 0.0)]  # exact: 2 and 0
     [1.7320508075688772, 1.0]
     """
-    d_eff, d_el, phi = np.asarray(d_eff), np.asarray(d_el), np.asarray(phi, dtype=float)
-    common, cross = d_eff**2 + d_el**2, d_eff * d_el * np.cos(phi)
-    return np.sqrt(common + cross), np.sqrt(common - cross)
+    args = (np.asarray(d_eff), np.asarray(d_el), np.asarray(phi, dtype=float))
+    return formulas.paper_eq39_amplitude_plus(*args), formulas.paper_eq39_amplitude_minus(*args)
 
 
 def paper_eq39_tan_phase(d_el, psi, pr_plus, pr_minus):
@@ -312,10 +315,8 @@ def paper_eq39_tan_phase(d_el, psi, pr_plus, pr_minus):
     >>> float(paper_eq39_tan_phase(1.0, np.pi / 2, 1.0, 1.0))
     0.0
     """
-    d_el, psi = np.asarray(d_el), np.asarray(psi, dtype=float)
-    pr_plus, pr_minus = np.asarray(pr_plus), np.asarray(pr_minus)
-    numerator = 2.0 * d_el * (pr_minus - pr_plus) * np.sin(psi)
-    return numerator / (d_el**2 * (1.0 - np.cos(2.0 * psi)) + 2.0 * pr_plus * pr_minus)
+    return formulas.paper_eq39_tan_phase(np.asarray(d_el), np.asarray(psi, dtype=float),
+                                         np.asarray(pr_plus), np.asarray(pr_minus))
 
 
 def paper_eq40_phase_difference(d_eff, d_el, psi):
@@ -340,8 +341,8 @@ def paper_eq40_phase_difference(d_eff, d_el, psi):
     >>> round(float(paper_eq40_phase_difference(1.0, 0.1, np.pi / 4)), 6)
     3.131593
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return np.pi - np.sin(2.0 * psi) * d_el**2 / d_eff**2
+    return formulas.paper_eq40_phase_difference(np.asarray(d_eff), np.asarray(d_el),
+                                                np.asarray(psi, dtype=float))
 
 
 def paper_small_piezo_phase_difference(d_eff, d_el, psi):
@@ -367,5 +368,5 @@ def paper_small_piezo_phase_difference(d_eff, d_el, psi):
     >>> round(float(paper_small_piezo_phase_difference(0.01, 1.0, np.pi / 3)), 6)  # correct: -0.017321
     -0.004949
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return 2.0 * np.sin(2.0 * psi) * d_eff / (d_el * (np.cos(2.0 * psi) - 3.0))
+    return formulas.paper_small_piezo_phase_difference(np.asarray(d_eff), np.asarray(d_el),
+                                                       np.asarray(psi, dtype=float))

@@ -13,20 +13,20 @@ A model that explains the data reaches ``gap ~ 1``.
 Damping is one effect with three mechanisms (:mod:`pfmdyn.derivations.damping`); what
 tells them apart is how the half-power width of the peaks scales with their frequency
 (constant in Hz: viscous; proportional to ``f``: internal; growing with ``f`` and with the
-contact stiffness: contact).  :func:`peak_widths` measures the widths, which seed the fits
-and are reported; the mechanism named is the one whose fit is best (BIC).
+contact stiffness: contact).  :func:`peaks.peak_widths` measures the widths (complex poles),
+which seed the fits and are reported; the mechanism named is the one whose fit is best (BIC).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit, project, resonances
+from .model import FitResult, Model, fit, project
+from .peaks import data_peaks, match_starts, peak_residual, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
@@ -82,80 +82,6 @@ def signature(data: SpectrumData, result: FitResult, sigma: float) -> dict:
             "share_near_resonances": share, "signature": shape}
 
 
-def data_peaks(data: SpectrumData) -> np.ndarray:
-    """Frequencies (Hz) of the peaks of the bias-summed |response| (5x above its median), interpolated.
-
-    >>> from types import SimpleNamespace
-    >>> f = np.repeat(np.linspace(1, 10, 91), 2); y = 1 / (f - 4.03) + 0j   # pole off the grid
-    >>> data_peaks(SimpleNamespace(frequency_hz=f, bias_v=np.tile([0, 1], 91), response=y)).round(6).tolist()
-    [4.03]
-    """
-    freq_u, inverse = np.unique(data.frequency_hz, return_inverse=True)
-    size = np.bincount(inverse, np.abs(data.response))
-    inner = np.arange(1, len(size) - 1)
-    keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > 5 * np.median(size))
-    out = []
-    # Near a pole 1/|y| is a V, a |f - f_p|: its steeper side through the two points away
-    # from the pole locates f_p to a fraction of the sampling step.
-    for i in inner[keep]:
-        g, f = 1 / size[i - 1:i + 2], freq_u[i - 1:i + 2]
-        if g[2] < g[0]:     # pole between f[1] and f[2]: line through points 0 and 1
-            a = (g[0] - g[1]) / (f[1] - f[0])
-            out.append(min(f[1] + g[1] / a, f[2]) if a > 0 else f[1])
-        else:               # pole between f[0] and f[1]: line through points 2 and 1
-            a = (g[2] - g[1]) / (f[2] - f[1])
-            out.append(max(f[1] - g[1] / a, f[0]) if a > 0 else f[1])
-    return np.array(out)
-
-
-def peak_widths(data: SpectrumData) -> tuple[np.ndarray, np.ndarray]:
-    """Peaks of the bias-summed |response| and their half-power widths (Hz), where measurable.
-
-    A width is the span where the magnitude stays above ``1/sqrt(2)`` of the peak (linear
-    interpolation); peaks too close to the band's edge or to another peak get NaN.
-
-    >>> from types import SimpleNamespace
-    >>> f = np.linspace(50, 150, 2001); y = 1 / (100**2 - f**2 + 1j * f * 2.0)
-    >>> p, w = peak_widths(SimpleNamespace(frequency_hz=f, bias_v=np.zeros_like(f), response=y))
-    >>> p.round(1).tolist(), w.round(2).tolist()
-    ([100.0], [2.0])
-    """
-    freq_u, inverse = np.unique(data.frequency_hz, return_inverse=True)
-    size = np.bincount(inverse, np.abs(data.response))
-    inner = np.arange(1, len(size) - 1)
-    keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > 3 * np.median(size))
-    peaks, widths = [], []
-    for i in inner[keep]:
-        level = size[i] / math.sqrt(2)
-        lo, hi = i, i
-        while lo > 0 and size[lo] > level and size[lo - 1] <= size[lo]:
-            lo -= 1
-        while hi < len(size) - 1 and size[hi] > level and size[hi + 1] <= size[hi]:
-            hi += 1
-        if size[lo] > level or size[hi] > level:
-            width = math.nan
-        else:
-            f_lo = np.interp(level, [size[lo], size[lo + 1]], [freq_u[lo], freq_u[lo + 1]])
-            f_hi = np.interp(level, [size[hi], size[hi - 1]], [freq_u[hi], freq_u[hi - 1]])
-            width = f_hi - f_lo
-        peaks.append(freq_u[i])
-        widths.append(width)
-    return np.array(peaks), np.array(widths)
-
-
-def _peak_residual(model, internal, peaks, band, refine):
-    """Log-frequency distance of each peak to the nearest resonance, then one entry for the
-    resonances in the band that no peak explains (fixed length, for least squares)."""
-    roots = resonances(model, internal, True, band[1] * 1.3, refine_roots=refine)
-    if not len(roots):
-        return np.full(len(peaks) + 1, 10.0)
-    inside = roots[(roots > band[0]) & (roots < band[1])]
-    lp, lr = np.log(peaks), np.log(roots)
-    there = [np.min(np.abs(lr - x)) for x in lp]
-    back = math.sqrt(sum(np.min(np.abs(lp - x)) ** 2 for x in np.log(inside)))
-    return np.array(there + [back])
-
-
 TRIAL_NFEV = 30
 """Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
 then converged (:meth:`SpectrumProblem.polish`)."""
@@ -180,33 +106,10 @@ class SpectrumProblem:
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
 
     # -- starts --------------------------------------------------------------------------
-    def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2,
-                         refined: int = 4) -> list[np.ndarray]:
-        """Starts whose resonances match the data's peaks.
-
-        A grid over the springs times ``extra`` (values of the remaining parameters) is
-        ranked by how well its undamped resonances match the peaks; the best ``refined``
-        are matched by least squares on the peaks.  Peak positions alone often leave a
-        family of exact matches (two peaks, three parameters), so those are ranked by the
-        full misfit of the spectrum, and the best ``count`` are returned.
-        """
-        if not len(self.peaks):
-            return []
-        n_springs = 1 if model.vertical_only else 2
-        springs = ([np.array([x]) for x in self.k1_grid] if n_springs == 1 else
-                   [np.array([x, y]) for x in self.k1_grid for y in self.k2_grid])
-        grid = [np.concatenate([sp_, e]) for sp_ in springs for e in extra]
-        lower, upper = bounds(model)
-        grid = [np.clip(g, lower, upper) for g in grid]
-        ranked = sorted((float(np.sum(_peak_residual(model, g, self.peaks, self.band, False) ** 2)), i)
-                        for i, g in enumerate(grid))
-        starts = []
-        for _, i in ranked[:refined]:
-            res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
-                                bounds=(lower, upper), diff_step=1e-6, max_nfev=15)
-            if not any(np.allclose(res.x, s_, atol=1e-3) for s_ in starts):
-                starts.append(res.x)
-        return sorted(starts, key=lambda x: self.cost(model, x))[:count]
+    def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
+        """Starts whose resonances match the data's peaks (:func:`peaks.match_starts`)."""
+        return match_starts(model, extra, self.peaks, self.band, (self.k1_grid, self.k2_grid),
+                            lambda x: self.cost(model, x), count)
 
     def damping_seeds(self) -> dict[str, float]:
         """Start values of each damping mechanism's parameter from the measured peak widths."""

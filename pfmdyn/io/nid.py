@@ -94,11 +94,38 @@ def _channels(nid, sections) -> list[tuple]:
     out = []
     keys = [k for k in sections if re.fullmatch(r"DataSet-\d+:\d+", k)]
     headers = [sections[k] for k in sorted(keys, key=lambda k: tuple(int(n) for n in re.findall(r"\d+", k)))]
+    # NSFopen names a channel (group, direction, signal); a header says "Scan forward" or
+    # "Spec backward" and the signal.  Match on those: files with processed data sets (force
+    # curves' slopes, adhesion) hold headers NSFopen does not turn into channels.
+    by_name = {}
+    for header in headers:
+        frame = str(header.get("Frame", "")).lower().split()
+        if len(frame) == 2:
+            group = {"scan": "image", "spectrum": "sweep"}.get(frame[0], frame[0])
+            by_name.setdefault((group, frame[1], str(header.get("Dim2Name", "")).lower()), header)
     for i, (name, values) in enumerate(nid.data.items()):
-        header = headers[i] if i < len(headers) else {}
-        data = np.asarray(values, dtype=float)
-        out.append((name, data, _unit(str(header.get("Dim2Unit", ""))), header))
+        key = tuple(str(p).lower() for p in name) if isinstance(name, tuple) else None
+        positional = headers[i] if len(headers) == len(nid.data) else {}
+        header = by_name.get(key, positional)
+        out.append((name, _array(values), _unit(str(header.get("Dim2Unit", ""))), header))
     return out
+
+
+def _array(values) -> np.ndarray:
+    """A channel as a float array; curves of unequal length (force spectroscopy stops each
+    approach at its own trigger) are padded with NaN to the longest.
+
+    >>> _array([np.ones(3), np.ones(2)]).tolist()
+    [[1.0, 1.0, 1.0], [1.0, 1.0, nan]]
+    """
+    try:
+        return np.asarray(values, dtype=float)
+    except ValueError:
+        rows = [np.ravel(np.asarray(v, dtype=float)) for v in values]
+        out = np.full((len(rows), max(len(r) for r in rows)), np.nan)
+        for i, r in enumerate(rows):
+            out[i, :len(r)] = r
+        return out
 
 
 def read_nid(path) -> InstrumentRecord:
@@ -127,6 +154,10 @@ def read_nid(path) -> InstrumentRecord:
     else:
         kind = "image" if group.startswith("image") else "curve" if group.startswith("spec") else "spectrum"
         found = _fields(info, _SCAN_KEYS)
+        curves = [data for name, data, _, _ in channels
+                  if isinstance(name, tuple) and str(name[0]).lower().startswith("spec")]
+        if kind == "image" and curves:
+            notes.append(f"also holds {len(curves[0])} spectroscopy curves per channel")
     listed = [Channel(" ".join(str(p) for p in name) if isinstance(name, tuple) else str(name), unit,
                       data.shape[1:] if data.ndim > 1 and data.shape[0] == 1 else data.shape)
               for name, data, unit, _ in channels]

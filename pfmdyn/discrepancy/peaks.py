@@ -1,0 +1,222 @@
+"""The peaks of a measured spectrum, and fit starts whose resonances match them.
+
+A resonance seen in a response ``y(f)`` is a complex pole: near it, at every bias,
+``y = a / (f - p) + b + c f`` with one ``p`` shared by all biases.  ``Re p`` is the
+resonance frequency and ``2 |Im p|`` the half-power width (for a Lorentzian peak ``|y|**2``
+falls to half at ``|f - Re p| = |Im p|``).  :func:`poles` fits that form on a window
+around each peak of the bias-summed magnitude: the pole is located to a small fraction of
+the frequency step, which an undamped spectrum (needle peaks, where a shift of one step
+changes the misfit by orders of magnitude) needs, and a damped one gives its width.
+
+:func:`match_starts` turns the peaks into starts for a model's nonlinear parameters.  Peak
+positions rarely fix the parameters alone: two peaks and three parameters (``k1``, ``k2``
+and an effect) leave a curve of exact matches, and three peaks may be matched by several
+isolated points.  So the springs are matched at each value of the remaining parameters
+(a profile), every match is then refined jointly, and all are ranked by the full misfit
+of the spectrum, which the residues (mode shapes) decide.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares, minimize_scalar
+
+from .model import bounds, resonances
+
+__all__ = ["data_peaks", "poles", "peak_widths", "peak_residual", "match_starts"]
+
+
+def _summed(data):
+    freq_u, inverse = np.unique(data.frequency_hz, return_inverse=True)
+    return freq_u, np.bincount(inverse, np.abs(data.response))
+
+
+def _maxima(size, factor):
+    inner = np.arange(1, len(size) - 1)
+    keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > factor * np.median(size))
+    return inner[keep]
+
+
+def _half_power_span(size, i) -> tuple[int, int]:
+    """Indices around maximum ``i`` where the summed magnitude first drops below 1/sqrt(2)."""
+    level = size[i] / math.sqrt(2)
+    lo, hi = i, i
+    while lo > 0 and size[lo] > level and size[lo - 1] <= size[lo]:
+        lo -= 1
+    while hi < len(size) - 1 and size[hi] > level and size[hi + 1] <= size[hi]:
+        hi += 1
+    return lo, hi
+
+
+def poles(data, guesses_hz, half_width: int | None = None) -> np.ndarray:
+    """Complex poles ``p`` (Hz) of the response near each guess (see module).
+
+    The window spans ``half_width`` samples each side (default: twice the half-power span,
+    6 to 40 samples); ``a, b, c`` per bias come by linear least squares at each ``p``.
+
+    >>> from types import SimpleNamespace
+    >>> f = np.repeat(np.linspace(90, 110, 41), 2); v = np.tile([0.0, 1.0], 41)
+    >>> y = (1 + v) / (f - (100.13 + 0.02j)) + 0.3
+    >>> p = poles(SimpleNamespace(frequency_hz=f, bias_v=v, response=y), [100.0])
+    >>> round(float(p[0].real), 4), round(float(abs(p[0].imag)), 4)
+    (100.13, 0.02)
+    """
+    freq_u, size = _summed(data)
+    biases, which_all = np.unique(data.bias_v, return_inverse=True)
+    out = []
+    for guess in np.atleast_1d(guesses_hz):
+        i = int(np.clip(np.searchsorted(freq_u, guess), 1, len(freq_u) - 2))
+        i = max((i - 1, i, i + 1), key=lambda j: size[j])
+        if half_width is None:
+            lo, hi = _half_power_span(size, i)
+            half = int(np.clip(2 * max(hi - lo, 1), 6, 40))
+        else:
+            half = half_width
+        lo, hi = max(i - half, 0), min(i + half, len(freq_u) - 1)
+        sel = (data.frequency_hz >= freq_u[lo]) & (data.frequency_hz <= freq_u[hi])
+        scale = (freq_u[hi] - freq_u[lo]) / 2
+        x = (data.frequency_hz[sel] - freq_u[i]) / scale
+        y = data.response[sel] / np.max(np.abs(data.response[sel]))
+        which, rows = which_all[sel], np.arange(sel.sum())
+
+        def design(p):
+            A = np.zeros((len(x), 3 * len(biases)), complex)
+            A[rows, 3 * which] = 1 / (x - p)
+            A[rows, 3 * which + 1] = 1
+            A[rows, 3 * which + 2] = x
+            return A
+
+        def residual(v):
+            A = design(v[0] + 1j * v[1])
+            coef = np.linalg.lstsq(A, y, rcond=None)[0]
+            r = y - A @ coef
+            return np.concatenate([r.real, r.imag])
+
+        step = (freq_u[i + 1] - freq_u[i - 1]) / 2 / scale
+        # The sign of Im p depends on the time convention of the data: try both.
+        fits = [least_squares(residual, [0.0, sign * step / 2], method="lm", max_nfev=200) for sign in (1, -1)]
+        best = min(fits, key=lambda r: r.cost)
+        p = best.x[0] + 1j * best.x[1]
+        inside = abs(p.real) < 1 and np.isfinite(p)
+        out.append(freq_u[i] + scale * p if inside else complex(guess, math.nan))
+    return np.array(out, complex)
+
+
+def data_peaks(data) -> np.ndarray:
+    """Resonance frequencies (Hz): the maxima of the bias-summed |response| (5x above its
+    median), each located by its complex pole (:func:`poles`).
+
+    >>> from types import SimpleNamespace
+    >>> f = np.repeat(np.linspace(1, 10, 91), 2); y = 1 / (f - 4.03) + 0j   # pole off the grid
+    >>> data_peaks(SimpleNamespace(frequency_hz=f, bias_v=np.tile([0, 1], 91), response=y)).round(6).tolist()
+    [4.03]
+    """
+    freq_u, size = _summed(data)
+    found = freq_u[_maxima(size, 5.0)]
+    return poles(data, found).real if len(found) else found
+
+
+def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
+    """Peaks (3x above the median of the bias-summed |response|) and their half-power widths
+    (Hz), ``2 |Im p|`` of each pole; NaN where no pole was found near the peak.
+
+    >>> from types import SimpleNamespace
+    >>> f = np.linspace(50, 150, 2001); y = 1 / (100**2 - f**2 + 1j * f * 2.0)
+    >>> p, w = peak_widths(SimpleNamespace(frequency_hz=f, bias_v=np.zeros_like(f), response=y))
+    >>> p.round(1).tolist(), w.round(2).tolist()
+    ([100.0], [2.0])
+    """
+    freq_u, size = _summed(data)
+    found = freq_u[_maxima(size, 3.0)]
+    if not len(found):
+        return found, found
+    p = poles(data, found)
+    return np.where(np.isfinite(p.real), p.real, found), 2 * np.abs(p.imag)
+
+
+def peak_residual(model, internal, peaks, band, refine: bool) -> np.ndarray:
+    """Log-frequency distance of each peak to the nearest resonance, then one entry for the
+    resonances in the band that no peak explains (fixed length, for least squares)."""
+    roots = resonances(model, internal, True, band[1] * 1.3, refine_roots=refine)
+    if not len(roots):
+        return np.full(len(peaks) + 1, 10.0)
+    inside = roots[(roots > band[0]) & (roots < band[1])]
+    lp, lr = np.log(peaks), np.log(roots)
+    there = [np.min(np.abs(lr - x)) for x in lp]
+    back = math.sqrt(sum(np.min(np.abs(lp - x)) ** 2 for x in np.log(inside)))
+    return np.array(there + [back])
+
+
+def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
+                 per_value: int = 3, joint: int = 6) -> list[np.ndarray]:
+    """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
+
+    ``extra``: values of the parameters after the springs (one vector per profile point).
+    At each, the spring grid is ranked by :func:`peak_residual` and its best ``per_value``
+    distinct ``k1`` rows are matched by least squares over the springs alone; the best
+    ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
+    are returned.
+    """
+    if not len(peaks):
+        return []
+    lower, upper = bounds(model)
+    n_springs = 1 if model.vertical_only else 2
+    k1_grid, k2_grid = spring_grids
+    springs = ([np.array([a]) for a in k1_grid] if n_springs == 1 else
+               [np.array([a, b]) for a in k1_grid for b in k2_grid])
+
+    def on_peaks(x, refine=True):
+        return peak_residual(model, x, peaks, band, refine)
+
+    matched = []
+    for e in extra:
+        grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
+        score = [float(np.sum(on_peaks(g, False) ** 2)) for g in grid]
+        best_k1 = {}
+        for i in np.argsort(score):
+            best_k1.setdefault(round(float(grid[i][0]), 6), i)
+        for i in list(best_k1.values())[:per_value]:
+            g = grid[i]
+            res = least_squares(lambda s: on_peaks(np.concatenate([s, g[n_springs:]])), g[:n_springs],
+                                bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=15)
+            matched.append((2 * res.cost, np.concatenate([res.x, g[n_springs:]])))
+    matched.sort(key=lambda t: t[0])
+    starts = []
+    for _, x in matched[:joint]:
+        if len(x) > n_springs:
+            x = least_squares(on_peaks, x, bounds=(lower, upper), diff_step=1e-6, max_nfev=20).x
+        if not any(np.allclose(x, s, atol=1e-3) for s in starts):
+            starts.append(x)
+    best = sorted(starts, key=cost)[:count]
+    if len(lower) > n_springs:
+        best = sorted((_along_matches(x, on_peaks, cost, n_springs, lower, upper) for x in best), key=cost)
+    return best
+
+
+def _along_matches(x, on_peaks, cost, n_springs, lower, upper) -> np.ndarray:
+    """Minimise ``cost`` over the last parameter with the springs re-matched to the peaks at
+    every value: along the curve of matches the misfit is smooth, while across it (a peak
+    moved by a fraction of its width) an undamped spectrum's misfit is a needle.
+    """
+    j = len(x) - 1
+    state = {"springs": x[:n_springs]}
+
+    def matched(v):
+        y = x.copy()
+        y[j] = v
+        res = least_squares(lambda s: on_peaks(np.concatenate([s, y[n_springs:]])), state["springs"],
+                            bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=10)
+        y[:n_springs] = res.x
+        return y
+
+    def along(v):
+        y = matched(v)
+        state["springs"] = y[:n_springs]
+        return cost(y)
+
+    reach = 0.25 * (upper[j] - lower[j])
+    span = (max(lower[j], x[j] - reach), min(upper[j], x[j] + reach))
+    res = minimize_scalar(along, bounds=span, method="bounded", options={"xatol": 1e-4 * (upper[j] - lower[j])})
+    y = matched(res.x)
+    return y if cost(y) < cost(x) else x
