@@ -184,20 +184,53 @@ def test_zarr_group_input(synthetic, local_run, tmp_path):
     np.testing.assert_array_equal(_maps(tmp_path / "o")["k1"], _maps(local_run)["k1"][:16, :16])
 
 
-def test_two_contact_bands_separate_k1_and_k2(tmp_path, capsys):
-    beam = FEBeam(K, L, F1, H, k1=100.0, k2=60.0, Q=80.0, n_elements=60)
-    f_contact = beam.contact_resonances(2)
+def _two_band_map(tmp_path, name, **damping):
+    """A 3 x 4 map of one FE beam (k1 = 100, k2 = 60 N/m) over its first two contact modes;
+    returns the file and the true extra damping parameter: the dashpot's loss tangent at the free
+    resonance (x = omega1 eta / k1) or the drag's g = c / (rho S omega1) = viscous_hz / f1."""
+    undamped = FEBeam(K, L, F1, H, k1=100.0, k2=60.0, n_elements=60)
+    f_contact = undamped.contact_resonances(2)
+    if "eta" in damping:    # dashpot giving contact mode 1 a loss tangent of ~1/60
+        damping["eta"] = 100.0 / (2 * np.pi * f_contact[0] * damping["eta"])
+    beam = FEBeam(K, L, F1, H, k1=100.0, k2=60.0, n_elements=60, **damping)
     f = np.concatenate([np.linspace(0.93, 1.07, 40) * f_contact[0], np.linspace(0.95, 1.05, 40) * f_contact[1]])
     rng = np.random.default_rng(3)
     y = np.broadcast_to(2e-3 * np.exp(0.3j) * beam.slope(f)[:, 0], (3, 4, f.size))
     y = y + 0.01 * np.median(np.abs(y)) * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
-    with h5py.File(tmp_path / "two.h5", "w") as h:
+    free = float(FEBeam(K, L, F1, H, n_elements=60).free_resonances(1)[0])
+    with h5py.File(tmp_path / name, "w") as h:
         h["response"], h["frequency_hz"] = y, f
-        h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H,
-                       free_resonance_hz=float(FEBeam(K, L, F1, H, n_elements=60).free_resonances(1)[0]))
-    assert main(["map", str(tmp_path / "two.h5"), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
-    assert "k1 and k2" in capsys.readouterr().out
+        h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=free)
+    return tmp_path / name, 2 * np.pi * free * beam.eta / beam.k1 + beam.viscous_hz / free
+
+
+@pytest.mark.parametrize("damping, chosen", [({"Q": 80.0}, "elastic"), ({"eta": 60.0}, "elastic+contact"),
+                                             ({"viscous_hz": F1 / 40}, "elastic+viscous")])
+def test_two_contact_bands_separate_k1_and_k2_and_auto_names_the_damping(tmp_path, capsys, damping, chosen):
+    path, x = _two_band_map(tmp_path, "two.h5", **damping)
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "k1 and k2" in out and f"model {chosen}:" in out
     group = zarr.open_group(str(tmp_path / "o" / "maps.zarr"), mode="r")
+    assert group.attrs["model"] == chosen
+    assert [r["model"] for r in group.attrs["model_selection"] if r["chosen"]] == [chosen]
     for name, true in (("k1", 100.0), ("k2", 60.0)):
         z = (np.asarray(group[name][...]) - true) / np.asarray(group[f"{name}_stderr"][...])
         assert np.all(np.abs(z) < 4), (name, z)
+    extra = {"elastic+contact": "contact_loss", "elastic+viscous": "viscous_loss"}.get(chosen)
+    if extra:
+        z = (np.asarray(group[extra][...]) - x) / np.asarray(group[f"{extra}_stderr"][...])
+        assert np.all(np.abs(z) < 4), z
+
+
+def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, local_run, tmp_path, capsys):
+    path, _ = synthetic
+    args = ["map", str(path), "--out", str(tmp_path), "--max-blocks", "3", "--workers", "2"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert "3/4 done" in captured.out
+    assert "3/4" in captured.err and "pixels_per_s" in captured.err      # tqdm bar: blocks, pixels/s
+    assert main(args) == 0
+    assert "1 blocks fitted" in capsys.readouterr().out
+    for name, value in _maps(tmp_path).items():
+        np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)

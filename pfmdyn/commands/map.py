@@ -13,6 +13,7 @@ becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  R
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..errors import UserError
@@ -27,13 +28,18 @@ def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
     parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response, frequency_hz; or USID BE HDF5")
     parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
-    parser.add_argument("--model", default="auto", choices=["auto", "elastic"],
-                        help="per-pixel model: elastic contact, k1 + loss 1/Q + complex d_eff per band, "
-                             "and k2 when the frequencies hold two or more contact-mode bands; "
-                             "auto (default) picks that from the bands and reports it")
+    parser.add_argument("--model", default="auto",
+                        help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
+                             "per band, and k2 when the frequencies hold two or more contact-mode bands) plus damping "
+                             "mechanisms '+viscous' (drag) and/or '+contact' (dashpot); 'auto' (default) chooses them "
+                             "on 16 pixels spread over the map (BIC + gap rule of pfmdyn discrepancy) and reports it")
     parser.add_argument("--block", type=int, default=16, help="pixels per block side (default 16)")
     parser.add_argument("--scheduler", default=None,
-                        help="'sync', or tcp://HOST:PORT of a dask.distributed scheduler (default: local, all cores)")
+                        help="'processes' (default: one worker process per core), 'threads', 'sync' (one core), "
+                             "or tcp://HOST:PORT of a dask.distributed scheduler")
+    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--max-blocks", type=int, default=None,
+                        help="stop after this many blocks (rerun the same command to continue)")
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
     parser.add_argument("--gap-threshold", type=float, default=0.2,
                         help="relative residual above which a pixel is marked unexplained (default 0.2)")
@@ -44,13 +50,33 @@ def add_arguments(parser) -> None:
                             help=f"override the file's {key}")
 
 
+def _mechanisms(args, source, fit_options):
+    """Damping mechanisms from --model (and the selection rows when auto): auto reuses an
+    interrupted run's choice, else selects on pixels spread over the map."""
+    import os
+    from ..maps.fit import model_name, parse_model
+    if args.model != "auto":
+        return parse_model(args.model), None
+    from ..maps.readers import require
+    out = os.path.join(args.out, "maps.zarr")
+    if os.path.isdir(out) and "model" in (attrs := require("zarr").open_group(out, mode="r").attrs):
+        print(f"model (auto, as chosen by the interrupted run): {attrs['model']}")
+        return parse_model(attrs["model"]), attrs.get("model_selection")
+    from ..maps.select import choose_model
+    mechanisms, rows = choose_model(source, **fit_options)
+    print(f"model (auto, on pixels spread over the map): {model_name(mechanisms)}; " + ", ".join(
+        f"{r['model']} BIC {r['bic']:.1f} gap {r['gap']:.3g}" for r in rows))
+    return mechanisms, rows
+
+
 def run(args) -> int:
     """Fit the map and print a summary line."""
-    from ..maps.driver import open_map, run_map
-    for name in ("block", "quality_factor", "gap_threshold"):
+    from ..maps.driver import check_scheduler, open_map, run_map
+    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
-        if not (math.isfinite(value) and value > 0):
+        if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
+    check_scheduler(args.scheduler)
     overrides = {key: getattr(args, flag) for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
     from ..maps.contact import contact_map, is_contact_map
     if is_contact_map(args.data):
@@ -59,17 +85,20 @@ def run(args) -> int:
               f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
         return 0
     source = open_map(args.data, overrides)
+    fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold}
+    mechanisms, rows = _mechanisms(args, source, fit_options)
+    source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
     n_bands = len(source.model.bands)
-    print(f"model ({args.model}): elastic contact + loss 1/Q, "
-          f"{'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
+    print(f"fitting: {'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
           f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})")
-    s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, progress=not args.no_progress,
-                q0=args.quality_factor, gap_threshold=args.gap_threshold)
+    s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
+                max_blocks=args.max_blocks, progress=not args.no_progress, selection=rows, **fit_options)
     ny, nx = source.shape
     if args.png:
         from ..maps.driver import read_maps
         from ..plots.maps import plot_maps
         plot_maps(*read_maps(s["out"]), args.out)
-    print(f"{ny}x{nx} pixels, {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s); "
-          f"explained {100 * s['explained_fraction']:.1f} %, median gap {s['median_gap']:.3g}; maps in {s['out']}")
+    print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
+          f"{s['blocks_done']}/{s['blocks_total']} done; explained {100 * s['explained_fraction']:.1f} %, "
+          f"median gap {s['median_gap']:.3g}; maps in {s['out']}")
     return 0

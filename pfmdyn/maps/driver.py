@@ -2,8 +2,13 @@
 
 The map is cut into pixel blocks (``block`` x ``block`` pixels, all frequencies).  Each block is
 one Dask task that reads its spectra, fits them with :func:`pfmdyn.maps.fit.fit_block` and writes
-its region of every output array in ``OUT/maps.zarr``; a per-block flag array ``done`` is set last,
-so a rerun after an interruption skips finished blocks.  Nothing holds the whole map in memory.
+its region of every output array in ``OUT/maps.zarr``; a per-block flag array ``done`` (one chunk
+per block, so concurrent workers never rewrite each other's flags) is set last, so a rerun after
+an interruption skips finished blocks.  Nothing holds the whole map in memory: a task holds one
+block of spectra, the driver only the ``(ny, nx)`` maps of its summary.
+
+The default local run uses a pool of worker *processes*, one per core, each limited to one BLAS
+thread: the fit is NumPy work on modest arrays, which threads sharing the GIL do not scale.
 """
 from __future__ import annotations
 
@@ -14,15 +19,21 @@ import time
 import numpy as np
 
 from ..errors import UserError
-from .fit import QUANTITIES, fit_block
+from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 
-__all__ = ["MapInput", "open_map", "run_map", "read_maps"]
+__all__ = ["MapInput", "check_scheduler", "open_map", "run_map", "read_maps"]
 
 def _blocks(shape, block):
     ny, nx = shape
     return [(by, bx) for by in range(math.ceil(ny / block)) for bx in range(math.ceil(nx / block))]
+
+
+def _one_blas_thread():
+    """Worker initialiser: one BLAS thread per process (the processes are the parallelism)."""
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(1)
 
 
 def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
@@ -33,88 +44,142 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
         raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
     result = fit_block(source.model, response, **options)
     group = zarr.open_group(out, mode="r+")
-    for name, value in result.items():
-        group[name][ys, xs] = value
+    for name in quantities(source.model.mechanisms):
+        group[name][ys, xs] = result[name]
     group["done"][by, bx] = 1
     return response.shape[0] * response.shape[1]
 
 
-def _output(out, source: MapInput, block: int):
+def _output(out, source: MapInput, block: int, selection=None):
     zarr = _require("zarr")
     group = zarr.open_group(out, mode="a")
     ny, nx = source.shape
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     if "done" in group and group["done"].shape != grid:
         raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
-    for name, (unit, text) in QUANTITIES.items():
+    model = model_name(source.model.mechanisms)
+    if "done" in group and group.attrs.get("model", model) != model:
+        raise UserError(f"{out}: holds a map of model {group.attrs['model']}, not {model}; choose another --out")
+    for name, (unit, text) in quantities(source.model.mechanisms).items():
         if name not in group:
             arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
             arr.attrs.update(units=unit, description=text)
     if "done" not in group:
-        group.zeros("done", shape=grid, chunks=grid, dtype="u1")
-    group.attrs.update(source=os.path.abspath(source.path), block=block)
+        group.zeros("done", shape=grid, chunks=(1, 1), dtype="u1")
+    group.attrs.update(source=os.path.abspath(source.path), block=block, model=model)
+    if selection is not None:
+        group.attrs["model_selection"] = selection
     return group
 
 
 def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str | None = None,
-            progress: bool = True, **options) -> dict:
+            workers: int | None = None, max_blocks: int | None = None, progress: bool = True,
+            selection: list | None = None, **options) -> dict:
     """Fit every pixel of ``source`` and write ``out_dir/maps.zarr``; returns a summary.
 
-    ``scheduler``: None (Dask's local threaded scheduler on all cores), ``"sync"`` (one thread),
-    or ``tcp://HOST:PORT`` (a running ``dask.distributed`` scheduler).  Blocks flagged done in an
-    existing output are skipped.
+    ``scheduler``: None or ``"processes"`` (local pool of ``workers`` processes, default one per
+    core, see :func:`_pool`), ``"threads"``,
+    ``"sync"`` (one core, in this process), or ``tcp://HOST:PORT`` (a running
+    ``dask.distributed`` scheduler).  Blocks flagged done in an existing output are skipped;
+    ``max_blocks`` stops after that many (the next run continues).  ``selection`` (the rows
+    of an automatic model choice) is stored in the Zarr attributes; ``options`` go to
+    :func:`pfmdyn.maps.fit.fit_block`.
+
+    The summary: blocks and pixels fitted, pixels per second, the model, the fraction of
+    pixels explained and the median gap over the whole map.
     """
     dask = _require("dask")
     import dask.delayed  # noqa: F401  (submodule import)
     os.makedirs(out_dir, exist_ok=True)
     out = os.path.join(out_dir, "maps.zarr")
-    group = _output(out, source, block)
+    group = _output(out, source, block, selection)
     done = np.asarray(group["done"][...])
-    todo = [b for b in _blocks(source.shape, block) if not done[b]]
-    tasks = [dask.delayed(_process)(source, out, by, bx, block, options) for by, bx in todo]
+    todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
+    tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,
+                                                dask_key_name=f"pfmdyn-block-{by}-{bx}") for by, bx in todo]
     start = time.perf_counter()
-    pixels = _compute(tasks, scheduler, progress, len(_blocks(source.shape, block)) - len(todo))
+    pixels = _compute(tasks, scheduler, workers, progress, int(done.sum()), done.size)
     elapsed = time.perf_counter() - start
     gap = np.asarray(group["gap"][...])
-    summary = {"blocks_run": len(todo), "pixels_fitted": pixels,
-               "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
-               "explained_fraction": float(np.nanmean(group["explained"][...])),
-               "median_gap": float(np.nanmedian(gap)), "out": out}
-    return summary
+    return {"blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
+            "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
+            "model": group.attrs["model"],
+            "explained_fraction": float(np.nanmean(group["explained"][...])) if np.isfinite(gap).any() else float("nan"),
+            "median_gap": float(np.nanmedian(gap)) if np.isfinite(gap).any() else float("nan"), "out": out}
 
 
-def _compute(tasks, scheduler, progress, already):
-    """Run the block tasks, with a tqdm bar of blocks done and pixels per second."""
+def _pool(workers: int):
+    """A pool of worker processes, started now (before any progress-bar thread exists).
+
+    ``fork`` while this process runs no other thread (workers start in milliseconds and share
+    the imported modules; with other threads running a fork could copy a held lock), else
+    ``spawn`` as Dask does (then a calling script needs the usual ``if __name__ == "__main__":``).
+    """
+    import multiprocessing
+    import threading
+    from concurrent.futures import ProcessPoolExecutor
+    # tqdm's monitor thread (left by an earlier bar) only sleeps; workers never touch its lock
+    others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.name != "tqdm_monitor"]
+    method = "fork" if not others and "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_one_blas_thread)
+    pool.submit(int).result()
+    return pool
+
+
+def check_scheduler(scheduler: str | None) -> None:
+    """Raise a one-line error unless ``scheduler`` is one :func:`run_map` accepts.
+
+    >>> check_scheduler("tcp://127.0.0.1:8786")
+    """
+    if scheduler not in (None, "processes", "threads", "sync") and "://" not in scheduler:
+        raise UserError(f"unknown scheduler {scheduler!r}: use processes, threads, sync or tcp://HOST:PORT")
+
+
+def _compute(tasks, scheduler, workers, progress, already, total):
+    """Run the block tasks, with a tqdm bar of blocks done (of the whole map) and pixels per second."""
     from tqdm.auto import tqdm
-    bar = tqdm(total=len(tasks) + already, initial=already, unit="block", disable=not progress)
+    check_scheduler(scheduler)
+    kwargs = {"scheduler": scheduler or "processes"}
+    if kwargs["scheduler"] in ("processes", "threads"):
+        kwargs["num_workers"] = max(1, min(workers or os.cpu_count() or 1, len(tasks)))
+    pool = _pool(kwargs["num_workers"]) if kwargs["scheduler"] == "processes" and tasks else None
+    if pool is not None:
+        kwargs.update(pool=pool, chunksize=1)   # one block per message: blocks are large
+    bar = tqdm(total=total, initial=already, unit="block", disable=not progress)
     pixels = 0
-    if scheduler and "://" in scheduler:
-        distributed = _require("distributed")
-        with distributed.Client(scheduler) as client:
-            for future in distributed.as_completed(client.compute(tasks)):
-                pixels += future.result()
-                bar.update(1)
-                bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
-    else:
-        import dask
-        from dask.callbacks import Callback
 
-        class _Bar(Callback):
-            def _posttask(self, key, result, dsk, state, worker_id):
-                nonlocal pixels
-                if isinstance(result, int):
-                    pixels += result
-                    bar.update(1)
-                    bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
+    def tick(result):
+        nonlocal pixels
+        pixels += result
+        bar.update(1)
+        bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
 
-        with _Bar():
-            dask.compute(*tasks, scheduler="sync" if scheduler == "sync" else "threads")
-    bar.close()
+    try:
+        if "://" in kwargs["scheduler"]:
+            distributed = _require("distributed")
+            with distributed.Client(scheduler) as client:
+                for future in distributed.as_completed(client.compute(tasks)):
+                    tick(future.result())
+        elif tasks:
+            import dask
+            from dask.callbacks import Callback
+
+            class _Bar(Callback):   # runs in this process whatever the local scheduler
+                def _posttask(self, key, result, dsk, state, worker_id):
+                    if isinstance(result, int):
+                        tick(result)
+
+            with _Bar():
+                dask.compute(*tasks, **kwargs)
+    finally:
+        bar.close()
+        if pool is not None:
+            pool.shutdown()
     return pixels
 
 
 def read_maps(out: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """The fitted maps of ``out`` (a ``maps.zarr`` directory) and their units."""
     group = _require("zarr").open_group(out, mode="r")
-    maps = {name: np.asarray(group[name][...]) for name in QUANTITIES if name in group}
+    maps = {name: np.asarray(group[name][...]) for name in quantities(MECHANISMS) if name in group}
     return maps, {name: group[name].attrs.get("units", "") for name in maps}

@@ -1,41 +1,94 @@
 """Batched per-pixel fit of the elastic-contact beam response to band-excitation spectra.
 
-At each pixel the measured response is ``c_b * A_v(f; k1, k2, Q)``: the tip slope per unit
-vertical surface displacement of the elastic-contact cantilever (generated code, via
-:meth:`pfmdyn.Cantilever.elastic_response`), with contact stiffnesses ``k1``, ``k2``, loss
-``1/Q`` and one complex amplitude ``c_b`` per frequency band (d_eff amplitude and phase,
-arbitrary instrument units; bands are driven and demodulated separately).  The amplitudes
-enter linearly and are projected out (variable projection); ``log k1``, ``log Q`` and, when
-the frequencies hold two or more bands (one per contact mode), ``log k2`` are fitted by a
-Levenberg-Marquardt iteration that treats every pixel of a block at once, with its own damping
-per pixel.  One contact mode cannot separate ``k1`` from ``k2``: with one band ``k2 = 0``.
-The covariance of the fitted parameters is ``s**2 (J^T J)^-1`` of the projected residual,
-the marginal covariance of the full problem (Golub and Pereyra 1973).
+At each pixel the measured response is ``c_b * A_v(f; k1, k2, damping)``: the tip slope per
+unit vertical surface displacement of the elastic-contact cantilever
+(:mod:`pfmdyn.generated.elastic_contact`), damped by the substitution of
+:mod:`pfmdyn.generated.damping` (internal friction ``1/Q`` always; viscous drag ``g`` and a
+contact dashpot ``x`` when the model names them), with one complex amplitude ``c_b`` per
+frequency band (d_eff amplitude and phase, arbitrary instrument units; bands are driven and
+demodulated separately).  The amplitudes enter linearly and are projected out (variable
+projection); ``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one
+per contact mode: one mode cannot separate ``k1`` from ``k2``, so with one band ``k2 = 0``),
+``g`` and ``x`` are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block
+at once, each pixel with its own damping factor.
+
+Cost is dominated by the generated transfer function over ``(pixels, frequencies)``; one
+*design evaluation* per iteration gives the transfer function and its derivatives for the whole
+block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow from
+them in closed form.  The covariance of the fitted parameters is ``s**2 (J^T J)^-1`` of the
+projected residual, the marginal covariance of the full problem (Golub and Pereyra 1973).
 """
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..cantilever import Cantilever
+from ..errors import UserError
 from ..generated import damping, elastic_contact
 
-__all__ = ["BeamMapModel", "fit_block", "QUANTITIES", "bands"]
+__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
+
+CHUNK = 256
+"""Pixels fitted together: large enough to make the per-call overhead negligible, small enough
+for the ``(pixels, frequencies)`` temporaries to stay in cache (1024 at once is ~1.5x slower)."""
+
+MECHANISMS = ("internal", "viscous", "contact")
+"""Damping mechanisms a map model may hold (``internal`` always: the baseline)."""
 
 # name -> (unit, description) of the per-pixel output arrays
-QUANTITIES = {
+_QUANTITIES = {
     "k1": ("N/m", "vertical contact stiffness"),
     "k1_stderr": ("N/m", "standard error of k1"),
     "k2": ("N/m", "longitudinal contact stiffness (two or more bands; else NaN)"),
     "k2_stderr": ("N/m", "standard error of k2"),
-    "quality_factor": ("1", "quality factor Q of the beam loss 1/Q"),
+    "quality_factor": ("1", "quality factor Q of the beam loss 1/Q (internal friction)"),
+    "quality_factor_stderr": ("1", "standard error of Q"),
+    "viscous_loss": ("1", "viscous drag g = c / (rho S omega1): 1/Q of free mode 1 under drag alone"),
+    "viscous_loss_stderr": ("1", "standard error of viscous_loss"),
+    "contact_loss": ("1", "contact dashpot x = omega1 eta / k1: loss tangent of the contact at f1"),
+    "contact_loss_stderr": ("1", "standard error of contact_loss"),
     "amplitude": ("response units per unit d1", "d_eff amplitude |c| (first band)"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
     "gap": ("1", "relative residual |y - model| / |y|"),
     "explained": ("1", "1 where the model explains the pixel (gap below threshold), else 0"),
 }
+_ONLY = {"viscous_loss": "viscous", "viscous_loss_stderr": "viscous",
+         "contact_loss": "contact", "contact_loss_stderr": "contact"}
+
+
+def quantities(mechanisms=("internal",)) -> dict[str, tuple[str, str]]:
+    """Output arrays (name -> (unit, description)) of a model with these damping mechanisms.
+
+    >>> list(quantities(("internal", "viscous")))[4:8]
+    ['quality_factor', 'quality_factor_stderr', 'viscous_loss', 'viscous_loss_stderr']
+    """
+    return {name: v for name, v in _QUANTITIES.items() if _ONLY.get(name, "internal") in mechanisms}
+
+
+def parse_model(spec: str) -> tuple[str, ...]:
+    """Damping mechanisms of a ``--model`` spec ``elastic[+viscous][+contact]``.
+
+    >>> parse_model("elastic+contact")
+    ('internal', 'contact')
+    """
+    names = spec.split("+")
+    unknown = [n for n in names[1:] if n not in MECHANISMS[1:]]
+    if names[0] != "elastic" or unknown:
+        raise UserError(f"unknown model {spec!r}: use 'auto' or elastic[+viscous][+contact]")
+    return ("internal",) + tuple(m for m in MECHANISMS[1:] if m in names)
+
+
+def model_name(mechanisms) -> str:
+    """Inverse of :func:`parse_model`.
+
+    >>> model_name(("internal", "viscous"))
+    'elastic+viscous'
+    """
+    return "+".join(["elastic", *[m for m in mechanisms if m != "internal"]])
 
 
 def bands(frequency_hz) -> list[slice]:
@@ -53,13 +106,15 @@ def bands(frequency_hz) -> list[slice]:
 
 @dataclass(frozen=True)
 class BeamMapModel:
-    """Cantilever metadata in SI units and the frequency vector of the map.
+    """Cantilever metadata in SI units, the frequency vector of the map and the damping mechanisms.
 
     Examples
     --------
     >>> m = BeamMapModel(k=2.0, L=225e-6, f1=75e3, H=10e-6, frequency_hz=np.linspace(3e5, 4e5, 8))
     >>> m.shape_functions(np.array([200.0]), np.array([80.0])).shape
     (1, 8)
+    >>> m.parameters
+    ('log_k1', 'log_q')
     """
 
     k: float
@@ -67,70 +122,203 @@ class BeamMapModel:
     f1: float
     H: float
     frequency_hz: np.ndarray
+    mechanisms: tuple[str, ...] = ("internal",)
 
     @property
     def bands(self) -> list[slice]:
         """The frequency bands (one per contact mode driven)."""
         return bands(self.frequency_hz)
 
-    def shape_functions(self, k1, q, k2=0.0) -> np.ndarray:
-        """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """Internal nonlinear parameters, in the order of the fit's columns."""
+        names = ["log_k1", "log_q"] + (["log_k2"] if len(self.bands) > 1 else [])
+        return tuple(names + [{"viscous": "g", "contact": "x"}[m] for m in self.mechanisms if m != "internal"])
+
+    def _arguments(self, inv_q, g, k1, k2, x):
+        """``beta`` and the springs relative to the complex EI, with the damping factors.
+
+        Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
+        on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
+        contact springs are divided by that factor (the dashpot multiplies ``k1``).
+        """
         f = np.asarray(self.frequency_hz, float)
-        beta1 = Cantilever(self.k, self.f1, self.L).beta(f)
-        # Internal friction as derived (derivations/damping.py): the complex modulus E (1 + i/Q)
-        # turns beta**4 into beta**4 / (1 + i/Q) and, relative to EI, the contact springs into
-        # k / (1 + i/Q).
-        beta_factor, modulus, _, _ = damping.factors(1.0, 1.0 / np.asarray(q, float)[:, None], 0.0, 0.0)
-        k2 = np.asarray(k2, float)
-        k2 = k2[:, None] if k2.ndim else k2
-        return elastic_contact.slope(beta1[None, :] * beta_factor, self.k,
-                                     np.asarray(k1, float)[:, None] / modulus, k2 / modulus, self.H, self.L)[0]
+        r = f / self.f1
+        beta0 = Cantilever(self.k, self.f1, self.L).beta(f)
+        # Without drag the beta factor does not depend on r: keep it one number per pixel.
+        r_beta = r if "viscous" in self.mechanisms else 1.0
+        beta_factor, k_factor, _, _ = damping.factors(r_beta, inv_q, g, 0.0)
+        k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
+        return beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor
+
+    def _physical(self, p):
+        """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(n, n_p)``), each ``(n, 1)``."""
+        col = {name: p[:, i, None] for i, name in enumerate(self.parameters)}
+        zero = np.zeros_like(col["log_k1"])
+        return (np.exp(-col["log_q"]), col.get("g", zero), np.exp(col["log_k1"]),
+                np.exp(col["log_k2"]) if "log_k2" in col else zero, col.get("x", zero))
+
+    def shape_functions(self, k1, q, k2=0.0, g=0.0, x=0.0) -> np.ndarray:
+        """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
+        col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
+        _, _, _, beta, k1e, k2e, _ = self._arguments(*(c[:, None] for c in col))
+        return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0]
+
+    def design(self, p, jacobian=True):
+        """Transfer function ``(n, n_freq)`` at internal parameters ``p`` ``(n, n_p)`` and its
+        derivatives ``(n_p, n, n_freq)`` (None unless ``jacobian``): one call of the generated
+        values-and-partials (w.r.t. ``beta``, ``k1``, ``k2``), chained with the generated
+        derivatives of the damping factors.
+        """
+        inv_q, g, k1, k2, x = self._physical(p)
+        beta0, r, r_beta, beta, k1e, k2e, k_factor = self._arguments(inv_q, g, k1, k2, x)
+        if not jacobian:
+            return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0], None
+        values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
+        d_beta, d_k1, d_k2 = partials[0]
+        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, _ = damping.d_factors(r_beta, inv_q, g, 0.0)
+        # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
+        spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
+        chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
+                 "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
+                 "g": d_beta * beta0 * dbf_g}
+        if "contact" in self.mechanisms:
+            dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2]
+            chain["x"] = d_k1 * k1 * dk1f_x / k_factor
+        d = np.empty((len(self.parameters),) + values[0].shape, complex)
+        for i, name in enumerate(self.parameters):
+            d[i] = chain[name]
+        return values[0], d
 
 
-def _project(g, y, band_list):
-    """Best complex amplitude per pixel and band ``(n, n_bands)`` and the residual ``y - c_b g``."""
+def _project(g, dg, y, band_list):
+    """Variable projection: amplitudes ``(n, n_bands)``, real residual ``(n, 2 n_freq)`` and,
+    given ``dg``, its Jacobian ``(n, 2 n_freq, n_p)`` (exact derivative of the projection)."""
     c, r = [], np.empty_like(y)
+    dr = None if dg is None else np.empty((dg.shape[0],) + y.shape, complex)
     for b in band_list:
-        cb = np.sum(g[:, b].conj() * y[:, b], axis=1) / np.sum(np.abs(g[:, b]) ** 2, axis=1)
-        r[:, b] = y[:, b] - cb[:, None] * g[:, b]
+        gb, yb = g[:, b], y[:, b]
+        norm = np.maximum(np.sum(np.abs(gb) ** 2, axis=1), 1e-300)
+        cb = np.sum(gb.conj() * yb, axis=1) / norm
+        r[:, b] = yb - cb[:, None] * gb
         c.append(cb)
-    return np.stack(c, axis=1), r
-
-
-def _residual(model, p, y):
-    k2 = np.exp(p[:, 2]) if p.shape[1] > 2 else 0.0
-    g = model.shape_functions(np.exp(p[:, 0]), np.exp(p[:, 1]), k2)
-    c, r = _project(g, y, model.bands)
-    return c, np.concatenate([r.real, r.imag], axis=1)
-
-
-def _jacobian(model, p, y, r):
-    """Derivatives of the projected residual w.r.t. (log k1, log Q[, log k2]): forward differences.
-
-    The one place derivatives are made: generated Jacobians replace this body alone.
-    """
-    cols, h = [], 1e-6
-    for j in range(p.shape[1]):
-        q = p.copy()
-        q[:, j] += h
-        cols.append((_residual(model, q, y)[1] - r) / h)
-    return np.stack(cols, axis=2)
+        if dg is not None:
+            dgb = dg[:, :, b]
+            dc = (np.sum(dgb.conj() * yb, axis=2) - 2 * cb * np.sum((gb.conj() * dgb).real, axis=2)) / norm
+            dr[:, :, b] = -(dc[..., None] * gb + cb[:, None] * dgb)
+    J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).transpose(1, 2, 0)
+    return np.stack(c, axis=1), np.concatenate([r.real, r.imag], axis=1), J
 
 
 def _start(model, y, q0, k1_range):
-    """Best k1 per pixel on a logarithmic grid (one shape function per grid value, k2 = 0)."""
-    grid = np.geomspace(*k1_range, 60)
-    g = model.shape_functions(grid, np.full(grid.size, q0))
+    """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0), refined
+    by the vertex of the parabola through the best grid value and its neighbours on each axis."""
+    log_k1, log_q, g = _grid(model.k, model.L, model.f1, model.H, np.asarray(model.frequency_hz, float).tobytes(),
+                            q0, tuple(k1_range))
     proj = sum(np.abs(y[:, b] @ g[:, b].conj().T) ** 2 / np.sum(np.abs(g[:, b]) ** 2, axis=1)
-               for b in model.bands)
-    return np.log(grid[np.argmax(proj, axis=1)])
+               for b in model.bands).reshape(len(y), len(log_q), len(log_k1))
+    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), proj.shape[1:])
+    rows = np.arange(len(y))
+    return (_vertex(proj[rows, iq], ik, log_k1), _vertex(proj[rows, :, ik], iq, log_q))
+
+
+@functools.lru_cache(maxsize=8)
+def _grid(k, L, f1, H, frequency_bytes, q0, k1_range):
+    """Shape functions of the start grid, computed once per cantilever, frequencies and range."""
+    log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
+    k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
+    model = BeamMapModel(k, L, f1, H, np.frombuffer(frequency_bytes))
+    return log_k1, log_q, model.shape_functions(k1_grid.ravel(), q_grid.ravel())
+
+
+def _vertex(values, best, axis):
+    """Abscissa of the parabola's vertex through ``values[best - 1 : best + 2]`` on an evenly
+    spaced ``axis`` (the grid value itself at an edge or without curvature)."""
+    inner = np.clip(best, 1, len(axis) - 2)
+    rows = np.arange(len(values))
+    lo, mid, hi = (values[rows, inner + d] for d in (-1, 0, 1))
+    curvature = lo - 2 * mid + hi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = np.where((best == inner) & (curvature < 0), 0.5 * (lo - hi) / curvature, 0.0)
+    return axis[best] + np.clip(shift, -0.5, 0.5) * (axis[1] - axis[0])
+
+
+def _bounds(model, k1_range):
+    limits = {"log_k1": (k1_range[0] / 10, k1_range[1] * 10), "log_q": (1.0, 1e5),
+              "log_k2": (k1_range[0] / 100, k1_range[1] * 10)}
+    lower = [math.log(limits[n][0]) if n in limits else 0.0 for n in model.parameters]
+    upper = [math.log(limits[n][1]) if n in limits else {"g": 1.0, "x": 5.0}[n] for n in model.parameters]
+    return np.array(lower), np.array(upper)
+
+
+def _initial(model, y, q0, k1_range, iterations, tolerance):
+    """Starting parameters: the (k1, Q) grid; with extra damping mechanisms, the fitted baseline
+    with the extras switched off (nested, so the fit never ends worse than the baseline)."""
+    if model.mechanisms != ("internal",):
+        base = replace(model, mechanisms=("internal",))
+        p_base = _levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
+                                      _bounds(base, k1_range), iterations, tolerance)[0]
+        return np.stack([p_base[:, base.parameters.index(n)] if n in base.parameters else np.zeros(len(y))
+                         for n in model.parameters], axis=1)
+    log_k1, log_q = _start(model, y, q0, k1_range)
+    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + math.log(0.5)}  # Mindlin: k2 ~ 0.7-0.9 k1
+    return np.stack([start[n] for n in model.parameters], axis=1)
+
+
+def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
+    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost).
+
+    A step predicted to gain less than 100 ``tolerance`` is the last one (Gauss-Newton converges
+    quadratically: the next would gain below ``tolerance``), so its point gets values only; ``J``
+    then stays the Jacobian of the previous point, a fraction of a standard error away.
+    """
+    lower, upper = bounds
+    n_p, band_list = p.shape[1], model.bands
+    c, r, J = _project(*model.design(p), y, band_list)
+    cost = np.sum(r**2, axis=1)
+    lam = np.full(len(y), 1e-3)
+    dof = max(r.shape[1] - n_p - 2 * len(band_list), 1)
+    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
+    for _ in range(iterations):
+        Ja, ra, la = J[active], r[active], lam[active]
+        JtJ = np.einsum("nki,nkj->nij", Ja, Ja)
+        grad = np.einsum("nki,nk->ni", Ja, ra)
+        A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
+        step = np.clip(p[active] - np.linalg.solve(A, grad[..., None])[..., 0], lower, upper) - p[active]
+        # predicted decrease of the cost (Gauss-Newton) in units of the tolerance
+        gain = -np.einsum("ni,ni->n", step, grad) / (tolerance * cost[active] / dof)
+        moving = (gain > 1) & (la < 1e8)
+        active, step, gain = active[moving], step[moving], gain[moving]
+        if active.size == 0:
+            break
+        finished = np.zeros(len(active), bool)
+        for last in (False, True):
+            sel = (gain < 100) == last
+            if not sel.any():
+                continue
+            act = active[sel]
+            trial = p[act] + step[sel]
+            c_t, r_t, J_t = _project(*model.design(trial, jacobian=not last), y[act], band_list)
+            cost_t = np.sum(r_t**2, axis=1)
+            better = cost_t < cost[act]
+            idx = act[better]
+            p[idx], c[idx], r[idx], cost[idx] = trial[better], c_t[better], r_t[better], cost_t[better]
+            if not last:
+                J[idx] = J_t[better]
+            lam[act] = np.where(better, lam[act] / 3, lam[act] * 4)
+            finished[np.flatnonzero(sel)[better]] = last
+        active = active[~finished]
+    return p, c, r, J, cost
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2) -> dict[str, np.ndarray]:
-    """Fit every pixel of ``response`` (``(..., n_freq)`` complex) at once.
+              gap_threshold=0.2, tolerance=1e-3) -> dict[str, np.ndarray]:
+    """Fit every pixel of ``response`` (``(..., n_freq)`` complex), :data:`CHUNK` pixels at once.
 
-    Returns the arrays of :data:`QUANTITIES`, each of the pixel shape ``response.shape[:-1]``.
+    Returns the arrays of :func:`quantities` of the model, each of the pixel shape
+    ``response.shape[:-1]``, plus ``cost`` (the squared relative residual).  A pixel stops when
+    the predicted decrease of its cost is below ``tolerance`` times the noise variance
+    (the step is then ~``sqrt(tolerance)`` standard errors).
 
     Examples
     --------
@@ -144,55 +332,31 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     y = np.asarray(response, complex)
     shape = y.shape[:-1]
     y = y.reshape(-1, y.shape[-1])
+    k1_range = k1_range or (model.k, 1e4 * model.k)
+    settings = (q0, k1_range, iterations, gap_threshold, tolerance)
+    parts = [_fit_pixels(model, y[i:i + CHUNK], *settings) for i in range(0, max(len(y), 1), CHUNK)]
+    return {name: np.concatenate([part[name] for part in parts]).reshape(shape) for name in parts[0]}
+
+
+def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance):
     scale = np.linalg.norm(y, axis=1)
     scale[scale == 0] = 1.0
     y = y / scale[:, None]
-    k1_range = k1_range or (model.k, 1e4 * model.k)
-    log_k1 = _start(model, y, q0, k1_range)
-    columns = [log_k1, np.full(len(y), math.log(q0))]
-    n_bands = len(model.bands)
-    if n_bands > 1:
-        columns.append(log_k1 + math.log(0.5))   # k2 ~ k1 / 2 (Mindlin: 0.7-0.9 k1)
-    p = np.stack(columns, axis=1)
-    n_p = p.shape[1]
-    lower = np.log([k1_range[0] / 10, 1.0, k1_range[0] / 100][:n_p])
-    upper = np.log([k1_range[1] * 10, 1e5, k1_range[1] * 10][:n_p])
-    _, r = _residual(model, p, y)
-    cost = np.sum(r**2, axis=1)
-    lam = np.full(len(y), 1e-2)
-    dof = max(r.shape[1] - n_p - 2 * n_bands, 1)
-    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
-    for _ in range(iterations):
-        if active.size == 0:
-            break
-        pa, ra, ya, la = p[active], r[active], y[active], lam[active]
-        J = _jacobian(model, pa, ya, ra)
-        JtJ = np.einsum("nki,nkj->nij", J, J)
-        grad = np.einsum("nki,nk->ni", J, ra)
-        A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
-        step = -np.linalg.solve(A, grad[..., None])[..., 0]
-        trial = np.clip(pa + step, lower, upper)
-        _, r_new = _residual(model, trial, ya)
-        c_new = np.sum(r_new**2, axis=1)
-        better = c_new < cost[active]
-        idx = active[better]
-        p[idx], r[idx], cost[idx] = trial[better], r_new[better], c_new[better]
-        lam[active] = np.where(better, la / 3, la * 4)
-        # Converged when the predicted decrease of the cost (Gauss-Newton decrement) is below
-        # 1e-6 of the noise variance: the step is then ~1e-3 standard errors.
-        decrement = -np.einsum("ni,ni->n", step, grad)
-        small = (decrement < 1e-6 * cost[active] / dof) | (np.max(np.abs(step), axis=1) < 1e-8)
-        active = active[~((better & small) | (lam[active] > 1e8))]
-    J = _jacobian(model, p, y, r)
+    names = model.parameters
+    p = _initial(model, y, q0, k1_range, iterations, tolerance)
+    p, c, r, J, cost = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
+    dof = max(r.shape[1] - len(names) - 2 * len(model.bands), 1)
     JtJ = np.einsum("nki,nkj->nij", J, J)
     cov = np.linalg.pinv(JtJ) * (cost / dof)[:, None, None]
-    c, _ = _residual(model, p, y)
-    k1 = np.exp(p[:, 0])
-    k2 = np.exp(p[:, 2]) if n_p > 2 else np.full(len(y), np.nan)
-    k2_stderr = k2 * np.sqrt(np.abs(cov[:, 2, 2])) if n_p > 2 else k2
+    sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
+    col = {n: p[:, i] for i, n in enumerate(names)}
+    k1 = np.exp(col["log_k1"])
+    k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
     gap = np.sqrt(cost)
-    out = {"k1": k1, "k1_stderr": k1 * np.sqrt(np.abs(cov[:, 0, 0])), "k2": k2, "k2_stderr": k2_stderr,
-           "quality_factor": np.exp(p[:, 1]),
+    out = {"k1": k1, "k1_stderr": k1 * sd["log_k1"], "k2": k2, "k2_stderr": k2 * sd.get("log_k2", np.nan),
+           "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * sd["log_q"],
+           "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
+           "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
            "amplitude": np.abs(c[:, 0]) * scale, "phase": np.angle(c[:, 0]), "gap": gap,
-           "explained": (gap < gap_threshold).astype(float)}
-    return {name: v.reshape(shape) for name, v in out.items()}
+           "explained": (gap < gap_threshold).astype(float), "cost": cost}
+    return {name: out[name] for name in [*quantities(model.mechanisms), "cost"]}
