@@ -131,30 +131,40 @@ def test_missing_extra_names_it(synthetic, tmp_path, monkeypatch, capsys):
     assert "pip install 'pfmdyn[maps]'" in capsys.readouterr().err
 
 
-def _write_usid(path, response, f, attrs):
-    """BE data the way BGlib writes it: positions x spectral values, with ancillary references."""
+def _write_usid(path, response, f, attrs, pyusid_style=False):
+    """BE data the way BGlib writes it: positions x spectral values, with ancillary references.
+    ``pyusid_style``: as pyUSID's ``write_main_dataset`` lays it out instead (position columns
+    slowest first, [Y, X]), with the frequencies in kHz and the metadata on the measurement
+    group under Asylum's names where Asylum has one."""
     ny, nx, nf = response.shape
     with h5py.File(path, "w") as h:
-        h.attrs.update(attrs)
-        chan = h.create_group("Measurement_000/Channel_000")
+        meas = h.create_group("Measurement_000")
+        chan = meas.create_group("Channel_000")
         raw = chan.create_dataset("Raw_Data", data=response.reshape(ny * nx, nf))
         yy, xx = np.divmod(np.arange(ny * nx), nx)
-        pos = chan.create_dataset("Position_Indices", data=np.stack([xx, yy], axis=1).astype(np.uint32))
-        pos.attrs["labels"] = ["X", "Y"]
-        spec = chan.create_dataset("Spectroscopic_Values", data=f[None, :])
+        columns, labels = ((yy, xx), ["Y", "X"]) if pyusid_style else ((xx, yy), ["X", "Y"])
+        pos = chan.create_dataset("Position_Indices", data=np.stack(columns, axis=1).astype(np.uint32))
+        pos.attrs["labels"] = labels
+        spec = chan.create_dataset("Spectroscopic_Values", data=(f / 1e3 if pyusid_style else f)[None, :])
         spec.attrs["labels"] = ["Frequency"]
-        spec.attrs["units"] = ["Hz"]
+        spec.attrs["units"] = ["kHz" if pyusid_style else "Hz"]
         raw.attrs["Position_Indices"], raw.attrs["Spectroscopic_Values"] = pos.ref, spec.ref
+        (meas if pyusid_style else h).attrs.update(attrs)
 
 
-def test_usid_layout_gives_the_plain_layout_maps(synthetic, local_run, tmp_path):
+@pytest.mark.parametrize("pyusid_style", [False, True], ids=["bglib", "pyusid"])
+def test_usid_layout_gives_the_plain_layout_maps(synthetic, local_run, tmp_path, pyusid_style):
     path, _ = synthetic
     with h5py.File(path, "r") as h:
         response, f = h["response"][...], h["frequency_hz"][...]
     usid = tmp_path / "be_usid.h5"
-    _write_usid(usid, response, f, {"tip_height_m": H, "free_resonance_hz": F1})
-    assert main(["map", str(usid), "--out", str(tmp_path / "o"), "--no-progress",
-                 "--spring-constant", str(K), "--length", str(L)]) == 0
+    attrs = {"tip_height_m": H, "free_resonance_hz": F1}
+    lever = ["--spring-constant", str(K), "--length", str(L)]
+    if pyusid_style:
+        attrs.update(SpringConstant=K, CustomLeverLength=L)
+        lever = []
+    _write_usid(usid, response, f, attrs, pyusid_style)
+    assert main(["map", str(usid), "--out", str(tmp_path / "o"), "--no-progress"] + lever) == 0
     for name, value in _maps(tmp_path / "o").items():
         np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)
 

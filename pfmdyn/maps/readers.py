@@ -3,8 +3,10 @@
 Plain: ``response`` (ny, nx, n_freq) complex, ``frequency_hz`` (n_freq,), cantilever metadata as
 root attributes named as in the CSV metadata.  USID (as BGlib writes BE data): a main dataset
 (positions x spectral values, complex) whose attributes reference ``Position_Indices`` (columns
-labelled ``X``/``Y``, X fastest) and ``Spectroscopic_Values`` (a ``Frequency`` row in Hz); the
-cantilever metadata come from the root attributes or the command line.
+labelled ``X``/``Y``, X fastest) and ``Spectroscopic_Values`` (a ``Frequency`` row, in Hz or
+a prefixed unit); the
+cantilever metadata come from the root attributes, a ``Measurement_*`` group's (pfmdyn's or
+Asylum's key names) or the command line.
 """
 from __future__ import annotations
 
@@ -14,6 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MissingExtraError, UserError
+from ..io.asylum import cantilever_fields
+from ..io.record import si_unit
 from .fit import BeamMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require"]
@@ -66,23 +70,49 @@ def _usid_main(root):
     return found[0] if found else None
 
 
+def _labels(table, key) -> list[str]:
+    return [str(v.decode() if isinstance(v, bytes) else v) for v in np.ravel(table.attrs.get(key, []))]
+
+
 def _usid_grid(root, name, path):
     main = root[name]
     spec = root[main.attrs["Spectroscopic_Values"]]
-    labels = [str(v.decode() if isinstance(v, bytes) else v) for v in spec.attrs.get("labels", [])]
+    labels, units = _labels(spec, "labels"), _labels(spec, "units")
     if "Frequency" not in labels:
         raise UserError(f"{path}: USID Spectroscopic_Values has no 'Frequency' row (labels {labels})")
-    f = np.asarray(spec[labels.index("Frequency"), :], float)
+    row = labels.index("Frequency")
+    unit = units[row] if row < len(units) else "Hz"
+    converted = si_unit(unit)
+    if not converted or converted[0] != "Hz":
+        raise UserError(f"{path}: USID Frequency row is in {unit!r}, not a frequency unit")
+    f = np.asarray(spec[row, :], float) * converted[1]
     pos = root[main.attrs["Position_Indices"]]
-    plabels = [str(v.decode() if isinstance(v, bytes) else v) for v in pos.attrs.get("labels", [])]
-    if plabels[:2] != ["X", "Y"]:
-        raise UserError(f"{path}: USID Position_Indices must be labelled X, Y (got {plabels})")
+    plabels = _labels(pos, "labels")
+    if sorted(plabels) != ["X", "Y"]:
+        raise UserError(f"{path}: USID Position_Indices must have columns X and Y (got {plabels})")
     idx = np.asarray(pos[...])
-    nx, ny = int(idx[:, 0].max()) + 1, int(idx[:, 1].max()) + 1
+    x, y = idx[:, plabels.index("X")], idx[:, plabels.index("Y")]
+    nx, ny = int(x.max()) + 1, int(y.max()) + 1
     yy, xx = np.divmod(np.arange(ny * nx), nx)
-    if idx.shape[0] != ny * nx or np.any(idx[:, 0] != xx) or np.any(idx[:, 1] != yy):
+    # pyUSID lists the columns slowest first ([Y, X]); BGlib writes [X, Y]: rows X fastest either way.
+    if idx.shape[0] != ny * nx or np.any(x != xx) or np.any(y != yy):
         raise UserError(f"{path}: USID positions must be a full grid with X fastest")
     return f, (ny, nx), main.shape
+
+
+def _metadata(root) -> dict:
+    """Cantilever metadata: root attributes, else the first ``Measurement_*`` group's, under
+    pfmdyn's names or Asylum's (as pycroscopy's translators keep them)."""
+    found = {}
+    groups = [root] + [root[k] for k in sorted(root.keys()) if k.startswith("Measurement")]
+    for group in groups:
+        attrs = dict(group.attrs)
+        asylum, _ = cantilever_fields(attrs)
+        for key in METADATA:
+            value = attrs.get(key, asylum.get(key))
+            if value is not None and key not in found:
+                found[key] = value
+    return found
 
 
 def open_map(path: str, overrides: dict | None = None) -> MapInput:
@@ -105,7 +135,7 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
             f, grid, shape = _usid_grid(root, usid, path)
             if shape != (grid[0] * grid[1], f.size):
                 raise UserError(f"{path}: USID main dataset has shape {shape}, expected ({grid[0] * grid[1]}, {f.size})")
-        attrs = dict(root.attrs)
+        attrs = _metadata(root)
     attrs.update(overrides or {})
     missing = [key for key in METADATA if key not in attrs]
     if missing:
