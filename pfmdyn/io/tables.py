@@ -16,12 +16,17 @@ Format (SI units)::
 
 A resonances table may hold free modes only; the contact springs are then not determined.
 Rows may come in any order (they are sorted by condition, then mode); a repeated
-(condition, mode) with a different frequency is an error.  An optional ``quality_factor``
-column gives each mode's Q.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
-.txt/.dat) are read by :func:`pfmdyn.io.instruments.to_discrepancy_input` (``pfmdyn
-discrepancy`` dispatches them); :func:`check_resonance_rows` accepts their short tables
-(one or two resonances).  ``overrides`` (metadata keys, from the
-command line) win over the file's values.
+(condition, mode) with a different frequency is an error.  Columns may come in any order;
+the frequency column may carry its unit (``frequency_hz``, ``frequency_khz``,
+``frequency_mhz``), an optional ``quality_factor`` (or ``q``) column gives each mode's Q
+(blank where unknown), and an optional ``quality_factor_uncertainty`` metadata key its
+relative uncertainty (default 5 %).  Any other column is an error naming it.
+
+:func:`read` is the one entry point for every supported file: instrument files (.ibw,
+.nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
+:func:`pfmdyn.io.instruments.to_discrepancy_input`, whose short tables (one or two
+resonances) are accepted.  ``overrides`` (metadata keys, from the command line) win over
+the file's values.
 
 Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
@@ -45,6 +50,12 @@ REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m
                  "free_resonance_hz")
 RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
 OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
+FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1e6}
+"""Frequency column names of a resonances table and their factor to Hz."""
+COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "cond": "condition",
+                  "mode_number": "mode"}
+Q_RELATIVE_UNCERTAINTY = 0.05
+"""Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
 MIN_SPECTRUM_ROWS = 20
 MIN_RESONANCES = 3
@@ -61,6 +72,7 @@ class Metadata:
     f1: float
     description: str = ""
     frequency_uncertainty_hz: float | None = None
+    quality_factor_uncertainty: float | None = None
 
 
 @dataclass(frozen=True)
@@ -98,7 +110,7 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
                         f" (lines '# key: value' before the header)")
     values = {}
-    for key in REQUIRED_KEYS + ("frequency_uncertainty_hz",):
+    for key in REQUIRED_KEYS + ("frequency_uncertainty_hz", "quality_factor_uncertainty"):
         if key not in meta:
             continue
         try:
@@ -109,7 +121,8 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
     return Metadata(values["spring_constant_n_per_m"], values["length_m"], values["width_m"],
                     values["tip_height_m"], values["free_resonance_hz"],
-                    meta.get("description", ""), values.get("frequency_uncertainty_hz"))
+                    meta.get("description", ""), values.get("frequency_uncertainty_hz"),
+                    values.get("quality_factor_uncertainty"))
 
 
 def _preamble(path: Path) -> tuple[dict, list[str], list[str]]:
@@ -148,17 +161,18 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     """
     path = Path(path)
     if path.suffix.lower() in INSTRUMENT_SUFFIXES:
-        # pfmdyn.io.instruments imports this module's data classes: the command dispatches
-        # instrument files (read_input) so that the two modules do not import each other.
-        raise UserError(f"{path}: an instrument file; read it with pfmdyn.io.instruments.to_discrepancy_input")
+        return _instrument(path, overrides)
     meta, header, rows = _preamble(path)
     metadata = _metadata(str(path), meta, overrides)
-    if "mode" in header or "condition" in header:
-        return _resonances(path, metadata, header, rows)
+    names = [_column(c) for c in header]
+    if {"mode", "condition"} & set(names):
+        return _resonances(path, metadata, names, rows)
     unknown = [c for c in header if c not in EXPECTED_COLUMNS]
     if unknown:
-        raise UserError(f"{path}: unknown column(s) {', '.join(unknown)}; expected frequency_hz, "
-                        "bias_v and x, y or amplitude, phase_deg (or mode, condition, frequency_hz)")
+        hint = ("; give frequencies in Hz as 'frequency_hz'" if any(c.lower().startswith("frequency") for c in unknown)
+                else "")
+        raise UserError(f"{path}: unknown column(s) {', '.join(repr(c) for c in unknown)}{hint}; expected "
+                        "frequency_hz, bias_v and x, y or amplitude, phase_deg (or mode, condition, frequency_hz)")
     spectra = read_spectra(path, biases_per_frequency=1)
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
@@ -166,31 +180,65 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
+def _column(name: str) -> str:
+    """Canonical name of a resonances-table column (case, spaces and aliases forgiven)."""
+    key = "_".join(name.strip().lower().replace("(", " ").replace(")", " ").split())
+    return COLUMN_ALIASES.get(key, key)
+
+
+def _instrument(path: Path, overrides: dict | None) -> ResonanceData:
+    """The resonance table an instrument file implies, rows sorted as for a CSV table."""
+    # Imported here: pfmdyn.io.instruments builds this module's data classes.
+    from .instruments import to_discrepancy_input
+
+    data = to_discrepancy_input(path, {k: v for k, v in (overrides or {}).items() if v is not None})
+    if not isinstance(data, ResonanceData):
+        return data
+    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, minimum=1)
+    qs = None if data.quality_factor is None else data.quality_factor[order]
+    return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
+                         quality_factor=qs)
+
+
 def _resonances(path, metadata, header, rows) -> ResonanceData:
-    allowed = RESONANCE_COLUMNS + OPTIONAL_RESONANCE_COLUMNS
-    problem = sorted(set(header) - set(allowed)) + sorted(set(RESONANCE_COLUMNS) - set(header))
-    if problem or len(set(header)) != len(header):
-        raise UserError(f"{path}: resonances table needs the columns mode, condition, frequency_hz "
-                        f"(and optionally quality_factor) once each (problem: {', '.join(problem) or 'repeated column'})")
-    idx = [header.index(c) for c in RESONANCE_COLUMNS]
+    freq_cols = [c for c in header if c in FREQUENCY_UNITS]
+    allowed = ("mode", "condition") + tuple(FREQUENCY_UNITS) + OPTIONAL_RESONANCE_COLUMNS
+    unknown = [c for c in header if c not in allowed]
+    if unknown:
+        raise UserError(f"{path}: unknown column(s) {', '.join(repr(c) for c in unknown)} in a resonances "
+                        "table; expected mode, condition, frequency_hz (or frequency_khz, frequency_mhz) "
+                        "and optionally quality_factor")
+    missing = [c for c in ("mode", "condition") if c not in header] + ([] if freq_cols else ["frequency_hz"])
+    if missing:
+        raise UserError(f"{path}: resonances table lacks the column(s) {', '.join(missing)}")
+    repeated = sorted({c for c in header if header.count(c) > 1}) or freq_cols[1:]
+    if repeated:
+        raise UserError(f"{path}: column {repeated[0]} given more than once (one frequency column, each "
+                        "column once)")
+    idx = [header.index(c) for c in ("mode", "condition", freq_cols[0])]
+    unit = FREQUENCY_UNITS[freq_cols[0]]
     q_idx = header.index("quality_factor") if "quality_factor" in header else None
     modes, conds, freqs, qs = [], [], [], []
     for n, line in enumerate(rows, start=1):
         cells = [c.strip() for c in next(csv.reader([line]))]
         if len(cells) != len(header):
-            raise UserError(f"{path}: data row {n}: expected {len(header)} fields")
+            raise UserError(f"{path}: data row {n}: expected {len(header)} fields, got {len(cells)}")
         mode, cond, freq = (cells[i] for i in idx)
+        cond = cond.lower()
         if cond not in ("free", "contact"):
             raise UserError(f"{path}: data row {n}: condition must be 'free' or 'contact', got '{cond}'")
         try:
-            modes.append(int(mode))
-            freqs.append(float(freq))
+            modes.append(int(float(mode)) if float(mode).is_integer() else int(mode))
+            freqs.append(float(freq) * unit)
             qs.append(float(cells[q_idx]) if q_idx is not None and cells[q_idx] else math.nan)
         except ValueError:
-            raise UserError(f"{path}: data row {n}: mode must be an integer, frequency_hz and "
+            raise UserError(f"{path}: data row {n}: mode must be an integer, {freq_cols[0]} and "
                             "quality_factor numbers") from None
         if modes[-1] < 1 or not (math.isfinite(freqs[-1]) and freqs[-1] > 0):
-            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite frequency_hz > 0 required")
+            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite {freq_cols[0]} > 0 required")
+        if not (math.isnan(qs[-1]) or (math.isfinite(qs[-1]) and qs[-1] > 0.5)):
+            raise UserError(f"{path}: data row {n}: quality_factor must be a finite number > 0.5 "
+                            f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
     order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
