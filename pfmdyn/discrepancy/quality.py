@@ -21,6 +21,8 @@ Its accuracy is better than 0.1 % in Q down to Q = 5.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..generated import damping, tip_setback
@@ -63,24 +65,37 @@ def damped_roots(model: Model, internal, contact: bool, r0) -> np.ndarray:
     with np.errstate(all="ignore"):
         for degree, count in _PASSES:
             t = np.linspace(-1.0, 1.0, count)
-            x = centre.real[:, None] + span[:, None] * t
-            y = _characteristic(model, internal, contact, np.maximum(x, 1e-9))
-            for i in range(len(r0)):
-                if not np.all(np.isfinite(y[i])):
-                    centre[i] = np.nan
-                    continue
-                # Scaling y keeps the fit well conditioned whatever the characteristic's size.
-                z = np.roots(np.polyfit(t, y[i] / np.max(np.abs(y[i])), degree)) * span[i] + centre[i].real
-                centre[i] = z[np.argmin(np.abs(z - centre[i]))] if len(z) else np.nan
+            y = _characteristic(model, internal, contact, np.maximum(centre.real[:, None] + span[:, None] * t, 1e-9))
+            # Scaling each row keeps the fit well conditioned whatever the characteristic's size;
+            # all modes share the sample points, hence one least-squares solve.
+            y = y / np.max(np.abs(y), axis=1, keepdims=True)
+            coef = np.linalg.lstsq(np.vander(t, degree + 1), y.T, rcond=None)[0]     # highest power first
+            dcoef = coef[:-1] * np.arange(degree, 0, -1)[:, None]
+            # Newton on each polynomial from the previous estimate: the zero nearest to it.
+            z = 1j * centre.imag / span
+            for _ in range(30):
+                step = _horner(coef, z) / _horner(dcoef, z)
+                z = z - step
+                if np.all(np.abs(step[np.isfinite(step)]) < 1e-13):
+                    break
+            centre = centre.real + span * z
             span = np.where(np.isfinite(centre), np.maximum(1.5 * np.abs(centre.imag), 1e-4 * r0), span)
     return centre
+
+
+def _horner(coef, z):
+    """Polynomials (columns of ``coef``, highest power first) at ``z`` (one point per column)."""
+    out = np.zeros_like(z) + coef[0]
+    for c in coef[1:]:
+        out = out * z + c
+    return out
 
 
 def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
     """``1 / Q`` of the model's modes at the undamped resonances ``frequency_hz`` (0: no damping).
 
-    >>> from types import SimpleNamespace
-    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> from pfmdyn.io.tables import Metadata
+    >>> meta = Metadata(k=1.0, L=1e-4, width=3e-5, H=1e-5, f1=1e4)
     >>> loss = loss_factors(Model(meta, ("damping_internal",)), [-9.0, -9.0, 0.01], False, [1e4, 6.2669e4])
     >>> (1 / loss).round(2).tolist()
     [100.0, 100.0]
@@ -88,6 +103,24 @@ def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndar
     f = np.asarray(frequency_hz, float)
     if not model.damping_mechanisms or not len(f):
         return np.zeros(len(f))
+    if not contact:
+        # Free modes ignore the springs and the tilt: fits that vary only those reuse them.
+        c = model.coords(internal)
+        key = tuple(float(c[n]) for n in ("Q", "Q_viscous", "contact_loss", "mu", "gamma"))
+        return _free_loss(model.meta, key, tuple(f.tolist()))
+    return _loss(model, internal, contact, f)
+
+
+def _loss(model, internal, contact, f):
     rc = damped_roots(model, internal, contact, f / model.meta.f1)
     loss = 2 * np.abs(rc.imag) / np.abs(rc)
     return np.where(np.isfinite(loss), loss, 0.0)
+
+
+@lru_cache(maxsize=2048)
+def _free_loss(meta, key, frequency_hz):
+    q, g, x, mu, gamma = key
+    model = Model(meta, ("damping_internal", "damping_viscous", "damping_contact", "tip_mass", "tip_setback"))
+    out = _loss(model, [0.0, 0.0, q, g, x, mu, gamma], False, np.array(frequency_hz))
+    out.flags.writeable = False
+    return out

@@ -9,9 +9,29 @@ free mode 1 is reproduced by construction.  Residuals are ``(f_model - f) / sigm
 ``sigma`` the metadata's ``frequency_uncertainty_hz`` (default 0.1 % of each frequency);
 the gap is their RMS.  With ``sigma`` known, the criterion is ``BIC = chi2 + k ln n``; the
 loop and its stopping rule are :func:`pfmdyn.discrepancy.select.run`'s.
-Damping and background leave undamped resonances unchanged and are not candidates.  A
-table of free modes only leaves the springs undetermined: they are not fitted (nor counted
-in BIC), and tilt and lateral_stiffness, which act only through them, are not candidates.
+
+Damping.  Undamped resonances do not move with damping, so ``damping`` is a candidate only
+when the table gives Q values (a ``quality_factor`` column, or an instrument's thermal and
+tune fits).  Each given Q adds a residual ``(1/Q_model - 1/Q) / sigma_Q`` (relative
+uncertainty 5 % unless the metadata's ``quality_factor_uncertainty`` says otherwise), with
+``Q_model`` from the complex roots of the generated damped characteristic
+(:mod:`pfmdyn.discrepancy.quality`).  The mechanisms differ in how the half-power width
+``f/Q`` scales with the mode and the contact: internal friction keeps 1/Q of free modes
+equal, viscous drag keeps the width in Hz equal, a contact dashpot damps contact modes only,
+more the larger ``k1``'s share of the mode.  The mechanism (or two) with the lowest BIC is
+reported as ``damping`` with ``damping_mechanisms``, as for spectra.
+
+Springs (:func:`held_springs`).  Contact modes alone determine the springs: none leaves
+both undetermined (not fitted, not counted in BIC); one contact mode determines one spring,
+so ``k2`` is tied to ``k1`` at the Mindlin ratio and ``k1`` is reported with its
+uncertainty (``k2`` as not determined, with the rule as its ``note``; the report's
+``spring_rule`` repeats it); two or more fit both.
+
+Candidates (:func:`candidate_rule`): ``damping`` with Q values; ``tip_mass`` and
+``tip_setback``; ``tilt`` (and ``lateral_stiffness`` with ``--vertical-only``: the baseline
+has ``k2`` otherwise) only when there are more contact modes than contact parameters
+already fitted.  ``background`` never (it changes spectra, not resonances).  Every
+candidate needs fewer parameters than data values.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.
 """
@@ -37,8 +57,9 @@ __all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "ResonanceProblem", "analy
 CANDIDATES = ("tilt", "tip_mass", "tip_setback")
 """Effects a resonance table can show, in the order ties are broken (tilt is always present
 in a real contact, set-back changes only contact modes, like tilt)."""
-CONTACT_ONLY = ("tilt", "lateral_stiffness")
-"""Effects that act only through the contact springs: each needs a contact mode of its own."""
+CONTACT_ONLY = ("tilt", "lateral_stiffness", "tip_setback")
+"""Effects that change only contact modes (a set-back tip without a mass leaves the free
+modes alone): each parameter needs a contact mode of its own."""
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
 SPRINGS = ("k1", "k2")
 """Contact springs: they act on contact modes only, so free-only tables leave them undetermined."""
@@ -314,20 +335,31 @@ class ResonanceProblem:
     def baseline(self) -> FitResult:
         return fit_resonances(Model(self.data.metadata, (), self.vertical_only), self.data)
 
+    def _contact_room(self, current: FitResult) -> int:
+        """Contact modes not yet used by fitted contact parameters (springs, tilt, set-back, k2)."""
+        held = current.extra.get("held", {})
+        springs = sum(1 for p in current.model.parameters if p.name in SPRINGS and p.name not in held)
+        return _contact_modes(self.data) - springs - sum(e in current.model.effects for e in CONTACT_ONLY)
+
     def candidates(self, current: FitResult) -> list[str]:
         # A fit needs fewer parameters than data values; contact-only effects a contact mode each.
         room = len(current.residual) - current.k
-        springs = sum(1 for p in current.model.parameters if p.name in SPRINGS) - len(current.extra.get("held", {}))
-        contact_params = springs + sum(e in current.model.effects for e in CONTACT_ONLY)
         out = []
         for e in self.library:
             if e == "damping":
                 if len(current.model.damping_mechanisms) < 2 and room > 1 and self._mechanisms(current):
                     out.append(e)
             elif e not in current.model.effects and room > max(len(EFFECTS[e].parameters), 1) and (
-                    e not in CONTACT_ONLY or _contact_modes(self.data) > contact_params):
+                    e not in CONTACT_ONLY or self._contact_room(current) > 0):
                 out.append(e)
         return out
+
+    def untestable(self, current: FitResult) -> dict[str, str]:
+        """Effects of the library this table cannot test on top of ``current``, and why."""
+        n = _contact_modes(self.data)
+        return {e: f"changes contact modes only, and the {n} contact mode(s) are all used by the fitted "
+                   "contact parameters" for e in self.library
+                if e in CONTACT_ONLY and e not in current.model.effects and self._contact_room(current) <= 0}
 
     def _mechanisms(self, current: FitResult | None = None) -> list[str]:
         """Damping components not yet in the model (the dashpot only with a contact Q)."""
@@ -399,7 +431,8 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     --------
     See ``tests/test_discrepancy.py`` (FE resonances, and the paper's tips 1 and 2).
     """
-    result = select.run(ResonanceProblem(data, vertical_only), progress, time_budget_s)
+    problem = ResonanceProblem(data, vertical_only)
+    result = select.run(problem, progress, time_budget_s)
     sigma = _sigma(data)
     n = len(data.frequency_hz)
     base, final = result["baseline"], result["final"]
@@ -417,6 +450,7 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
                   baseline_hz=(data.frequency_hz + base.residual[:n]).tolist(),
                   predicted_hz=(data.frequency_hz + final.residual[:n]).tolist(),
                   frequency_uncertainty_hz=sigma.tolist(), spring_rule=held_springs(final.model, data),
+                  untestable_effects=problem.untestable(final),
                   **extra)
 
 
