@@ -37,7 +37,9 @@ def report(result: dict, **extra) -> dict:
 def summary(report: dict) -> str:
     """Readable multi-line summary of a report."""
     mech = report.get("damping_mechanisms") or []
-    named = [e + (f" ({', '.join(mech)})" if e == "damping" and mech else "") for e in report["missing_effects"]]
+    tied = report.get("damping_mechanisms_indistinguishable_from") or []
+    detail = ", ".join(mech) + (f"; {' or '.join(tied)} fit the data as well" if tied else "")
+    named = [e + (f" ({detail})" if e == "damping" and mech else "") for e in report["missing_effects"]]
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}"]
     for i, s in enumerate(report["steps"], 1):

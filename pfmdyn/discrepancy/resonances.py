@@ -208,7 +208,8 @@ def _damping_seeds(data: ResonanceData) -> dict[str, tuple]:
             "contact_loss": tuple(float(np.clip(v, 1e-4, 4.0)) for v in (x, 4 * x))}
 
 
-def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None = None) -> FitResult:
+def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None = None,
+                   local: list[np.ndarray] | None = None) -> FitResult:
     """Fit the springs and the model's effect parameters to the resonances (multi-start).
 
     Springs the table cannot determine (:func:`held_springs`) are held fixed and reported
@@ -216,7 +217,8 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     Starts come from grids scaled to the cantilever (:func:`pfmdyn.discrepancy.effects.spring_grid`),
     damping parameters from the table's Q values, clipped into the bounds, so no lever is
     outside them; ``start`` (e.g. the current fit with a new effect at its null value) is
-    one more.
+    one more.  ``local`` replaces the grid by these starts (an effect that leaves the
+    resonances alone, such as damping, from the current fit).
 
     >>> free = paper_tables()["tip 2"]
     >>> result = fit_resonances(Model(free.metadata, ("tip_mass",)), free)
@@ -246,7 +248,9 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     fitted = np.array([p.name not in held for p in params])
     grid = [np.where(fitted, np.clip(np.concatenate([s_, e]), lower, upper), np.concatenate([s_, e]))
             for s_ in springs for e in extra]
-    if start is not None:
+    if local:
+        grid = [np.where(fitted, np.clip(g, lower, upper), g) for g in local]
+    elif start is not None:
         grid.append(np.where(fitted, np.clip(start, lower, upper), grid[0]))
 
     def full(x, template):
@@ -266,7 +270,7 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     # Rank by the frequencies (cheap), then the best few by everything (Q rows included).
     ranked = sorted((float(np.sum(_residual(model, g, data, refine=False, with_q=False) ** 2)), i)
                     for i, g in enumerate(grid))
-    shortlist = [i for _, i in ranked[:8]] + ([len(grid) - 1] if start is not None else [])
+    shortlist = [i for _, i in ranked[:8]] + ([len(grid) - 1] if start is not None or local else [])
     ranked = sorted((float(np.sum(_residual(model, grid[i], data, refine=False) ** 2)), i)
                     for i in dict.fromkeys(shortlist))
     if fitted.any():
@@ -369,9 +373,12 @@ class ResonanceProblem:
 
     def _fit_with(self, current: FitResult, component: str) -> FitResult:
         model = current.model.with_effect(component)
-        start = None
-        if component != "lateral_stiffness":
-            start = np.concatenate([current.internal, EFFECTS[component].null])
+        effect = EFFECTS[component]
+        if component.startswith("damping_"):
+            # Damping leaves the resonances alone: the current fit plus the data's seed values.
+            values = (effect.null[0],) + self.seeds[effect.parameters[0].name]
+            return fit_resonances(model, self.data, local=[np.append(current.internal, v) for v in values])
+        start = None if component == "lateral_stiffness" else np.concatenate([current.internal, effect.null])
         return fit_resonances(model, self.data, start)
 
     def trial(self, current: FitResult, name: str) -> FitResult:
@@ -384,7 +391,11 @@ class ResonanceProblem:
     def without(self, current: FitResult, component: str) -> FitResult:
         effects = list(current.model.effects)
         effects.remove(component)
-        return fit_resonances(Model(self.data.metadata, tuple(effects), self.vertical_only), self.data)
+        model = Model(self.data.metadata, tuple(effects), self.vertical_only)
+        if not component.startswith("damping_"):
+            return fit_resonances(model, self.data)
+        keep = [i for i, p in enumerate(current.model.parameters) if p not in EFFECTS[component].parameters]
+        return fit_resonances(model, self.data, local=[current.internal[keep]])
 
     def alternatives(self, current: FitResult) -> list[FitResult]:
         """The final model with its damping mechanism(s) replaced by each single other one."""
@@ -393,14 +404,27 @@ class ResonanceProblem:
             return []
         others = tuple(c for c in current.model.effects if c not in present)
         out = []
+        keep = [i for i, p in enumerate(current.model.parameters)
+                if not any(p in EFFECTS[c].parameters for c in present)]
         for component in self._mechanisms():
             if present != [component]:
+                name = EFFECTS[component].parameters[0].name
                 out.append(fit_resonances(Model(self.data.metadata, others + (component,), self.vertical_only),
-                                          self.data))
+                                          self.data, local=[np.append(current.internal[keep], v)
+                                                            for v in self.seeds[name]]))
         return out
 
     def locate(self, current: FitResult) -> dict:
         return _locate(self.data, current)
+
+
+def _tied_mechanisms(problem: ResonanceProblem, final: FitResult) -> list[str]:
+    """Damping mechanisms that explain the Q values as well as the reported ones (BIC within
+    the threshold), e.g. every mechanism when the table holds one Q."""
+    if not final.model.damping_mechanisms:
+        return []
+    fits = [f for f in problem.alternatives(final) if f.bic - final.bic <= select.BIC_THRESHOLD]
+    return sorted({m for f in fits for m in f.model.damping_mechanisms} - set(final.model.damping_mechanisms))
 
 
 def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
@@ -436,16 +460,16 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     sigma = _sigma(data)
     n = len(data.frequency_hz)
     base, final = result["baseline"], result["final"]
-    extra = {}
+    extra = {"damping_mechanisms_indistinguishable_from": _tied_mechanisms(problem, final)}
+    gap_definition = "RMS of (f_model - f_measured) / frequency uncertainty"
     if _has_q(data).any():
         rows = _has_q(data)
-        q_sigma = final.sigma[n:]
-        extra = {"measured_quality_factor": data.quality_factor[rows].tolist(),
-                 "predicted_quality_factor": [1 / v if v > 0 else None
-                                              for v in (1 / data.quality_factor[rows] + final.residual[n:])],
-                 "quality_factor_relative_uncertainty": float(q_sigma[0] * data.quality_factor[rows][0])}
-    return report(result, gap_definition="RMS of (f_model - f_measured) / frequency uncertainty"
-                  + (" and of (1/Q_model - 1/Q_measured) / its uncertainty" if extra else ""),
+        measured = data.quality_factor[rows]
+        extra.update(measured_quality_factor=measured.tolist(),
+                     predicted_quality_factor=[1 / v if v > 0 else None for v in 1 / measured + final.residual[n:]],
+                     quality_factor_relative_uncertainty=float(final.sigma[n] * measured[0]))
+        gap_definition += " and of (1/Q_model - 1/Q_measured) / its uncertainty"
+    return report(result, gap_definition=gap_definition,
                   measured_hz=data.frequency_hz.tolist(),
                   baseline_hz=(data.frequency_hz + base.residual[:n]).tolist(),
                   predicted_hz=(data.frequency_hz + final.residual[:n]).tolist(),

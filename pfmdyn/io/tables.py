@@ -14,7 +14,8 @@ Format (SI units)::
     1,free,63200
     ...
 
-A resonances table may hold free modes only; the contact springs are then not determined.
+A resonances table may hold free modes only (the contact springs are then not determined)
+and as little as one row (the report says what it leaves undetermined).
 Rows may come in any order (they are sorted by condition, then mode); a repeated
 (condition, mode) with a different frequency is an error.  Columns may come in any order;
 the frequency column may carry its unit (``frequency_hz``, ``frequency_khz``,
@@ -58,7 +59,9 @@ Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
 MIN_SPECTRUM_ROWS = 20
-MIN_RESONANCES = 3
+MIN_RESONANCES = 1
+"""A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
+discrepancy report says which parameters so few rows leave undetermined."""
 
 
 @dataclass(frozen=True)
@@ -163,16 +166,18 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     if path.suffix.lower() in INSTRUMENT_SUFFIXES:
         return _instrument(path, overrides)
     meta, header, rows = _preamble(path)
-    metadata = _metadata(str(path), meta, overrides)
     names = [_column(c) for c in header]
     if {"mode", "condition"} & set(names):
-        return _resonances(path, metadata, names, rows)
+        return _resonances(path, _metadata(str(path), meta, overrides), names, rows)
     unknown = [c for c in header if c not in EXPECTED_COLUMNS]
     if unknown:
+        # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
         hint = ("; give frequencies in Hz as 'frequency_hz'" if any(c.lower().startswith("frequency") for c in unknown)
                 else "")
-        raise UserError(f"{path}: unknown column(s) {', '.join(repr(c) for c in unknown)}{hint}; expected "
-                        "frequency_hz, bias_v and x, y or amplitude, phase_deg (or mode, condition, frequency_hz)")
+        raise UserError(f"{path}: not a PFM spectrum or resonances table: unknown column(s) "
+                        f"{', '.join(repr(c) for c in unknown)}{hint}; expected frequency_hz, bias_v and x, y or "
+                        "amplitude, phase_deg (or mode, condition, frequency_hz)")
+    metadata = _metadata(str(path), meta, overrides)
     spectra = read_spectra(path, biases_per_frequency=1)
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
