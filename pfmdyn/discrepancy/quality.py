@@ -29,7 +29,7 @@ from ..generated import damping, tip_setback
 from ..generated.tilt_rotation import rotated
 from .model import Model, free_root
 
-__all__ = ["damped_roots", "loss_factors"]
+__all__ = ["damped_roots", "loss_factors", "loss_and_roots"]
 
 _PASSES = ((1, 3), (5, 11), (5, 11))
 """(polynomial degree, samples) per pass of the complex-root search."""
@@ -49,8 +49,11 @@ def _characteristic(model: Model, internal, contact: bool, r):
                                       c["mu"] * mu_f, c["gamma"])
 
 
-def damped_roots(model: Model, internal, contact: bool, r0) -> np.ndarray:
+def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.ndarray:
     """Complex zeros ``r_c`` of the damped characteristic near the undamped roots ``r0``.
+
+    ``guess``: roots of a nearby model (e.g. before a finite-difference step): one pass
+    around them replaces the three.
 
     >>> from types import SimpleNamespace
     >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
@@ -60,10 +63,12 @@ def damped_roots(model: Model, internal, contact: bool, r0) -> np.ndarray:
     [50.0, 313.3]
     """
     r0 = np.atleast_1d(np.asarray(r0, float))
-    centre = r0.astype(complex)
-    span = 1e-3 * r0
+    centre, span, passes = r0.astype(complex), 1e-3 * r0, _PASSES
+    if guess is not None and np.all(np.isfinite(guess)):
+        centre = np.asarray(guess, complex).copy()
+        span, passes = np.maximum(1.5 * np.abs(centre.imag), 1e-4 * r0), _PASSES[-1:]
     with np.errstate(all="ignore"):
-        for degree, count in _PASSES:
+        for degree, count in passes:
             t = np.linspace(-1.0, 1.0, count)
             y = _characteristic(model, internal, contact, np.maximum(centre.real[:, None] + span[:, None] * t, 1e-9))
             # Scaling each row keeps the fit well conditioned whatever the characteristic's size;
@@ -111,10 +116,16 @@ def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndar
     return _loss(model, internal, contact, f)
 
 
-def _loss(model, internal, contact, f):
-    rc = damped_roots(model, internal, contact, f / model.meta.f1)
+def _loss(model, internal, contact, f, guess=None):
+    return loss_and_roots(model, internal, contact, f, guess)[0]
+
+
+def loss_and_roots(model: Model, internal, contact: bool, frequency_hz, guess=None):
+    """``1 / Q`` and the complex roots ``r_c`` (for ``guess`` of a nearby model), no cache."""
+    f = np.asarray(frequency_hz, float)
+    rc = damped_roots(model, internal, contact, f / model.meta.f1, guess)
     loss = 2 * np.abs(rc.imag) / np.abs(rc)
-    return np.where(np.isfinite(loss), loss, 0.0)
+    return np.where(np.isfinite(loss), loss, 0.0), rc
 
 
 @lru_cache(maxsize=2048)

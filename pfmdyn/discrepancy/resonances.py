@@ -49,7 +49,7 @@ from ..io.tables import Q_RELATIVE_UNCERTAINTY, Metadata, ResonanceData
 from . import select
 from .report import report
 from .effects import DAMPING, EFFECTS, spring_grid
-from .quality import loss_factors
+from .quality import loss_and_roots, loss_factors
 from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, resonances
 
 __all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "ResonanceProblem", "analyse_resonances", "paper_tables",
@@ -79,20 +79,28 @@ K2_OVER_K1 = float(formulas.mindlin_k2_over_k1(POISSON_RATIO))
 
 
 def _sigma(data: ResonanceData) -> np.ndarray:
+    """Frequency uncertainty of each row; a damped mode's frequency is defined only to about
+    ``f / (4 Q**2)`` (undamped, damped-oscillator ``f0`` or amplitude-peak frequency), added
+    in quadrature where Q is given."""
     u = data.metadata.frequency_uncertainty_hz
-    return np.full(len(data.frequency_hz), u) if u else 1e-3 * data.frequency_hz
+    sigma = np.full(len(data.frequency_hz), u) if u else 1e-3 * data.frequency_hz
+    if data.quality_factor is None:
+        return sigma
+    q = np.where(_has_q(data), data.quality_factor, np.inf)
+    return np.hypot(sigma, data.frequency_hz / (4 * q**2))
 
 
 def _has_q(data: ResonanceData) -> np.ndarray:
-    """Rows whose Q is given."""
+    """Rows whose Q is given (``inf``: a mode measured without damping)."""
     q = data.quality_factor
-    return np.zeros(len(data.frequency_hz), bool) if q is None else np.isfinite(q) & (q > 0)
+    return np.zeros(len(data.frequency_hz), bool) if q is None else ~np.isnan(q) & (q > 0)
 
 
 def _q_sigma(data: ResonanceData) -> np.ndarray:
-    """Uncertainty of each given ``1/Q`` (relative: :data:`pfmdyn.io.tables.Q_RELATIVE_UNCERTAINTY`)."""
+    """Uncertainty of each given ``1/Q`` (relative: :data:`pfmdyn.io.tables.Q_RELATIVE_UNCERTAINTY`;
+    at least that of Q = 1e4, so that an undamped mode, Q = inf, has one too)."""
     rel = data.metadata.quality_factor_uncertainty or Q_RELATIVE_UNCERTAINTY
-    return rel / data.quality_factor[_has_q(data)]
+    return rel * np.maximum(1 / data.quality_factor[_has_q(data)], 1e-4)
 
 
 def _contact_modes(data: ResonanceData) -> int:
@@ -156,15 +164,23 @@ def _predicted(model, internal, data, refine=True) -> np.ndarray:
     return out
 
 
-def _q_residual(model, internal, data, predicted) -> np.ndarray:
-    """``(1/Q_model - 1/Q_measured) / sigma`` for the rows with a Q (:mod:`.quality`)."""
+def _q_residual(model, internal, data, predicted, roots: dict | None = None) -> np.ndarray:
+    """``(1/Q_model - 1/Q_measured) / sigma`` for the rows with a Q (:mod:`.quality`).
+
+    ``roots``: the contact modes' complex roots are stored there (empty dict) or read from
+    it as the starting guess (a finite-difference step from that model).
+    """
     has_q = _has_q(data)
     loss = np.zeros(int(has_q.sum()))
     rows = np.flatnonzero(has_q)
-    for contact in (False, True):
-        sel = (data.condition[rows] == ("contact" if contact else "free"))
-        if sel.any():
-            loss[sel] = loss_factors(model, internal, contact, predicted[rows[sel]])
+    free = data.condition[rows] == "free"
+    if free.any():
+        loss[free] = loss_factors(model, internal, False, predicted[rows[free]])
+    if (~free).any() and model.damping_mechanisms:
+        guess = None if roots is None else roots.get("contact")
+        loss[~free], rc = loss_and_roots(model, internal, True, predicted[rows[~free]], guess)
+        if roots is not None and guess is None:
+            roots["contact"] = rc
     return (loss - 1.0 / data.quality_factor[has_q]) / _q_sigma(data)
 
 
@@ -193,14 +209,15 @@ def _jacobian(model, internal, data) -> np.ndarray:
     if not _has_q(data).any():
         return freq
     q = np.zeros((int(_has_q(data).sum()), len(internal)))
-    base = _q_residual(model, internal, data, pred)
+    roots = {}
+    base = _q_residual(model, internal, data, pred, roots)
     for j in np.flatnonzero(np.isfinite(internal)):
         h = 1e-6 * max(1.0, abs(internal[j]))
         xs = internal.copy()
         xs[j] += h
         # The mode moves with the parameter too: first order, from the frequency sensitivity.
         shifted = pred + freq[:, j] * _sigma(data) * h
-        q[:, j] = (_q_residual(model, xs, data, shifted) - base) / h
+        q[:, j] = (_q_residual(model, xs, data, shifted, roots) - base) / h
     q[~np.isfinite(q)] = 0.0
     return np.vstack([freq, q])
 
@@ -219,7 +236,7 @@ def _damping_seeds(data: ResonanceData) -> dict[str, tuple]:
 
 
 def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None = None,
-                   local: list[np.ndarray] | None = None) -> FitResult:
+                   local: list[np.ndarray] | None = None, vary: tuple[str, ...] | None = None) -> FitResult:
     """Fit the springs and the model's effect parameters to the resonances (multi-start).
 
     Springs the table cannot determine (:func:`held_springs`) are held fixed and reported
@@ -228,7 +245,9 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     damping parameters from the table's Q values, clipped into the bounds, so no lever is
     outside them; ``start`` (e.g. the current fit with a new effect at its null value) is
     one more.  ``local`` replaces the grid by these starts (an effect that leaves the
-    resonances alone, such as damping, from the current fit).
+    resonances alone, such as damping, from the current fit), and ``vary`` (names) limits
+    the parameters that move (a quick trial; the others keep their start values, while the
+    criterion and the covariance count every fitted parameter).
 
     >>> free = paper_tables()["tip 2"]
     >>> result = fit_resonances(Model(free.metadata, ("tip_mass",)), free)
@@ -263,34 +282,38 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     elif start is not None:
         grid.append(np.where(fitted, np.clip(start, lower, upper), grid[0]))
 
-    def full(x, template):
+    moving = fitted & np.array([vary is None or p.name in vary for p in params])
+
+    def full(x, template, mask=moving):
         out = template.copy()
-        out[fitted] = x
+        out[mask] = x
         if tie:
             out[tie[1]] = out[tie[0]] + tie[2]
         return out
 
-    def jacobian(x, template):
-        jac = _jacobian(model, full(x, template), data)
+    def jacobian(x, template, mask=moving):
+        jac = _jacobian(model, full(x, template, mask), data)
         if tie:
             jac[:, tie[0]] += jac[:, tie[1]]
-        return jac[:, fitted]
+        return jac[:, mask]
 
-    grid = [full(g[fitted], g) for g in grid]
+    grid = [full(g[fitted], g, fitted) for g in grid]
     # Rank by the frequencies (cheap), then the best few by everything (Q rows included).
     ranked = sorted((float(np.sum(_residual(model, g, data, refine=False, with_q=False) ** 2)), i)
                     for i, g in enumerate(grid))
-    shortlist = [i for _, i in ranked[:8]] + ([len(grid) - 1] if start is not None or local else [])
+    shortlist = [i for _, i in ranked[:8]] + ([len(grid) - 1] if start is not None else [])
     ranked = sorted((float(np.sum(_residual(model, grid[i], data, refine=False) ** 2)), i)
                     for i in dict.fromkeys(shortlist))
-    if fitted.any():
+    if moving.any():
         fits = []
-        for _, i in ranked[:2]:
-            res = least_squares(lambda x: _residual(model, full(x, grid[i]), data), grid[i][fitted],
-                                jac=lambda x: jacobian(x, grid[i]), bounds=(lower[fitted], upper[fitted]),
+        for _, i in ranked[:1 if local else 2]:
+            res = least_squares(lambda x: _residual(model, full(x, grid[i]), data), grid[i][moving],
+                                jac=lambda x: jacobian(x, grid[i]), bounds=(lower[moving], upper[moving]),
                                 max_nfev=50)
             fits.append((res.cost, full(res.x, grid[i]), res.jac))
         _, internal, jac = min(fits, key=lambda t: t[0])
+        if not np.array_equal(moving, fitted):
+            jac = jacobian(internal[fitted], internal, fitted)
     else:
         internal = grid[ranked[0][1]]
         jac = np.zeros((len(_residual(model, internal, data)), 0))
@@ -320,7 +343,7 @@ def _locate(data: ResonanceData, result: FitResult) -> dict:
 
 def _q_signature(data: ResonanceData) -> str:
     """How the measured half-power width ``f/Q`` scales: with frequency, and from free to contact."""
-    has_q = _has_q(data)
+    has_q = _has_q(data) & np.isfinite(data.quality_factor if data.quality_factor is not None else 0.0)
     f, q = data.frequency_hz[has_q], data.quality_factor[has_q]
     parts = []
     if len(np.unique(f)) >= 2:
@@ -393,9 +416,11 @@ class ResonanceProblem:
         model = current.model.with_effect(component)
         effect = EFFECTS[component]
         if component.startswith("damping_"):
-            # Damping leaves the resonances alone: the current fit plus the data's seed values.
-            values = (effect.null[0],) + self.seeds[effect.parameters[0].name]
-            return fit_resonances(model, self.data, local=[np.append(current.internal, v) for v in values])
+            # Damping leaves the resonances alone: its parameter alone from the current fit
+            # (null and the data's seed values); polish() converges the one accepted.
+            name = effect.parameters[0].name
+            return fit_resonances(model, self.data, local=[np.append(current.internal, v) for v in
+                                                           (effect.null[0],) + self.seeds[name]], vary=(name,))
         start = None if component == "lateral_stiffness" else np.concatenate([current.internal, effect.null])
         return fit_resonances(model, self.data, start)
 
@@ -429,8 +454,12 @@ class ResonanceProblem:
                 name = EFFECTS[component].parameters[0].name
                 out.append(fit_resonances(Model(self.data.metadata, others + (component,), self.vertical_only),
                                           self.data, local=[np.append(current.internal[keep], v)
-                                                            for v in self.seeds[name]]))
+                                                            for v in self.seeds[name]], vary=(name,)))
         return out
+
+    def polish(self, trial: FitResult) -> FitResult:
+        """Every parameter of an accepted trial converged (trials may move one only)."""
+        return fit_resonances(trial.model, self.data, local=[trial.internal])
 
     def locate(self, current: FitResult) -> dict:
         return _locate(self.data, current)
@@ -485,7 +514,7 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
         measured = data.quality_factor[rows]
         extra.update(measured_quality_factor=measured.tolist(),
                      predicted_quality_factor=[1 / v if v > 0 else None for v in 1 / measured + final.residual[n:]],
-                     quality_factor_relative_uncertainty=float(final.sigma[n] * measured[0]))
+                     quality_factor_relative_uncertainty=float(final.sigma[n] / max(1 / measured[0], 1e-4)))
         gap_definition += " and of (1/Q_model - 1/Q_measured) / its uncertainty"
     return report(result, gap_definition=gap_definition,
                   measured_hz=data.frequency_hz.tolist(),

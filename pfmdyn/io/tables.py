@@ -20,7 +20,7 @@ Rows may come in any order (they are sorted by condition, then mode); a repeated
 (condition, mode) with a different frequency is an error.  Columns may come in any order;
 the frequency column may carry its unit (``frequency_hz``, ``frequency_khz``,
 ``frequency_mhz``), an optional ``quality_factor`` (or ``q``) column gives each mode's Q
-(blank where unknown), and an optional ``quality_factor_uncertainty`` metadata key its
+(blank where unknown, ``inf`` for a mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key its
 relative uncertainty (default 5 %).  Any other column is an error naming it.
 
 :func:`read` is the one entry point for every supported file: instrument files (.ibw,
@@ -241,8 +241,8 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
                             "quality_factor numbers") from None
         if modes[-1] < 1 or not (math.isfinite(freqs[-1]) and freqs[-1] > 0):
             raise UserError(f"{path}: data row {n}: mode >= 1 and a finite {freq_cols[0]} > 0 required")
-        if not (math.isnan(qs[-1]) or (math.isfinite(qs[-1]) and qs[-1] > 0.5)):
-            raise UserError(f"{path}: data row {n}: quality_factor must be a finite number > 0.5 "
+        if not (math.isnan(qs[-1]) or qs[-1] > 0.5):
+            raise UserError(f"{path}: data row {n}: quality_factor must be a number > 0.5 (inf: undamped) "
                             f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
