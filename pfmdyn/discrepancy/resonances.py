@@ -401,8 +401,10 @@ class ResonanceProblem:
     def untestable(self, current: FitResult) -> dict[str, str]:
         """Effects of the library this table cannot test on top of ``current``, and why."""
         n = _contact_modes(self.data)
-        return {e: f"changes contact modes only, and the fitted contact parameters already reproduce the "
-                   f"{n} contact mode(s)" for e in self.library
+        reason = (f"the fitted contact parameters already reproduce the {n} contact mode(s)" if n
+                  else "the table has no contact mode")
+        return {e: f"changes contact modes only{' (without a tip mass)' if e == 'tip_setback' else ''}, and {reason}"
+                for e in self.library
                 if _contact_only(e, current.model.effects) and e not in current.model.effects
                 and self._contact_room(current) <= 0}
 
