@@ -37,12 +37,12 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
+from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .spectra import EXPECTED_COLUMNS, read_spectra
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
@@ -62,47 +62,6 @@ MIN_SPECTRUM_ROWS = 20
 MIN_RESONANCES = 1
 """A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
 discrepancy report says which parameters so few rows leave undetermined."""
-
-
-@dataclass(frozen=True)
-class Metadata:
-    """Cantilever description: k (N/m), L, width, H (m), first free resonance f1 (Hz)."""
-
-    k: float
-    L: float
-    width: float
-    H: float
-    f1: float
-    description: str = ""
-    frequency_uncertainty_hz: float | None = None
-    quality_factor_uncertainty: float | None = None
-
-
-@dataclass(frozen=True)
-class SpectrumData:
-    """Complex response at (frequency, bias) rows, plus metadata."""
-
-    metadata: Metadata
-    frequency_hz: np.ndarray
-    bias_v: np.ndarray
-    response: np.ndarray
-    kind: str = "spectrum"
-
-
-@dataclass(frozen=True)
-class ResonanceData:
-    """Measured resonances: mode number (1-based), condition ('free'/'contact'), Hz.
-
-    ``quality_factor`` (one per row, NaN where unknown) when the source gives it, e.g. an
-    instrument's thermal or contact tune fit.
-    """
-
-    metadata: Metadata
-    mode: np.ndarray
-    condition: np.ndarray
-    frequency_hz: np.ndarray
-    kind: str = "resonances"
-    quality_factor: np.ndarray | None = None
 
 
 def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
@@ -193,7 +152,7 @@ def _column(name: str) -> str:
 
 def _instrument(path: Path, overrides: dict | None) -> ResonanceData:
     """The resonance table an instrument file implies, rows sorted as for a CSV table."""
-    # Imported here: pfmdyn.io.instruments builds this module's data classes.
+    # Imported on use: the instrument readers' libraries are optional extras.
     from .instruments import to_discrepancy_input
 
     data = to_discrepancy_input(path, {k: v for k, v in (overrides or {}).items() if v is not None})
