@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     >>> p.parse_args(["d.csv", "--json", "o.json"]).json
     'o.json'
     """
-    parser.add_argument("data", help="CSV: metadata lines, then a spectrum or resonances table")
+    parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
+                        "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat)")
     parser.add_argument("--json", required=True, help="write the report here")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     for option, key, what in OVERRIDES:
