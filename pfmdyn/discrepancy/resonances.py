@@ -374,14 +374,21 @@ class ResonanceProblem:
 
     def _contact_room(self, current: FitResult) -> int:
         """Contact modes not yet used by fitted contact parameters (springs, tilt, set-back, k2);
-        when the fitted springs cannot reach the contact modes (their residual is above the
-        noise), there is a misfit to explain whatever the count: 1."""
+        when the fitted springs cannot reach the contact modes (their residual, frequencies
+        and, with damping, Q values, is above the noise), there is a misfit to explain
+        whatever the count: 1."""
         held = current.extra.get("held", {})
         springs = sum(1 for p in current.model.parameters if p.name in SPRINGS and p.name not in held)
         effects = current.model.effects
         free = _contact_modes(self.data) - springs - sum(_contact_only(e, effects) for e in effects)
         contact = self.data.condition == "contact"
-        r = (current.residual / current.sigma)[:len(contact)][contact]
+        r = current.residual / current.sigma
+        rows = np.zeros(len(r), bool)
+        rows[:len(contact)] = contact
+        if current.model.damping_mechanisms:
+            # With damping, the contact modes' Q values also depend on the contact parameters.
+            rows[len(contact):] = contact[_has_q(self.data)]
+        r = r[rows]
         misfit = bool(len(r)) and float(np.sqrt(np.mean(r**2))) > select.NEAR_NOISE
         return max(free, int(misfit and springs > 0))
 
