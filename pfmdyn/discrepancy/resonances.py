@@ -27,11 +27,14 @@ so ``k2`` is tied to ``k1`` at the Mindlin ratio and ``k1`` is reported with its
 uncertainty (``k2`` as not determined, with the rule as its ``note``; the report's
 ``spring_rule`` repeats it); two or more fit both.
 
-Candidates (:func:`candidate_rule`): ``damping`` with Q values; ``tip_mass`` and
-``tip_setback``; ``tilt`` (and ``lateral_stiffness`` with ``--vertical-only``: the baseline
-has ``k2`` otherwise) only when there are more contact modes than contact parameters
-already fitted, or when those parameters leave a contact misfit above the noise (then the
-effect's parameter may be undetermined, and tied candidates are listed).  ``background`` never (it changes spectra, not resonances).  Every
+Candidates (:func:`candidate_rule`): ``damping`` with Q values; ``tip_mass``;
+``tip_setback``, ``tilt`` and (with ``--vertical-only``: the baseline has ``k2`` otherwise)
+``lateral_stiffness`` change contact modes only (the set-back when the tip carries no mass),
+so they are tried only when there are more contact modes than contact parameters already
+fitted, or when those parameters leave a contact misfit (frequencies, and with damping Q
+values) above the noise; the effect's parameter may then be undetermined, and tied
+candidates are listed (set-back before tilt).  The others are listed in the report's
+``untestable_effects``.  ``background`` never (it changes spectra, not resonances).  Every
 candidate needs fewer parameters than data values.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.

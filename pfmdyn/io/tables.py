@@ -15,13 +15,13 @@ Format (SI units)::
     ...
 
 A resonances table may hold free modes only (the contact springs are then not determined)
-and as little as one row (the report says what it leaves undetermined).
-Rows may come in any order (they are sorted by condition, then mode); a repeated
-(condition, mode) with a different frequency is an error.  Columns may come in any order;
-the frequency column may carry its unit (``frequency_hz``, ``frequency_khz``,
-``frequency_mhz``), an optional ``quality_factor`` (or ``q``) column gives each mode's Q
-(blank where unknown, ``inf`` for a mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key its
-relative uncertainty (default 5 %).  Any other column is an error naming it.
+and as little as one row (the report says what it leaves undetermined). Rows may come in any
+order (they are sorted by condition, then mode); a repeated (condition, mode) with a
+different frequency is an error. Columns may come in any order; the frequency column may
+carry its unit (``frequency_hz``, ``frequency_khz``, ``frequency_mhz``), an optional
+``quality_factor`` (or ``q``) column gives each mode's Q (blank where unknown, ``inf`` for a
+mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key
+its relative uncertainty (default 5 %). Any other column is an error naming it.
 
 :func:`read` is the one entry point for every supported file: instrument files (.ibw,
 .nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
@@ -158,7 +158,7 @@ def _instrument(path: Path, overrides: dict | None) -> ResonanceData:
     data = to_discrepancy_input(path, {k: v for k, v in (overrides or {}).items() if v is not None})
     if not isinstance(data, ResonanceData):
         return data
-    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, minimum=1)
+    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, 1, data.quality_factor)
     qs = None if data.quality_factor is None else data.quality_factor[order]
     return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
                          quality_factor=qs)
@@ -205,23 +205,26 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
                             f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
-    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
+    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
                          quality_factor=qs[order] if q_idx is not None else None)
 
 
-def check_resonance_rows(where, modes, conds, freqs, minimum) -> np.ndarray:
-    """Row order sorting by (condition, mode); duplicates that disagree and too few rows are errors."""
+def check_resonance_rows(where, modes, conds, freqs, minimum, qs=None) -> np.ndarray:
+    """Row order sorting by (condition, mode); duplicates that disagree (frequency, or Q when
+    ``qs`` is given) and too few rows are errors."""
     # Free modes alone still constrain the effects that change mode ratios (a tip mass).
     if len(freqs) < minimum:
         raise UserError(f"{where}: {len(freqs)} resonances; at least {minimum} are needed")
     order = np.lexsort((modes, conds == "contact"))
+    values = [(f,) if qs is None else (f, q) for f, q in zip(freqs, qs if qs is not None else freqs)]
     seen, keep = {}, []
     for i in order:
         key = (str(conds[i]), int(modes[i]))
-        if key in seen and seen[key] != freqs[i]:
-            raise UserError(f"{where}: {key[0]} mode {key[1]} given twice with different frequencies")
+        if key in seen and not np.array_equal(seen[key], values[i], equal_nan=True):
+            what = "frequencies" if seen[key][0] != values[i][0] else "quality factors"
+            raise UserError(f"{where}: {key[0]} mode {key[1]} given twice with different {what}")
         if key not in seen:
             keep.append(i)
-        seen[key] = freqs[i]
+        seen[key] = values[i]
     return np.array(keep, int)
