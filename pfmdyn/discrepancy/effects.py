@@ -4,8 +4,9 @@ An effect (in the spirit of lmfit's ``Parameter``/``Model``) states everything t
 loop needs: its nonlinear parameters (unit, internal coordinate, bounds), the internal
 values that switch it off exactly (``null``: the model without it is nested, so a fit
 started there is never worse), seed values for fresh starts, how many linear design
-columns it adds, whether it moves the undamped resonances, and the derivation it comes
-from.  ``damping`` is one effect name with three mechanisms (components ``damping_internal``,
+columns it adds, whether it moves the undamped resonances, whether only a spectrum can
+show it (``spectrum_only``: background; damping shows in a table's Q values), and the
+derivation it comes from.  ``damping`` is one effect name with three mechanisms (components ``damping_internal``,
 ``damping_viscous``, ``damping_contact``, :mod:`pfmdyn.derivations.damping`).
 
 Bounds of the springs depend on the cantilever: :func:`spring_parameters` centres them on
@@ -70,13 +71,13 @@ class Effect:
 _LOSS = "internal friction: complex modulus E (1 + i/Q)"
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("damping_internal", (Parameter("Q", "", 0.0, 0.5, inverse=True, description=_LOSS),),
-           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py"),
     Effect("damping_viscous", (Parameter("Q_viscous", "", 0.0, 1.0, inverse=True,
                                          description="viscous force c u_t per length: Q of free mode 1"),),
-           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py"),
     Effect("damping_contact", (Parameter("contact_loss", "", 0.0, 5.0,
                                          description="dashpot eta parallel to k1: omega1 eta / k1"),),
-           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py"),
     Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass"),),
            (0.0,), (0.05, 0.1, 0.2, 0.4, 0.8), "derivations/tip_mass.py", moves_resonances=True),
     Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L"),),
