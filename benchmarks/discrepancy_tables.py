@@ -14,7 +14,8 @@ traceback is a failure, as is a run over 70 s.  Two sets:
   set is named, ``damping`` with the hidden mechanism alone, and ``gap_after <= 1.5``.
 
 Last run (``--tables 6 --damped 4``, shared machine, load ~4): 56/66 (85 %), no traceback,
-median 1.7 s, longest 25 s per table (a damped table whose set-back shows only in the contact Q values).  Per class: none 6/6, tip_mass 6/6, tip_setback 6/6, lateral_stiffness 5/6
+median 1.7 s, longest 25 s per table (a damped table whose set-back shows only in the
+contact Q values). Per class: none 6/6, tip_mass 6/6, tip_setback 6/6, lateral_stiffness 5/6
 (one hidden k2 changes nothing above the noise), tilt 0/6 (3 invisible: the fitted k1, k2
 absorb it; 3 tie with a set-back, which is named first); damped: each mechanism alone 4/4,
 with a tip mass 4/4 each, with a set-back internal 4/4, viscous 3/4 (set-back below the
