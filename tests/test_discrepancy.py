@@ -213,8 +213,8 @@ def test_cli_free_modes_only(tmp_path, capsys):
     report = json.loads(out.read_text())
     assert report["missing_effects"] == ["tip_mass"] and report["gap_after"] < 1.0
     for spring in ("k1", "k2"):
-        assert report["parameters"][spring] == {"value": None, "stderr": None, "unit": "N/m",
-                                                "determined": False}
+        assert report["parameters"][spring] == {"value": None, "stderr": None, "unit": "N/m", "determined": False,
+                                                "note": report["spring_rule"][spring]}
     assert 0.02 < report["parameters"]["mu"]["value"] < 0.1
     assert "k1 not determined" in capsys.readouterr().out and png.stat().st_size > 1000
 

@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import FEBeam, spectrum  # noqa: E402
+from fe_quality import quality_factors  # noqa: E402
 from pfmdyn import cli  # noqa: E402
 
 levers = st.fixed_dictionaries({
@@ -52,15 +53,23 @@ def _run(path: Path, capsys) -> int:
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(p=levers, shuffle=st.integers(0, 2**16))
 def test_tables_end_in_a_report_or_one_line(tmp_path, capsys, p, shuffle):
-    beam = _beam(p)
+    """Half the tables give each mode's Q (internal friction Q, from the FE complex eigenvalues),
+    in a column placed first, with the frequency in kHz."""
+    with_q = shuffle % 2 == 1
+    beam = _beam(p, Q=p["Q"]) if with_q else _beam(p)
     n = p["contact_modes"]
-    rows = [f"{i + 1},free,{float(f)!r}" for i, f in enumerate(beam.free_resonances(3))]
-    rows += [f"{i + 1},contact,{float(f)!r}" for i, f in enumerate(beam.contact_resonances(n))]
+    rows = []
+    for contact, freqs in ((False, beam.free_resonances(3)), (True, beam.contact_resonances(n))):
+        qs = quality_factors(beam, len(freqs), contact) if with_q else [None] * len(freqs)
+        for i, (f, q) in enumerate(zip(freqs, qs)):
+            cells = [str(i + 1), "contact" if contact else "free", repr(float(f) / 1e3)]
+            rows.append(",".join(([repr(float(q))] if with_q else []) + cells))
     rows = [rows[i] for i in np.random.default_rng(shuffle).permutation(len(rows))]
+    header = ("quality_factor," if with_q else "") + "mode,condition,frequency_khz"
     path = tmp_path / "table.csv"
     path.write_text(f"# spring_constant_n_per_m: {beam.k!r}\n# length_m: {beam.L!r}\n# width_m: {p['w']!r}\n"
                     f"# tip_height_m: {beam.H!r}\n# free_resonance_hz: {beam.f1!r}\n"
-                    "mode,condition,frequency_hz\n" + "\n".join(rows) + "\n")
+                    f"{header}\n" + "\n".join(rows) + "\n")
     # Exact FE eigenfrequencies of a valid lever: always a report.
     assert _run(path, capsys) == 0
 

@@ -4,8 +4,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -14,7 +12,7 @@ from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy.spectrum import analyse, summary
 from ..errors import UserError
-from ..io.tables import INSTRUMENT_SUFFIXES, ResonanceData, SpectrumData, check_resonance_rows, read
+from ..io.tables import SpectrumData, read
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
 
 
@@ -25,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     >>> p.parse_args(["d.csv", "--json", "o.json"]).json
     'o.json'
     """
-    parser.add_argument("data", help="CSV: metadata lines, then a spectrum or resonances table")
+    parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
+                        "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat)")
     parser.add_argument("--json", required=True, help="write the report here")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     for option, key, what in OVERRIDES:
@@ -55,20 +54,6 @@ def _finite(obj):
     return obj
 
 
-def read_input(path, overrides: dict):
-    """A CSV input (:func:`pfmdyn.io.tables.read`) or an instrument file's resonance table."""
-    if Path(path).suffix.lower() not in INSTRUMENT_SUFFIXES:
-        return read(path, overrides)
-    from ..io.instruments import to_discrepancy_input
-    data = to_discrepancy_input(path, {k: v for k, v in overrides.items() if v is not None})
-    if isinstance(data, ResonanceData):
-        order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, minimum=1)
-        data = replace(data, mode=data.mode[order], condition=data.condition[order],
-                       frequency_hz=data.frequency_hz[order],
-                       quality_factor=None if data.quality_factor is None else data.quality_factor[order])
-    return data
-
-
 def _analyse(data, args) -> dict:
     if isinstance(data, SpectrumData):
         return analyse(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
@@ -77,7 +62,7 @@ def _analyse(data, args) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
-    data = read_input(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
+    data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
     try:
         # The fits multiply tall, narrow matrices: threaded BLAS only adds overhead there
         # (about 1.5x slower on a shared machine).

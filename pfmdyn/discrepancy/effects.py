@@ -4,10 +4,11 @@ An effect (in the spirit of lmfit's ``Parameter``/``Model``) states everything t
 loop needs: its nonlinear parameters (unit, internal coordinate, bounds), the internal
 values that switch it off exactly (``null``: the model without it is nested, so a fit
 started there is never worse), seed values for fresh starts (for an effect that moves the
-resonances, the profile along which the springs are matched to the peaks: dense enough
-that one lies near each exact match, :func:`pfmdyn.discrepancy.peaks.match_starts`), how many linear design
-columns it adds, whether it moves the undamped resonances, and the derivation it comes
-from.  ``damping`` is one effect name with three mechanisms (components ``damping_internal``,
+resonances, the profile along which the springs are matched to the peaks, dense enough that
+one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
+linear design columns it adds, whether it moves the undamped resonances, whether only a
+spectrum can show it (``spectrum_only``: background; damping shows in a table's Q values),
+and the derivation it comes from.  ``damping`` is one effect name with three mechanisms (components ``damping_internal``,
 ``damping_viscous``, ``damping_contact``, :mod:`pfmdyn.derivations.damping`).
 
 Bounds of the springs depend on the cantilever: :func:`spring_parameters` centres them on
@@ -72,20 +73,22 @@ class Effect:
 _LOSS = "internal friction: complex modulus E (1 + i/Q)"
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("damping_internal", (Parameter("Q", "", 0.0, 0.5, inverse=True, description=_LOSS),),
-           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py"),
     Effect("damping_viscous", (Parameter("Q_viscous", "", 0.0, 1.0, inverse=True,
                                          description="viscous force c u_t per length: Q of free mode 1"),),
-           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py"),
     Effect("damping_contact", (Parameter("contact_loss", "", 0.0, 5.0,
                                          description="dashpot eta parallel to k1: omega1 eta / k1"),),
-           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py", spectrum_only=True),
+           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py"),
     Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass"),),
-           (0.0,), (0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5), "derivations/tip_mass.py", moves_resonances=True),
+           (0.0,), (0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5), "derivations/tip_mass.py",
+           moves_resonances=True),
     Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L"),),
            (1.0,), (0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68),
            "derivations/tip_setback.py", moves_resonances=True),
     Effect("tilt", (Parameter("alpha", "rad", -0.8, 0.8, description="beam inclination"),),
-           (0.0,), (-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45), "derivations/tilt.py", moves_resonances=True),
+           (0.0,), (-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45), "derivations/tilt.py",
+           moves_resonances=True),
     Effect("lateral_stiffness", (), (), (), "derivations/elastic_contact.py", moves_resonances=True),
     Effect("background", (), (), (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2,
            spectrum_only=True),

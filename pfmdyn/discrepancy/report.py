@@ -4,7 +4,22 @@ from __future__ import annotations
 from . import select
 from .effects import public_name
 
-__all__ = ["report", "summary"]
+__all__ = ["parameters", "report", "summary"]
+
+
+def parameters(fit) -> dict:
+    """A fit's parameters, each held one (``fit.extra["held"]``) with the reason as ``note``.
+
+    >>> from types import SimpleNamespace as S
+    >>> fit = S(parameters=lambda: {"k2": {"value": None}}, extra={"held": {"k2": "tied to k1"}})
+    >>> parameters(fit)["k2"]["note"]
+    'tied to k1'
+    """
+    out = fit.parameters()
+    for name, note in getattr(fit, "extra", {}).get("held", {}).items():
+        if name in out:
+            out[name] = dict(out[name], note=note)
+    return out
 
 
 def report(result: dict, **extra) -> dict:
@@ -13,8 +28,8 @@ def report(result: dict, **extra) -> dict:
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
            "damping_mechanisms": final.model.damping_mechanisms, "unexplained": result["unexplained"],
-           "criterion": select.CRITERION, "steps": steps, "parameters": final.parameters(),
-           "baseline_parameters": baseline.parameters(), "fit_report": final.report()}
+           "criterion": select.CRITERION, "steps": steps, "parameters": parameters(final),
+           "baseline_parameters": parameters(baseline), "fit_report": final.report()}
     out.update(extra)
     return out
 
@@ -22,7 +37,9 @@ def report(result: dict, **extra) -> dict:
 def summary(report: dict) -> str:
     """Readable multi-line summary of a report."""
     mech = report.get("damping_mechanisms") or []
-    named = [e + (f" ({', '.join(mech)})" if e == "damping" and mech else "") for e in report["missing_effects"]]
+    tied = report.get("damping_mechanisms_indistinguishable_from") or []
+    detail = ", ".join(mech) + (f"; {' or '.join(tied)} fit the data as well" if tied else "")
+    named = [e + (f" ({detail})" if e == "damping" and mech else "") for e in report["missing_effects"]]
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}"]
     for i, s in enumerate(report["steps"], 1):
@@ -44,9 +61,11 @@ def summary(report: dict) -> str:
                  else f"at {where}")
         lines.append(f"no effect of the library explains the residual {place} "
                      f"(gap {report['unexplained']['gap']:.3g} x noise)")
+    for name, why in (report.get("untestable_effects") or {}).items():
+        lines.append(f"{name} could not be tested: {why}")
     for name, p in report["parameters"].items():
         if p["value"] is None:      # e.g. springs from a table of free modes only
-            lines.append(f"  {name} not determined by these data")
+            lines.append(f"  {name} not determined by these data" + (f": {p['note']}" if p.get("note") else ""))
         else:
             err = "" if p["stderr"] is None else f" +- {p['stderr']:.2g}"
             note = "" if p.get("determined", True) else " (not determined by these data)"

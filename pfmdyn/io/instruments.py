@@ -157,7 +157,7 @@ def to_discrepancy_input(path, overrides: dict | None = None):
     -------
     pfmdyn.io.tables.ResonanceData
     """
-    from .tables import Metadata, ResonanceData
+    from .discrepancy_data import Metadata, ResonanceData
 
     record = read_instrument(path)
     overrides = dict(overrides or {})

@@ -14,14 +14,20 @@ Format (SI units)::
     1,free,63200
     ...
 
-A resonances table may hold free modes only; the contact springs are then not determined.
-Rows may come in any order (they are sorted by condition, then mode); a repeated
-(condition, mode) with a different frequency is an error.  An optional ``quality_factor``
-column gives each mode's Q.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
-.txt/.dat) are read by :func:`pfmdyn.io.instruments.to_discrepancy_input` (``pfmdyn
-discrepancy`` dispatches them); :func:`check_resonance_rows` accepts their short tables
-(one or two resonances).  ``overrides`` (metadata keys, from the
-command line) win over the file's values.
+A resonances table may hold free modes only (the contact springs are then not determined)
+and as little as one row (the report says what it leaves undetermined). Rows may come in any
+order (they are sorted by condition, then mode); a repeated (condition, mode) with a
+different frequency is an error. Columns may come in any order; the frequency column may
+carry its unit (``frequency_hz``, ``frequency_khz``, ``frequency_mhz``), an optional
+``quality_factor`` (or ``q``) column gives each mode's Q (blank where unknown, ``inf`` for a
+mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key
+its relative uncertainty (default 5 %). Any other column is an error naming it.
+
+:func:`read` is the one entry point for every supported file: instrument files (.ibw,
+.nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
+:func:`pfmdyn.io.instruments.to_discrepancy_input`, whose short tables (one or two
+resonances) are accepted.  ``overrides`` (metadata keys, from the command line) win over
+the file's values.
 
 Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
@@ -31,12 +37,12 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
+from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .spectra import EXPECTED_COLUMNS, read_spectra
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
@@ -45,49 +51,17 @@ REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m
                  "free_resonance_hz")
 RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
 OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
+FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1e6}
+"""Frequency column names of a resonances table and their factor to Hz."""
+COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "cond": "condition",
+                  "mode_number": "mode"}
+Q_RELATIVE_UNCERTAINTY = 0.05
+"""Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
 MIN_SPECTRUM_ROWS = 20
-MIN_RESONANCES = 3
-
-
-@dataclass(frozen=True)
-class Metadata:
-    """Cantilever description: k (N/m), L, width, H (m), first free resonance f1 (Hz)."""
-
-    k: float
-    L: float
-    width: float
-    H: float
-    f1: float
-    description: str = ""
-    frequency_uncertainty_hz: float | None = None
-
-
-@dataclass(frozen=True)
-class SpectrumData:
-    """Complex response at (frequency, bias) rows, plus metadata."""
-
-    metadata: Metadata
-    frequency_hz: np.ndarray
-    bias_v: np.ndarray
-    response: np.ndarray
-    kind: str = "spectrum"
-
-
-@dataclass(frozen=True)
-class ResonanceData:
-    """Measured resonances: mode number (1-based), condition ('free'/'contact'), Hz.
-
-    ``quality_factor`` (one per row, NaN where unknown) when the source gives it, e.g. an
-    instrument's thermal or contact tune fit.
-    """
-
-    metadata: Metadata
-    mode: np.ndarray
-    condition: np.ndarray
-    frequency_hz: np.ndarray
-    kind: str = "resonances"
-    quality_factor: np.ndarray | None = None
+MIN_RESONANCES = 1
+"""A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
+discrepancy report says which parameters so few rows leave undetermined."""
 
 
 def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
@@ -98,7 +72,7 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
                         f" (lines '# key: value' before the header)")
     values = {}
-    for key in REQUIRED_KEYS + ("frequency_uncertainty_hz",):
+    for key in REQUIRED_KEYS + ("frequency_uncertainty_hz", "quality_factor_uncertainty"):
         if key not in meta:
             continue
         try:
@@ -109,7 +83,8 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
     return Metadata(values["spring_constant_n_per_m"], values["length_m"], values["width_m"],
                     values["tip_height_m"], values["free_resonance_hz"],
-                    meta.get("description", ""), values.get("frequency_uncertainty_hz"))
+                    meta.get("description", ""), values.get("frequency_uncertainty_hz"),
+                    values.get("quality_factor_uncertainty"))
 
 
 def _preamble(path: Path) -> tuple[dict, list[str], list[str]]:
@@ -148,17 +123,20 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     """
     path = Path(path)
     if path.suffix.lower() in INSTRUMENT_SUFFIXES:
-        # pfmdyn.io.instruments imports this module's data classes: the command dispatches
-        # instrument files (read_input) so that the two modules do not import each other.
-        raise UserError(f"{path}: an instrument file; read it with pfmdyn.io.instruments.to_discrepancy_input")
+        return _instrument(path, overrides)
     meta, header, rows = _preamble(path)
-    metadata = _metadata(str(path), meta, overrides)
-    if "mode" in header or "condition" in header:
-        return _resonances(path, metadata, header, rows)
+    names = [_column(c) for c in header]
+    if {"mode", "condition"} & set(names):
+        return _resonances(path, _metadata(str(path), meta, overrides), names, rows)
     unknown = [c for c in header if c not in EXPECTED_COLUMNS]
     if unknown:
-        raise UserError(f"{path}: unknown column(s) {', '.join(unknown)}; expected frequency_hz, "
-                        "bias_v and x, y or amplitude, phase_deg (or mode, condition, frequency_hz)")
+        # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
+        hint = ("; give frequencies in Hz as 'frequency_hz'" if any(c.lower().startswith("frequency") for c in unknown)
+                else "")
+        raise UserError(f"{path}: not a PFM spectrum or resonances table: unknown column(s) "
+                        f"{', '.join(repr(c) for c in unknown)}{hint}; expected frequency_hz, bias_v and x, y or "
+                        "amplitude, phase_deg (or mode, condition, frequency_hz)")
+    metadata = _metadata(str(path), meta, overrides)
     spectra = read_spectra(path, biases_per_frequency=1)
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
@@ -166,50 +144,87 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
+def _column(name: str) -> str:
+    """Canonical name of a resonances-table column (case, spaces and aliases forgiven)."""
+    key = "_".join(name.strip().lower().replace("(", " ").replace(")", " ").split())
+    return COLUMN_ALIASES.get(key, key)
+
+
+def _instrument(path: Path, overrides: dict | None) -> ResonanceData:
+    """The resonance table an instrument file implies, rows sorted as for a CSV table."""
+    # Imported on use: the instrument readers' libraries are optional extras.
+    from .instruments import to_discrepancy_input
+
+    data = to_discrepancy_input(path, {k: v for k, v in (overrides or {}).items() if v is not None})
+    if not isinstance(data, ResonanceData):
+        return data
+    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, 1, data.quality_factor)
+    qs = None if data.quality_factor is None else data.quality_factor[order]
+    return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
+                         quality_factor=qs)
+
+
 def _resonances(path, metadata, header, rows) -> ResonanceData:
-    allowed = RESONANCE_COLUMNS + OPTIONAL_RESONANCE_COLUMNS
-    problem = sorted(set(header) - set(allowed)) + sorted(set(RESONANCE_COLUMNS) - set(header))
-    if problem or len(set(header)) != len(header):
-        raise UserError(f"{path}: resonances table needs the columns mode, condition, frequency_hz "
-                        f"(and optionally quality_factor) once each (problem: {', '.join(problem) or 'repeated column'})")
-    idx = [header.index(c) for c in RESONANCE_COLUMNS]
+    freq_cols = [c for c in header if c in FREQUENCY_UNITS]
+    allowed = ("mode", "condition") + tuple(FREQUENCY_UNITS) + OPTIONAL_RESONANCE_COLUMNS
+    unknown = [c for c in header if c not in allowed]
+    if unknown:
+        raise UserError(f"{path}: unknown column(s) {', '.join(repr(c) for c in unknown)} in a resonances "
+                        "table; expected mode, condition, frequency_hz (or frequency_khz, frequency_mhz) "
+                        "and optionally quality_factor")
+    missing = [c for c in ("mode", "condition") if c not in header] + ([] if freq_cols else ["frequency_hz"])
+    if missing:
+        raise UserError(f"{path}: resonances table lacks the column(s) {', '.join(missing)}")
+    repeated = sorted({c for c in header if header.count(c) > 1}) or freq_cols[1:]
+    if repeated:
+        raise UserError(f"{path}: column {repeated[0]} given more than once (one frequency column, each "
+                        "column once)")
+    idx = [header.index(c) for c in ("mode", "condition", freq_cols[0])]
+    unit = FREQUENCY_UNITS[freq_cols[0]]
     q_idx = header.index("quality_factor") if "quality_factor" in header else None
     modes, conds, freqs, qs = [], [], [], []
     for n, line in enumerate(rows, start=1):
         cells = [c.strip() for c in next(csv.reader([line]))]
         if len(cells) != len(header):
-            raise UserError(f"{path}: data row {n}: expected {len(header)} fields")
+            raise UserError(f"{path}: data row {n}: expected {len(header)} fields, got {len(cells)}")
         mode, cond, freq = (cells[i] for i in idx)
+        cond = cond.lower()
         if cond not in ("free", "contact"):
             raise UserError(f"{path}: data row {n}: condition must be 'free' or 'contact', got '{cond}'")
         try:
-            modes.append(int(mode))
-            freqs.append(float(freq))
+            modes.append(int(float(mode)) if float(mode).is_integer() else int(mode))
+            freqs.append(float(freq) * unit)
             qs.append(float(cells[q_idx]) if q_idx is not None and cells[q_idx] else math.nan)
         except ValueError:
-            raise UserError(f"{path}: data row {n}: mode must be an integer, frequency_hz and "
+            raise UserError(f"{path}: data row {n}: mode must be an integer, {freq_cols[0]} and "
                             "quality_factor numbers") from None
         if modes[-1] < 1 or not (math.isfinite(freqs[-1]) and freqs[-1] > 0):
-            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite frequency_hz > 0 required")
+            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite {freq_cols[0]} > 0 required")
+        if not (math.isnan(qs[-1]) or qs[-1] > 0.5):
+            raise UserError(f"{path}: data row {n}: quality_factor must be a number > 0.5 (inf: undamped) "
+                            f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
-    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES)
+    order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
                          quality_factor=qs[order] if q_idx is not None else None)
 
 
-def check_resonance_rows(where, modes, conds, freqs, minimum) -> np.ndarray:
-    """Row order sorting by (condition, mode); duplicates that disagree and too few rows are errors."""
+def check_resonance_rows(where, modes, conds, freqs, minimum, qs=None) -> np.ndarray:
+    """Row order sorting by (condition, mode); duplicates that disagree (frequency, or Q when
+    ``qs`` is given) and too few rows are errors."""
     # Free modes alone still constrain the effects that change mode ratios (a tip mass).
     if len(freqs) < minimum:
         raise UserError(f"{where}: {len(freqs)} resonances; at least {minimum} are needed")
     order = np.lexsort((modes, conds == "contact"))
+    values = [(f,) if qs is None else (f, q) for f, q in zip(freqs, qs if qs is not None else freqs)]
     seen, keep = {}, []
     for i in order:
         key = (str(conds[i]), int(modes[i]))
-        if key in seen and seen[key] != freqs[i]:
-            raise UserError(f"{where}: {key[0]} mode {key[1]} given twice with different frequencies")
+        if key in seen and not np.array_equal(seen[key], values[i], equal_nan=True):
+            what = "frequencies" if seen[key][0] != values[i][0] else "quality factors"
+            raise UserError(f"{where}: {key[0]} mode {key[1]} given twice with different {what}")
         if key not in seen:
             keep.append(i)
-        seen[key] = freqs[i]
+        seen[key] = values[i]
     return np.array(keep, int)
