@@ -8,8 +8,9 @@ resonances, the profile along which the springs are matched to the peaks, dense 
 one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
 linear design columns it adds, whether it moves the undamped resonances, whether only a
 spectrum can show it (``spectrum_only``: background; damping shows in a table's Q values),
-and the derivation it comes from.  ``damping`` is one effect name with three mechanisms (components ``damping_internal``,
-``damping_viscous``, ``damping_contact``, :mod:`pfmdyn.derivations.damping`).
+and the derivation it comes from.  ``damping`` is one effect name with three mechanisms
+(components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
+:mod:`pfmdyn.derivations.damping`).
 
 Bounds of the springs depend on the cantilever: :func:`spring_parameters` centres them on
 ``k`` (for ``k1``) and on ``k L**2 / H**2`` (for ``k2``, the lateral scale), so a stiff long
