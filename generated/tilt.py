@@ -10,14 +10,17 @@ complex, ``Re beta > 0``) and broadcasting over the parameters (k, kvv, kll, kvl
 
 Every numerator and the denominator are sums of parameter monomials times the basis
 
-    h0 = sin(beta)*sinh(beta)
-    h1 = sin(beta) - sinh(beta)
-    h2 = cos(beta)*cosh(beta) - 1
-    h3 = cos(beta)*cosh(beta) + 1
-    h4 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h5 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h6 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
-    h7 = sin(beta)*cosh(beta) - sin(beta) + cos(beta)*sinh(beta) - sinh(beta)
+    h0 = cos(beta)*cosh(beta)
+    h1 = sin(beta)*sinh(beta)
+    h2 = cos(beta) - cosh(beta)
+    h3 = sin(beta) - sinh(beta)
+    h4 = cos(beta)*cosh(beta) - 1
+    h5 = cos(beta)*cosh(beta) + 1
+    h6 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h7 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h8 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
+    h9 = 2*cos(beta)*cosh(beta) - cos(beta) - cosh(beta)
+    h10 = sin(beta)*cosh(beta) - sin(beta) + cos(beta)*sinh(beta) - sinh(beta)
 
 each evaluated once per call: by its Taylor series for ``|beta| < SWITCH`` (where the
 closed form cancels), else in closed form divided by ``cosh(beta)**1`` with ``tanh`` and
@@ -26,9 +29,10 @@ beyond.
 """
 import numpy as np
 
-__all__ = ['DRIVES', 'PARAMETERS', 'SWITCH', 'slope']
+__all__ = ['DRIVES', 'JACOBIAN_PARAMETERS', 'PARAMETERS', 'SWITCH', 'slope', 'slope_and_jacobian']
 
 PARAMETERS = ('k', 'kvv', 'kll', 'kvl', 'H', 'L')
+JACOBIAN_PARAMETERS = ('beta', 'kvv', 'kll', 'kvl')
 DRIVES = ('d1', 'd2', 'f0', 'q0')
 SWITCH = 1.3
 """``|beta|`` below which the basis is evaluated by its series."""
@@ -37,18 +41,21 @@ SWITCH = 1.3
 def _basis(beta):
     """The basis functions h0... at ``beta`` (series or scaled closed form, see module)."""
     beta = np.asarray(beta)
-    out = np.empty((8,) + beta.shape, np.result_type(beta, float))
+    out = np.empty((11,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
     _u4 = x**4
-    out[0, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
-    out[1, small] = x**3 * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
-    out[2, small] = x**4 * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
-    out[3, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
-    out[4, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
-    out[5, small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
-    out[6, small] = x**6 * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
-    out[7, small] = x**5 * (-0.08333333333333333 + _u4*(8.267195767195767e-05 + _u4*(-2.08767569878681e-08 + _u4*(1.4338431997162156e-12 + _u4*(-4.0124529179952086e-17)))))
+    out[0, small] = (1.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
+    out[1, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
+    out[2, small] = x**2 * (-1.0 + _u4*(-0.002777777777777778 + _u4*(-5.511463844797178e-07 + _u4*(-2.294149119545945e-11 + _u4*(-3.123841393717245e-16)))))
+    out[3, small] = x**3 * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
+    out[4, small] = x**4 * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
+    out[5, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
+    out[6, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
+    out[7, small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
+    out[8, small] = x**6 * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
+    out[9, small] = x**4 * (-0.4166666666666667 + _u4*(0.000744047619047619 + _u4*(-2.713978408422853e-07 + _u4*(2.4375334395175665e-11 + _u4*(-8.426151127789938e-16)))))
+    out[10, small] = x**5 * (-0.08333333333333333 + _u4*(8.267195767195767e-05 + _u4*(-2.08767569878681e-08 + _u4*(1.4338431997162156e-12 + _u4*(-4.0124529179952086e-17)))))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -58,18 +65,23 @@ def _basis(beta):
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
     _t0 = _s*_tanh
-    _t1 = -_tanh
-    _t2 = _s*_sech
-    _t3 = _c*_tanh
-    _t4 = _s + _t3
-    out[0, large] = _t0
-    out[1, large] = _t1 + _t2
-    out[2, large] = _c - _sech
-    out[3, large] = _c + _sech
-    out[4, large] = -_s + _t3
-    out[5, large] = _t4
-    out[6, large] = _c*_sech + _t0 - 1
-    out[7, large] = _t1 - _t2 + _t4
+    _t1 = _c*_sech
+    _t2 = _t1 - 1
+    _t3 = -_tanh
+    _t4 = _s*_sech
+    _t5 = _c*_tanh
+    _t6 = _s + _t5
+    out[0, large] = _c
+    out[1, large] = _t0
+    out[2, large] = _t2
+    out[3, large] = _t3 + _t4
+    out[4, large] = _c - _sech
+    out[5, large] = _c + _sech
+    out[6, large] = -_s + _t5
+    out[7, large] = _t6
+    out[8, large] = _t0 + _t2
+    out[9, large] = 2*_c - _t1 - 1
+    out[10, large] = _t3 - _t4 + _t6
     return out
 
 
@@ -89,18 +101,94 @@ def slope(beta, k, kvv, kll, kvl, H, L):
         per unit f0
         per unit q0
     """
-    _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7 = _basis(beta)
+    _h1, _h3, _h4, _h5, _h6, _h7, _h8, _h10 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8, 10]]
     beta = np.asarray(beta)
     _t0 = H*kvl
-    _t1 = L*_h0*beta**4
+    _t1 = L*_h1*beta**4
     _t2 = L**2
     _t3 = H**2
     _t4 = beta**2
     _t5 = 3*k
-    _t6 = _h5*_t5*beta**5
+    _t6 = _h7*_t5*beta**5
     _t7 = beta**3
-    _t8 = 9*_h2*_t4
+    _t8 = 9*_h4*_t4
     _t9 = _t8*kvl**2
     _t10 = _t1*_t5
-    _r = 1.0 / (9*_h2*_t3*_t4*kll*kvv - _h3*_t2*beta**6*k**2 + 3*_h4*_t2*_t7*k*kvv - 6*_t0*_t1*k - _t3*_t6*kll - _t3*_t9)
-    return ((-_t0*_t6 - _t10*kvv) * _r, (9*H*_h2*_t4*kll*kvv - H*_t6*kll - H*_t9 - _t10*kvl) * _r, (-_t0*_t8 - _t10) * _r, (-9*L*_h7*_t0*beta + 3*_h1*_t2*_t7*k - 9*_h6*_t2*kvv) * _r)
+    _r = 1.0 / (9*_h4*_t3*_t4*kll*kvv - _h5*_t2*beta**6*k**2 + 3*_h6*_t2*_t7*k*kvv - 6*_t0*_t1*k - _t3*_t6*kll - _t3*_t9)
+    return ((-_t0*_t6 - _t10*kvv) * _r, (9*H*_h4*_t4*kll*kvv - H*_t6*kll - H*_t9 - _t10*kvl) * _r, (-_t0*_t8 - _t10) * _r, (-9*L*_h10*_t0*beta + 3*_h3*_t2*_t7*k - 9*_h8*_t2*kvv) * _r)
+
+
+def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L):
+    """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, kvv, kll, kvl).
+
+    Arguments as :func:`slope`.  Values and partials share their subexpressions.
+
+    Returns
+    -------
+    values : tuple of ndarray
+        as :func:`slope`
+    jacobian : tuple of tuples of ndarray
+        ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+    """
+    _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9, _h10 = _basis(beta)
+    beta = np.asarray(beta)
+    _t0 = H*kvl
+    _t1 = beta**4
+    _t2 = L*_h1
+    _t3 = _t2*k
+    _t4 = 6*_t1*_t3
+    _t5 = L**2
+    _t6 = k**2
+    _t7 = _t5*_t6*beta**6
+    _t8 = H**2
+    _t9 = beta**2
+    _t10 = _h7*_t8
+    _t11 = beta**5
+    _t12 = 3*k
+    _t13 = _t11*_t12
+    _t14 = _t10*_t13
+    _t15 = beta**3
+    _t16 = kvl**2
+    _t17 = 9*_t9
+    _t18 = _t16*_t17
+    _t19 = _h4*_t8
+    _t20 = _h7*_t13
+    _t21 = _t1*_t12
+    _t22 = _t2*_t21
+    _t23 = H*_t20
+    _t24 = H*_h4
+    _t25 = _t17*_t24
+    _t26 = 9*_t5
+    _t27 = _h8*_t26
+    _t28 = 9*L*_h10
+    _t29 = _t0*_t28
+    _t30 = 18*beta
+    _t31 = _t16*_t30
+    _t32 = _t15*_t3
+    _t33 = L*_h7
+    _t34 = 6*k
+    _t35 = k*kll
+    _t36 = 6*_t11
+    _t37 = _h0*_t36
+    _t38 = _t35*_t37
+    _t39 = 15*_t1
+    _t40 = _t35*_t39
+    _t41 = _t15*_t5
+    _t42 = _h6*_t18
+    _t43 = _t0*k
+    _t44 = 12*_t32
+    _t45 = _t21*_t33
+    _t46 = _t24*kvl
+    _t47 = _t17*_t19
+    _t48 = -_t23
+    _t49 = 18*_t9
+    _r = 1.0 / (9*_h4*_t8*_t9*kll*kvv - _h5*_t7 + 3*_h6*_t15*_t5*k*kvv - _t0*_t4 - _t14*kll - _t18*_t19)
+    _v0 = (-_t0*_t20 - _t22*kvv) * _r
+    _v1 = (9*H*_h4*_t9*kll*kvv - _t16*_t25 - _t22*kvl - _t23*kll) * _r
+    _v2 = (-_t22 - _t25*kvl) * _r
+    _v3 = (3*_h3*_t15*_t5*k - _t27*kvv - _t29*beta) * _r
+    _q0 = (-_h1*_t34*_t41*kvv + 18*_h4*_t8*beta*kll*kvv - _h5*_t36*_t5*_t6 + 9*_h6*_t5*_t9*k*kvv - _h6*_t7 + 9*_h6*_t8*_t9*kll*kvv - _t0*_t1*_t33*_t34 - 24*_t0*_t32 - _t10*_t40 - _t19*_t31 - _t38*_t8 - _t42*_t8) * _r
+    _q1 = (_h6*_t12*_t41 + _t47*kll) * _r
+    _q2 = (-_t14 + _t47*kvv) * _r
+    _q3 = (-H*_t4 - _t19*_t49*kvl) * _r
+    return ((_v0, _v1, _v2, _v3), (((-_h7*_t39*_t43 - _t37*_t43 - _t44*kvv - _t45*kvv) * _r - _v0 * _q0, (-_t22) * _r - _v0 * _q1, -_v0 * _q2, (_t48) * _r - _v0 * _q3), ((18*H*_h4*beta*kll*kvv + 9*H*_h6*_t9*kll*kvv - H*_h7*_t40 - H*_t38 - H*_t42 - _t24*_t31 - _t44*kvl - _t45*kvl) * _r - _v1 * _q0, (_t25*kll) * _r - _v1 * _q1, (_t25*kvv + _t48) * _r - _v1 * _q2, (-_t22 - _t46*_t49) * _r - _v1 * _q3), ((-_h6*_t0*_t17 - _t30*_t46 - _t44 - _t45) * _r - _v2 * _q0, -_v2 * _q1, -_v2 * _q2, (-_t25) * _r - _v2 * _q3), ((-9*L*_h9*_t0*beta - _h10*_t26*kvv + 3*_h2*_t15*_t5*k + 9*_h3*_t5*_t9*k - _t29) * _r - _v3 * _q0, (-_t27) * _r - _v3 * _q1, -_v3 * _q2, (-H*_t28*beta) * _r - _v3 * _q3)))

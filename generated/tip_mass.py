@@ -10,13 +10,16 @@ complex, ``Re beta > 0``) and broadcasting over the parameters (k, k1, k2, H, L,
 
 Every numerator and the denominator are sums of parameter monomials times the basis
 
-    h0 = sin(beta)*sinh(beta)
-    h1 = sin(beta) - sinh(beta)
-    h2 = cos(beta)*cosh(beta) - 1
-    h3 = cos(beta)*cosh(beta) + 1
-    h4 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h5 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h6 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
+    h0 = cos(beta)*cosh(beta)
+    h1 = sin(beta)*sinh(beta)
+    h2 = cos(beta) - cosh(beta)
+    h3 = sin(beta) - sinh(beta)
+    h4 = cos(beta)*cosh(beta) - 1
+    h5 = cos(beta)*cosh(beta) + 1
+    h6 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h7 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h8 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
+    h9 = sin(beta)*cosh(beta) - sin(beta) + cos(beta)*sinh(beta) - sinh(beta)
 
 each evaluated once per call: by its Taylor series for ``|beta| < SWITCH`` (where the
 closed form cancels), else in closed form divided by ``cosh(beta)**1`` with ``tanh`` and
@@ -25,9 +28,10 @@ beyond.
 """
 import numpy as np
 
-__all__ = ['DRIVES', 'PARAMETERS', 'SWITCH', 'slope']
+__all__ = ['DRIVES', 'JACOBIAN_PARAMETERS', 'PARAMETERS', 'SWITCH', 'slope', 'slope_and_jacobian']
 
 PARAMETERS = ('k', 'k1', 'k2', 'H', 'L', 'mu')
+JACOBIAN_PARAMETERS = ('beta', 'k1', 'k2', 'mu')
 DRIVES = ('d1', 'd2', 'f0', 'q0')
 SWITCH = 1.3
 """``|beta|`` below which the basis is evaluated by its series."""
@@ -36,17 +40,20 @@ SWITCH = 1.3
 def _basis(beta):
     """The basis functions h0... at ``beta`` (series or scaled closed form, see module)."""
     beta = np.asarray(beta)
-    out = np.empty((7,) + beta.shape, np.result_type(beta, float))
+    out = np.empty((10,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
     _u4 = x**4
-    out[0, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
-    out[1, small] = x**3 * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
-    out[2, small] = x**4 * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
-    out[3, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
-    out[4, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
-    out[5, small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
-    out[6, small] = x**6 * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
+    out[0, small] = (1.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
+    out[1, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
+    out[2, small] = x**2 * (-1.0 + _u4*(-0.002777777777777778 + _u4*(-5.511463844797178e-07 + _u4*(-2.294149119545945e-11 + _u4*(-3.123841393717245e-16)))))
+    out[3, small] = x**3 * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
+    out[4, small] = x**4 * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
+    out[5, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
+    out[6, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
+    out[7, small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
+    out[8, small] = x**6 * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
+    out[9, small] = x**5 * (-0.08333333333333333 + _u4*(8.267195767195767e-05 + _u4*(-2.08767569878681e-08 + _u4*(1.4338431997162156e-12 + _u4*(-4.0124529179952086e-17)))))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -56,14 +63,21 @@ def _basis(beta):
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
     _t0 = _s*_tanh
-    _t1 = _c*_tanh
-    out[0, large] = _t0
-    out[1, large] = _s*_sech - _tanh
-    out[2, large] = _c - _sech
-    out[3, large] = _c + _sech
-    out[4, large] = -_s + _t1
-    out[5, large] = _s + _t1
-    out[6, large] = _c*_sech + _t0 - 1
+    _t1 = _c*_sech - 1
+    _t2 = -_tanh
+    _t3 = _s*_sech
+    _t4 = _c*_tanh
+    _t5 = _s + _t4
+    out[0, large] = _c
+    out[1, large] = _t0
+    out[2, large] = _t1
+    out[3, large] = _t2 + _t3
+    out[4, large] = _c - _sech
+    out[5, large] = _c + _sech
+    out[6, large] = -_s + _t4
+    out[7, large] = _t5
+    out[8, large] = _t0 + _t1
+    out[9, large] = _t2 - _t3 + _t5
     return out
 
 
@@ -83,21 +97,99 @@ def slope(beta, k, k1, k2, H, L, mu):
         per unit f0
         per unit q0
     """
-    _h0, _h1, _h2, _h3, _h4, _h5, _h6 = _basis(beta)
+    _h1, _h3, _h4, _h5, _h6, _h7, _h8 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8]]
     beta = np.asarray(beta)
     _t0 = beta**6
     _t1 = L**2
     _t2 = _t1*k**2
     _t3 = H**2*k2
-    _t4 = _h2*_t3
+    _t4 = _h4*_t3
     _t5 = 9*beta**2*k1
     _t6 = 3*k
-    _t7 = _h5*_t6*beta**5
+    _t7 = _h7*_t6*beta**5
     _t8 = _t1*_t6*beta**3
     _t9 = _t0*_t6*mu
     _t10 = _t6*beta**4
-    _t11 = L*_h0*_t10
+    _t11 = L*_h1*_t10
     _t12 = H*k2
-    _t13 = _h2*_t12
-    _r = 1.0 / (_h3*_t0*_t2 + _h4*_t2*beta**7*mu - _h4*_t8*k1 + _t3*_t7 - _t4*_t5 + _t4*_t9)
-    return ((_t11*k1) * _r, (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r, (_t11) * _r, (-_h1*_t8 - _h6*_t1*_t10*mu + 9*_h6*_t1*k1) * _r)
+    _t13 = _h4*_t12
+    _r = 1.0 / (_h5*_t0*_t2 + _h6*_t2*beta**7*mu - _h6*_t8*k1 + _t3*_t7 - _t4*_t5 + _t4*_t9)
+    return ((_t11*k1) * _r, (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r, (_t11) * _r, (-_h3*_t8 - _h8*_t1*_t10*mu + 9*_h8*_t1*k1) * _r)
+
+
+def slope_and_jacobian(beta, k, k1, k2, H, L, mu):
+    """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, k1, k2, mu).
+
+    Arguments as :func:`slope`.  Values and partials share their subexpressions.
+
+    Returns
+    -------
+    values : tuple of ndarray
+        as :func:`slope`
+    jacobian : tuple of tuples of ndarray
+        ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+    """
+    _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9 = _basis(beta)
+    beta = np.asarray(beta)
+    _t0 = beta**6
+    _t1 = L**2
+    _t2 = _t1*k**2
+    _t3 = _t0*_t2
+    _t4 = H**2
+    _t5 = _t4*k2
+    _t6 = beta**2
+    _t7 = 9*_h4*_t6
+    _t8 = _t5*_t7
+    _t9 = 3*k
+    _t10 = beta**5
+    _t11 = _h7*_t10
+    _t12 = _t11*_t9
+    _t13 = beta**3
+    _t14 = _t1*_t13
+    _t15 = _t14*_t9
+    _t16 = _h6*_t15
+    _t17 = _t2*beta**7
+    _t18 = _h6*_t17
+    _t19 = _h4*_t0
+    _t20 = _t19*mu
+    _t21 = _t20*_t9
+    _t22 = L*_h1
+    _t23 = beta**4
+    _t24 = _t23*_t9
+    _t25 = _t22*_t24
+    _t26 = H*_t7
+    _t27 = _t26*k2
+    _t28 = H*_t12
+    _t29 = H*k2
+    _t30 = _t1*_t24
+    _t31 = _h8*_t30
+    _t32 = _t5*k1
+    _t33 = 18*_h4
+    _t34 = _t33*beta
+    _t35 = _h6*_t3
+    _t36 = _t5*k
+    _t37 = 6*_t10
+    _t38 = _h0*_t37
+    _t39 = 9*_h6*_t6
+    _t40 = 15*_h7*_t23
+    _t41 = 9*_t1
+    _t42 = _t6*k
+    _t43 = _t10*_t33*mu
+    _t44 = _h6*_t0*_t9*mu
+    _t45 = 12*k
+    _t46 = _t13*_t22*_t45
+    _t47 = L*_h7*_t24
+    _t48 = _t29*k1
+    _t49 = _t29*k
+    _t50 = _t4*_t9
+    _t51 = _t19*_t9
+    _r = 1.0 / (_h5*_t3 + _t12*_t5 - _t16*k1 + _t18*mu + _t21*_t5 - _t8*k1)
+    _v0 = (_t25*k1) * _r
+    _v1 = (_t21*_t29 - _t27*k1 + _t28*k2) * _r
+    _v2 = (_t25) * _r
+    _v3 = (-_h3*_t15 + 9*_h8*_t1*k1 - _t31*mu) * _r
+    _q0 = (6*_h1*_t14*k*k1 - 2*_h1*_t17*mu + _h5*_t2*_t37 - _h6*_t41*_t42*k1 - _t32*_t34 - _t32*_t39 + 7*_t35*mu + _t35 + _t36*_t38 + _t36*_t40 + _t36*_t43 + _t44*_t5) * _r
+    _q1 = (-_t16 - _t8) * _r
+    _q2 = (_t11*_t50 + _t20*_t50 - _t4*_t7*k1) * _r
+    _q3 = (_t18 + _t5*_t51) * _r
+    return ((_v0, _v1, _v2, _v3), (((_t46*k1 + _t47*k1) * _r - _v0 * _q0, (_t25) * _r - _v0 * _q1, -_v0 * _q2, -_v0 * _q3), ((_t29*_t44 - _t34*_t48 + _t38*_t49 - _t39*_t48 + _t40*_t49 + _t43*_t49) * _r - _v1 * _q0, (-_t27) * _r - _v1 * _q1, (H*_t21 - _t26*k1 + _t28) * _r - _v1 * _q2, (_t29*_t51) * _r - _v1 * _q3), ((_t46 + _t47) * _r - _v2 * _q0, -_v2 * _q1, -_v2 * _q2, -_v2 * _q3), ((-_h2*_t15 - _h3*_t41*_t42 - _h8*_t14*_t45*mu + 9*_h9*_t1*k1 - _h9*_t30*mu) * _r - _v3 * _q0, (_h8*_t41) * _r - _v3 * _q1, -_v3 * _q2, (-_t31) * _r - _v3 * _q3)))

@@ -13,8 +13,9 @@ documented as the domain of validity.  The scaled denominator is exported as
 """
 from __future__ import annotations
 
-from .. import families as registry, tip_setback
-from ..trig import hyperbolic_degree, scaled
+from .. import beam, families as registry, tip_setback
+from ..trig import hyperbolic_degree, normal_form, scaled
+from .jacobian import JACOBIANS, partials, render_and_jacobian
 from .printing import cse_lines, header, source_hash
 from .stabilise import clipped_exp
 from .transfer import symbol
@@ -32,6 +33,9 @@ def render() -> str:
     exprs = [sol.denominator] + [sol.slope[d] for d in drives]
     sets = (tip_setback.ATOMS_A, tip_setback.ATOMS_B)
     degrees = {at: max(hyperbolic_degree(e, at) for e in exprs) for at in sets}
+    d_exprs, wrt = _partials(exprs, params)
+    # The atoms differentiate into atoms: the partials keep the degrees, so share the scaling.
+    assert all(hyperbolic_degree(e, at) <= degrees[at] for e in d_exprs for at in sets)
     lines, reduced = cse_lines([scaled(e, degrees) for e in exprs])
     den_lines, den = cse_lines([scaled(sol.denominator, degrees)])
     names = ", ".join(map(str, params))
@@ -65,9 +69,10 @@ built from ``exp(-a)``, ``exp(-b)`` so nothing overflows.  No series branch: use
 """
 import numpy as np
 
-__all__ = {sorted(["PARAMETERS", "DRIVES", *row.outputs])!r}
+__all__ = {sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian", "characteristic_and_jacobian"])!r}
 
 PARAMETERS = {tuple(map(str, params))!r}
+JACOBIAN_PARAMETERS = {tuple(map(str, wrt))!r}
 DRIVES = {row.drives!r}
 
 
@@ -83,7 +88,7 @@ def slope(beta, {names}):
 {atoms}''' + "\n".join(lines) + f'''
     _r = 1.0 / ({reduced[0]})
     return ({", ".join(f"({r}) * _r" for r in reduced[1:])})
-
+{_jacobian(exprs, d_exprs, degrees, wrt, names, atoms)}
 
 def characteristic(beta, {names}):
     """Scaled denominator: its real zeros in ``beta`` are the resonances.
@@ -91,4 +96,41 @@ def characteristic(beta, {names}):
 {params_doc}    """
 {atoms}''' + "\n".join(den_lines) + f'''
     return {den[0]}
-''')
+''' + _characteristic_jacobian(exprs[0], d_exprs[::len(exprs)], degrees, wrt, names, atoms))
+
+
+def _partials(exprs, params):
+    """Partials of ``exprs`` w.r.t. the Jacobian parameters (``beta`` and ``gamma`` through the atoms)."""
+    a, b = tip_setback.ATOMS_A, tip_setback.ATOMS_B
+    g = tip_setback.gamma
+    by_name = {str(p): p for p in (beam.beta, *params)}
+    wrt = [by_name[n] for n in JACOBIANS["tip_setback"]]
+    # a = gamma beta, b = (1 - gamma) beta.
+    rates = {beam.beta: {a: g, b: 1 - g}, g: {a: beam.beta, b: -beam.beta}}
+    return [normal_form(d, a, b) for d in partials(exprs, wrt, rates)], wrt
+
+
+def _jacobian(exprs, d_exprs, degrees, wrt, names, atoms) -> str:
+    """``slope_and_jacobian``: one CSE over the scaled values and partials."""
+    lines, reduced = cse_lines([scaled(e, degrees) for e in exprs + d_exprs])
+    n = len(exprs) - 1
+    return render_and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive",
+                               atoms, wrt, n, reduced[0], reduced[1:n + 1], reduced[n + 1:], lines).rstrip("\n") + "\n"
+
+
+def _characteristic_jacobian(den, d_dens, degrees, wrt, names, atoms) -> str:
+    """``characteristic_and_jacobian``: the scaled denominator and its partials, scaled alike."""
+    lines, reduced = cse_lines([scaled(e, degrees) for e in [den, *d_dens]])
+    body = "\n".join(lines)
+    return f'''
+
+def characteristic_and_jacobian(beta, {names}):
+    """:func:`characteristic` and ``D_p / S`` for each ``p`` in ``JACOBIAN_PARAMETERS``.
+
+    ``D`` is the unscaled denominator and ``S`` the scale of :func:`characteristic`; at a
+    zero of ``D`` these are the partials of :func:`characteristic`, so a resonance moves
+    with ``p`` as ``d beta / d p = -D_p / D_beta``.
+    """
+{atoms}{body}
+    return {reduced[0]}, ({", ".join(reduced[1:])})
+'''

@@ -18,6 +18,8 @@ import sympy as sp
 
 from .. import beam, families as registry, tilt, tip_mass, torsion
 from ..trig import ATOMS, from_atoms, hyperbolic_degree, scaled
+from ..trig import normal_form
+from .jacobian import JACOBIANS, partials, render_and_jacobian
 from .printing import cse_lines, header, horner, source_hash
 from .stabilise import clipped_exp, series_branch, split, switch_point
 
@@ -103,12 +105,30 @@ def families() -> tuple[Family, ...]:
     return tuple(_derive(row) for row in registry.FAMILIES if row.kind != "setback")
 
 
-def _basis(fam: Family):
-    """Distinct basis functions ``h`` of a family and each output's split over them."""
+def _partials(fam: Family) -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:
+    """The family's Jacobian parameters and ``d e / d p`` of every source expression (normal form)."""
+    names = JACOBIANS.get(fam.module, ())
+    wrt = tuple(fam.variable if n == str(fam.variable) else fam.parameters[[str(p) for p in fam.parameters].index(n)]
+                for n in names)
+    return wrt, [normal_form(d) for d in partials(fam.source_exprs(), wrt, {fam.variable: {ATOMS: 1}})]
+
+
+def _unpack(vname: str, exprs, hsyms) -> str:
+    """The line unpacking the basis rows that ``exprs`` use."""
+    used = sorted({s for e in exprs for s in e.free_symbols if s in hsyms}, key=lambda s: int(str(s)[2:]))
+    if len(used) == len(hsyms):
+        return f"{', '.join(map(str, used))} = _basis({vname})"
+    # Only part of the basis enters this function: pick its rows.
+    rows = [int(str(s)[2:]) for s in used]
+    return f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
+
+
+def _basis(fam: Family, exprs):
+    """Distinct basis functions ``h`` of ``exprs`` and each one's split over them."""
     basis: list[sp.Expr] = []
     splits = []
-    for expr in fam.source_exprs():
-        parts = split(expr, fam.variable, fam.parameters)
+    for expr in exprs:
+        parts = [(c, h) for c, h in split(expr, fam.variable, fam.parameters) if h != 0]
         for _, h in parts:
             if h not in basis:
                 basis.append(h)
@@ -121,11 +141,13 @@ def render_family(fam: Family) -> str:
     """Source text of the generated module of one family."""
     var = fam.variable
     vname = str(var)
-    basis, splits = _basis(fam)
+    wrt, d_exprs = _partials(fam)
+    n_src = len(fam.source_exprs())
+    basis, splits = _basis(fam, fam.source_exprs() + d_exprs)
     degree = max(hyperbolic_degree(h) for h in basis)
     switch = max(switch_point(h, degree) for h in basis)
     hsyms = [sp.Symbol(f"_h{i}") for i in range(len(basis))]
-    combos = [sum(coeff * hsyms[basis.index(h)] for coeff, h in parts) for parts in splits]
+    combos = [sp.sympify(sum(coeff * hsyms[basis.index(h)] for coeff, h in parts)) for parts in splits]
 
     if degree:
         evaluation = textwrap.fill(
@@ -155,10 +177,11 @@ Every numerator and the denominator are sums of parameter monomials times the ba
 """
 import numpy as np
 
-__all__ = {sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"])!r}
+__all__ = {sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"]
+                  + ([f"{f.name}_and_jacobian" for f in fam.functions] + ["JACOBIAN_PARAMETERS"] if wrt else []))!r}
 
 PARAMETERS = {tuple(str(p) for p in fam.parameters)!r}
-DRIVES = {tuple(name for name, _ in fam.functions[0].outputs)!r}
+{f"JACOBIAN_PARAMETERS = {tuple(map(str, wrt))!r}{chr(10)}" if wrt else ""}DRIVES = {tuple(name for name, _ in fam.functions[0].outputs)!r}
 SWITCH = {switch!r}
 """``|{vname}|`` below which the basis is evaluated by its series."""
 
@@ -202,16 +225,10 @@ def _basis({vname}):
         n = len(fn.outputs)
         den = combos[0]
         nums = combos[start:start + n]
+        d_combos = [combos[n_src * (1 + j) + i] for j in range(len(wrt)) for i in [0, *range(start, start + n)]]
         start += n
-        used = sorted({s for e in [den, *nums] for s in e.free_symbols if s in hsyms},
-                      key=lambda s: int(str(s)[2:]))
         lines, reduced = cse_lines([den, *nums])
-        if len(used) == len(hsyms):
-            unpack = f"{', '.join(map(str, used))} = _basis({vname})"
-        else:
-            # Only part of the basis enters this function: pick its rows.
-            rows = [int(str(s)[2:]) for s in used]
-            unpack = f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
+        unpack = _unpack(vname, [den, *nums], hsyms)
         doc_out = "\n".join(f"        per unit {name}" for name, _ in fn.outputs)
         out.append(f'''
 
@@ -235,6 +252,11 @@ def {fn.name}({vname}, {names}):
         out.append(f"    _r = 1.0 / ({reduced[0]})\n")
         values = [f"({r}) * _r" for r in reduced[1:]]
         out.append(f"    return ({', '.join(values)}{',' if len(values) == 1 else ''})\n")
+        if wrt:
+            lines, reduced = cse_lines([den, *nums, *d_combos])
+            preamble = f"    {_unpack(vname, [den, *nums, *d_combos], hsyms)}\n    {vname} = np.asarray({vname})\n"
+            out.append(render_and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt, n,
+                                           reduced[0], reduced[1:n + 1], reduced[n + 1:], lines))
     return "".join(out)
 
 

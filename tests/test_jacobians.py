@@ -1,0 +1,77 @@
+"""Generated Jacobians of the transfer functions against central finite differences.
+
+Random points over realistic ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
+k2/k1 0-1.5, tip mass 0-1, tip at 0.6-1 L; ``beta`` from the first mode's neighbourhood to
+the tenth mode, with the phase of a damped ``beta``), fixed seed.  Each partial is compared
+with ``(f(p + h) - f(p - h)) / 2h`` of the generated function itself.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pfmdyn.generated import elastic_contact, tilt, tip_mass, tip_setback
+
+N = 200
+
+
+def _points(module, seed):
+    """Arguments by name at N random points (realistic ranges, see module docstring)."""
+    rng = np.random.default_rng(seed)
+    k = 10 ** rng.uniform(np.log10(0.05), np.log10(50), N)
+    k1 = k * 10 ** rng.uniform(0, 4, N)
+    k2 = k1 * rng.uniform(0, 1.5, N)
+    alpha = rng.uniform(-0.5, 0.5, N)
+    # Down to 0.05 where the series branch applies (tip_setback documents Re beta > 0.3).
+    low = 0.3 if module is tip_setback else 0.05
+    beta = 10 ** rng.uniform(np.log10(low), np.log10(32), N) * np.exp(-1j * rng.uniform(0, 0.03, N))
+    args = {"beta": beta, "k": k, "k1": k1, "k2": k2, "H": rng.uniform(3e-6, 20e-6, N),
+            "L": rng.uniform(100e-6, 500e-6, N), "mu": rng.uniform(0, 1, N), "gamma": rng.uniform(0.6, 1, N),
+            "kvv": k1 * np.cos(alpha) ** 2 + k2 * np.sin(alpha) ** 2,
+            "kll": k1 * np.sin(alpha) ** 2 + k2 * np.cos(alpha) ** 2,
+            "kvl": (k1 - k2) * np.sin(alpha) * np.cos(alpha)}
+    return {name: args[name] for name in ("beta",) + module.PARAMETERS}
+
+
+@pytest.mark.parametrize("module", [elastic_contact, tip_mass, tilt, tip_setback], ids=lambda m: m.__name__)
+def test_jacobian_matches_central_differences(module):
+    args = _points(module, 11)
+    values, jac = module.slope_and_jacobian(**args)
+    reference = module.slope(**args)
+    for v, r in zip(values, reference):
+        # Same expressions, other CSE: equal to rounding (tip_setback loses ~1e-12 near 0.3).
+        np.testing.assert_allclose(v, r, rtol=2e-9, atol=0)
+    # Relative accuracy of the values themselves (tip_setback: ~5e-10 near beta = 0.3, see above).
+    accuracy = 1e-9 if module is tip_setback else 1e-12
+    for j, name in enumerate(module.JACOBIAN_PARAMETERS):
+        p = args[name]
+        # Steps relative to the parameter's scale (springs: k, so a zero k2 or kvl still moves).
+        scale = np.abs(p) if name in ("beta", "k", "k1", "kvv") else (
+            args["k"] if name in ("k2", "kll", "kvl") else np.ones(N))
+        h = 1e-6 * scale
+        up = module.slope(**{**args, name: p + h})
+        down = module.slope(**{**args, name: p - h})
+        for i, (d, u, w, v) in enumerate(zip((t[j] for t in jac), up, down, values)):
+            fd = (u - w) / (2 * h)
+            # Tolerance: FD truncation near sharp resonances, plus the FD noise floor ~ err(T) / h.
+            tol = 1e-5 * np.abs(d) + 10 * accuracy * np.abs(v) / h
+            bad = np.abs(d - fd) > tol
+            assert not bad.any(), (name, i, args["beta"][bad][:3], d[bad][:3], fd[bad][:3])
+
+
+def test_characteristic_jacobian_moves_resonances():
+    """-D_p / D_beta at a root is the root's motion: compare with re-solved roots."""
+    from pfmdyn.roots.bracket import refine
+    args = dict(k=2.0, kvv=150.0, kll=40.0, kvl=3.0, H=1e-5, L=2.2e-4, mu=0.2, gamma=0.9)
+    F = lambda b, **kw: tip_setback.characteristic(b, **{**args, **kw})  # noqa: E731
+    grid = np.linspace(0.5, 12, 2000)
+    vals = F(grid)
+    i = int(np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[1])
+    root = float(refine(F, grid[i], grid[i + 1], rtol=1e-14))
+    _, d = tip_setback.characteristic_and_jacobian(root, **args)
+    names = tip_setback.JACOBIAN_PARAMETERS
+    for j, name in enumerate(names[1:], 1):
+        h = 1e-6 * max(abs(args[name]), 1.0)
+        moved = [float(refine(lambda b: F(b, **{name: args[name] + s}), grid[i] - 0.05, grid[i + 1] + 0.05,
+                              rtol=1e-14)) for s in (h, -h)]
+        np.testing.assert_allclose(-d[j] / d[0], (moved[0] - moved[1]) / (2 * h), rtol=1e-5, atol=1e-9)
