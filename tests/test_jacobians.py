@@ -75,3 +75,33 @@ def test_characteristic_jacobian_moves_resonances():
         moved = [float(refine(lambda b: F(b, **{name: args[name] + s}), grid[i] - 0.05, grid[i + 1] + 0.05,
                               rtol=1e-14)) for s in (h, -h)]
         np.testing.assert_allclose(-d[j] / d[0], (moved[0] - moved[1]) / (2 * h), rtol=1e-5, atol=1e-9)
+
+
+@pytest.mark.parametrize("effects", [("damping_internal", "tip_mass"), ("damping_viscous", "tip_setback", "tilt"),
+                                     ("damping_contact", "tip_mass", "tip_setback", "background")])
+def test_model_jacobian_matches_central_differences(effects):
+    """The discrepancy model's chain rule (damping, rotation, free root) against differences."""
+    from types import SimpleNamespace
+
+    from pfmdyn.discrepancy.model import Model
+    rng = np.random.default_rng(5)
+    meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=63.2e3)
+    model = Model(meta, effects)
+    lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
+    x = lower + (upper - lower) * rng.uniform(0.2, 0.8, len(lower))
+    freq = np.linspace(150e3, 1300e3, 300)
+    T, dT = model.slopes_and_jacobian(freq, x)
+    np.testing.assert_allclose(T, np.array(model.slopes(freq, x)), rtol=1e-9)
+    def central(j, h):
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        return (np.array(model.slopes(freq, up)) - np.array(model.slopes(freq, down))) / (2 * h)
+
+    for j in range(len(x)):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        # Richardson extrapolation: the sharp resonances make plain central differences' h**2 term visible.
+        fd = (4 * central(j, h / 2) - central(j, h)) / 3
+        scale = np.abs(T).max(axis=1, keepdims=True)
+        bad = np.abs(dT[:, j] - fd) > 1e-5 * np.abs(fd) + 1e-7 * scale
+        assert not bad.any(), (model.parameters[j].name, dT[:, j][bad][:3], fd[bad][:3], freq[bad.any(axis=0)][:3])

@@ -13,6 +13,8 @@ documented as the domain of validity.  The scaled denominator is exported as
 """
 from __future__ import annotations
 
+import sympy as sp
+
 from .. import beam, families as registry, tip_setback
 from ..trig import hyperbolic_degree, normal_form, scaled
 from .jacobian import JACOBIANS, partials, render_and_jacobian
@@ -34,10 +36,11 @@ def render() -> str:
     sets = (tip_setback.ATOMS_A, tip_setback.ATOMS_B)
     degrees = {at: max(hyperbolic_degree(e, at) for e in exprs) for at in sets}
     d_exprs, wrt = _partials(exprs, params)
+    d_scaled = [_grouped(scaled(e, degrees), params) for e in d_exprs]
     # The atoms differentiate into atoms: the partials keep the degrees, so share the scaling.
     assert all(hyperbolic_degree(e, at) <= degrees[at] for e in d_exprs for at in sets)
-    lines, reduced = cse_lines([scaled(e, degrees) for e in exprs])
-    den_lines, den = cse_lines([scaled(sol.denominator, degrees)])
+    lines, reduced = cse_lines([_grouped(scaled(e, degrees), params) for e in exprs])
+    den_lines, den = cse_lines([_grouped(scaled(sol.denominator, degrees), params)])
     names = ", ".join(map(str, params))
     da, db = degrees[tip_setback.ATOMS_A], degrees[tip_setback.ATOMS_B]
     atoms = f'''    beta = np.asarray(beta)
@@ -88,7 +91,7 @@ def slope(beta, {names}):
 {atoms}''' + "\n".join(lines) + f'''
     _r = 1.0 / ({reduced[0]})
     return ({", ".join(f"({r}) * _r" for r in reduced[1:])})
-{_jacobian(exprs, d_exprs, degrees, wrt, names, atoms)}
+{_jacobian([_grouped(scaled(e, degrees), params) for e in exprs], d_scaled, wrt, names, atoms)}
 
 def characteristic(beta, {names}):
     """Scaled denominator: its real zeros in ``beta`` are the resonances.
@@ -96,7 +99,7 @@ def characteristic(beta, {names}):
 {params_doc}    """
 {atoms}''' + "\n".join(den_lines) + f'''
     return {den[0]}
-''' + _characteristic_jacobian(exprs[0], d_exprs[::len(exprs)], degrees, wrt, names, atoms))
+''' + _characteristic_jacobian(_grouped(scaled(exprs[0], degrees), params), d_scaled[::len(exprs)], wrt, names, atoms))
 
 
 def _partials(exprs, params):
@@ -110,17 +113,27 @@ def _partials(exprs, params):
     return [normal_form(d, a, b) for d in partials(exprs, wrt, rates)], wrt
 
 
-def _jacobian(exprs, d_exprs, degrees, wrt, names, atoms) -> str:
-    """``slope_and_jacobian``: one CSE over the scaled values and partials."""
-    lines, reduced = cse_lines([scaled(e, degrees) for e in exprs + d_exprs])
-    n = len(exprs) - 1
-    return render_and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive",
-                               atoms, wrt, n, reduced[0], reduced[1:n + 1], reduced[n + 1:], lines).rstrip("\n") + "\n"
+def _grouped(expr, params):
+    """``expr`` collected by monomials of the parameters other than ``beta``, ``gamma``, each
+    coefficient (a polynomial in ``beta`` and the atoms) with its common factors pulled out.
+
+    The same sum regrouped: a third of the operations of the expanded form, and most of
+    them on scalars when the parameters are scalars.
+    """
+    gens = [p for p in params if str(p) != "gamma"]
+    poly = sp.Poly(expr, *gens)
+    return sp.Add(*[sp.Mul(*[g**e for g, e in zip(gens, m)]) * sp.factor_terms(c) for m, c in poly.terms()])
 
 
-def _characteristic_jacobian(den, d_dens, degrees, wrt, names, atoms) -> str:
+def _jacobian(values, partials, wrt, names, atoms) -> str:
+    """``slope_and_jacobian``: the scaled values and partials (see :func:`.jacobian.render_and_jacobian`)."""
+    return render_and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive", atoms, wrt,
+                               values, partials).rstrip("\n") + "\n"
+
+
+def _characteristic_jacobian(den, d_dens, wrt, names, atoms) -> str:
     """``characteristic_and_jacobian``: the scaled denominator and its partials, scaled alike."""
-    lines, reduced = cse_lines([scaled(e, degrees) for e in [den, *d_dens]])
+    lines, reduced = cse_lines([den, *d_dens])
     body = "\n".join(lines)
     return f'''
 

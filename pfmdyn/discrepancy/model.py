@@ -28,12 +28,12 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..generated import damping, tip_setback
-from ..generated.tilt_rotation import rotated
+from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..generated.characteristic import BETA1_FREE
 from ..roots.bracket import grid_roots, refine
 from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "project"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
 
 _DEFAULTS = {"k2": 0.0, "Q": 0.0, "Q_viscous": 0.0, "contact_loss": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
@@ -106,6 +106,64 @@ class Model:
             return tip_setback.slope(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                      c["mu"] * mu_f, c["gamma"])
 
+    def slopes_and_jacobian(self, frequency_hz, internal):
+        """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
+
+        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
+        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`) are composed by
+        the chain rule with the generated damping factors' derivatives
+        (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
+        (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
+        with ``mu`` and ``gamma`` (implicit differentiation of the generated characteristic).
+        """
+        c = self.coords(internal)
+        m = self.meta
+        r = np.asarray(frequency_hz, dtype=float) / m.f1
+        b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
+        with np.errstate(all="ignore"):
+            loss = (c["Q"], c["Q_viscous"], c["contact_loss"])
+            beta_f, k_f, k1_f, mu_f = damping.factors(r, *loss)
+            d_f = damping.d_factors(r, *loss)
+            spring = c["k1"] * k1_f
+            kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
+            rot = rotated_jacobian(spring, c["k2"], c["alpha"])
+            root_r = b1 * np.sqrt(r)
+            T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                                  c["mu"] * mu_f, c["gamma"], wrt=self._partials_needed(c))
+            T = np.array(T)
+            # Partials not computed have a zero multiplier below.
+            J = np.array([np.broadcast_arrays(*[0.0 if d is None else d for d in row], r)[:-1] for row in J])
+            j_beta, j_k, j_mu, j_gamma = J[:, 0], J[:, 1], J[:, 5], J[:, 6]
+            # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
+            j_rot = [sum(J[:, 2 + s] * rot[s][i] for s in range(3)) for i in range(3)]
+            out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
+            loss_index = {"Q": 0, "Q_viscous": 1, "contact_loss": 2}
+            for j, p in enumerate(self.parameters):
+                if p.name == "k1":
+                    out[:, j] = j_rot[0] * (spring * math.log(10))
+                elif p.name == "k2":
+                    out[:, j] = j_rot[1] * (c["k2"] * math.log(10))
+                elif p.name == "alpha":
+                    out[:, j] = j_rot[2]
+                elif p.name in loss_index:
+                    q = loss_index[p.name]
+                    out[:, j] = (j_beta * (root_r * d_f[0][q]) + j_k * (m.k * d_f[1][q])
+                                 + j_rot[0] * (c["k1"] * d_f[2][q]) + j_mu * (c["mu"] * d_f[3][q]))
+                elif p.name == "mu":
+                    out[:, j] = j_mu * mu_f + j_beta * (np.sqrt(r) * beta_f * d_b1[0])
+                elif p.name == "gamma":
+                    out[:, j] = j_gamma + j_beta * (np.sqrt(r) * beta_f * d_b1[1])
+        return T, out
+
+    def _partials_needed(self, c) -> tuple[str, ...]:
+        """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
+        names = {p.name for p in self.parameters}
+        root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
+        need = {"beta": bool(names & {"Q", "Q_viscous"}) or root_moves, "k": "Q" in names,
+                "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
+                "mu": "mu" in names or ("Q_viscous" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
+        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
+
     @property
     def n_linear(self) -> int:
         """Number of complex linear coefficients."""
@@ -113,13 +171,26 @@ class Model:
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
-        t_d1, t_d2, t_f, t_q = (t[inverse] for t in self.slopes(freq_unique, internal))
+        return self._columns(self.slopes(freq_unique, internal), freq_unique, inverse, bias)
+
+    def design_and_jacobian(self, freq_unique, inverse, bias, internal):
+        """:meth:`design` and its derivatives (parameters, rows, columns), from generated partials."""
+        T, dT = self.slopes_and_jacobian(freq_unique, internal)
+        A = self._columns(T, freq_unique, inverse, bias)
+        dA = np.stack([self._columns(dT[:, j], freq_unique, inverse, bias, constant=False)
+                       for j in range(dT.shape[1])]) if dT.shape[1] else np.empty((0,) + A.shape, complex)
+        return A, dA
+
+    def _columns(self, slopes, freq_unique, inverse, bias, constant=True):
+        """Design columns from the slopes at the unique frequencies; ``constant=False`` for a
+        derivative (the background ramp does not depend on the nonlinear parameters)."""
+        t_d1, t_d2, t_f, t_q = (t[inverse] for t in slopes)
         cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
         if "damping_contact" in self.effects:
             cols.append(t_f)
         if "background" in self.effects:
             ramp = freq_unique[inverse] / freq_unique.max()
-            cols += [ramp, bias * ramp]
+            cols += [ramp, bias * ramp] if constant else [0 * ramp, 0 * ramp]
         return np.stack(cols, axis=1)
 
 
@@ -143,6 +214,40 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
     return m.f1 * (roots / b1) ** 2
+
+
+def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
+    """:func:`resonances` without refinement (roots linearly interpolated on the same grid)
+    for many parameter vectors at once: one vectorised evaluation of the characteristic
+    per distinct free root, for start grids.
+    """
+    m = model.meta
+    args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    b1s = np.array([free_root(m.k, m.H, m.L, a[6], a[7]) for a in args])
+    out: list[np.ndarray] = [np.empty(0)] * len(args)
+    for b1 in np.unique(b1s):
+        rows = np.flatnonzero(b1s == b1)
+        top = b1 * math.sqrt(f_max / m.f1)
+        grid = np.linspace(0.3, top, max(150, int(12 * top)))
+        with np.errstate(all="ignore"):
+            vals = tip_setback.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+        change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
+        for row, i in enumerate(rows):
+            idx = np.flatnonzero(change[row])
+            lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
+            out[i] = m.f1 * ((hi - fhi * (hi - lo) / (fhi - flo)) / b1) ** 2
+    return out
+
+
+@lru_cache(maxsize=4096)
+def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, float]]:
+    """:func:`free_root` and its derivatives w.r.t. ``(mu, gamma)`` (implicit differentiation)."""
+    b1 = free_root(k, H, L, mu, gamma)
+    if mu == 0.0:
+        return b1, (0.0, 0.0)
+    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma)
+    names = tip_setback.JACOBIAN_PARAMETERS
+    return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
 
 def characteristic_args(model: Model, internal, contact: bool) -> tuple:
@@ -300,10 +405,11 @@ def _solve(A, y):
     return ginv @ (As.conj().T @ y), ginv, As, norms
 
 
-JACOBIAN = "projection"
-"""How :func:`fit` differentiates: ``"projection"`` (variable-projection Jacobian from finite
-differences of the design matrix only, Kaufman's approximation) or ``"finite-difference"``
-(SciPy's two-point differences of the whole residual, the reference in benchmarks)."""
+JACOBIAN = "analytic"
+"""How :func:`fit` differentiates: ``"analytic"`` (variable-projection Jacobian, Kaufman's
+approximation, from the generated partials of the design matrix), ``"projection"`` (the
+same with finite differences of the design matrix) or ``"finite-difference"`` (SciPy's
+two-point differences of the whole residual, the reference in benchmarks)."""
 
 
 def bounds(model: Model):
@@ -338,18 +444,21 @@ class _Problem:
     def jacobian(self, x):
         A, c, ginv, As = self._at(x)
         x = np.asarray(x, float)
-        lower, upper = bounds(self.model)
-        out = np.empty((2 * len(self.y), len(x)))
-        for j in range(len(x)):
-            h = 1e-7 * max(1.0, abs(x[j]))
-            step = h if x[j] + h <= upper[j] else -h
-            xs = x.copy()
-            xs[j] += step
-            dA = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) / step
-            v = dA @ c
-            v = v - As @ (ginv @ (As.conj().T @ v))       # (I - P) dA c
-            col = -v / self.sigma
-            out[:, j] = np.concatenate([col.real, col.imag])
+        if JACOBIAN == "analytic":
+            _, dA = self.model.design_and_jacobian(self.freq_u, self.inverse, self.bias, x)
+        else:
+            lower, upper = bounds(self.model)
+            dA = np.empty((len(x),) + A.shape, complex)
+            for j in range(len(x)):
+                h = 1e-7 * max(1.0, abs(x[j]))
+                step = h if x[j] + h <= upper[j] else -h
+                xs = x.copy()
+                xs[j] += step
+                dA[j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) / step
+        v = (dA @ c).T                                      # (rows, parameters)
+        v = v - As @ (ginv @ (As.conj().T @ v))             # (I - P) dA c
+        col = -v / self.sigma
+        out = np.concatenate([col.real, col.imag])
         out[~np.isfinite(out)] = 0.0
         return out
 
@@ -381,7 +490,7 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     """
     problem = _Problem(model, data, sigma)
     lower, upper = bounds(model)
-    jac = problem.jacobian if JACOBIAN == "projection" else "2-point"
+    jac = "2-point" if JACOBIAN == "finite-difference" else problem.jacobian
     best = None
     for start in starts:
         x0 = np.clip(start, lower, upper)

@@ -26,7 +26,7 @@ from scipy.optimize import least_squares
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit, project, resonances
+from .model import FitResult, Model, bounds, fit, project, resonances, resonances_many
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
@@ -146,7 +146,11 @@ def peak_widths(data: SpectrumData) -> tuple[np.ndarray, np.ndarray]:
 def _peak_residual(model, internal, peaks, band, refine):
     """Log-frequency distance of each peak to the nearest resonance, then one entry for the
     resonances in the band that no peak explains (fixed length, for least squares)."""
-    roots = resonances(model, internal, True, band[1] * 1.3, refine_roots=refine)
+    return _peak_match(resonances(model, internal, True, band[1] * 1.3, refine_roots=refine), peaks, band)
+
+
+def _peak_match(roots, peaks, band):
+    """:func:`_peak_residual` from the resonances ``roots`` (Hz)."""
     if not len(roots):
         return np.full(len(peaks) + 1, 10.0)
     inside = roots[(roots > band[0]) & (roots < band[1])]
@@ -198,8 +202,8 @@ class SpectrumProblem:
         grid = [np.concatenate([sp_, e]) for sp_ in springs for e in extra]
         lower, upper = bounds(model)
         grid = [np.clip(g, lower, upper) for g in grid]
-        ranked = sorted((float(np.sum(_peak_residual(model, g, self.peaks, self.band, False) ** 2)), i)
-                        for i, g in enumerate(grid))
+        roots = resonances_many(model, grid, True, self.band[1] * 1.3)
+        ranked = sorted((float(np.sum(_peak_match(r, self.peaks, self.band) ** 2)), i) for i, r in enumerate(roots))
         starts = []
         for _, i in ranked[:refined]:
             res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
