@@ -105,3 +105,27 @@ def test_model_jacobian_matches_central_differences(effects):
         scale = np.abs(T).max(axis=1, keepdims=True)
         bad = np.abs(dT[:, j] - fd) > 1e-5 * np.abs(fd) + 1e-7 * scale
         assert not bad.any(), (model.parameters[j].name, dT[:, j][bad][:3], fd[bad][:3], freq[bad.any(axis=0)][:3])
+
+
+def test_design_derivative_times_coefficients():
+    """``(dA/dx_j) c`` of the design matrix (rows = frequency x bias, background, dashpot column)."""
+    from types import SimpleNamespace
+
+    from pfmdyn.discrepancy.model import Model
+    rng = np.random.default_rng(8)
+    model = Model(SimpleNamespace(k=0.3, H=4e-6, L=4.5e-4, f1=2.1e3),
+                  ("damping_contact", "tilt", "background"))
+    lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
+    x = lower + (upper - lower) * rng.uniform(0.3, 0.7, len(lower))
+    freq_u = np.linspace(5e3, 60e3, 200)
+    inverse = np.repeat(np.arange(200), 3)
+    bias = np.tile([-2.0, 0.5, 3.0], 200)
+    coef = rng.normal(size=model.n_linear) + 1j * rng.normal(size=model.n_linear)
+    v = model.design_derivative_times(freq_u, inverse, bias, x, coef)
+    for j in range(len(x)):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        fd = (model.design(freq_u, inverse, bias, up) - model.design(freq_u, inverse, bias, down)) @ coef / (2 * h)
+        np.testing.assert_allclose(v[:, j], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())

@@ -173,24 +173,29 @@ class Model:
         """Complex design matrix (rows, columns) of the linear coefficients."""
         return self._columns(self.slopes(freq_unique, internal), freq_unique, inverse, bias)
 
-    def design_and_jacobian(self, freq_unique, inverse, bias, internal):
-        """:meth:`design` and its derivatives (parameters, rows, columns), from generated partials."""
-        T, dT = self.slopes_and_jacobian(freq_unique, internal)
-        A = self._columns(T, freq_unique, inverse, bias)
-        dA = np.stack([self._columns(dT[:, j], freq_unique, inverse, bias, constant=False)
-                       for j in range(dT.shape[1])]) if dT.shape[1] else np.empty((0,) + A.shape, complex)
-        return A, dA
+    def design_derivative_times(self, freq_unique, inverse, bias, internal, coef) -> np.ndarray:
+        """``(d design / d internal_j) @ coef`` for every parameter ``j``: (rows, parameters).
 
-    def _columns(self, slopes, freq_unique, inverse, bias, constant=True):
-        """Design columns from the slopes at the unique frequencies; ``constant=False`` for a
-        derivative (the background ramp does not depend on the nonlinear parameters)."""
+        From the generated partials (:meth:`slopes_and_jacobian`), combined per unique
+        frequency before expanding to rows (the background ramp does not depend on them).
+        """
+        _, dT = self.slopes_and_jacobian(freq_unique, internal)
+        d_d1, d_d2, d_f, d_q = dT
+        fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
+        if "damping_contact" in self.effects:
+            fixed = fixed + d_f * coef[5]
+        per_volt = d_f * coef[3] + d_q * coef[4]
+        return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
+
+    def _columns(self, slopes, freq_unique, inverse, bias):
+        """Design columns from the slopes at the unique frequencies (order: see module)."""
         t_d1, t_d2, t_f, t_q = (t[inverse] for t in slopes)
         cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
         if "damping_contact" in self.effects:
             cols.append(t_f)
         if "background" in self.effects:
             ramp = freq_unique[inverse] / freq_unique.max()
-            cols += [ramp, bias * ramp] if constant else [0 * ramp, 0 * ramp]
+            cols += [ramp, bias * ramp]
         return np.stack(cols, axis=1)
 
 
@@ -445,17 +450,17 @@ class _Problem:
         A, c, ginv, As = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
-            _, dA = self.model.design_and_jacobian(self.freq_u, self.inverse, self.bias, x)
+            v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
         else:
             lower, upper = bounds(self.model)
-            dA = np.empty((len(x),) + A.shape, complex)
+            v = np.empty((len(self.y), len(x)), complex)
             for j in range(len(x)):
                 h = 1e-7 * max(1.0, abs(x[j]))
                 step = h if x[j] + h <= upper[j] else -h
                 xs = x.copy()
                 xs[j] += step
-                dA[j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) / step
-        v = (dA @ c).T                                      # (rows, parameters)
+                v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
+        # v = (d design / d x_j) c, shape (rows, parameters)
         v = v - As @ (ginv @ (As.conj().T @ v))             # (I - P) dA c
         col = -v / self.sigma
         out = np.concatenate([col.real, col.imag])

@@ -26,7 +26,7 @@ from scipy.optimize import least_squares
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit, project, resonances, resonances_many
+from .model import FitResult, Model, bounds, fit, project, resonance_sensitivity, resonances, resonances_many
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
@@ -143,21 +143,53 @@ def peak_widths(data: SpectrumData) -> tuple[np.ndarray, np.ndarray]:
     return np.array(peaks), np.array(widths)
 
 
-def _peak_residual(model, internal, peaks, band, refine):
-    """Log-frequency distance of each peak to the nearest resonance, then one entry for the
-    resonances in the band that no peak explains (fixed length, for least squares)."""
-    return _peak_match(resonances(model, internal, True, band[1] * 1.3, refine_roots=refine), peaks, band)
-
-
-def _peak_match(roots, peaks, band):
-    """:func:`_peak_residual` from the resonances ``roots`` (Hz)."""
+def _peak_match(roots, peaks, band, d_roots=None):
+    """Log-frequency distance of each peak to the nearest of the resonances ``roots`` (Hz),
+    then one entry for the resonances in the band that no peak explains (fixed length, for
+    least squares).  With ``d_roots`` (roots x parameters) also its Jacobian, where each
+    minimum is attained."""
+    p = 0 if d_roots is None else d_roots.shape[1]
     if not len(roots):
-        return np.full(len(peaks) + 1, 10.0)
-    inside = roots[(roots > band[0]) & (roots < band[1])]
+        out = np.full(len(peaks) + 1, 10.0)
+        return out if d_roots is None else (out, np.zeros((len(out), p)))
+    inside = (roots > band[0]) & (roots < band[1])
     lp, lr = np.log(peaks), np.log(roots)
-    there = [np.min(np.abs(lr - x)) for x in lp]
-    back = math.sqrt(sum(np.min(np.abs(lp - x)) ** 2 for x in np.log(inside)))
-    return np.array(there + [back])
+    near = np.argmin(np.abs(lr[None, :] - lp[:, None]), axis=1)          # nearest root of each peak
+    there = np.abs(lr[near] - lp)
+    li = lr[inside]
+    partner = np.argmin(np.abs(lp[None, :] - li[:, None]), axis=1)       # nearest peak of each root
+    gaps = li - lp[partner]
+    back = math.sqrt(float(np.sum(gaps**2)))
+    out = np.append(there, back)
+    if d_roots is None:
+        return out
+    d_log = d_roots / roots[:, None]
+    jac = np.zeros((len(out), p))
+    jac[:-1] = np.sign(lr[near] - lp)[:, None] * d_log[near]
+    if back > 0:
+        jac[-1] = gaps @ d_log[inside] / back
+    return out, jac
+
+
+def _peak_fit(model, start, peaks, band, lower, upper):
+    """Match the model's resonances to the peaks by least squares from ``start``, with the
+    Jacobian from the resonances' sensitivities (no root search per parameter)."""
+    last = {}
+
+    def roots_at(x):
+        key = tuple(x)
+        if key not in last:
+            last.clear()
+            last[key] = resonances(model, x, True, band[1] * 1.3, refine_roots=True)
+        return last[key]
+
+    def jac(x):
+        roots = roots_at(x)
+        d_roots = resonance_sensitivity(model, x, True, roots) if len(roots) else np.zeros((0, len(x)))
+        return _peak_match(roots, peaks, band, d_roots)[1]
+
+    return least_squares(lambda x: _peak_match(roots_at(x), peaks, band), start, jac=jac,
+                         bounds=(lower, upper), max_nfev=15).x
 
 
 TRIAL_NFEV = 30
@@ -206,10 +238,9 @@ class SpectrumProblem:
         ranked = sorted((float(np.sum(_peak_match(r, self.peaks, self.band) ** 2)), i) for i, r in enumerate(roots))
         starts = []
         for _, i in ranked[:refined]:
-            res = least_squares(lambda x: _peak_residual(model, x, self.peaks, self.band, True), grid[i],
-                                bounds=(lower, upper), diff_step=1e-6, max_nfev=15)
-            if not any(np.allclose(res.x, s_, atol=1e-3) for s_ in starts):
-                starts.append(res.x)
+            x = _peak_fit(model, grid[i], self.peaks, self.band, lower, upper)
+            if not any(np.allclose(x, s_, atol=1e-3) for s_ in starts):
+                starts.append(x)
         return sorted(starts, key=lambda x: self.cost(model, x))[:count]
 
     def damping_seeds(self) -> dict[str, float]:
