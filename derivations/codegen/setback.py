@@ -114,13 +114,13 @@ def _partials(exprs, params):
 
 
 def _grouped(expr, params):
-    """``expr`` collected by monomials of the parameters other than ``beta``, ``gamma``, each
-    coefficient (a polynomial in ``beta`` and the atoms) with its common factors pulled out.
+    """``expr`` collected by monomials of ``beta`` and the parameters other than ``gamma``,
+    each coefficient (a polynomial in the atoms) with its common factors pulled out.
 
     The same sum regrouped: a third of the operations of the expanded form, and most of
     them on scalars when the parameters are scalars.
     """
-    gens = [p for p in params if str(p) != "gamma"]
+    gens = [p for p in params if str(p) != "gamma"] + [beam.beta]
     poly = sp.Poly(expr, *gens)
     return sp.Add(*[sp.Mul(*[g**e for g, e in zip(gens, m)]) * sp.factor_terms(c) for m, c in poly.terms()])
 

@@ -49,7 +49,16 @@ def free_root(k, H, L, mu, gamma) -> float:
     if mu == 0.0:
         return BETA1_FREE
     char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
-    return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
+    # The only root in (0.3, BETA1_FREE]: bracketed on a grid first (one vectorised call), so
+    # regula falsi starts from a narrow bracket (a few steps instead of ~30).
+    grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
+    with np.errstate(all="ignore"):
+        vals = char(grid)
+    change = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) <= 0)
+    if len(change) != 1:
+        return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
+    i = change[0]
+    return float(refine(char, grid[i], grid[i + 1], vals[i], vals[i + 1], rtol=1e-14))
 
 
 @dataclass(frozen=True)
