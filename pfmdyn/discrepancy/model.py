@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -69,7 +69,7 @@ class Model:
     effects: tuple[str, ...] = ()
     vertical_only: bool = False
 
-    @property
+    @cached_property
     def parameters(self) -> tuple[Parameter, ...]:
         """Nonlinear parameters in order: k1, [k2], then each effect's (k2 for lateral_stiffness)."""
         springs = spring_parameters(self.meta, self.vertical_only)
