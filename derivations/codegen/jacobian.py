@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ..trig import ATOMS, Atoms
+from ..trig import ATOMS, Atoms  # noqa: F401  (ATOMS: the doctest)
 from .printing import cse_lines
 
 __all__ = ["JACOBIANS", "derivative", "partials", "render_and_jacobian"]

@@ -461,7 +461,7 @@ class _Problem:
         if JACOBIAN == "analytic":
             v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
         else:
-            lower, upper = bounds(self.model)
+            upper = bounds(self.model)[1]
             v = np.empty((len(self.y), len(x)), complex)
             for j in range(len(x)):
                 h = 1e-7 * max(1.0, abs(x[j]))
