@@ -17,6 +17,11 @@ compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``.
+
+The solver's Jacobian comes from the derivations too: the generated partials of the slopes
+(:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
+of the rotation, composed by the chain rule (:meth:`Model.slopes_and_jacobian`), enter the
+variable-projection Jacobian (:data:`JACOBIAN`).
 """
 from __future__ import annotations
 
