@@ -9,7 +9,10 @@ and ``sech`` built from ``exp(-a)``, ``exp(-b)``; nothing overflows.  There is n
 branch: the closed form cancels like the elastic family's below ``beta ~ 1`` (about
 ``beta**-6`` lost relative to the largest term, 1e-12 at ``beta = 0.3``), which is
 documented as the domain of validity.  The scaled denominator is exported as
-``characteristic`` for root finding.
+``characteristic`` for root finding.  Every printed polynomial is grouped by monomials of
+``beta`` and the parameters before CSE (:func:`_grouped`).  ``slope_and_jacobian`` and
+``characteristic_and_jacobian`` add the partials of :data:`.jacobian.JACOBIANS`, ``beta``
+and ``gamma`` through the atoms of both arguments.
 """
 from __future__ import annotations
 
