@@ -145,11 +145,12 @@ class Model:
             T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                                   c["mu"] * mu_f, c["gamma"], wrt=self._partials_needed(c))
             T = np.array(T)
-            # Partials not computed have a zero multiplier below.
-            J = np.array([np.broadcast_arrays(*[0.0 if d is None else d for d in row], r)[:-1] for row in J])
-            j_beta, j_k, j_mu, j_gamma = J[:, 0], J[:, 1], J[:, 5], J[:, 6]
+            # Partials not computed (None) have a zero multiplier below.
+            part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
+                    for j, p in enumerate(tip_setback.JACOBIAN_PARAMETERS)}
+            j_beta, j_k, j_mu, j_gamma = part["beta"], part["k"], part["mu"], part["gamma"]
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
-            j_rot = [sum(J[:, 2 + s] * rot[s][i] for s in range(3)) for i in range(3)]
+            j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
             loss_index = {"Q": 0, "Q_viscous": 1, "contact_loss": 2}
             for j, p in enumerate(self.parameters):
@@ -408,20 +409,22 @@ def project(A: np.ndarray, y: np.ndarray):
     >>> np.round(c.real, 6).tolist()
     [1.0, 2.0]
     """
-    c, _, As, norms = _solve(A, y)
+    c, _, As, norms, _ = _solve(A, y)
     return c / norms, As @ c
 
 
 def _solve(A, y):
-    """Scaled columns ``As = A / norms``, pseudo-inverse of their Gram matrix, coefficients."""
+    """Coefficients, pseudo-inverse of the Gram matrix of the scaled columns ``As = A / norms``,
+    ``As``, ``norms`` and ``As^H``."""
     norms = np.linalg.norm(A, axis=0)
     norms[~(np.isfinite(norms) & (norms > 0))] = np.inf
     As = A / norms
     As[~np.isfinite(As)] = 0.0
-    w, V = np.linalg.eigh(As.conj().T @ As)
+    AsH = As.conj().T
+    w, V = np.linalg.eigh(AsH @ As)
     keep = w > 1e-13 * max(w.max(), 1e-300)
     ginv = (V[:, keep] / w[keep]) @ V[:, keep].conj().T
-    return ginv @ (As.conj().T @ y), ginv, As, norms
+    return ginv @ (AsH @ y), ginv, As, norms, AsH
 
 
 JACOBIAN = "analytic"
@@ -450,18 +453,18 @@ class _Problem:
         key = tuple(np.asarray(x, float))
         if key != self._key:
             A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
-            c, ginv, As, norms = _solve(A, self.y)
-            self._key, self._state = key, (A, c / norms, ginv, As)
+            c, ginv, As, norms, AsH = _solve(A, self.y)
+            self._key, self._state = key, (A, c / norms, ginv, As, AsH)
         return self._state
 
     def residual(self, x):
-        A, c, _, _ = self._at(x)
+        A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, x):
-        A, c, ginv, As = self._at(x)
+        A, c, ginv, As, AsH = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
             v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
@@ -475,7 +478,7 @@ class _Problem:
                 xs[j] += step
                 v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
         # v = (d design / d x_j) c, shape (rows, parameters)
-        v = v - As @ (ginv @ (As.conj().T @ v))             # (I - P) dA c
+        v = v - As @ (ginv @ (AsH @ v))                     # (I - P) dA c
         col = -v / self.sigma
         out = np.concatenate([col.real, col.imag])
         out[~np.isfinite(out)] = 0.0
@@ -520,6 +523,6 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
     cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
-    A, c, _, _ = problem._at(best.x)
+    A, c = problem._at(best.x)[:2]
     pred = A @ c
     return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)
