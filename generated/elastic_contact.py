@@ -112,10 +112,11 @@ def slope(beta, k, k1, k2, H, L):
     return ((-_t7*k1) * _r, (_t1*_t8 - _t3*_t8) * _r, (-_t7) * _r, (_h3*_t4*_t6 - 9*_h8*_t5) * _r)
 
 
-def slope_and_jacobian(beta, k, k1, k2, H, L):
+def slope_and_jacobian(beta, k, k1, k2, H, L, wrt=JACOBIAN_PARAMETERS):
     """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, k1, k2).
 
-    Arguments as :func:`slope`.  Values and partials share their subexpressions.
+    Arguments as :func:`slope`; ``wrt``: the partials to compute (a subset of
+    ``JACOBIAN_PARAMETERS``), the others are returned as None.
 
     Returns
     -------
@@ -126,44 +127,52 @@ def slope_and_jacobian(beta, k, k1, k2, H, L):
     """
     _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9 = _basis(beta)
     beta = np.asarray(beta)
-    _t0 = H**2
-    _t1 = _t0*k2
-    _t2 = beta**2
-    _t3 = 9*_h4*_t2
-    _t4 = _t1*_t3
-    _t5 = beta**5
-    _t6 = 3*k
-    _t7 = _h7*_t5*_t6
-    _t8 = L**2
-    _t9 = beta**3
-    _t10 = _t8*_t9
-    _t11 = _t10*_t6
-    _t12 = _h6*_t11
-    _t13 = k**2
-    _t14 = _t13*_t8*beta**6
-    _t15 = L*_h1
-    _t16 = beta**4
-    _t17 = _t16*_t6
-    _t18 = _t15*_t17
-    _t19 = H*_t3
-    _t20 = _t19*k2
-    _t21 = H*_t7
-    _t22 = -_t18
-    _t23 = 9*_t8
-    _t24 = _h8*_t23
-    _t25 = _t1*k
-    _t26 = 6*_t5
-    _t27 = _h0*_t26
-    _t28 = 15*_h7*_t16
-    _t29 = 12*_t15*_t9*k
-    _t30 = L*_h7*_t17
-    _t31 = H*k*k2
-    _r = 1.0 / (-_h5*_t14 - _t1*_t7 + _t12*k1 + _t4*k1)
-    _v0 = (-_t18*k1) * _r
-    _v1 = (_t20*k1 - _t21*k2) * _r
-    _v2 = (_t22) * _r
-    _v3 = (_h3*_t11 - _t24*k1) * _r
-    _q0 = (-6*_h1*_t10*k*k1 + 18*_h4*_t0*beta*k1*k2 - _h5*_t13*_t26*_t8 + 9*_h6*_t0*_t2*k1*k2 - _h6*_t14 + 9*_h6*_t2*_t8*k*k1 - _t25*_t27 - _t25*_t28) * _r
-    _q1 = (_t12 + _t4) * _r
-    _q2 = (_t0*_t3*k1 - _t0*_t7) * _r
-    return ((_v0, _v1, _v2, _v3), (((-_t29*k1 - _t30*k1) * _r - _v0 * _q0, (_t22) * _r - _v0 * _q1, -_v0 * _q2), ((18*H*_h4*beta*k1*k2 + 9*H*_h6*_t2*k1*k2 - _t27*_t31 - _t28*_t31) * _r - _v1 * _q0, (_t20) * _r - _v1 * _q1, (_t19*k1 - _t21) * _r - _v1 * _q2), ((-_t29 - _t30) * _r - _v2 * _q0, -_v2 * _q1, -_v2 * _q2), ((_h2*_t11 + _h3*_t2*_t23*k - _h9*_t23*k1) * _r - _v3 * _q0, (-_t24) * _r - _v3 * _q1, -_v3 * _q2)))
+    _t0 = H**2*k2
+    _t1 = 9*_h4*beta**2*k1
+    _t2 = 3*k
+    _t3 = _h7*_t2*beta**5
+    _t4 = L**2
+    _t5 = _t4*k1
+    _t6 = _t2*beta**3
+    _t7 = L*_h1*_t2*beta**4
+    _t8 = H*k2
+    _r = 1.0 / (-_h5*_t4*beta**6*k**2 + _h6*_t5*_t6 + _t0*_t1 - _t0*_t3)
+    _v0 = (-_t7*k1) * _r
+    _v1 = (_t1*_t8 - _t3*_t8) * _r
+    _v2 = (-_t7) * _r
+    _v3 = (_h3*_t4*_t6 - 9*_h8*_t5) * _r
+    _jac = dict.fromkeys(JACOBIAN_PARAMETERS)
+    if 'beta' in wrt:
+        _d0_0 = H**2
+        _d0_1 = L**2
+        _d0_2 = _d0_1*k**2
+        _d0_3 = _d0_0*k*k2
+        _d0_4 = 6*beta**5
+        _d0_5 = _d0_4*_h0
+        _d0_6 = beta**2
+        _d0_7 = _h7*beta**4
+        _d0_8 = 15*_d0_7
+        _d0_9 = beta**3
+        _d0_10 = _d0_9*_h1
+        _d0_11 = _d0_1*k
+        _d0_12 = L*k
+        _d0_13 = 12*_d0_10*_d0_12
+        _d0_14 = 3*_d0_12*_d0_7
+        _d0_15 = H*k*k2
+        _d0_16 = 9*_d0_1
+        _q = (9*_d0_0*_d0_6*_h6*k1*k2 + 18*_d0_0*_h4*beta*k1*k2 + 9*_d0_1*_d0_6*_h6*k*k1 - 6*_d0_10*_d0_11*k1 - _d0_2*_d0_4*_h5 - _d0_2*_h6*beta**6 - _d0_3*_d0_5 - _d0_3*_d0_8) * _r
+        _jac['beta'] = ((-_d0_13*k1 - _d0_14*k1) * _r - _v0 * _q, (9*H*_d0_6*_h6*k1*k2 + 18*H*_h4*beta*k1*k2 - _d0_15*_d0_5 - _d0_15*_d0_8) * _r - _v1 * _q, (-_d0_13 - _d0_14) * _r - _v2 * _q, (3*_d0_11*_d0_9*_h2 + _d0_16*_d0_6*_h3*k - _d0_16*_h9*k1) * _r - _v3 * _q)
+    if 'k1' in wrt:
+        _d1_0 = 9*_h4*beta**2*k2
+        _d1_1 = L**2
+        _d1_2 = 3*k
+        _q = (H**2*_d1_0 + _d1_1*_d1_2*_h6*beta**3) * _r
+        _jac['k1'] = ((-L*_d1_2*_h1*beta**4) * _r - _v0 * _q, (H*_d1_0) * _r - _v1 * _q, -_v2 * _q, (-9*_d1_1*_h8) * _r - _v3 * _q)
+    if 'k2' in wrt:
+        _d2_0 = H**2
+        _d2_1 = 9*_h4*beta**2*k1
+        _d2_2 = 3*_h7*beta**5*k
+        _q = (_d2_0*_d2_1 - _d2_0*_d2_2) * _r
+        _jac['k2'] = (-_v0 * _q, (H*_d2_1 - H*_d2_2) * _r - _v1 * _q, -_v2 * _q, -_v3 * _q)
+    _cols = list(_jac.values())
+    return (_v0, _v1, _v2, _v3), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range(4))

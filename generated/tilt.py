@@ -118,10 +118,11 @@ def slope(beta, k, kvv, kll, kvl, H, L):
     return ((-_t0*_t6 - _t10*kvv) * _r, (9*H*_h4*_t4*kll*kvv - H*_t6*kll - H*_t9 - _t10*kvl) * _r, (-_t0*_t8 - _t10) * _r, (-9*L*_h10*_t0*beta + 3*_h3*_t2*_t7*k - 9*_h8*_t2*kvv) * _r)
 
 
-def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L):
+def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L, wrt=JACOBIAN_PARAMETERS):
     """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, kvv, kll, kvl).
 
-    Arguments as :func:`slope`.  Values and partials share their subexpressions.
+    Arguments as :func:`slope`; ``wrt``: the partials to compute (a subset of
+    ``JACOBIAN_PARAMETERS``), the others are returned as None.
 
     Returns
     -------
@@ -133,62 +134,71 @@ def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L):
     _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9, _h10 = _basis(beta)
     beta = np.asarray(beta)
     _t0 = H*kvl
-    _t1 = beta**4
-    _t2 = L*_h1
-    _t3 = _t2*k
-    _t4 = 6*_t1*_t3
-    _t5 = L**2
-    _t6 = k**2
-    _t7 = _t5*_t6*beta**6
-    _t8 = H**2
-    _t9 = beta**2
-    _t10 = _h7*_t8
-    _t11 = beta**5
-    _t12 = 3*k
-    _t13 = _t11*_t12
-    _t14 = _t10*_t13
-    _t15 = beta**3
-    _t16 = kvl**2
-    _t17 = 9*_t9
-    _t18 = _t16*_t17
-    _t19 = _h4*_t8
-    _t20 = _h7*_t13
-    _t21 = _t1*_t12
-    _t22 = _t2*_t21
-    _t23 = H*_t20
-    _t24 = H*_h4
-    _t25 = _t17*_t24
-    _t26 = 9*_t5
-    _t27 = _h8*_t26
-    _t28 = 9*L*_h10
-    _t29 = _t0*_t28
-    _t30 = 18*beta
-    _t31 = _t16*_t30
-    _t32 = _t15*_t3
-    _t33 = L*_h7
-    _t34 = 6*k
-    _t35 = k*kll
-    _t36 = 6*_t11
-    _t37 = _h0*_t36
-    _t38 = _t35*_t37
-    _t39 = 15*_t1
-    _t40 = _t35*_t39
-    _t41 = _t15*_t5
-    _t42 = _h6*_t18
-    _t43 = _t0*k
-    _t44 = 12*_t32
-    _t45 = _t21*_t33
-    _t46 = _t24*kvl
-    _t47 = _t17*_t19
-    _t48 = -_t23
-    _t49 = 18*_t9
-    _r = 1.0 / (9*_h4*_t8*_t9*kll*kvv - _h5*_t7 + 3*_h6*_t15*_t5*k*kvv - _t0*_t4 - _t14*kll - _t18*_t19)
-    _v0 = (-_t0*_t20 - _t22*kvv) * _r
-    _v1 = (9*H*_h4*_t9*kll*kvv - _t16*_t25 - _t22*kvl - _t23*kll) * _r
-    _v2 = (-_t22 - _t25*kvl) * _r
-    _v3 = (3*_h3*_t15*_t5*k - _t27*kvv - _t29*beta) * _r
-    _q0 = (-_h1*_t34*_t41*kvv + 18*_h4*_t8*beta*kll*kvv - _h5*_t36*_t5*_t6 + 9*_h6*_t5*_t9*k*kvv - _h6*_t7 + 9*_h6*_t8*_t9*kll*kvv - _t0*_t1*_t33*_t34 - 24*_t0*_t32 - _t10*_t40 - _t19*_t31 - _t38*_t8 - _t42*_t8) * _r
-    _q1 = (_h6*_t12*_t41 + _t47*kll) * _r
-    _q2 = (-_t14 + _t47*kvv) * _r
-    _q3 = (-H*_t4 - _t19*_t49*kvl) * _r
-    return ((_v0, _v1, _v2, _v3), (((-_h7*_t39*_t43 - _t37*_t43 - _t44*kvv - _t45*kvv) * _r - _v0 * _q0, (-_t22) * _r - _v0 * _q1, -_v0 * _q2, (_t48) * _r - _v0 * _q3), ((18*H*_h4*beta*kll*kvv + 9*H*_h6*_t9*kll*kvv - H*_h7*_t40 - H*_t38 - H*_t42 - _t24*_t31 - _t44*kvl - _t45*kvl) * _r - _v1 * _q0, (_t25*kll) * _r - _v1 * _q1, (_t25*kvv + _t48) * _r - _v1 * _q2, (-_t22 - _t46*_t49) * _r - _v1 * _q3), ((-_h6*_t0*_t17 - _t30*_t46 - _t44 - _t45) * _r - _v2 * _q0, -_v2 * _q1, -_v2 * _q2, (-_t25) * _r - _v2 * _q3), ((-9*L*_h9*_t0*beta - _h10*_t26*kvv + 3*_h2*_t15*_t5*k + 9*_h3*_t5*_t9*k - _t29) * _r - _v3 * _q0, (-_t27) * _r - _v3 * _q1, -_v3 * _q2, (-H*_t28*beta) * _r - _v3 * _q3)))
+    _t1 = L*_h1*beta**4
+    _t2 = L**2
+    _t3 = H**2
+    _t4 = beta**2
+    _t5 = 3*k
+    _t6 = _h7*_t5*beta**5
+    _t7 = beta**3
+    _t8 = 9*_h4*_t4
+    _t9 = _t8*kvl**2
+    _t10 = _t1*_t5
+    _r = 1.0 / (9*_h4*_t3*_t4*kll*kvv - _h5*_t2*beta**6*k**2 + 3*_h6*_t2*_t7*k*kvv - 6*_t0*_t1*k - _t3*_t6*kll - _t3*_t9)
+    _v0 = (-_t0*_t6 - _t10*kvv) * _r
+    _v1 = (9*H*_h4*_t4*kll*kvv - H*_t6*kll - H*_t9 - _t10*kvl) * _r
+    _v2 = (-_t0*_t8 - _t10) * _r
+    _v3 = (-9*L*_h10*_t0*beta + 3*_h3*_t2*_t7*k - 9*_h8*_t2*kvv) * _r
+    _jac = dict.fromkeys(JACOBIAN_PARAMETERS)
+    if 'beta' in wrt:
+        _d0_0 = H**2
+        _d0_1 = kvl**2
+        _d0_2 = _d0_0*_d0_1
+        _d0_3 = 18*_h4*beta
+        _d0_4 = H*kvl
+        _d0_5 = L*k
+        _d0_6 = beta**3
+        _d0_7 = _d0_6*_h1
+        _d0_8 = _d0_5*_d0_7
+        _d0_9 = _h7*beta**4
+        _d0_10 = _d0_5*_d0_9
+        _d0_11 = L**2
+        _d0_12 = _d0_11*k**2
+        _d0_13 = _d0_0*k*kll
+        _d0_14 = 6*beta**5
+        _d0_15 = _d0_14*_h0
+        _d0_16 = beta**2
+        _d0_17 = 15*_d0_9
+        _d0_18 = _d0_11*kvv
+        _d0_19 = 9*_d0_16*_h6
+        _d0_20 = _d0_4*k
+        _d0_21 = 12*_d0_8
+        _d0_22 = 3*_d0_10
+        _d0_23 = H*_d0_1
+        _d0_24 = H*k*kll
+        _d0_25 = 9*_h10
+        _d0_26 = L*_d0_4
+        _q = (9*_d0_0*_d0_16*_h6*kll*kvv + 18*_d0_0*_h4*beta*kll*kvv - 6*_d0_10*_d0_4 + 9*_d0_11*_d0_16*_h6*k*kvv - _d0_12*_d0_14*_h5 - _d0_12*_h6*beta**6 - _d0_13*_d0_15 - _d0_13*_d0_17 - 6*_d0_18*_d0_7*k - _d0_19*_d0_2 - _d0_2*_d0_3 - 24*_d0_4*_d0_8) * _r
+        _jac['beta'] = ((-_d0_15*_d0_20 - _d0_17*_d0_20 - _d0_21*kvv - _d0_22*kvv) * _r - _v0 * _q, (9*H*_d0_16*_h6*kll*kvv + 18*H*_h4*beta*kll*kvv - _d0_15*_d0_24 - _d0_17*_d0_24 - _d0_19*_d0_23 - _d0_21*kvl - _d0_22*kvl - _d0_23*_d0_3) * _r - _v1 * _q, (-_d0_19*_d0_4 - _d0_21 - _d0_22 - _d0_3*_d0_4) * _r - _v2 * _q, (9*_d0_11*_d0_16*_h3*k + 3*_d0_11*_d0_6*_h2*k - _d0_18*_d0_25 - _d0_25*_d0_26 - 9*_d0_26*_h9*beta) * _r - _v3 * _q)
+    if 'kvv' in wrt:
+        _d1_0 = 9*_h4*beta**2*kll
+        _d1_1 = L**2
+        _d1_2 = 3*k
+        _q = (H**2*_d1_0 + _d1_1*_d1_2*_h6*beta**3) * _r
+        _jac['kvv'] = ((-L*_d1_2*_h1*beta**4) * _r - _v0 * _q, (H*_d1_0) * _r - _v1 * _q, -_v2 * _q, (-9*_d1_1*_h8) * _r - _v3 * _q)
+    if 'kll' in wrt:
+        _d2_0 = H**2
+        _d2_1 = 9*_h4*beta**2*kvv
+        _d2_2 = 3*_h7*beta**5*k
+        _q = (_d2_0*_d2_1 - _d2_0*_d2_2) * _r
+        _jac['kll'] = (-_v0 * _q, (H*_d2_1 - H*_d2_2) * _r - _v1 * _q, -_v2 * _q, -_v3 * _q)
+    if 'kvl' in wrt:
+        _d3_0 = L*_h1*beta**4
+        _d3_1 = _h4*beta**2
+        _d3_2 = 18*_d3_1*kvl
+        _d3_3 = 3*k
+        _d3_4 = 9*H
+        _q = (-H**2*_d3_2 - 6*H*_d3_0*k) * _r
+        _jac['kvl'] = ((-H*_d3_3*_h7*beta**5) * _r - _v0 * _q, (-H*_d3_2 - _d3_0*_d3_3) * _r - _v1 * _q, (-_d3_1*_d3_4) * _r - _v2 * _q, (-L*_d3_4*_h10*beta) * _r - _v3 * _q)
+    _cols = list(_jac.values())
+    return (_v0, _v1, _v2, _v3), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range(4))

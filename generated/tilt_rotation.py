@@ -8,9 +8,14 @@ beam inclined by ``alpha``.  ``k1`` may be complex (a contact dashpot).
 """
 import numpy as np
 
-__all__ = ['rotated']
+__all__ = ['rotated', 'rotated_jacobian']
 
 
 def rotated(k1, k2, alpha):
     """``(kvv, kll, kvl)`` for springs ``k1``, ``k2`` and tilt ``alpha`` (rad)."""
     return (k1*np.cos(alpha)**2 + k2*np.sin(alpha)**2, k1*np.sin(alpha)**2 + k2*np.cos(alpha)**2, (k1 - k2)*np.sin(alpha)*np.cos(alpha))
+
+
+def rotated_jacobian(k1, k2, alpha):
+    """Partials of ``(kvv, kll, kvl)`` w.r.t. ``(k1, k2, alpha)``: a tuple of three 3-tuples."""
+    return ((np.cos(alpha)**2, np.sin(alpha)**2, (-k1 + k2)*np.sin(2*alpha)), (np.sin(alpha)**2, np.cos(alpha)**2, (k1 - k2)*np.sin(2*alpha)), ((1/2)*np.sin(2*alpha), -1/2*np.sin(2*alpha), (k1 - k2)*np.cos(2*alpha)))

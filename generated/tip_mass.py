@@ -117,10 +117,11 @@ def slope(beta, k, k1, k2, H, L, mu):
     return ((_t11*k1) * _r, (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r, (_t11) * _r, (-_h3*_t8 - _h8*_t1*_t10*mu + 9*_h8*_t1*k1) * _r)
 
 
-def slope_and_jacobian(beta, k, k1, k2, H, L, mu):
+def slope_and_jacobian(beta, k, k1, k2, H, L, mu, wrt=JACOBIAN_PARAMETERS):
     """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, k1, k2, mu).
 
-    Arguments as :func:`slope`.  Values and partials share their subexpressions.
+    Arguments as :func:`slope`; ``wrt``: the partials to compute (a subset of
+    ``JACOBIAN_PARAMETERS``), the others are returned as None.
 
     Returns
     -------
@@ -134,62 +135,79 @@ def slope_and_jacobian(beta, k, k1, k2, H, L, mu):
     _t0 = beta**6
     _t1 = L**2
     _t2 = _t1*k**2
-    _t3 = _t0*_t2
-    _t4 = H**2
-    _t5 = _t4*k2
-    _t6 = beta**2
-    _t7 = 9*_h4*_t6
-    _t8 = _t5*_t7
-    _t9 = 3*k
-    _t10 = beta**5
-    _t11 = _h7*_t10
-    _t12 = _t11*_t9
-    _t13 = beta**3
-    _t14 = _t1*_t13
-    _t15 = _t14*_t9
-    _t16 = _h6*_t15
-    _t17 = _t2*beta**7
-    _t18 = _h6*_t17
-    _t19 = _h4*_t0
-    _t20 = _t19*mu
-    _t21 = _t20*_t9
-    _t22 = L*_h1
-    _t23 = beta**4
-    _t24 = _t23*_t9
-    _t25 = _t22*_t24
-    _t26 = H*_t7
-    _t27 = _t26*k2
-    _t28 = H*_t12
-    _t29 = H*k2
-    _t30 = _t1*_t24
-    _t31 = _h8*_t30
-    _t32 = _t5*k1
-    _t33 = 18*_h4
-    _t34 = _t33*beta
-    _t35 = _h6*_t3
-    _t36 = _t5*k
-    _t37 = 6*_t10
-    _t38 = _h0*_t37
-    _t39 = 9*_h6*_t6
-    _t40 = 15*_h7*_t23
-    _t41 = 9*_t1
-    _t42 = _t6*k
-    _t43 = _t10*_t33*mu
-    _t44 = _h6*_t0*_t9*mu
-    _t45 = 12*k
-    _t46 = _t13*_t22*_t45
-    _t47 = L*_h7*_t24
-    _t48 = _t29*k1
-    _t49 = _t29*k
-    _t50 = _t4*_t9
-    _t51 = _t19*_t9
-    _r = 1.0 / (_h5*_t3 + _t12*_t5 - _t16*k1 + _t18*mu + _t21*_t5 - _t8*k1)
-    _v0 = (_t25*k1) * _r
-    _v1 = (_t21*_t29 - _t27*k1 + _t28*k2) * _r
-    _v2 = (_t25) * _r
-    _v3 = (-_h3*_t15 + 9*_h8*_t1*k1 - _t31*mu) * _r
-    _q0 = (6*_h1*_t14*k*k1 - 2*_h1*_t17*mu + _h5*_t2*_t37 - _h6*_t41*_t42*k1 - _t32*_t34 - _t32*_t39 + 7*_t35*mu + _t35 + _t36*_t38 + _t36*_t40 + _t36*_t43 + _t44*_t5) * _r
-    _q1 = (-_t16 - _t8) * _r
-    _q2 = (_t11*_t50 + _t20*_t50 - _t4*_t7*k1) * _r
-    _q3 = (_t18 + _t5*_t51) * _r
-    return ((_v0, _v1, _v2, _v3), (((_t46*k1 + _t47*k1) * _r - _v0 * _q0, (_t25) * _r - _v0 * _q1, -_v0 * _q2, -_v0 * _q3), ((_t29*_t44 - _t34*_t48 + _t38*_t49 - _t39*_t48 + _t40*_t49 + _t43*_t49) * _r - _v1 * _q0, (-_t27) * _r - _v1 * _q1, (H*_t21 - _t26*k1 + _t28) * _r - _v1 * _q2, (_t29*_t51) * _r - _v1 * _q3), ((_t46 + _t47) * _r - _v2 * _q0, -_v2 * _q1, -_v2 * _q2, -_v2 * _q3), ((-_h2*_t15 - _h3*_t41*_t42 - _h8*_t14*_t45*mu + 9*_h9*_t1*k1 - _h9*_t30*mu) * _r - _v3 * _q0, (_h8*_t41) * _r - _v3 * _q1, -_v3 * _q2, (-_t31) * _r - _v3 * _q3)))
+    _t3 = H**2*k2
+    _t4 = _h4*_t3
+    _t5 = 9*beta**2*k1
+    _t6 = 3*k
+    _t7 = _h7*_t6*beta**5
+    _t8 = _t1*_t6*beta**3
+    _t9 = _t0*_t6*mu
+    _t10 = _t6*beta**4
+    _t11 = L*_h1*_t10
+    _t12 = H*k2
+    _t13 = _h4*_t12
+    _r = 1.0 / (_h5*_t0*_t2 + _h6*_t2*beta**7*mu - _h6*_t8*k1 + _t3*_t7 - _t4*_t5 + _t4*_t9)
+    _v0 = (_t11*k1) * _r
+    _v1 = (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r
+    _v2 = (_t11) * _r
+    _v3 = (-_h3*_t8 - _h8*_t1*_t10*mu + 9*_h8*_t1*k1) * _r
+    _jac = dict.fromkeys(JACOBIAN_PARAMETERS)
+    if 'beta' in wrt:
+        _d0_0 = H**2*k2
+        _d0_1 = _d0_0*k1
+        _d0_2 = 18*_h4
+        _d0_3 = _d0_2*beta
+        _d0_4 = L**2
+        _d0_5 = _d0_4*k**2
+        _d0_6 = _h6*beta**6
+        _d0_7 = _d0_5*_d0_6
+        _d0_8 = _d0_0*k
+        _d0_9 = beta**5
+        _d0_10 = 6*_d0_9
+        _d0_11 = _d0_10*_h0
+        _d0_12 = beta**2
+        _d0_13 = 9*_d0_12*_h6
+        _d0_14 = beta**4
+        _d0_15 = _d0_14*_h7
+        _d0_16 = 15*_d0_15
+        _d0_17 = beta**3
+        _d0_18 = _d0_17*_h1
+        _d0_19 = _d0_4*k
+        _d0_20 = 9*_d0_4
+        _d0_21 = _d0_12*k
+        _d0_22 = _d0_2*_d0_9*mu
+        _d0_23 = 3*mu
+        _d0_24 = _d0_23*_d0_6
+        _d0_25 = L*k
+        _d0_26 = 12*_d0_18*_d0_25
+        _d0_27 = 3*_d0_15*_d0_25
+        _d0_28 = H*k2
+        _d0_29 = _d0_28*k1
+        _d0_30 = _d0_28*k
+        _d0_31 = _d0_17*_d0_19
+        _q = (-_d0_1*_d0_13 - _d0_1*_d0_3 + _d0_10*_d0_5*_h5 + _d0_11*_d0_8 + _d0_16*_d0_8 + 6*_d0_18*_d0_19*k1 - _d0_20*_d0_21*_h6*k1 + _d0_22*_d0_8 + _d0_24*_d0_8 - 2*_d0_5*_h1*beta**7*mu + 7*_d0_7*mu + _d0_7) * _r
+        _jac['beta'] = ((_d0_26*k1 + _d0_27*k1) * _r - _v0 * _q, (_d0_11*_d0_30 - _d0_13*_d0_29 + _d0_16*_d0_30 + _d0_22*_d0_30 + _d0_24*_d0_30 - _d0_29*_d0_3) * _r - _v1 * _q, (_d0_26 + _d0_27) * _r - _v2 * _q, (-_d0_14*_d0_19*_d0_23*_h9 - _d0_20*_d0_21*_h3 - 3*_d0_31*_h2 - 12*_d0_31*_h8*mu + 9*_d0_4*_h9*k1) * _r - _v3 * _q)
+    if 'k1' in wrt:
+        _d1_0 = 9*_h4*beta**2*k2
+        _d1_1 = L**2
+        _d1_2 = 3*k
+        _q = (-H**2*_d1_0 - _d1_1*_d1_2*_h6*beta**3) * _r
+        _jac['k1'] = ((L*_d1_2*_h1*beta**4) * _r - _v0 * _q, (-H*_d1_0) * _r - _v1 * _q, -_v2 * _q, (9*_d1_1*_h8) * _r - _v3 * _q)
+    if 'k2' in wrt:
+        _d2_0 = H**2
+        _d2_1 = _d2_0*_h4
+        _d2_2 = 9*beta**2*k1
+        _d2_3 = 3*k
+        _d2_4 = _d2_3*_h7*beta**5
+        _d2_5 = _d2_3*beta**6*mu
+        _d2_6 = H*_h4
+        _q = (_d2_0*_d2_4 - _d2_1*_d2_2 + _d2_1*_d2_5) * _r
+        _jac['k2'] = (-_v0 * _q, (H*_d2_4 - _d2_2*_d2_6 + _d2_5*_d2_6) * _r - _v1 * _q, -_v2 * _q, -_v3 * _q)
+    if 'mu' in wrt:
+        _d3_0 = L**2
+        _d3_1 = 3*k
+        _d3_2 = _d3_1*_h4*beta**6*k2
+        _q = (H**2*_d3_2 + _d3_0*_h6*beta**7*k**2) * _r
+        _jac['mu'] = (-_v0 * _q, (H*_d3_2) * _r - _v1 * _q, -_v2 * _q, (-_d3_0*_d3_1*_h8*beta**4) * _r - _v3 * _q)
+    _cols = list(_jac.values())
+    return (_v0, _v1, _v2, _v3), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range(4))

@@ -1,9 +1,10 @@
 """Generated Jacobians of the transfer functions against central finite differences.
 
 Random points over realistic ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
-k2/k1 0-1.5, tip mass 0-1, tip at 0.6-1 L; ``beta`` from the first mode's neighbourhood to
-the tenth mode, with the phase of a damped ``beta``), fixed seed.  Each partial is compared
-with ``(f(p + h) - f(p - h)) / 2h`` of the generated function itself.
+k2/k1 0-1.5, tip mass 0-1, tip at 0.6-1 L; ``beta`` from below the first mode to about the
+hundredth, with the phase of a damped ``beta``), fixed seed.  Each partial is compared with
+``(f(p + h) - f(p - h)) / 2h`` of the generated function itself; the discrepancy model's
+chain rule (damping, rotation, free root) likewise with differences of its slopes.
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ def _points(module, seed):
     alpha = rng.uniform(-0.5, 0.5, N)
     # Down to 0.05 where the series branch applies (tip_setback documents Re beta > 0.3).
     low = 0.3 if module is tip_setback else 0.05
-    beta = 10 ** rng.uniform(np.log10(low), np.log10(32), N) * np.exp(-1j * rng.uniform(0, 0.03, N))
+    beta = 10 ** rng.uniform(np.log10(low), np.log10(300), N) * np.exp(-1j * rng.uniform(0, 0.03, N))
     args = {"beta": beta, "k": k, "k1": k1, "k2": k2, "H": rng.uniform(3e-6, 20e-6, N),
             "L": rng.uniform(100e-6, 500e-6, N), "mu": rng.uniform(0, 1, N), "gamma": rng.uniform(0.6, 1, N),
             "kvv": k1 * np.cos(alpha) ** 2 + k2 * np.sin(alpha) ** 2,
@@ -62,7 +63,7 @@ def test_jacobian_matches_central_differences(module):
 def test_characteristic_jacobian_moves_resonances():
     """-D_p / D_beta at a root is the root's motion: compare with re-solved roots."""
     from pfmdyn.roots.bracket import refine
-    args = dict(k=2.0, kvv=150.0, kll=40.0, kvl=3.0, H=1e-5, L=2.2e-4, mu=0.2, gamma=0.9)
+    args = {"k": 2.0, "kvv": 150.0, "kll": 40.0, "kvl": 3.0, "H": 1e-5, "L": 2.2e-4, "mu": 0.2, "gamma": 0.9}
     F = lambda b, **kw: tip_setback.characteristic(b, **{**args, **kw})  # noqa: E731
     grid = np.linspace(0.5, 12, 2000)
     vals = F(grid)
@@ -72,6 +73,60 @@ def test_characteristic_jacobian_moves_resonances():
     names = tip_setback.JACOBIAN_PARAMETERS
     for j, name in enumerate(names[1:], 1):
         h = 1e-6 * max(abs(args[name]), 1.0)
-        moved = [float(refine(lambda b: F(b, **{name: args[name] + s}), grid[i] - 0.05, grid[i + 1] + 0.05,
+        moved = [float(refine(lambda b, kw={name: args[name] + s}: F(b, **kw), grid[i] - 0.05, grid[i + 1] + 0.05,
                               rtol=1e-14)) for s in (h, -h)]
         np.testing.assert_allclose(-d[j] / d[0], (moved[0] - moved[1]) / (2 * h), rtol=1e-5, atol=1e-9)
+
+
+@pytest.mark.parametrize("effects", [("damping_internal", "tip_mass"), ("damping_viscous", "tip_setback", "tilt"),
+                                     ("damping_contact", "tip_mass", "tip_setback", "background")])
+def test_model_jacobian_matches_central_differences(effects):
+    """The discrepancy model's chain rule (damping, rotation, free root) against differences."""
+    from types import SimpleNamespace
+
+    from pfmdyn.discrepancy.model import Model
+    rng = np.random.default_rng(5)
+    meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=63.2e3)
+    model = Model(meta, effects)
+    lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
+    x = lower + (upper - lower) * rng.uniform(0.2, 0.8, len(lower))
+    freq = np.linspace(150e3, 1300e3, 300)
+    T, dT = model.slopes_and_jacobian(freq, x)
+    np.testing.assert_allclose(T, np.array(model.slopes(freq, x)), rtol=1e-9)
+    def central(j, h):
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        return (np.array(model.slopes(freq, up)) - np.array(model.slopes(freq, down))) / (2 * h)
+
+    for j in range(len(x)):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        # Richardson extrapolation: the sharp resonances make plain central differences' h**2 term visible.
+        fd = (4 * central(j, h / 2) - central(j, h)) / 3
+        scale = np.abs(T).max(axis=1, keepdims=True)
+        bad = np.abs(dT[:, j] - fd) > 1e-5 * np.abs(fd) + 1e-7 * scale
+        assert not bad.any(), (model.parameters[j].name, dT[:, j][bad][:3], fd[bad][:3], freq[bad.any(axis=0)][:3])
+
+
+def test_design_derivative_times_coefficients():
+    """``(dA/dx_j) c`` of the design matrix (rows = frequency x bias, background, dashpot column)."""
+    from types import SimpleNamespace
+
+    from pfmdyn.discrepancy.model import Model
+    rng = np.random.default_rng(8)
+    model = Model(SimpleNamespace(k=0.3, H=4e-6, L=4.5e-4, f1=2.1e3),
+                  ("damping_contact", "tilt", "background"))
+    lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
+    x = lower + (upper - lower) * rng.uniform(0.3, 0.7, len(lower))
+    freq_u = np.linspace(5e3, 60e3, 200)
+    inverse = np.repeat(np.arange(200), 3)
+    bias = np.tile([-2.0, 0.5, 3.0], 200)
+    coef = rng.normal(size=model.n_linear) + 1j * rng.normal(size=model.n_linear)
+    v = model.design_derivative_times(freq_u, inverse, bias, x, coef)
+    for j in range(len(x)):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        fd = (model.design(freq_u, inverse, bias, up) - model.design(freq_u, inverse, bias, down)) @ coef / (2 * h)
+        np.testing.assert_allclose(v[:, j], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())

@@ -9,7 +9,10 @@ The family registry (:mod:`derivations.families`) says what is generated.  The p
   (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
   registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``), :mod:`.formulas` (``formulas.py``, closed-form
   relations), :mod:`.effects` (``damping.py``, ``tilt_rotation.py``: the discrepancy
-  model's damping substitution and tilt rotation).
+  model's damping substitution and tilt rotation);
+* :mod:`.jacobian`: the partial derivatives generated with the transfer functions
+  (``<function>_and_jacobian`` in the modules of :data:`.jacobian.JACOBIANS`, rendered by
+  :mod:`.transfer` and :mod:`.setback`).
 
 :func:`render_all` maps every output file name to its text; a renderer is added by adding
 its files there.  Run through ``pfmdyn codegen`` (see :mod:`pfmdyn.commands.codegen`).

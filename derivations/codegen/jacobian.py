@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ..trig import ATOMS, Atoms
+from ..trig import ATOMS, Atoms  # noqa: F401  (ATOMS: the doctest)
+from .printing import cse_lines
 
 __all__ = ["JACOBIANS", "derivative", "partials", "render_and_jacobian"]
 
@@ -51,32 +52,39 @@ def partials(exprs, wrt, rates) -> list[sp.Expr]:
     return [derivative(e, p, rates.get(p, {})) for p in wrt for e in exprs]
 
 
-def render_and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt, n_out: int,
-                        den: str, nums: list[str], d_exprs: list[str], lines: list[str]) -> str:
-    """Source of ``<name>_and_jacobian``: values and partials from shared CSE lines.
+def render_and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
+                        value_exprs, partial_exprs, indent: str = "    ") -> str:
+    """Source of ``<name>_and_jacobian``: the values, then one block per partial, each run
+    only when asked for (``wrt``), so a caller pays for the partials it uses.
 
-    ``den``, ``nums`` and ``d_exprs`` (``[D_p, N_1p, ..., N_np]`` for each ``p`` in ``wrt``)
-    are the printed reduced expressions; ``lines`` the CSE assignments they use.
+    ``value_exprs`` are ``[D, N_1, ..., N_n]`` and ``partial_exprs`` ``[D_p, N_1p, ...]`` for
+    each ``p`` in ``wrt`` (SymPy, in the names the preamble defines); each list is printed
+    with its own CSE.
     """
+    n_out = len(value_exprs) - 1
     names = ", ".join(map(str, wrt))
+    lines, reduced = cse_lines(value_exprs, indent)
+    body = ["\n".join(lines), f"{indent}_r = 1.0 / ({reduced[0]})"]
+    body += [f"{indent}_v{i} = ({n}) * _r" for i, n in enumerate(reduced[1:])]
+    body.append(f"{indent}_jac = dict.fromkeys(JACOBIAN_PARAMETERS)")
+    for j, p in enumerate(wrt):
+        exprs = partial_exprs[j * (n_out + 1):(j + 1) * (n_out + 1)]
+        lines, reduced = cse_lines(exprs, indent * 2, prefix=f"_d{j}_")
+        body.append(f"{indent}if {str(p)!r} in wrt:")
+        body += lines
+        # T_p = (N_p - T D_p) / D, with D_p / D computed once.
+        body.append(f"{indent * 2}_q = ({reduced[0]}) * _r")
+        cols = [f"-_v{i} * _q" if d == "0" else f"({d}) * _r - _v{i} * _q" for i, d in enumerate(reduced[1:])]
+        body.append(f"{indent * 2}_jac[{str(p)!r}] = ({', '.join(cols)}{',' if n_out == 1 else ''})")
     values = ", ".join(f"_v{i}" for i in range(n_out))
-    rows = []
-    for i in range(n_out):
-        cols = []
-        for j in range(len(wrt)):
-            d_num = d_exprs[j * (n_out + 1) + 1 + i]
-            # T_p = (N_p - T D_p) / D, with D_p / D computed once per parameter.
-            cols.append(f"-_v{i} * _q{j}" if d_num == "0" else f"({d_num}) * _r - _v{i} * _q{j}")
-        rows.append("(" + ", ".join(cols) + ("," if len(cols) == 1 else "") + ")")
-    body = "\n".join(lines)
-    assign = "\n".join([f"    _v{i} = ({n}) * _r" for i, n in enumerate(nums)]
-                       + [f"    _q{j} = ({d_exprs[j * (n_out + 1)]}) * _r" for j in range(len(wrt))])
+    text = "\n".join(b for b in body if b)
     return f'''
 
-def {name}_and_jacobian({signature}):
+def {name}_and_jacobian({signature}, wrt=JACOBIAN_PARAMETERS):
     """{summary[0].upper() + summary[1:]}, and its partial derivatives w.r.t. ({names}).
 
-    Arguments as :func:`{name}`.  Values and partials share their subexpressions.
+    Arguments as :func:`{name}`; ``wrt``: the partials to compute (a subset of
+    ``JACOBIAN_PARAMETERS``), the others are returned as None.
 
     Returns
     -------
@@ -85,8 +93,7 @@ def {name}_and_jacobian({signature}):
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
     """
-{preamble}{body}
-    _r = 1.0 / ({den})
-{assign}
-    return (({values}{"," if n_out == 1 else ""}), ({", ".join(rows)}{"," if n_out == 1 else ""}))
+{preamble}{text}
+    _cols = list(_jac.values())
+    return ({values}{"," if n_out == 1 else ""}), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range({n_out}))
 '''

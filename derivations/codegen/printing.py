@@ -37,9 +37,9 @@ def horner(coeffs, u: str) -> str:
     return text
 
 
-def cse_lines(exprs, indent="    ") -> tuple[list[str], list[str]]:
+def cse_lines(exprs, indent="    ", prefix="_t") -> tuple[list[str], list[str]]:
     """Common subexpressions as assignment lines (``_t0 = ...``) and the reduced expressions."""
-    reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_t"), order="canonical")
+    reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(prefix), order="canonical")
     lines = [f"{indent}{sym} = {code(val)}" for sym, val in reps]
     return lines, [code(e) for e in reduced]
 

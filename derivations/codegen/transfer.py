@@ -253,10 +253,9 @@ def {fn.name}({vname}, {names}):
         values = [f"({r}) * _r" for r in reduced[1:]]
         out.append(f"    return ({', '.join(values)}{',' if len(values) == 1 else ''})\n")
         if wrt:
-            lines, reduced = cse_lines([den, *nums, *d_combos])
             preamble = f"    {_unpack(vname, [den, *nums, *d_combos], hsyms)}\n    {vname} = np.asarray({vname})\n"
-            out.append(render_and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt, n,
-                                           reduced[0], reduced[1:n + 1], reduced[n + 1:], lines))
+            out.append(render_and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt,
+                                           [den, *nums], d_combos))
     return "".join(out)
 
 

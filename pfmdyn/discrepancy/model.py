@@ -17,23 +17,28 @@ compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``.
+
+The solver's Jacobian comes from the derivations too: the generated partials of the slopes
+(:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
+of the rotation, composed by the chain rule (:meth:`Model.slopes_and_jacobian`), enter the
+variable-projection Jacobian (:data:`JACOBIAN`).
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..generated import damping, tip_setback
-from ..generated.tilt_rotation import rotated
+from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..generated.characteristic import BETA1_FREE
 from ..roots.bracket import grid_roots, refine
 from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "project"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
 
 _DEFAULTS = {"k2": 0.0, "Q": 0.0, "Q_viscous": 0.0, "contact_loss": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
@@ -49,7 +54,16 @@ def free_root(k, H, L, mu, gamma) -> float:
     if mu == 0.0:
         return BETA1_FREE
     char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
-    return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
+    # The only root in (0.3, BETA1_FREE]: bracketed on a grid first (one vectorised call), so
+    # regula falsi starts from a narrow bracket (a few steps instead of ~30).
+    grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
+    with np.errstate(all="ignore"):
+        vals = char(grid)
+    change = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) <= 0)
+    if len(change) != 1:
+        return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
+    i = change[0]
+    return float(refine(char, grid[i], grid[i + 1], vals[i], vals[i + 1], rtol=1e-14))
 
 
 @dataclass(frozen=True)
@@ -60,7 +74,7 @@ class Model:
     effects: tuple[str, ...] = ()
     vertical_only: bool = False
 
-    @property
+    @cached_property
     def parameters(self) -> tuple[Parameter, ...]:
         """Nonlinear parameters in order: k1, [k2], then each effect's (k2 for lateral_stiffness)."""
         springs = spring_parameters(self.meta, self.vertical_only)
@@ -106,6 +120,65 @@ class Model:
             return tip_setback.slope(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                      c["mu"] * mu_f, c["gamma"])
 
+    def slopes_and_jacobian(self, frequency_hz, internal):
+        """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
+
+        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
+        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`) are composed by
+        the chain rule with the generated damping factors' derivatives
+        (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
+        (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
+        with ``mu`` and ``gamma`` (implicit differentiation of the generated characteristic).
+        """
+        c = self.coords(internal)
+        m = self.meta
+        r = np.asarray(frequency_hz, dtype=float) / m.f1
+        b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
+        with np.errstate(all="ignore"):
+            loss = (c["Q"], c["Q_viscous"], c["contact_loss"])
+            beta_f, k_f, k1_f, mu_f = damping.factors(r, *loss)
+            d_f = damping.d_factors(r, *loss)
+            spring = c["k1"] * k1_f
+            kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
+            rot = rotated_jacobian(spring, c["k2"], c["alpha"])
+            root_r = b1 * np.sqrt(r)
+            T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                                  c["mu"] * mu_f, c["gamma"], wrt=self._partials_needed(c))
+            T = np.array(T)
+            # Partials not computed (None) have a zero multiplier below.
+            part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
+                    for j, p in enumerate(tip_setback.JACOBIAN_PARAMETERS)}
+            j_beta, j_k, j_mu, j_gamma = part["beta"], part["k"], part["mu"], part["gamma"]
+            # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
+            j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
+            out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
+            loss_index = {"Q": 0, "Q_viscous": 1, "contact_loss": 2}
+            for j, p in enumerate(self.parameters):
+                if p.name == "k1":
+                    out[:, j] = j_rot[0] * (spring * math.log(10))
+                elif p.name == "k2":
+                    out[:, j] = j_rot[1] * (c["k2"] * math.log(10))
+                elif p.name == "alpha":
+                    out[:, j] = j_rot[2]
+                elif p.name in loss_index:
+                    q = loss_index[p.name]
+                    out[:, j] = (j_beta * (root_r * d_f[0][q]) + j_k * (m.k * d_f[1][q])
+                                 + j_rot[0] * (c["k1"] * d_f[2][q]) + j_mu * (c["mu"] * d_f[3][q]))
+                elif p.name == "mu":
+                    out[:, j] = j_mu * mu_f + j_beta * (np.sqrt(r) * beta_f * d_b1[0])
+                elif p.name == "gamma":
+                    out[:, j] = j_gamma + j_beta * (np.sqrt(r) * beta_f * d_b1[1])
+        return T, out
+
+    def _partials_needed(self, c) -> tuple[str, ...]:
+        """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
+        names = {p.name for p in self.parameters}
+        root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
+        need = {"beta": bool(names & {"Q", "Q_viscous"}) or root_moves, "k": "Q" in names,
+                "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
+                "mu": "mu" in names or ("Q_viscous" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
+        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
+
     @property
     def n_linear(self) -> int:
         """Number of complex linear coefficients."""
@@ -113,7 +186,25 @@ class Model:
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
-        t_d1, t_d2, t_f, t_q = (t[inverse] for t in self.slopes(freq_unique, internal))
+        return self._columns(self.slopes(freq_unique, internal), freq_unique, inverse, bias)
+
+    def design_derivative_times(self, freq_unique, inverse, bias, internal, coef) -> np.ndarray:
+        """``(d design / d internal_j) @ coef`` for every parameter ``j``: (rows, parameters).
+
+        From the generated partials (:meth:`slopes_and_jacobian`), combined per unique
+        frequency before expanding to rows (the background ramp does not depend on them).
+        """
+        _, dT = self.slopes_and_jacobian(freq_unique, internal)
+        d_d1, d_d2, d_f, d_q = dT
+        fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
+        if "damping_contact" in self.effects:
+            fixed = fixed + d_f * coef[5]
+        per_volt = d_f * coef[3] + d_q * coef[4]
+        return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
+
+    def _columns(self, slopes, freq_unique, inverse, bias):
+        """Design columns from the slopes at the unique frequencies (order: see module)."""
+        t_d1, t_d2, t_f, t_q = (t[inverse] for t in slopes)
         cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
         if "damping_contact" in self.effects:
             cols.append(t_f)
@@ -143,6 +234,40 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
     return m.f1 * (roots / b1) ** 2
+
+
+def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
+    """:func:`resonances` without refinement (roots linearly interpolated on the same grid)
+    for many parameter vectors at once: one vectorised evaluation of the characteristic
+    per distinct free root, for start grids.
+    """
+    m = model.meta
+    args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    b1s = np.array([free_root(m.k, m.H, m.L, a[6], a[7]) for a in args])
+    out: list[np.ndarray] = [np.empty(0)] * len(args)
+    for b1 in np.unique(b1s):
+        rows = np.flatnonzero(b1s == b1)
+        top = b1 * math.sqrt(f_max / m.f1)
+        grid = np.linspace(0.3, top, max(150, int(12 * top)))
+        with np.errstate(all="ignore"):
+            vals = tip_setback.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+        change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
+        for row, i in enumerate(rows):
+            idx = np.flatnonzero(change[row])
+            lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
+            out[i] = m.f1 * ((hi - fhi * (hi - lo) / (fhi - flo)) / b1) ** 2
+    return out
+
+
+@lru_cache(maxsize=4096)
+def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, float]]:
+    """:func:`free_root` and its derivatives w.r.t. ``(mu, gamma)`` (implicit differentiation)."""
+    b1 = free_root(k, H, L, mu, gamma)
+    if mu == 0.0:
+        return b1, (0.0, 0.0)
+    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma)
+    names = tip_setback.JACOBIAN_PARAMETERS
+    return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
 
 def characteristic_args(model: Model, internal, contact: bool) -> tuple:
@@ -284,26 +409,29 @@ def project(A: np.ndarray, y: np.ndarray):
     >>> np.round(c.real, 6).tolist()
     [1.0, 2.0]
     """
-    c, _, As, norms = _solve(A, y)
+    c, _, As, norms, _ = _solve(A, y)
     return c / norms, As @ c
 
 
 def _solve(A, y):
-    """Scaled columns ``As = A / norms``, pseudo-inverse of their Gram matrix, coefficients."""
+    """Coefficients, pseudo-inverse of the Gram matrix of the scaled columns ``As = A / norms``,
+    ``As``, ``norms`` and ``As^H``."""
     norms = np.linalg.norm(A, axis=0)
     norms[~(np.isfinite(norms) & (norms > 0))] = np.inf
     As = A / norms
     As[~np.isfinite(As)] = 0.0
-    w, V = np.linalg.eigh(As.conj().T @ As)
+    AsH = As.conj().T
+    w, V = np.linalg.eigh(AsH @ As)
     keep = w > 1e-13 * max(w.max(), 1e-300)
     ginv = (V[:, keep] / w[keep]) @ V[:, keep].conj().T
-    return ginv @ (As.conj().T @ y), ginv, As, norms
+    return ginv @ (AsH @ y), ginv, As, norms, AsH
 
 
-JACOBIAN = "projection"
-"""How :func:`fit` differentiates: ``"projection"`` (variable-projection Jacobian from finite
-differences of the design matrix only, Kaufman's approximation) or ``"finite-difference"``
-(SciPy's two-point differences of the whole residual, the reference in benchmarks)."""
+JACOBIAN = "analytic"
+"""How :func:`fit` differentiates: ``"analytic"`` (variable-projection Jacobian, Kaufman's
+approximation, from the generated partials of the design matrix), ``"projection"`` (the
+same with finite differences of the design matrix) or ``"finite-difference"`` (SciPy's
+two-point differences of the whole residual, the reference in benchmarks)."""
 
 
 def bounds(model: Model):
@@ -325,31 +453,34 @@ class _Problem:
         key = tuple(np.asarray(x, float))
         if key != self._key:
             A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
-            c, ginv, As, norms = _solve(A, self.y)
-            self._key, self._state = key, (A, c / norms, ginv, As)
+            c, ginv, As, norms, AsH = _solve(A, self.y)
+            self._key, self._state = key, (A, c / norms, ginv, As, AsH)
         return self._state
 
     def residual(self, x):
-        A, c, _, _ = self._at(x)
+        A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, x):
-        A, c, ginv, As = self._at(x)
+        A, c, ginv, As, AsH = self._at(x)
         x = np.asarray(x, float)
-        lower, upper = bounds(self.model)
-        out = np.empty((2 * len(self.y), len(x)))
-        for j in range(len(x)):
-            h = 1e-7 * max(1.0, abs(x[j]))
-            step = h if x[j] + h <= upper[j] else -h
-            xs = x.copy()
-            xs[j] += step
-            dA = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) / step
-            v = dA @ c
-            v = v - As @ (ginv @ (As.conj().T @ v))       # (I - P) dA c
-            col = -v / self.sigma
-            out[:, j] = np.concatenate([col.real, col.imag])
+        if JACOBIAN == "analytic":
+            v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
+        else:
+            upper = bounds(self.model)[1]
+            v = np.empty((len(self.y), len(x)), complex)
+            for j in range(len(x)):
+                h = 1e-7 * max(1.0, abs(x[j]))
+                step = h if x[j] + h <= upper[j] else -h
+                xs = x.copy()
+                xs[j] += step
+                v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
+        # v = (d design / d x_j) c, shape (rows, parameters)
+        v = v - As @ (ginv @ (AsH @ v))                     # (I - P) dA c
+        col = -v / self.sigma
+        out = np.concatenate([col.real, col.imag])
         out[~np.isfinite(out)] = 0.0
         return out
 
@@ -381,7 +512,7 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     """
     problem = _Problem(model, data, sigma)
     lower, upper = bounds(model)
-    jac = problem.jacobian if JACOBIAN == "projection" else "2-point"
+    jac = "2-point" if JACOBIAN == "finite-difference" else problem.jacobian
     best = None
     for start in starts:
         x0 = np.clip(start, lower, upper)
@@ -392,6 +523,6 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
     cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
-    A, c, _, _ = problem._at(best.x)
+    A, c = problem._at(best.x)[:2]
     pred = A @ c
     return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)

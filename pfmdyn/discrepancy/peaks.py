@@ -22,9 +22,9 @@ import math
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 
-from .model import bounds, resonances
+from .model import bounds, resonance_sensitivity, resonances, resonances_many
 
-__all__ = ["data_peaks", "poles", "peak_widths", "peak_residual", "match_starts"]
+__all__ = ["data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
 
 
 def _summed(data):
@@ -135,17 +135,65 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     return np.where(np.isfinite(p.real), p.real, found), 2 * np.abs(p.imag)
 
 
-def peak_residual(model, internal, peaks, band, refine: bool) -> np.ndarray:
-    """Log-frequency distance of each peak to the nearest resonance, then one entry for the
-    resonances in the band that no peak explains (fixed length, for least squares)."""
-    roots = resonances(model, internal, True, band[1] * 1.3, refine_roots=refine)
+def peak_match(roots, peaks, band, d_roots=None):
+    """Log-frequency distance of each peak to the nearest of the resonances ``roots`` (Hz),
+    then one entry for the resonances in the band that no peak explains (fixed length, for
+    least squares).  With ``d_roots`` (roots x parameters) also its Jacobian, where each
+    minimum is attained.
+
+    >>> peak_match(np.array([100.0, 300.0]), np.array([100.0]), (50.0, 400.0)).round(3).tolist()
+    [0.0, 1.099]
+    """
+    p = 0 if d_roots is None else d_roots.shape[1]
     if not len(roots):
-        return np.full(len(peaks) + 1, 10.0)
-    inside = roots[(roots > band[0]) & (roots < band[1])]
+        out = np.full(len(peaks) + 1, 10.0)
+        return out if d_roots is None else (out, np.zeros((len(out), p)))
+    inside = (roots > band[0]) & (roots < band[1])
     lp, lr = np.log(peaks), np.log(roots)
-    there = [np.min(np.abs(lr - x)) for x in lp]
-    back = math.sqrt(sum(np.min(np.abs(lp - x)) ** 2 for x in np.log(inside)))
-    return np.array(there + [back])
+    near = np.argmin(np.abs(lr[None, :] - lp[:, None]), axis=1)          # nearest root of each peak
+    there = np.abs(lr[near] - lp)
+    li = lr[inside]
+    partner = np.argmin(np.abs(lp[None, :] - li[:, None]), axis=1)       # nearest peak of each root
+    gaps = li - lp[partner]
+    back = math.sqrt(float(np.sum(gaps**2)))
+    out = np.append(there, back)
+    if d_roots is None:
+        return out
+    d_log = d_roots / roots[:, None]
+    jac = np.zeros((len(out), p))
+    jac[:-1] = np.sign(lr[near] - lp)[:, None] * d_log[near]
+    if back > 0:
+        jac[-1] = gaps @ d_log[inside] / back
+    return out, jac
+
+
+def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
+    """Least-squares match of the model's resonances to the peaks from ``start``, moving the
+    parameters where ``moving`` is True; the Jacobian comes from the resonances'
+    sensitivities (no root search per parameter).  Returns (parameters, sum of squares)."""
+    last = {}
+
+    def full(v):
+        x = start.copy()
+        x[moving] = v
+        return x
+
+    def roots_at(v):
+        key = tuple(v)
+        if key not in last:
+            last.clear()
+            last[key] = resonances(model, full(v), True, band[1] * 1.3, refine_roots=True)
+        return last[key]
+
+    def jac(v):
+        roots = roots_at(v)
+        d_roots = (resonance_sensitivity(model, full(v), True, roots) if len(roots)
+                   else np.zeros((0, len(start))))
+        return peak_match(roots, peaks, band, d_roots[:, moving])[1]
+
+    res = least_squares(lambda v: peak_match(roots_at(v), peaks, band), start[moving], jac=jac,
+                        bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
+    return full(res.x), 2 * res.cost
 
 
 def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
@@ -153,7 +201,7 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
 
     ``extra``: values of the parameters after the springs (one vector per profile point).
-    At each, the spring grid is ranked by :func:`peak_residual` and its best ``per_value``
+    At each, the spring grid is ranked by :func:`peak_match` and its best ``per_value``
     distinct ``k1`` rows are matched by least squares over the springs alone; the best
     ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
     are returned.
@@ -166,37 +214,36 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     springs = ([np.array([a]) for a in k1_grid] if n_springs == 1 else
                [np.array([a, b]) for a in k1_grid for b in k2_grid])
 
-    def on_peaks(x, refine=True):
-        return peak_residual(model, x, peaks, band, refine)
-
+    springs_only = np.arange(len(lower)) < n_springs
     matched = []
     for e in extra:
         grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
-        score = [float(np.sum(on_peaks(g, False) ** 2)) for g in grid]
+        roots = resonances_many(model, grid, True, band[1] * 1.3)
+        score = [float(np.sum(peak_match(r, peaks, band) ** 2)) for r in roots]
         best_k1 = {}
         for i in np.argsort(score):
             best_k1.setdefault(round(float(grid[i][0]), 6), i)
         for i in list(best_k1.values())[:per_value]:
-            g = grid[i]
-            res = least_squares(lambda s: on_peaks(np.concatenate([s, g[n_springs:]])), g[:n_springs],
-                                bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=15)
-            matched.append((2 * res.cost, np.concatenate([res.x, g[n_springs:]])))
+            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15)
+            matched.append((ss, x))
     # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
     exact = sorted((x for r, x in matched if r < 1e-6), key=cost)
     rest = [x for _, x in sorted((t for t in matched if t[0] >= 1e-6), key=lambda t: t[0])]
     starts = []
+    every = np.ones(len(lower), bool)
     for x in (exact + rest)[:joint]:
         if len(x) > n_springs:
-            x = least_squares(on_peaks, x, bounds=(lower, upper), diff_step=1e-6, max_nfev=20).x
+            x = _peak_fit(model, x, every, peaks, band, lower, upper, 20)[0]
         if not any(np.allclose(x, s, atol=1e-3) for s in starts):
             starts.append(x)
     best = sorted(starts, key=cost)[:count]
     if len(lower) > n_springs:
-        best = sorted((_along_matches(x, on_peaks, cost, n_springs, lower, upper) for x in best), key=cost)
+        best = sorted((_along_matches(model, x, peaks, band, cost, n_springs, lower, upper) for x in best),
+                      key=cost)
     return best
 
 
-def _along_matches(x, on_peaks, cost, n_springs, lower, upper) -> np.ndarray:
+def _along_matches(model, x, peaks, band, cost, n_springs, lower, upper) -> np.ndarray:
     """Minimise ``cost`` over the last parameter with the springs re-matched to the peaks at
     every value: along the curve of matches the misfit is smooth, while across it (a peak
     moved by a fraction of its width) an undamped spectrum's misfit is a needle.
@@ -207,10 +254,9 @@ def _along_matches(x, on_peaks, cost, n_springs, lower, upper) -> np.ndarray:
     def matched(v):
         y = x.copy()
         y[j] = v
-        near = seen[min(seen, key=lambda u: abs(u - v))]
-        res = least_squares(lambda s: on_peaks(np.concatenate([s, y[n_springs:]])), near,
-                            bounds=(lower[:n_springs], upper[:n_springs]), diff_step=1e-6, max_nfev=20)
-        y[:n_springs] = seen[float(v)] = res.x
+        y[:n_springs] = seen[min(seen, key=lambda u: abs(u - v))]
+        y = _peak_fit(model, y, np.arange(len(y)) < n_springs, peaks, band, lower, upper, 20)[0]
+        seen[float(v)] = y[:n_springs]
         return y
 
     def along(v):

@@ -26,7 +26,7 @@ from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
 from .model import FitResult, Model, fit, project
-from .peaks import data_peaks, match_starts, peak_residual, peak_widths
+from .peaks import data_peaks, match_starts, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
