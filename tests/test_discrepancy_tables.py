@@ -110,4 +110,11 @@ def test_asylum_image_through_read_and_cli(tmp_path, capsys):
     assert cli.main(["discrepancy", str(path), "--json", str(out), "--tip-height", "1e-5"]) == 0
     report = json.loads(out.read_text())
     assert report["parameters"]["k1"]["determined"] and report["parameters"]["k2"]["value"] is None
-    assert "k2 not determined by these data: tied to k1" in capsys.readouterr().out
+    summary = capsys.readouterr().out
+    assert "k2 not determined by these data: tied to k1" in summary
+    # Without --json the summary alone; with '--json -' the report follows it on stdout.
+    assert cli.main(["discrepancy", str(path), "--tip-height", "1e-5"]) == 0
+    assert capsys.readouterr().out == summary
+    assert cli.main(["discrepancy", str(path), "--json", "-", "--tip-height", "1e-5"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith(summary) and json.loads(printed[len(summary):]) == report

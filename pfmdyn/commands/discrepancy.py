@@ -25,7 +25,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """
     parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
                         "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat)")
-    parser.add_argument("--json", required=True, help="write the report here")
+    parser.add_argument("--json", metavar="PATH",
+                        help="write the full report as JSON here ('-': standard output, after the summary)")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     for option, key, what in OVERRIDES:
         parser.add_argument(option, type=float, dest=key, metavar="VALUE",
@@ -78,10 +79,13 @@ def run(args: argparse.Namespace) -> int:
         else:
             plot_resonance_report(data, report, args.plot)
     report.pop("_fits", None)
-    try:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(_finite(report), fh, indent=2)
-    except OSError as exc:
-        raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
     print(summary(report))
+    if args.json == "-":
+        print(json.dumps(_finite(report), indent=2))
+    elif args.json:
+        try:
+            with open(args.json, "w", encoding="utf-8") as fh:
+                json.dump(_finite(report), fh, indent=2)
+        except OSError as exc:
+            raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
     return 0
