@@ -21,6 +21,7 @@ from pathlib import Path
 
 import yaml
 
+from .derivations.checks.core import Outcome
 from .derivations.paper.convention import SIGN_CONVENTION
 from .errors import UserError
 
@@ -127,7 +128,7 @@ def summary(verdicts) -> str:
 
 
 def _short(counter: dict) -> str:
-    abbrev = {"holds": "hold", "holds_up_to_sign_convention": "sign", "erratum": "errata", "undecidable": "undecidable"}
+    abbrev = {Outcome.HOLDS: "hold", Outcome.SIGN: "sign", Outcome.ERRATUM: "errata", Outcome.UNDECIDABLE: "undecidable"}
     return ", ".join(f"{n} {abbrev[k]}" for k, n in counter.items() if n) or "none"
 
 
@@ -152,8 +153,8 @@ def render_errata(verdicts) -> str:
     lines = ["<!-- generated — do not edit: written by `pfmdyn verify --errata` from derivations/checks -->",
              "# Errata of Jesse, Baddorf & Kalinin (2006), as computed by pfmdyn", "",
              f"Sign convention: {SIGN_CONVENTION}.", ""]
-    registry = [v for v in verdicts if v.kind == "claim" and v.verdict in ("erratum", "holds_up_to_sign_convention")]
-    audit = [v for v in verdicts if v.kind != "claim" and v.verdict == "erratum"]
+    registry = [v for v in verdicts if v.kind == "claim" and v.verdict in (Outcome.ERRATUM, Outcome.SIGN)]
+    audit = [v for v in verdicts if v.kind != "claim" and v.verdict == Outcome.ERRATUM]
     for v in registry:
         lines += entry(v)
     if audit:
@@ -359,7 +360,7 @@ def prose(text: str) -> str:
 def entry(v) -> list[str]:
     """Markdown lines of one erratum: printed, correct, proof (sentence and decisive expression)."""
     f = forms(v)
-    kind = "Erratum" if v.verdict == "erratum" else "Sign convention"
+    kind = "Erratum" if v.verdict == Outcome.ERRATUM else "Sign convention"
     lines = [f"## `{v.id}` ({v.where}) — {kind}", ""]
     if "printed" in f:
         lines += ["**Printed:**", ""] + [f"$$\n{t}\n$$" for t in f["printed"]] + [""]
@@ -372,6 +373,6 @@ def entry(v) -> list[str]:
     lines += [f"**Proof:** {f['proof']}." + (" Decisive:" if "decisive" in f else ""), ""]
     if "decisive" in f:
         lines += [f"$$\n{f['decisive']}\n$$", ""]
-    if v.verdict == "holds_up_to_sign_convention" or "sign" in v.evidence:
+    if v.verdict == Outcome.SIGN or "sign" in v.evidence:
         lines += [f"*Sign convention:* {SIGN_CONVENTION}.", ""]
     return lines
