@@ -197,14 +197,15 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
 
 
 def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
-                 per_value: int = 3, joint: int = 6) -> list[np.ndarray]:
+                 per_value: int = 3, joint: int = 6, sharp: bool = False) -> list[np.ndarray]:
     """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
 
     ``extra``: values of the parameters after the springs (one vector per profile point).
     At each, the spring grid is ranked by :func:`peak_match` and its best ``per_value``
     distinct ``k1`` rows are matched by least squares over the springs alone; the best
     ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
-    are returned.
+    are returned; with ``sharp`` (peaks narrower than half a frequency step: an undamped
+    spectrum) each is first moved along its curve of matches to the least misfit.
     """
     if not len(peaks):
         return []
@@ -237,7 +238,7 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
         if not any(np.allclose(x, s, atol=1e-3) for s in starts):
             starts.append(x)
     best = sorted(starts, key=cost)[:count]
-    if len(lower) > n_springs:
+    if sharp and len(lower) > n_springs:
         best = sorted((_along_matches(model, x, peaks, band, cost, n_springs, lower, upper) for x in best),
                       key=cost)
     return best
@@ -265,7 +266,7 @@ def _along_matches(model, x, peaks, band, cost, n_springs, lower, upper) -> np.n
     # A scan outward from the start (each match continues from its neighbour), then Brent
     # between the best point's neighbours.
     reach = 0.3 * (upper[j] - lower[j])
-    grid = np.linspace(max(lower[j], x[j] - reach), min(upper[j], x[j] + reach), 25)
+    grid = np.linspace(max(lower[j], x[j] - reach), min(upper[j], x[j] + reach), 17)
     order = sorted(range(len(grid)), key=lambda i: abs(grid[i] - x[j]))
     values = {i: along(grid[i]) for i in order}
     i = min(values, key=values.get)

@@ -98,6 +98,9 @@ class SpectrumProblem:
             self.sigma = 1e-12 * float(np.max(np.abs(data.response))) or 1e-300
         self.peaks = data_peaks(data)
         self.widths = peak_widths(data)
+        # Peaks narrower than half a frequency step: a misfit landscape of needles (undamped).
+        step = float(np.median(np.diff(np.unique(data.frequency_hz))))
+        self.sharp = bool(np.any(self.widths[1] < 0.5 * step))
         # Library order breaks ties between candidates the data do not tell apart.
         self.library = (["lateral_stiffness"] if vertical_only else []) + [
             "damping", "tip_mass", "tilt", "tip_setback", "background"]
@@ -108,8 +111,10 @@ class SpectrumProblem:
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
         """Starts whose resonances match the data's peaks (:func:`peaks.match_starts`)."""
+        # Damped peaks leave a smooth misfit: one match per profile value is enough there.
         return match_starts(model, extra, self.peaks, self.band, (self.k1_grid, self.k2_grid),
-                            lambda x: self.cost(model, x), count)
+                            lambda x: self.cost(model, x), count, per_value=3 if self.sharp else 1,
+                            joint=6 if self.sharp else 4, sharp=self.sharp)
 
     def damping_seeds(self) -> dict[str, float]:
         """Start values of each damping mechanism's parameter from the measured peak widths."""
