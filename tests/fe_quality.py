@@ -10,12 +10,16 @@ undamped ones, as in :func:`fe_beam.random_table`.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
-from fe_beam import _metadata, random_beam
+# Test support next to fe_beam.py: importable however pytest collects this file.
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fe_beam import _metadata, random_beam  # noqa: E402
 
 
 def quality_factors(beam, count: int, contact: bool) -> np.ndarray:
