@@ -191,8 +191,15 @@ class SpectrumProblem:
         starts = [np.append(current.internal, effect.null)] if effect.parameters else [current.internal]
         if effect.moves_resonances:
             springs = 1 if model.vertical_only else 2
-            others = current.internal[springs:]
-            extra = [np.concatenate([others, [v]]) for v in effect.seeds]
+            others = [current.internal[springs:]]
+            # Damping fitted while this effect was missing may sit anywhere (even on a
+            # bound): also start from the peak widths' values.
+            seed = {EFFECTS[DAMPING[m]].parameters[0].name: v for m, v in self.damping_seeds().items()}
+            reseeded = np.array([seed.get(p.name, v)
+                                 for p, v in zip(current.model.parameters[springs:], others[0])])
+            if not np.allclose(reseeded, others[0]):
+                others.append(reseeded)
+            extra = [np.concatenate([o, [v]]) for o in others for v in effect.seeds]
             starts += self.resonance_starts(model, extra, count=2)
         elif seeds and rematch:
             springs = 1 if model.vertical_only else 2
