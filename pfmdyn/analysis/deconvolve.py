@@ -104,11 +104,14 @@ def nulling_bias(intercept, slope):
         return formulas.nulling_bias(intercept.real, intercept.imag, slope.real, slope.imag)
 
 
-def _nulling_bias_gradient(intercept, slope):
+def nulling_bias_gradient(intercept, slope):
     """Derivatives of the generated nulling bias with respect to (Re b, Im b, Re c, Im c).
 
     By complex steps (exact to rounding, no cancellation): the formula is a rational
     function of the four parts, so it accepts a complex increment in any one of them.
+
+    >>> [round(float(d[0]), 12) for d in nulling_bias_gradient(np.array([2 - 4j]), np.array([-1 + 2j]))]
+    [0.2, -0.4, 0.4, -0.8]
     """
     parts = [intercept.real, intercept.imag, slope.real, slope.imag]
     scales = [np.abs(intercept)] * 2 + [np.abs(slope)] * 2
@@ -216,7 +219,7 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     v_null = nulling_bias(intercept, slope)
     # Delta method: the real parts of (b, c) and their imaginary parts are independent pairs.
     with np.errstate(divide="ignore", invalid="ignore"):
-        d_b_re, d_b_im, d_c_re, d_c_im = _nulling_bias_gradient(intercept, slope)
+        d_b_re, d_b_im, d_c_re, d_c_im = nulling_bias_gradient(intercept, slope)
     v_null_var = variance(d_b_re, d_c_re) + variance(d_b_im, d_c_im)
     return Deconvolution(
         frequency_hz=frequency_hz[starts],

@@ -43,6 +43,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
     parser.add_argument("--gap-threshold", type=float, default=0.2,
                         help="relative residual above which a pixel is marked unexplained (default 0.2)")
+    parser.add_argument("--surface-potential", type=float, default=0.0,
+                        help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
+                             "this bias (default 0: the intercept); the electrostatic term and the nulling bias "
+                             "do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
     for flag, key in _OVERRIDES.items():
@@ -85,12 +89,18 @@ def run(args) -> int:
               f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
         return 0
     source = open_map(args.data, overrides)
-    fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold}
+    if not math.isfinite(args.surface_potential):
+        raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
+    fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
+                   "surface_potential_v": args.surface_potential}
     mechanisms, rows = _mechanisms(args, source, fit_options)
     source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
     n_bands = len(source.model.bands)
+    biases = source.model.bias_v
     print(f"fitting: {'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
-          f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})")
+          f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
+          + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
+             if biases is not None else ""))
     s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
                 max_blocks=args.max_blocks, progress=not args.no_progress, selection=rows, **fit_options)
     ny, nx = source.shape
@@ -100,5 +110,7 @@ def run(args) -> int:
         plot_maps(*read_maps(s["out"]), args.out)
     print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
           f"{s['blocks_done']}/{s['blocks_total']} done; explained {100 * s['explained_fraction']:.1f} %, "
-          f"median gap {s['median_gap']:.3g}; maps in {s['out']}")
+          f"median gap {s['median_gap']:.3g}"
+          + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else "")
+          + f"; maps in {s['out']}")
     return 0

@@ -44,13 +44,13 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
         raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
     result = fit_block(source.model, response, **options)
     group = zarr.open_group(out, mode="r+")
-    for name in quantities(source.model.mechanisms):
+    for name in source.model.outputs:
         group[name][ys, xs] = result[name]
     group["done"][by, bx] = 1
     return response.shape[0] * response.shape[1]
 
 
-def _output(out, source: MapInput, block: int, selection=None):
+def _output(out, source: MapInput, block: int, selection=None, surface_potential_v=0.0):
     zarr = _require("zarr")
     group = zarr.open_group(out, mode="a")
     ny, nx = source.shape
@@ -60,13 +60,18 @@ def _output(out, source: MapInput, block: int, selection=None):
     model = model_name(source.model.mechanisms)
     if "done" in group and group.attrs.get("model", model) != model:
         raise UserError(f"{out}: holds a map of model {group.attrs['model']}, not {model}; choose another --out")
-    for name, (unit, text) in quantities(source.model.mechanisms).items():
+    for name, (unit, text) in source.model.outputs.items():
         if name not in group:
             arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
             arr.attrs.update(units=unit, description=text)
     if "done" not in group:
         group.zeros("done", shape=grid, chunks=(1, 1), dtype="u1")
+    if "done" in group and group.attrs.get("surface_potential_v", surface_potential_v) != surface_potential_v:
+        raise UserError(f"{out}: holds a map for surface potential {group.attrs['surface_potential_v']} V, "
+                        f"not {surface_potential_v} V; choose another --out")
     group.attrs.update(source=os.path.abspath(source.path), block=block, model=model)
+    if source.model.bias_v is not None:
+        group.attrs.update(bias_v=[float(v) for v in source.model.bias_v], surface_potential_v=surface_potential_v)
     if selection is not None:
         group.attrs["model_selection"] = selection
     return group
@@ -92,7 +97,7 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     import dask.delayed  # noqa: F401  (submodule import)
     os.makedirs(out_dir, exist_ok=True)
     out = os.path.join(out_dir, "maps.zarr")
-    group = _output(out, source, block, selection)
+    group = _output(out, source, block, selection, options.get("surface_potential_v", 0.0))
     done = np.asarray(group["done"][...])
     todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
     tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,
@@ -101,11 +106,18 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     pixels = _compute(tasks, scheduler, workers, progress, int(done.sum()), done.size)
     elapsed = time.perf_counter() - start
     gap = np.asarray(group["gap"][...])
-    return {"blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
+    extra = {"median_nulling_bias": _median(group["nulling_bias"][...])} if "nulling_bias" in group else {}
+    return {**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
             "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
             "model": group.attrs["model"],
             "explained_fraction": float(np.nanmean(group["explained"][...])) if np.isfinite(gap).any() else float("nan"),
-            "median_gap": float(np.nanmedian(gap)) if np.isfinite(gap).any() else float("nan"), "out": out}
+            "median_gap": _median(gap), "out": out}
+
+
+def _median(values) -> float:
+    """Median of the fitted pixels (NaN before any is)."""
+    values = np.asarray(values)
+    return float(np.nanmedian(values)) if np.isfinite(values).any() else float("nan")
 
 
 def _pool(workers: int):
@@ -181,5 +193,5 @@ def _compute(tasks, scheduler, workers, progress, already, total):
 def read_maps(out: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """The fitted maps of ``out`` (a ``maps.zarr`` directory) and their units."""
     group = _require("zarr").open_group(out, mode="r")
-    maps = {name: np.asarray(group[name][...]) for name in quantities(MECHANISMS) if name in group}
+    maps = {name: np.asarray(group[name][...]) for name in quantities(MECHANISMS, bias=True) if name in group}
     return maps, {name: group[name].attrs.get("units", "") for name in maps}

@@ -6,8 +6,9 @@ unit vertical surface displacement of the elastic-contact cantilever
 :mod:`pfmdyn.generated.damping` (internal friction ``1/Q`` always; viscous drag ``g`` and a
 contact dashpot ``x`` when the model names them), with one complex amplitude ``c_b`` per
 frequency band (d_eff amplitude and phase, arbitrary instrument units; bands are driven and
-demodulated separately).  The amplitudes enter linearly and are projected out (variable
-projection); ``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one
+demodulated separately).  With a bias axis (:mod:`pfmdyn.maps.bias`) every band has two
+amplitudes, an intercept and a slope per volt of DC bias (the electrostatic term).  The amplitudes
+enter linearly and are projected out (variable projection); ``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one
 per contact mode: one mode cannot separate ``k1`` from ``k2``, so with one band ``k2 = 0``),
 ``g`` and ``x`` are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block
 at once, each pixel with its own damping factor.
@@ -16,7 +17,8 @@ Cost is dominated by the generated transfer function over ``(pixels, frequencies
 *design evaluation* per iteration gives the transfer function and its derivatives for the whole
 block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow from
 them in closed form.  The covariance of the fitted parameters is ``s**2 (J^T J)^-1`` of the
-projected residual, the marginal covariance of the full problem (Golub and Pereyra 1973).
+projected residual, the marginal covariance of the full problem (Golub and Pereyra 1973); the
+amplitudes' covariance comes from the Jacobian of the full problem at the solution.
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ import numpy as np
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..generated import damping, elastic_contact
+from . import bias as bias_axis
 
 __all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
 
@@ -51,22 +54,29 @@ _QUANTITIES = {
     "viscous_loss_stderr": ("1", "standard error of viscous_loss"),
     "contact_loss": ("1", "contact dashpot x = omega1 eta / k1: loss tangent of the contact at f1"),
     "contact_loss_stderr": ("1", "standard error of contact_loss"),
-    "amplitude": ("response units per unit d1", "d_eff amplitude |c| (first band)"),
+    "amplitude": ("response units per unit d1",
+                  "d_eff amplitude |c| (first band; with biases the response at V = V_surf: intercept + V_surf slope)"),
+    "amplitude_stderr": ("response units per unit d1", "standard error of amplitude"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
+    **bias_axis.QUANTITIES,
     "gap": ("1", "relative residual |y - model| / |y|"),
     "explained": ("1", "1 where the model explains the pixel (gap below threshold), else 0"),
 }
 _ONLY = {"viscous_loss": "viscous", "viscous_loss_stderr": "viscous",
-         "contact_loss": "contact", "contact_loss_stderr": "contact"}
+         "contact_loss": "contact", "contact_loss_stderr": "contact", **dict.fromkeys(bias_axis.QUANTITIES, "bias")}
 
 
-def quantities(mechanisms=("internal",)) -> dict[str, tuple[str, str]]:
-    """Output arrays (name -> (unit, description)) of a model with these damping mechanisms.
+def quantities(mechanisms=("internal",), bias: bool = False) -> dict[str, tuple[str, str]]:
+    """Output arrays (name -> (unit, description)) of a model with these damping mechanisms
+    (and the electrostatic maps when the map has a ``bias`` axis).
 
     >>> list(quantities(("internal", "viscous")))[4:8]
     ['quality_factor', 'quality_factor_stderr', 'viscous_loss', 'viscous_loss_stderr']
+    >>> [name for name in quantities(bias=True) if "bias" in name]
+    ['nulling_bias', 'nulling_bias_stderr']
     """
-    return {name: v for name, v in _QUANTITIES.items() if _ONLY.get(name, "internal") in mechanisms}
+    have = set(mechanisms) | ({"bias"} if bias else set())
+    return {name: v for name, v in _QUANTITIES.items() if _ONLY.get(name, "internal") in have}
 
 
 def parse_model(spec: str) -> tuple[str, ...]:
@@ -123,6 +133,13 @@ class BeamMapModel:
     H: float
     frequency_hz: np.ndarray
     mechanisms: tuple[str, ...] = ("internal",)
+    bias_v: np.ndarray | None = None
+    """DC tip bias of each spectrum of a pixel (V), or None: one spectrum per pixel."""
+
+    @property
+    def outputs(self) -> dict[str, tuple[str, str]]:
+        """The per-pixel maps this model writes (:func:`quantities`)."""
+        return quantities(self.mechanisms, self.bias_v is not None)
 
     @property
     def bands(self) -> list[slice]:
@@ -192,22 +209,25 @@ class BeamMapModel:
 
 
 def _project(g, dg, y, band_list):
-    """Variable projection: amplitudes ``(n, n_bands)``, real residual ``(n, 2 n_freq)`` and,
-    given ``dg``, its Jacobian ``(n, 2 n_freq, n_p)`` (exact derivative of the projection)."""
+    """Variable projection of ``y`` ``(n, m, n_freq)`` (``m`` bias components, each with its own
+    amplitude per band) on the transfer function ``g`` ``(n, n_freq)``: amplitudes
+    ``(n, m, n_bands)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``, its Jacobian
+    ``(n, 2 m n_freq, n_p)`` (exact derivative of the projection)."""
     c, r = [], np.empty_like(y)
     dr = None if dg is None else np.empty((dg.shape[0],) + y.shape, complex)
     for b in band_list:
-        gb, yb = g[:, b], y[:, b]
-        norm = np.maximum(np.sum(np.abs(gb) ** 2, axis=1), 1e-300)
-        cb = np.sum(gb.conj() * yb, axis=1) / norm
-        r[:, b] = yb - cb[:, None] * gb
+        gb, yb = g[:, None, b], y[..., b]
+        norm = np.maximum(np.sum(np.abs(gb) ** 2, axis=2), 1e-300)
+        cb = np.sum(gb.conj() * yb, axis=2) / norm
+        r[..., b] = yb - cb[..., None] * gb
         c.append(cb)
         if dg is not None:
-            dgb = dg[:, :, b]
-            dc = (np.sum(dgb.conj() * yb, axis=2) - 2 * cb * np.sum((gb.conj() * dgb).real, axis=2)) / norm
-            dr[:, :, b] = -(dc[..., None] * gb + cb[:, None] * dgb)
-    J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).transpose(1, 2, 0)
-    return np.stack(c, axis=1), np.concatenate([r.real, r.imag], axis=1), J
+            dgb = dg[:, :, None, b]
+            dc = (np.sum(dgb.conj() * yb, axis=3) - 2 * cb * np.sum((gb.conj() * dgb).real, axis=3)) / norm
+            dr[..., b] = -(dc[..., None] * gb + cb[..., None] * dgb)
+    n = len(y)
+    J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).reshape(len(dr), n, -1).transpose(1, 2, 0)
+    return np.stack(c, axis=2), np.concatenate([r.real, r.imag], axis=1).reshape(n, -1), J
 
 
 def _start(model, y, q0, k1_range):
@@ -215,8 +235,10 @@ def _start(model, y, q0, k1_range):
     by the vertex of the parabola through the best grid value and its neighbours on each axis."""
     log_k1, log_q, g = _grid(model.k, model.L, model.f1, model.H, np.asarray(model.frequency_hz, float).tobytes(),
                             q0, tuple(k1_range))
-    proj = sum(np.abs(y[:, b] @ g[:, b].conj().T) ** 2 / np.sum(np.abs(g[:, b]) ** 2, axis=1)
-               for b in model.bands).reshape(len(y), len(log_q), len(log_k1))
+    n, m = y.shape[:2]
+    # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
+    proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
+               / np.sum(np.abs(g[:, b]) ** 2, axis=1) for b in model.bands).reshape(len(y), len(log_q), len(log_k1))
     iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), proj.shape[1:])
     rows = np.arange(len(y))
     return (_vertex(proj[rows, iq], ik, log_k1), _vertex(proj[rows, :, ik], iq, log_q))
@@ -266,18 +288,20 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
 
 
 def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
-    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost).
+    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost, g, dg).
 
     A step predicted to gain less than 100 ``tolerance`` is the last one (Gauss-Newton converges
     quadratically: the next would gain below ``tolerance``), so its point gets values only; ``J``
-    then stays the Jacobian of the previous point, a fraction of a standard error away.
+    and the transfer function ``g`` and its derivatives ``dg`` then stay those of the previous
+    point, a fraction of a standard error away.
     """
     lower, upper = bounds
     n_p, band_list = p.shape[1], model.bands
-    c, r, J = _project(*model.design(p), y, band_list)
+    g, dg = model.design(p)
+    c, r, J = _project(g, dg, y, band_list)
     cost = np.sum(r**2, axis=1)
     lam = np.full(len(y), 1e-3)
-    dof = max(r.shape[1] - n_p - 2 * len(band_list), 1)
+    dof = max(r.shape[1] - n_p - 2 * c[0].size, 1)
     active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
     for _ in range(iterations):
         Ja, ra, la = J[active], r[active], lam[active]
@@ -298,27 +322,31 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
                 continue
             act = active[sel]
             trial = p[act] + step[sel]
-            c_t, r_t, J_t = _project(*model.design(trial, jacobian=not last), y[act], band_list)
+            g_t, dg_t = model.design(trial, jacobian=not last)
+            c_t, r_t, J_t = _project(g_t, dg_t, y[act], band_list)
             cost_t = np.sum(r_t**2, axis=1)
             better = cost_t < cost[act]
             idx = act[better]
             p[idx], c[idx], r[idx], cost[idx] = trial[better], c_t[better], r_t[better], cost_t[better]
             if not last:
-                J[idx] = J_t[better]
+                J[idx], g[idx], dg[:, idx] = J_t[better], g_t[better], dg_t[:, better]
             lam[act] = np.where(better, lam[act] / 3, lam[act] * 4)
             finished[np.flatnonzero(sel)[better]] = last
         active = active[~finished]
-    return p, c, r, J, cost
+    return p, c, r, J, cost, g, dg
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2, tolerance=1e-3) -> dict[str, np.ndarray]:
-    """Fit every pixel of ``response`` (``(..., n_freq)`` complex), :data:`CHUNK` pixels at once.
+              gap_threshold=0.2, tolerance=1e-3, surface_potential_v=0.0) -> dict[str, np.ndarray]:
+    """Fit every pixel of ``response``, :data:`CHUNK` pixels at once.
 
-    Returns the arrays of :func:`quantities` of the model, each of the pixel shape
-    ``response.shape[:-1]``, plus ``cost`` (the squared relative residual).  A pixel stops when
-    the predicted decrease of its cost is below ``tolerance`` times the noise variance
-    (the step is then ~``sqrt(tolerance)`` standard errors).
+    ``response`` is complex, ``(..., n_freq)``, or ``(..., n_bias, n_freq)`` when the model has
+    biases.  Returns the arrays of :attr:`BeamMapModel.outputs`, each of the pixel shape
+    ``response.shape[:-1]`` (``[:-2]`` with biases), plus ``cost`` (the squared relative
+    residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
+    times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
+    ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
+    line.
 
     Examples
     --------
@@ -328,35 +356,83 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     >>> out = fit_block(m, y)
     >>> round(float(out["k1"][0]), 6), round(float(out["quality_factor"][0]), 6)
     (300.0, 60.0)
+
+    With biases, the electrostatic slope and the nulling bias (here ``1e-3 (V - 2)``):
+
+    >>> mb = replace(m, bias_v=np.array([-2.0, 0.0, 2.0]))
+    >>> out = fit_block(mb, 1e-3 * (mb.bias_v[:, None] - 2.0) * m.shape_functions(np.array([300.0]), np.array([60.0])))
+    >>> round(float(out["electrostatic"]), 9), round(float(out["nulling_bias"]), 9)
+    (0.001, 2.0)
     """
-    y = np.asarray(response, complex)
-    shape = y.shape[:-1]
-    y = y.reshape(-1, y.shape[-1])
+    bias = bias_axis.basis(model.bias_v)
+    y = np.ascontiguousarray(response, complex)     # the sums' rounding follows the memory layout
+    tail = (len(model.bias_v), len(model.frequency_hz)) if bias.has_bias else (len(model.frequency_hz),)
+    if y.shape[-len(tail):] != tail:
+        raise UserError(f"response has shape {y.shape}; its last axes must be {tail} (biases, frequencies)")
+    shape = y.shape[:-len(tail)]
+    y = y.reshape(-1, bias.q.shape[0], tail[-1])
     k1_range = k1_range or (model.k, 1e4 * model.k)
-    settings = (q0, k1_range, iterations, gap_threshold, tolerance)
+    settings = (q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v)
     parts = [_fit_pixels(model, y[i:i + CHUNK], *settings) for i in range(0, max(len(y), 1), CHUNK)]
     return {name: np.concatenate([part[name] for part in parts]).reshape(shape) for name in parts[0]}
 
 
-def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance):
-    scale = np.linalg.norm(y, axis=1)
+def _covariance(model, g, dg, c, noise):
+    """Covariance of ``(p, Re c, Im c)`` per pixel, ``(n, n_p + 2 c.size, ...)``: ``noise`` times
+    the inverse normal matrix of the full (unprojected) problem at the solution.  Its ``p`` block
+    is the variable-projection one; the amplitudes' block also carries their correlation with
+    ``p`` (an amplitude's error grows with that of the resonance it sits on).  The amplitude
+    columns are ``(Re, Im)`` pairs in ``c``'s (component, band) order.
+
+    The residual in band ``j`` of component ``q`` is ``y - c_qj g``, so the normal matrix has
+    closed-form blocks: ``sum_q |c_qj|^2 Re(dg^H dg)`` for ``p``, ``Re(conj(c_qj) dg^H g)`` and
+    ``-Im(...)`` between ``p`` and ``(Re, Im) c_qj``, and ``|g|^2`` on the amplitudes' diagonal.
+    """
+    n, m, n_bands = c.shape
+    n_p = dg.shape[0]
+    N = np.zeros((n, n_p + 2 * m * n_bands, n_p + 2 * m * n_bands))
+    for j, b in enumerate(model.bands):
+        gb, dgb = g[:, b], dg[:, :, b]
+        N[:, :n_p, :n_p] += np.sum(np.abs(c[:, :, j]) ** 2, axis=1)[:, None, None] * np.einsum(
+            "inf,knf->nik", dgb.conj(), dgb).real
+        h = np.einsum("inf,nf->ni", dgb.conj(), gb)
+        for q in range(m):
+            col = n_p + 2 * (q * n_bands + j)
+            cross = c[:, q, j, None].conj() * h
+            N[:, :n_p, col], N[:, :n_p, col + 1] = cross.real, -cross.imag
+            N[:, col, col] = N[:, col + 1, col + 1] = np.sum(np.abs(gb) ** 2, axis=1)
+    N[:, n_p:, :n_p] = N[:, :n_p, n_p:].transpose(0, 2, 1)
+    size = np.sqrt(np.maximum(np.einsum("nii->ni", N), 1e-300))      # columns of very different scales
+    inverse = np.linalg.pinv(N / (size[:, :, None] * size[:, None, :]), hermitian=True)
+    return inverse / (size[:, :, None] * size[:, None, :]) * noise[:, None, None]
+
+
+def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v):
+    scale = np.sqrt(np.sum(np.abs(y) ** 2, axis=(1, 2)))
     scale[scale == 0] = 1.0
-    y = y / scale[:, None]
+    y, outside = bias_axis.project(y / scale[:, None, None], bias)
     names = model.parameters
     p = _initial(model, y, q0, k1_range, iterations, tolerance)
-    p, c, r, J, cost = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
-    dof = max(r.shape[1] - len(names) - 2 * len(model.bands), 1)
-    JtJ = np.einsum("nki,nkj->nij", J, J)
-    cov = np.linalg.pinv(JtJ) * (cost / dof)[:, None, None]
+    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
+    cost = cost + outside
+    dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
+    cov = _covariance(model, g, dg, c, cost / dof)
     sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
     col = {n: p[:, i] for i, n in enumerate(names)}
     k1 = np.exp(col["log_k1"])
     k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
     gap = np.sqrt(cost)
+    # the first band's amplitudes: columns (Re, Im) of component q at n_p + 2 q n_bands
+    first = np.concatenate([len(names) + 2 * q * c.shape[2] + np.arange(2) for q in range(c.shape[1])])
+    linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v)
     out = {"k1": k1, "k1_stderr": k1 * sd["log_k1"], "k2": k2, "k2_stderr": k2 * sd.get("log_k2", np.nan),
            "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * sd["log_q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
-           "amplitude": np.abs(c[:, 0]) * scale, "phase": np.angle(c[:, 0]), "gap": gap,
-           "explained": (gap < gap_threshold).astype(float), "cost": cost}
-    return {name: out[name] for name in [*quantities(model.mechanisms), "cost"]}
+           "gap": gap, "explained": (gap < gap_threshold).astype(float), "cost": cost}
+    out.update({name: value * scale if name in _SCALED else value for name, value in linear.items()})
+    return {name: out[name] for name in [*model.outputs, "cost"]}
+
+
+_SCALED = {"amplitude", "amplitude_stderr", "electrostatic", "electrostatic_stderr"}
+"""Linear maps in response units (the fit works on spectra scaled to unit norm)."""

@@ -1,10 +1,12 @@
 """Map inputs: the plain layout (HDF5 file or Zarr group) and pycroscopy's USID band-excitation layout.
 
 Plain: ``response`` (ny, nx, n_freq) complex, ``frequency_hz`` (n_freq,), cantilever metadata as
-root attributes named as in the CSV metadata.  USID (as BGlib writes BE data): a main dataset
-(positions x spectral values, complex) whose attributes reference ``Position_Indices`` (columns
-labelled ``X``/``Y``, X fastest) and ``Spectroscopic_Values`` (a ``Frequency`` row, in Hz or
-a prefixed unit); the
+root attributes named as in the CSV metadata; with a bias axis ``response`` is (ny, nx, n_bias,
+n_freq) and ``bias_v`` (n_bias,) gives the DC tip biases.  USID (as BGlib writes BE and BEPS
+data): a main dataset (positions x spectral values, complex) whose attributes reference
+``Position_Indices`` (columns labelled ``X``/``Y``, X fastest) and ``Spectroscopic_Values`` /
+``Spectroscopic_Indices`` (a ``Frequency`` row, in Hz or a prefixed unit, and optionally a DC
+bias row such as BGlib's ``DC_Offset``, in V or mV; spectral columns in any order); the
 cantilever metadata come from the root attributes, a ``Measurement_*`` group's (pfmdyn's or
 Asylum's key names) or the command line.
 """
@@ -18,6 +20,7 @@ import numpy as np
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
+from .bias import basis
 from .fit import BeamMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require"]
@@ -42,6 +45,8 @@ class MapInput:
     shape: tuple[int, int]
     dataset: str = "response"
     layout: str = "plain"
+    columns: np.ndarray | None = None
+    """USID: the spectral columns in (bias, frequency) order, one row per bias step."""
 
 
 class open_root:
@@ -74,18 +79,58 @@ def _labels(table, key) -> list[str]:
     return [str(v.decode() if isinstance(v, bytes) else v) for v in np.ravel(table.attrs.get(key, []))]
 
 
-def _usid_grid(root, name, path):
-    main = root[name]
+_BIAS_LABELS = {"dcoffset", "dc", "bias", "dcbias", "vdc", "tipbias", "biasv"}
+"""Spectroscopic labels of a DC bias row (lower case, without ``_``, `` `` or ``-``)."""
+
+
+def _spectral_row(spec, labels, units, row, unit_si, path):
+    """Values of one Spectroscopic_Values row in SI (``unit_si``: 'Hz' or 'V')."""
+    unit = units[row] if row < len(units) else unit_si
+    converted = si_unit(unit)
+    if not converted or converted[0] != unit_si:
+        raise UserError(f"{path}: USID {labels[row]} row is in {unit!r}, not in {unit_si}")
+    return np.asarray(spec[row, :], float) * converted[1]
+
+
+def _spectral_grid(root, main, path):
+    """Frequencies, biases (or None) and the spectral columns in (bias, frequency) order.
+
+    The columns form a full grid of the Frequency and bias steps (by their indices; a triangular
+    bias waveform repeats values at different steps); other spectroscopic rows must hold one
+    value.
+    """
     spec = root[main.attrs["Spectroscopic_Values"]]
     labels, units = _labels(spec, "labels"), _labels(spec, "units")
     if "Frequency" not in labels:
         raise UserError(f"{path}: USID Spectroscopic_Values has no 'Frequency' row (labels {labels})")
-    row = labels.index("Frequency")
-    unit = units[row] if row < len(units) else "Hz"
-    converted = si_unit(unit)
-    if not converted or converted[0] != "Hz":
-        raise UserError(f"{path}: USID Frequency row is in {unit!r}, not a frequency unit")
-    f = np.asarray(spec[row, :], float) * converted[1]
+    values = np.asarray(spec[...], float).reshape(len(labels), -1)
+    index = (np.asarray(root[main.attrs["Spectroscopic_Indices"]][...]).reshape(values.shape)
+             if "Spectroscopic_Indices" in main.attrs else values)
+    key = [label.lower().replace("_", "").replace(" ", "").replace("-", "") for label in labels]
+    rows = [labels.index("Frequency")] + [i for i, k in enumerate(key) if k in _BIAS_LABELS][:1]
+    others = [labels[i] for i in range(len(labels)) if i not in rows and np.unique(values[i]).size > 1]
+    if others:
+        raise UserError(f"{path}: USID spectroscopic dimension(s) {', '.join(others)} vary; pfmdyn map takes "
+                        "Frequency and one DC bias dimension (write one slice per file)")
+    steps = [np.unique(index[i], return_inverse=True)[1].ravel() for i in rows]
+    if len(rows) == 1:
+        steps.append(np.zeros_like(steps[0]))     # one bias step
+    n_steps = [int(s.max()) + 1 for s in steps]
+    grid = np.full(n_steps[::-1], -1)             # (bias, frequency) -> column
+    grid[tuple(steps[::-1])] = np.arange(values.shape[1])
+    if np.any(grid < 0) or values.shape[1] != grid.size:
+        raise UserError(f"{path}: USID spectral columns must form a full grid of Frequency and bias steps")
+    f = _spectral_row(spec, labels, units, rows[0], "Hz", path)[grid]
+    if np.any(f != f[:1]):
+        raise UserError(f"{path}: USID frequencies differ between bias steps")
+    order = np.argsort(f[0], kind="stable")
+    bias = _spectral_row(spec, labels, units, rows[1], "V", path)[grid[:, 0]] if len(rows) > 1 else None
+    return f[0][order], bias, grid[:, order]
+
+
+def _usid_grid(root, name, path):
+    main = root[name]
+    f, bias, columns = _spectral_grid(root, main, path)
     pos = root[main.attrs["Position_Indices"]]
     plabels = _labels(pos, "labels")
     if sorted(plabels) != ["X", "Y"]:
@@ -97,7 +142,9 @@ def _usid_grid(root, name, path):
     # pyUSID lists the columns slowest first ([Y, X]); BGlib writes [X, Y]: rows X fastest either way.
     if idx.shape[0] != ny * nx or np.any(x != xx) or np.any(y != yy):
         raise UserError(f"{path}: USID positions must be a full grid with X fastest")
-    return f, (ny, nx), main.shape
+    if main.shape != (ny * nx, columns.size):
+        raise UserError(f"{path}: USID main dataset has shape {main.shape}, expected ({ny * nx}, {columns.size})")
+    return f, bias, (ny, nx), columns
 
 
 def _metadata(root) -> dict:
@@ -116,25 +163,28 @@ def _metadata(root) -> dict:
 
 
 def open_map(path: str, overrides: dict | None = None) -> MapInput:
-    """Read the map's layout, frequencies and metadata (``overrides`` win over the file's)."""
+    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's)."""
     if not os.path.exists(path):
         raise UserError(f"{path}: no such file or directory")
     with open_root(path) as root:
         usid = None if "response" in root else _usid_main(root)
+        columns = None
         if usid is None:
             for name in ("response", "frequency_hz"):
                 if name not in root:
                     raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
                                     " or a USID main dataset)")
             f = np.asarray(root["frequency_hz"][...], float)
+            bias = np.asarray(root["bias_v"][...], float) if "bias_v" in root else None
             shape = root["response"].shape
-            if len(shape) != 3 or shape[2] != f.size:
-                raise UserError(f"{path}: response must have shape (ny, nx, {f.size}), got {shape}")
+            expected = (f.size,) if bias is None else (bias.size, f.size)
+            if len(shape) != 2 + len(expected) or shape[2:] != expected:
+                raise UserError(f"{path}: response must have shape (ny, nx, {', '.join(map(str, expected))})"
+                                f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
+                                f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
             grid = shape[:2]
         else:
-            f, grid, shape = _usid_grid(root, usid, path)
-            if shape != (grid[0] * grid[1], f.size):
-                raise UserError(f"{path}: USID main dataset has shape {shape}, expected ({grid[0] * grid[1]}, {f.size})")
+            f, bias, grid, columns = _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
     missing = [key for key in METADATA if key not in attrs]
@@ -142,18 +192,23 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
     if not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(np.diff(f) <= 0):
         raise UserError(f"{path}: frequency_hz must be positive, finite and increasing")
+    if bias is not None:
+        basis(bias)                                  # one-line error unless two distinct finite biases
     meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    return MapInput(path, BeamMapModel(frequency_hz=f, **meta), tuple(grid),
-                    usid or "response", "usid" if usid else "plain")
+    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta), tuple(grid),
+                    usid or "response", "usid" if usid else "plain", columns)
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:
-    """Spectra of the pixel block ``[ys, xs]``, shape ``(by, bx, n_freq)`` complex."""
+    """Spectra of the pixel block ``[ys, xs]``: ``(by, bx, n_freq)`` complex, or
+    ``(by, bx, n_bias, n_freq)`` when the map has a bias axis."""
     with open_root(source.path) as root:
         data = root[source.dataset]
         if source.layout == "plain":
-            return np.asarray(data[ys, xs, :])
+            return np.asarray(data[ys, xs])
         nx = source.shape[1]
         rows = range(*ys.indices(source.shape[0]))
         x0, x1, _ = xs.indices(nx)
-        return np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
+        block = np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
+        spectra = block[..., source.columns]              # (by, bx, n_bias, n_freq)
+        return spectra if source.model.bias_v is not None else spectra[..., 0, :]

@@ -30,13 +30,14 @@ __all__ = ["choose_model", "sample_pixels"]
 
 
 def sample_pixels(source: MapInput, count: int = 16) -> np.ndarray:
-    """Spectra ``(n, n_freq)`` at the centres of a ``sqrt(count)`` x ``sqrt(count)`` grid of cells
-    (fewer on a map with fewer rows or columns); only those spectra are read."""
+    """Spectra ``(n, n_freq)`` (``(n, n_bias, n_freq)`` with a bias axis) at the centres of a
+    ``sqrt(count)`` x ``sqrt(count)`` grid of cells (fewer on a map with fewer rows or columns);
+    only those spectra are read."""
     ny, nx = source.shape
     side = max(1, int(math.isqrt(count)))
     ys = np.unique(((np.arange(side) + 0.5) * ny / side).astype(int))
     xs = np.unique(((np.arange(side) + 0.5) * nx / side).astype(int))
-    return np.concatenate([read_block(source, slice(y, y + 1), slice(x, x + 1)).reshape(1, -1)
+    return np.concatenate([read_block(source, slice(y, y + 1), slice(x, x + 1))[0]
                            for y in ys for x in xs])
 
 
@@ -46,8 +47,10 @@ class _Score:
     def __init__(self, mechanisms, source, y, options):
         model = replace(source.model, mechanisms=mechanisms)
         self.name, self.mechanisms = model_name(mechanisms), mechanisms
-        self.rss = fit_block(model, y, **options)["cost"] * np.sum(np.abs(y) ** 2, axis=1)
-        self.k_pixel = len(model.parameters) + 2 * len(model.bands)
+        flat = y.reshape(len(y), -1)
+        self.rss = fit_block(model, y, **options)["cost"] * np.sum(np.abs(flat) ** 2, axis=1)
+        # complex amplitudes: one per band, two (intercept, slope) with a bias axis
+        self.k_pixel = len(model.parameters) + 2 * len(model.bands) * (1 if model.bias_v is None else 2)
 
     def judge(self, sigma2, y):
         """chi2 (noise known), BIC = chi2 + k ln n and the noise-normalised gap."""
@@ -83,17 +86,18 @@ def choose_model(source: MapInput, count: int = 16, **options) -> tuple[tuple[st
     (('internal',), ['elastic', 'elastic+viscous', 'elastic+contact', 'elastic+viscous+contact'])
     """
     y = sample_pixels(source, count)
+    flat = y.reshape(len(y), -1)
     extras = MECHANISMS[1:]
     scores = {}
     for size in range(len(extras) + 1):
         for combo in itertools.combinations(extras, size):
             mechanisms = ("internal", *combo)
             scores[mechanisms] = _Score(mechanisms, source, y, options)
-    sigma2 = np.min([s.rss / (y.shape[1] - s.k_pixel / 2) for s in scores.values()], axis=0)
+    sigma2 = np.min([s.rss / (flat.shape[1] - s.k_pixel / 2) for s in scores.values()], axis=0)
     # floor: 1 ppm of the signal, the model's own numerical precision (noise-free data choose nothing)
-    sigma2 = np.maximum(sigma2, 1e-12 * np.mean(np.abs(y) ** 2, axis=1))
+    sigma2 = np.maximum(sigma2, 1e-12 * np.mean(np.abs(flat) ** 2, axis=1))
     for s in scores.values():
-        s.judge(sigma2, y)
+        s.judge(sigma2, flat)
     current = scores[("internal",)]
     while True:
         trials = [scores[tuple(m for m in MECHANISMS if m in current.mechanisms or m == extra)]

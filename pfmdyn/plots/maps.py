@@ -11,7 +11,8 @@ from matplotlib.figure import Figure
 
 __all__ = ["plot_maps"]
 
-_SHOWN = ("k1", "k1_stderr", "quality_factor", "amplitude", "phase", "gap")
+_SHOWN = ("k1", "k1_stderr", "k2", "quality_factor", "viscous_loss", "contact_loss", "amplitude", "phase",
+          "electrostatic", "electrostatic_phase", "nulling_bias", "gap")
 
 
 def plot_maps(maps: dict[str, np.ndarray], units: dict[str, str], out_dir: Path) -> list[Path]:
@@ -24,11 +25,11 @@ def plot_maps(maps: dict[str, np.ndarray], units: dict[str, str], out_dir: Path)
     """
     paths = []
     for name in _SHOWN:
-        if name not in maps:
+        if name not in maps or not np.isfinite(maps[name]).any():    # e.g. k2 with one band
             continue
         fig = Figure(figsize=(4.2, 3.6))
         ax = fig.add_subplot()
-        image = ax.imshow(maps[name], origin="lower", cmap="twilight" if name == "phase" else "viridis")
+        image = ax.imshow(maps[name], origin="lower", cmap="twilight" if name.endswith("phase") else "viridis")
         fig.colorbar(image, ax=ax, label=f"{name} ({units.get(name, '')})")
         ax.set_xlabel("x (pixel)")
         ax.set_ylabel("y (pixel)")

@@ -1,0 +1,184 @@
+"""``pfmdyn map`` with a bias axis: the electrostatic term and the nulling bias at every pixel.
+
+Spectra from the independent finite-element beam (tests/fe_beam.py): at each pixel the surface
+moves by ``d1`` (two domains, opposite signs) and a local electrostatic force
+``f0 = F_loc (V - V_surf)`` acts on the tip, with a surface-potential pattern, read through a
+complex instrument gain, with complex Gaussian noise.  Two levers drawn from the ranges real ones
+have.  The truth the maps must recover, with ``T_d1 = k1 T_f0`` (the force enters the tip's
+boundary condition beside ``k1 d1``): slope ``G = gain F_loc / k1`` per volt, nulling bias
+``V_surf - d1 k1 / F_loc`` and ``d_eff`` amplitude ``|gain d1|`` at ``V_surf``.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+h5py = pytest.importorskip("h5py")
+zarr = pytest.importorskip("zarr")
+pytest.importorskip("dask")
+sys.path.insert(0, str(Path(__file__).parent))
+
+from fe_beam import FEBeam  # noqa: E402
+from pfmdyn.cli import main  # noqa: E402
+
+N = 8
+BIASES = np.array([-3.0, -1.5, 0.0, 1.5, 3.0, 1.5, 0.0, -1.5])   # a triangle: values repeat
+GAIN = 2e5 * np.exp(0.7j)
+F_LOC = 2e-9           # N per volt
+
+
+def _levers():
+    """Two levers (seeded): soft and long, stiff and short; contact k1/k in their ranges."""
+    rng = np.random.default_rng(11)
+    soft = dict(k=rng.uniform(0.1, 1.0), L=rng.uniform(350e-6, 480e-6), ratio=rng.uniform(50, 500))
+    stiff = dict(k=rng.uniform(10, 45), L=rng.uniform(110e-6, 160e-6), ratio=rng.uniform(2, 20))
+    return {"soft": soft, "stiff": stiff}
+
+
+def _write_map(path, lever, usid=False):
+    """The map file and the truth per pixel (k1, slope G, nulling bias, |d_eff|)."""
+    k, L = lever["k"], lever["L"]
+    f1 = 300e3 * (k / 40) ** (1 / 3) * (125e-6 / L)       # silicon levers: f1 ~ k^(1/3) / L at fixed width
+    yy, xx = np.mgrid[:N, :N]
+    k1 = np.where(xx < N // 2, 1.0, 1.6) * lever["ratio"] * k
+    d1 = np.where(yy < N // 2, 5e-12, -5e-12)                  # two domains
+    v_surf = np.where(xx + yy < N, 0.4, -0.6)                  # a surface-potential step
+    beams = {v: FEBeam(k, L, f1, 10e-6, k1=v, Q=80.0, n_elements=50) for v in np.unique(k1)}
+    fc = [b.contact_resonances(1)[0] for b in beams.values()]
+    f = np.linspace(0.85 * min(fc), 1.15 * max(fc), 48)
+    slope = {v: b.slope(f) for v, b in beams.items()}          # per (d1, d2, f0, q0)
+    free = float(FEBeam(k, L, f1, 10e-6, n_elements=50).free_resonances(1)[0])
+    y = np.empty((N, N, BIASES.size, f.size), complex)
+    for i in range(N):
+        for j in range(N):
+            T = slope[k1[i, j]]
+            y[i, j] = GAIN * (T[:, 0] * d1[i, j] + T[:, 2] * F_LOC * (BIASES[:, None] - v_surf[i, j]))
+    rng = np.random.default_rng(5)
+    y += 0.01 * np.abs(y).max(axis=(2, 3), keepdims=True) * (rng.standard_normal(y.shape)
+                                                             + 1j * rng.standard_normal(y.shape))
+    attrs = dict(spring_constant_n_per_m=k, length_m=L, tip_height_m=10e-6, free_resonance_hz=free)
+    with h5py.File(path, "w") as h:
+        if usid:
+            _write_beps(h, y, f, attrs)
+        else:
+            h["response"], h["frequency_hz"], h["bias_v"] = y, f, BIASES
+            h.attrs.update(attrs)
+    truth = {"k1": k1, "electrostatic": np.abs(GAIN) * F_LOC / k1, "nulling_bias": v_surf - d1 * k1 / F_LOC,
+             "amplitude": np.abs(GAIN * d1), "v_surf": v_surf}
+    return path, truth
+
+
+def _write_beps(h, y, f, attrs):
+    """As BGlib lays out BEPS: positions x (DC step, frequency bin), Frequency fastest, bias in
+    a ``DC_Offset`` row in mV, spectral columns listed with the frequencies in decreasing order
+    and an ``Field`` row holding one value."""
+    ny, nx, nb, nf = y.shape
+    raw = y[:, :, :, ::-1].reshape(ny * nx, nb * nf)
+    chan = h.create_group("Measurement_000/Channel_000")
+    main = chan.create_dataset("Raw_Data", data=raw)
+    yy, xx = np.divmod(np.arange(ny * nx), nx)
+    pos = chan.create_dataset("Position_Indices", data=np.stack([xx, yy], axis=1).astype(np.uint32))
+    pos.attrs["labels"] = ["X", "Y"]
+    fi, bi = np.tile(np.arange(nf), nb), np.repeat(np.arange(nb), nf)
+    values = np.stack([f[::-1][fi], 1e3 * BIASES[bi], np.zeros(nb * nf)])
+    spec = chan.create_dataset("Spectroscopic_Values", data=values)
+    index = chan.create_dataset("Spectroscopic_Indices", data=np.stack([fi, bi, np.zeros(nb * nf, int)]))
+    for d in (spec, index):
+        d.attrs["labels"], d.attrs["units"] = ["Frequency", "DC_Offset", "Field"], ["Hz", "mV", ""]
+    main.attrs["Position_Indices"], main.attrs["Spectroscopic_Values"] = pos.ref, spec.ref
+    main.attrs["Spectroscopic_Indices"] = index.ref
+    h.attrs.update(attrs)
+
+
+def _maps(out):
+    group = zarr.open_group(str(out / "maps.zarr"), mode="r")
+    return {name: np.asarray(group[name][...]) for name in group.array_keys() if name != "done"}
+
+
+@pytest.fixture(scope="module", params=["soft", "stiff"])
+def bias_run(request, tmp_path_factory):
+    d = tmp_path_factory.mktemp(request.param)
+    path, truth = _write_map(d / "beps.h5", _levers()[request.param])
+    assert main(["map", str(path), "--out", str(d / "o"), "--no-progress", "--model", "elastic",
+                 "--surface-potential", "0.4"]) == 0
+    return request.param, path, truth, _maps(d / "o")
+
+
+@pytest.mark.parametrize("name", ["k1", "electrostatic", "nulling_bias"])
+def test_electrostatic_maps_within_uncertainty(bias_run, name):
+    _, _, truth, m = bias_run
+    z = (m[name] - truth[name]) / m[f"{name}_stderr"]
+    assert np.mean(np.abs(z) <= 3) >= 0.95, (name, z)
+    assert np.mean(np.abs(z) <= 1) >= 0.5, (name, z)          # the errors are not inflated either
+
+
+def test_d_eff_at_the_given_surface_potential(bias_run):
+    _, _, truth, m = bias_run
+    at = truth["v_surf"] == 0.4                               # pixels whose V_surf was given
+    z = (m["amplitude"] - truth["amplitude"]) / m["amplitude_stderr"]
+    assert np.mean(np.abs(z[at]) <= 3) >= 0.95, z[at]
+    # opposite domains: d_eff phases differ by pi
+    top, bottom = (np.exp(1j * m["phase"][half][at[half]]).mean() for half in (slice(None, N // 2), slice(N // 2, None)))
+    assert abs(abs(np.angle(top / bottom)) - np.pi) < 0.1
+
+
+def test_beps_usid_layout_gives_the_same_maps(bias_run, tmp_path):
+    name, _, _, m = bias_run
+    path, _ = _write_map(tmp_path / "beps_usid.h5", _levers()[name], usid=True)
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress", "--model", "elastic",
+                 "--surface-potential", "0.4"]) == 0
+    for name, value in _maps(tmp_path / "o").items():
+        np.testing.assert_allclose(value, m[name], rtol=1e-9, atol=1e-300, err_msg=name)
+
+
+def test_bias_axis_errors_are_one_line(tmp_path, capsys):
+    attrs = dict(spring_constant_n_per_m=2.0, length_m=225e-6, tip_height_m=10e-6, free_resonance_hz=75e3)
+    cases = [({"response": np.ones((2, 2, 3, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0]},
+              "a bias axis needs a bias_v dataset"),
+             ({"response": np.ones((2, 2, 2, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0], "bias_v": [1.0, 1.0]},
+              "at least two distinct biases"),
+             ({"response": np.ones((2, 2, 3, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0], "bias_v": [0, 1, 2, 3]},
+              "(n_bias = len(bias_v))")]
+    for data, message in cases:
+        path = tmp_path / "bad.h5"
+        with h5py.File(path, "w") as h:
+            for key, value in data.items():
+                h[key] = value
+            h.attrs.update(attrs)
+        assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_closed_form_normal_matrix_matches_the_explicit_jacobian():
+    """The covariance's closed-form blocks against the real Jacobian of the full problem, built
+    column by column (two bands, two bias components, drag: every block type)."""
+    from pfmdyn.maps import fit
+    rng = np.random.default_rng(1)
+    f = np.concatenate([np.linspace(2.5e5, 3.5e5, 30), np.linspace(9e5, 1.1e6, 30)])
+    model = fit.BeamMapModel(2.0, 225e-6, 75e3, 10e-6, f, mechanisms=("internal", "viscous"))
+    n = 5
+    p = np.column_stack([np.log(rng.uniform(200, 400, n)), np.log(rng.uniform(30, 90, n)),
+                         np.log(rng.uniform(100, 300, n)), rng.uniform(0, 0.1, n)])
+    c = rng.standard_normal((n, 2, 2)) + 1j * rng.standard_normal((n, 2, 2))
+    g, dg = model.design(p)
+    columns = []
+    for i in range(dg.shape[0]):                       # d residual / d p_i = -c_qj dg_i in band j
+        d = np.zeros((n, 2, f.size), complex)
+        for j, b in enumerate(model.bands):
+            d[:, :, b] = -c[:, :, j, None] * dg[i][:, None, b]
+        columns.append(d)
+    for q in range(2):
+        for j, b in enumerate(model.bands):
+            for unit in (1.0, 1j):                     # d residual / d (Re, Im) c_qj = -(1, i) g
+                d = np.zeros((n, 2, f.size), complex)
+                d[:, q, b] = -unit * g[:, b]
+                columns.append(d)
+    J = np.stack([np.concatenate([d.real, d.imag], axis=1).reshape(n, -1) for d in columns], axis=2)
+    expected = np.linalg.inv(np.einsum("nki,nkj->nij", J, J))
+    scale = np.sqrt(np.einsum("nii->ni", expected))
+    np.testing.assert_allclose(fit._covariance(model, g, dg, c, np.ones(n)) / (scale[:, :, None] * scale[:, None, :]),
+                               expected / (scale[:, :, None] * scale[:, None, :]), atol=1e-10)
