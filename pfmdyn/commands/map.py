@@ -31,7 +31,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--model", default="auto",
                         help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
                              "per band, and k2 when the frequencies hold two or more contact-mode bands) plus damping "
-                             "mechanisms '+viscous' (drag) and/or '+contact' (dashpot); 'auto' (default) chooses them "
+                             "mechanisms '+viscous' (drag) and/or '+contact' (dashpot), and '+distributed' (the "
+                             "electrostatic load along the lever, beside the local one at the tip); 'auto' (default) "
+                             "chooses them "
                              "on 16 pixels spread over the map (BIC + gap rule of pfmdyn discrepancy) and reports it")
     parser.add_argument("--block", type=int, default=16, help="pixels per block side (default 16)")
     parser.add_argument("--scheduler", default=None,
@@ -43,10 +45,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
     parser.add_argument("--gap-threshold", type=float, default=0.2,
                         help="relative residual above which a pixel is marked unexplained (default 0.2)")
-    parser.add_argument("--surface-potential", type=float, default=0.0,
+    parser.add_argument("--surface-potential", type=float, default=None,
                         help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
-                             "this bias (default 0: the intercept); the electrostatic term and the nulling bias "
-                             "do not depend on it")
+                             "this bias (default: fitted with +distributed, else 0, the intercept); the "
+                             "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
     for flag, key in _OVERRIDES.items():
@@ -55,7 +57,7 @@ def add_arguments(parser) -> None:
 
 
 def _mechanisms(args, source, fit_options):
-    """Damping mechanisms from --model (and the selection rows when auto): auto reuses an
+    """Mechanisms from --model (and the selection rows when auto): auto reuses an
     interrupted run's choice, else selects on pixels spread over the map."""
     import os
     from ..maps.fit import model_name, parse_model
@@ -89,7 +91,7 @@ def run(args) -> int:
               f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
         return 0
     source = open_map(args.data, overrides)
-    if not math.isfinite(args.surface_potential):
+    if args.surface_potential is not None and not math.isfinite(args.surface_potential):
         raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
     fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
                    "surface_potential_v": args.surface_potential}

@@ -27,17 +27,32 @@ import numpy as np
 from ..analysis.deconvolve import nulling_bias, nulling_bias_gradient
 from ..errors import UserError
 
-__all__ = ["BiasBasis", "QUANTITIES", "basis", "linear_maps", "project"]
+__all__ = ["DISTRIBUTED", "QUANTITIES", "SURFACE", "BiasBasis", "basis", "linear_maps", "project"]
 
 QUANTITIES = {
     "electrostatic": ("response units per unit d1 per V",
-                      "electrostatic term G_elec: |slope of the response with DC bias| (first band)"),
+                      "electrostatic term G_elec: |slope of the response with DC bias| (local force; first band)"),
     "electrostatic_stderr": ("response units per unit d1 per V", "standard error of electrostatic"),
     "electrostatic_phase": ("rad", "arg G_elec (first band)"),
-    "nulling_bias": ("V", "DC bias at which the response is smallest, V_surf - d_eff / G_elec (first band)"),
+    "nulling_bias": ("V", "DC bias at which the response at the first band's resonance peak is smallest "
+                          "(V_surf - d_eff / G_elec; the same at every frequency without +distributed)"),
     "nulling_bias_stderr": ("V", "standard error of nulling_bias"),
 }
 """Maps written when the data have a bias axis (name -> (unit, description))."""
+
+DISTRIBUTED = {
+    "distributed": ("response units per unit q0",
+                    "distributed electrostatic load on the lever: |amplitude of its response| (first band; "
+                    "per volt of DC bias with a bias axis)"),
+    "distributed_stderr": ("response units per unit q0", "standard error of distributed"),
+}
+"""Maps of the model ``+distributed``."""
+
+SURFACE = {
+    "surface_potential": ("V", "V_surf: the bias that nulls the distributed load (+distributed with a bias axis)"),
+    "surface_potential_stderr": ("V", "standard error of surface_potential"),
+}
+"""Maps of the model ``+distributed`` on data with a bias axis."""
 
 
 @dataclass(frozen=True)
@@ -85,53 +100,100 @@ def project(y, bias: BiasBasis):
 
 
 def _parts(weights):
-    """Gradients of Re z and Im z, ``z = sum_q w_q c_q``, over ``(Re c_0, Im c_0, Re c_1, ...)``."""
-    e_re = np.zeros(2 * len(weights))
-    e_re[0::2] = weights
-    e_im = np.roll(e_re, 1)
-    return e_re, e_im
+    """Gradients of Re z and Im z, ``z = sum W c`` over the first band's amplitudes ``c`` (n, m, K),
+    for complex weights ``W`` broadcasting to (n, m, K): over ``(Re c, Im c)`` pairs, (n, 2 m K)."""
+    w = np.asarray(weights, complex)
+    w = w.reshape(-1, w.shape[-2] * w.shape[-1]) if w.ndim == 3 else w.reshape(1, -1)
+    g_re, g_im = np.empty((len(w), 2 * w.shape[1])), np.empty((len(w), 2 * w.shape[1]))
+    g_re[:, 0::2], g_re[:, 1::2] = w.real, -w.imag
+    g_im[:, 0::2], g_im[:, 1::2] = w.imag, w.real
+    return g_re, g_im
 
 
 def _stderr(gradient, cov):
-    return np.sqrt(np.abs(np.einsum("ni,nij,nj->n", gradient, cov, gradient)))
+    return np.sqrt(np.abs(np.einsum("ni,nij,nj->n", gradient * np.ones((len(cov), 1)), cov,
+                                    gradient * np.ones((len(cov), 1)))))
 
 
-def linear_maps(c, cov, bias: BiasBasis, surface_potential_v: float = 0.0) -> dict[str, np.ndarray]:
-    """Maps of the first band's amplitudes ``c`` (n, m) with covariance ``cov`` (n, 2m, 2m) over
-    ``(Re c_0, Im c_0, Re c_1, Im c_1)``: ``amplitude``, ``phase`` (of ``d_eff``, the response at
-    ``V_surf``) with ``amplitude_stderr``, and with a bias axis the maps of :data:`QUANTITIES`.
+def _abs(z, parts):
+    """``|z|`` (n,) and its gradient, from the gradients ``parts`` of Re z and Im z."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(z), (z.real[:, None] * parts[0] + z.imag[:, None] * parts[1]) / np.abs(z)[:, None]
+
+
+def _nulling(intercept, slope, p_intercept, p_slope):
+    """The generated nulling bias of the line ``intercept + slope V`` and its gradient."""
+    with np.errstate(divide="ignore", invalid="ignore"):    # a zero slope has no nulling bias
+        value = nulling_bias(intercept, slope)
+        g = nulling_bias_gradient(intercept, slope)
+    grad = (g[0][:, None] * p_intercept[0] + g[1][:, None] * p_intercept[1]
+            + g[2][:, None] * p_slope[0] + g[3][:, None] * p_slope[1])
+    return value, grad
+
+
+def _on(weights_q, k, K):
+    """Weights (m, K) selecting drive ``k`` with bias-component weights ``weights_q`` (m,)."""
+    w = np.zeros((len(weights_q), K))
+    w[:, k] = weights_q
+    return w
+
+
+def linear_maps(c, cov, bias: BiasBasis, surface_potential_v=None, g=None) -> dict[str, np.ndarray]:
+    """Maps of the first band's amplitudes ``c`` (n, m, K), for ``m`` bias components and ``K``
+    drives (``d1``; ``q0`` with ``+distributed``), with covariance ``cov`` (n, 2mK, 2mK) over
+    their ``(Re, Im)`` pairs in (component, drive) order; ``g`` (n, K, n_freq) are the transfer
+    functions over the first band (for the resonance peak of ``+distributed``).
+
+    ``amplitude``, ``phase``, ``amplitude_stderr``: ``d_eff``, the ``d1`` term (with a bias axis
+    the response at ``V_surf``: ``surface_potential_v``, else the fitted one with
+    ``+distributed``, else 0).  With a bias axis the maps of :data:`QUANTITIES`; with
+    ``+distributed`` those of :data:`DISTRIBUTED` (and :data:`SURFACE` with a bias axis).
 
     Examples
     --------
     >>> b = basis([-1.0, 0.0, 1.0])
     >>> line = (2.0 + 1.0j) + (1.0 - 0.5j) * np.array([-1.0, 0.0, 1.0])      # b + s V
-    >>> c = (b.q.T @ line)[None]          # the amplitudes on the basis
+    >>> c = (b.q.T @ line)[None, :, None]          # the amplitudes on the basis
     >>> out = linear_maps(c, np.zeros((1, 4, 4)), b, surface_potential_v=0.5)
     >>> complex(np.round(out["amplitude"][0] * np.exp(1j * out["phase"][0]), 12))
     (2.5+0.75j)
     >>> float(out["nulling_bias"][0]), round(float(out["electrostatic"][0]), 12)
     (-1.2, 1.11803398875)
     """
+    n, m, K = c.shape
+    flat = c.reshape(n, -1)
     wb, ws = bias.r_inv[0], bias.r_inv[-1]
-    intercept, slope = c @ wb, c @ ws
-    w_eff = wb + surface_potential_v * ws if bias.has_bias else wb
-    d_eff = c @ w_eff
-    out = {"amplitude": np.abs(d_eff), "phase": np.angle(d_eff),
-           "amplitude_stderr": _stderr(_abs_gradient(d_eff, w_eff), cov)}
-    if bias.has_bias:
-        (b_re, b_im), (s_re, s_im) = _parts(wb), _parts(ws)
-        with np.errstate(divide="ignore", invalid="ignore"):    # a zero slope has no nulling bias
-            g = nulling_bias_gradient(intercept, slope)
-            v_null = nulling_bias(intercept, slope)
-        grad = g[0][:, None] * b_re + g[1][:, None] * b_im + g[2][:, None] * s_re + g[3][:, None] * s_im
-        out.update(electrostatic=np.abs(slope), electrostatic_phase=np.angle(slope),
-                   electrostatic_stderr=_stderr(_abs_gradient(slope, ws), cov),
-                   nulling_bias=v_null, nulling_bias_stderr=_stderr(grad, cov))
-    return out
-
-
-def _abs_gradient(z, weights):
-    """Gradient of ``|z|`` (n,) over the real parameters, for ``z = sum_q w_q c_q``."""
-    e_re, e_im = _parts(weights)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return (z.real[:, None] * e_re + z.imag[:, None] * e_im) / np.abs(z)[:, None]
+    out = {}
+    if K > 1:                                    # the distributed load's amplitude (its slope with a bias axis)
+        w = _on(ws if bias.has_bias else wb, 1, K)
+        value, grad = _abs(flat @ w.ravel(), _parts(w))
+        out.update(distributed=value, distributed_stderr=_stderr(grad, cov))
+    if not bias.has_bias:
+        w = _on(wb, 0, K)
+        d_eff = flat @ w.ravel()
+        value, grad = _abs(d_eff, _parts(w))
+        return {**out, "amplitude": value, "phase": np.angle(d_eff), "amplitude_stderr": _stderr(grad, cov)}
+    (b, pb), (s, ps) = ((flat @ _on(w, 0, K).ravel(), _parts(_on(w, 0, K))) for w in (wb, ws))
+    value, grad = _abs(s, ps)
+    out.update(electrostatic=value, electrostatic_stderr=_stderr(grad, cov), electrostatic_phase=np.angle(s))
+    if K > 1:
+        (e, pe), (h, ph) = ((flat @ _on(w, 1, K).ravel(), _parts(_on(w, 1, K))) for w in (wb, ws))
+        v_surf, grad_surf = _nulling(e, h, pe, ph)
+        out.update(surface_potential=v_surf, surface_potential_stderr=_stderr(grad_surf, cov))
+        # the nulling bias at the resonance peak of the first band: the total response there
+        peak = np.argmax(np.abs(np.einsum("nkf,nk->nf", g, np.stack([s, h], axis=1))), axis=1)
+        t = g[np.arange(n), :, peak]                                            # (n, K)
+        w_i, w_s = wb[None, :, None] * t[:, None, :], ws[None, :, None] * t[:, None, :]
+        total_i, total_s = np.einsum("nmk,nmk->n", w_i, c), np.einsum("nmk,nmk->n", w_s, c)
+        v_null, grad_null = _nulling(total_i, total_s, _parts(w_i), _parts(w_s))
+    else:
+        v_null, grad_null = _nulling(b, s, pb, ps)
+    out.update(nulling_bias=v_null, nulling_bias_stderr=_stderr(grad_null, cov))
+    if surface_potential_v is None and K > 1:         # fitted: d_eff = b + s V_surf, V_surf uncertain too
+        d_eff = b + s * v_surf
+        parts = tuple(pb[i] + v_surf[:, None] * ps[i] + (s.real, s.imag)[i][:, None] * grad_surf for i in range(2))
+    else:
+        v = surface_potential_v or 0.0
+        d_eff, parts = b + v * s, tuple(pb[i] + v * ps[i] for i in range(2))
+    value, grad = _abs(d_eff, parts)
+    return {**out, "amplitude": value, "phase": np.angle(d_eff), "amplitude_stderr": _stderr(grad, cov)}

@@ -50,7 +50,7 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
     return response.shape[0] * response.shape[1]
 
 
-def _output(out, source: MapInput, block: int, selection=None, surface_potential_v=0.0):
+def _output(out, source: MapInput, block: int, selection=None, surface_potential_v=None):
     zarr = _require("zarr")
     group = zarr.open_group(out, mode="a")
     ny, nx = source.shape
@@ -97,7 +97,7 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     import dask.delayed  # noqa: F401  (submodule import)
     os.makedirs(out_dir, exist_ok=True)
     out = os.path.join(out_dir, "maps.zarr")
-    group = _output(out, source, block, selection, options.get("surface_potential_v", 0.0))
+    group = _output(out, source, block, selection, options.get("surface_potential_v"))
     done = np.asarray(group["done"][...])
     todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
     tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,

@@ -6,19 +6,21 @@ unit vertical surface displacement of the elastic-contact cantilever
 :mod:`pfmdyn.generated.damping` (internal friction ``1/Q`` always; viscous drag ``g`` and a
 contact dashpot ``x`` when the model names them), with one complex amplitude ``c_b`` per
 frequency band (d_eff amplitude and phase, arbitrary instrument units; bands are driven and
-demodulated separately).  With a bias axis (:mod:`pfmdyn.maps.bias`) every band has two
-amplitudes, an intercept and a slope per volt of DC bias (the electrostatic term).  The amplitudes
-enter linearly and are projected out (variable projection); ``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one
-per contact mode: one mode cannot separate ``k1`` from ``k2``, so with one band ``k2 = 0``),
-``g`` and ``x`` are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block
-at once, each pixel with its own damping factor.
+demodulated separately).  ``+distributed`` adds the response to a load along the lever (the
+electrostatic force on the lever's body) with amplitudes of its own.  With a bias axis
+(:mod:`pfmdyn.maps.bias`) every band and drive has two amplitudes, an intercept and a slope per
+volt of DC bias.  The amplitudes enter linearly and are projected out (variable projection);
+``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one per contact
+mode: one mode cannot separate ``k1`` from ``k2``, so with one band ``k2 = 0``), ``g`` and ``x``
+are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block at once, each
+pixel with its own damping factor.
 
 Cost is dominated by the generated transfer function over ``(pixels, frequencies)``; one
-*design evaluation* per iteration gives the transfer function and its derivatives for the whole
-block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow from
-them in closed form.  The covariance of the fitted parameters is ``s**2 (J^T J)^-1`` of the
-projected residual, the marginal covariance of the full problem (Golub and Pereyra 1973); the
-amplitudes' covariance comes from the Jacobian of the full problem at the solution.
+*design evaluation* per iteration gives the transfer functions and their derivatives for the
+whole block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow
+from them in closed form (Golub and Pereyra 1973).  The covariance of all parameters, nonlinear
+and amplitudes, is ``s**2`` times the inverse normal matrix of the full problem at the solution
+(:func:`_covariance`); its nonlinear block is the variable-projection one.
 """
 from __future__ import annotations
 
@@ -39,8 +41,10 @@ CHUNK = 256
 """Pixels fitted together: large enough to make the per-call overhead negligible, small enough
 for the ``(pixels, frequencies)`` temporaries to stay in cache (1024 at once is ~1.5x slower)."""
 
-MECHANISMS = ("internal", "viscous", "contact")
-"""Damping mechanisms a map model may hold (``internal`` always: the baseline)."""
+MECHANISMS = ("internal", "viscous", "contact", "distributed")
+"""Mechanisms a map model may hold: damping (``internal`` always: the baseline; viscous drag, a
+contact dashpot) and the electrostatic load distributed along the lever (a second transfer
+function, :attr:`BeamMapModel.drives`)."""
 
 # name -> (unit, description) of the per-pixel output arrays
 _QUANTITIES = {
@@ -58,12 +62,15 @@ _QUANTITIES = {
                   "d_eff amplitude |c| (first band; with biases the response at V = V_surf: intercept + V_surf slope)"),
     "amplitude_stderr": ("response units per unit d1", "standard error of amplitude"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
-    **bias_axis.QUANTITIES,
+    **bias_axis.QUANTITIES, **bias_axis.DISTRIBUTED, **bias_axis.SURFACE,
     "gap": ("1", "relative residual |y - model| / |y|"),
     "explained": ("1", "1 where the model explains the pixel (gap below threshold), else 0"),
 }
-_ONLY = {"viscous_loss": "viscous", "viscous_loss_stderr": "viscous",
-         "contact_loss": "contact", "contact_loss_stderr": "contact", **dict.fromkeys(bias_axis.QUANTITIES, "bias")}
+_REQUIRES = {"viscous_loss": {"viscous"}, "viscous_loss_stderr": {"viscous"},
+             "contact_loss": {"contact"}, "contact_loss_stderr": {"contact"},
+             **dict.fromkeys(bias_axis.QUANTITIES, {"bias"}), **dict.fromkeys(bias_axis.DISTRIBUTED, {"distributed"}),
+             **dict.fromkeys(bias_axis.SURFACE, {"distributed", "bias"})}
+"""What a model must hold (mechanisms, a bias axis) to write a quantity (others: always)."""
 
 
 def quantities(mechanisms=("internal",), bias: bool = False) -> dict[str, tuple[str, str]]:
@@ -76,11 +83,11 @@ def quantities(mechanisms=("internal",), bias: bool = False) -> dict[str, tuple[
     ['nulling_bias', 'nulling_bias_stderr']
     """
     have = set(mechanisms) | ({"bias"} if bias else set())
-    return {name: v for name, v in _QUANTITIES.items() if _ONLY.get(name, "internal") in have}
+    return {name: v for name, v in _QUANTITIES.items() if _REQUIRES.get(name, set()) <= have}
 
 
 def parse_model(spec: str) -> tuple[str, ...]:
-    """Damping mechanisms of a ``--model`` spec ``elastic[+viscous][+contact]``.
+    """Mechanisms of a ``--model`` spec ``elastic[+viscous][+contact][+distributed]``.
 
     >>> parse_model("elastic+contact")
     ('internal', 'contact')
@@ -88,7 +95,7 @@ def parse_model(spec: str) -> tuple[str, ...]:
     names = spec.split("+")
     unknown = [n for n in names[1:] if n not in MECHANISMS[1:]]
     if names[0] != "elastic" or unknown:
-        raise UserError(f"unknown model {spec!r}: use 'auto' or elastic[+viscous][+contact]")
+        raise UserError(f"unknown model {spec!r}: use 'auto' or elastic[+viscous][+contact][+distributed]")
     return ("internal",) + tuple(m for m in MECHANISMS[1:] if m in names)
 
 
@@ -150,7 +157,8 @@ class BeamMapModel:
     def parameters(self) -> tuple[str, ...]:
         """Internal nonlinear parameters, in the order of the fit's columns."""
         names = ["log_k1", "log_q"] + (["log_k2"] if len(self.bands) > 1 else [])
-        return tuple(names + [{"viscous": "g", "contact": "x"}[m] for m in self.mechanisms if m != "internal"])
+        extra = {"viscous": "g", "contact": "x"}
+        return tuple(names + [extra[m] for m in self.mechanisms if m in extra])
 
     def _arguments(self, inv_q, g, k1, k2, x):
         """``beta`` and the springs relative to the complex EI, with the damping factors.
@@ -181,50 +189,62 @@ class BeamMapModel:
         _, _, _, beta, k1e, k2e, _ = self._arguments(*(c[:, None] for c in col))
         return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0]
 
+    @property
+    def drives(self) -> tuple[int, ...]:
+        """Drives (indices into the generated ``DRIVES``) with a transfer function of their own:
+        ``d1`` (which also carries the local electrostatic force, ``f0 + k1 d1`` at the tip),
+        and ``q0``, the distributed electrostatic load on the lever, with ``+distributed``."""
+        return (0, 3) if "distributed" in self.mechanisms else (0,)
+
     def design(self, p, jacobian=True):
-        """Transfer function ``(n, n_freq)`` at internal parameters ``p`` ``(n, n_p)`` and its
-        derivatives ``(n_p, n, n_freq)`` (None unless ``jacobian``): one call of the generated
-        values-and-partials (w.r.t. ``beta``, ``k1``, ``k2``), chained with the generated
-        derivatives of the damping factors.
+        """Transfer functions ``(n, n_drives, n_freq)`` at internal parameters ``p`` ``(n, n_p)``
+        and their derivatives ``(n_p, n, n_drives, n_freq)`` (None unless ``jacobian``): one call
+        of the generated values-and-partials (w.r.t. ``beta``, ``k1``, ``k2``), chained with the
+        generated derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
         beta0, r, r_beta, beta, k1e, k2e, k_factor = self._arguments(inv_q, g, k1, k2, x)
         if not jacobian:
-            return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0], None
+            values = elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)
+            return np.stack([values[i] for i in self.drives], axis=1), None
         values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
-        d_beta, d_k1, d_k2 = partials[0]
         (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, _ = damping.d_factors(r_beta, inv_q, g, 0.0)
-        # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
-        spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
-        chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
-                 "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
-                 "g": d_beta * beta0 * dbf_g}
-        if "contact" in self.mechanisms:
-            dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2]
-            chain["x"] = d_k1 * k1 * dk1f_x / k_factor
-        d = np.empty((len(self.parameters),) + values[0].shape, complex)
-        for i, name in enumerate(self.parameters):
-            d[i] = chain[name]
-        return values[0], d
+        dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2] if "contact" in self.mechanisms else 0.0
+        d = np.empty((len(self.parameters), len(k1), len(self.drives), values[0].shape[-1]), complex)
+        for j, drive in enumerate(self.drives):
+            d_beta, d_k1, d_k2 = partials[drive]
+            # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
+            spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
+            chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
+                     "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
+                     "g": d_beta * beta0 * dbf_g, "x": d_k1 * k1 * dk1f_x / k_factor}
+            for i, name in enumerate(self.parameters):
+                d[i, :, j] = chain[name]
+        return np.stack([values[i] for i in self.drives], axis=1), d
 
 
 def _project(g, dg, y, band_list):
-    """Variable projection of ``y`` ``(n, m, n_freq)`` (``m`` bias components, each with its own
-    amplitude per band) on the transfer function ``g`` ``(n, n_freq)``: amplitudes
-    ``(n, m, n_bands)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``, its Jacobian
-    ``(n, 2 m n_freq, n_p)`` (exact derivative of the projection)."""
+    """Variable projection of ``y`` ``(n, m, n_freq)`` (``m`` bias components) on the transfer
+    functions ``g`` ``(n, K, n_freq)``, with amplitudes of their own for every component and
+    band: amplitudes ``(n, m, n_bands, K)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``
+    ``(n_p, n, K, n_freq)``, its Jacobian ``(n, 2 m n_freq, n_p)``, the exact derivative of the
+    projection: ``dc = (A^H A)^-1 (dA^H r - A^H dA c)``, ``dr = -dA c - A dc``."""
     c, r = [], np.empty_like(y)
     dr = None if dg is None else np.empty((dg.shape[0],) + y.shape, complex)
     for b in band_list:
-        gb, yb = g[:, None, b], y[..., b]
-        norm = np.maximum(np.sum(np.abs(gb) ** 2, axis=2), 1e-300)
-        cb = np.sum(gb.conj() * yb, axis=2) / norm
-        r[..., b] = yb - cb[..., None] * gb
+        A, yb = g[..., b], y[..., b]
+        AhA = np.einsum("nkf,nlf->nkl", A.conj(), A)
+        scale = np.maximum(np.einsum("nkk->nk", AhA).real, 1e-300) ** -0.5     # equilibrate the columns
+        inverse = np.linalg.inv(AhA * scale[:, :, None] * scale[:, None, :]) * scale[:, :, None] * scale[:, None, :]
+        cb = np.einsum("nkl,nlf,nmf->nmk", inverse, A.conj(), yb)
+        r[..., b] = rb = yb - np.einsum("nmk,nkf->nmf", cb, A)
         c.append(cb)
         if dg is not None:
-            dgb = dg[:, :, None, b]
-            dc = (np.sum(dgb.conj() * yb, axis=3) - 2 * cb * np.sum((gb.conj() * dgb).real, axis=3)) / norm
-            dr[..., b] = -(dc[..., None] * gb + cb[..., None] * dgb)
+            dA = dg[..., b]
+            dA_c = np.einsum("pnkf,nmk->pnmf", dA, cb)
+            rhs = np.einsum("pnkf,nmf->pnmk", dA.conj(), rb) - np.einsum("nkf,pnmf->pnmk", A.conj(), dA_c)
+            dc = np.einsum("nkl,pnml->pnmk", inverse, rhs)
+            dr[..., b] = -(dA_c + np.einsum("pnmk,nkf->pnmf", dc, A))
     n = len(y)
     J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).reshape(len(dr), n, -1).transpose(1, 2, 0)
     return np.stack(c, axis=2), np.concatenate([r.real, r.imag], axis=1).reshape(n, -1), J
@@ -337,7 +357,7 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2, tolerance=1e-3, surface_potential_v=0.0) -> dict[str, np.ndarray]:
+              gap_threshold=0.2, tolerance=1e-3, surface_potential_v=None) -> dict[str, np.ndarray]:
     """Fit every pixel of ``response``, :data:`CHUNK` pixels at once.
 
     ``response`` is complex, ``(..., n_freq)``, or ``(..., n_bias, n_freq)`` when the model has
@@ -346,7 +366,7 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
-    line.
+    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).
 
     Examples
     --------
@@ -382,29 +402,38 @@ def _covariance(model, g, dg, c, noise):
     the inverse normal matrix of the full (unprojected) problem at the solution.  Its ``p`` block
     is the variable-projection one; the amplitudes' block also carries their correlation with
     ``p`` (an amplitude's error grows with that of the resonance it sits on).  The amplitude
-    columns are ``(Re, Im)`` pairs in ``c``'s (component, band) order.
+    columns are ``(Re, Im)`` pairs in ``c``'s (component, band, drive) order (:func:`_column`).
 
-    The residual in band ``j`` of component ``q`` is ``y - c_qj g``, so the normal matrix has
-    closed-form blocks: ``sum_q |c_qj|^2 Re(dg^H dg)`` for ``p``, ``Re(conj(c_qj) dg^H g)`` and
-    ``-Im(...)`` between ``p`` and ``(Re, Im) c_qj``, and ``|g|^2`` on the amplitudes' diagonal.
+    The residual in band ``j`` of component ``q`` is ``y - sum_k c_qjk g_k``, so the normal
+    matrix has closed-form blocks: with ``D_i = sum_k c_qjk dg_ik``, ``Re(D^H D)`` for ``p``,
+    ``Re(D_i^H g_k)`` and ``-Im(...)`` between ``p_i`` and ``(Re, Im) c_qjk``, and the real form
+    of ``g^H g`` between the amplitudes of one component and band.
     """
-    n, m, n_bands = c.shape
+    n, m, n_bands, K = c.shape
     n_p = dg.shape[0]
-    N = np.zeros((n, n_p + 2 * m * n_bands, n_p + 2 * m * n_bands))
+    N = np.zeros((n, n_p + 2 * c[0].size, n_p + 2 * c[0].size))
     for j, b in enumerate(model.bands):
-        gb, dgb = g[:, b], dg[:, :, b]
-        N[:, :n_p, :n_p] += np.sum(np.abs(c[:, :, j]) ** 2, axis=1)[:, None, None] * np.einsum(
-            "inf,knf->nik", dgb.conj(), dgb).real
-        h = np.einsum("inf,nf->ni", dgb.conj(), gb)
+        gb = g[..., b]
+        D = np.einsum("pnkf,nmk->pnmf", dg[..., b], c[:, :, j])
+        N[:, :n_p, :n_p] += np.einsum("pnmf,inmf->npi", D.conj(), D).real
+        cross = np.einsum("pnmf,nkf->npmk", D.conj(), gb)
+        H = np.einsum("nkf,nlf->nkl", gb.conj(), gb)
+        block = np.empty((n, 2 * K, 2 * K))
+        block[:, 0::2, 0::2] = block[:, 1::2, 1::2] = H.real
+        block[:, 0::2, 1::2], block[:, 1::2, 0::2] = -H.imag, H.imag
         for q in range(m):
-            col = n_p + 2 * (q * n_bands + j)
-            cross = c[:, q, j, None].conj() * h
-            N[:, :n_p, col], N[:, :n_p, col + 1] = cross.real, -cross.imag
-            N[:, col, col] = N[:, col + 1, col + 1] = np.sum(np.abs(gb) ** 2, axis=1)
+            cols = _column(n_p, q, j, 0, n_bands, K) + np.arange(2 * K)
+            N[:, :n_p, cols[0::2]], N[:, :n_p, cols[1::2]] = cross[:, :, q].real, -cross[:, :, q].imag
+            N[:, cols[:, None], cols] = block
     N[:, n_p:, :n_p] = N[:, :n_p, n_p:].transpose(0, 2, 1)
     size = np.sqrt(np.maximum(np.einsum("nii->ni", N), 1e-300))      # columns of very different scales
     inverse = np.linalg.pinv(N / (size[:, :, None] * size[:, None, :]), hermitian=True)
     return inverse / (size[:, :, None] * size[:, None, :]) * noise[:, None, None]
+
+
+def _column(n_p, q, j, k, n_bands, K) -> int:
+    """Index of ``Re c_qjk`` (``Im`` is the next) among the covariance's parameters."""
+    return n_p + 2 * ((q * n_bands + j) * K + k)
 
 
 def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v):
@@ -422,9 +451,11 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     k1 = np.exp(col["log_k1"])
     k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
     gap = np.sqrt(cost)
-    # the first band's amplitudes: columns (Re, Im) of component q at n_p + 2 q n_bands
-    first = np.concatenate([len(names) + 2 * q * c.shape[2] + np.arange(2) for q in range(c.shape[1])])
-    linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v)
+    _, m, n_bands, K = c.shape
+    first = np.concatenate([_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
+    band = model.bands[0]
+    linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
+                                   g[..., band])
     out = {"k1": k1, "k1_stderr": k1 * sd["log_k1"], "k2": k2, "k2_stderr": k2 * sd.get("log_k2", np.nan),
            "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * sd["log_q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
