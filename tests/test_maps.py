@@ -181,6 +181,9 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
         h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
     assert main(["map", str(path), "--out", str(tmp_path)]) == 0
     np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
+    # the same map through pfmdyn stiffness
+    assert main(["stiffness", str(path), "--out", str(tmp_path / "s")]) == 0
+    np.testing.assert_array_equal(_maps(tmp_path / "s")["k1"], _maps(tmp_path)["k1"])
 
 
 def test_zarr_group_input(synthetic, local_run, tmp_path):

@@ -84,11 +84,9 @@ def run(args) -> int:
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
     overrides = {key: getattr(args, flag) for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
-    from ..maps.contact import contact_map, is_contact_map
+    from ..maps.contact import contact_map, describe, is_contact_map
     if is_contact_map(args.data):
-        s = contact_map(args.data, args.out, overrides)
-        print(f"contact-frequency map: k1 at {100 * s['explained_fraction']:.1f} % of pixels, "
-              f"median k1 {s['median_k1']:.4g} N/m; maps in {s['out']}")
+        print(describe(contact_map(args.data, args.out, overrides)))
         return 0
     source = open_map(args.data, overrides)
     if args.surface_potential is not None and not math.isfinite(args.surface_potential):

@@ -10,6 +10,10 @@ command-line values win) or a pfmdyn resonance table (CSV, ``mode,condition,freq
     pfmdyn stiffness scan.ibw --k2-ratio 0.05 --json k1.json
 
 Two or more ``--contact`` values (with their ``--mode`` numbers) give k1 and k2.
+A contact-resonance frequency map (DART or CR tracking: ``contact_frequency_hz`` (ny, nx) in an
+HDF5 file or Zarr group, see :mod:`pfmdyn.maps.contact`) becomes a k1 map, vectorised::
+
+    pfmdyn stiffness dart.h5 --out result/      # result/maps.zarr: k1, k1_stderr
 ``--reduced-modulus`` converts k1 to E* with the Hertz relation (``--tip-radius``, ``--load``).
 """
 from __future__ import annotations
@@ -67,6 +71,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--tip-radius", default=None, metavar="M", help="tip radius R (with --reduced-modulus)")
     parser.add_argument("--load", default=None, metavar="N", help="normal load P (with --reduced-modulus)")
     parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    parser.add_argument("--out", default=None, metavar="DIR",
+                        help="for a contact-frequency map (contact_frequency_hz): write DIR/maps.zarr with k1")
 
 
 def _from_file(path: str, overrides: dict) -> dict:
@@ -135,12 +141,44 @@ def _coupling(args) -> float | None:
     return _number(args.k2_over_k1, "--k2-over-k1")
 
 
+def _is_contact_map(path: str) -> bool:
+    """True for an HDF5 file or Zarr directory holding a contact-frequency map."""
+    import os
+    if not (os.path.isdir(path) or Path(path).suffix.lower() in (".h5", ".hdf5")):
+        return False
+    from ..maps.contact import is_contact_map
+    return is_contact_map(path)
+
+
+def _contact_map(args) -> int:
+    """k1 at every pixel of a contact-frequency map (command-line values win over the file's)."""
+    from ..maps.contact import contact_map, describe
+    if not args.out:
+        raise UserError(f"{args.file}: a contact-frequency map needs --out DIR (gets maps.zarr with k1)")
+    if args.contact or args.k2_ratio or args.k2_over_k1 or args.poisson or args.reduced_modulus:
+        raise UserError("a contact-frequency map takes its contact frequencies from the file, with k2 = 0: "
+                        "drop --contact, --k2-ratio, --k2-over-k1, --poisson and --reduced-modulus")
+    overrides = {key: _number(getattr(args, flag), option) for flag, key, option in (
+        ("free", "free_resonance_hz", "--free"), ("spring_constant", "spring_constant_n_per_m", "--spring-constant"),
+        ("contact_uncertainty", "contact_uncertainty_hz", "--contact-uncertainty")) if getattr(args, flag) is not None}
+    if args.mode:
+        if len(args.mode) != 1:
+            raise UserError("a contact-frequency map has one mode: give --mode once")
+        overrides["contact_mode"] = int(_number(args.mode[0], "--mode"))
+    print(describe(contact_map(args.file, args.out, overrides)))
+    return 0
+
+
 def run(args) -> int:
     """Compute k1 (and k2), print them with the branch proof, write JSON if asked."""
     from ..analysis.stiffness import (coupled_contact_stiffness, contact_stiffness, k1_k2_from_modes, reduced_modulus,
                                       reduced_modulus_uncertainty)
     from .inspect import write_json
 
+    if args.file and _is_contact_map(args.file):
+        return _contact_map(args)
+    if args.out:
+        raise UserError("--out is for a contact-frequency map (a file holding contact_frequency_hz)")
     inputs = gather(args)
     sig_c = _number(args.contact_uncertainty, "--contact-uncertainty", allow_zero=True) or 0.0
     sig_f = _number(args.free_uncertainty, "--free-uncertainty", allow_zero=True) or 0.0

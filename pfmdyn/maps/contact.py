@@ -15,7 +15,7 @@ from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
 from .readers import open_root, require
 
-__all__ = ["is_contact_map", "contact_map"]
+__all__ = ["contact_map", "describe", "is_contact_map"]
 
 
 def is_contact_map(path: str) -> bool:
@@ -57,3 +57,13 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
         arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
     k1 = np.asarray(result.k1_n_per_m)
     return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": float(np.nanmedian(k1)), "out": out}
+
+
+def describe(summary: dict) -> str:
+    """One line on a :func:`contact_map` summary.
+
+    >>> describe({"explained_fraction": 1.0, "median_k1": 109.75, "out": "o/maps.zarr"})
+    'contact-frequency map: k1 at 100.0 % of pixels, median k1 109.8 N/m; maps in o/maps.zarr'
+    """
+    return (f"contact-frequency map: k1 at {100 * summary['explained_fraction']:.1f} % of pixels, "
+            f"median k1 {summary['median_k1']:.4g} N/m; maps in {summary['out']}")
