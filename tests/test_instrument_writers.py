@@ -411,6 +411,34 @@ def test_ibw_long_names_version_7(tmp_path):
     assert record.fields == {"spring_constant_n_per_m": 2.5}
 
 
+def _version2_wave(path, values, x0, dx, x_unit, data_unit, note=b""):
+    """An Igor 1-4 era (version 2) binary wave, byte by byte from the format's description:
+    a 16-byte binary header, the 126-byte wave header whose last 16 bytes are the first of the
+    data, the data padded by those 16 bytes, then the note."""
+    import struct
+    data = np.asarray(values, "<f4").tobytes() + bytes(16)
+    wave = struct.pack("<hl20shhl4s4slhddhhhddccllL2sLl", 2, 0, b"tune", 0, 0, 0, data_unit, x_unit, len(values), 0,
+                       dx, x0, 0, 0, 0, 0.0, 0.0, b"\0", b"\0", 0, 0, 0, b"\0\0", 0, 0)
+    head = struct.pack("<hlllh", 2, len(wave) + len(data), len(note), 0, 0) + wave
+    check = -sum(struct.unpack(f"<{len(head) // 2}h", head))        # the header's int16 words sum to zero
+    head = struct.pack("<hlllh", 2, len(wave) + len(data), len(note), 0, (check + 2**15) % 2**16 - 2**15) + wave
+    path.write_bytes(head + data + note)
+    return path
+
+
+def test_ibw_version_2_spectrum(tmp_path):
+    """Versions 1-3 give the point count as npnts (no nDim): a 1-D tune saved by an old Igor."""
+    f_khz = np.linspace(280.0, 360.0, 41)
+    amplitude = 1e3 / np.abs(330.0**2 - f_khz**2 + 1j * f_khz * 330.0 / 50)
+    path = _version2_wave(tmp_path / "old.ibw", amplitude, f_khz[0], f_khz[1] - f_khz[0], b"kHz", b"nm",
+                          b"SpringConstant: 2.5\r")
+    record = read_instrument(path)
+    freq, values, unit = record.spectrum
+    np.testing.assert_allclose(freq, f_khz * 1e3, rtol=1e-9)
+    np.testing.assert_allclose(values, amplitude.astype("f4") * 1e-9, rtol=1e-6)
+    assert unit == "m" and record.fields == {"spring_constant_n_per_m": 2.5}
+
+
 def test_ibw_axis_in_unknown_unit_is_said(tmp_path):
     record = read_instrument(igor_wave(tmp_path / "h.ibw", np.ones(20), "Amp", [(1.0, 1.0, "Hertz")], "V"))
     assert record.kind == "curve" and record.spectrum is None

@@ -63,7 +63,10 @@ def _load(path: Path) -> dict:
     if int(np.ravel(wave["wave_header"].get("type", 1))[0]) == 0:
         raise UserError(f"{path}: a text wave (Igor type 0), not measured data")
     data = wave.get("wData")
-    expected = int(np.prod([n for n in np.ravel(wave["wave_header"].get("nDim", [0])) if n > 0] or [0]))
+    header = wave["wave_header"]
+    # versions 1-3 (Igor 1-4) are one-dimensional: npnts instead of nDim
+    expected = (int(np.prod([n for n in np.ravel(header["nDim"]) if n > 0] or [0])) if "nDim" in header
+                else int(np.ravel(header.get("npnts", 0))[0]))
     if not isinstance(data, np.ndarray) or data.dtype.kind not in "iufc" or data.size != expected:
         raise UserError(f"{path}: not a readable Igor binary wave (truncated or damaged?): "
                         f"the data block does not hold the {expected} points its header announces")
