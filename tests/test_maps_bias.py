@@ -136,6 +136,40 @@ def test_beps_usid_layout_gives_the_same_maps(bias_run, tmp_path):
         np.testing.assert_allclose(value, m[name], rtol=1e-9, atol=1e-300, err_msg=name)
 
 
+def test_beps_written_by_pyusid(tmp_path, monkeypatch):
+    """pyUSID's own writer (positions [Y, X], spectroscopic rows slowest first: DC_Offset, then
+    Frequency) gives the maps of the plain layout holding the same numbers."""
+    if not hasattr(np, "product"):                 # pyUSID 0.0.12 calls numpy.product (gone in NumPy 2)
+        monkeypatch.setattr(np, "product", np.prod, raising=False)
+    usid = pytest.importorskip("pyUSID")
+    path, _ = _write_map(tmp_path / "plain.h5", _levers()["stiff"])
+    with h5py.File(path, "r") as h:
+        y, f, attrs = h["response"][...], h["frequency_hz"][...], dict(h.attrs)
+    with h5py.File(tmp_path / "pyusid.h5", "w") as h:
+        group = usid.hdf_utils.create_indexed_group(h, "Measurement")
+        channel = usid.hdf_utils.create_indexed_group(group, "Channel")
+        positions = [usid.Dimension("X", "m", np.arange(N) * 1e-7), usid.Dimension("Y", "m", np.arange(N) * 1e-7)]
+        spectral = [usid.Dimension("Frequency", "Hz", f), usid.Dimension("DC_Offset", "V", np.arange(BIASES.size))]
+        main_data = usid.hdf_utils.write_main_dataset(channel, y.reshape(N * N, -1), "Raw_Data", "Piezoresponse",
+                                                      "a.u.", positions, spectral)
+        # the bias steps' values (a triangle repeats them; pyUSID wants distinct ones to build the indices)
+        values = h[main_data.attrs["Spectroscopic_Values"]]
+        row = [label.decode() if isinstance(label, bytes) else label for label in values.attrs["labels"]].index("DC_Offset")
+        values[row] = BIASES[values[row].astype(int)]
+        f_written = np.unique(values[1 - row])
+        group.attrs.update(attrs)
+    with h5py.File(path, "a") as h:            # pyUSID keeps float32 values: the plain file gets the same
+        del h["frequency_hz"]
+        h["frequency_hz"] = f_written
+    outs = []
+    for name in (path, tmp_path / "pyusid.h5"):
+        out = tmp_path / ("o_" + Path(name).stem)
+        assert main(["map", str(name), "--out", str(out), "--no-progress", "--model", "elastic"]) == 0
+        outs.append(_maps(out))
+    for name, value in outs[1].items():
+        np.testing.assert_allclose(value, outs[0][name], rtol=1e-9, atol=1e-300, err_msg=name)
+
+
 def test_distributed_load_is_named_and_gives_the_surface_potential(tmp_path, capsys):
     """A soft lever with the parallel-plate load of the paper's estimate (eps0 w / H^2 per volt,
     w = 30 um, H = 10 um) along it: at the first contact resonance it drives the tip ~5x more than
