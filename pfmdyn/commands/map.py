@@ -21,7 +21,8 @@ from ..errors import UserError
 __all__ = ["add_arguments", "run"]
 
 _OVERRIDES = {"spring_constant": "spring_constant_n_per_m", "length": "length_m",
-              "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz"}
+              "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz",
+              "tip_position": "tip_position", "tip_mass": "tip_mass_ratio"}
 
 
 def add_arguments(parser) -> None:
@@ -52,8 +53,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
     for flag, key in _OVERRIDES.items():
+        extra = {"tip_position": " (the tip at this fraction of the length: below 1 when set back from the end; "
+                                 "default 1)",
+                 "tip_mass": " (tip mass over the lever's mass; default 0)"}.get(flag, "")
         parser.add_argument("--" + flag.replace("_", "-"), type=float, default=None,
-                            help=f"override the file's {key}")
+                            help=f"override the file's {key}{extra}")
 
 
 def _mechanisms(args, source, fit_options):

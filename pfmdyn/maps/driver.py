@@ -55,23 +55,24 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     group = zarr.open_group(out, mode="a")
     ny, nx = source.shape
     grid = (math.ceil(ny / block), math.ceil(nx / block))
-    if "done" in group and group["done"].shape != grid:
-        raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
-    model = model_name(source.model.mechanisms)
-    if "done" in group and group.attrs.get("model", model) != model:
-        raise UserError(f"{out}: holds a map of model {group.attrs['model']}, not {model}; choose another --out")
-    for name, (unit, text) in source.model.outputs.items():
+    model = source.model
+    settings = {"model": model_name(model.mechanisms), "tip_position": model.tip_position,
+                "tip_mass": model.tip_mass, "surface_potential_v": surface_potential_v}
+    if "done" in group:     # an interrupted run: only the same map of the same model may continue it
+        if group["done"].shape != grid:
+            raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
+        for key, value in settings.items():
+            if group.attrs.get(key, value) != value:
+                raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another --out")
+    for name, (unit, text) in model.outputs.items():
         if name not in group:
             arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
             arr.attrs.update(units=unit, description=text)
     if "done" not in group:
         group.zeros("done", shape=grid, chunks=(1, 1), dtype="u1")
-    if "done" in group and group.attrs.get("surface_potential_v", surface_potential_v) != surface_potential_v:
-        raise UserError(f"{out}: holds a map for surface potential {group.attrs['surface_potential_v']} V, "
-                        f"not {surface_potential_v} V; choose another --out")
-    group.attrs.update(source=os.path.abspath(source.path), block=block, model=model)
-    if source.model.bias_v is not None:
-        group.attrs.update(bias_v=[float(v) for v in source.model.bias_v], surface_potential_v=surface_potential_v)
+    group.attrs.update(source=os.path.abspath(source.path), block=block, **settings)
+    if model.bias_v is not None:
+        group.attrs["bias_v"] = [float(v) for v in model.bias_v]
     if selection is not None:
         group.attrs["model_selection"] = selection
     return group

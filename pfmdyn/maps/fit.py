@@ -32,7 +32,9 @@ import numpy as np
 
 from ..cantilever import Cantilever
 from ..errors import UserError
-from ..generated import damping, elastic_contact
+from ..discrepancy.model import free_root
+from ..generated import damping, elastic_contact, tip_setback
+from ..generated.characteristic import BETA1_FREE
 from . import bias as bias_axis
 
 __all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
@@ -142,6 +144,10 @@ class BeamMapModel:
     mechanisms: tuple[str, ...] = ("internal",)
     bias_v: np.ndarray | None = None
     """DC tip bias of each spectrum of a pixel (V), or None: one spectrum per pixel."""
+    tip_position: float = 1.0
+    """``gamma``: the tip sits at ``gamma L`` (set back from the free end when below 1)."""
+    tip_mass: float = 0.0
+    """``mu``: the tip's mass over the lever's."""
 
     @property
     def outputs(self) -> dict[str, tuple[str, str]]:
@@ -170,11 +176,33 @@ class BeamMapModel:
         f = np.asarray(self.frequency_hz, float)
         r = f / self.f1
         beta0 = Cantilever(self.k, self.f1, self.L).beta(f)
+        if self.tip_mass:       # the measured f1 is the loaded lever's: its root is not BETA1_FREE
+            beta0 = beta0 * free_root(self.k, self.H, self.L, self.tip_mass, self.tip_position) / BETA1_FREE
         # Without drag the beta factor does not depend on r: keep it one number per pixel.
         r_beta = r if "viscous" in self.mechanisms else 1.0
-        beta_factor, k_factor, _, _ = damping.factors(r_beta, inv_q, g, 0.0)
+        beta_factor, k_factor, _, mu_factor = damping.factors(r_beta, inv_q, g, 0.0)
         k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
-        return beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor
+        return (beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor,
+                self.tip_mass * mu_factor)
+
+    def _transfer(self, beta, k1e, k2e, mu, jacobian):
+        """Slopes per drive and (with ``jacobian``) per drive the partials w.r.t. (beta, k1, k2,
+        mu), None where not needed: the generated elastic contact for a massless tip at the end,
+        else the generated set-back solution (springs on the beam axes, no tilt)."""
+        if self.tip_position == 1.0 and not self.tip_mass:
+            if not jacobian:
+                return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L), None
+            values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
+            return values, [(*p, None) for p in partials]
+        args = (beta, self.k, k1e, k2e, 0.0, self.H, self.L, mu, self.tip_position)
+        if not jacobian:
+            return tip_setback.slope(*args), None
+        wanted = ("beta", "kvv", "kll", "mu")
+        # the tip mass moves with drag only (mu_factor); otherwise its partial multiplies zero
+        wrt = wanted if self.tip_mass and "viscous" in self.mechanisms else wanted[:3]
+        values, partials = tip_setback.slope_and_jacobian(*args, wrt=wrt)
+        index = [tip_setback.JACOBIAN_PARAMETERS.index(name) for name in wanted]
+        return values, [tuple(p[i] for i in index) for p in partials]
 
     def _physical(self, p):
         """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(n, n_p)``), each ``(n, 1)``."""
@@ -186,8 +214,8 @@ class BeamMapModel:
     def shape_functions(self, k1, q, k2=0.0, g=0.0, x=0.0) -> np.ndarray:
         """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
         col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
-        _, _, _, beta, k1e, k2e, _ = self._arguments(*(c[:, None] for c in col))
-        return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)[0]
+        _, _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
+        return self._transfer(beta, k1e, k2e, mu, jacobian=False)[0][0]
 
     @property
     def drives(self) -> tuple[int, ...]:
@@ -203,21 +231,21 @@ class BeamMapModel:
         generated derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
-        beta0, r, r_beta, beta, k1e, k2e, k_factor = self._arguments(inv_q, g, k1, k2, x)
+        beta0, r, r_beta, beta, k1e, k2e, k_factor, mu = self._arguments(inv_q, g, k1, k2, x)
+        values, partials = self._transfer(beta, k1e, k2e, mu, jacobian)
         if not jacobian:
-            values = elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L)
             return np.stack([values[i] for i in self.drives], axis=1), None
-        values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
-        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, _ = damping.d_factors(r_beta, inv_q, g, 0.0)
+        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, (_, dmf_g, _) = damping.d_factors(r_beta, inv_q, g, 0.0)
         dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2] if "contact" in self.mechanisms else 0.0
         d = np.empty((len(self.parameters), len(k1), len(self.drives), values[0].shape[-1]), complex)
         for j, drive in enumerate(self.drives):
-            d_beta, d_k1, d_k2 = partials[drive]
+            d_beta, d_k1, d_k2, d_mu = partials[drive]
             # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
             spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
             chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
                      "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
-                     "g": d_beta * beta0 * dbf_g, "x": d_k1 * k1 * dk1f_x / k_factor}
+                     "g": d_beta * beta0 * dbf_g + (0.0 if d_mu is None else d_mu * self.tip_mass * dmf_g),
+                     "x": d_k1 * k1 * dk1f_x / k_factor}
             for i, name in enumerate(self.parameters):
                 d[i, :, j] = chain[name]
         return np.stack([values[i] for i in self.drives], axis=1), d
@@ -254,7 +282,7 @@ def _start(model, y, q0, k1_range):
     """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0), refined
     by the vertex of the parabola through the best grid value and its neighbours on each axis."""
     log_k1, log_q, g = _grid(model.k, model.L, model.f1, model.H, np.asarray(model.frequency_hz, float).tobytes(),
-                            q0, tuple(k1_range))
+                             q0, tuple(k1_range), model.tip_position, model.tip_mass)
     n, m = y.shape[:2]
     # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
     proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
@@ -265,11 +293,11 @@ def _start(model, y, q0, k1_range):
 
 
 @functools.lru_cache(maxsize=8)
-def _grid(k, L, f1, H, frequency_bytes, q0, k1_range):
+def _grid(k, L, f1, H, frequency_bytes, q0, k1_range, tip_position, tip_mass):
     """Shape functions of the start grid, computed once per cantilever, frequencies and range."""
     log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
     k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
-    model = BeamMapModel(k, L, f1, H, np.frombuffer(frequency_bytes))
+    model = BeamMapModel(k, L, f1, H, np.frombuffer(frequency_bytes), tip_position=tip_position, tip_mass=tip_mass)
     return log_k1, log_q, model.shape_functions(k1_grid.ravel(), q_grid.ravel())
 
 

@@ -26,6 +26,9 @@ from .fit import BeamMapModel
 __all__ = ["MapInput", "open_map", "read_block", "require"]
 
 METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
+TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
+"""Optional tip geometry: position over the lever length (default 1, at the free end) and mass
+over the lever's (default 0)."""
 
 
 def require(module: str):
@@ -155,7 +158,7 @@ def _metadata(root) -> dict:
     for group in groups:
         attrs = dict(group.attrs)
         asylum, _ = cantilever_fields(attrs)
-        for key in METADATA:
+        for key in [*METADATA, *TIP]:
             value = attrs.get(key, asylum.get(key))
             if value is not None and key not in found:
                 found[key] = value
@@ -195,7 +198,11 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
     if bias is not None:
         basis(bias)                                  # one-line error unless two distinct finite biases
     meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta), tuple(grid),
+    tip = {short: float(attrs[key]) for key, short in TIP.items() if key in attrs}
+    if not 0.5 <= tip.get("tip_position", 1.0) <= 1.0 or not 0.0 <= tip.get("tip_mass", 0.0) < 10.0:
+        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
+                        f"[0, 10), got {tip}")
+    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
 
