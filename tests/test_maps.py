@@ -122,6 +122,11 @@ def test_bad_input_is_one_line_error(tmp_path, capsys):
         h["frequency_hz"] = [1.0]
     assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "missing dataset 'response'" in capsys.readouterr().err
+    for other in (tmp_path / "scan.ibw", tmp_path / "empty_dir"):     # not HDF5, not a Zarr group
+        other.write_bytes(b"IGOR") if other.suffix else other.mkdir()
+        assert main(["map", str(other), "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert "not a readable" in err and len(err.strip().splitlines()) == 1, err
 
 
 def test_missing_extra_names_it(synthetic, tmp_path, monkeypatch, capsys):

@@ -59,9 +59,16 @@ class open_root:
         self.path = path
 
     def __enter__(self):
-        if os.path.isdir(self.path):
-            return require("zarr").open_group(self.path, mode="r")
-        self._file = require("h5py").File(self.path, "r")
+        if not os.path.exists(self.path):
+            raise UserError(f"{self.path}: no such file or directory")
+        try:
+            if os.path.isdir(self.path):
+                return require("zarr").open_group(self.path, mode="r")
+            self._file = require("h5py").File(self.path, "r")
+        except (OSError, ValueError, KeyError) as exc:   # h5py: not HDF5; zarr: no group here
+            kind = "Zarr group" if os.path.isdir(self.path) else "HDF5 file"
+            raise UserError(f"{self.path}: not a readable {kind} ({' '.join(str(exc).split())[:120]}); maps are read "
+                            "from HDF5 files and Zarr directories") from None
         return self._file
 
     def __exit__(self, *exc):
