@@ -147,7 +147,10 @@ def _is_contact_map(path: str) -> bool:
     if not (os.path.isdir(path) or Path(path).suffix.lower() in (".h5", ".hdf5")):
         return False
     from ..maps.contact import is_contact_map
-    return is_contact_map(path)
+    try:
+        return is_contact_map(path)
+    except UserError:       # not HDF5 or Zarr: the instrument readers say what it is
+        return False
 
 
 def _contact_map(args) -> int:
