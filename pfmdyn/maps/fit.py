@@ -154,7 +154,7 @@ class BeamMapModel:
         """The per-pixel maps this model writes (:func:`quantities`)."""
         return quantities(self.mechanisms, self.bias_v is not None)
 
-    @property
+    @functools.cached_property
     def bands(self) -> list[slice]:
         """The frequency bands (one per contact mode driven)."""
         return bands(self.frequency_hz)
