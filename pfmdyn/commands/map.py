@@ -6,8 +6,9 @@
     pfmdyn map scan.h5 --out result/ --scheduler tcp://host:8786
     pfmdyn map be_usid.h5 --out result/ --spring-constant 2 --length 225e-6   # pycroscopy USID
 
-The input holds ``response`` (ny, nx, n_freq, complex), ``frequency_hz`` and the cantilever
-metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
+The input holds ``response`` (ny, nx, n_freq, complex; or (ny, nx, n_bias, n_freq) with
+``bias_v``, which adds maps of the electrostatic term and the nulling bias), ``frequency_hz`` and
+the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
 becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  Rerunning an interrupted command resumes where it stopped.
 """
@@ -27,7 +28,8 @@ _OVERRIDES = {"spring_constant": "spring_constant_n_per_m", "length": "length_m"
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
-    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response, frequency_hz; or USID BE HDF5")
+    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
+                                     "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx)")
     parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
     parser.add_argument("--model", default="auto",
                         help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
