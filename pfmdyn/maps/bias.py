@@ -111,8 +111,9 @@ def _parts(weights):
 
 
 def _stderr(gradient, cov):
-    return np.sqrt(np.abs(np.einsum("ni,nij,nj->n", gradient * np.ones((len(cov), 1)), cov,
-                                    gradient * np.ones((len(cov), 1)))))
+    """Delta-method standard error from a gradient (one row, or one per pixel) and ``cov``."""
+    gradient = np.broadcast_to(gradient, (len(cov), cov.shape[-1]))
+    return np.sqrt(np.abs(np.einsum("ni,nij,nj->n", gradient, cov, gradient)))
 
 
 def _abs(z, parts):
