@@ -78,3 +78,26 @@ def test_a_statement_decider_follows_the_derivation():
     assert verdict == core.ERRATUM and "(n - 1/4) pi" in correct
     assert statements._limiting_cases_order()[0] == core.ERRATUM
     assert statements._scaling_order("nonlocal_fastest")()[0] == core.HOLDS
+
+
+def test_a_roman_numeral_names_the_same_table():
+    s = "Cantilever parameters are summarized in Table I."
+    assert xref.check_table(_ref("table", "captions", s, "Table I", ("I",)))[0] == core.HOLDS
+    s2 = s.replace("Table I", "Table II")
+    assert xref.check_table(_ref("table", "captions", s2, "Table II", ("II",)))[0] == core.ERRATUM
+
+
+def test_loose_names_are_decided_by_the_physics_they_point_to(monkeypatch):
+    # "8 times ... than that for the clamped cantilever": the number decides, not the name.
+    assert statements._eight_times()[0] == core.HOLDS
+    monkeypatch.setattr(statements.P, "nonlocal_free_to_supported", 4)
+    core.clear_results()
+    try:
+        assert statements._eight_times()[0] == core.ERRATUM
+    finally:
+        core.clear_results()
+    # "a cantilever with a high spring constant (k1 -> oo)": k1 grows with k through the load.
+    verdict, evidence, _ = statements._stiff_cantilever_vs_k1()
+    assert verdict == core.HOLDS and "d ln k1/d ln k = 1/3" in evidence
+    assert statements._tip1_null_consistency()[0] == core.HOLDS
+    assert statements._nominal_resonance()[0] == core.UNDECIDABLE     # a catalogue value, no tolerance

@@ -203,7 +203,8 @@ def check_table(ref: T.Reference):
     m = re.search(r"\b(" + "|".join(_NUMBER_WORDS) + r")\s+(\w+)", ref.sentence)
     evidence = f"Table {number} exists (rows {', '.join(rows)})"
     if ref.targets[0] != number:
-        return ERRATUM, f"{evidence}; cited as {ref.text}, headed Table {number}", f"Table {number}"
+        # Roman and Arabic numerals name the same table (journals print either): a style difference.
+        evidence += f"; cited as {ref.text} (Roman numeral), headed Table {number}: the same number"
     if m and m.group(2).rstrip("s")[:6] in sec.body.lower():
         if _NUMBER_WORDS[m.group(1)] != len(rows):
             return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", f"{len(rows)} {m.group(2)}"
