@@ -101,3 +101,9 @@ def test_loose_names_are_decided_by_the_physics_they_point_to(monkeypatch):
     assert verdict == core.HOLDS and "d ln k1/d ln k = 1/3" in evidence
     assert statements._tip1_null_consistency()[0] == core.HOLDS
     assert statements._nominal_resonance()[0] == core.UNDECIDABLE     # a catalogue value, no tolerance
+
+
+def test_a_sentence_that_says_where_a_result_is_follows_its_reference():
+    wrong = statements._where_it_is("IV2", r"is given in Section II\b")()
+    assert wrong[0] == core.ERRATUM and wrong[2] == "Section III.2"
+    assert statements._where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS

@@ -349,6 +349,16 @@ def _symbol_verdict(symbol: str) -> Callable:
     return decide
 
 
+def _where_it_is(tag: str, phrase: str) -> Callable:
+    """Decide a sentence that says where a result is by the audit of its cross-reference."""
+    def decide():
+        from .xref import check_reference
+        ref = next(r for r in T.references() if r.section == tag and re.search(phrase, r.sentence))
+        verdict, evidence, correct = check_reference(ref)
+        return verdict, f"the sentence says where the result is; its reference {ref.text}: {evidence}", correct
+    return decide
+
+
 def _stiffness_ratio():
     """'k1 ~ 1000 N/m is significantly higher than k ~ 1-50 N/m' and 'relatively weak' bias dependence."""
     sentence = next(t for t in _sentences_of("III1") if "relatively weak" in t)
@@ -505,6 +515,8 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("III6", r"infinitely stiff contact", same_as("eq33.limits")),
     ("IV1", r"inversely proportional to the cantilever spring constant", _nonlocal_vs_k),
     ("IV1", r"non-local interactions are formally absent", _linear_in_bias),
+    ("IV", r"dynamics of the cantilever is analyzed in Section IV\.2", _where_it_is("IV", r"analyzed in Section IV\.2")),
+    ("IV2", r"contributions is given in Section II\b", _where_it_is("IV2", r"is given in Section II\b")),
     ("IV2", r"phase changes by 180° across resonance", _phase_flip_at_lines),
     ("IV2", r"independent of \$\\Delta V\$", _linear_in_bias),
     ("IV2", r"linear in \$\\Delta V\$", _linear_in_bias),
