@@ -107,3 +107,12 @@ def test_a_sentence_that_says_where_a_result_is_follows_its_reference():
     wrong = statements._where_it_is("IV2", r"is given in Section II\b")()
     assert wrong[0] == core.ERRATUM and wrong[2] == "Section III.2"
     assert statements._where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS
+
+
+def test_the_order_of_limiting_cases_is_read_from_the_sentence(monkeypatch):
+    printed = next(t for t in statements._sentences_of("III2") if "providing purely" in t)
+    assert statements._limiting_cases_order()[0] == core.ERRATUM
+    swapped = printed.replace("purely electromechanical and purely electrostatic",
+                              "purely electrostatic and purely electromechanical")
+    monkeypatch.setattr(statements, "_sentences_of", lambda tag: [swapped])
+    assert statements._limiting_cases_order()[0] == core.HOLDS

@@ -50,17 +50,25 @@ def same_as(*claim_ids: str) -> Callable:
 # --- deciders computed here -----------------------------------------------------------------------
 
 def _limiting_cases_order():
+    """'For non-piezoelectric materials, d1 = d2 = 0, while for ... f0 = 0, providing purely X and purely Y
+    limiting cases': the case each condition leaves, in the sentence's order."""
     from .. import elastic_contact
     from ..beam import d1, d2, f0, q0
     drives = set(elastic_contact.solve().drives)
-    no_piezo = sorted(map(str, drives - {d1, d2}))
-    no_force = sorted(map(str, drives - {f0}))
-    evidence = (f"the derived solution is driven by {sorted(map(str, drives))}; with d1 = d2 = 0 (non-piezoelectric) "
-                f"only {no_piezo} remain: purely electrostatic; with f0 = 0 the tip force is gone but {no_force} "
-                f"remain (purely electromechanical only if q0 = 0 too); the sentence lists the two cases in the "
-                f"opposite order")
-    return ERRATUM, evidence, ("d1 = d2 = 0 gives the purely electrostatic case and f0 = 0 (with q0 = 0) the "
-                               "purely electromechanical one")
+    sentence = next(t for t in _sentences_of("III2") if "providing purely" in t)
+    conditions = {"d_1 = d_2 = 0": drives - {d1, d2}, "f_0 = 0": drives - {f0}}
+    order = sorted(conditions, key=sentence.index)
+    named = re.findall(r"purely (electromechanical|electrostatic)", sentence)
+    left = {c: ("electrostatic" if not conditions[c] & {d1, d2} else "electromechanical") for c in conditions}
+    pairs = list(zip(order, named))
+    evidence = (f"the derived solution is driven by {sorted(map(str, drives))}; "
+                + "; ".join(f"{c} leaves {sorted(map(str, conditions[c]))}: {left[c]}" for c in order)
+                + (" (purely so only if q0 = 0 too)" if q0 in conditions["f_0 = 0"] else "")
+                + f"; the sentence pairs them in order as {[(c, n) for c, n in pairs]}")
+    if all(left[c] == n for c, n in pairs):
+        return HOLDS, evidence, ""
+    return ERRATUM, evidence + " (the opposite order)", (
+        "d1 = d2 = 0 gives the purely electrostatic case and f0 = 0 (with q0 = 0) the purely electromechanical one")
 
 
 def _sections_lateral_stiffness():
