@@ -107,6 +107,10 @@ def test_a_sentence_that_says_where_a_result_is_follows_its_reference():
     wrong = statements._where_it_is("IV2", r"is given in Section II\b")()
     assert wrong[0] == core.ERRATUM and wrong[2] == "Section III.2"
     assert statements._where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS
+    # several references in one sentence: the worst decides
+    verdict, evidence, _ = statements._where_it_is("VI4", r"Shown in Fig\. 14 are the bias")()
+    assert verdict == core.HOLDS and "Fig. 14 (c)" in evidence
+    assert statements._where_it_is("VI1", r"Fig\. 8 c,d are the response")()[0] == core.ERRATUM
 
 
 def test_the_order_of_limiting_cases_is_read_from_the_sentence(monkeypatch):
