@@ -5,6 +5,8 @@ Each check is shown to fail on a wrong target and to pass on the right one.
 """
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from pfmdyn.derivations.checks import core, statements, xref
@@ -120,3 +122,10 @@ def test_the_order_of_limiting_cases_is_read_from_the_sentence(monkeypatch):
                               "purely electrostatic and purely electromechanical")
     monkeypatch.setattr(statements, "_sentences_of", lambda tag: [swapped])
     assert statements._limiting_cases_order()[0] == core.HOLDS
+
+
+def test_sentences_about_superposition_and_the_nulling_bias_are_decided():
+    ids = {sentence[:60]: core.run_check(core.REGISTRY[cid]).verdict
+           for cid, _, sentence, _ in statements.statements()
+           if re.search(r"A = A_\{el\} \+ A_\{piezo\}|nulling bias provides information", sentence)}
+    assert len(ids) == 2 and set(ids.values()) == {core.HOLDS}
