@@ -48,7 +48,7 @@ def _digits_verdict(pairs, what):
             lo, hi = interval[0]
             half = mp.mpf(10) ** -len(printed.partition(".")[2]) / 2
             ok = ok or (lo <= mp.mpf(printed) + half and mp.mpf(printed) - half <= hi)
-            row += f"; {mp.nstr(lo, 6)} to {mp.nstr(hi, 6)} within the printed uncertainties"
+            row += f", {mp.nstr(lo, 6)} to {mp.nstr(hi, 6)} within the printed uncertainties"
         rows.append(row + ")")
         if not ok:
             wrong.append((printed, rounded))
