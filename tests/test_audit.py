@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from pfmdyn.derivations.checks import core, statements, xref
+from pfmdyn.derivations.checks import core, statements, wording, xref
 from pfmdyn.derivations.paper import text as T
 
 pytestmark = pytest.mark.skipif(not T.sections(), reason="paper transcription not found")
@@ -78,7 +78,7 @@ def test_symbol_misprints_are_found_and_defined_symbols_pass():
 def test_a_statement_decider_follows_the_derivation():
     verdict, evidence, correct = statements._torsion_crossover()
     assert verdict == core.ERRATUM and "(n - 1/4) pi" in correct
-    assert statements._limiting_cases_order()[0] == core.ERRATUM
+    assert wording.limiting_cases_order()[0] == core.ERRATUM
     assert statements._scaling_order("nonlocal_fastest")()[0] == core.HOLDS
 
 
@@ -91,37 +91,37 @@ def test_a_roman_numeral_names_the_same_table():
 
 def test_loose_names_are_decided_by_the_physics_they_point_to(monkeypatch):
     # "8 times ... than that for the clamped cantilever": the number decides, not the name.
-    assert statements._eight_times()[0] == core.HOLDS
-    monkeypatch.setattr(statements.P, "nonlocal_free_to_supported", 4)
+    assert wording.eight_times()[0] == core.HOLDS
+    monkeypatch.setattr(wording.P, "nonlocal_free_to_supported", 4)
     core.clear_results()
     try:
-        assert statements._eight_times()[0] == core.ERRATUM
+        assert wording.eight_times()[0] == core.ERRATUM
     finally:
         core.clear_results()
     # "a cantilever with a high spring constant (k1 -> oo)": k1 grows with k through the load.
-    verdict, evidence, _ = statements._stiff_cantilever_vs_k1()
+    verdict, evidence, _ = wording.stiff_cantilever_vs_k1()
     assert verdict == core.HOLDS and "d ln k1/d ln k = 1/3" in evidence
-    assert statements._tip1_null_consistency()[0] == core.HOLDS
-    assert statements._nominal_resonance()[0] == core.UNDECIDABLE     # a catalogue value, no tolerance
+    assert wording.tip1_null_consistency()[0] == core.HOLDS
+    assert wording.nominal_resonance()[0] == core.UNDECIDABLE     # a catalogue value, no tolerance
 
 
 def test_a_sentence_that_says_where_a_result_is_follows_its_reference():
-    wrong = statements._where_it_is("IV2", r"is given in Section II\b")()
+    wrong = wording.where_it_is("IV2", r"is given in Section II\b")()
     assert wrong[0] == core.ERRATUM and wrong[2] == "Section III.2"
-    assert statements._where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS
+    assert wording.where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS
     # several references in one sentence: the worst decides
-    verdict, evidence, _ = statements._where_it_is("VI4", r"Shown in Fig\. 14 are the bias")()
+    verdict, evidence, _ = wording.where_it_is("VI4", r"Shown in Fig\. 14 are the bias")()
     assert verdict == core.HOLDS and "Fig. 14 (c)" in evidence
-    assert statements._where_it_is("VI1", r"Fig\. 8 c,d are the response")()[0] == core.ERRATUM
+    assert wording.where_it_is("VI1", r"Fig\. 8 c,d are the response")()[0] == core.ERRATUM
 
 
 def test_the_order_of_limiting_cases_is_read_from_the_sentence(monkeypatch):
-    printed = next(t for t in statements._sentences_of("III2") if "providing purely" in t)
-    assert statements._limiting_cases_order()[0] == core.ERRATUM
+    printed = next(t for t in wording.sentences_of("III2") if "providing purely" in t)
+    assert wording.limiting_cases_order()[0] == core.ERRATUM
     swapped = printed.replace("purely electromechanical and purely electrostatic",
                               "purely electrostatic and purely electromechanical")
-    monkeypatch.setattr(statements, "_sentences_of", lambda tag: [swapped])
-    assert statements._limiting_cases_order()[0] == core.HOLDS
+    monkeypatch.setattr(wording, "sentences_of", lambda tag: [swapped])
+    assert wording.limiting_cases_order()[0] == core.HOLDS
 
 
 def test_sentences_about_superposition_and_the_nulling_bias_are_decided():
