@@ -5,9 +5,11 @@ Each check is shown to fail on a wrong target and to pass on the right one.
 """
 from __future__ import annotations
 
+import re
+
 import pytest
 
-from pfmdyn.derivations.checks import core, statements, xref
+from pfmdyn.derivations.checks import core, statements, wording, xref
 from pfmdyn.derivations.paper import text as T
 
 pytestmark = pytest.mark.skipif(not T.sections(), reason="paper transcription not found")
@@ -76,5 +78,54 @@ def test_symbol_misprints_are_found_and_defined_symbols_pass():
 def test_a_statement_decider_follows_the_derivation():
     verdict, evidence, correct = statements._torsion_crossover()
     assert verdict == core.ERRATUM and "(n - 1/4) pi" in correct
-    assert statements._limiting_cases_order()[0] == core.ERRATUM
+    assert wording.limiting_cases_order()[0] == core.ERRATUM
     assert statements._scaling_order("nonlocal_fastest")()[0] == core.HOLDS
+
+
+def test_a_roman_numeral_names_the_same_table():
+    s = "Cantilever parameters are summarized in Table I."
+    assert xref.check_table(_ref("table", "captions", s, "Table I", ("I",)))[0] == core.HOLDS
+    s2 = s.replace("Table I", "Table II")
+    assert xref.check_table(_ref("table", "captions", s2, "Table II", ("II",)))[0] == core.ERRATUM
+
+
+def test_loose_names_are_decided_by_the_physics_they_point_to(monkeypatch):
+    # "8 times ... than that for the clamped cantilever": the number decides, not the name.
+    assert wording.eight_times()[0] == core.HOLDS
+    monkeypatch.setattr(wording.P, "nonlocal_free_to_supported", 4)
+    core.clear_results()
+    try:
+        assert wording.eight_times()[0] == core.ERRATUM
+    finally:
+        core.clear_results()
+    # "a cantilever with a high spring constant (k1 -> oo)": k1 grows with k through the load.
+    verdict, evidence, _ = wording.stiff_cantilever_vs_k1()
+    assert verdict == core.HOLDS and "d ln k1/d ln k = 1/3" in evidence
+    assert wording.tip1_null_consistency()[0] == core.HOLDS
+    assert wording.nominal_resonance()[0] == core.UNDECIDABLE     # a catalogue value, no tolerance
+
+
+def test_a_sentence_that_says_where_a_result_is_follows_its_reference():
+    wrong = wording.where_it_is("IV2", r"is given in Section II\b")()
+    assert wrong[0] == core.ERRATUM and wrong[2] == "Section III.2"
+    assert wording.where_it_is("IV", r"analyzed in Section IV\.2")()[0] == core.HOLDS
+    # several references in one sentence: the worst decides
+    verdict, evidence, _ = wording.where_it_is("VI4", r"Shown in Fig\. 14 are the bias")()
+    assert verdict == core.HOLDS and "Fig. 14 (c)" in evidence
+    assert wording.where_it_is("VI1", r"Fig\. 8 c,d are the response")()[0] == core.ERRATUM
+
+
+def test_the_order_of_limiting_cases_is_read_from_the_sentence(monkeypatch):
+    printed = next(t for t in wording.sentences_of("III2") if "providing purely" in t)
+    assert wording.limiting_cases_order()[0] == core.ERRATUM
+    swapped = printed.replace("purely electromechanical and purely electrostatic",
+                              "purely electrostatic and purely electromechanical")
+    monkeypatch.setattr(wording, "sentences_of", lambda tag: [swapped])
+    assert wording.limiting_cases_order()[0] == core.HOLDS
+
+
+def test_sentences_about_superposition_and_the_nulling_bias_are_decided():
+    ids = {sentence[:60]: core.run_check(core.REGISTRY[cid]).verdict
+           for cid, _, sentence, _ in statements.statements()
+           if re.search(r"A = A_\{el\} \+ A_\{piezo\}|nulling bias provides information", sentence)}
+    assert len(ids) == 2 and set(ids.values()) == {core.HOLDS}

@@ -160,3 +160,20 @@ def test_the_book_orders_the_one_set_of_verdict_names():
     from pfmdyn import book
     assert book.VERDICT_ORDER == tuple(o.value for o in core.Outcome)
     assert core.Outcome("erratum") == "erratum" and str(core.Outcome.SIGN) == "holds_up_to_sign_convention"
+
+
+def test_measured_ratios_are_judged_within_their_printed_uncertainties():
+    from pfmdyn.derivations.checks import numbers
+    value, interval = 2.6351759, (2.63287, 2.63748)
+    assert numbers._digits_verdict([("2.63", value, interval)], "ratio")[0] == core.HOLDS
+    assert numbers._digits_verdict([("2.63", value)], "ratio")[0] == core.ERRATUM       # no uncertainty
+    assert numbers._digits_verdict([("2.62", value, interval)], "ratio")[0] == core.ERRATUM
+    assert _verdict("exp.tip1_contact_ratio") == core.HOLDS
+    tip2 = core.run_check(core.REGISTRY["exp.tip2_noncontact_ratios"])
+    assert tip2.verdict == core.ERRATUM and tip2.correct == "6.23 should read 6.27"    # theory, exact
+
+
+def test_a_limit_statement_is_judged_in_its_limit_and_the_crossover_is_reported():
+    v = core.run_check(core.REGISTRY["eq11_14.stiff_cantilever"])
+    assert v.verdict == core.HOLDS
+    assert "ratio -> oo (vertical dominates)" in v.evidence and "rho = L/(2*H)" in v.evidence

@@ -1,7 +1,10 @@
 """Checks of printed numbers: resonance roots, frequency ratios, Table 1, contact mechanics.
 
 A printed number holds when it is the correctly rounded value of the quantity recomputed
-from the paper's own inputs; roots come certified from :mod:`derivations.roots`.
+from the paper's own inputs; roots come certified from :mod:`derivations.roots`.  A ratio of
+measured resonances holds when it is the correct rounding of some value the printed
+uncertainties (``407.95 +- 0.3 kHz``, ...) allow: the last digit of such a ratio is not
+determined more finely than the measurements.
 """
 from __future__ import annotations
 
@@ -34,11 +37,19 @@ def pinned_roots(n: int = 3) -> tuple[mp.mpf, ...]:
 
 
 def _digits_verdict(pairs, what):
-    """pairs: [(printed string, exact value)] -> verdict on correct rounding of every entry."""
+    """pairs: [(printed string, value)] or [(printed, value, (low, high))] -> verdict on correct
+    rounding of every entry; with an interval (a measured quantity), any value in it may be the one
+    rounded."""
     rows, wrong = [], []
-    for printed, value in pairs:
+    for printed, value, *interval in pairs:
         ok, rounded = digits_check(printed, value)
-        rows.append(f"{printed} (computed {mp.nstr(value, 8)} -> {rounded})")
+        row = f"{printed} (computed {mp.nstr(value, 8)} -> {rounded}"
+        if interval:
+            lo, hi = interval[0]
+            half = mp.mpf(10) ** -len(printed.partition(".")[2]) / 2
+            ok = ok or (lo <= mp.mpf(printed) + half and mp.mpf(printed) - half <= hi)
+            row += f", {mp.nstr(lo, 6)} to {mp.nstr(hi, 6)} within the printed uncertainties"
+        rows.append(row + ")")
         if not ok:
             wrong.append((printed, rounded))
     evidence = f"{what}: " + ", ".join(rows)
@@ -63,29 +74,35 @@ def _contact_to_free():
     return _digits_verdict([(P.contact_to_free_ratio, ratio)], "omega ratio (beta1_supported/beta1_free)^2")
 
 
-def _ratios(freqs):
-    f = [mp.mpf(x) for x in freqs]
-    return [fi / f[0] for fi in f[1:]]
+def _ratios(freqs, pm):
+    """Measured f_i/f_1 with the range the printed uncertainties +-pm allow: [(ratio, (low, high))]."""
+    f, d = [mp.mpf(x) for x in freqs], [mp.mpf(x) for x in pm]
+    return [(fi / f[0], ((fi - di) / (f[0] + d[0]), (fi + di) / (f[0] - d[0]))) for fi, di in zip(f[1:], d[1:])]
+
+
+def _measured(printed, freqs, pm):
+    return [(p, r, interval) for p, (r, interval) in zip(printed, _ratios(freqs, pm))]
 
 
 @claim("exp.tip1_contact_ratio", "VI.1", "contact resonances 407.95, 1075.020 kHz: 2.63:1, theory 3.24:1", chapter="roots")
 def _tip1_contact():
     theory = (pinned_roots()[1] / pinned_roots()[0]) ** 2
-    return _digits_verdict([(P.TIP1_CONTACT_RATIO, _ratios(P.TIP1_CONTACT)[0]), (P.TIP1_CONTACT_THEORY, theory)],
+    return _digits_verdict(_measured([P.TIP1_CONTACT_RATIO], P.TIP1_CONTACT, inputs.TIP1_CONTACT_PM)
+                           + [(P.TIP1_CONTACT_THEORY, theory)],
                            "measured w2/w1 and supported-end theory (beta2/beta1)^2")
 
 
 @claim("exp.tip1_noncontact_ratios", "VI.1", "63.2, 368.33, 1031.70 kHz: 16.32:5.83:1, theory 17.55:6.23:1", chapter="roots")
 def _tip1_free():
     theory = [(r / free_roots()[0]) ** 2 for r in free_roots()[1:]]
-    pairs = list(zip(P.TIP1_FREE_RATIOS, _ratios(P.TIP1_FREE))) + list(zip(P.FREE_THEORY_RATIOS, theory))
+    pairs = _measured(P.TIP1_FREE_RATIOS, P.TIP1_FREE, inputs.TIP1_FREE_PM) + list(zip(P.FREE_THEORY_RATIOS, theory))
     return _digits_verdict(pairs, "measured w2/w1, w3/w1 and free-end theory (beta_n/beta1)^2")
 
 
 @claim("exp.tip2_noncontact_ratios", "VI.1", "54.55, 346.73, 980.55 kHz: 17.97:6.35:1, theory 17.55:6.23:1", chapter="roots")
 def _tip2_free():
     theory = [(r / free_roots()[0]) ** 2 for r in free_roots()[1:]]
-    pairs = list(zip(P.TIP2_FREE_RATIOS, _ratios(P.TIP2_FREE))) + list(zip(P.FREE_THEORY_RATIOS, theory))
+    pairs = _measured(P.TIP2_FREE_RATIOS, P.TIP2_FREE, inputs.TIP2_FREE_PM) + list(zip(P.FREE_THEORY_RATIOS, theory))
     return _digits_verdict(pairs, "measured w2/w1, w3/w1 and free-end theory (beta_n/beta1)^2")
 
 

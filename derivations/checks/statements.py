@@ -21,6 +21,7 @@ import sympy as sp
 
 from ..paper import printed as P
 from ..paper import text as T
+from . import wording as W
 from .core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
 
 CHAPTER = "audit"
@@ -48,20 +49,6 @@ def same_as(*claim_ids: str) -> Callable:
 
 
 # --- deciders computed here -----------------------------------------------------------------------
-
-def _limiting_cases_order():
-    from .. import elastic_contact
-    from ..beam import d1, d2, f0, q0
-    drives = set(elastic_contact.solve().drives)
-    no_piezo = sorted(map(str, drives - {d1, d2}))
-    no_force = sorted(map(str, drives - {f0}))
-    evidence = (f"the derived solution is driven by {sorted(map(str, drives))}; with d1 = d2 = 0 (non-piezoelectric) "
-                f"only {no_piezo} remain: purely electrostatic; with f0 = 0 the tip force is gone but {no_force} "
-                f"remain (purely electromechanical only if q0 = 0 too); the sentence lists the two cases in the "
-                f"opposite order")
-    return ERRATUM, evidence, ("d1 = d2 = 0 gives the purely electrostatic case and f0 = 0 (with q0 = 0) the "
-                               "purely electromechanical one")
-
 
 def _sections_lateral_stiffness():
     from .. import elastic_contact, indentation
@@ -311,24 +298,6 @@ def _frictionless_from_4a():
             f"Eq. 4a: EI u0''(L) = {moment} -> 0 as k2 -> 0, i.e. u0''(L) = 0", "")
 
 
-def _sentences_of(tag: str) -> list[str]:
-    return next((s.sentences for s in T.sections() if s.tag == tag), [])
-
-
-def _eight_times():
-    """'8 times larger than that for the clamped cantilever': the number (registry) and the name
-    of the cantilever it is compared with (the section's own name for the Eq. 20 case)."""
-    verdict, evidence, correct = same_as("eq22.nonlocal_8x")()
-    sentence = next(t for t in _sentences_of("III3") if "8 times larger" in t)
-    called = re.search(r"than that for the (\w+) cantilever", sentence)
-    named = next((m.group(1) for t in _sentences_of("III3") for m in [re.search(r"such a (\w+) cantilever", t)] if m), "")
-    evidence += f"; the sentence calls the Eq. 20 case the '{called.group(1) if called else '?'}' cantilever, " \
-                f"the section calls it '{named}' ('clamped' is the paper's name for the end x = 0, Eqs. 3a,b)"
-    if called and named and called.group(1) != named:
-        return ERRATUM, evidence, f"8 times larger than for the {named} cantilever (Eq. 20)"
-    return verdict, evidence, correct
-
-
 def _symbol_verdict(symbol: str) -> Callable:
     """Decide a sentence by the audit of a symbol it defines."""
     def decide():
@@ -338,118 +307,23 @@ def _symbol_verdict(symbol: str) -> Callable:
     return decide
 
 
-def _stiffness_ratio():
-    """'k1 ~ 1000 N/m is significantly higher than k ~ 1-50 N/m' and 'relatively weak' bias dependence."""
-    sentence = next(t for t in _sentences_of("III1") if "relatively weak" in t)
-    k1 = re.search(r"k_1 \\sim (\d+)", sentence)
-    k_hi = re.search(r"k \\sim [\d.]+-(\d+)", sentence)
-    slope = next((re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t) for t in _sentences_of("III1")
-                  if re.search(r"\((\d+) - ([\d.]+) V_\{tip\}\)", t)), None)
-    if not (k1 and k_hi and slope):
-        return UNDECIDABLE, "numbers not found in the text", ""
-    ratio = mp.mpf(k1.group(1)) / mp.mpf(k_hi.group(1))
-    per_volt = mp.mpf(slope.group(2)) / mp.mpf(slope.group(1))
-    ok = ratio >= 10 and per_volt < mp.mpf("0.1")
-    return (HOLDS if ok else ERRATUM,
-            f"k1/k >= {mp.nstr(ratio, 3)} for the printed ranges (k1/(k + k1) >= {mp.nstr(ratio / (1 + ratio), 3)}: the tip "
-            f"follows the surface); the printed k1(V) changes by {mp.nstr(100 * per_volt, 2)} % per volt", "")
-
-
-def _order_of_ratios():
-    """'A_v/N, A_l/N, A_e/N, A_q/N describe ... vertical, longitudinal, local force, distributed force, respectively'."""
-    from ..beam import d1, d2, f0, q0
-    roles = {d1: "vertical", d2: "longitudinal", f0: "local", q0: "distributed"}
-    names = {id(P.A_v): "A_v", id(P.A_l): "A_l", id(P.A_e): "A_e", id(P.A_q): "A_q"}
-    printed = [(names.get(id(a), "?"), roles[d]) for d, a in P.ELASTIC.items()]
-    sentence = next(t for t in _sentences_of("III2") if "respectively" in t and "A_v(\\beta)/N" in t)
-    order_a = re.findall(r"(A_[vleq])\(\\beta\)/N", sentence)
-    order_roles = [w for w in re.findall(r"vertical|longitudinal|local|distributed", sentence)]
-    pairs = list(zip(order_a, order_roles))
-    ok = pairs == printed
-    return (HOLDS if ok else ERRATUM,
-            f"Eq. 5 pairs {printed} (each A_x multiplies the drive d1, d2, f0, q0 of Eqs. 4a,b); the sentence pairs {pairs}", "")
-
-
-def _stiff_cantilever_vs_k1():
-    """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
-    from .. import elastic_contact
-    from ..beam import d1, f0, k, k1
-    sol = elastic_contact.solve()
-    ratio = sp.simplify(sol.theta(d1) * d1 / (sol.theta(f0) * f0))
-    evidence = (f"derived A_piezo/A_el = {ratio} at every frequency: it grows with the tip-surface junction's k1 and "
-                f"does not contain the cantilever's spring constant k ({ratio.has(k)})")
-    if ratio.has(k1) and not ratio.has(k):
-        return ERRATUM, evidence + "; the sentence calls k1 the cantilever's spring constant", \
-            "a stiff tip-surface junction (k1 -> oo, e.g. a high indentation force), not a stiff cantilever"
-    return HOLDS, evidence, ""
-
-
-def _tip1_null_consistency():
-    """'Similarly to tip 1, the nulling bias is frequency independent': what did tip 1's paragraph say?"""
-    tip1 = next((t for t in _sentences_of("VI1") if re.search(r"nulling bias is (\w+ )?frequency", t)), "")
-    said = re.search(r"nulling bias is ((?:\w+ )?frequency (?:in)?dependent)", tip1)
-    said = said.group(1) if said else "(not found)"
-    evidence = (f"tip 1 (contact and non-contact, SiO2): the nulling bias '{said}'; tip 2: 'similarly to tip 1, "
-                f"... frequency independent'")
-    if said != "frequency independent":
-        return ERRATUM, evidence + ": the two descriptions of tip 1 disagree", \
-            "the tip-1 nulling bias was described as weakly frequency dependent (model for SiO2, d_eff = 0: V_null = V_surf exactly)"
-    return HOLDS, evidence, ""
-
-
-def _nominal_resonance():
-    """Section V's nominal Co-Cr resonance against the measured non-contact resonance of tip 1 (Co-Cr)."""
-    nominal = next((t for t in _sentences_of("V") if "Co-Cr" in t), "")
-    m = re.search(r"Co-Cr[^)]*resonant frequency ~\s*([\d.]+)\s*kHz", nominal)
-    measured = next((t for t in _sentences_of("VI1") if "non-contact regime, resonances are" in t), "")
-    w1 = re.search(r"\\omega_1 = ([\d.]+)", measured)
-    if not (m and w1):
-        return UNDECIDABLE, "nominal or measured value not found in the text", ""
-    f_nom, f_meas = mp.mpf(m.group(1)), mp.mpf(w1.group(1))
-    digits = len(m.group(1).replace(".", "").lstrip("0"))
-    half_ulp = mp.mpf(10) ** (len(m.group(1).split(".")[0]) - digits) / 2
-    evidence = (f"Section V: Co-Cr tips, resonant frequency ~{m.group(1)} kHz; Section VI.1, tip 1 (Co-Cr) in "
-                f"non-contact: w1 = {w1.group(1)} kHz, {mp.nstr(100 * (f_nom - f_meas) / f_meas, 3)} % lower than nominal; "
-                f"'~{m.group(1)}' allows +-{mp.nstr(half_ulp, 2)} kHz")
-    if abs(f_nom - f_meas) > half_ulp:
-        return ERRATUM, evidence, f"~{int(mp.nint(f_meas))} kHz (as measured for tip 1) or a stated manufacturer tolerance"
-    return HOLDS, evidence, ""
-
-
-def _fig15_grains():
-    """Curves of Fig. 15 named by grain in the text vs the data set deconvolved (Fig. 14's sentence)."""
-    data = next((t for t in _sentences_of("VI4") if re.search(r"Shown in Fig\. 14", t)), "")
-    used = set(re.findall(r"grain (\d)", data))
-    named = set(re.findall(r"grain (\d)", next((t for t in _sentences_of("VI4") if "greatest for PZT" in t), "")))
-    cap = T.captions().get(15)
-    cap_grains = set(re.findall(r"grain (\d)", cap.text)) if cap else set()
-    evidence = (f"the deconvolved PZT data (Fig. 14 sentence) are of grain(s) {sorted(used)} with a good and a "
-                f"deteriorated tip; the Fig. 15 sentence names grain(s) {sorted(named)}; the Fig. 15 caption names "
-                f"grain(s) {sorted(cap_grains) or 'none'} (its PZT curves: good tip, deteriorated tip)")
-    if named - used - cap_grains:
-        return ERRATUM, evidence, ("the PZT curves of Fig. 15 are grain " + ", ".join(sorted(used))
-                                   + " with a good and with a deteriorated tip")
-    return HOLDS, evidence, ""
-
-
-# --- which decider speaks to which sentence -------------------------------------------------------
-
 DECIDERS: list[tuple[str, str, Callable]] = [
     # (section tag, phrase of the sentence, decider)
     ("II", r"tip deflection is equal to surface displacement", same_as("contact.low_frequency_transfer")),
     ("II", r"more sensitive to the longitudinal", _longitudinal_more_sensitive),
     ("II", r"purely electromechanical response, the piezoresponse amplitude is equal", _domains("pure_em")),
     ("II", r"vary linearly with the tip-surface potential", _linear_in_bias),
+    ("II", r"A = A_\{el\} \+ A_\{piezo\} \+ A_\{nl\}", _additive),
     ("II", r"no slip condition", _longitudinal_more_sensitive),
     ("II", r"non-local contribution can be well-approximated as being position independent", _symbol_verdict("A_{el}")),
-    ("III1", r"relatively weak", _stiffness_ratio),
-    ("III2", r"describe the frequency dependence of the PFM signal", _order_of_ratios),
+    ("III1", r"relatively weak", W.stiffness_ratio),
+    ("III2", r"describe the frequency dependence of the PFM signal", W.order_of_ratios),
     ("IV1", r"capacitive force can be approximated", same_as("eq36.q0")),
     ("III", r"Sections III\.4 and III\.5", _sections_lateral_stiffness),
     ("III", r"torsional and vertical oscillations\) are generally different", _torsion_vs_flexure_resonances),
     ("III1", r"tip deflection is almost equal", same_as("contact.low_frequency_transfer")),
     ("III1", r"ratio between the two is determined only by the Poisson", same_as("contact.lateral_to_vertical_ratio")),
-    ("III2", r"providing purely electromechanical and purely electrostatic", _limiting_cases_order),
+    ("III2", r"providing purely electromechanical and purely electrostatic", W.limiting_cases_order),
     ("III2", r"similar frequency dependences", same_as("eq6_8.same_shape")),
     ("III2", r"resonance structure in Eq\. \(5\) is determined only", same_as("eq10.resonances_independent")),
     ("III2", r"roots of Eq\. \(10\) are independent", same_as("eq10.resonances_independent")),
@@ -459,9 +333,10 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("III2", r"higher power of frequency", _scaling_order("nonlocal_fastest")),
     ("III2", r"scale in a similar manner", same_as("eq15_18.piezo_to_local_ratio")),
     ("III2", r"less pronounced for the longitudinal", _scaling_order("longitudinal_slowest")),
-    ("III2", r"cantilever with a high spring constant", _stiff_cantilever_vs_k1),
+    ("III2", r"cantilever with a high spring constant", W.stiff_cantilever_vs_k1),
+    ("III2", r"contributions to the PFM are additive", _additive),
     ("III2", r"cannot be distinguished by a choice of the operating frequency", same_as("eq15_18.piezo_to_local_ratio")),
-    ("III3", r"8 times larger", _eight_times),
+    ("III3", r"8 times larger", W.eight_times),
     ("III3", r"4\.4 times", same_as("eq22.contact_to_free_ratio")),
     ("III3", r"independent of the ratio between the distributed", same_as("eq22.resonances_independent")),
     ("III4", r"changing the boundary condition given in Eq\. \(4a\)", _frictionless_from_4a),
@@ -475,6 +350,8 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("III6", r"infinitely stiff contact", same_as("eq33.limits")),
     ("IV1", r"inversely proportional to the cantilever spring constant", _nonlocal_vs_k),
     ("IV1", r"non-local interactions are formally absent", _linear_in_bias),
+    ("IV", r"dynamics of the cantilever is analyzed in Section IV\.2", W.where_it_is("IV", r"analyzed in Section IV\.2")),
+    ("IV2", r"contributions is given in Section II\b", W.where_it_is("IV2", r"is given in Section II\b")),
     ("IV2", r"phase changes by 180° across resonance", _phase_flip_at_lines),
     ("IV2", r"independent of \$\\Delta V\$", _linear_in_bias),
     ("IV2", r"linear in \$\\Delta V\$", _linear_in_bias),
@@ -487,14 +364,21 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("IV2", r"frequency independent ratio between local", same_as("fig7.local_boundary_frequency_independent")),
     ("IV3", r"always 180° or 0°", _domains("low_frequency")),
     ("IV3", r"response amplitudes are equal in", _domains("pure_em")),
+    ("IV3", r"purely electromechanical case, \$G_\{elec\}\$ is identically zero", _domains("pure_em")),
     ("IV3", r"strong electrostatic contribution, the phase changes weakly", _domains("strong_el")),
     ("IV3", r"small non-local electrostatic contribution", _domains("weak_el")),
     ("IV3", r"limit of a small piezoelectric contribution", same_as("eq40.small_piezo")),
     ("V", r"linear in the tip-surface potential difference", _linear_in_bias),
     ("VI1", r"checkerboard", _phase_flip_at_lines),
-    ("VI1", r"Similarly to tip 1, the nulling bias is frequency independent", _tip1_null_consistency),
-    ("V", r"Co-Cr coated tips", _nominal_resonance),
-    ("VI4", r"greatest for PZT grain", _fig15_grains),
+    ("VI1", r"Similarly to tip 1, the nulling bias is frequency independent", W.tip1_null_consistency),
+    ("V", r"Co-Cr coated tips", W.nominal_resonance),
+    ("VI4", r"greatest for PZT grain", W.fig15_grains),
+    ("VI1", r"summarized in Fig\. 11a", W.where_it_is("VI1", r"summarized in Fig\. 11a")),
+    ("VI4", r"Shown in Fig\. 14 are the bias", W.where_it_is("VI4", r"Shown in Fig\. 14 are the bias")),
+    ("VI4", r"shown in Fig\. 15 a,b", W.where_it_is("VI4", r"shown in Fig\. 15 a,b")),
+    ("VI4", r"Fig\. 15 c reveals", W.where_it_is("VI4", r"Fig\. 15 c reveals")),
+    ("VI4", r"Also shown in Fig\. 15 d", W.where_it_is("VI4", r"Also shown in Fig\. 15 d")),
+    ("III4", r"corresponds to frictionless contact", _frictionless_from_4a),
     ("VI1", r"non-contact mode are identical to that for", _noncontact_resonances_sample_free),
     ("VI1", r"nulling bias is now strongly frequency dependent", _null_frequency_dependent),
     ("VI2", r"nulling bias is \$V_\{null\}", _null_bias("formula")),
@@ -509,6 +393,10 @@ DECIDERS: list[tuple[str, str, Callable]] = [
     ("VI4", r"resonant frequencies of a cantilever in contact with the surface are identical",
      same_as("eq28.resonances_increase_with_k1")),
     ("VI4", r"determined unambiguously", same_as("eq41.deconvolution")),
+    ("VI4", r"provides a more rigorous approach provided that the surface potential", same_as("eq41.deconvolution")),
+    ("VI3", r"frequency dependence of the nulling bias, \$V_\{null\}\(\\omega\)\$, provides information",
+     _null_bias("formula")),
+    ("conclusions", r"frequency dependence of the nulling bias provides information", _null_bias("formula")),
     ("conclusions", r"determined solely by the cantilever spring constant", same_as("eq10.resonances_independent")),
     ("conclusions", r"decays faster with frequency", _scaling_order("nonlocal_fastest")),
     ("conclusions", r"are additive", _additive),

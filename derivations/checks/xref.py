@@ -203,7 +203,8 @@ def check_table(ref: T.Reference):
     m = re.search(r"\b(" + "|".join(_NUMBER_WORDS) + r")\s+(\w+)", ref.sentence)
     evidence = f"Table {number} exists (rows {', '.join(rows)})"
     if ref.targets[0] != number:
-        return ERRATUM, f"{evidence}; cited as {ref.text}, headed Table {number}", f"Table {number}"
+        # Roman and Arabic numerals name the same table (journals print either): a style difference.
+        evidence += f"; cited as {ref.text} (Roman numeral), headed Table {number}: the same number"
     if m and m.group(2).rstrip("s")[:6] in sec.body.lower():
         if _NUMBER_WORDS[m.group(1)] != len(rows):
             return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", f"{len(rows)} {m.group(2)}"
@@ -579,18 +580,23 @@ def _where(tag: str) -> str:
     return "captions" if tag == "captions" else (sec.number if sec else tag)
 
 
+def check_reference(ref: T.Reference):
+    """The check of one cross-reference, by its kind."""
+    runners = {"figure": check_figure, "section": check_section, "table": check_table, "equation": check_equation}
+    return runners[ref.kind](ref)
+
+
 def register() -> int:
     """Register one check per extracted reference; returns how many (0 without the transcription)."""
     if not T.sections():
         return 0
     n = 0
     counters: Counter = Counter()
-    runners = {"figure": check_figure, "section": check_section, "table": check_table, "equation": check_equation}
     for ref in T.references():
         counters[ref.section] += 1
         cid = f"xref.{ref.section}.{counters[ref.section]}"
         claim(cid, f"{_where(ref.section)}, {ref.text}", f"{ref.kind} reference: {T.clip(ref.sentence, 200)}",
-              chapter=CHAPTER, kind="cross-reference")(lambda r=ref: runners[r.kind](r))
+              chapter=CHAPTER, kind="cross-reference")(lambda r=ref: check_reference(r))
         n += 1
     sym_counters: Counter = Counter()
     for sym, use in T.symbols().items():

@@ -7,7 +7,8 @@ written from this module by ``pfmdyn codegen``.
 from __future__ import annotations
 
 __all__ = ["TABLE1", "TIP_HEIGHT", "CONTACT_K1", "K1_OVER_K2", "D_EFF_FIG", "TIP1_CONTACT", "TIP1_FREE",
-           "TIP2_FREE", "TIP2_GEOMETRY", "EPSILON_0", "SILICON_DENSITY", "SILICON_E", "NUMERIC"]
+           "TIP2_FREE", "TIP2_GEOMETRY",
+           "TIP1_CONTACT_PM", "TIP1_FREE_PM", "TIP2_FREE_PM", "EPSILON_0", "SILICON_DENSITY", "SILICON_E", "NUMERIC"]
 
 TABLE1 = {"A": {"w": "24e-6", "h": "8e-6", "L": "224e-6", "k": "45"},
           "B": {"w": "24e-6", "h": "3e-6", "L": "224e-6", "k": "2.4"},
@@ -24,6 +25,10 @@ TIP1_CONTACT = ("407.95", "1075.020")
 TIP1_FREE = ("63.2", "368.33", "1031.70")
 TIP2_FREE = ("54.55", "346.73", "980.55")
 TIP2_GEOMETRY = {"h": "3e-6", "w": "24e-6", "L": "223e-6", "k": "2.4", "f1": "54.55e3"}
+# The uncertainties (kHz) printed with those resonances ("407.95 +- 0.3 kHz", ...).
+TIP1_CONTACT_PM = ("0.3", "0.15")
+TIP1_FREE_PM = ("0.4", "0.3", "0.2")
+TIP2_FREE_PM = ("0.04", "0.05", "0.1")
 
 EPSILON_0 = "8.8541878128e-12"
 """Vacuum permittivity, F/m (CODATA 2018)."""
