@@ -64,19 +64,15 @@ def _stiff_cantilever():
     kk2 = sp.Rational(P.CONTACT_K1) / sp.Rational(P.K1_OVER_K2)
     rho_A = kk * LL**2 / (HH**2 * kk2)
     ratio_A = ratio.subs({k: kk, L: LL, H: HH, k2: kk2})
-    soft, stiff = sp.limit(in_rho, rho, 0), sp.limit(in_rho, rho, sp.oo)
-    # "k L^2 >> H^2 k2" is a limit statement in rho at a given geometry: it holds when the ratio
-    # grows without bound as rho -> oo and vanishes as rho -> 0.  Where the crossover lies
-    # (rho = L/(2H), not rho = 1) is reported, not judged: ">>" does not say how much larger.
-    crossover = sp.solve(sp.Eq(in_rho, 1), rho)
+    soft = sp.limit(in_rho, rho, 0)
     evidence = (f"static signal per unit vertical / per unit longitudinal displacement (k1 >> k) = {ratio} "
-                f"= {in_rho} with rho = kL^2/(H^2 k2): stiff limit rho -> oo: ratio -> {stiff} (vertical dominates), "
-                f"soft limit rho -> 0: ratio -> {soft} (in-plane dominates). The two are equal at rho = "
-                f"{crossover[0] if crossover else '?'}, so 'kL^2 >> H^2 k2' must mean rho >> L/(2H): cantilever A of "
-                f"Table 1 (k2 = k1/0.85) has rho = {float(rho_A):.3g} and the ratio {float(ratio_A):.3g}")
-    ok = stiff == sp.oo and soft == 0
+                f"= {in_rho} with rho = kL^2/(H^2 k2); it exceeds 1 only for rho > L/(2H), not for rho > 1. "
+                f"Cantilever A of Table 1 (k2 = k1/0.85): rho = {float(rho_A):.3g} (stiff by the printed test) "
+                f"but the ratio is {float(ratio_A):.3g}; soft limit rho -> 0: ratio -> {soft} (in-plane dominates, as stated)")
+    ok = bool(ratio_A > 3) or not bool(rho_A > 3)
     return (HOLDS if ok else ERRATUM, evidence,
-            "" if ok else f"per unit displacement the vertical/longitudinal ratio is {in_rho}")
+            "" if ok else "vertical displacement dominates when k L >> H k2 / 2, i.e. k L^2 >> (L/2H) H^2 k2; "
+            "the soft-cantilever statement holds")
 
 
 def _scaling(drive, eq):
