@@ -279,26 +279,58 @@ def _project(g, dg, y, band_list):
 
 
 def _start(model, y, q0, k1_range):
-    """Best (k1, Q) per pixel on a grid (log-spaced k1, five Q around ``q0``; k2 = 0), refined
-    by the vertex of the parabola through the best grid value and its neighbours on each axis."""
-    log_k1, log_q, g = _grid(model.k, model.L, model.f1, model.H, np.asarray(model.frequency_hz, float).tobytes(),
-                             q0, tuple(k1_range), model.tip_position, model.tip_mass)
+    """Best (k1, Q, k2/k1) per pixel on a grid (:func:`_grid`), k1 and Q refined by the vertex
+    of the parabola through the best grid value and its neighbours on each axis."""
+    log_k1, log_q, log_ratio, g = _grid(model.k, model.L, model.f1, model.H,
+                                        np.asarray(model.frequency_hz, float).tobytes(), q0, tuple(k1_range),
+                                        model.tip_position, model.tip_mass)
     n, m = y.shape[:2]
     # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
     proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
-               / np.sum(np.abs(g[:, b]) ** 2, axis=1) for b in model.bands).reshape(len(y), len(log_q), len(log_k1))
-    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(y), -1), axis=1), proj.shape[1:])
-    rows = np.arange(len(y))
-    return (_vertex(proj[rows, iq], ik, log_k1), _vertex(proj[rows, :, ik], iq, log_q))
+               / np.sum(np.abs(g[:, b]) ** 2, axis=1) for b in model.bands)
+    proj = proj.reshape(n, len(log_ratio), len(log_q), len(log_k1))
+    ir, iq, ik = np.unravel_index(np.argmax(proj.reshape(n, -1), axis=1), proj.shape[1:])
+    rows = np.arange(n)
+    return (_vertex(proj[rows, ir, iq], ik, log_k1), _vertex(proj[rows, ir, :, ik], iq, log_q), log_ratio[ir])
 
 
 @functools.lru_cache(maxsize=8)
 def _grid(k, L, f1, H, frequency_bytes, q0, k1_range, tip_position, tip_mass):
-    """Shape functions of the start grid, computed once per cantilever, frequencies and range."""
-    log_k1, log_q = np.log(np.geomspace(*k1_range, 48)), np.log(q0 * np.geomspace(0.25, 4, 5))
-    k1_grid, q_grid = np.meshgrid(np.exp(log_k1), np.exp(log_q))
-    model = BeamMapModel(k, L, f1, H, np.frombuffer(frequency_bytes), tip_position=tip_position, tip_mass=tip_mass)
-    return log_k1, log_q, model.shape_functions(k1_grid.ravel(), q_grid.ravel())
+    """Shape functions of the start grid, computed once per cantilever, frequencies and range:
+    log-spaced k1 over the part of ``k1_range`` that puts a resonance inside a band, Q over
+    ``q0 / 16`` to ``4 q0`` (levers have Q 5-500), and with two or more bands (k2 fitted) k2/k1 of
+    0.1, 0.4 and 1 (the lateral spring moves the modes of stiff contacts: k2 = 0 starts them
+    decades off).
+
+    A resonance moves by at most half the relative change of k1 (less on stiff contacts), and a
+    sharp one correlates only with a start that places it within a few line widths: 48 steps over
+    the four decades of the default range move it by up to 10 %, over the k1 whose resonance lies
+    in the band by far less.
+    """
+    f = np.frombuffer(frequency_bytes)
+    model = BeamMapModel(k, L, f1, H, f, tip_position=tip_position, tip_mass=tip_mass)
+    log_ratio = np.log([0.1, 0.4, 1.0]) if len(model.bands) > 1 else np.array([-np.inf])
+    log_k1 = _resonant(model, np.log(np.geomspace(*k1_range, 400)), q0, np.exp(log_ratio))
+    log_q = np.log(q0 * np.geomspace(1 / 16, 4, 7))
+    ratio, q, k1 = (np.exp(a).ravel() for a in np.meshgrid(log_ratio, log_q, log_k1, indexing="ij"))
+    return log_k1, log_q, log_ratio, model.shape_functions(k1, q, k2=ratio * k1)
+
+
+def _resonant(model, log_k1, q0, ratios, count=48):
+    """``count`` log-spaced k1 from four steps below the smallest to four above the largest of
+    ``log_k1`` whose response peaks inside a band (not at its edges) for some k2/k1 of ``ratios``;
+    all of ``log_k1``'s range when none does (a band away from every resonance)."""
+    k1 = np.exp(np.tile(log_k1, len(ratios)))
+    g = np.abs(model.shape_functions(k1, np.full(k1.size, 4 * q0), k2=np.repeat(ratios, len(log_k1)) * k1))
+    inside = np.zeros(k1.size, bool)
+    for b in model.bands:
+        peak = np.argmax(g[:, b], axis=1)
+        inside |= (peak > 0) & (peak < b.stop - b.start - 1)
+    hit = np.flatnonzero(inside.reshape(len(ratios), -1).any(axis=0))
+    if hit.size == 0:
+        return np.linspace(log_k1[0], log_k1[-1], count)
+    lo, hi = log_k1[max(hit[0] - 4, 0)], log_k1[min(hit[-1] + 4, len(log_k1) - 1)]
+    return np.linspace(lo, hi, count)
 
 
 def _vertex(values, best, axis):
@@ -330,8 +362,8 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
                                       _bounds(base, k1_range), iterations, tolerance)[0]
         return np.stack([p_base[:, base.parameters.index(n)] if n in base.parameters else np.zeros(len(y))
                          for n in model.parameters], axis=1)
-    log_k1, log_q = _start(model, y, q0, k1_range)
-    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + math.log(0.5)}  # Mindlin: k2 ~ 0.7-0.9 k1
+    log_k1, log_q, log_ratio = _start(model, y, q0, k1_range)
+    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + log_ratio}
     return np.stack([start[n] for n in model.parameters], axis=1)
 
 
