@@ -279,8 +279,9 @@ def _project(g, dg, y, band_list):
 
 
 def _start(model, y, q0, k1_range):
-    """Best (k1, Q, k2/k1) per pixel on a grid (:func:`_grid`), k1 and Q refined by the vertex
-    of the parabola through the best grid value and its neighbours on each axis."""
+    """Best (k1, Q) per pixel and k2/k1 of the grid (:func:`_grid`): ``log_k1``, ``log_q``
+    ``(n_ratio, n)``, ``log_ratio`` ``(n_ratio,)``; k1 and Q refined by the vertex of the
+    parabola through the best grid value and its neighbours on each axis."""
     log_k1, log_q, log_ratio, g = _grid(model.k, model.L, model.f1, model.H,
                                         np.asarray(model.frequency_hz, float).tobytes(), q0, tuple(k1_range),
                                         model.tip_position, model.tip_mass)
@@ -288,10 +289,11 @@ def _start(model, y, q0, k1_range):
     # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
     proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
                / np.sum(np.abs(g[:, b]) ** 2, axis=1) for b in model.bands)
-    proj = proj.reshape(n, len(log_ratio), len(log_q), len(log_k1))
-    ir, iq, ik = np.unravel_index(np.argmax(proj.reshape(n, -1), axis=1), proj.shape[1:])
-    rows = np.arange(n)
-    return (_vertex(proj[rows, ir, iq], ik, log_k1), _vertex(proj[rows, ir, :, ik], iq, log_q), log_ratio[ir])
+    proj = proj.reshape(n, len(log_ratio), len(log_q), len(log_k1)).transpose(1, 0, 2, 3).reshape(-1, len(log_q), len(log_k1))
+    iq, ik = np.unravel_index(np.argmax(proj.reshape(len(proj), -1), axis=1), proj.shape[1:])
+    rows = np.arange(len(proj))
+    return (_vertex(proj[rows, iq], ik, log_k1).reshape(-1, n), _vertex(proj[rows, :, ik], iq, log_q).reshape(-1, n),
+            log_ratio)
 
 
 @functools.lru_cache(maxsize=8)
@@ -354,8 +356,9 @@ def _bounds(model, k1_range):
 
 
 def _initial(model, y, q0, k1_range, iterations, tolerance):
-    """Starting parameters: the (k1, Q) grid; with extra damping mechanisms, the fitted baseline
-    with the extras switched off (nested, so the fit never ends worse than the baseline)."""
+    """Starting parameters: the (k1, Q) grid (with two or more bands, the lowest of the fits
+    started at each k2/k1 of the grid); with extra damping mechanisms, the fitted baseline with
+    the extras switched off (nested, so the fit never ends worse than the baseline)."""
     if model.mechanisms != ("internal",):
         base = replace(model, mechanisms=("internal",))
         p_base = _levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
@@ -363,8 +366,15 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
         return np.stack([p_base[:, base.parameters.index(n)] if n in base.parameters else np.zeros(len(y))
                          for n in model.parameters], axis=1)
     log_k1, log_q, log_ratio = _start(model, y, q0, k1_range)
-    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + log_ratio}
-    return np.stack([start[n] for n in model.parameters], axis=1)
+    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + log_ratio[:, None]}
+    p = np.stack([start[n] for n in model.parameters], axis=2)          # (n_ratio, n, n_p)
+    if len(p) == 1:
+        return p[0]
+    # k1 and k2 trade off against each other: one start per k2/k1, the fit that ends lowest wins
+    p, *_, cost, _, _ = _levenberg_marquardt(model, np.concatenate([y] * len(p)), p.reshape(-1, p.shape[2]),
+                                             _bounds(model, k1_range), iterations, tolerance)
+    best = np.argmin(cost.reshape(-1, len(y)), axis=0)
+    return p.reshape(-1, len(y), p.shape[1])[best, np.arange(len(y))]
 
 
 def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
@@ -426,7 +436,10 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
-    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).
+    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  k1, k2 and Q are fitted
+    as logarithms: their standard errors are half the width of ``exp(log x +- sd)``,
+    ``x sinh(sd)`` (``x sd`` when small; huge, not small, when the data leave ``x`` undetermined,
+    e.g. k2 driven to its bound on a soft contact).
 
     Examples
     --------
@@ -507,6 +520,8 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
     cov = _covariance(model, g, dg, c, cost / dof)
     sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
+    with np.errstate(over="ignore"):
+        spread = {n: np.sinh(sd[n]) for n in ("log_k1", "log_q", "log_k2") if n in sd}     # see fit_block
     col = {n: p[:, i] for i, n in enumerate(names)}
     k1 = np.exp(col["log_k1"])
     k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
@@ -516,8 +531,8 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     band = model.bands[0]
     linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
                                    g[..., band])
-    out = {"k1": k1, "k1_stderr": k1 * sd["log_k1"], "k2": k2, "k2_stderr": k2 * sd.get("log_k2", np.nan),
-           "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * sd["log_q"],
+    out = {"k1": k1, "k1_stderr": k1 * spread["log_k1"], "k2": k2, "k2_stderr": k2 * spread.get("log_k2", np.nan),
+           "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * spread["log_q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
            "gap": gap, "explained": (gap < gap_threshold).astype(float), "cost": cost}
