@@ -252,3 +252,28 @@ def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, loc
     assert "1 blocks fitted" in capsys.readouterr().out
     for name, value in _maps(tmp_path).items():
         np.testing.assert_array_equal(value, _maps(local_run)[name], err_msg=name)
+
+
+@pytest.mark.parametrize("case", ["low_q", "stiff_two_band"])
+def test_levers_the_start_grid_used_to_miss(case):
+    """Failure classes of benchmarks/map_levers.py, one lever each drawn (seeded) from the class:
+    a broad resonance (Q 5-8: the start grid's Q stopped at 25, and k1 ran to its bound), and a
+    stiff contact seen in two bands (k1/k 2000-1e4, k2 = 0.8 k1: the grid had k2 = 0, which moves
+    the modes of such a contact by decades of k1).  k1 (and k2) within 3 standard errors."""
+    from pfmdyn.maps.fit import BeamMapModel, fit_block
+    rng = np.random.default_rng({"low_q": 1, "stiff_two_band": 27}[case])
+    k, length, height = 10 ** rng.uniform(-1, 1.5), rng.uniform(150e-6, 450e-6), rng.uniform(5e-6, 20e-6)
+    f1 = 300e3 * (k / 40) ** (1 / 3) * (125e-6 / length)
+    two = case == "stiff_two_band"
+    ratio, q = (10 ** rng.uniform(3.3, 4), rng.uniform(100, 300)) if two else (10 ** rng.uniform(1, 3), rng.uniform(5, 8))
+    k1 = ratio * k * rng.uniform(0.7, 1.3, 4)
+    beams = [FEBeam(k, length, f1, height, k1=v, k2=0.8 * v if two else 0.0, Q=q, n_elements=40) for v in k1]
+    modes = np.array([b.contact_resonances(2) for b in beams])
+    f = np.concatenate([np.linspace(0.85 * modes[:, m].min(), 1.15 * modes[:, m].max(), 64) for m in range(1 + two)])
+    y = np.stack([2e-3 * b.slope(f)[:, 0] for b in beams])
+    y = y + 0.01 * np.abs(y).max() * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
+    free = float(FEBeam(k, length, f1, height, n_elements=40).free_resonances(1)[0])
+    out = fit_block(BeamMapModel(k, length, free, height, f), y)
+    for name, true in (("k1", k1), ("k2", 0.8 * k1)) if two else (("k1", k1),):
+        z = (out[name] - true) / out[f"{name}_stderr"]
+        assert np.all(np.abs(z) < 3), (name, z)
