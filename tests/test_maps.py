@@ -265,7 +265,7 @@ def test_levers_the_start_grid_used_to_miss(case):
     k, length, height = 10 ** rng.uniform(-1, 1.5), rng.uniform(150e-6, 450e-6), rng.uniform(5e-6, 20e-6)
     f1 = 300e3 * (k / 40) ** (1 / 3) * (125e-6 / length)
     two = case == "stiff_two_band"
-    ratio, q = (10 ** rng.uniform(3.3, 4), rng.uniform(100, 300)) if two else (10 ** rng.uniform(1, 3), rng.uniform(5, 8))
+    ratio, q = 10 ** rng.uniform(*((3.3, 4) if two else (1, 3))), rng.uniform(*((100, 300) if two else (5, 8)))
     k1 = ratio * k * rng.uniform(0.7, 1.3, 4)
     beams = [FEBeam(k, length, f1, height, k1=v, k2=0.8 * v if two else 0.0, Q=q, n_elements=40) for v in k1]
     modes = np.array([b.contact_resonances(2) for b in beams])

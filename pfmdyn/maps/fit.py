@@ -289,7 +289,7 @@ def _start(model, y, q0, k1_range):
     # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
     proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
                / np.sum(np.abs(g[:, b]) ** 2, axis=1) for b in model.bands)
-    proj = proj.reshape(n, len(log_ratio), len(log_q), len(log_k1)).transpose(1, 0, 2, 3).reshape(-1, len(log_q), len(log_k1))
+    proj = proj.reshape(n, len(log_ratio), -1).transpose(1, 0, 2).reshape(-1, len(log_q), len(log_k1))
     iq, ik = np.unravel_index(np.argmax(proj.reshape(len(proj), -1), axis=1), proj.shape[1:])
     rows = np.arange(len(proj))
     return (_vertex(proj[rows, iq], ik, log_k1).reshape(-1, n), _vertex(proj[rows, :, ik], iq, log_q).reshape(-1, n),
