@@ -355,10 +355,6 @@ def _bounds(model, k1_range):
     return np.array(lower), np.array(upper)
 
 
-_Q_LADDER = (20.0, 100.0)
-"""Caps on Q of the successive fits that start a multi-band pixel (then Q is free)."""
-
-
 def _initial(model, y, q0, k1_range, iterations, tolerance):
     """Starting parameters: the (k1, Q) grid (with two or more bands, the lowest of the fits
     started at each k2/k1 of the grid); with extra damping mechanisms, the fitted baseline with
@@ -374,18 +370,9 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
     p = np.stack([start[n] for n in model.parameters], axis=2)          # (n_ratio, n, n_p)
     if len(p) == 1:
         return p[0]
-    # k1 and k2 trade off against each other: one start per k2/k1, the fit that ends lowest wins.
-    # Each is first fitted with Q capped (_Q_LADDER): broad lines give a smooth cost in (k1, k2),
-    # sharp ones a valley per frequency step when the band samples them coarsely.
-    lower, upper = _bounds(model, k1_range)
-    p, y_all = p.reshape(-1, p.shape[2]), np.concatenate([y] * len(p))
-    column = model.parameters.index("log_q")
-    for cap in _Q_LADDER:
-        capped = upper.copy()
-        capped[column] = math.log(cap)
-        p[:, column] = np.minimum(p[:, column], capped[column])
-        p = _levenberg_marquardt(model, y_all, p, (lower, capped), iterations, tolerance)[0]
-    p, *_, cost, _, _ = _levenberg_marquardt(model, y_all, p, (lower, upper), iterations, tolerance)
+    # k1 and k2 trade off against each other: one start per k2/k1, the fit that ends lowest wins
+    p, *_, cost, _, _ = _levenberg_marquardt(model, np.concatenate([y] * len(p)), p.reshape(-1, p.shape[2]),
+                                             _bounds(model, k1_range), iterations, tolerance)
     best = np.argmin(cost.reshape(-1, len(y)), axis=0)
     return p.reshape(-1, len(y), p.shape[1])[best, np.arange(len(y))]
 
