@@ -14,13 +14,45 @@ would pick it.  Variants cycle through the cases:
   step; also the ``electrostatic`` and ``nulling_bias`` maps must lie within their errors;
 * ``2band``: bands around the first two contact resonances, ``k2 = 0.8 k1`` (fitted);
 * ``viscous`` / ``contact``: two bands, drag (free-mode Q 5-100) or a contact dashpot (contact
-  mode Q 20-300) beside internal friction; ``--model auto`` (:func:`choose_model`) must name it,
-  and the named model's ``viscous_loss`` / ``contact_loss`` must lie within their errors.
+  mode Q 20-300) beside internal friction; ``--model auto`` (:func:`choose_model`) must name it
+  (excused when the model it names instead fits within 2 % of the same gap: the data cannot name
+  the mechanism), and the model with it must give ``viscous_loss`` / ``contact_loss`` within
+  their errors.
 
-Pass: every checked quantity within 3 standard errors at >= 95 % of pixels, and the gap (relative
-residual) at most 1.3 x the noise's share of the spectrum at >= 95 % of pixels.
+Pass: every checked quantity within 3 standard errors at >= 95 % of pixels (all but one), and the
+gap (relative residual) at most 1.3 x the noise's share of the spectrum at >= 95 % of pixels.
+A failure is diagnosed by refitting from the truth (:func:`diagnose`): ``start``, ``ident`` or
+``noise``.
 
-    python benchmarks/map_levers.py [--cases 20] [--seed 0]
+Results (40 cases at seeds 0 and 1000, ``--cases 40 [--seed 1000]``):
+
+* before (pfmdyn at d180df5): 27/40 and 21/40, **48/80 = 60 %**; 30 of the 32 failures ``start``.
+* after: 37/40 and 39/40, **76/80 = 95 %** (2 cases with the auto check excused).
+
+Failure classes and what was done:
+
+* ``start``, fixed in :mod:`pfmdyn.maps.fit`: the start grid's Q stopped at q0/4 = 25 (a Q = 5
+  lever's k1 ran to its bound: Q now from q0/16); its k1 took 48 log steps over four decades
+  (a resonance moves up to 10 % per step: now 48 steps over the k1 that put a resonance in a
+  band); with two bands it held k2 = 0 (a stiff contact, k1/k > 1000, whose k2 = 0.8 k1 moves the
+  modes, started decades off: now k2/k1 of 0.1, 0.4 and 1 on the grid, and one fit per ratio,
+  the lowest kept, since k1 and k2 trade off).  On a two-band 1024-pixel map (k1 150-1500 N/m, k
+  = 2 N/m) the old start left 42 % of the pixels in a wrong minimum, now 0.3 % (at ~4x the CPU
+  of that fit; one-band fits cost what they did).
+* ``start``, left (3 cases): two-band fits whose (k1, k2) valleys hold a pixel or two of 25 in
+  a wrong minimum, at seed 22 (Q = 472: the frequency step is 3 line widths), 34 and 1029 (with a
+  dashpot).  Fitting first with Q capped (broad lines) lowered the worst |z| of some but passed
+  no more cases, at twice the multi-band cost: not kept.
+* ``ident`` (none left at these seeds; seen at seed 34 of a 4 x 4 variant): a second (k1, k2)
+  minimum fits as well as the truth's.  The standard errors are local: they cannot cover it.
+* ``noise`` (1 case): the fit from the truth ends at the fit's own minimum (seed 36: two pixels
+  at |z| = 3.4 on a 0.5 % k1 error).
+* auto excused (2 cases): a dashpot immaterial beside internal friction at Q = 9.6 (seed 1034)
+  or on a contact so stiff (k1/k = 2000, seed 1009) that the tip barely moves against it; on the
+  4 x 4 variant also drag and a dashpot fitting alike at k1/k ~ 2 (both to the noise).  Standard errors of k1, k2 and Q are now
+  ``x sinh(sd of log x)``: an undetermined k2 at its bound reports a huge error, not a small one.
+
+    python benchmarks/map_levers.py [--cases 20] [--seed 0] [--variant VARIANT]
 """
 from __future__ import annotations
 
