@@ -185,8 +185,8 @@ class SpectrumProblem:
         effect = EFFECTS[component]
         if component == "lateral_stiffness":
             extra = [np.append(current.internal[1:], v) for v in self.k2_grid]
-            return fit(model, self.data, self.resonance_starts(model, extra, count=3), self.sigma,
-                       max_nfev=TRIAL_NFEV)
+            starts = self.resonance_starts(model, extra, count=3) or [np.insert(current.internal, 1, self.k2_grid[len(self.k2_grid) // 2])]
+            return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
         # The nested start (effect switched off) guarantees the fit is never worse.
         starts = [np.append(current.internal, effect.null)] if effect.parameters else [current.internal]
         if effect.moves_resonances:
@@ -201,11 +201,13 @@ class SpectrumProblem:
                 others.append(reseeded)
             extra = [np.concatenate([o, [v]]) for o in others for v in effect.seeds]
             starts += self.resonance_starts(model, extra, count=2)
-        elif seeds and rematch:
-            springs = 1 if model.vertical_only else 2
-            starts = self.resonance_starts(model, [np.append(current.internal[springs:], seeds[0])], count=1)
         elif seeds:
             starts = [np.append(current.internal, v) for v in seeds]
+            if rematch:
+                springs = 1 if model.vertical_only else 2
+                # No peak in the data to match: the nested starts remain.
+                starts = self.resonance_starts(
+                    model, [np.append(current.internal[springs:], seeds[0])], count=1) or starts
         return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
 
     def without(self, current: FitResult, component: str) -> FitResult:

@@ -141,6 +141,8 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
                         f"{MIN_SPECTRUM_ROWS} are needed to fit the model")
+    if not np.any(spectra.response):
+        raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
