@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -83,4 +84,53 @@ def test_spectra_end_in_a_report_or_one_line(tmp_path, capsys, p):
     freq = np.linspace(0.5 * beam.contact_resonances(1)[0], 1.1 * top, 60)
     path = tmp_path / "spectrum.csv"
     path.write_text(spectrum(beam, freq, tuple(np.linspace(-2, 2, p["biases"])), order="instrument"))
+    assert _run(path, capsys) == 0
+
+
+META = ("# spring_constant_n_per_m: 2.4\n# length_m: 2.23e-4\n# width_m: 2.4e-5\n# tip_height_m: 1e-5\n"
+        "# free_resonance_hz: 6.32e4\n")
+
+
+def _spectrum_text(freq_hz, meta=META, header="frequency_hz,bias_v,x,y", x=1.0):
+    return meta + header + "\n" + "".join(f"{float(f)!r},{v},{x},0.5\n" for f in freq_hz for v in (-1, 1))
+
+
+@pytest.mark.parametrize("text, message", [
+    (_spectrum_text(np.linspace(150, 400, 20)), "lie far from the free resonance 63200 Hz"),      # kHz as Hz
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")), "'length_m' is 223 m"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")), "'free_resonance_hz' is 63.2"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.4\n", "2.4 N/mm\n")), "unit 'N/mm' not understood"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), x=0.0).replace(",0.5\n", ",0\n"), "zero in every row"),
+    (META + "mode,condition,frequency_hz\n1,free,63.2\n1,contact,310.5\n", "lie far from the free resonance"),
+], ids=["spectrum in kHz", "length in um", "f1 in kHz", "unknown unit", "zero response", "table in kHz"])
+def test_wrong_units_and_empty_responses_are_one_line(tmp_path, capsys, text, message):
+    path = tmp_path / "d.csv"
+    path.write_text(text)
+    assert cli.main(["discrepancy", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
+def test_units_in_metadata_and_table_spellings_read_as_si(tmp_path):
+    from pfmdyn.io.tables import read
+
+    plain = tmp_path / "plain.csv"
+    plain.write_text(META + "mode,condition,frequency_hz\n1,free,63200\n2,free,396000\n1,contact,310500\n")
+    spelled = tmp_path / "spelled.csv"
+    spelled.write_text("% Spring constant = 2.4 N/m\n% length_m = 223 um\n% width_m = 24um\n% tip_height_m = 10 um\n"
+                       "% free_resonance_hz = 63.2 kHz\nFreq (kHz)\tCondition\tMode\t\n"
+                       "396,0\tair\t2\t\n310,5\tIn contact\t1\t\n63,2\tnon-contact\t1\t\n".replace("Spring constant",
+                                                                                                 "spring_constant_n_per_m"))
+    a, b = read(plain), read(spelled)
+    assert a.metadata == b.metadata and a.mode.tolist() == b.mode.tolist()
+    assert a.condition.tolist() == b.condition.tolist()
+    np.testing.assert_allclose(a.frequency_hz, b.frequency_hz, rtol=1e-12)
+
+
+def test_spectrum_without_a_peak_ends_in_a_report(tmp_path, capsys):
+    """A short single-bias sweep between resonances: no peak to match fit starts to (it
+    ended in a traceback)."""
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=40, Q=100.0)
+    path = tmp_path / "flat.csv"
+    path.write_text(spectrum(beam, np.linspace(200e3, 230e3, 25), biases=(1.0,), seed=3))
     assert _run(path, capsys) == 0

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+from decimal import Decimal
 
 from ..errors import UserError
 
@@ -43,12 +44,12 @@ the analyses are invariant to its scale."""
 _RESPONSE_UNITS = ("pm", "nm", "um", "m", "v", "mv", "uv", "au", "a.u.", "arb")
 
 _METADATA_UNITS = {
-    "_n_per_m": {"n/m": 1.0, "nn/nm": 1.0, "pn/nm": 1e-3, "mn/m": 1e-3},
-    "_m": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9},
-    "_hz": {"hz": 1.0, "khz": 1e3, "mhz": 1e6},
+    "_n_per_m": {"n/m": 0, "nn/nm": 0, "pn/nm": -3, "mn/m": -3},
+    "_m": {"m": 0, "mm": -3, "um": -6, "µm": -6, "μm": -6, "nm": -9},
+    "_hz": {"hz": 0, "khz": 3, "mhz": 6},
 }
-"""Metadata key suffix (its SI unit) -> units a value may be written in, factor to SI (the
-first suffix that matches counts: ``_n_per_m`` before ``_m``)."""
+"""Metadata key suffix (its SI unit) -> units a value may be written in, power of ten to SI
+(the first suffix that matches counts: ``_n_per_m`` before ``_m``)."""
 
 
 def delimiter(header: str) -> str | None:
@@ -138,12 +139,13 @@ def metadata_number(where: str, key: str, text: str) -> float:
                          re.IGNORECASE)
     if not match:
         raise UserError(f"{where}: metadata '{key}' is '{text}', not a number")
-    value, unit = float(match.group(1)), match.group(2).lower()
+    number, unit = match.group(1), match.group(2).lower()
     if not unit:
-        return value
+        return float(number)
     units = next((u for suffix, u in _METADATA_UNITS.items() if key.endswith(suffix)), {})
     if unit not in units:
         allowed = ", ".join(units) or "none"
         raise UserError(f"{where}: metadata '{key}' is '{text}': unit '{match.group(2)}' not understood "
                         f"(allowed: {allowed})")
-    return value * units[unit]
+    # Shifting the decimal exponent reads '10 um' exactly as '10e-6' would be.
+    return float(Decimal(number).scaleb(units[unit]))

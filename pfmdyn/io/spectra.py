@@ -12,6 +12,11 @@ The format, shared by every command that reads measured spectra::
 * ``x, y`` are the lock-in in-phase and quadrature signals; ``amplitude, phase_deg`` the
   same response in polar form (phase in degrees).  Either pair gives the complex response
   :math:`x + i y = A e^{i\\varphi}`.  Other columns are ignored.
+* Spellings researchers use are read too (:mod:`pfmdyn.io.columns`): other separators
+  (semicolon, tab, spaces), ``%`` comments, names with units (``Frequency (kHz)``,
+  ``bias_mv``, ``Phase (rad)``) and aliases (``freq``, ``V_dc``, ``real, imag``, ``R``);
+  values are converted to Hz, V and degrees.  Sweeps whose frequencies differ only by
+  rounding (less than 1/1000 of a step) share their setpoints.
 * A table is a set of rows: any row order is accepted (a sweep at each bias written one
   after another, as instruments do, or frequency-grouped, or shuffled).  After reading, the
   rows are sorted by frequency, then bias.  A (frequency, bias) pair given twice with the
