@@ -134,3 +134,12 @@ def test_spectrum_without_a_peak_ends_in_a_report(tmp_path, capsys):
     path = tmp_path / "flat.csv"
     path.write_text(spectrum(beam, np.linspace(200e3, 230e3, 25), biases=(1.0,), seed=3))
     assert _run(path, capsys) == 0
+
+
+def test_tables_saved_as_txt_or_dat_are_not_taken_for_drive_sweeps(tmp_path):
+    from pfmdyn.io.tables import read
+
+    text = META + "mode\tcondition\tfrequency_hz\n1\tfree\t63200\n1\tcontact\t310500\n"
+    for name in ("r.txt", "r.dat"):
+        (tmp_path / name).write_text(text)
+        assert read(tmp_path / name).frequency_hz.tolist() == [63200, 310500]

@@ -44,6 +44,7 @@ from ..errors import UserError
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, comment_entry, delimiter, is_comment, metadata_number, split
 from .spectra import read_spectra
+from .sweeps import is_drive_sweep
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
@@ -67,6 +68,8 @@ PLAUSIBLE = {"spring_constant_n_per_m": (1e-4, 1e4, "N/m"), "length_m": (1e-6, 1
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
+TEXT_SUFFIXES = (".txt", ".dat")
+"""Drive sweeps, or tables in this module's format saved under a text-file name."""
 MIN_SPECTRUM_ROWS = 20
 MIN_RESONANCES = 1
 """A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
@@ -135,7 +138,8 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
-    if path.suffix.lower() in INSTRUMENT_SUFFIXES:
+    if path.suffix.lower() in INSTRUMENT_SUFFIXES and not (path.suffix.lower() in TEXT_SUFFIXES
+                                                          and not is_drive_sweep(path)):
         return _instrument(path, overrides)
     meta, header, rows = _preamble(path)
     names = [_column(c) for c in header]
