@@ -23,6 +23,12 @@ carry its unit (``frequency_hz``, ``frequency_khz``, ``frequency_mhz``), an opti
 mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key
 its relative uncertainty (default 5 %). Any other column is an error naming it.
 
+Spellings are forgiven as for spectra (:mod:`pfmdyn.io.columns`): separators, ``%`` comments,
+``key = value``, metadata keys without their unit whose value carries it (``length: 223 um``,
+``f1: 63.2 kHz``), conditions ``air``/``non-contact`` and ``in contact``.  Metadata outside
+any cantilever's range, and frequencies far from ``free_resonance_hz``, are errors: they are
+in another unit than the file says.
+
 :func:`read` is the one entry point for every supported file: instrument files (.ibw,
 .nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
 :func:`pfmdyn.io.instruments.to_discrepancy_input`, whose short tables (one or two
@@ -56,6 +62,11 @@ FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1
 """Frequency column names of a resonances table and their factor to Hz."""
 COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "q_factor": "quality_factor",
                   "cond": "condition", "mode_number": "mode"}
+METADATA_ALIASES = {"spring_constant": "spring_constant_n_per_m", "k": "spring_constant_n_per_m",
+                    "k_n_per_m": "spring_constant_n_per_m", "length": "length_m", "width": "width_m",
+                    "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz", "f1": "free_resonance_hz",
+                    "f1_hz": "free_resonance_hz"}
+"""Metadata keys without their unit (the value then carries it: ``length: 223 um``)."""
 CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free", "out_of_contact": "free",
                      "in_contact": "contact", "engaged": "contact"}
 SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
@@ -77,7 +88,7 @@ discrepancy report says which parameters so few rows leave undetermined."""
 
 
 def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
-    meta = dict(meta)
+    meta = {METADATA_ALIASES.get(key, key): value for key, value in meta.items()}
     meta.update({key: value for key, value in (overrides or {}).items() if value is not None})
     missing = [key for key in REQUIRED_KEYS if key not in meta]
     if missing:
