@@ -132,9 +132,10 @@ def column(name: str) -> tuple[str, float, str] | None:
 def metadata_number(where: str, key: str, text: str) -> float:
     """A metadata value as a float in the key's SI unit (``223 um`` for ``length_m``).
 
-    >>> metadata_number("f", "length_m", "223 um"), metadata_number("f", "free_resonance_hz", "63.2kHz")
+    >>> metadata_number("f", "length_m", "223 um"), metadata_number("f", "free_resonance_hz", "63,2kHz")
     (0.000223, 63200.0)
     """
+    text = re.sub(r"^(\s*[-+]?\d+),(\d)", r"\1.\2", text)     # a decimal comma
     match = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan)\s*(\S*)\s*", text,
                          re.IGNORECASE)
     if not match:
