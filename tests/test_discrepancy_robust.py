@@ -142,3 +142,16 @@ def test_tables_saved_as_txt_or_dat_are_not_taken_for_drive_sweeps(tmp_path):
     for name in ("r.txt", "r.dat"):
         (tmp_path / name).write_text(text)
         assert read(tmp_path / name).frequency_hz.tolist() == [63200, 310500]
+
+
+def test_noise_free_spectrum_names_only_the_hidden_effect(tmp_path):
+    """A simulator's exact output: the noise estimate is then the curvature of the curve, and
+    effects of negligible size (tilt 5e-5 rad, tip mass 3e-7) were named beside damping."""
+    from pfmdyn.discrepancy.spectrum import analyse
+    from pfmdyn.io.tables import read
+
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=40, Q=100.0)
+    path = tmp_path / "exact.csv"
+    path.write_text(spectrum(beam, np.linspace(150e3, 1300e3, 120), biases=(-1.0, 1.0), noise=0.0))
+    report = analyse(read(path), progress=False)
+    assert report["missing_effects"] == ["damping"] and report["damping_mechanisms"] == ["internal"]
