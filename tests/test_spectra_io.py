@@ -175,3 +175,14 @@ def test_sweeps_whose_frequencies_differ_by_rounding_share_the_setpoints(tmp_pat
     # Interleaved sweeps (half a step apart) are different setpoints.
     text = HEADER + "".join(f"{float(a)!r},0,1,0\n" for a in f) + "".join(f"{float(a) + 18.55!r},1,2,0\n" for a in f)
     assert len(np.unique(read_spectra(write(tmp_path, text), 1).frequency_hz)) == 60
+
+
+def test_biases_read_back_with_jitter_are_one_bias_per_sweep(tmp_path):
+    """Every row its own bias (an instrument's read-back, 1 mV jitter): the sweeps' biases."""
+    rng = np.random.default_rng(5)
+    f = 1e4 + 50.0 * np.arange(20)
+    text = HEADER + "".join(f"{float(a)!r},{v + 1e-3 * rng.standard_normal()!r},{v},1\n"
+                            for v in (-2.0, 0.0, 2.0) for a in f)
+    data = read_spectra(write(tmp_path, text))
+    assert sorted(set(np.round(data.bias_v, 2).tolist())) == [-2.0, 0.0, 2.0] and len(np.unique(data.bias_v)) == 3
+    np.testing.assert_allclose(data.response.real, np.round(data.bias_v), atol=0.01)

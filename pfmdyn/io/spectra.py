@@ -161,6 +161,7 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
         raise UserError(f"{where}, line {header_line}: header but no data rows")
     table = np.array(rows, dtype=float) * factors
     table[:, 0] = _common_setpoints(table[:, 0], table[:, 1])
+    table[:, 1] = _common_biases(table[:, 0], table[:, 1])
     table = _check_rows(where, table, np.array(line_numbers), response_columns, biases_per_frequency)
     first, second = table[:, 2], table[:, 3]
     if response_columns == ("x", "y"):
@@ -250,6 +251,27 @@ def _common_setpoints(frequency_hz: np.ndarray, bias_v: np.ndarray) -> np.ndarra
         return frequency_hz
     means = np.bincount(cluster, unique) / np.bincount(cluster)
     return means[cluster[np.searchsorted(unique, frequency_hz)]]
+
+
+def _common_biases(frequency_hz: np.ndarray, bias_v: np.ndarray) -> np.ndarray:
+    """Biases read back with jitter (every row its own value) but in sweeps: when every
+    frequency has the same number of rows and the i-th lowest bias at each frequency stays
+    below the (i+1)-th everywhere, the i-th sweep takes its mean bias.
+
+    >>> _common_biases(np.array([1.0, 1.0, 2.0, 2.0]), np.array([-1.001, 0.999, -0.999, 1.001])).tolist()
+    [-1.0, 1.0, -1.0, 1.0]
+    """
+    order = np.lexsort((bias_v, frequency_hz))
+    starts = frequency_group_starts(frequency_hz[order])
+    counts = np.diff(np.append(starts, len(order)))
+    if counts.min() != counts.max() or len(np.unique(bias_v)) <= counts[0] or counts[0] < 2:
+        return bias_v
+    sweeps = bias_v[order].reshape(-1, counts[0])           # row: one frequency, biases ascending
+    if np.any(sweeps.max(axis=0)[:-1] >= sweeps.min(axis=0)[1:]):
+        return bias_v
+    out = np.empty_like(bias_v)
+    out[order] = np.broadcast_to(sweeps.mean(axis=0), sweeps.shape).ravel()
+    return out
 
 
 def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, response_columns: tuple[str, str],
