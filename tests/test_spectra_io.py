@@ -158,6 +158,10 @@ def test_decimal_comma_with_semicolons_and_a_phase_without_unit(tmp_path):
     path = write(tmp_path, "frequency_hz;bias_v;x;y\n1000,5;-1;0,25;1e-3\n1000,5;1;2;0\n")
     data = read_spectra(path)
     assert data.frequency_hz.tolist() == [1000.5, 1000.5] and data.response[0] == 0.25 + 1e-3j
+    # A units line under the header, as spreadsheet exports write it.
+    data = read_spectra(write(tmp_path, "freq,bias,amplitude,phase\nkHz,mV,pm,(deg)\n10,-1000,2,90\n10,1000,1,0\n"))
+    assert data.frequency_hz.tolist() == [1e4, 1e4] and data.bias_v.tolist() == [-1, 1]
+    np.testing.assert_allclose(data.response, [2j, 1], atol=1e-15)
     # Degrees or radians cannot be told from the numbers: a unitless phase is an error.
     with pytest.raises(UserError, match="missing column 'phase_deg'"):
         read_spectra(write(tmp_path, "frequency_hz,bias_v,amplitude,phase\n1,0,1,1\n1,1,1,1\n"))

@@ -23,7 +23,7 @@ from decimal import Decimal
 
 from ..errors import UserError
 
-__all__ = ["delimiter", "split", "comment_entry", "is_comment", "column", "metadata_number"]
+__all__ = ["delimiter", "split", "comment_entry", "is_comment", "units_line", "column", "metadata_number"]
 
 COMMENT_PREFIXES = ("#", "%")
 
@@ -93,6 +93,29 @@ def comment_entry(line: str) -> tuple[str, str] | None:
     if not match:
         return ("", "")
     return "_".join(match.group(1).lower().split()), match.group(2).strip()
+
+
+def units_line(lines: list[str], sep: str | None, count: int) -> list[str] | None:
+    """The units of the columns when the line after the header gives them (``Hz,V,pm,pm``, as
+    spreadsheet exports write), else None.
+
+    >>> units_line(["kHz;mV;;"], ";", 4), units_line(["1e4,0,1,2"], ",", 4)
+    (['khz', 'mv', '', ''], None)
+    """
+    if not lines:
+        return None
+    cells = split(lines[0], sep)[:count]
+    if not any(cells) or any(_is_number(cell) for cell in cells):
+        return None
+    return [cell.strip("()[] ").lower() for cell in cells] + [""] * (count - len(cells))
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
 
 
 def is_comment(line: str) -> bool:

@@ -137,6 +137,11 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     written = columns.split(lines[header_line - 1], sep)
     while written and not written[-1]:      # a trailing separator
         written.pop()
+    first_data = header_line
+    units = columns.units_line(lines[header_line:header_line + 1], sep, len(written))
+    if units is not None:
+        written = [f"{name} ({unit})" if unit else name for name, unit in zip(written, units)]
+        first_data += 1
     found = [columns.column(name) for name in written]
     names = [match[0] if match else name for match, name in zip(found, written)]
     response_columns = _check_header(where, header_line, names)
@@ -144,7 +149,7 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     indices = [names.index(name) for name in wanted]
     factors = np.array([found[i][1] for i in indices])
     rows, line_numbers = [], []
-    for number in range(header_line + 1, len(lines) + 1):
+    for number in range(first_data + 1, len(lines) + 1):
         text = lines[number - 1]
         if not text.strip():
             continue
