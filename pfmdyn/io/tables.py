@@ -229,7 +229,7 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
     q_idx = header.index("quality_factor") if "quality_factor" in header else None
     modes, conds, freqs, qs = [], [], [], []
     for n, cells in enumerate(rows, start=1):
-        if len(cells) == 1 and is_comment(cells[0]):
+        if cells and is_comment(cells[0]):
             raise UserError(f"{path}: data row {n}: comment lines are only allowed before the header")
         if len(cells) > len(header) and not any(cells[len(header):]):
             cells = cells[:len(header)]
