@@ -155,3 +155,19 @@ def test_noise_free_spectrum_names_only_the_hidden_effect(tmp_path):
     path.write_text(spectrum(beam, np.linspace(150e3, 1300e3, 120), biases=(-1.0, 1.0), noise=0.0))
     report = analyse(read(path), progress=False)
     assert report["missing_effects"] == ["damping"] and report["damping_mechanisms"] == ["internal"]
+
+
+def test_lateral_stiffness_trial_after_another_effect_is_never_worse(tmp_path):
+    """--vertical-only: k2 joins the parameters after k1, before the effects already added
+    (its starts put it last: the trial after a tip mass was 10x worse than the current fit)."""
+    from pfmdyn.discrepancy.spectrum import SpectrumProblem
+    from pfmdyn.io.tables import read
+
+    beam = FEBeam(0.0747, 220e-6, 6.6e3, 1.9e-5, k1=565.4, k2=745.6, n_elements=40)
+    c = beam.contact_resonances(3)
+    path = tmp_path / "lateral.csv"
+    path.write_text(spectrum(beam, np.linspace(0.5 * c[0], 1.15 * c[1], 150), biases=(-3.0, 0.0, 3.0),
+                             noise=0.003, seed=2))
+    problem = SpectrumProblem(read(path), vertical_only=True)
+    current = problem.trial(problem.baseline(), "tip_mass")
+    assert problem.trial(current, "lateral_stiffness").gap <= current.gap * (1 + 1e-9)

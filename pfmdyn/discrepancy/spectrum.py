@@ -25,7 +25,7 @@ import numpy as np
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, fit, project
+from .model import FitResult, Model, bounds, fit, project
 from .peaks import data_peaks, match_starts, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
@@ -189,8 +189,11 @@ class SpectrumProblem:
         model = current.model.with_effect(component)
         effect = EFFECTS[component]
         if component == "lateral_stiffness":
-            extra = [np.append(current.internal[1:], v) for v in self.k2_grid]
-            starts = self.resonance_starts(model, extra, count=3) or [np.insert(current.internal, 1, self.k2_grid[len(self.k2_grid) // 2])]
+            # Parameters: k1, k2, then the current effects'; k2 at its lower bound is the
+            # current model (the nested start: never worse).
+            extra = [np.insert(current.internal[1:], 0, v) for v in self.k2_grid]
+            nested = np.insert(current.internal, 1, bounds(model)[0][1])
+            starts = [nested] + self.resonance_starts(model, extra, count=3)
             return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
         # The nested start (effect switched off) guarantees the fit is never worse.
         starts = [np.append(current.internal, effect.null)] if effect.parameters else [current.internal]
