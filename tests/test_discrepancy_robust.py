@@ -102,7 +102,10 @@ def _spectrum_text(freq_hz, meta=META, header="frequency_hz,bias_v,x,y", x=1.0):
     (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.4\n", "2.4 N/mm\n")), "unit 'N/mm' not understood"),
     (_spectrum_text(np.linspace(150e3, 400e3, 20), x=0.0).replace(",0.5\n", ",0\n"), "zero in every row"),
     (META + "mode,condition,frequency_hz\n1,free,63.2\n1,contact,310.5\n", "lie far from the free resonance"),
-], ids=["spectrum in kHz", "length in um", "f1 in kHz", "unknown unit", "zero response", "table in kHz"])
+    (_spectrum_text([3e5, 3.1e5]).replace(",-1,", ",-2,") + "".join(f"3e5,{v},1,0\n" for v in range(3, 20)),
+     "2 distinct frequencies"),
+], ids=["spectrum in kHz", "length in um", "f1 in kHz", "unknown unit", "zero response", "table in kHz",
+        "two frequencies"])
 def test_wrong_units_and_empty_responses_are_one_line(tmp_path, capsys, text, message):
     path = tmp_path / "d.csv"
     path.write_text(text)

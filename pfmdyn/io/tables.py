@@ -82,6 +82,7 @@ INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
 TEXT_SUFFIXES = (".txt", ".dat")
 """Drive sweeps, or tables in this module's format saved under a text-file name."""
 MIN_SPECTRUM_ROWS = 20
+MIN_SPECTRUM_FREQUENCIES = 10
 MIN_RESONANCES = 1
 """A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
 discrepancy report says which parameters so few rows leave undetermined."""
@@ -169,6 +170,10 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
                         f"{MIN_SPECTRUM_ROWS} are needed to fit the model")
+    count = len(np.unique(spectra.frequency_hz))
+    if count < MIN_SPECTRUM_FREQUENCIES:
+        raise UserError(f"{path}: {count} distinct frequenc{'y' if count == 1 else 'ies'}; a spectrum needs at least "
+                        f"{MIN_SPECTRUM_FREQUENCIES} to show its resonances")
     if not np.any(spectra.response):
         raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
     check_band(str(path), spectra.frequency_hz, metadata.f1, SPECTRUM_BAND)
