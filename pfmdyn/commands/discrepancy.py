@@ -73,12 +73,7 @@ def run(args: argparse.Namespace) -> int:
         # Data that read correctly but defeat the numerics still get one line, not a traceback.
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
                         "check the metadata (spring constant, length, tip height, free resonance)") from None
-    if args.plot:
-        if isinstance(data, SpectrumData):
-            plot_spectrum_report(data, report, args.plot)
-        else:
-            plot_resonance_report(data, report, args.plot)
-    report.pop("_fits", None)
+    fits = report.pop("_fits", None)
     print(summary(report))
     if args.json == "-":
         print(json.dumps(_finite(report), indent=2))
@@ -88,4 +83,11 @@ def run(args: argparse.Namespace) -> int:
                 json.dump(_finite(report), fh, indent=2)
         except OSError as exc:
             raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+    if args.plot:
+        # Last: a path the plot cannot take costs the figure, not the report.
+        plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
+        try:
+            plot(data, {**report, "_fits": fits}, args.plot)
+        except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
+            raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
     return 0
