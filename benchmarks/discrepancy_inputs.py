@@ -29,11 +29,17 @@ Outcome of a variant:
 
 Files that read as the canonical file are not re-analysed unless ``--all-through-cli``.
 
-Last run (2026-11-23, seed 3, shared 2-core machine): formats 125/125 pass (0 reject, 0
-fail); before this benchmark's fixes 66 pass, 45 reject, 5 fail (tracebacks on a constant
-or zero response and on a short sweep without a peak; a kHz spectrum and table taken as Hz;
-frequencies with rounding noise: nothing named).  ``--physics``: no traceback or timeout;
-the misses are the analysis's (tilt, see ``benchmarks/discrepancy.py``).
+Last run (2026-11-23, seed 3, shared 2-core machine): 103/103 pass (100 %), 0 reject, 0
+FAIL.  The same run on the code before these fixes (commit baf84b9): 54 pass (52 %), 40
+reject (header spellings, units, separators, ``%`` comments, metadata with units), 9 FAIL:
+tracebacks on a zero or constant response and on a 25-row sweep without a peak; a kHz
+spectrum and a kHz table read as Hz, a length in um and f1 in kHz accepted (effects named
+from wrong metadata); frequencies with rounding noise (each row its own frequency: nothing
+named).  ``--physics`` (20 cases): no traceback, no run over 60 s, 15 pass; the misses are
+the analysis's: tilt (4 of the 5, see ``benchmarks/discrepancy.py``) and a soft lever (k = 0.075
+N/m) on a stiff contact (k1/k = 7500, k2 = 745 N/m, above the k2 start grid of
+:func:`pfmdyn.discrepancy.effects.spring_grid`), which names tip_mass and background
+beside lateral_stiffness and reports the rest unexplained.
 """
 from __future__ import annotations
 
