@@ -9,7 +9,8 @@ module maps what a file says onto it, with the factor to the canonical unit:
   semicolon, tab or space separator a decimal comma is read as a point);
 * comment and metadata lines start with ``#`` or ``%`` (``## key = value`` too);
 * column names are compared case-insensitively, with the unit as a suffix (``frequency_khz``),
-  in brackets (``Frequency (kHz)``, ``Bias [mV]``) or implied (``freq``: Hz, ``bias``: V);
+  in brackets (``Frequency (kHz)``, ``Bias [mV]``), after a slash (``Frequency / kHz``), on
+  a line of its own under the header, or implied (``freq``: Hz, ``bias``: V);
   a phase needs its unit (``phase_deg``, ``Phase (rad)``): degrees and radians cannot be
   told apart safely from the numbers;
 * metadata values may carry a unit of the key's dimension (``length_m: 223 um``).
@@ -129,10 +130,14 @@ def column(name: str) -> tuple[str, float, str] | None:
 
     >>> column("Frequency (kHz)"), column("bias_mv"), column("X (pm)")[0], column("phase")
     (('frequency_hz', 1000.0, 'khz'), ('bias_v', 0.001, 'mv'), 'x', None)
+    >>> column("Frequency / MHz"), column("Tip bias [V]"), column("Phase / rad")[1] == 180 / math.pi
+    (('frequency_hz', 1000000.0, 'mhz'), ('bias_v', 1.0, 'v'), True)
     """
     text = name.strip().strip('"').strip().lower()
     unit = None
-    bracket = re.fullmatch(r"(.*?)\s*[(\[]\s*([^)\]]*?)\s*[)\]]", text)
+    # "Frequency (kHz)", "Frequency [kHz]" or "Frequency / kHz"
+    bracket = (re.fullmatch(r"(.*?)\s*[(\[]\s*([^)\]]*?)\s*[)\]]", text)
+               or re.fullmatch(r"(.*?)\s+/\s*(\S+)", text))
     if bracket:
         text, unit = bracket.group(1), bracket.group(2).replace(" ", "")
     key = "_".join(text.replace("-", " ").split())

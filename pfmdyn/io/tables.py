@@ -61,7 +61,8 @@ OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
 FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1e6}
 """Frequency column names of a resonances table and their factor to Hz."""
 COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "q_factor": "quality_factor",
-                  "cond": "condition", "mode_number": "mode"}
+                  "cond": "condition", "state": "condition", "boundary_condition": "condition",
+                  "mode_number": "mode", "mode_no": "mode", "mode_index": "mode"}
 METADATA_ALIASES = {"spring_constant": "spring_constant_n_per_m", "k": "spring_constant_n_per_m",
                     "k_n_per_m": "spring_constant_n_per_m", "length": "length_m", "width": "width_m",
                     "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz", "f1": "free_resonance_hz",
