@@ -18,6 +18,7 @@ which seed the fits and are reported; the mechanism named is the one whose fit i
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -29,7 +30,7 @@ from .model import FitResult, Model, bounds, fit, project
 from .peaks import data_peaks, match_starts, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
-__all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
+__all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
 
 
 
@@ -85,6 +86,32 @@ def signature(data: SpectrumData, result: FitResult, sigma: float) -> dict:
         shape = "peak shift" if odd > 0.3 else "peak width"
     return {"band_hz": band, "resonances_hz": [float(freq_u[p]) for p in peaks],
             "share_near_resonances": share, "signature": shape}
+
+
+MAX_ROWS = 20000
+"""Rows ``pfmdyn discrepancy`` analyses at most: the fits' cost grows with the rows, and a
+longer spectrum (e.g. 20 000 frequencies x 9 biases: 107 s, stopped by the time budget
+with an effect missed) is analysed at every k-th frequency (:func:`thin`)."""
+
+
+def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData, int]:
+    """Every k-th frequency (all its biases) with the smallest k that leaves at most
+    ``max_rows`` rows (default :data:`MAX_ROWS`); returns the data and k.
+
+    >>> from pfmdyn.io.tables import Metadata
+    >>> m = Metadata(2.4, 2.2e-4, 3e-5, 1e-5, 6e4)
+    >>> f = np.repeat(np.arange(1.0, 11.0), 2); v = np.tile([0.0, 1.0], 10)
+    >>> small, k = thin(SpectrumData(m, f, v, f + 0j), max_rows=8)
+    >>> k, small.frequency_hz.tolist()
+    (3, [1.0, 1.0, 4.0, 4.0, 7.0, 7.0, 10.0, 10.0])
+    """
+    stride = math.ceil(len(data.frequency_hz) / (max_rows or MAX_ROWS))
+    if stride <= 1:
+        return data, 1
+    _, index = np.unique(data.frequency_hz, return_inverse=True)
+    keep = index % stride == 0
+    return dataclasses.replace(data, frequency_hz=data.frequency_hz[keep], bias_v=data.bias_v[keep],
+                               response=data.response[keep]), stride
 
 
 TRIAL_NFEV = 30
