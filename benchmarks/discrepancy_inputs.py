@@ -144,6 +144,9 @@ def spectrum_variants(text: str) -> dict[str, tuple[str, str]]:
         "duplicated rows": (W(base, [np.concatenate([c, c[:50]]) for c in cols]), SAME),
         "rounding noise on f": (W(base, [f * (1 + 1e-13 * rng.standard_normal(len(f))), V, x, y]), SAME),
         "jitter 1e-7 on f": (W(base, [f * (1 + 1e-7 * rng.standard_normal(len(f))), V, x, y]), SAME),
+        "bias read back, 1 mV jitter": (W(base, [f, V + 1e-3 * rng.standard_normal(len(V)), x, y]), EFFECTS),
+        "one frequency": (W(base, [c[f == f.min()] for c in cols]) + "".join(
+            f"{float(f.min())!r},{float(b)!r},1.0,0.0\n" for b in np.arange(10.0, 40.0)), ERROR),
         "conflicting duplicate": (W(base, [np.concatenate([f, f[:5]]), np.concatenate([V, V[:5]]),
                                            np.concatenate([x, 1.01 * x[:5]]), np.concatenate([y, y[:5]])]), ERROR),
         "NaN cell": (canonical.replace(f",{float(x[10])!r},", ",NaN,", 1), ERROR),
