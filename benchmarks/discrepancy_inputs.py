@@ -11,9 +11,10 @@ refused.  Spectrum variants: column order, header spellings and units (``freq``,
 semicolon, spaces, decimal commas), Windows and old Mac line ends, byte-order mark,
 ``%``/``##`` comments, ``key = value`` metadata, metadata with units, trailing separators,
 row orders, duplicated rows, one or two biases, frequencies written with rounding noise,
-NaN cells, non-positive frequencies, empty files, missing metadata, wrong units (kHz in a
-Hz column, length in um, f1 in kHz), zero and constant responses.  Table variants: the same
-kinds, plus Q columns, free-only and contact-only rows, condition words, ``.txt`` names.
+biases read back with jitter, a single frequency, NaN cells, non-positive frequencies,
+empty files, missing metadata, wrong units (kHz in a Hz column, length in um, f1 in kHz),
+zero and constant responses.  Table variants: the same kinds, plus Q columns, free-only
+and contact-only rows, condition words.
 The paper's Section VI.1 resonances (tip 1, tip 2) are run in kHz, in both row orders.
 ``--physics`` adds random levers with each hidden effect and special spectra (noise-free,
 interleaved sweeps, 6000 x 7 rows, 60 frequencies, a band without a peak).
@@ -29,14 +30,15 @@ Outcome of a variant:
 
 Files that read as the canonical file are not re-analysed unless ``--all-through-cli``.
 
-Last run (2026-11-23, seed 3, shared 2-core machine): 103/103 pass (100 %), 0 reject, 0
-FAIL.  The same run on the code before these fixes (commit baf84b9): 54 pass (52 %), 40
-reject (header spellings, units, separators, ``%`` comments, metadata with units), 9 FAIL:
-tracebacks on a zero or constant response and on a 25-row sweep without a peak; a kHz
-spectrum and a kHz table read as Hz, a length in um and f1 in kHz accepted (effects named
-from wrong metadata); frequencies with rounding noise (each row its own frequency: nothing
-named).  ``--physics`` (20 cases): no traceback, no run over 60 s, 15 pass; the misses are
-the analysis's: tilt (4 of the 5, see ``benchmarks/discrepancy.py``) and a soft lever (k = 0.075
+Last run (2026-11-23, seed 3, shared 2-core machine): 105/105 pass (100 %), 0 reject, 0
+FAIL.  The same run on the code before these fixes (commit baf84b9): 54 pass (51 %), 40
+reject (header spellings, units, separators, ``%`` comments, metadata with units), 11 FAIL:
+tracebacks on a zero or constant response, a single frequency and a 25-row sweep without
+a peak; a kHz spectrum and a kHz table read as Hz, a length in um and f1 in kHz accepted
+(effects named from wrong metadata); frequencies with rounding noise (each row its own
+frequency: nothing named) and biases with read-back jitter (a tilt named, gap 1e10).
+``--physics`` (20 cases): no traceback, no run over 60 s, 15 pass; the misses are the
+analysis's: tilt (4 of the 5, see ``benchmarks/discrepancy.py``) and a soft lever (k = 0.075
 N/m) on a stiff contact (k1/k = 7500, k2 = 745 N/m, above the k2 start grid of
 :func:`pfmdyn.discrepancy.effects.spring_grid`), which names tip_mass and background
 beside lateral_stiffness and reports the rest unexplained.
