@@ -56,7 +56,8 @@ BAD_INPUTS = {
     "misspelled response column": ("frequency_hz,bias_v,amplitude,phase\n1,0,1,1\n",
                                    "line 1: missing column 'phase_deg' (found 'phase': did you mean 'phase_deg'?)"),
     "missing column": ("frequency_hz,bias_v,x\n1,0,1\n", "line 1: missing column 'y'; expected frequency_hz, bias_v"),
-    "both response pairs": ("frequency_hz,bias_v,x,y,amplitude,phase_deg\n", "line 1: both x, y and amplitude"),
+    "response pairs that disagree": ("frequency_hz,bias_v,x,y,amplitude,phase_deg\n1,0,1,0,1,0\n1,1,1,0,1,90\n",
+                                     "line 3: x, y and amplitude, phase_deg give different responses"),
     "duplicate column": ("frequency_hz,bias_v,x,y,x\n", "line 1: column 'x' appears more than once"),
     "no data rows": (HEADER, "line 1: header but no data rows"),
     "NaN cell": (HEADER + "1,0,1,1\n1,1,nan,1\n", "line 3: column 'x' is 'nan'; a finite number is required"),
@@ -158,6 +159,9 @@ def test_decimal_comma_with_semicolons_and_a_phase_without_unit(tmp_path):
     path = write(tmp_path, "frequency_hz;bias_v;x;y\n1000,5;-1;0,25;1e-3\n1000,5;1;2;0\n")
     data = read_spectra(path)
     assert data.frequency_hz.tolist() == [1000.5, 1000.5] and data.response[0] == 0.25 + 1e-3j
+    # X, Y, R, theta as a lock-in exports them: x, y are read.
+    data = read_spectra(write(tmp_path, "f;V;X;Y;R;Theta (deg)\n10;-1;0;2;2;90\n10;1;1;0;1;0,0001\n"))
+    assert data.response.tolist() == [2j, 1] and data.response_columns == ("x", "y")
     # A units line under the header, as spreadsheet exports write it.
     data = read_spectra(write(tmp_path, "freq,bias,amplitude,phase\nkHz,mV,pm,(deg)\n10,-1000,2,90\n10,1000,1,0\n"))
     assert data.frequency_hz.tolist() == [1e4, 1e4] and data.bias_v.tolist() == [-1, 1]

@@ -11,7 +11,8 @@ The format, shared by every command that reads measured spectra::
 
 * ``x, y`` are the lock-in in-phase and quadrature signals; ``amplitude, phase_deg`` the
   same response in polar form (phase in degrees).  Either pair gives the complex response
-  :math:`x + i y = A e^{i\\varphi}`.  Other columns are ignored.
+  :math:`x + i y = A e^{i\\varphi}`; a file with both pairs is read from ``x, y``, the
+  polar pair checked to agree (0.1 %).  Other columns are ignored.
 * Spellings researchers use are read too (:mod:`pfmdyn.io.columns`): other separators
   (semicolon, tab, spaces), ``%`` comments, names with units (``Frequency (kHz)``,
   ``bias_mv``, ``Phase (rad)``) and aliases (``freq``, ``V_dc``, ``real, imag``, ``R``);
@@ -145,7 +146,10 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     found = [columns.column(name) for name in written]
     names = [match[0] if match else name for match, name in zip(found, written)]
     response_columns = _check_header(where, header_line, names)
-    wanted = COORDINATE_COLUMNS + response_columns
+    # Both pairs (lock-ins export X, Y, R, theta): x, y are read, the polar pair checked.
+    polar = RESPONSE_VARIANTS[1] if len(response_columns) == 4 else ()
+    response_columns = response_columns[:2]
+    wanted = COORDINATE_COLUMNS + response_columns + polar
     indices = [names.index(name) for name in wanted]
     factors = np.array([found[i][1] for i in indices])
     rows, line_numbers = [], []
@@ -165,6 +169,9 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     if not rows:
         raise UserError(f"{where}, line {header_line}: header but no data rows")
     table = np.array(rows, dtype=float) * factors
+    if polar:
+        _check_same_response(where, table, line_numbers)
+        table = table[:, :4]
     table[:, 0] = _common_setpoints(table[:, 0], table[:, 1])
     table[:, 1] = _common_biases(table[:, 0], table[:, 1])
     table = _check_rows(where, table, np.array(line_numbers), response_columns, biases_per_frequency)
@@ -203,7 +210,7 @@ def _check_header(where: str, number: int, names: list[str]) -> tuple[str, str]:
             raise UserError(f"{where}, line {number}: column '{name}' appears more than once")
     present = [pair for pair in RESPONSE_VARIANTS if set(pair) <= set(names)]
     if len(present) == 2:
-        raise UserError(f"{where}, line {number}: both x, y and amplitude, phase_deg columns; keep one pair")
+        return present[0] + present[1]
     unknown = [name for name in names if name not in EXPECTED_COLUMNS]
     # Without a complete pair, report against the pair the header most resembles.
     pair = present[0] if present else max(
@@ -236,6 +243,16 @@ def _number(where: str, number: int, name: str, cell: str) -> float:
     if not math.isfinite(value):
         raise UserError(f"{where}, line {number}: column '{name}' is '{cell}'; a finite number is required")
     return value
+
+
+def _check_same_response(where: str, table: np.ndarray, line_numbers: list[int]) -> None:
+    """Columns x, y, amplitude, phase_deg (2-5) must give one response, to 0.1 %."""
+    xy = table[:, 2] + 1j * table[:, 3]
+    polar = table[:, 4] * np.exp(1j * np.deg2rad(table[:, 5]))
+    bad = np.flatnonzero(np.abs(xy - polar) > 1e-3 * np.abs(xy) + 1e-9 * np.abs(xy).max())
+    if bad.size:
+        raise UserError(f"{where}, line {line_numbers[bad[0]]}: x, y and amplitude, phase_deg give different "
+                        "responses; keep one pair")
 
 
 def _common_setpoints(frequency_hz: np.ndarray, bias_v: np.ndarray) -> np.ndarray:
