@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -84,3 +85,117 @@ def test_spectra_end_in_a_report_or_one_line(tmp_path, capsys, p):
     path = tmp_path / "spectrum.csv"
     path.write_text(spectrum(beam, freq, tuple(np.linspace(-2, 2, p["biases"])), order="instrument"))
     assert _run(path, capsys) == 0
+
+
+META = ("# spring_constant_n_per_m: 2.4\n# length_m: 2.23e-4\n# width_m: 2.4e-5\n# tip_height_m: 1e-5\n"
+        "# free_resonance_hz: 6.32e4\n")
+
+
+def _spectrum_text(freq_hz, meta=META, header="frequency_hz,bias_v,x,y", x=1.0):
+    return meta + header + "\n" + "".join(f"{float(f)!r},{v},{x},0.5\n" for f in freq_hz for v in (-1, 1))
+
+
+@pytest.mark.parametrize("text, message", [
+    (_spectrum_text(np.linspace(150, 400, 20)), "lie far from the free resonance 63200 Hz"),      # kHz as Hz
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")), "'length_m' is 223 m"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")), "'free_resonance_hz' is 63.2"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.4\n", "2.4 N/mm\n")), "unit 'N/mm' not understood"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), x=0.0).replace(",0.5\n", ",0\n"), "zero in every row"),
+    (META + "mode,condition,frequency_hz\n1,free,63.2\n1,contact,310.5\n", "lie far from the free resonance"),
+    (_spectrum_text([3e5, 3.1e5]).replace(",-1,", ",-2,") + "".join(f"3e5,{v},1,0\n" for v in range(3, 20)),
+     "2 distinct frequencies"),
+], ids=["spectrum in kHz", "length in um", "f1 in kHz", "unknown unit", "zero response", "table in kHz",
+        "two frequencies"])
+def test_wrong_units_and_empty_responses_are_one_line(tmp_path, capsys, text, message):
+    path = tmp_path / "d.csv"
+    path.write_text(text)
+    assert cli.main(["discrepancy", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
+def test_units_in_metadata_and_table_spellings_read_as_si(tmp_path):
+    from pfmdyn.io.tables import read
+
+    plain = tmp_path / "plain.csv"
+    plain.write_text(META + "mode,condition,frequency_hz\n1,free,63200\n2,free,396000\n1,contact,310500\n")
+    spelled = tmp_path / "spelled.csv"
+    spelled.write_text("% Spring constant = 2.4 N/m\n% Length = 223 um\n% width_m = 24um\n% tip_height_m = 10 um\n"
+                       "% f1 = 63.2 kHz\nFreq (kHz)\tCondition\tMode\t\n"
+                       "396,0\tair\t2\t\n310,5\tIn contact\t1\t\n63,2\tnon-contact\t1\t\n")
+    a, b = read(plain), read(spelled)
+    assert a.metadata == b.metadata and a.mode.tolist() == b.mode.tolist()
+    assert a.condition.tolist() == b.condition.tolist()
+    np.testing.assert_allclose(a.frequency_hz, b.frequency_hz, rtol=1e-12)
+
+
+def test_spectrum_without_a_peak_ends_in_a_report(tmp_path, capsys):
+    """A short single-bias sweep between resonances: no peak to match fit starts to (it
+    ended in a traceback)."""
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=40, Q=100.0)
+    path = tmp_path / "flat.csv"
+    path.write_text(spectrum(beam, np.linspace(200e3, 230e3, 25), biases=(1.0,), seed=3))
+    assert _run(path, capsys) == 0
+
+
+def test_tables_saved_as_txt_or_dat_are_not_taken_for_drive_sweeps(tmp_path):
+    from pfmdyn.io.tables import read
+
+    text = META + "mode\tcondition\tfrequency_hz\n1\tfree\t63200\n1\tcontact\t310500\n"
+    for name in ("r.txt", "r.dat"):
+        (tmp_path / name).write_text(text)
+        assert read(tmp_path / name).frequency_hz.tolist() == [63200, 310500]
+
+
+def test_noise_free_spectrum_names_only_the_hidden_effect(tmp_path):
+    """A simulator's exact output: the noise estimate is then the curvature of the curve, and
+    effects of negligible size (tilt 5e-5 rad, tip mass 3e-7) were named beside damping."""
+    from pfmdyn.discrepancy.spectrum import analyse
+    from pfmdyn.io.tables import read
+
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=40, Q=100.0)
+    path = tmp_path / "exact.csv"
+    path.write_text(spectrum(beam, np.linspace(150e3, 1300e3, 120), biases=(-1.0, 1.0), noise=0.0))
+    report = analyse(read(path), progress=False)
+    assert report["missing_effects"] == ["damping"] and report["damping_mechanisms"] == ["internal"]
+
+
+def test_lateral_stiffness_trial_after_another_effect_is_never_worse(tmp_path):
+    """--vertical-only: k2 joins the parameters after k1, before the effects already added
+    (its starts put it last: the trial after a tip mass was 10x worse than the current fit)."""
+    from pfmdyn.discrepancy.spectrum import SpectrumProblem
+    from pfmdyn.io.tables import read
+
+    beam = FEBeam(0.0747, 220e-6, 6.6e3, 1.9e-5, k1=565.4, k2=745.6, n_elements=40)
+    c = beam.contact_resonances(3)
+    path = tmp_path / "lateral.csv"
+    path.write_text(spectrum(beam, np.linspace(0.5 * c[0], 1.15 * c[1], 150), biases=(-3.0, 0.0, 3.0),
+                             noise=0.003, seed=2))
+    problem = SpectrumProblem(read(path), vertical_only=True)
+    current = problem.trial(problem.baseline(), "tip_mass")
+    assert problem.trial(current, "lateral_stiffness").gap <= current.gap * (1 + 1e-9)
+
+
+def test_a_plot_path_that_cannot_be_written_is_one_line_after_the_report(tmp_path, capsys):
+    path = tmp_path / "r.csv"
+    path.write_text(META + "mode,condition,frequency_hz\n1,free,63200\n2,free,396000\n1,contact,310500\n")
+    for plot in (tmp_path / "missing" / "p.png", tmp_path / "p.xyz"):
+        assert cli.main(["discrepancy", str(path), "--plot", str(plot)]) == 2
+        captured = capsys.readouterr()
+        assert "baseline gap" in captured.out
+        last = captured.err.splitlines()[-1]        # after the progress bar
+        assert last.startswith("pfmdyn discrepancy: error: ") and f"cannot write {plot}" in last
+
+
+def test_long_spectra_are_analysed_at_every_kth_frequency(tmp_path, capsys, monkeypatch):
+    """20 000 frequencies x 9 biases took 107 s and stopped on the time budget with the tip
+    mass missed; the command thins a spectrum to at most MAX_ROWS rows (here lowered)."""
+    from pfmdyn.discrepancy import spectrum as spectrum_module
+
+    monkeypatch.setattr(spectrum_module, "MAX_ROWS", 200)
+    beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=40, Q=100.0)
+    path = tmp_path / "long.csv"
+    path.write_text(spectrum(beam, np.linspace(150e3, 700e3, 240), biases=(-1.0, 1.0), seed=4))
+    assert _run(path, capsys) == 0
+    report = json.loads(path.with_suffix(".json").read_text())
+    assert report["frequency_stride"] == 3 and report["missing_effects"] == ["damping"]

@@ -54,7 +54,7 @@ def test_column_layouts_read_alike(tmp_path):
     ("mode,condition,quality_factor", "1,free,100", "lacks the column(s) frequency_hz"),
     ("mode,condition,frequency_hz,quality_factor", "1,free,6e4,-3", "quality_factor must be"),
     ("mode,condition,frequency_hz,q", "1,free,6e4,abc", "quality_factor numbers"),
-    ("frequency_khz,bias_v,x,y", "60,0,1,0", "'frequency_khz'; give frequencies in Hz"),
+    ("frequency_ghz,bias_v,x,y", "60,0,1,0", "'frequency_ghz'; give frequencies as 'frequency_hz'"),
 ])
 def test_bad_columns_are_one_line_naming_the_column(tmp_path, capsys, header, rows, message):
     text = HEAD + header + "\n" + "\n".join([rows] * 3) + "\n"

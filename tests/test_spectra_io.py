@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
+from pfmdyn.errors import UserError
 from pfmdyn.io.spectra import frequency_group_starts, read_spectra
 
 GOOD = """\
@@ -55,7 +56,8 @@ BAD_INPUTS = {
     "misspelled response column": ("frequency_hz,bias_v,amplitude,phase\n1,0,1,1\n",
                                    "line 1: missing column 'phase_deg' (found 'phase': did you mean 'phase_deg'?)"),
     "missing column": ("frequency_hz,bias_v,x\n1,0,1\n", "line 1: missing column 'y'; expected frequency_hz, bias_v"),
-    "both response pairs": ("frequency_hz,bias_v,x,y,amplitude,phase_deg\n", "line 1: both x, y and amplitude"),
+    "response pairs that disagree": ("frequency_hz,bias_v,x,y,amplitude,phase_deg\n1,0,1,0,1,0\n1,1,1,0,1,90\n",
+                                     "line 3: x, y and amplitude, phase_deg give different responses"),
     "duplicate column": ("frequency_hz,bias_v,x,y,x\n", "line 1: column 'x' appears more than once"),
     "no data rows": (HEADER, "line 1: header but no data rows"),
     "NaN cell": (HEADER + "1,0,1,1\n1,1,nan,1\n", "line 3: column 'x' is 'nan'; a finite number is required"),
@@ -118,3 +120,77 @@ def test_any_row_order_reads_the_same_set_of_rows(tmp_path):
         assert data.bias_v.tolist() == read["grouped"].bias_v.tolist()
         assert data.response.tolist() == read["grouped"].response.tolist()
     assert read["grouped"].frequency_hz.tolist()[:3] == [1e3, 1e3, 1e3]
+
+
+SPELLINGS = {
+    # header, separator, how the canonical rows (f Hz, V, x, y) are written in that file
+    "aliases, kHz": ("Frequency (kHz),Bias (V),Real,Imag", ",", lambda f, v, x, y: (f / 1e3, v, x, y)),
+    "suffix units, mV": ("freq_mhz;bias_mv;x_pm;y_pm", ";", lambda f, v, x, y: (f / 1e6, 1e3 * v, x, y)),
+    "columns reordered, tab": ("Y\tV\tf\tX", "\t", lambda f, v, x, y: (y, v, f, x)),
+    "spaces": ("f_hz  V_dc  re  im", "  ", lambda f, v, x, y: (f, v, x, y)),
+    "polar, radians": ("frequency_hz,bias_v,R,Phase (rad)", ",",
+                       lambda f, v, x, y: (f, v, abs(x + 1j * y), np.angle(x + 1j * y))),
+    "polar, degrees, trailing comma": ("frequency_hz,dc,amp,theta_deg,", ",",
+                                       lambda f, v, x, y: (f, v, abs(x + 1j * y), np.degrees(np.angle(x + 1j * y)), "")),
+}
+
+
+@pytest.mark.parametrize("case", SPELLINGS, ids=list(SPELLINGS))
+def test_column_spellings_units_and_separators_read_the_same(tmp_path, case):
+    """What researchers write (aliases, units in the name, any column order and separator,
+    Windows line ends, '%' comments) reads as the canonical table, in SI units."""
+    header, sep, row = SPELLINGS[case]
+    rng = np.random.default_rng(7)
+    canonical = [(f, v, x, y) for v in (-1.5, 2.0) for f, x, y in
+                 zip([1.1e4, 3.3e4, 2.2e4], rng.standard_normal(3), rng.standard_normal(3))]
+    lines = ["% instrument = MFP-3D", header] + [sep.join(repr(float(c)) if c != "" else "" for c in row(*r))
+                                                  for r in canonical]
+    path = tmp_path / "d.csv"
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode())
+    data = read_spectra(path)
+    expected = sorted(canonical)
+    assert data.metadata == {"instrument": "MFP-3D"}
+    np.testing.assert_allclose(data.frequency_hz, [r[0] for r in expected], rtol=1e-12)
+    np.testing.assert_allclose(data.bias_v, [r[1] for r in expected], rtol=1e-12)
+    np.testing.assert_allclose(data.response, [r[2] + 1j * r[3] for r in expected], rtol=1e-9)
+
+
+def test_decimal_comma_with_semicolons_and_a_phase_without_unit(tmp_path):
+    path = write(tmp_path, "frequency_hz;bias_v;x;y\n1000,5;-1;0,25;1e-3\n1000,5;1;2;0\n")
+    data = read_spectra(path)
+    assert data.frequency_hz.tolist() == [1000.5, 1000.5] and data.response[0] == 0.25 + 1e-3j
+    # X, Y, R, theta as a lock-in exports them: x, y are read.
+    data = read_spectra(write(tmp_path, "f;V;X;Y;R;Theta (deg)\n10;-1;0;2;2;90\n10;1;1;0;1;0,0001\n"))
+    assert data.response.tolist() == [2j, 1] and data.response_columns == ("x", "y")
+    # A units line under the header, as spreadsheet exports write it.
+    data = read_spectra(write(tmp_path, "freq,bias,amplitude,phase\nkHz,mV,pm,(deg)\n10,-1000,2,90\n10,1000,1,0\n"))
+    assert data.frequency_hz.tolist() == [1e4, 1e4] and data.bias_v.tolist() == [-1, 1]
+    np.testing.assert_allclose(data.response, [2j, 1], atol=1e-15)
+    # Degrees or radians cannot be told from the numbers: a unitless phase is an error.
+    with pytest.raises(UserError, match="missing column 'phase_deg'"):
+        read_spectra(write(tmp_path, "frequency_hz,bias_v,amplitude,phase\n1,0,1,1\n1,1,1,1\n"))
+
+
+def test_sweeps_whose_frequencies_differ_by_rounding_share_the_setpoints(tmp_path):
+    """An instrument-order file whose second sweep writes f0 + i df computed another way
+    (relative differences 1e-13) has two biases at each frequency, not one."""
+    f = 1e4 + 37.1 * np.arange(30)
+    g = f * (1 + 1e-13 * np.random.default_rng(2).standard_normal(f.size))
+    text = HEADER + "".join(f"{float(a)!r},0,1,0\n" for a in f) + "".join(f"{float(b)!r},1,2,0\n" for b in g)
+    data = read_spectra(write(tmp_path, text))
+    assert len(np.unique(data.frequency_hz)) == 30
+    np.testing.assert_allclose(np.unique(data.frequency_hz), f, rtol=1e-12)
+    # Interleaved sweeps (half a step apart) are different setpoints.
+    text = HEADER + "".join(f"{float(a)!r},0,1,0\n" for a in f) + "".join(f"{float(a) + 18.55!r},1,2,0\n" for a in f)
+    assert len(np.unique(read_spectra(write(tmp_path, text), 1).frequency_hz)) == 60
+
+
+def test_biases_read_back_with_jitter_are_one_bias_per_sweep(tmp_path):
+    """Every row its own bias (an instrument's read-back, 1 mV jitter): the sweeps' biases."""
+    rng = np.random.default_rng(5)
+    f = 1e4 + 50.0 * np.arange(20)
+    text = HEADER + "".join(f"{float(a)!r},{v + 1e-3 * rng.standard_normal()!r},{v},1\n"
+                            for v in (-2.0, 0.0, 2.0) for a in f)
+    data = read_spectra(write(tmp_path, text))
+    assert sorted(set(np.round(data.bias_v, 2).tolist())) == [-2.0, 0.0, 2.0] and len(np.unique(data.bias_v)) == 3
+    np.testing.assert_allclose(data.response.real, np.round(data.bias_v), atol=0.01)

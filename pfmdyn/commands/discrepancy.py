@@ -10,7 +10,8 @@ from threadpoolctl import threadpool_limits
 
 from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.select import TIME_BUDGET_S
-from ..discrepancy.spectrum import analyse, summary
+from ..discrepancy import spectrum
+from ..discrepancy.spectrum import analyse, summary, thin
 from ..errors import UserError
 from ..io.tables import SpectrumData, read
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
@@ -64,6 +65,10 @@ def _analyse(data, args) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
     data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
+    stride = 1
+    if isinstance(data, SpectrumData):
+        rows = len(data.frequency_hz)
+        data, stride = thin(data)
     try:
         # The fits multiply tall, narrow matrices: threaded BLAS only adds overhead there
         # (about 1.5x slower on a shared machine).
@@ -73,13 +78,12 @@ def run(args: argparse.Namespace) -> int:
         # Data that read correctly but defeat the numerics still get one line, not a traceback.
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
                         "check the metadata (spring constant, length, tip height, free resonance)") from None
-    if args.plot:
-        if isinstance(data, SpectrumData):
-            plot_spectrum_report(data, report, args.plot)
-        else:
-            plot_resonance_report(data, report, args.plot)
-    report.pop("_fits", None)
+    fits = report.pop("_fits", None)
+    if stride > 1:
+        report["frequency_stride"] = stride
     print(summary(report))
+    if stride > 1:
+        print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     if args.json == "-":
         print(json.dumps(_finite(report), indent=2))
     elif args.json:
@@ -88,4 +92,11 @@ def run(args: argparse.Namespace) -> int:
                 json.dump(_finite(report), fh, indent=2)
         except OSError as exc:
             raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+    if args.plot:
+        # Last: a path the plot cannot take costs the figure, not the report.
+        plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
+        try:
+            plot(data, {**report, "_fits": fits}, args.plot)
+        except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
+            raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
     return 0

@@ -518,8 +518,10 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
         x0 = np.clip(start, lower, upper)
         res = least_squares(problem.residual, x0, jac=jac, bounds=(lower, upper), method="trf",
                             diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
-        if best is None or res.cost < best.cost:
+        if np.isfinite(res.cost) and (best is None or res.cost < best.cost):
             best = res
+    if best is None:
+        raise FloatingPointError("no start gave a finite misfit")
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
     cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))

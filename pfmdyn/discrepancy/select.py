@@ -10,7 +10,10 @@ step every candidate effect is fitted on top of the current model (by the data k
   :data:`NEAR_NOISE` (1.5) times the noise while shrinking it by at least 5 %.
 
 With a misfit far above the noise any extra parameter wins the BIC, so the criterion
-alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  The
+alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  A
+misfit already below :data:`WITHIN_NOISE` (0.5) times the noise estimate needs nothing
+more: there the estimate measures the curvature of noise-free data (a simulation), and the
+BIC, with the noise profiled, would name effects of negligible size.  The
 material candidate with the largest BIC gain is added (candidates within
 :data:`BIC_THRESHOLD` of it are indistinguishable: the first in the library's order is
 taken and the others are listed in the step).  When none is material, pairs of
@@ -26,11 +29,12 @@ import time
 
 from tqdm import tqdm
 
-__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "UNEXPLAINED", "material", "run"]
+__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "material", "run"]
 
 BIC_THRESHOLD = 10.0
 MIN_REDUCTION = 0.25
 NEAR_NOISE = 1.5
+WITHIN_NOISE = 0.5
 UNEXPLAINED = 2.0
 TIME_BUDGET_S = 35.0
 """``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
@@ -49,9 +53,11 @@ def material(old, new) -> bool:
     False
     >>> material(S(bic=0.0, gap=40.0), S(bic=-900.0, gap=1.1))
     True
+    >>> material(S(bic=0.0, gap=0.19), S(bic=-9e4, gap=0.01))          # noise-free data
+    False
     """
     gain = old.bic - new.bic
-    if not gain > BIC_THRESHOLD:
+    if not gain > BIC_THRESHOLD or old.gap <= WITHIN_NOISE:
         return False
     return new.gap <= (1 - MIN_REDUCTION) * old.gap or (new.gap <= NEAR_NOISE and new.gap <= 0.95 * old.gap)
 

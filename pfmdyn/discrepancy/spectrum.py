@@ -18,6 +18,7 @@ which seed the fits and are reported; the mechanism named is the one whose fit i
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -25,11 +26,11 @@ import numpy as np
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, fit, project
+from .model import FitResult, Model, bounds, fit, project
 from .peaks import data_peaks, match_starts, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
-__all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary"]
+__all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
 
 
 
@@ -49,6 +50,11 @@ def noise_sigma(frequency_hz, bias_v, response) -> float:
         y = response[sel][order]
         d2.append(y[:-2] - 2 * y[1:-1] + y[2:])
     d2 = np.concatenate(d2)
+    if not d2.size:
+        # No bias has three frequencies (a bias that changes with every row): along frequency
+        # over all rows, an upper bound.
+        y = response[np.argsort(frequency_hz, kind="stable")]
+        d2 = y[:-2] - 2 * y[1:-1] + y[2:]
     return float(math.sqrt(np.median(np.abs(d2) ** 2) / (6 * math.log(2))))
 
 
@@ -80,6 +86,33 @@ def signature(data: SpectrumData, result: FitResult, sigma: float) -> dict:
         shape = "peak shift" if odd > 0.3 else "peak width"
     return {"band_hz": band, "resonances_hz": [float(freq_u[p]) for p in peaks],
             "share_near_resonances": share, "signature": shape}
+
+
+MAX_ROWS = 12000
+"""Rows ``pfmdyn discrepancy`` analyses at most (1000 frequencies x 12 biases): the fits' cost
+grows with the rows, and a longer spectrum (e.g. 20 000 frequencies x 9 biases: 107 s,
+stopped by the time budget with an effect missed) is analysed at every k-th frequency
+(:func:`thin`)."""
+
+
+def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData, int]:
+    """Every k-th frequency (all its biases) with the smallest k that leaves at most
+    ``max_rows`` rows (default :data:`MAX_ROWS`); returns the data and k.
+
+    >>> from pfmdyn.io.tables import Metadata
+    >>> m = Metadata(2.4, 2.2e-4, 3e-5, 1e-5, 6e4)
+    >>> f = np.repeat(np.arange(1.0, 11.0), 2); v = np.tile([0.0, 1.0], 10)
+    >>> small, k = thin(SpectrumData(m, f, v, f + 0j), max_rows=8)
+    >>> k, small.frequency_hz.tolist()
+    (3, [1.0, 1.0, 4.0, 4.0, 7.0, 7.0, 10.0, 10.0])
+    """
+    stride = math.ceil(len(data.frequency_hz) / (max_rows or MAX_ROWS))
+    if stride <= 1:
+        return data, 1
+    _, index = np.unique(data.frequency_hz, return_inverse=True)
+    keep = index % stride == 0
+    return dataclasses.replace(data, frequency_hz=data.frequency_hz[keep], bias_v=data.bias_v[keep],
+                               response=data.response[keep]), stride
 
 
 TRIAL_NFEV = 30
@@ -184,9 +217,12 @@ class SpectrumProblem:
         model = current.model.with_effect(component)
         effect = EFFECTS[component]
         if component == "lateral_stiffness":
-            extra = [np.append(current.internal[1:], v) for v in self.k2_grid]
-            return fit(model, self.data, self.resonance_starts(model, extra, count=3), self.sigma,
-                       max_nfev=TRIAL_NFEV)
+            # Parameters: k1, k2, then the current effects'; k2 at its lower bound is the
+            # current model (the nested start: never worse).
+            extra = [np.insert(current.internal[1:], 0, v) for v in self.k2_grid]
+            nested = np.insert(current.internal, 1, bounds(model)[0][1])
+            starts = [nested] + self.resonance_starts(model, extra, count=3)
+            return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
         # The nested start (effect switched off) guarantees the fit is never worse.
         starts = [np.append(current.internal, effect.null)] if effect.parameters else [current.internal]
         if effect.moves_resonances:
@@ -201,11 +237,13 @@ class SpectrumProblem:
                 others.append(reseeded)
             extra = [np.concatenate([o, [v]]) for o in others for v in effect.seeds]
             starts += self.resonance_starts(model, extra, count=2)
-        elif seeds and rematch:
-            springs = 1 if model.vertical_only else 2
-            starts = self.resonance_starts(model, [np.append(current.internal[springs:], seeds[0])], count=1)
         elif seeds:
             starts = [np.append(current.internal, v) for v in seeds]
+            if rematch:
+                springs = 1 if model.vertical_only else 2
+                # No peak in the data to match: the nested starts remain.
+                starts = self.resonance_starts(
+                    model, [np.append(current.internal[springs:], seeds[0])], count=1) or starts
         return fit(model, self.data, starts, self.sigma, max_nfev=TRIAL_NFEV)
 
     def without(self, current: FitResult, component: str) -> FitResult:

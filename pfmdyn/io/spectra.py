@@ -11,7 +11,13 @@ The format, shared by every command that reads measured spectra::
 
 * ``x, y`` are the lock-in in-phase and quadrature signals; ``amplitude, phase_deg`` the
   same response in polar form (phase in degrees).  Either pair gives the complex response
-  :math:`x + i y = A e^{i\\varphi}`.  Other columns are ignored.
+  :math:`x + i y = A e^{i\\varphi}`; a file with both pairs is read from ``x, y``, the
+  polar pair checked to agree (0.1 %).  Other columns are ignored.
+* Spellings researchers use are read too (:mod:`pfmdyn.io.columns`): other separators
+  (semicolon, tab, spaces), ``%`` comments, names with units (``Frequency (kHz)``,
+  ``bias_mv``, ``Phase (rad)``) and aliases (``freq``, ``V_dc``, ``real, imag``, ``R``);
+  values are converted to Hz, V and degrees.  Sweeps whose frequencies differ only by
+  rounding (less than 1/1000 of a step) share their setpoints.
 * A table is a set of rows: any row order is accepted (a sweep at each bias written one
   after another, as instruments do, or frequency-grouped, or shuffled).  After reading, the
   rows are sorted by frequency, then bias.  A (frequency, bias) pair given twice with the
@@ -23,7 +29,6 @@ The format, shared by every command that reads measured spectra::
 """
 from __future__ import annotations
 
-import csv
 import difflib
 import math
 from dataclasses import dataclass, field
@@ -32,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from . import columns
 
 COORDINATE_COLUMNS = ("frequency_hz", "bias_v")
 RESPONSE_VARIANTS = (("x", "y"), ("amplitude", "phase_deg"))
@@ -128,25 +134,46 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
         raise UserError(f"{path}: not a UTF-8 text file") from None
     where = str(path)
     metadata, header_line = _read_preamble(where, lines)
-    names = _split(lines[header_line - 1])
+    sep = columns.delimiter(lines[header_line - 1])
+    written = columns.split(lines[header_line - 1], sep)
+    while written and not written[-1]:      # a trailing separator
+        written.pop()
+    first_data = header_line
+    units = columns.units_line(lines[header_line:header_line + 1], sep, len(written))
+    if units is not None:
+        written = [f"{name} ({unit})" if unit else name for name, unit in zip(written, units)]
+        first_data += 1
+    found = [columns.column(name) for name in written]
+    names = [match[0] if match else name for match, name in zip(found, written)]
     response_columns = _check_header(where, header_line, names)
-    wanted = COORDINATE_COLUMNS + response_columns
+    # Both pairs (lock-ins export X, Y, R, theta): x, y are read, the polar pair checked.
+    polar = RESPONSE_VARIANTS[1] if len(response_columns) == 4 else ()
+    response_columns = response_columns[:2]
+    wanted = COORDINATE_COLUMNS + response_columns + polar
     indices = [names.index(name) for name in wanted]
+    factors = np.array([found[i][1] for i in indices])
     rows, line_numbers = [], []
-    for number in range(header_line + 1, len(lines) + 1):
+    for number in range(first_data + 1, len(lines) + 1):
         text = lines[number - 1]
         if not text.strip():
             continue
-        if text.lstrip().startswith("#"):
+        if columns.is_comment(text):
             raise UserError(f"{where}, line {number}: comment lines are only allowed before the header")
-        fields = _split(text)
+        fields = columns.split(text, sep)
+        if len(fields) > len(names) and not any(fields[len(names):]):
+            fields = fields[:len(names)]
         if len(fields) != len(names):
             raise UserError(f"{where}, line {number}: expected {len(names)} fields as in the header, found {len(fields)}")
         rows.append([_number(where, number, name, fields[i]) for name, i in zip(wanted, indices)])
         line_numbers.append(number)
     if not rows:
         raise UserError(f"{where}, line {header_line}: header but no data rows")
-    table = np.array(rows, dtype=float)
+    table = np.array(rows, dtype=float) * factors
+    if polar:
+        _check_same_response(where, table, line_numbers)
+        table = table[:, :4]
+    table[:, 0] = _common_setpoints(table[:, 0], table[:, 1])
+    table[:, 1] = _common_biases(table[:, 0], table[:, 1])
     table = _check_rows(where, table, np.array(line_numbers), response_columns, biases_per_frequency)
     first, second = table[:, 2], table[:, 3]
     if response_columns == ("x", "y"):
@@ -156,26 +183,19 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     return Spectra(str(path), table[:, 0], table[:, 1], response, response_columns, metadata)
 
 
-def _split(line: str) -> list[str]:
-    """Fields of one CSV line, whitespace-stripped (data files contain no multi-line quotes)."""
-    return [cell.strip() for cell in next(csv.reader([line]))]
-
-
 def _read_preamble(where: str, lines: list[str]) -> tuple[dict[str, str], int]:
     """Collect ``# key: value`` metadata; return it with the 1-based line number of the header."""
     metadata: dict[str, str] = {}
     for number, text in enumerate(lines, start=1):
-        stripped = text.strip()
-        if not stripped:
+        if not text.strip():
             continue
-        if not stripped.startswith("#"):
+        if not columns.is_comment(text):
             return metadata, number
-        key, colon, value = stripped[1:].partition(":")
-        if colon and key.strip():
-            key = key.strip()
-            if key in metadata:
+        key, value = columns.comment_entry(text)
+        if key:
+            if metadata.get(key, value) != value:
                 raise UserError(f"{where}, line {number}: metadata key '{key}' given twice")
-            metadata[key] = value.strip()
+            metadata[key] = value
     if not lines:
         raise UserError(f"{where}, line 1: the file is empty")
     raise UserError(f"{where}, line {len(lines)}: no header line (only comments or blank lines)")
@@ -190,7 +210,7 @@ def _check_header(where: str, number: int, names: list[str]) -> tuple[str, str]:
             raise UserError(f"{where}, line {number}: column '{name}' appears more than once")
     present = [pair for pair in RESPONSE_VARIANTS if set(pair) <= set(names)]
     if len(present) == 2:
-        raise UserError(f"{where}, line {number}: both x, y and amplitude, phase_deg columns; keep one pair")
+        return present[0] + present[1]
     unknown = [name for name in names if name not in EXPECTED_COLUMNS]
     # Without a complete pair, report against the pair the header most resembles.
     pair = present[0] if present else max(
@@ -223,6 +243,57 @@ def _number(where: str, number: int, name: str, cell: str) -> float:
     if not math.isfinite(value):
         raise UserError(f"{where}, line {number}: column '{name}' is '{cell}'; a finite number is required")
     return value
+
+
+def _check_same_response(where: str, table: np.ndarray, line_numbers: list[int]) -> None:
+    """Columns x, y, amplitude, phase_deg (2-5) must give one response, to 0.1 %."""
+    xy = table[:, 2] + 1j * table[:, 3]
+    polar = table[:, 4] * np.exp(1j * np.deg2rad(table[:, 5]))
+    bad = np.flatnonzero(np.abs(xy - polar) > 1e-3 * np.abs(xy) + 1e-9 * np.abs(xy).max())
+    if bad.size:
+        raise UserError(f"{where}, line {line_numbers[bad[0]]}: x, y and amplitude, phase_deg give different "
+                        "responses; keep one pair")
+
+
+def _common_setpoints(frequency_hz: np.ndarray, bias_v: np.ndarray) -> np.ndarray:
+    """Frequencies of different sweeps closer than 1/1000 of the finest step of one sweep are the
+    same setpoint written with rounding noise (e.g. ``f0 + i df`` computed two ways): each such
+    cluster takes its mean, so that every frequency has its biases together.
+
+    >>> _common_setpoints(np.array([1.0, 2.0, 1.0 + 1e-9, 2.0]), np.array([0, 0, 1, 1])).round(6).tolist()
+    [1.0, 2.0, 1.0, 2.0]
+    """
+    steps = [np.diff(np.unique(frequency_hz[bias_v == b])) for b in np.unique(bias_v)]
+    steps = np.concatenate(steps)
+    unique = np.unique(frequency_hz)
+    if not steps.size or len(unique) < 2:
+        return frequency_hz
+    cluster = np.concatenate(([0], np.cumsum(np.diff(unique) > 1e-3 * steps.min())))
+    if cluster[-1] == len(unique) - 1:
+        return frequency_hz
+    means = np.bincount(cluster, unique) / np.bincount(cluster)
+    return means[cluster[np.searchsorted(unique, frequency_hz)]]
+
+
+def _common_biases(frequency_hz: np.ndarray, bias_v: np.ndarray) -> np.ndarray:
+    """Biases read back with jitter (every row its own value) but in sweeps: when every
+    frequency has the same number of rows and the i-th lowest bias at each frequency stays
+    below the (i+1)-th everywhere, the i-th sweep takes its mean bias.
+
+    >>> _common_biases(np.array([1.0, 1.0, 2.0, 2.0]), np.array([-1.001, 0.999, -0.999, 1.001])).tolist()
+    [-1.0, 1.0, -1.0, 1.0]
+    """
+    order = np.lexsort((bias_v, frequency_hz))
+    starts = frequency_group_starts(frequency_hz[order])
+    counts = np.diff(np.append(starts, len(order)))
+    if counts.min() != counts.max() or len(np.unique(bias_v)) <= counts[0] or counts[0] < 2:
+        return bias_v
+    sweeps = bias_v[order].reshape(-1, counts[0])           # row: one frequency, biases ascending
+    if np.any(sweeps.max(axis=0)[:-1] >= sweeps.min(axis=0)[1:]):
+        return bias_v
+    out = np.empty_like(bias_v)
+    out[order] = np.broadcast_to(sweeps.mean(axis=0), sweeps.shape).ravel()
+    return out
 
 
 def _check_rows(where: str, table: np.ndarray, line_numbers: np.ndarray, response_columns: tuple[str, str],

@@ -29,7 +29,7 @@ from .record import (
     si_value,
 )
 
-__all__ = ["read_sweep", "split_unit"]
+__all__ = ["read_sweep", "split_unit", "is_drive_sweep"]
 
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
 _KEYS = {"Peak amplitude frequency": "free_resonance_hz", "Q factor": "free_quality_factor",
@@ -45,6 +45,24 @@ def split_unit(column: str) -> tuple[str, str]:
     """
     match = re.fullmatch(r"\s*(.*?)\s*\(([^()]*)\)\s*", column)
     return (match.group(1), match.group(2)) if match else (column.strip(), "")
+
+
+def is_drive_sweep(path) -> bool:
+    """Whether a text file holds a drive sweep (a ``Sweep data`` or ``[DATA]`` line); an
+    unreadable file counts as one, so that its reader reports the problem.
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "s.txt")
+    ...     _ = open(name, "w").write("f\\tA\\n1\\t2\\n")
+    ...     is_drive_sweep(name)
+    False
+    """
+    try:
+        text = Path(path).read_text(encoding="latin-1")
+    except OSError:
+        return True
+    return any(line.strip() in _TABLE_START for line in re.split(r"\r\n|\r|\n", text))
 
 
 def _split(path: Path) -> tuple[dict, list[str], np.ndarray]:

@@ -23,6 +23,12 @@ carry its unit (``frequency_hz``, ``frequency_khz``, ``frequency_mhz``), an opti
 mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key
 its relative uncertainty (default 5 %). Any other column is an error naming it.
 
+Spellings are forgiven as for spectra (:mod:`pfmdyn.io.columns`): separators, ``%`` comments,
+``key = value``, metadata keys without their unit whose value carries it (``length: 223 um``,
+``f1: 63.2 kHz``), conditions ``air``/``non-contact`` and ``in contact``.  Metadata outside
+any cantilever's range, and frequencies far from ``free_resonance_hz``, are errors: they are
+in another unit than the file says.
+
 :func:`read` is the one entry point for every supported file: instrument files (.ibw,
 .nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
 :func:`pfmdyn.io.instruments.to_discrepancy_input`, whose short tables (one or two
@@ -35,7 +41,6 @@ problem is one :class:`~pfmdyn.cli.UserError` line.
 """
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
@@ -43,7 +48,9 @@ import numpy as np
 
 from ..errors import UserError
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
-from .spectra import EXPECTED_COLUMNS, read_spectra
+from .columns import column, comment_entry, delimiter, is_comment, metadata_number, split
+from .spectra import read_spectra
+from .sweeps import is_drive_sweep
 
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
@@ -53,19 +60,37 @@ RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
 OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
 FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1e6}
 """Frequency column names of a resonances table and their factor to Hz."""
-COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "cond": "condition",
-                  "mode_number": "mode"}
+COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "q_factor": "quality_factor",
+                  "cond": "condition", "state": "condition", "boundary_condition": "condition",
+                  "mode_number": "mode", "mode_no": "mode", "mode_index": "mode"}
+METADATA_ALIASES = {"spring_constant": "spring_constant_n_per_m", "k": "spring_constant_n_per_m",
+                    "k_n_per_m": "spring_constant_n_per_m", "length": "length_m", "width": "width_m",
+                    "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz", "f1": "free_resonance_hz",
+                    "f1_hz": "free_resonance_hz"}
+"""Metadata keys without their unit (the value then carries it: ``length: 223 um``)."""
+CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free", "out_of_contact": "free",
+                     "in_contact": "contact", "engaged": "contact"}
+SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
+"""Where measured frequencies lie, in units of the free resonance f1: a spectrum may stay below
+f1 (not 20x below); a table's modes are free mode 1 (f1) or above."""
+PLAUSIBLE = {"spring_constant_n_per_m": (1e-4, 1e4, "N/m"), "length_m": (1e-6, 1e-2, "m"),
+             "width_m": (1e-7, 1e-2, "m"), "tip_height_m": (1e-8, 1e-3, "m"),
+             "free_resonance_hz": (500.0, 1e8, "Hz")}
+"""Ranges no AFM cantilever leaves: a value outside is in another unit (um for m, kHz for Hz)."""
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
+TEXT_SUFFIXES = (".txt", ".dat")
+"""Drive sweeps, or tables in this module's format saved under a text-file name."""
 MIN_SPECTRUM_ROWS = 20
+MIN_SPECTRUM_FREQUENCIES = 10
 MIN_RESONANCES = 1
 """A table may be short (e.g. free mode 1 and contact mode 1 from an image's metadata): the
 discrepancy report says which parameters so few rows leave undetermined."""
 
 
 def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
-    meta = dict(meta)
+    meta = {METADATA_ALIASES.get(key, key): value for key, value in meta.items()}
     meta.update({key: value for key, value in (overrides or {}).items() if value is not None})
     missing = [key for key in REQUIRED_KEYS if key not in meta]
     if missing:
@@ -75,12 +100,13 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
     for key in REQUIRED_KEYS + ("frequency_uncertainty_hz", "quality_factor_uncertainty"):
         if key not in meta:
             continue
-        try:
-            values[key] = float(meta[key])
-        except ValueError:
-            raise UserError(f"{where}: metadata '{key}' is '{meta[key]}', not a number") from None
+        values[key] = meta[key] if isinstance(meta[key], float) else metadata_number(where, key, str(meta[key]))
         if not (math.isfinite(values[key]) and values[key] > 0):
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
+        low, high, unit = PLAUSIBLE.get(key, (0.0, math.inf, ""))
+        if not low <= values[key] <= high:
+            raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
+                            f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
     return Metadata(values["spring_constant_n_per_m"], values["length_m"], values["width_m"],
                     values["tip_height_m"], values["free_resonance_hz"],
                     meta.get("description", ""), values.get("frequency_uncertainty_hz"),
@@ -94,14 +120,17 @@ def _preamble(path: Path) -> tuple[dict, list[str], list[str]]:
     except (OSError, UnicodeDecodeError) as exc:
         raise UserError(f"{path}: cannot read the file ({exc})") from None
     meta, rest = {}, [line for line in lines if line.strip()]
-    while rest and rest[0].lstrip().startswith("#"):
-        key, colon, value = rest.pop(0).strip()[1:].partition(":")
-        if colon and key.strip():
-            meta[key.strip()] = value.strip()
+    while rest and is_comment(rest[0]):
+        key, value = comment_entry(rest.pop(0))
+        if key:
+            meta[key] = value
     if not rest:
         raise UserError(f"{path}: no header line")
-    header = [c.strip() for c in next(csv.reader([rest[0]]))]
-    return meta, header, rest[1:]
+    sep = delimiter(rest[0])
+    header = split(rest[0], sep)
+    while header and not header[-1]:        # a trailing separator
+        header.pop()
+    return meta, header, [split(line, sep) for line in rest[1:]]
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
@@ -122,17 +151,18 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
-    if path.suffix.lower() in INSTRUMENT_SUFFIXES:
+    if path.suffix.lower() in INSTRUMENT_SUFFIXES and not (path.suffix.lower() in TEXT_SUFFIXES
+                                                          and not is_drive_sweep(path)):
         return _instrument(path, overrides)
     meta, header, rows = _preamble(path)
     names = [_column(c) for c in header]
     if {"mode", "condition"} & set(names):
         return _resonances(path, _metadata(str(path), meta, overrides), names, rows)
-    unknown = [c for c in header if c not in EXPECTED_COLUMNS]
+    unknown = [c for c in header if column(c) is None]
     if unknown:
         # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
-        hint = ("; give frequencies in Hz as 'frequency_hz'" if any(c.lower().startswith("frequency") for c in unknown)
-                else "")
+        hint = ("; give frequencies as 'frequency_hz' (or frequency_khz, frequency_mhz)"
+                if any(c.lower().startswith("frequency") for c in unknown) else "")
         raise UserError(f"{path}: not a PFM spectrum or resonances table: unknown column(s) "
                         f"{', '.join(repr(c) for c in unknown)}{hint}; expected frequency_hz, bias_v and x, y or "
                         "amplitude, phase_deg (or mode, condition, frequency_hz)")
@@ -141,11 +171,32 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
                         f"{MIN_SPECTRUM_ROWS} are needed to fit the model")
+    count = len(np.unique(spectra.frequency_hz))
+    if count < MIN_SPECTRUM_FREQUENCIES:
+        raise UserError(f"{path}: {count} distinct frequenc{'y' if count == 1 else 'ies'}; a spectrum needs at least "
+                        f"{MIN_SPECTRUM_FREQUENCIES} to show its resonances")
+    if not np.any(spectra.response):
+        raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
+    check_band(str(path), spectra.frequency_hz, metadata.f1, SPECTRUM_BAND)
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
+def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:
+    """Frequencies outside ``band`` (multiples of the free resonance ``f1``) are in another unit
+    than the column (or ``free_resonance_hz``) says."""
+    low, high = float(np.min(frequency_hz)), float(np.max(frequency_hz))
+    if high < band[0] * f1 or low > band[1] * f1:
+        raise UserError(f"{where}: frequencies {low:.6g}-{high:.6g} Hz lie far from the free resonance "
+                        f"{f1:.6g} Hz of the metadata; check their units (frequency_hz or frequency_khz "
+                        "column, free_resonance_hz in Hz)")
+
+
 def _column(name: str) -> str:
-    """Canonical name of a resonances-table column (case, spaces and aliases forgiven)."""
+    """Canonical name of a resonances-table column (case, spaces and aliases forgiven); a
+    frequency column keeps its unit (``frequency_khz``)."""
+    spectral = column(name)
+    if spectral and spectral[0] == "frequency_hz":
+        return f"frequency_{spectral[2]}"
     key = "_".join(name.strip().lower().replace("(", " ").replace(")", " ").split())
     return COLUMN_ALIASES.get(key, key)
 
@@ -183,12 +234,16 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
     unit = FREQUENCY_UNITS[freq_cols[0]]
     q_idx = header.index("quality_factor") if "quality_factor" in header else None
     modes, conds, freqs, qs = [], [], [], []
-    for n, line in enumerate(rows, start=1):
-        cells = [c.strip() for c in next(csv.reader([line]))]
+    for n, cells in enumerate(rows, start=1):
+        if cells and is_comment(cells[0]):
+            raise UserError(f"{path}: data row {n}: comment lines are only allowed before the header")
+        if len(cells) > len(header) and not any(cells[len(header):]):
+            cells = cells[:len(header)]
         if len(cells) != len(header):
             raise UserError(f"{path}: data row {n}: expected {len(header)} fields, got {len(cells)}")
         mode, cond, freq = (cells[i] for i in idx)
-        cond = cond.lower()
+        cond = "_".join(cond.lower().replace("-", " ").split())
+        cond = CONDITION_ALIASES.get(cond, cond)
         if cond not in ("free", "contact"):
             raise UserError(f"{path}: data row {n}: condition must be 'free' or 'contact', got '{cond}'")
         try:
@@ -205,6 +260,8 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
                             f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
+    if len(freqs):
+        check_band(str(path), freqs, metadata.f1, TABLE_BAND)
     order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
                          quality_factor=qs[order] if q_idx is not None else None)

@@ -1,0 +1,180 @@
+"""How researchers write the CSV tables pfmdyn reads: separators, comment lines, column names
+with units, metadata values with units.
+
+The readers (:mod:`pfmdyn.io.spectra`, :mod:`pfmdyn.io.tables`) keep one canonical vocabulary
+(``frequency_hz``, ``bias_v``, ``x``, ``y``, ``amplitude``, ``phase_deg``; metadata in SI); this
+module maps what a file says onto it, with the factor to the canonical unit:
+
+* separators: comma, semicolon, tab or runs of spaces, decided by the header line (with a
+  semicolon, tab or space separator a decimal comma is read as a point);
+* comment and metadata lines start with ``#`` or ``%`` (``## key = value`` too);
+* column names are compared case-insensitively, with the unit as a suffix (``frequency_khz``),
+  in brackets (``Frequency (kHz)``, ``Bias [mV]``), after a slash (``Frequency / kHz``), on
+  a line of its own under the header, or implied (``freq``: Hz, ``bias``: V);
+  a phase needs its unit (``phase_deg``, ``Phase (rad)``): degrees and radians cannot be
+  told apart safely from the numbers;
+* metadata values may carry a unit of the key's dimension (``length_m: 223 um``).
+"""
+from __future__ import annotations
+
+import csv
+import math
+import re
+from decimal import Decimal
+
+from ..errors import UserError
+
+__all__ = ["delimiter", "split", "comment_entry", "is_comment", "units_line", "column", "metadata_number"]
+
+COMMENT_PREFIXES = ("#", "%")
+
+_QUANTITIES = {
+    "frequency_hz": (("frequency", "freq", "f", "drive_frequency"), {"hz": 1.0, "khz": 1e3, "mhz": 1e6}, "hz"),
+    "bias_v": (("bias", "v", "vdc", "v_dc", "dc", "dc_bias", "bias_voltage", "voltage", "tip_bias", "v_bias",
+                "vbias", "dc_voltage"), {"v": 1.0, "mv": 1e-3}, "v"),
+    "x": (("x", "real", "re", "in_phase", "inphase"), None, None),
+    "y": (("y", "imag", "im", "imaginary", "quadrature"), None, None),
+    "amplitude": (("amplitude", "amp", "r", "mag", "magnitude"), None, None),
+    "phase_deg": (("phase", "theta", "phi"), {"deg": 1.0, "degree": 1.0, "degrees": 1.0, "°": 1.0,
+                                              "rad": 180 / math.pi, "radian": 180 / math.pi,
+                                              "radians": 180 / math.pi}, None),
+}
+"""Canonical column -> (names, unit factors to the canonical unit, unit implied when none is
+written; None: a unit must be written).  The response (x, y, amplitude) may carry any unit:
+the analyses are invariant to its scale."""
+_RESPONSE_UNITS = ("pm", "nm", "um", "m", "v", "mv", "uv", "au", "a.u.", "arb")
+
+_METADATA_UNITS = {
+    "_n_per_m": {"n/m": 0, "nn/nm": 0, "pn/nm": -3, "mn/m": -3},
+    "_m": {"m": 0, "mm": -3, "um": -6, "µm": -6, "μm": -6, "nm": -9},
+    "_hz": {"hz": 0, "khz": 3, "mhz": 6},
+}
+"""Metadata key suffix (its SI unit) -> units a value may be written in, power of ten to SI
+(the first suffix that matches counts: ``_n_per_m`` before ``_m``)."""
+
+
+def delimiter(header: str) -> str | None:
+    """The field separator of a table, from its header line (None: runs of whitespace).
+
+    >>> delimiter("frequency_hz;bias_v;x;y"), delimiter("f\\tV\\tx\\ty"), delimiter("f V x y")
+    (';', '\\t', None)
+    """
+    for candidate in ("\t", ";", ","):
+        if candidate in header:
+            return candidate
+    return None if len(header.split()) > 1 else ","
+
+
+def split(line: str, sep: str | None) -> list[str]:
+    """Fields of one line, stripped of spaces and quotes; a decimal comma becomes a point when
+    the separator is not a comma.
+
+    >>> split('1,5; 2; "x"', ";")
+    ['1.5', '2', 'x']
+    """
+    cells = line.split() if sep is None else next(csv.reader([line], delimiter=sep))
+    cells = [cell.strip().strip('"').strip() for cell in cells]
+    if sep != ",":
+        cells = [c.replace(",", ".") if re.fullmatch(r"[-+]?\d*,\d+([eE][-+]?\d+)?", c) else c for c in cells]
+    return cells
+
+
+def comment_entry(line: str) -> tuple[str, str] | None:
+    """``(key, value)`` of a metadata comment line (``# key: value``, ``% key = value``), key
+    lower-cased with spaces as underscores; None for other lines.
+
+    >>> comment_entry("## Spring constant = 2.4 N/m"), comment_entry("frequency_hz,x")
+    (('spring_constant', '2.4 N/m'), None)
+    """
+    text = line.strip()
+    if not text.startswith(COMMENT_PREFIXES):
+        return None
+    text = text.lstrip("#%").strip()
+    match = re.match(r"([^:=]+?)\s*[:=]\s*(.*)$", text)
+    if not match:
+        return ("", "")
+    return "_".join(match.group(1).lower().split()), match.group(2).strip()
+
+
+def units_line(lines: list[str], sep: str | None, count: int) -> list[str] | None:
+    """The units of the columns when the line after the header gives them (``Hz,V,pm,pm``, as
+    spreadsheet exports write), else None.
+
+    >>> units_line(["kHz;mV;;"], ";", 4), units_line(["1e4,0,1,2"], ",", 4)
+    (['khz', 'mv', '', ''], None)
+    """
+    if not lines:
+        return None
+    cells = split(lines[0], sep)[:count]
+    if not any(cells) or any(_is_number(cell) for cell in cells):
+        return None
+    return [cell.strip("()[] ").lower() for cell in cells] + [""] * (count - len(cells))
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def is_comment(line: str) -> bool:
+    """A comment (or metadata) line."""
+    return line.lstrip().startswith(COMMENT_PREFIXES)
+
+
+def column(name: str) -> tuple[str, float, str] | None:
+    """``(canonical name, factor to its unit, unit written)`` of a column header, None when
+    it is not a spectrum column.
+
+    >>> column("Frequency (kHz)"), column("bias_mv"), column("X (pm)")[0], column("phase")
+    (('frequency_hz', 1000.0, 'khz'), ('bias_v', 0.001, 'mv'), 'x', None)
+    >>> column("Frequency / MHz"), column("Tip bias [V]"), column("Phase / rad")[1] == 180 / math.pi
+    (('frequency_hz', 1000000.0, 'mhz'), ('bias_v', 1.0, 'v'), True)
+    """
+    text = name.strip().strip('"').strip().lower()
+    unit = None
+    # "Frequency (kHz)", "Frequency [kHz]" or "Frequency / kHz"
+    bracket = (re.fullmatch(r"(.*?)\s*[(\[]\s*([^)\]]*?)\s*[)\]]", text)
+               or re.fullmatch(r"(.*?)\s+/\s*(\S+)", text))
+    if bracket:
+        text, unit = bracket.group(1), bracket.group(2).replace(" ", "")
+    key = "_".join(text.replace("-", " ").split())
+    for canonical, (names, units, implied) in _QUANTITIES.items():
+        if key == canonical and unit is None:
+            return canonical, 1.0, canonical.rpartition("_")[2] if units else ""
+        stem, _, suffix = key.rpartition("_")
+        if unit is None and key not in names and stem in names and suffix in (units or _RESPONSE_UNITS):
+            key, unit = stem, suffix
+        if key not in names:
+            continue
+        if units is None:
+            return canonical, 1.0, unit or ""
+        unit = unit if unit is not None else implied
+        if unit in units:
+            return canonical, units[unit], unit
+    return None
+
+
+def metadata_number(where: str, key: str, text: str) -> float:
+    """A metadata value as a float in the key's SI unit (``223 um`` for ``length_m``).
+
+    >>> metadata_number("f", "length_m", "223 um"), metadata_number("f", "free_resonance_hz", "63,2kHz")
+    (0.000223, 63200.0)
+    """
+    text = re.sub(r"^(\s*[-+]?\d+),(\d)", r"\1.\2", text)     # a decimal comma
+    match = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan)\s*(\S*)\s*", text,
+                         re.IGNORECASE)
+    if not match:
+        raise UserError(f"{where}: metadata '{key}' is '{text}', not a number")
+    number, unit = match.group(1), match.group(2).lower()
+    if not unit:
+        return float(number)
+    units = next((u for suffix, u in _METADATA_UNITS.items() if key.endswith(suffix)), {})
+    if unit not in units:
+        allowed = ", ".join(units) or "none"
+        raise UserError(f"{where}: metadata '{key}' is '{text}': unit '{match.group(2)}' not understood "
+                        f"(allowed: {allowed})")
+    # Shifting the decimal exponent reads '10 um' exactly as '10e-6' would be.
+    return float(Decimal(number).scaleb(units[unit]))
