@@ -117,6 +117,16 @@ def test_electrostatic_maps_within_uncertainty(bias_run, name):
     assert np.mean(np.abs(z) <= 1) >= 0.5, (name, z)          # the errors are not inflated either
 
 
+def test_signs_of_the_electrostatic_and_electromechanical_terms(bias_run):
+    """A force F_loc > 0 per volt and d1 > 0 (top domain) both read through the gain: their
+    phases are arg(gain); a sign slip anywhere would put them at arg(gain) + pi."""
+    _, _, truth, m = bias_run
+    top = (np.arange(N)[:, None] < N // 2) & (truth["v_surf"] == 0.4)    # d1 > 0, V_surf as given
+    for phase in (m["electrostatic_phase"], m["phase"][top]):
+        offset = np.angle(np.mean(np.exp(1j * (phase - np.angle(GAIN)))))
+        assert abs(offset) < 0.05, offset
+
+
 def test_d_eff_at_the_given_surface_potential(bias_run):
     _, _, truth, m = bias_run
     at = truth["v_surf"] == 0.4                               # pixels whose V_surf was given
@@ -171,12 +181,14 @@ def test_beps_written_by_pyusid(tmp_path, monkeypatch):
 
 
 def test_distributed_load_is_named_and_gives_the_surface_potential(tmp_path, capsys):
-    """A soft lever with the parallel-plate load of the paper's estimate (eps0 w / H^2 per volt,
-    w = 30 um, H = 10 um) along it: at the first contact resonance it drives the tip ~5x more than
-    the local force.  ``--model auto`` must name it; then k1, the local term, V_surf (now
+    """A soft lever with the derived parallel-plate load along it (eps0 w / H^2 per volt of dV,
+    w = 30 um, H = 10 um; the size only, from the generated formula): at the first contact
+    resonance it drives the tip ~5x more than the local force.  ``--model auto`` must name it; then k1, the local term, V_surf (now
     identifiable: the distributed load has a spectrum of its own) and d_eff at the fitted V_surf
     lie within their standard errors."""
-    path, truth = _write_map(tmp_path / "soft.h5", _levers()["soft"], q0=8.854e-12 * 30e-6 / 10e-6**2)
+    from pfmdyn.analysis.diagram import EPSILON_0
+    from pfmdyn.generated.formulas import capacitive_load_per_volt2
+    path, truth = _write_map(tmp_path / "soft.h5", _levers()["soft"], q0=capacitive_load_per_volt2(EPSILON_0, 30e-6, 10e-6))
     assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 0
     assert "model elastic+distributed:" in capsys.readouterr().out
     m = _maps(tmp_path / "o")
