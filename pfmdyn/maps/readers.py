@@ -1,6 +1,6 @@
 """Map inputs: the plain layout (HDF5 file or Zarr group) and pycroscopy's USID band-excitation layout.
 
-Plain: ``response`` (ny, nx, n_freq) complex, ``frequency_hz`` (n_freq,), cantilever metadata as
+Plain: ``response`` (ny, nx, n_freq) complex, ``frequency_hz`` (n_freq,; any order), cantilever metadata as
 root attributes named as in the CSV metadata; with a bias axis ``response`` is (ny, nx, n_bias,
 n_freq) and ``bias_v`` (n_bias,) gives the DC tip biases.  USID (as BGlib writes BE and BEPS
 data): a main dataset (positions x spectral values, complex) whose attributes reference
@@ -49,7 +49,8 @@ class MapInput:
     dataset: str = "response"
     layout: str = "plain"
     columns: np.ndarray | None = None
-    """USID: the spectral columns in (bias, frequency) order, one row per bias step."""
+    """USID: the spectral columns in (bias, frequency) order, one row per bias step; plain: the
+    order of ``frequency_hz`` that sorts it (None when already increasing)."""
 
 
 class open_root:
@@ -193,6 +194,9 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
                                 f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
                                 f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
             grid = shape[:2]
+            order = np.argsort(f, kind="stable")
+            # frequencies are a set: any order, sorted here (the spectra follow on reading)
+            columns, f = (None, f) if np.all(order == np.arange(f.size)) else (order, f[order])
         else:
             f, bias, grid, columns = _usid_grid(root, usid, path)
         attrs = _metadata(root)
@@ -200,8 +204,10 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
     missing = [key for key in METADATA if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-    if not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(np.diff(f) <= 0):
-        raise UserError(f"{path}: frequency_hz must be positive, finite and increasing")
+    if not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise UserError(f"{path}: frequency_hz must be positive and finite")
+    if np.any(np.diff(f) == 0):
+        raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
     if bias is not None:
         basis(bias)                                  # one-line error unless two distinct finite biases
     meta = {short: float(attrs[key]) for key, short in METADATA.items()}
@@ -219,7 +225,8 @@ def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:
     with open_root(source.path) as root:
         data = root[source.dataset]
         if source.layout == "plain":
-            return np.asarray(data[ys, xs])
+            block = np.asarray(data[ys, xs])
+            return block if source.columns is None else block[..., source.columns]
         nx = source.shape[1]
         rows = range(*ys.indices(source.shape[0]))
         x0, x1, _ = xs.indices(nx)
