@@ -23,6 +23,7 @@ import re
 from decimal import Decimal
 
 from ..errors import UserError
+from .record import si_unit
 
 __all__ = ["delimiter", "split", "comment_entry", "is_comment", "units_line", "column", "metadata_number"]
 
@@ -44,13 +45,9 @@ written; None: a unit must be written).  The response (x, y, amplitude) may carr
 the analyses are invariant to its scale."""
 _RESPONSE_UNITS = ("pm", "nm", "um", "m", "v", "mv", "uv", "au", "a.u.", "arb")
 
-_METADATA_UNITS = {
-    "_n_per_m": {"n/m": 0, "nn/nm": 0, "pn/nm": -3, "mn/m": -3},
-    "_m": {"m": 0, "mm": -3, "um": -6, "µm": -6, "μm": -6, "nm": -9},
-    "_hz": {"hz": 0, "khz": 3, "mhz": 6},
-}
-"""Metadata key suffix (its SI unit) -> units a value may be written in, power of ten to SI
-(the first suffix that matches counts: ``_n_per_m`` before ``_m``)."""
+_METADATA_UNITS = (("_n_per_m", "N/m"), ("_m", "m"), ("_hz", "Hz"))
+"""Metadata key suffix -> its SI unit (the first suffix that matches counts: ``_n_per_m``
+before ``_m``); a value may be written in any prefixed form of it (:func:`pfmdyn.io.record.si_unit`)."""
 
 
 def delimiter(header: str) -> str | None:
@@ -168,13 +165,13 @@ def metadata_number(where: str, key: str, text: str) -> float:
                          re.IGNORECASE)
     if not match:
         raise UserError(f"{where}: metadata '{key}' is '{text}', not a number")
-    number, unit = match.group(1), match.group(2).lower()
+    number, unit = match.group(1), match.group(2)
     if not unit:
         return float(number)
-    units = next((u for suffix, u in _METADATA_UNITS.items() if key.endswith(suffix)), {})
-    if unit not in units:
-        allowed = ", ".join(units) or "none"
-        raise UserError(f"{where}: metadata '{key}' is '{text}': unit '{match.group(2)}' not understood "
-                        f"(allowed: {allowed})")
-    # Shifting the decimal exponent reads '10 um' exactly as '10e-6' would be.
-    return float(Decimal(number).scaleb(units[unit]))
+    wanted = next((si for suffix, si in _METADATA_UNITS if key.endswith(suffix)), None)
+    converted = si_unit(unit)
+    if wanted is None or converted is None or converted[0] != wanted:
+        raise UserError(f"{where}: metadata '{key}' is '{text}': unit '{unit}' not understood "
+                        f"({'a prefixed ' + wanted if wanted else 'no unit'} expected)")
+    # In decimal: '10 um' reads exactly as '10e-6' would.
+    return float(Decimal(number) * Decimal(repr(converted[1])))
