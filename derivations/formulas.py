@@ -186,6 +186,9 @@ def _oscillator() -> tuple[Formula, ...]:
         Formula("loss_factor_from_root", (a, b_), solution[inv_q],
                 "1/Q of a mode from its complex root a + i b (Im > 0, exp(i omega t); any frequency scale)",
                 f"{source}: complex root"),
+        Formula("half_power_width_from_root", (b_,), sp.simplify(solution[w0] * solution[inv_q]),
+                "half-power width omega0/Q of a mode from the imaginary part b of its complex root (same units)",
+                f"{source}: complex root"),
     )
 
 

@@ -100,7 +100,8 @@ class Cantilever:
             raise ValueError("frequency must be positive and finite (Hz)")
         r = f / self.resonance_frequency
         beta_factor, k_factor, _, _ = damping.factors(r, 1.0 / self.quality_factor, 0.0, 0.0)
-        return BETA1_FREE * np.sqrt(r) * beta_factor, self.spring_constant * k_factor
+        return (formulas.beta_from_frequency(f, self.resonance_frequency, BETA1_FREE) * beta_factor,
+                self.spring_constant * k_factor)
 
 
 _EXAMPLE = {"k1": 10.0, "k2": 5.0, "H": 1e-5}

@@ -195,3 +195,4 @@ def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
     assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["k1_n_per_m"] > 0 and doc["k2_n_per_m"] == pytest.approx(1.4 / 1.7 * doc["k1_n_per_m"])   # 2(1-nu)/(2-nu)
+    assert doc["k2_ratio"] == pytest.approx(1.4 / 1.7 * doc["k1_n_per_m"] * 1.5e-5**2 / 2.4e-4**2, rel=1e-12)   # k2 H^2/(k L^2)

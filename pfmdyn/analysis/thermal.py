@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UserError
+from ..generated import formulas
 
 __all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks"]
 
@@ -45,8 +46,7 @@ def oscillator_asd(f, f0, q, amplitude, white):
     >>> round(float(oscillator_asd(1e5, 1e5, 100.0, 1.0, 0.0)), 6)   # A Q at resonance
     100.0
     """
-    f = np.asarray(f, dtype=float)
-    return np.sqrt(white**2 + amplitude**2 * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / q) ** 2))
+    return formulas.oscillator_asd(np.asarray(f, dtype=float), f0, q, amplitude, white)
 
 
 def _smooth(y, width):
@@ -63,7 +63,7 @@ def _flexural_modes(candidates, max_modes):
     if len(candidates) == 0:
         return []
     z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
-    ratios = (z / z[0]) ** 2
+    ratios = formulas.frequency_from_beta(z, 1.0, z[0])
     out, taken = [1], {1}
     for f in candidates[1:]:
         r = f / candidates[0]

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..generated import formulas
 
 __all__ = ["add_arguments", "run", "gather"]
 
@@ -199,7 +200,7 @@ def run(args) -> int:
                                       tip_height_m=inputs["H"], mode=inputs["modes"][0],
                                       contact_uncertainty_hz=sig_c, free_uncertainty_hz=sig_f)
         k1, dk1 = float(r.k1_n_per_m), float(np.hypot(r.k1_uncertainty_n_per_m, r.k1_over_k * sig_k))
-        k2_ratio, dk2, proofs = coupling * k1 / k * (inputs["H"] / inputs["L"]) ** 2, 0.0, []
+        k2_ratio, dk2, proofs = formulas.k2_ratio(coupling * k1, k, inputs["H"], inputs["L"]), 0.0, []
         coupled_note = (f"k2 = {coupling:g} k1 along the branch; certified limits f/f1 = {r.proof.soft_ratio:.6g} "
                         f"(free) and {r.proof.stiff_ratio:.6g} (clamped-clamped); one positive k1 (checked)")
     elif len(inputs["contacts"]) == 1:
@@ -224,7 +225,7 @@ def run(args) -> int:
              f"k2 H^2/(k L^2) = {k2_ratio:.6g}" + (f" +/- {dk2:.2g}" if len(proofs) > 1 else
                                                   " (held fixed)" if proofs else " (follows k1)")]
     if inputs["L"] and inputs["H"]:
-        out["k2_n_per_m"] = k2_ratio * k * inputs["L"] ** 2 / inputs["H"] ** 2
+        out["k2_n_per_m"] = formulas.k2_from_ratio(k2_ratio, k, inputs["H"], inputs["L"])
         lines.append(f"k2 = {out['k2_n_per_m']:.6g} N/m  (L = {inputs['L']:g} m, H = {inputs['H']:g} m)")
     if args.reduced_modulus:
         radius, load = _number(args.tip_radius, "--tip-radius"), _number(args.load, "--load")
