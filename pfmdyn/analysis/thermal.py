@@ -6,7 +6,8 @@ that of a damped harmonic oscillator over a white floor,
     ASD(f)**2 = w**2 + A**2 f0**4 / ((f0**2 - f**2)**2 + (f f0 / Q)**2),
 
 (the beam's modal response, one mode at a time: pfmdyn's transfer functions with loss
-``1/Q`` reduce to it near each root).  Peaks are located on the logarithm of the median-
+``1/Q`` reduce to it near each root; derived in ``derivations/formulas.py``, evaluated by
+the generated ``formulas.oscillator_asd``).  Peaks are located on the logarithm of the median-
 smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
 that the floor and the peak weigh alike.
 
