@@ -25,6 +25,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass, fields
+from functools import lru_cache
 
 import numpy as np
 
@@ -220,6 +221,7 @@ class Cantilever:
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
+@lru_cache(maxsize=4096)
 def _free_root(k, H, L, mu, gamma) -> float:
     """First free root ``beta`` with a tip mass ``mu`` at ``gamma L`` (1.8751... at ``mu = 0``).
 
