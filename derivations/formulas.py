@@ -117,13 +117,21 @@ def _frequency_scaling() -> tuple[Formula, ...]:
     # The lever's rho S L**4 / EI from its first free mode, then the mode at f.
     scaled = dispersion(b, frequency).subs(rho_s, _only(sp.solve(dispersion(beta1, f1), rho_s)))
     source = "derivations/beam.py: kappa, Eq. 2 (beta**4 = omega**2 rho S L**4 / EI)"
+    # First-order change of f when beta and beta1 move (f1 fixed), written with f itself.
+    f_of_beta = _only(sp.solve(scaled, frequency))
+    d_b, d_b1 = sp.symbols("d_beta d_beta1", real=True)
+    change = (sp.diff(f_of_beta, b) * d_b + sp.diff(f_of_beta, beta1) * d_b1).subs(
+        f1, _only(sp.solve(sp.Eq(f_of_beta, frequency), f1)))
     return (
         Formula("beta_from_frequency", (frequency, f1, beta1), _only(sp.solve(scaled, b)),
                 "dimensionless frequency beta of a mode at frequency f (Hz) of a lever whose first free root "
                 "beta1 rings at f1", source),
-        Formula("frequency_from_beta", (b, f1, beta1), _only(sp.solve(scaled, frequency)),
+        Formula("frequency_from_beta", (b, f1, beta1), f_of_beta,
                 "frequency (Hz) of the mode at dimensionless frequency beta, the inverse of beta_from_frequency",
                 source),
+        Formula("frequency_change", (frequency, b, d_b, beta1, d_b1), sp.factor(change),
+                "first-order change (Hz) of a mode at frequency f when its root beta moves by d_beta and the "
+                "free root beta1 by d_beta1 (f1 fixed)", source),
     )
 
 

@@ -95,6 +95,12 @@ def test_beta_and_frequency_scale_as_the_modes_of_a_finite_element_beam():
     np.testing.assert_allclose(formulas.beta_from_frequency(f, f1, b1), b1 * np.sqrt(f / f1), rtol=1e-14)
     np.testing.assert_allclose(formulas.frequency_from_beta(formulas.beta_from_frequency(f, f1, b1), f1, b1), f,
                                rtol=1e-13)
+    # The first-order change against a central difference of frequency_from_beta.
+    beta, d_beta, d_b1, h = RNG.uniform(1, 30, 50), RNG.normal(size=50), RNG.normal(size=50), 1e-6
+    f = formulas.frequency_from_beta(beta, f1, b1)
+    step = (formulas.frequency_from_beta(beta + h * d_beta, f1, b1 + h * d_b1)
+            - formulas.frequency_from_beta(beta - h * d_beta, f1, b1 - h * d_b1)) / (2 * h)
+    assert np.all(np.abs(formulas.frequency_change(f, beta, d_beta, b1, d_b1) - step) < 1e-7 * f)
 
 
 def test_free_resonances_with_a_tip_mass_scale_from_the_loaded_root():

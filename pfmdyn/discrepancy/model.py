@@ -305,7 +305,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
             xs[j] += h
             d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
             d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
-            out[:, j] = 2 * f * (d_beta / beta - d_b1 / b1)
+            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1)
     out[~np.isfinite(out)] = 0.0
     return out
 
