@@ -84,7 +84,8 @@ def _mechanisms(args, source, fit_options):
 def run(args) -> int:
     """Fit the map and print a summary line."""
     from ..maps.driver import check_scheduler, open_map, run_map
-    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks"):
+    positive = [flag for flag in _OVERRIDES if flag != "tip_mass"]      # a tip mass may be zero
+    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks", *positive):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")

@@ -7,13 +7,14 @@ vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
-from .readers import open_root, require
+from .readers import metadata_number, open_root, require
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
 
@@ -38,25 +39,37 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     109.748
     """
     with open_root(path) as root:
-        fc = np.asarray(root["contact_frequency_hz"][...], float)
+        fc = np.asarray(root["contact_frequency_hz"][...])
         attrs = dict(root.attrs)
     attrs.update(overrides or {})
     missing = [key for key in ("spring_constant_n_per_m", "free_resonance_hz") if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-    if fc.ndim != 2:
-        raise UserError(f"{path}: contact_frequency_hz must have shape (ny, nx), got {fc.shape}")
-    result = contact_stiffness(fc, float(attrs["free_resonance_hz"]), float(attrs["spring_constant_n_per_m"]),
-                               mode=int(attrs.get("contact_mode", 1)),
-                               contact_uncertainty_hz=float(attrs.get("contact_uncertainty_hz", 0.0)),
-                               out_of_range="nan")
+    if fc.ndim != 2 or not np.issubdtype(fc.dtype, np.number) or np.iscomplexobj(fc):
+        raise UserError(f"{path}: contact_frequency_hz must be a (ny, nx) array of real numbers, got shape "
+                        f"{fc.shape} of {fc.dtype}")
+    if fc.size == 0:
+        raise UserError(f"{path}: the map holds no pixels (shape {fc.shape})")
+    where = {key: " (command line)" if key in (overrides or {}) else "" for key in attrs}
+    number = {key: metadata_number(path, key, attrs[key], where[key]) for key in
+              ("spring_constant_n_per_m", "free_resonance_hz", "contact_mode", "contact_uncertainty_hz") if key in attrs}
+    mode, sigma = number.get("contact_mode", 1.0), number.get("contact_uncertainty_hz", 0.0)
+    if mode != int(mode) or mode < 1 or sigma < 0:
+        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty_hz at least 0, "
+                        f"got {mode:g} and {sigma:g}")
+    try:
+        result = contact_stiffness(fc.astype(float), number["free_resonance_hz"], number["spring_constant_n_per_m"],
+                                   mode=int(mode), contact_uncertainty_hz=sigma, out_of_range="nan")
+    except UserError as exc:            # a non-physical spring constant or free resonance
+        raise UserError(f"{path}: {exc}") from None
     out = os.path.join(out_dir, "maps.zarr")
     group = require("zarr").open_group(out, mode="w")
     for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
         arr = group.create_dataset(name, data=np.broadcast_to(value, fc.shape).astype(float))
         arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
     k1 = np.asarray(result.k1_n_per_m)
-    return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": float(np.nanmedian(k1)), "out": out}
+    median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
+    return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}
 
 
 def describe(summary: dict) -> str:

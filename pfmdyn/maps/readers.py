@@ -12,6 +12,7 @@ Asylum's key names) or the command line.
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -22,8 +23,9 @@ from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
 from .bias import basis
 from .fit import BeamMapModel
+from .fit import bands as fit_bands
 
-__all__ = ["MapInput", "open_map", "read_block", "require"]
+__all__ = ["MapInput", "metadata_number", "open_map", "read_block", "require"]
 
 METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
 TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
@@ -53,8 +55,20 @@ class MapInput:
     order of ``frequency_hz`` that sorts it (None when already increasing)."""
 
 
+_READ_ERRORS = (OSError, KeyError, ValueError, TypeError, IndexError, AttributeError, RuntimeError)
+"""What h5py and zarr raise on a damaged or foreign layout (a broken B-tree or chunk, a dangling
+reference, a group where a dataset belongs, text where numbers belong)."""
+
+
+def _reason(exc: Exception) -> str:
+    """An exception as a short single line: its type and first 120 characters."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}"
+
+
 class open_root:
-    """Context manager giving the root group of an HDF5 file or a Zarr directory."""
+    """Context manager giving the root group of an HDF5 file or a Zarr directory; what the
+    libraries raise on a damaged or foreign layout inside the ``with`` becomes one
+    :class:`~pfmdyn.errors.UserError` naming the file."""
 
     def __init__(self, path):
         self.path = path
@@ -72,9 +86,11 @@ class open_root:
                             "from HDF5 files and Zarr directories") from None
         return self._file
 
-    def __exit__(self, *exc):
+    def __exit__(self, kind, exc, traceback):
         if hasattr(self, "_file"):
             self._file.close()
+        if isinstance(exc, _READ_ERRORS) and not isinstance(exc, UserError):
+            raise UserError(f"{self.path}: could not interpret the file ({_reason(exc)})") from None
 
 
 def _usid_main(root):
@@ -173,63 +189,146 @@ def _metadata(root) -> dict:
     return found
 
 
+MIN_BAND = 3
+"""Frequencies a band needs: its complex amplitude takes two real numbers of the band's
+``2 n`` and k1, Q the rest (with fewer the fit reports a resonance the data cannot determine)."""
+
+
+def _plain_axes(root, path):
+    """Frequencies, biases (or None), pixel grid and sorting order of the plain layout."""
+    for name in ("response", "frequency_hz"):
+        if name not in root:
+            raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
+                            " or a USID main dataset)")
+    axes = {name: np.asarray(root[name][...]) for name in ("frequency_hz", "bias_v") if name in root}
+    for name, values in axes.items():
+        if values.ndim != 1 or not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+            raise UserError(f"{path}: {name} must be a 1-D array of real numbers, got shape {values.shape} "
+                            f"of {values.dtype}")
+    f = axes["frequency_hz"].astype(float)
+    bias = axes["bias_v"].astype(float) if "bias_v" in axes else None
+    response = root["response"]
+    shape, dtype = response.shape, response.dtype
+    if not np.issubdtype(dtype, np.number):
+        raise UserError(f"{path}: response must hold complex (or real) numbers, got {dtype}")
+    expected = (f.size,) if bias is None else (bias.size, f.size)
+    if len(shape) != 2 + len(expected) or shape[2:] != expected:
+        raise UserError(f"{path}: response must have shape (ny, nx, {', '.join(map(str, expected))})"
+                        f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
+                        f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
+    order = np.argsort(f, kind="stable")
+    # frequencies are a set: any order, sorted here (the spectra follow on reading)
+    columns, f = (None, f) if np.all(order == np.arange(f.size)) else (order, f[order])
+    return f, bias, shape[:2], columns
+
+
+def metadata_number(path, key: str, raw, where: str = "") -> float:
+    """A metadata value (a number, a one-element array, text) as one finite float, else one line
+    naming the file, the key and ``where`` it came from.
+
+    >>> metadata_number("a.h5", "length_m", np.array([2.25e-4]))
+    0.000225
+    >>> metadata_number("a.h5", "length_m", "225 um")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: a.h5: length_m must be one finite number in SI units, got '225 um'
+    """
+    try:
+        value = float(np.asarray(raw, dtype=float).reshape(-1)[0]) if np.size(raw) == 1 else math.nan
+    except (TypeError, ValueError):
+        value = math.nan
+    if not math.isfinite(value):
+        raise UserError(f"{path}: {key} must be one finite number in SI units, got {raw!r}{where}")
+    return value
+
+
+def _checked(path, attrs, overrides) -> dict:
+    """The model's metadata as finite numbers with their physical ranges, else one line saying
+    which value, where it came from and what it must be."""
+    values = {}
+    for key in [*METADATA, *TIP]:
+        if key in attrs:
+            where = " (command line)" if key in (overrides or {}) else ""
+            values[key] = metadata_number(path, key, attrs[key], where)
+            if key in METADATA and values[key] <= 0:
+                raise UserError(f"{path}: {key} must be positive, got {values[key]:g}{where}")
+    if not 0.5 <= values.get("tip_position", 1.0) <= 1.0 or not 0.0 <= values.get("tip_mass_ratio", 0.0) < 10.0:
+        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
+                        f"[0, 10), got {values.get('tip_position', 1.0):g} and {values.get('tip_mass_ratio', 0.0):g}")
+    return values
+
+
 def open_map(path: str, overrides: dict | None = None) -> MapInput:
-    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's)."""
+    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's).
+
+    Everything a fit needs is checked here, before anything is written: a malformed file, an
+    empty or non-finite axis, inconsistent shapes or non-physical metadata are one
+    :class:`~pfmdyn.errors.UserError` naming the file.
+
+    >>> import tempfile, h5py
+    >>> path = tempfile.mkdtemp() + "/be.h5"
+    >>> with h5py.File(path, "w") as h:
+    ...     h["response"], h["frequency_hz"] = np.ones((2, 3, 8), complex), np.linspace(3e5, 4e5, 8)
+    ...     h.attrs.update(spring_constant_n_per_m=-2.0, length_m=225e-6, tip_height_m=1e-5, free_resonance_hz=75e3)
+    >>> open_map(path)                              # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: .../be.h5: spring_constant_n_per_m must be positive, got -2
+    >>> open_map(path, {"spring_constant_n_per_m": 2.0}).shape
+    (2, 3)
+    """
     if not os.path.exists(path):
         raise UserError(f"{path}: no such file or directory")
     with open_root(path) as root:
         usid = None if "response" in root else _usid_main(root)
-        columns = None
-        if usid is None:
-            for name in ("response", "frequency_hz"):
-                if name not in root:
-                    raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
-                                    " or a USID main dataset)")
-            f = np.asarray(root["frequency_hz"][...], float)
-            bias = np.asarray(root["bias_v"][...], float) if "bias_v" in root else None
-            shape = root["response"].shape
-            expected = (f.size,) if bias is None else (bias.size, f.size)
-            if len(shape) != 2 + len(expected) or shape[2:] != expected:
-                raise UserError(f"{path}: response must have shape (ny, nx, {', '.join(map(str, expected))})"
-                                f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
-                                f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
-            grid = shape[:2]
-            order = np.argsort(f, kind="stable")
-            # frequencies are a set: any order, sorted here (the spectra follow on reading)
-            columns, f = (None, f) if np.all(order == np.arange(f.size)) else (order, f[order])
-        else:
-            f, bias, grid, columns = _usid_grid(root, usid, path)
+        f, bias, grid, columns = _plain_axes(root, path) if usid is None else _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
     missing = [key for key in METADATA if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
+    if 0 in grid:
+        raise UserError(f"{path}: the map holds no pixels (shape {tuple(grid)})")
+    if f.size == 0:
+        raise UserError(f"{path}: the frequency axis is empty")
     if not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise UserError(f"{path}: frequency_hz must be positive and finite")
     if np.any(np.diff(f) == 0):
         raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
-    if bias is not None:
+    narrow = [b for b in fit_bands(f) if b.stop - b.start < MIN_BAND]
+    if narrow:
+        raise UserError(f"{path}: the band at {f[narrow[0].start]:g} Hz holds {narrow[0].stop - narrow[0].start} "
+                        f"frequencies; a band needs at least {MIN_BAND} to determine a resonance")
+    try:
         basis(bias)                                  # one-line error unless two distinct finite biases
-    meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    tip = {short: float(attrs[key]) for key, short in TIP.items() if key in attrs}
-    if not 0.5 <= tip.get("tip_position", 1.0) <= 1.0 or not 0.0 <= tip.get("tip_mass", 0.0) < 10.0:
-        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
-                        f"[0, 10), got {tip}")
+    except UserError as exc:
+        raise UserError(f"{path}: {exc}") from None
+    values = _checked(path, attrs, overrides)
+    meta = {short: values[key] for key, short in METADATA.items()}
+    tip = {short: values[key] for key, short in TIP.items() if key in values}
     return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:
     """Spectra of the pixel block ``[ys, xs]``: ``(by, bx, n_freq)`` complex, or
-    ``(by, bx, n_bias, n_freq)`` when the map has a bias axis."""
+    ``(by, bx, n_bias, n_freq)`` when the map has a bias axis.  A block the file cannot give
+    (a damaged chunk) is one :class:`~pfmdyn.errors.UserError` naming the file and the pixels."""
     with open_root(source.path) as root:
-        data = root[source.dataset]
-        if source.layout == "plain":
-            block = np.asarray(data[ys, xs])
-            return block if source.columns is None else block[..., source.columns]
-        nx = source.shape[1]
-        rows = range(*ys.indices(source.shape[0]))
-        x0, x1, _ = xs.indices(nx)
-        block = np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
-        spectra = block[..., source.columns]              # (by, bx, n_bias, n_freq)
-        return spectra if source.model.bias_v is not None else spectra[..., 0, :]
+        try:
+            return _block(root[source.dataset], source, ys, xs)
+        except _READ_ERRORS as exc:
+            raise UserError(f"{source.path}: could not read pixels [{ys.start}:{ys.stop}, {xs.start}:{xs.stop}] "
+                            f"({_reason(exc)})") from None
+
+
+def _block(data, source: MapInput, ys: slice, xs: slice) -> np.ndarray:
+    if source.layout == "plain":
+        block = np.asarray(data[ys, xs])
+        return block if source.columns is None else block[..., source.columns]
+    nx = source.shape[1]
+    rows = range(*ys.indices(source.shape[0]))
+    x0, x1, _ = xs.indices(nx)
+    block = np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
+    spectra = block[..., source.columns]              # (by, bx, n_bias, n_freq)
+    return spectra if source.model.bias_v is not None else spectra[..., 0, :]
