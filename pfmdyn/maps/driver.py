@@ -140,12 +140,12 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
             raise UserError(f"cannot write {out}: {exc.strerror or exc}") from None
         raise
     gap = np.asarray(group["gap"][...])
-    extra = {"median_nulling_bias": _median(group["nulling_bias"][...])} if "nulling_bias" in group else {}
+    extra = {"median_nulling_bias": _statistic(group["nulling_bias"][...])} if "nulling_bias" in group else {}
     return {**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
             "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
             "model": group.attrs["model"],
-            "explained_fraction": float(np.nanmean(group["explained"][...])) if np.isfinite(gap).any() else float("nan"),
-            "median_gap": _median(gap), "out": out}
+            "explained_fraction": _statistic(group["explained"][...], np.nanmean),
+            "median_gap": _statistic(gap), "out": out}
 
 
 def _forget(made: list[str], out: str) -> None:
@@ -162,10 +162,11 @@ def _forget(made: list[str], out: str) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-def _median(values) -> float:
-    """Median of the fitted pixels (NaN before any is)."""
+def _statistic(values, how=np.nanmedian) -> float:
+    """``how`` (a NaN-skipping median or mean) over the pixels holding a value: fitted or masked
+    (``explained`` 0) pixels of finished blocks; NaN before any block is done."""
     values = np.asarray(values)
-    return float(np.nanmedian(values)) if np.isfinite(values).any() else float("nan")
+    return float(how(values)) if np.isfinite(values).any() else float("nan")
 
 
 def _pool(workers: int):
