@@ -84,13 +84,14 @@ def _mechanisms(args, source, fit_options):
 def run(args) -> int:
     """Fit the map and print a summary line."""
     from ..maps.driver import check_scheduler, open_map, run_map
-    positive = [flag for flag in _OVERRIDES if flag != "tip_mass"]      # a tip mass may be zero
-    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks", *positive):
+    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
-    overrides = {key: getattr(args, flag) for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
+    from ..names import canonical, checked
+    overrides = {key: checked(canonical(key), getattr(args, flag), "--" + flag.replace("_", "-"))
+                 for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
     from ..maps.contact import contact_map, describe, is_contact_map
     if is_contact_map(args.data):
         print(describe(contact_map(args.data, args.out, overrides)))

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
-from .readers import metadata_number, open_root, require
+from ..names import canonical, checked
+from .readers import open_root, require, scalar
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
 
@@ -50,18 +51,18 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
                         f"{fc.shape} of {fc.dtype}")
     if fc.size == 0:
         raise UserError(f"{path}: the map holds no pixels (shape {fc.shape})")
-    where = {key: " (command line)" if key in (overrides or {}) else "" for key in attrs}
-    number = {key: metadata_number(path, key, attrs[key], where[key]) for key in
-              ("spring_constant_n_per_m", "free_resonance_hz", "contact_mode", "contact_uncertainty_hz") if key in attrs}
-    mode, sigma = number.get("contact_mode", 1.0), number.get("contact_uncertainty_hz", 0.0)
-    if mode != int(mode) or mode < 1 or sigma < 0:
-        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty_hz at least 0, "
-                        f"got {mode:g} and {sigma:g}")
+    k, f1 = (checked(canonical(key), scalar(attrs[key]), f"{path} (command line)" if key in (overrides or {})
+                     else str(path)) for key in ("spring_constant_n_per_m", "free_resonance_hz"))
     try:
-        result = contact_stiffness(fc.astype(float), number["free_resonance_hz"], number["spring_constant_n_per_m"],
-                                   mode=int(mode), contact_uncertainty_hz=sigma, out_of_range="nan")
-    except UserError as exc:            # a non-physical spring constant or free resonance
-        raise UserError(f"{path}: {exc}") from None
+        mode, sigma = (float(scalar(attrs.get(key, default))) for key, default in
+                       (("contact_mode", 1), ("contact_uncertainty_hz", 0.0)))
+    except (TypeError, ValueError):
+        mode = sigma = math.nan
+    if not (math.isfinite(mode) and mode == int(mode) and mode >= 1 and math.isfinite(sigma) and sigma >= 0):
+        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty_hz a number "
+                        f"from 0, got {attrs.get('contact_mode', 1)!r} and {attrs.get('contact_uncertainty_hz', 0.0)!r}")
+    result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty_hz=sigma,
+                               out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
     group = require("zarr").open_group(out, mode="w")
     for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):

@@ -21,11 +21,12 @@ import numpy as np
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
+from ..names import canonical, checked
 from .bias import basis
 from .fit import BeamMapModel
 from .fit import bands as fit_bands
 
-__all__ = ["MapInput", "metadata_number", "open_map", "read_block", "require"]
+__all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
 
 METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
 TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
@@ -222,39 +223,27 @@ def _plain_axes(root, path):
     return f, bias, shape[:2], columns
 
 
-def metadata_number(path, key: str, raw, where: str = "") -> float:
-    """A metadata value (a number, a one-element array, text) as one finite float, else one line
-    naming the file, the key and ``where`` it came from.
+def scalar(raw):
+    """A one-element array attribute (HDF5 often stores a number so) as its element.
 
-    >>> metadata_number("a.h5", "length_m", np.array([2.25e-4]))
-    0.000225
-    >>> metadata_number("a.h5", "length_m", "225 um")
-    Traceback (most recent call last):
-    ...
-    pfmdyn.errors.UserError: a.h5: length_m must be one finite number in SI units, got '225 um'
+    >>> scalar(np.array([2.25e-4])), scalar("2")
+    (np.float64(0.000225), '2')
     """
-    try:
-        value = float(np.asarray(raw, dtype=float).reshape(-1)[0]) if np.size(raw) == 1 else math.nan
-    except (TypeError, ValueError):
-        value = math.nan
-    if not math.isfinite(value):
-        raise UserError(f"{path}: {key} must be one finite number in SI units, got {raw!r}{where}")
-    return value
+    return raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
 
 
 def _checked(path, attrs, overrides) -> dict:
-    """The model's metadata as finite numbers with their physical ranges, else one line saying
-    which value, where it came from and what it must be."""
+    """The model's metadata checked against what a real probe can have (:func:`pfmdyn.names.checked`)
+    and against the map model's tip range, else one line naming the value and where it came from."""
     values = {}
     for key in [*METADATA, *TIP]:
         if key in attrs:
-            where = " (command line)" if key in (overrides or {}) else ""
-            values[key] = metadata_number(path, key, attrs[key], where)
-            if key in METADATA and values[key] <= 0:
-                raise UserError(f"{path}: {key} must be positive, got {values[key]:g}{where}")
-    if not 0.5 <= values.get("tip_position", 1.0) <= 1.0 or not 0.0 <= values.get("tip_mass_ratio", 0.0) < 10.0:
-        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
-                        f"[0, 10), got {values.get('tip_position', 1.0):g} and {values.get('tip_mass_ratio', 0.0):g}")
+            where = f"{path} (command line)" if key in (overrides or {}) else str(path)
+            values[key] = checked(canonical(key), scalar(attrs[key]), where)
+    if not 0.5 <= values.get("tip_position", 1.0) <= 1.0 or not values.get("tip_mass_ratio", 0.0) < 10.0:
+        raise UserError(f"{path}: the map model takes tip_position in [0.5, 1] (of the lever length) and "
+                        f"tip_mass_ratio in [0, 10), got {values.get('tip_position', 1.0):g} and "
+                        f"{values.get('tip_mass_ratio', 0.0):g}")
     return values
 
 
@@ -273,7 +262,7 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
     >>> open_map(path)                              # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    pfmdyn.errors.UserError: .../be.h5: spring_constant_n_per_m must be positive, got -2
+    pfmdyn.errors.UserError: .../be.h5: spring_constant must be in (0.0001, 10000] N/m, got -2.0
     >>> open_map(path, {"spring_constant_n_per_m": 2.0}).shape
     (2, 3)
     """
