@@ -1,7 +1,7 @@
 """Contact-resonance frequency maps (DART, CR-AFM tracking) to contact-stiffness maps.
 
 The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
-``spring_constant_n_per_m`` and ``free_resonance_hz`` (optionally ``contact_mode``, default 1,
+``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
 and ``contact_uncertainty_hz``).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
@@ -35,15 +35,16 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     >>> d = tempfile.mkdtemp()
     >>> with h5py.File(d + "/cr.h5", "w") as h:
     ...     h["contact_frequency_hz"] = np.full((2, 3), 300e3)
-    ...     h.attrs.update(spring_constant_n_per_m=2.0, free_resonance_hz=75e3)
+    ...     h.attrs.update(spring_constant=2.0, free_resonance=75e3)
     >>> round(contact_map(d + "/cr.h5", d)["median_k1"], 3)
     109.748
     """
     with open_root(path) as root:
         fc = np.asarray(root["contact_frequency_hz"][...])
-        attrs = dict(root.attrs)
-    attrs.update(overrides or {})
-    missing = [key for key in ("spring_constant_n_per_m", "free_resonance_hz") if key not in attrs]
+        attrs = {canonical(key) or key: value for key, value in root.attrs.items()}
+    given = {canonical(key) or key: value for key, value in (overrides or {}).items()}     # any spelling
+    attrs.update(given)
+    missing = [key for key in ("spring_constant", "free_resonance") if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
     if fc.ndim != 2 or not np.issubdtype(fc.dtype, np.number) or np.iscomplexobj(fc):
@@ -51,8 +52,8 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
                         f"{fc.shape} of {fc.dtype}")
     if fc.size == 0:
         raise UserError(f"{path}: the map holds no pixels (shape {fc.shape})")
-    k, f1 = (checked(canonical(key), scalar(attrs[key]), f"{path} (command line)" if key in (overrides or {})
-                     else str(path)) for key in ("spring_constant_n_per_m", "free_resonance_hz"))
+    k, f1 = (checked(key, scalar(attrs[key]), f"{path} (command line)" if key in given
+                     else str(path)) for key in ("spring_constant", "free_resonance"))
     try:
         mode, sigma = (float(scalar(attrs.get(key, default))) for key, default in
                        (("contact_mode", 1), ("contact_uncertainty_hz", 0.0)))

@@ -18,20 +18,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..cantilever import Cantilever, Contact
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
-from ..names import canonical, checked
+from ..names import CONTACT, LEVER, canonical
 from .bias import basis
 from .fit import BeamMapModel
 from .fit import bands as fit_bands
 
 __all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
 
-METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
-TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
-"""Optional tip geometry: position over the lever length (default 1, at the free end) and mass
-over the lever's (default 0)."""
+REQUIRED = ("spring_constant", "free_resonance", "length", "tip_height")
+"""Lever metadata every map needs (names of :mod:`pfmdyn.names`); the tip geometry, tilt and the
+contact's k2 policy are optional (:data:`pfmdyn.names.LEVER`, :data:`pfmdyn.names.CONTACT`)."""
 
 
 def require(module: str):
@@ -176,17 +176,18 @@ def _usid_grid(root, name, path):
 
 
 def _metadata(root) -> dict:
-    """Cantilever metadata: root attributes, else the first ``Measurement_*`` group's, under
-    pfmdyn's names or Asylum's (as pycroscopy's translators keep them)."""
+    """Lever and contact metadata by name (:mod:`pfmdyn.names`; older spellings are read too):
+    root attributes, else the first ``Measurement_*`` group's, under pfmdyn's names or Asylum's
+    (as pycroscopy's translators keep them)."""
     found = {}
     groups = [root] + [root[k] for k in sorted(root.keys()) if k.startswith("Measurement")]
     for group in groups:
         attrs = dict(group.attrs)
         asylum, _ = cantilever_fields(attrs)
-        for key in [*METADATA, *TIP]:
-            value = attrs.get(key, asylum.get(key))
-            if value is not None and key not in found:
-                found[key] = value
+        for key, value in [*attrs.items(), *asylum.items()]:
+            name = canonical(key)
+            if name in LEVER + CONTACT and name not in found:
+                found[name] = value
     return found
 
 
@@ -232,21 +233,6 @@ def scalar(raw):
     return raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
 
 
-def _checked(path, attrs, overrides) -> dict:
-    """The model's metadata checked against what a real probe can have (:func:`pfmdyn.names.checked`)
-    and against the map model's tip range, else one line naming the value and where it came from."""
-    values = {}
-    for key in [*METADATA, *TIP]:
-        if key in attrs:
-            where = f"{path} (command line)" if key in (overrides or {}) else str(path)
-            values[key] = checked(canonical(key), scalar(attrs[key]), where)
-    if not 0.5 <= values.get("tip_position", 1.0) <= 1.0 or not values.get("tip_mass_ratio", 0.0) < 10.0:
-        raise UserError(f"{path}: the map model takes tip_position in [0.5, 1] (of the lever length) and "
-                        f"tip_mass_ratio in [0, 10), got {values.get('tip_position', 1.0):g} and "
-                        f"{values.get('tip_mass_ratio', 0.0):g}")
-    return values
-
-
 def open_map(path: str, overrides: dict | None = None) -> MapInput:
     """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's).
 
@@ -263,7 +249,7 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
     Traceback (most recent call last):
     ...
     pfmdyn.errors.UserError: .../be.h5: spring_constant must be in (0.0001, 10000] N/m, got -2.0
-    >>> open_map(path, {"spring_constant_n_per_m": 2.0}).shape
+    >>> open_map(path, {"spring_constant": 2.0}).shape
     (2, 3)
     """
     if not os.path.exists(path):
@@ -273,7 +259,7 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         f, bias, grid, columns = _plain_axes(root, path) if usid is None else _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
-    missing = [key for key in METADATA if key not in attrs]
+    missing = [name for name in REQUIRED if name not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
     if 0 in grid:
@@ -292,10 +278,12 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         basis(bias)                                  # one-line error unless two distinct finite biases
     except UserError as exc:
         raise UserError(f"{path}: {exc}") from None
-    values = _checked(path, attrs, overrides)
-    meta = {short: values[key] for key, short in METADATA.items()}
-    tip = {short: values[key] for key, short in TIP.items() if key in values}
-    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
+    try:
+        lever = Cantilever.from_values({name: float(scalar(attrs[name])) for name in LEVER if name in attrs})
+        contact = Contact(**{name: float(scalar(attrs[name])) for name in CONTACT if name in attrs and name != "k1"})
+    except (TypeError, ValueError, UserError) as exc:
+        raise UserError(f"{path}: {exc}") from None
+    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
 
