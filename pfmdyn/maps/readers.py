@@ -22,7 +22,7 @@ from ..cantilever import Cantilever, Contact
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
-from ..names import CONTACT, LEVER, canonical
+from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
 from .fit import BeamMapModel
 from .fit import bands as fit_bands
@@ -279,8 +279,9 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
     except UserError as exc:
         raise UserError(f"{path}: {exc}") from None
     try:
-        lever = Cantilever.from_values({name: float(scalar(attrs[name])) for name in LEVER if name in attrs})
-        contact = Contact(**{name: float(scalar(attrs[name])) for name in CONTACT if name in attrs and name != "k1"})
+        lever = Cantilever.from_values({name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs})
+        contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
+                             if name in attrs and name != "k1"})
     except (TypeError, ValueError, UserError) as exc:
         raise UserError(f"{path}: {exc}") from None
     return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
