@@ -171,7 +171,7 @@ def variants(tmp: Path):
                 "zero_spring_constant": ("spring_constant_n_per_m", 0.0), "zero_length": ("length_m", 0.0),
                 "nan_free_resonance": ("free_resonance_hz", np.nan), "inf_tip_height": ("tip_height_m", np.inf),
                 "text_tip_height": ("tip_height_m", "10 um"), "array_spring_constant": ("spring_constant_n_per_m", [1.0, 2.0]),
-                "missing_length": ("length_m", None), "tip_position_0.2": ("tip_position", 0.2),
+                "missing_length": ("length_m", None), "tip_position_1.5": ("tip_position", 1.5),
                 "negative_tip_mass": ("tip_mass_ratio", -1.0)}
     for name, (key, value) in bad_meta.items():
         add(f"map/{name}", _h5(tmp / f"{name}.h5", attrs={key: value}))
@@ -273,7 +273,9 @@ def _argv(command, path: Path, extra: list, out: Path) -> list[str]:
     if command == "stiffness":     # --out: a contact-frequency map's k1 map (refused for other files)
         contact = path.suffix == ".h5" and path.name.startswith("cr")
         return ["stiffness", str(path), "--json", str(out.with_suffix(".json"))] + (["--out", str(out)] if contact else [])
-    return [command, str(path), "--json", str(out.with_suffix(".json"))]
+    if command == "inspect":
+        return [command, str(path), "--json", str(out.with_suffix(".json"))]
+    return [command, str(path)]
 
 
 class _Timeout(Exception):
@@ -289,6 +291,8 @@ def _run(argv):
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             status = cli.main(argv)
         escaped = None
+    except SystemExit as exc:           # argparse refusing the arguments: its usage lines are counted
+        status, escaped = exc.code, None
     except BaseException as exc:        # noqa: BLE001  (a traceback is what is measured)
         status, escaped = None, exc
     finally:

@@ -50,7 +50,12 @@ def exit_with_parent(parent: int, poll_s: float = 0.5) -> None:
     daemon thread polling the parent's pid does the same elsewhere and covers a parent that
     died before the ``prctl`` call.
 
-    >>> exit_with_parent(os.getppid())      # this process's parent is alive: nothing happens
+    In a child (here a separate interpreter, which goes on while its parent lives):
+
+    >>> import subprocess, sys
+    >>> code = "import os; from pfmdyn.maps.driver import exit_with_parent as e; e(os.getppid()); print('on')"
+    >>> subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip()
+    'on'
     """
     if sys.platform.startswith("linux"):
         import ctypes
