@@ -65,10 +65,13 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty_hz=sigma,
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
-    group = require("zarr").open_group(out, mode="w")
-    for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
-        arr = group.create_dataset(name, data=np.broadcast_to(value, fc.shape).astype(float))
-        arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
+    try:        # a new map each time (nothing to resume): whatever was at out is replaced
+        group = require("zarr").open_group(out, mode="w")
+        for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
+            arr = group.create_dataset(name, data=np.broadcast_to(value, fc.shape).astype(float))
+            arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
+    except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
+        raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
     k1 = np.asarray(result.k1_n_per_m)
     median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
     return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}

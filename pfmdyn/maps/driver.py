@@ -26,7 +26,7 @@ from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 
-__all__ = ["MapInput", "check_scheduler", "exit_with_parent", "open_map", "run_map", "read_maps"]
+__all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map", "read_maps"]
 
 def _blocks(shape, block):
     ny, nx = shape
@@ -132,6 +132,7 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     import dask.delayed  # noqa: F401  (submodule import)
     out = os.path.join(out_dir, "maps.zarr")
     made = [path for path in (out_dir, out) if not os.path.exists(path)]
+    earlier_run(out)
     try:
         os.makedirs(out_dir, exist_ok=True)
         group = _output(out, source, block, selection, options.get("surface_potential_v"))
@@ -156,6 +157,26 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
             "model": group.attrs["model"],
             "explained_fraction": _statistic(group["explained"][...], np.nanmean),
             "median_gap": _statistic(gap), "out": out}
+
+
+def earlier_run(out: str) -> dict:
+    """The attributes of the map output ``out`` an earlier run left (empty when there is none);
+    a file, or a damaged Zarr group, in its place is one line asking for another ``--out``.
+
+    >>> import tempfile
+    >>> earlier_run(tempfile.mkdtemp() + "/maps.zarr")
+    {}
+    """
+    if not os.path.exists(out):
+        return {}
+    try:
+        group = _require("zarr").open_group(out, mode="r")
+        if "done" in group:
+            np.asarray(group["done"][...])          # the flags a rerun continues from
+        return dict(group.attrs)
+    except (OSError, ValueError, KeyError) as exc:    # zarr: not a group, unreadable metadata
+        raise UserError(f"{out}: not a map output a run can continue ({type(exc).__name__}: "
+                        f"{' '.join(str(exc).split())[:80]}); choose another --out") from None
 
 
 def _forget(made: list[str], out: str) -> None:
