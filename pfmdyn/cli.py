@@ -45,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:
-        from .commands.options import option_hint
+        from .commands.flags import option_hint
         print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:

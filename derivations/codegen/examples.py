@@ -28,6 +28,8 @@ POINT = {
     # Lever and tip (SI): spring constant, length, tip height, width, thickness, silicon.
     "k": 2.0, "L": 2e-4, "H": 1e-5, "width": 3e-5, "thickness": 3e-6,
     "youngs_modulus": 1.69e11, "density": 2330.0, "mu": 0.1, "gamma": 0.9,
+    # Tip's radius of gyration over L; detection spot position over L.
+    "rho_g": 0.05, "sigma": 0.8,
     # Contact (SI): springs, their beam-frame form at alpha = 0.2 rad, torsion, Hertz.
     "k1": 100.0, "k2": 50.0, "kvv": 98.0, "kll": 52.0, "kvl": 9.0, "alpha": 0.2, "k2t": 1e9,
     "tip_radius": 2.5e-8, "load": 1e-8, "nu": 0.3,

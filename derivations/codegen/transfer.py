@@ -5,7 +5,9 @@ variable (``beta``, or ``z = xi L`` for torsion) and cos, sin, cosh, sinh of it.
 polynomial is *split* by parameter monomial, ``sum_m p_m * beta**a_m * h_m(beta)``
 (:func:`derivations.codegen.stabilise.split`); the ``h`` form the family's *basis*, shared
 by all its transfer coefficients and evaluated once per call, stabilised (series below a
-switch point, scaled closed form above).  Printed with CSE, headed with the source's hash.
+switch point, scaled closed form above).  Printed with CSE, headed with the source's hash,
+laid out by ``templates/transfer.py.jinja``; each function carries a doctest at the stored
+point (:mod:`.examples`).
 """
 from __future__ import annotations
 
