@@ -43,7 +43,7 @@ from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
 __all__ = ["GRID_STEP", "BETA_MIN", "Lateral", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
-           "branch_limits", "tip_position_scan", "fit", "covariance", "Crossings"]
+           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings"]
 
 GRID_STEP = 0.02
 """Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
@@ -263,51 +263,56 @@ class Crossings:
 
 
 def _k1_curves(lever, lateral, contact_hz, modes, gammas):
+    """``k1`` of each mode alone at each tip position, and the same compactified to
+    ``s = k1 / (k1 + k)`` in [0, 1]: 0 where the resonance lies below its branch (no ``k1``
+    is small enough), 1 where above (none is large enough), so ``s`` is continuous in ``gamma``."""
     b = np.stack([betas(lever, f, gammas) for f in contact_hz])
-    return np.stack([k1_at(b[i], m, lever, lateral, gammas) for i, m in enumerate(modes)])
+    k1 = np.stack([k1_at(b[i], m, lever, lateral, gammas) for i, m in enumerate(modes)])
+    s = k1 / (k1 + lever.spring_constant)
+    for i, m in enumerate(modes):
+        missing = np.isnan(k1[i])
+        if missing.any():
+            below = mode_numbers(b[i][missing], lever, 0.0, lateral.k2(0.0), gammas[missing]) <= m
+            s[i][missing] = np.where(below, 0.0, 1.0)
+    return k1, s
 
 
 def _crossings(lever, lateral, contact_hz, modes, gammas):
-    curves = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], gammas)
-    with np.errstate(all="ignore"):
-        d = np.log(curves[1]) - np.log(curves[0])
-    ok = np.isfinite(d)
-    brackets = [i for i in range(len(gammas) - 1) if ok[i] and ok[i + 1] and d[i] * d[i + 1] < 0]
-    brackets += [i - 0.5 for i in range(len(gammas)) if ok[i] and d[i] == 0.0]
-    return sorted(brackets), d
+    _, s = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], gammas)
+    d = s[1] - s[0]
+    brackets = [i for i in range(len(gammas) - 1) if d[i] * d[i + 1] < 0]
+    brackets += [i - 0.5 for i in range(len(gammas)) if d[i] == 0.0 and 0.0 < s[0][i] < 1.0]
+    return sorted(brackets)
 
 
 def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, low: float = 0.5,
                       points: int = 101) -> Crossings:
     """``(tip_position, k1)`` explaining the first two resonances, by crossing their ``k1(gamma)`` curves.
 
-    The curves are evaluated at ``points`` tip positions in ``[low, 1]``, each sign change of
-    their log-ratio is refined by bisection-secant, and the count is confirmed on a grid of
-    ``2 points - 1`` positions (module, fact 4).
+    The curves, compactified to ``k1 / (k1 + k)`` (so that a branch running off to
+    ``k1 -> oo`` near the solution stays continuous), are evaluated at ``points`` tip positions
+    in ``[low, 1]``; each sign change of their difference is refined by Brent's method, and the
+    count is confirmed on a grid of ``2 points - 1`` positions (module, fact 4).
     """
     from scipy.optimize import brentq
 
-    def ratio(g):
-        with np.errstate(all="ignore"):
-            c = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))[:, 0]
-            return float(np.log(c[1]) - np.log(c[0]))
+    def gap(g):
+        return float(np.diff(_k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))[1][:, 0])[0])
 
     found = []
     gammas = np.linspace(low, 1.0, points)
-    brackets, d = _crossings(lever, lateral, contact_hz, modes, gammas)
-    for i in brackets:
+    for i in _crossings(lever, lateral, contact_hz, modes, gammas):
         if i != int(i):                                # a grid point on the crossing
-            g = float(gammas[int(i + 0.5)])
+            found.append(float(gammas[int(i + 0.5)]))
         else:
-            g = brentq(ratio, gammas[i], gammas[i + 1], xtol=1e-15, rtol=1e-15)
-        found.append(g)
-    finer, _ = _crossings(lever, lateral, contact_hz, modes, np.linspace(low, 1.0, 2 * points - 1))
-    k1 = [float(_k1_curves(lever, lateral, contact_hz[:1], modes[:1], np.array([g]))[0, 0]) for g in found]
+            found.append(brentq(gap, gammas[i], gammas[i + 1], xtol=1e-15, rtol=1e-15))
+    finer = _crossings(lever, lateral, contact_hz, modes, np.linspace(low, 1.0, 2 * points - 1))
+    k1 = [float(_k1_curves(lever, lateral, contact_hz[:1], modes[:1], np.array([g]))[0][0, 0]) for g in found]
     return Crossings(tuple(found), tuple(k1), low, points, 2 * points - 1 if len(finer) == len(found) else -1,
                      (int(modes[0]), int(modes[1])))
 
 
-def _residuals(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -> np.ndarray:
+def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -> np.ndarray:
     """Shift in ``beta`` from each measured resonance to the nearest root of the model."""
     gamma = values.get("tip_position", lever.tip_position)
     k1 = values["k1"]
@@ -338,7 +343,7 @@ def fit(lever: Cantilever, lateral: Lateral, contact_hz, start: dict) -> tuple[d
     x0 = np.clip(np.array([start[n] for n in names]) / scale, low, high)
 
     def residual(x):
-        return _residuals(lever, lateral, contact_hz, dict(zip(names, x * scale)))
+        return beta_shifts(lever, lateral, contact_hz, dict(zip(names, x * scale)))
     with np.errstate(all="ignore"):
         sol = least_squares(residual, x0, bounds=(low, high), xtol=1e-15, ftol=1e-15, gtol=1e-15, method="trf")
     values = {n: float(v) for n, v in zip(names, sol.x * scale)}
@@ -358,7 +363,7 @@ def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, co
 
     def residual(p, data):
         lv = replace(lever, free_resonance=data[-2], spring_constant=data[-1])
-        return _residuals(lv, lateral, data[:-2], dict(zip(names, p)))
+        return beta_shifts(lv, lateral, data[:-2], dict(zip(names, p)))
 
     p0 = np.array([values[n] for n in names])
     d0 = np.concatenate([fc, [lever.free_resonance, lever.spring_constant]])

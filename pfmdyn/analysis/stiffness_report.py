@@ -136,8 +136,8 @@ class StiffnessReport:
         if self.unique:
             lines = self.solution.lines(k)
         else:
-            lines = ["not unique: " + (f"{len(self.solutions)} solutions explain these resonances equally"
-                                       if self.solutions else "no solution")]
+            lines = ["not unique: " + (f"{len(self.solutions)} solution(s) shown, see why" if self.solutions
+                                       else "no solution found")]
             for i, s in enumerate(self.solutions, 1):
                 lines += [f"solution {i}:"] + ["  " + line for line in s.lines(k)]
         if not any(s.stderr.get("k1", 0.0) > 0 for s in self.solutions):
@@ -190,15 +190,20 @@ def _same(a: dict, b: dict) -> bool:
     return all(abs(a[n] - b[n]) <= _SAME * max(abs(a[n]), abs(b[n]), 1e-300) for n in a)
 
 
-def _keep(lever, lateral, fc, modes, candidates) -> list[tuple[dict, float]]:
+def _keep(lever, lateral, fc, modes, candidates, check_modes: bool = True) -> list[tuple[dict, float]]:
     """Candidates polished on all modes, kept when their modes match, duplicates dropped."""
     out = []
     for start in candidates:
         values, rms = cr.fit(lever, lateral, fc, start)
+        if not check_modes:
+            out.append((values, rms))
+            continue
         gamma = values.get("tip_position", lever.tip_position)
         k2 = values["k2"] if "k2" in values else lateral.k2(values["k1"])
         placed = replace(lever, tip_position=gamma)
-        found = cr.mode_numbers(cr.betas(placed, fc), placed, values["k1"], k2, gamma)
+        # The model's resonance nearest each measured one (they differ in a least-squares fit).
+        nearest = cr.betas(placed, fc) + cr.beta_shifts(lever, lateral, fc, values)
+        found = cr.mode_numbers(nearest, placed, values["k1"], k2, gamma)
         if np.array_equal(found, modes) and not any(_same(values, v) for v, _ in out):
             out.append((values, rms))
     return out
@@ -219,7 +224,9 @@ def _k1_only(lever, lateral, words, fc, modes):
     for f, m, k1 in zip(fc, modes, k1s):
         if not math.isfinite(k1):
             raise _out_of_range(lever, lateral, words, f, m)
-    found = _keep(lever, lateral, fc, modes, [{"k1": float(np.median(k1s))}])
+    # Each mode's own k1 has its mode number checked; their least-squares compromise need not
+    # reproduce any resonance exactly, so its modes are not counted again.
+    found = _keep(lever, lateral, fc, modes, [{"k1": float(np.median(k1s))}], check_modes=False)
     degree = "1 (k2 fixed)" if lateral.degree == 1 else "2 (k2 tied to k1)"
     proof = [f"mode {m}: at the measured frequency the characteristic is a polynomial of degree {degree} in k1; of "
              f"its positive roots exactly one puts the resonance at mode {m} (the roots below it counted): one k1"
@@ -229,31 +236,38 @@ def _k1_only(lever, lateral, words, fc, modes):
     return found, proof, tuple(k1s) if len(fc) > 1 else ()
 
 
-def _k1_k2(lever, fc, modes):
+def _decide(found, fc, noise_beta: float) -> tuple[list, list[str]]:
+    """With more modes than unknowns, drop the solutions whose misfit is over 10 times the best."""
+    if len(fc) <= 2 or len(found) <= 1:
+        return found, []
+    best = min(rms for _, rms in found)
+    kept = [(v, rms) for v, rms in found if rms <= max(10 * best, 3 * noise_beta, 1e-10)]
+    if len(kept) == len(found):
+        return found, []
+    return kept, [f"the other modes rule out {len(found) - len(kept)} of the {len(found)} solutions of the first two "
+                  "(their misfit is over 10 times the best)"]
+
+
+def _k1_k2(lever, fc, modes, noise_beta: float):
     cr.require_tip_height(lever, "k1 and k2 from two modes")
     b = cr.betas(lever, fc)
     candidates = cr.k1_k2_at(b[:2], modes[:2], lever, lever.tip_position)
     found = _keep(lever, cr.Lateral(), fc, modes, [{"k1": k1, "k2": k2} for k1, k2 in candidates])
-    proof = (f"modes {modes[0]} and {modes[1]} with the tip at {lever.tip_position:g} L: the characteristic is "
+    proof = [f"modes {modes[0]} and {modes[1]} with the tip at {lever.tip_position:g} L: the characteristic is "
              f"bilinear in (k1, k2); eliminating k2 leaves a quadratic in k1 with {len(candidates)} root(s) giving "
              f"k1 > 0, k2 >= 0, {len(found)} of them with the measured mode numbers"
-             + (": unique" if len(found) == 1 else ""))
-    return found, [proof]
+             + (": unique" if len(found) == 1 else ": a third contact mode decides" if len(fc) == 2 else "")]
+    found, decided = _decide(found, fc, noise_beta)
+    return found, proof + decided
 
 
 def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
     crossings = cr.tip_position_scan(lever, lateral, fc, modes, low=TIP_POSITION_LOW)
     found = _keep(lever, lateral, fc, modes,
-                  [{"k1": k1, "tip_position": g} for g, k1 in zip(crossings.tip_positions, crossings.k1)])
-    proof = [crossings.text()]
-    if len(fc) > 2 and len(found) > 1:
-        best = min(rms for _, rms in found)
-        kept = [(v, rms) for v, rms in found if rms <= max(10 * best, 3 * noise_beta, 1e-10)]
-        if len(kept) < len(found):
-            proof.append(f"the other modes rule out {len(found) - len(kept)} of the {len(found)} crossings "
-                         "(their misfit is over 10 times the best)")
-        found = kept
-    return found, proof
+                  [{"k1": k1, "tip_position": g} for g, k1 in zip(crossings.tip_positions, crossings.k1)
+                   if math.isfinite(k1)])
+    found, decided = _decide(found, fc, noise_beta)
+    return found, [crossings.text()] + decided
 
 
 def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=None) -> Solution:
@@ -308,15 +322,14 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     policy = contact.k2 is not None or contact.ratio is not None
     notes = list(notes)
     k1_by_mode = ()
+    # The beta shift that the frequency uncertainties alone would make (mode by mode, RMS).
+    noise = float(np.sqrt(np.mean((0.5 * cr.betas(lever, fc) * np.hypot(
+        stderrs["contact_uncertainty"] / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
     if fit_tip_position:
         if len(fc) < 2:
             raise UserError("the tip position is fitted from two or more contact modes: give a second --contact "
                             "(and --mode), or a --tip-position number")
         lateral, words = _lateral(lever, contact, "zero")
-        b = cr.betas(lever, fc)
-        noise = float(np.sqrt(np.mean((0.5 * b * np.hypot(stderrs["contact_uncertainty"] / fc,
-                                                          stderrs["free_resonance_uncertainty"]
-                                                          / lever.free_resonance)) ** 2)))
         found, proof = _k1_tip(lever, lateral, fc, modes, noise)
         laterals = [lateral] * len(found)
     elif len(fc) == 1 or policy:
@@ -324,24 +337,30 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         found, proof, k1_by_mode = _k1_only(lever, lateral, words, fc, modes)
         laterals = [lateral] * len(found)
     elif tip_position_stated:
-        found, proof = _k1_k2(lever, fc, modes)
+        found, proof = _k1_k2(lever, fc, modes, noise)
         words, laterals = "k2 solved with k1 from the modes", [cr.Lateral()] * len(found)
     else:
         words = "none stated: k2 solved with k1, or k2 = 0 with the tip position solved"
         pairs, tips = [], []
         if lever.tip_height is not None:
-            pairs, proof_pairs = _k1_k2(lever, fc, modes)
+            pairs, proof_pairs = _k1_k2(lever, fc, modes, noise)
         else:
             proof_pairs = ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
-        tips, proof_tips = _k1_tip(lever, cr.Lateral(), fc, modes, 0.0)
+        tips, proof_tips = _k1_tip(lever, cr.Lateral(), fc, modes, noise)
         found, laterals = pairs + tips, [cr.Lateral()] * (len(pairs) + len(tips))
-        proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: (k1, k2) with the tip at "
-                  f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0 explain them equally, so neither is "
-                  "unique; give --k2, --k2-over-k1 or --poisson, or --tip-position (a number, or fit)"]
+        both = ": both explain them equally" if pairs and tips else ""
+        proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position "
+                  "are three unknowns, so no answer is unique; the two usual readings are (k1, k2) with the tip at "
+                  f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give --k2, --k2-over-k1 or "
+                  "--poisson, or --tip-position (a number, or fit)"]
                  + proof_pairs + proof_tips)
         solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, hertz=hertz) for (v, rms), lt in zip(found, laterals))
         return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, False, tuple(proof),
                                tuple(notes), stderrs)
+    if k1_by_mode and found and found[0][1] > max(3 * noise, 1e-9):
+        notes.append("the modes disagree beyond their uncertainties (k1 from each mode alone differs): the lever "
+                     "(tip position, tip mass, tilt) or the k2 policy may be wrong; --tip-position fit solves the tip "
+                     "position with k1")
     if not found:
         raise UserError("no k1 > 0 of this lever model gives these contact resonances as modes "
                         f"{modes}: check the mode numbers, the free resonance and the lever (tip position, tip mass, "
