@@ -85,6 +85,10 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     >>> abs(float(characteristic(1.8751040687119611, lever, 0.0, 0.0, 1.0))) < 1e-12
     True
     """
+    if lever.tip_gyration_radius:
+        # The composed characteristic has no rotary inertia yet (issue 20, item 2): refuse rather than ignore it.
+        raise UserError("tip_gyration_radius: the tip's rotary inertia is not in the stiffness model yet; leave "
+                        "--tip-gyration-radius out")
     kvv, kll, kvl = rotated(k1, k2, lever.alpha)
     with np.errstate(all="ignore"):
         return tip_setback.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
@@ -193,7 +197,7 @@ def branch_limits(mode: int, lever: Cantilever, lateral: Lateral, tip_position: 
     out = []
     for k1 in (0.0, _STIFF * lever.spring_constant):
         f = lambda b: characteristic(b, lever, k1, lateral.k2(k1), tip_position)   # noqa: E731
-        top = BETA_MIN + 4.0 * (mode + 1)
+        top = BETA_MIN + 6.0 * (mode + 1)         # above any branch limit of a lever tipped at >= 0.5 L
         grid = np.arange(BETA_MIN, top, GRID_STEP)
         values = f(grid)
         change = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)
