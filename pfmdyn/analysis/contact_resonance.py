@@ -43,7 +43,8 @@ from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
 __all__ = ["GRID_STEP", "BETA_MIN", "Lateral", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
-           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings"]
+           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
+           "require_tip_height"]
 
 GRID_STEP = 0.02
 """Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
@@ -225,6 +226,12 @@ def k1_k2_at(beta_pair, mode_pair, lever: Cantilever, tip_position: float) -> li
     Eliminating ``k2`` from the two bilinear equations leaves a quadratic in ``k1``; its
     roots, polished with :func:`fit` and kept when the mode numbers match, are all the
     solutions.  Needs the lever's tip height (``k2`` acts through ``H``).
+
+    >>> from pfmdyn.roots.bracket import grid_roots
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5)
+    >>> b = grid_roots(lambda x: characteristic(x, lever, 100.0, 50.0, 1.0), np.arange(1, 9, 0.01))[:2]
+    >>> [(round(k1, 6), round(k2, 6)) for k1, k2 in k1_k2_at(b, (1, 2), lever, 1.0)]
+    [(100.0, 50.0)]
     """
     k, H = lever.spring_constant, lever.tip_height
     scale_k2 = k * (lever.length / H) ** 2
@@ -256,28 +263,38 @@ class Crossings:
     modes: tuple[int, int]
 
     def text(self) -> str:
-        """The uniqueness argument in words."""
+        """The uniqueness argument in words.
+
+        >>> Crossings((0.93,), (300.0,), 0.7, 101, 201, (1, 2)).text().split("positions: ")[-1]
+        'one solution in the box: unique there (a search at two resolutions, not an interval proof)'
+        """
         n = len(self.tip_positions)
         verdict = ("one solution in the box: unique there" if n == 1 else
                    "no solution in the box" if n == 0 else f"{n} solutions in the box: not unique")
-        return (f"k1 from mode {self.modes[0]} alone and from mode {self.modes[1]} alone at {self.points} tip positions "
-                f"in [{self.low:g}, 1] (exact at each: a polynomial in k1, the mode fixed by counting the roots below "
-                f"it); their curves cross {n} time(s), the same at {self.confirmed_points} positions: {verdict} "
-                "(a search at two resolutions, not an interval proof)")
+        if self.confirmed_points < 0:
+            again = f"but a different number of times at {2 * self.points - 1} positions: the count is not settled"
+        else:
+            again = f"the same at {self.confirmed_points} positions: {verdict}"
+        return (f"k1 from mode {self.modes[0]} alone and from mode {self.modes[1]} alone at {self.points} "
+                f"tip positions in [{self.low:g}, 1] (exact at each: a polynomial in k1, the mode fixed by counting "
+                f"the roots below it); their curves cross {n} time(s), {again} (a search at two resolutions, not an "
+                "interval proof)")
 
 
 def _k1_curves(lever, lateral, contact_hz, modes, gammas):
     """``k1`` of each mode alone at each tip position, and the same compactified to
-    ``s = k1 / (k1 + k)`` in [0, 1]: 0 where the resonance lies below its branch (no ``k1``
-    is small enough), 1 where above (none is large enough), so ``s`` is continuous in ``gamma``."""
+    ``s = k1 / (k1 + k)``, continued past the branch: ``-(soft - beta) / soft`` below its soft
+    limit (no ``k1`` is small enough), ``1 + (beta - stiff) / stiff`` above its stiff limit
+    (none is large enough).  So ``s`` is continuous in ``gamma`` and its curves of two modes
+    change order exactly where they cross, even where both run off to ``k1 -> oo``."""
     b = np.stack([betas(lever, f, gammas) for f in contact_hz])
     k1 = np.stack([k1_at(b[i], m, lever, lateral, gammas) for i, m in enumerate(modes)])
     s = k1 / (k1 + lever.spring_constant)
     for i, m in enumerate(modes):
-        missing = np.isnan(k1[i])
-        if missing.any():
-            below = mode_numbers(b[i][missing], lever, 0.0, lateral.k2(0.0), gammas[missing]) <= m
-            s[i][missing] = np.where(below, 0.0, 1.0)
+        for j in np.flatnonzero(np.isnan(k1[i])):
+            soft, stiff = branch_limits(m, lever, lateral, float(gammas[j]))
+            beta = b[i][j]
+            s[i][j] = -(soft - beta) / soft if beta <= soft else 1.0 + (beta - stiff) / stiff
     return k1, s
 
 
@@ -285,7 +302,7 @@ def _crossings(lever, lateral, contact_hz, modes, gammas):
     _, s = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], gammas)
     d = s[1] - s[0]
     brackets = [i for i in range(len(gammas) - 1) if d[i] * d[i + 1] < 0]
-    brackets += [i - 0.5 for i in range(len(gammas)) if d[i] == 0.0 and 0.0 < s[0][i] < 1.0]
+    brackets += [i - 0.5 for i in range(len(gammas)) if d[i] == 0.0]
     return sorted(brackets)
 
 
@@ -293,31 +310,51 @@ def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, lo
                       points: int = 101) -> Crossings:
     """``(tip_position, k1)`` explaining the first two resonances, by crossing their ``k1(gamma)`` curves.
 
-    The curves, compactified to ``k1 / (k1 + k)`` (so that a branch running off to
-    ``k1 -> oo`` near the solution stays continuous), are evaluated at ``points`` tip positions
-    in ``[low, 1]``; each sign change of their difference is refined by Brent's method, and the
-    count is confirmed on a grid of ``2 points - 1`` positions (module, fact 4).
+    The curves, compactified to ``k1 / (k1 + k)`` and continued past their branches (so that
+    a branch running off to ``k1 -> oo`` near the solution stays continuous), are evaluated at
+    ``points`` tip positions in ``[low, 1]``; each sign change of their difference is refined
+    by Brent's method and kept where both modes have a ``k1``, and the count is confirmed on a
+    grid of ``2 points - 1`` positions (module, fact 4).
+
+    >>> from pfmdyn.roots.bracket import grid_roots
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5)   # tip at 0.9 L, k1 = 100 N/m, k2 = 0
+    >>> b = grid_roots(lambda x: characteristic(x, lever, 100.0, 0.0, 0.9), np.arange(1, 9, 0.01))[:2]
+    >>> c = tip_position_scan(lever, Lateral(), 7e4 * (b / lever.free_root()) ** 2, (1, 2), low=0.8)
+    >>> [round(g, 9) for g in c.tip_positions], [round(k, 6) for k in c.k1]
+    ([0.9], [100.0])
     """
     from scipy.optimize import brentq
 
-    def gap(g):
-        return float(np.diff(_k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))[1][:, 0])[0])
+    def curves(g):
+        return _k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))
 
-    found = []
-    gammas = np.linspace(low, 1.0, points)
-    for i in _crossings(lever, lateral, contact_hz, modes, gammas):
-        if i != int(i):                                # a grid point on the crossing
-            found.append(float(gammas[int(i + 0.5)]))
-        else:
-            found.append(brentq(gap, gammas[i], gammas[i + 1], xtol=1e-15, rtol=1e-15))
-    finer = _crossings(lever, lateral, contact_hz, modes, np.linspace(low, 1.0, 2 * points - 1))
-    k1 = [float(_k1_curves(lever, lateral, contact_hz[:1], modes[:1], np.array([g]))[0][0, 0]) for g in found]
+    def crossings(count):
+        gammas = np.linspace(low, 1.0, count)
+        found = []
+        for i in _crossings(lever, lateral, contact_hz, modes, gammas):
+            if i != int(i):                                # a grid point on the crossing
+                g = float(gammas[int(i + 0.5)])
+            else:
+                g = brentq(lambda x: float(np.diff(curves(x)[1][:, 0])[0]), gammas[i], gammas[i + 1],
+                           xtol=1e-15, rtol=1e-15)
+            # Where the continued curves cross beyond a branch, no k1 explains either mode.
+            if np.all(np.isfinite(curves(g)[0])):
+                found.append(g)
+        return found
+
+    found = crossings(points)
+    finer = crossings(2 * points - 1)
+    k1 = [float(curves(g)[0][0, 0]) for g in found]
     return Crossings(tuple(found), tuple(k1), low, points, 2 * points - 1 if len(finer) == len(found) else -1,
                      (int(modes[0]), int(modes[1])))
 
 
 def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -> np.ndarray:
-    """Shift in ``beta`` from each measured resonance to the nearest root of the model."""
+    """Shift in ``beta`` from each measured resonance to the nearest root of the model (a Newton step).
+
+    >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
+    array([-0.016603])
+    """
     gamma = values.get("tip_position", lever.tip_position)
     k1 = values["k1"]
     k2 = values["k2"] if "k2" in values else lateral.k2(k1)
@@ -361,6 +398,10 @@ def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, co
     The residuals vanish (or are least squares) at the solution; by the implicit-function
     theorem ``d values / d data = -pinv(J_values) J_data``, both Jacobians by central
     differences of the residuals (relative step 1e-6).
+
+    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
+    >>> round(float(np.sqrt(cov[0, 0])), 3)   # N/m
+    0.393
     """
     names = list(values)
     fc = np.asarray(contact_hz, dtype=float)
@@ -395,6 +436,12 @@ def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, co
 
 
 def require_tip_height(lever: Cantilever, why: str) -> None:
-    """A one-line error when ``why`` needs the tip height and the lever has none."""
+    """A one-line error when ``why`` needs the tip height and the lever has none.
+
+    >>> require_tip_height(Cantilever(2.0, 7e4, 2e-4), "a tilt")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: a tilt needs the tip height: give --tip-height (and --length)
+    """
     if lever.tip_height is None:
         raise UserError(f"{why} needs the tip height: give --tip-height (and --length)")

@@ -74,7 +74,11 @@ class Solution:
         return out
 
     def lines(self, spring_constant: float) -> list[str]:
-        """The solution as printed lines."""
+        """The solution as printed lines.
+
+        >>> Solution(300.0, 0.0, 0.93, ("k1", "tip_position"), {"k1": 1.0, "tip_position": 1e-4}).lines(3.0)[0]
+        'k1 = 300 +/- 1 N/m  (k1/k = 100)'
+        """
         def pm(name):
             sigma = self.stderr.get(name, 0.0)
             return f" +/- {sigma:.2g}" if sigma > 0 else ""
@@ -118,7 +122,12 @@ class StiffnessReport:
         return self.solutions[0] if self.unique else None
 
     def to_dict(self) -> dict:
-        """The report as names -> values; ``k1`` and the rest are None unless the solution is unique."""
+        """The report as names -> values; ``k1`` and the rest are None unless the solution is unique.
+
+        >>> d = analyse(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3]).to_dict()
+        >>> round(d["k1"], 4), d["unique"], d["inputs"]["contact_hz"]
+        (109.7483, True, [300000.0])
+        """
         out = dict.fromkeys(("k1", "k1_stderr", "k2", "k2_stderr", "tip_position", "tip_position_stderr"))
         if self.unique:
             out.update(self.solution.to_dict())
@@ -131,7 +140,11 @@ class StiffnessReport:
         return out
 
     def report(self) -> str:
-        """The printed text: the solution (or each candidate), the k2 policy, the argument, notes."""
+        """The printed text: the solution (or each candidate), the k2 policy, the argument, notes.
+
+        >>> print(analyse(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3]).report().splitlines()[0])
+        k1 = 109.748 N/m  (k1/k = 54.8741)
+        """
         k = self.lever.spring_constant
         if self.unique:
             lines = self.solution.lines(k)
@@ -267,7 +280,7 @@ def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
                   [{"k1": k1, "tip_position": g} for g, k1 in zip(crossings.tip_positions, crossings.k1)
                    if math.isfinite(k1)])
     found, decided = _decide(found, fc, noise_beta)
-    return found, [crossings.text()] + decided
+    return found, [crossings.text()] + decided, crossings.confirmed_points > 0
 
 
 def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=None) -> Solution:
@@ -321,7 +334,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         cr.require_tip_height(lever, "a tilt")
     policy = contact.k2 is not None or contact.ratio is not None
     notes = list(notes)
-    k1_by_mode = ()
+    k1_by_mode, settled = (), True
     # The beta shift that the frequency uncertainties alone would make (mode by mode, RMS).
     noise = float(np.sqrt(np.mean((0.5 * cr.betas(lever, fc) * np.hypot(
         stderrs["contact_uncertainty"] / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
@@ -330,7 +343,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
             raise UserError("the tip position is fitted from two or more contact modes: give a second --contact "
                             "(and --mode), or a --tip-position number")
         lateral, words = _lateral(lever, contact, "zero")
-        found, proof = _k1_tip(lever, lateral, fc, modes, noise)
+        found, proof, settled = _k1_tip(lever, lateral, fc, modes, noise)
         laterals = [lateral] * len(found)
     elif len(fc) == 1 or policy:
         lateral, words = _lateral(lever, contact, "tie")
@@ -346,7 +359,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
             pairs, proof_pairs = _k1_k2(lever, fc, modes, noise)
         else:
             proof_pairs = ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
-        tips, proof_tips = _k1_tip(lever, cr.Lateral(), fc, modes, noise)
+        tips, proof_tips, _ = _k1_tip(lever, cr.Lateral(), fc, modes, noise)
         found, laterals = pairs + tips, [cr.Lateral()] * (len(pairs) + len(tips))
         both = ": both explain them equally" if pairs and tips else ""
         proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position "
@@ -354,7 +367,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
                   f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give --k2, --k2-over-k1 or "
                   "--poisson, or --tip-position (a number, or fit)"]
                  + proof_pairs + proof_tips)
-        solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, hertz=hertz) for (v, rms), lt in zip(found, laterals))
+        solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, hertz=hertz)
+                          for (v, rms), lt in zip(found, laterals))
         return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, False, tuple(proof),
                                tuple(notes), stderrs)
     if k1_by_mode and found and found[0][1] > max(3 * noise, 1e-9):
@@ -367,5 +381,6 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
                         "tilt)")
     solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, k1_by_mode, hertz)
                       for (v, rms), lt in zip(found, laterals))
-    return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, len(solutions) == 1,
-                           tuple(proof), tuple(notes), stderrs)
+    unique = len(solutions) == 1 and settled
+    return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, unique, tuple(proof),
+                           tuple(notes), stderrs)
