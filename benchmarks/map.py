@@ -31,6 +31,7 @@ import scipy.optimize
 from threadpoolctl import threadpool_limits
 
 from pfmdyn.maps.driver import open_map, run_map
+from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel, fit_block
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
@@ -39,7 +40,7 @@ K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 def synthetic(n, n_freq, rng):
     """A map of spectra with k1 in 150-1500 N/m and Q = 60 (from the model itself: speed only)."""
     f = np.linspace(2.2e5, 4.2e5, n_freq)
-    model = BeamMapModel(K, L, F1, H, f)
+    model = BeamMapModel(Cantilever(K, F1, L, tip_height=H), f)
     k1 = rng.uniform(150, 1500, n * n)
     y = model.shape_functions(k1, np.full(k1.size, 60.0)) * 1e-3
     y += 1e-3 * 0.01 * np.abs(y).max() / 1e-3 * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))

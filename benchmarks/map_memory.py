@@ -22,6 +22,7 @@ import time
 import numpy as np
 import zarr
 
+from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
@@ -62,7 +63,7 @@ except MemoryError:
 def write_map(path, ny, nx, n_freq, rng):
     """Synthetic spectra (k1 150-1500 N/m, Q 60, 1 % noise) written one row of blocks at a time."""
     f = np.linspace(2.2e5, 4.2e5, n_freq)
-    model = BeamMapModel(K, L, F1, H, f)
+    model = BeamMapModel(Cantilever(K, F1, L, tip_height=H), f)
     group = zarr.open_group(path, mode="w")
     response = group.create_dataset("response", shape=(ny, nx, n_freq), chunks=(BLOCK, BLOCK, n_freq),
                                     dtype="c16", compressor=None)

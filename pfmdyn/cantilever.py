@@ -25,6 +25,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass, fields
+from functools import lru_cache
 
 import numpy as np
 
@@ -212,6 +213,9 @@ class Cantilever:
         """
         if contact.k1 is None:
             raise UserError("the contact needs k1 (--k1)")
+        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
+            if getattr(self, name) != null:      # refuse rather than describe another lever
+                raise UserError(f"{name} is not yet part of Cantilever.response (leave it at {null:g})")
         beta, k, k1_factor, mu_factor = self._damped(frequency, contact.contact_loss)
         kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
         with np.errstate(all="ignore"):
@@ -220,6 +224,7 @@ class Cantilever:
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
+@lru_cache(maxsize=4096)
 def _free_root(k, H, L, mu, gamma) -> float:
     """First free root ``beta`` with a tip mass ``mu`` at ``gamma L`` (1.8751... at ``mu = 0``).
 

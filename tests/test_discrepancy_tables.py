@@ -77,7 +77,7 @@ def test_damping_mechanism_from_quality_factors(tmp_path, mechanism):
     measured, predicted = np.array(report["measured_quality_factor"]), np.array(report["predicted_quality_factor"])
     assert np.max(np.abs(predicted / measured - 1)) < 0.05
     if mechanism == "internal":
-        q = report["parameters"]["Q"]
+        q = report["parameters"]["quality_factor"]
         assert abs(q["value"] - truth["Q"]) < 3 * q["stderr"] + 0.02 * truth["Q"]
 
 

@@ -1,7 +1,7 @@
 """Contact-resonance frequency maps (DART, CR-AFM tracking) to contact-stiffness maps.
 
 The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
-``spring_constant_n_per_m`` and ``free_resonance_hz`` (optionally ``contact_mode``, default 1,
+``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
 and ``contact_uncertainty_hz``).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
@@ -13,6 +13,7 @@ import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
+from ..names import canonical
 from .readers import open_root, require
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
@@ -33,20 +34,20 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     >>> d = tempfile.mkdtemp()
     >>> with h5py.File(d + "/cr.h5", "w") as h:
     ...     h["contact_frequency_hz"] = np.full((2, 3), 300e3)
-    ...     h.attrs.update(spring_constant_n_per_m=2.0, free_resonance_hz=75e3)
+    ...     h.attrs.update(spring_constant=2.0, free_resonance=75e3)
     >>> round(contact_map(d + "/cr.h5", d)["median_k1"], 3)
     109.748
     """
     with open_root(path) as root:
         fc = np.asarray(root["contact_frequency_hz"][...], float)
-        attrs = dict(root.attrs)
+        attrs = {canonical(key) or key: value for key, value in root.attrs.items()}
     attrs.update(overrides or {})
-    missing = [key for key in ("spring_constant_n_per_m", "free_resonance_hz") if key not in attrs]
+    missing = [key for key in ("spring_constant", "free_resonance") if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
     if fc.ndim != 2:
         raise UserError(f"{path}: contact_frequency_hz must have shape (ny, nx), got {fc.shape}")
-    result = contact_stiffness(fc, float(attrs["free_resonance_hz"]), float(attrs["spring_constant_n_per_m"]),
+    result = contact_stiffness(fc, float(attrs["free_resonance"]), float(attrs["spring_constant"]),
                                mode=int(attrs.get("contact_mode", 1)),
                                contact_uncertainty_hz=float(attrs.get("contact_uncertainty_hz", 0.0)),
                                out_of_range="nan")

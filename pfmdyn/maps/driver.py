@@ -56,8 +56,11 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     ny, nx = source.shape
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     model = source.model
-    settings = {"model": model_name(model.mechanisms), "tip_position": model.tip_position,
-                "tip_mass": model.tip_mass, "surface_potential_v": surface_potential_v}
+    geometry = {name: getattr(model.lever, name) for name in ("spring_constant", "free_resonance", "length",
+                                                             "tip_height", "tip_position", "tip_mass_ratio",
+                                                             "tip_gyration_radius", "tilt")}
+    settings = {"model": model_name(model.mechanisms), **geometry, "k2_policy": model.describe_k2(),
+                "surface_potential_v": surface_potential_v}
     if "done" in group:     # an interrupted run: only the same map of the same model may continue it
         if group["done"].shape != grid:
             raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
@@ -108,6 +111,8 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     elapsed = time.perf_counter() - start
     gap = np.asarray(group["gap"][...])
     extra = {"median_nulling_bias": _median(group["nulling_bias"][...])} if "nulling_bias" in group else {}
+    if "at_bound" in group:
+        extra["at_bound_fraction"] = float(np.nanmean(group["at_bound"][...])) if np.isfinite(gap).any() else 0.0
     return {**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
             "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
             "model": group.attrs["model"],

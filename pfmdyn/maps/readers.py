@@ -17,18 +17,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..cantilever import Cantilever, Contact
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
+from ..names import CONTACT, LEVER, canonical
 from .bias import basis
 from .fit import BeamMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require"]
 
-METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
-TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
-"""Optional tip geometry: position over the lever length (default 1, at the free end) and mass
-over the lever's (default 0)."""
+REQUIRED = ("spring_constant", "free_resonance", "length", "tip_height")
+"""Lever metadata every map needs (names of :mod:`pfmdyn.names`); the tip geometry, tilt and the
+contact's k2 policy are optional (:data:`pfmdyn.names.LEVER`, :data:`pfmdyn.names.CONTACT`)."""
 
 
 def require(module: str):
@@ -159,17 +160,18 @@ def _usid_grid(root, name, path):
 
 
 def _metadata(root) -> dict:
-    """Cantilever metadata: root attributes, else the first ``Measurement_*`` group's, under
-    pfmdyn's names or Asylum's (as pycroscopy's translators keep them)."""
+    """Lever and contact metadata by name (:mod:`pfmdyn.names`; older spellings are read too):
+    root attributes, else the first ``Measurement_*`` group's, under pfmdyn's names or Asylum's
+    (as pycroscopy's translators keep them)."""
     found = {}
     groups = [root] + [root[k] for k in sorted(root.keys()) if k.startswith("Measurement")]
     for group in groups:
         attrs = dict(group.attrs)
         asylum, _ = cantilever_fields(attrs)
-        for key in [*METADATA, *TIP]:
-            value = attrs.get(key, asylum.get(key))
-            if value is not None and key not in found:
-                found[key] = value
+        for key, value in [*attrs.items(), *asylum.items()]:
+            name = canonical(key)
+            if name in LEVER + CONTACT and name not in found:
+                found[name] = value
     return found
 
 
@@ -201,7 +203,7 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
             f, bias, grid, columns = _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
-    missing = [key for key in METADATA if key not in attrs]
+    missing = [name for name in REQUIRED if name not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
     if not np.all(np.isfinite(f)) or np.any(f <= 0):
@@ -210,12 +212,12 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
     if bias is not None:
         basis(bias)                                  # one-line error unless two distinct finite biases
-    meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    tip = {short: float(attrs[key]) for key, short in TIP.items() if key in attrs}
-    if not 0.5 <= tip.get("tip_position", 1.0) <= 1.0 or not 0.0 <= tip.get("tip_mass", 0.0) < 10.0:
-        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
-                        f"[0, 10), got {tip}")
-    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
+    try:
+        lever = Cantilever.from_values({name: float(attrs[name]) for name in LEVER if name in attrs})
+        contact = Contact(**{name: float(attrs[name]) for name in CONTACT if name in attrs and name != "k1"})
+    except (TypeError, ValueError, UserError) as exc:
+        raise UserError(f"{path}: {exc}") from None
+    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
 
