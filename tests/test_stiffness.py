@@ -182,3 +182,17 @@ def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
     assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["k1"] > 0 and doc["k2"] == pytest.approx(1.4 / 1.7 * doc["k1"])   # 2(1-nu)/(2-nu)
+
+
+def test_cli_contact_frequency_map_takes_the_lever_flags_and_refuses_the_rest(tmp_path, capsys):
+    h5py = pytest.importorskip("h5py")
+    pytest.importorskip("zarr")
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), fc)
+        h.attrs.update(spring_constant=2.0, free_resonance=75e3)
+    assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "a"), "--spring-constant", "4"]) == 0
+    assert "median k1 160 N/m" in capsys.readouterr().out          # k1/k = 40 at the flag's k
+    assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "b"), "--tilt", "12"]) == 2
+    assert "--tilt" in capsys.readouterr().err and not (tmp_path / "b").exists()

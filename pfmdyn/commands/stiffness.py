@@ -153,11 +153,9 @@ def _contact_map(args) -> int:
     if args.contact or args.reduced_modulus or others:
         raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
                         "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
-    given = flags.given(args, ("free_resonance", "spring_constant"))
-    overrides = {"free_resonance_hz": given.get("free_resonance"),
-                 "spring_constant_n_per_m": given.get("spring_constant"),
-                 "contact_uncertainty_hz": _number(args.contact_uncertainty, "--contact-uncertainty", allow_zero=True)}
-    overrides = {k: v for k, v in overrides.items() if v is not None}
+    overrides = flags.given(args, ("free_resonance", "spring_constant"))
+    if args.contact_uncertainty is not None:
+        overrides["contact_uncertainty_hz"] = _number(args.contact_uncertainty, "--contact-uncertainty", allow_zero=True)
     if args.mode:
         if len(args.mode) != 1:
             raise UserError("a contact-frequency map has one mode: give --mode once")
