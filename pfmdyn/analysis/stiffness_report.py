@@ -283,6 +283,20 @@ def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
     return found, [crossings.text()] + decided, crossings.confirmed_points > 0
 
 
+def _two_readings(lever, fc, modes, noise_beta: float):
+    """Neither a k2 policy nor a tip position: (k1, k2) at the lever's tip position and (k1, tip position) at k2 = 0."""
+    pairs, proof_pairs = [], ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
+    if lever.tip_height is not None:
+        pairs, proof_pairs = _k1_k2(lever, fc, modes, noise_beta)
+    tips, proof_tips, _ = _k1_tip(lever, cr.Lateral(), fc, modes, noise_beta)
+    both = ": both explain them equally" if pairs and tips else ""
+    proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position are "
+              "three unknowns, so no answer is unique; the two usual readings are (k1, k2) with the tip at "
+              f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give --k2, --k2-over-k1 or "
+              "--poisson, or --tip-position (a number, or fit)"] + proof_pairs + proof_tips)
+    return pairs + tips, proof
+
+
 def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=None) -> Solution:
     gamma = values.get("tip_position", lever.tip_position)
     placed = replace(lever, tip_position=gamma)
@@ -344,33 +358,16 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
                             "(and --mode), or a --tip-position number")
         lateral, words = _lateral(lever, contact, "zero")
         found, proof, settled = _k1_tip(lever, lateral, fc, modes, noise)
-        laterals = [lateral] * len(found)
     elif len(fc) == 1 or policy:
         lateral, words = _lateral(lever, contact, "tie")
         found, proof, k1_by_mode = _k1_only(lever, lateral, words, fc, modes)
-        laterals = [lateral] * len(found)
     elif tip_position_stated:
         found, proof = _k1_k2(lever, fc, modes, noise)
-        words, laterals = "k2 solved with k1 from the modes", [cr.Lateral()] * len(found)
+        lateral, words = cr.Lateral(), "k2 solved with k1 from the modes"
     else:
-        words = "none stated: k2 solved with k1, or k2 = 0 with the tip position solved"
-        pairs, tips = [], []
-        if lever.tip_height is not None:
-            pairs, proof_pairs = _k1_k2(lever, fc, modes, noise)
-        else:
-            proof_pairs = ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
-        tips, proof_tips, _ = _k1_tip(lever, cr.Lateral(), fc, modes, noise)
-        found, laterals = pairs + tips, [cr.Lateral()] * (len(pairs) + len(tips))
-        both = ": both explain them equally" if pairs and tips else ""
-        proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position "
-                  "are three unknowns, so no answer is unique; the two usual readings are (k1, k2) with the tip at "
-                  f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give --k2, --k2-over-k1 or "
-                  "--poisson, or --tip-position (a number, or fit)"]
-                 + proof_pairs + proof_tips)
-        solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, hertz=hertz)
-                          for (v, rms), lt in zip(found, laterals))
-        return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, False, tuple(proof),
-                               tuple(notes), stderrs)
+        found, proof = _two_readings(lever, fc, modes, noise)
+        lateral, words = cr.Lateral(), "none stated: k2 solved with k1, or k2 = 0 with the tip position solved"
+        settled = False
     if k1_by_mode and found and found[0][1] > max(3 * noise, 1e-9):
         notes.append("the modes disagree beyond their uncertainties (k1 from each mode alone differs): the lever "
                      "(tip position, tip mass, tilt) or the k2 policy may be wrong; --tip-position fit solves the tip "
@@ -379,8 +376,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         raise UserError("no k1 > 0 of this lever model gives these contact resonances as modes "
                         f"{modes}: check the mode numbers, the free resonance and the lever (tip position, tip mass, "
                         "tilt)")
-    solutions = tuple(_solution(lever, lt, fc, v, rms, stderrs, k1_by_mode, hertz)
-                      for (v, rms), lt in zip(found, laterals))
+    solutions = tuple(_solution(lever, lateral, fc, v, rms, stderrs, k1_by_mode, hertz) for v, rms in found)
     unique = len(solutions) == 1 and settled
     return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, unique, tuple(proof),
                            tuple(notes), stderrs)
