@@ -279,8 +279,9 @@ def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
     found = _keep(lever, lateral, fc, modes,
                   [{"k1": k1, "tip_position": g} for g, k1 in zip(crossings.tip_positions, crossings.k1)
                    if math.isfinite(k1)])
+    more = ["a third contact mode decides between them"] if len(found) > 1 and len(fc) == 2 else []
     found, decided = _decide(found, fc, noise_beta)
-    return found, [crossings.text()] + decided, crossings.confirmed_points > 0
+    return found, [crossings.text()] + more + decided, crossings.confirmed_points > 0
 
 
 def _two_readings(lever, fc, modes, noise_beta: float):
