@@ -67,9 +67,8 @@ def _mechanisms(args, source, fit_options):
     from ..maps.fit import model_name, parse_model
     if args.model != "auto":
         return parse_model(args.model), None
-    from ..maps.readers import require
-    out = os.path.join(args.out, "maps.zarr")
-    if os.path.isdir(out) and "model" in (attrs := require("zarr").open_group(out, mode="r").attrs):
+    from ..maps.driver import earlier_run
+    if "model" in (attrs := earlier_run(os.path.join(args.out, "maps.zarr"))):
         print(f"model (auto, as chosen by the interrupted run): {attrs['model']}")
         return parse_model(attrs["model"]), attrs.get("model_selection")
     from ..maps.select import choose_model

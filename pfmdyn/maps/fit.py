@@ -37,7 +37,7 @@ from ..generated import damping, elastic_contact, tip_setback
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
-__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
+__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "fittable", "quantities", "bands", "parse_model"]
 
 CHUNK = 256
 """Pixels fitted together: large enough to make the per-call overhead negligible, small enough
@@ -515,7 +515,8 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
-    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  k1, k2 and Q are fitted
+    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  A pixel whose spectra hold
+    NaN or inf, or are all zero, is masked: NaN in every map, ``explained`` 0.  k1, k2 and Q are fitted
     as logarithms: their standard errors are half the width of ``exp(log x +- sd)``,
     ``x sinh(sd)`` (``x sd`` when small; huge, not small, when the data leave ``x`` undetermined,
     e.g. k2 driven to its bound on a soft contact).
@@ -535,6 +536,13 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     >>> out = fit_block(mb, 1e-3 * (mb.bias_v[:, None] - 2.0) * m.shape_functions(np.array([300.0]), np.array([60.0])))
     >>> round(float(out["electrostatic"]), 9), round(float(out["nulling_bias"]), 9)
     (0.001, 2.0)
+
+    A pixel with a NaN is masked, the others fitted:
+
+    >>> y2 = np.concatenate([y, np.full_like(y, np.nan)])
+    >>> out = fit_block(m, y2)
+    >>> out["k1"].round(6).tolist(), out["explained"].tolist()
+    ([300.0, nan], [1.0, 0.0])
     """
     bias = bias_axis.basis(model.bias_v)
     y = np.ascontiguousarray(response, complex)     # the sums' rounding follows the memory layout
@@ -545,8 +553,25 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     y = y.reshape(-1, bias.q.shape[0], tail[-1])
     k1_range = k1_range or (model.k, 1e4 * model.k)
     settings = (q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v)
-    parts = [_fit_pixels(model, y[i:i + CHUNK], *settings) for i in range(0, max(len(y), 1), CHUNK)]
-    return {name: np.concatenate([part[name] for part in parts]).reshape(shape) for name in parts[0]}
+    fitted = np.flatnonzero(fittable(y))
+    out = {name: np.full(len(y), np.nan) for name in [*model.outputs, "cost"]}
+    out["explained"][:] = 0.0
+    for i in range(0, len(fitted), CHUNK):
+        rows = fitted[i:i + CHUNK]
+        for name, value in _fit_pixels(model, y[rows], *settings).items():
+            out[name][rows] = value
+    return {name: value.reshape(shape) for name, value in out.items()}
+
+
+def fittable(spectra) -> np.ndarray:
+    """Which pixels of ``spectra`` (pixels first) can be fitted: not those holding NaN or inf, nor
+    those with no response at all (a dropped spectrum), which the fit masks.
+
+    >>> fittable(np.array([[1.0, 2.0], [np.nan, 1.0], [0.0, 0.0]])).tolist()
+    [True, False, False]
+    """
+    axes = tuple(range(1, np.ndim(spectra)))
+    return np.all(np.isfinite(spectra), axis=axes) & np.any(spectra != 0, axis=axes)
 
 
 def _covariance(model, g, dg, c, noise):

@@ -26,7 +26,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..discrepancy.select import material
-from .fit import MECHANISMS, fit_block, model_name
+from ..errors import UserError
+from .fit import MECHANISMS, fit_block, fittable, model_name
 from .readers import MapInput, read_block
 
 __all__ = ["choose_model", "sample_pixels"]
@@ -35,13 +36,18 @@ __all__ = ["choose_model", "sample_pixels"]
 def sample_pixels(source: MapInput, count: int = 16) -> np.ndarray:
     """Spectra ``(n, n_freq)`` (``(n, n_bias, n_freq)`` with a bias axis) at the centres of a
     ``sqrt(count)`` x ``sqrt(count)`` grid of cells (fewer on a map with fewer rows or columns);
-    only those spectra are read."""
+    only those spectra are read.  Pixels the fit masks (NaN, inf, no response) are left out; if
+    all are, a one-line error asks for ``--model``."""
     ny, nx = source.shape
     side = max(1, int(math.isqrt(count)))
     ys = np.unique(((np.arange(side) + 0.5) * ny / side).astype(int))
     xs = np.unique(((np.arange(side) + 0.5) * nx / side).astype(int))
-    return np.concatenate([read_block(source, slice(y, y + 1), slice(x, x + 1))[0]
-                           for y in ys for x in xs])
+    y = np.concatenate([read_block(source, slice(y, y + 1), slice(x, x + 1))[0] for y in ys for x in xs])
+    usable = fittable(y)
+    if not usable.any():
+        raise UserError(f"{source.path}: the {len(y)} pixels sampled to choose the model hold NaN, inf or no "
+                        "response; give --model (e.g. elastic)")
+    return y[usable]
 
 
 class _Score:
