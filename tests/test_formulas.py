@@ -187,6 +187,19 @@ def test_viscous_width_is_every_free_modes_half_power_width():
         np.testing.assert_allclose(width, formulas.viscous_width(g, meta.f1), rtol=1e-3)
 
 
+def test_stiffness_limits_are_stated_as_frequency_ratios(capsys):
+    """Out of range, `pfmdyn stiffness` names the pinned limit and free mode 2 as f/f1 = (beta/beta1)**2."""
+    from pfmdyn import cli
+
+    free = _free_roots(2)
+    pinned = float(mp.findroot(lambda b: mp.tan(b) - mp.tanh(b), 3.93))
+    code = cli.main(["stiffness", "--free-resonance", "60e3", "--contact", "300e3", "--spring-constant", "2",
+                     "--k2", "0", "--length", "2e-4", "--tip-height", "1e-5"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert f"stiff limit {(pinned / free[0]) ** 2:.6g}" in err and f"free mode 2 ({(free[1] / free[0]) ** 2:.6g})" in err
+
+
 def test_spring_bounds_scale_with_the_lever():
     """k2's bounds in the discrepancy fit sit around k L**2 / H**2, where k2_ratio = 1."""
     from pfmdyn.discrepancy.effects import spring_parameters
