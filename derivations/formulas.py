@@ -231,7 +231,7 @@ def _domain_contrast() -> tuple[Formula, ...]:
     g_elec, v_dc, v_av = sp.symbols("g_elec v_dc v_av", real=True)
     electrostatic = sp.expand(slope * V + intercept - d0).subs({G: g_elec, V: v_dc, Vs: v_av}, simultaneous=True)
     return (
-        Formula("electrostatic_term", (g_elec, v_dc, v_av), sp.factor(electrostatic),
+        Formula("electrostatic_term", (g_elec, v_dc, v_av), sp.factor_terms(electrostatic),
                 "electrostatic term d_el = G_elec (V_dc - V_av) of Eqs. 37-38 (units of G_elec times V)",
                 f"{source}: linear_fit_in_bias()"),
         Formula("domain_response_plus", (d, e, p), pr_plus, "complex response PR+ over the c+ domain (Eqs. 37-38)",
