@@ -26,6 +26,7 @@ import re
 from collections import Counter
 from functools import lru_cache
 
+from ..derivations import families as registry
 from . import text as T
 from ..derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim
 from ..derivations.checks.evidence import Evidence, Tex, join, say
@@ -220,11 +221,30 @@ def check_table(ref: T.Reference):
 _TRIG = re.compile(r"\\(?:sin|cos|tan|sinh|cosh)")
 
 
+def _number(label: str) -> int:
+    return int(re.match(r"\d+", label).group())
+
+
+@lru_cache(maxsize=1)
+def _solved() -> dict[int, tuple[str, range]]:
+    """Equation number -> (the derivation that solves it, the numbers of its family's equations),
+    from the family registry (``derivations/families.py``: ``equations`` such as 'Eqs. 27-28')."""
+    out = {}
+    for fam in registry.FAMILIES:
+        m = re.fullmatch(r"Eqs?\. (\d+)(?:-(\d+))?", fam.equations)
+        if m:
+            numbers = range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1)
+            out.update({n: (fam.derivation, numbers) for n in numbers})
+    return out
+
+
 @lru_cache(maxsize=1)
 def _families() -> dict[str, str]:
-    """Equation label -> the tip boundary condition it was solved with (from the printed BCs)."""
+    """Equation label -> the tip boundary condition it was solved with: the derivation the family
+    registry names for its number, else the last boundary condition printed before it in its
+    section (read from the printed conditions)."""
     family, out, section = "", {}, None
-    for label in sorted(T.equations(), key=lambda s: (int(re.match(r"\d+", s).group()), s)):
+    for label in sorted(T.equations(), key=lambda s: (_number(s), s)):
         tex = T.equations()[label]
         if T.equation_section(label) != section:       # a family never carries over into another section
             family, section = "", T.equation_section(label)
@@ -232,27 +252,27 @@ def _families() -> dict[str, str]:
             out[label] = "boundary condition"
         elif re.search(r"u_0'*\(L\)", tex) and "=" in tex:
             if "u_0(L) = 0" in tex:
-                family = "supported"
+                family = "pinned"
             elif "k_1" in tex or "k_2" in tex:
-                family = "elastic"
+                family = "elastic_contact"
             elif "f_l" in tex:
-                family = "sliding friction"
+                family = "sliding_friction"
             elif "f_0" in tex:
-                family = "free"
+                family = "free_end"
             out[label] = "boundary condition"
-        elif label in ("30", "31", "32", "33", "34", "35"):
-            out[label] = "torsion"
         else:
-            out[label] = family if label[:2] not in ("27", "28", "29") else "indentation"
+            out[label] = _solved().get(_number(label), (family,))[0]
     return out
 
 
 def _content(label: str) -> str:
-    """The printed equation and the ones displayed under its 'where' (Eq. 5 with Eqs. 6-10)."""
+    """The printed equation and, for the first equation of a family in the registry, the ones
+    displayed under its 'where' (Eq. 5 with Eqs. 6-10)."""
     eqs = T.equations()
     tex = eqs.get(label, "")
-    if label == "5" or re.search(r"\\frac\{A_v", tex):
-        tex += " ".join(eqs.get(str(i), "") for i in range(6, 11))
+    numbers = _solved().get(_number(label), ("", range(0)))[1]
+    if label == str(numbers.start):
+        tex += " ".join(eqs.get(str(i), "") for i in numbers[1:])
     return tex
 
 
@@ -296,14 +316,14 @@ def check_equation(ref: T.Reference):
                 problems.append(say("the sentence takes ", Tex(sym), f" to a limit, but Eq. ({target}) has no ", Tex(sym)))
                 fixes.append(say("an equation containing ", Tex(sym)))
         free_ref = _owns_phrase(ref, r"free cantilever")
-        if free_ref and family not in ("free", "elastic", ""):
-            free = [lab for lab, fam in _families().items() if fam == "free" and lab[:2] != "21"]
+        if free_ref and family not in ("free_end", "elastic_contact", ""):
+            free = [lab for lab, fam in _families().items() if fam == "free_end"]
             fixes.append(say(f"Eq. ({', '.join(free)})"))
             problems.append(say(f"the sentence needs a free cantilever, but Eq. ({target}) is solved with the "
-                            f"{family} tip conditions (free-end solution: Eq. ({', '.join(free)}))"))
+                            f"{family.replace('_', ' ')} tip conditions (free-end solution: Eq. ({', '.join(free)}))"))
         elif free_ref:
-            notes.append(say(f"Eq. ({target}) is solved with {family or 'its own'} tip conditions ",
-                             ("(the free end is its ", Tex("k_1 = k_2 = 0"), " case)") if family == "elastic" else ""))
+            notes.append(say(f"Eq. ({target}) is solved with {family.replace('_', ' ') or 'its own'} tip conditions ",
+                             ("(the free end is its ", Tex("k_1 = k_2 = 0"), " case)") if family == "elastic_contact" else ""))
         if re.search(r"clamped end", sentence) and family == "boundary condition" and "(0)" not in tex:
             problems.append(say(f"Eq. ({target}) is not a condition at the clamped end ", Tex("x = 0")))
             fixes.append(say("Eq. (3a,b)"))
