@@ -19,9 +19,9 @@ from typing import Callable
 import mpmath as mp
 import sympy as sp
 
-from ..derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
-from ..derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
-from ..derivations.paper import printed as P
+from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
+from pfmdyn.derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
+from pfmdyn.derivations.paper import printed as P
 from . import text as T
 from . import wording as W
 from .restated import same_as
@@ -42,10 +42,10 @@ K2_ZERO, K2_INF = Tex(r"k_2 \to 0", "k2 -> 0"), Tex(r"k_2 \to \infty", "k2 -> oo
 
 
 def _sections_lateral_stiffness():
-    from ..derivations import elastic_contact, indentation
-    from ..derivations.beam import d1, k2
-    from ..derivations.checks.core import compare
-    from ..derivations.limits import param_limit
+    from pfmdyn.derivations import elastic_contact, indentation
+    from pfmdyn.derivations.beam import d1, k2
+    from pfmdyn.derivations.checks.core import compare
+    from pfmdyn.derivations.limits import param_limit
     nano = indentation.solve().theta(d1)
     general = elastic_contact.solve().theta(d1)
     zero = compare(param_limit(general, k2, 0), nano).is_(1)
@@ -63,8 +63,8 @@ def _sections_lateral_stiffness():
 
 
 def _torsion_crossover():
-    from ..derivations import torsion as Tor
-    from ..derivations.beam import H, L
+    from pfmdyn.derivations import torsion as Tor
+    from pfmdyn.derivations.beam import H, L
     den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
     K, x = sp.symbols("K x", positive=True)
     # Dimensionless: xi L = x, H k2t L = K (the normalised contact stiffness of Fig. 5c).
@@ -108,10 +108,10 @@ def _scaling_order(which: str):
 
 
 def _nonlocal_vs_k():
-    from ..derivations import indentation
-    from ..derivations.beam import L, d1, k, k1
-    from ..derivations.checks.electrostatics import nonlocal_height
-    from ..derivations.limits import low_frequency
+    from pfmdyn.derivations import indentation
+    from pfmdyn.derivations.beam import L, d1, k, k1
+    from pfmdyn.derivations.checks.electrostatics import nonlocal_height
+    from pfmdyn.derivations.limits import low_frequency
     a_nl = nonlocal_height()
     inverse = sp.simplify(sp.diff(a_nl * k, k)) == 0
     em = sp.simplify(2 * L / 3 * low_frequency(indentation.solve().theta(d1)))
@@ -124,7 +124,7 @@ def _nonlocal_vs_k():
 
 
 def _phase_flip_at_lines():
-    from ..derivations import elastic_contact
+    from pfmdyn.derivations import elastic_contact
     sol = elastic_contact.solve()
     real = all(not e.has(sp.I) for e in list(sol.slope.values()) + [sol.denominator])
     return Evidence(HOLDS if real else UNDECIDABLE, say(
@@ -134,7 +134,7 @@ def _phase_flip_at_lines():
 
 
 def _linear_in_bias():
-    from ..derivations.checks.electrostatics import q0_first_harmonic
+    from pfmdyn.derivations.checks.electrostatics import q0_first_harmonic
     q = q0_first_harmonic()
     lin = sp.diff(q, P.dV, 2) == 0 and sp.diff(q, P.dV) != 0
     return Evidence(HOLDS if lin else ERRATUM, say(
@@ -144,9 +144,9 @@ def _linear_in_bias():
 
 
 def _zeros_bias_dependent():
-    from ..derivations import elastic_contact
-    from ..derivations.beam import d1, q0
-    from ..derivations.checks.electrostatics import q0_first_harmonic
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, q0
+    from pfmdyn.derivations.checks.electrostatics import q0_first_harmonic
     sol = elastic_contact.solve()
     numerator = sol.slope[d1] * d1 + sol.slope[q0] * q0_first_harmonic().subs(P.S_area, sp.Symbol("S"))
     depends = numerator.has(P.dV)
@@ -223,8 +223,8 @@ def _null_bias(case: str):
 
 
 def _null_frequency_dependent():
-    from ..derivations import elastic_contact
-    from ..derivations.beam import beta, d1, q0
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import beta, d1, q0
     sol = elastic_contact.solve()
     ratio = sp.cancel(sol.slope[d1] / sol.slope[q0])
     dep = ratio.has(beta)
@@ -236,7 +236,7 @@ def _null_frequency_dependent():
 
 
 def _noncontact_resonances_sample_free():
-    from ..derivations import free_end
+    from pfmdyn.derivations import free_end
     syms = free_end.solve().denominator.free_symbols
     ok = not {str(x) for x in syms} & {"k1", "k2"}
     return Evidence(HOLDS if ok else ERRATUM, say(
@@ -245,9 +245,9 @@ def _noncontact_resonances_sample_free():
 
 
 def _same_denominator_for_vertical_and_longitudinal():
-    from ..derivations import elastic_contact
-    from ..derivations.beam import d1, d2
-    from ..derivations.checks.core import same_resonances
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, d2
+    from pfmdyn.derivations.checks.core import same_resonances
     sol = elastic_contact.solve()
     same, why = same_resonances(sp.denom(sp.cancel(sol.theta(d1))), sp.denom(sp.cancel(sol.theta(d2))))
     evidence = say("the derived vertical and longitudinal responses ", Tex("A_v/N", "A_v/N"), " and ", Tex("A_l/N", "A_l/N"),
@@ -261,16 +261,16 @@ def _same_denominator_for_vertical_and_longitudinal():
 
 
 def _torsion_vs_flexure_resonances():
-    from ..derivations import torsion as Tor
+    from pfmdyn.derivations import torsion as Tor
     b = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
     return Evidence(HOLDS, say("flexural characteristic function in ", Tex(r"\beta", "beta"), " (Eq. 10) and torsional one "
                                "in ", Tex(r"\xi L", "xi L"), " (", b, ") are different functions: different resonances"))
 
 
 def _longitudinal_more_sensitive():
-    from ..derivations import elastic_contact
-    from ..derivations.beam import H, L, d1, d2, k1, k2
-    from ..derivations.limits import low_frequency, param_limit
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import H, L, d1, d2, k1, k2
+    from pfmdyn.derivations.limits import low_frequency, param_limit
     sol = elastic_contact.solve()
     vertical = param_limit(param_limit(low_frequency(sol.theta(d1)).subs(k2, 0), k1, sp.oo), k1, sp.oo)
     longitudinal = param_limit(param_limit(low_frequency(sol.theta(d2)), k2, sp.oo), k1, sp.oo)
@@ -281,7 +281,7 @@ def _longitudinal_more_sensitive():
 
 
 def _length_sensitive():
-    from ..derivations.beam import L, d1, d2
+    from pfmdyn.derivations.beam import L, d1, d2
     ratio = sp.simplify(P.LOW_FREQUENCY[d2][0] / P.LOW_FREQUENCY[d1][0])
     return Evidence(HOLDS if ratio.has(L) or P.LOW_FREQUENCY[d1][0].has(L) else ERRATUM, say(
         "the low-frequency responses (Eqs. 11-14, confirmed by eq11-14 checks) contain L; e.g. ",
@@ -289,7 +289,7 @@ def _length_sensitive():
 
 
 def _additive():
-    from ..derivations import elastic_contact
+    from pfmdyn.derivations import elastic_contact
     sol = elastic_contact.solve()
     total = sum(sol.theta(dr) * dr for dr in sol.drives)
     linear = all(sp.diff(total, a, b) == 0 for a in sol.drives for b in sol.drives)
@@ -299,7 +299,7 @@ def _additive():
 
 
 def _torsion_depends_on_k2():
-    from ..derivations import torsion as Tor
+    from pfmdyn.derivations import torsion as Tor
     den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
     return Evidence(HOLDS if den.has(Tor.k2t) else ERRATUM, say(
         "derived denominator of the torsional response: ", den, " (contains ",
@@ -307,7 +307,7 @@ def _torsion_depends_on_k2():
 
 
 def _frictionless_from_4a():
-    from ..derivations.beam import H, d2, k2
+    from pfmdyn.derivations.beam import H, d2, k2
     U1 = sp.Symbol("U1")
     moment = k2 * H * (d2 - U1 * H)
     return Evidence(HOLDS if sp.limit(moment, k2, 0) == 0 else ERRATUM, say(
@@ -462,6 +462,3 @@ def register() -> int:
     for cid, number, sentence, decide in statements():
         claim(cid, number, T.quote(T.clip(sentence, 300)), chapter=CHAPTER, kind="statement")(decide)
     return len(statements())
-
-
-register()

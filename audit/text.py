@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-from ..derivations.checks.evidence import Tex, say
+from pfmdyn.derivations.checks.evidence import Tex, say
 
 PAPER_ENV = "PFMDYN_PAPER"
 PAPER_NAME = "jesse2006_dynamic_pfm.md"
@@ -156,8 +156,8 @@ def quote(passage: str) -> tuple:
     """A passage of the transcription as a sentence of evidence: words, and its ``$...$`` and
     ``$$...$$`` formulas as LaTeX parts (an unpaired ``$`` is kept as a word).
 
-    >>> quote("so $k \\gg 1$ here")
-    ('so ', Tex(tex='k \\gg 1', plain=''), ' here')
+    >>> quote("so $k_1$ here")
+    ('so ', Tex(tex='k_1', plain=''), ' here')
     """
     pieces = passage.replace("$$", "$").split("$")
     if len(pieces) % 2 == 0:                 # unpaired: the last '$' starts no formula

@@ -14,18 +14,18 @@ from typing import Callable
 import mpmath as mp
 import sympy as sp
 
-from ..derivations.paper import printed as P
+from pfmdyn.derivations.paper import printed as P
 from . import text as T
-from ..derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE
-from ..derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
+from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE
+from pfmdyn.derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
 from .restated import same_as
 
 
 def limiting_cases_order():
     """'For non-piezoelectric materials, d1 = d2 = 0, while for ... f0 = 0, providing purely X and purely Y
     limiting cases': the case each condition leaves, in the sentence's order."""
-    from ..derivations import elastic_contact
-    from ..derivations.beam import d1, d2, f0, q0
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, d2, f0, q0
     drives = set(elastic_contact.solve().drives)
     sentence = next(t for t in sentences_of("III2") if "providing purely" in t)
     conditions = {"d_1 = d_2 = 0": drives - {d1, d2}, "f_0 = 0": drives - {f0}}
@@ -60,7 +60,7 @@ def eight_times():
     if called and named and called.group(1) != named:
         # Read literally (tip clamped too: u0'(L) = 0) there is no tip slope to compare with, so a
         # finite ratio can only refer to the section's supported case: the name is loose wording.
-        from ..derivations.beam import EI, L, q0, x
+        from pfmdyn.derivations.beam import EI, L, q0, x
         c = sp.symbols("c0:4")
         u = q0 * x**4 / (24 * EI) + sum(ci * x**i for i, ci in enumerate(c))
         ends = sp.solve([u.subs(x, 0), u.diff(x).subs(x, 0), u.subs(x, L), u.diff(x).subs(x, L)], c)
@@ -106,7 +106,7 @@ def stiffness_ratio():
 
 def order_of_ratios():
     """'A_v/N, A_l/N, A_e/N, A_q/N describe ... vertical, longitudinal, local force, distributed force, respectively'."""
-    from ..derivations.beam import d1, d2, f0, q0
+    from pfmdyn.derivations.beam import d1, d2, f0, q0
     roles = {d1: "vertical", d2: "longitudinal", f0: "local", q0: "distributed"}
     names = {id(P.A_v): "A_v", id(P.A_l): "A_l", id(P.A_e): "A_e", id(P.A_q): "A_q"}
     printed = [(names.get(id(a), "?"), roles[d]) for d, a in P.ELASTIC.items()]
@@ -124,8 +124,8 @@ def order_of_ratios():
 
 def stiff_cantilever_vs_k1():
     """'a cantilever with a high spring constant (k1 -> oo)': which stiffness sets A_piezo/A_el?"""
-    from ..derivations import elastic_contact
-    from ..derivations.beam import d1, f0, k, k1
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, f0, k, k1
     sol = elastic_contact.solve()
     ratio = sp.simplify(sol.theta(d1) * d1 / (sol.theta(f0) * f0))
     piezo_el = Tex(r"A_{piezo}/A_{el}", "A_piezo/A_el")
@@ -138,7 +138,7 @@ def stiff_cantilever_vs_k1():
     # The cantilever acts on k1 through the load: P = k A0 at set-point deflection A0 and Hertz
     # k1(P) (both Section III.1), so a stiffer cantilever raises k1 (the conclusions' "high
     # indentation forces and high spring constant cantilevers").
-    from ..derivations import contact_mechanics as cm
+    from pfmdyn.derivations import contact_mechanics as cm
     A0 = sp.Symbol("A0", positive=True)
     k1_of_k = cm.hertz_stiffness().subs(cm.P, k * A0)
     exponent = sp.simplify(k * sp.diff(k1_of_k, k) / k1_of_k)

@@ -26,10 +26,10 @@ import re
 from collections import Counter
 from functools import lru_cache
 
-from ..derivations import families as registry
+from pfmdyn.derivations import families as registry
 from . import text as T
-from ..derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim
-from ..derivations.checks.evidence import Evidence, Tex, join, say
+from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim
+from pfmdyn.derivations.checks.evidence import Evidence, Tex, join, say
 
 CHAPTER = "audit"
 
@@ -658,6 +658,3 @@ def register() -> int:
         claim(f"structure.caption{number}", f"caption of Fig. {number}", "panel groups of the caption",
               chapter=CHAPTER, kind="cross-reference")(lambda k=number: check_caption_panels(k))
     return n + 4 + len(T.captions())
-
-
-register()

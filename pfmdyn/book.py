@@ -38,8 +38,9 @@ def chapter_of(claim_id: str) -> str | None:
     >>> chapter_of("eq22.roots"), chapter_of("eq22.static"), chapter_of("nope")
     ('roots', 'free_end', None)
     """
-    from . import audit  # noqa: F401  (registers every check)
+    from . import audit
     from .derivations.checks import core
+    audit.register()
     check = core.REGISTRY.get(claim_id)
     return (check.chapter or None) if check else None
 

@@ -35,7 +35,7 @@ def latex(expr) -> str:
     ``\sin{\beta}``; a string is taken as LaTeX already.
 
     >>> latex(sp.sin(sp.Symbol("beta"))), latex(sp.Symbol("DeltaV")), latex(r"\theta")
-    ('\\sin{\\beta}', '\\Delta V', '\\theta')
+    ('\\sin {\\beta}', '\\Delta V', '\\theta')
     """
     if isinstance(expr, str):
         return expr
@@ -56,10 +56,10 @@ class TipValue(sp.Symbol):
 
 def visible(tex: str) -> int:
     r"""Rough printed width of LaTeX source in characters: a function name (``\cos``) counts
-    three, another command (``\beta``) one, braces, ``\left``/``\right`` and spacing nothing.
+    three, another command (``\beta``) one, braces, ``\left``/``\right``, spaces and spacing nothing.
 
     >>> visible(r"\frac{\beta}{\cos{x}}"), visible(r"\left( a + b \right)")
-    (8, 7)
+    (8, 5)
     """
     width, i = 0, 0
     while i < len(tex):

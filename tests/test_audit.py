@@ -9,12 +9,14 @@ import re
 
 import pytest
 
+from pfmdyn import audit
 from pfmdyn.audit import statements, wording, xref
 from pfmdyn.audit import text as T
 from pfmdyn.derivations.checks import core
 from pfmdyn.derivations.checks.evidence import text
 
 pytestmark = pytest.mark.skipif(not T.sections(), reason="paper transcription not found")
+audit.register()
 
 
 def _ref(kind, section, sentence, ref_text, targets):

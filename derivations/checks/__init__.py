@@ -1,8 +1,8 @@
 """Checks that give each claim of the paper's registry a computed verdict.
 
 Importing this package registers every check in :data:`core.REGISTRY`.  The audit of the
-paper's text (cross-references, symbols, statements) registers its own checks from the
-``pfmdyn.audit`` package, which builds on these.
+paper's text (cross-references, symbols, statements) adds its own checks
+(``pfmdyn.audit.register``), building on these.
 """
 from . import core  # noqa: F401
 # Import order is the order of the verdict table and of the errata list (roughly the paper's).
