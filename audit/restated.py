@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Callable
 
 from pfmdyn.derivations.checks.core import HOLDS, result
-from pfmdyn.derivations.checks.evidence import Evidence, clip, join, say
+from pfmdyn.derivations.evidence import Evidence, clip, join, say
 
 
 def same_as(*claim_ids: str) -> Callable[[], Evidence]:

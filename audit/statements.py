@@ -20,7 +20,7 @@ import mpmath as mp
 import sympy as sp
 
 from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
-from pfmdyn.derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
+from pfmdyn.derivations.evidence import Evidence, Math, Tex, join, listing, say
 from pfmdyn.derivations.paper import printed as P
 from . import text as T
 from . import wording as W
@@ -216,9 +216,9 @@ def _null_bias(case: str):
         return Evidence(ERRATUM if not has_bias else HOLDS, say(
             Math(nulls[0], Tex(r"V_{null}(\omega)", "V_null(omega)")), " (", listing([d, G]),
             " frequency dependent) contains no ", V, ": the nulling bias is a function of frequency; 'bias dependent' "
-            "cannot describe it (the figures vary frequency)"), correction=(
-            "V_null is strongly frequency dependent for a good tip, and virtually frequency independent for a "
-            "deteriorated one"))
+            "cannot describe it (the figures vary frequency)"), correction=say(
+            Tex("V_{null}", "V_null"), " is strongly frequency dependent for a good tip, and virtually frequency "
+            "independent for a deteriorated one"))
     return decide
 
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-from pfmdyn.derivations.checks.evidence import Tex, say
+from pfmdyn.derivations.evidence import Tex, say
 
 PAPER_ENV = "PFMDYN_PAPER"
 PAPER_NAME = "jesse2006_dynamic_pfm.md"

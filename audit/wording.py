@@ -4,7 +4,7 @@ A sentence may name a case loosely ("the clamped cantilever"), pair conditions w
 order, qualify a measurement ("weakly", "~72 kHz") or say where a result is shown.  Each decider
 here reads the sentence (through :func:`sentences_of`) and decides it by the physics or the
 reference it points to; :mod:`.statements` lists which sentence each decider speaks to.  Each
-returns its :class:`~derivations.checks.evidence.Evidence`.
+returns its :class:`~derivations.evidence.Evidence`.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import sympy as sp
 from pfmdyn.derivations.paper import printed as P
 from . import text as T
 from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE
-from pfmdyn.derivations.checks.evidence import Evidence, Math, Tex, join, listing, say
+from pfmdyn.derivations.evidence import Evidence, Math, Tex, join, listing, say
 from .restated import same_as
 
 

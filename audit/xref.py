@@ -29,7 +29,7 @@ from functools import lru_cache
 from pfmdyn.derivations import families as registry
 from . import text as T
 from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim
-from pfmdyn.derivations.checks.evidence import Evidence, Tex, join, say
+from pfmdyn.derivations.evidence import Evidence, Tex, join, say
 
 CHAPTER = "audit"
 

@@ -247,7 +247,8 @@ def errata(rows: list[dict]) -> None:
     the decisive expression."""
     from IPython.display import Math, display
 
-    from .derivations.paper.convention import SIGN_CONVENTION
+    from .derivations.paper.convention import SIGN_CONVENTION_SENTENCE
+    from .typeset import html as typeset_html
     for v in rows:
         f = v["erratum"]
         page = v.get("chapter")
@@ -265,12 +266,12 @@ def errata(rows: list[dict]) -> None:
         if f["decisive"]:
             display(Math(f["decisive"]))
         if f["sign"]:
-            display(HTML(f"<p><i>Sign convention:</i> {html.escape(SIGN_CONVENTION)}.</p>"))
+            display(HTML(f"<p><i>Sign convention:</i> {typeset_html(SIGN_CONVENTION_SENTENCE)}.</p>"))
 
 
-def math(lhs: str, expr):
-    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string); a long
-    expression is broken over lines that fit the text column."""
+def math(lhs, expr):
+    """Display ``lhs = expr`` as typeset math (``lhs`` LaTeX or a SymPy object, ``expr`` a SymPy
+    object or a LaTeX string); a long expression is broken over lines that fit the text column."""
     from IPython.display import Math
     if isinstance(expr, str):
         return Math(f"{lhs} = {expr}" if lhs else expr)

@@ -2,7 +2,7 @@
 
 SymPy objects become LaTeX with the project's symbol names (:func:`latex`); long expressions
 are broken over lines that fit the text column (:func:`latex_rows`, :func:`display_latex`).
-A sentence of evidence (:mod:`derivations.checks.evidence`: words, SymPy formulas, LaTeX)
+A sentence of evidence (:mod:`derivations.evidence`: words, SymPy formulas, LaTeX)
 becomes Markdown (:func:`markdown`) or HTML (:func:`html`): short formulas inline, long ones
 as broken display blocks, so that no line is wider than the column.  :func:`erratum` gathers
 what an erratum shows: printed and correct forms, the correction, the proof and the decisive
@@ -14,7 +14,7 @@ import html as _html
 
 import sympy as sp
 
-from .derivations.checks.evidence import RELATIONS, Math, Tex
+from .derivations.evidence import RELATIONS, Math, Tex
 
 LINE_WIDTH = 64
 """Characters of LaTeX source (commands counted as one) per displayed line: fits the text column."""
@@ -251,8 +251,8 @@ def erratum(v) -> dict:
     e = v.proof
     correct = list(e.correct)
     printed_lhs = [p.lhs for p in v.printed if isinstance(p, Math)]
-    if len(correct) == len(printed_lhs):
-        correct = [Math(c.expr, c.lhs if c.lhs is not None else lhs, c.relation) for c, lhs in zip(correct, printed_lhs)]
+    if len(correct) == len(printed_lhs):       # name the correct forms like the printed ones
+        correct = [Math(c.expr, lhs if lhs is not None else c.lhs, c.relation) for c, lhs in zip(correct, printed_lhs)]
     return {"printed": v.printed, "correct": [display(m) for m in correct], "correction": e.correction,
             "proof": e.proof, "decisive": decisive(e.ratio),
             "sign": e.sign_convention or str(v.verdict) == "holds_up_to_sign_convention"}

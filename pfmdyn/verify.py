@@ -24,8 +24,8 @@ import yaml
 
 from . import typeset
 from .derivations.checks.core import VERDICTS, Outcome
-from .derivations.checks.evidence import text
-from .derivations.paper.convention import SIGN_CONVENTION
+from .derivations.evidence import text
+from .derivations.paper.convention import SIGN_CONVENTION, SIGN_CONVENTION_SENTENCE
 from .errors import UserError
 
 RECORDED = "recorded_verdicts.yaml"
@@ -155,7 +155,7 @@ def render_errata(verdicts) -> str:
     """
     lines = ["<!-- generated — do not edit: written by `pfmdyn verify --errata` from derivations/checks and audit -->",
              "# Errata of Jesse, Baddorf & Kalinin (2006), as computed by pfmdyn", "",
-             f"Sign convention: {SIGN_CONVENTION}.", ""]
+             f"Sign convention: {typeset.markdown(SIGN_CONVENTION_SENTENCE)}.", ""]
     registry = [v for v in verdicts if v.kind == "claim" and v.verdict in (Outcome.ERRATUM, Outcome.SIGN)]
     audit = [v for v in verdicts if v.kind != "claim" and v.verdict == Outcome.ERRATUM]
     for v in registry:
@@ -187,7 +187,7 @@ def entry(v) -> list[str]:
     if f["decisive"]:
         lines += [f"$$\n{f['decisive']}\n$$", ""]
     if f["sign"]:
-        lines += [f"*Sign convention:* {SIGN_CONVENTION}.", ""]
+        lines += [f"*Sign convention:* {typeset.markdown(SIGN_CONVENTION_SENTENCE)}.", ""]
     return lines
 
 

@@ -13,7 +13,7 @@ from pfmdyn import audit
 from pfmdyn.audit import statements, wording, xref
 from pfmdyn.audit import text as T
 from pfmdyn.derivations.checks import core
-from pfmdyn.derivations.checks.evidence import text
+from pfmdyn.derivations.evidence import text
 
 pytestmark = pytest.mark.skipif(not T.sections(), reason="paper transcription not found")
 audit.register()

@@ -11,8 +11,8 @@ import yaml
 from pfmdyn import cli, typeset, verify
 from pfmdyn.audit import text
 from pfmdyn.derivations.checks import core
-from pfmdyn.derivations.checks.evidence import Evidence, Math, Tex, say
-from pfmdyn.derivations.checks.evidence import text as plain
+from pfmdyn.derivations.evidence import Evidence, Math, Tex, say
+from pfmdyn.derivations.evidence import text as plain
 from pfmdyn.derivations.paper import printed as P
 
 SHARED = verify.shared_claims_path() or Path("/nonexistent/claims.yaml")

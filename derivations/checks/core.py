@@ -1,7 +1,7 @@
 """Verdict registry and the comparison tools every check uses.
 
 A check is a function decorated with :func:`claim`; it computes and returns a
-:class:`~derivations.checks.evidence.Evidence` (:func:`run_check` makes it a :class:`Verdict`).
+:class:`~derivations.evidence.Evidence` (:func:`run_check` makes it a :class:`Verdict`).
 Comparisons are always done two ways: exactly (ratio of canonical
 trigonometric normal forms, see :func:`derivations.trig.normal_form`) and by
 50-digit evaluation at seeded random parameter points.
@@ -19,7 +19,7 @@ import sympy as sp
 from ..beam import beta
 from ..paper.convention import SIGN_CONVENTION
 from ..trig import ATOMS, from_atoms, normal_form, to_atoms
-from .evidence import Evidence, Math, Outcome, Sentence, Tex, join, say, text
+from ..evidence import Evidence, Math, Outcome, Sentence, Tex, join, say, text
 
 HOLDS, SIGN, ERRATUM, UNDECIDABLE = Outcome.HOLDS, Outcome.SIGN, Outcome.ERRATUM, Outcome.UNDECIDABLE
 VERDICTS = tuple(Outcome)
@@ -73,7 +73,7 @@ REGISTRY: dict[str, Check] = {}
 def claim(claim_id: str, where, printed, *, chapter: str = "", kind: str = "claim"):
     """Register a check: a function of no arguments returning its :class:`Evidence`.
 
-    ``where`` and ``printed`` are words or sentences (:func:`derivations.checks.evidence.say`)
+    ``where`` and ``printed`` are words or sentences (:func:`derivations.evidence.say`)
     naming the place in the paper and what it prints.  ``chapter`` names the book page that
     discusses the claim; ``kind`` is ``claim`` for the shared registry's ids, ``cross-reference``,
     ``symbol`` or ``statement`` for the text audit.

@@ -10,7 +10,7 @@ from ..beam import H, L, beta, d1, f0, k, k1, q0
 from ..limits import envelope_exponent, low_frequency
 from ..paper import inputs, printed as P
 from .core import ERRATUM, HOLDS, SIGN, claim, compare, digits_check
-from .evidence import Evidence, Math, Tex, say
+from ..evidence import Evidence, Math, Tex, say
 
 tau = sp.Symbol("tau", real=True)
 

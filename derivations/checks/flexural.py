@@ -10,7 +10,7 @@ from ..limits import low_frequency, param_limit
 from ..paper import printed as P
 from ..sliding_friction import f_l
 from .core import ERRATUM, HOLDS, claim, compare, describe, same_resonances, sign_flip_verdict
-from .evidence import Evidence, Math, Tex, listing, say
+from ..evidence import Evidence, Math, Tex, listing, say
 
 K1_INF, K2_INF = Tex(r"k_1 \to \infty", "k1 -> oo"), Tex(r"k_2 \to \infty", "k2 -> oo")
 K1_ZERO, K2_ZERO = Tex(r"k_1 \to 0", "k1 -> 0"), Tex(r"k_2 \to 0", "k2 -> 0")

@@ -10,7 +10,7 @@ from ..beam import H, L, beta, d1, d2, f0, k, k1, k2, q0
 from ..limits import envelope_exponent, low_frequency, param_limit
 from ..paper import printed as P
 from .core import ERRATUM, HOLDS, claim, compare, sign_flip_verdict
-from .evidence import Evidence, Math, Tex, say
+from ..evidence import Evidence, Math, Tex, say
 from .flexural import K1_INF
 
 _LABEL = {d1: "A_v/N", d2: "A_l/N", f0: "A_e/N", q0: "A_q/N"}
@@ -39,8 +39,8 @@ def _approx_limit(drive, eq):
         derived = _static(drive)
         approx = P.LOW_FREQUENCY[drive][1]
         ratio = param_limit(sp.cancel(derived / approx), k1, sp.oo)
-        evidence = say("stiff contact ", _STIFF, f": leading term of the derived static {_LABEL[drive]} "
-                       "divided by the printed approximation tends to ", ratio)
+        evidence = say("stiff contact ", _STIFF, ": leading term of the derived static ", Tex(_LABEL[drive], _LABEL[drive]),
+                       " divided by the printed approximation tends to ", ratio)
         if ratio == 1:
             return Evidence(HOLDS, evidence)
         correct = (Math(sp.factor(approx * ratio), _LABEL[drive], "~="),)

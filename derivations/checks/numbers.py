@@ -19,7 +19,7 @@ from ..beam import L, beta, k, k1
 from ..paper import inputs, printed as P
 from ..roots import certified_roots
 from .core import ERRATUM, HOLDS, claim, digits_check
-from .evidence import Evidence, Math, Rounding, Tex, say
+from ..evidence import Evidence, Math, Rounding, Tex, say
 
 SILICON_E = tuple(map(float, inputs.SILICON_E))
 SILICON_RHO = float(inputs.SILICON_DENSITY)

@@ -9,7 +9,7 @@ from ..beam import L
 from ..paper import printed as P
 from ..roots import certified_roots
 from .core import ERRATUM, HOLDS, claim, compare
-from .evidence import Evidence, Math, Tex, say
+from ..evidence import Evidence, Math, Tex, say
 
 TIP_TWIST = Tex(r"\Theta_0(L)", "Theta0(L)")
 
