@@ -205,16 +205,24 @@ def chapter_table(page: str) -> "HTML":
     return claims_table(claims_of(page), columns=("id", "where", "verdict", "evidence"), link=True)
 
 
+COLUMN_SHARES = {"id": 14, "where": 11, "verdict": 11, "printed": 30, "evidence": 40, "correct": 24, "chapter": 9}
+"""Relative widths of the columns of a verdict table."""
+
+
 def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "correct"),
                  link=False) -> HTML:
-    """An HTML table of verdicts; every cell is escaped text.
+    """An HTML table of verdicts: escaped text with typeset formulas.
 
     ``link=True`` links ids to their row on the verdicts page; ``link="anchor"`` makes this
-    table the target of those links (the verdicts page).
+    table the target of those links (the verdicts page).  Column widths are fixed shares of the
+    text column (:data:`COLUMN_SHARES`), so a long formula never widens the table.
     """
     heads = {"id": "claim", "where": "where", "printed": "as printed", "verdict": "verdict",
              "evidence": "evidence", "correct": "correct form", "chapter": "chapter"}
-    out = ['<table class="pfm-claims"><thead><tr>']
+    total = sum(COLUMN_SHARES[c] for c in columns)
+    out = ['<table class="pfm-claims pfm-fixed"><colgroup>']
+    out += [f'<col style="width: {100 * COLUMN_SHARES[c] / total:.1f}%">' for c in columns]
+    out.append("</colgroup><thead><tr>")
     out += [f"<th>{heads[c]}</th>" for c in columns]
     out.append("</tr></thead><tbody>")
     for v in rows:

@@ -14,7 +14,7 @@ import html as _html
 
 import sympy as sp
 
-from .derivations.evidence import RELATIONS, Math, Tex
+from .derivations.evidence import RELATIONS, Math, Tex, join
 
 LINE_WIDTH = 64
 """Characters of LaTeX source (commands counted as one) per displayed line: fits the text column."""
@@ -231,13 +231,7 @@ def decisive(comparison) -> str | None:
 def correction(v):
     """What is right, as a sentence: the check's correction, else its correct forms."""
     e = v.proof
-    if e.correction:
-        return e.correction
-    out: list = []
-    for i, m in enumerate(e.correct):
-        out += [", "] if i else []
-        out.append(m)
-    return tuple(out)
+    return e.correction or join([(m,) for m in e.correct], ", ")
 
 
 def erratum(v) -> dict:

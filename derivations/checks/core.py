@@ -4,7 +4,17 @@ A check is a function decorated with :func:`claim`; it computes and returns a
 :class:`~derivations.evidence.Evidence` (:func:`run_check` makes it a :class:`Verdict`).
 Comparisons are always done two ways: exactly (ratio of canonical
 trigonometric normal forms, see :func:`derivations.trig.normal_form`) and by
-50-digit evaluation at seeded random parameter points.
+50-digit evaluation at seeded random parameter points.  A new check, in one of the modules
+of this package (formulas as SymPy objects or ``Tex``, never written into the words)::
+
+    @claim("eq20.pinned_response", "III.3, Eqs. 19-20", Math(P.theta_nlc, Tex(r"\theta_{nlc}", "theta_nlc")),
+           chapter="pinned")
+    def _eq20():
+        cmp = compare(P.theta_nlc, derived)
+        return Evidence(HOLDS if cmp.is_(1) else ERRATUM, say("derived ", Math(derived, "theta")), ratio=cmp,
+                        correct=() if cmp.is_(1) else (Math(derived),))
+
+then ``pfmdyn verify --record`` after review and ``pfmdyn verify --errata generated/errata.md``.
 """
 from __future__ import annotations
 
