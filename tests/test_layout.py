@@ -92,9 +92,7 @@ RANKS = {"pfmdyn.io": 1, "pfmdyn.analysis": 2, "pfmdyn.discrepancy": 2, "pfmdyn.
          "pfmdyn.commands": 4, "pfmdyn.cli": 4}
 
 # Known edges against the rank order, each with the change that removes it (then delete the entry).
-KNOWN = {("pfmdyn.io.instruments", "pfmdyn.analysis.thermal"):
-         "issue 24 item 4: peak fitting of a thermal tune moves out of the reader into analysis",
-         ("pfmdyn.derivations.roots", "pfmdyn.roots.certify"):
+KNOWN = {("pfmdyn.derivations.roots", "pfmdyn.roots.certify"):
          "the ball-arithmetic root certifier (flint only, no SymPy) serves both the numeric root finder "
          "and the checks; it belongs in a package below both"}
 
