@@ -1,6 +1,6 @@
 """Every cross-reference of the paper's text checked against its target.
 
-References are extracted by :mod:`derivations.paper.text` (ids ``xref.<section>.<n>``, in order
+References are extracted by :mod:`pfmdyn.audit.text` (ids ``xref.<section>.<n>``, in order
 of appearance within a section; symbols ``symbol.<section>.<n>`` by first use; the numbering
 of sections and equations ``structure.*``).  A reference is checked against what its target
 contains:
