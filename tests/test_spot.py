@@ -9,13 +9,15 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pfmdyn.analysis.spot import Lever, blind_spots, sensitivities, spot_analysis
+from pfmdyn.analysis.spot import blind_spots, parameters, sensitivities, spot_analysis
+from pfmdyn.cantilever import Cantilever, Contact
 from pfmdyn.cli import main
 from pfmdyn.generated import detection
 from pfmdyn.generated.characteristic import BETA1_FREE
@@ -61,9 +63,9 @@ def test_jacobian_in_the_spot_position_is_the_slope_derivative():
         np.testing.assert_allclose(jac[i][column], ref, rtol=1e-5, atol=1e-6 * np.max(np.abs(ref)))
 
 
-def _reference_blind_spots(lever: Lever, beta: float) -> list[float]:
+def _reference_blind_spots(lever, contact, beta: float) -> list[float]:
     """Zeros in (0, 1] of the reference q0 slope (bracketed on a fine grid, then brentq)."""
-    p = lever.parameters()
+    p = parameters(lever, contact)
 
     def slope(s):
         return spot_response(beta, s, **p, q0=1.0)[0].real
@@ -81,12 +83,12 @@ def test_pfmdyn_spot_matches_held_out_blind_spots(k1_over_k, beta, tmp_path):
     """``pfmdyn spot`` (JSON key ``blind_spot``) against the reference to 5e-5 L, quasi-static
     (the reference at beta = 0, pfmdyn at f = 1e-4 f1) and below the first contact resonance."""
     k, f1 = 2.0, 70e3
-    lever = Lever(k, f1, 225e-6, 15e-6, k1=k1_over_k * k, k2=0.4 * k1_over_k * k)
-    expected = _reference_blind_spots(lever, beta)
+    lever, contact = Cantilever(k, f1, 225e-6, tip_height=15e-6), Contact(k1=k1_over_k * k, k2=0.4 * k1_over_k * k)
+    expected = _reference_blind_spots(lever, contact, beta)
     frequency = 1e-4 * f1 if beta == 0 else f1 * (beta / BETA1_FREE) ** 2
     out = tmp_path / "spot.json"
     assert main(["spot", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", "225e-6",
-                 "--tip-height", "15e-6", "--k1", str(lever.k1), "--k2", str(lever.k2),
+                 "--tip-height", "15e-6", "--k1", str(contact.k1), "--k2", str(contact.k2),
                  "--frequency", repr(frequency), "--json", str(out)]) == 0
     found = json.loads(out.read_text())["blind_spot"]
     assert len(found) == len(expected) >= 1
@@ -95,25 +97,26 @@ def test_pfmdyn_spot_matches_held_out_blind_spots(k1_over_k, beta, tmp_path):
 
 def test_blind_spot_with_the_tip_set_back_and_tilt():
     """Set-back tip, tip mass and tilt: the certified zeros equal the reference's."""
-    lever = Lever(0.8, 60e3, 300e-6, 12e-6, k1=80.0, k2=50.0, tip_position=0.93, tip_mass_ratio=0.1, tilt=11.0)
+    lever = Cantilever(0.8, 6e4, 3e-4, tip_height=1.2e-5, tip_position=0.93, tip_mass_ratio=0.1, tilt=11.0)
+    contact = Contact(k1=80.0, k2=50.0)
     for beta in (0.7, 2.4):
-        found = blind_spots(lever, beta)
+        found = blind_spots(lever, contact, beta)
         assert found.certified
-        np.testing.assert_allclose(found.positions, _reference_blind_spots(lever, beta), atol=1e-8)
+        np.testing.assert_allclose(found.positions, _reference_blind_spots(lever, contact, beta), atol=1e-8)
 
 
 def test_stiff_pinned_tip_approaches_the_closed_form():
     """k1/k -> oo, k2 = 0, low frequency: (15 - sqrt(33))/16."""
-    lever = Lever(1.0, 70e3, 225e-6, 15e-6, k1=1e7)
-    (position,) = blind_spots(lever, 0.01).positions
+    lever = Cantilever(1.0, 7e4, 2.25e-4, tip_height=1.5e-5)
+    (position,) = blind_spots(lever, Contact(k1=1e7), 0.01).positions
     assert abs(position - (15 - math.sqrt(33)) / 16) < 1e-5
 
 
 def test_soft_contact_has_no_static_blind_spot():
     """Static end slope per q0 is proportional to 8k - k1 (Eq. 14): none below k1 = 8k."""
     for k1_over_k, count in ((4.0, 0), (7.5, 0), (9.0, 1)):
-        lever = Lever(1.0, 70e3, 225e-6, 15e-6, k1=k1_over_k)
-        assert len(blind_spots(lever, 0.01).positions) == count
+        lever = Cantilever(1.0, 7e4, 2.25e-4, tip_height=1.5e-5)
+        assert len(blind_spots(lever, Contact(k1=k1_over_k), 0.01).positions) == count
 
 
 def test_local_force_reads_as_d1_over_k1_everywhere():
@@ -127,29 +130,29 @@ def test_local_force_reads_as_d1_over_k1_everywhere():
 
 def test_static_sensitivity_free_and_in_contact():
     """Free: 2/(3 sigma (2 - sigma)) (2/3 at the end: A = 2 theta L/3); in contact: the reference."""
-    lever = Lever(3.0, 80e3, 200e-6, 10e-6, k1=500.0, k2=300.0)
+    lever, contact = Cantilever(3.0, 8e4, 2e-4, tip_height=1e-5), Contact(k1=500.0, k2=300.0)
     for sigma in (0.6, 0.8, 1.0):
-        s = sensitivities(lever, sigma)
+        s = sensitivities(lever, contact, sigma)
         assert abs(s["free"] - 2 / (3 * sigma * (2 - sigma))) < 1e-6
-        theta = spot_response(0.0, sigma, **lever.parameters(), d1=1.0)[0].real
+        theta = spot_response(0.0, sigma, **parameters(lever, contact), d1=1.0)[0].real
         assert abs(s["contact"] - 1 / (lever.length * theta)) < 1e-6 * abs(s["contact"])
 
 
 def test_calibration_factor_and_d_eff_error_at_the_spot():
     """At a blind spot the d_eff error vanishes; the calibration factor is 1 at low frequency."""
-    lever = Lever(2.0, 70e3, 225e-6, 15e-6, k1=400.0)
-    low = spot_analysis(lever, 70.0, 0.9, width=35e-6, positions=20)
+    lever, contact = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, width=3.5e-5, spot_position=0.9), Contact(k1=400.0)
+    low = spot_analysis(lever, contact, 70.0, positions=20)
     assert abs(low.calibration_factor - 1) < 1e-6
     (blind,) = low.blind_spot.positions
-    at_blind = spot_analysis(lever, 70.0, blind, width=35e-6, positions=20)
+    at_blind = spot_analysis(replace(lever, spot_position=blind), contact, 70.0, positions=20)
     assert abs(at_blind.d_eff_error_per_volt) < 1e-6 * abs(low.d_eff_error_per_volt)
-    assert spot_analysis(lever, 70.0, 0.9, positions=20).d_eff_error_per_volt is None
+    assert spot_analysis(replace(lever, width=None), contact, 70.0, positions=20).d_eff_error_per_volt is None
 
 
 @pytest.mark.parametrize("argv,message", [
-    (["--k1", "-3"], "k1 must be a positive number"),
-    (["--tip-position", "1.2"], "tip_position must be in (0, 1]"),
-    (["--spot-position", "0"], "spot_position must be in (0, 1]"),
+    (["--k1", "-3"], "--k1"),
+    (["--tip-position", "1.2"], "--tip-position"),
+    (["--spot-position", "0"], "--spot-position"),
     (["--frequency", "0"], "frequency must be a positive number"),
 ])
 def test_bad_input_is_one_line(argv, message, capsys, tmp_path):

@@ -23,19 +23,19 @@ Static values are the generated (dynamic) functions extrapolated to ``beta = 0``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import flint
 import numpy as np
 
-from ..cantilever import Cantilever
+from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..generated import detection, formulas, tilt_rotation
 from ..generated.characteristic import FLINT
 from ..roots.certify import CertificationError, zeros_in
 
-__all__ = ["Lever", "SpotResult", "BlindSpots", "blind_spots", "slope_along", "static_limit", "sensitivities",
-           "spot_analysis", "ratio_map", "EPSILON_0"]
+__all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_beta", "blind_spots", "slope_along",
+           "static_limit", "sensitivities", "spot_analysis", "ratio_map", "EPSILON_0"]
 
 EPSILON_0 = 8.8541878128e-12
 """Vacuum permittivity (F/m), for the capacitive load per volt."""
@@ -44,72 +44,48 @@ _STATIC_BETA4 = 0.3**4
 """Spacing in ``beta**4`` of the three points of the static extrapolation (see :func:`static_limit`)."""
 
 
-@dataclass(frozen=True)
-class Lever:
-    """A cantilever in contact, SI units (names as on the command line).
+def parameters(lever: Cantilever, contact: Contact) -> dict:
+    """Keyword arguments of the generated detection functions (besides ``beta``, ``sigma``).
 
-    >>> lever = Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0)
-    >>> lever.stiffness()["kvv"]
+    The contact springs in beam axes (``kvv, kll, kvl``: the tilt rotates ``k1``, ``k2``).
+
+    >>> parameters(Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5), Contact(k1=200.0))["kvv"]
     200.0
     """
-
-    spring_constant: float
-    free_resonance: float
-    length: float
-    tip_height: float
-    k1: float
-    k2: float = 0.0
-    tip_position: float = 1.0
-    tip_mass_ratio: float = 0.0
-    tilt: float = 0.0
-
-    def __post_init__(self):
-        for name in ("spring_constant", "free_resonance", "length", "tip_height", "k1"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise UserError(f"{name} must be a positive number, got {value!r}")
-        if not (math.isfinite(self.k2) and self.k2 >= 0):
-            raise UserError(f"k2 must be zero or positive, got {self.k2!r}")
-        if not 0 < self.tip_position <= 1:
-            raise UserError(f"tip_position must be in (0, 1], got {self.tip_position!r}")
-        if not (math.isfinite(self.tip_mass_ratio) and self.tip_mass_ratio >= 0):
-            raise UserError(f"tip_mass_ratio must be zero or positive, got {self.tip_mass_ratio!r}")
-        if not abs(self.tilt) < 90:
-            raise UserError(f"tilt must be within (-90, 90) degrees, got {self.tilt!r}")
-
-    def beta(self, frequency) -> np.ndarray:
-        """Dimensionless frequency ``beta`` (lossless) at ``frequency`` in Hz."""
-        lever = Cantilever(self.spring_constant, self.free_resonance, self.length)
-        return np.real(lever.beta(frequency))
-
-    def stiffness(self) -> dict:
-        """Contact springs in beam axes ``kvv, kll, kvl`` (the tilt rotates ``k1``, ``k2``)."""
-        # Public tilt is positive when the free end is nearer the sample; the derivation's
-        # alpha has the opposite sign (derivations/tilt.py).
-        kvv, kll, kvl = tilt_rotation.rotated(self.k1, self.k2, -math.radians(self.tilt))
-        return {"kvv": float(kvv), "kll": float(kll), "kvl": float(kvl)}
-
-    def parameters(self) -> dict:
-        """Keyword arguments of the generated detection functions (besides ``beta``, ``sigma``)."""
-        return {"k": self.spring_constant, **self.stiffness(), "H": self.tip_height, "L": self.length,
-                "mu": self.tip_mass_ratio, "gamma": self.tip_position}
-
-    def dimensionless(self) -> dict:
-        """The stiffnesses of the blind-spot functions (``kvv/k``, ``kll H**2/(k L**2)``, ``kvl H/(k L)``)."""
-        s, k, H, L = self.stiffness(), self.spring_constant, self.tip_height, self.length
-        return {"kvv_over_k": s["kvv"] / k, "kll_ratio": s["kll"] * H**2 / (k * L**2),
-                "kvl_ratio": s["kvl"] * H / (k * L), "mu": self.tip_mass_ratio, "gamma": self.tip_position}
+    if contact.k1 is None:
+        raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
+    if lever.tip_height is None:
+        raise UserError("the spot analysis needs the tip height (--tip-height)")
+    if lever.tip_gyration_radius != 0.0:   # refuse rather than describe another lever
+        raise UserError("tip_gyration_radius is not yet part of the detection model (leave it at 0)")
+    kvv, kll, kvl = tilt_rotation.rotated(contact.k1, contact.k2_of(contact.k1), lever.alpha)
+    return {"k": lever.spring_constant, "kvv": float(kvv), "kll": float(kll), "kvl": float(kvl),
+            "H": lever.tip_height, "L": lever.length, "mu": lever.tip_mass_ratio, "gamma": lever.tip_position}
 
 
-def slope_along(lever: Lever, beta, sigma) -> tuple:
+def dimensionless(lever: Cantilever, contact: Contact) -> dict:
+    """The parameters of the blind-spot functions (``kvv/k``, ``kll H**2/(k L**2)``, ``kvl H/(k L)``)."""
+    p = parameters(lever, contact)
+    k, H, L = p["k"], p["H"], p["L"]
+    return {"kvv_over_k": p["kvv"] / k, "kll_ratio": p["kll"] * H**2 / (k * L**2),
+            "kvl_ratio": p["kvl"] * H / (k * L), "mu": p["mu"], "gamma": p["gamma"]}
+
+
+def lossless_beta(lever: Cantilever, frequency) -> np.ndarray:
+    """``beta`` at ``frequency`` (Hz) of the lever without losses (blind spots are real zeros)."""
+    return np.real(replace(lever, quality_factor=math.inf, viscous_loss=0.0).beta(frequency))
+
+
+def slope_along(lever: Cantilever, contact: Contact, beta, sigma) -> tuple:
     """Slope at ``x_s = sigma L`` per unit d1, d2, f0, q0 (SI: 1/m, 1/m, 1/N, 1/(N/m) per m).
 
-    >>> lever = Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0)
-    >>> a = slope_along(lever, 1.0, 1.0)[0]; b = slope_along(lever, 1.0, 0.999999)[0]
+    >>> lever, contact = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5), Contact(k1=200.0)
+    >>> a = slope_along(lever, contact, 1.0, 1.0)[0]; b = slope_along(lever, contact, 1.0, 0.999999)[0]
     >>> bool(abs(a - b) < 1e-5 * abs(a))
     True
     """
-    return detection.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float), **lever.parameters())
+    return detection.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
+                            **parameters(lever, contact))
 
 
 def static_limit(fn, *args, **kwargs):
@@ -137,7 +113,7 @@ class BlindSpots:
     reason: str = ""
 
 
-def blind_spots(lever: Lever, beta: float, digits: int = 10) -> BlindSpots:
+def blind_spots(lever: Cantilever, contact: Contact, beta: float, digits: int = 10) -> BlindSpots:
     """Every ``x_s/L`` in ``(0, 1]`` where the slope per unit ``q0`` vanishes, certified.
 
     Zeros of the generated numerator (the denominator does not depend on the spot) on
@@ -146,11 +122,11 @@ def blind_spots(lever: Lever, beta: float, digits: int = 10) -> BlindSpots:
     (:func:`_taylor_model`).  A failed proof (a double zero, a zero exactly at the tip or at
     the end) gives ``certified = False`` with the reason and no positions.
 
-    >>> lever = Lever(1.0, 70e3, 225e-6, 15e-6, k1=1e5)
-    >>> blind_spots(lever, 0.01).positions          # nearly pinned: (15 - sqrt(33))/16 = 0.578464
+    >>> lever = Cantilever(1.0, 7e4, 2.25e-4, tip_height=1.5e-5)
+    >>> blind_spots(lever, Contact(k1=1e5), 0.01).positions          # nearly pinned: (15 - sqrt(33))/16 = 0.578464
     (0.5784871059,)
     """
-    params = {name: _exact(v) for name, v in lever.dimensionless().items()}
+    params = {name: _exact(v) for name, v in dimensionless(lever, contact).items()}
     b = params["beta"] = _exact(beta)
     gamma = lever.tip_position
     # The numerator is a small difference of O(1) terms at low frequency: carry the bits it loses.
@@ -212,7 +188,7 @@ def _exact(value: float) -> flint.arb:
     return flint.arb(float(value))
 
 
-def sensitivities(lever: Lever, sigma) -> dict:
+def sensitivities(lever: Cantilever, contact: Contact, sigma) -> dict:
     """Static ``S = u_tip / (L theta(x_s))``: free (tip force, no contact) and in contact (``d1``).
 
     ``free``: a force on the tip of the free lever (how a free-lever or thermal calibration
@@ -220,41 +196,41 @@ def sensitivities(lever: Lever, sigma) -> dict:
     ``contact``: the surface moving the tip by ``d1`` through the contact springs (a force
     curve on this contact): ``S = d1 / (L theta_d1(x_s))``.
 
-    >>> s = sensitivities(Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0), 1.0)
+    >>> s = sensitivities(Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5), Contact(k1=200.0), 1.0)
     >>> round(float(s["free"]), 6)
     0.666667
     """
     L, gamma = lever.length, lever.tip_position
-    params = {**lever.parameters(), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
+    params = {**parameters(lever, contact), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
     theta = static_limit(lambda b: detection.slope(b, sigma, **params)[2])
     tip = static_limit(lambda b: detection.deflection(b, gamma, **params)[2])
-    contact = static_limit(lambda b: detection.slope(b, sigma, **lever.parameters())[0])
-    return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * contact))}
+    touching = static_limit(lambda b: detection.slope(b, sigma, **parameters(lever, contact))[0])
+    return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * touching))}
 
 
 @dataclass(frozen=True)
 class SpotResult:
     """What :func:`spot_analysis` finds for one lever at one frequency (SI; positions as x_s/L)."""
 
-    lever: Lever
+    lever: Cantilever
+    contact: Contact
     frequency: float
     beta: float
     blind_spot: BlindSpots
     positions: np.ndarray = field(repr=False)
     ratio: np.ndarray = field(repr=False)
-    spot_position: float | None = None
-    free_sensitivity: float | None = None
-    contact_sensitivity: float | None = None
-    calibration_factor: complex | None = None
-    paper_calibration_factor: complex | None = None
+    spot_position: float = 1.0
+    free_sensitivity: float = math.nan
+    contact_sensitivity: float = math.nan
+    calibration_factor: complex = math.nan
+    paper_calibration_factor: complex = math.nan
     d_eff_error_per_volt: complex | None = None
-    width: float | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary (the document ``pfmdyn spot --json`` writes).
 
-        >>> r = spot_analysis(Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0), 20e3, positions=5)
-        >>> r.to_dict()["blind_spot"]
+        >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5)
+        >>> spot_analysis(lever, Contact(k1=200.0), 20e3, positions=5).to_dict()["blind_spot"]
         [0.6008736276]
         """
         def cplx(z):
@@ -272,10 +248,10 @@ class SpotResult:
                "calibration_factor": cplx(self.calibration_factor),
                "paper_calibration_factor": cplx(self.paper_calibration_factor),
                "d_eff_error_per_volt": cplx(self.d_eff_error_per_volt),
-               "lever": {name: getattr(self.lever, name) for name in self.lever.__dataclass_fields__}}
+               "lever": self.lever.to_dict(), "k1": self.contact.k1, "k2": self.contact.k2_of(self.contact.k1)}
         if not self.blind_spot.certified:
             out["reason"] = self.blind_spot.reason
-        if self.d_eff_error_per_volt is None and self.spot_position is not None:
+        if self.d_eff_error_per_volt is None:
             out["d_eff_error_per_volt_undetermined"] = "needs the lever width (--width)"
         return out
 
@@ -284,48 +260,48 @@ def _float(x):
     return None if x is None else float(x)
 
 
-def spot_analysis(lever: Lever, frequency: float, spot_position: float | None = None, *,
-                  width: float | None = None, positions=201) -> SpotResult:
-    """Blind spots, the q0/d1 slope ratio along the lever and, at ``spot_position``, the
-    calibration factor and the d_eff error (see the module docstring).
+def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
+                  positions=201) -> SpotResult:
+    """Blind spots, the q0/d1 slope ratio along the lever and, at the lever's ``spot_position``,
+    the sensitivities, calibration factor and d_eff error (see the module docstring).
 
     ``positions``: the number of evenly spaced ``x_s/L`` in ``(0, 1]`` for the ratio, or the
-    positions themselves.  ``width`` (m) sizes the capacitive load per volt (parallel plate
-    over the tip height); without it the d_eff error is undetermined (None).
+    positions themselves.  The lever's ``width`` sizes the capacitive load per volt (parallel
+    plate over the tip height); without it the d_eff error is undetermined (None).
 
-    >>> r = spot_analysis(Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0), 20e3, 0.8, positions=5)
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, spot_position=0.8)
+    >>> r = spot_analysis(lever, Contact(k1=200.0), 20e3, positions=5)
     >>> round(r.calibration_factor.real, 4), round(float(r.free_sensitivity), 4)
     (0.9965, 0.6944)
     """
     if not (math.isfinite(frequency) and frequency > 0):
         raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
-    if spot_position is not None and not 0 < spot_position <= 1:
-        raise UserError(f"spot_position must be in (0, 1], got {spot_position!r}")
-    beta = float(lever.beta(frequency))
+    beta = float(lossless_beta(lever, frequency))
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
-    theta = slope_along(lever, beta, grid)
-    result = dict(lever=lever, frequency=float(frequency), beta=beta, blind_spot=blind_spots(lever, beta),
-                  positions=grid, ratio=theta[3] / theta[0], width=width)
-    if spot_position is not None:
-        sens = sensitivities(lever, spot_position)
-        at = slope_along(lever, beta, spot_position)
-        invols = sens["contact"] * lever.length        # metres of d1 per unit slope, static
-        result.update(spot_position=float(spot_position), free_sensitivity=float(sens["free"]),
+    theta = slope_along(lever, contact, beta, grid)
+    spot = lever.spot_position
+    sens = sensitivities(lever, contact, spot)
+    at = slope_along(lever, contact, beta, spot)
+    invols = sens["contact"] * lever.length        # metres of d1 per unit slope, static
+    error = None
+    if lever.width is not None:
+        q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, lever.width, lever.tip_height))
+        error = complex(invols * at[3] * q_per_volt)
+    return SpotResult(lever=lever, contact=contact, frequency=float(frequency), beta=beta,
+                      blind_spot=blind_spots(lever, contact, beta), positions=grid, ratio=theta[3] / theta[0],
+                      spot_position=float(spot), free_sensitivity=float(sens["free"]),
                       contact_sensitivity=float(sens["contact"]), calibration_factor=complex(invols * at[0]),
-                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]))
-        if width is not None:
-            q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, width, lever.tip_height))
-            result["d_eff_error_per_volt"] = complex(invols * at[3] * q_per_volt)
-    return SpotResult(**result)
+                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]), d_eff_error_per_volt=error)
 
 
-def ratio_map(lever: Lever, frequencies, positions) -> np.ndarray:
+def ratio_map(lever: Cantilever, contact: Contact, frequencies, positions) -> np.ndarray:
     """``theta_q0 / theta_d1`` on a grid: rows ``frequencies`` (Hz), columns ``positions`` (x_s/L).
 
-    >>> m = ratio_map(Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0), [10e3, 50e3], [0.5, 1.0])
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5)
+    >>> m = ratio_map(lever, Contact(k1=200.0), [10e3, 50e3], [0.5, 1.0])
     >>> m.shape
     (2, 2)
     """
-    beta = lever.beta(np.asarray(frequencies, float))[:, None]
-    theta = slope_along(lever, beta, np.asarray(positions, float)[None, :])
+    beta = lossless_beta(lever, np.asarray(frequencies, float))[:, None]
+    theta = slope_along(lever, contact, beta, np.asarray(positions, float)[None, :])
     return theta[3] / theta[0]

@@ -34,8 +34,9 @@ def plot_spot(result: SpotResult, frequencies=None, ratio_map=None):
 
     Examples
     --------
-    >>> from pfmdyn.analysis.spot import Lever, spot_analysis
-    >>> r = spot_analysis(Lever(2.0, 70e3, 225e-6, 15e-6, k1=200.0), 20e3, positions=50)
+    >>> from pfmdyn.analysis.spot import spot_analysis
+    >>> from pfmdyn.cantilever import Cantilever, Contact
+    >>> r = spot_analysis(Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5), Contact(k1=200.0), 20e3, positions=50)
     >>> len(plot_spot(r).axes)
     1
     """
@@ -48,9 +49,8 @@ def plot_spot(result: SpotResult, frequencies=None, ratio_map=None):
     ax.semilogy(x, np.abs(result.ratio), color="k")
     for p in result.blind_spot.positions:
         ax.axvline(p, color="tab:red", ls="--", lw=1)
-    if result.spot_position is not None:
-        ax.axvline(result.spot_position, color="tab:blue", lw=1, label=f"spot {result.spot_position:g} L")
-        ax.legend(loc="best", fontsize="small")
+    ax.axvline(result.spot_position, color="tab:blue", lw=1, label=f"spot {result.spot_position:g} L")
+    ax.legend(loc="best", fontsize="small")
     ax.set_xlabel("detection point $x_s/L$")
     ax.set_ylabel(r"$|\theta_{q0}/\theta_{d1}|$ (m$^2$/N)")
     spots = ", ".join(f"{p:.4f}" for p in result.blind_spot.positions) or "none"
