@@ -165,3 +165,10 @@ def test_bad_input_is_one_line(argv, message, capsys, tmp_path):
     assert main(["spot", *args]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err and not out.exists()
+
+
+def test_missing_lever_value_names_its_flag(capsys):
+    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100",
+            "--frequency", "1e4"]
+    assert main(args) == 2
+    assert "give --tip-height" in capsys.readouterr().err

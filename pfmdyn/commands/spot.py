@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
+from ..names import LEVER, NAMES, canonical
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -10,7 +11,9 @@ __all__ = ["add_arguments", "run", "report"]
 
 def add_arguments(parser) -> None:
     """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""
-    flags.add_lever(parser, required=("spring_constant", "free_resonance", "length", "tip_height"))
+    parser.add_argument("file", nargs="?", help="instrument file supplying what it holds of the lever "
+                        "(.ibw, .h5, .nid, sweeps); flags override it")
+    flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
     parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
     parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
@@ -39,9 +42,24 @@ def report(result) -> str:
     return "\n".join(lines)
 
 
+def _lever(args):
+    """The lever from the instrument file (when given) with the flags over it."""
+    found = {}
+    if args.file:
+        from ..io.instruments import read_instrument
+        record = read_instrument(args.file)
+        found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
+    given = {**found, **flags.given(args, LEVER)}
+    for name in ("spring_constant", "free_resonance", "length", "tip_height"):
+        if given.get(name) is None:
+            where = f" in {args.file}" if args.file else ""
+            raise UserError(f"no {NAMES[name].meaning.split(',')[0]}{where}: give {NAMES[name].flag}")
+    return flags.cantilever(args, found)
+
+
 def run(args) -> int:
     """Analyse, print, write what was asked."""
-    lever, contact = flags.cantilever(args), flags.contact(args)
+    lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
     print(report(result))
     if args.json:
