@@ -20,6 +20,8 @@ Written:
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import sympy as sp
 
 from .. import beam, detection, families as registry, tip_setback
@@ -129,8 +131,9 @@ def _examples(sol, params):
                 target=f"[row[{JACOBIAN.index('sigma')}] for row in jacobian]"))
 
 
+@lru_cache(maxsize=None)
 def render() -> str:
-    """Source text of ``generated/detection.py``."""
+    """Source text of ``generated/detection.py`` (once per process: it takes minutes)."""
     row = registry.by_module("tip_setback")
     params = [symbol(p, tip_setback) for p in row.parameters]
     sol = detection.solve()
