@@ -17,8 +17,10 @@ gives, for one lever in contact at one frequency:
   contact, at the given frequency; and the **d_eff error**: the apparent ``d_eff`` the
   distributed load adds at ``x_s`` (zero at a blind spot), per volt of ``V_dc - V_surf``.
 
-Static values are the generated (dynamic) functions extrapolated to ``beta = 0`` in
-``beta**4`` from three points (:func:`static_limit`; relative error below 1e-7).
+Responses are those of the lossless lever (a blind spot is a real zero of the slope; the
+cantilever's losses are left out).  Static values are the generated (dynamic) functions
+extrapolated to ``beta = 0`` in ``beta**4`` from three points (:func:`static_limit`;
+relative error below 1e-7).
 """
 from __future__ import annotations
 
@@ -243,8 +245,8 @@ class SpotResult:
                "q0_to_d1_slope_ratio": {"spot_position": [float(p) for p in self.positions],
                                         "re": [float(v) for v in np.real(self.ratio)],
                                         "im": [float(v) for v in np.imag(self.ratio)], "unit": "m**2/N"},
-               "free_sensitivity": _float(self.free_sensitivity),
-               "contact_sensitivity": _float(self.contact_sensitivity),
+               "free_sensitivity": float(self.free_sensitivity),
+               "contact_sensitivity": float(self.contact_sensitivity),
                "calibration_factor": cplx(self.calibration_factor),
                "paper_calibration_factor": cplx(self.paper_calibration_factor),
                "d_eff_error_per_volt": cplx(self.d_eff_error_per_volt),
@@ -254,10 +256,6 @@ class SpotResult:
         if self.d_eff_error_per_volt is None:
             out["d_eff_error_per_volt_undetermined"] = "needs the lever width (--width)"
         return out
-
-
-def _float(x):
-    return None if x is None else float(x)
 
 
 def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
