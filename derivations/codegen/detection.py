@@ -131,6 +131,13 @@ def _examples(sol, params):
                 target=f"[row[{JACOBIAN.index('sigma')}] for row in jacobian]"))
 
 
+def _keywords(params) -> str:
+    """Keyword arguments of the blind-spot coefficients: ``beta``, ``gamma``, the lever's other
+    dimensionless parameters (``mu``, and any a tip term adds), the dimensionless stiffnesses."""
+    dimensional = {"k", "kvv", "kll", "kvl", "H", "L", "gamma"}
+    return ", ".join(["beta", "gamma", *(str(p) for p in params if str(p) not in dimensional), *DIMENSIONLESS])
+
+
 @lru_cache(maxsize=None)
 def render() -> str:
     """Source text of ``generated/detection.py`` (once per process: it takes minutes)."""
@@ -159,7 +166,7 @@ def render() -> str:
                 *(f"q0_slope_{b}{suffix}" for b in ("before", "beyond") for suffix in ("", "_coefficients"))]
     return templates.render(
         "detection.py.jinja", header=header("derivations/detection.py: solve()", source_hash(hashed)),
-        source="derivations/detection.py: solve()", names=names, signature=signature,
+        source="derivations/detection.py: solve()", names=names, signature=signature, keywords=_keywords(params),
         dimensionless="; ".join(f"``{k}`` = {v}" for k, v in DIMENSIONLESS.items()),
         exported=sorted(exported), parameters=tuple(map(str, params)), jacobian_parameters=JACOBIAN,
         drives=row.drives, slope_example=slope_example, deflection_example=deflection_example,
