@@ -44,12 +44,23 @@ def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
     -------
     tuple of ndarray
         per unit d1, d2 (beam-frame surface displacements), f0, q0
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9)]
+    ['7435.831', '3606.06', '70.62985', '-0.01437834']
     """
     return _pick(sigma, gamma, _slope_before(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma), _slope_beyond(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma))
 
 
 def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
-    """Deflection u0(sigma L) at the detection point per unit drive (arguments as :func:`slope`)."""
+    """Deflection u0(sigma L) at the detection point per unit drive (arguments as :func:`slope`).
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9)]
+    ['0.9397726', '0.04510866', '0.009663449', '1.391415e-06']
+    """
     return _pick(sigma, gamma, _deflection_before(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma), _deflection_beyond(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma))
 
 
@@ -63,6 +74,12 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, wrt=JACOB
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]`` (None
         when not in ``wrt``)
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, wrt=('sigma',))
+    >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
+    ['-2027.0872', '15512.075', '-48.856871', '-0.042606774']
     """
     v0, j0 = _slope_before_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, wrt)
     v1, j1 = _slope_beyond_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, wrt)
@@ -72,7 +89,7 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, wrt=JACOB
 
 
 def _slope_before(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
-    """slope at the spot, spot before the tip (see :func:`slope`)."""
+    """Slope at the spot, spot before the tip (see :func:`slope`)."""
     beta = np.asarray(beta)
     a = gamma * beta
     _ca, _sa = np.cos(a), np.sin(a)
@@ -233,7 +250,7 @@ def _slope_before(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
 
 
 def _deflection_before(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
-    """deflection at the spot, spot before the tip (see :func:`deflection`)."""
+    """Deflection at the spot, spot before the tip (see :func:`deflection`)."""
     beta = np.asarray(beta)
     a = gamma * beta
     _ca, _sa = np.cos(a), np.sin(a)
@@ -423,6 +440,9 @@ def _slope_before_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, w
         as :func:`_slope_before`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -1821,7 +1841,7 @@ def q0_slope_before(sigma, m, coefficients, beta):
 
 
 def _slope_beyond(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
-    """slope at the spot, spot beyond the tip (see :func:`slope`)."""
+    """Slope at the spot, spot beyond the tip (see :func:`slope`)."""
     beta = np.asarray(beta)
     a = gamma * beta
     _ca, _sa = np.cos(a), np.sin(a)
@@ -1956,7 +1976,7 @@ def _slope_beyond(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
 
 
 def _deflection_beyond(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma):
-    """deflection at the spot, spot beyond the tip (see :func:`deflection`)."""
+    """Deflection at the spot, spot beyond the tip (see :func:`deflection`)."""
     beta = np.asarray(beta)
     a = gamma * beta
     _ca, _sa = np.cos(a), np.sin(a)
@@ -2120,6 +2140,9 @@ def _slope_beyond_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, w
         as :func:`_slope_beyond`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
     """
     beta = np.asarray(beta)
     a = gamma * beta
