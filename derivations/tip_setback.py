@@ -49,8 +49,11 @@ DRIVES = (d1, d2, f0, q0)
 
 
 @lru_cache(maxsize=None)
-def field_matrix(fraction: sp.Symbol) -> sp.Matrix:
+def field_matrix(fraction: sp.Symbol, at=None) -> sp.Matrix:
     """State transfer matrix over ``fraction * L`` of the unloaded beam, in atoms.
+
+    ``at``: the atoms of ``fraction * beta`` (default: :data:`ATOMS_A` for ``gamma``, else
+    :data:`ATOMS_B`).
 
     >>> F = field_matrix(gamma)
     >>> F.subs({ATOMS_A[0]: 1, ATOMS_A[1]: 0, ATOMS_A[2]: 1, ATOMS_A[3]: 0})   # zero length
@@ -63,10 +66,10 @@ def field_matrix(fraction: sp.Symbol) -> sp.Matrix:
     u, consts = general_solution()
     u = u.subs(q0, 0)
     phi = sp.Matrix([[sp.diff(u, x, n).diff(c) for c in consts] for n in range(4)])
-    at = ATOMS_A if fraction == gamma else ATOMS_B
+    at = at or (ATOMS_A if fraction == gamma else ATOMS_B)
     at_l = to_atoms(phi.subs(x, fraction * L), beta * fraction, at)
     F = at_l * phi.subs(x, 0).inv()
-    return F.applyfunc(lambda e: normal_form(sp.cancel(e), ATOMS_A, ATOMS_B))
+    return F.applyfunc(lambda e: normal_form(sp.cancel(e), at))
 
 
 @dataclass(frozen=True)
@@ -80,21 +83,26 @@ class SetbackSolution:
     denominator: sp.Expr
     slope: dict
     deflection: dict
+    clamp: tuple = ()
+    """``(det, {drive: numerators of u''(0), u'''(0) over det})``, unreduced: the clamp state,
+    from which :mod:`derivations.detection` reads the beam anywhere (every tip term flows in)."""
 
     def theta(self, drive: sp.Symbol) -> sp.Expr:
         """Tip slope at L per unit ``drive``, in atoms."""
         return self.slope[drive] / self.denominator
 
 
-def _reduce(exprs: list[sp.Expr]) -> list[sp.Expr]:
+def _reduce(exprs: list[sp.Expr], sets=(ATOMS_A, ATOMS_B)) -> list[sp.Expr]:
     """Normal forms over one monomial denominator, common monomial and integer content removed.
+
+    ``sets``: the atom sets the expressions are polynomials in.
 
     Only monomial factors are removed: the normalisation is fixed but arbitrary (compare
     by ratio), as in :func:`derivations.beam.solve_tip_problem`.
     """
     terms = [t for e in exprs for t in sp.Add.make_args(sp.expand(e))]
     common = sp.lcm_list([t.as_numer_denom()[1] for t in terms])
-    nums = [normal_form(sp.expand(e * common), ATOMS_A, ATOMS_B) for e in exprs]
+    nums = [normal_form(sp.expand(e * common), *sets) for e in exprs]
     gens = sorted(set().union(*[n.free_symbols for n in nums]), key=str)
     polys = [sp.Poly(n, *gens) for n in nums]
     nonzero = [p for p in polys if not p.is_zero]
@@ -140,8 +148,9 @@ def solve() -> SetbackSolution:
     defl_l = sp.expand(times_det(z_l[0] + u_p).subs(load))
     outputs = [det] + [slope_l.coeff(dr) for dr in DRIVES] + [defl_l.coeff(dr) for dr in DRIVES]
     reduced = _reduce(outputs)
+    clamp = {dr: tuple(sp.expand(e.subs(load)).coeff(dr) for e in (m0_det, v0_det)) for dr in DRIVES}
     return SetbackSolution(reduced[0], dict(zip(DRIVES, reduced[1:5])),
-                           dict(zip(DRIVES, reduced[5:9])))
+                           dict(zip(DRIVES, reduced[5:9])), (det, clamp))
 
 
 def to_functions(expr: sp.Expr) -> sp.Expr:
