@@ -194,7 +194,7 @@ class BeamMapModel:
                 return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L), None
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
-        args = (beta, self.k, k1e, k2e, 0.0, self.H, self.L, mu, self.tip_position)
+        args = (beta, self.k, k1e, k2e, 0.0, self.H, self.L, mu, self.tip_position, 0.0)
         if not jacobian:
             return tip_setback.slope(*args), None
         wanted = ("beta", "kvv", "kll", "mu")
