@@ -55,7 +55,7 @@ def main() -> None:
     print(f"  sympy.lambdify     {t_naive * 1e3:8.1f} ms")
     print(f"  speed-up           {t_naive / t_gen:8.2f} x  (target >= 2)")
 
-    cantilever = pfmdyn.Cantilever(spring_constant=2.0, resonance_frequency=7e4, length=1.5e-4,
+    cantilever = pfmdyn.Cantilever(spring_constant=2.0, free_resonance=7e4, length=1.5e-4,
                                    quality_factor=150.0)
     freqs = np.linspace(1e4, 2e6, 2000)
     bias = np.linspace(-10.0, 10.0, 2000)

@@ -16,13 +16,13 @@ K1, H, D_EFF, F_LOC, WIDTH = 1000.0, 15e-6, 5e-12, 14e-9, 24e-6
 
 def to_hz(lever, beta):
     """Invert ``beta = BETA1_FREE sqrt(f / f1)`` (Cantilever.beta without losses)."""
-    return lever.resonance_frequency * (np.asarray(beta) / BETA1_FREE) ** 2
+    return lever.free_resonance * (np.asarray(beta) / BETA1_FREE) ** 2
 
 
 def contact_resonances_hz(lever, f_max):
     """Zeros of the frictionless characteristic function (Eq. 23's N), in Hz, below f_max."""
     ratio = K1 / lever.spring_constant
-    z = np.linspace(0.5, np.sqrt(f_max / lever.resonance_frequency) * BETA1_FREE, 20000)
+    z = np.linspace(0.5, np.sqrt(f_max / lever.free_resonance) * BETA1_FREE, 20000)
     g = characteristic.frictionless(z, np, k1_over_k=ratio)
     brackets = np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]
     roots = [brentq(lambda x: characteristic.frictionless(x, np, k1_over_k=ratio), z[i], z[i + 1],

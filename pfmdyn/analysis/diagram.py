@@ -77,7 +77,7 @@ def cantilever_from_spring_constant(*, spring_constant, length, width, thickness
     --------
     >>> c = cantilever_from_spring_constant(spring_constant=45.0, length=224e-6,
     ...                                     width=24e-6, thickness=8e-6)
-    >>> round(c.spring_constant, 6), round(c.resonance_frequency / 1e3, 1)   # N/m, kHz
+    >>> round(c.spring_constant, 6), round(c.free_resonance / 1e3, 1)   # N/m, kHz
     (45.0, 216.5)
     """
     for name, value in [("spring_constant", spring_constant), ("length", length),
@@ -95,7 +95,7 @@ def table1_cantilever(name, *, quality_factor=math.inf) -> Cantilever:
 
     Examples
     --------
-    >>> [round(table1_cantilever(n).resonance_frequency / 1e3, 1) for n in "ABC"]   # kHz
+    >>> [round(table1_cantilever(n).free_resonance / 1e3, 1) for n in "ABC"]   # kHz
     [216.5, 81.6, 28.2]
     """
     if name not in TABLE1:
@@ -314,7 +314,7 @@ def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_
     >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
     [39.883, 1.388, 0.057]
     """
-    static = [1e-6 * cantilever.resonance_frequency]
+    static = [1e-6 * cantilever.free_resonance]
     _, piezo, _, nonlocal_ = _coefficients(cantilever, static, width=width, k1=k1, H=H,
                                            d_eff=d_eff, local_force=0.0)
     with np.errstate(divide="ignore"):

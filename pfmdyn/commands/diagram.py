@@ -115,7 +115,7 @@ def run(args) -> int:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
-             f"$f_1$ = {lever.resonance_frequency / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
+             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
              f"H = {args.tip_height:g} µm, $d_{{eff}}$ = {args.d_eff:g} pm/V, "
              f"$F_{{loc}}$ = {args.local_force:g} nN/V, Q = {args.quality_factor:g}")
     plot_diagram(response, args.kind, args.out, title=title, log_frequency=args.log_frequency)
