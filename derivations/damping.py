@@ -138,8 +138,11 @@ OUTPUTS = {tuple(outputs)!r}
 
 
 def factors(r, inv_q, g, x):
-    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast)."""
-    r = np.asarray(r, dtype=float)
+    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast).
+
+    ``r`` may be complex (a damped mode's complex frequency): the factors are analytic in ``r``.
+    """
+    r = np.asarray(r, dtype=complex if np.iscomplexobj(r) else float)
     return ({values})
 
 

@@ -19,8 +19,11 @@ OUTPUTS = ('beta_factor', 'k_factor', 'k1_factor', 'mu_factor')
 
 
 def factors(r, inv_q, g, x):
-    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast)."""
-    r = np.asarray(r, dtype=float)
+    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast).
+
+    ``r`` may be complex (a damped mode's complex frequency): the factors are analytic in ``r``.
+    """
+    r = np.asarray(r, dtype=complex if np.iscomplexobj(r) else float)
     return (((-1j*g + r)/(1j*inv_q + 1))**(1/4)/r**(1/4), 1j*inv_q + 1, 1j*r*x + 1, r/(-1j*g + r))
 
 

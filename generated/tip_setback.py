@@ -14,7 +14,7 @@ built from ``exp(-a)``, ``exp(-b)`` so nothing overflows.  No series branch: use
 """
 import numpy as np
 
-__all__ = ['DRIVES', 'JACOBIAN_PARAMETERS', 'PARAMETERS', 'characteristic', 'characteristic_and_jacobian', 'slope', 'slope_and_jacobian']
+__all__ = ['DRIVES', 'JACOBIAN_PARAMETERS', 'PARAMETERS', 'characteristic', 'characteristic_and_jacobian', 'characteristic_balls', 'slope', 'slope_and_jacobian']
 
 PARAMETERS = ('k', 'kvv', 'kll', 'kvl', 'H', 'L', 'mu', 'gamma', 'rho_g')
 JACOBIAN_PARAMETERS = ('beta', 'k', 'kvv', 'kll', 'kvl', 'mu', 'gamma', 'rho_g')
@@ -779,6 +779,50 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     _secha = 2.0 * _ea / (1.0 + _ea * _ea)
     _tanhb = (1.0 - _eb * _eb) / (1.0 + _eb * _eb)
     _sechb = 2.0 * _eb / (1.0 + _eb * _eb)
+    _t0 = _ca*_cb
+    _t1 = _ca*_sechb
+    _t2 = -_cb*_secha - _secha*_sechb + _t0 + _t1
+    _t3 = -_t2
+    _t4 = H**2*L
+    _t5 = _t4*kll
+    _t6 = 9*beta**4*k
+    _t7 = k**2
+    _t8 = 3*_t7
+    _t9 = _t5*_t8
+    _t10 = beta**8
+    _t11 = _t10*_t2*mu
+    _t12 = _cb*_sa
+    _t13 = _sa*_sechb
+    _t14 = _sb*_secha
+    _t15 = _ca*_sb
+    _t16 = rho_g**2
+    _t17 = L**3
+    _t18 = _t17*k**3
+    _t19 = _t17*_t8*kvv
+    _t20 = _sa*_sb
+    _t21 = _t0*_tanha
+    _t22 = -_cb*_secha*_tanhb + _t0*_tanhb + _t1*_tanha + _t21
+    _t23 = -_t12 - _t13 + _t14 - _t15 + _t22
+    _t24 = _t18*mu
+    _t25 = _t12 + _t13 - _t14 + _t15 + _t22
+    return 6*H*L**2*_t7*beta**6*kvl*(_t12*_tanha + _t13*_tanha + _t14*_tanhb - _t15*_tanhb) + 2*_t10*_t18*(_secha*_sechb + _t0 - _t20*_tanha*_tanhb - _t20 + _t21*_tanhb) + _t11*_t16*_t19 + _t11*_t9 + _t16*_t18*_t3*beta**12*mu**2 - _t16*_t24*_t25*beta**11 - _t19*_t23*beta**5 + _t2*_t4*_t6*kvl**2 + _t23*_t24*beta**9 + _t25*_t9*beta**7 + _t3*_t5*_t6*kvv
+
+
+def characteristic_balls(beta, m, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """:func:`characteristic` in a math namespace ``m`` with ``cos``, ``sin``, ``exp``.
+
+    For certified roots: ``beta`` a python-flint ``arb_series`` (or an exact ``fmpq_series``),
+    ``m`` the namespace ``generated.characteristic.FLINT``, parameters ``arb`` or ``fmpq``.
+    Every coefficient is an integer.  Real ``beta`` (no clipping of the exponentials).
+    """
+    a = gamma * beta
+    b = (1 - gamma) * beta
+    _ca, _sa, _cb, _sb = m.cos(a), m.sin(a), m.cos(b), m.sin(b)
+    _ea, _eb = m.exp(-a), m.exp(-b)
+    _tanha = (1 - _ea * _ea) / (1 + _ea * _ea)
+    _secha = 2 * _ea / (1 + _ea * _ea)
+    _tanhb = (1 - _eb * _eb) / (1 + _eb * _eb)
+    _sechb = 2 * _eb / (1 + _eb * _eb)
     _t0 = _ca*_cb
     _t1 = _ca*_sechb
     _t2 = -_cb*_secha - _secha*_sechb + _t0 + _t1

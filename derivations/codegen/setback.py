@@ -9,7 +9,8 @@ and ``sech`` built from ``exp(-a)``, ``exp(-b)``; nothing overflows.  There is n
 branch: the closed form cancels like the elastic family's below ``beta ~ 1`` (about
 ``beta**-6`` lost relative to the largest term, 1e-12 at ``beta = 0.3``), which is
 documented as the domain of validity.  The scaled denominator is exported as
-``characteristic`` for root finding.  Every printed polynomial is grouped by monomials of
+``characteristic`` for root finding, and as ``characteristic_balls`` (the same lines in a
+math namespace, integer coefficients) for certified roots in ball arithmetic.  Every printed polynomial is grouped by monomials of
 ``beta`` and the parameters before CSE (:func:`_grouped`).  ``slope_and_jacobian`` and
 ``characteristic_and_jacobian`` add the partials of :data:`.jacobian.JACOBIANS`, ``beta``
 and ``gamma`` through the atoms of both arguments.
@@ -75,7 +76,7 @@ built from ``exp(-a)``, ``exp(-b)`` so nothing overflows.  No series branch: use
 """
 import numpy as np
 
-__all__ = {sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian", "characteristic_and_jacobian"])!r}
+__all__ = {sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian", "characteristic_and_jacobian", "characteristic_balls"])!r}
 
 PARAMETERS = {tuple(map(str, params))!r}
 JACOBIAN_PARAMETERS = {tuple(map(str, wrt))!r}
@@ -102,7 +103,8 @@ def characteristic(beta, {names}):
 {params_doc}    """
 {atoms}''' + "\n".join(den_lines) + f'''
     return {den[0]}
-''' + _characteristic_jacobian(_grouped(scaled(exprs[0], degrees), params), d_scaled[::len(exprs)], wrt, names, atoms))
+''' + _characteristic_balls(den_lines, den[0], names)
+            + _characteristic_jacobian(_grouped(scaled(exprs[0], degrees), params), d_scaled[::len(exprs)], wrt, names, atoms))
 
 
 def _partials(exprs, params):
@@ -132,6 +134,38 @@ def _jacobian(values, partials, wrt, names, atoms) -> str:
     """``slope_and_jacobian``: the scaled values and partials (see :func:`.jacobian.render_and_jacobian`)."""
     return render_and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive", atoms, wrt,
                                values, partials).rstrip("\n") + "\n"
+
+
+def _characteristic_balls(lines, value, names) -> str:
+    """``characteristic_balls``: :func:`characteristic`'s lines in a math namespace ``m``.
+
+    The same CSE lines and scaling with ``cos``, ``sin``, ``exp`` taken from ``m`` and integer
+    literals only, so python-flint balls and exact series evaluate it without rounding
+    anything but the balls' own arithmetic (certified root isolation uses it).
+    """
+    body = "\n".join(lines)
+    # Integer coefficients: a float literal would be a rounded constant inside a proof.
+    assert "." not in body + value, "non-integer literal in the set-back characteristic"
+    return f'''
+
+def characteristic_balls(beta, m, {names}):
+    """:func:`characteristic` in a math namespace ``m`` with ``cos``, ``sin``, ``exp``.
+
+    For certified roots: ``beta`` a python-flint ``arb_series`` (or an exact ``fmpq_series``),
+    ``m`` the namespace ``generated.characteristic.FLINT``, parameters ``arb`` or ``fmpq``.
+    Every coefficient is an integer.  Real ``beta`` (no clipping of the exponentials).
+    """
+    a = gamma * beta
+    b = (1 - gamma) * beta
+    _ca, _sa, _cb, _sb = m.cos(a), m.sin(a), m.cos(b), m.sin(b)
+    _ea, _eb = m.exp(-a), m.exp(-b)
+    _tanha = (1 - _ea * _ea) / (1 + _ea * _ea)
+    _secha = 2 * _ea / (1 + _ea * _ea)
+    _tanhb = (1 - _eb * _eb) / (1 + _eb * _eb)
+    _sechb = 2 * _eb / (1 + _eb * _eb)
+{body}
+    return {value}
+'''
 
 
 def _characteristic_jacobian(den, d_dens, wrt, names, atoms) -> str:
