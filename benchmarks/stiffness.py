@@ -10,6 +10,8 @@ Run ``python benchmarks/stiffness.py``.
 2. Accuracy sweep (quoted as a pass rate): 300 levers over the real ranges (k 0.05-50 N/m,
    f1 10-500 kHz, k1/k 1-1e4, modes 1-3, k2 ratio 0-2), contact frequencies from the
    certified roots; pass = k1 within 1e-9 relative.
+
+Results: ``benchmarks/results/stiffness.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -21,6 +23,7 @@ from scipy.optimize import brentq
 from pfmdyn.analysis.stiffness import branch_proof, contact_stiffness
 from pfmdyn.generated.characteristic import BETA1_FREE, elastic
 from pfmdyn.roots.core import family_roots
+from recording import recorded
 
 
 def _map(n: int, f1: float, seed: int = 0) -> np.ndarray:
@@ -84,5 +87,6 @@ def sweep(n: int = 300, seed: int = 2026) -> None:
 
 
 if __name__ == "__main__":
-    speed()
-    sweep()
+    with recorded("stiffness"):
+        speed()
+        sweep()

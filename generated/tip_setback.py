@@ -33,6 +33,11 @@ def slope(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     -------
     tuple of ndarray
         per unit d1, d2 (beam-frame surface displacements), f0, q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -142,6 +147,12 @@ def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOB
         as :func:`slope`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> [f"{v:.7g}" for v in jacobian[0]]
+    ['-886.0306', '513.2703', '-5.792086', '-6.619739', '-12.7433', '2058.692', '-23608.84', '689.5561']
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -768,6 +779,11 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     ----------
     beta : array_like, real or complex, ``Re beta > 0.3`` (see module)
     k, kvv, kll, kvl, H, L, mu, gamma, rho_g : array_like, broadcast against ``beta``; ``0 < gamma <= 1``
+
+    Examples
+    --------
+    >>> f"{characteristic(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05):.8g}"
+    '2.3891198e-06'
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -814,6 +830,13 @@ def characteristic_balls(beta, m, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     For certified roots: ``beta`` a python-flint ``arb_series`` (or an exact ``fmpq_series``),
     ``m`` the namespace ``generated.characteristic.FLINT``, parameters ``arb`` or ``fmpq``.
     Every coefficient is an integer.  Real ``beta`` (no clipping of the exponentials).
+
+    >>> import flint
+    >>> from pfmdyn.generated.characteristic import FLINT
+    >>> args = (2.0, 150.0, 40.0, 3.0, 1e-05, 0.00022, 0.2, 0.9, 0.01)
+    >>> ball = characteristic_balls(flint.arb(3.3), FLINT, *map(flint.arb, args))
+    >>> bool(abs(float(ball.mid()) / characteristic(3.3, *args) - 1) < 1e-12)
+    True
     """
     a = gamma * beta
     b = (1 - gamma) * beta
@@ -858,6 +881,12 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     ``D`` is the unscaled denominator and ``S`` the scale of :func:`characteristic`; at a
     zero of ``D`` these are the partials of :func:`characteristic`, so a resonance moves
     with ``p`` as ``d beta / d p = -D_p / D_beta``.
+
+    Examples
+    --------
+    >>> value, partials = characteristic_and_jacobian(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> [f"{v:.7g}" for v in partials]
+    ['6.606121e-06', '2.221942e-06', '2.635226e-08', '2.162759e-09', '3.165604e-09', '-7.425786e-07', '7.237094e-06', '-2.252874e-07']
     """
     beta = np.asarray(beta)
     a = gamma * beta

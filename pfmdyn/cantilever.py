@@ -218,6 +218,9 @@ class Cantilever:
         """
         if contact.k1 is None:
             raise UserError("the contact needs k1 (--k1)")
+        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
+            if getattr(self, name) != null:      # refuse rather than describe another lever
+                raise UserError(f"{name} is not yet part of Cantilever.response (leave it at {null:g})")
         beta, k, k1_factor, mu_factor = self._damped(frequency, contact.contact_loss)
         kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
         with np.errstate(all="ignore"):

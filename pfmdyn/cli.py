@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:
-        print(f"pfmdyn {args.command}: error: {exc}", file=sys.stderr)
+        from .commands.flags import option_hint
+        print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # Output piped into `head` and closed early: not an error of ours or the user's.

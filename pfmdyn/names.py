@@ -50,6 +50,8 @@ QUANTITIES: tuple[Quantity, ...] = (
              500.0, 1e8, aliases=("free_resonance_hz", "f1", "f1_hz")),
     Quantity("length", "L", "m", "lever length, clamp to free end", 1e-6, 1e-2, aliases=("length_m",)),
     Quantity("width", "w", "m", "lever width", 1e-7, 1e-2, aliases=("width_m",)),
+    Quantity("thickness", "t", "m", "lever thickness (geometry input)", 1e-8, 1e-3, aliases=("thickness_m",)),
+    Quantity("density", "rho", "kg/m^3", "lever material density (geometry input)", 100.0, 3e4),
     Quantity("tip_height", "H", "m", "tip height, the lever arm of the lateral contact force", 1e-8, 1e-3,
              aliases=("tip_height_m",)),
     Quantity("tip_position", "x_tip/L", "1", "where the tip sits along the lever (1: at the free end)",

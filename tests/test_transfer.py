@@ -158,7 +158,7 @@ def test_cantilever_losses_are_the_derived_complex_modulus():
                                         dict(k=k_ * (1 + 1j / q), k1=300.0, k2=60.0, H=1e-5, L=length))
     got = c.elastic_response(f, k1=300.0, k2=60.0, H=1e-5)
     np.testing.assert_allclose(np.array(got), np.array(expected), rtol=1e-12)
-    maps = BeamMapModel(k=k_, L=length, f1=f1, H=1e-5, frequency_hz=f)
+    maps = BeamMapModel(Cantilever(k_, f1, length, tip_height=1e-5), f)
     np.testing.assert_allclose(maps.shape_functions(np.array([300.0]), np.array([q]), np.array([60.0]))[0],
                                got.vertical, rtol=1e-10)
     # The free mode's half-power width is f1/Q (to O(1/Q**2)): the loss factor is the mode's 1/Q.

@@ -102,9 +102,10 @@ class ResonanceResult:
             out[f"{prefix}_intervals_hz"] = [list(i) for i in modes.intervals_hz]
             out[f"{prefix}_complete_below_hz"] = modes.complete_below_hz if modes.hz else None
             if self.damped:
-                # An undamped mode (Q infinite) or one not found: null, never a non-finite number.
-                for key, values in (("q", modes.q), ("damped_hz", modes.damped_hz), ("peak_hz", modes.peak_hz)):
-                    out[f"{prefix}_{key}"] = [v if math.isfinite(v) else None for v in values]
+                # An undamped mode's Q is infinite: the JSON writer (pfmdyn.io.results) makes it null.
+                out[f"{prefix}_q"] = list(modes.q)
+                out[f"{prefix}_damped_hz"] = list(modes.damped_hz)
+                out[f"{prefix}_peak_hz"] = list(modes.peak_hz)
         return out
 
     def report(self) -> str:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from ..analysis.resonances import resonances
 from ..errors import UserError
+from ..io.results import write_json
 from . import flags
-from .inspect import write_json
 from .roots import positive_int
 
 __all__ = ["add_arguments", "run"]

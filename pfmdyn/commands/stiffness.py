@@ -176,7 +176,7 @@ def run(args) -> int:
     """Compute k1 (and k2), print them with the branch proof, write JSON if asked."""
     from ..analysis.stiffness import (coupled_contact_stiffness, contact_stiffness, k1_k2_from_modes, reduced_modulus,
                                       reduced_modulus_uncertainty)
-    from .inspect import write_json
+    from ..io.results import write_json
 
     if args.file and _is_contact_map(args.file):
         return _contact_map(args)
