@@ -13,7 +13,6 @@ Results: ``benchmarks/results/resonances.md``, written by each completed run.
 """
 from __future__ import annotations
 
-import math
 import sys
 import time
 from pathlib import Path
@@ -21,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from fe_beam import FEBeam  # noqa: E402
+from fe_beam import random_probe  # noqa: E402
 from pfmdyn import Cantilever, Contact  # noqa: E402
 from pfmdyn.analysis.resonances import resonances  # noqa: E402
 from recording import recorded  # noqa: E402
@@ -31,17 +30,8 @@ N_ELEMENTS = 100
 
 
 def _probe(rng):
-    k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
-    L, H = rng.uniform(100e-6, 500e-6), rng.uniform(3e-6, 20e-6)
-    k1 = k * 10 ** rng.uniform(0, 4)
-    gamma = int(rng.integers(int(0.85 * N_ELEMENTS), N_ELEMENTS + 1)) / N_ELEMENTS
-    mu, r_g, tilt = rng.uniform(0, 0.5), rng.uniform(0.5, 2.0) * H / 4, rng.uniform(0, 15)
-    fe = FEBeam(k, L, 1e5, H, k1=k1, k2=0.85 * k1, mu=mu, gamma=gamma, gyration_radius=r_g, tilt_deg=tilt,
-                n_elements=N_ELEMENTS)
-    f1 = float(fe.free_resonances(1)[0])
-    lever = Cantilever(k, f1, L, tip_height=H, tip_position=gamma, tip_mass_ratio=mu, tip_gyration_radius=r_g,
-                       tilt=tilt)
-    return lever, Contact(k1=k1, k2_over_k1=0.85), fe
+    fe, p = random_probe(rng, N_ELEMENTS, tilt_deg=(0.0, 15.0), mass_ratio=(0.0, 0.5))
+    return Cantilever(**{n: v for n, v in p.items() if n not in ("k1", "k2")}), Contact(k1=p["k1"], k2_over_k1=0.85), fe
 
 
 def main(count: int) -> None:

@@ -261,6 +261,26 @@ def random_beam(rng, hidden=(), n_elements: int = 120) -> tuple[FEBeam, dict, np
     return beam, truth, contact
 
 
+def random_probe(rng, n_elements: int = 100, tilt_deg=(5.0, 15.0), mass_ratio=(0.05, 0.5)) -> tuple[FEBeam, dict]:
+    """A random probe in contact over the real ranges, as the FE lever and the public description.
+
+    k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4, k2 = 0.85 k1, tip at a node in
+    0.85-1 L with a tip mass ratio in ``mass_ratio`` and radius of gyration H/4 times 0.5-2,
+    tilt (public sign, explicit geometry) in ``tilt_deg``.  The description uses the public
+    names (``spring_constant``, ``free_resonance`` as measured: the FE's first free mode with
+    its tip, ..., ``k1``, ``k2``).
+    """
+    k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
+    L, H = rng.uniform(100e-6, 500e-6), rng.uniform(3e-6, 20e-6)
+    k1 = k * 10 ** rng.uniform(0, 4)
+    gamma = int(rng.integers(int(0.85 * n_elements), n_elements + 1)) / n_elements
+    mu, r_g, tilt = rng.uniform(*mass_ratio), rng.uniform(0.5, 2.0) * H / 4, rng.uniform(*tilt_deg)
+    fe = FEBeam(k, L, 1e5, H, k1=k1, k2=0.85 * k1, mu=mu, gamma=gamma, gyration_radius=r_g, tilt_deg=tilt,
+                n_elements=n_elements)
+    return fe, dict(spring_constant=k, free_resonance=float(fe.free_resonances(1)[0]), length=L, tip_height=H,
+                    tip_position=gamma, tip_mass_ratio=mu, tip_gyration_radius=r_g, tilt=tilt, k1=k1, k2=0.85 * k1)
+
+
 def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrument",
                 n_elements: int = 120) -> tuple[str, dict]:
     """A random spectrum (:func:`random_beam`) with the ``hidden`` effects: CSV text and the truth.

@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg
 
 sys.path.insert(0, str(Path(__file__).parent))
-from fe_beam import FEBeam  # noqa: E402
+from fe_beam import FEBeam, random_probe  # noqa: E402
 from pfmdyn import Cantilever, Contact, cli  # noqa: E402
 from pfmdyn.analysis.resonances import resonances  # noqa: E402
 
@@ -21,19 +21,10 @@ N_ELEMENTS = 100
 
 
 def _probe(seed):
-    """A random probe over the real ranges and its FE twin (tip at a node)."""
-    rng = np.random.default_rng(seed)
-    k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
-    L, H = rng.uniform(100e-6, 500e-6), rng.uniform(3e-6, 20e-6)
-    k1 = k * 10 ** rng.uniform(0, 4)
-    gamma = int(rng.integers(int(0.85 * N_ELEMENTS), N_ELEMENTS + 1)) / N_ELEMENTS
-    mu, r_g, tilt = rng.uniform(0.05, 0.5), rng.uniform(0.5, 2.0) * H / 4, rng.uniform(5.0, 15.0)
-    fe = FEBeam(k, L, 1e5, H, k1=k1, k2=0.85 * k1, mu=mu, gamma=gamma, gyration_radius=r_g, tilt_deg=tilt,
-                n_elements=N_ELEMENTS)
-    f1 = float(fe.free_resonances(1)[0])          # what the user measures: the lever with its tip
-    lever = Cantilever(k, f1, L, tip_height=H, tip_position=gamma, tip_mass_ratio=mu, tip_gyration_radius=r_g,
-                       tilt=tilt)
-    return lever, Contact(k1=k1, k2_over_k1=0.85), fe
+    """A random probe (:func:`fe_beam.random_probe`), its contact and its FE twin."""
+    fe, p = random_probe(np.random.default_rng(seed), N_ELEMENTS)
+    lever = Cantilever(**{n: v for n, v in p.items() if n not in ("k1", "k2")})
+    return lever, Contact(k1=p["k1"], k2_over_k1=0.85), fe
 
 
 @pytest.mark.parametrize("seed", range(4))
