@@ -24,7 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "branches": ("pfmdyn.commands.branches", "resonance branches against contact stiffness (CSV + PNG)"),
     "diagram": ("pfmdyn.commands.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
     "inspect": ("pfmdyn.commands.inspect", "what pfmdyn reads from an instrument file (.ibw, .h5, .nid, sweeps)"),
-    "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (and k2) from contact resonances"),
+    "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (with k2 or the tip position) from contact resonances"),
     "map": ("pfmdyn.commands.map", "fit the beam model at every pixel of a band-excitation map (Dask, Zarr)"),
     "resonances": ("pfmdyn.commands.resonances", "certified free and contact resonances of a probe (and Q, damped and peak frequencies)"),
 }

@@ -170,9 +170,10 @@ def test_image_without_spring_constant(tmp_path, capsys):
     out = tmp_path / "k.json"
     one_line_error(capsys, ["stiffness", str(path), "--json", str(out)], "give --spring-constant")
     assert not out.exists()
-    # Given on the command line, the same file is fine (ratio 5.83 needs a longitudinal spring).
-    assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--k2-ratio", "10", "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["inputs"]["spring_constant_n_per_m"] == 2.0
+    # Given on the command line, the same file is fine (ratio 5.83 needs a lateral spring: Mindlin's by default).
+    assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--length", "2e-4", "--tip-height", "1e-5",
+                     "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["inputs"]["spring_constant"] == 2.0
 
 
 def test_usid_band_excitation_is_a_spectrum(tmp_path):

@@ -98,3 +98,25 @@ def test_shift_of_the_size_an_independent_program_reports():
     contact_shift = (_roots((*contact, rho_g)) / _roots((*contact, 0.0))) ** 2 - 1
     assert 1.5e-4 < -contact_shift[0] < 2.2e-4
     assert 6.5e-4 < -free_shift[1] < 7.5e-4
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_stiffness_model_recovers_k1_with_a_turning_tip(seed):
+    """pfmdyn stiffness's whole-lever model with the rotary inertia: k1 from the first contact mode
+    of the FE lever (J on the tip node), to 1e-5 (higher modes see k1 less: the FE's 1e-7 in
+    frequency grows there); without J it is off by more."""
+    from pfmdyn import Cantilever
+    from pfmdyn.analysis.contact_resonance import Lateral, betas, k1_at
+    p = _lever(np.random.default_rng(40 + seed))
+    beam = FEBeam(n_elements=N_ELEMENTS, **p)
+    f1 = float(beam.free_resonances(1)[0])
+    contact_hz = beam.contact_resonances(1)
+    found = {}
+    for r_g in (p["gyration_radius"], 0.0):
+        lever = Cantilever(p["k"], f1, p["L"], tip_height=p["H"], tip_position=p["gamma"], tip_mass_ratio=p["mu"],
+                           tip_gyration_radius=r_g, tilt=-math.degrees(p["alpha"]))
+        found[r_g] = [float(k1_at(betas(lever, f), mode, lever, Lateral(ratio=0.85), p["gamma"]))
+                      for mode, f in enumerate(contact_hz, 1)]
+    error = abs(found[p["gyration_radius"]][0] / p["k1"] - 1)
+    assert error < 1e-5
+    assert abs(found[0.0][0] / p["k1"] - 1) > 10 * error       # leaving J out costs more
