@@ -36,7 +36,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar, newton
 
 from ..cantilever import Cantilever, Contact
-from ..generated import damping, tip_setback
+from ..generated import damping, formulas, tip_setback
 from ..generated.characteristic import FLINT
 from ..generated.tilt_rotation import rotated
 from ..roots.certify import CertificationError, certify
@@ -212,7 +212,7 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
     beta1 = free_balls[0]
 
     def hz(ball):
-        return f1 * (ball / beta1) ** 2
+        return formulas.frequency_from_beta(ball, f1, beta1)
 
     def condition(balls, top, where):
         values = [hz(b) for b in balls]
@@ -220,7 +220,8 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         out = Modes(mids, tuple((float(v.lower()), float(v.upper())) for v in values), float(hz(top).mid()))
         if not _damped(lever, contact):
             return out
-        q, damped_hz, peak = _damped_modes(lever, where, [float((b / beta1).mid()) ** 2 for b in balls])
+        ratios = [float(formulas.frequency_from_beta(b, 1, beta1).mid()) for b in balls]      # f / f1
+        q, damped_hz, peak = _damped_modes(lever, where, ratios)
         return Modes(out.hz, out.intervals_hz, out.complete_below_hz, q, damped_hz, peak)
 
     return ResonanceResult(lever, contact, condition(free_balls, free_top, None),
@@ -234,7 +235,8 @@ def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
     beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
     k, kvv, kll, kvl, H, L, mu, gamma, rho_g = _parameters(lever, contact)
     kvv, kll, kvl = _springs(lever, contact, k1_f)
-    return tip_setback.characteristic(lever.free_root() * np.sqrt(r) * beta_f, k * k_f, kvv, kll, kvl, H, L,
+    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
+    return tip_setback.characteristic(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
                                       mu * mu_f, gamma, rho_g)
 
 
@@ -244,7 +246,8 @@ def _slope(lever: Cantilever, contact: Contact | None, r):
     beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
     k, _, _, _, H, L, mu, gamma, rho_g = _parameters(lever, contact)
     kvv, kll, kvl = _springs(lever, contact, k1_f)
-    slopes = tip_setback.slope(lever.free_root() * np.sqrt(r) * beta_f, k * k_f, kvv, kll, kvl, H, L,
+    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
+    slopes = tip_setback.slope(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
                                mu * mu_f, gamma, rho_g)
     return slopes[0] if contact is not None else slopes[3]
 
