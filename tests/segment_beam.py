@@ -25,7 +25,7 @@ def _basis(kappa, x):
     return np.array([[v * kappa**n for v in r] for n, r in enumerate(rows)], dtype=complex)
 
 
-def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=1.0,
+def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=1.0, rho_g=0.0,
                   d1=0.0, d2=0.0, f0=0.0, q0=0.0):
     """``(u'(sigma L), u(sigma L))`` of the clamped beam with the tip at ``gamma L``."""
     EI = k * L**3 / 3
@@ -38,6 +38,9 @@ def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=
         return -q0 / (EI * kappa**4) if n == 0 else 0.0
     a = gamma * L
     inertia = mu * k * beta**4 / 3
+    # the tip body's rotary inertia J = m r_g**2 resists the rotation: a couple J omega**2 u'(a)
+    # in the moment jump, as the mass's m omega**2 u(a) is in the shear jump
+    rotary = inertia * (rho_g * L) ** 2
     segments = 1 if gamma == 1 else 2
     n = 4 * segments
     M = np.zeros((n, n), complex)
@@ -50,7 +53,7 @@ def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=
         row += 1
     left = _basis(kappa, a)
     # Tip state from the left segment: w = (u, H u'); spring forces F = -K (w - d).
-    # Moment jump EI (u''- - u''+) = H F_l; shear jump EI (u'''- - u'''+) = -(F_v + f0 + m w**2 u).
+    # Moment jump EI (u''- - u''+) = H F_l + J omega**2 u'; shear jump EI (u'''- - u'''+) = -(F_v + f0 + m w**2 u).
     # Written as linear rows in the left constants (and the right ones), constants on the rhs.
     u_row, du_row = left[0], left[1]
     u_p, du_p = particular(a, 0), particular(a, 1)
@@ -60,10 +63,11 @@ def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=
     Fl_const = -(kvl * (u_p - d1) + kll * (H * du_p - d2))
     right = _basis(kappa, a) if segments == 2 else None
     # moment
-    M[row, :4] = EI * left[2] - H * Fl_row
+    M[row, :4] = EI * left[2] - H * Fl_row - rotary * du_row
     if right is not None:
         M[row, 4:] = -EI * right[2]
-    rhs[row] = H * Fl_const - EI * particular(a, 2) + (EI * particular(a, 2) if right is not None else 0)
+    rhs[row] = (H * Fl_const + rotary * du_p - EI * particular(a, 2)
+                + (EI * particular(a, 2) if right is not None else 0))
     row += 1
     # shear
     M[row, :4] = EI * left[3] + Fv_row + inertia * u_row

@@ -34,7 +34,7 @@ def _random_lever(rng):
     k1 = k * 10 ** rng.uniform(0, 4)
     return dict(k=k, L=rng.uniform(100e-6, 500e-6), H=rng.uniform(5e-6, 20e-6), kvv=k1,
                 kll=k1 * rng.uniform(0, 1.2), kvl=k1 * rng.uniform(-0.2, 0.2), mu=rng.uniform(0, 0.3),
-                gamma=float(rng.choice([1.0, rng.uniform(0.85, 1.0)])))
+                gamma=float(rng.choice([1.0, rng.uniform(0.85, 1.0)])), rho_g=rng.uniform(0, 0.05))
 
 
 @pytest.mark.parametrize("seed", range(6))

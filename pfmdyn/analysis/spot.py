@@ -58,11 +58,10 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height (--tip-height)")
-    if lever.tip_gyration_radius != 0.0:   # refuse rather than describe another lever
-        raise UserError("tip_gyration_radius is not yet part of the detection model (leave it at 0)")
     kvv, kll, kvl = tilt_rotation.rotated(contact.k1, contact.k2_of(contact.k1), lever.alpha)
     return {"k": lever.spring_constant, "kvv": float(kvv), "kll": float(kll), "kvl": float(kvl),
-            "H": lever.tip_height, "L": lever.length, "mu": lever.tip_mass_ratio, "gamma": lever.tip_position}
+            "H": lever.tip_height, "L": lever.length, "mu": lever.tip_mass_ratio, "gamma": lever.tip_position,
+            "rho_g": lever.rho_g}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:
@@ -70,7 +69,7 @@ def dimensionless(lever: Cantilever, contact: Contact) -> dict:
     p = parameters(lever, contact)
     k, H, L = p["k"], p["H"], p["L"]
     return {"kvv_over_k": p["kvv"] / k, "kll_ratio": p["kll"] * H**2 / (k * L**2),
-            "kvl_ratio": p["kvl"] * H / (k * L), "mu": p["mu"], "gamma": p["gamma"]}
+            "kvl_ratio": p["kvl"] * H / (k * L), "mu": p["mu"], "gamma": p["gamma"], "rho_g": p["rho_g"]}
 
 
 def lossless_beta(lever: Cantilever, frequency) -> np.ndarray:
