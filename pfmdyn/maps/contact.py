@@ -13,7 +13,8 @@ import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
-from .readers import open_root, require
+from .readers import open_root
+from .store import open_group, write_array
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
 
@@ -51,10 +52,10 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
                                contact_uncertainty_hz=float(attrs.get("contact_uncertainty_hz", 0.0)),
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
-    group = require("zarr").open_group(out, mode="w")
+    group = open_group(out, "w")
     for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
-        arr = group.create_dataset(name, data=np.broadcast_to(value, fc.shape).astype(float))
-        arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
+        write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
+                    description=f"{name} from the contact resonance", dims=["y", "x"])
     k1 = np.asarray(result.k1_n_per_m)
     return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": float(np.nanmedian(k1)), "out": out}
 

@@ -22,6 +22,7 @@ from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
 from .bias import basis
 from .fit import BeamMapModel
+from .sho import SHOMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require"]
 
@@ -173,8 +174,9 @@ def _metadata(root) -> dict:
     return found
 
 
-def open_map(path: str, overrides: dict | None = None) -> MapInput:
-    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's)."""
+def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> MapInput:
+    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's);
+    ``sho``: for the SHO fit (:class:`pfmdyn.maps.sho.SHOMapModel`), which needs no lever metadata."""
     if not os.path.exists(path):
         raise UserError(f"{path}: no such file or directory")
     with open_root(path) as root:
@@ -201,15 +203,14 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
             f, bias, grid, columns = _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
+    if sho:
+        _check_axes(path, f, bias)
+        return MapInput(path, SHOMapModel(frequency_hz=f, bias_v=bias), tuple(grid), usid or "response",
+                        "usid" if usid else "plain", columns)
     missing = [key for key in METADATA if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-    if not np.all(np.isfinite(f)) or np.any(f <= 0):
-        raise UserError(f"{path}: frequency_hz must be positive and finite")
-    if np.any(np.diff(f) == 0):
-        raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
-    if bias is not None:
-        basis(bias)                                  # one-line error unless two distinct finite biases
+    _check_axes(path, f, bias)
     meta = {short: float(attrs[key]) for key, short in METADATA.items()}
     tip = {short: float(attrs[key]) for key, short in TIP.items() if key in attrs}
     if not 0.5 <= tip.get("tip_position", 1.0) <= 1.0 or not 0.0 <= tip.get("tip_mass", 0.0) < 10.0:
@@ -217,6 +218,15 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
                         f"[0, 10), got {tip}")
     return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
+
+
+def _check_axes(path, f, bias):
+    if not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise UserError(f"{path}: frequency_hz must be positive and finite")
+    if np.any(np.diff(f) == 0):
+        raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
+    if bias is not None:
+        basis(bias)                                  # one-line error unless two distinct finite biases
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:
