@@ -118,7 +118,7 @@ def run(args) -> int:
              f"$f_1$ = {lever.resonance_frequency / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
              f"H = {args.tip_height:g} µm, $d_{{eff}}$ = {args.d_eff:g} pm/V, "
              f"$F_{{loc}}$ = {args.local_force:g} nN/V, Q = {args.quality_factor:g}")
-    plot_diagram(response, args.kind, args.out, title=title, log_frequency=args.log_frequency)
+    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")
     if args.csv is not None:
         _write_csv(args.csv, response)
