@@ -189,9 +189,15 @@ def test_beam_fit_in_the_same_layout(usid, tmp_path):
     np.testing.assert_array_equal(open_result(tmp_path / "o")["k1"].values.ravel(), fit["k1 [N/m]"][:, 0])
 
 
-def test_usid_inplace_needs_usid_input(tmp_path, capsys):
+def test_usid_inplace_needs_usid_input_and_the_copy_never_replaces_the_input(usid, tmp_path, capsys):
     path = tmp_path / "plain.h5"
     with h5py.File(path, "w") as h:
         h["response"], h["frequency_hz"] = np.ones((2, 2, 4), complex), np.arange(1.0, 5.0)
     assert main(["map", str(path), "--model", "sho", "--out", str(tmp_path / "o"), "--usid-inplace"]) == 2
     assert "--usid-inplace needs a USID input" in capsys.readouterr().err
+    f = np.linspace(290e3, 310e3, 16)
+    path = write_be(usid, tmp_path / "be.h5", np.broadcast_to(bglib_sho(f, 1e-3, 0.0, 3e5, 50.0), (NY, NX, 16)), f)
+    before = path.read_bytes()
+    assert main(["map", str(path), "--model", "sho", "--out", str(tmp_path), "--no-progress"]) == 2
+    assert "--out is the input's folder" in capsys.readouterr().err
+    assert path.read_bytes() == before and not (tmp_path / "maps.zarr").exists()

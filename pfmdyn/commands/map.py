@@ -126,6 +126,10 @@ def run(args) -> int:
     source = open_map(args.data, overrides, sho=sho)
     if args.usid_inplace and source.layout != "usid":
         raise UserError(f"{args.data}: --usid-inplace needs a USID input (this file has the plain layout)")
+    copy = os.path.join(args.out, os.path.basename(args.data))
+    if source.layout == "usid" and not args.usid_inplace and os.path.exists(copy) and os.path.samefile(copy, args.data):
+        raise UserError(f"{args.data}: --out is the input's folder, where the copy with the fit would replace the "
+                        "input; choose another --out, or --usid-inplace to write into the input")
     if args.surface_potential is not None and not math.isfinite(args.surface_potential):
         raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
     n_bands = len(source.model.bands)
@@ -158,7 +162,7 @@ def run(args) -> int:
     written = ""
     if source.layout == "usid":
         from ..maps.usid import write_usid
-        target = args.data if args.usid_inplace else os.path.join(args.out, os.path.basename(args.data))
+        target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     explained = (f"explained {100 * s['explained_fraction']:.1f} %, median gap {s['median_gap']:.3g}"
                  + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))

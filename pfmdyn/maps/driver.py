@@ -22,7 +22,7 @@ from ..errors import UserError
 from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
-from .sho import SHOMapModel, band_centres, fit_sho_block
+from .sho import band_centres, fit_sho_block, is_sho
 from .store import create_map, open_group
 
 __all__ = ["MapInput", "check_scheduler", "open_map", "run_map"]
@@ -43,7 +43,7 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
     response = read_block(source, ys, xs)
     if not np.all(np.isfinite(response)):
         raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
-    fit = fit_sho_block if isinstance(source.model, SHOMapModel) else fit_block
+    fit = fit_sho_block if is_sho(source.model) else fit_block
     result = fit(source.model, response, **options)
     group = open_group(out, mode="r+")
     for name in source.model.outputs:
@@ -57,7 +57,7 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     ny, nx = source.shape
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     model = source.model
-    sho = isinstance(model, SHOMapModel)
+    sho = is_sho(model)
     settings = {"model": "sho", "band_hz": band_centres(model)} if sho else {"model": model_name(model.mechanisms), "tip_position": model.tip_position,
                                              "tip_mass": model.tip_mass, "surface_potential_v": surface_potential_v}
     steps, dims = (model.step_shape, model.dims) if sho else ((), ("y", "x"))

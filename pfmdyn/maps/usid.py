@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import UserError
 from .readers import MapInput, require
-from .sho import FIELDS, SHOMapModel, band_centres
+from .sho import FIELDS, band_centres, is_sho
 from .store import open_group
 
 __all__ = ["write_usid"]
@@ -51,7 +51,7 @@ def write_usid(source: MapInput, maps: str, target: str) -> str:
     if os.path.abspath(target) != os.path.abspath(source.path) and not os.path.exists(target):
         shutil.copyfile(source.path, target)
     group = open_group(maps, "r")
-    sho = isinstance(source.model, SHOMapModel)
+    sho = is_sho(source.model)
     done = _completed(np.asarray(group["done"][...]), source.shape)
     try:
         with h5py.File(target, "r+") as h5:
