@@ -266,7 +266,10 @@ def main():
         *[s + "\n" for s in sections],
         "f and Q right: frequency within 2e-4 and Q within 3 % of the least-squares SHO of the noise-free "
         "spectrum (first band). k1 for the SHO tools: their first-band frequency through pfmdyn stiffness "
-        "(k2 = 0), today's BE route; for the beam fit: its own k1.", ""])
+        "(k2 = 0), today's BE route; for the beam fit: its own k1. With two bands the lever has k2 = 0.5 k1, "
+        "which that route cannot see; BGlib and sidpy fit one SHO over both bands.",
+        "Rates are per core on a machine shared with other jobs: compare the ratios; each pfmdyn row includes "
+        "its run's set-up (Dask, Zarr output).", ""])
     RESULTS.write_text(text)
     print(f"wrote {RESULTS}")
 
