@@ -11,6 +11,8 @@ Prints, in one run:
    product.
 
 Run: ``python benchmarks/codegen.py``.
+
+Results: ``benchmarks/results/codegen.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import time
 import warnings
 
 import numpy as np
+from recording import recorded
 
 
 def best_of(fn, repeat=5) -> float:
@@ -55,7 +58,7 @@ def main() -> None:
     print(f"  sympy.lambdify     {t_naive * 1e3:8.1f} ms")
     print(f"  speed-up           {t_naive / t_gen:8.2f} x  (target >= 2)")
 
-    cantilever = pfmdyn.Cantilever(spring_constant=2.0, resonance_frequency=7e4, length=1.5e-4,
+    cantilever = pfmdyn.Cantilever(spring_constant=2.0, free_resonance=7e4, length=1.5e-4,
                                    quality_factor=150.0)
     freqs = np.linspace(1e4, 2e6, 2000)
     bias = np.linspace(-10.0, 10.0, 2000)
@@ -73,4 +76,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("codegen"):
+        main()

@@ -15,6 +15,8 @@ on a busy shared machine one and two processes get the same CPU and (c)/(b) stay
 2 cores; a 1024 x 1024 contact-frequency map to k1 in <= 2 s.  Memory: benchmarks/map_memory.py.
 
     python benchmarks/map.py [--size 128] [--sample 64] [--repeat 2]
+
+Results: ``benchmarks/results/map.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -31,7 +33,9 @@ import scipy.optimize
 from threadpoolctl import threadpool_limits
 
 from pfmdyn.maps.driver import open_map, run_map
+from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel, fit_block
+from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 
@@ -39,7 +43,7 @@ K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 def synthetic(n, n_freq, rng):
     """A map of spectra with k1 in 150-1500 N/m and Q = 60 (from the model itself: speed only)."""
     f = np.linspace(2.2e5, 4.2e5, n_freq)
-    model = BeamMapModel(K, L, F1, H, f)
+    model = BeamMapModel(Cantilever(K, F1, L, tip_height=H), f)
     k1 = rng.uniform(150, 1500, n * n)
     y = model.shape_functions(k1, np.full(k1.size, 60.0)) * 1e-3
     y += 1e-3 * 0.01 * np.abs(y).max() / 1e-3 * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
@@ -127,4 +131,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("map"):
+        main()

@@ -8,6 +8,8 @@ size (a control shows that limit refuses the whole map at once), and prints each
 RSS against the data size.
 
     python benchmarks/map_memory.py [--mib 256] [--n-freq 256]
+
+Results: ``benchmarks/results/map_memory.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -22,7 +24,9 @@ import time
 import numpy as np
 import zarr
 
+from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel
+from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 BLOCK = 16
@@ -62,7 +66,7 @@ except MemoryError:
 def write_map(path, ny, nx, n_freq, rng):
     """Synthetic spectra (k1 150-1500 N/m, Q 60, 1 % noise) written one row of blocks at a time."""
     f = np.linspace(2.2e5, 4.2e5, n_freq)
-    model = BeamMapModel(K, L, F1, H, f)
+    model = BeamMapModel(Cantilever(K, F1, L, tip_height=H), f)
     group = zarr.open_group(path, mode="w")
     response = group.create_dataset("response", shape=(ny, nx, n_freq), chunks=(BLOCK, BLOCK, n_freq),
                                     dtype="c16", compressor=None)
@@ -123,4 +127,6 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with recorded("map_memory"):
+        status = main()
+    sys.exit(status)

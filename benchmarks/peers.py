@@ -167,10 +167,10 @@ def run_sidpy(y, f, side):
     return elapsed, params
 
 
-def run_pfmdyn(path, out, sho):
+def run_pfmdyn(path, out, sho, free):
     from pfmdyn.maps import open_result
     from pfmdyn.maps.driver import open_map, run_map
-    overrides = {"spring_constant_n_per_m": K, "length_m": L, "tip_height_m": H, "free_resonance_hz": F1}
+    overrides = {"spring_constant": K, "length": L, "tip_height": H, "free_resonance": free}
     source = open_map(str(path), overrides, sho=sho)
     start = time.perf_counter()
     run_map(source, str(out), block=32, scheduler="sync")
@@ -210,10 +210,10 @@ def bench(name, two_bands, args, peers, tmp):
         elapsed, params = run_sidpy(y, f, args.side)
         rows.append(("sidpy SidpyFitterRefactor", n / elapsed, *sho_scores(params[:, 1], params[:, 2], best, k1_true,
                                                                             free)))
-    elapsed, result = run_pfmdyn(path, tmp / f"{name}_sho", sho=True)
+    elapsed, result = run_pfmdyn(path, tmp / f"{name}_sho", True, free)
     f0, q = (result[v].values.reshape(n, -1)[:, 0] for v in ("resonance_frequency", "quality_factor"))
     rows.append(("pfmdyn map --model sho", n / elapsed, *sho_scores(f0, q, best, k1_true, free)))
-    elapsed, result = run_pfmdyn(path, tmp / f"{name}_beam", sho=False)
+    elapsed, result = run_pfmdyn(path, tmp / f"{name}_beam", False, free)
     rows.append(("pfmdyn map (beam, elastic)", n / elapsed, None, *k1_scores(result["k1"].values.ravel(), k1_true)))
     return rows
 

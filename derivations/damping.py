@@ -27,8 +27,8 @@ the substitution is::
     beta**4 = beta0**4 (1 - i g / r) / (1 + i inv_q),   k -> k (1 + i inv_q),
     k1 -> k1 (1 + i x r),   mu -> mu / (1 - i g / r)
 
-:func:`render` writes it to ``generated/damping.py`` with its derivatives with respect
-to ``inv_q``, ``g``, ``x`` (for the least-squares Jacobian).
+``pfmdyn codegen`` writes it to ``generated/damping.py`` with its derivatives with respect
+to ``inv_q``, ``g``, ``x`` (for the least-squares Jacobian; :mod:`derivations.codegen.effects`).
 """
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ import sympy as sp
 from .beam import EI, L, k, k1, q0, x as coordinate
 from .tip_mass import mu
 
-__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width", "render"]
+__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width"]
 
 omega, omega1, rho_s, c, eta, Q = sp.symbols("omega omega1 rho_S c eta Q", positive=True)
 r, g, xc, inv_q, beta0 = sp.symbols("r g x inv_q beta0", positive=True)
@@ -95,50 +95,3 @@ def half_power_width(mechanism: str) -> sp.Expr:
     factor = substitution()["beta4"].subs({p: 0 for p in MECHANISMS.values() if p is not param}) / beta0**4
     delta = -sp.im(sp.series(factor, param, 0, 2).removeO())
     return sp.simplify(r * delta)
-
-
-def render(header, digest) -> str:
-    """Source of ``generated/damping.py``: the substitution factors and their derivatives.
-
-    ``header(source, digest)`` and ``digest(exprs)`` are the code generator's (the file is
-    headed and hashed like every generated file).
-    """
-    s = substitution()
-    outputs = {"beta_factor": (s["beta4"] / beta0**4) ** sp.Rational(1, 4), "k_factor": s["k"] / k,
-               "k1_factor": s["k1"] / k1, "mu_factor": s["mu"] / mu}
-    params = (inv_q, g, xc)
-    printer = sp.printing.numpy.NumPyPrinter({"fully_qualified_modules": True})
-
-    def code(e):
-        return printer.doprint(sp.simplify(e)).replace("numpy.", "np.")
-
-    values = ", ".join(code(e) for e in outputs.values())
-    derivs = ", ".join("(" + ", ".join(code(e.diff(p)) for p in params) + ")" for e in outputs.values())
-    return header("derivations/damping.py: substitution()", digest(list(outputs.values()))) + f'''"""Damping as a substitution into undamped solutions (derivations/damping.py).
-
-Internal friction (complex modulus), viscous drag (force c u_t per length) and a contact
-dashpot (eta parallel to k1) turn the undamped solution into the damped one at
-``beta = beta0 * beta_factor``, ``k -> k * k_factor``, ``k1 -> k1 * k1_factor``,
-``mu -> mu * mu_factor``, where ``r = f / f1`` and the parameters are ``inv_q`` (1/Q of the
-modulus), ``g`` (1/Q of free mode 1 under air damping alone) and ``x`` (the contact's loss
-tangent at f1).  All three at 0 give factors of exactly 1.
-"""
-import numpy as np
-
-__all__ = ['PARAMETERS', 'OUTPUTS', 'factors', 'd_factors']
-
-PARAMETERS = ('inv_q', 'g', 'x')
-OUTPUTS = {tuple(outputs)!r}
-
-
-def factors(r, inv_q, g, x):
-    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast)."""
-    r = np.asarray(r, dtype=float)
-    return ({values})
-
-
-def d_factors(r, inv_q, g, x):
-    """Derivatives of each factor with respect to (inv_q, g, x): a tuple of 3-tuples."""
-    r = np.asarray(r, dtype=float)
-    return ({derivs})
-'''

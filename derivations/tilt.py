@@ -30,7 +30,7 @@ import sympy as sp
 from .beam import EI, H, TipProblem, TipSolution, d1, d2, f0, k1, k2, q0, solve_tip_problem
 
 __all__ = ["alpha", "kvv", "kll", "kvl", "rotated", "tip_conditions", "problem", "solve",
-           "DRIVES", "render_rotation"]
+           "DRIVES"]
 
 alpha = sp.Symbol("alpha", real=True)
 kvv, kll = sp.symbols("kvv kll", positive=True)
@@ -79,27 +79,3 @@ def solve() -> TipSolution:
     True
     """
     return solve_tip_problem(problem)
-
-
-def render_rotation(header, digest) -> str:
-    """Source of ``generated/tilt_rotation.py``: :func:`rotated` as NumPy code.
-
-    ``header(source, digest)`` and ``digest(exprs)`` are the code generator's.
-    """
-    r = rotated()
-    printer = sp.printing.numpy.NumPyPrinter({"fully_qualified_modules": True})
-    body = ", ".join(printer.doprint(r[s]).replace("numpy.", "np.") for s in (kvv, kll, kvl))
-    return header("derivations/tilt.py: rotated()", digest([r[s] for s in (kvv, kll, kvl)])) + f'''"""The contact spring tensor in beam axes: ``R diag(k1, k2) R^T`` (derivations/tilt.py).
-
-``k1`` along the surface normal, ``k2`` along the surface in the plane of the beam, the
-beam inclined by ``alpha``.  ``k1`` may be complex (a contact dashpot).
-"""
-import numpy as np
-
-__all__ = ['rotated']
-
-
-def rotated(k1, k2, alpha):
-    """``(kvv, kll, kvl)`` for springs ``k1``, ``k2`` and tilt ``alpha`` (rad)."""
-    return ({body})
-'''

@@ -33,6 +33,11 @@ def slope(beta, k, kvv, kll, kvl, H, L, mu, gamma):
     -------
     tuple of ndarray
         per unit d1, d2 (beam-frame surface displacements), f0, q0
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in slope(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9)]
+    ['7329.034', '5298.034', '66.48604', '-0.01598267']
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -128,6 +133,12 @@ def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, wrt=JACOBIAN_PAR
         as :func:`slope`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9)
+    >>> [f"{v:.7g}" for v in jacobian[0]]
+    ['-912.7894', '511.1507', '-5.770172', '-6.588637', '-12.69059', '1881.672', '-23571.42']
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -636,6 +647,11 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma):
     ----------
     beta : array_like, real or complex, ``Re beta > 0.3`` (see module)
     k, kvv, kll, kvl, H, L, mu, gamma : array_like, broadcast against ``beta``; ``0 < gamma <= 1``
+
+    Examples
+    --------
+    >>> f"{characteristic(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9):.8g}"
+    '2.394752e-06'
     """
     beta = np.asarray(beta)
     a = gamma * beta
@@ -678,6 +694,12 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma):
     ``D`` is the unscaled denominator and ``S`` the scale of :func:`characteristic`; at a
     zero of ``D`` these are the partials of :func:`characteristic`, so a resonance moves
     with ``p`` as ``d beta / d p = -D_p / D_beta``.
+
+    Examples
+    --------
+    >>> value, partials = characteristic_and_jacobian(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9)
+    >>> [f"{v:.7g}" for v in partials]
+    ['6.631211e-06', '2.22748e-06', '2.641165e-08', '2.162759e-09', '3.165604e-09', '-6.878034e-07', '7.259323e-06']
     """
     beta = np.asarray(beta)
     a = gamma * beta

@@ -1,68 +1,115 @@
-"""Physical-unit layer: a rectangular cantilever described in SI units, responses vs frequency in Hz.
+"""The one description of the probe: lever, tip, detection point, damping (SI), and the contact.
+
+:class:`Cantilever` is what every command, reader and report means by "the lever": spring
+constant, first free resonance and length, with optionally the tip's height, position, mass and
+rotary inertia, the tilt, the laser spot and the losses.  :class:`Contact` is the tip-sample
+contact: ``k1``, and ``k2`` or a policy tying it to ``k1``.  Names, units and plausible values
+are those of :mod:`pfmdyn.names` (one name from file key to flag to JSON key).
 
 The dimensionless frequency of the derivations is ``beta`` with ``beta**4 = omega**2 rho S
-L**4 / EI``.  For a given cantilever it follows from the first free resonance ``f1``:
-``beta = BETA1_FREE * sqrt(f / f1)``, ``BETA1_FREE = 1.8751040687...`` (the first root of
-``1 + cos(beta) cosh(beta)``, stored in ``generated/characteristic.py``).  Losses are the
-internal friction derived in ``derivations/damping.py`` (a complex modulus ``E (1 + i/Q)``),
-applied by its generated substitution (``generated/damping.py``): ``beta**4 -> beta**4 /
-(1 + i/Q)`` and ``k -> k (1 + i/Q)``, the model the discrepancy workflow and the maps fit.
-Responses are complex.
+L**4 / EI``.  For a given cantilever it follows from the measured first free resonance ``f1``:
+``beta = beta_1 sqrt(f / f1)``, ``beta_1`` the first free root of the lever *with its tip*
+(``1.8751040687...``, the root of ``1 + cos(beta) cosh(beta)``, for a massless tip; smaller for
+a heavy tip).  Losses are the damping substitution of ``derivations/damping.py``
+(``generated/damping.py``): internal friction ``E (1 + i/Q)`` and viscous drag ``g``; the contact
+dashpot belongs to :class:`Contact`.  Responses are complex.
 
-The per-family methods (``elastic_response``, ``free_response``, ...) are made from the
-family registry (``derivations/families.py``, field ``method``): each evaluates the family's
-generated transfer function with this cantilever's ``beta``, ``k`` and ``L``.
+:meth:`Cantilever.response` evaluates the composed model (``derivations/tip_setback.py``: tip
+set back, tip mass, tilted springs, every damping mechanism) and serves every probe.  The
+per-family methods (``elastic_response``, ``free_response``, ...) are made from the family
+registry (``derivations/families.py``, field ``method``): each evaluates the paper's family,
+whose tip sits massless at the free end of an untilted lever.
 """
 from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from functools import lru_cache
 
 import numpy as np
 
 from . import transfer
-from .generated import damping, families, formulas
+from .errors import UserError
+from .generated import damping, families, formulas, tip_setback
 from .generated.characteristic import BETA1_FREE
+from .generated.tilt_rotation import rotated
+from .names import LEVER, checked
+from .roots.bracket import refine
 
-__all__ = ["Cantilever", "BETA1_FREE"]
+__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON"]
+
+DEFAULT_POISSON = 0.3
+"""Poisson's ratio of the Mindlin tie ``k2 = c k1`` when one contact mode must fix both springs
+and the user named no policy (a typical oxide or polymer sample)."""
 
 
 @dataclass(frozen=True)
 class Cantilever:
-    """An Euler-Bernoulli cantilever: spring constant (N/m), first free resonance (Hz), length (m).
+    """An Euler-Bernoulli cantilever with its tip, in SI units (names: :mod:`pfmdyn.names`).
 
     Parameters
     ----------
     spring_constant : float
         ``k = 3 EI / L**3`` in N/m.
-    resonance_frequency : float
-        First free flexural resonance ``f1`` in Hz.
+    free_resonance : float
+        First free flexural resonance ``f1`` in Hz, as measured (the lever with its tip).
     length : float
         ``L`` in m.
     quality_factor : float
         ``Q`` of the complex modulus ``E (1 + i/Q)`` (``inf``: lossless).
+    tip_height : float, optional
+        ``H`` in m: the lever arm of the lateral contact force (needed with ``k2`` or a tilt).
+    width : float, optional
+        ``w`` in m (geometry only; no resonance depends on it).
+    tip_position : float
+        ``x_tip / L``: 1 at the free end.
+    tip_mass_ratio : float
+        Tip mass over the lever's mass.
+    tip_gyration_radius : float
+        Radius of gyration ``r_g`` of the tip (m): rotary inertia ``J = m_tip r_g**2``.
+    tilt : float
+        Inclination in degrees, positive when the free end is nearer the sample than the clamp.
+    spot_position : float
+        ``x_s / L`` of the detection (laser) spot: 1 at the free end.
+    viscous_loss : float
+        Viscous drag ``g = c / (rho S omega1)`` (1/Q of free mode 1 under drag alone).
 
     Examples
     --------
     >>> c = Cantilever.from_geometry(length=225e-6, width=40e-6, thickness=3e-6,
     ...                              youngs_modulus=169e9, density=2330.0)
-    >>> round(c.spring_constant, 3), round(c.resonance_frequency / 1e3, 2)   # N/m, kHz
+    >>> round(c.spring_constant, 3), round(c.free_resonance / 1e3, 2)   # N/m, kHz
     (4.006, 81.53)
-    >>> round(float(c.beta(c.resonance_frequency).real), 10)
+    >>> round(float(c.beta(c.free_resonance).real), 10)
     1.8751040687
+    >>> Cantilever(2.0, 7e4, 2e-4, tip_mass_ratio=0.2).free_root() < BETA1_FREE   # a heavy tip
+    True
     """
 
     spring_constant: float
-    resonance_frequency: float
+    free_resonance: float
     length: float
     quality_factor: float = math.inf
+    tip_height: float | None = None
+    width: float | None = None
+    tip_position: float = 1.0
+    tip_mass_ratio: float = 0.0
+    tip_gyration_radius: float = 0.0
+    tilt: float = 0.0
+    spot_position: float = 1.0
+    viscous_loss: float = 0.0
 
     def __post_init__(self):
-        for name in ("spring_constant", "resonance_frequency", "length", "quality_factor"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and value > 0) or math.isnan(value):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None and f.name in ("tip_height", "width"):
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+                raise UserError(f"{f.name} must be a number, got {value!r}")
+            if f.name == "quality_factor" and value == math.inf:
+                continue
+            checked(f.name, value)
 
     @classmethod
     def from_geometry(cls, *, length, width, thickness, youngs_modulus, density,
@@ -79,13 +126,61 @@ class Cantilever:
         k = formulas.spring_constant_from_geometry(youngs_modulus, width, thickness, length)
         f1 = formulas.free_resonance_from_geometry(youngs_modulus, width, thickness, length,
                                                    density, BETA1_FREE)
-        return cls(float(k), float(f1), length, quality_factor)
+        return cls(float(k), float(f1), length, quality_factor, width=width)
+
+    @classmethod
+    def from_values(cls, values: dict) -> "Cantilever":
+        """A cantilever from a mapping of names (:data:`pfmdyn.names.LEVER`, ``quality_factor``,
+        ``viscous_loss``) to SI values; other keys are ignored.
+
+        >>> Cantilever.from_values({"spring_constant": 2, "free_resonance": 7e4, "length": 2e-4,
+        ...                         "k1": 100}).tip_position
+        1.0
+        """
+        own = {f.name for f in fields(cls)}
+        missing = [n for n in ("spring_constant", "free_resonance", "length") if values.get(n) is None]
+        if missing:
+            raise UserError("the lever needs " + ", ".join(missing))
+        return cls(**{k: v for k, v in values.items() if k in own and v is not None})
+
+    def to_dict(self) -> dict:
+        """The description as names -> SI values (``None``: not known).
+
+        >>> sorted(Cantilever(2.0, 7e4, 2e-4).to_dict())[:3]
+        ['free_resonance', 'length', 'quality_factor']
+        """
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @property
+    def alpha(self) -> float:
+        """The derivations' tilt angle (rad, ``derivations/tilt.py``): positive there when the
+        free end is *farther* from the sample, so ``alpha = -radians(tilt)``."""
+        return -math.radians(self.tilt)
+
+    @property
+    def is_paper_probe(self) -> bool:
+        """True when the paper's families apply: massless tip at the free end, no tilt, spot at L."""
+        return (self.tip_position == 1.0 and self.tip_mass_ratio == 0.0 and self.tilt == 0.0
+                and self.spot_position == 1.0 and self.tip_gyration_radius == 0.0)
+
+    def _tip_height(self, contact: "Contact | None" = None) -> float:
+        lateral = self.tilt != 0.0 or (contact is not None and contact.k2_of(contact.k1 or 0.0) != 0.0)
+        if self.tip_height is None:
+            if lateral:
+                raise UserError("tip_height is needed with k2 or a tilt (--tip-height)")
+            return 0.0
+        return self.tip_height
+
+    def free_root(self) -> float:
+        """``beta_1``: the first free root of this lever with its tip (1.8751... when massless)."""
+        return _free_root(self.spring_constant, self.tip_height or 0.0, self.length,
+                          self.tip_mass_ratio, self.tip_position)
 
     def beta(self, frequency) -> np.ndarray:
         """Dimensionless frequency ``beta`` (complex) for frequencies in Hz (> 0).
 
-        ``beta = BETA1_FREE sqrt(f / f1) (1 + i/Q)**(-1/4)``: the internal friction's
-        substitution (``generated/damping.py``); the spring constant becomes ``k (1 + i/Q)``.
+        ``beta = beta_1 sqrt(f / f1)`` times the damping factor of the internal friction and
+        drag (``generated/damping.py``); the spring constant becomes ``k (1 + i/Q)``.
 
         >>> c = Cantilever(1.0, 1e5, 1e-4)
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
@@ -93,14 +188,138 @@ class Cantilever:
         """
         return self._damped(frequency)[0]
 
-    def _damped(self, frequency):
-        """``(beta, k)`` with the internal friction substituted (``derivations/damping.py``)."""
+    def _damped(self, frequency, contact_loss: float = 0.0):
+        """``(beta, k, k1_factor, mu_factor)`` with the damping substituted (``derivations/damping.py``)."""
         f = np.asarray(frequency, dtype=float)
         if not np.all(np.isfinite(f)) or np.any(f <= 0):
             raise ValueError("frequency must be positive and finite (Hz)")
-        r = f / self.resonance_frequency
-        beta_factor, k_factor, _, _ = damping.factors(r, 1.0 / self.quality_factor, 0.0, 0.0)
-        return BETA1_FREE * np.sqrt(r) * beta_factor, self.spring_constant * k_factor
+        r = f / self.free_resonance
+        beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
+            r, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
+        b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
+        return b1 * np.sqrt(r) * beta_factor, self.spring_constant * k_factor, k1_factor, mu_factor
+
+    def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
+        """Slope at the free end per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
+
+        Set-back, heavy, tilted tips and every damping mechanism at once
+        (``derivations/tip_setback.py``); equal to :meth:`elastic_response` for the paper's probe.
+
+        >>> c = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0, tip_height=1e-5)
+        >>> contact = Contact(k1=50.0, k2=20.0)
+        >>> r = c.response([1e5, 3e5], contact)
+        >>> bool(np.allclose(r.vertical, c.elastic_response([1e5, 3e5], k1=50.0, k2=20.0, H=1e-5).vertical))
+        True
+        """
+        if contact.k1 is None:
+            raise UserError("the contact needs k1 (--k1)")
+        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
+            if getattr(self, name) != null:      # refuse rather than describe another lever
+                raise UserError(f"{name} is not yet part of Cantilever.response (leave it at {null:g})")
+        beta, k, k1_factor, mu_factor = self._damped(frequency, contact.contact_loss)
+        kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
+        with np.errstate(all="ignore"):
+            slopes = tip_setback.slope(beta, k, kvv, kll, kvl, self._tip_height(contact), self.length,
+                                       self.tip_mass_ratio * mu_factor, self.tip_position)
+        return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
+
+
+@lru_cache(maxsize=4096)
+def _free_root(k, H, L, mu, gamma) -> float:
+    """First free root ``beta`` with a tip mass ``mu`` at ``gamma L`` (1.8751... at ``mu = 0``).
+
+    The characteristic of the composed model (``generated/tip_setback.py``) with no contact has
+    one root in ``(0.3, BETA1_FREE]`` (a tip mass only lowers it): bracketed on a grid, refined.
+
+    >>> round(_free_root(1.0, 1e-5, 1e-4, 0.0, 1.0), 10)
+    1.8751040687
+    """
+    if mu == 0.0:
+        return BETA1_FREE
+    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
+    grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
+    with np.errstate(all="ignore"):
+        vals = char(grid)
+    change = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) <= 0)
+    if len(change) != 1:
+        return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
+    i = change[0]
+    return float(refine(char, grid[i], grid[i + 1], vals[i], vals[i + 1], rtol=1e-14))
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The tip-sample contact: ``k1`` (N/m) and ``k2`` or a policy tying it to ``k1``.
+
+    At most one of ``k2`` (given), ``k2_over_k1`` (``k2 = X k1``) and ``poisson`` (the
+    Hertz-Mindlin ratio of a sample of that Poisson's ratio) may be given; with none, ``k2``
+    is free where the data determine it and :data:`DEFAULT_POISSON`'s Mindlin tie where they
+    cannot (:meth:`tie`).  ``contact_loss`` is the contact dashpot (``derivations/damping.py``).
+
+    >>> round(Contact(k1=100.0, poisson=0.3).k2_of(100.0), 3)
+    82.353
+    >>> Contact(k1=100.0, k2=5.0).k2_of(100.0), Contact(k1=100.0).k2_of(100.0)
+    (5.0, 0.0)
+    >>> Contact(k2=1.0, poisson=0.3)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: give one of k2, k2_over_k1 and poisson, not several
+    """
+
+    k1: float | None = None
+    k2: float | None = None
+    k2_over_k1: float | None = None
+    poisson: float | None = None
+    contact_loss: float = 0.0
+
+    def __post_init__(self):
+        for name in ("k1", "k2", "k2_over_k1", "poisson", "contact_loss"):
+            if getattr(self, name) is not None:
+                checked(name, getattr(self, name))
+        if sum(v is not None for v in (self.k2, self.k2_over_k1, self.poisson)) > 1:
+            raise UserError("give one of k2, k2_over_k1 and poisson, not several")
+
+    @property
+    def ratio(self) -> float | None:
+        """``k2 / k1`` of the stated tie (``k2_over_k1`` or Mindlin), or None."""
+        if self.k2_over_k1 is not None:
+            return float(self.k2_over_k1)
+        if self.poisson is not None:
+            return float(formulas.mindlin_k2_over_k1(self.poisson))
+        return None
+
+    def tie(self) -> float:
+        """``k2 / k1`` to use when the data cannot fix ``k2`` (one contact mode): the stated tie,
+        else Mindlin at :data:`DEFAULT_POISSON`; a given ``k2`` has no tie (NaN).
+
+        >>> round(Contact().tie(), 6), Contact(k2_over_k1=0.5).tie()
+        (0.823529, 0.5)
+        """
+        if self.k2 is not None:
+            return math.nan
+        ratio = self.ratio
+        return float(formulas.mindlin_k2_over_k1(DEFAULT_POISSON)) if ratio is None else ratio
+
+    def describe_k2(self) -> str:
+        """The k2 policy in words, for reports.
+
+        >>> Contact(poisson=0.25).describe_k2()
+        'k2 tied to k1 (Mindlin, Poisson ratio 0.25: k2 = 0.857 k1)'
+        """
+        if self.k2 is not None:
+            return f"k2 = {self.k2:g} N/m (given)"
+        if self.poisson is not None:
+            return f"k2 tied to k1 (Mindlin, Poisson ratio {self.poisson:g}: k2 = {self.ratio:.3g} k1)"
+        if self.k2_over_k1 is not None:
+            return f"k2 tied to k1 (k2 = {self.k2_over_k1:g} k1, given)"
+        return "k2 free"
+
+    def k2_of(self, k1) -> float:
+        """``k2`` at contact stiffness ``k1``: given, tied, or 0 when nothing is said."""
+        if self.k2 is not None:
+            return float(self.k2)
+        ratio = self.ratio
+        return 0.0 if ratio is None else ratio * k1
 
 
 _EXAMPLE = {"k1": 10.0, "k2": 5.0, "H": 1e-5}
@@ -122,7 +341,10 @@ def _response_method(row):
 
     def response(self, frequency, **kwargs):
         given = signature.bind(self, frequency, **kwargs).arguments
-        beta, k = self._damped(frequency)
+        if not self.is_paper_probe:
+            raise UserError(f"{row.method} is the paper's family ({row.equations}): massless tip at the free end, "
+                            "no tilt, spot at the end; use Cantilever.response for this lever")
+        beta, k = self._damped(frequency)[:2]
         values = transfer.check_parameters({p: given[p] for p in extra})
         return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
                                  given.get("output"))

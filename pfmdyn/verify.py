@@ -13,7 +13,6 @@ The sign convention of the electrostatic drives is :data:`SIGN_CONVENTION`
 """
 from __future__ import annotations
 
-import json
 import os
 import sys
 from collections import Counter
@@ -24,6 +23,7 @@ import yaml
 from .derivations.checks.core import Outcome
 from .derivations.paper.convention import SIGN_CONVENTION
 from .errors import UserError
+from .io import results
 
 RECORDED = "recorded_verdicts.yaml"
 
@@ -139,7 +139,8 @@ def to_json(verdicts) -> dict:
 
 
 def write_json(verdicts, path: Path) -> None:
-    Path(path).write_text(json.dumps(to_json(verdicts), indent=2))
+    """Write :func:`to_json` to ``path`` (:func:`pfmdyn.io.results.write_json`)."""
+    results.write_json(path, to_json(verdicts))
 
 
 # --- errata as mathematics --------------------------------------------------------------------------

@@ -16,13 +16,13 @@ K1, H, D_EFF, F_LOC, WIDTH = 1000.0, 15e-6, 5e-12, 14e-9, 24e-6
 
 def to_hz(lever, beta):
     """Invert ``beta = BETA1_FREE sqrt(f / f1)`` (Cantilever.beta without losses)."""
-    return lever.resonance_frequency * (np.asarray(beta) / BETA1_FREE) ** 2
+    return lever.free_resonance * (np.asarray(beta) / BETA1_FREE) ** 2
 
 
 def contact_resonances_hz(lever, f_max):
     """Zeros of the frictionless characteristic function (Eq. 23's N), in Hz, below f_max."""
     ratio = K1 / lever.spring_constant
-    z = np.linspace(0.5, np.sqrt(f_max / lever.resonance_frequency) * BETA1_FREE, 20000)
+    z = np.linspace(0.5, np.sqrt(f_max / lever.free_resonance) * BETA1_FREE, 20000)
     g = characteristic.frictionless(z, np, k1_over_k=ratio)
     brackets = np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]
     roots = [brentq(lambda x: characteristic.frictionless(x, np, k1_over_k=ratio), z[i], z[i + 1],
@@ -138,8 +138,9 @@ def test_validation():
 
 def test_cli_writes_png_and_csv(tmp_path):
     png, table = tmp_path / "d.png", tmp_path / "d.csv"
-    code = cli.main(["diagram", "--cantilever", "custom", "--k", "3", "--length", "225", "--width", "30",
-                     "--thickness", "3", "--kind", "rgb", "--local-force", "14", "--log-frequency",
+    code = cli.main(["diagram", "--cantilever", "custom", "--spring-constant", "3", "--length", "225e-6",
+                     "--width", "30e-6", "--thickness", "3e-6", "--kind", "rgb", "--local-force", "14e-9",
+                     "--log-frequency",
                      "--frequency-points", "30", "--bias-points", "11", "--out", str(png), "--csv", str(table)])
     assert code == 0 and png.stat().st_size > 0
     with open(table) as handle:
@@ -154,12 +155,15 @@ def test_cli_writes_png_and_csv(tmp_path):
 
 @pytest.mark.parametrize("argv, message", [
     (["--cantilever", "D"], "unknown cantilever"),
-    (["--cantilever", "custom", "--k", "-1", "--length", "200", "--width", "30", "--thickness", "2"], "--k must be positive"),
-    (["--cantilever", "custom", "--k", "1", "--length", "200", "--width", "30", "--thickness", "-2"],
-     "--thickness must be positive"),
+    (["--cantilever", "custom", "--spring-constant", "-1", "--length", "2e-4", "--width", "3e-5", "--thickness",
+      "2e-6"], "--spring-constant: spring_constant must be in"),
+    (["--cantilever", "custom", "--spring-constant", "1", "--length", "2e-4", "--width", "3e-5",
+      "--thickness=-2e-6"], "--thickness: thickness must be in"),
+    (["--cantilever", "custom", "--spring-constant", "1", "--length", "200", "--width", "3e-5", "--thickness",
+      "2e-6"], "--length: length must be in (1e-06, 0.01] m, got 200"),     # micrometres are not SI
     (["--quality-factor", "0"], "quality_factor"),
-    (["--cantilever", "custom", "--k", "1"], "needs --length --width --thickness"),
-    (["--cantilever", "B", "--k", "1"], "apply only to --cantilever custom"),
+    (["--cantilever", "custom", "--spring-constant", "1"], "needs --length --width --thickness"),
+    (["--cantilever", "B", "--spring-constant", "1"], "apply only to --cantilever custom"),
     (["--fmin", "2e6", "--fmax", "1e6"], "--fmin < --fmax"),
     (["--vmin", "1", "--vmax", "1"], "--vmin < --vmax"),
     (["--k1", "-5"], "k1"),

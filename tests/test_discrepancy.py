@@ -160,7 +160,7 @@ def test_resonances_hidden_tip_mass(tmp_path):
     report = analyse_resonances(read(path), progress=False)
     assert report["missing_effects"] == ["tip_mass"]
     assert report["gap_after"] < 1.0 < report["gap_before"]
-    assert abs(report["parameters"]["mu"]["value"] - 0.15) < 0.01
+    assert abs(report["parameters"]["tip_mass_ratio"]["value"] - 0.15) < 0.01
 
 
 def _noisy_resonances(beam, n_contact, sigma=50.0, seed=1):
@@ -182,7 +182,7 @@ def _noisy_resonances(beam, n_contact, sigma=50.0, seed=1):
     ({}, 2, False, [], ("k1", 120.0, 1.0)),
     # Set-back moves contact modes only: with 3 free + 4 contact modes tilt (also a
     # contact-only effect) cannot mimic it.
-    ({"gamma": 0.9}, 4, False, ["tip_setback"], ("gamma", 0.9, 0.002)),
+    ({"gamma": 0.9}, 4, False, ["tip_setback"], ("tip_position", 0.9, 0.002)),
     # A vertical-only start misses k2, which the contact modes call for.
     ({}, 3, True, ["lateral_stiffness"], ("k2", 100.0, 2.0)),
 ])
@@ -215,7 +215,7 @@ def test_cli_free_modes_only(tmp_path, capsys):
     for spring in ("k1", "k2"):
         assert report["parameters"][spring] == {"value": None, "stderr": None, "unit": "N/m", "determined": False,
                                                 "note": report["spring_rule"][spring]}
-    assert 0.02 < report["parameters"]["mu"]["value"] < 0.1
+    assert 0.02 < report["parameters"]["tip_mass_ratio"]["value"] < 0.1
     assert "k1 not determined" in capsys.readouterr().out and png.stat().st_size > 1000
 
 
@@ -225,7 +225,7 @@ def test_paper_resonances():
     tables = paper_tables()
     tip2 = analyse_resonances(tables["tip 2"], progress=False)
     assert tip2["missing_effects"] == ["tip_mass"] and tip2["gap_after"] < 1.0
-    assert 0.02 < tip2["parameters"]["mu"]["value"] < 0.1
+    assert 0.02 < tip2["parameters"]["tip_mass_ratio"]["value"] < 0.1
     tip1 = analyse_resonances(tables["tip 1"], progress=False)
     assert tip1["missing_effects"] == [] and tip1["unexplained"]["gap"] > 50
     best = max(tip1["steps"][-1]["candidates"], key=lambda c: c["delta_bic"])
@@ -267,12 +267,12 @@ def test_random_lever_in_instrument_order(tmp_path):
     assert sorted(report["missing_effects"]) == ["damping", "tip_setback"]
     assert report["damping_mechanisms"] == [truth["damping_mechanism"]] == ["viscous"]
     assert report["gap_after"] < 1.5 and report["unexplained"] is None
-    assert abs(report["parameters"]["gamma"]["value"] - truth["gamma"]) < 0.01
+    assert abs(report["parameters"]["tip_position"]["value"] - truth["gamma"]) < 0.01
 
 
 @pytest.mark.parametrize("seed,hidden,parameter,tolerance", [
-    (8002, "tip_mass", "mu", 0.01),       # soft long lever (k 0.05 N/m, L 382 um), stiff contact
-    (11003, "tip_setback", "gamma", 0.005),  # stiff short lever (k 10 N/m, L 173 um)
+    (8002, "tip_mass", "tip_mass_ratio", 0.01),       # soft long lever (k 0.05 N/m, L 382 um), stiff contact
+    (11003, "tip_setback", "tip_position", 0.005),  # stiff short lever (k 10 N/m, L 173 um)
 ])
 def test_undamped_random_lever_effect_found(tmp_path, seed, hidden, parameter, tolerance):
     """Undamped spectra have needle peaks: the effect is found only when the peaks are
@@ -281,6 +281,6 @@ def test_undamped_random_lever_effect_found(tmp_path, seed, hidden, parameter, t
     text, truth = random_case(seed, (hidden,))
     report = _run(tmp_path, text)
     assert report["missing_effects"] == [hidden] and report["gap_after"] < 1.5
-    expected = round(truth["gamma"] * 120) / 120 if parameter == "gamma" else truth[parameter]
+    expected = round(truth["gamma"] * 120) / 120 if parameter == "tip_position" else truth["mu"]
     assert abs(report["parameters"][parameter]["value"] - expected) < tolerance
     assert abs(report["parameters"]["k1"]["value"] / truth["k1"] - 1) < 0.05

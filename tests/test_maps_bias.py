@@ -22,6 +22,7 @@ pytest.importorskip("dask")
 sys.path.insert(0, str(Path(__file__).parent))
 
 from fe_beam import FEBeam  # noqa: E402
+from pfmdyn import Cantilever  # noqa: E402
 from pfmdyn.cli import main  # noqa: E402
 
 N = 8
@@ -61,7 +62,7 @@ def _write_map(path, lever, usid=False, q0=0.0):
     rng = np.random.default_rng(5)
     y += 0.01 * np.abs(y).max(axis=(2, 3), keepdims=True) * (rng.standard_normal(y.shape)
                                                              + 1j * rng.standard_normal(y.shape))
-    attrs = dict(spring_constant_n_per_m=k, length_m=L, tip_height_m=10e-6, free_resonance_hz=free)
+    attrs = dict(spring_constant_n_per_m=k, length_m=L, tip_height_m=10e-6, free_resonance_hz=free, k2=0.0)
     with h5py.File(path, "w") as h:
         if usid:
             _write_beps(h, y, f, attrs)
@@ -223,7 +224,8 @@ def test_closed_form_normal_matrix_matches_the_explicit_jacobian():
     from pfmdyn.maps import fit
     rng = np.random.default_rng(1)
     f = np.concatenate([np.linspace(2.5e5, 3.5e5, 30), np.linspace(9e5, 1.1e6, 30)])
-    model = fit.BeamMapModel(2.0, 225e-6, 75e3, 10e-6, f, mechanisms=("internal", "viscous", "distributed"))
+    model = fit.BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f,
+                             mechanisms=("internal", "viscous", "distributed"))
     n = 5
     p = np.column_stack([np.log(rng.uniform(200, 400, n)), np.log(rng.uniform(30, 90, n)),
                          np.log(rng.uniform(100, 300, n)), rng.uniform(0, 0.1, n)])
@@ -268,8 +270,8 @@ def test_known_tip_geometry_is_used(tmp_path, geometry):
     free = float(FEBeam(k, L, f1, 10e-6, n_elements=100, **geometry).free_resonances(1)[0])
     with h5py.File(tmp_path / "m.h5", "w") as h:
         h["response"], h["frequency_hz"] = y, f
-        h.attrs.update(spring_constant_n_per_m=k, length_m=L, tip_height_m=10e-6, free_resonance_hz=free)
-    tip = ["--tip-position", str(geometry["gamma"]), "--tip-mass", str(geometry.get("mu", 0.0))]
+        h.attrs.update(spring_constant_n_per_m=k, length_m=L, tip_height_m=10e-6, free_resonance_hz=free, k2=0.0)
+    tip = ["--tip-position", str(geometry["gamma"]), "--tip-mass-ratio", str(geometry.get("mu", 0.0))]
     z = {}
     for name, extra in (("known", tip), ("plain", [])):
         assert main(["map", str(tmp_path / "m.h5"), "--out", str(tmp_path / name), "--no-progress",
@@ -277,4 +279,6 @@ def test_known_tip_geometry_is_used(tmp_path, geometry):
         m = _maps(tmp_path / name)
         z[name] = np.abs(m["k1"].ravel() - k1) / m["k1_stderr"].ravel()
     assert np.all(z["known"] < 3), z
-    assert np.median(z["plain"]) > 10, z
+    # the plain model either misses k1 by many errors or cannot reach the spectra at all (a
+    # parameter at its bound: the pixel is unexplained, k1 not reported)
+    assert np.median(np.where(np.isnan(z["plain"]), np.inf, z["plain"])) > 10, z

@@ -1,4 +1,4 @@
-"""Frequency-bias response diagrams of vertical PFM (Section IV.2, Figs. 6 and 7) and ``pfmdyn diagram``.
+"""Frequency-bias response diagrams of vertical PFM (Section IV.2, Figs. 6 and 7).
 
 The vertical signal is the measured height ``A = (2L/3) theta`` (Section III.2) per unit
 ``V_ac`` for frictionless contact (Eq. 23, ``k2 -> 0``: vertical coupling only, which is
@@ -18,8 +18,9 @@ surface).  The capacitive force is attractive, so ``s = electrostatic_sign = -1`
 the bias enters linearly, the transfer coefficients are evaluated once per frequency and
 the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
 
-:func:`plot_diagram` draws the amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour
-(Fig. 7) maps; ``run``/``add_arguments`` are the ``pfmdyn diagram`` subcommand.
+:func:`response_map` computes the map; :func:`pfmdyn.plots.diagram.plot_diagram` draws the
+amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour (Fig. 7) maps, and
+:mod:`pfmdyn.commands.diagram` is the ``pfmdyn diagram`` subcommand.
 """
 from __future__ import annotations
 
@@ -77,7 +78,7 @@ def cantilever_from_spring_constant(*, spring_constant, length, width, thickness
     --------
     >>> c = cantilever_from_spring_constant(spring_constant=45.0, length=224e-6,
     ...                                     width=24e-6, thickness=8e-6)
-    >>> round(c.spring_constant, 6), round(c.resonance_frequency / 1e3, 1)   # N/m, kHz
+    >>> round(c.spring_constant, 6), round(c.free_resonance / 1e3, 1)   # N/m, kHz
     (45.0, 216.5)
     """
     for name, value in [("spring_constant", spring_constant), ("length", length),
@@ -95,7 +96,7 @@ def table1_cantilever(name, *, quality_factor=math.inf) -> Cantilever:
 
     Examples
     --------
-    >>> [round(table1_cantilever(n).resonance_frequency / 1e3, 1) for n in "ABC"]   # kHz
+    >>> [round(table1_cantilever(n).free_resonance / 1e3, 1) for n in "ABC"]   # kHz
     [216.5, 81.6, 28.2]
     """
     if name not in TABLE1:
@@ -314,7 +315,7 @@ def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_
     >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
     [39.883, 1.388, 0.057]
     """
-    static = [1e-6 * cantilever.resonance_frequency]
+    static = [1e-6 * cantilever.free_resonance]
     _, piezo, _, nonlocal_ = _coefficients(cantilever, static, width=width, k1=k1, H=H,
                                            d_eff=d_eff, local_force=0.0)
     with np.errstate(divide="ignore"):

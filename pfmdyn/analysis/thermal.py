@@ -14,6 +14,9 @@ Which peaks are flexural modes: the tallest peak is mode 1 (in a displacement sp
 fundamental dominates); a higher peak is mode ``n`` when its ratio to mode 1 lies within
 25 % of the free beam's ``(z_n/z_1)**2`` (certified free roots, :mod:`pfmdyn.roots.core`);
 other peaks (electrical pick-up, torsion, the stage) are left out.
+
+:func:`instrument_resonances` is the resonance table of any instrument file: the readers
+(:mod:`pfmdyn.io.instruments`) only read, the thermal tune's peaks are fitted here.
 """
 from __future__ import annotations
 
@@ -22,8 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UserError
+from ..io.discrepancy_data import ResonanceData
+from ..io.instruments import read_instrument, resonance_table
+from ..io.tables import check_resonance_rows
 
-__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks"]
+__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
@@ -136,3 +142,28 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
         out.append(ThermalPeak(mode, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
                                float(err[0]), float(err[1])))
     return out
+
+
+def instrument_resonances(path, overrides: dict | None = None):
+    """The resonance table of ``pfmdyn discrepancy`` that an instrument file implies, rows
+    sorted by (condition, mode).
+
+    A thermal tune's free modes are fitted (:func:`fit_thermal_peaks`); any other file gives
+    the resonances its instrument stored (:func:`pfmdyn.io.instruments.resonance_table`).
+    ``overrides`` (field keys, e.g. ``tip_height_m``) win over the file.
+
+    >>> instrument_resonances("scan.xyz")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: scan.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv
+    """
+    record = read_instrument(path)
+    peaks = None
+    if record.kind == "thermal spectrum":
+        freq, asd, _ = record.spectrum
+        peaks = fit_thermal_peaks(freq, asd)
+    data = resonance_table(record, {k: v for k, v in (overrides or {}).items() if v is not None}, peaks)
+    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, 1, data.quality_factor)
+    qs = None if data.quality_factor is None else data.quality_factor[order]
+    return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
+                         quality_factor=qs)

@@ -10,25 +10,24 @@ from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
 from ..errors import UserError
+from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
+from . import flags
 
 
 def add_arguments(parser) -> None:
     """Options of ``pfmdyn diagram``."""
     parser.add_argument("--cantilever", default="A", metavar="A|B|C|custom",
-                        help="Table 1 cantilever, or 'custom' with --k --length --width --thickness")
-    parser.add_argument("--k", type=float, help="custom: spring constant, N/m")
-    parser.add_argument("--length", type=float, help="custom: length, um")
-    parser.add_argument("--width", type=float, help="custom: width, um")
-    parser.add_argument("--thickness", type=float, help="custom: thickness, um")
-    parser.add_argument("--density", type=float, help="custom: density, kg/m^3 (silicon, 2330)")
+                        help="Table 1 cantilever, or 'custom' with --spring-constant --length --width --thickness "
+                             "(SI: N/m, m)")
+    flags.add_lever(parser, _CUSTOM)
     parser.add_argument("--quality-factor", type=float, default=math.inf,
                         help="Q of the loss factor 1/Q (default: lossless, as in the paper)")
     parser.add_argument("--k1", type=float, default=PAPER_K1, help="contact stiffness, N/m (1000)")
-    parser.add_argument("--tip-height", type=float, default=PAPER_TIP_HEIGHT * 1e6, help="H, um (15)")
-    parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF * 1e12, help="d_eff, pm/V (5)")
-    parser.add_argument("--local-force", type=float, default=0.0, metavar="NN_PER_V",
-                        help="F_loc, nN/V (0 as in Fig. 6; 14 or 0.7 as in Fig. 7)")
+    parser.add_argument("--tip-height", type=float, default=PAPER_TIP_HEIGHT, help=f"H, m ({PAPER_TIP_HEIGHT:g})")
+    parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF, help=f"d_eff, m/V ({PAPER_D_EFF:g})")
+    parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
+                        help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
     parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V")
     parser.add_argument("--electrostatic-sign", type=int, choices=(-1, 1), default=-1,
                         help="-1: attractive capacitive force (default, the project's convention); "
@@ -46,29 +45,28 @@ def add_arguments(parser) -> None:
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
 
 
+_CUSTOM = ("spring_constant", "length", "width", "thickness", "density")
+"""The custom lever's flags (:mod:`pfmdyn.names`, SI)."""
+
+
 def _cli_cantilever(args):
     """``(Cantilever, width in m)`` from the options; errors as :class:`UserError`."""
-    custom = {"k": args.k, "length": args.length, "width": args.width, "thickness": args.thickness,
-              "density": args.density}
+    custom = flags.given(args, _CUSTOM)
     if args.cantilever == "custom":
-        missing = [f"--{name}" for name, value in custom.items() if value is None and name != "density"]
+        missing = [flag(name) for name in _CUSTOM[:4] if name not in custom]
         if missing:
             raise UserError(f"--cantilever custom needs {' '.join(missing)}")
-        for name, value in custom.items():   # checked here to report the user's units
-            if value is not None and not (np.isfinite(value) and value > 0):
-                raise UserError(f"--{name} must be positive and finite, got {value:g}")
         try:
             lever = cantilever_from_spring_constant(
-                spring_constant=args.k, length=args.length * 1e-6, width=args.width * 1e-6,
-                thickness=args.thickness * 1e-6,
-                density=SILICON_DENSITY if args.density is None else args.density,
+                spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
+                thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
                 quality_factor=args.quality_factor)
         except ValueError as exc:
             raise UserError(str(exc)) from None
-        return lever, args.width * 1e-6
+        return lever, custom["width"]
     if args.cantilever not in TABLE1:
         raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
-    given = [f"--{name}" for name, value in custom.items() if value is not None]
+    given = [flag(name) for name in custom]
     if given:
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
     try:
@@ -107,17 +105,16 @@ def run(args) -> int:
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)
     try:
         response = response_map(lever, frequency, bias, width=width, k1=args.k1,
-                                H=args.tip_height * 1e-6, d_eff=args.d_eff * 1e-12,
-                                local_force=args.local_force * 1e-9,
+                                H=args.tip_height, d_eff=args.d_eff, local_force=args.local_force,
                                 surface_potential_v=args.surface_potential,
                                 electrostatic_sign=args.electrostatic_sign)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
-             f"$f_1$ = {lever.resonance_frequency / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
-             f"H = {args.tip_height:g} µm, $d_{{eff}}$ = {args.d_eff:g} pm/V, "
-             f"$F_{{loc}}$ = {args.local_force:g} nN/V, Q = {args.quality_factor:g}")
+             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
+             f"H = {args.tip_height * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
+             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}")
     plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")
     if args.csv is not None:

@@ -21,12 +21,14 @@ import dataclasses
 import math
 
 from ..errors import UserError
+from . import flags
 
 __all__ = ["add_arguments", "run"]
 
-_OVERRIDES = {"spring_constant": "spring_constant_n_per_m", "length": "length_m",
-              "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz",
-              "tip_position": "tip_position", "tip_mass": "tip_mass_ratio"}
+_LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_position", "tip_mass_ratio",
+          "tip_gyration_radius", "tilt", "spot_position")
+_CONTACT = ("k2", "k2_over_k1", "poisson")
+"""The probe's flags (:mod:`pfmdyn.commands.flags`): they override the file's metadata."""
 
 
 def add_arguments(parser) -> None:
@@ -62,12 +64,8 @@ def add_arguments(parser) -> None:
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
-    for flag, key in _OVERRIDES.items():
-        extra = {"tip_position": " (the tip at this fraction of the length: below 1 when set back from the end; "
-                                 "default 1)",
-                 "tip_mass": " (tip mass over the lever's mass; default 0)"}.get(flag, "")
-        parser.add_argument("--" + flag.replace("_", "-"), type=float, default=None,
-                            help=f"override the file's {key}{extra}")
+    flags.add_lever(parser, _LEVER)
+    flags.add_contact(parser, _CONTACT)
 
 
 def _mechanisms(args, source, fit_options):
@@ -77,9 +75,8 @@ def _mechanisms(args, source, fit_options):
     from ..maps.fit import model_name, parse_model
     if args.model != "auto":
         return parse_model(args.model), None
-    from ..maps.readers import require
-    out = os.path.join(args.out, "maps.zarr")
-    if os.path.isdir(out) and "model" in (attrs := require("zarr").open_group(out, mode="r").attrs):
+    from ..maps.driver import earlier_run
+    if "model" in (attrs := earlier_run(os.path.join(args.out, "maps.zarr"))):
         print(f"model (auto, as chosen by the interrupted run): {attrs['model']}")
         return parse_model(attrs["model"]), attrs.get("model_selection")
     from ..maps.select import choose_model
@@ -117,7 +114,7 @@ def run(args) -> int:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
-    overrides = {key: getattr(args, flag) for flag, key in _OVERRIDES.items() if getattr(args, flag) is not None}
+    overrides = flags.given(args, _LEVER + _CONTACT)
     from ..maps.contact import contact_map, describe, is_contact_map
     if is_contact_map(args.data):
         print(describe(contact_map(args.data, args.out, overrides)))
@@ -143,7 +140,7 @@ def run(args) -> int:
                        "surface_potential_v": args.surface_potential}
         mechanisms, rows = _mechanisms(args, source, fit_options)
         source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
-        print(f"fitting: {'k1 and k2' if n_bands > 1 else 'k1 (k2 = 0: one contact mode cannot separate them)'}, "
+        print(f"fitting: k1 ({source.model.describe_k2()}), "
               f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
               + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
                  if biases is not None else ""))
@@ -164,7 +161,9 @@ def run(args) -> int:
         from ..maps.usid import write_usid
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
-    explained = (f"explained {100 * s['explained_fraction']:.1f} %, median gap {s['median_gap']:.3g}"
+    explained = (f"explained {100 * s['explained_fraction']:.1f} %"
+                 + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
+                    if s.get("at_bound_fraction") else "") + f", median gap {s['median_gap']:.3g}"
                  + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))
     print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
           f"{s['blocks_done']}/{s['blocks_total']} done; {explained}; maps in {s['out']}{written}")

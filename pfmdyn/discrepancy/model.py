@@ -40,7 +40,7 @@ from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
 
-_DEFAULTS = {"k2": 0.0, "Q": 0.0, "Q_viscous": 0.0, "contact_loss": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
+_DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
 
 
@@ -115,7 +115,7 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            beta_f, k_f, k1_f, mu_f = damping.factors(r, c["Q"], c["Q_viscous"], c["contact_loss"])
+            beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
             return tip_setback.slope(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                      c["mu"] * mu_f, c["gamma"])
@@ -135,7 +135,7 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            loss = (c["Q"], c["Q_viscous"], c["contact_loss"])
+            loss = (c["inv_q"], c["g"], c["x"])
             beta_f, k_f, k1_f, mu_f = damping.factors(r, *loss)
             d_f = damping.d_factors(r, *loss)
             spring = c["k1"] * k1_f
@@ -152,7 +152,7 @@ class Model:
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
-            loss_index = {"Q": 0, "Q_viscous": 1, "contact_loss": 2}
+            loss_index = {"inv_q": 0, "g": 1, "x": 2}
             for j, p in enumerate(self.parameters):
                 if p.name == "k1":
                     out[:, j] = j_rot[0] * (spring * math.log(10))
@@ -174,9 +174,9 @@ class Model:
         """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
         names = {p.name for p in self.parameters}
         root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
-        need = {"beta": bool(names & {"Q", "Q_viscous"}) or root_moves, "k": "Q" in names,
+        need = {"beta": bool(names & {"inv_q", "g"}) or root_moves, "k": "inv_q" in names,
                 "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
-                "mu": "mu" in names or ("Q_viscous" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
+                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
         return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
 
     @property
@@ -358,21 +358,21 @@ class FitResult:
         fitted = self.fitted if self.fitted is not None else np.ones(len(self.internal), bool)
         for i, p in enumerate(self.model.parameters):
             if not fitted[i]:
-                out[p.name] = {"value": None, "stderr": None, "unit": p.unit, "determined": False}
+                out[p.key] = {"value": None, "stderr": None, "unit": p.unit, "determined": False}
                 continue
             sd = math.sqrt(max(self.covariance[j, j], 0.0)) if self.covariance.size else math.nan
             value, err = p.value(self.internal[i]), p.stderr(self.internal[i], sd)
             # A parameter whose uncertainty exceeds its value is not determined by these data.
             determined = bool(math.isfinite(err) and (err < abs(value) or (p.inverse and err < 1e12)))
-            out[p.name] = {"value": value, "stderr": err, "unit": p.unit, "determined": determined}
+            out[p.key] = {"value": value, "stderr": err, "unit": p.unit, "determined": determined}
             j += 1
         if "damping_contact" in self.model.effects and out.get("k1", {}).get("value"):
             loss = out["contact_loss"]["value"]
             out["eta"] = {"value": loss * out["k1"]["value"] / (2 * math.pi * self.model.meta.f1),
                           "stderr": None, "unit": "N s/m", "determined": out["contact_loss"]["determined"]}
-        if "damping_viscous" in self.model.effects and out["Q_viscous"]["value"]:
-            out["viscous_width_hz"] = {"value": self.model.meta.f1 / out["Q_viscous"]["value"], "stderr": None,
-                                       "unit": "Hz", "determined": out["Q_viscous"]["determined"]}
+        if "damping_viscous" in self.model.effects and out["viscous_loss"]["value"] is not None:
+            out["viscous_width_hz"] = {"value": self.model.meta.f1 * out["viscous_loss"]["value"], "stderr": None,
+                                       "unit": "Hz", "determined": out["viscous_loss"]["determined"]}
         return out
 
     def report(self) -> str:

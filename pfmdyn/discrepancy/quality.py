@@ -40,7 +40,7 @@ def _characteristic(model: Model, internal, contact: bool, r):
     c = model.coords(internal)
     m = model.meta
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, c["Q"], c["Q_viscous"], c["contact_loss"])
+    beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
     if contact:
         kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
     else:
@@ -111,7 +111,7 @@ def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndar
     if not contact:
         # Free modes ignore the springs and the tilt: fits that vary only those reuse them.
         c = model.coords(internal)
-        key = tuple(float(c[n]) for n in ("Q", "Q_viscous", "contact_loss", "mu", "gamma"))
+        key = tuple(float(c[n]) for n in ("inv_q", "g", "x", "mu", "gamma"))
         return _free_loss(model.meta, key, tuple(f.tolist()))
     return _loss(model, internal, contact, f)
 

@@ -229,13 +229,13 @@ def _damping_seeds(data: ResonanceData) -> dict[str, tuple]:
     """Start values of the damping parameters from the table's Q values."""
     has_q = _has_q(data)
     if not has_q.any():
-        return {"Q": (0.01,), "Q_viscous": (0.02,), "contact_loss": (0.01,)}
+        return {"inv_q": (0.01,), "g": (0.02,), "x": (0.01,)}
     q, r = data.quality_factor[has_q], data.frequency_hz[has_q] / data.metadata.f1
     contact = data.condition[has_q] == "contact"
     x = float(np.median(1 / (q * r)[contact])) if contact.any() else 0.01
-    return {"Q": (float(np.clip(np.median(1 / q), 1e-4, 0.4)),),
-            "Q_viscous": (float(np.clip(np.median(r / q), 1e-4, 0.9)),),
-            "contact_loss": tuple(float(np.clip(v, 1e-4, 4.0)) for v in (x, 4 * x))}
+    return {"inv_q": (float(np.clip(np.median(1 / q), 1e-4, 0.4)),),
+            "g": (float(np.clip(np.median(r / q), 1e-4, 0.9)),),
+            "x": tuple(float(np.clip(v, 1e-4, 4.0)) for v in (x, 4 * x))}
 
 
 def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None = None,
@@ -254,7 +254,7 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
 
     >>> free = paper_tables()["tip 2"]
     >>> result = fit_resonances(Model(free.metadata, ("tip_mass",)), free)
-    >>> result.parameters()["k1"]["determined"], round(result.parameters()["mu"]["value"], 2)
+    >>> result.parameters()["k1"]["determined"], round(result.parameters()["tip_mass_ratio"]["value"], 2)
     (False, 0.05)
     """
     params = model.parameters

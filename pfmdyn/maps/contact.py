@@ -1,19 +1,21 @@
 """Contact-resonance frequency maps (DART, CR-AFM tracking) to contact-stiffness maps.
 
 The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
-``spring_constant_n_per_m`` and ``free_resonance_hz`` (optionally ``contact_mode``, default 1,
+``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
 and ``contact_uncertainty_hz``).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
-from .readers import open_root
+from ..names import canonical, checked
+from .readers import open_root, scalar
 from .store import open_group, write_array
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
@@ -34,30 +36,46 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     >>> d = tempfile.mkdtemp()
     >>> with h5py.File(d + "/cr.h5", "w") as h:
     ...     h["contact_frequency_hz"] = np.full((2, 3), 300e3)
-    ...     h.attrs.update(spring_constant_n_per_m=2.0, free_resonance_hz=75e3)
+    ...     h.attrs.update(spring_constant=2.0, free_resonance=75e3)
     >>> round(contact_map(d + "/cr.h5", d)["median_k1"], 3)
     109.748
     """
     with open_root(path) as root:
-        fc = np.asarray(root["contact_frequency_hz"][...], float)
-        attrs = dict(root.attrs)
-    attrs.update(overrides or {})
-    missing = [key for key in ("spring_constant_n_per_m", "free_resonance_hz") if key not in attrs]
+        fc = np.asarray(root["contact_frequency_hz"][...])
+        attrs = {canonical(key) or key: value for key, value in root.attrs.items()}
+    given = {canonical(key) or key: value for key, value in (overrides or {}).items()}     # any spelling
+    attrs.update(given)
+    missing = [key for key in ("spring_constant", "free_resonance") if key not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-    if fc.ndim != 2:
-        raise UserError(f"{path}: contact_frequency_hz must have shape (ny, nx), got {fc.shape}")
-    result = contact_stiffness(fc, float(attrs["free_resonance_hz"]), float(attrs["spring_constant_n_per_m"]),
-                               mode=int(attrs.get("contact_mode", 1)),
-                               contact_uncertainty_hz=float(attrs.get("contact_uncertainty_hz", 0.0)),
+    if fc.ndim != 2 or not np.issubdtype(fc.dtype, np.number) or np.iscomplexobj(fc):
+        raise UserError(f"{path}: contact_frequency_hz must be a (ny, nx) array of real numbers, got shape "
+                        f"{fc.shape} of {fc.dtype}")
+    if fc.size == 0:
+        raise UserError(f"{path}: the map holds no pixels (shape {fc.shape})")
+    k, f1 = (checked(key, scalar(attrs[key]), f"{path} (command line)" if key in given
+                     else str(path)) for key in ("spring_constant", "free_resonance"))
+    try:
+        mode, sigma = (float(scalar(attrs.get(key, default))) for key, default in
+                       (("contact_mode", 1), ("contact_uncertainty_hz", 0.0)))
+    except (TypeError, ValueError):
+        mode = sigma = math.nan
+    if not (math.isfinite(mode) and mode == int(mode) and mode >= 1 and math.isfinite(sigma) and sigma >= 0):
+        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty_hz a number "
+                        f"from 0, got {attrs.get('contact_mode', 1)!r} and {attrs.get('contact_uncertainty_hz', 0.0)!r}")
+    result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty_hz=sigma,
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
-    group = open_group(out, "w")
-    for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
-        write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
-                    description=f"{name} from the contact resonance", dims=["y", "x"])
+    try:        # a new map each time (nothing to resume): whatever was at out is replaced
+        group = open_group(out, "w")
+        for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
+            write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
+                        description=f"{name} from the contact resonance", dims=["y", "x"])
+    except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
+        raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
     k1 = np.asarray(result.k1_n_per_m)
-    return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": float(np.nanmedian(k1)), "out": out}
+    median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
+    return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}
 
 
 def describe(summary: dict) -> str:

@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import math
 import os
+import signal
+import sys
+import threading
 import time
 
 import numpy as np
@@ -25,26 +28,54 @@ from .readers import require as _require
 from .sho import band_centres, fit_sho_block, is_sho
 from .store import create_map, open_group
 
-__all__ = ["MapInput", "check_scheduler", "open_map", "run_map"]
+__all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
 def _blocks(shape, block):
     ny, nx = shape
     return [(by, bx) for by in range(math.ceil(ny / block)) for bx in range(math.ceil(nx / block))]
 
 
-def _one_blas_thread():
-    """Worker initialiser: one BLAS thread per process (the processes are the parallelism)."""
+def _worker_start(parent: int):
+    """Worker initialiser: exit with the process that started the pool, and one BLAS thread per
+    process (the processes are the parallelism)."""
+    exit_with_parent(parent)
     from threadpoolctl import threadpool_limits
     threadpool_limits(1)
+
+
+def exit_with_parent(parent: int, poll_s: float = 0.5) -> None:
+    """Make this process exit when ``parent`` (its parent's pid) dies, whatever the signal.
+
+    A parent killed by SIGKILL (an out-of-memory killer, a batch scheduler) runs no clean-up,
+    and its pool's workers would live on, reparented, holding their memory.  On Linux the
+    kernel sends the worker SIGKILL when its parent dies (``prctl(PR_SET_PDEATHSIG)``); a
+    daemon thread polling the parent's pid does the same elsewhere and covers a parent that
+    died before the ``prctl`` call.
+
+    In a child (here a separate interpreter, which goes on while its parent lives):
+
+    >>> import subprocess, sys
+    >>> code = "import os; from pfmdyn.maps.driver import exit_with_parent as e; e(os.getppid()); print('on')"
+    >>> subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip()
+    'on'
+    """
+    if sys.platform.startswith("linux"):
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)   # 1: PR_SET_PDEATHSIG
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(poll_s)
+        os._exit(1)   # no clean-up to run: a half-written block is redone on the next run
+
+    threading.Thread(target=watch, name="pfmdyn-parent-watch", daemon=True).start()
 
 
 def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
     ys, xs = slice(by * block, (by + 1) * block), slice(bx * block, (bx + 1) * block)
     response = read_block(source, ys, xs)
-    if not np.all(np.isfinite(response)):
-        raise UserError(f"{source.path}: response holds NaN or inf in block ({by}, {bx})")
     fit = fit_sho_block if is_sho(source.model) else fit_block
-    result = fit(source.model, response, **options)
+    result = fit(source.model, response, **options)      # NaN or empty pixels come back masked
     group = open_group(out, mode="r+")
     for name in source.model.outputs:
         group[name][ys, xs] = result[name]
@@ -58,8 +89,14 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     model = source.model
     sho = is_sho(model)
-    settings = {"model": "sho", "band_hz": band_centres(model)} if sho else {"model": model_name(model.mechanisms), "tip_position": model.tip_position,
-                                             "tip_mass": model.tip_mass, "surface_potential_v": surface_potential_v}
+    if sho:
+        settings = {"model": "sho", "band_hz": band_centres(model)}
+    else:
+        geometry = {name: getattr(model.lever, name) for name in ("spring_constant", "free_resonance", "length",
+                                                                 "tip_height", "tip_position", "tip_mass_ratio",
+                                                                 "tip_gyration_radius", "tilt")}
+        settings = {"model": model_name(model.mechanisms), **geometry, "k2_policy": model.describe_k2(),
+                    "surface_potential_v": surface_potential_v}
     steps, dims = (model.step_shape, model.dims) if sho else ((), ("y", "x"))
     if "done" in group:     # an interrupted run: only the same map of the same model may continue it
         if group["done"].shape != grid:
@@ -101,29 +138,74 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     """
     dask = _require("dask")
     import dask.delayed  # noqa: F401  (submodule import)
-    os.makedirs(out_dir, exist_ok=True)
     out = os.path.join(out_dir, "maps.zarr")
-    group = _output(out, source, block, selection, options.get("surface_potential_v"))
-    done = np.asarray(group["done"][...])
-    todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
-    tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,
-                                                dask_key_name=f"pfmdyn-block-{by}-{bx}") for by, bx in todo]
-    start = time.perf_counter()
-    pixels = _compute(tasks, scheduler, workers, progress, int(done.sum()), done.size)
-    elapsed = time.perf_counter() - start
+    made = [path for path in (out_dir, out) if not os.path.exists(path)]
+    earlier_run(out)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+        group = _output(out, source, block, selection, options.get("surface_potential_v"))
+        done = np.asarray(group["done"][...])
+        todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
+        tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,
+                                                    dask_key_name=f"pfmdyn-block-{by}-{bx}") for by, bx in todo]
+        start = time.perf_counter()
+        pixels = _compute(tasks, scheduler, workers, progress, int(done.sum()), done.size)
+        elapsed = time.perf_counter() - start
+    except BaseException as exc:
+        _forget(made, out)
+        if isinstance(exc, OSError):      # out_dir not writable, a file in its place, a full disk
+            raise UserError(f"cannot write {out}: {exc.strerror or exc}") from None
+        raise
     gap = np.asarray(group["gap"][...])
-    extra = {"median_nulling_bias": _median(group["nulling_bias"][...])} if "nulling_bias" in group else {}
+    extra = {"median_nulling_bias": _statistic(group["nulling_bias"][...])} if "nulling_bias" in group else {}
+    if "at_bound" in group:
+        extra["at_bound_fraction"] = _statistic(group["at_bound"][...], np.nanmean) if np.isfinite(gap).any() else 0.0
     return {**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
             "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
             "model": group.attrs["model"],
-            "explained_fraction": float(np.nanmean(group["explained"][...])) if np.isfinite(gap).any() else float("nan"),
-            "median_gap": _median(gap), "out": out}
+            "explained_fraction": _statistic(group["explained"][...], np.nanmean),
+            "median_gap": _statistic(gap), "out": out}
 
 
-def _median(values) -> float:
-    """Median of the fitted pixels (NaN before any is)."""
+def earlier_run(out: str) -> dict:
+    """The attributes of the map output ``out`` an earlier run left (empty when there is none);
+    a file, or a damaged Zarr group, in its place is one line asking for another ``--out``.
+
+    >>> import tempfile
+    >>> earlier_run(tempfile.mkdtemp() + "/maps.zarr")
+    {}
+    """
+    if not os.path.exists(out):
+        return {}
+    try:
+        group = _require("zarr").open_group(out, mode="r")
+        if "done" in group:
+            np.asarray(group["done"][...])          # the flags a rerun continues from
+        return dict(group.attrs)
+    except (OSError, ValueError, KeyError) as exc:    # zarr: not a group, unreadable metadata
+        raise UserError(f"{out}: not a map output a run can continue ({type(exc).__name__}: "
+                        f"{' '.join(str(exc).split())[:80]}); choose another --out") from None
+
+
+def _forget(made: list[str], out: str) -> None:
+    """After a failed run, remove what it created (``made``: the output directory, ``maps.zarr``)
+    unless a block finished there: a run that fitted nothing leaves nothing behind, one that
+    fitted some blocks keeps them for the rerun."""
+    import shutil
+    try:
+        if out in made and np.any(_require("zarr").open_group(out, mode="r")["done"][...]):
+            return
+    except (OSError, KeyError, ValueError):     # not even the flags were written
+        pass
+    for path in reversed(made):
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _statistic(values, how=np.nanmedian) -> float:
+    """``how`` (a NaN-skipping median or mean) over the pixels holding a value: fitted or masked
+    (``explained`` 0) pixels of finished blocks; NaN before any block is done."""
     values = np.asarray(values)
-    return float(np.nanmedian(values)) if np.isfinite(values).any() else float("nan")
+    return float(how(values)) if np.isfinite(values).any() else float("nan")
 
 
 def _pool(workers: int):
@@ -134,12 +216,12 @@ def _pool(workers: int):
     ``spawn`` as Dask does (then a calling script needs the usual ``if __name__ == "__main__":``).
     """
     import multiprocessing
-    import threading
     from concurrent.futures import ProcessPoolExecutor
     # tqdm's monitor thread (left by an earlier bar) only sleeps; workers never touch its lock
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.name != "tqdm_monitor"]
     method = "fork" if not others and "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_one_blas_thread)
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_worker_start,
+                               initargs=(os.getpid(),))
     pool.submit(int).result()
     return pool
 
@@ -171,12 +253,17 @@ def _compute(tasks, scheduler, workers, progress, already, total):
         pixels, blocks = pixels + result, blocks + 1
         report(blocks, total, pixels)
 
+    from concurrent.futures.process import BrokenProcessPool
     try:
         if "://" in kwargs["scheduler"]:
             distributed = _require("distributed")
             with distributed.Client(scheduler) as client:
-                for future in distributed.as_completed(client.compute(tasks)):
-                    tick(future.result())
+                try:
+                    for future in distributed.as_completed(client.compute(tasks)):
+                        tick(future.result())
+                except distributed.KilledWorker as exc:     # a block whose workers keep dying
+                    raise UserError(f"{exc.args[0] if exc.args else 'a block'} killed every worker that ran it "
+                                    "(out of memory?); finished blocks are kept: rerun to resume") from None
         elif tasks:
             import dask
             from dask.callbacks import Callback
@@ -188,6 +275,9 @@ def _compute(tasks, scheduler, workers, progress, already, total):
 
             with _Bar():
                 dask.compute(*tasks, **kwargs)
+    except BrokenProcessPool:
+        raise UserError("a worker process was killed (a signal, or out of memory); finished blocks are kept: "
+                        "rerun the same command to resume") from None
     finally:
         if pool is not None:
             pool.shutdown()

@@ -11,8 +11,9 @@ electrostatic force on the lever's body) with amplitudes of its own.  With a bia
 (:mod:`pfmdyn.maps.bias`) every band and drive has two amplitudes, an intercept and a slope per
 volt of DC bias.  The amplitudes enter linearly and are projected out (variable projection);
 ``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one per contact
-mode: one mode cannot separate ``k1`` from ``k2``, so with one band ``k2 = 0``), ``g`` and ``x``
-are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block at once, each
+mode; one mode cannot separate ``k1`` from ``k2``, so with one band ``k2`` follows the contact's
+policy, :meth:`pfmdyn.Contact.tie`: a stated ratio, or Mindlin's at Poisson 0.3, as ``pfmdyn
+stiffness`` and ``pfmdyn discrepancy`` do; a given ``k2`` is held), ``g`` and ``x`` are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block at once, each
 pixel with its own damping factor.
 
 Cost is dominated by the generated transfer function over ``(pixels, frequencies)``; one
@@ -30,14 +31,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever
+from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from ..discrepancy.model import free_root
 from ..generated import damping, elastic_contact, tip_setback
-from ..generated.characteristic import BETA1_FREE
+from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
-__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "quantities", "bands", "parse_model"]
+__all__ = ["BeamMapModel", "CHUNK", "MECHANISMS", "fit_block", "fittable", "quantities", "bands", "parse_model"]
 
 CHUNK = 256
 """Pixels fitted together: large enough to make the per-call overhead negligible, small enough
@@ -66,7 +66,9 @@ _QUANTITIES = {
     "phase": ("rad", "d_eff phase arg c (first band)"),
     **bias_axis.QUANTITIES, **bias_axis.DISTRIBUTED, **bias_axis.SURFACE,
     "gap": ("1", "relative residual |y - model| / |y|"),
-    "explained": ("1", "1 where the model explains the pixel (gap below threshold), else 0"),
+    "at_bound": ("1", "1 where a fitted parameter sits at its bound: the model cannot reach the data there, "
+                      "so nothing is reported for the pixel"),
+    "explained": ("1", "1 where the model explains the pixel (gap below threshold, no parameter at a bound), else 0"),
 }
 _REQUIRES = {"viscous_loss": {"viscous"}, "viscous_loss_stderr": {"viscous"},
              "contact_loss": {"contact"}, "contact_loss_stderr": {"contact"},
@@ -125,29 +127,52 @@ def bands(frequency_hz) -> list[slice]:
 
 @dataclass(frozen=True)
 class BeamMapModel:
-    """Cantilever metadata in SI units, the frequency vector of the map and the damping mechanisms.
+    """The lever and contact (:class:`pfmdyn.Cantilever`, :class:`pfmdyn.Contact`), the frequency
+    vector of the map and the mechanisms fitted.
+
+    The lever carries the tip geometry (position, mass ratio, tilt) the map is fitted with; the
+    contact its ``k2`` policy (:attr:`k2_mode`).
 
     Examples
     --------
-    >>> m = BeamMapModel(k=2.0, L=225e-6, f1=75e3, H=10e-6, frequency_hz=np.linspace(3e5, 4e5, 8))
+    >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+    >>> m = BeamMapModel(lever, np.linspace(3e5, 4e5, 8))
     >>> m.shape_functions(np.array([200.0]), np.array([80.0])).shape
     (1, 8)
-    >>> m.parameters
-    ('log_k1', 'log_q')
+    >>> m.parameters, m.k2_mode
+    (('log_k1', 'log_q'), 'tied')
     """
 
-    k: float
-    L: float
-    f1: float
-    H: float
+    lever: Cantilever
     frequency_hz: np.ndarray
     mechanisms: tuple[str, ...] = ("internal",)
     bias_v: np.ndarray | None = None
     """DC tip bias of each spectrum of a pixel (V), or None: one spectrum per pixel."""
-    tip_position: float = 1.0
-    """``gamma``: the tip sits at ``gamma L`` (set back from the free end when below 1)."""
-    tip_mass: float = 0.0
-    """``mu``: the tip's mass over the lever's."""
+    contact: Contact = Contact()
+    """The k2 policy: ``k2`` held, ``k2_over_k1``/``poisson`` tied, or nothing said (free with two
+    or more bands, Mindlin's tie with one)."""
+
+    def __post_init__(self):
+        # not in the map model yet: refuse rather than fit a lever other than the one described
+        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
+            if getattr(self.lever, name) != null:
+                raise UserError(f"{name} is not yet part of the map model (leave it at {null:g})")
+
+    @property
+    def k(self) -> float:
+        return self.lever.spring_constant
+
+    @property
+    def L(self) -> float:
+        return self.lever.length
+
+    @property
+    def f1(self) -> float:
+        return self.lever.free_resonance
+
+    @property
+    def H(self) -> float:
+        return self.lever.tip_height or 0.0
 
     @property
     def outputs(self) -> dict[str, tuple[str, str]]:
@@ -160,59 +185,110 @@ class BeamMapModel:
         return bands(self.frequency_hz)
 
     @property
+    def k2_mode(self) -> str:
+        """``fixed`` (a given k2), ``tied`` (k2 = ratio k1: a stated ratio, or one band) or ``free``."""
+        if self.contact.k2 is not None:
+            return "fixed"
+        return "tied" if self.contact.ratio is not None or len(self.bands) < 2 else "free"
+
+    def describe_k2(self) -> str:
+        """The k2 policy in words, for the summary and the Zarr attributes.
+
+        >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+        >>> BeamMapModel(lever, np.linspace(3e5, 4e5, 8)).describe_k2()
+        'k2 tied to k1 at 0.824 (Mindlin, Poisson ratio 0.3: one contact mode cannot separate k1 from k2)'
+        """
+        if self.k2_mode == "fixed":
+            return f"k2 held at {self.contact.k2:g} N/m"
+        if self.k2_mode == "free":
+            return "k2 fitted (two or more contact-mode bands)"
+        if self.contact.ratio is not None:
+            return f"k2 tied to k1 at {self.contact.ratio:.3g} ({self.contact.describe_k2()})"
+        from ..cantilever import DEFAULT_POISSON
+        return (f"k2 tied to k1 at {self.contact.tie():.3g} (Mindlin, Poisson ratio {DEFAULT_POISSON:g}: one "
+                "contact mode cannot separate k1 from k2)")
+
+    @property
     def parameters(self) -> tuple[str, ...]:
         """Internal nonlinear parameters, in the order of the fit's columns."""
-        names = ["log_k1", "log_q"] + (["log_k2"] if len(self.bands) > 1 else [])
+        names = ["log_k1", "log_q"] + (["log_k2"] if self.k2_mode == "free" else [])
         extra = {"viscous": "g", "contact": "x"}
         return tuple(names + [extra[m] for m in self.mechanisms if m in extra])
+
+    def k2_of(self, k1, log_k2=None):
+        """``k2`` by the policy at contact stiffness ``k1`` (``log_k2`` when fitted)."""
+        mode = self.k2_mode
+        if mode == "free":
+            return np.exp(log_k2)
+        if mode == "fixed":
+            return np.full_like(np.asarray(k1, float), self.contact.k2)
+        return self.contact.tie() * np.asarray(k1, float)
+
+    @property
+    def _composed(self) -> bool:
+        """Whether the lever needs the composed (set-back) model: the elastic-contact family is
+        the paper's massless, untilted tip at the free end."""
+        return not self.lever.is_paper_probe
 
     def _arguments(self, inv_q, g, k1, k2, x):
         """``beta`` and the springs relative to the complex EI, with the damping factors.
 
         Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
         on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
-        contact springs are divided by that factor (the dashpot multiplies ``k1``).
+        contact springs are divided by that factor (the dashpot multiplies ``k1``).  A heavy tip
+        moves the lever's first free root (:meth:`pfmdyn.Cantilever.beta` accounts for it).
         """
         f = np.asarray(self.frequency_hz, float)
         r = f / self.f1
-        beta0 = Cantilever(self.k, self.f1, self.L).beta(f)
-        if self.tip_mass:       # the measured f1 is the loaded lever's: its root is not BETA1_FREE
-            beta0 = beta0 * free_root(self.k, self.H, self.L, self.tip_mass, self.tip_position) / BETA1_FREE
+        beta0 = Cantilever(self.k, self.f1, self.L, tip_height=self.lever.tip_height,
+                           tip_position=self.lever.tip_position,
+                           tip_mass_ratio=self.lever.tip_mass_ratio).beta(f)
         # Without drag the beta factor does not depend on r: keep it one number per pixel.
         r_beta = r if "viscous" in self.mechanisms else 1.0
         beta_factor, k_factor, _, mu_factor = damping.factors(r_beta, inv_q, g, 0.0)
         k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
         return (beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor,
-                self.tip_mass * mu_factor)
+                self.lever.tip_mass_ratio * mu_factor)
 
     def _transfer(self, beta, k1e, k2e, mu, jacobian):
         """Slopes per drive and (with ``jacobian``) per drive the partials w.r.t. (beta, k1, k2,
-        mu), None where not needed: the generated elastic contact for a massless tip at the end,
-        else the generated set-back solution (springs on the beam axes, no tilt)."""
-        if self.tip_position == 1.0 and not self.tip_mass:
+        mu), None where not needed: the generated elastic contact for the paper's probe, else the
+        generated composed model (set-back, heavy or tilted tip: springs rotated onto the beam
+        axes, so the partials w.r.t. k1 and k2 combine those w.r.t. kvv, kll, kvl)."""
+        if not self._composed:
             if not jacobian:
                 return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L), None
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
-        args = (beta, self.k, k1e, k2e, 0.0, self.H, self.L, mu, self.tip_position)
+        alpha = self.lever.alpha
+        args = (beta, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position)
         if not jacobian:
             return tip_setback.slope(*args), None
-        wanted = ("beta", "kvv", "kll", "mu")
+        wanted = ("beta", "kvv", "kll", "kvl", "mu")
         # the tip mass moves with drag only (mu_factor); otherwise its partial multiplies zero
-        wrt = wanted if self.tip_mass and "viscous" in self.mechanisms else wanted[:3]
-        values, partials = tip_setback.slope_and_jacobian(*args, wrt=wrt)
-        index = [tip_setback.JACOBIAN_PARAMETERS.index(name) for name in wanted]
-        return values, [tuple(p[i] for i in index) for p in partials]
+        moving_mass = self.lever.tip_mass_ratio and "viscous" in self.mechanisms
+        values, partials = tip_setback.slope_and_jacobian(*args, wrt=wanted if moving_mass else wanted[:4])
+        c, s = math.cos(alpha), math.sin(alpha)
+        index = {name: tip_setback.JACOBIAN_PARAMETERS.index(name) for name in wanted}
+        out = []
+        for p in partials:
+            d_vv, d_ll, d_vl = (p[index[n]] for n in ("kvv", "kll", "kvl"))
+            out.append((p[index["beta"]], d_vv * c * c + d_ll * s * s + d_vl * s * c,
+                        d_vv * s * s + d_ll * c * c - d_vl * s * c, p[index["mu"]] if moving_mass else None))
+        return values, out
 
     def _physical(self, p):
         """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(n, n_p)``), each ``(n, 1)``."""
         col = {name: p[:, i, None] for i, name in enumerate(self.parameters)}
         zero = np.zeros_like(col["log_k1"])
-        return (np.exp(-col["log_q"]), col.get("g", zero), np.exp(col["log_k1"]),
-                np.exp(col["log_k2"]) if "log_k2" in col else zero, col.get("x", zero))
+        k1 = np.exp(col["log_k1"])
+        return (np.exp(-col["log_q"]), col.get("g", zero), k1, self.k2_of(k1, col.get("log_k2")), col.get("x", zero))
 
-    def shape_functions(self, k1, q, k2=0.0, g=0.0, x=0.0) -> np.ndarray:
-        """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``."""
+    def shape_functions(self, k1, q, k2=None, g=0.0, x=0.0) -> np.ndarray:
+        """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``; ``k2`` by the
+        policy (:meth:`k2_of`) unless given."""
+        k1 = np.asarray(k1, float)
+        k2 = self.k2_of(k1, 0.0 * k1) if k2 is None and self.k2_mode != "free" else (0.0 if k2 is None else k2)
         col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
         _, _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
         return self._transfer(beta, k1e, k2e, mu, jacobian=False)[0][0]
@@ -242,9 +318,11 @@ class BeamMapModel:
             d_beta, d_k1, d_k2, d_mu = partials[drive]
             # d/d inv_q of k1e, k2e (both divided by k_factor) and of beta
             spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
-            chain = {"log_k1": d_k1 * k1e, "log_k2": d_k2 * k2e,
+            # a tied k2 (k2 = ratio k1) moves with k1; a held one does not
+            tied = d_k2 * k2e if self.k2_mode == "tied" else 0.0
+            chain = {"log_k1": d_k1 * k1e + tied, "log_k2": d_k2 * k2e,
                      "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
-                     "g": d_beta * beta0 * dbf_g + (0.0 if d_mu is None else d_mu * self.tip_mass * dmf_g),
+                     "g": d_beta * beta0 * dbf_g + (0.0 if d_mu is None else d_mu * self.lever.tip_mass_ratio * dmf_g),
                      "x": d_k1 * k1 * dk1f_x / k_factor}
             for i, name in enumerate(self.parameters):
                 d[i, :, j] = chain[name]
@@ -282,9 +360,8 @@ def _start(model, y, q0, k1_range):
     """Best (k1, Q) per pixel and k2/k1 of the grid (:func:`_grid`): ``log_k1``, ``log_q``
     ``(n_ratio, n)``, ``log_ratio`` ``(n_ratio,)``; k1 and Q refined by the vertex of the
     parabola through the best grid value and its neighbours on each axis."""
-    log_k1, log_q, log_ratio, g = _grid(model.k, model.L, model.f1, model.H,
-                                        np.asarray(model.frequency_hz, float).tobytes(), q0, tuple(k1_range),
-                                        model.tip_position, model.tip_mass)
+    log_k1, log_q, log_ratio, g = _grid(model.lever, model.contact, np.asarray(model.frequency_hz, float).tobytes(),
+                                        q0, tuple(k1_range))
     n, m = y.shape[:2]
     # one matrix product over (pixel, bias component) rows: batched products of 1-row matrices are slow
     proj = sum(np.sum(np.abs(y[..., b].reshape(n * m, -1) @ g[:, b].conj().T).reshape(n, m, -1) ** 2, axis=1)
@@ -297,33 +374,35 @@ def _start(model, y, q0, k1_range):
 
 
 @functools.lru_cache(maxsize=8)
-def _grid(k, L, f1, H, frequency_bytes, q0, k1_range, tip_position, tip_mass):
-    """Shape functions of the start grid, computed once per cantilever, frequencies and range:
-    log-spaced k1 over the part of ``k1_range`` that puts a resonance inside a band, Q over
-    ``q0 / 16`` to ``4 q0`` (levers have Q 5-500), and with two or more bands (k2 fitted) k2/k1 of
-    0.1, 0.4 and 1 (the lateral spring moves the modes of stiff contacts: k2 = 0 starts them
-    decades off).
+def _grid(lever, contact, frequency_bytes, q0, k1_range):
+    """Shape functions of the start grid, computed once per lever, contact policy, frequencies and
+    range: log-spaced k1 over the part of ``k1_range`` that puts a resonance inside a band, Q over
+    ``q0 / 16`` to ``4 q0`` (levers have Q 5-500), and, when k2 is fitted (two or more bands),
+    k2/k1 of 0.1, 0.4 and 1 (the lateral spring moves the modes of stiff contacts: k2 = 0 starts
+    them decades off); otherwise k2 follows the policy (``log_ratio`` NaN).
 
     A resonance moves by at most half the relative change of k1 (less on stiff contacts), and a
     sharp one correlates only with a start that places it within a few line widths: 48 steps over
     the four decades of the default range move it by up to 10 %, over the k1 whose resonance lies
     in the band by far less.
     """
-    f = np.frombuffer(frequency_bytes)
-    model = BeamMapModel(k, L, f1, H, f, tip_position=tip_position, tip_mass=tip_mass)
-    log_ratio = np.log([0.1, 0.4, 1.0]) if len(model.bands) > 1 else np.array([-np.inf])
+    model = BeamMapModel(lever, np.frombuffer(frequency_bytes), contact=contact)
+    free = model.k2_mode == "free"
+    log_ratio = np.log([0.1, 0.4, 1.0]) if free else np.array([np.nan])
     log_k1 = _resonant(model, np.log(np.geomspace(*k1_range, 400)), q0, np.exp(log_ratio))
     log_q = np.log(q0 * np.geomspace(1 / 16, 4, 7))
     ratio, q, k1 = (np.exp(a).ravel() for a in np.meshgrid(log_ratio, log_q, log_k1, indexing="ij"))
-    return log_k1, log_q, log_ratio, model.shape_functions(k1, q, k2=ratio * k1)
+    return log_k1, log_q, log_ratio, model.shape_functions(k1, q, k2=ratio * k1 if free else None)
 
 
 def _resonant(model, log_k1, q0, ratios, count=48):
     """``count`` log-spaced k1 from four steps below the smallest to four above the largest of
-    ``log_k1`` whose response peaks inside a band (not at its edges) for some k2/k1 of ``ratios``;
-    all of ``log_k1``'s range when none does (a band away from every resonance)."""
+    ``log_k1`` whose response peaks inside a band (not at its edges) for some k2/k1 of ``ratios``
+    (NaN: k2 by the model's policy); all of ``log_k1``'s range when none does (a band away from
+    every resonance)."""
     k1 = np.exp(np.tile(log_k1, len(ratios)))
-    g = np.abs(model.shape_functions(k1, np.full(k1.size, 4 * q0), k2=np.repeat(ratios, len(log_k1)) * k1))
+    k2 = None if np.isnan(ratios).all() else np.repeat(ratios, len(log_k1)) * k1
+    g = np.abs(model.shape_functions(k1, np.full(k1.size, 4 * q0), k2=k2))
     inside = np.zeros(k1.size, bool)
     for b in model.bands:
         peak = np.argmax(g[:, b], axis=1)
@@ -436,7 +515,8 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
-    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  k1, k2 and Q are fitted
+    line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  A pixel whose spectra hold
+    NaN or inf, or are all zero, is masked: NaN in every map, ``explained`` 0.  k1, k2 and Q are fitted
     as logarithms: their standard errors are half the width of ``exp(log x +- sd)``,
     ``x sinh(sd)`` (``x sd`` when small; huge, not small, when the data leave ``x`` undetermined,
     e.g. k2 driven to its bound on a soft contact).
@@ -444,7 +524,7 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     Examples
     --------
     >>> f = np.linspace(2.5e5, 4.5e5, 48)
-    >>> m = BeamMapModel(k=2.0, L=225e-6, f1=75e3, H=10e-6, frequency_hz=f)
+    >>> m = BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f)
     >>> y = 3e-3 * m.shape_functions(np.array([300.0]), np.array([60.0]))
     >>> out = fit_block(m, y)
     >>> round(float(out["k1"][0]), 6), round(float(out["quality_factor"][0]), 6)
@@ -456,6 +536,13 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     >>> out = fit_block(mb, 1e-3 * (mb.bias_v[:, None] - 2.0) * m.shape_functions(np.array([300.0]), np.array([60.0])))
     >>> round(float(out["electrostatic"]), 9), round(float(out["nulling_bias"]), 9)
     (0.001, 2.0)
+
+    A pixel with a NaN is masked, the others fitted:
+
+    >>> y2 = np.concatenate([y, np.full_like(y, np.nan)])
+    >>> out = fit_block(m, y2)
+    >>> out["k1"].round(6).tolist(), out["explained"].tolist()
+    ([300.0, nan], [1.0, 0.0])
     """
     bias = bias_axis.basis(model.bias_v)
     y = np.ascontiguousarray(response, complex)     # the sums' rounding follows the memory layout
@@ -466,8 +553,25 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
     y = y.reshape(-1, bias.q.shape[0], tail[-1])
     k1_range = k1_range or (model.k, 1e4 * model.k)
     settings = (q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v)
-    parts = [_fit_pixels(model, y[i:i + CHUNK], *settings) for i in range(0, max(len(y), 1), CHUNK)]
-    return {name: np.concatenate([part[name] for part in parts]).reshape(shape) for name in parts[0]}
+    fitted = np.flatnonzero(fittable(y))
+    out = {name: np.full(len(y), np.nan) for name in [*model.outputs, "cost"]}
+    out["explained"][:] = 0.0
+    for i in range(0, len(fitted), CHUNK):
+        rows = fitted[i:i + CHUNK]
+        for name, value in _fit_pixels(model, y[rows], *settings).items():
+            out[name][rows] = value
+    return {name: value.reshape(shape) for name, value in out.items()}
+
+
+def fittable(spectra) -> np.ndarray:
+    """Which pixels of ``spectra`` (pixels first) can be fitted: not those holding NaN or inf, nor
+    those with no response at all (a dropped spectrum), which the fit masks.
+
+    >>> fittable(np.array([[1.0, 2.0], [np.nan, 1.0], [0.0, 0.0]])).tolist()
+    [True, False, False]
+    """
+    axes = tuple(range(1, np.ndim(spectra)))
+    return np.all(np.isfinite(spectra), axis=axes) & np.any(spectra != 0, axis=axes)
 
 
 def _covariance(model, g, dg, c, noise):
@@ -524,20 +628,46 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
         spread = {n: np.sinh(sd[n]) for n in ("log_k1", "log_q", "log_k2") if n in sd}     # see fit_block
     col = {n: p[:, i] for i, n in enumerate(names)}
     k1 = np.exp(col["log_k1"])
-    k2 = np.exp(col["log_k2"]) if "log_k2" in col else np.full(len(y), np.nan)
+    k2 = model.k2_of(k1, col.get("log_k2"))
+    k2_sd = k2 * spread["log_k2"] if "log_k2" in spread else (
+        np.zeros(len(y)) if model.k2_mode == "fixed" else k2 * spread["log_k1"])
     gap = np.sqrt(cost)
+    at_bound = _at_bound(model, p, k1_range)
     _, m, n_bands, K = c.shape
     first = np.concatenate([_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
     band = model.bands[0]
     linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
                                    g[..., band])
-    out = {"k1": k1, "k1_stderr": k1 * spread["log_k1"], "k2": k2, "k2_stderr": k2 * spread.get("log_k2", np.nan),
+    out = {"k1": k1, "k1_stderr": k1 * spread["log_k1"], "k2": k2, "k2_stderr": k2_sd,
            "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * spread["log_q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
-           "gap": gap, "explained": (gap < gap_threshold).astype(float), "cost": cost}
+           "gap": gap, "at_bound": at_bound.astype(float),
+           "explained": ((gap < gap_threshold) & ~at_bound).astype(float), "cost": cost}
     out.update({name: value * scale if name in _SCALED else value for name, value in linear.items()})
+    # a parameter at its bound is where the fit was stopped, not a measurement: report nothing there
+    for name in out:
+        if name not in _ALWAYS and out[name] is not None:
+            out[name] = np.where(at_bound, np.nan, out[name])
     return {name: out[name] for name in [*model.outputs, "cost"]}
+
+
+_ALWAYS = {"gap", "at_bound", "explained", "cost"}
+"""Outputs reported at every pixel, also where the fit sits at a bound."""
+
+
+_NULL_BOUNDS = {"log_q": "upper", "log_k2": "lower", "g": "lower", "x": "lower"}
+"""Bounds that are a parameter's null (no internal loss, no lateral spring, no drag or dashpot):
+reaching them switches an effect off, it does not mean the model cannot reach the data."""
+
+
+def _at_bound(model, p, k1_range) -> np.ndarray:
+    """Pixels where a fitted parameter sits at a bound (within 1e-6) other than its null."""
+    lower, upper = _bounds(model, k1_range)
+    names = model.parameters
+    low = np.array([_NULL_BOUNDS.get(n) != "lower" for n in names])
+    high = np.array([_NULL_BOUNDS.get(n) != "upper" for n in names])
+    return np.any((np.abs(p - upper) < 1e-6) & high, axis=1) | np.any((np.abs(p - lower) < 1e-6) & low, axis=1)
 
 
 _SCALED = {"amplitude", "amplitude_stderr", "electrostatic", "electrostatic_stderr"}

@@ -12,24 +12,27 @@ Asylum's key names) or the command line.
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..cantilever import Cantilever, Contact
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
+from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
 from .fit import BeamMapModel
+from .fit import bands as fit_bands
 from .sho import SHOMapModel
 
-__all__ = ["MapInput", "open_map", "read_block", "require"]
+__all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
 
-METADATA = {"spring_constant_n_per_m": "k", "length_m": "L", "tip_height_m": "H", "free_resonance_hz": "f1"}
-TIP = {"tip_position": "tip_position", "tip_mass_ratio": "tip_mass"}
-"""Optional tip geometry: position over the lever length (default 1, at the free end) and mass
-over the lever's (default 0)."""
+REQUIRED = ("spring_constant", "free_resonance", "length", "tip_height")
+"""Lever metadata every map needs (names of :mod:`pfmdyn.names`); the tip geometry, tilt and the
+contact's k2 policy are optional (:data:`pfmdyn.names.LEVER`, :data:`pfmdyn.names.CONTACT`)."""
 
 
 def require(module: str):
@@ -54,8 +57,20 @@ class MapInput:
     order of ``frequency_hz`` that sorts it (None when already increasing)."""
 
 
+_READ_ERRORS = (OSError, KeyError, ValueError, TypeError, IndexError, AttributeError, RuntimeError)
+"""What h5py and zarr raise on a damaged or foreign layout (a broken B-tree or chunk, a dangling
+reference, a group where a dataset belongs, text where numbers belong)."""
+
+
+def _reason(exc: Exception) -> str:
+    """An exception as a short single line: its type and first 120 characters."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}"
+
+
 class open_root:
-    """Context manager giving the root group of an HDF5 file or a Zarr directory."""
+    """Context manager giving the root group of an HDF5 file or a Zarr directory; what the
+    libraries raise on a damaged or foreign layout inside the ``with`` becomes one
+    :class:`~pfmdyn.errors.UserError` naming the file."""
 
     def __init__(self, path):
         self.path = path
@@ -73,9 +88,11 @@ class open_root:
                             "from HDF5 files and Zarr directories") from None
         return self._file
 
-    def __exit__(self, *exc):
+    def __exit__(self, kind, exc, traceback):
         if hasattr(self, "_file"):
             self._file.close()
+        if isinstance(exc, _READ_ERRORS) and not isinstance(exc, UserError):
+            raise UserError(f"{self.path}: could not interpret the file ({_reason(exc)})") from None
 
 
 def _usid_main(root):
@@ -160,86 +177,146 @@ def _usid_grid(root, name, path):
 
 
 def _metadata(root) -> dict:
-    """Cantilever metadata: root attributes, else the first ``Measurement_*`` group's, under
-    pfmdyn's names or Asylum's (as pycroscopy's translators keep them)."""
+    """Lever and contact metadata by name (:mod:`pfmdyn.names`; older spellings are read too):
+    root attributes, else the first ``Measurement_*`` group's, under pfmdyn's names or Asylum's
+    (as pycroscopy's translators keep them)."""
     found = {}
     groups = [root] + [root[k] for k in sorted(root.keys()) if k.startswith("Measurement")]
     for group in groups:
         attrs = dict(group.attrs)
         asylum, _ = cantilever_fields(attrs)
-        for key in [*METADATA, *TIP]:
-            value = attrs.get(key, asylum.get(key))
-            if value is not None and key not in found:
-                found[key] = value
+        for key, value in [*attrs.items(), *asylum.items()]:
+            name = canonical(key)
+            if name in LEVER + CONTACT and name not in found:
+                found[name] = value
     return found
+
+
+MIN_BAND = 3
+"""Frequencies a band needs: its complex amplitude takes two real numbers of the band's
+``2 n`` and k1, Q the rest (with fewer the fit reports a resonance the data cannot determine)."""
+
+
+def _plain_axes(root, path):
+    """Frequencies, biases (or None), pixel grid and sorting order of the plain layout."""
+    for name in ("response", "frequency_hz"):
+        if name not in root:
+            raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
+                            " or a USID main dataset)")
+    axes = {name: np.asarray(root[name][...]) for name in ("frequency_hz", "bias_v") if name in root}
+    for name, values in axes.items():
+        if values.ndim != 1 or not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+            raise UserError(f"{path}: {name} must be a 1-D array of real numbers, got shape {values.shape} "
+                            f"of {values.dtype}")
+    f = axes["frequency_hz"].astype(float)
+    bias = axes["bias_v"].astype(float) if "bias_v" in axes else None
+    response = root["response"]
+    shape, dtype = response.shape, response.dtype
+    if not np.issubdtype(dtype, np.number):
+        raise UserError(f"{path}: response must hold complex (or real) numbers, got {dtype}")
+    expected = (f.size,) if bias is None else (bias.size, f.size)
+    if len(shape) != 2 + len(expected) or shape[2:] != expected:
+        raise UserError(f"{path}: response must have shape (ny, nx, {', '.join(map(str, expected))})"
+                        f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
+                        f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
+    order = np.argsort(f, kind="stable")
+    # frequencies are a set: any order, sorted here (the spectra follow on reading)
+    columns, f = (None, f) if np.all(order == np.arange(f.size)) else (order, f[order])
+    return f, bias, shape[:2], columns
+
+
+def scalar(raw):
+    """A one-element array attribute (HDF5 often stores a number so) as its element.
+
+    >>> scalar(np.array([2.25e-4])), scalar("2")
+    (np.float64(0.000225), '2')
+    """
+    return raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
 
 
 def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> MapInput:
     """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's);
-    ``sho``: for the SHO fit (:class:`pfmdyn.maps.sho.SHOMapModel`), which needs no lever metadata."""
+    ``sho``: for the SHO fit (:class:`pfmdyn.maps.sho.SHOMapModel`), which needs no lever metadata.
+
+    Everything a fit needs is checked here, before anything is written: a malformed file, an
+    empty or non-finite axis, inconsistent shapes or non-physical metadata are one
+    :class:`~pfmdyn.errors.UserError` naming the file.
+
+    >>> import tempfile, h5py
+    >>> path = tempfile.mkdtemp() + "/be.h5"
+    >>> with h5py.File(path, "w") as h:
+    ...     h["response"], h["frequency_hz"] = np.ones((2, 3, 8), complex), np.linspace(3e5, 4e5, 8)
+    ...     h.attrs.update(spring_constant_n_per_m=-2.0, length_m=225e-6, tip_height_m=1e-5, free_resonance_hz=75e3)
+    >>> open_map(path)                              # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: .../be.h5: spring_constant must be in (0.0001, 10000] N/m, got -2.0
+    >>> open_map(path, {"spring_constant": 2.0}).shape
+    (2, 3)
+    """
     if not os.path.exists(path):
         raise UserError(f"{path}: no such file or directory")
     with open_root(path) as root:
         usid = None if "response" in root else _usid_main(root)
-        columns = None
-        if usid is None:
-            for name in ("response", "frequency_hz"):
-                if name not in root:
-                    raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
-                                    " or a USID main dataset)")
-            f = np.asarray(root["frequency_hz"][...], float)
-            bias = np.asarray(root["bias_v"][...], float) if "bias_v" in root else None
-            shape = root["response"].shape
-            expected = (f.size,) if bias is None else (bias.size, f.size)
-            if len(shape) != 2 + len(expected) or shape[2:] != expected:
-                raise UserError(f"{path}: response must have shape (ny, nx, {', '.join(map(str, expected))})"
-                                f"{' (n_bias = len(bias_v))' if bias is not None else ''}, got {shape}"
-                                f"{'; a bias axis needs a bias_v dataset' if bias is None and len(shape) == 4 else ''}")
-            grid = shape[:2]
-            order = np.argsort(f, kind="stable")
-            # frequencies are a set: any order, sorted here (the spectra follow on reading)
-            columns, f = (None, f) if np.all(order == np.arange(f.size)) else (order, f[order])
-        else:
-            f, bias, grid, columns = _usid_grid(root, usid, path)
+        f, bias, grid, columns = _plain_axes(root, path) if usid is None else _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
-    if sho:
-        _check_axes(path, f, bias)
-        return MapInput(path, SHOMapModel(frequency_hz=f, bias_v=bias), tuple(grid), usid or "response",
-                        "usid" if usid else "plain", columns)
-    missing = [key for key in METADATA if key not in attrs]
+    missing = [] if sho else [name for name in REQUIRED if name not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
-    _check_axes(path, f, bias)
-    meta = {short: float(attrs[key]) for key, short in METADATA.items()}
-    tip = {short: float(attrs[key]) for key, short in TIP.items() if key in attrs}
-    if not 0.5 <= tip.get("tip_position", 1.0) <= 1.0 or not 0.0 <= tip.get("tip_mass", 0.0) < 10.0:
-        raise UserError(f"{path}: tip_position must lie in [0.5, 1] (of the lever length) and tip_mass_ratio in "
-                        f"[0, 10), got {tip}")
-    return MapInput(path, BeamMapModel(frequency_hz=f, bias_v=bias, **meta, **tip), tuple(grid),
+    _check_axes(path, grid, f, bias)
+    if sho:
+        return MapInput(path, SHOMapModel(frequency_hz=f, bias_v=bias), tuple(grid), usid or "response",
+                        "usid" if usid else "plain", columns)
+    try:
+        lever = Cantilever.from_values({name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs})
+        contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
+                             if name in attrs and name != "k1"})
+    except (TypeError, ValueError, UserError) as exc:
+        raise UserError(f"{path}: {exc}") from None
+    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
 
-def _check_axes(path, f, bias):
+def _check_axes(path, grid, f, bias):
+    """One-line errors for an empty map, a bad frequency axis, too narrow a band or bad biases."""
+    if 0 in grid:
+        raise UserError(f"{path}: the map holds no pixels (shape {tuple(grid)})")
+    if f.size == 0:
+        raise UserError(f"{path}: the frequency axis is empty")
     if not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise UserError(f"{path}: frequency_hz must be positive and finite")
     if np.any(np.diff(f) == 0):
         raise UserError(f"{path}: frequency_hz holds {f[1:][np.diff(f) == 0][0]:g} Hz twice")
-    if bias is not None:
+    narrow = [b for b in fit_bands(f) if b.stop - b.start < MIN_BAND]
+    if narrow:
+        raise UserError(f"{path}: the band at {f[narrow[0].start]:g} Hz holds {narrow[0].stop - narrow[0].start} "
+                        f"frequencies; a band needs at least {MIN_BAND} to determine a resonance")
+    try:
         basis(bias)                                  # one-line error unless two distinct finite biases
+    except UserError as exc:
+        raise UserError(f"{path}: {exc}") from None
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:
     """Spectra of the pixel block ``[ys, xs]``: ``(by, bx, n_freq)`` complex, or
-    ``(by, bx, n_bias, n_freq)`` when the map has a bias axis."""
+    ``(by, bx, n_bias, n_freq)`` when the map has a bias axis.  A block the file cannot give
+    (a damaged chunk) is one :class:`~pfmdyn.errors.UserError` naming the file and the pixels."""
     with open_root(source.path) as root:
-        data = root[source.dataset]
-        if source.layout == "plain":
-            block = np.asarray(data[ys, xs])
-            return block if source.columns is None else block[..., source.columns]
-        nx = source.shape[1]
-        rows = range(*ys.indices(source.shape[0]))
-        x0, x1, _ = xs.indices(nx)
-        block = np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
-        spectra = block[..., source.columns]              # (by, bx, n_bias, n_freq)
-        return spectra if source.model.bias_v is not None else spectra[..., 0, :]
+        try:
+            return _block(root[source.dataset], source, ys, xs)
+        except _READ_ERRORS as exc:
+            raise UserError(f"{source.path}: could not read pixels [{ys.start}:{ys.stop}, {xs.start}:{xs.stop}] "
+                            f"({_reason(exc)})") from None
+
+
+def _block(data, source: MapInput, ys: slice, xs: slice) -> np.ndarray:
+    if source.layout == "plain":
+        block = np.asarray(data[ys, xs])
+        return block if source.columns is None else block[..., source.columns]
+    nx = source.shape[1]
+    rows = range(*ys.indices(source.shape[0]))
+    x0, x1, _ = xs.indices(nx)
+    block = np.stack([np.asarray(data[y * nx + x0:y * nx + x1, :]) for y in rows])
+    spectra = block[..., source.columns]              # (by, bx, n_bias, n_freq)
+    return spectra if source.model.bias_v is not None else spectra[..., 0, :]

@@ -203,6 +203,9 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=0.2, iterations
     >>> out = fit_sho_block(SHOMapModel(f), np.broadcast_to(y, (2, 3, f.size)))
     >>> out["resonance_frequency"].shape, np.round(out["quality_factor"][0, 0], 6).tolist()
     ((2, 3, 2), [80.0, 120.0])
+    >>> masked = fit_sho_block(SHOMapModel(f), np.stack([y, np.full(f.size, np.nan)]))
+    >>> np.isnan(masked["resonance_frequency"][1]).tolist(), masked["explained"][:, 0].tolist()
+    ([True, True], [1.0, 0.0])
     """
     y = np.asarray(response, complex)
     tail = (len(model.bias_v), len(model.frequency_hz)) if model.bias_v is not None else (len(model.frequency_hz),)
@@ -213,13 +216,24 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=0.2, iterations
     f = np.asarray(model.frequency_hz, float)
     per_band = []
     for band in model.bands:
-        parts = [fit_spectra(f[band], spectra[i:i + chunk, band], iterations=iterations, tolerance=tolerance)
-                 for i in range(0, max(len(spectra), 1), chunk)]
-        per_band.append({name: np.concatenate([part[name] for part in parts]) for name in parts[0]})
+        # a spectrum holding NaN or inf, or nothing but zeros, is masked: NaN maps, not explained
+        usable = np.all(np.isfinite(spectra[:, band]), axis=1) & np.any(spectra[:, band] != 0, axis=1)
+        good = spectra[usable][:, band]
+        parts = [fit_spectra(f[band], good[i:i + chunk], iterations=iterations, tolerance=tolerance)
+                 for i in range(0, len(good), chunk)] or [fit_spectra(f[band], np.ones((1, f[band].size)))]
+        fitted = {name: np.concatenate([part[name] for part in parts])[:len(good)] for name in parts[0]}
+        per_band.append({name: _unmask(value, usable) for name, value in fitted.items()})
     stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in per_band[0]}
-    stacked["explained"] = (stacked["gap"] < gap_threshold).astype(float)
+    stacked["explained"] = np.where(np.isfinite(stacked["gap"]), stacked["gap"] < gap_threshold, 0.0)
     bands_shape = (len(model.bands),) if len(model.bands) > 1 else ()
     return {name: value.reshape(shape + bands_shape) for name, value in stacked.items() if name in model.outputs}
+
+
+def _unmask(values, usable):
+    """``values`` of the usable spectra in place among all, NaN elsewhere."""
+    out = np.full(usable.shape, np.nan)
+    out[usable] = values
+    return out
 
 
 def band_centres(model: SHOMapModel) -> list[float]:

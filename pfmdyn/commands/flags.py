@@ -1,0 +1,106 @@
+"""The probe's command-line flags, the same in every command (names: :mod:`pfmdyn.names`).
+
+A command adds the groups it uses (:func:`add_lever`, :func:`add_contact`, :func:`add_damping`)
+and builds the one description from them, values found in a file first and flags over them
+(:func:`cantilever`, :func:`contact`).  Every value is checked against what a real probe can
+have, and a bad one is a one-line error naming the flag.
+"""
+from __future__ import annotations
+
+import math
+
+from ..cantilever import Cantilever, Contact
+from ..io.record import MissingFieldError
+from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
+
+__all__ = ["add_lever", "add_contact", "add_damping", "given", "cantilever", "contact", "option_hint"]
+
+
+def _add(parser, names, required=()):
+    for name in names:
+        q = NAMES[name]
+        unit = "" if q.unit == "1" else f", {q.unit}"
+        parser.add_argument(q.flag, dest=name, default=None, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
+                            required=name in required, help=f"{q.meaning} ({q.symbol}{unit})")
+
+
+def add_lever(parser, names=LEVER, required=()) -> None:
+    """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_lever(p)
+    >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position
+    '0.93'
+    """
+    _add(parser, names, required)
+
+
+def add_contact(parser, names=CONTACT, required=()) -> None:
+    """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``)."""
+    _add(parser, names, required)
+
+
+def add_damping(parser, names=DAMPING) -> None:
+    """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``)."""
+    _add(parser, names)
+
+
+def given(args, names) -> dict[str, float]:
+    """The values of the flags among ``names`` that were given, checked (name -> SI float).
+
+    >>> import argparse
+    >>> given(argparse.Namespace(length="2e-4", width=None), ("length", "width"))
+    {'length': 0.0002}
+    >>> given(argparse.Namespace(length="-2"), ("length",))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --length: length must be in (1e-06, 0.01] m, got -2
+    """
+    out = {}
+    for name in names:
+        value = getattr(args, name, None)
+        if value is not None:
+            out[name] = checked(name, value, NAMES[name].flag)
+    return out
+
+
+def cantilever(args, found: dict | None = None) -> Cantilever:
+    """The lever from values ``found`` in a file (names -> SI) with the flags over them.
+
+    >>> import argparse
+    >>> ns = argparse.Namespace(spring_constant="2", free_resonance="7e4", length=None, tilt="12")
+    >>> lever = cantilever(ns, {"length": 2e-4, "spring_constant": 1.0})
+    >>> lever.spring_constant, lever.length, lever.tilt
+    (2.0, 0.0002, 12.0)
+    """
+    values = {k: v for k, v in (found or {}).items() if k in LEVER or k in ("quality_factor", "viscous_loss")}
+    values.update(given(args, LEVER + ("quality_factor", "viscous_loss")))
+    if values.get("quality_factor") is None:
+        values["quality_factor"] = math.inf
+    return Cantilever.from_values(values)
+
+
+def contact(args) -> Contact:
+    """The contact from its flags (and ``--contact-loss``).
+
+    >>> import argparse
+    >>> contact(argparse.Namespace(k1="300", poisson="0.3")).describe_k2()
+    'k2 tied to k1 (Mindlin, Poisson ratio 0.3: k2 = 0.824 k1)'
+    """
+    values = given(args, CONTACT + ("contact_loss",))
+    return Contact(**values)
+
+
+def option_hint(error: Exception) -> str:
+    """``": give --flag"`` when ``error`` is a field missing from a file that a flag supplies.
+
+    The readers name the field (:class:`pfmdyn.io.record.MissingFieldError`); only the
+    commands know flags.
+
+    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height_m"))
+    ': give --tip-height'
+    >>> option_hint(ValueError("x"))
+    ''
+    """
+    name = canonical(error.field) if isinstance(error, MissingFieldError) else None
+    return f": give {NAMES[name].flag}" if name else ""

@@ -1,0 +1,146 @@
+"""The one vocabulary of pfmdyn: each physical quantity under one name, one unit, one flag.
+
+The same name is the Python attribute (:class:`pfmdyn.Cantilever`, :class:`pfmdyn.Contact`),
+the key of a metadata line in a CSV file, of a JSON report and of a Zarr attribute, and, with
+dashes, the command-line flag (``tip_position`` <-> ``--tip-position``).  Values are SI
+(tilt in degrees).  Older spellings found in files (``spring_constant_n_per_m``, ``f1``) are
+read as :attr:`Quantity.aliases` of the name; nothing writes them.
+
+The README's table of names is :func:`markdown_table` (a test keeps the two equal).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import UserError
+
+__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "canonical", "flag",
+           "checked", "markdown_table"]
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One physical quantity: its name, unit, meaning and the values a real probe can have.
+
+    ``low``/``high`` bound plausible values (a value outside is a typo or a unit slip);
+    ``open_low`` excludes ``low`` itself (a length cannot be 0, a tip mass can).
+    """
+
+    name: str
+    symbol: str
+    unit: str
+    meaning: str
+    low: float
+    high: float
+    open_low: bool = True
+    aliases: tuple[str, ...] = ()
+
+    @property
+    def flag(self) -> str:
+        """The command-line flag: ``--`` and the name with dashes."""
+        return "--" + self.name.replace("_", "-")
+
+
+QUANTITIES: tuple[Quantity, ...] = (
+    # The lever, its tip and the detection point.
+    Quantity("spring_constant", "k", "N/m", "lever spring constant 3 EI / L^3", 1e-4, 1e4,
+             aliases=("spring_constant_n_per_m", "k", "k_n_per_m")),
+    Quantity("free_resonance", "f1", "Hz", "first free flexural resonance, as measured (with the tip)",
+             500.0, 1e8, aliases=("free_resonance_hz", "f1", "f1_hz")),
+    Quantity("length", "L", "m", "lever length, clamp to free end", 1e-6, 1e-2, aliases=("length_m",)),
+    Quantity("width", "w", "m", "lever width", 1e-7, 1e-2, aliases=("width_m",)),
+    Quantity("thickness", "t", "m", "lever thickness (geometry input)", 1e-8, 1e-3, aliases=("thickness_m",)),
+    Quantity("density", "rho", "kg/m^3", "lever material density (geometry input)", 100.0, 3e4),
+    Quantity("tip_height", "H", "m", "tip height, the lever arm of the lateral contact force", 1e-8, 1e-3,
+             aliases=("tip_height_m",)),
+    Quantity("tip_position", "x_tip/L", "1", "where the tip sits along the lever (1: at the free end)",
+             0.0, 1.0, aliases=("gamma",)),
+    Quantity("tip_mass_ratio", "m_tip/(rho S L)", "1", "tip mass over the lever's mass", 0.0, 100.0,
+             open_low=False, aliases=("mu",)),
+    Quantity("tip_gyration_radius", "r_g", "m", "tip's radius of gyration about the lever axis "
+             "(rotary inertia J = m_tip r_g^2)", 0.0, 1e-3, open_low=False),
+    Quantity("tilt", "alpha", "deg", "lever inclination; positive when the free end is nearer the sample "
+             "than the clamp (the usual mounting, 10-15 deg)", -45.0, 45.0, open_low=False),
+    Quantity("spot_position", "x_s/L", "1", "detection (laser) spot along the lever (1: at the free end)",
+             0.0, 1.0),
+    # The contact.
+    Quantity("k1", "k1", "N/m", "vertical contact stiffness", 0.0, 1e9, open_low=False),
+    Quantity("k2", "k2", "N/m", "lateral (longitudinal) contact stiffness", 0.0, 1e9, open_low=False),
+    Quantity("k2_over_k1", "k2/k1", "1", "k2 policy: k2 tied to k1 at this ratio", 0.0, 100.0,
+             open_low=False),
+    Quantity("poisson", "nu", "1", "k2 policy: k2/k1 of a Hertz-Mindlin contact on a sample of this "
+             "Poisson's ratio", 0.0, 0.5, open_low=False, aliases=("poisson_ratio",)),
+    # Damping.
+    Quantity("quality_factor", "Q", "1", "internal friction: complex modulus E (1 + i/Q)", 0.1, 1e9,
+             aliases=("Q",)),
+    Quantity("viscous_loss", "g", "1", "viscous drag c/(rho S omega1): 1/Q of free mode 1 under drag alone",
+             0.0, 100.0, open_low=False),
+    Quantity("contact_loss", "x", "1", "contact dashpot omega1 eta/k1: loss tangent of the contact at f1",
+             0.0, 1e4, open_low=False),
+)
+
+NAMES: dict[str, Quantity] = {q.name: q for q in QUANTITIES}
+
+LEVER = ("spring_constant", "free_resonance", "length", "width", "tip_height", "tip_position",
+         "tip_mass_ratio", "tip_gyration_radius", "tilt", "spot_position")
+"""Names describing the probe (:class:`pfmdyn.Cantilever`)."""
+CONTACT = ("k1", "k2", "k2_over_k1", "poisson")
+"""Names describing the contact (:class:`pfmdyn.Contact`)."""
+DAMPING = ("quality_factor", "viscous_loss", "contact_loss")
+"""The three damping mechanisms: internal friction, viscous drag, contact dashpot."""
+
+_ALIASES = {alias.lower(): q.name for q in QUANTITIES for alias in (q.name, *q.aliases)}
+
+
+def canonical(key: str) -> str | None:
+    """The name of a quantity from any spelling a file may use (None: not a quantity).
+
+    >>> canonical("spring_constant_n_per_m"), canonical("Tip_Position"), canonical("colour")
+    ('spring_constant', 'tip_position', None)
+    """
+    return _ALIASES.get(str(key).strip().lower())
+
+
+def flag(name: str) -> str:
+    """The command-line flag of a name.
+
+    >>> flag("tip_mass_ratio")
+    '--tip-mass-ratio'
+    """
+    return NAMES[name].flag
+
+
+def checked(name: str, value, where: str = "") -> float:
+    """``value`` as a float, or a :class:`UserError` naming ``where`` when no probe can have it.
+
+    >>> checked("length", "225e-6")
+    0.000225
+    >>> checked("length", 0.0, "lever.csv")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: lever.csv: length must be in (1e-06, 0.01] m, got 0.0
+    """
+    q = NAMES[name]
+    prefix = f"{where}: " if where else ""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise UserError(f"{prefix}{name} must be a number, got {value!r}") from None
+    inside = (number > q.low if q.open_low else number >= q.low) and number <= q.high
+    if not (math.isfinite(number) and inside):
+        interval = f"{'(' if q.open_low else '['}{q.low:g}, {q.high:g}]"
+        unit = "" if q.unit == "1" else f" {q.unit}"
+        raise UserError(f"{prefix}{name} must be in {interval}{unit}, got {value}")
+    return number
+
+
+def markdown_table() -> str:
+    """The README's table: one row per quantity (name, flag, unit, meaning).
+
+    >>> markdown_table().splitlines()[2]
+    '| `spring_constant` | `--spring-constant` | N/m | lever spring constant 3 EI / L^3 |'
+    """
+    rows = ["| name (Python, JSON, file, Zarr) | flag | unit | meaning |", "|---|---|---|---|"]
+    rows += [f"| `{q.name}` | `{q.flag}` | {q.unit} | {q.meaning} |" for q in QUANTITIES]
+    return "\n".join(rows)
