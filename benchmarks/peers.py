@@ -29,14 +29,13 @@ workarounds are applied here: pyUSID 0.0.12 calls ``np.product`` (gone in NumPy 
 
     python benchmarks/peers.py [--side 32] [--bins 128]
 
-The results go to ``benchmarks/peers_results.md``.
+The results go to ``benchmarks/results/peers.md`` (:mod:`recording`).
 """
 from __future__ import annotations
 
 import argparse
 import contextlib
 import io
-import os
 import shutil
 import sys
 import tempfile
@@ -52,10 +51,10 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from fe_beam import FEBeam  # noqa: E402
+from recording import recorded  # noqa: E402
 
 K, L, F1, H, Q = 2.0, 225e-6, 75e3, 10e-6, 80.0
 NOISE = 0.01
-RESULTS = HERE / "peers_results.md"
 
 
 def hand_sho(f, amplitude, f0, q):
@@ -167,10 +166,12 @@ def run_sidpy(y, f, side):
     return elapsed, params
 
 
-def run_pfmdyn(path, out, sho, free):
+def run_pfmdyn(path, out, sho, free, two_bands):
     from pfmdyn.maps import open_result
     from pfmdyn.maps.driver import open_map, run_map
     overrides = {"spring_constant": K, "length": L, "tip_height": H, "free_resonance": free}
+    if not two_bands:       # one band cannot tell k2 from k1: held at the lever's k2 = 0
+        overrides["k2"] = 0.0
     source = open_map(str(path), overrides, sho=sho)
     start = time.perf_counter()
     run_map(source, str(out), block=32, scheduler="sync")
@@ -210,10 +211,10 @@ def bench(name, two_bands, args, peers, tmp):
         elapsed, params = run_sidpy(y, f, args.side)
         rows.append(("sidpy SidpyFitterRefactor", n / elapsed, *sho_scores(params[:, 1], params[:, 2], best, k1_true,
                                                                             free)))
-    elapsed, result = run_pfmdyn(path, tmp / f"{name}_sho", True, free)
+    elapsed, result = run_pfmdyn(path, tmp / f"{name}_sho", True, free, two_bands)
     f0, q = (result[v].values.reshape(n, -1)[:, 0] for v in ("resonance_frequency", "quality_factor"))
     rows.append(("pfmdyn map --model sho", n / elapsed, *sho_scores(f0, q, best, k1_true, free)))
-    elapsed, result = run_pfmdyn(path, tmp / f"{name}_beam", False, free)
+    elapsed, result = run_pfmdyn(path, tmp / f"{name}_beam", False, free, two_bands)
     rows.append(("pfmdyn map (beam, elastic)", n / elapsed, None, *k1_scores(result["k1"].values.ravel(), k1_true)))
     return rows
 
@@ -251,27 +252,19 @@ def main():
     import numpy
     import scipy
     versions = ", ".join(f"{m.__name__} {getattr(m, '__version__', '?')}" for m in (numpy, scipy, *peers.values()))
-    sections = []
-    with threadpool_limits(1), tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+    with recorded("peers"), threadpool_limits(1), tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        print(f"{versions}; one core per tool.\n")
+        print("Skipped: " + ("; ".join(skipped) if skipped else "none") + ".\n")
         for name, two in (("one band", False), ("two bands", True)):
-            rows = bench(name.replace(" ", "_"), two, args, peers, Path(tmp))
-            sections.append(table(name, rows, args.side, args.bins))
-            print(sections[-1] + "\n", flush=True)
-    text = "\n".join([
-        "# benchmarks/peers.py: results", "",
-        f"Written by `python benchmarks/peers.py --side {args.side} --bins {args.bins}` on {os.cpu_count()} cores "
-        f"({versions}); one core per tool.", "",
-        "Skipped: " + ("; ".join(skipped) if skipped else "none") + ".", "",
-        *[s + "\n" for s in sections],
-        "f and Q right: frequency within 2e-4 and Q within 3 % of the least-squares SHO of the noise-free "
-        "spectrum (first band). k1 for the SHO tools: their first-band frequency through pfmdyn stiffness "
-        "(k2 = 0), today's BE route; for the beam fit: its own k1. With two bands the lever has k2 = 0.5 k1, "
-        "which that route cannot see; BGlib and sidpy fit one SHO over both bands.",
-        "Rates are per core on a machine shared with other jobs: compare the ratios; each pfmdyn row includes "
-        "its run's set-up (Dask, Zarr output).", ""])
-    RESULTS.write_text(text)
-    print(f"wrote {RESULTS}")
+            print(table(name, bench(name.replace(" ", "_"), two, args, peers, Path(tmp)), args.side, args.bins) + "\n",
+                  flush=True)
+        print("f and Q right: frequency within 2e-4 and Q within 3 % of the least-squares SHO of the noise-free\n"
+              "spectrum (first band). k1 for the SHO tools: their first-band frequency through pfmdyn stiffness\n"
+              "(k2 = 0), today's BE route; for the beam fit: its own k1. With two bands the lever has k2 = 0.5 k1,\n"
+              "which that route cannot see; BGlib and sidpy fit one SHO over both bands.\n"
+              "Rates are per core on a machine that may be shared (see the load above): compare the ratios; each\n"
+              "pfmdyn row includes its run's set-up (Dask, Zarr output).")
 
 
 if __name__ == "__main__":
