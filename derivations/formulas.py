@@ -106,7 +106,7 @@ def _oscillator() -> tuple[Formula, ...]:
     ``x'' + (w0/Q) x' + w0**2 x = w0**2 F`` at ``e^{i w t}`` gives ``X/F = w0**2 / (w0**2 - w**2 +
     i w w0/Q)``, which depends on frequencies only through ``w/w0 = f/f0``.  BGlib writes
     ``A e^{i phi} w0**2 / (f**2 - i f w0/Q - w0**2)``: the same response times ``-1``, so its
-    phase is the usual one plus pi and ``A`` is the response far below resonance.
+    phase is the usual one plus pi and ``A`` is the response's magnitude far below resonance.
     """
     f, f0, q = sp.symbols("frequency resonance_frequency quality_factor", positive=True)
     w, w0, x = sp.symbols("omega omega_0 X")
@@ -117,7 +117,7 @@ def _oscillator() -> tuple[Formula, ...]:
     source = "derivations/formulas.py: SHO x'' + (w0/Q) x' + w0**2 x = w0**2 F, times -1 (BGlib)"
     return (
         Formula("sho_response", (f, f0, q), bglib,
-                "SHO response per unit amplitude in BGlib's convention (1 far below resonance, phase + pi)", source),
+                "SHO response per unit amplitude in BGlib's convention (-1 far below resonance: phase + pi)", source),
         Formula("sho_response_d_log_resonance", (f, f0, q), sp.factor(f0 * sp.diff(bglib, f0)),
                 "partial of sho_response w.r.t. log(resonance_frequency)", source),
         Formula("sho_response_d_log_quality", (f, f0, q), sp.factor(q * sp.diff(bglib, q)),

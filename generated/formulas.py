@@ -294,14 +294,14 @@ def paper_small_piezo_phase_difference(d_eff, d_el, psi):
 
 
 def sho_response(frequency, resonance_frequency, quality_factor):
-    """SHO response per unit amplitude in BGlib's convention (1 far below resonance, phase + pi).
+    """SHO response per unit amplitude in BGlib's convention (-1 far below resonance: phase + pi).
 
     ``quality_factor*resonance_frequency**2/(frequency**2*quality_factor - I*frequency*resonance_frequency - quality_factor*resonance_frequency**2)``, from derivations/formulas.py: SHO x'' + (w0/Q) x' + w0**2 x = w0**2 F, times -1 (BGlib).
 
     Examples
     --------
-    >>> f"{sho_response(0.5, 0.5, 0.5):.8g}"
-    '0+0.5j'
+    >>> f"{sho_response(301000.0, 300000.0, 50.0):.8g}"
+    '14.930288+44.865391j'
     """
     return quality_factor*resonance_frequency**2/(frequency**2*quality_factor - 1j*frequency*resonance_frequency - quality_factor*resonance_frequency**2)
 
@@ -313,8 +313,8 @@ def sho_response_d_log_resonance(frequency, resonance_frequency, quality_factor)
 
     Examples
     --------
-    >>> f"{sho_response_d_log_resonance(0.5, 0.5, 0.5):.8g}"
-    '-0.5+0.5j'
+    >>> f"{sho_response_d_log_resonance(301000.0, 300000.0, 50.0):.8g}"
+    '-3577.0026+2733.2245j'
     """
     return frequency*quality_factor*resonance_frequency**2*(2*frequency*quality_factor - 1j*resonance_frequency)/(frequency**2*quality_factor - 1j*frequency*resonance_frequency - quality_factor*resonance_frequency**2)**2
 
@@ -326,7 +326,7 @@ def sho_response_d_log_quality(frequency, resonance_frequency, quality_factor):
 
     Examples
     --------
-    >>> f"{sho_response_d_log_quality(0.5, 0.5, 0.5):.8g}"
-    '0+0.5j'
+    >>> f"{sho_response_d_log_quality(301000.0, 300000.0, 50.0):.8g}"
+    '26.883442+35.91913j'
     """
     return -1j*frequency*quality_factor*resonance_frequency**3/(frequency**2*quality_factor - 1j*frequency*resonance_frequency - quality_factor*resonance_frequency**2)**2

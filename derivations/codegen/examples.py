@@ -41,6 +41,8 @@ POINT = {
     "epsilon_0": 8.8541878128e-12, "V_ac": 1.0, "dV": 0.5,
     "b_re": 1.0, "b_im": 0.5, "c_re": -0.2, "c_im": 0.1,
     "d_eff": 5e-11, "d_el": 2e-11, "psi": 0.3, "phi": 0.3, "pr_plus": 4e-11, "pr_minus": 6e-11,
+    # The SHO of band-excitation tools (Hz): just above a contact resonance.
+    "frequency": 3.01e5, "resonance_frequency": 3e5, "quality_factor": 50.0,
 }
 """Argument name -> its value in the examples (``beta1``: the first free root, derived)."""
 

@@ -2,7 +2,8 @@
 
 Band-excitation users describe each spectrum by an SHO,
 ``A e^{i phi} w0**2 / (f**2 - i f w0/Q - w0**2)`` (f in Hz; BGlib's ``BESHOfitter``): ``A`` is the
-response far below resonance (the peak is ``A Q``) and ``phi`` carries BGlib's ``+pi``.  The
+response's magnitude far below resonance (the peak's is ``A Q``) and ``phi`` carries BGlib's ``+pi``
+(far below resonance the response is ``-A e^{i phi}``).  The
 response and its partials are :func:`pfmdyn.generated.formulas.sho_response` and its
 ``_d_log_*`` companions.  Each spectrum (every pixel, bias step and frequency band: BGlib fits each
 spectroscopic step on its own) is fitted in two stages, every spectrum of a block at once:
@@ -35,7 +36,7 @@ FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "resonance_frequency",
 """BGlib's compound fields -> pfmdyn's map names (``guess_`` + name for the guess)."""
 
 _FIT = {
-    "amplitude": ("response units", "SHO amplitude A (the response far below resonance; the peak is A Q)"),
+    "amplitude": ("response units", "SHO amplitude A (|response| far below resonance; at the peak A Q)"),
     "resonance_frequency": ("Hz", "SHO resonance frequency w0"),
     "resonance_frequency_stderr": ("Hz", "standard error of resonance_frequency"),
     "quality_factor": ("1", "SHO quality factor Q"),
