@@ -26,8 +26,8 @@ from pfmdyn.derivations.checks import core
 limits._series = limits._series.__wrapped__
 core._evaluator = core._evaluator.__wrapped__
 core.result = lambda claim_id: core.run_check(core.REGISTRY[claim_id])
-from pfmdyn.derivations.checks import statements
-statements.result = core.result
+from pfmdyn.audit import restated, statements
+statements.result = restated.result = core.result
 raise SystemExit(cli.main(["verify", "--quiet"]))
 """
 

@@ -197,7 +197,8 @@ class Cantilever:
         beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
             r, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
         b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        return b1 * np.sqrt(r) * beta_factor, self.spring_constant * k_factor, k1_factor, mu_factor
+        return (formulas.beta_from_frequency(f, self.free_resonance, b1) * beta_factor, self.spring_constant * k_factor,
+                k1_factor, mu_factor)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
         """Slope at the free end per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.

@@ -41,8 +41,14 @@ POINT = {
     "epsilon_0": 8.8541878128e-12, "V_ac": 1.0, "dV": 0.5,
     "b_re": 1.0, "b_im": 0.5, "c_re": -0.2, "c_im": 0.1,
     "d_eff": 5e-11, "d_el": 2e-11, "psi": 0.3, "phi": 0.3, "pr_plus": 4e-11, "pr_minus": 6e-11,
-    # The SHO of band-excitation tools (Hz): just above a contact resonance.
-    "frequency": 3.01e5, "resonance_frequency": 3e5, "quality_factor": 50.0,
+    "g_elec": 2e-11, "v_dc": 1.5, "v_av": 0.2,
+    # Relations of derivations/formulas.py: a mode at f (Hz) of a lever with f1, its shifts;
+    # losses; a thermal peak; a complex root in units of f1.
+    "frequency": 3e5, "free_resonance": 7e4, "d_beta": 0.01, "d_beta1": -0.002,
+    "viscous_loss": 0.02, "contact_loss": 0.03,
+    "f": 7.2e4, "f0": 7e4, "q": 150.0, "amplitude": 1e-12, "white": 1e-14, "root_re": 1.0, "root_im": 0.005,
+    # The SHO of band-excitation tools (Hz): a resonance just below that frequency.
+    "resonance_frequency": 2.99e5, "quality_factor": 50.0,
 }
 """Argument name -> its value in the examples (``beta1``: the first free root, derived)."""
 

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..cantilever import Cantilever
 from ..errors import UserError
-from ..generated import tip_setback
+from ..generated import formulas, tip_setback
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
@@ -112,7 +112,7 @@ def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
         b1 = np.array([_free_root(lever, float(g)) for g in np.ravel(gamma)]).reshape(np.shape(gamma))
     else:
         b1 = _free_root(lever, float(gamma))
-    return b1 * np.sqrt(np.asarray(frequency, dtype=float) / lever.free_resonance)
+    return formulas.beta_from_frequency(np.asarray(frequency, dtype=float), lever.free_resonance, b1)
 
 
 def mode_numbers(beta, lever: Cantilever, k1, k2, tip_position) -> np.ndarray:
@@ -234,7 +234,7 @@ def k1_k2_at(beta_pair, mode_pair, lever: Cantilever, tip_position: float) -> li
     [(100.0, 50.0)]
     """
     k, H = lever.spring_constant, lever.tip_height
-    scale_k2 = k * (lever.length / H) ** 2
+    scale_k2 = formulas.k2_from_ratio(1.0, k, H, lever.length)     # k2 H**2/(k L**2) = 1
     (p1, q1, r1, s1), (p2, q2, r2, s2) = (_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
     coefficients = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
     out = []

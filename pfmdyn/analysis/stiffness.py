@@ -118,7 +118,8 @@ def z_from_frequency(frequency_hz, free_resonance_hz):
     >>> round(float(z_from_frequency(4e5, 1e5)), 10)
     3.7502081374
     """
-    return BETA1_FREE * np.sqrt(np.asarray(frequency_hz, dtype=float) / np.asarray(free_resonance_hz, dtype=float))
+    return formulas.beta_from_frequency(np.asarray(frequency_hz, dtype=float), np.asarray(free_resonance_hz, dtype=float),
+                                        BETA1_FREE)
 
 
 def k1_over_k_from_z(z, k2_ratio: float = 0.0):
@@ -188,7 +189,7 @@ def coupled_limits(modes: int = 4) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _ratio(z):
-    return (np.asarray(z) / BETA1_FREE) ** 2
+    return formulas.frequency_from_beta(np.asarray(z), 1.0, BETA1_FREE)
 
 
 def branch_proof(mode: int, k2_ratio: float = 0.0, k1_over_k: float | None = None) -> BranchProof:
@@ -324,7 +325,7 @@ def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k
         raise ValueError("out_of_range must be 'raise' or 'nan'")
     if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length_m, tip_height_m)):
         raise UserError("k2/k1, lever length and tip height must be positive and finite")
-    c = k2_over_k1 * (tip_height_m / length_m) ** 2
+    c = formulas.k2_ratio(k2_over_k1, 1.0, tip_height_m, length_m)     # b per unit a = k1/k
     soft, stiff = coupled_limits(max(4, mode + 1))
     fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_hz, free_hz, spring_constant))
     with np.errstate(invalid="ignore", divide="ignore", under="ignore"):

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
+from ..generated import formulas
 from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 
@@ -224,7 +225,7 @@ def _keep(lever, lateral, fc, modes, candidates, check_modes: bool = True) -> li
 
 def _out_of_range(lever, lateral, words, fc, mode) -> UserError:
     b1 = lever.free_root()
-    ratio_of = lambda b: (b / b1) ** 2      # noqa: E731
+    ratio_of = lambda b: formulas.frequency_from_beta(b, 1.0, b1)      # noqa: E731
     soft, stiff = cr.branch_limits(mode, lever, lateral, lever.tip_position)
     next_soft = cr.branch_limits(mode + 1, lever, lateral, lever.tip_position)[0]
     return UserError(out_of_range_message(fc / lever.free_resonance, mode, ratio_of(soft), ratio_of(stiff),

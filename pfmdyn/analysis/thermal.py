@@ -6,7 +6,8 @@ that of a damped harmonic oscillator over a white floor,
     ASD(f)**2 = w**2 + A**2 f0**4 / ((f0**2 - f**2)**2 + (f f0 / Q)**2),
 
 (the beam's modal response, one mode at a time: pfmdyn's transfer functions with loss
-``1/Q`` reduce to it near each root).  Peaks are located on the logarithm of the median-
+``1/Q`` reduce to it near each root; derived in ``derivations/formulas.py``, evaluated by
+the generated ``formulas.oscillator_asd``).  Peaks are located on the logarithm of the median-
 smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
 that the floor and the peak weigh alike.
 
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UserError
+from ..generated import formulas
 from ..io.discrepancy_data import ResonanceData
 from ..io.instruments import read_instrument, resonance_table
 from ..io.tables import check_resonance_rows
@@ -51,8 +53,7 @@ def oscillator_asd(f, f0, q, amplitude, white):
     >>> round(float(oscillator_asd(1e5, 1e5, 100.0, 1.0, 0.0)), 6)   # A Q at resonance
     100.0
     """
-    f = np.asarray(f, dtype=float)
-    return np.sqrt(white**2 + amplitude**2 * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / q) ** 2))
+    return formulas.oscillator_asd(np.asarray(f, dtype=float), f0, q, amplitude, white)
 
 
 def _smooth(y, width):
@@ -69,7 +70,7 @@ def _flexural_modes(candidates, max_modes):
     if len(candidates) == 0:
         return []
     z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
-    ratios = (z / z[0]) ** 2
+    ratios = formulas.frequency_from_beta(z, 1.0, z[0])
     out, taken = [1], {1}
     for f in candidates[1:]:
         r = f / candidates[0]
