@@ -101,11 +101,11 @@ def formulas() -> tuple[Formula, ...]:
         *_oscillator(),
         *_domain_contrast(),
         *_domain_contrast_printed(),
-        *_oscillator(),
+        *_band_excitation_sho(),
     )
 
 
-def _oscillator() -> tuple[Formula, ...]:
+def _band_excitation_sho() -> tuple[Formula, ...]:
     """The simple harmonic oscillator (SHO) that band-excitation tools fit, in BGlib's convention,
     with its partials w.r.t. the logarithms of the resonance frequency and the quality factor.
 
