@@ -13,8 +13,11 @@ Dividing the damped Eq. 2 by the complex ``EI`` gives back Eq. 2 with complex
 ``beta``, ``k``, ``k1`` and tip mass ``mu`` (:func:`substitution`), so every undamped
 family solution evaluated there *is* the damped solution; :func:`check_substitution`
 proves it for the equation of motion, the dashpot and the tip mass's inertia (a point
-mass feels no drag: ``mu beta**4`` must stay ``mu beta0**4 / (1 + i inv_q)``).  In terms of the undamped dimensionless frequency
-``beta0 = beta1 sqrt(r)``, ``r = f / f1``, and three dimensionless parameters,
+mass feels no drag: ``mu beta**4`` must stay ``mu beta0**4 / (1 + i inv_q)``), and the
+tip's rotary inertia (a rigid body turning in the medium is not dragged by it either:
+``J omega**2 = mu k beta**4 L**2 rho_g**2 / 3`` scales like the mass, so it must come out
+undamped, ``mu k beta0**4 L**2 rho_g**2 / 3``, with ``rho_g`` unchanged).  In terms of
+the undamped dimensionless frequency ``beta0 = beta1 sqrt(r)``, ``r = f / f1``, and three dimensionless parameters,
 
 * ``inv_q = 1/Q`` (internal loss factor, the same for every mode),
 * ``g = c / (rho S omega1)`` (the inverse Q of free mode 1 under air damping alone; the
@@ -34,8 +37,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .beam import EI, L, k, k1, q0, x as coordinate
-from .tip_mass import mu
+from .beam import EI, L, beta, k, k1, q0, x as coordinate
+from .tip_mass import mu, rotary_inertia
 
 __all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width"]
 
@@ -62,7 +65,8 @@ def check_substitution() -> bool:
 
     Damped: ``EI (1 + i/Q) u'''' = (rho S omega**2 - i omega c) u + q0`` with
     ``beta0**4 = rho S omega**2 L**4 / EI``, ``omega = r omega1``, ``c = g rho S omega1``;
-    the contact dashpot: ``(k1 + i omega eta) = k1 (1 + i x r)`` with ``eta = x k1 / omega1``.
+    the contact dashpot: ``(k1 + i omega eta) = k1 (1 + i x r)`` with ``eta = x k1 / omega1``;
+    the tip's mass and rotary inertia come out undamped.
 
     >>> check_substitution()
     True
@@ -77,7 +81,9 @@ def check_substitution() -> bool:
                                       - q0 / (k_star * L**3 / 3))
     dashpot = (k1 + sp.I * w * (xc * k1 / omega1)) - s["k1"]
     inertia = s["mu"] * s["beta4"] - mu * beta0**4 / (1 + sp.I * inv_q)
-    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia))
+    rotary = (rotary_inertia().subs({mu: s["mu"], k: s["k"]}).subs(beta**4, s["beta4"])
+              - rotary_inertia().subs(beta, beta0))
+    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia, rotary))
 
 
 def half_power_width(mechanism: str) -> sp.Expr:

@@ -9,7 +9,8 @@ and ``sech`` built from ``exp(-a)``, ``exp(-b)``; nothing overflows.  There is n
 branch: the closed form cancels like the elastic family's below ``beta ~ 1`` (about
 ``beta**-6`` lost relative to the largest term, 1e-12 at ``beta = 0.3``), which is
 documented as the domain of validity.  The scaled denominator is exported as
-``characteristic`` for root finding.  Every printed polynomial is grouped by monomials of
+``characteristic`` for root finding, and as ``characteristic_balls`` (the same lines in a
+math namespace, integer coefficients) for certified roots in ball arithmetic.  Every printed polynomial is grouped by monomials of
 ``beta`` and the parameters before CSE (:func:`_grouped`).  ``slope_and_jacobian`` and
 ``characteristic_and_jacobian`` add the partials of :data:`.jacobian.JACOBIANS`, ``beta``
 and ``gamma`` through the atoms of both arguments.
@@ -46,6 +47,7 @@ def render() -> str:
     assert all(hyperbolic_degree(e, at) <= degrees[at] for e in d_exprs for at in sets)
     lines, reduced = cse_lines([_grouped(scaled(e, degrees), params) for e in exprs])
     den_lines, den = cse_lines([_grouped(scaled(sol.denominator, degrees), params)])
+    _balls(den_lines, den[0])
     names = ", ".join(map(str, params))
     da, db = degrees[tip_setback.ATOMS_A], degrees[tip_setback.ATOMS_B]
     atoms = f'''    beta = np.asarray(beta)
@@ -66,10 +68,17 @@ def render() -> str:
         "tip_setback.py.jinja", header=header(row.source, source_hash(exprs)), source=row.source,
         degree_a=da, degree_b=db, names=names, atoms=atoms, parameters=tuple(map(str, params)),
         exported=sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian",
-                         "characteristic_and_jacobian"]),
+                         "characteristic_and_jacobian", "characteristic_balls"]),
         jacobian_parameters=tuple(map(str, wrt)), drives=row.drives, slope=slope,
         characteristic=_characteristic(_grouped(scaled(exprs[0], degrees), params), den_lines, den[0],
                                        d_scaled[::len(exprs)], examples_[2:]))
+
+
+def _balls(lines, value) -> None:
+    """``characteristic_balls`` prints :func:`characteristic`'s lines in a math namespace; a
+    float literal there would be a rounded constant inside a proof, so every coefficient
+    must be an integer."""
+    assert "." not in "".join(lines) + value, "non-integer literal in the set-back characteristic"
 
 
 def _examples(exprs, params, wrt, degrees):

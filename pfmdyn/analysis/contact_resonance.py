@@ -79,21 +79,17 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     """The composed characteristic (zeros in ``beta``: the resonances) for springs ``k1``, ``k2``.
 
     The one call of ``generated/tip_setback.py``'s characteristic in the stiffness code:
-    springs rotated by the lever's tilt, its tip height, length and tip mass; broadcast over
-    ``beta``, ``k1``, ``k2`` and ``tip_position``.
+    springs rotated by the lever's tilt, its tip height, length, tip mass and rotary inertia
+    (``rho_g``); broadcast over ``beta``, ``k1``, ``k2`` and ``tip_position``.
 
     >>> lever = Cantilever(2.0, 7e4, 2e-4)
     >>> abs(float(characteristic(1.8751040687119611, lever, 0.0, 0.0, 1.0))) < 1e-12
     True
     """
-    if lever.tip_gyration_radius:
-        # The composed characteristic has no rotary inertia yet (issue 20, item 2): refuse rather than ignore it.
-        raise UserError("tip_gyration_radius: the tip's rotary inertia is not in the stiffness model yet; leave "
-                        "--tip-gyration-radius out")
     kvv, kll, kvl = rotated(k1, k2, lever.alpha)
     with np.errstate(all="ignore"):
         return tip_setback.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
-                                          lever.length, lever.tip_mass_ratio, tip_position)
+                                          lever.length, lever.tip_mass_ratio, tip_position, lever.rho_g)
 
 
 def _free_root(lever: Cantilever, tip_position: float) -> float:

@@ -53,7 +53,7 @@ def free_root(k, H, L, mu, gamma) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
+    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)  # noqa: E731
     # The only root in (0.3, BETA1_FREE]: bracketed on a grid first (one vectorised call), so
     # regula falsi starts from a narrow bracket (a few steps instead of ~30).
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
@@ -118,7 +118,7 @@ class Model:
             beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
             return tip_setback.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                     c["mu"] * mu_f, c["gamma"])
+                                     c["mu"] * mu_f, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -143,7 +143,7 @@ class Model:
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
             T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                                  c["mu"] * mu_f, c["gamma"], wrt=self._partials_needed(c))
+                                                  c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
@@ -176,7 +176,8 @@ class Model:
         root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
         need = {"beta": bool(names & {"inv_q", "g"}) or root_moves, "k": "inv_q" in names,
                 "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
-                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
+                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names,
+                "rho_g": False}
         return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
 
     @property
@@ -229,7 +230,7 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
     top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
@@ -265,7 +266,7 @@ def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, flo
     b1 = free_root(k, H, L, mu, gamma)
     if mu == 0.0:
         return b1, (0.0, 0.0)
-    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma)
+    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
     names = tip_setback.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
@@ -275,7 +276,7 @@ def characteristic_args(model: Model, internal, contact: bool) -> tuple:
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
 
 
 def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:

@@ -46,7 +46,7 @@ def _characteristic(model: Model, internal, contact: bool, r):
     else:
         kvv = kll = kvl = 0.0
     return tip_setback.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                      c["mu"] * mu_f, c["gamma"])
+                                      c["mu"] * mu_f, c["gamma"], 0.0)
 
 
 def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.ndarray:
