@@ -101,6 +101,33 @@ def formulas() -> tuple[Formula, ...]:
         *_oscillator(),
         *_domain_contrast(),
         *_domain_contrast_printed(),
+        *_band_excitation_sho(),
+    )
+
+
+def _band_excitation_sho() -> tuple[Formula, ...]:
+    """The simple harmonic oscillator (SHO) that band-excitation tools fit, in BGlib's convention,
+    with its partials w.r.t. the logarithms of the resonance frequency and the quality factor.
+
+    ``x'' + (w0/Q) x' + w0**2 x = w0**2 F`` at ``e^{i w t}`` gives ``X/F = w0**2 / (w0**2 - w**2 +
+    i w w0/Q)``, which depends on frequencies only through ``w/w0 = f/f0``.  BGlib writes
+    ``A e^{i phi} w0**2 / (f**2 - i f w0/Q - w0**2)``: the same response times ``-1``, so its
+    phase is the usual one plus pi and ``A`` is the response's magnitude far below resonance.
+    """
+    f, f0, q = sp.symbols("frequency resonance_frequency quality_factor", positive=True)
+    w, w0, x = sp.symbols("omega omega_0 X")
+    motion = -w**2 * x + sp.I * w * (w0 / q) * x + w0**2 * x - w0**2
+    usual = _only(sp.solve(motion, x)).subs({w: 2 * sp.pi * f, w0: 2 * sp.pi * f0})
+    bglib = sp.factor(-usual)
+    assert sp.simplify(bglib - f0**2 / (f**2 - sp.I * f * f0 / q - f0**2)) == 0
+    source = "derivations/formulas.py: SHO x'' + (w0/Q) x' + w0**2 x = w0**2 F, times -1 (BGlib)"
+    return (
+        Formula("sho_response", (f, f0, q), bglib,
+                "SHO response per unit amplitude in BGlib's convention (-1 far below resonance: phase + pi)", source),
+        Formula("sho_response_d_log_resonance", (f, f0, q), sp.factor(f0 * sp.diff(bglib, f0)),
+                "partial of sho_response w.r.t. log(resonance_frequency)", source),
+        Formula("sho_response_d_log_quality", (f, f0, q), sp.factor(q * sp.diff(bglib, q)),
+                "partial of sho_response w.r.t. log(quality_factor)", source),
     )
 
 

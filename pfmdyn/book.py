@@ -17,7 +17,6 @@ import html
 import json
 import os
 import re
-import sys
 import time
 from collections import Counter
 from functools import lru_cache
@@ -340,8 +339,11 @@ def book_dir() -> Path:
     return here
 
 
-def build(out: Path, *, quiet: bool = False) -> int:
-    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success)."""
+def build(out: Path, *, progress=None) -> int:
+    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success).
+
+    ``progress``: None (quiet), or a callable taking a line of news (the command prints it);
+    Sphinx reports its own progress only when one is given."""
     try:
         from jupyter_book.sphinx import build_sphinx
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -352,9 +354,8 @@ def build(out: Path, *, quiet: bool = False) -> int:
     t0 = time.perf_counter()
     verdict_file = out / "verdicts.json"
     write_verdicts(verdict_file)
-    if not quiet:
-        print(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}",
-              file=sys.stderr)
+    if progress is not None:
+        progress(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}")
     os.environ[VERDICTS_ENV] = str(verdict_file)
     result = build_sphinx(
         src, out / "html",
@@ -367,7 +368,7 @@ def build(out: Path, *, quiet: bool = False) -> int:
         warningiserror=True,
         keep_going=True,
         freshenv=True,
-        quiet=quiet,
+        quiet=progress is None,
     )
     if isinstance(result, BaseException):
         return 1

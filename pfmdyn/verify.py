@@ -67,7 +67,7 @@ def load_recorded() -> dict[str, str]:
     return yaml.safe_load(path.read_text()) if path.exists() else {}
 
 
-def compute(ids: list[str] | None = None, progress: bool = True):
+def compute(ids: list[str] | None = None, progress: bool = False):
     """Run the checks; returns the list of :class:`Verdict` in registry order.
 
     Heavy symbolic steps are shared within one call (solutions, series, lambdified

@@ -302,3 +302,18 @@ def test_no_module_under_pfmdyn_redefines_a_generated_formula():
 def test_hand_typed_versions_are_gone(text):
     hits = [p.name for p in PACKAGE.rglob("*.py") if text in p.read_text(encoding="utf-8")]
     assert not hits, hits
+
+
+def test_sho_response_is_bglibs_and_its_log_partials_are_derivatives():
+    """BGlib's SHO typed from its documentation, A e^{i phi} w0^2 / (f^2 - i f w0/Q - w0^2) with A = 1,
+    phi = 0; the partials against central differences in log w0 and log Q."""
+    f, f0, q = RNG.uniform(1e5, 5e5, 20), RNG.uniform(1e5, 5e5, 20), np.exp(RNG.uniform(np.log(5), np.log(500), 20))
+    np.testing.assert_allclose(formulas.sho_response(f, f0, q), f0**2 / (f**2 - 1j * f * f0 / q - f0**2), rtol=1e-13)
+    assert np.allclose(formulas.sho_response(1e3, 3e5, 50.0), -1.0, rtol=1e-4)     # -1 far below: BGlib's + pi
+    assert np.isclose(formulas.sho_response(3e5, 3e5, 50.0), 50j)                   # i Q at resonance
+    h = 1e-6
+    for partial, scale in ((formulas.sho_response_d_log_resonance, (np.exp(h), 1.0)),
+                           (formulas.sho_response_d_log_quality, (1.0, np.exp(h)))):
+        up = formulas.sho_response(f, f0 * scale[0], q * scale[1])
+        down = formulas.sho_response(f, f0 / scale[0], q / scale[1])
+        np.testing.assert_allclose(partial(f, f0, q), (up - down) / (2 * h), rtol=1e-6, atol=1e-6 * np.abs(up).max())

@@ -47,6 +47,8 @@ POINT = {
     "frequency": 3e5, "free_resonance": 7e4, "d_beta": 0.01, "d_beta1": -0.002,
     "viscous_loss": 0.02, "contact_loss": 0.03,
     "f": 7.2e4, "f0": 7e4, "q": 150.0, "amplitude": 1e-12, "white": 1e-14, "root_re": 1.0, "root_im": 0.005,
+    # The SHO of band-excitation tools (Hz): a resonance just below that frequency.
+    "resonance_frequency": 2.99e5, "quality_factor": 50.0,
 }
 """Argument name -> its value in the examples (``beta1``: the first free root, derived)."""
 

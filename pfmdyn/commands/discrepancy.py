@@ -45,8 +45,8 @@ OVERRIDES = tuple((flag(canonical(key)), key, what) for key, what in (
 
 def _analyse(data, args) -> dict:
     if isinstance(data, SpectrumData):
-        return analyse(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
-    return analyse_resonances(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
+        return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
+    return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         # Last: a path the plot cannot take costs the figure, not the report.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         try:
-            plot(data, {**report, "_fits": fits}, args.plot)
+            plot(data, {**report, "_fits": fits}).savefig(args.plot, dpi=120)
         except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
             raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
     return 0
