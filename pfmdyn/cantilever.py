@@ -31,13 +31,13 @@ import numpy as np
 
 from . import transfer
 from .errors import UserError
-from .generated import damping, families, formulas, tip_setback
+from .generated import damping, detection, families, formulas, tip_setback
 from .generated.characteristic import BETA1_FREE
 from .generated.tilt_rotation import rotated
-from .names import LEVER, checked
+from .names import checked
 from .roots.bracket import refine
 
-__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON"]
+__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON", "free_root"]
 
 DEFAULT_POISSON = 0.3
 """Poisson's ratio of the Mindlin tie ``k2 = c k1`` when one contact mode must fix both springs
@@ -178,7 +178,7 @@ class Cantilever:
 
     def free_root(self) -> float:
         """``beta_1``: the first free root of this lever with its tip (1.8751... when massless)."""
-        return _free_root(self.spring_constant, self.tip_height or 0.0, self.length,
+        return free_root(self.spring_constant, self.tip_height or 0.0, self.length,
                           self.tip_mass_ratio, self.tip_position, self.rho_g)
 
     def beta(self, frequency) -> np.ndarray:
@@ -206,10 +206,11 @@ class Cantilever:
                 k1_factor, mu_factor)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
-        """Slope at the free end per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
+        """Slope at the laser spot per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
 
-        Set-back, heavy, tilted tips and every damping mechanism at once
-        (``derivations/tip_setback.py``); equal to :meth:`elastic_response` for the paper's probe.
+        Set-back, heavy, tilted tips, the tip's rotary inertia and every damping mechanism at once
+        (``derivations/tip_setback.py``), read at ``spot_position`` (``derivations/detection.py``;
+        the free end by default); equal to :meth:`elastic_response` for the paper's probe.
 
         >>> c = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0, tip_height=1e-5)
         >>> contact = Contact(k1=50.0, k2=20.0)
@@ -219,26 +220,26 @@ class Cantilever:
         """
         if contact.k1 is None:
             raise UserError("the contact needs k1 (--k1)")
-        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
-            if getattr(self, name) != null:      # refuse rather than describe another lever
-                raise UserError(f"{name} is not yet part of Cantilever.response (leave it at {null:g})")
         beta, k, k1_factor, mu_factor = self._damped(frequency, contact.contact_loss)
         kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
+        rest = (self._tip_height(contact), self.length, self.tip_mass_ratio * mu_factor, self.tip_position, self.rho_g)
         with np.errstate(all="ignore"):
-            slopes = tip_setback.slope(beta, k, kvv, kll, kvl, self._tip_height(contact), self.length,
-                                       self.tip_mass_ratio * mu_factor, self.tip_position, self.rho_g)
+            if self.spot_position == 1.0:
+                slopes = tip_setback.slope(beta, k, kvv, kll, kvl, *rest)
+            else:       # the lever read at the laser spot (derivations/detection.py)
+                slopes = detection.slope(beta, self.spot_position, k, kvv, kll, kvl, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
 @lru_cache(maxsize=4096)
-def _free_root(k, H, L, mu, gamma, rho_g) -> float:
+def free_root(k, H, L, mu, gamma, rho_g=0.0) -> float:
     """First free root ``beta`` with a tip mass ``mu`` (radius of gyration ``rho_g L``) at ``gamma L``
     (1.8751... at ``mu = 0``).
 
     The characteristic of the composed model (``generated/tip_setback.py``) with no contact has
     one root in ``(0.3, BETA1_FREE]`` (a tip mass only lowers it): bracketed on a grid, refined.
 
-    >>> round(_free_root(1.0, 1e-5, 1e-4, 0.0, 1.0, 0.0), 10)
+    >>> round(free_root(1.0, 1e-5, 1e-4, 0.0, 1.0, 0.0), 10)
     1.8751040687
     """
     if mu == 0.0:

@@ -172,3 +172,34 @@ def test_missing_lever_value_names_its_flag(capsys):
             "--frequency", "1e4"]
     assert main(args) == 2
     assert "give --tip-height" in capsys.readouterr().err
+
+
+def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
+    """``Cantilever.response`` and the map model with ``spot_position`` against the independent
+    two-segment beam (set-back, heavy, tilted tip with rotary inertia), and a map fit at the spot
+    recovers k1 (the generated partials w.r.t. the springs at the spot drive it there)."""
+    from pfmdyn import Cantilever, Contact
+    from pfmdyn.generated.tilt_rotation import rotated
+    from pfmdyn.maps.fit import BeamMapModel, fit_block
+    rng = np.random.default_rng(21)
+    for _ in range(3):
+        k, length, height = 10 ** rng.uniform(-1, 1.5), rng.uniform(150e-6, 450e-6), rng.uniform(5e-6, 20e-6)
+        lever = Cantilever(k, rng.uniform(2e4, 3e5), length, tip_height=height, spot_position=rng.uniform(0.5, 0.95),
+                           tip_position=rng.uniform(0.9, 1.0), tip_mass_ratio=rng.uniform(0, 0.2),
+                           tip_gyration_radius=rng.uniform(0, 0.3) * height, tilt=rng.uniform(0, 15))
+        k1 = k * 10 ** rng.uniform(1, 3)
+        f = lever.free_resonance * np.geomspace(0.5, 8, 40)
+        got = lever.response(f, Contact(k1=k1, k2=0.5 * k1)).vertical
+        kvv, kll, kvl = rotated(k1, 0.5 * k1, lever.alpha)
+        ref = [spot_response(b, lever.spot_position, k=k, L=length, H=height, kvv=kvv, kll=kll, kvl=kvl,
+                             mu=lever.tip_mass_ratio, gamma=lever.tip_position, rho_g=lever.rho_g, d1=1.0)[0]
+               for b in lever.beta(f).real]
+        np.testing.assert_allclose(got, ref, rtol=1e-7, atol=1e-9 * np.max(np.abs(ref)))
+        model = BeamMapModel(lever, f, contact=Contact(k2_over_k1=0.5))
+        shape = model.shape_functions(np.array([k1]), np.array([np.inf]))[0]
+        np.testing.assert_allclose(shape, ref, rtol=1e-7, atol=1e-9 * np.max(np.abs(ref)))
+    band = lever.free_resonance * np.linspace(2.0, 7.0, 96)
+    model = BeamMapModel(lever, band, contact=Contact(k2_over_k1=0.5))
+    truth = k * np.array([30.0, 300.0])
+    out = fit_block(model, 1e-3 * model.shape_functions(truth, np.array([80.0, 150.0])))
+    np.testing.assert_allclose(out["k1"], truth, rtol=1e-6)

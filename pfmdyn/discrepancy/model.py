@@ -32,38 +32,16 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..cantilever import free_root
 from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
-from ..generated.characteristic import BETA1_FREE
-from ..roots.bracket import grid_roots, refine
+from ..roots.bracket import grid_roots
 from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
 
 _DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
-
-
-@lru_cache(maxsize=4096)
-def free_root(k, H, L, mu, gamma) -> float:
-    """First free root ``beta`` with a tip mass ``mu`` at ``gamma L`` (1.8751... at ``mu = 0``).
-
-    >>> round(free_root(1.0, 1e-5, 1e-4, 0.0, 1.0), 10)
-    1.8751040687
-    """
-    if mu == 0.0:
-        return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)  # noqa: E731
-    # The only root in (0.3, BETA1_FREE]: bracketed on a grid first (one vectorised call), so
-    # regula falsi starts from a narrow bracket (a few steps instead of ~30).
-    grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
-    with np.errstate(all="ignore"):
-        vals = char(grid)
-    change = np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) <= 0)
-    if len(change) != 1:
-        return float(refine(char, 0.3, BETA1_FREE + 1e-9, rtol=1e-14))
-    i = change[0]
-    return float(refine(char, grid[i], grid[i + 1], vals[i], vals[i + 1], rtol=1e-14))
 
 
 @dataclass(frozen=True)

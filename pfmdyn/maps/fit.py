@@ -33,7 +33,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from ..generated import damping, elastic_contact, tip_setback
+from ..generated import damping, detection, elastic_contact, tip_setback
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
@@ -152,12 +152,6 @@ class BeamMapModel:
     """The k2 policy: ``k2`` held, ``k2_over_k1``/``poisson`` tied, or nothing said (free with two
     or more bands, Mindlin's tie with one)."""
 
-    def __post_init__(self):
-        # not in the map model yet: refuse rather than fit a lever other than the one described
-        for name, null in (("tip_gyration_radius", 0.0), ("spot_position", 1.0)):
-            if getattr(self.lever, name) != null:
-                raise UserError(f"{name} is not yet part of the map model (leave it at {null:g})")
-
     @property
     def k(self) -> float:
         return self.lever.spring_constant
@@ -262,16 +256,19 @@ class BeamMapModel:
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
         alpha = self.lever.alpha
-        args = (beta, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,
+        # read at the laser spot (derivations/detection.py) or, by default, at the free end
+        spot = self.lever.spot_position
+        module, at = (tip_setback, ()) if spot == 1.0 else (detection, (spot,))
+        args = (beta, *at, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,
                 self.lever.rho_g)
         if not jacobian:
-            return tip_setback.slope(*args), None
+            return module.slope(*args), None
         wanted = ("beta", "kvv", "kll", "kvl", "mu")
         # the tip mass moves with drag only (mu_factor); otherwise its partial multiplies zero
         moving_mass = self.lever.tip_mass_ratio and "viscous" in self.mechanisms
-        values, partials = tip_setback.slope_and_jacobian(*args, wrt=wanted if moving_mass else wanted[:4])
+        values, partials = module.slope_and_jacobian(*args, wrt=wanted if moving_mass else wanted[:4])
         c, s = math.cos(alpha), math.sin(alpha)
-        index = {name: tip_setback.JACOBIAN_PARAMETERS.index(name) for name in wanted}
+        index = {name: module.JACOBIAN_PARAMETERS.index(name) for name in wanted}
         out = []
         for p in partials:
             d_vv, d_ll, d_vl = (p[index[n]] for n in ("kvv", "kll", "kvl"))
