@@ -76,7 +76,6 @@ def main() -> None:
     parser.add_argument("--label", default="current", help="key of this run in the results file")
     parser.add_argument("--classes", nargs="*", default=list(ACQUISITION), choices=ACQUISITION)
     args = parser.parse_args()
-    results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     cases = []
     for kind in args.classes:
         for seed in range(args.seeds):
@@ -95,6 +94,8 @@ def main() -> None:
                 row["pass"] += c["grade"] in ("exact", "honest")
                 row["exact"] += c["grade"] == "exact"
                 row["false effect"] += c["grade"] == "false effect"
+            # Re-read: another label may have been written meanwhile (runs on older code side by side).
+            results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
             results[args.label] = {"date": time.strftime("%Y-%m-%d"), "seeds": args.seeds,
                                    "pass_rate": {k: f"{v['pass']}/{v['cases']}" for k, v in per_class.items()},
                                    "per_class": per_class, "cases": cases}
