@@ -11,6 +11,8 @@ Prints, in one run:
    product.
 
 Run: ``python benchmarks/codegen.py``.
+
+Results: ``benchmarks/results/codegen.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import time
 import warnings
 
 import numpy as np
+from recording import recorded
 
 
 def best_of(fn, repeat=5) -> float:
@@ -73,4 +76,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("codegen"):
+        main()

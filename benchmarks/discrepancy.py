@@ -15,15 +15,7 @@ effects in <= 10 s with the Jacobian from the generated partials (``model.JACOBI
 "analytic"``), printed beside the same analysis with finite differences of the design matrix
 (``"projection"``) and of the whole residual (``"finite-difference"``); a resonance table in <= 2 s.
 
-Last run (2026-11-23, after the input-robustness changes; machine shared with a test run, so
-times are high): spectra 33/36 (the misses: a tilt the springs absorb, gap 0.91 with nothing
-named; two damped contacts with lateral stiffness, one also naming tilt, one naming a set-back
-instead, gap 6.5: its lateral trials come out near, not past, the material threshold, so the
-path through the candidates decides; the code before these changes passed it in the benchmark
-but named five effects in a standalone run); tables 10/15 (tilt 0/3: told apart from set-back by no
-table of 2-3 contact modes, which the report says; set-back 1/3: two within the noise, nothing
-named); speed case 10.1 s CPU (finite differences 11.2 s), paper tip-1 table 1.2 s.  The run
-before (quiet machine): spectra 37/39, tables 10/15, speed case 9.6 s CPU.
+Results: ``benchmarks/results/discrepancy.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -44,6 +36,7 @@ from pfmdyn.discrepancy import model as model_module  # noqa: E402
 from pfmdyn.discrepancy.resonances import analyse_resonances, paper_tables  # noqa: E402
 from pfmdyn.discrepancy.spectrum import analyse  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
+from recording import recorded  # noqa: E402
 
 SINGLE = ("damping", "tip_mass", "tip_setback", "tilt", "background", "lateral_stiffness")
 CLASSES = [()] + [(e,) for e in SINGLE] + [("damping", e) for e in SINGLE[1:]]
@@ -138,5 +131,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    with threadpool_limits(1, user_api="blas"):      # one core, as `pfmdyn discrepancy` runs
-        sys.exit(main())
+    with threadpool_limits(1, user_api="blas"), recorded("discrepancy"):   # one core, as the command runs
+        status = main()
+    sys.exit(status)

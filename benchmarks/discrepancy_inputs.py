@@ -30,19 +30,7 @@ Outcome of a variant:
 
 Files that read as the canonical file are not re-analysed unless ``--all-through-cli``.
 
-Last run (2026-11-23, seed 3, shared 2-core machine): 106/106 pass (100 %), 0 reject, 0
-FAIL. The same run on the code before these fixes (commit baf84b9): 54 pass (51 %), 41
-reject (header spellings, units, separators, ``%`` comments, metadata with units, X, Y, R,
-theta together), 11 FAIL: tracebacks on a zero or constant response, a single frequency and
-a 25-row sweep without a peak; a kHz spectrum and a kHz table read as Hz, a length in um and
-f1 in kHz accepted (effects named from wrong metadata); frequencies with rounding noise
-(each row its own frequency: nothing named) and biases with read-back jitter (a tilt named,
-gap 1e10).
-``--physics`` (20 cases): no traceback, no run over 60 s, 15 pass; the misses are the
-analysis's: tilt (4 of the 5, see ``benchmarks/discrepancy.py``) and a soft lever (k = 0.075
-N/m) on a stiff contact (k1/k = 7500, k2 = 745 N/m, above the k2 start grid of
-:func:`pfmdyn.discrepancy.effects.spring_grid`), which names tip_mass and background
-beside lateral_stiffness and reports the rest unexplained.
+Results: ``benchmarks/results/discrepancy_inputs.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -62,6 +50,7 @@ from fe_beam import FEBeam, random_case, random_table, spectrum  # noqa: E402
 from pfmdyn.discrepancy.resonances import paper_inputs  # noqa: E402
 from pfmdyn.errors import UserError  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
+from recording import recorded  # noqa: E402
 
 TIMEOUT_S, SLOW_S = 120, 60.0
 SAME, EFFECTS, ERROR, ANY = "same", "effects", "error", "any"
@@ -356,4 +345,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with recorded("discrepancy_inputs"):
+        status = main()
+    sys.exit(status)

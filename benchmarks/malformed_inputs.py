@@ -1,9 +1,9 @@
 """Benchmark: every file-reading command on malformed map and instrument files.
 
-Not a pytest module: a wide sweep that writes its pass count and one row per case to
-``malformed_inputs.results.json`` beside this script (``--results PATH`` elsewhere).
+Not a pytest module: a wide sweep that writes one row per case and its pass count to
+``benchmarks/results/malformed_inputs.md`` (:mod:`recording`).
 
-    python benchmarks/malformed_inputs.py [--results PATH]
+    python benchmarks/malformed_inputs.py
 
 Each variant is a file (or a command-line override) written from a valid one: a 4 x 4
 band-excitation map of the finite-element beam (``tests/fe_beam.py``) as HDF5, Zarr and
@@ -35,11 +35,8 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
-import json
 import os
-import shutil
 import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -52,6 +49,7 @@ import zarr
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 from fe_beam import FEBeam  # noqa: E402
+from recording import recorded  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
 
@@ -370,21 +368,11 @@ def judge(command, expect, path, argv, out: Path) -> tuple[str, str]:
     return "pass", (stdout.strip().splitlines() or [""])[-1][:200]
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--results", default=str(HERE / "malformed_inputs.results.json"),
-                        help="where to write the results (default: beside this script)")
-    args = parser.parse_args(argv)
+    parser.parse_args(argv)
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
+    with recorded("malformed_inputs"), tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         cases = variants(tmp)
         for name, path, extra, expect in cases:
@@ -394,15 +382,11 @@ def main(argv=None) -> int:
                     continue
                 out = tmp / "out" / f"{name.replace('/', '_').replace('.', '_')}_{command}"
                 outcome, detail = judge(command, wanted, path, _argv(command, path, extra, out), out)
-                rows.append({"variant": name, "command": command, "expect": wanted, "outcome": outcome,
-                             "detail": detail.replace(str(tmp), "TMP")})
-                print(f"{outcome:<5} {name:<44} {command:<10} {rows[-1]['detail'][:110]}", flush=True)
-    passed = sum(row["outcome"] == "pass" for row in rows)
-    summary = {"passed": passed, "total": len(rows), "variants": len(cases), "commands": _commands(),
-               "realdata": REALDATA is not None, "commit": _commit(),
-               "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "cases": rows}
-    Path(args.results).write_text(json.dumps(summary, indent=1) + "\n")
-    print(f"{passed}/{len(rows)} pass ({len(cases)} variants x commands); results in {args.results}")
+                rows.append(outcome)
+                print(f"{outcome:<5} {name:<44} {command:<10} {detail.replace(str(tmp), 'TMP')[:110]}", flush=True)
+        passed = rows.count("pass")
+        print(f"\n{passed}/{len(rows)} pass ({len(cases)} variants x commands {', '.join(_commands())}; "
+              f"real files {'included' if REALDATA is not None else 'absent'})")
     return 0 if passed == len(rows) else 1
 
 

@@ -15,6 +15,8 @@ on a busy shared machine one and two processes get the same CPU and (c)/(b) stay
 2 cores; a 1024 x 1024 contact-frequency map to k1 in <= 2 s.  Memory: benchmarks/map_memory.py.
 
     python benchmarks/map.py [--size 128] [--sample 64] [--repeat 2]
+
+Results: ``benchmarks/results/map.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -33,6 +35,7 @@ from threadpoolctl import threadpool_limits
 from pfmdyn.maps.driver import open_map, run_map
 from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel, fit_block
+from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 
@@ -128,4 +131,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("map"):
+        main()

@@ -24,34 +24,7 @@ gap (relative residual) at most 1.3 x the noise's share of the spectrum at >= 95
 A failure is diagnosed by refitting from the truth (:func:`diagnose`): ``start``, ``ident`` or
 ``noise``.
 
-Results (40 cases at seeds 0 and 1000, ``--cases 40 [--seed 1000]``, under a minute each on a
-quiet machine; the default 20 cases pass 20/20):
-
-* before (pfmdyn at d180df5): 27/40 and 21/40, **48/80 = 60 %**; 30 of the 32 failures ``start``.
-* after: 37/40 and 39/40, **76/80 = 95 %** (2 cases with the auto check excused).
-
-Failure classes and what was done:
-
-* ``start``, fixed in :mod:`pfmdyn.maps.fit`: the start grid's Q stopped at q0/4 = 25 (a Q = 5
-  lever's k1 ran to its bound: Q now from q0/16); its k1 took 48 log steps over four decades
-  (a resonance moves up to 10 % per step: now 48 steps over the k1 that put a resonance in a
-  band); with two bands it held k2 = 0 (a stiff contact, k1/k > 1000, whose k2 = 0.8 k1 moves the
-  modes, started decades off: now k2/k1 of 0.1, 0.4 and 1 on the grid, and one fit per ratio,
-  the lowest kept, since k1 and k2 trade off).  On a two-band 1024-pixel map (k1 150-1500 N/m, k
-  = 2 N/m) the old start left 42 % of the pixels in a wrong minimum, now 0.3 % (at ~4x the CPU
-  of that fit; one-band fits cost what they did).
-* ``start``, left (3 cases): two-band fits whose (k1, k2) valleys hold a pixel or two of 25 in
-  a wrong minimum, at seed 22 (Q = 472: the frequency step is 3 line widths), 34 and 1029 (with a
-  dashpot).  Fitting first with Q capped (broad lines) lowered the worst |z| of some but passed
-  no more cases, at twice the multi-band cost: not kept.
-* ``ident`` (none left at these seeds; seen at seed 34 of a 4 x 4 variant): a second (k1, k2)
-  minimum fits as well as the truth's.  The standard errors are local: they cannot cover it.
-* ``noise`` (1 case): the fit from the truth ends at the fit's own minimum (seed 36: two pixels
-  at |z| = 3.4 on a 0.5 % k1 error).
-* auto excused (2 cases): a dashpot immaterial beside internal friction at Q = 9.6 (seed 1034)
-  or on a contact so stiff (k1/k = 2000, seed 1009) that the tip barely moves against it; on the
-  4 x 4 variant also drag and a dashpot fitting alike at k1/k ~ 2 (both to the noise).  Standard errors of k1, k2 and Q are now
-  ``x sinh(sd of log x)``: an undetermined k2 at its bound reports a huge error, not a small one.
+Results: ``benchmarks/results/map_levers.md``, written by each completed run.
 
     python benchmarks/map_levers.py [--cases 20] [--seed 0] [--variant VARIANT]
 """
@@ -77,6 +50,7 @@ from pfmdyn.maps.driver import open_map  # noqa: E402
 from pfmdyn.maps.fit import fit_block  # noqa: E402
 from pfmdyn.maps.readers import read_block  # noqa: E402
 from pfmdyn.maps.select import choose_model  # noqa: E402
+from recording import recorded  # noqa: E402
 
 VARIANTS = ("plain", "bias", "2band", "viscous", "contact")
 N = 5
@@ -249,4 +223,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("map_levers"):
+        main()

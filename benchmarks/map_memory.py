@@ -8,6 +8,8 @@ size (a control shows that limit refuses the whole map at once), and prints each
 RSS against the data size.
 
     python benchmarks/map_memory.py [--mib 256] [--n-freq 256]
+
+Results: ``benchmarks/results/map_memory.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ import zarr
 
 from pfmdyn import Cantilever
 from pfmdyn.maps.fit import BeamMapModel
+from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6
 BLOCK = 16
@@ -124,4 +127,6 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with recorded("map_memory"):
+        status = main()
+    sys.exit(status)

@@ -4,6 +4,8 @@ Run ``python benchmarks/roots.py``.  The baseline is what one would write withou
 engine: ``mpmath.findroot`` started from the asymptotic guesses ``(2n-1) pi/2`` (free) and
 ``(4n+1) pi/4`` (pinned), uncertified.  Targets: 100 roots at 100 digits < 2 s, 10 roots at
 1000 digits < 5 s, a 500 x 5 double-precision branch sweep < 1 s.
+
+Results: ``benchmarks/results/roots.md``, written by each completed run.
 """
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ import numpy as np
 
 from pfmdyn.roots import branches
 from pfmdyn.roots.core import family_roots
+from recording import recorded
 
 EQUATIONS = {"free": (lambda b: mp.cos(b) + mp.sech(b), lambda n: (2 * n - 1) * mp.pi / 2),
              "pinned": (lambda b: mp.cos(b) * mp.tanh(b) - mp.sin(b), lambda n: (4 * n + 1) * mp.pi / 4)}
@@ -67,4 +70,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("roots"):
+        main()

@@ -8,17 +8,15 @@ every ``beta -> 0`` limit, and every registry claim that a text statement reuses
 These are the three steps a profile (``python -m cProfile -m pfmdyn.cli verify --quiet``) showed
 to dominate before they were cached.
 
-Measured on this machine (nice 10, other jobs running), before and after the caches:
-
-- before (80 registry claims, no audit): 54.9 s cold (76 s reported in issue 14)
-- after (80 registry claims + 304 audit ids): 19.5-20.7 s cold; in the same run the baseline
-  (same 384 ids, caches off) took 42.6 s, a 2.05x speed-up (08:01 UTC, 2026-11-23).
+Results: ``benchmarks/results/verify.md``, written by each completed run.
 """
 from __future__ import annotations
 
 import subprocess
 import sys
 import time
+
+from recording import recorded
 
 UNCACHED = """
 import functools
@@ -28,8 +26,8 @@ from pfmdyn.derivations.checks import core
 limits._series = limits._series.__wrapped__
 core._evaluator = core._evaluator.__wrapped__
 core.result = lambda claim_id: core.run_check(core.REGISTRY[claim_id])
-from pfmdyn.derivations.checks import statements
-statements.result = core.result
+from pfmdyn.audit import restated, statements
+statements.result = restated.result = core.result
 raise SystemExit(cli.main(["verify", "--quiet"]))
 """
 
@@ -52,4 +50,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recorded("verify"):
+        main()

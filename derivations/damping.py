@@ -13,8 +13,11 @@ Dividing the damped Eq. 2 by the complex ``EI`` gives back Eq. 2 with complex
 ``beta``, ``k``, ``k1`` and tip mass ``mu`` (:func:`substitution`), so every undamped
 family solution evaluated there *is* the damped solution; :func:`check_substitution`
 proves it for the equation of motion, the dashpot and the tip mass's inertia (a point
-mass feels no drag: ``mu beta**4`` must stay ``mu beta0**4 / (1 + i inv_q)``).  In terms of the undamped dimensionless frequency
-``beta0 = beta1 sqrt(r)``, ``r = f / f1``, and three dimensionless parameters,
+mass feels no drag: ``mu beta**4`` must stay ``mu beta0**4 / (1 + i inv_q)``), and the
+tip's rotary inertia (a rigid body turning in the medium is not dragged by it either:
+``J omega**2 = mu k beta**4 L**2 rho_g**2 / 3`` scales like the mass, so it must come out
+undamped, ``mu k beta0**4 L**2 rho_g**2 / 3``, with ``rho_g`` unchanged).  In terms of
+the undamped dimensionless frequency ``beta0 = beta1 sqrt(r)``, ``r = f / f1``, and three dimensionless parameters,
 
 * ``inv_q = 1/Q`` (internal loss factor, the same for every mode),
 * ``g = c / (rho S omega1)`` (the inverse Q of free mode 1 under air damping alone; the
@@ -27,17 +30,17 @@ the substitution is::
     beta**4 = beta0**4 (1 - i g / r) / (1 + i inv_q),   k -> k (1 + i inv_q),
     k1 -> k1 (1 + i x r),   mu -> mu / (1 - i g / r)
 
-:func:`render` writes it to ``generated/damping.py`` with its derivatives with respect
-to ``inv_q``, ``g``, ``x`` (for the least-squares Jacobian).
+``pfmdyn codegen`` writes it to ``generated/damping.py`` with its derivatives with respect
+to ``inv_q``, ``g``, ``x`` (for the least-squares Jacobian; :mod:`derivations.codegen.effects`).
 """
 from __future__ import annotations
 
 import sympy as sp
 
-from .beam import EI, L, k, k1, q0, x as coordinate
-from .tip_mass import mu
+from .beam import EI, L, beta, k, k1, q0, x as coordinate
+from .tip_mass import mu, rotary_inertia
 
-__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width", "render"]
+__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width"]
 
 omega, omega1, rho_s, c, eta, Q = sp.symbols("omega omega1 rho_S c eta Q", positive=True)
 r, g, xc, inv_q, beta0 = sp.symbols("r g x inv_q beta0", positive=True)
@@ -62,7 +65,8 @@ def check_substitution() -> bool:
 
     Damped: ``EI (1 + i/Q) u'''' = (rho S omega**2 - i omega c) u + q0`` with
     ``beta0**4 = rho S omega**2 L**4 / EI``, ``omega = r omega1``, ``c = g rho S omega1``;
-    the contact dashpot: ``(k1 + i omega eta) = k1 (1 + i x r)`` with ``eta = x k1 / omega1``.
+    the contact dashpot: ``(k1 + i omega eta) = k1 (1 + i x r)`` with ``eta = x k1 / omega1``;
+    the tip's mass and rotary inertia come out undamped.
 
     >>> check_substitution()
     True
@@ -77,7 +81,9 @@ def check_substitution() -> bool:
                                       - q0 / (k_star * L**3 / 3))
     dashpot = (k1 + sp.I * w * (xc * k1 / omega1)) - s["k1"]
     inertia = s["mu"] * s["beta4"] - mu * beta0**4 / (1 + sp.I * inv_q)
-    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia))
+    rotary = (rotary_inertia().subs({mu: s["mu"], k: s["k"]}).subs(beta**4, s["beta4"])
+              - rotary_inertia().subs(beta, beta0))
+    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia, rotary))
 
 
 def half_power_width(mechanism: str) -> sp.Expr:
@@ -95,50 +101,3 @@ def half_power_width(mechanism: str) -> sp.Expr:
     factor = substitution()["beta4"].subs({p: 0 for p in MECHANISMS.values() if p is not param}) / beta0**4
     delta = -sp.im(sp.series(factor, param, 0, 2).removeO())
     return sp.simplify(r * delta)
-
-
-def render(header, digest) -> str:
-    """Source of ``generated/damping.py``: the substitution factors and their derivatives.
-
-    ``header(source, digest)`` and ``digest(exprs)`` are the code generator's (the file is
-    headed and hashed like every generated file).
-    """
-    s = substitution()
-    outputs = {"beta_factor": (s["beta4"] / beta0**4) ** sp.Rational(1, 4), "k_factor": s["k"] / k,
-               "k1_factor": s["k1"] / k1, "mu_factor": s["mu"] / mu}
-    params = (inv_q, g, xc)
-    printer = sp.printing.numpy.NumPyPrinter({"fully_qualified_modules": True})
-
-    def code(e):
-        return printer.doprint(sp.simplify(e)).replace("numpy.", "np.")
-
-    values = ", ".join(code(e) for e in outputs.values())
-    derivs = ", ".join("(" + ", ".join(code(e.diff(p)) for p in params) + ")" for e in outputs.values())
-    return header("derivations/damping.py: substitution()", digest(list(outputs.values()))) + f'''"""Damping as a substitution into undamped solutions (derivations/damping.py).
-
-Internal friction (complex modulus), viscous drag (force c u_t per length) and a contact
-dashpot (eta parallel to k1) turn the undamped solution into the damped one at
-``beta = beta0 * beta_factor``, ``k -> k * k_factor``, ``k1 -> k1 * k1_factor``,
-``mu -> mu * mu_factor``, where ``r = f / f1`` and the parameters are ``inv_q`` (1/Q of the
-modulus), ``g`` (1/Q of free mode 1 under air damping alone) and ``x`` (the contact's loss
-tangent at f1).  All three at 0 give factors of exactly 1.
-"""
-import numpy as np
-
-__all__ = ['PARAMETERS', 'OUTPUTS', 'factors', 'd_factors']
-
-PARAMETERS = ('inv_q', 'g', 'x')
-OUTPUTS = {tuple(outputs)!r}
-
-
-def factors(r, inv_q, g, x):
-    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast)."""
-    r = np.asarray(r, dtype=float)
-    return ({values})
-
-
-def d_factors(r, inv_q, g, x):
-    """Derivatives of each factor with respect to (inv_q, g, x): a tuple of 3-tuples."""
-    r = np.asarray(r, dtype=float)
-    return ({derivs})
-'''

@@ -100,7 +100,7 @@ FAMILIES: tuple[Family, ...] = (
            result="TorsionTransfer", kind="torsion",
            chapter="torsion"),
     Family("tip_setback", "tip_setback", "solve", "Eqs. 4-5 with the tip set back", _CONTACT,
-           ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma"),
+           ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g"),
            outputs=("slope", "characteristic"), kind="setback"),
 )
 """Every family with a generated module."""
@@ -112,6 +112,7 @@ PARAMETER_HELP = {
     "H": "tip height (m)",
     "L": "cantilever length (m)",
     "mu": "tip mass over beam mass",
+    "rho_g": "tip radius of gyration over cantilever length, r_g / L (J = m_tip r_g**2)",
     "kvv": "vertical contact stiffness in beam axes (N/m)",
     "kll": "longitudinal contact stiffness in beam axes (N/m)",
     "kvl": "vertical-longitudinal coupling stiffness in beam axes (N/m)",

@@ -12,8 +12,10 @@ from functools import lru_cache
 import sympy as sp
 
 from . import contact_mechanics as cm
+from . import damping as dm
 from . import domain_contrast as dc
-from .beam import EI, L, beta, f0, k
+from .beam import EI, H, L, beta, f0, k, k2
+from .elastic_contact import tip_conditions
 from .free_end import solve as solve_free_end
 from .paper import printed as P
 
@@ -93,8 +95,135 @@ def formulas() -> tuple[Formula, ...]:
         Formula("mindlin_k2_over_k1", (cm.nu,), sp.factor(1 / cm.mindlin_ratio()),
                 "k2/k1 of a rigid sphere on an isotropic sample (Hertz normal, Mindlin tangential)",
                 "derivations/contact_mechanics.py: mindlin_ratio()"),
+        *_frequency_scaling(),
+        *_lateral_spring(),
+        *_damping(),
+        *_oscillator(),
         *_domain_contrast(),
         *_domain_contrast_printed(),
+        *_band_excitation_sho(),
+    )
+
+
+def _band_excitation_sho() -> tuple[Formula, ...]:
+    """The simple harmonic oscillator (SHO) that band-excitation tools fit, in BGlib's convention,
+    with its partials w.r.t. the logarithms of the resonance frequency and the quality factor.
+
+    ``x'' + (w0/Q) x' + w0**2 x = w0**2 F`` at ``e^{i w t}`` gives ``X/F = w0**2 / (w0**2 - w**2 +
+    i w w0/Q)``, which depends on frequencies only through ``w/w0 = f/f0``.  BGlib writes
+    ``A e^{i phi} w0**2 / (f**2 - i f w0/Q - w0**2)``: the same response times ``-1``, so its
+    phase is the usual one plus pi and ``A`` is the response's magnitude far below resonance.
+    """
+    f, f0, q = sp.symbols("frequency resonance_frequency quality_factor", positive=True)
+    w, w0, x = sp.symbols("omega omega_0 X")
+    motion = -w**2 * x + sp.I * w * (w0 / q) * x + w0**2 * x - w0**2
+    usual = _only(sp.solve(motion, x)).subs({w: 2 * sp.pi * f, w0: 2 * sp.pi * f0})
+    bglib = sp.factor(-usual)
+    assert sp.simplify(bglib - f0**2 / (f**2 - sp.I * f * f0 / q - f0**2)) == 0
+    source = "derivations/formulas.py: SHO x'' + (w0/Q) x' + w0**2 x = w0**2 F, times -1 (BGlib)"
+    return (
+        Formula("sho_response", (f, f0, q), bglib,
+                "SHO response per unit amplitude in BGlib's convention (-1 far below resonance: phase + pi)", source),
+        Formula("sho_response_d_log_resonance", (f, f0, q), sp.factor(f0 * sp.diff(bglib, f0)),
+                "partial of sho_response w.r.t. log(resonance_frequency)", source),
+        Formula("sho_response_d_log_quality", (f, f0, q), sp.factor(q * sp.diff(bglib, q)),
+                "partial of sho_response w.r.t. log(quality_factor)", source),
+    )
+
+
+def _frequency_scaling() -> tuple[Formula, ...]:
+    """beta <-> f of one lever: Eq. 2's beta**4 = omega**2 rho S L**4 / EI, written for the
+    mode at ``f`` and for the first free mode (``beta1`` at ``f1``), so that rho S L**4 / EI
+    drops out.  ``beta1`` is the first free root of the lever at hand (1.8751... for a bare
+    lever; a tip mass or set-back moves it)."""
+    f1, rho_s, b = sp.symbols("free_resonance rho_S beta", positive=True)
+
+    def dispersion(root, f):
+        return sp.Eq(root**4, (2 * sp.pi * f)**2 * rho_s * L**4 / EI)
+
+    # The lever's rho S L**4 / EI from its first free mode, then the mode at f.
+    scaled = dispersion(b, frequency).subs(rho_s, _only(sp.solve(dispersion(beta1, f1), rho_s)))
+    source = "derivations/beam.py: kappa, Eq. 2 (beta**4 = omega**2 rho S L**4 / EI)"
+    # First-order change of f when beta and beta1 move (f1 fixed), written with f itself.
+    f_of_beta = _only(sp.solve(scaled, frequency))
+    d_b, d_b1 = sp.symbols("d_beta d_beta1", real=True)
+    change = (sp.diff(f_of_beta, b) * d_b + sp.diff(f_of_beta, beta1) * d_b1).subs(
+        f1, _only(sp.solve(sp.Eq(f_of_beta, frequency), f1)))
+    return (
+        Formula("beta_from_frequency", (frequency, f1, beta1), _only(sp.solve(scaled, b)),
+                "dimensionless frequency beta of a mode at frequency f (Hz) of a lever whose first free root "
+                "beta1 rings at f1", source),
+        Formula("frequency_from_beta", (b, f1, beta1), f_of_beta,
+                "frequency (Hz) of the mode at dimensionless frequency beta, the inverse of beta_from_frequency",
+                source),
+        Formula("frequency_change", (frequency, b, d_b, beta1, d_b1), sp.factor(change),
+                "first-order change (Hz) of a mode at frequency f when its root beta moves by d_beta and the "
+                "free root beta1 by d_beta1 (f1 fixed)", source),
+    )
+
+
+def _lateral_spring() -> tuple[Formula, ...]:
+    """k2 H**2/(k L**2): the moment stiffness of the longitudinal spring at the tip (Eq. 4a's
+    ``-k2 H**2 u0'(L)``) over ``k L**2``; the elastic-contact characteristic depends on
+    ``k2``, ``H`` and ``L`` only through it (``generated/characteristic.py`` is written in it)."""
+    U = sp.symbols("U0:4")
+    moment = sp.diff(tip_conditions(U)[0], U[1])        # EI u0''(L) + k2 H**2 u0'(L) - k2 H d2 = 0
+    ratio = sp.Symbol("k2_ratio", positive=True)
+    group = moment / (k * L**2)
+    source = "derivations/elastic_contact.py: tip_conditions() (Eq. 4a)"
+    return (
+        Formula("k2_ratio", (k2, k, H, L), group,
+                "dimensionless longitudinal contact stiffness k2 H**2/(k L**2)", source),
+        Formula("k2_from_ratio", (ratio, k, H, L), _only(sp.solve(sp.Eq(group, ratio), k2)),
+                "longitudinal contact stiffness k2 (N/m) from k2 H**2/(k L**2), the inverse of k2_ratio", source),
+    )
+
+
+def _damping() -> tuple[Formula, ...]:
+    """The contact dashpot and the viscous half-power width in SI, from the damping substitution."""
+    f1, g, x = sp.symbols("free_resonance viscous_loss contact_loss", positive=True)
+    # The dashpot's normal force (k1 + i omega eta) at omega = r omega1 is k1 (1 + i x r).
+    dashpot = sp.Eq(k1 + sp.I * dm.r * dm.omega1 * dm.eta, dm.substitution()["k1"].subs(dm.k1, k1))
+    eta = _only(sp.solve(dashpot, dm.eta)).subs({dm.omega1: 2 * sp.pi * f1, dm.xc: x})
+    width = (dm.half_power_width("viscous") * f1).subs(dm.g, g)
+    source = "derivations/damping.py"
+    return (
+        Formula("contact_dashpot", (x, k1, f1), eta,
+                "contact dashpot eta (N s/m) of the loss tangent x = omega1 eta / k1 at the first free resonance f1",
+                f"{source}: substitution()"),
+        Formula("viscous_width", (g, f1), width,
+                "half-power width (Hz) of every free mode under viscous drag g = c/(rho S omega1) alone",
+                f"{source}: half_power_width('viscous')"),
+    )
+
+
+def _oscillator() -> tuple[Formula, ...]:
+    """One mode as a damped oscillator ``x'' + (omega0/Q) x' + omega0**2 x = omega0**2 F/k``
+    (time dependence ``exp(i omega t)``): its power spectrum, and 1/Q from its complex root."""
+    w, w0, inv_q = sp.symbols("omega omega0 inv_q", positive=True)
+    f, f_0, q, amplitude, white = sp.symbols("f f0 q amplitude white", positive=True)
+    oscillator = -w**2 + sp.I * w * w0 * inv_q + w0**2
+    # Response per static response (1 at omega = 0), its squared modulus in Hz; the
+    # denominator is kept a sum of squares (expanded, it cancels near the resonance).
+    denominator = oscillator.subs({w: 2 * sp.pi * f, w0: 2 * sp.pi * f_0, inv_q: 1 / q})
+    modulus2 = sum(sp.factor_terms(part(denominator))**2 for part in (sp.re, sp.im))
+    power = sp.factor_terms((2 * sp.pi * f_0)**4 / modulus2)
+    asd = sp.sqrt(white**2 + amplitude**2 * power)
+    # A complex root omega = a + i b: real and imaginary parts of the oscillator vanish.
+    a, b_ = sp.symbols("root_re root_im", positive=True)
+    parts = sp.expand_complex(sp.expand(oscillator.subs(w, a + sp.I * b_)))
+    solution = _only(sp.solve([sp.re(parts), sp.im(parts)], [w0, inv_q], dict=True))
+    source = "derivations/formulas.py: damped oscillator x'' + (omega0/Q) x' + omega0**2 x"
+    return (
+        Formula("oscillator_asd", (f, f_0, q, amplitude, white), asd,
+                "amplitude spectral density at f (Hz) of a mode at f0 with quality factor q and static "
+                "amplitude A over a white floor w", f"{source}: |response|**2"),
+        Formula("loss_factor_from_root", (a, b_), solution[inv_q],
+                "1/Q of a mode from its complex root a + i b (Im > 0, exp(i omega t); any frequency scale)",
+                f"{source}: complex root"),
+        Formula("half_power_width_from_root", (b_,), sp.simplify(solution[w0] * solution[inv_q]),
+                "half-power width omega0/Q of a mode from the imaginary part b of its complex root (same units)",
+                f"{source}: complex root"),
     )
 
 
@@ -123,7 +252,19 @@ def _domain_contrast() -> tuple[Formula, ...]:
                 f"domain_amplitude_{'plus' if sign == '+' else 'minus'}_small_{name}", (d, e, p),
                 amplitude.subs(real), f"leading order of |PR{sign}| for {regime}",
                 f"{source}: amplitude_series('{small}')"))
+    # Eq. 41's line b + c V in the bias, less its bias-free part d: the electrostatic term.
+    d0, G, V, Vs = sp.symbols("d G V V_surf", real=True)
+    slope, intercept = dc.linear_fit_in_bias()
+    g_elec, v_dc, v_av = sp.symbols("g_elec v_dc v_av", real=True)
+    electrostatic = sp.expand(slope * V + intercept - d0).subs({G: g_elec, V: v_dc, Vs: v_av}, simultaneous=True)
     return (
+        Formula("electrostatic_term", (g_elec, v_dc, v_av), sp.factor_terms(electrostatic),
+                "electrostatic term d_el = G_elec (V_dc - V_av) of Eqs. 37-38 (units of G_elec times V)",
+                f"{source}: linear_fit_in_bias()"),
+        Formula("domain_response_plus", (d, e, p), pr_plus, "complex response PR+ over the c+ domain (Eqs. 37-38)",
+                f"{source}: responses()"),
+        Formula("domain_response_minus", (d, e, p), pr_minus, "complex response PR- over the c- domain (Eqs. 37-38)",
+                f"{source}: responses()"),
         Formula("domain_amplitude_plus", (d, e, p), plus, "|PR+| over the c+ domain", f"{source}: amplitudes_squared()"),
         Formula("domain_amplitude_minus", (d, e, p), minus, "|PR-| over the c- domain", f"{source}: amplitudes_squared()"),
         Formula("domain_phase_difference", (d, e, p), phase,

@@ -14,7 +14,7 @@ away from the surface; ``theta = u0'(L)``.
 """
 from __future__ import annotations
 
-import sympy as sp
+import sympy as sp  # noqa: F401  (the doctests)
 
 from .beam import EI, TipProblem, TipSolution, d1, f0, k1, q0, solve_tip_problem
 

@@ -18,7 +18,24 @@ shear condition, the longitudinal one bends the beam through the lever arm ``H``
     EI u0''(L)  = H F_l = -H [kvl (u0(L) - d1) + kll (H u0'(L) - d2)]
     EI u0'''(L) = -f0 - F_v = -f0 + kvv (u0(L) - d1) + kvl (H u0'(L) - d2)
 
-At ``alpha = 0`` (``kvv = k1``, ``kll = k2``, ``kvl = 0``) this is Eq. 4a,b exactly.  The
+At ``alpha = 0`` (``kvv = k1``, ``kll = k2``, ``kvl = 0``) this is Eq. 4a,b exactly.
+
+Sign of ``alpha``.  ``K = k1 n n^T + k2 t t^T`` with the surface normal ``n = (cos alpha,
+sin alpha)`` and tangent ``t = (-sin alpha, cos alpha)`` in beam components ``(v, l)``
+(that is what :func:`rotated` expands to).  ``v`` is the side of the lever facing away
+from the sample (``u0 > 0`` lifts it), so ``n`` is the normal pointing away from the sample,
+and ``n . e_l = sin alpha``: walking along the lever from the clamp to the free end one
+moves *away* from the sample when ``alpha > 0``.  So ``alpha > 0`` puts the free end farther
+from the sample than the clamp, and the usual mounting (tip end nearer the sample, tilt
+10-15 degrees in the public convention) is ``alpha < 0``::
+
+    alpha = -radians(tilt)          (tilt in degrees, free end nearer the sample > 0)
+
+(:attr:`pfmdyn.Cantilever.alpha` is that conversion.)  A check with the physics: in the
+usual mounting the lever points down towards the sample, so a slope ``u0' > 0`` swings the
+apex (``H`` below the lever) forward and down by ``H u0' sin(tilt)``, compressing the
+normal spring, which pushes the free end back up: ``F_v = -kvl H u0' > 0``, so ``kvl < 0``,
+and ``kvl = (k1 - k2) sin alpha cos alpha`` is negative for ``k1 > k2`` only at ``alpha < 0``.  The
 generated code takes ``kvv, kll, kvl`` (polynomial parameters); :func:`rotated` gives them
 from ``k1, k2, alpha``.  ``f0`` is taken along the beam normal: its longitudinal part, a
 ``sin alpha`` fraction, is absorbed by the fitted drive amplitudes.
@@ -30,7 +47,7 @@ import sympy as sp
 from .beam import EI, H, TipProblem, TipSolution, d1, d2, f0, k1, k2, q0, solve_tip_problem
 
 __all__ = ["alpha", "kvv", "kll", "kvl", "rotated", "tip_conditions", "problem", "solve",
-           "DRIVES", "render_rotation"]
+           "DRIVES"]
 
 alpha = sp.Symbol("alpha", real=True)
 kvv, kll = sp.symbols("kvv kll", positive=True)
@@ -79,27 +96,3 @@ def solve() -> TipSolution:
     True
     """
     return solve_tip_problem(problem)
-
-
-def render_rotation(header, digest) -> str:
-    """Source of ``generated/tilt_rotation.py``: :func:`rotated` as NumPy code.
-
-    ``header(source, digest)`` and ``digest(exprs)`` are the code generator's.
-    """
-    r = rotated()
-    printer = sp.printing.numpy.NumPyPrinter({"fully_qualified_modules": True})
-    body = ", ".join(printer.doprint(r[s]).replace("numpy.", "np.") for s in (kvv, kll, kvl))
-    return header("derivations/tilt.py: rotated()", digest([r[s] for s in (kvv, kll, kvl)])) + f'''"""The contact spring tensor in beam axes: ``R diag(k1, k2) R^T`` (derivations/tilt.py).
-
-``k1`` along the surface normal, ``k2`` along the surface in the plane of the beam, the
-beam inclined by ``alpha``.  ``k1`` may be complex (a contact dashpot).
-"""
-import numpy as np
-
-__all__ = ['rotated']
-
-
-def rotated(k1, k2, alpha):
-    """``(kvv, kll, kvl)`` for springs ``k1``, ``k2`` and tilt ``alpha`` (rad)."""
-    return ({body})
-'''

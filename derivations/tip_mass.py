@@ -1,8 +1,8 @@
 """Elastic contact with a point mass at the tip (extension of Eqs. 4a,b).
 
 Equation: Eq. 2, ``u0'''' = kappa**4 u0 + q0/EI``, with the clamped end of Eq. 3.  The
-tip carries a point mass ``m_t`` (rotary inertia neglected: the tip is short next to
-``L``).  In harmonic motion ``u0 e^{i omega t}`` its inertia is a force
+tip carries a point mass ``m_t`` (this family leaves out its rotary inertia;
+:func:`rotary_inertia` derives it for the composed model of :mod:`derivations.tip_setback`).  In harmonic motion ``u0 e^{i omega t}`` its inertia is a force
 ``+m_t omega**2 u0(L)`` on the beam end (positive away from the surface when the tip is
 displaced that way), which adds to the local force ``f0`` in the shear condition::
 
@@ -25,12 +25,15 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .beam import EI, H, TipProblem, TipSolution, beta, d1, d2, f0, k, k1, k2, q0, solve_tip_problem
+from .beam import EI, H, L, TipProblem, TipSolution, beta, d1, d2, f0, k, k1, k2, q0, solve_tip_problem
 
-__all__ = ["mu", "inertial_stiffness", "tip_conditions", "problem", "solve", "DRIVES"]
+__all__ = ["mu", "rho_g", "inertial_stiffness", "rotary_inertia", "tip_conditions", "problem", "solve", "DRIVES"]
 
 mu = sp.Symbol("mu", nonnegative=True)
 """Tip mass over cantilever mass, ``m_t / (rho S L)``."""
+
+rho_g = sp.Symbol("rho_g", nonnegative=True)
+"""Tip radius of gyration over the cantilever length, ``r_g / L`` (``J = m_t r_g**2``)."""
 
 DRIVES = (d1, d2, f0, q0)
 
@@ -42,6 +45,30 @@ def inertial_stiffness() -> sp.Expr:
     beta**4*k*mu/3
     """
     return mu * k * beta**4 / 3
+
+
+def rotary_inertia() -> sp.Expr:
+    """``J omega**2`` in the derivation's variables: ``mu k beta**4 L**2 rho_g**2 / 3``.
+
+    The tip is a rigid body of mass ``m_t`` and moment of inertia ``J = m_t r_g**2`` about
+    the axis through its attachment point on the beam's neutral axis, normal to the plane
+    of bending (a centre of mass a distance ``e`` from that axis contributes ``m_t e**2``:
+    the beam is axially rigid, so the body turns about the attachment point).  It turns
+    with the beam, through the angle ``u0'(a)``.  The rotating body resists angular
+    acceleration: the couple the beam applies to it is ``J d**2 u0'(a)/dt**2
+    = -J omega**2 u0'(a)`` (the moment ``-J omega**2 u'`` of the issue), so it returns
+    ``+J omega**2 u0'(a)`` to the beam, counter-clockwise positive (the sense in which
+    ``u0'`` grows), the same way the point mass returns ``+m_t omega**2 u0(a)``.  With
+    ``m_t omega**2`` of :func:`inertial_stiffness` and ``r_g = rho_g L``::
+
+        J omega**2 = m_t omega**2 r_g**2 = mu k beta**4 L**2 rho_g**2 / 3.
+
+    It is a negative rotational spring: like the mass, it lowers every resonance.
+
+    >>> rotary_inertia()
+    L**2*beta**4*k*mu*rho_g**2/3
+    """
+    return inertial_stiffness() * L**2 * rho_g**2
 
 
 def tip_conditions(U):

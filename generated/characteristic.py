@@ -29,7 +29,12 @@ BETA1_FREE = float(BETA1_FREE_STR)
 
 
 class _FlintMath:
-    """``cos``, ``sin``, ``exp`` as methods of python-flint ``arb``/``acb``/``arb_series`` values."""
+    """``cos``, ``sin``, ``exp`` as methods of python-flint ``arb``/``acb``/``arb_series`` values.
+
+    >>> import flint
+    >>> float(FLINT.cos(flint.arb(0)) + FLINT.sin(flint.arb(0)) + FLINT.exp(flint.arb(0)))
+    2.0
+    """
 
     @staticmethod
     def cos(x):
@@ -54,6 +59,14 @@ def free(z, m):
     ----------
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{free(2.5, np):.8g}"
+    '-0.63807238'
+    >>> print(abs(free(BETA1_FREE, np)) < 1e-15)
+    True
     """
     _c = m.cos(z)
     _e = m.exp(-z)
@@ -69,6 +82,12 @@ def pinned(z, m):
     ----------
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{pinned(2.5, np):.8g}"
+    '-1.3888919'
     """
     _c = m.cos(z)
     _s = m.sin(z)
@@ -87,6 +106,12 @@ def elastic(z, m, *, k1_over_k, k2_ratio):
     m : math namespace with ``cos``, ``sin``, ``exp``
     k1_over_k : k1/k: vertical contact stiffness over the cantilever spring constant
     k2_ratio : k2 H^2/(k L^2): longitudinal contact stiffness seen through the lever arm H
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{elastic(2.5, np, k1_over_k=50.0, k2_ratio=0.5):.7g}"
+    '708.3593'
     """
     _c = m.cos(z)
     _s = m.sin(z)
@@ -105,6 +130,12 @@ def frictionless(z, m, *, k1_over_k):
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
     k1_over_k : k1/k: vertical contact stiffness over the cantilever spring constant
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{frictionless(2.5, np, k1_over_k=50.0):.8g}"
+    '198.3639'
     """
     _c = m.cos(z)
     _s = m.sin(z)
@@ -122,6 +153,12 @@ def friction(z, m):
     ----------
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{friction(2.5, np):.8g}"
+    '-0.63807238'
     """
     _c = m.cos(z)
     _e = m.exp(-z)
@@ -138,6 +175,12 @@ def indentation(z, m, *, k1_over_k):
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
     k1_over_k : k1/k: vertical contact stiffness over the cantilever spring constant
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{indentation(2.5, np, k1_over_k=50.0):.8g}"
+    '198.3639'
     """
     _c = m.cos(z)
     _s = m.sin(z)
@@ -156,6 +199,12 @@ def torsion_elastic(z, m, *, k2t_HL):
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
     k2t_HL : H^2 k2 L/c_T: lateral contact stiffness over the torsional stiffness
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{torsion_elastic(2.5, np, k2t_HL=2.0):.8g}"
+    '-0.80591475'
     """
     _c = m.cos(z)
     _s = m.sin(z)
@@ -169,6 +218,12 @@ def torsion_force(z, m):
     ----------
     z : number or array (``beta``, or ``xi L`` for torsion)
     m : math namespace with ``cos``, ``sin``, ``exp``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{torsion_force(2.5, np):.7g}"
+    '-0.8011436'
     """
     _c = m.cos(z)
     return _c

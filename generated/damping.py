@@ -19,12 +19,26 @@ OUTPUTS = ('beta_factor', 'k_factor', 'k1_factor', 'mu_factor')
 
 
 def factors(r, inv_q, g, x):
-    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast)."""
-    r = np.asarray(r, dtype=float)
-    return (((-1j*g + r)/(1j*inv_q + 1))**(1/4)/r**(1/4), 1j*inv_q + 1, 1j*r*x + 1, r/(-1j*g + r))
+    """(beta_factor, k_factor, k1_factor, mu_factor) at ``r = f / f1`` (arrays broadcast).
+
+    ``r`` may be complex (a damped mode's complex frequency): the factors are analytic in ``r``.
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in factors(1.5, 0.01, 0.02, 0.03)]
+    ['0.99999271-0.0058330761j', '1+0.01j', '1+0.045j', '0.99982225+0.013330963j']
+    """
+    r = np.asarray(r, dtype=complex if np.iscomplexobj(r) else float)
+    return (((-1j*g + r)/(1j*inv_q + 1))**(0.25)/r**(0.25), 1j*inv_q + 1, 1j*r*x + 1, r/(-1j*g + r))
 
 
 def d_factors(r, inv_q, g, x):
-    """Derivatives of each factor with respect to (inv_q, g, x): a tuple of 3-tuples."""
+    """Derivatives of each factor with respect to (inv_q, g, x): a tuple of 3-tuples.
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in d_factors(1.5, 0.01, 0.02, 0.03)[0]]
+    ['-0.003957855-0.2499586j', '0.0012498045-0.16664879j', '0']
+    """
     r = np.asarray(r, dtype=float)
-    return ((-1/4*(-(1j*g - r)/(1j*inv_q + 1))**(1/4)/(r**(1/4)*(inv_q - 1j)), (1/4)*((-1j*g + r)/(1j*inv_q + 1))**(1/4)/(r**(1/4)*(g + 1j*r)), 0), (1j, 0, 0), (0, 0, 1j*r), (0, 1j*r/(1j*g - r)**2, 0))
+    return ((-0.25*(-(1j*g - r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(inv_q - 1j)), (0.25)*((-1j*g + r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(g + 1j*r)), 0), (1j, 0, 0), (0, 0, 1j*r), (0, 1j*r/(1j*g - r)**2, 0))

@@ -96,6 +96,11 @@ def slope(beta, k, k1, k2, H, L):
         per unit d2
         per unit f0
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 100.0, 50.0, 1e-05, 0.0002)]
+    ['5297.5447', '5082.8568', '52.975447', '-0.03083978']
     """
     _h1, _h3, _h4, _h5, _h6, _h7, _h8 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8]]
     beta = np.asarray(beta)
@@ -124,6 +129,12 @@ def slope_and_jacobian(beta, k, k1, k2, H, L, wrt=JACOBIAN_PARAMETERS):
         as :func:`slope`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 2.0, 100.0, 50.0, 1e-05, 0.0002)
+    >>> [f"{v:.8g}" for v in jacobian[0]]
+    ['-3473.9052', '-2.5842599', '-5.3853322']
     """
     _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9 = _basis(beta)
     beta = np.asarray(beta)

@@ -66,6 +66,11 @@ def slope(beta, k, L):
     tuple of ndarray
         per unit f0
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 0.0002)]
+    ['-1110.4593', '-0.13375597']
     """
     _h0, _h1, _h2 = _basis(beta)
     beta = np.asarray(beta)

@@ -74,6 +74,11 @@ def slope(beta, k, k1, L):
         per unit d1
         per unit f0
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 100.0, 0.0002)]
+    ['5581.2307', '55.812307', '-0.032491265']
     """
     _h0, _h1, _h2, _h3, _h4 = _basis(beta)
     beta = np.asarray(beta)

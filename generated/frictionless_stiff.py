@@ -67,6 +67,11 @@ def slope(beta, k, L):
     tuple of ndarray
         per unit d1
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 0.0002)]
+    ['5314.1391', '-0.03733732']
     """
     _h0, _h1, _h2 = _basis(beta)
     beta = np.asarray(beta)

@@ -66,6 +66,11 @@ def slope(beta, k, k1, L):
     tuple of ndarray
         per unit d1
         per unit f0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 100.0, 0.0002)]
+    ['5581.2307', '55.812307']
     """
     _h0, _h1, _h2 = _basis(beta)
     beta = np.asarray(beta)
@@ -87,6 +92,11 @@ def deflection(beta, k, k1, L):
     tuple of ndarray
         per unit d1
         per unit f0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in deflection(2.5, 2.0, 100.0, 0.0002)]
+    ['1.0502606', '0.010502606']
     """
     _h1, _h2 = _basis(beta)[[1, 2]]
     beta = np.asarray(beta)

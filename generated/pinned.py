@@ -62,6 +62,11 @@ def slope(beta, k):
     -------
     tuple of ndarray
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0)]
+    ['-0.03733732']
     """
     _h0, _h1 = _basis(beta)
     beta = np.asarray(beta)

@@ -62,6 +62,11 @@ def slope(beta, k, H, L):
     -------
     tuple of ndarray
         per unit f_l
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 2.0, 1e-05, 0.0002)]
+    ['45.123627']
     """
     _h0, _h1 = _basis(beta)
     beta = np.asarray(beta)

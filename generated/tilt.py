@@ -100,6 +100,11 @@ def slope(beta, k, kvv, kll, kvl, H, L):
         per unit d2
         per unit f0
         per unit q0
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in slope(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002)]
+    ['5225.992', '5628.819', '44.08618', '-0.03140777']
     """
     _h1, _h3, _h4, _h5, _h6, _h7, _h8, _h10 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8, 10]]
     beta = np.asarray(beta)
@@ -130,6 +135,12 @@ def slope_and_jacobian(beta, k, kvv, kll, kvl, H, L, wrt=JACOBIAN_PARAMETERS):
         as :func:`slope`
     jacobian : tuple of tuples of ndarray
         ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002)
+    >>> [f"{v:.7g}" for v in jacobian[0]]
+    ['-3557.317', '-1.962519', '-5.258195', '-6.782923']
     """
     _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9, _h10 = _basis(beta)
     beta = np.asarray(beta)

@@ -50,6 +50,11 @@ def twist(z, k2t, H, L):
     -------
     tuple of ndarray
         per unit d3
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in twist(2.5, 1000000000.0, 1e-05, 0.0002)]
+    ['-148519.96']
     """
     _h0, _h1 = _basis(z)
     z = np.asarray(z)

@@ -50,6 +50,11 @@ def twist(z, L):
     -------
     tuple of ndarray
         per unit f_lat
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in twist(2.5, 0.0002)]
+    ['-5.9761784e-05']
     """
     _h0, _h1 = _basis(z)
     z = np.asarray(z)

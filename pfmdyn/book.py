@@ -2,25 +2,24 @@
 
 The book's chapters (MyST notebooks in ``book/``) compute everything at build time.  The
 verdicts of ``pfmdyn verify`` are computed once per build, before Sphinx starts, written to
-``<out>/verdicts.json`` and passed to the notebook kernels through the environment variable
-:data:`VERDICTS_ENV`; the chapters read them with :func:`verdicts`.  The build is strict:
-notebook execution is forced, a cell that raises fails the build, and Sphinx warnings are
-errors (``-W -n``).
+``<out>/verdicts.json`` (each with its evidence already typeset by :mod:`pfmdyn.typeset`, the
+module that also writes ``pfmdyn verify --errata``) and passed to the notebook kernels through
+the environment variable :data:`VERDICTS_ENV`; the chapters read them with :func:`verdicts`.
+The build is strict: notebook execution is forced, a cell that raises fails the build, and
+Sphinx warnings are errors (``-W -n``).
 
 This module also holds the small display helpers the chapters share (:func:`claims_table`,
 :func:`math`), so that the pages contain prose and computation only.
 """
 from __future__ import annotations
 
-import hashlib
 import html
 import json
 import os
 import re
-import sys
-import tempfile
 import time
 from collections import Counter
+from functools import lru_cache
 from pathlib import Path
 
 from .errors import UserError
@@ -38,59 +37,65 @@ def chapter_of(claim_id: str) -> str | None:
     >>> chapter_of("eq22.roots"), chapter_of("eq22.static"), chapter_of("nope")
     ('roots', 'free_end', None)
     """
+    from . import audit
     from .derivations.checks import core
+    audit.register()
     check = core.REGISTRY.get(claim_id)
     return (check.chapter or None) if check else None
 
 
 # --- verdicts, computed once per build -------------------------------------------------------
 
-def _source_digest() -> str:
-    """sha256 of the derivation sources: the key of the fallback verdict cache."""
-    from . import derivations
-    root = Path(derivations.__file__).resolve().parent
-    h = hashlib.sha256()
-    for path in sorted(root.rglob("*")):
-        if path.suffix in (".py", ".yaml") and "__pycache__" not in path.parts:
-            h.update(str(path.relative_to(root)).encode())
-            h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+def record(v) -> dict:
+    """One verdict for the book: the plain fields of ``pfmdyn verify --json`` and, under ``html``,
+    the claim's place, printed form, evidence and correction typeset for a table cell; errata also
+    carry their typeset parts under ``erratum`` (:func:`pfmdyn.typeset.erratum`)."""
+    from . import typeset
+    out = v.as_dict()
+    out["html"] = {"where": typeset.html(v.where), "printed": typeset.html(v.printed),
+                   "evidence": typeset.html(v.proof.proof), "correct": typeset.html(typeset.correction(v))}
+    if str(v.verdict) in ("erratum", "holds_up_to_sign_convention"):
+        f = typeset.erratum(v)
+        width = typeset.LINE_WIDTH
+        out["erratum"] = {"printed": typeset.html(f["printed"], width), "correct": f["correct"],
+                          "correction": typeset.html(f["correction"], width), "proof": typeset.html(f["proof"], width),
+                          "decisive": f["decisive"], "sign": f["sign"]}
+    return out
 
 
 def compute_verdicts() -> list[dict]:
-    """All verdicts of ``pfmdyn verify`` as plain dictionaries."""
+    """All verdicts of ``pfmdyn verify`` as :func:`record` dictionaries."""
     from .verify import compute
-    return [v.as_dict() for v in compute(progress=False)]
+    return [record(v) for v in compute(progress=False)]
 
 
 def write_verdicts(path: Path) -> list[dict]:
     """Compute the verdicts and write them to ``path`` (JSON)."""
     data = compute_verdicts()
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"digest": _source_digest(), "claims": data}, indent=1))
+    path.write_text(json.dumps({"claims": data}, indent=1))
     return data
 
 
-_CACHE: list[dict] | None = None
+@lru_cache(maxsize=None)
+def _read(path: str) -> tuple[dict, ...]:
+    return tuple(json.loads(Path(path).read_text())["claims"])
+
+
+@lru_cache(maxsize=1)
+def _computed() -> tuple[dict, ...]:
+    return tuple(compute_verdicts())
 
 
 def verdicts() -> list[dict]:
     """The verdicts of this build, in registry order.
 
-    Read from the file named by :data:`VERDICTS_ENV` (set by ``pfmdyn book``).  When a page
-    is executed outside ``pfmdyn book`` (e.g. ``jupyter-book build book``), they are
-    computed once and cached in the temporary directory under a digest of the derivation
-    sources, so a changed derivation is never served stale.
+    Read from the file named by :data:`VERDICTS_ENV` (set by ``pfmdyn book``).  When a page is
+    executed outside ``pfmdyn book`` (e.g. ``jupyter-book build book``) they are computed in
+    the kernel, once; nothing is written.
     """
-    global _CACHE
-    if _CACHE is None:
-        env = os.environ.get(VERDICTS_ENV)
-        if env:
-            _CACHE = json.loads(Path(env).read_text())["claims"]
-        else:
-            path = Path(tempfile.gettempdir()) / f"pfmdyn-book-verdicts-{_source_digest()}.json"
-            _CACHE = json.loads(path.read_text())["claims"] if path.exists() else write_verdicts(path)
-    return _CACHE
+    env = os.environ.get(VERDICTS_ENV)
+    return list(_read(env) if env else _computed())
 
 
 def claims(*ids: str) -> list[dict]:
@@ -199,16 +204,24 @@ def chapter_table(page: str) -> "HTML":
     return claims_table(claims_of(page), columns=("id", "where", "verdict", "evidence"), link=True)
 
 
+COLUMN_SHARES = {"id": 14, "where": 11, "verdict": 11, "printed": 30, "evidence": 40, "correct": 24, "chapter": 9}
+"""Relative widths of the columns of a verdict table."""
+
+
 def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "correct"),
                  link=False) -> HTML:
-    """An HTML table of verdicts; every cell is escaped text.
+    """An HTML table of verdicts: escaped text with typeset formulas.
 
     ``link=True`` links ids to their row on the verdicts page; ``link="anchor"`` makes this
-    table the target of those links (the verdicts page).
+    table the target of those links (the verdicts page).  Column widths are fixed shares of the
+    text column (:data:`COLUMN_SHARES`), so a long formula never widens the table.
     """
     heads = {"id": "claim", "where": "where", "printed": "as printed", "verdict": "verdict",
              "evidence": "evidence", "correct": "correct form", "chapter": "chapter"}
-    out = ['<table class="pfm-claims"><thead><tr>']
+    total = sum(COLUMN_SHARES[c] for c in columns)
+    out = ['<table class="pfm-claims pfm-fixed"><colgroup>']
+    out += [f'<col style="width: {100 * COLUMN_SHARES[c] / total:.1f}%">' for c in columns]
+    out.append("</colgroup><thead><tr>")
     out += [f"<th>{heads[c]}</th>" for c in columns]
     out.append("</tr></thead><tbody>")
     for v in rows:
@@ -221,86 +234,51 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
                 if link:
                     cell = f'<a href="verdicts.html#{anchor(v["id"])}">{cell}</a>'
             elif c == "where":
-                cell = text_cell(v.get("where") or "")
+                cell = v["html"]["where"]
                 if link == "anchor":
                     cell = f'<span id="{anchor(v["id"])}"></span>{cell}' 
             elif c == "chapter":
                 page = v.get("chapter") or None
                 cell = f'<a href="{page}.html">{page}</a>' if page and link else html.escape(page or "—")
             else:
-                cell = text_cell(v.get(c) or "")
+                cell = v["html"][c]
             out.append(f"<td>{cell}</td>")
         out.append("</tr>")
     out.append("</tbody></table>")
     return HTML("".join(out))
 
 
-def text_cell(text: str) -> str:
-    r"""Escaped text for a table cell: ``$...$`` spans become MathJax math, SymPy's ``**`` and
-    ``*`` become ``^`` and a middle dot.
-
-    >>> text_cell("x**2 < $\\frac{a}{b}$")
-    'x^2 &lt; <span class="math notranslate nohighlight">\\(\\frac{a}{b}\\)</span>'
-    """
-    import re
-
-    from .verify import prose
-    parts = re.split(r"(\$\$.+?\$\$|\$[^$]+\$)", text, flags=re.S)
-    out = []
-    for part in parts:
-        if len(part) > 4 and part.startswith("$$") and part.endswith("$$"):
-            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[2:-2].strip())}\\)</span>')
-        elif len(part) > 2 and part.startswith("$") and part.endswith("$"):
-            out.append(f'<span class="math notranslate nohighlight">\\({html.escape(part[1:-1])}\\)</span>')
-        else:
-            out.append(html.escape(prose(part)))
-    return "".join(out)
-
-
 def errata(rows: list[dict]) -> None:
-    """Display each erratum: head, printed and correct forms as typeset math (long ones broken
-    over lines), the proof as one sentence and the decisive expression."""
-    from types import SimpleNamespace
-
+    """Display each erratum (records of :func:`verdicts`): head, the claim as printed and the
+    correct forms as typeset math (long ones broken over lines), the proof as one sentence and
+    the decisive expression."""
     from IPython.display import Math, display
 
-    from .verify import SIGN_CONVENTION, forms
+    from .derivations.paper.convention import SIGN_CONVENTION_SENTENCE
+    from .typeset import html as typeset_html
     for v in rows:
-        f = forms(SimpleNamespace(**v))
+        f = v["erratum"]
         page = v.get("chapter")
         chapter = f' — <a href="{page}.html">{page}</a>' if page else ""
         display(HTML(f'<p class="pfm-erratum-head"><code>{html.escape(v["id"])}</code> '
-                     f'({html.escape(v["where"])}) {_badge(v["verdict"])}{chapter}</p>'))
-        for label, key, fallback in (("As printed", "printed", v.get("printed")), ("Correct", "correct", v.get("correct"))):
-            if key in f:
-                display(HTML(f"<p><b>{label}:</b></p>"))
-                for tex in f[key]:
-                    display(Math(tex))
-            else:
-                display(HTML(f"<p><b>{label}:</b> {text_cell(fallback or '(see proof)')}</p>"))
-        display(HTML(f"<p><b>Proof:</b> {text_cell(f['proof'])}.{' Decisive:' if 'decisive' in f else ''}</p>"))
-        if "decisive" in f:
+                     f'({v["html"]["where"]}) {_badge(v["verdict"])}{chapter}</p>'))
+        display(HTML(f'<div class="pfm-result"><b>As printed:</b> {f["printed"]}</div>'))
+        if f["correct"]:
+            display(HTML("<p><b>Correct:</b></p>"))
+            for tex in f["correct"]:
+                display(Math(tex))
+        if f["correction"] or not f["correct"]:
+            display(HTML(f'<div class="pfm-result"><b>Correct:</b> {f["correction"] or "(see proof)"}</div>'))
+        display(HTML(f'<div class="pfm-result"><b>Proof:</b> {f["proof"]}.{" Decisive:" if f["decisive"] else ""}</div>'))
+        if f["decisive"]:
             display(Math(f["decisive"]))
-        if "sign" in (v.get("evidence") or ""):
-            display(HTML(f"<p><i>Sign convention:</i> {html.escape(SIGN_CONVENTION)}.</p>"))
+        if f["sign"]:
+            display(HTML(f"<p><i>Sign convention:</i> {typeset_html(SIGN_CONVENTION_SENTENCE)}.</p>"))
 
 
-def latex(expr) -> str:
-    r"""LaTeX of a SymPy object, folding ``\sin{\left(\beta \right)}`` to ``\sin {\beta}``.
-
-    >>> import sympy as sp
-    >>> latex(sp.sin(sp.Symbol("beta")))
-    '\\sin {\\beta}'
-    """
-    import sympy as sp
-    if isinstance(expr, str):
-        return expr
-    return sp.latex(expr, fold_func_brackets=True, symbol_names=_TIP_NAMES)
-
-
-def math(lhs: str, expr):
-    """Display ``lhs = expr`` as typeset math (``expr`` a SymPy object or a LaTeX string); a long
-    expression is broken over lines that fit the text column."""
+def math(lhs, expr):
+    """Display ``lhs = expr`` as typeset math (``lhs`` LaTeX or a SymPy object, ``expr`` a SymPy
+    object or a LaTeX string); a long expression is broken over lines that fit the text column."""
     from IPython.display import Math
     if isinstance(expr, str):
         return Math(f"{lhs} = {expr}" if lhs else expr)
@@ -309,29 +287,24 @@ def math(lhs: str, expr):
 
 def aligned(rows, *, relation: str = "="):
     """Display several ``(lhs, rhs)`` pairs as one aligned block of typeset math, each broken
-    over lines where it would be wider than the text column (:func:`pfmdyn.verify.latex_rows`)."""
+    over lines where it would be wider than the text column (:func:`pfmdyn.typeset.latex_rows`)."""
     from IPython.display import Math
 
-    from .verify import latex_rows
+    from .typeset import latex, latex_rows
     lines = []
     for lhs, rhs in rows:
-        lhs_tex = latex(lhs)
         if isinstance(rhs, str):
-            lines.append(f"{lhs_tex} &{relation} {rhs}")
+            lines.append(f"{latex(lhs)} &{relation} {rhs}")
         else:
-            lines += latex_rows(lhs_tex, rhs, relation=relation, printer=latex)
+            lines += latex_rows(lhs, rhs, relation=relation)
     return Math(r"\begin{aligned}" + r" \\[3pt] ".join(lines) + r"\end{aligned}")
 
 
-_TIP_NAMES: dict = {}
-
-
 def tip_values():
-    """Symbols standing for ``u0(L) ... u0'''(L)``, typeset as such by :func:`latex`."""
-    import sympy as sp
-    syms = sp.symbols("U_0:4")
-    _TIP_NAMES.update({s: f"u_0{p}(L)" for s, p in zip(syms, ("", "'", "''", "'''"))})
-    return list(syms)
+    """Symbols standing for the tip values of ``u0`` and its first three derivatives, typeset
+    as such (:class:`pfmdyn.typeset.TipValue`)."""
+    from .typeset import TipValue
+    return [TipValue(f"U_{i}") for i in range(4)]
 
 
 def ratios(rows):
@@ -366,8 +339,11 @@ def book_dir() -> Path:
     return here
 
 
-def build(out: Path, *, quiet: bool = False) -> int:
-    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success)."""
+def build(out: Path, *, progress=None) -> int:
+    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success).
+
+    ``progress``: None (quiet), or a callable taking a line of news (the command prints it);
+    Sphinx reports its own progress only when one is given."""
     try:
         from jupyter_book.sphinx import build_sphinx
     except ImportError as exc:  # pragma: no cover - depends on the environment
@@ -378,9 +354,8 @@ def build(out: Path, *, quiet: bool = False) -> int:
     t0 = time.perf_counter()
     verdict_file = out / "verdicts.json"
     write_verdicts(verdict_file)
-    if not quiet:
-        print(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}",
-              file=sys.stderr)
+    if progress is not None:
+        progress(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}")
     os.environ[VERDICTS_ENV] = str(verdict_file)
     result = build_sphinx(
         src, out / "html",
@@ -393,7 +368,7 @@ def build(out: Path, *, quiet: bool = False) -> int:
         warningiserror=True,
         keep_going=True,
         freshenv=True,
-        quiet=quiet,
+        quiet=progress is None,
     )
     if isinstance(result, BaseException):
         return 1

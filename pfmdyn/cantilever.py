@@ -158,6 +158,11 @@ class Cantilever:
         return -math.radians(self.tilt)
 
     @property
+    def rho_g(self) -> float:
+        """The derivations' tip radius of gyration ``r_g / L`` (``derivations/tip_mass.py``)."""
+        return self.tip_gyration_radius / self.length
+
+    @property
     def is_paper_probe(self) -> bool:
         """True when the paper's families apply: massless tip at the free end, no tilt, spot at L."""
         return (self.tip_position == 1.0 and self.tip_mass_ratio == 0.0 and self.tilt == 0.0
@@ -174,7 +179,7 @@ class Cantilever:
     def free_root(self) -> float:
         """``beta_1``: the first free root of this lever with its tip (1.8751... when massless)."""
         return _free_root(self.spring_constant, self.tip_height or 0.0, self.length,
-                          self.tip_mass_ratio, self.tip_position)
+                          self.tip_mass_ratio, self.tip_position, self.rho_g)
 
     def beta(self, frequency) -> np.ndarray:
         """Dimensionless frequency ``beta`` (complex) for frequencies in Hz (> 0).
@@ -197,7 +202,8 @@ class Cantilever:
         beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
             r, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
         b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        return b1 * np.sqrt(r) * beta_factor, self.spring_constant * k_factor, k1_factor, mu_factor
+        return (formulas.beta_from_frequency(f, self.free_resonance, b1) * beta_factor, self.spring_constant * k_factor,
+                k1_factor, mu_factor)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
         """Slope at the free end per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
@@ -220,23 +226,24 @@ class Cantilever:
         kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
         with np.errstate(all="ignore"):
             slopes = tip_setback.slope(beta, k, kvv, kll, kvl, self._tip_height(contact), self.length,
-                                       self.tip_mass_ratio * mu_factor, self.tip_position)
+                                       self.tip_mass_ratio * mu_factor, self.tip_position, self.rho_g)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
 @lru_cache(maxsize=4096)
-def _free_root(k, H, L, mu, gamma) -> float:
-    """First free root ``beta`` with a tip mass ``mu`` at ``gamma L`` (1.8751... at ``mu = 0``).
+def _free_root(k, H, L, mu, gamma, rho_g) -> float:
+    """First free root ``beta`` with a tip mass ``mu`` (radius of gyration ``rho_g L``) at ``gamma L``
+    (1.8751... at ``mu = 0``).
 
     The characteristic of the composed model (``generated/tip_setback.py``) with no contact has
     one root in ``(0.3, BETA1_FREE]`` (a tip mass only lowers it): bracketed on a grid, refined.
 
-    >>> round(_free_root(1.0, 1e-5, 1e-4, 0.0, 1.0), 10)
+    >>> round(_free_root(1.0, 1e-5, 1e-4, 0.0, 1.0, 0.0), 10)
     1.8751040687
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
+    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
     with np.errstate(all="ignore"):
         vals = char(grid)

@@ -24,8 +24,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "branches": ("pfmdyn.commands.branches", "resonance branches against contact stiffness (CSV + PNG)"),
     "diagram": ("pfmdyn.commands.diagram", "frequency-bias response diagrams of vertical PFM (Figs. 6-7)"),
     "inspect": ("pfmdyn.commands.inspect", "what pfmdyn reads from an instrument file (.ibw, .h5, .nid, sweeps)"),
-    "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (and k2) from contact resonances"),
+    "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (with k2 or the tip position) from contact resonances"),
     "map": ("pfmdyn.commands.map", "fit the beam model at every pixel of a band-excitation map (Dask, Zarr)"),
+    "resonances": ("pfmdyn.commands.resonances", "certified free and contact resonances of a probe (and Q, damped and peak frequencies)"),
+    "spot": ("pfmdyn.commands.spot", "electrostatic blind spots, calibration and d_eff error at the laser spot"),
 }
 
 
@@ -45,7 +47,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:
-        print(f"pfmdyn {args.command}: error: {exc}", file=sys.stderr)
+        from .commands.flags import option_hint
+        print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # Output piped into `head` and closed early: not an error of ours or the user's.

@@ -8,8 +8,12 @@ mechanisms: internal friction (complex modulus of the beam, ``Q``), a viscous fo
 unit length ``c u_t`` (``C = c M_beam / (rho S)``; ``viscous_hz = c / (2 pi rho S)`` is the
 half-power width every mode shares), and a dashpot ``eta`` in parallel with ``k1`` at the
 tip (``D``, rotated with ``k1`` by the tilt).  The tip node may sit inside the beam
-(set-back), carry a lumped mass, and hold a 2x2 spring tensor on ``(u, H u')`` (tilt); a
-uniform load uses the consistent load vector.  The output is the slope at the last node.
+(set-back), carry a rigid body (a lumped mass, and its moment of inertia
+``J = m_tip r_g**2`` on the node's rotation), and hold a 2x2 spring tensor on ``(u, H u')``
+(tilt); a uniform load uses the consistent load vector.  The tilt is given either as
+pfmdyn's internal ``alpha`` (the rotation of :mod:`derivations.tilt`) or, independently,
+as ``tilt_deg`` in the public convention (free end nearer the sample > 0), from which the
+springs are built from the explicit geometry (:meth:`FEBeam.spring_tensor`).  The output is the slope at the last node.
 Test data follow :func:`spectrum` and :func:`resonances`; :func:`random_case` draws a
 cantilever, contact and hidden effects over realistic ranges.
 """
@@ -46,6 +50,30 @@ class FEBeam:
     """The viscous force's coefficient grows as ``(f / f1)**air_exponent``: 0 for a constant
     half-power width (viscous), 0.5 for air (the boundary layer thins as 1/sqrt(f)), so that
     ``viscous_hz`` is the width at f1."""
+    gyration_radius: float = 0.0
+    tilt_deg: float = 0.0
+
+    def spring_tensor(self, normal: float, tangential: float) -> tuple[float, float, float]:
+        """``(kvv, kll, kvl)`` on the beam axes (v: beam normal, l: beam axis) of springs
+        ``normal`` along the surface normal and ``tangential`` along the surface.
+
+        With ``tilt_deg``, from the geometry: lab frame x along the surface (from the clamp's
+        side to the tip's), y up from the sample; the beam axis, clamp to free end, points
+        down towards the sample, ``e_l = (cos t, -sin t)``, and its normal ``e_v = (sin t,
+        cos t)`` is the side facing away from the sample (``u > 0``); each spring is
+        ``k n n^T`` with ``n`` its direction in beam components.  Else from ``alpha``.
+        """
+        if self.tilt_deg:
+            t = math.radians(self.tilt_deg)
+            e_l, e_v = np.array([math.cos(t), -math.sin(t)]), np.array([math.sin(t), math.cos(t)])
+            K = np.zeros((2, 2))
+            for stiffness, lab in ((normal, np.array([0.0, 1.0])), (tangential, np.array([1.0, 0.0]))):
+                n = np.array([lab @ e_v, lab @ e_l])
+                K += stiffness * np.outer(n, n)
+            return K[0, 0], K[1, 1], K[0, 1]
+        c, s_ = math.cos(self.alpha), math.sin(self.alpha)
+        return (normal * c * c + tangential * s_ * s_, normal * s_ * s_ + tangential * c * c,
+                (normal - tangential) * s_ * c)
 
     def _matrices(self, parts: bool = False):
         n, le = self.n_elements, self.L / self.n_elements
@@ -64,19 +92,18 @@ class FEBeam:
             M[s, s] += me
             q[s] += le * np.array([0.5, le / 12, 0.5, -le / 12])
         tip = round(self.gamma * n)
-        c, s_ = math.cos(self.alpha), math.sin(self.alpha)
-        kvv = self.k1 * c * c + self.k2 * s_ * s_
-        kll = self.k1 * s_ * s_ + self.k2 * c * c
-        kvl = (self.k1 - self.k2) * s_ * c
+        kvv, kll, kvl = self.spring_tensor(self.k1, self.k2)
+        dvv, dll, dvl = self.spring_tensor(self.eta, 0.0)
         iu, it = 2 * tip, 2 * tip + 1
         C = M * (2 * math.pi * self.viscous_hz)        # c / (rho S) times the beam's mass matrix
         # Springs act on (u, H u'): K_spring = T^T Kt T with T = diag(1, H).
-        for target, (vv, ll, vl) in ((T, (kvv, kll, kvl)), (D, (self.eta * c * c, self.eta * s_ * s_, self.eta * s_ * c))):
+        for target, (vv, ll, vl) in ((T, (kvv, kll, kvl)), (D, (dvv, dll, dvl))):
             target[iu, iu] += vv
             target[iu, it] += vl * self.H
             target[it, iu] += vl * self.H
             target[it, it] += ll * self.H**2
         M[iu, iu] += self.mu * rhoS * self.L
+        M[it, it] += self.mu * rhoS * self.L * self.gyration_radius**2     # J = m_tip r_g**2 on the rotation
         # Surface displacements d1 (along k1) and d2 (along k2) load through springs and dashpot:
         # per unit d the load is (spring + i omega dashpot) column; returned as two parts.
         loads = np.zeros((size, 4))
@@ -85,8 +112,8 @@ class FEBeam:
         loads[iu, 2] = 1.0                                       # per unit f0
         loads[:, 3] = q                                          # per unit q0
         dash = np.zeros((size, 4))
-        dash[iu, 0], dash[it, 0] = self.eta * c * c, self.eta * s_ * c * self.H
-        dash[iu, 1], dash[it, 1] = self.eta * s_ * c, self.eta * s_ * s_ * self.H
+        dash[iu, 0], dash[it, 0] = dvv, dvl * self.H
+        dash[iu, 1], dash[it, 1] = dvl, dll * self.H
         # Rotations times L have the units of displacements: keeps the SI matrices well scaled.
         scale = np.tile([1.0, 1.0 / self.L], n + 1)
         sc = np.outer(scale, scale)
@@ -123,7 +150,7 @@ class FEBeam:
     def free_resonances(self, count: int = 3) -> np.ndarray:
         """First ``count`` free flexural resonances (Hz) with the tip mass, no contact."""
         free = FEBeam(self.k, self.L, self.f1, self.H, mu=self.mu, gamma=self.gamma,
-                      n_elements=self.n_elements)    # undamped: the resonances of the table
+                      n_elements=self.n_elements, gyration_radius=self.gyration_radius)    # undamped: the resonances of the table
         K, M, _ = free._matrices()
         w2 = scipy.linalg.eigh(K, M, eigvals_only=True)[:count]
         return np.sqrt(w2) / (2 * math.pi)
@@ -241,6 +268,26 @@ def random_beam(rng, hidden=(), n_elements: int = 120) -> tuple[FEBeam, dict, np
         beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, n_elements=n_elements,
                       **{p: truth[p] for p in ("mu", "gamma", "alpha", "Q", "viscous_hz", "eta") if p in truth})
     return beam, truth, contact
+
+
+def random_probe(rng, n_elements: int = 100, tilt_deg=(5.0, 15.0), mass_ratio=(0.05, 0.5)) -> tuple[FEBeam, dict]:
+    """A random probe in contact over the real ranges, as the FE lever and the public description.
+
+    k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4, k2 = 0.85 k1, tip at a node in
+    0.85-1 L with a tip mass ratio in ``mass_ratio`` and radius of gyration H/4 times 0.5-2,
+    tilt (public sign, explicit geometry) in ``tilt_deg``.  The description uses the public
+    names (``spring_constant``, ``free_resonance`` as measured: the FE's first free mode with
+    its tip, ..., ``k1``, ``k2``).
+    """
+    k = 10 ** rng.uniform(math.log10(0.05), math.log10(50))
+    L, H = rng.uniform(100e-6, 500e-6), rng.uniform(3e-6, 20e-6)
+    k1 = k * 10 ** rng.uniform(0, 4)
+    gamma = int(rng.integers(int(0.85 * n_elements), n_elements + 1)) / n_elements
+    mu, r_g, tilt = rng.uniform(*mass_ratio), rng.uniform(0.5, 2.0) * H / 4, rng.uniform(*tilt_deg)
+    fe = FEBeam(k, L, 1e5, H, k1=k1, k2=0.85 * k1, mu=mu, gamma=gamma, gyration_radius=r_g, tilt_deg=tilt,
+                n_elements=n_elements)
+    return fe, dict(spring_constant=k, free_resonance=float(fe.free_resonances(1)[0]), length=L, tip_height=H,
+                    tip_position=gamma, tip_mass_ratio=mu, tip_gyration_radius=r_g, tilt=tilt, k1=k1, k2=0.85 * k1)
 
 
 def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrument",

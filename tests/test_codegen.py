@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pfmdyn import cli
-from pfmdyn.commands.codegen import stale_files
+from pfmdyn.commands.codegen import compare, stale_files
 from pfmdyn.derivations import codegen
 from pfmdyn.derivations.beam import H, L, beta, k, k1, k2
 from pfmdyn.derivations.tilt import kll, kvl, kvv
@@ -139,24 +139,67 @@ def test_headers_and_gitattributes():
     assert "generated/** linguist-generated=true" in attrs
 
 
-def test_check_passes():
-    assert stale_files(codegen.GENERATED) == []
+@pytest.fixture(scope="module")
+def fresh():
+    """One fresh generation shared by the tests below (rendering takes most of a minute)."""
+    return codegen.render_all()
+
+
+def test_check_passes(fresh, monkeypatch, capsys):
+    result = compare(codegen.GENERATED, fresh)
+    assert result.ok, (sorted(result.diffs), result.orphans)
+    monkeypatch.setattr(codegen, "render_all", lambda: fresh)
     assert cli.main(["codegen", "--check"]) == 0
+    assert "up to date" in capsys.readouterr().out
 
 
-def test_check_fails_on_hand_edit(tmp_path, capsys):
+def test_check_fails_on_hand_edit_with_the_diff(fresh, tmp_path, capsys, monkeypatch):
     copy = tmp_path / "generated"
     shutil.copytree(codegen.GENERATED, copy)
     path = copy / "pinned.py"
     path.write_text(path.read_text().replace("_r = 1.0 /", "_r = 1.0001 /"))
+    monkeypatch.setattr(codegen, "render_all", lambda: fresh)
     assert cli.main(["codegen", "--check", "--output", str(copy)]) == 1
     out = capsys.readouterr().out
-    assert "pinned.py" in out and "run `pfmdyn codegen`" in out
+    assert "--- pinned.py (committed)\n+++ pinned.py (fresh)" in out
+    assert "\n-    _r = 1.0001 / (" in out and "\n+    _r = 1.0 / (" in out
+    assert "pinned.py; run `pfmdyn codegen`" in out and "orphan" not in out
+    assert stale_files(copy) == ["pinned.py"]
 
 
-def test_generation_is_deterministic(tmp_path):
-    codegen.write(tmp_path)
+def test_check_fails_on_orphan(fresh, tmp_path, capsys, monkeypatch):
+    copy = tmp_path / "generated"
+    shutil.copytree(codegen.GENERATED, copy)
+    # A module left behind when its family was renamed: nothing writes it any more.
+    shutil.copy(copy / "pinned.py", copy / "pinned_old.py")
+    monkeypatch.setattr(codegen, "render_all", lambda: fresh)
+    assert cli.main(["codegen", "--check", "--output", str(copy)]) == 1
+    out = capsys.readouterr().out
+    assert "orphan file(s)" in out and "pinned_old.py" in out
+    assert "---" not in out and "stale" not in out
+    assert compare(copy, fresh).orphans == ["pinned_old.py"]
+
+
+def test_generation_is_deterministic(fresh, tmp_path):
+    codegen.write(tmp_path, fresh)
     assert codegen.write(tmp_path) == []
+
+
+def test_examples_match_the_sympy_expression():
+    """Each transfer module's doctest values agree with the mpmath reference of this file."""
+    import ast
+    import doctest
+    for fam, fn in CASES:
+        function = getattr(importlib.import_module(f"pfmdyn.generated.{fam.module}"), fn.name)
+        first = doctest.DocTestParser().get_examples(function.__doc__)[0]
+        call = first.source[first.source.index(f" {fn.name}(") + len(fn.name) + 1:first.source.rindex("]")]
+        args = ast.literal_eval(call)
+        shown = [float(v) for v in ast.literal_eval(first.want)]
+        _, (den, _), outputs = _reference(fam.module, fn.name)
+        with mp.workdps(30):
+            a = [mp.mpf(x) for x in args]
+            values = [num(*a) / den(*a) for num, _ in outputs]
+        assert shown == pytest.approx([float(v) for v in values], rel=1e-6), (fam.module, fn.name)
 
 
 def test_naive_lambdify_fails_where_generated_holds():

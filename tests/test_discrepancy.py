@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import FEBeam, random_case, resonances, spectrum  # noqa: E402
 from pfmdyn import cli
 from pfmdyn.discrepancy.spectrum import analyse
-from pfmdyn.plots.discrepancy import spectrum_figure
+from pfmdyn.plots.discrepancy import plot_spectrum_report
 from pfmdyn.io.tables import read
 from pfmdyn.discrepancy.model import Model
 from pfmdyn.discrepancy.resonances import analyse_resonances, paper_tables
@@ -54,7 +54,7 @@ def test_generated_composite_against_finite_elements(damping, component, interna
 def test_composite_reduces_to_eq5():
     b = np.array([0.5, 2.0, 7.0, 30.0])
     e = elastic_contact.slope(b, 2.4, 120.0, 100.0, 1e-5, 223e-6)
-    s = tip_setback.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.0, 1.0)
+    s = tip_setback.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.0, 1.0, 0.0)
     np.testing.assert_allclose(np.array(s), np.array(e), rtol=1e-10)
 
 
@@ -117,7 +117,7 @@ def test_plot_axis_follows_data(tmp_path):
                            response=(1 + f / 1e5) * np.exp(1j * f / 1e4))
     collapsed = SimpleNamespace(prediction=1e-12 * data.response, residual=data.response)
     exact = SimpleNamespace(prediction=data.response, residual=0 * data.response)
-    fig = spectrum_figure(data, {"_fits": (collapsed, exact)})
+    fig = plot_spectrum_report(data, {"_fits": (collapsed, exact)})
     low, high = fig.axes[0].get_ylim()
     fig.clear()
     assert 0.5 < low < 2 and 3 < high < 10

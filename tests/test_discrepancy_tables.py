@@ -22,6 +22,7 @@ from test_instruments import ASYLUM  # noqa: E402
 from pfmdyn import cli  # noqa: E402
 from pfmdyn.discrepancy.resonances import K2_OVER_K1, analyse_resonances  # noqa: E402
 from pfmdyn.errors import UserError  # noqa: E402
+from pfmdyn.discrepancy.inputs import read as read_input  # noqa: E402
 from pfmdyn.io.tables import ResonanceData, read  # noqa: E402
 
 HEAD = ("# spring_constant_n_per_m: 2\n# length_m: 2e-4\n# width_m: 3e-5\n# tip_height_m: 1e-5\n"
@@ -101,10 +102,10 @@ def test_one_contact_mode_determines_k1(tmp_path):
 
 @pytest.mark.skipif(not ASYLUM.is_dir(), reason="real data absent")
 def test_asylum_image_through_read_and_cli(tmp_path, capsys):
-    """An instrument file goes through the one entry point (io.tables.read) and ends in a
+    """An instrument file goes through the one entry point (discrepancy.inputs.read) and ends in a
     report with k1 determined from the one contact mode."""
     path = ASYLUM / "IgorIBWReader_ImageStack_BTFO_DSO.ibw"
-    data = read(path, {"tip_height_m": 1e-5})
+    data = read_input(path, {"tip_height_m": 1e-5})
     assert isinstance(data, ResonanceData) and data.condition.tolist() == ["free", "contact"]
     out = tmp_path / "o.json"
     assert cli.main(["discrepancy", str(path), "--json", str(out), "--tip-height", "1e-5"]) == 0

@@ -18,7 +18,8 @@ import pytest
 
 from pfmdyn import cli
 from pfmdyn.errors import UserError
-from pfmdyn.io.instruments import read_instrument, to_discrepancy_input
+from pfmdyn.analysis.thermal import instrument_resonances
+from pfmdyn.io.instruments import read_instrument
 from pfmdyn.io.record import si_unit
 
 # The writers' own deprecation notices are not the readers' concern.
@@ -84,7 +85,7 @@ def test_ibw_asylum_image_layers_and_note(tmp_path, end):
     assert [(c.name, c.unit, c.shape, c.scale) for c in record.channels] == \
         [(n, u, (16, 12), 1.0) for n, u in LAYERS.items()]
     assert_fields(record, ASYLUM)
-    data = to_discrepancy_input(path, TIP)
+    data = instrument_resonances(path, TIP)
     assert sorted(zip(data.condition, data.frequency_hz, data.quality_factor)) == \
         [("contact", 331250.0, 87.5), ("free", 71324.0, 151.2)]
     assert data.metadata.k == 2.7193 and data.metadata.L == 2.25e-4
@@ -96,8 +97,8 @@ def test_ibw_note_missing_keys_and_nan_are_missing_not_zero(tmp_path, capsys):
                      {2: ["HeightTrace", "PhaseTrace"]}, note)
     record = read_instrument(path)
     assert record.fields == {"contact_resonance_hz": 331250.0}
-    with pytest.raises(UserError, match="free resonance not in bare.ibw: give --free-resonance"):
-        to_discrepancy_input(path, TIP)
+    with pytest.raises(UserError, match="free resonance not in bare.ibw$"):
+        instrument_resonances(path, TIP)
     out = tmp_path / "d.json"
     assert cli.main(["discrepancy", str(path), "--json", str(out)]) == 2
     err = capsys.readouterr().err
@@ -250,7 +251,7 @@ def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
     assert record.fields == {"spring_constant_n_per_m": 1.8, "free_resonance_hz": 65000.0,
                              "contact_resonance_hz": 320000.0, "drive_frequency_hz": 3.2e5}
     assert "12 spectra of 24 frequencies (300000 to 340000 Hz)" in record.notes[0]
-    assert to_discrepancy_input(path, {"length_m": 2e-4, "width_m": 3e-5, **TIP}).frequency_hz.tolist() == \
+    assert instrument_resonances(path, {"length_m": 2e-4, "width_m": 3e-5, **TIP}).frequency_hz.tolist() == \
         [65000.0, 320000.0]
     # Without cantilever attributes: the same data, every field missing, a one-line error.
     bare, response = write_usid_be(tmp_path / "bare.h5", usid, unit, positions=(1, 1),
@@ -260,8 +261,8 @@ def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
     freq, values, unit_out = record.spectrum
     assert unit_out == "V" and freq[0] == 3e5 and freq[-1] == pytest.approx(3.4e5)
     np.testing.assert_allclose(values, response[0], rtol=1e-6)
-    with pytest.raises(UserError, match="free resonance not in bare.h5: give --free-resonance"):
-        to_discrepancy_input(bare)
+    with pytest.raises(UserError, match="free resonance not in bare.h5$"):
+        instrument_resonances(bare)
 
 
 def test_usid_image_by_array_translator(tmp_path, usid):
@@ -523,7 +524,7 @@ def test_ibw_thermal_tune_gives_the_free_mode(tmp_path):
     path = igor_wave(tmp_path / "Thermal.ibw", asd_pm, "ThermalData", [(0.0, 50.0, "Hz")], "pm/sqrt(Hz)", note=note)
     record = read_instrument(path)
     assert record.kind == "thermal spectrum" and record.spectrum[2] == "m/sqrt(Hz)"
-    data = to_discrepancy_input(path, TIP)
+    data = instrument_resonances(path, TIP)
     assert data.condition.tolist() == ["free"] and data.mode.tolist() == [1]
     assert data.frequency_hz[0] == pytest.approx(f0, rel=2e-3) and data.quality_factor[0] == pytest.approx(q, rel=0.15)
     assert data.metadata.k == 2.7193

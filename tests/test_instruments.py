@@ -14,7 +14,8 @@ import pytest
 
 from pfmdyn import cli
 from pfmdyn.errors import UserError
-from pfmdyn.io.instruments import read_instrument, to_discrepancy_input
+from pfmdyn.analysis.thermal import instrument_resonances
+from pfmdyn.io.instruments import read_instrument
 
 ROOT = Path(__file__).resolve().parents[1]
 _CANDIDATES = [Path(os.environ.get("PFMDYN_REALDATA", "/nonexistent")), ROOT.parent / "shared" / "realdata",
@@ -72,7 +73,7 @@ def test_thermal_tune_header_spectrum_and_fitted_mode():
     assert unit == "m/sqrt(Hz)" and len(freq) == 8369 and freq[-1] == pytest.approx(319214)
     peak = np.argmax(np.where(freq > 1e4, asd, 0))
     assert freq[peak] == pytest.approx(179.79e3, abs=40) and asd[peak] == pytest.approx(777e-15, rel=2e-3)
-    data = to_discrepancy_input(THERMAL, {"length_m": 225e-6, "width_m": 40e-6, "tip_height_m": 12e-6})
+    data = instrument_resonances(THERMAL, {"length_m": 225e-6, "width_m": 40e-6, "tip_height_m": 12e-6})
     assert data.mode.tolist() == [1] and data.condition.tolist() == ["free"]
     assert data.frequency_hz[0] == pytest.approx(179.8e3, rel=2e-3)
     assert data.quality_factor[0] == pytest.approx(442, rel=0.15) and data.metadata.k == 27.13
@@ -90,13 +91,13 @@ def test_drive_sweeps_header_fit(name):
 
 def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():
     path = real(ASYLUM / "IgorIBWReader_P0089OP0027.ibw")
-    with pytest.raises(UserError, match="tip height not in IgorIBWReader_P0089OP0027.ibw: give --tip-height"):
-        to_discrepancy_input(path)
-    data = to_discrepancy_input(path, {"tip_height_m": 12e-6})
+    with pytest.raises(UserError, match="tip height not in IgorIBWReader_P0089OP0027.ibw$"):
+        instrument_resonances(path)
+    data = instrument_resonances(path, {"tip_height_m": 12e-6})
     assert data.condition.tolist() == ["free", "contact"] and data.mode.tolist() == [1, 1]
     assert data.frequency_hz.tolist() == [59162, 349890] and data.quality_factor.tolist() == [134.21, 166.43]
     assert (data.metadata.k, data.metadata.L, data.metadata.H) == (8.3589, 2.4e-4, 12e-6)
-    assert to_discrepancy_input(path, {"tip_height_m": 1e-5, "spring_constant_n_per_m": 3.0}).metadata.k == 3.0
+    assert instrument_resonances(path, {"tip_height_m": 1e-5, "spring_constant_n_per_m": 3.0}).metadata.k == 3.0
 
 
 def test_inspect_exits_0_on_every_real_file_and_writes_numbers(tmp_path):
@@ -164,14 +165,15 @@ def test_image_without_spring_constant(tmp_path, capsys):
     record = read_instrument(path)
     assert record.kind == "image" and "spring_constant_n_per_m" in record.missing
     assert record.fields["contact_resonance_hz"] == 3.5e5
-    with pytest.raises(UserError, match="spring constant not in nok.h5: give --spring-constant"):
-        to_discrepancy_input(path, {"tip_height_m": 1e-5, "length_m": 2e-4, "width_m": 3e-5})
+    with pytest.raises(UserError, match="spring constant not in nok.h5$"):
+        instrument_resonances(path, {"tip_height_m": 1e-5, "length_m": 2e-4, "width_m": 3e-5})
     out = tmp_path / "k.json"
     one_line_error(capsys, ["stiffness", str(path), "--json", str(out)], "give --spring-constant")
     assert not out.exists()
-    # Given on the command line, the same file is fine (ratio 5.83 needs a longitudinal spring).
-    assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--k2-ratio", "10", "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["inputs"]["spring_constant_n_per_m"] == 2.0
+    # Given on the command line, the same file is fine (ratio 5.83 needs a lateral spring: Mindlin's by default).
+    assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--length", "2e-4", "--tip-height", "1e-5",
+                     "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["inputs"]["spring_constant"] == 2.0
 
 
 def test_usid_band_excitation_is_a_spectrum(tmp_path):

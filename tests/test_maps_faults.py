@@ -24,7 +24,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from fe_beam import FEBeam  # noqa: E402
 from pfmdyn.cli import main  # noqa: E402
-from pfmdyn.maps.driver import open_map, read_maps, run_map  # noqa: E402
+from pfmdyn.maps import open_result  # noqa: E402
+from pfmdyn.maps.driver import open_map, run_map  # noqa: E402
 
 K, L, F1, H, Q = 2.0, 225e-6, 75e3, 10e-6, 60.0
 N, BLOCK = 16, 4
@@ -47,7 +48,12 @@ def scan(tmp_path_factory):
         h["response"], h["frequency_hz"] = y, f
         h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=F1)
     run_map(open_map(str(path)), str(root / "clean"), block=BLOCK, scheduler="sync", progress=False)
-    return path, read_maps(str(root / "clean" / "maps.zarr"))[0]
+    return path, _maps(root / "clean")
+
+
+def _maps(out: Path) -> dict:
+    result = open_result(str(out))
+    return {name: result[name].values for name in result.data_vars}
 
 
 def _done(out: Path) -> np.ndarray:
@@ -77,7 +83,7 @@ def _alive(processes) -> list:
 
 
 def _assert_same_maps(out: Path, clean: dict):
-    maps = read_maps(str(out / "maps.zarr"))[0]
+    maps = _maps(out)
     assert maps.keys() == clean.keys()
     for name, value in maps.items():
         np.testing.assert_array_equal(value, clean[name], err_msg=name)

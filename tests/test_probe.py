@@ -74,3 +74,27 @@ def test_bad_values_are_one_line_errors():
         Contact(k1=1.0, k2=1.0, poisson=0.3)
     with pytest.raises(UserError, match="tip_height"):
         Cantilever(2.0, 7e4, 2e-4, tilt=10.0).response([1e5], Contact(k1=10.0))
+
+
+def _options():
+    """(command, option string, dest, shown in --help) for every option of every command."""
+    import argparse
+    import importlib
+
+    from pfmdyn.cli import COMMANDS
+    for command, (module, _) in COMMANDS.items():
+        parser = argparse.ArgumentParser()
+        importlib.import_module(module).add_arguments(parser)
+        for action in parser._actions:
+            for option in action.option_strings:
+                yield command, option, action.dest, action.help != argparse.SUPPRESS
+
+
+def test_every_command_spells_each_quantity_with_its_one_flag():
+    """A quantity of pfmdyn.names is given by the same flag in every command (old spellings may
+    survive only hidden from --help)."""
+    wrong = [(c, o) for c, o, dest, shown in _options()
+             if dest in NAMES and shown and o.startswith("--") and o != NAMES[dest].flag]
+    assert not wrong, wrong
+    retired = {"--k", "--tip-mass", "--free", "--free-hz", "--L", "--H"}
+    assert not [(c, o) for c, o, _, shown in _options() if o in retired and shown]

@@ -1,8 +1,9 @@
-"""Contact stiffness from contact resonances: recovery from certified roots, uncertainty, range, CLI.
+"""Contact stiffness of the paper's lever (vectorised, maps) and the CLI: recovery, uncertainty, range.
 
 Test data come from an independent route: the certified roots of the elastic-contact family
 (:func:`pfmdyn.roots.core.family_roots`, ball arithmetic) at known k1/k, never from the
-closed-form inversion under test.  Levers are drawn over real ranges with fixed seeds.
+closed-form inversion under test.  Levers are drawn over real ranges with fixed seeds.  The
+whole lever model (set-back, heavy, tilted tips) is ``tests/test_stiffness_model.py``'s.
 """
 import json
 import math
@@ -11,8 +12,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
-from pfmdyn.analysis.stiffness import (branch_proof, contact_stiffness, k1_k2_from_modes, k1_over_k_from_z,
-                                       reduced_modulus)
+from pfmdyn.analysis.stiffness import branch_proof, contact_stiffness, k1_over_k_from_z, reduced_modulus
 from pfmdyn.errors import UserError
 from pfmdyn.generated.characteristic import BETA1_FREE
 from pfmdyn.roots.core import family_roots
@@ -82,31 +82,6 @@ def test_noise_scatter_matches_the_propagated_uncertainty():
     assert 0.93 < inside.mean() < 0.97
 
 
-def test_two_modes_give_k1_and_k2_and_their_uncertainty():
-    k, _, f1, ratio = draw_levers(21, 4)
-    for ki, fi, ri, b in zip(k, f1, ratio, ("0.01", "0.2", "0.05", "1.5")):
-        fc = [certified_contact_hz(fi, m, k1_over_k=ri, k2_ratio=b) for m in (1, 2)]
-        r = k1_k2_from_modes(fc, [1, 2], fi, ki)
-        assert abs(r.k1_n_per_m / (float(ri) * ki) - 1) < 1e-8
-        assert abs(r.k2_ratio / float(b) - 1) < 1e-8
-    # Monte Carlo against the propagated covariance (one lever).
-    rng = np.random.default_rng(5)
-    fc = np.array([certified_contact_hz(60e3, m, k1_over_k="50", k2_ratio="0.1") for m in (1, 2)])
-    sig = 20.0
-    ref = k1_k2_from_modes(fc, [1, 2], 60e3, 2.0, contact_uncertainty_hz=sig)
-    draws = np.array([[(s := k1_k2_from_modes(fc + sig * rng.standard_normal(2), [1, 2], 60e3, 2.0)).k1_n_per_m,
-                       s.k2_ratio] for _ in range(100)])
-    assert abs(draws[:, 0].std() / ref.k1_uncertainty_n_per_m - 1) < 0.25     # 100 draws: 7 % scatter
-    assert abs(draws[:, 1].std() / ref.k2_ratio_uncertainty - 1) < 0.25
-
-
-def test_three_modes_fitted_by_least_squares():
-    fc = [certified_contact_hz(50e3, m, k1_over_k="200", k2_ratio="0.3") for m in (1, 2, 3)]
-    r = k1_k2_from_modes(fc, [1, 2, 3], 50e3, 0.8)
-    assert abs(r.k1_n_per_m / 160.0 - 1) < 1e-7 and abs(r.k2_ratio / 0.3 - 1) < 1e-7
-    assert r.residual_z < 1e-9
-
-
 def test_branch_limits_are_the_certified_free_and_pinned_roots_and_k1_is_monotonic():
     free = family_roots("free", 3, 17).roots
     pinned = family_roots("pinned", 3, 17).roots
@@ -118,7 +93,7 @@ def test_branch_limits_are_the_certified_free_and_pinned_roots_and_k1_is_monoton
         assert np.all(a > 0) and np.all(np.diff(a) > 0)
 
 
-@pytest.mark.parametrize("ratio, words", [(5.0, ("pinned", "k2", "higher mode")), (0.8, ("mass",))])
+@pytest.mark.parametrize("ratio, words", [(5.0, ("stiff limit", "k2", "higher mode")), (0.8, ("mass",))])
 def test_ratios_outside_the_model_name_the_effect(ratio, words):
     with pytest.raises(UserError) as err:
         contact_stiffness(ratio * 60e3, 60e3, 2.0)
@@ -136,17 +111,19 @@ def test_reduced_modulus_inverts_the_derived_hertz_stiffness():
 def test_cli_numbers_json_and_reduced_modulus(tmp_path, capsys):
     fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
     out = tmp_path / "k1.json"
-    code = cli.main(["stiffness", "--free", "75e3", "--contact", repr(fc), "--spring-constant", "2",
+    code = cli.main(["stiffness", "--free-resonance", "75e3", "--contact", repr(fc), "--spring-constant", "2",
                      "--contact-uncertainty", "50", "--reduced-modulus", "--tip-radius", "20e-9",
                      "--load", "1e-7", "--json", str(out)])
     assert code == 0
     doc = json.loads(out.read_text())
-    assert abs(doc["k1_n_per_m"] / 80 - 1) < 1e-9 and isinstance(doc["k1_uncertainty_n_per_m"], float)
-    assert doc["reduced_modulus_pa"] > 0 and "unique" in doc["branch_proof"][0]
+    assert abs(doc["k1"] / 80 - 1) < 1e-9 and isinstance(doc["k1_stderr"], float) and doc["k1_stderr"] > 0
+    assert doc["reduced_modulus"] > 0 and doc["unique"] and "one k1" in doc["proof"][0]
+    assert doc["inputs"]["length"] is None and "k2 left out" in doc["k2_policy"]
     assert "k1 = 80" in capsys.readouterr().out
 
 
 def test_cli_two_modes_from_a_resonance_table(tmp_path):
+    """No k2 policy, no tip position: (k1, k2) and (k1, tip position) both, not unique; a stated tip decides."""
     fc = [certified_contact_hz(60e3, m, k1_over_k="25", k2_ratio="0.04") for m in (1, 2)]
     table = tmp_path / "res.csv"
     table.write_text("# spring_constant_n_per_m: 4\n# length_m: 2e-4\n# width_m: 3e-5\n# tip_height_m: 1e-5\n"
@@ -155,15 +132,25 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     out = tmp_path / "k.json"
     assert cli.main(["stiffness", str(table), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert abs(doc["k1_n_per_m"] / 100 - 1) < 1e-8 and abs(doc["k2_ratio"] / 0.04 - 1) < 1e-8
-    assert abs(doc["k2_n_per_m"] / (0.04 * 4 * 4e-8 / 1e-10) - 1) < 1e-8
+    k2_true = 0.04 * 4 * 4e-8 / 1e-10
+    assert not doc["unique"] and doc["k1"] is None and "three unknowns" in doc["proof"][0]
+    pair = [s for s in doc["solutions"] if s["unknowns"] == ["k1", "k2"]][0]
+    assert abs(pair["k1"] / 100 - 1) < 1e-8 and abs(pair["k2"] / k2_true - 1) < 1e-8
+    assert cli.main(["stiffness", str(table), "--tip-position", "1", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["unique"] and abs(doc["k1"] / 100 - 1) < 1e-8 and abs(doc["k2"] / k2_true - 1) < 1e-8
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--free", "60e3", "--contact", "400e3", "--spring-constant", "2"], "pinned"),
-    (["--free", "60e3", "--contact", "2e5"], "--spring-constant"),
-    (["--free", "-1", "--contact", "2e5", "--spring-constant", "2"], "--free"),
-    (["--free", "60e3", "--contact", "2e5", "--spring-constant", "2", "--reduced-modulus"], "--tip-radius"),
+    (["--free-resonance", "60e3", "--contact", "400e3", "--spring-constant", "2"], "stiff limit"),
+    (["--free-resonance", "60e3", "--contact", "2e5"], "--spring-constant"),
+    (["--free", "-1", "--contact", "2e5", "--spring-constant", "2"], "--free-resonance"),
+    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--reduced-modulus"], "--tip-radius"),
+    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position", "fit"], "two or more"),
+    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--length", "2e-4", "--tilt", "12"],
+     "--tip-height"),
+    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position", "1.3"],
+     "--tip-position"),
 ])
 def test_cli_errors_are_one_line_and_write_nothing(tmp_path, capsys, argv, words):
     out = tmp_path / "k.json"
@@ -188,10 +175,24 @@ def test_k1_recovered_when_k2_follows_k1_mindlin():
 
 
 def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
-    base = ["stiffness", "--free", "60e3", "--contact", "300e3", "--spring-constant", "1", "--poisson", "0.3"]
+    base = ["stiffness", "--free-resonance", "60e3", "--contact", "300e3", "--spring-constant", "1", "--poisson", "0.3"]
     one_line = cli.main(base + ["--length", "2.4e-4"])
     assert one_line == 2 and "give --tip-height" in capsys.readouterr().err
     out = tmp_path / "k.json"
     assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["k1_n_per_m"] > 0 and doc["k2_n_per_m"] == pytest.approx(1.4 / 1.7 * doc["k1_n_per_m"])   # 2(1-nu)/(2-nu)
+    assert doc["k1"] > 0 and doc["k2"] == pytest.approx(1.4 / 1.7 * doc["k1"])   # 2(1-nu)/(2-nu)
+
+
+def test_cli_contact_frequency_map_takes_the_lever_flags_and_refuses_the_rest(tmp_path, capsys):
+    h5py = pytest.importorskip("h5py")
+    pytest.importorskip("zarr")
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), fc)
+        h.attrs.update(spring_constant=2.0, free_resonance=75e3)
+    assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "a"), "--spring-constant", "4"]) == 0
+    assert "median k1 160 N/m" in capsys.readouterr().out          # k1/k = 40 at the flag's k
+    assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "b"), "--tilt", "12"]) == 2
+    assert "--tilt" in capsys.readouterr().err and not (tmp_path / "b").exists()

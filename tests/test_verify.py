@@ -8,10 +8,12 @@ import pytest
 import sympy as sp
 import yaml
 
-from pfmdyn import cli, verify
+from pfmdyn import cli, typeset, verify
+from pfmdyn.audit import text
 from pfmdyn.derivations.checks import core
+from pfmdyn.derivations.evidence import Evidence, Math, Tex, say
+from pfmdyn.derivations.evidence import text as plain
 from pfmdyn.derivations.paper import printed as P
-from pfmdyn.derivations.paper import text
 
 SHARED = verify.shared_claims_path() or Path("/nonexistent/claims.yaml")
 # The text audit reads the paper's transcription beside the source tree; without it only the
@@ -83,7 +85,7 @@ def test_correcting_a_printed_erratum_makes_it_hold(monkeypatch):
 
 def test_a_sign_flip_without_contradicting_anchor_is_a_convention():
     verdict, why = core.sign_flip_verdict({"other equation": False}, "f0 towards the surface")
-    assert verdict == core.SIGN and "f0 towards the surface" in why
+    assert verdict == core.SIGN and "f0 towards the surface" in plain(why)
     assert core.sign_flip_verdict({"other equation": True}, "")[0] == core.ERRATUM
 
 
@@ -141,19 +143,35 @@ def test_summary_line_counts_each_kind(all_verdicts):
 def test_long_expressions_are_broken_to_the_line_width():
     x = sp.Symbol("x")
     long = sum(sp.cos(i * x) * x**i for i in range(1, 25)) / (1 + sum(sp.sinh(i * x) for i in range(1, 20)))
-    tex = verify.display_latex(r"\theta", long)
+    tex = typeset.display_latex(r"\theta", long)
     assert tex.startswith(r"\begin{aligned}")
     rows = tex.splitlines()[1:-1]
-    assert len(rows) > 4 and all(verify._visible(r) <= verify.LINE_WIDTH + 8 for r in rows)
-    assert verify.display_latex("y", x + 1) == "y = x + 1"
+    assert len(rows) > 4 and all(typeset.visible(r) <= typeset.LINE_WIDTH + 8 for r in rows)
+    assert typeset.display_latex("y", x + 1) == "y = x + 1"
 
 
-def test_errata_show_printed_and_correct_forms_as_latex(all_verdicts):
-    text = verify.render_errata(all_verdicts)
-    block = text.split("`eq22.free_response`")[1].split("\n## ")[0]
-    assert block.count("$$") >= 4 and r"\sinh" in block and "**" not in block.replace("**Printed:**", "").replace(
-        "**Correct:**", "").replace("**Proof:**", "")
-    assert "sign convention" in block.lower()
+def test_evidence_is_rendered_from_its_parts_not_parsed():
+    x = sp.Symbol("x")
+    sentence = say("the slope is ", Math(3 * x**2, "y'"), " for ", Tex(r"x \to \infty", "x -> oo"))
+    assert plain(sentence) == "the slope is y' = 3*x**2 for x -> oo"
+    assert typeset.markdown(sentence) == r"the slope is $y' = 3 x^{2}$ for $x \to \infty$"
+    assert typeset.html(sentence).count('class="math notranslate nohighlight"') == 2 and "**" not in typeset.html(sentence)
+    long = Math(sum(sp.cos(i * x) * x**i for i in range(1, 12)), "y")
+    assert "pfm-display" in typeset.html(say("so ", long)) and r"\begin{aligned}" in typeset.html(say("so ", long))
+    with pytest.raises(TypeError):
+        say("a", 1.5)                              # a bare number is not a part: format it as words
+
+
+def test_every_erratum_is_typeset(all_verdicts):
+    """The words of every erratum (printed, proof, correction) hold no formula written as text
+    (SymPy's ``**``, ``*``, ``sqrt(``, a power ``^``): formulas are parts that go through LaTeX."""
+    for v in all_verdicts:
+        if v.verdict not in (core.ERRATUM, core.SIGN):
+            continue
+        for sentence in (v.printed, v.proof.proof, typeset.correction(v)):
+            words = " ".join(p for p in sentence if isinstance(p, str))
+            for bad in ("**", "*", "sqrt(", "^"):
+                assert bad not in words, (v.id, bad, words)
 
 
 def test_the_book_orders_the_one_set_of_verdict_names():
@@ -165,9 +183,18 @@ def test_the_book_orders_the_one_set_of_verdict_names():
 def test_measured_ratios_are_judged_within_their_printed_uncertainties():
     from pfmdyn.derivations.checks import numbers
     value, interval = 2.6351759, (2.63287, 2.63748)
-    assert numbers._digits_verdict([("2.63", value, interval)], "ratio")[0] == core.HOLDS
-    assert numbers._digits_verdict([("2.63", value)], "ratio")[0] == core.ERRATUM       # no uncertainty
-    assert numbers._digits_verdict([("2.62", value, interval)], "ratio")[0] == core.ERRATUM
+    assert numbers._digits_verdict([("2.63", value, interval)], "ratio").verdict == core.HOLDS
+    assert numbers._digits_verdict([("2.63", value)], "ratio").verdict == core.ERRATUM       # no uncertainty
+    assert numbers._digits_verdict([("2.62", value, interval)], "ratio").verdict == core.ERRATUM
     assert _verdict("exp.tip1_contact_ratio") == core.HOLDS
     tip2 = core.run_check(core.REGISTRY["exp.tip2_noncontact_ratios"])
     assert tip2.verdict == core.ERRATUM and tip2.correct == "6.23 should read 6.27"    # theory, exact
+    assert [n.rounded for n in tip2.proof.numbers if not n.ok] == ["6.27"]
+
+
+def test_a_check_must_return_evidence(monkeypatch):
+    check = core.Check("x.prose", ("somewhere",), ("as printed",), lambda: ("holds", "prose", ""))
+    with pytest.raises(TypeError, match="Evidence"):
+        core.run_check(check)
+    good = core.Check("x.data", ("somewhere",), ("as printed",), lambda: Evidence(core.HOLDS, "fine"))
+    assert core.run_check(good).evidence == "fine"

@@ -1,41 +1,35 @@
 """Verdict registry and the comparison tools every check uses.
 
 A check is a function decorated with :func:`claim`; it computes and returns a
-:class:`Verdict`.  Comparisons are always done two ways: exactly (ratio of canonical
+:class:`~derivations.evidence.Evidence` (:func:`run_check` makes it a :class:`Verdict`).
+Comparisons are always done two ways: exactly (ratio of canonical
 trigonometric normal forms, see :func:`derivations.trig.normal_form`) and by
-50-digit evaluation at seeded random parameter points.
+50-digit evaluation at seeded random parameter points.  A new check, in one of the modules
+of this package (formulas as SymPy objects or ``Tex``, never written into the words)::
+
+    @claim("eq20.pinned_response", "III.3, Eqs. 19-20", Math(P.theta_nlc, Tex(r"\theta_{nlc}", "theta_nlc")),
+           chapter="pinned")
+    def _eq20():
+        cmp = compare(P.theta_nlc, derived)
+        return Evidence(HOLDS if cmp.is_(1) else ERRATUM, say("derived ", Math(derived, "theta")), ratio=cmp,
+                        correct=() if cmp.is_(1) else (Math(derived),))
+
+then ``pfmdyn verify --record`` after review and ``pfmdyn verify --errata generated/errata.md``.
 """
 from __future__ import annotations
 
 import random
-import re
 from dataclasses import dataclass, field
 from functools import lru_cache
-from enum import Enum
 from typing import Callable, Iterable
 
 import mpmath as mp
 import sympy as sp
 
 from ..beam import beta
-from ..trig import ATOMS, from_atoms, normal_form, to_atoms
 from ..paper.convention import SIGN_CONVENTION
-
-# Evidence that turns on the sign of f0, q0 or d1 (an overall sign flip, a ratio -1 or -8).
-SIGN_DEPENDENT = re.compile(r"overall sign|opposite (?:sign|directions)|exact -1\b|ratio -\d|sign opposite")
-
-
-class Outcome(str, Enum):
-    """The four verdicts a check can give (compare equal to their names as strings)."""
-
-    HOLDS = "holds"
-    SIGN = "holds_up_to_sign_convention"
-    ERRATUM = "erratum"
-    UNDECIDABLE = "undecidable"
-
-    def __str__(self) -> str:
-        return self.value
-
+from ..trig import ATOMS, from_atoms, normal_form, to_atoms
+from ..evidence import Evidence, Math, Outcome, Sentence, Tex, join, say, text
 
 HOLDS, SIGN, ERRATUM, UNDECIDABLE = Outcome.HOLDS, Outcome.SIGN, Outcome.ERRATUM, Outcome.UNDECIDABLE
 VERDICTS = tuple(Outcome)
@@ -43,30 +37,42 @@ VERDICTS = tuple(Outcome)
 
 @dataclass(frozen=True)
 class Verdict:
-    """The outcome of one claim check."""
+    """The outcome of one claim check: the claim (id, where, as printed) and its :class:`Evidence`."""
 
     id: str
-    where: str
-    verdict: str
-    evidence: str
-    correct: str = ""
-    printed: str = ""
+    where: Sentence
+    proof: Evidence
+    printed: Sentence = ()
     chapter: str = ""
     kind: str = "claim"
-    latex: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def verdict(self) -> Outcome:
+        return self.proof.verdict
+
+    @property
+    def evidence(self) -> str:
+        """The proof as plain text, with the sign convention when the evidence turns on it."""
+        words = self.proof.evidence_text()
+        return f"{words}; sign convention: {SIGN_CONVENTION}" if self.proof.sign_convention else words
+
+    @property
+    def correct(self) -> str:
+        return self.proof.correct_text()
 
     def as_dict(self) -> dict:
-        return {"id": self.id, "where": self.where, "verdict": str(self.verdict), "kind": self.kind,
+        """Plain-text fields (the JSON of ``pfmdyn verify --json``)."""
+        return {"id": self.id, "where": text(self.where), "verdict": str(self.verdict), "kind": self.kind,
                 "chapter": self.chapter, "correct": self.correct, "evidence": self.evidence,
-                "printed": self.printed, "latex": self.latex}
+                "printed": text(self.printed)}
 
 
 @dataclass(frozen=True)
 class Check:
     id: str
-    where: str
-    printed: str
-    run: Callable[[], tuple]
+    where: Sentence
+    printed: Sentence
+    run: Callable[[], Evidence]
     chapter: str = ""
     kind: str = "claim"
 
@@ -74,17 +80,18 @@ class Check:
 REGISTRY: dict[str, Check] = {}
 
 
-def claim(claim_id: str, where: str, printed: str, *, chapter: str = "", kind: str = "claim"):
-    """Register a check; the function returns ``(verdict, evidence, correct)`` and optionally a
-    fourth item, a dict of LaTeX forms (``printed``, ``correct``, ``decisive``) for the errata.
+def claim(claim_id: str, where, printed, *, chapter: str = "", kind: str = "claim"):
+    """Register a check: a function of no arguments returning its :class:`Evidence`.
 
-    ``chapter`` names the book page that discusses the claim; ``kind`` is ``claim`` for the
-    shared registry's ids, ``cross-reference``, ``symbol`` or ``statement`` for the text audit.
+    ``where`` and ``printed`` are words or sentences (:func:`derivations.evidence.say`)
+    naming the place in the paper and what it prints.  ``chapter`` names the book page that
+    discusses the claim; ``kind`` is ``claim`` for the shared registry's ids, ``cross-reference``,
+    ``symbol`` or ``statement`` for the text audit.
     """
-    def wrap(fn: Callable[[], tuple]):
+    def wrap(fn: Callable[[], Evidence]):
         if claim_id in REGISTRY:
             raise ValueError(f"claim {claim_id!r} registered twice")
-        REGISTRY[claim_id] = Check(claim_id, where, printed, fn, chapter, kind)
+        REGISTRY[claim_id] = Check(claim_id, say(where), say(printed), fn, chapter, kind)
         return fn
     return wrap
 
@@ -105,15 +112,10 @@ def result(claim_id: str) -> "Verdict":
 
 
 def run_check(check: Check) -> Verdict:
-    result = check.run()
-    verdict, evidence, correct = result[:3]
-    latex = result[3] if len(result) > 3 else {}
-    if verdict not in VERDICTS:
-        raise ValueError(f"{check.id}: unknown verdict {verdict!r}")
-    if SIGN_DEPENDENT.search(evidence) and "sign convention:" not in evidence and not evidence.startswith("same zeros"):
-        evidence = f"{evidence}; sign convention: {SIGN_CONVENTION}"
-    return Verdict(check.id, check.where, Outcome(verdict), evidence, correct, check.printed,
-                   check.chapter, check.kind, latex)
+    evidence = check.run()
+    if not isinstance(evidence, Evidence):
+        raise TypeError(f"{check.id}: a check returns Evidence, not {type(evidence).__name__}")
+    return Verdict(check.id, check.where, evidence, check.printed, check.chapter, check.kind)
 
 
 # --- comparing expressions -----------------------------------------------------------------
@@ -179,14 +181,20 @@ class Comparison:
         numeric_ok = all(abs(v - complex(value)) < mp.mpf(10) ** (-(DIGITS - 10)) for v in self.numeric_ratios)
         return exact_ok and numeric_ok
 
-    def summary(self) -> str:
-        exact = "n/a" if self.exact_ratio is None else sp.sstr(self.exact_ratio)
+    def sentence(self) -> Sentence:
+        """The comparison in words and formulas: the exact ratio, then its 50-digit values (a ratio
+        that is not constant is described by the range of its values, not written out)."""
         if self.constant:
+            exact = "n/a" if self.exact_ratio is None else Math(self.exact_ratio)
             num = f"{mp.nstr(self.numeric_ratios[0], 8)} at all {len(self.numeric_ratios)} points"
         else:
+            exact = "n/a" if self.exact_ratio is None else "not constant"
             vals = sorted(float(abs(v)) for v in self.numeric_ratios)
             num = f"|ratio| varies from {vals[0]:.3g} to {vals[-1]:.3g}"
-        return f"printed/derived: exact {exact}; {DIGITS}-digit {num}"
+        return say("printed/derived: exact ", exact, f"; {DIGITS}-digit {num}")
+
+    def summary(self) -> str:
+        return text(self.sentence())
 
 
 def _atom_form(expr: sp.Expr) -> sp.Expr:
@@ -206,9 +214,9 @@ def compare(printed: sp.Expr, derived: sp.Expr, seed: int = 2006) -> Comparison:
     return Comparison(exact if not ratio.has(*ATOMS.functions) else None, values)
 
 
-def describe(expr: sp.Expr) -> str:
-    """Compact printable form of an expression for the evidence and errata."""
-    return sp.sstr(sp.factor(expr))
+def describe(expr: sp.Expr) -> sp.Expr:
+    """Compact (factored) form of an expression for the evidence and errata."""
+    return sp.factor(expr)
 
 
 def digits_check(printed: str, value) -> tuple[bool, str]:
@@ -220,21 +228,21 @@ def digits_check(printed: str, value) -> tuple[bool, str]:
     return text == printed, text
 
 
-def sign_flip_verdict(anchors: dict[str, bool], convention: str) -> tuple[str, str]:
+def sign_flip_verdict(anchors: dict, convention) -> tuple[Outcome, Sentence]:
     """Verdict for a printed result that is exactly minus the derived one.
 
     ``anchors`` maps the paper's own related printed results (same quantity, same boundary
-    conditions) to whether their sign agrees with the derivation.  If any does, the printed
-    sign contradicts the paper itself: an erratum.  Otherwise the flip is a convention.
+    conditions; words or sentences) to whether their sign agrees with the derivation.  If any
+    does, the printed sign contradicts the paper itself: an erratum.  Otherwise the flip is a
+    convention (``convention``, words or a sentence, says which).
     """
-    agreeing = [name for name, agrees in anchors.items() if agrees]
+    agreeing = [say(name) for name, agrees in anchors.items() if agrees]
     if agreeing:
-        return ERRATUM, ("overall sign opposite to the derivation and to the paper's own "
-                         + ", ".join(agreeing))
-    return SIGN, f"overall sign opposite to the derivation; convention: {convention}"
+        return ERRATUM, say("overall sign opposite to the derivation and to the paper's own ", join(agreeing, ", "))
+    return SIGN, say("overall sign opposite to the derivation; convention: ", convention)
 
 
-def same_resonances(a: sp.Expr, b: sp.Expr) -> tuple[bool, str]:
+def same_resonances(a: sp.Expr, b: sp.Expr) -> tuple[bool, Sentence]:
     """Do two characteristic functions have the same zeros for beta > 0?
 
     True when their exact ratio is free of cos, sin, cosh, sinh and, as a rational
@@ -242,10 +250,10 @@ def same_resonances(a: sp.Expr, b: sp.Expr) -> tuple[bool, str]:
     """
     ratio = sp.cancel(_atom_form(a) / _atom_form(b))
     if ratio.has(*ATOMS.functions):
-        return False, "ratio contains trigonometric terms"
+        return False, say("ratio contains trigonometric terms")
     num, den = sp.fraction(sp.factor(ratio))
     for part in (num, den):
         poly = sp.Poly(part, beta)
         if any(r.is_positive for r in sp.real_roots(poly)) if poly.degree() > 0 else False:
-            return False, f"ratio {sp.sstr(ratio)} vanishes or diverges at positive beta"
-    return True, f"ratio {sp.sstr(ratio)} has no zero or pole at beta > 0"
+            return False, say("ratio ", ratio, " vanishes or diverges at positive ", Tex(r"\beta", "beta"))
+    return True, say("ratio ", ratio, " has no zero or pole at ", Tex(r"\beta > 0", "beta > 0"))

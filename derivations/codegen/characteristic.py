@@ -6,17 +6,18 @@ registry rows with a ``roots`` name (:mod:`derivations.families`).
 """
 from __future__ import annotations
 
-import mpmath as mp
 import sympy as sp
 
 from .. import families as registry
 from ..beam import H, L, k, k1, k2
 from ..torsion import k2t
 from ..trig import ATOMS, from_atoms, hyperbolic_degree, scaled, to_atoms
+from . import examples, templates
+from .examples import Example, beta1_free
 from .printing import code, header, source_hash
 from .transfer import families, z
 
-__all__ = ["characteristic_families", "dimensionless", "beta1_free", "render_characteristic"]
+__all__ = ["characteristic_families", "dimensionless", "render_characteristic"]
 
 k1_over_k, k2_ratio, k2t_HL = sp.symbols("k1_over_k k2_ratio k2t_HL", positive=True)
 
@@ -69,103 +70,42 @@ def dimensionless(den: sp.Expr, var: sp.Symbol) -> sp.Expr:
     return from_atoms(result, var)
 
 
-def beta1_free(dps: int = 30) -> str:
-    """First root of ``1 + cos(beta) cosh(beta)`` (free cantilever), to ``dps`` digits.
-
-    >>> beta1_free(12)
-    '1.87510406871'
-    """
-    with mp.workdps(dps + 10):
-        root = mp.findroot(lambda b: mp.cos(b) + mp.sech(b), 1.875)
-        return mp.nstr(root, dps, strip_zeros=False)
+def _example(name: str, fname: str, expr: sp.Expr, var: sp.Symbol, degree: int, params) -> Example:
+    """The function at the stored point; the free family also at its first root, where it vanishes."""
+    scaled_expr = expr.subs(var, z) / sp.cosh(z) ** degree
+    symbols = [z, *sorted(scaled_expr.free_symbols - {z}, key=str)]
+    keywords = "".join(f", {p}={examples.value(p)!r}" for p in params)
+    example = Example().statement("import numpy as np").number(f"{fname}({examples.value('z')!r}, np{keywords})",
+                               examples.evaluate(scaled_expr, symbols))
+    if name == "free":
+        example.statement("print(abs(free(BETA1_FREE, np)) < 1e-15)", "True")
+    return example
 
 
 def render_characteristic() -> str:
-    """Source text of ``generated/characteristic.py``."""
+    """Source text of ``generated/characteristic.py`` (``templates/characteristic.py.jinja``)."""
     items = characteristic_families()
     digest = source_hash([den for _, _, den, _ in items])
     srcs = ", ".join(sorted({src.split(":")[0] for _, src, _, _ in items}))
-    out = [header(srcs, digest), '''"""Characteristic functions (resonance conditions) of every family, dimensionless and scaled.
-
-Each ``<family>(z, m, **params)`` returns the family's denominator (see the transfer
-modules) with dimensional factors, integer content and powers of ``z`` removed, divided by
-``cosh(z)`` where hyperbolics occur, with ``tanh``/``sech`` built from ``m.exp(-z)`` so
-nothing overflows.  ``z`` is ``beta`` (flexural families) or ``xi L`` (torsion).  Its real
-zeros ``z > 0`` are the resonances.  ``m`` supplies ``cos``, ``sin``, ``exp``: pass
-``numpy``, ``mpmath`` (or ``mpmath.iv``), or :data:`FLINT` for python-flint ``arb``,
-``acb`` and ``arb_series`` (which have no ``cosh``/``sinh``).  Coefficients are integers,
-so the arithmetic is exact in every namespace.  In float64 near ``z = 0`` prefer the
-transfer modules, which switch to a series there.
-
-Dimensionless parameters:
-
-''' + "\n".join(f"* ``{k_}``: {v}" for k_, v in sorted(_PARAM_DOC.items())) + f'''
-"""
-
-__all__ = ["FAMILIES", "PARAMETERS", "FLINT", "BETA1_FREE", "BETA1_FREE_STR",
-           {", ".join(repr(n.replace("-", "_")) for n, *_ in items)}]
-
-BETA1_FREE_STR = "{beta1_free(30)}"
-"""First free resonance root of ``1 + cos(beta) cosh(beta) = 0`` (30 digits, mpmath)."""
-BETA1_FREE = float(BETA1_FREE_STR)
-
-
-class _FlintMath:
-    """``cos``, ``sin``, ``exp`` as methods of python-flint ``arb``/``acb``/``arb_series`` values."""
-
-    @staticmethod
-    def cos(x):
-        return x.cos()
-
-    @staticmethod
-    def sin(x):
-        return x.sin()
-
-    @staticmethod
-    def exp(x):
-        return x.exp()
-
-
-FLINT = _FlintMath()
-''']
-    params_table = {}
+    functions = []
     for name, src, den, var in items:
         expr = dimensionless(den, var)
         fname = name.replace("-", "_")
         params = sorted((str(s) for s in expr.free_symbols - {var}))
-        params_table[name] = tuple(params)
         atoms = to_atoms(expr.subs(var, z), z)
         degree = hyperbolic_degree(atoms) if atoms.has(ATOMS.ch, ATOMS.sh) else 0
         body = scaled(atoms, {ATOMS: degree}) if degree else atoms
-        sig = "z, m" + (", *, " + ", ".join(params) if params else "")
-        pdoc = "".join(f"\n    {p} : {_PARAM_DOC[p]}" for p in params)
         used = body.free_symbols
-        lines = [line for atom, line in [(ATOMS.c, "    _c = m.cos(z)"), (ATOMS.s, "    _s = m.sin(z)")]
-                 if atom in used]
+        lines = [line for atom, line in [(ATOMS.c, "_c = m.cos(z)"), (ATOMS.s, "_s = m.sin(z)")] if atom in used]
         if degree:
-            lines += ["    _e = m.exp(-z)", "    _e2 = _e * _e"]
-            lines += [line for atom, line in [(ATOMS.tanh, "    _tanh = (1 - _e2) / (1 + _e2)"),
-                                              (ATOMS.sech, "    _sech = 2 * _e / (1 + _e2)")]
+            lines += ["_e = m.exp(-z)", "_e2 = _e * _e"]
+            lines += [line for atom, line in [(ATOMS.tanh, "_tanh = (1 - _e2) / (1 + _e2)"),
+                                              (ATOMS.sech, "_sech = 2 * _e / (1 + _e2)")]
                       if atom in used]
-        shown = sp.sstr(expr.subs(var, z))
-        scale = f" / cosh(z)**{degree}" if degree else ""
-        out.append(f'''
-
-def {fname}({sig}):
-    """{name}: ``({shown}){scale}`` (from {src}).
-
-    Parameters
-    ----------
-    z : number or array (``beta``, or ``xi L`` for torsion)
-    m : math namespace with ``cos``, ``sin``, ``exp``{pdoc}
-    """
-{chr(10).join(lines)}
-    return {code(body)}
-''')
-    out.append("\n\nFAMILIES = {\n" + "".join(
-        f"    {n!r}: {n.replace('-', '_')},\n" for n, *_ in items) + "}\n")
-    out.append('"""Family name -> characteristic function."""\n')
-    out.append("PARAMETERS = {\n" + "".join(
-        f"    {n!r}: {params_table[n]!r},\n" for n, *_ in items) + "}\n")
-    out.append('"""Family name -> names of its dimensionless keyword parameters."""\n')
-    return "".join(out)
+        functions.append({"name": name, "function": fname, "parameters": params, "source": src,
+                          "shown": sp.sstr(expr.subs(var, z)), "scale": f" / cosh(z)**{degree}" if degree else "",
+                          "lines": lines, "body": code(body),
+                          "example": _example(name, fname, expr, var, degree, params)})
+    return templates.render("characteristic.py.jinja", header=header(srcs, digest), functions=functions,
+                            parameter_help=sorted(_PARAM_DOC.items()), help=_PARAM_DOC,
+                            beta1_free=beta1_free(30))

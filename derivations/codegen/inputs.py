@@ -4,6 +4,7 @@ from __future__ import annotations
 import hashlib
 
 from ..paper import inputs
+from . import templates
 from .printing import header
 
 __all__ = ["render"]
@@ -18,15 +19,8 @@ def _floats(value):
 
 
 def render() -> str:
-    """Source text of ``generated/paper_inputs.py``."""
-    lines = "".join(f"{name} = {_floats(value)!r}\n" for name, value in inputs.NUMERIC.items())
-    body = f'''"""The paper's inputs (from derivations/paper/inputs.py) as floats, SI units.
-
-See :mod:`pfmdyn.derivations.paper.inputs` for what each one is.
-"""
-
-__all__ = {sorted(inputs.NUMERIC)!r}
-
-{lines}'''
+    """Source text of ``generated/paper_inputs.py`` (``templates/paper_inputs.py.jinja``)."""
+    body = templates.render("paper_inputs.py.jinja", exported=sorted(inputs.NUMERIC),
+                            values={name: _floats(value) for name, value in inputs.NUMERIC.items()})
     return header("derivations/paper/inputs.py", hashlib.sha256(body.encode()).hexdigest(),
                   "the text below") + body

@@ -20,13 +20,13 @@ import sympy as sp
 from ..trig import ATOMS, Atoms  # noqa: F401  (ATOMS: the doctest)
 from .printing import cse_lines
 
-__all__ = ["JACOBIANS", "derivative", "partials", "render_and_jacobian"]
+__all__ = ["JACOBIANS", "derivative", "partials", "and_jacobian"]
 
 JACOBIANS = {
     "elastic_contact": ("beta", "k1", "k2"),
     "tip_mass": ("beta", "k1", "k2", "mu"),
     "tilt": ("beta", "kvv", "kll", "kvl"),
-    "tip_setback": ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma"),
+    "tip_setback": ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g"),
 }
 """Family module -> parameters of its generated Jacobian, in column order."""
 
@@ -52,48 +52,28 @@ def partials(exprs, wrt, rates) -> list[sp.Expr]:
     return [derivative(e, p, rates.get(p, {})) for p in wrt for e in exprs]
 
 
-def render_and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
-                        value_exprs, partial_exprs, indent: str = "    ") -> str:
-    """Source of ``<name>_and_jacobian``: the values, then one block per partial, each run
-    only when asked for (``wrt``), so a caller pays for the partials it uses.
+def and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
+                 value_exprs, partial_exprs, example) -> dict:
+    """Template context of ``<name>_and_jacobian`` (``templates/jacobian.jinja``).
 
     ``value_exprs`` are ``[D, N_1, ..., N_n]`` and ``partial_exprs`` ``[D_p, N_1p, ...]`` for
-    each ``p`` in ``wrt`` (SymPy, in the names the preamble defines); each list is printed
-    with its own CSE.
+    each ``p`` in ``wrt`` (SymPy, in the names the ``preamble`` lines define); each list is
+    printed with its own CSE.  ``T_p = (N_p - T D_p) / D``, with ``D_p / D`` computed once.
+
+    >>> x, p = sp.symbols("x p")
+    >>> j = and_jacobian("f", "x, p", "f", "    x = np.asarray(x)", [p], [x, p * x], [0, x], None)
+    >>> j["nums"], j["partials"][0]["columns"]
+    (['p*x'], ['(x) * _r - _v0 * _q'])
     """
     n_out = len(value_exprs) - 1
-    names = ", ".join(map(str, wrt))
-    lines, reduced = cse_lines(value_exprs, indent)
-    body = ["\n".join(lines), f"{indent}_r = 1.0 / ({reduced[0]})"]
-    body += [f"{indent}_v{i} = ({n}) * _r" for i, n in enumerate(reduced[1:])]
-    body.append(f"{indent}_jac = dict.fromkeys(JACOBIAN_PARAMETERS)")
-    for j, p in enumerate(wrt):
-        exprs = partial_exprs[j * (n_out + 1):(j + 1) * (n_out + 1)]
-        lines, reduced = cse_lines(exprs, indent * 2, prefix=f"_d{j}_")
-        body.append(f"{indent}if {str(p)!r} in wrt:")
-        body += lines
-        # T_p = (N_p - T D_p) / D, with D_p / D computed once.
-        body.append(f"{indent * 2}_q = ({reduced[0]}) * _r")
-        cols = [f"-_v{i} * _q" if d == "0" else f"({d}) * _r - _v{i} * _q" for i, d in enumerate(reduced[1:])]
-        body.append(f"{indent * 2}_jac[{str(p)!r}] = ({', '.join(cols)}{',' if n_out == 1 else ''})")
-    values = ", ".join(f"_v{i}" for i in range(n_out))
-    text = "\n".join(b for b in body if b)
-    return f'''
-
-def {name}_and_jacobian({signature}, wrt=JACOBIAN_PARAMETERS):
-    """{summary[0].upper() + summary[1:]}, and its partial derivatives w.r.t. ({names}).
-
-    Arguments as :func:`{name}`; ``wrt``: the partials to compute (a subset of
-    ``JACOBIAN_PARAMETERS``), the others are returned as None.
-
-    Returns
-    -------
-    values : tuple of ndarray
-        as :func:`{name}`
-    jacobian : tuple of tuples of ndarray
-        ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
-    """
-{preamble}{text}
-    _cols = list(_jac.values())
-    return ({values}{"," if n_out == 1 else ""}), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range({n_out}))
-'''
+    lines, reduced = cse_lines(value_exprs)
+    blocks = []
+    for i, p in enumerate(wrt):
+        exprs = partial_exprs[i * (n_out + 1):(i + 1) * (n_out + 1)]
+        p_lines, p_reduced = cse_lines(exprs, "        ", prefix=f"_d{i}_")
+        columns = [f"-_v{m} * _q" if d == "0" else f"({d}) * _r - _v{m} * _q"
+                   for m, d in enumerate(p_reduced[1:])]
+        blocks.append({"name": str(p), "lines": p_lines, "den": p_reduced[0], "columns": columns})
+    return {"name": name, "signature": signature, "summary": summary, "preamble": preamble.rstrip("\n"),
+            "wrt": [str(p) for p in wrt], "lines": lines, "den": reduced[0], "nums": reduced[1:],
+            "partials": blocks, "example": example}

@@ -9,7 +9,8 @@ and ``sech`` built from ``exp(-a)``, ``exp(-b)``; nothing overflows.  There is n
 branch: the closed form cancels like the elastic family's below ``beta ~ 1`` (about
 ``beta**-6`` lost relative to the largest term, 1e-12 at ``beta = 0.3``), which is
 documented as the domain of validity.  The scaled denominator is exported as
-``characteristic`` for root finding.  Every printed polynomial is grouped by monomials of
+``characteristic`` for root finding, and as ``characteristic_balls`` (the same lines in a
+math namespace, integer coefficients) for certified roots in ball arithmetic.  Every printed polynomial is grouped by monomials of
 ``beta`` and the parameters before CSE (:func:`_grouped`).  ``slope_and_jacobian`` and
 ``characteristic_and_jacobian`` add the partials of :data:`.jacobian.JACOBIANS`, ``beta``
 and ``gamma`` through the atoms of both arguments.
@@ -20,7 +21,9 @@ import sympy as sp
 
 from .. import beam, families as registry, tip_setback
 from ..trig import hyperbolic_degree, normal_form, scaled
-from .jacobian import JACOBIANS, partials, render_and_jacobian
+from . import examples, templates
+from .examples import Example
+from .jacobian import JACOBIANS, and_jacobian, partials
 from .printing import cse_lines, header, source_hash
 from .stabilise import clipped_exp
 from .transfer import symbol
@@ -44,6 +47,7 @@ def render() -> str:
     assert all(hyperbolic_degree(e, at) <= degrees[at] for e in d_exprs for at in sets)
     lines, reduced = cse_lines([_grouped(scaled(e, degrees), params) for e in exprs])
     den_lines, den = cse_lines([_grouped(scaled(sol.denominator, degrees), params)])
+    _balls(den_lines, den[0])
     names = ", ".join(map(str, params))
     da, db = degrees[tip_setback.ATOMS_A], degrees[tip_setback.ATOMS_B]
     atoms = f'''    beta = np.asarray(beta)
@@ -55,54 +59,43 @@ def render() -> str:
     _tanha = (1.0 - _ea * _ea) / (1.0 + _ea * _ea)
     _secha = 2.0 * _ea / (1.0 + _ea * _ea)
     _tanhb = (1.0 - _eb * _eb) / (1.0 + _eb * _eb)
-    _sechb = 2.0 * _eb / (1.0 + _eb * _eb)
-'''
-    params_doc = f'''    Parameters
-    ----------
-    beta : array_like, real or complex, ``Re beta > 0.3`` (see module)
-    {names} : array_like, broadcast against ``beta``; ``0 < gamma <= 1``
-'''
-    return (header(row.source, source_hash(exprs)) + f'''"""tip_setback: tip at x = gamma L with springs kvv, kll, kvl, tip mass mu; slope read at L.
-
-Source: {row.source}, an extension of Eqs. 4-5 of Jesse, Baddorf,
-Kalinin 2006; signs as there.  ``gamma = 1``, ``mu = 0``, ``kvv = k1``, ``kll = k2``,
-``kvl = 0`` is Eq. 5 (elastic contact).
-
-Numerators and denominator are polynomials in cos, sin, cosh, sinh of ``a = gamma beta``
-and ``b = (1 - gamma) beta``, divided by ``cosh(a)**{da} cosh(b)**{db}`` with ``tanh``, ``sech``
-built from ``exp(-a)``, ``exp(-b)`` so nothing overflows.  No series branch: use
-``Re beta > 0.3``, where about 1e-12 relative to the largest term is lost at worst.
-"""
-import numpy as np
-
-__all__ = {sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian", "characteristic_and_jacobian"])!r}
-
-PARAMETERS = {tuple(map(str, params))!r}
-JACOBIAN_PARAMETERS = {tuple(map(str, wrt))!r}
-DRIVES = {row.drives!r}
+    _sechb = 2.0 * _eb / (1.0 + _eb * _eb)'''
+    examples_ = _examples(exprs, params, wrt, degrees)
+    slope = {"lines": lines, "den": reduced[0], "nums": reduced[1:], "example": examples_[0],
+             "jacobian": _jacobian([_grouped(scaled(e, degrees), params) for e in exprs], d_scaled, wrt, names,
+                                   atoms, examples_[1])}
+    return templates.render(
+        "tip_setback.py.jinja", header=header(row.source, source_hash(exprs)), source=row.source,
+        degree_a=da, degree_b=db, names=names, atoms=atoms, parameters=tuple(map(str, params)),
+        exported=sorted(["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", *row.outputs, "slope_and_jacobian",
+                         "characteristic_and_jacobian", "characteristic_balls"]),
+        jacobian_parameters=tuple(map(str, wrt)), drives=row.drives, slope=slope,
+        characteristic=_characteristic(_grouped(scaled(exprs[0], degrees), params), den_lines, den[0],
+                                       d_scaled[::len(exprs)], examples_[2:]))
 
 
-def slope(beta, {names}):
-    """Tip slope theta = u0'(L) per unit drive.
+def _balls(lines, value) -> None:
+    """``characteristic_balls`` prints :func:`characteristic`'s lines in a math namespace; a
+    float literal there would be a rounded constant inside a proof, so every coefficient
+    must be an integer."""
+    assert "." not in "".join(lines) + value, "non-integer literal in the set-back characteristic"
 
-{params_doc}
-    Returns
-    -------
-    tuple of ndarray
-        per unit d1, d2 (beam-frame surface displacements), f0, q0
-    """
-{atoms}''' + "\n".join(lines) + f'''
-    _r = 1.0 / ({reduced[0]})
-    return ({", ".join(f"({r}) * _r" for r in reduced[1:])})
-{_jacobian([_grouped(scaled(e, degrees), params) for e in exprs], d_scaled, wrt, names, atoms)}
 
-def characteristic(beta, {names}):
-    """Scaled denominator: its real zeros in ``beta`` are the resonances.
-
-{params_doc}    """
-{atoms}''' + "\n".join(den_lines) + f'''
-    return {den[0]}
-''' + _characteristic_jacobian(_grouped(scaled(exprs[0], degrees), params), d_scaled[::len(exprs)], wrt, names, atoms))
+def _examples(exprs, params, wrt, degrees):
+    """Doctests of slope, slope_and_jacobian, characteristic, characteristic_and_jacobian."""
+    args = (beam.beta, *params)
+    at = examples.arguments(map(str, args))
+    den, *nums = [tip_setback.to_functions(e) for e in exprs]
+    ratio = [n / den for n in nums]
+    a, b = tip_setback.gamma * beam.beta, (1 - tip_setback.gamma) * beam.beta
+    scale = sp.cosh(a) ** degrees[tip_setback.ATOMS_A] * sp.cosh(b) ** degrees[tip_setback.ATOMS_B]
+    slope = Example().tuple_of(f"slope({at})", [examples.evaluate(e, args) for e in ratio])
+    jac = Example().statement(f"values, jacobian = slope_and_jacobian({at})").tuple_of(
+        "", [examples.derivative(ratio[0], args, p) for p in wrt], target="jacobian[0]")
+    char = Example().number(f"characteristic({at})", examples.evaluate(den / scale, args))
+    char_jac = Example().statement(f"value, partials = characteristic_and_jacobian({at})").tuple_of(
+        "", [examples.derivative(den, args, p) / examples.evaluate(scale, args) for p in wrt], target="partials")
+    return slope, jac, char, char_jac
 
 
 def _partials(exprs, params):
@@ -128,25 +121,15 @@ def _grouped(expr, params):
     return sp.Add(*[sp.Mul(*[g**e for g, e in zip(gens, m)]) * sp.factor_terms(c) for m, c in poly.terms()])
 
 
-def _jacobian(values, partials, wrt, names, atoms) -> str:
-    """``slope_and_jacobian``: the scaled values and partials (see :func:`.jacobian.render_and_jacobian`)."""
-    return render_and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive", atoms, wrt,
-                               values, partials).rstrip("\n") + "\n"
+def _jacobian(values, partials, wrt, names, atoms, example) -> dict:
+    """``slope_and_jacobian``: the scaled values and partials (see :func:`.jacobian.and_jacobian`)."""
+    return and_jacobian("slope", f"beta, {names}", "tip slope theta = u0'(L) per unit drive", atoms, wrt,
+                        values, partials, example)
 
 
-def _characteristic_jacobian(den, d_dens, wrt, names, atoms) -> str:
-    """``characteristic_and_jacobian``: the scaled denominator and its partials, scaled alike."""
-    lines, reduced = cse_lines([den, *d_dens])
-    body = "\n".join(lines)
-    return f'''
-
-def characteristic_and_jacobian(beta, {names}):
-    """:func:`characteristic` and ``D_p / S`` for each ``p`` in ``JACOBIAN_PARAMETERS``.
-
-    ``D`` is the unscaled denominator and ``S`` the scale of :func:`characteristic`; at a
-    zero of ``D`` these are the partials of :func:`characteristic`, so a resonance moves
-    with ``p`` as ``d beta / d p = -D_p / D_beta``.
-    """
-{atoms}{body}
-    return {reduced[0]}, ({", ".join(reduced[1:])})
-'''
+def _characteristic(den, lines, value, d_dens, example) -> dict:
+    """``characteristic`` and ``characteristic_and_jacobian``: the scaled denominator and its
+    partials, scaled alike."""
+    jacobian_lines, jacobian = cse_lines([den, *d_dens])
+    return {"lines": lines, "value": value, "jacobian_lines": jacobian_lines, "jacobian": jacobian,
+            "example": example[0], "jacobian_example": example[1]}

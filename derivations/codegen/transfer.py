@@ -5,7 +5,9 @@ variable (``beta``, or ``z = xi L`` for torsion) and cos, sin, cosh, sinh of it.
 polynomial is *split* by parameter monomial, ``sum_m p_m * beta**a_m * h_m(beta)``
 (:func:`derivations.codegen.stabilise.split`); the ``h`` form the family's *basis*, shared
 by all its transfer coefficients and evaluated once per call, stabilised (series below a
-switch point, scaled closed form above).  Printed with CSE, headed with the source's hash.
+switch point, scaled closed form above).  Printed with CSE, headed with the source's hash,
+laid out by ``templates/transfer.py.jinja``; each function carries a doctest at the stored
+point (:mod:`.examples`).
 """
 from __future__ import annotations
 
@@ -19,7 +21,9 @@ import sympy as sp
 from .. import beam, families as registry, tilt, tip_mass, torsion
 from ..trig import ATOMS, from_atoms, hyperbolic_degree, scaled
 from ..trig import normal_form
-from .jacobian import JACOBIANS, partials, render_and_jacobian
+from . import examples, templates
+from .examples import Example
+from .jacobian import JACOBIANS, and_jacobian, partials
 from .printing import cse_lines, header, horner, source_hash
 from .stabilise import clipped_exp, series_branch, split, switch_point
 
@@ -137,8 +141,21 @@ def _basis(fam: Family, exprs):
     return basis, splits
 
 
+def _example(fam: Family, fn: Function, wrt) -> tuple[Example, Example | None]:
+    """Doctests of ``fn`` and of its ``_and_jacobian`` at the stored point (:mod:`.examples`)."""
+    args = (fam.variable, *fam.parameters)
+    call = f"{fn.name}({examples.arguments(map(str, args))})"
+    ratios = [num / fam.denominator for _, num in fn.outputs]
+    example = Example().tuple_of(call, [examples.evaluate(e, args) for e in ratios])
+    if not wrt:
+        return example, None
+    jac = Example().statement(f"values, jacobian = {fn.name}_and_jacobian({examples.arguments(map(str, args))})")
+    jac.tuple_of("", [examples.derivative(ratios[0], args, p) for p in wrt], target="jacobian[0]")
+    return example, jac
+
+
 def render_family(fam: Family) -> str:
-    """Source text of the generated module of one family."""
+    """Source text of the generated module of one family (``templates/transfer.py.jinja``)."""
     var = fam.variable
     vname = str(var)
     wrt, d_exprs = _partials(fam)
@@ -159,67 +176,15 @@ def render_family(fam: Family) -> str:
         evaluation = textwrap.fill(
             "each evaluated once per call in closed form: there are no hyperbolics and no "
             "cancellation near 0, so no series branch (``SWITCH = 0``).", 88)
-    out = [header(fam.source, source_hash(fam.source_exprs()))]
-    names = ", ".join(str(p) for p in fam.parameters)
-    doc_basis = "\n".join(f"    h{i} = {sp.sstr(from_atoms(h, var))}" for i, h in enumerate(basis))
-    out.append(f'''"""{fam.module}: {fam.description}.
-
-Source: {fam.source}, {fam.equations} of Jesse, Baddorf, Kalinin 2006; signs as there.
-
-Transfer coefficients as NumPy functions of ``{vname}``, vectorised over ``{vname}`` (real or
-complex, ``Re {vname} > 0``) and broadcasting over the parameters ({names}).
-
-Every numerator and the denominator are sums of parameter monomials times the basis
-
-{doc_basis}
-
-{evaluation}
-"""
-import numpy as np
-
-__all__ = {sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"]
-                  + ([f"{f.name}_and_jacobian" for f in fam.functions] + ["JACOBIAN_PARAMETERS"] if wrt else []))!r}
-
-PARAMETERS = {tuple(str(p) for p in fam.parameters)!r}
-{f"JACOBIAN_PARAMETERS = {tuple(map(str, wrt))!r}{chr(10)}" if wrt else ""}DRIVES = {tuple(name for name, _ in fam.functions[0].outputs)!r}
-SWITCH = {switch!r}
-"""``|{vname}|`` below which the basis is evaluated by its series."""
-
-
-def _basis({vname}):
-    """The basis functions h0... at ``{vname}`` (series or scaled closed form, see module)."""
-    {vname} = np.asarray({vname})
-    out = np.empty(({len(basis)},) + {vname}.shape, np.result_type({vname}, float))
-''')
-    body = []
+    series = None
     if switch > 0:
-        body.append(f"    small = np.abs({vname}) < SWITCH")
-        body.append(f"    x = {vname}[small]")
-        series = [series_branch(h, var, switch) for h in basis]
-        for q in sorted({q for _, q, _ in series}):
-            body.append(f"    _u{q} = x**{q}")
-        for i, (p, q, coeffs) in enumerate(series):
-            lead = f"x**{p} * " if p > 1 else ("x * " if p == 1 else "")
-            body.append(f"    out[{i}, small] = {lead}({horner(coeffs, f'_u{q}')})")
-        body.append("    large = ~small")
-        body.append(f"    x = {vname}[large]")
-        target = "large"
-    else:
-        body.append(f"    x = {vname}")
-        target = "..."
-    body.append("    _c = np.cos(x)")
-    body.append("    _s = np.sin(x)")
-    if degree:
-        body.append(f"    _e = {clipped_exp('x', 'x.real')}")
-        body.append("    _e2 = _e * _e")
-        body.append("    _tanh = (1.0 - _e2) / (1.0 + _e2)")
-        body.append("    _sech = 2.0 * _e / (1.0 + _e2)")
-    lines, reduced = cse_lines([scaled(h, {ATOMS: degree}) for h in basis])
-    body.extend(lines)
-    body.extend(f"    out[{i}, {target}] = {r}" for i, r in enumerate(reduced))
-    body.append("    return out")
-    out.append("\n".join(body) + "\n")
-
+        terms = [series_branch(h, var, switch) for h in basis]
+        series = {"powers": sorted({q for _, q, _ in terms}),
+                  "rows": [(f"x**{p} * " if p > 1 else ("x * " if p == 1 else ""), horner(coeffs, f"_u{q}"))
+                           for p, q, coeffs in terms]}
+    basis_lines, basis_code = cse_lines([scaled(h, {ATOMS: degree}) for h in basis])
+    names = ", ".join(str(p) for p in fam.parameters)
+    functions = []
     start = 1
     for fn in fam.functions:
         n = len(fn.outputs)
@@ -228,34 +193,23 @@ def _basis({vname}):
         d_combos = [combos[n_src * (1 + j) + i] for j in range(len(wrt)) for i in [0, *range(start, start + n)]]
         start += n
         lines, reduced = cse_lines([den, *nums])
-        unpack = _unpack(vname, [den, *nums], hsyms)
-        doc_out = "\n".join(f"        per unit {name}" for name, _ in fn.outputs)
-        out.append(f'''
-
-def {fn.name}({vname}, {names}):
-    """{fn.summary[0].upper() + fn.summary[1:]}.
-
-    Parameters
-    ----------
-    {vname} : array_like, real or complex, ``Re {vname} > 0``
-    {names} : array_like, broadcast against ``{vname}``
-
-    Returns
-    -------
-    tuple of ndarray
-{doc_out}
-    """
-    {unpack}
-    {vname} = np.asarray({vname})
-''')
-        out.append("\n".join(lines) + ("\n" if lines else ""))
-        out.append(f"    _r = 1.0 / ({reduced[0]})\n")
-        values = [f"({r}) * _r" for r in reduced[1:]]
-        out.append(f"    return ({', '.join(values)}{',' if len(values) == 1 else ''})\n")
+        example, jac_example = _example(fam, fn, wrt)
+        jacobian = None
         if wrt:
-            preamble = f"    {_unpack(vname, [den, *nums, *d_combos], hsyms)}\n    {vname} = np.asarray({vname})\n"
-            out.append(render_and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt,
-                                           [den, *nums], d_combos))
-    return "".join(out)
-
-
+            preamble = f"    {_unpack(vname, [den, *nums, *d_combos], hsyms)}\n    {vname} = np.asarray({vname})"
+            jacobian = and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt,
+                                    [den, *nums], d_combos, jac_example)
+        functions.append({"name": fn.name, "summary": fn.summary, "drives": [d for d, _ in fn.outputs],
+                          "unpack": _unpack(vname, [den, *nums], hsyms), "lines": lines, "den": reduced[0],
+                          "nums": reduced[1:], "example": example, "jacobian": jacobian})
+    exported = sorted([f.name for f in fam.functions] + ["PARAMETERS", "DRIVES", "SWITCH"]
+                      + ([f"{f.name}_and_jacobian" for f in fam.functions] + ["JACOBIAN_PARAMETERS"] if wrt else []))
+    return templates.render(
+        "transfer.py.jinja", header=header(fam.source, source_hash(fam.source_exprs())), module=fam.module,
+        description=fam.description, source=fam.source, equations=fam.equations, var=vname, names=names,
+        basis_doc=[sp.sstr(from_atoms(h, var)) for h in basis], evaluation=evaluation, exported=exported,
+        parameters=tuple(str(p) for p in fam.parameters),
+        jacobian_parameters=tuple(map(str, wrt)) if wrt else None,
+        drives=tuple(name for name, _ in fam.functions[0].outputs), switch=switch, series=series,
+        degree=degree, clipped_exp=clipped_exp("x", "x.real"), basis_lines=basis_lines, basis_code=basis_code,
+        functions=functions)

@@ -129,26 +129,3 @@ small_piezo_phase = 2 * sp.sin(2 * psi) * d_eff / (d_el * (sp.cos(2 * psi) - 3))
 # --- Section VI.4, Eq. 41 ---------------------------------------------------------------------
 G_t, d_t, V_dc, V_surf, b_fit, c_fit = sp.symbols("G_elec d_efft V_dc V_surf b c", real=True)
 eq41_G, eq41_d = c_fit, b_fit + c_fit * V_surf
-
-# --- printed forms of the equation errata, for typesetting (claim id -> [(lhs LaTeX, expr)]) --------
-_nu = sp.Symbol("nu")
-PRINTED_FORMS = {
-    "eq14.approx": [(r"A_q/N \approx", LOW_FREQUENCY[q0][1])],
-    "eq20.static": [(r"\theta_{nlc}", pinned_static_theta), ("A", pinned_static_A)],
-    "eq22.free_response": [(r"\theta_f", theta_f)],
-    "eq23.frictionless": [("N", N_frictionless)],
-    "eq24.frictionless_stiff_contact": [(r"\theta_p", theta_p_stiff)],
-    "eq27.indentation_displacement": [("u(L)", u_indentation)],
-    "eq28.free_static": [(r"\theta_{f0}", free_static_theta_28), ("A", free_static_A_28)],
-    "eq28.nonpiezo_contact_static": [(r"\theta_{p0}", nonpiezo_static_theta), ("A", nonpiezo_static_A)],
-    "eq29.stiff_contact_dynamic": [(r"\theta_f", theta_stiff_dynamic)],
-    "eq35.roots": [(r"\xi_n", torsion_force_roots)],
-    "eq36.q0": [("q_0", q0_cap)],
-    "eq36.A_nl": [("A_{nl}", A_nl)],
-    "eq36.PR": [("PR - d_{eff}", PR_eq36_extra)],
-    "eq39.amplitudes": [("|PR_+|", PR_plus_amp), ("|PR_-|", PR_minus_amp)],
-    "eq39.phase_shift": [(r"\tan\varphi", tan_phase)],
-    "eq40.small_electrostatic": [(r"\Delta\varphi", small_el_phase)],
-    "eq40.small_piezo": [(r"\Delta\varphi", small_piezo_phase)],
-    "contact.lateral_to_vertical_ratio": [("k_1/k_2", 2 * (1 - _nu) / (1 - 2 * _nu))],
-}

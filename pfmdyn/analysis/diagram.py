@@ -1,4 +1,4 @@
-"""Frequency-bias response diagrams of vertical PFM (Section IV.2, Figs. 6 and 7) and ``pfmdyn diagram``.
+"""Frequency-bias response diagrams of vertical PFM (Section IV.2, Figs. 6 and 7).
 
 The vertical signal is the measured height ``A = (2L/3) theta`` (Section III.2) per unit
 ``V_ac`` for frictionless contact (Eq. 23, ``k2 -> 0``: vertical coupling only, which is
@@ -18,8 +18,9 @@ surface).  The capacitive force is attractive, so ``s = electrostatic_sign = -1`
 the bias enters linearly, the transfer coefficients are evaluated once per frequency and
 the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
 
-:func:`plot_diagram` draws the amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour
-(Fig. 7) maps; ``run``/``add_arguments`` are the ``pfmdyn diagram`` subcommand.
+:func:`response_map` computes the map; :func:`pfmdyn.plots.diagram.plot_diagram` draws the
+amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour (Fig. 7) maps, and
+:mod:`pfmdyn.commands.diagram` is the ``pfmdyn diagram`` subcommand.
 """
 from __future__ import annotations
 

@@ -61,7 +61,7 @@ def electrostatic_amplitude(g_elec, v_dc, v_av):
     >>> float(electrostatic_amplitude(2.0, 1.5, 0.5))
     2.0
     """
-    return np.asarray(g_elec) * (np.asarray(v_dc) - np.asarray(v_av))
+    return formulas.electrostatic_term(np.asarray(g_elec), np.asarray(v_dc), np.asarray(v_av))
 
 
 def domain_responses(d_eff, d_el, psi):
@@ -86,9 +86,8 @@ def domain_responses(d_eff, d_el, psi):
     >>> [complex(pr) for pr in domain_responses(1.0, 0.5, 0.0)]
     [(1.5+0j), (-0.5+0j)]
     """
-    background = np.asarray(d_el) * np.exp(1j * np.asarray(psi, dtype=float))
-    d_eff = np.asarray(d_eff)
-    return d_eff + background, -d_eff + background
+    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+    return formulas.domain_response_plus(d_eff, d_el, psi), formulas.domain_response_minus(d_eff, d_el, psi)
 
 
 def domain_amplitudes(d_eff, d_el, psi):

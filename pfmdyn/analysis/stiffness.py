@@ -1,18 +1,19 @@
-"""Contact stiffness from contact resonances: the inverse problem of contact-resonance AFM.
+"""Contact stiffness from contact resonances of the paper's lever, vectorised (maps).
 
 Model: the elastic-contact family (Eqs. 4a,b and 5 of Jesse, Baddorf, Kalinin 2006; vertical
-spring ``k1`` and longitudinal spring ``k2`` at tip height ``H``), whose resonances are the
-zeros ``z > 0`` of the generated characteristic function ``F(z; a, b)`` with ``a = k1/k``
-and ``b = k2 H**2/(k L**2)``.  A resonance at ``f`` on a lever whose first free resonance
-is ``f1`` has ``z = z1 sqrt(f/f1)`` (``z1 = 1.8751...``, since ``omega ~ z**2``).
+spring ``k1`` and longitudinal spring ``k2`` at tip height ``H``; massless tip at the free end
+of an untilted lever), whose resonances are the zeros ``z > 0`` of the generated
+characteristic function ``F(z; a, b)`` with ``a = k1/k`` and ``b = k2 H**2/(k L**2)``.  A
+resonance at ``f`` on a lever whose first free resonance is ``f1`` has
+``z = z1 sqrt(f/f1)`` (``z1 = 1.8751...``, since ``omega ~ z**2``).  Any other lever (tip set
+back, heavy, tilted) and two or more modes are :mod:`pfmdyn.analysis.contact_resonance`'s,
+and ``pfmdyn stiffness``'s report is :mod:`pfmdyn.analysis.stiffness_report`.
 
 ``F`` is affine in ``a`` (and bilinear in ``a, b``): ``F = A(z) + a B(z)``, with ``A``, ``B``
 evaluated from the generated function itself (at ``a = 0`` and ``a = 1``).  Hence:
 
 * **one contact mode** (``b`` given, default 0): ``a = -A(z)/B(z)``, in closed form,
   vectorised over any array of frequencies (a map);
-* **two contact modes**: the two equations ``F(z_i; a, b) = 0`` reduce to a quadratic in
-  ``a`` (:func:`k1_k2_from_modes`); three or more are fitted by least squares;
 * **k2 tied to k1** (``k2 = c k1``, e.g. Mindlin): a quadratic in ``a`` per value
   (:func:`coupled_contact_stiffness`), with the uniqueness of its positive root checked.
 
@@ -47,8 +48,8 @@ from ..errors import UserError
 from ..generated import formulas
 from ..generated.characteristic import BETA1_FREE, elastic
 
-__all__ = ["StiffnessResult", "TwoModeResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
-           "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "k1_k2_from_modes",
+__all__ = ["StiffnessResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
+           "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "out_of_range_message",
            "branch_proof", "mindlin_k2_over_k1", "reduced_modulus", "reduced_modulus_uncertainty"]
 
 _STEP = 1e-30      # complex step: exact first derivatives, no cancellation
@@ -88,25 +89,6 @@ class StiffnessResult:
     proof: BranchProof
 
 
-@dataclass(frozen=True)
-class TwoModeResult:
-    """k1 (N/m), k2_ratio = k2 H^2/(k L^2), their covariance, the proofs per mode, the fit residual."""
-
-    k1_n_per_m: float
-    k2_ratio: float
-    covariance: np.ndarray
-    proofs: tuple
-    residual_z: float = 0.0
-
-    @property
-    def k1_uncertainty_n_per_m(self) -> float:
-        return float(math.sqrt(max(self.covariance[0, 0], 0.0)))
-
-    @property
-    def k2_ratio_uncertainty(self) -> float:
-        return float(math.sqrt(max(self.covariance[1, 1], 0.0)))
-
-
 def _parts(z):
     """``F = P + a Q + b R + a b S``: the four parts of the bilinear characteristic function."""
     p = elastic(z, np, k1_over_k=0.0, k2_ratio=0.0)
@@ -136,7 +118,8 @@ def z_from_frequency(frequency_hz, free_resonance_hz):
     >>> round(float(z_from_frequency(4e5, 1e5)), 10)
     3.7502081374
     """
-    return BETA1_FREE * np.sqrt(np.asarray(frequency_hz, dtype=float) / np.asarray(free_resonance_hz, dtype=float))
+    return formulas.beta_from_frequency(np.asarray(frequency_hz, dtype=float), np.asarray(free_resonance_hz, dtype=float),
+                                        BETA1_FREE)
 
 
 def k1_over_k_from_z(z, k2_ratio: float = 0.0):
@@ -206,7 +189,7 @@ def coupled_limits(modes: int = 4) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _ratio(z):
-    return (np.asarray(z) / BETA1_FREE) ** 2
+    return formulas.frequency_from_beta(np.asarray(z), 1.0, BETA1_FREE)
 
 
 def branch_proof(mode: int, k2_ratio: float = 0.0, k1_over_k: float | None = None) -> BranchProof:
@@ -226,18 +209,26 @@ def branch_proof(mode: int, k2_ratio: float = 0.0, k1_over_k: float | None = Non
                        float(_ratio(soft[mode - 1])), float(_ratio(stiff[mode - 1])), root)
 
 
-def out_of_range_message(ratio: float, proof: BranchProof, next_soft_ratio: float) -> str:
-    """Why a contact/free ratio is no k1 of the model, naming the effect that could explain it."""
-    n = proof.mode
-    if ratio <= proof.soft_ratio:
-        return (f"contact/free ratio {ratio:.6g} of mode {n} is at or below its free limit {proof.soft_ratio:.6g}: "
+def out_of_range_message(ratio: float, mode: int, soft_ratio: float, stiff_ratio: float, next_soft_ratio: float,
+                         lateral: str) -> str:
+    """Why a contact/free ratio of ``mode`` is no k1 of the model, naming the effect that could explain it.
+
+    ``soft_ratio``, ``stiff_ratio``: the branch's limits at k1 = 0 and k1 -> oo; ``lateral``
+    says how k2 was held (words).
+
+    >>> out_of_range_message(0.9, 1, 1.0, 4.385, 6.267, "k2 = 0").split(":")[0]
+    'contact/free ratio 0.9 of mode 1 is at or below its free limit 1'
+    """
+    if ratio <= soft_ratio:
+        return (f"contact/free ratio {ratio:.6g} of mode {mode} is at or below its free limit {soft_ratio:.6g}: "
                 "no contact stiffness lowers a resonance; an added mass at the tip (or liquid loading), a free "
                 "resonance measured elsewhere, or a lower mode could explain it")
-    beyond = "between that limit and free mode {} ({:.6g})".format(n + 1, next_soft_ratio) \
+    beyond = f"between that limit and free mode {mode + 1} ({next_soft_ratio:.6g})" \
         if ratio < next_soft_ratio else "beyond it"
-    return (f"contact/free ratio {ratio:.6g} of mode {n} is above its stiff (pinned) limit {proof.stiff_ratio:.6g} "
-            f"for k2 H^2/(k L^2) = {proof.k2_ratio:g} ({beyond}): k1 alone cannot reach it; a longitudinal contact "
-            "stiffness k2 (give --k2-ratio, or a second contact mode) or the peak being a higher mode could explain it")
+    return (f"contact/free ratio {ratio:.6g} of mode {mode} is above its stiff limit {stiff_ratio:.6g} "
+            f"with {lateral} ({beyond}): k1 alone cannot reach it; a lateral contact stiffness k2 (--k2, "
+            "--k2-over-k1, --poisson, or a second contact mode), the tip set back from the end, or the peak "
+            "being a higher mode could explain it")
 
 
 def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2_ratio: float = 0.0,
@@ -288,7 +279,8 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
         inside = (z > proof.soft_z) & (z < proof.stiff_z)
         if out_of_range == "raise" and not np.all(inside):
             ratio = float(np.ravel(_ratio(z))[np.argmin(np.ravel(inside))])
-            raise UserError(out_of_range_message(ratio, proof, next_soft))
+            raise UserError(out_of_range_message(ratio, mode, proof.soft_ratio, proof.stiff_ratio, next_soft,
+                                                  f"k2 H^2/(k L^2) = {k2_ratio:g}"))
         zc = np.where(inside, z, 0.5 * (proof.soft_z + proof.stiff_z))
         a, dadz = _a_and_slope(zc, float(k2_ratio))
         rel_z = 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc, np.asarray(free_uncertainty_hz) / f1)
@@ -298,97 +290,6 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
     if certify_root and np.ndim(k1) == 0 and inside:
         proof = branch_proof(mode, k2_ratio, float(a))
     return StiffnessResult(k1, sigma, a, z, proof)
-
-
-def _solve_pair(z1, z2):
-    """All (a, b) with a > 0, b >= 0 making z1 and z2 roots: a quadratic in a (module docstring)."""
-    p1, q1, r1, s1 = _parts(z1)
-    p2, q2, r2, s2 = _parts(z2)
-    coeffs = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
-    out = []
-    for a in np.roots(coeffs):
-        if abs(a.imag) > 1e-9 * abs(a) or a.real <= 0:
-            continue
-        a = a.real
-        b = -(p1 + a * q1) / (r1 + a * s1)
-        if b >= -1e-12 * max(1.0, a):
-            out.append((float(a), max(float(b), 0.0)))
-    return out
-
-
-def _f_and_grad(z, a, b):
-    """F and its derivatives in z, a, b at the points z (complex step in z; exact in a, b)."""
-    p, q, r, s = _parts(z)
-    fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=b).imag / _STEP
-    return p + a * q + b * r + a * b * s, fz, q + b * s, r + a * s
-
-
-def k1_k2_from_modes(contact_hz, modes, free_hz, spring_constant, *, contact_uncertainty_hz=None,
-                     free_uncertainty_hz=0.0, spring_constant_uncertainty=0.0) -> TwoModeResult:
-    """k1 and ``k2_ratio`` from two or more contact resonances of known mode numbers.
-
-    Two modes: the quadratic in ``a`` (unique positive solution required, else an error
-    that asks for a third mode).  More: least squares in z from the pair solutions.
-
-    >>> from pfmdyn.roots.core import family_roots
-    >>> z = [float(x) for x in family_roots("elastic", 2, 20, k1_over_k=40, k2_ratio="0.05").roots]
-    >>> f = [75e3 * (zi / BETA1_FREE) ** 2 for zi in z]
-    >>> r = k1_k2_from_modes(f, [1, 2], 75e3, 2.0)
-    >>> round(r.k1_n_per_m, 9), round(r.k2_ratio, 12)
-    (80.0, 0.05)
-    """
-    fc = np.asarray(contact_hz, dtype=float)
-    modes = [int(m) for m in modes]
-    if fc.ndim != 1 or len(fc) != len(modes) or len(fc) < 2:
-        raise UserError("two or more contact resonances, each with its mode number, are needed for k1 and k2")
-    if len(set(modes)) != len(modes) or min(modes) < 1:
-        raise UserError(f"contact mode numbers must be distinct and >= 1, got {modes}")
-    if not (np.all(np.isfinite(fc)) and np.all(fc > 0) and free_hz > 0 and spring_constant > 0):
-        raise UserError("frequencies and spring constant must be positive and finite")
-    z = z_from_frequency(fc, free_hz)
-    with np.errstate(under="ignore"):
-        candidates = _solve_pair(z[0], z[1])
-        if len(fc) > 2:
-            candidates = [_least_squares(z, a, b) for a, b in candidates]
-        valid = [(a, b) for a, b in candidates if _modes_match(z, modes, a, b)]
-    if not valid:
-        raise UserError("no k1 > 0, k2 >= 0 of the elastic-contact model gives these contact resonances as modes "
-                        f"{modes}: check the mode numbers; tip mass or damping may be missing from the model")
-    if len(valid) > 1 and abs(valid[0][0] - valid[1][0]) > 1e-9 * valid[0][0]:
-        sols = "; ".join(f"k1 = {a * spring_constant:.6g} N/m, k2 ratio = {b:.6g}" for a, b in valid)
-        raise UserError(f"two solutions fit these modes ({sols}): a third contact mode decides")
-    a, b = valid[0]
-    f, fz, fa, fb = _f_and_grad(z, a, b)
-    jac = np.column_stack([fa, fb])
-    # d(a,b)/dz from the implicit function theorem (least squares: its pseudo-inverse).
-    dab_dz = -np.linalg.pinv(jac) * fz
-    sig_c = np.zeros_like(fc) if contact_uncertainty_hz is None else np.broadcast_to(contact_uncertainty_hz, fc.shape)
-    dz_dfc = z / (2 * fc)
-    dz_df1 = -z / (2 * free_hz)
-    cov_ab = (dab_dz * (dz_dfc * sig_c) ** 2) @ dab_dz.T
-    g = dab_dz @ dz_df1
-    cov_ab = cov_ab + np.outer(g, g) * free_uncertainty_hz**2
-    scale = np.diag([spring_constant, 1.0])
-    cov = scale @ cov_ab @ scale
-    cov[0, 0] += (a * spring_constant_uncertainty) ** 2
-    proofs = tuple(branch_proof(m, b) for m in modes)
-    return TwoModeResult(a * spring_constant, b, cov, proofs, float(np.sqrt(np.mean((f / fz) ** 2))))
-
-
-def _least_squares(z, a, b):
-    from scipy.optimize import least_squares
-
-    def residual(x):
-        f, fz, _, _ = _f_and_grad(z, x[0], x[1])
-        return f / fz
-    sol = least_squares(residual, [a, b], bounds=([0, 0], [np.inf, np.inf]), x_scale=[max(a, 1e-3), max(b, 1e-3)])
-    return float(sol.x[0]), float(sol.x[1])
-
-
-def _modes_match(z, modes, a, b) -> bool:
-    """Each z lies strictly between the certified limits of its branch at this k2 ratio."""
-    soft, stiff = k1_limits(max(modes) + 1, float(b))
-    return all(soft[m - 1] < zi < stiff[m - 1] for zi, m in zip(z, modes))
 
 
 def mindlin_k2_over_k1(poisson_ratio):
@@ -424,7 +325,7 @@ def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k
         raise ValueError("out_of_range must be 'raise' or 'nan'")
     if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length_m, tip_height_m)):
         raise UserError("k2/k1, lever length and tip height must be positive and finite")
-    c = k2_over_k1 * (tip_height_m / length_m) ** 2
+    c = formulas.k2_ratio(k2_over_k1, 1.0, tip_height_m, length_m)     # b per unit a = k1/k
     soft, stiff = coupled_limits(max(4, mode + 1))
     fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_hz, free_hz, spring_constant))
     with np.errstate(invalid="ignore", divide="ignore", under="ignore"):

@@ -6,7 +6,8 @@ that of a damped harmonic oscillator over a white floor,
     ASD(f)**2 = w**2 + A**2 f0**4 / ((f0**2 - f**2)**2 + (f f0 / Q)**2),
 
 (the beam's modal response, one mode at a time: pfmdyn's transfer functions with loss
-``1/Q`` reduce to it near each root).  Peaks are located on the logarithm of the median-
+``1/Q`` reduce to it near each root; derived in ``derivations/formulas.py``, evaluated by
+the generated ``formulas.oscillator_asd``).  Peaks are located on the logarithm of the median-
 smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
 that the floor and the peak weigh alike.
 
@@ -14,6 +15,9 @@ Which peaks are flexural modes: the tallest peak is mode 1 (in a displacement sp
 fundamental dominates); a higher peak is mode ``n`` when its ratio to mode 1 lies within
 25 % of the free beam's ``(z_n/z_1)**2`` (certified free roots, :mod:`pfmdyn.roots.core`);
 other peaks (electrical pick-up, torsion, the stage) are left out.
+
+:func:`instrument_resonances` is the resonance table of any instrument file: the readers
+(:mod:`pfmdyn.io.instruments`) only read, the thermal tune's peaks are fitted here.
 """
 from __future__ import annotations
 
@@ -22,8 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UserError
+from ..generated import formulas
+from ..io.discrepancy_data import ResonanceData
+from ..io.instruments import read_instrument, resonance_table
+from ..io.tables import check_resonance_rows
 
-__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks"]
+__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
@@ -45,8 +53,7 @@ def oscillator_asd(f, f0, q, amplitude, white):
     >>> round(float(oscillator_asd(1e5, 1e5, 100.0, 1.0, 0.0)), 6)   # A Q at resonance
     100.0
     """
-    f = np.asarray(f, dtype=float)
-    return np.sqrt(white**2 + amplitude**2 * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / q) ** 2))
+    return formulas.oscillator_asd(np.asarray(f, dtype=float), f0, q, amplitude, white)
 
 
 def _smooth(y, width):
@@ -63,7 +70,7 @@ def _flexural_modes(candidates, max_modes):
     if len(candidates) == 0:
         return []
     z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
-    ratios = (z / z[0]) ** 2
+    ratios = formulas.frequency_from_beta(z, 1.0, z[0])
     out, taken = [1], {1}
     for f in candidates[1:]:
         r = f / candidates[0]
@@ -136,3 +143,28 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
         out.append(ThermalPeak(mode, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
                                float(err[0]), float(err[1])))
     return out
+
+
+def instrument_resonances(path, overrides: dict | None = None):
+    """The resonance table of ``pfmdyn discrepancy`` that an instrument file implies, rows
+    sorted by (condition, mode).
+
+    A thermal tune's free modes are fitted (:func:`fit_thermal_peaks`); any other file gives
+    the resonances its instrument stored (:func:`pfmdyn.io.instruments.resonance_table`).
+    ``overrides`` (field keys, e.g. ``tip_height_m``) win over the file.
+
+    >>> instrument_resonances("scan.xyz")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: scan.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv
+    """
+    record = read_instrument(path)
+    peaks = None
+    if record.kind == "thermal spectrum":
+        freq, asd, _ = record.spectrum
+        peaks = fit_thermal_peaks(freq, asd)
+    data = resonance_table(record, {k: v for k, v in (overrides or {}).items() if v is not None}, peaks)
+    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, 1, data.quality_factor)
+    qs = None if data.quality_factor is None else data.quality_factor[order]
+    return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
+                         quality_factor=qs)

@@ -16,7 +16,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     out = Path(args.out) if args.out else book.book_dir() / "_build"
     t0 = time.perf_counter()
-    status = book.build(out)
+    status = book.build(out, progress=lambda line: print(line, file=sys.stderr))
     elapsed = time.perf_counter() - t0
     index = out.resolve() / "html" / "index.html"
     if status != 0:

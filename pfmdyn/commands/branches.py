@@ -6,7 +6,7 @@ import csv
 import numpy as np
 
 from ..errors import UserError
-from ..plots.branches import plot
+from ..plots.branches import plot_branches
 from ..roots.branches import SWEPT, frequency_ratio, branch_limits, crossovers, sweep
 from ..roots.certify import CertificationError
 from .roots import parse_parameters, positive_int
@@ -79,7 +79,7 @@ def run(args) -> int:
     for n, (s, zc) in enumerate(zip(s_cross, z_cross), 1):
         print(f"{args.family}: crossover of mode {n} at {SWEPT[args.family]} = {s:.3g} ({var} = {zc:.4g})")
     try:
-        plot(args.out, args.family, stiffness, z, **fixed)
+        plot_branches(args.family, stiffness, z, **fixed).savefig(args.out)
         if args.csv:
             write_csv(args.csv, args.family, stiffness, z, branch_limits(args.family, 1, **fixed)[0][0])
     except OSError as exc:

@@ -100,11 +100,11 @@ def run(args) -> int:
 
     args.out.mkdir(parents=True, exist_ok=True)
     written = write_tables(result, args.out)
-    written += [
-        plotting.plot_spectra(result, args.out / "spectra.png", unit),
-        plotting.plot_nulling_bias(result, args.out / "nulling_bias.png"),
-        plotting.plot_error_map(result, args.out / "error_map.png", unit),
-    ]
+    for name, figure in (("spectra", plotting.plot_spectra(result, unit)),
+                         ("nulling_bias", plotting.plot_nulling_bias(result)),
+                         ("error_map", plotting.plot_error_map(result, unit))):
+        figure.savefig(args.out / f"{name}.png", dpi=120)
+        written.append(args.out / f"{name}.png")
     print(f"{data.path}:")
     print(summary(result, unit))
     print("wrote " + ", ".join(str(path) for path in written))

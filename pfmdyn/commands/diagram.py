@@ -115,7 +115,7 @@ def run(args) -> int:
              f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
              f"H = {args.tip_height * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
              f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}")
-    plot_diagram(response, args.kind, args.out, title=title, log_frequency=args.log_frequency)
+    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")
     if args.csv is not None:
         _write_csv(args.csv, response)

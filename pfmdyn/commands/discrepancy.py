@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
-import math
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -13,7 +11,10 @@ from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, summary, thin
 from ..errors import UserError
-from ..io.tables import SpectrumData, read
+from ..discrepancy.inputs import read
+from ..io.results import dumps, write_json
+from ..io.tables import SpectrumData
+from ..names import canonical, flag
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
 
 
@@ -36,30 +37,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
 
 
-OVERRIDES = (("--spring-constant", "spring_constant_n_per_m", "cantilever spring constant, N/m"),
-             ("--length", "length_m", "cantilever length, m"),
-             ("--width", "width_m", "cantilever width, m"),
-             ("--tip-height", "tip_height_m", "tip height, m"),
-             ("--free-resonance", "free_resonance_hz", "first free flexural resonance, Hz"))
-
-
-def _finite(obj):
-    """JSON-safe copy: NumPy scalars to Python, non-finite numbers (e.g. Q = inf) to null."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+OVERRIDES = tuple((flag(canonical(key)), key, what) for key, what in (
+    ("spring_constant_n_per_m", "cantilever spring constant, N/m"), ("length_m", "cantilever length, m"),
+    ("width_m", "cantilever width, m"), ("tip_height_m", "tip height, m"),
+    ("free_resonance_hz", "first free flexural resonance, Hz")))
 
 
 def _analyse(data, args) -> dict:
     if isinstance(data, SpectrumData):
-        return analyse(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
-    return analyse_resonances(data, vertical_only=args.vertical_only, time_budget_s=TIME_BUDGET_S)
+        return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
+    return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -85,18 +72,14 @@ def run(args: argparse.Namespace) -> int:
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     if args.json == "-":
-        print(json.dumps(_finite(report), indent=2))
+        print(dumps(report))
     elif args.json:
-        try:
-            with open(args.json, "w", encoding="utf-8") as fh:
-                json.dump(_finite(report), fh, indent=2)
-        except OSError as exc:
-            raise UserError(f"cannot write {args.json}: {exc.strerror or exc}") from None
+        write_json(args.json, report)
     if args.plot:
         # Last: a path the plot cannot take costs the figure, not the report.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         try:
-            plot(data, {**report, "_fits": fits}, args.plot)
+            plot(data, {**report, "_fits": fits}).savefig(args.plot, dpi=120)
         except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
             raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
     return 0

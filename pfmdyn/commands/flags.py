@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 
 from ..cantilever import Cantilever, Contact
-from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
+from ..io.record import MissingFieldError
+from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 
-__all__ = ["add_lever", "add_contact", "add_damping", "given", "cantilever", "contact"]
+__all__ = ["add_lever", "add_contact", "add_damping", "given", "cantilever", "contact", "option_hint"]
 
 
 def _add(parser, names, required=()):
@@ -88,3 +89,18 @@ def contact(args) -> Contact:
     """
     values = given(args, CONTACT + ("contact_loss",))
     return Contact(**values)
+
+
+def option_hint(error: Exception) -> str:
+    """``": give --flag"`` when ``error`` is a field missing from a file that a flag supplies.
+
+    The readers name the field (:class:`pfmdyn.io.record.MissingFieldError`); only the
+    commands know flags.
+
+    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height_m"))
+    ': give --tip-height'
+    >>> option_hint(ValueError("x"))
+    ''
+    """
+    name = canonical(error.field) if isinstance(error, MissingFieldError) else None
+    return f": give {NAMES[name].flag}" if name else ""

@@ -6,12 +6,11 @@ ones missing; ``--json PATH`` writes the same as JSON (numbers as numbers).  Exa
 """
 from __future__ import annotations
 
-import json
 
-from ..errors import UserError
 from ..io.instruments import FIELDS, InstrumentRecord, read_instrument
+from ..io.results import write_json
 
-__all__ = ["add_arguments", "run", "report", "write_json"]
+__all__ = ["add_arguments", "run", "report"]
 
 
 def add_arguments(parser) -> None:
@@ -48,19 +47,6 @@ def report(record: InstrumentRecord) -> str:
         lines.append("missing: " + ", ".join(FIELDS[name][0] for name in record.missing))
     lines.extend(f"note: {note}" for note in record.notes)
     return "\n".join(lines)
-
-
-def write_json(path: str, document: dict) -> None:
-    """Write ``document`` as JSON; non-finite numbers are refused, never written as NaN."""
-    try:
-        text = json.dumps(document, indent=2, allow_nan=False)
-    except ValueError:
-        raise UserError("result holds a non-finite number; not written") from None
-    try:
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(text + "\n")
-    except OSError as exc:
-        raise UserError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def run(args) -> int:

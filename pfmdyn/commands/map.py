@@ -5,12 +5,15 @@
     pfmdyn map scan.h5 --out result/                       # Dask local scheduler, all cores
     pfmdyn map scan.h5 --out result/ --scheduler tcp://host:8786
     pfmdyn map be_usid.h5 --out result/ --spring-constant 2 --length 225e-6   # pycroscopy USID
+    pfmdyn map be_usid.h5 --out result/ --model sho        # BGlib's SHO, result/be_usid.h5 in BGlib's layout
 
 The input holds ``response`` (ny, nx, n_freq, complex; or (ny, nx, n_bias, n_freq) with
 ``bias_v``, which adds maps of the electrostatic term and the nulling bias), ``frequency_hz`` and
 the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
 becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  Rerunning an interrupted command resumes where it stopped.
+A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a copy of the input
+in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
 from __future__ import annotations
 
@@ -39,7 +42,12 @@ def add_arguments(parser) -> None:
                              "mechanisms '+viscous' (drag) and/or '+contact' (dashpot), and '+distributed' (the "
                              "electrostatic load along the lever, beside the local one at the tip); 'auto' (default) "
                              "chooses them "
-                             "on 16 pixels spread over the map (BIC + gap rule of pfmdyn discrepancy) and reports it")
+                             "on 16 pixels spread over the map (BIC + gap rule of pfmdyn discrepancy) and reports it; "
+                             "'sho': BGlib's simple harmonic oscillator per spectrum and band (resonance frequency, Q, "
+                             "amplitude, phase; no lever metadata needed)")
+    parser.add_argument("--usid-inplace", action="store_true",
+                        help="USID input: write the results group into the input file (as BGlib does) instead of a "
+                             "copy of it in --out")
     parser.add_argument("--block", type=int, default=16, help="pixels per block side (default 16)")
     parser.add_argument("--scheduler", default=None,
                         help="'processes' (default: one worker process per core), 'threads', 'sync' (one core), "
@@ -78,8 +86,28 @@ def _mechanisms(args, source, fit_options):
     return mechanisms, rows
 
 
+def _progress_bar(enabled: bool):
+    """A tqdm bar of blocks done (of the whole map) with pixels per second, as a
+    :func:`pfmdyn.maps.driver.run_map` progress callback (None when disabled) and its closer."""
+    if not enabled:
+        return None, lambda: None
+    from tqdm.auto import tqdm
+    state = {}
+
+    def report(done, total, pixels):
+        if "bar" not in state:
+            state["bar"] = tqdm(total=total, initial=done, unit="block")
+            return
+        bar = state["bar"]
+        bar.update(done - bar.n)
+        bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
+
+    return report, lambda: state["bar"].close() if "bar" in state else None
+
+
 def run(args) -> int:
     """Fit the map and print a summary line."""
+    import os
     from ..maps.driver import check_scheduler, open_map, run_map
     for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
@@ -91,31 +119,52 @@ def run(args) -> int:
     if is_contact_map(args.data):
         print(describe(contact_map(args.data, args.out, overrides)))
         return 0
-    source = open_map(args.data, overrides)
+    sho = args.model == "sho"
+    source = open_map(args.data, overrides, sho=sho)
+    if args.usid_inplace and source.layout != "usid":
+        raise UserError(f"{args.data}: --usid-inplace needs a USID input (this file has the plain layout)")
+    copy = os.path.join(args.out, os.path.basename(args.data))
+    if source.layout == "usid" and not args.usid_inplace and os.path.exists(copy) and os.path.samefile(copy, args.data):
+        raise UserError(f"{args.data}: --out is the input's folder, where the copy with the fit would replace the "
+                        "input; choose another --out, or --usid-inplace to write into the input")
     if args.surface_potential is not None and not math.isfinite(args.surface_potential):
         raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
-    fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
-                   "surface_potential_v": args.surface_potential}
-    mechanisms, rows = _mechanisms(args, source, fit_options)
-    source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
     n_bands = len(source.model.bands)
     biases = source.model.bias_v
-    print(f"fitting: k1 ({source.model.describe_k2()}), "
-          f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
-          + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
-             if biases is not None else ""))
-    s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
-                max_blocks=args.max_blocks, progress=not args.no_progress, selection=rows, **fit_options)
+    if sho:
+        fit_options, rows = {"gap_threshold": args.gap_threshold}, None
+        print(f"fitting: an SHO per spectrum and band ({n_bands} band{'s' if n_bands > 1 else ''}"
+              + (f", {len(biases)} biases" if biases is not None else "") + ")")
+    else:
+        fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
+                       "surface_potential_v": args.surface_potential}
+        mechanisms, rows = _mechanisms(args, source, fit_options)
+        source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
+        print(f"fitting: k1 ({source.model.describe_k2()}), "
+              f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
+              + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
+                 if biases is not None else ""))
+    progress, close = _progress_bar(not args.no_progress)
+    try:
+        s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
+                    max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
+    finally:
+        close()
     ny, nx = source.shape
     if args.png:
-        from ..maps.driver import read_maps
+        from ..maps import open_result
         from ..plots.maps import plot_maps
-        plot_maps(*read_maps(s["out"]), args.out)
+        for name, figure in plot_maps(open_result(args.out)).items():
+            figure.savefig(os.path.join(args.out, f"{name}.png"), dpi=100)
+    written = ""
+    if source.layout == "usid":
+        from ..maps.usid import write_usid
+        target = args.data if args.usid_inplace else copy
+        written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
+    explained = (f"explained {100 * s['explained_fraction']:.1f} %"
+                 + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
+                    if s.get("at_bound_fraction") else "") + f", median gap {s['median_gap']:.3g}"
+                 + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))
     print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
-          f"{s['blocks_done']}/{s['blocks_total']} done; explained {100 * s['explained_fraction']:.1f} %"
-          + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
-             if s.get("at_bound_fraction") else "") + ", "
-          f"median gap {s['median_gap']:.3g}"
-          + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else "")
-          + f"; maps in {s['out']}")
+          f"{s['blocks_done']}/{s['blocks_total']} done; {explained}; maps in {s['out']}{written}")
     return 0

@@ -5,11 +5,11 @@ Parameter values are read as exact decimals (``1e6``, ``0.1``); see :mod:`pfmdyn
 """
 from __future__ import annotations
 
-import json
 from fractions import Fraction
 
 from ..errors import UserError
 from ..generated import characteristic
+from ..io.results import write_json
 from ..roots.core import FAMILIES, PARAMETER_HELP, RootResult, family_roots
 
 __all__ = ["OPTIONS", "add_arguments", "parse_parameters", "positive_int", "run", "table"]
@@ -115,10 +115,5 @@ def run(args) -> int:
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
     if args.json:
-        try:
-            with open(args.json, "w", encoding="utf-8") as fh:
-                json.dump(result.to_json(), fh, indent=1)
-                fh.write("\n")
-        except OSError as exc:
-            raise UserError(f"cannot write {args.json}: {exc.strerror}") from None
+        write_json(args.json, result.to_json())
     return 0 if result.certified else 1

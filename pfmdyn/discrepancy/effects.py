@@ -21,6 +21,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..generated import formulas
+
 __all__ = ["Parameter", "Effect", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
 
@@ -138,7 +140,7 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     [('k1', -0.59, 7.41), ('k2', -1.44, 7.56)]
     """
     a = math.log10(meta.k)
-    b = math.log10(meta.k * meta.L**2 / meta.H**2)
+    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L))
     k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, log=True, description="normal contact stiffness")
     k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, log=True, description="lateral contact stiffness")
     return (k1,) if vertical_only else (k1, k2)
@@ -148,5 +150,5 @@ def spring_grid(meta, count_k1: int, count_k2: int):
     """Start grids (internal log10) for ``k1`` (``k/10 .. 1e4 k``) and ``k2`` (lateral scale)."""
     import numpy as np
     a = math.log10(meta.k) + np.linspace(-1, 4.3, count_k1)
-    b = math.log10(meta.k * meta.L**2 / meta.H**2) + np.linspace(-4.5, 1, count_k2)
+    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L)) + np.linspace(-4.5, 1, count_k2)
     return a, b

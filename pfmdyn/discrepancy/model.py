@@ -32,7 +32,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..generated import damping, tip_setback
+from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..generated.characteristic import BETA1_FREE
 from ..roots.bracket import grid_roots, refine
@@ -53,7 +53,7 @@ def free_root(k, H, L, mu, gamma) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma)  # noqa: E731
+    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)  # noqa: E731
     # The only root in (0.3, BETA1_FREE]: bracketed on a grid first (one vectorised call), so
     # regula falsi starts from a narrow bracket (a few steps instead of ~30).
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
@@ -117,8 +117,8 @@ class Model:
         with np.errstate(all="ignore"):
             beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-            return tip_setback.slope(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                     c["mu"] * mu_f, c["gamma"])
+            return tip_setback.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                     c["mu"] * mu_f, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -141,9 +141,9 @@ class Model:
             spring = c["k1"] * k1_f
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
-            root_r = b1 * np.sqrt(r)
+            root_r = formulas.beta_from_frequency(r, 1.0, b1)
             T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                                  c["mu"] * mu_f, c["gamma"], wrt=self._partials_needed(c))
+                                                  c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
@@ -165,9 +165,9 @@ class Model:
                     out[:, j] = (j_beta * (root_r * d_f[0][q]) + j_k * (m.k * d_f[1][q])
                                  + j_rot[0] * (c["k1"] * d_f[2][q]) + j_mu * (c["mu"] * d_f[3][q]))
                 elif p.name == "mu":
-                    out[:, j] = j_mu * mu_f + j_beta * (np.sqrt(r) * beta_f * d_b1[0])
+                    out[:, j] = j_mu * mu_f + j_beta * (root_r / b1 * beta_f * d_b1[0])
                 elif p.name == "gamma":
-                    out[:, j] = j_gamma + j_beta * (np.sqrt(r) * beta_f * d_b1[1])
+                    out[:, j] = j_gamma + j_beta * (root_r / b1 * beta_f * d_b1[1])
         return T, out
 
     def _partials_needed(self, c) -> tuple[str, ...]:
@@ -176,7 +176,8 @@ class Model:
         root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
         need = {"beta": bool(names & {"inv_q", "g"}) or root_moves, "k": "inv_q" in names,
                 "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
-                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names}
+                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names,
+                "rho_g": False}
         return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
 
     @property
@@ -229,11 +230,11 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
-    top = b1 * math.sqrt(f_max / m.f1)
+    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
+    top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
-    return m.f1 * (roots / b1) ** 2
+    return formulas.frequency_from_beta(roots, m.f1, b1)
 
 
 def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
@@ -247,7 +248,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
         rows = np.flatnonzero(b1s == b1)
-        top = b1 * math.sqrt(f_max / m.f1)
+        top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
             vals = tip_setback.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
@@ -255,7 +256,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         for row, i in enumerate(rows):
             idx = np.flatnonzero(change[row])
             lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
-            out[i] = m.f1 * ((hi - fhi * (hi - lo) / (fhi - flo)) / b1) ** 2
+            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.f1, b1)
     return out
 
 
@@ -265,7 +266,7 @@ def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, flo
     b1 = free_root(k, H, L, mu, gamma)
     if mu == 0.0:
         return b1, (0.0, 0.0)
-    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma)
+    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
     names = tip_setback.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
@@ -275,7 +276,7 @@ def characteristic_args(model: Model, internal, contact: bool) -> tuple:
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"])
+    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
 
 
 def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
@@ -292,7 +293,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     F = tip_setback.characteristic
     c = model.coords(internal)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    beta = b1 * np.sqrt(f / m.f1)
+    beta = formulas.beta_from_frequency(f, m.f1, b1)
     a0, af0 = characteristic_args(model, internal, contact), characteristic_args(model, internal, False)
     with np.errstate(all="ignore"):
         hb = 1e-7 * beta
@@ -305,7 +306,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
             xs[j] += h
             d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
             d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
-            out[:, j] = 2 * f * (d_beta / beta - d_b1 / b1)
+            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1)
     out[~np.isfinite(out)] = 0.0
     return out
 
@@ -368,10 +369,11 @@ class FitResult:
             j += 1
         if "damping_contact" in self.model.effects and out.get("k1", {}).get("value"):
             loss = out["contact_loss"]["value"]
-            out["eta"] = {"value": loss * out["k1"]["value"] / (2 * math.pi * self.model.meta.f1),
+            out["eta"] = {"value": float(formulas.contact_dashpot(loss, out["k1"]["value"], self.model.meta.f1)),
                           "stderr": None, "unit": "N s/m", "determined": out["contact_loss"]["determined"]}
         if "damping_viscous" in self.model.effects and out["viscous_loss"]["value"] is not None:
-            out["viscous_width_hz"] = {"value": self.model.meta.f1 * out["viscous_loss"]["value"], "stderr": None,
+            width = formulas.viscous_width(out["viscous_loss"]["value"], self.model.meta.f1)
+            out["viscous_width_hz"] = {"value": float(width), "stderr": None,
                                        "unit": "Hz", "determined": out["viscous_loss"]["determined"]}
         return out
 

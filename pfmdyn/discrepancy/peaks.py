@@ -22,6 +22,7 @@ import math
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 
+from ..generated import formulas
 from .model import bounds, resonance_sensitivity, resonances, resonances_many
 
 __all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
@@ -161,7 +162,7 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     if not len(found):
         return found, found
     p = poles(data, found)
-    return np.where(np.isfinite(p.real), p.real, found), 2 * np.abs(p.imag)
+    return np.where(np.isfinite(p.real), p.real, found), formulas.half_power_width_from_root(np.abs(p.imag))
 
 
 def peak_match(roots, peaks, band, d_roots=None):

@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..generated import damping, tip_setback
+from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated
 from .model import Model, free_root
 
@@ -45,8 +45,8 @@ def _characteristic(model: Model, internal, contact: bool, r):
         kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
     else:
         kvv = kll = kvl = 0.0
-    return tip_setback.characteristic(b1 * np.sqrt(r) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                      c["mu"] * mu_f, c["gamma"])
+    return tip_setback.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                      c["mu"] * mu_f, c["gamma"], 0.0)
 
 
 def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.ndarray:
@@ -124,7 +124,7 @@ def loss_and_roots(model: Model, internal, contact: bool, frequency_hz, guess=No
     """``1 / Q`` and the complex roots ``r_c`` (for ``guess`` of a nearby model), no cache."""
     f = np.asarray(frequency_hz, float)
     rc = damped_roots(model, internal, contact, f / model.meta.f1, guess)
-    loss = 2 * np.abs(rc.imag) / np.abs(rc)
+    loss = formulas.loss_factor_from_root(rc.real, np.abs(rc.imag))
     return np.where(np.isfinite(loss), loss, 0.0), rc
 
 

@@ -534,7 +534,7 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
     return library
 
 
-def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = True,
+def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = False,
                        time_budget_s: float | None = None) -> dict:
     """Discrepancy loop on a resonances table; same report keys as the spectrum loop.
 

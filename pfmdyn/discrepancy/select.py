@@ -70,7 +70,7 @@ def _row(name, old, new) -> dict:
     return {"effect": name, "bic": new.bic, "delta_bic": old.bic - new.bic, "gap": new.gap}
 
 
-def run(problem, progress: bool = True, time_budget_s: float | None = None) -> dict:
+def run(problem, progress: bool = False, time_budget_s: float | None = None) -> dict:
     """Run the loop on ``problem``; return baseline, final fit and the steps.
 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)

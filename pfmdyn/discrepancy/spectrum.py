@@ -365,7 +365,7 @@ class SpectrumProblem:
         return where
 
 
-def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = True,
+def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = False,
             time_budget_s: float | None = None) -> dict:
     """Run the discrepancy loop on a spectrum; return the JSON-ready report.
 

@@ -14,18 +14,24 @@ module maps what a file says onto it, with the factor to the canonical unit:
   a phase needs its unit (``phase_deg``, ``Phase (rad)``): degrees and radians cannot be
   told apart safely from the numbers;
 * metadata values may carry a unit of the key's dimension (``length_m: 223 um``).
+
+:func:`read_table` is the one CSV reader: metadata lines, the header, the data rows as text
+fields with their line numbers.  The readers of each kind of table interpret them.
 """
 from __future__ import annotations
 
 import csv
 import math
 import re
+from dataclasses import dataclass
 from decimal import Decimal
+from pathlib import Path
 
 from ..errors import UserError
 from .record import si_unit
 
-__all__ = ["delimiter", "split", "comment_entry", "is_comment", "units_line", "column", "metadata_number"]
+__all__ = ["Table", "read_table", "delimiter", "split", "comment_entry", "is_comment", "units_line", "column",
+           "metadata_number"]
 
 COMMENT_PREFIXES = ("#", "%")
 
@@ -93,16 +99,84 @@ def comment_entry(line: str) -> tuple[str, str] | None:
     return "_".join(match.group(1).lower().split()), match.group(2).strip()
 
 
-def units_line(lines: list[str], sep: str | None, count: int) -> list[str] | None:
-    """The units of the columns when the line after the header gives them (``Hz,V,pm,pm``, as
-    spreadsheet exports write), else None.
+@dataclass(frozen=True)
+class Table:
+    """A CSV file as written: metadata before the header, the header, the data rows (text)."""
 
-    >>> units_line(["kHz;mV;;"], ";", 4), units_line(["1e4,0,1,2"], ",", 4)
+    path: str
+    metadata: dict[str, str]
+    """``key: value`` lines before the header (:func:`comment_entry`), values as written."""
+    header: list[str]
+    """Fields of the header line (a trailing separator dropped)."""
+    header_line: int
+    """1-based line number of the header."""
+    separator: str | None
+    """Field separator (None: runs of whitespace), decided by the header (:func:`delimiter`)."""
+    rows: list[tuple[int, list[str]]]
+    """``(line number, fields)`` of every non-blank line after the header."""
+
+
+def read_table(path) -> Table:
+    """Read a CSV file into a :class:`Table`; every problem is one ``UserError`` line naming
+    the file and the line.
+
+    Comment lines are allowed only before the header; a metadata key given twice with
+    different values is an error.
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "t.csv")
+    ...     _ = open(name, "w").write("% Length = 223 um\\n\\nmode;frequency_hz;\\n1;63,2\\n")
+    ...     table = read_table(name)
+    >>> table.metadata, table.header, table.header_line, table.rows
+    ({'length': '223 um'}, ['mode', 'frequency_hz'], 3, [(4, ['1', '63.2'])])
+    """
+    path = Path(path)
+    where = str(path)
+    try:
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
+    except OSError as exc:
+        raise UserError(f"{where}: cannot read the file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise UserError(f"{where}: not a UTF-8 text file") from None
+    metadata: dict[str, str] = {}
+    header_line = next((number for number, text in enumerate(lines, start=1)
+                        if text.strip() and not is_comment(text)), None)
+    preamble = lines if header_line is None else lines[:header_line - 1]
+    for number, text in enumerate(preamble, start=1):
+        entry = comment_entry(text) if text.strip() else None
+        if entry and entry[0]:
+            key, value = entry
+            if metadata.get(key, value) != value:
+                raise UserError(f"{where}, line {number}: metadata key '{key}' given twice")
+            metadata[key] = value
+    if not lines:
+        raise UserError(f"{where}, line 1: the file is empty")
+    if header_line is None:
+        raise UserError(f"{where}, line {len(lines)}: no header line (only comments or blank lines)")
+    sep = delimiter(lines[header_line - 1])
+    header = split(lines[header_line - 1], sep)
+    while header and not header[-1]:        # a trailing separator
+        header.pop()
+    rows = []
+    for number in range(header_line + 1, len(lines) + 1):
+        text = lines[number - 1]
+        if not text.strip():
+            continue
+        if is_comment(text):
+            raise UserError(f"{where}, line {number}: comment lines are only allowed before the header")
+        rows.append((number, split(text, sep)))
+    return Table(where, metadata, header, header_line, sep, rows)
+
+
+def units_line(cells: list[str], count: int) -> list[str] | None:
+    """The units of the columns when the first row after the header gives them (``Hz,V,pm,pm``,
+    as spreadsheet exports write), else None.
+
+    >>> units_line(["kHz", "mV", "", ""], 4), units_line(["1e4", "0", "1", "2"], 4)
     (['khz', 'mv', '', ''], None)
     """
-    if not lines:
-        return None
-    cells = split(lines[0], sep)[:count]
+    cells = cells[:count]
     if not any(cells) or any(_is_number(cell) for cell in cells):
         return None
     return [cell.strip("()[] ").lower() for cell in cells] + [""] * (count - len(cells))

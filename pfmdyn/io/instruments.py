@@ -16,11 +16,12 @@ with units, the cantilever fields found (SI) and the ones missing.  Prefixed uni
 ``nm``, ``pN/nm``, ``mV``) are converted to SI (:func:`pfmdyn.io.record.si_unit`): a channel
 keeps the factor from its stored values, spectra and fields are converted; a unit that is
 not SI is kept as written and said in the record's notes, never guessed.
-:func:`to_discrepancy_input` turns a file into the resonance table of ``pfmdyn
-discrepancy`` (:class:`pfmdyn.io.tables.ResonanceData`): an image's metadata gives free
-mode 1 and contact mode 1 with their Q; a thermal spectrum gives the free modes fitted in
-it.  A field that neither the file nor the command line gives is an error naming the
-option, never a silent default.
+:func:`resonance_table` turns a record into the resonance table of ``pfmdyn
+discrepancy`` (:class:`pfmdyn.io.discrepancy_data.ResonanceData`): an image's metadata gives
+free mode 1 and contact mode 1 with their Q; a thermal spectrum gives the free modes the
+caller fitted in it (readers only read: :mod:`pfmdyn.analysis.thermal` fits).  A field that
+neither the file nor the caller gives is a :class:`~pfmdyn.io.record.MissingFieldError`
+naming it, never a silent default (the commands add the option that supplies it).
 """
 from __future__ import annotations
 
@@ -31,15 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from .record import FIELDS, Channel, InstrumentRecord, make_record
+from .columns import read_table
+from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
 
-__all__ = ["FIELDS", "OPTIONS", "Channel", "InstrumentRecord", "read_instrument",
-           "to_discrepancy_input", "required_field"]
+__all__ = ["FIELDS", "Channel", "InstrumentRecord", "MissingFieldError", "read_instrument", "resonance_table",
+           "required_field"]
 
-OPTIONS = {"spring_constant_n_per_m": "--spring-constant", "length_m": "--length",
-           "width_m": "--width", "tip_height_m": "--tip-height",
-           "free_resonance_hz": "--free-resonance"}
-"""Field that may be given on the command line -> its option."""
 
 def _reader(path: Path):
     suffix = path.suffix.lower()
@@ -67,29 +65,20 @@ _CSV_UNITS = {"_hz": "Hz", "_m_per_sqrthz": "m/sqrt(Hz)", "_n_per_m": "N/m", "_d
 
 
 def _read_csv(path: Path) -> InstrumentRecord:
-    """A CSV table: columns with the units their names end in, ``# key: value`` metadata."""
-    import csv
-
-    try:
-        lines = [line for line in path.read_text(encoding="utf-8-sig").splitlines() if line.strip()]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(f"{path}: cannot read the file ({exc})") from None
-    meta = {}
-    while lines and lines[0].lstrip().startswith("#"):
-        key, colon, value = lines.pop(0).strip()[1:].partition(":")
-        meta[key.strip()] = value.strip() if colon else None
-    if not lines:
+    """A CSV table (:func:`pfmdyn.io.columns.read_table`): columns with the units their names
+    end in, ``# key: value`` metadata."""
+    table = read_table(path)
+    if not table.header:
         raise UserError(f"{path}: no header line")
-    header = [c.strip() for c in next(csv.reader([lines[0]]))]
-    units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in header]
+    units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in table.header]
     found = {}
     for key in FIELDS:
         try:
-            found[key] = float(meta[key])
-        except (KeyError, TypeError, ValueError):
+            found[key] = float(table.metadata[key])
+        except (KeyError, ValueError):
             pass
-    kind = "resonance metadata" if "mode" in header and "condition" in header else "spectrum"
-    channels = [Channel(c, u, (len(lines) - 1,)) for c, u in zip(header, units)]
+    kind = "resonance metadata" if {"mode", "condition"} <= set(table.header) else "spectrum"
+    channels = [Channel(c, u, (len(table.rows),)) for c, u in zip(table.header, units)]
     return make_record(path, kind, "CSV table", channels, found)
 
 
@@ -122,7 +111,8 @@ def read_instrument(path) -> InstrumentRecord:
 
 
 def required_field(record: InstrumentRecord, name: str, overrides: dict | None = None) -> float:
-    """A field from the command line (``overrides``) or else the file; missing -> error naming the option.
+    """A field from ``overrides`` (the caller's values) or else the file; missing ->
+    :class:`~pfmdyn.io.record.MissingFieldError` naming the field.
 
     >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0})
     >>> required_field(r, "spring_constant_n_per_m"), required_field(r, "length_m", {"length_m": 2e-4})
@@ -130,42 +120,46 @@ def required_field(record: InstrumentRecord, name: str, overrides: dict | None =
     >>> required_field(r, "tip_height_m")
     Traceback (most recent call last):
     ...
-    pfmdyn.errors.UserError: tip height not in a.ibw: give --tip-height
+    pfmdyn.io.record.MissingFieldError: tip height not in a.ibw
     """
     overrides = overrides or {}
     if overrides.get(name) is not None:
         value = float(overrides[name])
         if not (math.isfinite(value) and value > 0):
-            raise UserError(f"{OPTIONS.get(name, name)} must be positive and finite, got {overrides[name]}")
+            raise UserError(f"{FIELDS[name][0]} must be positive and finite, got {overrides[name]}")
         return value
     if name in record.fields:
         return record.fields[name]
-    option = OPTIONS.get(name)
-    hint = f": give {option}" if option else ""
-    raise UserError(f"{FIELDS[name][0]} not in {Path(record.path).name}{hint}")
+    raise MissingFieldError(f"{FIELDS[name][0]} not in {Path(record.path).name}", name)
 
 
-def to_discrepancy_input(path, overrides: dict | None = None):
-    """The resonance table of ``pfmdyn discrepancy`` that an instrument file implies.
+def resonance_table(record: InstrumentRecord, overrides: dict | None = None, peaks=None):
+    """The resonance table of ``pfmdyn discrepancy`` that an instrument record implies.
 
-    An image (or any file with resonance metadata): free mode 1 from the thermal fit and
-    contact mode 1 from the tune fit, each with its Q.  A thermal spectrum: the free modes
-    fitted in it (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`), each with its Q.
-    ``overrides`` (keys of :data:`OPTIONS`, from the command line) win over the file.
+    An image (or any record with resonance metadata): free mode 1 from the thermal fit and
+    contact mode 1 from the tune fit, each with its Q, as the instrument stored them.  A
+    thermal spectrum: ``peaks``, the free modes the caller fitted in it (objects with
+    ``mode``, ``frequency_hz``, ``quality_factor``:
+    :func:`pfmdyn.analysis.thermal.instrument_resonances` fits and calls this).
+    ``overrides`` (keys of :data:`FIELDS`) win over the file.
 
     Returns
     -------
-    pfmdyn.io.tables.ResonanceData
+    pfmdyn.io.discrepancy_data.ResonanceData
+
+    Examples
+    --------
+    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length_m": 2e-4,
+    ...     "width_m": 3e-5, "free_resonance_hz": 6e4, "contact_resonance_hz": 3e5})
+    >>> table = resonance_table(r, {"tip_height_m": 1e-5})
+    >>> table.condition.tolist(), table.frequency_hz.tolist()
+    (['free', 'contact'], [60000.0, 300000.0])
     """
     from .discrepancy_data import Metadata, ResonanceData
 
-    record = read_instrument(path)
     overrides = dict(overrides or {})
     name = Path(record.path).name
     if record.kind == "thermal spectrum":
-        from ..analysis.thermal import fit_thermal_peaks
-        freq, asd, _ = record.spectrum
-        peaks = fit_thermal_peaks(freq, asd)
         if not peaks:
             raise UserError(f"{name}: no resonance peak found in the thermal spectrum")
         modes = np.array([p.mode for p in peaks])

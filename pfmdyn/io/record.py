@@ -9,7 +9,10 @@ import math
 import re
 from dataclasses import dataclass, field
 
-__all__ = ["FIELDS", "KINDS", "Channel", "InstrumentRecord", "make_record", "make_channel", "si_unit",
+from ..errors import UserError
+
+__all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord", "make_record", "make_channel",
+           "si_unit",
            "si_value", "si_spectrum", "decode_text"]
 
 FIELDS = {
@@ -27,6 +30,15 @@ FIELDS = {
 """Cantilever field -> (what it is, SI unit).  Every record lists each as found or missing."""
 
 KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
+
+
+class MissingFieldError(UserError):
+    """A cantilever field that neither the file nor the caller gives; ``field`` names it (a key
+    of :data:`FIELDS`), so that a command can say which option supplies it."""
+
+    def __init__(self, message: str, field: str):
+        super().__init__(message)
+        self.field = field
 
 
 @dataclass(frozen=True)

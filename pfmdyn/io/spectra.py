@@ -24,7 +24,7 @@ The format, shared by every command that reads measured spectra::
   same response is kept once; with different responses it is an error.  Unless the caller
   says otherwise, every frequency needs at least two distinct biases so that a line can be
   fitted.
-* Blank lines are skipped.  Every problem is reported as one :class:`~pfmdyn.cli.UserError`
+* Blank lines are skipped.  Every problem is reported as one :class:`~pfmdyn.errors.UserError`
   naming the file and the line.
 """
 from __future__ import annotations
@@ -32,7 +32,6 @@ from __future__ import annotations
 import difflib
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -111,7 +110,7 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
 
     Raises
     ------
-    pfmdyn.cli.UserError
+    pfmdyn.errors.UserError
         One line naming the file, the line number and the problem.
 
     Examples
@@ -125,24 +124,14 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     >>> data.response.tolist(), data.metadata
     ([(1+0j), (3+0j)], {'response_unit': 'pm'})
     """
-    path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8-sig").splitlines()
-    except OSError as exc:
-        raise UserError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise UserError(f"{path}: not a UTF-8 text file") from None
-    where = str(path)
-    metadata, header_line = _read_preamble(where, lines)
-    sep = columns.delimiter(lines[header_line - 1])
-    written = columns.split(lines[header_line - 1], sep)
-    while written and not written[-1]:      # a trailing separator
-        written.pop()
-    first_data = header_line
-    units = columns.units_line(lines[header_line:header_line + 1], sep, len(written))
+    source = columns.read_table(path)
+    where, header_line = source.path, source.header_line
+    written = list(source.header)
+    data_rows = source.rows
+    units = columns.units_line(data_rows[0][1], len(written)) if data_rows else None
     if units is not None:
         written = [f"{name} ({unit})" if unit else name for name, unit in zip(written, units)]
-        first_data += 1
+        data_rows = data_rows[1:]
     found = [columns.column(name) for name in written]
     names = [match[0] if match else name for match, name in zip(found, written)]
     response_columns = _check_header(where, header_line, names)
@@ -153,13 +142,7 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     indices = [names.index(name) for name in wanted]
     factors = np.array([found[i][1] for i in indices])
     rows, line_numbers = [], []
-    for number in range(first_data + 1, len(lines) + 1):
-        text = lines[number - 1]
-        if not text.strip():
-            continue
-        if columns.is_comment(text):
-            raise UserError(f"{where}, line {number}: comment lines are only allowed before the header")
-        fields = columns.split(text, sep)
+    for number, fields in data_rows:
         if len(fields) > len(names) and not any(fields[len(names):]):
             fields = fields[:len(names)]
         if len(fields) != len(names):
@@ -180,25 +163,7 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
         response = first + 1j * second
     else:
         response = first * np.exp(1j * np.deg2rad(second))
-    return Spectra(str(path), table[:, 0], table[:, 1], response, response_columns, metadata)
-
-
-def _read_preamble(where: str, lines: list[str]) -> tuple[dict[str, str], int]:
-    """Collect ``# key: value`` metadata; return it with the 1-based line number of the header."""
-    metadata: dict[str, str] = {}
-    for number, text in enumerate(lines, start=1):
-        if not text.strip():
-            continue
-        if not columns.is_comment(text):
-            return metadata, number
-        key, value = columns.comment_entry(text)
-        if key:
-            if metadata.get(key, value) != value:
-                raise UserError(f"{where}, line {number}: metadata key '{key}' given twice")
-            metadata[key] = value
-    if not lines:
-        raise UserError(f"{where}, line 1: the file is empty")
-    raise UserError(f"{where}, line {len(lines)}: no header line (only comments or blank lines)")
+    return Spectra(where, table[:, 0], table[:, 1], response, response_columns, source.metadata)
 
 
 def _check_header(where: str, number: int, names: list[str]) -> tuple[str, str]:

@@ -29,15 +29,15 @@ Spellings are forgiven as for spectra (:mod:`pfmdyn.io.columns`): separators, ``
 any cantilever's range, and frequencies far from ``free_resonance_hz``, are errors: they are
 in another unit than the file says.
 
-:func:`read` is the one entry point for every supported file: instrument files (.ibw,
-.nid, .h5/.hdf5 and drive sweeps .txt/.dat) go to
-:func:`pfmdyn.io.instruments.to_discrepancy_input`, whose short tables (one or two
-resonances) are accepted.  ``overrides`` (metadata keys, from the command line) win over
-the file's values.
+:func:`read` reads these CSV files; ``overrides`` (metadata keys, from the command line)
+win over the file's values.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
+.txt/.dat, :func:`is_instrument_file`) give their resonance table through
+:func:`pfmdyn.analysis.thermal.instrument_resonances` (a thermal tune's peaks are fitted
+there); :func:`pfmdyn.discrepancy.inputs.read` takes either kind.
 
 Spectra are read by :func:`pfmdyn.io.spectra.read_spectra` (it owns the spectrum rules);
 this module checks the metadata, rejects unknown columns and too little data.  Every
-problem is one :class:`~pfmdyn.cli.UserError` line.
+problem is one :class:`~pfmdyn.errors.UserError` line.
 """
 from __future__ import annotations
 
@@ -48,11 +48,12 @@ import numpy as np
 
 from ..errors import UserError
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
-from .columns import column, comment_entry, delimiter, is_comment, metadata_number, split
+from .columns import column, metadata_number, read_table
 from .spectra import read_spectra
 from .sweeps import is_drive_sweep
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "is_instrument_file",
+           "check_resonance_rows"]
 
 REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz")
 OPTIONAL_KEYS = ("width_m", "frequency_uncertainty_hz", "quality_factor_uncertainty")
@@ -114,26 +115,6 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
                     values.get("quality_factor_uncertainty"))
 
 
-def _preamble(path: Path) -> tuple[dict, list[str], list[str]]:
-    """Metadata, header fields and data lines (comments and blanks skipped)."""
-    try:
-        lines = path.read_text(encoding="utf-8-sig").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(f"{path}: cannot read the file ({exc})") from None
-    meta, rest = {}, [line for line in lines if line.strip()]
-    while rest and is_comment(rest[0]):
-        key, value = comment_entry(rest.pop(0))
-        if key:
-            meta[key] = value
-    if not rest:
-        raise UserError(f"{path}: no header line")
-    sep = delimiter(rest[0])
-    header = split(rest[0], sep)
-    while header and not header[-1]:        # a trailing separator
-        header.pop()
-    return meta, header, [split(line, sep) for line in rest[1:]]
-
-
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     """Read a discrepancy input file (format in the module docstring).
 
@@ -152,13 +133,14 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
-    if path.suffix.lower() in INSTRUMENT_SUFFIXES and not (path.suffix.lower() in TEXT_SUFFIXES
-                                                          and not is_drive_sweep(path)):
-        return _instrument(path, overrides)
-    meta, header, rows = _preamble(path)
+    if is_instrument_file(path):
+        raise UserError(f"{path}: an instrument file, not a CSV table (read its resonances with "
+                        "pfmdyn.discrepancy.inputs.read)")
+    table = read_table(path)
+    meta, header = table.metadata, table.header
     names = [_column(c) for c in header]
     if {"mode", "condition"} & set(names):
-        return _resonances(path, _metadata(str(path), meta, overrides), names, rows)
+        return _resonances(path, _metadata(str(path), meta, overrides), names, table.rows)
     unknown = [c for c in header if column(c) is None]
     if unknown:
         # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
@@ -182,6 +164,16 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
+def is_instrument_file(path) -> bool:
+    """An instrument file (by its suffix; a .txt/.dat file only when it holds a drive sweep).
+
+    >>> is_instrument_file("scan.ibw"), is_instrument_file("table.csv")
+    (True, False)
+    """
+    suffix = Path(path).suffix.lower()
+    return suffix in INSTRUMENT_SUFFIXES and not (suffix in TEXT_SUFFIXES and not is_drive_sweep(path))
+
+
 def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:
     """Frequencies outside ``band`` (multiples of the free resonance ``f1``) are in another unit
     than the column (or ``free_resonance_hz``) says."""
@@ -200,20 +192,6 @@ def _column(name: str) -> str:
         return f"frequency_{spectral[2]}"
     key = "_".join(name.strip().lower().replace("(", " ").replace(")", " ").split())
     return COLUMN_ALIASES.get(key, key)
-
-
-def _instrument(path: Path, overrides: dict | None) -> ResonanceData:
-    """The resonance table an instrument file implies, rows sorted as for a CSV table."""
-    # Imported on use: the instrument readers' libraries are optional extras.
-    from .instruments import to_discrepancy_input
-
-    data = to_discrepancy_input(path, {k: v for k, v in (overrides or {}).items() if v is not None})
-    if not isinstance(data, ResonanceData):
-        return data
-    order = check_resonance_rows(str(path), data.mode, data.condition, data.frequency_hz, 1, data.quality_factor)
-    qs = None if data.quality_factor is None else data.quality_factor[order]
-    return ResonanceData(data.metadata, data.mode[order], data.condition[order], data.frequency_hz[order],
-                         quality_factor=qs)
 
 
 def _resonances(path, metadata, header, rows) -> ResonanceData:
@@ -235,29 +213,27 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
     unit = FREQUENCY_UNITS[freq_cols[0]]
     q_idx = header.index("quality_factor") if "quality_factor" in header else None
     modes, conds, freqs, qs = [], [], [], []
-    for n, cells in enumerate(rows, start=1):
-        if cells and is_comment(cells[0]):
-            raise UserError(f"{path}: data row {n}: comment lines are only allowed before the header")
+    for n, cells in rows:
         if len(cells) > len(header) and not any(cells[len(header):]):
             cells = cells[:len(header)]
         if len(cells) != len(header):
-            raise UserError(f"{path}: data row {n}: expected {len(header)} fields, got {len(cells)}")
+            raise UserError(f"{path}, line {n}: expected {len(header)} fields, got {len(cells)}")
         mode, cond, freq = (cells[i] for i in idx)
         cond = "_".join(cond.lower().replace("-", " ").split())
         cond = CONDITION_ALIASES.get(cond, cond)
         if cond not in ("free", "contact"):
-            raise UserError(f"{path}: data row {n}: condition must be 'free' or 'contact', got '{cond}'")
+            raise UserError(f"{path}, line {n}: condition must be 'free' or 'contact', got '{cond}'")
         try:
             modes.append(int(float(mode)) if float(mode).is_integer() else int(mode))
             freqs.append(float(freq) * unit)
             qs.append(float(cells[q_idx]) if q_idx is not None and cells[q_idx] else math.nan)
         except ValueError:
-            raise UserError(f"{path}: data row {n}: mode must be an integer, {freq_cols[0]} and "
+            raise UserError(f"{path}, line {n}: mode must be an integer, {freq_cols[0]} and "
                             "quality_factor numbers") from None
         if modes[-1] < 1 or not (math.isfinite(freqs[-1]) and freqs[-1] > 0):
-            raise UserError(f"{path}: data row {n}: mode >= 1 and a finite {freq_cols[0]} > 0 required")
+            raise UserError(f"{path}, line {n}: mode >= 1 and a finite {freq_cols[0]} > 0 required")
         if not (math.isnan(qs[-1]) or qs[-1] > 0.5):
-            raise UserError(f"{path}: data row {n}: quality_factor must be a number > 0.5 (inf: undamped) "
+            raise UserError(f"{path}, line {n}: quality_factor must be a number > 0.5 (inf: undamped) "
                             f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)

@@ -1,11 +1,15 @@
-"""Maps: the elastic-contact beam model fitted at every pixel of a band-excitation map, on Dask.
+"""Maps: the elastic-contact beam model (or BGlib's SHO) fitted at every pixel of a band-excitation map, on Dask.
 
 :mod:`pfmdyn.maps.fit` fits all pixels of a block at once (batched Levenberg-Marquardt);
+:mod:`pfmdyn.maps.sho` fits BGlib's simple harmonic oscillator the same way;
 :mod:`pfmdyn.maps.bias` derives the electrostatic maps when the spectra have a bias axis;
 :mod:`pfmdyn.maps.select` chooses the mechanisms (``--model auto``);
 :mod:`pfmdyn.maps.driver` reads the map, runs the blocks on a Dask scheduler and streams the
-result to Zarr, skipping blocks an interrupted run already wrote.
+result to Zarr (:mod:`pfmdyn.maps.store`), skipping blocks an interrupted run already wrote;
+:mod:`pfmdyn.maps.usid` writes the fit into a USID file in BGlib's layout;
+:func:`open_result` reads the result as an :class:`xarray.Dataset`.
 """
 from .fit import BeamMapModel, fit_block
+from .result import open_result
 
-__all__ = ["BeamMapModel", "fit_block"]
+__all__ = ["BeamMapModel", "fit_block", "open_result"]

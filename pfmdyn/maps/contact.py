@@ -15,7 +15,8 @@ import numpy as np
 from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
 from ..names import canonical, checked
-from .readers import open_root, require, scalar
+from .readers import open_root, scalar
+from .store import open_group, write_array
 
 __all__ = ["contact_map", "describe", "is_contact_map"]
 
@@ -66,10 +67,10 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
     try:        # a new map each time (nothing to resume): whatever was at out is replaced
-        group = require("zarr").open_group(out, mode="w")
+        group = open_group(out, "w")
         for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
-            arr = group.create_dataset(name, data=np.broadcast_to(value, fc.shape).astype(float))
-            arr.attrs.update(units="N/m", description=f"{name} from the contact resonance")
+            write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
+                        description=f"{name} from the contact resonance", dims=["y", "x"])
     except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
         raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
     k1 = np.asarray(result.k1_n_per_m)

@@ -25,8 +25,10 @@ from ..errors import UserError
 from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
+from .sho import band_centres, fit_sho_block, is_sho
+from .store import create_map, open_group
 
-__all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map", "read_maps"]
+__all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
 def _blocks(shape, block):
     ny, nx = shape
@@ -70,11 +72,11 @@ def exit_with_parent(parent: int, poll_s: float = 0.5) -> None:
 
 
 def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
-    zarr = _require("zarr")
     ys, xs = slice(by * block, (by + 1) * block), slice(bx * block, (bx + 1) * block)
     response = read_block(source, ys, xs)
-    result = fit_block(source.model, response, **options)      # NaN or empty pixels come back masked
-    group = zarr.open_group(out, mode="r+")
+    fit = fit_sho_block if is_sho(source.model) else fit_block
+    result = fit(source.model, response, **options)      # NaN or empty pixels come back masked
+    group = open_group(out, mode="r+")
     for name in source.model.outputs:
         group[name][ys, xs] = result[name]
     group["done"][by, bx] = 1
@@ -82,16 +84,20 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
 
 
 def _output(out, source: MapInput, block: int, selection=None, surface_potential_v=None):
-    zarr = _require("zarr")
-    group = zarr.open_group(out, mode="a")
+    group = open_group(out, mode="a")
     ny, nx = source.shape
     grid = (math.ceil(ny / block), math.ceil(nx / block))
     model = source.model
-    geometry = {name: getattr(model.lever, name) for name in ("spring_constant", "free_resonance", "length",
-                                                             "tip_height", "tip_position", "tip_mass_ratio",
-                                                             "tip_gyration_radius", "tilt")}
-    settings = {"model": model_name(model.mechanisms), **geometry, "k2_policy": model.describe_k2(),
-                "surface_potential_v": surface_potential_v}
+    sho = is_sho(model)
+    if sho:
+        settings = {"model": "sho", "band_hz": band_centres(model)}
+    else:
+        geometry = {name: getattr(model.lever, name) for name in ("spring_constant", "free_resonance", "length",
+                                                                 "tip_height", "tip_position", "tip_mass_ratio",
+                                                                 "tip_gyration_radius", "tilt")}
+        settings = {"model": model_name(model.mechanisms), **geometry, "k2_policy": model.describe_k2(),
+                    "surface_potential_v": surface_potential_v}
+    steps, dims = (model.step_shape, model.dims) if sho else ((), ("y", "x"))
     if "done" in group:     # an interrupted run: only the same map of the same model may continue it
         if group["done"].shape != grid:
             raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
@@ -100,10 +106,10 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
                 raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another --out")
     for name, (unit, text) in model.outputs.items():
         if name not in group:
-            arr = group.full(name, shape=(ny, nx), chunks=(block, block), dtype="f8", fill_value=np.nan)
-            arr.attrs.update(units=unit, description=text)
+            create_map(group, name, (ny, nx, *steps), (block, block, *steps), units=unit, description=text,
+                       dims=list(dims))
     if "done" not in group:
-        group.zeros("done", shape=grid, chunks=(1, 1), dtype="u1")
+        create_map(group, "done", grid, (1, 1), fill_value=0, dtype="u1")
     group.attrs.update(source=os.path.abspath(source.path), block=block, **settings)
     if model.bias_v is not None:
         group.attrs["bias_v"] = [float(v) for v in model.bias_v]
@@ -113,7 +119,7 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
 
 
 def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str | None = None,
-            workers: int | None = None, max_blocks: int | None = None, progress: bool = True,
+            workers: int | None = None, max_blocks: int | None = None, progress=None,
             selection: list | None = None, **options) -> dict:
     """Fit every pixel of ``source`` and write ``out_dir/maps.zarr``; returns a summary.
 
@@ -123,7 +129,9 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     ``dask.distributed`` scheduler).  Blocks flagged done in an existing output are skipped;
     ``max_blocks`` stops after that many (the next run continues).  ``selection`` (the rows
     of an automatic model choice) is stored in the Zarr attributes; ``options`` go to
-    :func:`pfmdyn.maps.fit.fit_block`.
+    :func:`pfmdyn.maps.fit.fit_block` (:func:`pfmdyn.maps.sho.fit_sho_block` for an SHO model).
+    ``progress``: None, or a callable ``progress(blocks_done, blocks_total, pixels_fitted)``
+    called before the first block and after each (the command draws its bar from it).
 
     The summary: blocks and pixels fitted, pixels per second, the model, the fraction of
     pixels explained and the median gap over the whole map.
@@ -228,8 +236,7 @@ def check_scheduler(scheduler: str | None) -> None:
 
 
 def _compute(tasks, scheduler, workers, progress, already, total):
-    """Run the block tasks, with a tqdm bar of blocks done (of the whole map) and pixels per second."""
-    from tqdm.auto import tqdm
+    """Run the block tasks, telling ``progress`` (if given) the blocks done of the whole map and the pixels fitted."""
     check_scheduler(scheduler)
     kwargs = {"scheduler": scheduler or "processes"}
     if kwargs["scheduler"] in ("processes", "threads"):
@@ -237,14 +244,14 @@ def _compute(tasks, scheduler, workers, progress, already, total):
     pool = _pool(kwargs["num_workers"]) if kwargs["scheduler"] == "processes" and tasks else None
     if pool is not None:
         kwargs.update(pool=pool, chunksize=1)   # one block per message: blocks are large
-    bar = tqdm(total=total, initial=already, unit="block", disable=not progress)
-    pixels = 0
+    pixels, blocks = 0, already
+    report = progress or (lambda *counts: None)
+    report(blocks, total, pixels)
 
     def tick(result):
-        nonlocal pixels
-        pixels += result
-        bar.update(1)
-        bar.set_postfix(pixels_per_s=f"{pixels / max(bar.format_dict['elapsed'], 1e-9):.0f}")
+        nonlocal pixels, blocks
+        pixels, blocks = pixels + result, blocks + 1
+        report(blocks, total, pixels)
 
     from concurrent.futures.process import BrokenProcessPool
     try:
@@ -272,14 +279,6 @@ def _compute(tasks, scheduler, workers, progress, already, total):
         raise UserError("a worker process was killed (a signal, or out of memory); finished blocks are kept: "
                         "rerun the same command to resume") from None
     finally:
-        bar.close()
         if pool is not None:
             pool.shutdown()
     return pixels
-
-
-def read_maps(out: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """The fitted maps of ``out`` (a ``maps.zarr`` directory) and their units."""
-    group = _require("zarr").open_group(out, mode="r")
-    maps = {name: np.asarray(group[name][...]) for name in quantities(MECHANISMS, bias=True) if name in group}
-    return maps, {name: group[name].attrs.get("units", "") for name in maps}

@@ -242,7 +242,8 @@ class BeamMapModel:
         r = f / self.f1
         beta0 = Cantilever(self.k, self.f1, self.L, tip_height=self.lever.tip_height,
                            tip_position=self.lever.tip_position,
-                           tip_mass_ratio=self.lever.tip_mass_ratio).beta(f)
+                           tip_mass_ratio=self.lever.tip_mass_ratio,
+                           tip_gyration_radius=self.lever.tip_gyration_radius).beta(f)
         # Without drag the beta factor does not depend on r: keep it one number per pixel.
         r_beta = r if "viscous" in self.mechanisms else 1.0
         beta_factor, k_factor, _, mu_factor = damping.factors(r_beta, inv_q, g, 0.0)
@@ -261,7 +262,8 @@ class BeamMapModel:
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
         alpha = self.lever.alpha
-        args = (beta, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position)
+        args = (beta, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,
+                self.lever.rho_g)
         if not jacobian:
             return tip_setback.slope(*args), None
         wanted = ("beta", "kvv", "kll", "kvl", "mu")

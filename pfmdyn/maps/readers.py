@@ -26,6 +26,7 @@ from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
 from .fit import BeamMapModel
 from .fit import bands as fit_bands
+from .sho import SHOMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
 
@@ -233,8 +234,9 @@ def scalar(raw):
     return raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
 
 
-def open_map(path: str, overrides: dict | None = None) -> MapInput:
-    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's).
+def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> MapInput:
+    """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's);
+    ``sho``: for the SHO fit (:class:`pfmdyn.maps.sho.SHOMapModel`), which needs no lever metadata.
 
     Everything a fit needs is checked here, before anything is written: a malformed file, an
     empty or non-finite axis, inconsistent shapes or non-physical metadata are one
@@ -259,9 +261,25 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         f, bias, grid, columns = _plain_axes(root, path) if usid is None else _usid_grid(root, usid, path)
         attrs = _metadata(root)
     attrs.update(overrides or {})
-    missing = [name for name in REQUIRED if name not in attrs]
+    missing = [] if sho else [name for name in REQUIRED if name not in attrs]
     if missing:
         raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
+    _check_axes(path, grid, f, bias)
+    if sho:
+        return MapInput(path, SHOMapModel(frequency_hz=f, bias_v=bias), tuple(grid), usid or "response",
+                        "usid" if usid else "plain", columns)
+    try:
+        lever = Cantilever.from_values({name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs})
+        contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
+                             if name in attrs and name != "k1"})
+    except (TypeError, ValueError, UserError) as exc:
+        raise UserError(f"{path}: {exc}") from None
+    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
+                    usid or "response", "usid" if usid else "plain", columns)
+
+
+def _check_axes(path, grid, f, bias):
+    """One-line errors for an empty map, a bad frequency axis, too narrow a band or bad biases."""
     if 0 in grid:
         raise UserError(f"{path}: the map holds no pixels (shape {tuple(grid)})")
     if f.size == 0:
@@ -278,14 +296,6 @@ def open_map(path: str, overrides: dict | None = None) -> MapInput:
         basis(bias)                                  # one-line error unless two distinct finite biases
     except UserError as exc:
         raise UserError(f"{path}: {exc}") from None
-    try:
-        lever = Cantilever.from_values({name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs})
-        contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
-                             if name in attrs and name != "k1"})
-    except (TypeError, ValueError, UserError) as exc:
-        raise UserError(f"{path}: {exc}") from None
-    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
-                    usid or "response", "usid" if usid else "plain", columns)
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:

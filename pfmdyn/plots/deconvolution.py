@@ -1,14 +1,11 @@
-"""PNG plots of a frequency-bias deconvolution (:mod:`pfmdyn.analysis.deconvolve`).
+"""Figures of a frequency-bias deconvolution (:mod:`pfmdyn.analysis.deconvolve`); the caller saves them.
 
-Figures are built with :class:`matplotlib.figure.Figure` and saved directly, without pyplot,
-so no GUI backend is ever selected and the global matplotlib state of a notebook importing
-this module is left alone (PNG files are rendered by Agg).  Frequencies are shown in kHz and
+Figures are built with :class:`matplotlib.figure.Figure`, without pyplot, so no GUI backend is
+ever selected and the global matplotlib state of a notebook importing this module is left alone.  Frequencies are shown in kHz and
 bias in volts; the error map has bias horizontal and frequency vertical, like the response
 diagrams of the paper (Figs. 13-14).
 """
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -16,30 +13,25 @@ from matplotlib.figure import Figure
 from ..analysis.deconvolve import Deconvolution
 
 
-def plot_spectra(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
+def plot_spectra(result: Deconvolution, unit: str = "a.u.") -> Figure:
     """Plot :math:`|G_{elec}|` and :math:`|d_{eff}|` against frequency on log scales (cf. Fig. 15 a,b).
 
     Parameters
     ----------
     result : Deconvolution
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
-    path : Path
-        PNG file to write.
     unit : str, optional
         Unit of the response.
 
     Returns
     -------
-    Path
-        ``path``.
+    matplotlib.figure.Figure
 
     Examples
     --------
-    >>> import tempfile
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_spectra(fit, Path(tmp) / "s.png").stat().st_size > 0
+    >>> len(plot_spectra(fit).axes) > 0
     True
     """
     fig = Figure(figsize=(7, 6), layout="constrained")
@@ -64,11 +56,10 @@ def plot_spectra(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
         ax.grid(True, which="both", alpha=0.3)
     top.legend(loc="best", fontsize="small")
     bottom.set_xlabel("frequency (kHz)")
-    fig.savefig(path, dpi=120)
-    return Path(path)
+    return fig
 
 
-def plot_nulling_bias(result: Deconvolution, path: Path) -> Path:
+def plot_nulling_bias(result: Deconvolution) -> Figure:
     """Plot the nulling bias :math:`V_{null}(\\omega)` with its standard error and :math:`V_{surf}`.
 
     The bias axis is limited to a little beyond the measured bias range and the surface
@@ -79,21 +70,16 @@ def plot_nulling_bias(result: Deconvolution, path: Path) -> Path:
     ----------
     result : Deconvolution
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
-    path : Path
-        PNG file to write.
 
     Returns
     -------
-    Path
-        ``path``.
+    matplotlib.figure.Figure
 
     Examples
     --------
-    >>> import tempfile
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_nulling_bias(fit, Path(tmp) / "v.png").stat().st_size > 0
+    >>> len(plot_nulling_bias(fit).axes) > 0
     True
     """
     fig = Figure(figsize=(7, 4), layout="constrained")
@@ -120,34 +106,28 @@ def plot_nulling_bias(result: Deconvolution, path: Path) -> Path:
     ax.set_ylabel("nulling bias $V_{null}$ (V)")
     ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncols=4, fontsize="small", frameon=False)
     ax.grid(True, alpha=0.3)
-    fig.savefig(path, dpi=120)
-    return Path(path)
+    return fig
 
 
-def plot_error_map(result: Deconvolution, path: Path, unit: str = "a.u.") -> Path:
+def plot_error_map(result: Deconvolution, unit: str = "a.u.") -> Figure:
     """Plot the error map :math:`R - (b + cV)` (in-phase and quadrature) over bias and frequency (cf. Fig. 14).
 
     Parameters
     ----------
     result : Deconvolution
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
-    path : Path
-        PNG file to write.
     unit : str, optional
         Unit of the response.
 
     Returns
     -------
-    Path
-        ``path``.
+    matplotlib.figure.Figure
 
     Examples
     --------
-    >>> import tempfile
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_error_map(fit, Path(tmp) / "e.png").stat().st_size > 0
+    >>> len(plot_error_map(fit).axes) > 0
     True
     """
     fig = Figure(figsize=(9, 5), layout="constrained")
@@ -167,8 +147,7 @@ def plot_error_map(result: Deconvolution, path: Path, unit: str = "a.u.") -> Pat
         ax.set_xlabel("tip bias (V)")
     axes[0].set_ylabel("frequency (kHz)")
     fig.colorbar(image, ax=axes, label=f"$R - (b + cV)$ ({unit})")
-    fig.savefig(path, dpi=120)
-    return Path(path)
+    return fig
 
 
 def _regular_grid(result: Deconvolution):

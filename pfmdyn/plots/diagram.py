@@ -1,7 +1,5 @@
-"""PNG maps of a frequency-bias response diagram (:mod:`pfmdyn.analysis.diagram`)."""
+"""Figures of a frequency-bias response diagram (:mod:`pfmdyn.analysis.diagram`); the caller saves them."""
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 
@@ -23,9 +21,8 @@ def _rgb_image(response: ResponseMap) -> np.ndarray:
     return np.nan_to_num(image)
 
 
-def plot_diagram(response: ResponseMap, kind: str, path, *, title: str = "",
-                 log_frequency: bool = False) -> Path:
-    """Draw one diagram of ``response`` and save it as PNG.
+def plot_diagram(response: ResponseMap, kind: str, *, title: str = "", log_frequency: bool = False):
+    """Draw one diagram of ``response``; the caller saves the figure.
 
     Parameters
     ----------
@@ -35,8 +32,6 @@ def plot_diagram(response: ResponseMap, kind: str, path, *, title: str = "",
         ``|A|`` on a log colour scale (Fig. 6 a,c,e); phase of ``A`` in degrees;
         ``|A_piezo|/(|A_piezo| + |A_nl|)`` in grey (white electromechanical, Fig. 6 b,d,f);
         the three-colour map of Fig. 7 (blue electromechanical, red local, green non-local).
-    path : str or Path
-        PNG file to write.
     title : str, optional
         Figure title.
     log_frequency : bool, optional
@@ -44,18 +39,15 @@ def plot_diagram(response: ResponseMap, kind: str, path, *, title: str = "",
 
     Returns
     -------
-    Path
-        ``path``.
+    matplotlib.figure.Figure
 
     Examples
     --------
-    >>> import tempfile
     >>> from pfmdyn.analysis.diagram import response_map, table1_cantilever
     >>> m = response_map(table1_cantilever("C"), np.linspace(1e4, 1e6, 40),
     ...                  np.linspace(-5, 5, 30), width=24e-6, local_force=14e-9)
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_diagram(m, "rgb", Path(tmp) / "d.png").stat().st_size > 0
-    True
+    >>> len(plot_diagram(m, "rgb").axes)
+    1
     """
     # Imported here so that the computational API does not pay for matplotlib.
     from matplotlib.colors import LogNorm
@@ -96,5 +88,4 @@ def plot_diagram(response: ResponseMap, kind: str, path, *, title: str = "",
                   else rf"bias $V_{{dc}}$ (V), $V_{{surf}}$ = {response.surface_potential_v:g} V")
     ax.set_ylabel("frequency (kHz)")
     ax.set_title(title, fontsize="medium")
-    fig.savefig(path, dpi=130)
-    return Path(path)
+    return fig

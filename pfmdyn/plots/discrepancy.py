@@ -1,16 +1,30 @@
-"""PNG figures of a discrepancy report (:mod:`pfmdyn.discrepancy.spectrum`)."""
+"""Figures of a discrepancy report (:mod:`pfmdyn.discrepancy.spectrum`, :mod:`.resonances`).
+
+Built on :class:`matplotlib.figure.Figure` (no pyplot, so no GUI backend is selected); the
+caller saves them.
+"""
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.figure import Figure
+
+__all__ = ["plot_resonance_report", "plot_spectrum_report"]
 
 
-def spectrum_figure(data, report):
-    """Figure of data, baseline, final model and residuals at the lowest and highest bias."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def plot_spectrum_report(data, report) -> Figure:
+    """Data, baseline, final model and residuals at the lowest and highest bias; ``report``
+    carries the baseline and final fits under ``"_fits"``.
+
+    >>> from types import SimpleNamespace
+    >>> f = np.repeat(np.linspace(1e5, 2e5, 5), 2)
+    >>> data = SimpleNamespace(frequency_hz=f, bias_v=np.tile([0.0, 1.0], 5), response=1 + f / 1e5 + 0j)
+    >>> fit = SimpleNamespace(prediction=data.response, residual=0 * data.response)
+    >>> plot_spectrum_report(data, {"_fits": (fit, fit)}).axes[1].get_xlabel()
+    'frequency (kHz)'
+    """
     base, final = report["_fits"]
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    fig = Figure(figsize=(8, 7))
+    axes = fig.subplots(2, 1, sharex=True)
     biases = np.unique(data.bias_v)[[0, -1]]
     for b in biases:
         sel = data.bias_v == b
@@ -34,21 +48,20 @@ def spectrum_figure(data, report):
     return fig
 
 
-def plot_spectrum_report(data, report, path) -> None:
-    import matplotlib.pyplot as plt
-    fig = spectrum_figure(data, report)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+def plot_resonance_report(data, report) -> Figure:
+    """Measured, baseline and final-model resonances and the residuals before and after.
 
-
-def plot_resonance_report(data, report, path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    >>> from types import SimpleNamespace
+    >>> data = SimpleNamespace(condition=["free", "contact"], mode=[1, 1])
+    >>> report = {"measured_hz": [75e3, 310e3], "baseline_hz": [75e3, 300e3], "predicted_hz": [75e3, 309e3]}
+    >>> [ax.get_ylabel() for ax in plot_resonance_report(data, report).axes]
+    ['frequency (kHz)', 'model - data (Hz)']
+    """
     labels = [f"{c} {m}" for c, m in zip(data.condition, data.mode)]
     x = np.arange(len(labels))
     measured = np.array(report["measured_hz"])
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    fig = Figure(figsize=(7, 6))
+    axes = fig.subplots(2, 1, sharex=True)
     axes[0].plot(x, measured / 1e3, "o", label="data")
     axes[0].plot(x, np.array(report["baseline_hz"]) / 1e3, "x", label="baseline")
     axes[0].plot(x, np.array(report["predicted_hz"]) / 1e3, "+", ms=12, label="final model")
@@ -59,5 +72,4 @@ def plot_resonance_report(data, report, path) -> None:
     axes[1].set_xticks(x, labels)
     for ax in axes:
         ax.legend(fontsize=7)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    return fig

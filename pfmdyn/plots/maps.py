@@ -1,10 +1,9 @@
-"""PNG maps of the per-pixel fit: one image per quantity, with a colour bar in SI units.
+"""Images of the per-pixel fit: one figure per quantity, with a colour bar in SI units.
 
-Uses ``matplotlib.figure.Figure`` directly, so no GUI backend is selected.
+Built on :class:`matplotlib.figure.Figure` (no pyplot, so no GUI backend is selected); the
+caller saves or shows the figures.
 """
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -12,29 +11,34 @@ from matplotlib.figure import Figure
 __all__ = ["plot_maps"]
 
 _SHOWN = ("k1", "k1_stderr", "k2", "quality_factor", "viscous_loss", "contact_loss", "amplitude", "phase",
-          "electrostatic", "electrostatic_phase", "nulling_bias", "gap")
+          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "r2", "gap")
 
 
-def plot_maps(maps: dict[str, np.ndarray], units: dict[str, str], out_dir: Path) -> list[Path]:
-    """Write ``out_dir/NAME.png`` for each shown quantity present in ``maps``; return the paths.
+def plot_maps(result) -> dict[str, Figure]:
+    """A figure per shown quantity of ``result`` (an :class:`xarray.Dataset` from
+    :func:`pfmdyn.maps.open_result`) that has a fitted pixel, by name.  Maps with more axes than
+    ``(y, x)`` (the SHO's biases or bands) show their first bias and band.
 
-    >>> import tempfile
-    >>> d = Path(tempfile.mkdtemp())
-    >>> [p.name for p in plot_maps({"k1": np.ones((4, 4))}, {"k1": "N/m"}, d)]
-    ['k1.png']
+    >>> import xarray
+    >>> ds = xarray.Dataset({"k1": (("y", "x"), np.ones((4, 4)), {"units": "N/m", "long_name": "k1"})})
+    >>> list(plot_maps(ds))
+    ['k1']
     """
-    paths = []
+    figures = {}
     for name in _SHOWN:
-        if name not in maps or not np.isfinite(maps[name]).any():    # e.g. k2 with one band
+        if name not in result or not np.isfinite(result[name].values).any():    # e.g. k2 with one band
             continue
-        fig = Figure(figsize=(4.2, 3.6))
+        array = result[name]
+        extra = {dim: 0 for dim in array.dims if dim not in ("y", "x")}
+        image_data = array.isel(extra).transpose("y", "x")
+        fig = Figure(figsize=(4.2, 3.6), layout="constrained")
         ax = fig.add_subplot()
-        image = ax.imshow(maps[name], origin="lower", cmap="twilight" if name.endswith("phase") else "viridis")
-        fig.colorbar(image, ax=ax, label=f"{name} ({units.get(name, '')})")
+        image = ax.imshow(image_data.values, origin="lower", cmap="twilight" if name.endswith("phase") else "viridis")
+        fig.colorbar(image, ax=ax, label=f"{name} ({array.attrs.get('units', '')})")
         ax.set_xlabel("x (pixel)")
         ax.set_ylabel("y (pixel)")
-        fig.tight_layout()
-        path = Path(out_dir) / f"{name}.png"
-        fig.savefig(path, dpi=100)
-        paths.append(path)
-    return paths
+        if extra:
+            ax.set_title(", ".join(f"{dim} {float(image_data[dim]) if dim in image_data.coords else 0:g}"
+                                   for dim in extra), fontsize=9)
+        figures[name] = fig
+    return figures

@@ -29,7 +29,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..generated import characteristic, families
+from ..generated import characteristic, families, formulas
 from .bracket import refine
 from .core import CertificationError, certify, characteristic_function
 
@@ -123,4 +123,4 @@ def crossovers(family: str, modes: int = 5, **fixed) -> tuple[np.ndarray, np.nda
 
 def frequency_ratio(family: str, z: np.ndarray, z1: float) -> np.ndarray:
     """Resonance frequency over the first free one: ``(z/z1)**2`` for flexure, ``z/z1`` for torsion."""
-    return z / z1 if family.startswith("torsion") else (z / z1) ** 2
+    return z / z1 if family.startswith("torsion") else formulas.frequency_from_beta(z, 1.0, z1)

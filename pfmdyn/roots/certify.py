@@ -24,7 +24,7 @@ from math import pi
 
 import flint
 
-__all__ = ["CertificationError", "certify", "rounded", "interval_strings", "floor_string"]
+__all__ = ["CertificationError", "certify", "zeros_in", "rounded", "interval_strings", "floor_string"]
 
 
 _ORIGIN_ORDER_CAP = 10          # series length used for the exact Taylor expansion at 0
@@ -90,13 +90,24 @@ def _sign(f, point: flint.arb) -> int:
     raise CertificationError(f"sign of the characteristic function undecided at {point.mid().str(10)}")
 
 
-def _origin_clearance(f_exact, f_ball) -> flint.arb:
-    """A point ``a > 0`` with ``(0, a]`` proven free of zeros (see step 1 of the module doc)."""
-    coeffs = f_exact(flint.fmpq_series([0, 1], prec=_ORIGIN_ORDER_CAP)).coeffs()
-    nonzero = [j for j, c in enumerate(coeffs) if c != 0]
-    if not nonzero:
-        raise CertificationError(f"characteristic function vanishes to order {_ORIGIN_ORDER_CAP} at z = 0")
-    p = nonzero[0]
+def _origin_clearance(f_exact, f_ball, known_order: int | None = None) -> flint.arb:
+    """A point ``a > 0`` with ``(0, a]`` proven free of zeros (see step 1 of the module doc).
+
+    Without ``f_exact`` the zero at 0 must be known to be of order ``known_order`` (from the
+    derivation, e.g. a slope at a clamp); its Taylor coefficients are then balls.
+    """
+    if f_exact is None:
+        p = known_order
+        coeffs = f_ball(flint.arb_series([0, 1], prec=p + 2)).coeffs()
+        if coeffs[p].contains(0):
+            raise CertificationError(f"order of the zero at 0 not proven to be {p}")
+    else:
+        coeffs = [flint.arb(c.p) / flint.arb(c.q)
+                  for c in f_exact(flint.fmpq_series([0, 1], prec=_ORIGIN_ORDER_CAP)).coeffs()]
+        nonzero = [j for j, c in enumerate(coeffs) if c != 0]
+        if not nonzero:
+            raise CertificationError(f"characteristic function vanishes to order {_ORIGIN_ORDER_CAP} at z = 0")
+        p = nonzero[0]
     order = p + 2                     # Taylor polynomial of degree p+1, remainder of order p+2
     a = flint.arb("0.5")
     for _ in range(40):
@@ -104,8 +115,7 @@ def _origin_clearance(f_exact, f_ball) -> flint.arb:
         tail = f_ball(flint.arb_series([box, 1], prec=order + 1))[order]
         poly = flint.arb(0)
         for j in range(order - 1, p - 1, -1):
-            c = coeffs[j] if j < len(coeffs) else 0
-            poly = poly * box + flint.arb(c.p) / flint.arb(c.q) if c else poly * box
+            poly = poly * box + coeffs[j] if j < len(coeffs) else poly * box
         quotient = poly + tail * box ** (order - p)         # encloses f(z)/z^p on (0, a]
         if not quotient.contains(0):
             return a
@@ -229,3 +239,30 @@ def floor_string(x: flint.arb, digits: int) -> str:
     '12.34'
     """
     return _decimal(_fraction(x.mid()), digits, "floor")
+
+
+def zeros_in(f, lower, upper, digits: int, *, zero_at_lower: int = 0, prec: int = _ISOLATION_PREC) -> list:
+    """Every zero of ``f`` in ``(lower, upper]`` as certified balls (complete, none twice).
+
+    ``zero_at_lower``: the known order of a zero at ``lower`` that is not to be reported
+    (its neighbourhood is proven free of others, as at the origin in :func:`certify`).
+    ``prec``: working bits for the isolation (raise it where ``f`` cancels heavily).
+
+    >>> [b.str(8, radius=False) for b in zeros_in(lambda s: s.sin(), 0, 7, 8, zero_at_lower=1)]
+    ['3.1415927', '6.2831853']
+    """
+    old = flint.ctx.prec
+    flint.ctx.prec = prec
+    try:
+        lo = flint.arb(str(lower))
+        start = lo
+        if zero_at_lower:
+            shifted = lambda s: f(s + lo)        # noqa: E731  (the clearance works at 0)
+            start = lo + _origin_clearance(None, shifted, zero_at_lower)
+        hi = flint.arb(str(upper))
+        if start >= hi:
+            return []
+        brackets = _find_roots(f, start, hi)
+        return [_refine(f, flint.arb((a + b) / 2, (b - a) / 2), digits) for a, b in brackets]
+    finally:
+        flint.ctx.prec = old

@@ -1,6 +1,6 @@
 """Every cross-reference of the paper's text checked against its target.
 
-References are extracted by :mod:`derivations.paper.text` (ids ``xref.<section>.<n>``, in order
+References are extracted by :mod:`pfmdyn.audit.text` (ids ``xref.<section>.<n>``, in order
 of appearance within a section; symbols ``symbol.<section>.<n>`` by first use; the numbering
 of sections and equations ``structure.*``).  A reference is checked against what its target
 contains:
@@ -26,8 +26,10 @@ import re
 from collections import Counter
 from functools import lru_cache
 
-from ..paper import text as T
-from .core import ERRATUM, HOLDS, UNDECIDABLE, claim
+from pfmdyn.derivations import families as registry
+from . import text as T
+from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim
+from pfmdyn.derivations.evidence import Evidence, Tex, join, say
 
 CHAPTER = "audit"
 
@@ -46,7 +48,8 @@ def check_figure(ref: T.Reference):
     for fig, panels in ref.targets:
         cap = caps.get(fig)
         if cap is None:
-            return ERRATUM, f"no caption for Fig. {fig} (captions exist for {sorted(caps)})", ""
+            return Evidence(ERRATUM, f"no caption for Fig. {fig} (captions exist for {sorted(caps)})",
+                            correction="a figure that exists")
         missing = [p for p in panels if p not in cap.panels]
         if missing:
             listed = ",".join(cap.panels) or "none"
@@ -76,8 +79,8 @@ def check_figure(ref: T.Reference):
         if panels:
             notes.append("caption: " + "; ".join(f"{p}: {_describe(cap, p)}" for p in panels))
     if problems:
-        return ERRATUM, "; ".join(problems), "; ".join(dict.fromkeys(fixes))
-    return HOLDS, "; ".join(notes) or "the figure exists; the sentence names no property the caption describes", ""
+        return Evidence(ERRATUM, "; ".join(problems), correction="; ".join(dict.fromkeys(fixes)))
+    return Evidence(HOLDS, "; ".join(notes) or "the figure exists; the sentence names no property the caption describes")
 
 
 # --- sections ------------------------------------------------------------------------------------
@@ -152,7 +155,7 @@ def check_section(ref: T.Reference):
     for target in ref.targets:
         sec = T.section(target)
         if sec is None:
-            return ERRATUM, f"there is no Section {target}", "a section that exists"
+            return Evidence(ERRATUM, f"there is no Section {target}", correction="a section that exists")
         clause = _with_antecedent(ref, _clause(ref.sentence, ref, target))
         words = [w for w in _words(clause)]
         own = next((s for s in secs if s.tag == ref.section), None)
@@ -162,12 +165,12 @@ def check_section(ref: T.Reference):
                                           and s.tag not in ("abstract", "I", "conclusions"))] + [sec]
         scores = {s.number: _similarity(words, s.tag) for s in candidates}
         best = max(scores, key=scores.get)
-        why = f"Section {target} ('{sec.title}'): wording similarity {scores[target]:.2f}"
+        why = say(f"Section {target} ('", T.quote(sec.title), f"'): wording similarity {scores[target]:.2f}")
         if best != target:
-            why += f"; closest section {best} ('{T.section(best).title}'): {scores[best]:.2f}"
+            why = say(why, f"; closest section {best} ('", T.quote(T.section(best).title), f"'): {scores[best]:.2f}")
         if re.search(r"\b(?:given|derived|described by)\s+in\b|\bis given in\b", clause) and "$$" not in sec.body:
             out_verdict = ERRATUM
-            why += f"; the sentence says the result is given there, but Section {target} displays no equation"
+            why = say(why, f"; the sentence says the result is given there, but Section {target} displays no equation")
             # The drives the sentence lists must all appear in the section's displayed equations.
             needed = {tok for word, tok in (("electromechanical", "d_1"), ("non-local", "q_0"),
                                             ("local", "f_0")) if word in clause}
@@ -177,15 +180,15 @@ def check_section(ref: T.Reference):
             fixes.append(f"Section {with_eqs[0]}" if with_eqs else "a section with equations")
         elif re.search(r"experimental", clause) and not _cites_data(sec.tag):
             out_verdict = ERRATUM
-            why += f"; the sentence promises experimental results, but Section {target} cites no figure"
+            why = say(why, f"; the sentence promises experimental results, but Section {target} cites no figure")
             with_figs = [n for n in sorted(scores, key=scores.get, reverse=True) if _cites_data(T.section(n).tag)]
             fixes.append(f"Section {with_figs[0]}" if with_figs else "a section with results")
         elif best != target and scores[best] >= MIN_SIMILARITY and scores[target] < 0.5 * scores[best]:
             out_verdict = ERRATUM
-            why += f"; the sentence fits Section {best} better than the one cited"
+            why = say(why, f"; the sentence fits Section {best} better than the one cited")
             fixes.append(f"Section {best}")
         notes.append(why)
-    return out_verdict, "; ".join(notes), "; ".join(fixes)
+    return Evidence(out_verdict, join(notes), correction="; ".join(fixes))
 
 
 # --- tables --------------------------------------------------------------------------------------
@@ -198,7 +201,7 @@ def check_table(ref: T.Reference):
     number = str(T.ROMAN.get(number, number))
     sec = T.section(f"table{number}")
     if sec is None:
-        return ERRATUM, f"there is no Table {number}", "a table that exists"
+        return Evidence(ERRATUM, f"there is no Table {number}", correction="a table that exists")
     rows = [line for line in re.findall(r"\|\s*([A-Z])\s*\|", sec.body)]
     m = re.search(r"\b(" + "|".join(_NUMBER_WORDS) + r")\s+(\w+)", ref.sentence)
     evidence = f"Table {number} exists (rows {', '.join(rows)})"
@@ -207,9 +210,10 @@ def check_table(ref: T.Reference):
         evidence += f"; cited as {ref.text} (Roman numeral), headed Table {number}: the same number"
     if m and m.group(2).rstrip("s")[:6] in sec.body.lower():
         if _NUMBER_WORDS[m.group(1)] != len(rows):
-            return ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}", f"{len(rows)} {m.group(2)}"
+            return Evidence(ERRATUM, f"{evidence}; the sentence counts {m.group(1)} {m.group(2)}",
+                            correction=f"{len(rows)} {m.group(2)}")
         evidence += f"; the sentence counts {m.group(1)} {m.group(2)}, the table has {len(rows)} rows"
-    return HOLDS, evidence, ""
+    return Evidence(HOLDS, evidence)
 
 
 # --- equations -------------------------------------------------------------------------------------
@@ -217,11 +221,30 @@ def check_table(ref: T.Reference):
 _TRIG = re.compile(r"\\(?:sin|cos|tan|sinh|cosh)")
 
 
+def _number(label: str) -> int:
+    return int(re.match(r"\d+", label).group())
+
+
+@lru_cache(maxsize=1)
+def _solved() -> dict[int, tuple[str, range]]:
+    """Equation number -> (the derivation that solves it, the numbers of its family's equations),
+    from the family registry (``derivations/families.py``: ``equations`` such as 'Eqs. 27-28')."""
+    out = {}
+    for fam in registry.FAMILIES:
+        m = re.fullmatch(r"Eqs?\. (\d+)(?:-(\d+))?", fam.equations)
+        if m:
+            numbers = range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1)
+            out.update({n: (fam.derivation, numbers) for n in numbers})
+    return out
+
+
 @lru_cache(maxsize=1)
 def _families() -> dict[str, str]:
-    """Equation label -> the tip boundary condition it was solved with (from the printed BCs)."""
+    """Equation label -> the tip boundary condition it was solved with: the derivation the family
+    registry names for its number, else the last boundary condition printed before it in its
+    section (read from the printed conditions)."""
     family, out, section = "", {}, None
-    for label in sorted(T.equations(), key=lambda s: (int(re.match(r"\d+", s).group()), s)):
+    for label in sorted(T.equations(), key=lambda s: (_number(s), s)):
         tex = T.equations()[label]
         if T.equation_section(label) != section:       # a family never carries over into another section
             family, section = "", T.equation_section(label)
@@ -229,27 +252,27 @@ def _families() -> dict[str, str]:
             out[label] = "boundary condition"
         elif re.search(r"u_0'*\(L\)", tex) and "=" in tex:
             if "u_0(L) = 0" in tex:
-                family = "supported"
+                family = "pinned"
             elif "k_1" in tex or "k_2" in tex:
-                family = "elastic"
+                family = "elastic_contact"
             elif "f_l" in tex:
-                family = "sliding friction"
+                family = "sliding_friction"
             elif "f_0" in tex:
-                family = "free"
+                family = "free_end"
             out[label] = "boundary condition"
-        elif label in ("30", "31", "32", "33", "34", "35"):
-            out[label] = "torsion"
         else:
-            out[label] = family if label[:2] not in ("27", "28", "29") else "indentation"
+            out[label] = _solved().get(_number(label), (family,))[0]
     return out
 
 
 def _content(label: str) -> str:
-    """The printed equation and the ones displayed under its 'where' (Eq. 5 with Eqs. 6-10)."""
+    """The printed equation and, for the first equation of a family in the registry, the ones
+    displayed under its 'where' (Eq. 5 with Eqs. 6-10)."""
     eqs = T.equations()
     tex = eqs.get(label, "")
-    if label == "5" or re.search(r"\\frac\{A_v", tex):
-        tex += " ".join(eqs.get(str(i), "") for i in range(6, 11))
+    numbers = _solved().get(_number(label), ("", range(0)))[1]
+    if label == str(numbers.start):
+        tex += " ".join(eqs.get(str(i), "") for i in numbers[1:])
     return tex
 
 
@@ -284,63 +307,69 @@ def check_equation(ref: T.Reference):
     for target in ref.targets:
         labels = _labels(target)
         if not labels:
-            return ERRATUM, f"no equation is printed with label ({target})", "an equation that exists"
+            return Evidence(ERRATUM, f"no equation is printed with label ({target})", correction="an equation that exists")
         tex = " ".join(_content(lab) for lab in labels)
         family = _families().get(labels[0], "")
         for sym in re.findall(r"\$([^$]*?)\\to", re.sub(r"\$\$.*?\$\$", " ", _before(ref))):
             sym = sym.strip().split("=")[-1].strip()
             if sym and sym not in tex:
-                problems.append(f"the sentence takes {sym} to a limit, but Eq. ({target}) has no {sym}")
-                fixes.append(f"an equation containing {sym}")
+                problems.append(say("the sentence takes ", Tex(sym), f" to a limit, but Eq. ({target}) has no ", Tex(sym)))
+                fixes.append(say("an equation containing ", Tex(sym)))
         free_ref = _owns_phrase(ref, r"free cantilever")
-        if free_ref and family not in ("free", "elastic", ""):
-            free = [lab for lab, fam in _families().items() if fam == "free" and lab[:2] != "21"]
-            fixes.append(f"Eq. ({', '.join(free)})")
-            problems.append(f"the sentence needs a free cantilever, but Eq. ({target}) is solved with the "
-                            f"{family} tip conditions (free-end solution: Eq. ({', '.join(free)}))")
+        if free_ref and family not in ("free_end", "elastic_contact", ""):
+            free = [lab for lab, fam in _families().items() if fam == "free_end"]
+            fixes.append(say(f"Eq. ({', '.join(free)})"))
+            problems.append(say(f"the sentence needs a free cantilever, but Eq. ({target}) is solved with the "
+                            f"{family.replace('_', ' ')} tip conditions (free-end solution: Eq. ({', '.join(free)}))"))
         elif free_ref:
-            notes.append(f"Eq. ({target}) is solved with {family or 'its own'} tip conditions "
-                         + ("(the free end is its k1 = k2 = 0 case)" if family == "elastic" else ""))
+            notes.append(say(f"Eq. ({target}) is solved with {family.replace('_', ' ') or 'its own'} tip conditions ",
+                             ("(the free end is its ", Tex("k_1 = k_2 = 0"), " case)") if family == "elastic_contact" else ""))
         if re.search(r"clamped end", sentence) and family == "boundary condition" and "(0)" not in tex:
-            problems.append(f"Eq. ({target}) is not a condition at the clamped end x = 0")
-            fixes.append("Eq. (3a,b)")
+            problems.append(say(f"Eq. ({target}) is not a condition at the clamped end ", Tex("x = 0")))
+            fixes.append(say("Eq. (3a,b)"))
         if re.search(r"resonan|roots|denominator", sentence) and family != "boundary condition":
             if not _TRIG.search(tex):
-                problems.append(f"the sentence needs resonances, but Eq. ({target}) has no frequency-dependent denominator")
-                fixes.append("an equation with a resonant denominator")
+                problems.append(say(f"the sentence needs resonances, but Eq. ({target}) has no frequency-dependent denominator"))
+                fixes.append(say("an equation with a resonant denominator"))
             else:
-                notes.append(f"Eq. ({target}) has a trigonometric (resonant) denominator")
+                notes.append(say(f"Eq. ({target}) has a trigonometric (resonant) denominator"))
         if re.search(r"potential difference|\\Delta V|bias", sentence) and family not in ("boundary condition",):
             zeroed = set(re.findall(r"\$(f|f_0|q_0|d_1)\s*=\s*0\$", sentence))
             drives = {d for d in ("f_0", "q_0") if d in tex} - {("f_0" if z == "f" else z) for z in zeroed}
             if re.search(r"\\Delta V|potential difference", sentence) and not drives and re.search(r"calculated|according", sentence):
                 with_q0 = [lab for lab in T.equations() if "q_0" in _content(lab) and _TRIG.search(_content(lab))
                            and _families().get(lab) not in ("boundary condition",)]
-                fixes.append(f"an equation with the distributed load q0, e.g. Eq. ({with_q0[0]})" if with_q0 else
-                             "an equation with the distributed load q0")
-                problems.append(f"the sentence computes a bias dependence from Eq. ({target}), whose electrostatic "
-                                f"drives {sorted(d for d in ('f_0', 'q_0') if d in tex) or 'none'} the sentence sets "
-                                f"to zero or lacks (no q_0: no non-local term)")
+                fixes.append(say("an equation with the distributed load ", Tex("q_0"),
+                                 f", e.g. Eq. ({with_q0[0]})" if with_q0 else ""))
+                present = [Tex(d) for d in ("f_0", "q_0") if d in tex]
+                problems.append(say(f"the sentence computes a bias dependence from Eq. ({target}), whose electrostatic "
+                                    "drives ", join([(t,) for t in present], ", ") or "none", " the sentence sets "
+                                    "to zero or lacks (no ", Tex("q_0"), ": no non-local term)"))
         purely = re.findall(r"purely (electromechanical|electrostatic)", sentence)
         if len(set(purely)) == 1 and family not in ("boundary condition",):
             drives = {d for d in ("d_1", "f_0", "q_0") if d in tex}
             want = {"electromechanical": {"d_1"}, "electrostatic": {"f_0", "q_0"}}[purely[0]]
             if drives and not drives <= want:
-                problems.append(f"Eq. ({target}) has drives {sorted(drives)}, not only {purely[0]} ones")
-                fixes.append(f"Eq. ({target}) with the other drives set to zero")
+                problems.append(say(f"Eq. ({target}) has drives ", _drives(drives), f", not only {purely[0]} ones"))
+                fixes.append(say(f"Eq. ({target}) with the other drives set to zero"))
             else:
-                notes.append(f"Eq. ({target}) drives: {sorted(drives)} ({purely[0]})")
+                notes.append(say(f"Eq. ({target}) drives: ", _drives(drives), f" ({purely[0]})"))
         if re.search(r"boundary condition", sentence) and family == "boundary condition":
             for term in re.findall(r"u_0'+\(L\)", sentence):
                 if term not in tex:
-                    problems.append(f"Eq. ({target}) does not contain {term}")
-                    fixes.append(f"the boundary condition on {term}")
+                    problems.append(say(f"Eq. ({target}) does not contain ", Tex(term)))
+                    fixes.append(say("the boundary condition on ", Tex(term)))
             terms = sorted(set(re.findall(r"u_0'*\([L0]\)", tex)))
-            notes.append(f"Eq. ({target}) is a boundary condition on {', '.join(terms)}")
-        notes.append(f"Eq. ({target}) printed in Section {T.equation_section(labels[0])}")
+            notes.append(say(f"Eq. ({target}) is a boundary condition on ", _drives(terms)))
+        notes.append(say(f"Eq. ({target}) printed in Section {T.equation_section(labels[0])}"))
     if problems:
-        return ERRATUM, "; ".join(problems), "; ".join(dict.fromkeys(fixes))
-    return HOLDS, "; ".join(dict.fromkeys(notes)), ""
+        return Evidence(ERRATUM, join(problems), correction=join(dict.fromkeys(fixes)))
+    return Evidence(HOLDS, join(dict.fromkeys(notes)))
+
+
+def _drives(names) -> tuple:
+    """LaTeX names (``d_1``, ``u_0(L)``) as formulas, sorted, separated by commas."""
+    return join([(Tex(n),) for n in sorted(names)], ", ")
 
 
 # --- symbols -----------------------------------------------------------------------------------------
@@ -425,13 +454,18 @@ def _condition_before(symbol: str) -> str | None:
     return None
 
 
-def _quote_definition(symbol: str, rhs: str) -> str:
+def _quote_definition(symbol: str, rhs: str) -> tuple:
     """A definition for the evidence: the equation number of a displayed one, else the formula."""
     tag = re.search(r"\\tag\{([^}]*)\}|\\quad\s*\((\d+[a-f]?)\)", rhs)
     if tag:
-        return f"${symbol}$ of Eq. ({tag.group(1) or tag.group(2)})"
+        return say(Tex(symbol), f" of Eq. ({tag.group(1) or tag.group(2)})")
     rhs = rhs.strip()
-    return f"${symbol} = {rhs}$" if len(rhs) <= 80 else f"${symbol}$ = (a {len(rhs)}-character formula)"
+    return say(Tex(f"{symbol} = {rhs}")) if len(rhs) <= 80 else say(Tex(symbol), f" = (a {len(rhs)}-character formula)")
+
+
+def _clash_reason(why: str) -> tuple:
+    """'G_{loc} vs G_{nl}' as formulas."""
+    return join([(Tex(x),) for x in why.split(" vs ")], " vs ")
 
 
 def check_symbol(symbol: str):
@@ -443,33 +477,38 @@ def check_symbol(symbol: str):
         base = _split(symbol)[0]
         subs = {re.sub(r"[^a-z]", "", x.split("_")[1]) for x in why.split(" vs ") if "_" in x}
         alt = [o for o in T.symbols() if _split(o)[0] == base and _split(o)[1] in subs and o != symbol]
-        fix = f"${alt[0]}$ in the definition with {why}" if alt else "a distinct symbol for each meaning"
-        return (ERRATUM, f"${symbol}$ is defined with different meanings: " + " and ".join(
-            _quote_definition(symbol, d) for d in (a, b)) + f" ({why})", fix)
+        fix = say(Tex(alt[0]), " in the definition with ", _clash_reason(why)) if alt else "a distinct symbol for each meaning"
+        return Evidence(ERRATUM, say(Tex(symbol), " is defined with different meanings: ",
+                                     join([_quote_definition(symbol, d) for d in (a, b)], " and "),
+                                     " (", _clash_reason(why), ")"), correction=fix)
     if use.uses == 1 and use.definition:
         base = _split(symbol)[0]
         mine = [d.strip() for d in defs]
         other = [d for d in _definitions(base) if any(m and m in d for m in mine)]
         if other:
-            return (ERRATUM, f"${symbol} = {mine[0]}$ is the definition of ${base}$ (${base} = {other[0].strip()}$) "
-                    f"under another name, used once; the formula that follows uses ${base}$", f"${base}$")
+            return Evidence(ERRATUM, say(Tex(f"{symbol} = {mine[0]}"), " is the definition of ", Tex(base), " (",
+                                         Tex(f"{base} = {other[0].strip()}"), ") under another name, used once; the "
+                                         "formula that follows uses ", Tex(base)), correction=Tex(base))
     near = _neighbours(symbol) if use.uses == 1 and not use.definition else []
     # The likeliest intended symbol: one used in the same section, then one whose subscript the misprint contains.
     near.sort(key=lambda n: (T.symbols()[n].section != use.section and not _used_in(n, use.section),
                              _split(n)[1] not in _split(symbol)[1]))
     if near:
-        return (ERRATUM, f"${symbol}$ is used once (Section {use.section}) and never defined; it is one edit away "
-                f"from {', '.join('$' + n + '$ (used ' + str(T.symbols()[n].uses) + ' times)' for n in near)}",
-                f"${near[0]}$")
+        return Evidence(ERRATUM, say(Tex(symbol), f" is used once (Section {use.section}) and never defined; it is one "
+                                     "edit away from ", join([(Tex(n), f" (used {T.symbols()[n].uses} times)") for n in near],
+                                                             ", ")), correction=Tex(near[0]))
     if use.definition:
-        return HOLDS, f"defined: \"{T.clip(use.definition, 160)}\"", ""
+        return Evidence(HOLDS, say("defined: \"", T.quote(T.clip(use.definition, 160)), "\""))
     condition = _condition_before(symbol) if use.uses == 1 else None
     if condition:
-        return (ERRATUM, f"${symbol}$ is used once and never defined; the sentence before states the condition "
-                f"on ${_split(symbol)[0]}$: \"{T.clip(condition, 120)}\"", f"${_split(symbol)[0]}$")
+        return Evidence(ERRATUM, say(Tex(symbol), " is used once and never defined; the sentence before states the "
+                                     "condition on ", Tex(_split(symbol)[0]), ": \"", T.quote(T.clip(condition, 120)), "\""),
+                        correction=Tex(_split(symbol)[0]))
     if use.uses >= 2:
-        return HOLDS, f"used {use.uses} times with one meaning, first in Section {use.section}; not a variant of another symbol", ""
-    return UNDECIDABLE, f"used once (Section {use.section}) without an explicit definition; no symbol it could be a misprint of", ""
+        return Evidence(HOLDS, f"used {use.uses} times with one meaning, first in Section {use.section}; not a variant "
+                               "of another symbol")
+    return Evidence(UNDECIDABLE, f"used once (Section {use.section}) without an explicit definition; no symbol it "
+                                 "could be a misprint of")
 
 
 # --- numbering --------------------------------------------------------------------------------------
@@ -481,9 +520,9 @@ def check_section_numbering():
     if numbers != expected:
         dup = [n for n, c in Counter(numbers).items() if c > 1]
         titles = [s.title for s in T.text_sections() if s.number in dup]
-        return ERRATUM, f"{evidence}; {', '.join(dup)} is used for {' and '.join(titles)}", \
-            f"{', '.join(expected)} (the last, '{titles[-1]}', is Section {expected[-1]})"
-    return HOLDS, evidence, ""
+        return Evidence(ERRATUM, f"{evidence}; {', '.join(dup)} is used for {' and '.join(titles)}",
+                        correction=f"{', '.join(expected)} (the last, '{titles[-1]}', is Section {expected[-1]})")
+    return Evidence(HOLDS, evidence)
 
 
 def check_equation_numbering():
@@ -505,8 +544,8 @@ def check_equation_numbering():
             later = [lab for lab in labels if re.fullmatch(rf"{n}[a-f]", lab) and lab[-1] > letter]
             if later:
                 relabel.append(f"({later[0]}) should be ({gap})")
-        return ERRATUM, evidence, "; ".join(relabel) or f"number the equations without gaps"
-    return HOLDS, evidence, ""
+        return Evidence(ERRATUM, evidence, correction="; ".join(relabel) or "number the equations without gaps")
+    return Evidence(HOLDS, evidence)
 
 
 def check_caption_panels(number: int):
@@ -528,8 +567,10 @@ def check_caption_panels(number: int):
             before = chr(ord(m.group(1)) - 1)
             if before in missing:
                 fixes.append(f"({m.group(1)}-{m.group(2)}) should read ({before}-{m.group(2)})")
-        return ERRATUM, f"caption of Fig. {number}: " + "; ".join(problems), "; ".join(fixes) or "describe every listed panel"
-    return HOLDS, f"caption of Fig. {number}: panels {','.join(cap.panels) or '(one)'}; every described property covers its panels without gaps", ""
+        return Evidence(ERRATUM, f"caption of Fig. {number}: " + "; ".join(problems),
+                        correction="; ".join(fixes) or "describe every listed panel")
+    return Evidence(HOLDS, f"caption of Fig. {number}: panels {','.join(cap.panels) or '(one)'}; every described "
+                           "property covers its panels without gaps")
 
 
 _UNIT = r"(?:[kMG]?Hz|m?V|[nμpm]m|pm/V|N/m|%|°|Å)"
@@ -546,9 +587,9 @@ def check_units():
     if bare:
         units = Counter(re.findall(r"(?:±|\\pm)\s*[\d.]+\s*\$?\s*(" + _UNIT + ")", " ".join(s.body for s in T.text_sections())))
         unit = units.most_common(1)[0][0] if units else "a unit"
-        return ERRATUM, "values with an uncertainty but no unit: " + "; ".join(bare), \
-            f"add the unit ({unit}, the unit of the other values with uncertainties)"
-    return HOLDS, "every value x ± y in the text carries a unit", ""
+        return Evidence(ERRATUM, "values with an uncertainty but no unit: " + "; ".join(bare),
+                        correction=f"add the unit ({unit}, the unit of the other values with uncertainties)")
+    return Evidence(HOLDS, say("every value ", Tex(r"x \pm y", "x ± y"), " in the text carries a unit"))
 
 
 def check_citations():
@@ -568,9 +609,10 @@ def check_citations():
     evidence = (f"{len(cites)} citations of references 1-{max(first)}; first citations in order: "
                 f"{'yes' if not out_of_order else out_of_order}; authors found in their entries: {named or 'none checkable'}")
     if out_of_order or wrong:
-        return ERRATUM, evidence + (f"; authors not in the cited entry: {wrong}" if wrong else ""), \
-            "number the references in order of first citation" if out_of_order else "cite the entry of that author"
-    return HOLDS, evidence, ""
+        return Evidence(ERRATUM, evidence + (f"; authors not in the cited entry: {wrong}" if wrong else ""),
+                        correction="number the references in order of first citation" if out_of_order
+                        else "cite the entry of that author")
+    return Evidence(HOLDS, evidence)
 
 
 # --- registration ----------------------------------------------------------------------------------
@@ -595,20 +637,20 @@ def register() -> int:
     for ref in T.references():
         counters[ref.section] += 1
         cid = f"xref.{ref.section}.{counters[ref.section]}"
-        claim(cid, f"{_where(ref.section)}, {ref.text}", f"{ref.kind} reference: {T.clip(ref.sentence, 200)}",
+        claim(cid, f"{_where(ref.section)}, {ref.text}", (f"{ref.kind} reference: ", T.quote(T.clip(ref.sentence, 200))),
               chapter=CHAPTER, kind="cross-reference")(lambda r=ref: check_reference(r))
         n += 1
     sym_counters: Counter = Counter()
     for sym, use in T.symbols().items():
         sym_counters[use.section] += 1
-        claim(f"symbol.{use.section}.{sym_counters[use.section]}", f"{_where(use.section)}, ${sym}$",
-              f"symbol ${sym}$ ({use.uses} uses)", chapter=CHAPTER, kind="symbol")(lambda s=sym: check_symbol(s))
+        claim(f"symbol.{use.section}.{sym_counters[use.section]}", (f"{_where(use.section)}, ", Tex(sym)),
+              ("symbol ", Tex(sym), f" ({use.uses} uses)"), chapter=CHAPTER, kind="symbol")(lambda s=sym: check_symbol(s))
         n += 1
     claim("structure.sections", "section headings", "section numbers I-VI, Conclusions",
           chapter=CHAPTER, kind="cross-reference")(check_section_numbering)
     claim("structure.citations", "reference list", "references numbered by first citation; named authors",
           chapter=CHAPTER, kind="cross-reference")(check_citations)
-    claim("structure.units", "values with uncertainties", "x ± y carries a unit",
+    claim("structure.units", "values with uncertainties", (Tex(r"x \pm y", "x ± y"), " carries a unit"),
           chapter=CHAPTER, kind="cross-reference")(check_units)
     claim("structure.equations", "equation labels", "equations (1)-(41) with sub-labels",
           chapter=CHAPTER, kind="cross-reference")(check_equation_numbering)
@@ -616,6 +658,3 @@ def register() -> int:
         claim(f"structure.caption{number}", f"caption of Fig. {number}", "panel groups of the caption",
               chapter=CHAPTER, kind="cross-reference")(lambda k=number: check_caption_panels(k))
     return n + 4 + len(T.captions())
-
-
-register()

@@ -9,8 +9,9 @@ This module finds, in order of appearance:
 - every subscripted or decorated symbol and where (if anywhere) it is defined;
 - the panel lists of the figure captions, with the words that describe each panel.
 
-Nothing here decides whether a statement is right; :mod:`derivations.checks.xref` and
-:mod:`derivations.checks.text` do.
+Nothing here decides whether a statement is right; :mod:`pfmdyn.audit.xref` and
+:mod:`pfmdyn.audit.statements` do.  :func:`quote` turns a passage into a sentence of evidence
+(its ``$...$`` formulas typeset, not shown as LaTeX source).
 """
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ import re
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
+
+from pfmdyn.derivations.evidence import Tex, say
 
 PAPER_ENV = "PFMDYN_PAPER"
 PAPER_NAME = "jesse2006_dynamic_pfm.md"
@@ -147,6 +150,19 @@ def section(number: str) -> Section | None:
 def text_sections() -> list[Section]:
     """Sections of running text (abstract to conclusions; not the table or the captions)."""
     return [s for s in sections() if s.number not in ("table1", "captions")]
+
+
+def quote(passage: str) -> tuple:
+    """A passage of the transcription as a sentence of evidence: words, and its ``$...$`` and
+    ``$$...$$`` formulas as LaTeX parts (an unpaired ``$`` is kept as a word).
+
+    >>> quote("so $k_1$ here")
+    ('so ', Tex(tex='k_1', plain=''), ' here')
+    """
+    pieces = passage.replace("$$", "$").split("$")
+    if len(pieces) % 2 == 0:                 # unpaired: the last '$' starts no formula
+        pieces[-2:] = [pieces[-2] + "$" + pieces[-1]]
+    return say(*(Tex(p.strip()) if i % 2 else p for i, p in enumerate(pieces) if p))
 
 
 def clip(text: str, n: int) -> str:

@@ -19,10 +19,12 @@ from typing import Callable
 import mpmath as mp
 import sympy as sp
 
-from ..paper import printed as P
-from ..paper import text as T
+from pfmdyn.derivations.checks.core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
+from pfmdyn.derivations.evidence import Evidence, Math, Tex, join, listing, say
+from pfmdyn.derivations.paper import printed as P
+from . import text as T
 from . import wording as W
-from .core import ERRATUM, HOLDS, UNDECIDABLE, claim, result
+from .restated import same_as
 
 CHAPTER = "audit"
 
@@ -34,45 +36,35 @@ TRIGGERS = re.compile(
     r"inversely|does not change|changes by 180", re.I)
 
 
-def _registry(claim_id: str):
-    return result(claim_id)
-
-
-def same_as(*claim_ids: str) -> Callable:
-    """Decide a statement by registry claims that state the same thing."""
-    def decide():
-        verdicts = [_registry(i) for i in claim_ids]
-        worst = next((v for v in verdicts if v.verdict != HOLDS), verdicts[0])
-        return worst.verdict, "same statement as " + "; ".join(
-            f"{v.id} ({v.verdict}): {T.clip(v.evidence, 200)}" for v in verdicts), worst.correct
-    return decide
-
-
 # --- deciders computed here -----------------------------------------------------------------------
 
+K2_ZERO, K2_INF = Tex(r"k_2 \to 0", "k2 -> 0"), Tex(r"k_2 \to \infty", "k2 -> oo")
+
+
 def _sections_lateral_stiffness():
-    from .. import elastic_contact, indentation
-    from ..beam import d1, k2
-    from ..limits import param_limit
-    from .core import compare
+    from pfmdyn.derivations import elastic_contact, indentation
+    from pfmdyn.derivations.beam import d1, k2
+    from pfmdyn.derivations.checks.core import compare
+    from pfmdyn.derivations.limits import param_limit
     nano = indentation.solve().theta(d1)
     general = elastic_contact.solve().theta(d1)
     zero = compare(param_limit(general, k2, 0), nano).is_(1)
     infinite_expr = param_limit(general, k2, sp.oo)
     infinite = infinite_expr != 0 and compare(infinite_expr, nano).is_(1)
-    evidence = (f"the derived nanoindentation slope (Section III.5) per unit d1 equals the general solution at k2 -> 0: "
-                f"{zero}; at k2 -> oo: {infinite} (k2 -> oo gives {sp.sstr(sp.factor(infinite_expr))[:80]}); "
-                f"Section III.5 neglects the lateral coupling (its own words: 'k2 neglected', stiff cantilever)")
+    evidence = say("the derived nanoindentation slope (Section III.5) per unit ", Tex("d_1", "d1"),
+                   " equals the general solution at ", K2_ZERO, f": {zero}; at ", K2_INF, f": {infinite} (", K2_INF,
+                   " gives ", sp.factor(infinite_expr), "); Section III.5 neglects the lateral coupling (its own words: '",
+                   Tex("k_2", "k2"), " neglected', stiff cantilever)")
     if zero and not infinite:
-        return ERRATUM, evidence, ("Sections III.4 and III.5 both have zero lateral stiffness (k2 -> 0); "
-                                   "III.5 adds k1 finite with the distributed force ignored")
-    return HOLDS, evidence, ""
+        return Evidence(ERRATUM, evidence, correction=say(
+            "Sections III.4 and III.5 both have zero lateral stiffness (", K2_ZERO, "); III.5 adds ", Tex("k_1", "k1"),
+            " finite with the distributed force ignored"))
+    return Evidence(HOLDS, evidence)
 
 
 def _torsion_crossover():
-    from .. import torsion as Tor
-    from ..beam import H, L
-    den = sp.numer(sp.together(Tor.solve_elastic().tip_twist))
+    from pfmdyn.derivations import torsion as Tor
+    from pfmdyn.derivations.beam import H, L
     den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
     K, x = sp.symbols("K x", positive=True)
     # Dimensionless: xi L = x, H k2t L = K (the normalised contact stiffness of Fig. 5c).
@@ -83,17 +75,21 @@ def _torsion_crossover():
         Kn = sp.solve(sp.Eq(scaled.subs(x, mid), 0), K)
         rows.append(sp.nsimplify(Kn[0]) if Kn else None)
     increasing = all(a is not None and b is not None and b > a for a, b in zip(rows, rows[1:]))
-    evidence = (f"derived torsional characteristic function (Eq. 33 denominator) {sp.sstr(scaled)} = 0 with x = xi L, "
-                f"K = H k2t L: mode n moves from the free root (n - 1/2) pi to the pinned root n pi as K grows; it is "
-                f"halfway at K = {', '.join(sp.sstr(r) for r in rows)} for n = 1, 2, 3")
-    return (ERRATUM, evidence, "the cross-over stiffness increases with mode number, K_n = (n - 1/4) pi") \
-        if increasing else (HOLDS, evidence, "")
+    n = sp.Symbol("n")
+    evidence = say("derived torsional characteristic function (Eq. 33 denominator) ", Math(0, scaled), " with ",
+                   Math(Tor.xi * L, x), ", ", Math(H * Tor.k2t * L, K), ": mode n moves from the free root ",
+                   (n - sp.Rational(1, 2)) * sp.pi, " to the pinned root ", n * sp.pi, " as K grows; it is halfway at ",
+                   listing([r for r in rows if r is not None]), " for n = 1, 2, 3")
+    if increasing:
+        return Evidence(ERRATUM, evidence, correction=say("the cross-over stiffness increases with mode number, ",
+                                                          Math((n - sp.Rational(1, 4)) * sp.pi, Tex("K_n", "K_n"))))
+    return Evidence(HOLDS, evidence)
 
 
 def _scaling_order(which: str):
     def decide():
         ids = ("eq15.scaling", "eq16.scaling", "eq17.scaling", "eq18.scaling")
-        verdicts = [_registry(i) for i in ids]
+        verdicts = [result(i) for i in ids]
         exps = {str(k): v for k, v in P.HIGH_FREQUENCY_EXPONENT.items()}
         ok_all = all(v.verdict == HOLDS for v in verdicts)
         if which == "nonlocal_fastest":
@@ -102,55 +98,62 @@ def _scaling_order(which: str):
             ok = ok_all and exps["d2"] > max(e for s, e in exps.items() if s != "d2")
         else:  # all decrease
             ok = ok_all and all(e < 0 for e in exps.values())
-        evidence = (f"high-frequency exponents of |A_x/N| in omega, each confirmed by the derivation "
-                    f"({', '.join(v.id + ' ' + str(v.verdict) for v in verdicts)}): {exps}")
-        return (HOLDS if ok else ERRATUM), evidence, ""
+        labels = {"d1": "A_v/N", "d2": "A_l/N", "f0": "A_e/N", "q0": "A_q/N"}
+        evidence = say(f"high-frequency exponents of |A_x/N| in omega, each confirmed by the derivation "
+                       f"({', '.join(v.id + ' ' + str(v.verdict) for v in verdicts)}): ",
+                       join([(Tex(rf"{labels[d]} \sim \omega^{{{sp.latex(e)}}}", f"{labels[d]} ~ omega^{e}"),)
+                             for d, e in exps.items()], ", "))
+        return Evidence(HOLDS if ok else ERRATUM, evidence)
     return decide
 
 
 def _nonlocal_vs_k():
-    from .. import indentation
-    from ..beam import L, d1, k, k1
-    from ..limits import low_frequency
-    from .electrostatics import nonlocal_height
+    from pfmdyn.derivations import indentation
+    from pfmdyn.derivations.beam import L, d1, k, k1
+    from pfmdyn.derivations.checks.electrostatics import nonlocal_height
+    from pfmdyn.derivations.limits import low_frequency
     a_nl = nonlocal_height()
     inverse = sp.simplify(sp.diff(a_nl * k, k)) == 0
     em = sp.simplify(2 * L / 3 * low_frequency(indentation.solve().theta(d1)))
     em_limit = sp.limit(em, k1, sp.oo)
-    evidence = (f"derived A_nl = {a_nl} (k A_nl independent of k: {inverse}); electromechanical height per unit d1 "
-                f"at low frequency = {em}, -> {em_limit} for k1 >> k (spring-constant independent in that limit)")
-    return (HOLDS if inverse and em_limit == 1 else ERRATUM), evidence, ""
+    evidence = say("derived ", Math(a_nl, Tex("A_{nl}", "A_nl")), " (", Tex(r"k A_{nl}", "k A_nl"),
+                   f" independent of k: {inverse}); electromechanical height per unit ", Tex("d_1", "d1"),
+                   " at low frequency = ", em, ", tending to ", em_limit, " for ", Tex(r"k_1 \gg k", "k1 >> k"),
+                   " (spring-constant independent in that limit)")
+    return Evidence(HOLDS if inverse and em_limit == 1 else ERRATUM, evidence)
 
 
 def _phase_flip_at_lines():
-    from .. import elastic_contact
+    from pfmdyn.derivations import elastic_contact
     sol = elastic_contact.solve()
     real = all(not e.has(sp.I) for e in list(sol.slope.values()) + [sol.denominator])
-    return (HOLDS if real else UNDECIDABLE,
-            f"without damping the derived transfer functions are real for real beta (no i in slope or denominator: "
-            f"{real}): the response changes sign, i.e. the phase jumps by 180 deg, at every simple zero "
-            f"(antiresonance) and pole (resonance)", "")
+    return Evidence(HOLDS if real else UNDECIDABLE, say(
+        "without damping the derived transfer functions are real for real ", Tex(r"\beta", "beta"),
+        f" (no i in slope or denominator: {real}): the response changes sign, i.e. the phase jumps by 180 deg, at "
+        "every simple zero (antiresonance) and pole (resonance)"))
 
 
 def _linear_in_bias():
-    from .electrostatics import q0_first_harmonic
+    from pfmdyn.derivations.checks.electrostatics import q0_first_harmonic
     q = q0_first_harmonic()
     lin = sp.diff(q, P.dV, 2) == 0 and sp.diff(q, P.dV) != 0
-    return (HOLDS if lin else ERRATUM,
-            f"first harmonic of the capacitive force per length q0 = {q}: linear in dV ({lin}); it vanishes at "
-            f"dV = 0; so the non-local (and, for the tip, the local) electrostatic term is linear in the bias", "")
+    return Evidence(HOLDS if lin else ERRATUM, say(
+        "first harmonic of the capacitive force per length ", Math(q, Tex("q_0", "q0")), ": linear in ",
+        Tex(r"\Delta V", "dV"), f" ({lin}); it vanishes at ", Tex(r"\Delta V = 0", "dV = 0"),
+        "; so the non-local (and, for the tip, the local) electrostatic term is linear in the bias"))
 
 
 def _zeros_bias_dependent():
-    from .. import elastic_contact
-    from ..beam import d1, q0
-    from .electrostatics import q0_first_harmonic
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, q0
+    from pfmdyn.derivations.checks.electrostatics import q0_first_harmonic
     sol = elastic_contact.solve()
     numerator = sol.slope[d1] * d1 + sol.slope[q0] * q0_first_harmonic().subs(P.S_area, sp.Symbol("S"))
     depends = numerator.has(P.dV)
-    return (HOLDS if depends else ERRATUM,
-            f"the response vanishes where A_v d1 + A_q q0 = 0 with q0 proportional to dV; that numerator contains dV "
-            f"({depends}) while the resonant denominator N does not: zeros move with bias, poles do not", "")
+    return Evidence(HOLDS if depends else ERRATUM, say(
+        "the response vanishes where ", Tex(r"A_v d_1 + A_q q_0 = 0", "A_v d1 + A_q q0 = 0"), " with ", Tex("q_0", "q0"),
+        " proportional to ", Tex(r"\Delta V", "dV"), "; that numerator contains ", Tex(r"\Delta V", "dV"),
+        f" ({depends}) while the resonant denominator N does not: zeros move with bias, poles do not"))
 
 
 def _domains(case: str):
@@ -162,28 +165,36 @@ def _domains(case: str):
             args = {sp.arg(pp.subs({d: 2, e: 1})) - sp.arg(mm.subs({d: 2, e: 1})),
                     sp.arg(pp.subs({d: 1, e: 2})) - sp.arg(mm.subs({d: 1, e: 2}))}
             ok = args <= {sp.pi, -sp.pi, 0}
-            return (HOLDS if ok else ERRATUM,
-                    f"with psi = 0 (no dynamic phase) PR+- = +-d_eff + d_el are real: phase difference {sorted(map(str, args))} "
-                    f"for d_eff > d_el and d_eff < d_el", "")
+            return Evidence(HOLDS if ok else ERRATUM, say(
+                "with ", Tex(r"\psi = 0", "psi = 0"), " (no dynamic phase) ", Tex(r"PR_\pm = \pm d_{eff} + d_{el}",
+                                                                               "PR+- = +-d_eff + d_el"),
+                " are real: phase difference ", listing(args), " for ", Tex(r"d_{eff} > d_{el}", "d_eff > d_el"), " and ",
+                Tex(r"d_{eff} < d_{el}", "d_eff < d_el")))
         if case == "pure_em":
             pp, mm = plus.subs(e, 0), minus.subs(e, 0)
             ok = sp.Abs(pp) == sp.Abs(mm) and sp.simplify(sp.arg(pp) - sp.arg(mm)) in (sp.pi, -sp.pi)
-            return HOLDS if ok else ERRATUM, f"G_elec = 0: PR+ = {pp}, PR- = {mm}: equal amplitudes, phases 180 deg apart", ""
+            return Evidence(HOLDS if ok else ERRATUM, say(
+                Tex(r"G_{elec} = 0", "G_elec = 0"), ": ", Math(pp, "PR_+"), ", ", Math(mm, "PR_-"),
+                ": equal amplitudes, phases 180 deg apart"))
         if case == "weak_el":
             f = sp.lambdify((d, e, psi), (sp.Abs(plus), sp.Abs(minus), sp.arg(plus) - sp.arg(minus)), "mpmath")
             ap, am, dphi = f(mp.mpf(1), mp.mpf("0.1"), mp.mpf("0.7"))
             ok = ap != am and abs(abs(dphi) - mp.pi) > 0
-            return (HOLDS if ok else ERRATUM,
-                    f"d_el/d_eff = 0.1, psi = 0.7: |PR+| = {mp.nstr(abs(ap), 5)} differs from |PR-| = {mp.nstr(abs(am), 5)}; "
-                    f"phase difference {mp.nstr(abs(dphi), 6)} rad, below pi", "")
+            return Evidence(HOLDS if ok else ERRATUM, say(
+                Tex(r"d_{el}/d_{eff} = 0.1,\ \psi = 0.7", "d_el/d_eff = 0.1, psi = 0.7"), ": ",
+                Tex(rf"|PR_+| = {mp.nstr(abs(ap), 5)}", f"|PR+| = {mp.nstr(abs(ap), 5)}"), " differs from ",
+                Tex(rf"|PR_-| = {mp.nstr(abs(am), 5)}", f"|PR-| = {mp.nstr(abs(am), 5)}"),
+                f"; phase difference {mp.nstr(abs(dphi), 6)} rad, below ", Tex(r"\pi", "pi")))
         # strong electrostatic contribution: e >> d
         vals = {d: mp.mpf("0.01"), e: mp.mpf(1), psi: mp.mpf("0.7")}
         f = sp.lambdify((d, e, psi), (sp.Abs(plus), sp.Abs(minus), sp.arg(plus) - sp.arg(minus)), "mpmath")
         ap, am, dphi = f(*vals.values())
         ok = abs(dphi) < 0.05 and ap != am
-        return (HOLDS if ok else ERRATUM,
-                f"d_el/d_eff = 100, psi = 0.7: |PR+| = {mp.nstr(abs(ap), 5)}, |PR-| = {mp.nstr(abs(am), 5)} (larger on one "
-                f"domain), phase difference {mp.nstr(abs(dphi), 3)} rad (small)", "")
+        return Evidence(HOLDS if ok else ERRATUM, say(
+            Tex(r"d_{el}/d_{eff} = 100,\ \psi = 0.7", "d_el/d_eff = 100, psi = 0.7"), ": ",
+            Tex(rf"|PR_+| = {mp.nstr(abs(ap), 5)}", f"|PR+| = {mp.nstr(abs(ap), 5)}"), ", ",
+            Tex(rf"|PR_-| = {mp.nstr(abs(am), 5)}", f"|PR-| = {mp.nstr(abs(am), 5)}"),
+            f" (larger on one domain), phase difference {mp.nstr(abs(dphi), 3)} rad (small)"))
     return decide
 
 
@@ -191,119 +202,125 @@ def _null_bias(case: str):
     def decide():
         d, G, V, Vs = sp.symbols("d_eff G_elec V_dc V_surf")
         nulls = [sp.solve(sign * d + G * (V - Vs), V)[0] for sign in (1, -1)]
+        pr = Tex(r"PR_\pm = \pm d_{eff} + G_{elec} (V_{dc} - V_{surf})", "PR+- = +-d_eff + G_elec (V_dc - V_surf)")
         if case == "formula":
             ok = {sp.simplify(n - Vs) for n in nulls} == {d / G, -d / G}
-            return (HOLDS if ok else ERRATUM,
-                    f"PR+- = +-d_eff + G_elec (V_dc - V_surf) vanishes at V_dc = {nulls[0]} and {nulls[1]}", "")
+            return Evidence(HOLDS if ok else ERRATUM, say(pr, " vanishes at ", Math(nulls[0], V), " and ", nulls[1]))
         if case == "limits":
             ok = all(n.subs(d, 0) == Vs for n in nulls)
-            return (HOLDS if ok else ERRATUM,
-                    f"V_null = {nulls[0]}: equals V_surf when d_eff = 0; with G_elec = 0 the response is bias independent "
-                    f"and has no zero", "")
+            return Evidence(HOLDS if ok else ERRATUM, say(
+                Math(nulls[0], Tex(r"V_{null}", "V_null")), ": equals ", Vs, " when ", Math(0, d), "; with ", Math(0, G),
+                " the response is bias independent and has no zero"))
         # V_null is itself a bias: it can depend on frequency (through d_eff, G_elec), not on the bias.
         has_bias = nulls[0].has(V)
-        return (ERRATUM if not has_bias else HOLDS,
-                f"V_null(omega) = {nulls[0]} (d_eff, G_elec frequency dependent) contains no V_dc: the nulling bias is a "
-                f"function of frequency; 'bias dependent' cannot describe it (the figures vary frequency)",
-                "V_null is strongly frequency dependent for a good tip, and virtually frequency independent for a "
-                "deteriorated one")
+        return Evidence(ERRATUM if not has_bias else HOLDS, say(
+            Math(nulls[0], Tex(r"V_{null}(\omega)", "V_null(omega)")), " (", listing([d, G]),
+            " frequency dependent) contains no ", V, ": the nulling bias is a function of frequency; 'bias dependent' "
+            "cannot describe it (the figures vary frequency)"), correction=say(
+            Tex("V_{null}", "V_null"), " is strongly frequency dependent for a good tip, and virtually frequency "
+            "independent for a deteriorated one"))
     return decide
 
 
 def _null_frequency_dependent():
-    from .. import elastic_contact
-    from ..beam import beta, d1, q0
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import beta, d1, q0
     sol = elastic_contact.solve()
     ratio = sp.cancel(sol.slope[d1] / sol.slope[q0])
     dep = ratio.has(beta)
-    return (HOLDS if dep else ERRATUM,
-            f"V_null - V_surf is proportional to A_v d1/(A_q q0 per volt); the derived A_v/A_q depends on beta ({dep}): "
-            f"a piezoelectric sample has a frequency-dependent nulling bias, a non-piezoelectric one (d1 = 0) does not", "")
+    return Evidence(HOLDS if dep else ERRATUM, say(
+        Tex(r"V_{null} - V_{surf}", "V_null - V_surf"), " is proportional to ",
+        Tex(r"A_v d_1/(A_q q_0 \text{ per volt})", "A_v d1/(A_q q0 per volt)"), "; the derived ", Tex("A_v/A_q", "A_v/A_q"),
+        " depends on ", Tex(r"\beta", "beta"), f" ({dep}): a piezoelectric sample has a frequency-dependent nulling bias, "
+        "a non-piezoelectric one (", Tex("d_1 = 0", "d1 = 0"), ") does not"))
 
 
 def _noncontact_resonances_sample_free():
-    from .. import free_end
-    syms = sorted(map(str, free_end.solve().denominator.free_symbols))
-    ok = not set(syms) & {"k1", "k2"}
-    return (HOLDS if ok else ERRATUM,
-            f"the derived free-end characteristic function depends on {syms} only: no sample property enters the "
-            f"non-contact resonances", "")
+    from pfmdyn.derivations import free_end
+    syms = free_end.solve().denominator.free_symbols
+    ok = not {str(x) for x in syms} & {"k1", "k2"}
+    return Evidence(HOLDS if ok else ERRATUM, say(
+        "the derived free-end characteristic function depends on ", listing(syms), " only: no sample property enters "
+        "the non-contact resonances"))
 
 
 def _same_denominator_for_vertical_and_longitudinal():
-    from .. import elastic_contact
-    from ..beam import d1, d2
-    from .core import same_resonances
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import d1, d2
+    from pfmdyn.derivations.checks.core import same_resonances
     sol = elastic_contact.solve()
     same, why = same_resonances(sp.denom(sp.cancel(sol.theta(d1))), sp.denom(sp.cancel(sol.theta(d2))))
-    return (ERRATUM if same else HOLDS,
-            f"the derived vertical and longitudinal responses A_v/N and A_l/N have the same resonances ({why}), as "
-            f"Section III.2 itself says; a choice of frequency cannot separate them",
+    evidence = say("the derived vertical and longitudinal responses ", Tex("A_v/N", "A_v/N"), " and ", Tex("A_l/N", "A_l/N"),
+                   " have the same resonances (", why, "), as Section III.2 itself says; a choice of frequency cannot "
+                   "separate them")
+    if same:
+        return Evidence(ERRATUM, evidence, correction=(
             "the vertical and longitudinal contributions share their resonances (one denominator N) and cannot be "
-            "separated by the choice of frequency; the torsional (lateral) resonances differ")
+            "separated by the choice of frequency; the torsional (lateral) resonances differ"))
+    return Evidence(HOLDS, evidence)
 
 
 def _torsion_vs_flexure_resonances():
-    from .. import elastic_contact
-    from .. import torsion as Tor
-    a = elastic_contact.solve().denominator
+    from pfmdyn.derivations import torsion as Tor
     b = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
-    return (HOLDS, f"flexural characteristic function in beta (Eq. 10) and torsional one in xi L "
-                   f"({sp.sstr(b)}) are different functions: different resonances", "")
+    return Evidence(HOLDS, say("flexural characteristic function in ", Tex(r"\beta", "beta"), " (Eq. 10) and torsional one "
+                               "in ", Tex(r"\xi L", "xi L"), " (", b, ") are different functions: different resonances"))
 
 
 def _longitudinal_more_sensitive():
-    from .. import elastic_contact
-    from ..beam import H, L, d1, d2, k1, k2
-    from ..limits import low_frequency, param_limit
+    from pfmdyn.derivations import elastic_contact
+    from pfmdyn.derivations.beam import H, L, d1, d2, k1, k2
+    from pfmdyn.derivations.limits import low_frequency, param_limit
     sol = elastic_contact.solve()
     vertical = param_limit(param_limit(low_frequency(sol.theta(d1)).subs(k2, 0), k1, sp.oo), k1, sp.oo)
     longitudinal = param_limit(param_limit(low_frequency(sol.theta(d2)), k2, sp.oo), k1, sp.oo)
     ratio = sp.simplify(longitudinal / vertical)
-    return (HOLDS if ratio.has(L) and ratio.has(H) else ERRATUM,
-            f"static slope per unit displacement: vertical (stiff contact, free to slide) {vertical}, longitudinal "
-            f"(no slip) {longitudinal}; ratio {ratio}: larger than 1 whenever H < 2L/3", "")
+    return Evidence(HOLDS if ratio.has(L) and ratio.has(H) else ERRATUM, say(
+        "static slope per unit displacement: vertical (stiff contact, free to slide) ", vertical, ", longitudinal "
+        "(no slip) ", longitudinal, "; ratio ", ratio, ": larger than 1 whenever ", Math(2 * L / 3, H, "<")))
 
 
 def _length_sensitive():
-    from ..beam import L, d1, d2
+    from pfmdyn.derivations.beam import L, d1, d2
     ratio = sp.simplify(P.LOW_FREQUENCY[d2][0] / P.LOW_FREQUENCY[d1][0])
-    return (HOLDS if ratio.has(L) or P.LOW_FREQUENCY[d1][0].has(L) else ERRATUM,
-            f"the low-frequency responses (Eqs. 11-14, confirmed by eq11-14 checks) contain L; e.g. A_v/N = "
-            f"{P.LOW_FREQUENCY[d1][0]}", "")
+    return Evidence(HOLDS if ratio.has(L) or P.LOW_FREQUENCY[d1][0].has(L) else ERRATUM, say(
+        "the low-frequency responses (Eqs. 11-14, confirmed by eq11-14 checks) contain L; e.g. ",
+        Math(P.LOW_FREQUENCY[d1][0], "A_v/N")))
 
 
 def _additive():
-    from .. import elastic_contact
+    from pfmdyn.derivations import elastic_contact
     sol = elastic_contact.solve()
     total = sum(sol.theta(dr) * dr for dr in sol.drives)
     linear = all(sp.diff(total, a, b) == 0 for a in sol.drives for b in sol.drives)
-    return (HOLDS if linear else ERRATUM,
-            f"Eq. 2 and its boundary conditions are linear in the drives: the derived response is the sum of one term "
-            f"per drive {sorted(map(str, sol.drives))} (all second derivatives in the drives vanish: {linear})", "")
+    return Evidence(HOLDS if linear else ERRATUM, say(
+        "Eq. 2 and its boundary conditions are linear in the drives: the derived response is the sum of one term per "
+        "drive ", listing(sol.drives), f" (all second derivatives in the drives vanish: {linear})"))
 
 
 def _torsion_depends_on_k2():
-    from .. import torsion as Tor
+    from pfmdyn.derivations import torsion as Tor
     den = sp.denom(sp.together(Tor.solve_elastic().tip_twist))
-    return (HOLDS if den.has(Tor.k2t) else ERRATUM,
-            f"derived denominator of the torsional response: {den} (contains k2t = H k2/c_T)", "")
+    return Evidence(HOLDS if den.has(Tor.k2t) else ERRATUM, say(
+        "derived denominator of the torsional response: ", den, " (contains ",
+        Tex(r"\tilde{k}_2 = H k_2/c_T", "k2t = H k2/c_T"), ")"))
 
 
 def _frictionless_from_4a():
-    from ..beam import H, d2, k2
-    U1, U2, EI = sp.symbols("U1 U2 EI")
+    from pfmdyn.derivations.beam import H, d2, k2
+    U1 = sp.Symbol("U1")
     moment = k2 * H * (d2 - U1 * H)
-    return (HOLDS if sp.limit(moment, k2, 0) == 0 else ERRATUM,
-            f"Eq. 4a: EI u0''(L) = {moment} -> 0 as k2 -> 0, i.e. u0''(L) = 0", "")
+    return Evidence(HOLDS if sp.limit(moment, k2, 0) == 0 else ERRATUM, say(
+        "Eq. 4a: ", Math(moment, Tex("EI u_0''(L)", "EI u0''(L)")), " tends to 0 as ", K2_ZERO, ", i.e. ",
+        Tex("u_0''(L) = 0", "u0''(L) = 0")))
 
 
 def _symbol_verdict(symbol: str) -> Callable:
     """Decide a sentence by the audit of a symbol it defines."""
     def decide():
         from .xref import check_symbol
-        verdict, evidence, correct = check_symbol(symbol)
-        return verdict, f"the symbol audit of ${symbol}$: {evidence}", correct
+        evidence = check_symbol(symbol)
+        return evidence.but(sentence=say("the symbol audit of ", Tex(symbol), ": ", evidence.sentence))
     return decide
 
 
@@ -413,7 +430,7 @@ def _undecided(sec: str, sentence: str):
     measured = sec.startswith("VI") or sec in ("V",) or re.search(r"experiment|measured|observed|Fig\.", sentence)
     why = ("an observation of measured data; the model does not decide it" if measured else
            "a qualitative or methodological remark that no derivation in pfmdyn decides")
-    return UNDECIDABLE, why, ""
+    return Evidence(UNDECIDABLE, why)
 
 
 @lru_cache(maxsize=1)
@@ -443,8 +460,5 @@ def register() -> int:
     if not T.sections():
         return 0
     for cid, number, sentence, decide in statements():
-        claim(cid, number, T.clip(sentence, 300), chapter=CHAPTER, kind="statement")(decide)
+        claim(cid, number, T.quote(T.clip(sentence, 300)), chapter=CHAPTER, kind="statement")(decide)
     return len(statements())
-
-
-register()

@@ -1,0 +1,91 @@
+"""Benchmark results written beside the scripts, in ``benchmarks/results/<name>.md``.
+
+A benchmark runs its main function inside :func:`recorded`: everything it prints goes to the
+terminal and, when the run completes, to the file, under a header saying how it was run, when,
+on which commit and under what machine load.  The file is committed when it changes, so the
+history of a benchmark's results is git's history of that file (docstrings state the targets,
+not the runs).  An interrupted or failed run leaves the previous file as it was.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["RESULTS", "recorded"]
+
+RESULTS = Path(__file__).resolve().parent / "results"
+"""Where the result files go."""
+
+
+class _Tee(io.TextIOBase):
+    """A text stream writing to several streams."""
+
+    def __init__(self, *streams):
+        self.streams = streams
+
+    def write(self, text):
+        for stream in self.streams:
+            stream.write(text)
+        return len(text)
+
+    def flush(self):
+        for stream in self.streams:
+            stream.flush()
+
+
+def _commit() -> str:
+    """The commit the code was at, marked when the work tree had changes."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git work tree)"
+    return head + (" with uncommitted changes" if dirty else "")
+
+
+def _header(name: str, argv: list[str], started: float, elapsed: float) -> str:
+    import numpy as np
+
+    load = "/".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "unknown"
+    return (f"# Benchmark `{name}`\n\n"
+            f"- run: `python benchmarks/{name}.py{''.join(' ' + a for a in argv)}`\n"
+            f"- finished: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(started + elapsed))}"
+            f" ({elapsed:.0f} s wall)\n"
+            f"- code: {_commit()}\n"
+            f"- machine: {os.cpu_count()} cores, load average {load} at the start; "
+            f"Python {platform.python_version()}, NumPy {np.__version__}\n\n")
+
+
+@contextlib.contextmanager
+def recorded(name: str, argv: list[str] | None = None, folder: Path = RESULTS):
+    """Print to the terminal and, when the block completes, write ``folder/<name>.md``.
+
+    ``argv``: the script's arguments (default ``sys.argv[1:]``), quoted in the header.
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     with recorded("demo", [], Path(tmp)):
+    ...         print("speed: 1.5 s (target <= 2 s)")
+    ...     text = (Path(tmp) / "demo.md").read_text()
+    speed: 1.5 s (target <= 2 s)
+    >>> text.splitlines()[0], text.splitlines()[2], text.splitlines()[-2]
+    ('# Benchmark `demo`', '- run: `python benchmarks/demo.py`', 'speed: 1.5 s (target <= 2 s)')
+    """
+    argv = sys.argv[1:] if argv is None else argv
+    captured = io.StringIO()
+    started, clock = time.time(), time.perf_counter()
+    with contextlib.redirect_stdout(_Tee(sys.stdout, captured)):
+        yield
+    text = _header(name, argv, started, time.perf_counter() - clock) + "```text\n" + captured.getvalue()
+    text += ("" if text.endswith("\n") else "\n") + "```\n"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{name}.md").write_text(text, encoding="utf-8")

@@ -1,0 +1,443 @@
+"""Contact resonances of the whole lever model, and the contact stiffness that explains them.
+
+The model is the composed characteristic of ``derivations/tip_setback.py`` (tip at
+``x_tip = gamma L``, tip mass, springs ``k1``, ``k2`` rotated by the tilt through
+``generated/tilt_rotation.py``), evaluated in one place, :func:`characteristic`.  Four facts
+make the inverse problem exact and checkable:
+
+1. **Frequency to beta.**  A resonance ``f`` of a lever whose measured free resonance (with
+   its tip) is ``f1`` has ``beta = beta_1 sqrt(f / f1)``, ``beta_1`` the first free root of
+   that lever (:meth:`pfmdyn.Cantilever.free_root`; it depends on the tip position when the
+   tip has mass).
+2. **Polynomial in the springs.**  The rotated springs are linear in ``(k1, k2)`` and the
+   characteristic holds them linearly and through ``kvv kll - kvl**2 = k1 k2`` only: at a
+   fixed ``beta`` and tip position it is bilinear in ``(k1, k2)``.  With ``k2 = k2_0 + r k1``
+   (:class:`Lateral`) it is a polynomial in ``k1`` of degree 1 (``r = 0``) or 2, so at most
+   two ``k1`` put a resonance at a measured frequency, found in closed form
+   (:func:`k1_at`); two modes at a known tip position give ``(k1, k2)`` from a quadratic
+   (:func:`k1_k2_at`).
+3. **Mode numbers.**  A ``beta`` is mode ``n`` of a lever when ``n - 1`` roots of the
+   characteristic lie below it (sign changes on a grid of step :data:`GRID_STEP` from
+   :data:`BETA_MIN`: the characteristic is entire, its roots simple and about ``pi`` apart).
+   Of the candidates of 2. exactly those with the measured mode numbers are kept.
+4. **Tip position.**  At each tip position ``gamma`` each mode alone gives ``k1(gamma)``
+   exactly (2. and 3.); two modes are explained where their curves cross.  Scanning
+   ``gamma`` over a box and counting the crossings at two resolutions
+   (:func:`tip_position_scan`) shows whether the solution is unique there (the L1/L method
+   of Rabe et al., NIST).
+
+Solutions are polished by least squares on all modes (:func:`fit`), residuals being the
+shift in ``beta`` to the nearest root, and their covariance follows by first-order
+propagation of the frequency and spring-constant uncertainties (:func:`covariance`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..cantilever import Cantilever
+from ..errors import UserError
+from ..generated import formulas, tip_setback
+from ..generated.tilt_rotation import rotated
+from ..roots.bracket import refine
+
+__all__ = ["GRID_STEP", "BETA_MIN", "Lateral", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
+           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
+           "require_tip_height"]
+
+GRID_STEP = 0.02
+"""Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
+BETA_MIN = 0.3
+"""Lowest ``beta`` searched (the generated characteristic's domain, ``Re beta > 0.3``)."""
+_STEP = 1e-30          # complex step: exact first derivatives in beta
+_STIFF = 1e12          # k1 / k of the stiff (k1 -> oo) limit
+
+
+@dataclass(frozen=True)
+class Lateral:
+    """The lateral spring as a function of ``k1``: ``k2 = fixed + ratio * k1`` (N/m, 1).
+
+    >>> Lateral(ratio=0.5).k2(100.0), Lateral(fixed=20.0).degree
+    (50.0, 1)
+    """
+
+    fixed: float = 0.0
+    ratio: float = 0.0
+
+    def k2(self, k1):
+        """``k2`` at ``k1``."""
+        return self.fixed + self.ratio * k1
+
+    @property
+    def degree(self) -> int:
+        """Degree of the characteristic in ``k1`` (fact 2 of the module)."""
+        return 2 if self.ratio else 1
+
+
+def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
+    """The composed characteristic (zeros in ``beta``: the resonances) for springs ``k1``, ``k2``.
+
+    The one call of ``generated/tip_setback.py``'s characteristic in the stiffness code:
+    springs rotated by the lever's tilt, its tip height, length, tip mass and rotary inertia
+    (``rho_g``); broadcast over ``beta``, ``k1``, ``k2`` and ``tip_position``.
+
+    >>> lever = Cantilever(2.0, 7e4, 2e-4)
+    >>> abs(float(characteristic(1.8751040687119611, lever, 0.0, 0.0, 1.0))) < 1e-12
+    True
+    """
+    kvv, kll, kvl = rotated(k1, k2, lever.alpha)
+    with np.errstate(all="ignore"):
+        return tip_setback.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
+                                          lever.length, lever.tip_mass_ratio, tip_position, lever.rho_g)
+
+
+def _free_root(lever: Cantilever, tip_position: float) -> float:
+    return lever.free_root() if tip_position == lever.tip_position else \
+        replace(lever, tip_position=float(tip_position)).free_root()
+
+
+def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
+    """``beta = beta_1 sqrt(f / f1)`` of frequencies ``f`` (Hz) with the tip at ``tip_position``.
+
+    >>> round(float(betas(Cantilever(2.0, 7e4, 2e-4), 4 * 7e4)), 10)
+    3.7502081374
+    """
+    gamma = lever.tip_position if tip_position is None else tip_position
+    if np.ndim(gamma):
+        b1 = np.array([_free_root(lever, float(g)) for g in np.ravel(gamma)]).reshape(np.shape(gamma))
+    else:
+        b1 = _free_root(lever, float(gamma))
+    return formulas.beta_from_frequency(np.asarray(frequency, dtype=float), lever.free_resonance, b1)
+
+
+def mode_numbers(beta, lever: Cantilever, k1, k2, tip_position) -> np.ndarray:
+    """The mode number of each ``beta`` (1 + roots below it), broadcast over all arguments.
+
+    >>> lever = Cantilever(2.0, 7e4, 2e-4)
+    >>> mode_numbers([1.87510406871, 4.69409113297], lever, 0.0, 0.0, 1.0).tolist()
+    [1, 2]
+    """
+    beta, k1, k2, gamma = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (beta, k1, k2, tip_position)))
+    top = np.where(np.isfinite(beta), beta, BETA_MIN) * (1 - 1e-9)
+    count = max(2, int(np.ceil((np.max(top, initial=BETA_MIN) - BETA_MIN) / GRID_STEP)) + 1)
+    t = np.linspace(0.0, 1.0, count).reshape((count,) + (1,) * beta.ndim)
+    grid = BETA_MIN + t * np.maximum(top - BETA_MIN, 0.0)
+    values = characteristic(grid, lever, k1, k2, gamma)
+    modes = 1 + np.sum(np.sign(values[:-1]) * np.sign(values[1:]) < 0, axis=0)
+    return np.where(np.isfinite(beta), modes, 0)
+
+
+def _polish(g, x, iterations: int = 6):
+    """Newton steps on ``g`` (entire in ``x``, complex-step slope) from the closed-form roots ``x``."""
+    x = np.asarray(x, dtype=float)
+    scale = np.maximum(np.abs(x), 1e-300)
+    for _ in range(iterations):
+        h = 1e-20 * scale
+        with np.errstate(all="ignore"):
+            value = g(x + 1j * h)
+            step = value.real / (value.imag / h)
+        good = np.isfinite(step) & (np.abs(step) < 0.5 * scale)
+        x = np.where(good, x - step, x)
+    return x
+
+
+def k1_at(beta, mode, lever: Cantilever, lateral: Lateral, tip_position) -> np.ndarray:
+    """The ``k1`` (N/m) making ``beta`` resonance ``mode``; NaN where none does (vectorised).
+
+    The characteristic at ``beta`` is a polynomial of degree ``lateral.degree`` in ``k1``
+    (module, fact 2): its coefficients come from the characteristic at ``k1 = 0, k, 1e4 k``,
+    its real positive roots are polished by Newton steps on the characteristic itself, and
+    the root whose ``beta`` is mode ``mode`` is kept (fact 3).
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4)
+    >>> round(float(k1_at(betas(lever, 300e3), 1, lever, Lateral(), 1.0)), 4)   # the paper's model
+    109.7483
+    """
+    beta, gamma = np.broadcast_arrays(np.asarray(beta, dtype=float), np.asarray(tip_position, dtype=float))
+    k = lever.spring_constant
+    f = lambda k1: characteristic(beta, lever, k1, lateral.k2(k1), gamma)    # noqa: E731
+    f0, fs = f(0.0), f(k)
+    with np.errstate(all="ignore"):
+        if lateral.degree == 1:
+            candidates = [-f0 * k / (fs - f0)]
+        else:
+            big = 1e4 * k
+            slope_s, slope_big = (fs - f0) / k, (f(big) - f0) / big
+            c2 = (slope_big - slope_s) / (big - k)
+            c1 = slope_s - c2 * k
+            root = np.sqrt(c1 * c1 - 4 * c2 * f0 + 0j)
+            candidates = [np.where(np.abs(r.imag) <= 1e-9 * np.abs(r), r.real, np.nan)
+                          for r in ((-c1 + root) / (2 * c2), (-c1 - root) / (2 * c2))]
+    out = np.full(beta.shape, np.nan)
+    for candidate in candidates:
+        candidate = np.where(np.isfinite(candidate) & (candidate > 0), candidate, np.nan)
+        if not np.isfinite(candidate).any():
+            continue
+        candidate = _polish(f, candidate)
+        ok = np.isfinite(candidate) & (candidate > 0)
+        ok &= mode_numbers(beta, lever, np.where(ok, candidate, 0.0), lateral.k2(np.where(ok, candidate, 0.0)),
+                           gamma) == mode
+        out = np.where(ok & np.isnan(out), candidate, out)
+    return out
+
+
+def branch_limits(mode: int, lever: Cantilever, lateral: Lateral, tip_position: float) -> tuple[float, float]:
+    """``beta`` of resonance ``mode`` at ``k1 = 0`` and ``k1 -> oo`` (``k1 = 1e12 k``).
+
+    Every resonance is nondecreasing in ``k1`` (the contact springs add a positive
+    semi-definite stiffness), so a resonance of this mode lies between the two.
+
+    >>> [round(b, 4) for b in branch_limits(1, Cantilever(2.0, 7e4, 2e-4), Lateral(), 1.0)]
+    [1.8751, 3.9266]
+    """
+    out = []
+    for k1 in (0.0, _STIFF * lever.spring_constant):
+        f = lambda b: characteristic(b, lever, k1, lateral.k2(k1), tip_position)   # noqa: E731
+        top = BETA_MIN + 6.0 * (mode + 1)         # above any branch limit of a lever tipped at >= 0.5 L
+        grid = np.arange(BETA_MIN, top, GRID_STEP)
+        values = f(grid)
+        change = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)
+        if len(change) < mode:
+            out.append(float("nan"))
+            continue
+        i = change[mode - 1]
+        out.append(float(refine(f, grid[i], grid[i + 1], values[i], values[i + 1], rtol=1e-14)))
+    return out[0], out[1]
+
+
+def _parts(beta, lever: Cantilever, tip_position, scale_k1: float, scale_k2: float):
+    """``F = P + k1 Q + k2 R + k1 k2 S`` at ``beta`` (module, fact 2)."""
+    f = lambda k1, k2: characteristic(beta, lever, k1, k2, tip_position)     # noqa: E731
+    p = f(0.0, 0.0)
+    q = (f(scale_k1, 0.0) - p) / scale_k1
+    r = (f(0.0, scale_k2) - p) / scale_k2
+    s = (f(scale_k1, scale_k2) - p - q * scale_k1 - r * scale_k2) / (scale_k1 * scale_k2)
+    return p, q, r, s
+
+
+def k1_k2_at(beta_pair, mode_pair, lever: Cantilever, tip_position: float) -> list[tuple[float, float]]:
+    """Every ``(k1, k2)`` (N/m, ``k1 > 0``, ``k2 >= 0``) making two ``beta`` resonances of the given modes.
+
+    Eliminating ``k2`` from the two bilinear equations leaves a quadratic in ``k1``; its
+    roots, polished with :func:`fit` and kept when the mode numbers match, are all the
+    solutions.  Needs the lever's tip height (``k2`` acts through ``H``).
+
+    >>> from pfmdyn.roots.bracket import grid_roots
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5)
+    >>> b = grid_roots(lambda x: characteristic(x, lever, 100.0, 50.0, 1.0), np.arange(1, 9, 0.01))[:2]
+    >>> [(round(k1, 6), round(k2, 6)) for k1, k2 in k1_k2_at(b, (1, 2), lever, 1.0)]
+    [(100.0, 50.0)]
+    """
+    k, H = lever.spring_constant, lever.tip_height
+    scale_k2 = formulas.k2_from_ratio(1.0, k, H, lever.length)     # k2 H**2/(k L**2) = 1
+    (p1, q1, r1, s1), (p2, q2, r2, s2) = (_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
+    coefficients = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
+    out = []
+    with np.errstate(all="ignore"):
+        roots = np.roots(coefficients) if np.all(np.isfinite(coefficients)) else []
+    for a in roots:
+        if abs(a.imag) > 1e-9 * abs(a) or a.real <= 0:
+            continue
+        k1 = float(a.real)
+        k2 = float(-(p1 + k1 * q1) / (r1 + k1 * s1))
+        if not np.isfinite(k2) or k2 < -1e-9 * max(scale_k2, k1):
+            continue
+        out.append((k1, max(k2, 0.0)))
+    return out
+
+
+@dataclass(frozen=True)
+class Crossings:
+    """Where the ``k1(gamma)`` curves of two modes cross on a tip-position grid (fact 4)."""
+
+    tip_positions: tuple[float, ...]
+    k1: tuple[float, ...]
+    low: float
+    points: int
+    confirmed_points: int
+    modes: tuple[int, int]
+
+    def text(self) -> str:
+        """The uniqueness argument in words.
+
+        >>> Crossings((0.93,), (300.0,), 0.7, 101, 201, (1, 2)).text().split("positions: ")[-1]
+        'one solution in the box: unique there (a search at two resolutions, not an interval proof)'
+        """
+        n = len(self.tip_positions)
+        verdict = ("one solution in the box: unique there" if n == 1 else
+                   "no solution in the box" if n == 0 else f"{n} solutions in the box: not unique")
+        if self.confirmed_points < 0:
+            again = f"but a different number of times at {2 * self.points - 1} positions: the count is not settled"
+        else:
+            again = f"the same at {self.confirmed_points} positions: {verdict}"
+        return (f"k1 from mode {self.modes[0]} alone and from mode {self.modes[1]} alone at {self.points} "
+                f"tip positions in [{self.low:g}, 1] (exact at each: a polynomial in k1, the mode fixed by counting "
+                f"the roots below it); their curves cross {n} time(s), {again} (a search at two resolutions, not an "
+                "interval proof)")
+
+
+def _k1_curves(lever, lateral, contact_hz, modes, gammas):
+    """``k1`` of each mode alone at each tip position, and the same compactified to
+    ``s = k1 / (k1 + k)``, continued past the branch: ``-(soft - beta) / soft`` below its soft
+    limit (no ``k1`` is small enough), ``1 + (beta - stiff) / stiff`` above its stiff limit
+    (none is large enough).  So ``s`` is continuous in ``gamma`` and its curves of two modes
+    change order exactly where they cross, even where both run off to ``k1 -> oo``."""
+    b = np.stack([betas(lever, f, gammas) for f in contact_hz])
+    k1 = np.stack([k1_at(b[i], m, lever, lateral, gammas) for i, m in enumerate(modes)])
+    s = k1 / (k1 + lever.spring_constant)
+    for i, m in enumerate(modes):
+        for j in np.flatnonzero(np.isnan(k1[i])):
+            soft, stiff = branch_limits(m, lever, lateral, float(gammas[j]))
+            beta = b[i][j]
+            s[i][j] = -(soft - beta) / soft if beta <= soft else 1.0 + (beta - stiff) / stiff
+    return k1, s
+
+
+def _crossings(lever, lateral, contact_hz, modes, gammas):
+    _, s = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], gammas)
+    d = s[1] - s[0]
+    brackets = [i for i in range(len(gammas) - 1) if d[i] * d[i + 1] < 0]
+    brackets += [i - 0.5 for i in range(len(gammas)) if d[i] == 0.0]
+    return sorted(brackets)
+
+
+def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, low: float = 0.5,
+                      points: int = 101) -> Crossings:
+    """``(tip_position, k1)`` explaining the first two resonances, by crossing their ``k1(gamma)`` curves.
+
+    The curves, compactified to ``k1 / (k1 + k)`` and continued past their branches (so that
+    a branch running off to ``k1 -> oo`` near the solution stays continuous), are evaluated at
+    ``points`` tip positions in ``[low, 1]``; each sign change of their difference is refined
+    by Brent's method and kept where both modes have a ``k1``, and the count is confirmed on a
+    grid of ``2 points - 1`` positions (module, fact 4).
+
+    >>> from pfmdyn.roots.bracket import grid_roots
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5)   # tip at 0.9 L, k1 = 100 N/m, k2 = 0
+    >>> b = grid_roots(lambda x: characteristic(x, lever, 100.0, 0.0, 0.9), np.arange(1, 9, 0.01))[:2]
+    >>> c = tip_position_scan(lever, Lateral(), 7e4 * (b / lever.free_root()) ** 2, (1, 2), low=0.8)
+    >>> [round(g, 9) for g in c.tip_positions], [round(k, 6) for k in c.k1]
+    ([0.9], [100.0])
+    """
+    from scipy.optimize import brentq
+
+    def curves(g):
+        return _k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))
+
+    def crossings(count):
+        gammas = np.linspace(low, 1.0, count)
+        found = []
+        for i in _crossings(lever, lateral, contact_hz, modes, gammas):
+            if i != int(i):                                # a grid point on the crossing
+                g = float(gammas[int(i + 0.5)])
+            else:
+                g = brentq(lambda x: float(np.diff(curves(x)[1][:, 0])[0]), gammas[i], gammas[i + 1],
+                           xtol=1e-15, rtol=1e-15)
+            # Where the continued curves cross beyond a branch, no k1 explains either mode.
+            if np.all(np.isfinite(curves(g)[0])):
+                found.append(g)
+        return found
+
+    found = crossings(points)
+    finer = crossings(2 * points - 1)
+    k1 = [float(curves(g)[0][0, 0]) for g in found]
+    return Crossings(tuple(found), tuple(k1), low, points, 2 * points - 1 if len(finer) == len(found) else -1,
+                     (int(modes[0]), int(modes[1])))
+
+
+def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -> np.ndarray:
+    """Shift in ``beta`` from each measured resonance to the nearest root of the model (a Newton step).
+
+    >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
+    array([-0.016603])
+    """
+    gamma = values.get("tip_position", lever.tip_position)
+    k1 = values["k1"]
+    k2 = values["k2"] if "k2" in values else lateral.k2(k1)
+    b = betas(lever, contact_hz, gamma)
+    value = characteristic(b + 1j * _STEP * b, lever, k1, k2, gamma)
+    return -value.real / (value.imag / (_STEP * b))
+
+
+_BOUNDS = {"k1": (0.0, np.inf), "k2": (0.0, np.inf), "tip_position": (0.05, 1.0)}
+
+
+def fit(lever: Cantilever, lateral: Lateral, contact_hz, start: dict) -> tuple[dict, float]:
+    """Least-squares polish of ``start`` (names -> values) on all resonances; the RMS ``beta`` shift.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4)
+    >>> values, rms = fit(lever, Lateral(), [300e3], {"k1": 109.7})
+    >>> round(values["k1"], 4), rms < 1e-12
+    (109.7483, True)
+    """
+    from scipy.optimize import least_squares
+
+    names = list(start)
+    scale = np.array([max(abs(start[n]), 1e-3 * lever.spring_constant if n != "tip_position" else 0.1)
+                      for n in names])
+    low = np.array([_BOUNDS[n][0] for n in names]) / scale
+    high = np.array([_BOUNDS[n][1] for n in names]) / scale
+    x0 = np.clip(np.array([start[n] for n in names]) / scale, low, high)
+
+    def residual(x):
+        return beta_shifts(lever, lateral, contact_hz, dict(zip(names, x * scale)))
+    with np.errstate(all="ignore"):
+        sol = least_squares(residual, x0, bounds=(low, high), xtol=1e-15, ftol=1e-15, gtol=1e-15, method="trf")
+    values = {n: float(v) for n, v in zip(names, sol.x * scale)}
+    return values, float(np.sqrt(np.mean(sol.fun ** 2)))
+
+
+def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, contact_stderr: float = 0.0,
+               free_stderr: float = 0.0, spring_constant_stderr: float = 0.0) -> np.ndarray:
+    """First-order covariance of ``values`` (their order) from the input standard uncertainties.
+
+    The residuals vanish (or are least squares) at the solution; by the implicit-function
+    theorem ``d values / d data = -pinv(J_values) J_data``, both Jacobians by central
+    differences of the residuals (relative step 1e-6).
+
+    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
+    >>> round(float(np.sqrt(cov[0, 0])), 3)   # N/m
+    0.393
+    """
+    names = list(values)
+    fc = np.asarray(contact_hz, dtype=float)
+
+    def residual(p, data):
+        lv = replace(lever, free_resonance=data[-2], spring_constant=data[-1])
+        return beta_shifts(lv, lateral, data[:-2], dict(zip(names, p)))
+
+    p0 = np.array([values[n] for n in names])
+    d0 = np.concatenate([fc, [lever.free_resonance, lever.spring_constant]])
+
+    def jacobian(fun, x0, limited=()):
+        cols = []
+        for i in range(len(x0)):
+            h = 1e-6 * max(abs(x0[i]), 1e-12)
+            up, down = x0.copy(), x0.copy()
+            up[i] += h
+            down[i] -= h
+            if i in limited and up[i] > 1.0:        # a tip position at the free end: one-sided
+                cols.append((fun(x0) - fun(down)) / h)
+            else:
+                cols.append((fun(up) - fun(down)) / (2 * h))
+        return np.column_stack(cols)
+
+    at_end = tuple(i for i, n in enumerate(names) if n == "tip_position")
+    with np.errstate(all="ignore"):
+        jp = jacobian(lambda p: residual(p, d0), p0, at_end)
+        jd = jacobian(lambda d: residual(p0, d), d0)
+    sensitivity = -np.linalg.pinv(jp) @ jd
+    sigma = np.concatenate([np.full(len(fc), float(contact_stderr)), [free_stderr, spring_constant_stderr]])
+    return (sensitivity * sigma ** 2) @ sensitivity.T
+
+
+def require_tip_height(lever: Cantilever, why: str) -> None:
+    """A one-line error when ``why`` needs the tip height and the lever has none.
+
+    >>> require_tip_height(Cantilever(2.0, 7e4, 2e-4), "a tilt")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: a tilt needs the tip height: give --tip-height (and --length)
+    """
+    if lever.tip_height is None:
+        raise UserError(f"{why} needs the tip height: give --tip-height (and --length)")

@@ -1,0 +1,285 @@
+"""Where a probe's resonances are: certified undamped free and contact modes, and with damping
+each mode's Q, damped frequency and amplitude-peak frequency.
+
+The model is the composed one (``derivations/tip_setback.py``, ``generated/tip_setback.py``):
+the tip at ``x_tip = tip_position L`` with its mass and rotary inertia, the contact springs
+``k1`` (along the sample normal) and ``k2`` (along the surface) rotated into the lever's axes by
+the tilt, the three damping mechanisms of ``derivations/damping.py``.
+
+Frequency scale.  The measured first free resonance ``f1`` is that of the lever *with* its tip,
+so the bare lever's scale follows from the first free root ``beta_1`` of the same model:
+``f_n = f1 (beta_n / beta_1)**2`` for every root ``beta_n`` (free or in contact).
+
+Proof.  The roots in ``beta`` are isolated and refined in ball arithmetic
+(:func:`pfmdyn.roots.certify.certify`) on ``characteristic_balls``, the generated
+characteristic in a math namespace: the trivial zero at ``beta = 0`` is cleared with exact
+rational series, every bracket holds exactly one simple zero, and the list is complete up to
+the highest root reported (``*_complete_below_hz``).  The parameters enter exactly as the
+floats given (``k1``, ``k2`` after the rotation by the tilt).  A proof that fails gives a
+result with ``certified = False``, the reason, and no numbers.
+
+Damping (``quality_factor``, ``viscous_loss``, ``contact_loss``).  Each mode's complex
+frequency ``r_c = f_c / f1`` is the zero of the damped characteristic (the generated damping
+factors are analytic in ``r``), found by the secant method from the undamped root;
+``Q = |r_c| / (2 Im r_c)``, the damped frequency is ``f1 Re r_c``.  The amplitude-peak frequency
+is the maximum of the tip slope's magnitude near the mode for the drive an instrument uses:
+the surface displacement ``d1`` in contact, a uniform load ``q0`` for free modes.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import flint
+import numpy as np
+from scipy.optimize import minimize_scalar, newton
+
+from ..cantilever import Cantilever, Contact
+from ..generated import damping, formulas, tip_setback
+from ..generated.characteristic import FLINT
+from ..generated.tilt_rotation import rotated
+from ..roots.certify import CertificationError, certify
+
+__all__ = ["Modes", "ResonanceResult", "resonances"]
+
+_DIGITS = 15
+"""Significant digits of each certified root in ``beta`` (the Hz values are floats)."""
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Resonances of one condition (free or in contact), in mode order.
+
+    ``hz``: undamped resonances; ``intervals_hz``: certified enclosures; ``complete_below_hz``:
+    no resonance was missed or counted twice below it.  With damping, ``q``, ``damped_hz`` and
+    ``peak_hz`` per mode (else empty).
+    """
+
+    hz: tuple = ()
+    intervals_hz: tuple = ()
+    complete_below_hz: float = math.nan
+    q: tuple = ()
+    damped_hz: tuple = ()
+    peak_hz: tuple = ()
+
+
+@dataclass(frozen=True)
+class ResonanceResult:
+    """Resonances of a probe (:func:`resonances`); ``to_dict()`` is the JSON report."""
+
+    lever: Cantilever
+    contact: Contact | None
+    free: Modes = field(default_factory=Modes)
+    in_contact: Modes = field(default_factory=Modes)
+    certified: bool = False
+    reason: str = ""
+
+    @property
+    def damped(self) -> bool:
+        """True when a damping mechanism was given (then Q, damped and peak frequencies exist)."""
+        return _damped(self.lever, self.contact)
+
+    def to_dict(self) -> dict:
+        """Names -> values (Hz, SI): ``free_hz``, ``contact_hz`` and their proofs, the probe,
+        with damping ``free_q``, ``free_damped_hz``, ``free_peak_hz`` (and ``contact_...``).
+
+        >>> r = resonances(Cantilever(2.0, 7e4, 2e-4), Contact(k1=100.0), modes=2)
+        >>> d = r.to_dict()
+        >>> [round(f) for f in d["free_hz"]], [round(f) for f in d["contact_hz"]]
+        ([70000, 438683], [277474, 696317])
+        """
+        out = {name: value for name, value in self.lever.to_dict().items()}
+        if self.contact is not None:
+            out.update(k1=self.contact.k1, k2=self.contact.k2_of(self.contact.k1),
+                       contact_loss=self.contact.contact_loss)
+        out["certified"] = self.certified
+        if not self.certified:
+            out["reason"] = self.reason
+            return out
+        for prefix, modes in (("free", self.free), ("contact", self.in_contact)):
+            out[f"{prefix}_hz"] = list(modes.hz)
+            out[f"{prefix}_intervals_hz"] = [list(i) for i in modes.intervals_hz]
+            out[f"{prefix}_complete_below_hz"] = modes.complete_below_hz if modes.hz else None
+            if self.damped:
+                # An undamped mode's Q is infinite: the JSON writer (pfmdyn.io.results) makes it null.
+                out[f"{prefix}_q"] = list(modes.q)
+                out[f"{prefix}_damped_hz"] = list(modes.damped_hz)
+                out[f"{prefix}_peak_hz"] = list(modes.peak_hz)
+        return out
+
+    def report(self) -> str:
+        """A readable table of the modes.
+
+        >>> print(resonances(Cantilever(2.0, 7e4, 2e-4), None, modes=2).report())
+        mode  condition  resonance (Hz)
+           1  free       70000.0
+           2  free       438682.5
+        certified: no resonance missed or counted twice below 446374.5 Hz (free)
+        """
+        if not self.certified:
+            return f"not certified: {self.reason}"
+        damped = self.damped
+        head = "mode  condition  resonance (Hz)" + ("   damped (Hz)      peak (Hz)        Q" if damped else "")
+        lines = [head]
+        for label, modes in (("free", self.free), ("contact", self.in_contact)):
+            for i, f in enumerate(modes.hz):
+                row = f"{i + 1:4d}  {label:9s}  {f:<14.1f}"
+                if damped:
+                    row += f"   {modes.damped_hz[i]:<14.1f}   {modes.peak_hz[i]:<14.1f}  {modes.q[i]:.4g}"
+                lines.append(row.rstrip())
+        proof = [f"{m.complete_below_hz:.1f} Hz ({label})" for label, m in (("free", self.free),
+                                                                           ("contact", self.in_contact)) if m.hz]
+        lines.append("certified: no resonance missed or counted twice below " + " and ".join(proof))
+        return "\n".join(lines)
+
+
+def _damped(lever: Cantilever, contact: Contact | None) -> bool:
+    return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0
+            or (contact is not None and contact.contact_loss > 0))
+
+
+def _springs(lever: Cantilever, contact: Contact | None, k1_factor=1.0) -> tuple:
+    """``(kvv, kll, kvl)`` of the contact in the lever's axes (zeros when free)."""
+    if contact is None:
+        return 0.0, 0.0, 0.0
+    return rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), lever.alpha)
+
+
+def _parameters(lever: Cantilever, contact: Contact | None) -> tuple:
+    """Arguments of the generated characteristic after ``beta``."""
+    H = lever._tip_height(contact) if contact is not None else (lever.tip_height or 0.0)
+    return (lever.spring_constant, *_springs(lever, contact), H, lever.length, lever.tip_mass_ratio,
+            lever.tip_position, lever.rho_g)
+
+
+def _fmpq(value: float) -> flint.fmpq:
+    q = Fraction(float(value))          # exact: the float given is the parameter proven for
+    return flint.fmpq(q.numerator, q.denominator)
+
+
+def _certified_roots(params: tuple, count: int) -> tuple[list, flint.arb]:
+    """The first ``count`` roots in ``beta`` as certified balls, and the end of the complete range."""
+    exact = [_fmpq(p) for p in params]
+    balls = [flint.arb(p) for p in exact]
+
+    def on_series(s):
+        return tip_setback.characteristic_balls(s, FLINT, *balls)
+
+    def on_exact(s):
+        return tip_setback.characteristic_balls(s, FLINT, *exact)
+
+    return certify(on_series, count, _DIGITS, f_exact=on_exact)
+
+
+def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3) -> ResonanceResult:
+    """Certified free and contact resonances of ``lever`` (and ``contact``), first ``modes`` of each.
+
+    Parameters
+    ----------
+    lever : the probe (:class:`pfmdyn.Cantilever`): ``free_resonance`` is the measured first free
+        resonance with the tip; tip position, mass, gyration radius, tilt and losses as given.
+    contact : :class:`pfmdyn.Contact` with ``k1`` (and ``k2`` or a policy; none: ``k2 = 0``), or
+        None for free modes only.
+    modes : number of modes of each condition.
+
+    Returns
+    -------
+    ResonanceResult
+
+    Examples
+    --------
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, tip_mass_ratio=0.1,
+    ...                    tip_gyration_radius=2.5e-6, tilt=12.0, quality_factor=200.0)
+    >>> r = resonances(lever, Contact(k1=200.0, k2_over_k1=0.85), modes=2)
+    >>> round(r.free.hz[0]), round(r.in_contact.hz[0]), round(r.in_contact.q[0])
+    (70000, 355728, 247)
+    """
+    if modes < 1:
+        raise ValueError("modes must be at least 1")
+    if contact is not None and contact.k1 is None:
+        contact = None
+    old = flint.ctx.prec
+    try:
+        free_balls, free_top = _certified_roots(_parameters(lever, None), modes)
+        contact_balls, contact_top = (_certified_roots(_parameters(lever, contact), modes)
+                                      if contact is not None else ([], None))
+    except CertificationError as exc:
+        return ResonanceResult(lever, contact, reason=str(exc))
+    finally:
+        flint.ctx.prec = old
+    f1 = flint.arb(_fmpq(lever.free_resonance))
+    beta1 = free_balls[0]
+
+    def hz(ball):
+        return formulas.frequency_from_beta(ball, f1, beta1)
+
+    def condition(balls, top, where):
+        values = [hz(b) for b in balls]
+        mids = tuple(float(v.mid()) for v in values)
+        out = Modes(mids, tuple((float(v.lower()), float(v.upper())) for v in values), float(hz(top).mid()))
+        if not _damped(lever, contact):
+            return out
+        ratios = [float(formulas.frequency_from_beta(b, 1, beta1).mid()) for b in balls]      # f / f1
+        q, damped_hz, peak = _damped_modes(lever, where, ratios)
+        return Modes(out.hz, out.intervals_hz, out.complete_below_hz, q, damped_hz, peak)
+
+    return ResonanceResult(lever, contact, condition(free_balls, free_top, None),
+                           condition(contact_balls, contact_top, contact) if contact is not None else Modes(),
+                           certified=True)
+
+
+def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
+    """The damped characteristic at (complex) ``r = f / f1``: the damping factors substituted."""
+    loss = contact.contact_loss if contact is not None else 0.0
+    beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
+    k, kvv, kll, kvl, H, L, mu, gamma, rho_g = _parameters(lever, contact)
+    kvv, kll, kvl = _springs(lever, contact, k1_f)
+    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
+    return tip_setback.characteristic(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
+                                      mu * mu_f, gamma, rho_g)
+
+
+def _slope(lever: Cantilever, contact: Contact | None, r):
+    """Tip slope per unit drive at real ``r``: ``d1`` in contact, ``q0`` when free."""
+    loss = contact.contact_loss if contact is not None else 0.0
+    beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
+    k, _, _, _, H, L, mu, gamma, rho_g = _parameters(lever, contact)
+    kvv, kll, kvl = _springs(lever, contact, k1_f)
+    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
+    slopes = tip_setback.slope(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
+                               mu * mu_f, gamma, rho_g)
+    return slopes[0] if contact is not None else slopes[3]
+
+
+def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple]:
+    """(Q, damped Hz, peak Hz) of the modes near the undamped roots ``r0`` (NaN where not found)."""
+    f1 = lever.free_resonance
+    q, damped_hz, peak = [], [], []
+    with np.errstate(all="ignore"):
+        for rn in r0:
+            try:
+                # The secant method in the complex plane from the undamped root, nudged off the axis.
+                rc = complex(newton(lambda r: complex(_damped_characteristic(lever, contact, r)),
+                                    complex(rn, 1e-3 * rn), x1=complex(rn * (1 + 1e-3), 2e-3 * rn),
+                                    tol=1e-14 * rn, maxiter=100))
+            except (RuntimeError, ZeroDivisionError):
+                rc = complex(math.nan, math.nan)
+            q.append(abs(rc) / (2 * abs(rc.imag)) if rc.imag else math.inf)
+            damped_hz.append(f1 * rc.real)
+            peak.append(_peak(lever, contact, rc, rn) * f1)
+    return tuple(q), tuple(damped_hz), tuple(peak)
+
+
+def _peak(lever: Cantilever, contact: Contact | None, rc: complex, rn: float) -> float:
+    """``r`` of the slope magnitude's maximum near the mode (bounded search over half-widths)."""
+    centre = rc.real if math.isfinite(rc.real) else rn
+    width = max(abs(rc.imag), 1e-9 * rn) if math.isfinite(rc.imag) else 1e-3 * rn
+    lo, hi = max(centre - 4 * width, 0.5 * centre), centre + 4 * width
+    grid = np.linspace(lo, hi, 81)
+    magnitude = np.abs(_slope(lever, contact, grid))
+    i = int(np.argmax(magnitude))
+    a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
+    best = minimize_scalar(lambda r: -abs(complex(_slope(lever, contact, np.array([r]))[0])), bounds=(a, b),
+                           method="bounded", options={"xatol": 1e-13 * centre})
+    return float(best.x)

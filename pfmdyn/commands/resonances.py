@@ -1,0 +1,51 @@
+"""``pfmdyn resonances``: where a probe's free and contact resonances are, certified.
+
+Example: ``pfmdyn resonances --spring-constant 2.5 --free-resonance 5e4 --length 200e-6
+--tip-height 10e-6 --k1 260 --k2-over-k1 0.85 --tip-mass-ratio 0.14 --tip-gyration-radius 2.5e-6
+--tilt 11.5 --quality-factor 300 --json r.json``.  Tilt in degrees, positive when the free end is
+nearer the sample than the clamp (the usual mounting).  See :mod:`pfmdyn.analysis.resonances`.
+"""
+from __future__ import annotations
+
+from ..analysis.resonances import resonances
+from ..errors import UserError
+from ..io.results import write_json
+from . import flags
+from .roots import positive_int
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(parser) -> None:
+    """Arguments of ``pfmdyn resonances``: the probe's flags, ``--modes``, ``--json``.
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> p.parse_args(["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4",
+    ...               "--tilt", "12"]).tilt
+    '12'
+    """
+    parser.epilog = ("tilt: degrees, positive when the free end is nearer the sample than the clamp "
+                     "(the usual mounting, 10-15 deg). No k2 and no k2 policy: k2 = 0.")
+    flags.add_lever(parser, required=("spring_constant", "free_resonance", "length"))
+    flags.add_contact(parser)
+    flags.add_damping(parser)
+    parser.add_argument("--modes", default="3", help="number of modes of each condition (default 3)")
+    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+
+
+def run(args) -> int:
+    """Compute, print the table, write JSON if asked; 1 when a proof fails."""
+    modes = positive_int(args.modes, "--modes")
+    if modes > 50:
+        raise UserError(f"--modes must be at most 50, got {modes}")
+    lever = flags.cantilever(args)
+    contact = flags.contact(args)
+    if contact.k1 is None and (contact.k2 is not None or contact.k2_over_k1 is not None
+                               or contact.poisson is not None or contact.contact_loss):
+        raise UserError("a contact needs --k1")
+    result = resonances(lever, contact if contact.k1 is not None else None, modes)
+    print(result.report())
+    if args.json:
+        write_json(args.json, result.to_dict())
+    return 0 if result.certified else 1

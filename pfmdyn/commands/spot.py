@@ -1,0 +1,79 @@
+"""``pfmdyn spot``: where to put the laser spot (electrostatic blind spots, calibration, d_eff error)."""
+from __future__ import annotations
+
+from ..analysis.spot import ratio_map, spot_analysis
+from ..errors import UserError
+from ..names import LEVER, NAMES, canonical
+from . import flags
+
+__all__ = ["add_arguments", "run", "report"]
+
+
+def add_arguments(parser) -> None:
+    """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""
+    parser.add_argument("file", nargs="?", help="instrument file supplying what it holds of the lever "
+                        "(.ibw, .h5, .nid, sweeps); flags override it")
+    flags.add_lever(parser)
+    flags.add_contact(parser, required=("k1",))
+    parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
+    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
+
+
+def report(result) -> str:
+    """The lines ``pfmdyn spot`` prints."""
+    d = result.to_dict()
+    lines = [f"frequency {d['frequency']:.6g} Hz (beta = {d['beta']:.6g})"]
+    if not d["certified"]:
+        lines.append(f"blind spot: not certified ({d['reason']})")
+    elif d["blind_spot"]:
+        lines.append("blind spot x_s/L: " + ", ".join(f"{p:.6f}" for p in d["blind_spot"])
+                     + " (certified: complete on (0, 1])")
+    else:
+        lines.append("blind spot x_s/L: none in (0, 1] (certified)")
+    lines.append(f"at x_s/L = {d['spot_position']:g}: static sensitivity u_tip/(L theta) "
+                 f"free {d['free_sensitivity']:.6g}, in contact {d['contact_sensitivity']:.6g} (paper: 2/3)")
+    c, p = d["calibration_factor"], d["paper_calibration_factor"]
+    lines.append(f"  measured/true d_eff: {c['re']:+.6g}{c['im']:+.3g}j (InvOLS from a static force curve "
+                 f"on this contact), {p['re']:+.6g}{p['im']:+.3g}j (A = 2 theta L/3)")
+    e = d["d_eff_error_per_volt"]
+    lines.append("  d_eff error from the distributed load: "
+                 + (f"{e['re'] * 1e12:+.4g} pm/V per volt of V_dc - V_surf" if e else "undetermined (needs --width)"))
+    return "\n".join(lines)
+
+
+def _lever(args):
+    """The lever from the instrument file (when given) with the flags over it."""
+    found = {}
+    if args.file:
+        from ..io.instruments import read_instrument
+        record = read_instrument(args.file)
+        found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
+    given = {**found, **flags.given(args, LEVER)}
+    for name in ("spring_constant", "free_resonance", "length", "tip_height"):
+        if given.get(name) is None:
+            where = f" in {args.file}" if args.file else ""
+            raise UserError(f"no {NAMES[name].meaning.split(',')[0]}{where}: give {NAMES[name].flag}")
+    return flags.cantilever(args, found)
+
+
+def run(args) -> int:
+    """Analyse, print, write what was asked."""
+    lever, contact = _lever(args), flags.contact(args)
+    result = spot_analysis(lever, contact, args.frequency)
+    print(report(result))
+    if args.json:
+        from ..io.results import write_json
+        write_json(args.json, result.to_dict())
+    if args.plot:
+        import numpy as np
+
+        from ..plots.spot import plot_spot
+        fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
+        frequencies = np.linspace(fmax / 400, fmax, 400)
+        fig = plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions))
+        try:
+            fig.savefig(args.plot, dpi=120)
+        except OSError as exc:
+            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+    return 0

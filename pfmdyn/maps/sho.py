@@ -1,0 +1,247 @@
+"""Batched simple-harmonic-oscillator (SHO) fit of band-excitation spectra, in BGlib's model and conventions.
+
+Band-excitation users describe each spectrum by an SHO,
+``A e^{i phi} w0**2 / (f**2 - i f w0/Q - w0**2)`` (f in Hz; BGlib's ``BESHOfitter``): ``A`` is the
+response's magnitude far below resonance (the peak's is ``A Q``) and ``phi`` carries BGlib's ``+pi``
+(far below resonance the response is ``-A e^{i phi}``).  The
+response and its partials are :func:`pfmdyn.generated.formulas.sho_response` and its
+``_d_log_*`` companions.  Each spectrum (every pixel, bias step and frequency band: BGlib fits each
+spectroscopic step on its own) is fitted in two stages, every spectrum of a block at once:
+
+1. *Guess*: the SHO's denominator is linear in ``w0**2`` and ``w0/Q``, so ``y D(f) = A e^{i phi}
+   w0**2`` is a linear least-squares problem per spectrum; three Sanathanan-Koerner passes
+   reweight it by ``1/|D|`` of the previous pass (the equation error becomes the residual).
+   No start values, no grid: resonances anywhere in or near the band, any Q.
+2. *Fit*: the complex amplitude enters linearly and is projected out (variable projection);
+   ``log w0`` and ``log Q`` follow the Levenberg-Marquardt iteration of the beam fit
+   (:func:`pfmdyn.maps.fit._levenberg_marquardt`), which treats all spectra at once.
+
+Both stages report BGlib's ``R2 Criterion``, ``1 - sum|y - model|**2 / sum|y - mean(y)|**2``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UserError
+from ..generated.formulas import sho_response, sho_response_d_log_quality, sho_response_d_log_resonance
+from .fit import _covariance, _levenberg_marquardt, _project, bands
+
+__all__ = ["FIELDS", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
+
+FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "resonance_frequency", "Quality Factor": "quality_factor",
+          "Phase [rad]": "phase", "R2 Criterion": "r2"}
+"""BGlib's compound fields -> pfmdyn's map names (``guess_`` + name for the guess)."""
+
+_FIT = {
+    "amplitude": ("response units", "SHO amplitude A (|response| far below resonance; at the peak A Q)"),
+    "resonance_frequency": ("Hz", "SHO resonance frequency w0"),
+    "resonance_frequency_stderr": ("Hz", "standard error of resonance_frequency"),
+    "quality_factor": ("1", "SHO quality factor Q"),
+    "quality_factor_stderr": ("1", "standard error of quality_factor"),
+    "phase": ("rad", "SHO phase phi (BGlib's convention: the usual phase + pi)"),
+    "r2": ("1", "R2 criterion 1 - sum|y - model|^2 / sum|y - mean(y)|^2"),
+}
+_QUANTITIES = {
+    **_FIT,
+    **{f"guess_{name}": (unit, f"guess: {text}") for name, (unit, text) in _FIT.items() if not name.endswith("stderr")},
+    "gap": ("1", "relative residual |y - model| / |y|"),
+    "explained": ("1", "1 where the SHO explains the spectrum (gap below threshold), else 0"),
+}
+
+_Q_RANGE = (0.1, 1e5)
+
+
+@dataclass(frozen=True)
+class SHOMapModel:
+    """The frequencies (and DC biases) of a map fitted with one SHO per spectrum and band.
+
+    >>> m = SHOMapModel(np.linspace(3e5, 3.2e5, 8))
+    >>> m.name, m.dims, list(m.outputs)[:2]
+    ('sho', ('y', 'x'), ['amplitude', 'resonance_frequency'])
+    """
+
+    frequency_hz: np.ndarray
+    bias_v: np.ndarray | None = None
+    name = "sho"
+
+    @property
+    def bands(self) -> list[slice]:
+        """Frequency bands (:func:`pfmdyn.maps.fit.bands`): each gets an SHO of its own."""
+        return bands(self.frequency_hz)
+
+    @property
+    def step_shape(self) -> tuple[int, ...]:
+        """Trailing shape of every map after ``(y, x)``: bias steps, then bands when more than one."""
+        return (() if self.bias_v is None else (len(self.bias_v),)) + ((len(self.bands),) if len(self.bands) > 1 else ())
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        """Dimension names of every map."""
+        return ("y", "x") + (() if self.bias_v is None else ("bias",)) + (("band",) if len(self.bands) > 1 else ())
+
+    @property
+    def outputs(self) -> dict[str, tuple[str, str]]:
+        """The maps written: name -> (unit, description)."""
+        return dict(_QUANTITIES)
+
+
+def is_sho(model) -> bool:
+    """Whether a map model is the SHO's (by its name: a class test fails when a module is loaded
+    twice, as pytest's doctests do).
+
+    >>> is_sho(SHOMapModel(np.array([1.0, 2.0]))), is_sho(object())
+    (True, False)
+    """
+    return getattr(model, "name", None) == SHOMapModel.name
+
+
+@dataclass(frozen=True)
+class _Oscillator:
+    """The SHO over one band as the Levenberg-Marquardt of :mod:`pfmdyn.maps.fit` wants a model:
+    internal parameters ``(log w0, log Q)``, one transfer function, one band."""
+
+    frequency_hz: np.ndarray
+    parameters = ("log_f0", "log_q")
+
+    @property
+    def bands(self):
+        return [slice(None)]
+
+    def design(self, p, jacobian=True):
+        f0, q = np.exp(p[:, 0, None]), np.exp(p[:, 1, None])
+        f = self.frequency_hz
+        g = sho_response(f, f0, q)[:, None, :]
+        if not jacobian:
+            return g, None
+        return g, np.stack([sho_response_d_log_resonance(f, f0, q), sho_response_d_log_quality(f, f0, q)])[:, :, None]
+
+
+def _guess(f, y, passes=3):
+    """``(log w0, log Q)`` per spectrum from the linearised SHO (see the module docstring).
+
+    ``y (f**2 - u - i f v) = c`` with ``u = w0**2``, ``v = w0/Q`` (real) and ``c`` complex, in
+    frequencies scaled by the band's centre; each pass weights the equations by ``1/|D|`` of the
+    previous one.
+    """
+    centre = float(np.mean(f))
+    x = f / centre
+    weight = np.ones(y.shape)
+    for _ in range(passes):
+        yw = y * weight
+        # unknowns (u, v, Re c, Im c); complex columns whose real normal matrix is Re(C^H C)
+        columns = np.stack([yw, 1j * x * yw, weight + 0j, 1j * weight], axis=1)     # (n, 4, nf)
+        normal = (columns.conj() @ columns.transpose(0, 2, 1)).real
+        rhs = (columns.conj() @ (yw * x**2)[:, :, None]).real
+        scale = np.sqrt(np.maximum(np.einsum("nii->ni", normal), 1e-300))
+        solution = np.linalg.solve(normal / scale[:, :, None] / scale[:, None, :] + 1e-12 * np.eye(4),
+                                   rhs / scale[:, :, None])[..., 0] / scale
+        u = np.clip(solution[:, 0], (x[0] / 2) ** 2, (2 * x[-1]) ** 2)
+        v = np.abs(solution[:, 1])
+        x0 = np.sqrt(u)
+        q = np.clip(x0 / np.maximum(v, x0 / _Q_RANGE[1]), *_Q_RANGE)
+        weight = 1.0 / np.abs(x**2 - 1j * x * (x0 / q)[:, None] - u[:, None])
+        weight /= np.max(weight, axis=1, keepdims=True)
+    return np.stack([np.log(x0 * centre), np.log(q)], axis=1)
+
+
+def _r2(y, residual_squares):
+    """BGlib's R2 criterion per spectrum (0 for a constant spectrum)."""
+    total = np.sum(np.abs(y - y.mean(axis=1, keepdims=True)) ** 2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(total > 0, 1 - residual_squares / total, 0.0)
+
+
+def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict[str, np.ndarray]:
+    """SHO guess and least-squares fit of every spectrum ``(n, n_freq)`` over one band.
+
+    Returns ``(n,)`` arrays named as :attr:`SHOMapModel.outputs` (guess and fit), ``cost``
+    (squared relative residual) and ``gap`` (its root).
+
+    >>> f = np.linspace(290e3, 310e3, 64)
+    >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
+    >>> out = fit_spectra(f, y[None])
+    >>> round(float(out["resonance_frequency"][0]), 3), round(float(out["quality_factor"][0]), 6)
+    (301200.0, 150.0)
+    >>> round(float(out["amplitude"][0]), 9), round(float(out["phase"][0]), 9), round(float(out["r2"][0]), 9)
+    (0.002, 0.5, 1.0)
+    """
+    f = np.asarray(frequency_hz, float)
+    y = np.asarray(spectra, complex)
+    norm = np.sqrt(np.sum(np.abs(y) ** 2, axis=1))
+    norm[norm == 0] = 1.0
+    yn = y / norm[:, None]
+    model = _Oscillator(f)
+    bounds = (np.log([f[0] / 2, _Q_RANGE[0]]), np.log([2 * f[-1], _Q_RANGE[1]]))
+    out = {}
+    p0 = _guess(f, yn)
+    g0 = model.design(p0, jacobian=False)[0]
+    c0, r0, _ = _project(g0, None, yn[:, None, :], model.bands)
+    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, yn[:, None, :], p0.copy(), bounds, iterations, tolerance)
+    cov = _covariance(model, g, dg, c, cost / max(2 * f.size - 4, 1))
+    with np.errstate(over="ignore"):
+        spread = np.sinh(np.sqrt(np.abs(cov[:, [0, 1], [0, 1]])))
+    for prefix, params, amp, squares in (("guess_", p0, c0, np.sum(r0**2, axis=1)), ("", p, c, cost)):
+        amplitude = amp[:, 0, 0, 0] * norm
+        out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}resonance_frequency": np.exp(params[:, 0]),
+                    f"{prefix}quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
+                    f"{prefix}r2": _r2(yn, squares)})
+    out["resonance_frequency_stderr"] = out["resonance_frequency"] * spread[:, 0]
+    out["quality_factor_stderr"] = out["quality_factor"] * spread[:, 1]
+    out["cost"], out["gap"] = cost, np.sqrt(cost)
+    return out
+
+
+def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=0.2, iterations=40, tolerance=1e-3,
+                  chunk=1024) -> dict[str, np.ndarray]:
+    """Fit every spectrum of ``response`` (``(..., n_freq)``, or ``(..., n_bias, n_freq)`` with
+    biases), ``chunk`` spectra at once; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.
+
+    >>> f = np.concatenate([np.linspace(290e3, 310e3, 32), np.linspace(600e3, 640e3, 32)])
+    >>> y = sho_response(f, 300e3, 80.0) * (f < 4e5) + 1j * sho_response(f, 620e3, 120.0) * (f > 4e5)
+    >>> out = fit_sho_block(SHOMapModel(f), np.broadcast_to(y, (2, 3, f.size)))
+    >>> out["resonance_frequency"].shape, np.round(out["quality_factor"][0, 0], 6).tolist()
+    ((2, 3, 2), [80.0, 120.0])
+    >>> masked = fit_sho_block(SHOMapModel(f), np.stack([y, np.full(f.size, np.nan)]))
+    >>> np.isnan(masked["resonance_frequency"][1]).tolist(), masked["explained"][:, 0].tolist()
+    ([True, True], [1.0, 0.0])
+    """
+    y = np.asarray(response, complex)
+    tail = (len(model.bias_v), len(model.frequency_hz)) if model.bias_v is not None else (len(model.frequency_hz),)
+    if y.shape[-len(tail):] != tail:
+        raise UserError(f"response has shape {y.shape}; its last axes must be {tail} (biases, frequencies)")
+    shape = y.shape[:y.ndim - 1]
+    spectra = y.reshape(-1, tail[-1])
+    f = np.asarray(model.frequency_hz, float)
+    per_band = []
+    for band in model.bands:
+        # a spectrum holding NaN or inf, or nothing but zeros, is masked: NaN maps, not explained
+        usable = np.all(np.isfinite(spectra[:, band]), axis=1) & np.any(spectra[:, band] != 0, axis=1)
+        good = spectra[usable][:, band]
+        parts = [fit_spectra(f[band], good[i:i + chunk], iterations=iterations, tolerance=tolerance)
+                 for i in range(0, len(good), chunk)] or [fit_spectra(f[band], np.ones((1, f[band].size)))]
+        fitted = {name: np.concatenate([part[name] for part in parts])[:len(good)] for name in parts[0]}
+        per_band.append({name: _unmask(value, usable) for name, value in fitted.items()})
+    stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in per_band[0]}
+    stacked["explained"] = np.where(np.isfinite(stacked["gap"]), stacked["gap"] < gap_threshold, 0.0)
+    bands_shape = (len(model.bands),) if len(model.bands) > 1 else ()
+    return {name: value.reshape(shape + bands_shape) for name, value in stacked.items() if name in model.outputs}
+
+
+def _unmask(values, usable):
+    """``values`` of the usable spectra in place among all, NaN elsewhere."""
+    out = np.full(usable.shape, np.nan)
+    out[usable] = values
+    return out
+
+
+def band_centres(model: SHOMapModel) -> list[float]:
+    """Centre frequency of each band (Hz), the ``band`` coordinate of the maps.
+
+    >>> band_centres(SHOMapModel(np.array([1.0, 2.0, 3.0, 50.0, 51.0])))
+    [2.0, 50.5]
+    """
+    f = np.asarray(model.frequency_hz, float)
+    return [float(math.fsum(f[b]) / len(f[b])) for b in model.bands]
