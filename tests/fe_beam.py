@@ -46,6 +46,10 @@ class FEBeam:
     viscous_hz: float = 0.0
     eta: float = 0.0
     n_elements: int = 200
+    air_exponent: float = 0.0
+    """The viscous force's coefficient grows as ``(f / f1)**air_exponent``: 0 for a constant
+    half-power width (viscous), 0.5 for air (the boundary layer thins as 1/sqrt(f)), so that
+    ``viscous_hz`` is the width at f1."""
     gyration_radius: float = 0.0
     tilt_deg: float = 0.0
 
@@ -136,10 +140,10 @@ class FEBeam:
             b[3 + rows - cols, cols] = X[rows, cols]
             return b
 
-        kb, mb, cb = band(K), band(M), band(C + D)
+        kb, mb, cb, db = band(K), band(M), band(C), band(D)
         for i, f in enumerate(np.asarray(frequency_hz, float)):
             w = 2 * math.pi * f
-            ab = kb + 1j * w * cb - w**2 * mb
+            ab = kb + 1j * w * (cb * (f / self.f1) ** self.air_exponent + db) - w**2 * mb
             out[i] = scipy.linalg.solve_banded((3, 3), ab, F + 1j * w * Fd)[-1] / self.L
         return out
 
@@ -165,8 +169,11 @@ def _metadata(beam: FEBeam, description: str) -> str:
 
 
 def spectrum(beam: FEBeam, frequency_hz, biases=(-2.0, -1.0, 0.0, 1.0, 2.0), *, noise=0.01,
-             background=0.0, polar=False, seed=0, order="frequency") -> str:
+             background=0.0, polar=False, seed=0, order="frequency", gain_drift=0.0) -> str:
     """CSV text of a frequency-bias spectrum; ``noise`` relative to the median |response|.
+
+    ``gain_drift``: the detector gain of each bias sweep is multiplied by ``1 + gain_drift z``
+    (z standard normal, one per sweep): outside any model that fits one gain to all sweeps.
 
     ``order``: ``"frequency"`` (rows grouped by frequency), ``"instrument"`` (one sweep per
     bias, one after another) or ``"shuffled"``.
@@ -184,6 +191,8 @@ def spectrum(beam: FEBeam, frequency_hz, biases=(-2.0, -1.0, 0.0, 1.0, 2.0), *, 
         drive = np.array([1e-12, 0.3e-12, 2e-9 * (V - 0.3), 0.5e-6 * (V - 0.3)])
         rows.append(gain * T @ drive)
     R = np.array(rows)                                      # (bias, freq)
+    if gain_drift:
+        R = R * (1 + gain_drift * rng.standard_normal(len(biases)))[:, None]
     scale = np.median(np.abs(R))
     R = R + background * scale * (f / f.max()) * (1 + 0.5 * np.array(biases))[:, None] * np.exp(1.1j)
     R = R + noise * scale * (rng.standard_normal(R.shape) + 1j * rng.standard_normal(R.shape)) / math.sqrt(2)
@@ -315,3 +324,88 @@ def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_ele
     rows = [rows[i] for i in rng.permutation(len(rows))]
     head = _metadata(beam, "FE synthetic resonances").replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}")
     return head + f"# frequency_uncertainty_hz: {sigma!r}\nmode,condition,frequency_hz\n" + "\n".join(rows) + "\n", truth
+
+
+ACQUISITION = ("band_viscous", "band_air", "band_air_setback", "gain_drift", "large_setback")
+"""Classes of :func:`acquisition_case`: how real instruments record (band excitation, DFRT)."""
+
+
+def noise_truth(text: str, noise: float) -> float:
+    """The RMS complex noise :func:`spectrum` added (``noise`` times the median |response|
+    before noise), from the CSV text and the same relative ``noise``: the truth a noise
+    estimate is checked against."""
+    rows = np.array([[float(c) for c in line.split(",")] for line in text.splitlines()
+                     if line and not line.startswith("#") and not line[0].isalpha()])
+    z = rows[:, 2] + 1j * rows[:, 3]
+    # The noise barely moves the median of |R| (it is 0.3-2 % of it).
+    return float(noise * np.median(np.abs(z)))
+
+
+def acquisition_case(seed: int, kind: str, n_elements: int = 80) -> tuple[str, dict]:
+    """A spectrum recorded as instruments do, of class ``kind`` (:data:`ACQUISITION`):
+
+    * ``band_viscous``: 2-4 bands of 64-256 bins around the contact resonances, viscous
+      damping of constant width (hidden: damping);
+    * ``band_air``: the same bands, air damping, width ~ sqrt(f) (hidden: damping);
+    * ``band_air_setback``: and the tip 0.80-0.95 L from the clamp (hidden: damping, tip_setback);
+    * ``gain_drift``: a full sweep with air damping and a gain that drifts by 0.2-0.5 %
+      between bias sweeps (hidden: damping; the drift is outside the library);
+    * ``large_setback``: a soft (k 0.3-0.8 N/m, L 130-190 um) or stiff (k 5-40 N/m, L
+      200-450 um) lever, tip at 0.70-0.97 L, viscous damping, three biases, noise 1-2 %,
+      full sweep in instrument order (hidden: damping, tip_setback).
+
+    Returns the CSV text and the truth (``hidden``: the effect names; ``noise_sigma``: the
+    RMS complex noise added).
+    """
+    rng = np.random.default_rng(seed)
+    E, rho = 169e9, 2330.0
+    gamma = 1.0
+    if kind == "large_setback":
+        soft = bool(seed % 2 == 0)
+        k = rng.uniform(0.3, 0.8) if soft else 10 ** rng.uniform(math.log10(5), math.log10(40))
+        L = rng.uniform(130e-6, 190e-6) if soft else rng.uniform(200e-6, 450e-6)
+        gamma = rng.uniform(0.70, 0.97)
+    else:
+        k, L = 10 ** rng.uniform(math.log10(0.2), math.log10(40)), rng.uniform(120e-6, 450e-6)
+        if kind == "band_air_setback":
+            gamma = rng.uniform(0.80, 0.95)
+    w, H = rng.uniform(25e-6, 50e-6), rng.uniform(5e-6, 15e-6)
+    t = (4 * k * L**3 / (E * w)) ** (1 / 3)
+    f1 = BETA1**2 / (2 * math.pi) * t / L**2 * math.sqrt(E / 12 / rho)
+    n_modes = 3 if kind == "large_setback" else int(rng.integers(2, 5))
+    for attempt in range(60):
+        k1 = k * 10 ** rng.uniform(1, 3)
+        k2 = k1 * rng.uniform(0.5, 1.0)
+        beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, gamma=gamma, n_elements=n_elements)
+        contact = beam.contact_resonances(n_modes + 1)
+        if contact[n_modes - 1] < 25 * f1:
+            break
+        if attempt % 20 == 19:
+            n_modes = max(n_modes - 1, 2)       # a set-back tip lifts the higher contact modes
+    air = kind in ("band_air", "band_air_setback", "gain_drift")
+    q1 = 10 ** rng.uniform(math.log10(10), math.log10(60))         # free mode-1 Q
+    beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, gamma=gamma, n_elements=n_elements, viscous_hz=f1 / q1,
+                  air_exponent=0.5 if air else 0.0)
+    hidden = ["damping"] + (["tip_setback"] if gamma < 1 else [])
+    if kind == "large_setback":
+        biases, noise = (-2.0, 0.0, 2.0), rng.uniform(0.01, 0.02)
+    else:
+        biases, noise = tuple(np.round(np.linspace(-3, 3, int(rng.integers(3, 6))), 3)), rng.uniform(0.003, 0.015)
+    if kind.startswith("band"):
+        bands = []
+        for fc in contact[:n_modes]:
+            # A band excitation window: a few half-power widths each side, 64-256 bins.
+            width = beam.viscous_hz * (fc / f1) ** beam.air_exponent
+            half = max(4 * width, 0.02 * fc)
+            bands.append(np.linspace(fc - half, fc + half, int(rng.integers(64, 257))))
+        freq = np.unique(np.concatenate(bands))
+    else:
+        lo, hi = 0.5 * contact[0], min(0.5 * (contact[n_modes - 1] + contact[n_modes]), 1.15 * contact[n_modes - 1])
+        freq = np.linspace(lo, hi, 1000)
+    drift = float(rng.uniform(0.002, 0.005)) if kind == "gain_drift" else 0.0
+    text = spectrum(beam, freq, biases, noise=noise, seed=seed, order="instrument", gain_drift=drift)
+    truth = {"kind": kind, "hidden": sorted(hidden), "k": k, "L": L, "H": H, "f1": f1, "k1": k1, "k2": k2,
+             "gamma": gamma, "q1": q1, "noise": noise, "gain_drift": drift, "biases": len(biases),
+             "rows": len(freq) * len(biases), "contact_hz": [float(c) for c in contact[:n_modes]]}
+    truth["noise_sigma"] = noise_truth(text, noise)
+    return text, truth

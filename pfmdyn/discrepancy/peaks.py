@@ -25,7 +25,7 @@ from scipy.optimize import least_squares, minimize_scalar
 from ..generated import formulas
 from .model import bounds, resonance_sensitivity, resonances, resonances_many
 
-__all__ = ["data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
+__all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
 
 
 def _summed(data):
@@ -33,10 +33,39 @@ def _summed(data):
     return freq_u, np.bincount(inverse, np.abs(data.response))
 
 
-def _maxima(size, factor):
+def bands(freq_u) -> np.ndarray:
+    """Index of the band each frequency belongs to: a new band starts after a step five
+    times longer than the steps on either side (band excitation records a few narrow bands
+    around the resonances; a sweep is one band).
+
+    >>> bands(np.array([1.0, 2, 3, 4, 50, 51, 52])).tolist()
+    [0, 0, 0, 0, 1, 1, 1]
+    """
+    step = np.diff(freq_u)
+    if len(step) < 3:
+        return np.zeros(len(freq_u), int)
+    before = np.concatenate([[step[0]], step[:-1]])
+    after = np.concatenate([step[1:], [step[-1]]])
+    gap = step > 5 * np.maximum(before, after)
+    return np.concatenate([[0], np.cumsum(gap)])
+
+
+def _maxima(size, factor, freq_u=None):
+    """Local maxima above ``factor`` times the median of ``size``; with several bands
+    (:func:`bands` of ``freq_u``), also each band's highest interior sample when it stands
+    twice above the band's lowest: in a band around one resonance most samples lie on the
+    peak, so the median of all bands hides the weaker peaks."""
     inner = np.arange(1, len(size) - 1)
     keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > factor * np.median(size))
-    return inner[keep]
+    which = bands(freq_u) if freq_u is not None else np.zeros(len(size), int)
+    found = set(inner[keep].tolist())
+    if which.max() > 0:
+        for b in range(which.max() + 1):
+            idx = np.flatnonzero(which == b)
+            top = idx[np.argmax(size[idx])]
+            if idx[0] < top < idx[-1] and size[top] >= 2 * size[idx].min():
+                found.add(int(top))
+    return np.array(sorted(found), int)
 
 
 def _half_power_span(size, i) -> tuple[int, int]:
@@ -106,7 +135,7 @@ def poles(data, guesses_hz, half_width: int | None = None) -> np.ndarray:
 
 def data_peaks(data) -> np.ndarray:
     """Resonance frequencies (Hz): the maxima of the bias-summed |response| (5x above its
-    median), each located by its complex pole (:func:`poles`).
+    median in their band, :func:`bands`), each located by its complex pole (:func:`poles`).
 
     >>> from types import SimpleNamespace
     >>> f = np.repeat(np.linspace(1, 10, 91), 2); y = 1 / (f - 4.03) + 0j   # pole off the grid
@@ -114,7 +143,7 @@ def data_peaks(data) -> np.ndarray:
     [4.03]
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 5.0)]
+    found = freq_u[_maxima(size, 5.0, freq_u)]
     return poles(data, found).real if len(found) else found
 
 
@@ -129,7 +158,7 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     ([100.0], [2.0])
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 3.0)]
+    found = freq_u[_maxima(size, 3.0, freq_u)]
     if not len(found):
         return found, found
     p = poles(data, found)

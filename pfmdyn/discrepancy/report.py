@@ -3,8 +3,25 @@ from __future__ import annotations
 
 from . import select
 from .effects import public_name
+from .plausible import describe
 
-__all__ = ["parameters", "report", "summary"]
+__all__ = ["degrees", "parameters", "report", "summary"]
+
+
+def degrees(fit) -> dict:
+    """Data values, fitted parameters and their difference ``dof`` of a fit.
+
+    Data values the model reproduces by construction (``fit.extra["by_construction"]``: a
+    table's free mode 1, which sets the frequency scale) test nothing and are not counted;
+    a complex spectrum value counts twice (real and imaginary part), as do its complex
+    linear coefficients.
+
+    >>> from types import SimpleNamespace as S
+    >>> degrees(S(n=4, k=3, extra={"by_construction": 1}))
+    {'data_values': 3, 'fitted_parameters': 3, 'dof': 0}
+    """
+    n = fit.n - getattr(fit, "extra", {}).get("by_construction", 0)
+    return {"data_values": n, "fitted_parameters": fit.k, "dof": n - fit.k}
 
 
 def parameters(fit) -> dict:
@@ -27,6 +44,7 @@ def report(result: dict, **extra) -> dict:
     baseline, final = result["baseline"], result["final"]
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
+           **degrees(final), "baseline_fitted_parameters": baseline.k,
            "damping_mechanisms": final.model.damping_mechanisms, "unexplained": result["unexplained"],
            "criterion": select.CRITERION, "steps": steps, "parameters": parameters(final),
            "baseline_parameters": parameters(baseline), "fit_report": final.report()}
@@ -41,7 +59,9 @@ def summary(report: dict) -> str:
     detail = ", ".join(mech) + (f"; {' or '.join(tied)} fit the data as well" if tied else "")
     named = [e + (f" ({detail})" if e == "damping" and mech else "") for e in report["missing_effects"]]
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
-             f"(1 = noise level); missing effects: {', '.join(named) or 'none'}"]
+             f"(1 = noise level); missing effects: {', '.join(named) or 'none'}",
+             f"{report['data_values']} data values, {report['fitted_parameters']} fitted parameters: "
+             f"{report['dof']} degree(s) of freedom left"]
     for i, s in enumerate(report["steps"], 1):
         if "removed" in s:
             lines.append(f"step {i}: {s['decision']}")
@@ -61,8 +81,10 @@ def summary(report: dict) -> str:
                  else f"at {where}")
         lines.append(f"no effect of the library explains the residual {place} "
                      f"(gap {report['unexplained']['gap']:.3g} x noise)")
+        if report["unexplained"].get("implausible"):
+            lines.append(describe(report["unexplained"]["implausible"]))
     for name, why in (report.get("untestable_effects") or {}).items():
-        lines.append(f"{name} could not be tested: {why}")
+        lines.append(f"{name}: {why}")
     for name, p in report["parameters"].items():
         if p["value"] is None:      # e.g. springs from a table of free modes only
             lines.append(f"  {name} not determined by these data" + (f": {p['note']}" if p.get("note") else ""))

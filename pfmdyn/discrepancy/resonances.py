@@ -35,7 +35,8 @@ fitted, or when those parameters leave a contact misfit (frequencies, and with d
 values) above the noise; the effect's parameter may then be undetermined, and tied
 candidates are listed (set-back before tilt).  The others are listed in the report's
 ``untestable_effects``.  ``background`` never (it changes spectra, not resonances).  Every
-candidate needs fewer parameters than data values.
+candidate needs a degree of freedom left once its parameters are fitted (data values reproduced by
+construction, free mode 1, do not count), a second damping mechanism a Q value left over.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.
 """
@@ -50,7 +51,7 @@ from scipy.optimize import least_squares
 from ..generated import formulas, paper_inputs
 from ..io.tables import Q_RELATIVE_UNCERTAINTY, Metadata, ResonanceData
 from . import select
-from .report import report
+from .report import degrees, report
 from .effects import DAMPING, EFFECTS, spring_grid
 from .quality import loss_and_roots, loss_factors
 from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, resonances
@@ -104,6 +105,11 @@ def _q_sigma(data: ResonanceData) -> np.ndarray:
     at least that of Q = 1e4, so that an undamped mode, Q = inf, has one too)."""
     rel = data.metadata.quality_factor_uncertainty or Q_RELATIVE_UNCERTAINTY
     return rel * np.maximum(1 / data.quality_factor[_has_q(data)], 1e-4)
+
+
+def _scale_rows(data: ResonanceData) -> int:
+    """Rows reproduced by construction: free mode 1 sets the frequency scale (module docstring)."""
+    return int(np.any((data.condition == "free") & (data.mode == 1)))
 
 
 def _contact_modes(data: ResonanceData) -> int:
@@ -323,7 +329,7 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     residual = _residual(model, internal, data)
     sigma = np.concatenate([_sigma(data), _q_sigma(data)]) if _has_q(data).any() else _sigma(data)
     return FitResult(model, internal, covariance(jac), residual * sigma, sigma, int(fitted.sum()),
-                     sigma_known=True, fitted=fitted, extra={"held": held})
+                     sigma_known=True, fitted=fitted, extra={"held": held, "by_construction": _scale_rows(data)})
 
 
 def _locate(data: ResonanceData, result: FitResult) -> dict:
@@ -396,27 +402,49 @@ class ResonanceProblem:
         return max(free, int(misfit and springs > 0))
 
     def candidates(self, current: FitResult) -> list[str]:
-        # A fit needs fewer parameters than data values; contact-only effects a contact mode each.
-        room = len(current.residual) - current.k
-        out = []
-        for e in self.library:
-            if e == "damping":
-                if len(current.model.damping_mechanisms) < 2 and room > 1 and self._mechanisms(current):
-                    out.append(e)
-            elif e not in current.model.effects and room > max(len(EFFECTS[e].parameters), 1) and (
-                    not _contact_only(e, current.model.effects) or self._contact_room(current) > 0):
-                out.append(e)
-        return out
+        # An effect needs a degree of freedom left to test it once its parameters are fitted;
+        # contact-only effects a contact mode each.
+        return [e for e in self.library if self._testable(current, e) is None]
+
+    def _testable(self, current: FitResult, e: str) -> str | None:
+        """None when ``e`` can be tried on top of ``current``; else why these data cannot test it."""
+        dof = degrees(current)["dof"]
+        if e == "damping":
+            mechanisms = len(current.model.damping_mechanisms)
+            if mechanisms >= 2 or not self._mechanisms(current):
+                return "every mechanism the table can show is in the model"
+            n_q = int(_has_q(self.data).sum())
+            # The first mechanism is tested by the undamped baseline's 1/Q = 0; a second one
+            # needs a Q value left over once both are fitted.
+            if mechanisms and n_q <= mechanisms + 1:
+                return (f"a second damping mechanism: {n_q} Q value(s) and {mechanisms + 1} mechanism "
+                        "parameters would leave none to test it")
+            if dof < 1 or (mechanisms and dof <= 1):
+                return f"{dof} degree(s) of freedom left, and a mechanism parameter would use it"
+            return None
+        if e in current.model.effects:
+            return "in the model"
+        p = max(len(EFFECTS[e].parameters), 1)
+        if dof <= p:
+            return (f"{degrees(current)['data_values']} data values and {current.k} fitted parameters leave "
+                    f"{dof} degree(s) of freedom; its {p} parameter(s) would leave none to test it")
+        if _contact_only(e, current.model.effects) and self._contact_room(current) <= 0:
+            n = _contact_modes(self.data)
+            reason = (f"the fitted contact parameters already reproduce the {n} contact mode(s)" if n
+                      else "the table has no contact mode")
+            return f"changes contact modes only{' (without a tip mass)' if e == 'tip_setback' else ''}, and {reason}"
+        return None
 
     def untestable(self, current: FitResult) -> dict[str, str]:
-        """Effects of the library this table cannot test on top of ``current``, and why."""
-        n = _contact_modes(self.data)
-        reason = (f"the fitted contact parameters already reproduce the {n} contact mode(s)" if n
-                  else "the table has no contact mode")
-        return {e: f"changes contact modes only{' (without a tip mass)' if e == 'tip_setback' else ''}, and {reason}"
-                for e in self.library
-                if _contact_only(e, current.model.effects) and e not in current.model.effects
-                and self._contact_room(current) <= 0}
+        """Effects of the library this table cannot test on top of ``current``: "not testable
+        with these data", and why (a damping mechanism already in the model is not listed)."""
+        out = {}
+        for e in self.library:
+            why = self._testable(current, e)
+            if why is None or why in ("in the model", "every mechanism the table can show is in the model"):
+                continue
+            out[e] = f"not testable with these data: {why}"
+        return out
 
     def _mechanisms(self, current: FitResult | None = None) -> list[str]:
         """Damping components not yet in the model (the dashpot only with a contact Q)."""

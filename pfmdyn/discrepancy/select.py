@@ -20,14 +20,18 @@ taken and the others are listed in the step).  When none is material, pairs of
 the three best candidates are tried (two effects can be needed together before either
 helps on its own), and the loop stops when no pair is material either.  A backward pass
 then removes every component that is no longer material in the final model (an effect
-that only helped a fit out of a local minimum, a damping mechanism replaced by another).  A final gap above
-:data:`UNEXPLAINED` (2) is reported as ``unexplained``, with where it concentrates.
+that only helped a fit out of a local minimum, a damping mechanism replaced by another).  An effect whose
+fitted values no lever has (:func:`pfmdyn.discrepancy.plausible.implausible`) is then removed: it is not a
+finding.  A final gap above :data:`UNEXPLAINED` (2), or any such removal, is reported as ``unexplained``,
+with where the misfit concentrates (and, for a removal, why).
 """
 from __future__ import annotations
 
 import time
 
 from tqdm import tqdm
+
+from .plausible import describe, implausible
 
 __all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "material", "run"]
 
@@ -124,11 +128,30 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
             current = _polish(problem, fit)
             steps[-1].update(gap_after=current.gap, parameters=current.parameters())
     current = _prune(problem, current, steps)
+    current, dropped = _drop_implausible(problem, current, steps)
     unexplained = None
-    if current.gap > UNEXPLAINED:
+    if current.gap > UNEXPLAINED or dropped:
         loc = problem.locate(current)
         unexplained = {"gap": current.gap, "where": loc.get("band_hz", loc.get("worst"))}
+        if dropped:
+            unexplained["implausible"] = dropped
     return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained}
+
+
+def _drop_implausible(problem, current, steps):
+    """Remove the effects whose fitted values no lever has (:mod:`.plausible`): the misfit
+    they lowered stays, reported as unexplained.  Returns the fit and what was dropped."""
+    dropped = {}
+    while True:
+        bad = implausible(current)
+        if not bad:
+            return current, dropped
+        component, why = next(iter(bad.items()))
+        fit = problem.without(current, component)
+        steps.append({"effect": None, "removed": component, "gap_before": current.gap, "gap_after": fit.gap,
+                      "decision": f"removed {component}: {describe({component: why})}"})
+        dropped[component] = why
+        current = fit
 
 
 def _prune(problem, current, steps):

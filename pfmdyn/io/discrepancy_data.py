@@ -16,11 +16,14 @@ __all__ = ["Metadata", "SpectrumData", "ResonanceData"]
 
 @dataclass(frozen=True)
 class Metadata:
-    """Cantilever description: k (N/m), L, width, H (m), first free resonance f1 (Hz)."""
+    """Cantilever description: k (N/m), L, width, H (m), first free resonance f1 (Hz).
+
+    ``width`` is None when not given: no resonance depends on it.
+    """
 
     k: float
     L: float
-    width: float
+    width: float | None
     H: float
     f1: float
     description: str = ""

@@ -177,7 +177,10 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
         else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
             modes, conditions = np.array([1]), np.array(["free"])
             freqs, qs = np.array([f_free]), np.array([q_free])
-    values = [required_field(record, key, overrides) for key in
-              ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m", "free_resonance_hz")]
-    metadata = Metadata(*values, description=f"{record.instrument}: {name}")
+    k, length, height, f1 = [required_field(record, key, overrides) for key in
+                             ("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz")]
+    # No resonance depends on the width: taken when known, never asked for.
+    width = required_field(record, "width_m", overrides) if ("width_m" in record.fields or
+                                                             overrides.get("width_m") is not None) else None
+    metadata = Metadata(k, length, width, height, f1, description=f"{record.instrument}: {name}")
     return ResonanceData(metadata, modes, conditions, freqs, quality_factor=qs)

@@ -4,7 +4,7 @@ Format (SI units)::
 
     # spring_constant_n_per_m: 2.4
     # length_m: 223e-6
-    # width_m: 24e-6
+    # width_m: 24e-6                  <- optional: no resonance depends on it
     # tip_height_m: 1e-5
     # free_resonance_hz: 63200          <- first free flexural resonance
     # description: optional text
@@ -55,8 +55,9 @@ from .sweeps import is_drive_sweep
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "is_instrument_file",
            "check_resonance_rows"]
 
-REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "width_m", "tip_height_m",
-                 "free_resonance_hz")
+REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz")
+OPTIONAL_KEYS = ("width_m", "frequency_uncertainty_hz", "quality_factor_uncertainty")
+"""The width is read when given but never required: no resonance depends on it."""
 RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
 OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
 FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1e6}
@@ -98,7 +99,7 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
                         f" (lines '# key: value' before the header)")
     values = {}
-    for key in REQUIRED_KEYS + ("frequency_uncertainty_hz", "quality_factor_uncertainty"):
+    for key in REQUIRED_KEYS + OPTIONAL_KEYS:
         if key not in meta:
             continue
         values[key] = meta[key] if isinstance(meta[key], float) else metadata_number(where, key, str(meta[key]))
@@ -108,7 +109,7 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         if not low <= values[key] <= high:
             raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
                             f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
-    return Metadata(values["spring_constant_n_per_m"], values["length_m"], values["width_m"],
+    return Metadata(values["spring_constant_n_per_m"], values["length_m"], values.get("width_m"),
                     values["tip_height_m"], values["free_resonance_hz"],
                     meta.get("description", ""), values.get("frequency_uncertainty_hz"),
                     values.get("quality_factor_uncertainty"))
