@@ -12,15 +12,12 @@ not hidden (honest); it fails when an effect is named that is not hidden (a fals
 hidden one is missed without ``unexplained``.  The noise estimate is checked against the
 noise the generator added.
 
-Run ``python benchmarks/discrepancy_acquisition.py [--seeds N] [--label NAME]``: the pass
-rate per class goes to ``discrepancy_acquisition.results.json`` beside this script, under
-``NAME`` (default ``current``; other labels already there are kept, e.g. the same sweep on
-older code run with ``PYTHONPATH`` pointing at it).
+Run ``python benchmarks/discrepancy_acquisition.py [--seeds N]``: every case and the pass rate
+per class go to ``benchmarks/results/discrepancy_acquisition.md`` (:mod:`recording`).
 """
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 import time
@@ -29,12 +26,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 from fe_beam import ACQUISITION, acquisition_case  # noqa: E402
+from recording import recorded  # noqa: E402
 
 from pfmdyn.discrepancy.select import TIME_BUDGET_S, UNEXPLAINED  # noqa: E402
 from pfmdyn.discrepancy.spectrum import analyse, noise_sigma  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
 
-RESULTS = HERE / "discrepancy_acquisition.results.json"
 
 
 def grade(report: dict, hidden: list[str]) -> str:
@@ -73,34 +70,27 @@ def run_case(kind: str, seed: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=4, help="cases per class")
-    parser.add_argument("--label", default="current", help="key of this run in the results file")
     parser.add_argument("--classes", nargs="*", default=list(ACQUISITION), choices=ACQUISITION)
     args = parser.parse_args()
-    cases = []
-    for kind in args.classes:
-        for seed in range(args.seeds):
-            try:
-                case = run_case(kind, seed)
-            except Exception as exc:        # a crash is a result of the benchmark, not its end
-                case = {"kind": kind, "seed": seed, "grade": f"error: {type(exc).__name__}: {exc}"}
-            cases.append(case)
-            print(f"{kind:18s} seed {seed}: {case['grade']:12s} named {case.get('named')} hidden "
-                  f"{case.get('hidden')} gap {case.get('gap_after')} noise ratio {case.get('noise_ratio')}",
-                  flush=True)
-            per_class = {}
-            for c in cases:
-                row = per_class.setdefault(c["kind"], {"cases": 0, "pass": 0, "exact": 0, "false effect": 0})
+    per_class = {}
+    with recorded("discrepancy_acquisition"):
+        for kind in args.classes:
+            row = per_class.setdefault(kind, {"cases": 0, "pass": 0, "exact": 0, "false effect": 0})
+            for seed in range(args.seeds):
+                try:
+                    case = run_case(kind, seed)
+                except Exception as exc:        # a crash is a result of the benchmark, not its end
+                    case = {"kind": kind, "seed": seed, "grade": f"error: {type(exc).__name__}: {exc}"}
                 row["cases"] += 1
-                row["pass"] += c["grade"] in ("exact", "honest")
-                row["exact"] += c["grade"] == "exact"
-                row["false effect"] += c["grade"] == "false effect"
-            # Re-read: another label may have been written meanwhile (runs on older code side by side).
-            results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
-            results[args.label] = {"date": time.strftime("%Y-%m-%d"), "seeds": args.seeds,
-                                   "pass_rate": {k: f"{v['pass']}/{v['cases']}" for k, v in per_class.items()},
-                                   "per_class": per_class, "cases": cases}
-            RESULTS.write_text(json.dumps(results, indent=1) + "\n")
-    print(json.dumps(results[args.label]["pass_rate"], indent=1))
+                row["pass"] += case["grade"] in ("exact", "honest")
+                row["exact"] += case["grade"] == "exact"
+                row["false effect"] += case["grade"] == "false effect"
+                print(f"{kind:18s} seed {seed}: {case['grade']:12s} named {case.get('named')} hidden "
+                      f"{case.get('hidden')} gap {case.get('gap_after')} noise ratio {case.get('noise_ratio')}",
+                      flush=True)
+        print("\n| class | pass | exact | false effect |\n|---|---|---|---|")
+        for kind, row in per_class.items():
+            print(f"| {kind} | {row['pass']}/{row['cases']} | {row['exact']} | {row['false effect']} |")
 
 
 if __name__ == "__main__":
