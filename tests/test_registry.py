@@ -69,7 +69,7 @@ def test_no_other_list_of_families():
 def test_package_exports_every_registry_wrapper():
     import pfmdyn
 
-    assert set(pfmdyn.__all__) == {"Cantilever"} | {f.function for f in WRAPPED}
+    assert set(pfmdyn.__all__) == {"Cantilever", "Contact"} | {f.function for f in WRAPPED}
     assert all(hasattr(pfmdyn, name) for name in pfmdyn.__all__)
 
 
