@@ -115,11 +115,14 @@ def scaled(expr: sp.Expr, degrees: Mapping[Atoms, int]) -> sp.Expr:
     >>> scaled(ATOMS.c * ATOMS.ch + 1, {ATOMS: 1})
     _c + _sech
     """
-    out = sp.expand(expr)
-    for at, d in degrees.items():
-        poly = sp.Poly(out, at.ch, at.sh)
-        out = sp.S.Zero
-        for (i, j), coeff in poly.terms():
-            out += coeff * at.tanh**j * at.sech**(d - i - j)
-        out = sp.expand(out)
-    return out
+    sets = list(degrees.items())
+    # one polynomial in every set's (cosh, sinh) at once: expanding once per set was the cost
+    poly = sp.Poly(sp.expand(expr), *(g for at, _ in sets for g in (at.ch, at.sh)))
+    terms = []
+    for monomial, coeff in poly.terms():
+        factor = coeff
+        for n, (at, d) in enumerate(sets):
+            i, j = monomial[2 * n], monomial[2 * n + 1]
+            factor = factor * at.tanh**j * at.sech**(d - i - j)
+        terms.append(factor)
+    return sp.expand(sp.Add(*terms))
