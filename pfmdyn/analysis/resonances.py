@@ -241,15 +241,10 @@ def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):
-    """Tip slope per unit drive at real ``r``: ``d1`` in contact, ``q0`` when free."""
-    loss = contact.contact_loss if contact is not None else 0.0
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
-    k, _, _, _, H, L, mu, gamma, rho_g = _parameters(lever, contact)
-    kvv, kll, kvl = _springs(lever, contact, k1_f)
-    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
-    slopes = tip_setback.slope(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
-                               mu * mu_f, gamma, rho_g)
-    return slopes[0] if contact is not None else slopes[3]
+    """Slope per unit drive at real ``r``: ``d1`` in contact, ``q0`` when free (the probe's own
+    damped response, :meth:`pfmdyn.Cantilever.response`)."""
+    response = lever.response(np.asarray(r, dtype=float) * lever.free_resonance, contact or Contact(k1=0.0))
+    return response.vertical if contact is not None else response.distributed_load
 
 
 def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple]:
