@@ -160,3 +160,15 @@ def test_cli_rejects_an_output_path_that_is_a_file(tmp_path, capsys):
     status = cli.main(["deconvolve", str(data_file), "--surface-potential", "0", "--out", str(tmp_path / "taken")])
     assert status == 2
     assert "not a directory" in capsys.readouterr().err
+
+
+def test_help_says_no_lever_model_enters_and_offers_no_probe_flags():
+    """deconvolve fits a line in the bias per frequency: a probe flag would change nothing, so there is none."""
+    import argparse
+
+    from pfmdyn.commands.deconvolve import add_arguments
+    from pfmdyn.names import NAMES
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    assert not [a.dest for a in parser._actions if a.dest in NAMES]
+    assert "No lever model enters" in parser.epilog and "no --spot-position" in parser.epilog

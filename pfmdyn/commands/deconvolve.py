@@ -79,6 +79,11 @@ def add_arguments(parser) -> None:
     >>> parser.parse_args(["d.csv", "--surface-potential", "0.5", "--out", "res"]).surface_potential
     0.5
     """
+    # No lever model enters, so no probe flag (--spot-position ...) would change a number here.
+    parser.epilog = ("No lever model enters: at each frequency the response is fitted as a straight line in the "
+                     "bias (Eq. 41), and d_eff and G_elec are those of the signal as measured, the lever and "
+                     "the laser spot's position included (there is no --spot-position; 'pfmdyn spot' gives "
+                     "the calibration factor and d_eff error at a spot).")
     parser.add_argument("data", metavar="DATA.csv", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
     parser.add_argument("--surface-potential", metavar="V", type=float, required=True,
                         help="surface potential V_surf in volts, used for d_eff = b + c V_surf")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ def add_arguments(parser) -> None:
                         help="Table 1 cantilever, or 'custom' with --spring-constant --length --width --thickness "
                              "(SI: N/m, m)")
     flags.add_lever(parser, _CUSTOM)
+    flags.add_lever(parser, ("spot_position",))
     parser.add_argument("--quality-factor", type=float, default=math.inf,
                         help="Q of the loss factor 1/Q (default: lossless, as in the paper)")
     parser.add_argument("--k1", type=float, default=PAPER_K1, help="contact stiffness, N/m (1000)")
@@ -89,6 +91,7 @@ def _write_csv(path, response: ResponseMap) -> None:
 def run(args) -> int:
     """Compute the diagram, write the PNG (and CSV)."""
     lever, width = _cli_cantilever(args)
+    lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
     if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):
@@ -114,7 +117,8 @@ def run(args) -> int:
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
              f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
              f"H = {args.tip_height * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
-             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}")
+             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}"
+             + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
     plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")
     if args.csv is not None:
