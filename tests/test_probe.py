@@ -98,3 +98,16 @@ def test_every_command_spells_each_quantity_with_its_one_flag():
     assert not wrong, wrong
     retired = {"--k", "--tip-mass", "--free", "--free-hz", "--L", "--H"}
     assert not [(c, o) for c, o, _, shown in _options() if o in retired and shown]
+
+
+def test_instrument_records_and_inspect_json_use_the_names():
+    """Record fields are names of pfmdyn.names; files with the older spellings are read under them."""
+    from pfmdyn.io.record import FIELDS, make_record
+    assert set(FIELDS) <= set(NAMES)
+    record = make_record("a.ibw", "image", "test", (), {"contact_resonance_hz": 3e5, "tip_bias_v": -1.5,
+                                                        "length_m": 2e-4, "free_quality_factor": 80.0})
+    assert record.to_json()["fields"] == {"free_quality_factor": {"value": 80.0, "unit": ""},
+                                          "contact_resonance": {"value": 3e5, "unit": "Hz"},
+                                          "length": {"value": 2e-4, "unit": "m"},
+                                          "tip_bias": {"value": -1.5, "unit": "V"}}
+    assert "spring_constant" in record.missing and "tip_height" in record.missing

@@ -14,7 +14,7 @@ from ..errors import UserError
 from ..discrepancy.inputs import read
 from ..io.results import dumps, write_json
 from ..io.tables import SpectrumData
-from ..names import canonical, flag
+from ..names import flag
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
 
 
@@ -37,10 +37,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
 
 
-OVERRIDES = tuple((flag(canonical(key)), key, what) for key, what in (
-    ("spring_constant_n_per_m", "cantilever spring constant, N/m"), ("length_m", "cantilever length, m"),
-    ("width_m", "cantilever width, m"), ("tip_height_m", "tip height, m"),
-    ("free_resonance_hz", "first free flexural resonance, Hz")))
+OVERRIDES = tuple((flag(key), key, what) for key, what in (
+    ("spring_constant", "cantilever spring constant, N/m"), ("length", "cantilever length, m"),
+    ("width", "cantilever width, m"), ("tip_height", "tip height, m"),
+    ("free_resonance", "first free flexural resonance, Hz")))
 
 
 def _analyse(data, args) -> dict:

@@ -97,10 +97,10 @@ def option_hint(error: Exception) -> str:
     The readers name the field (:class:`pfmdyn.io.record.MissingFieldError`); only the
     commands know flags.
 
-    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height_m"))
+    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
     ': give --tip-height'
-    >>> option_hint(ValueError("x"))
-    ''
+    >>> option_hint(MissingFieldError("no contact resonance in a.ibw", "contact_resonance")), option_hint(ValueError("x"))
+    ('', '')
     """
     name = canonical(error.field) if isinstance(error, MissingFieldError) else None
-    return f": give {NAMES[name].flag}" if name else ""
+    return f": give {NAMES[name].flag}" if name and NAMES[name].option else ""

@@ -30,7 +30,7 @@ def report(record: InstrumentRecord) -> str:
 
     >>> from pfmdyn.io.instruments import Channel, make_record
     >>> r = make_record("a.ibw", "image", "Asylum", [Channel("HeightRetrace", "m", (2, 2))],
-    ...                 {"spring_constant_n_per_m": 0.5})
+    ...                 {"spring_constant": 0.5})
     >>> print(report(r).splitlines()[0])
     a.ibw: image (Asylum)
     """

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
-from ..names import LEVER, NAMES, canonical
+from ..names import LEVER, NAMES
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -48,7 +48,7 @@ def _lever(args):
     if args.file:
         from ..io.instruments import read_instrument
         record = read_instrument(args.file)
-        found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
+        found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
     for name in ("spring_constant", "free_resonance", "length", "tip_height"):
         if given.get(name) is None:

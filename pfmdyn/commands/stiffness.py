@@ -31,7 +31,7 @@ import os
 from pathlib import Path
 
 from ..errors import UserError
-from ..names import LEVER, NAMES, canonical, checked
+from ..names import LEVER, NAMES, checked
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -108,8 +108,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
                  "free_resonance": free[0] if free else meta.f1}
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
     record = read_instrument(path)
-    found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
-    contact = record.fields.get("contact_resonance_hz")
+    found = {key: value for key, value in record.fields.items() if key in LEVER}
+    contact = record.fields.get("contact_resonance")
     return found, [contact] if contact else [], [1] if contact else []
 
 
