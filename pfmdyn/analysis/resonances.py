@@ -36,7 +36,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar, newton
 
 from ..cantilever import Cantilever, Contact
-from ..generated import damping, formulas, tip_setback
+from ..generated import formulas, tip_setback
 from ..generated.characteristic import FLINT
 from ..generated.tilt_rotation import rotated
 from ..roots.certify import CertificationError, certify
@@ -230,14 +230,9 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
 
 
 def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
-    """The damped characteristic at (complex) ``r = f / f1``: the damping factors substituted."""
-    loss = contact.contact_loss if contact is not None else 0.0
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
-    k, kvv, kll, kvl, H, L, mu, gamma, rho_g = _parameters(lever, contact)
-    kvv, kll, kvl = _springs(lever, contact, k1_f)
-    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
-    return tip_setback.characteristic(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
-                                      mu * mu_f, gamma, rho_g)
+    """The damped characteristic at (complex) ``r = f / f1`` (the probe's own damping
+    substitution, :meth:`pfmdyn.Cantilever.model_arguments`)."""
+    return tip_setback.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):
