@@ -219,12 +219,28 @@ class Cantilever:
         """
         loss = contact.contact_loss if contact is not None else 0.0
         beta, k, k1_factor, mu_factor = self._damped(frequency, loss)
+        _, kvv, kll, kvl, height, length, mu, gamma, rho_g = self.model_parameters(contact, k1_factor=k1_factor)
+        return beta, k, kvv, kll, kvl, height, length, mu * mu_factor, gamma, rho_g
+
+    def model_parameters(self, contact: "Contact | None" = None, *, k1_factor=1.0) -> tuple:
+        """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
+        damping (``generated/tip_setback.py``, ``generated/detection.py``).
+
+        The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
+        ``contact`` is None); ``k1_factor`` multiplies ``k1`` before the rotation (the contact
+        dashpot's factor, ``derivations/damping.py``).
+
+        >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, tilt=10.0)
+        >>> k, kvv, kll, kvl, H, *_ = lever.model_parameters(Contact(k1=50.0))
+        >>> k, round(float(kvv), 3), round(float(kll), 3), round(float(kvl), 3), H
+        (2.0, 48.492, 1.508, -8.551, 1e-05)
+        """
         if contact is None:
             springs, height = (0.0, 0.0, 0.0), self.tip_height or 0.0
         else:
             springs = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
             height = self._tip_height(contact)
-        return (beta, k, *springs, height, self.length, self.tip_mass_ratio * mu_factor, self.tip_position,
+        return (self.spring_constant, *springs, height, self.length, self.tip_mass_ratio, self.tip_position,
                 self.rho_g)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:

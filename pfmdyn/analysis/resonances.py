@@ -38,7 +38,6 @@ from scipy.optimize import minimize_scalar, newton
 from ..cantilever import Cantilever, Contact
 from ..generated import formulas, tip_setback
 from ..generated.characteristic import FLINT
-from ..generated.tilt_rotation import rotated
 from ..roots.certify import CertificationError, certify
 
 __all__ = ["Modes", "ResonanceResult", "resonances"]
@@ -139,20 +138,6 @@ def _damped(lever: Cantilever, contact: Contact | None) -> bool:
             or (contact is not None and contact.contact_loss > 0))
 
 
-def _springs(lever: Cantilever, contact: Contact | None, k1_factor=1.0) -> tuple:
-    """``(kvv, kll, kvl)`` of the contact in the lever's axes (zeros when free)."""
-    if contact is None:
-        return 0.0, 0.0, 0.0
-    return rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), lever.alpha)
-
-
-def _parameters(lever: Cantilever, contact: Contact | None) -> tuple:
-    """Arguments of the generated characteristic after ``beta``."""
-    H = lever._tip_height(contact) if contact is not None else (lever.tip_height or 0.0)
-    return (lever.spring_constant, *_springs(lever, contact), H, lever.length, lever.tip_mass_ratio,
-            lever.tip_position, lever.rho_g)
-
-
 def _fmpq(value: float) -> flint.fmpq:
     q = Fraction(float(value))          # exact: the float given is the parameter proven for
     return flint.fmpq(q.numerator, q.denominator)
@@ -201,8 +186,8 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         contact = None
     old = flint.ctx.prec
     try:
-        free_balls, free_top = _certified_roots(_parameters(lever, None), modes)
-        contact_balls, contact_top = (_certified_roots(_parameters(lever, contact), modes)
+        free_balls, free_top = _certified_roots(lever.model_parameters(None), modes)
+        contact_balls, contact_top = (_certified_roots(lever.model_parameters(contact), modes)
                                       if contact is not None else ([], None))
     except CertificationError as exc:
         return ResonanceResult(lever, contact, reason=str(exc))

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from ..generated import detection, formulas, tilt_rotation
+from ..generated import detection, formulas
 from ..generated.characteristic import FLINT
 from ..roots.certify import CertificationError, zeros_in
 
@@ -58,10 +58,7 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height (--tip-height)")
-    kvv, kll, kvl = tilt_rotation.rotated(contact.k1, contact.k2_of(contact.k1), lever.alpha)
-    return {"k": lever.spring_constant, "kvv": float(kvv), "kll": float(kll), "kvl": float(kvl),
-            "H": lever.tip_height, "L": lever.length, "mu": lever.tip_mass_ratio, "gamma": lever.tip_position,
-            "rho_g": lever.rho_g}
+    return {name: float(value) for name, value in zip(detection.PARAMETERS, lever.model_parameters(contact))}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:
