@@ -65,7 +65,7 @@ def dimensionless(lever: Cantilever, contact: Contact) -> dict:
     """The parameters of the blind-spot functions (``kvv/k``, ``kll H**2/(k L**2)``, ``kvl H/(k L)``)."""
     p = parameters(lever, contact)
     k, H, L = p["k"], p["H"], p["L"]
-    return {"kvv_over_k": p["kvv"] / k, "kll_ratio": p["kll"] * H**2 / (k * L**2),
+    return {"kvv_over_k": p["kvv"] / k, "kll_ratio": float(formulas.k2_ratio(p["kll"], k, H, L)),
             "kvl_ratio": p["kvl"] * H / (k * L), "mu": p["mu"], "gamma": p["gamma"], "rho_g": p["rho_g"]}
 
 
