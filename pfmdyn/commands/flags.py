@@ -8,12 +8,14 @@ have, and a bad one is a one-line error naming the flag.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
-from ..io.record import MissingFieldError
+from ..errors import UserError
+from ..io.record import FIELDS, MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 
-__all__ = ["add_lever", "add_contact", "add_damping", "given", "cantilever", "contact", "option_hint"]
+__all__ = ["add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
 
 
 def _add(parser, names, required=()):
@@ -62,6 +64,21 @@ def given(args, names) -> dict[str, float]:
         if value is not None:
             out[name] = checked(name, value, NAMES[name].flag)
     return out
+
+
+def require(values: dict, names, file=None) -> None:
+    """A one-line error for the first of ``names`` with no value: what is missing, where, which flag.
+
+    >>> require({"length": 2e-4}, ("length", "tip_height"), "scan.ibw")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: no tip height in scan.ibw: give --tip-height
+    """
+    for name in names:
+        if values.get(name) is None:
+            what = FIELDS[name][0] if name in FIELDS else name.replace("_", " ")
+            where = f" in {Path(file).name}" if file else ""
+            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
 
 
 def cantilever(args, found: dict | None = None) -> Cantilever:

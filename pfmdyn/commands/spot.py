@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
-from ..names import LEVER, NAMES
+from ..names import LEVER
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -50,10 +50,7 @@ def _lever(args):
         record = read_instrument(args.file)
         found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
-    for name in ("spring_constant", "free_resonance", "length", "tip_height"):
-        if given.get(name) is None:
-            where = f" in {args.file}" if args.file else ""
-            raise UserError(f"no {NAMES[name].meaning.split(',')[0]}{where}: give {NAMES[name].flag}")
+    flags.require(given, ("spring_constant", "free_resonance", "length", "tip_height"), args.file)
     return flags.cantilever(args, found)
 
 

@@ -116,10 +116,7 @@ def _from_file(path: str) -> tuple[dict, list, list]:
 def _lever(args, found: dict):
     """The lever from the file's values and the flags; the length may be left out when nothing needs it."""
     values = {**found, **flags.given(args, _LEVER)}
-    for name, what in (("free_resonance", "free resonance"), ("spring_constant", "spring constant")):
-        if values.get(name) is None:
-            where = f" in {Path(args.file).name}" if args.file else ""
-            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
+    flags.require(values, ("free_resonance", "spring_constant"), args.file)
     notes = []
     if values.get("length") is None:
         if values.get("tip_height") is not None or values.get("tilt"):
