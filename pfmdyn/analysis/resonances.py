@@ -11,7 +11,7 @@ so the bare lever's scale follows from the first free root ``beta_1`` of the sam
 ``f_n = f1 (beta_n / beta_1)**2`` for every root ``beta_n`` (free or in contact).
 
 Proof.  The roots in ``beta`` are isolated and refined in ball arithmetic
-(:func:`pfmdyn.roots.certify.certify`) on ``characteristic_balls``, the generated
+(:func:`pfmdyn.derivations.certify.certify`) on ``characteristic_balls``, the generated
 characteristic in a math namespace: the trivial zero at ``beta = 0`` is cleared with exact
 rational series, every bracket holds exactly one simple zero, and the list is complete up to
 the highest root reported (``*_complete_below_hz``).  The parameters enter exactly as the
@@ -38,7 +38,7 @@ from scipy.optimize import minimize_scalar, newton
 from ..cantilever import Cantilever, Contact
 from ..generated import formulas, tip_setback
 from ..generated.characteristic import FLINT
-from ..roots.certify import CertificationError, certify
+from ..derivations.certify import CertificationError, certify
 
 __all__ = ["Modes", "ResonanceResult", "resonances"]
 

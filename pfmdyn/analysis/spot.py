@@ -7,7 +7,7 @@ gives, for one lever in contact at one frequency:
 
 * the **electrostatic blind spots**: every ``x_s/L`` in ``(0, 1]`` where the slope response
   to the uniform capacitive load ``q0`` vanishes, certified with ball arithmetic (complete,
-  none twice: :func:`pfmdyn.roots.certify.zeros_in` on the generated numerator);
+  none twice: :func:`pfmdyn.derivations.certify.zeros_in` on the generated numerator);
 * the **electrostatic-to-electromechanical slope ratio** ``theta_q0 / theta_d1`` along the
   lever;
 * the **static sensitivity** ``S = u_tip / (L theta(x_s))`` (``2/3`` at the end of a free
@@ -34,7 +34,7 @@ from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..generated import detection, formulas
 from ..generated.characteristic import FLINT
-from ..roots.certify import CertificationError, zeros_in
+from ..derivations.certify import CertificationError, zeros_in
 
 __all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_beta", "blind_spots", "slope_along",
            "static_limit", "sensitivities", "spot_analysis", "ratio_map", "EPSILON_0"]
@@ -116,7 +116,7 @@ def blind_spots(lever: Cantilever, contact: Contact, beta: float, digits: int = 
 
     Zeros of the generated numerator (the denominator does not depend on the spot) on
     ``(0, gamma]`` (spot before the tip; the clamp's zero at 0 is excluded by proof) and on
-    ``[gamma, 1]`` (beyond it), by :func:`pfmdyn.roots.certify.zeros_in` on a Taylor model
+    ``[gamma, 1]`` (beyond it), by :func:`pfmdyn.derivations.certify.zeros_in` on a Taylor model
     (:func:`_taylor_model`).  A failed proof (a double zero, a zero exactly at the tip or at
     the end) gives ``certified = False`` with the reason and no positions.
 

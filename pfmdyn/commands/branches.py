@@ -8,7 +8,7 @@ import numpy as np
 from ..errors import UserError
 from ..plots.branches import plot_branches
 from ..roots.branches import SWEPT, frequency_ratio, branch_limits, crossovers, sweep
-from ..roots.certify import CertificationError
+from ..derivations.certify import CertificationError
 from .roots import parse_parameters, positive_int
 
 
