@@ -13,7 +13,7 @@ module maps what a file says onto it, with the factor to the canonical unit:
   a line of its own under the header, or implied (``freq``: Hz, ``bias``: V);
   a phase needs its unit (``phase_deg``, ``Phase (rad)``): degrees and radians cannot be
   told apart safely from the numbers;
-* metadata values may carry a unit of the key's dimension (``length_m: 223 um``).
+* metadata values may carry a unit of the key's dimension (``length: 223 um``).
 
 :func:`read_table` is the one CSV reader: metadata lines, the header, the data rows as text
 fields with their line numbers.  The readers of each kind of table interpret them.
