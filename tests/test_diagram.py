@@ -261,6 +261,8 @@ def test_spot_below_its_frequency_range_is_an_error(tmp_path, capsys):
     lever = replace(table1_cantilever("A"), spot_position=0.7)
     with pytest.raises(ValueError, match="lowest frequency"):
         response_map(lever, [10.0, 1e4], [0.0], width=WIDTH)
+    with pytest.raises(ValueError, match="paper's probe"):
+        low_frequency_crossover_bias(lever, width=WIDTH)
     assert cli.main(["diagram", "--spot-position", "0.7", "--fmin", "10", "--out", str(tmp_path / "x.png")]) == 2
     assert "lowest frequency" in capsys.readouterr().err
     assert cli.main(["diagram", "--spot-position", "1.5", "--out", str(tmp_path / "x.png")]) == 2

@@ -257,7 +257,8 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     k1 : float, optional
         Vertical contact stiffness, N/m (Section IV.2: 1000).
     H : float, optional
-        Tip height = cantilever-surface separation, m (15 um).
+        Tip height = cantilever-surface separation, m (15 um); also the lever arm of a tilted
+        lever's contact (the cantilever's own ``tip_height`` is replaced by it).
     d_eff : float, optional
         Effective piezoelectric coefficient, m/V (5 pm/V); the sign is the domain's.
     local_force : float, optional
@@ -338,13 +339,18 @@ def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_
     The ratio of the electromechanical coefficient to the non-local one per volt, taken from
     the generated transfer functions at a frequency ``1e-6 f1`` (their series branch: the
     static limit of Eq. 23).  For ``k1 >> k`` it grows in proportion to ``k``; it is
-    infinite at ``k1 = 8k``, where the static non-local slope vanishes.
+    infinite at ``k1 = 8k``, where the static non-local slope vanishes.  The paper's probe
+    only: a lever read elsewhere than at its free end has no series branch to take the static
+    limit from (ValueError; its static blind spot is ``pfmdyn spot``'s).
 
     Examples
     --------
     >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
     [39.883, 1.388, 0.057]
     """
+    if not cantilever.is_paper_probe:
+        raise ValueError("the static crossover bias is the paper's probe's (spot at the free end, massless "
+                         "tip there, no tilt)")
     static = [1e-6 * cantilever.free_resonance]
     _, piezo, _, nonlocal_ = _coefficients(cantilever, static, width=width, k1=k1, H=H,
                                            d_eff=d_eff, local_force=0.0)
