@@ -10,7 +10,8 @@ The four source trees installed as one package -- ``pfmdyn/``, ``derivations/``
   ``discrepancy`` and ``maps``, which lie below ``plots``, which lies below ``commands``;
 * the library never imports ``pfmdyn.commands`` or ``pfmdyn.cli`` (commands call the library,
   not the other way round), and never imports the plots (plots import results);
-* numeric code never imports SymPy or ``pfmdyn.derivations`` at module level.
+* numeric code never imports SymPy at module level, nor a ``pfmdyn.derivations`` module that
+  loads it (the flint-only root certifier, ``derivations/certify.py``, it may).
 """
 from __future__ import annotations
 
