@@ -218,8 +218,9 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force,
     else:       # read at the spot (or with the tip's extras): the composed model, k2 = 0 as in Eq. 23
         beta = cantilever.beta(frequency)
         if np.any(beta.real < _LOWEST_BETA):
-            raise ValueError(f"with the spot away from the free end the lowest frequency is "
-                             f"{_lowest_frequency(cantilever):.4g} Hz (the read-out loses precision below)")
+            raise ValueError(f"read at a spot away from the free end (or with a set-back, heavy or tilted tip) the "
+                             f"lowest frequency is {_lowest_frequency(cantilever):.4g} Hz (the closed forms lose "
+                             "precision below)")
         t = replace(cantilever, tip_height=H).response(frequency, Contact(k1=k1))
     to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
     s = electrostatic_sign * to_height
@@ -228,8 +229,9 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force,
 
 
 _LOWEST_BETA = 0.1
-"""Lowest ``Re beta`` of the spot's read-out (``generated/detection.py``: below, its closed form
-cancels, about ``beta**-6`` of the largest term lost)."""
+"""Lowest ``Re beta`` of the composed model's closed forms (``generated/detection.py``,
+``generated/tip_setback.py``: no series branch; below, they cancel, about ``beta**-6`` of the
+largest term lost: 1e-8 of the distributed-load slope at 0.1 against the two-segment beam)."""
 
 
 def _lowest_frequency(cantilever) -> float:
