@@ -267,3 +267,20 @@ def test_spot_below_its_frequency_range_is_an_error(tmp_path, capsys):
     assert "lowest frequency" in capsys.readouterr().err
     assert cli.main(["diagram", "--spot-position", "1.5", "--out", str(tmp_path / "x.png")]) == 2
     assert "--spot-position: spot_position must be in" in capsys.readouterr().err
+
+
+def test_at_the_blind_spot_the_nonlocal_part_vanishes():
+    """The spot where the segment beam's distributed-load slope is zero (brentq) nulls the diagram's
+    non-local coefficient at that frequency, and only there (1e-6 of its value at the end)."""
+    lever = table1_cantilever("B")
+    f = 0.3 * lever.free_resonance
+    beta = BETA1_FREE * np.sqrt(0.3)
+    slope = lambda s: spot_response(beta, s, k=lever.spring_constant, L=lever.length, H=H, kvv=K1, q0=1.0)[0].real  # noqa: E731
+    grid = np.linspace(0.3, 1.0, 141)
+    values = [slope(s) for s in grid]
+    i = next(i for i in range(len(grid) - 1) if values[i] * values[i + 1] < 0)
+    blind = brentq(slope, grid[i], grid[i + 1], xtol=1e-14)
+    end = response_map(lever, [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    at = response_map(replace(lever, spot_position=blind), [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    beside = response_map(replace(lever, spot_position=blind + 0.02), [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    assert abs(at) < 1e-6 * abs(end) and abs(beside) > 1e-3 * abs(end)
