@@ -37,7 +37,7 @@ from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in
 
 __all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_beta", "blind_spots", "slope_along",
-           "static_limit", "sensitivities", "spot_analysis", "ratio_map", "EPSILON_0"]
+           "static_limit", "sensitivities", "calibration", "spot_analysis", "ratio_map", "EPSILON_0"]
 
 EPSILON_0 = 8.8541878128e-12
 """Vacuum permittivity (F/m), for the capacitive load per volt."""
@@ -276,16 +276,54 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
     spot = lever.spot_position
     sens = sensitivities(lever, contact, spot)
     at = slope_along(lever, contact, beta, spot)
-    invols = sens["contact"] * lever.length        # metres of d1 per unit slope, static
-    error = None
-    if lever.width is not None:
-        q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, lever.width, lever.tip_height))
-        error = complex(invols * at[3] * q_per_volt)
+    factor, error = calibration(lever, contact, frequency, sensitivity=sens["contact"])
     return SpotResult(lever=lever, contact=contact, frequency=float(frequency), beta=beta,
                       blind_spot=blind_spots(lever, contact, beta), positions=grid, ratio=theta[3] / theta[0],
                       spot_position=float(spot), free_sensitivity=float(sens["free"]),
-                      contact_sensitivity=float(sens["contact"]), calibration_factor=complex(invols * at[0]),
-                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]), d_eff_error_per_volt=error)
+                      contact_sensitivity=float(sens["contact"]), calibration_factor=complex(factor),
+                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]),
+                      d_eff_error_per_volt=None if error is None else complex(error))
+
+
+def calibration(lever: Cantilever, contact: Contact, frequency, *, sensitivity=None) -> tuple:
+    """Calibration factor and d_eff error per volt at the lever's ``spot_position``, per frequency.
+
+    The factor is the measured amplitude over the true surface displacement ``d1`` when the
+    deflection sensitivity (InvOLS) comes from a static force curve on this contact read at
+    the same spot: ``L S_contact theta_d1(x_s, omega)`` (1 in the static limit).  The d_eff
+    error is the amplitude the distributed capacitive load (parallel plate over the tip
+    height, needs the lever ``width``) adds at the spot, in metres per volt of the ac drive per
+    volt of ``V_dc - V_surf``; None without the width.  Lossless lever, as everywhere here: at a
+    contact resonance the factor has a pole, at a zero of the spot's ``d1`` response a zero.
+
+    Parameters
+    ----------
+    lever, contact : Cantilever, Contact
+        The probe (its ``spot_position`` is the spot) and the contact (``k1`` needed).
+    frequency : float or array_like
+        Drive frequencies (Hz, > 0).
+    sensitivity : float, optional
+        :func:`sensitivities` ``["contact"]`` at the spot, if already known.
+
+    Returns
+    -------
+    factor : ndarray (real)
+    error : ndarray (real) or None
+
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, spot_position=0.8)
+    >>> factor, error = calibration(lever, Contact(k1=200.0), [70.0, 20e3])
+    >>> [round(float(c), 4) for c in factor], error is None
+    ([1.0, 0.9965], True)
+    """
+    if sensitivity is None:
+        sensitivity = sensitivities(lever, contact, lever.spot_position)["contact"]
+    at = slope_along(lever, contact, lossless_beta(lever, np.asarray(frequency, float)), lever.spot_position)
+    invols = float(sensitivity) * lever.length        # metres of d1 per unit slope, static
+    error = None
+    if lever.width is not None:
+        q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, lever.width, lever.tip_height))
+        error = np.real(invols * at[3] * q_per_volt)
+    return np.real(invols * at[0]), error
 
 
 def ratio_map(lever: Cantilever, contact: Contact, frequencies, positions) -> np.ndarray:
