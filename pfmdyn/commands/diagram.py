@@ -23,10 +23,10 @@ def add_arguments(parser) -> None:
                              "(SI: N/m, m)")
     flags.add_lever(parser, _CUSTOM)
     flags.add_lever(parser, ("spot_position",))
-    parser.add_argument("--quality-factor", type=float, default=math.inf,
-                        help="Q of the loss factor 1/Q (default: lossless, as in the paper)")
-    parser.add_argument("--k1", type=float, default=PAPER_K1, help="contact stiffness, N/m (1000)")
-    parser.add_argument("--tip-height", type=float, default=PAPER_TIP_HEIGHT, help=f"H, m ({PAPER_TIP_HEIGHT:g})")
+    # The paper's values where the diagram needs a number (Figs. 6-7); the lossless lever as in the paper.
+    flags.add_damping(parser, ("quality_factor",), defaults={"quality_factor": (None, "lossless, as in the paper")})
+    flags.add_contact(parser, ("k1",), defaults={"k1": (PAPER_K1, f"{PAPER_K1:g}, the paper's")})
+    flags.add_lever(parser, ("tip_height",), defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
     parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF, help=f"d_eff, m/V ({PAPER_D_EFF:g})")
     parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
                         help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
@@ -51,6 +51,11 @@ _CUSTOM = ("spring_constant", "length", "width", "thickness", "density")
 """The custom lever's flags (:mod:`pfmdyn.names`, SI)."""
 
 
+def _quality_factor(args) -> float:
+    """``--quality-factor``, checked; lossless (inf) when not given."""
+    return flags.given(args, ("quality_factor",)).get("quality_factor", math.inf)
+
+
 def _cli_cantilever(args):
     """``(Cantilever, width in m)`` from the options; errors as :class:`UserError`."""
     custom = flags.given(args, _CUSTOM)
@@ -62,7 +67,7 @@ def _cli_cantilever(args):
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
                 thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
-                quality_factor=args.quality_factor)
+                quality_factor=_quality_factor(args))
         except ValueError as exc:
             raise UserError(str(exc)) from None
         return lever, custom["width"]
@@ -72,7 +77,7 @@ def _cli_cantilever(args):
     if given:
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
     try:
-        lever = table1_cantilever(args.cantilever, quality_factor=args.quality_factor)
+        lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
     except ValueError as exc:
         raise UserError(str(exc)) from None
     return lever, TABLE1[args.cantilever][0]
@@ -92,6 +97,7 @@ def run(args) -> int:
     """Compute the diagram, write the PNG (and CSV)."""
     lever, width = _cli_cantilever(args)
     lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
+    contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
     if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):
@@ -107,17 +113,17 @@ def run(args) -> int:
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)
     try:
-        response = response_map(lever, frequency, bias, width=width, k1=args.k1,
-                                H=args.tip_height, d_eff=args.d_eff, local_force=args.local_force,
+        response = response_map(lever, frequency, bias, width=width, k1=contact["k1"],
+                                H=contact["tip_height"], d_eff=args.d_eff, local_force=args.local_force,
                                 surface_potential_v=args.surface_potential,
                                 electrostatic_sign=args.electrostatic_sign)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
-             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
-             f"H = {args.tip_height * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
-             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}"
+             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {contact['k1']:g} N/m\n"
+             f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
+             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
              + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
     plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")

@@ -18,33 +18,40 @@ from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 __all__ = ["add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
 
 
-def _add(parser, names, required=()):
+def _add(parser, names, required=(), defaults=None):
+    defaults = defaults or {}
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        parser.add_argument(q.flag, dest=name, default=None, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
-                            required=name in required, help=f"{q.meaning} ({q.symbol}{unit})")
+        value, why = defaults.get(name, (None, ""))
+        parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
+                            required=name in required,
+                            help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
 
 
-def add_lever(parser, names=LEVER, required=()) -> None:
+def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
     """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``).
 
+    ``defaults`` maps a name to ``(value, words)``: the value taken when the flag is not given
+    (checked like a given one by :func:`given`) and how ``--help`` states it.
+
     >>> import argparse
-    >>> p = argparse.ArgumentParser(); add_lever(p)
-    >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position
-    '0.93'
+    >>> p = argparse.ArgumentParser(); add_lever(p, defaults={"tip_height": (1e-5, "1e-05, the paper's")})
+    >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position, p.parse_args([]).tip_height
+    ('0.93', 1e-05)
     """
-    _add(parser, names, required)
+    _add(parser, names, required, defaults)
 
 
-def add_contact(parser, names=CONTACT, required=()) -> None:
-    """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``)."""
-    _add(parser, names, required)
+def add_contact(parser, names=CONTACT, required=(), defaults=None) -> None:
+    """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``); ``defaults`` as in :func:`add_lever`."""
+    _add(parser, names, required, defaults)
 
 
-def add_damping(parser, names=DAMPING) -> None:
-    """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``)."""
-    _add(parser, names)
+def add_damping(parser, names=DAMPING, defaults=None) -> None:
+    """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``);
+    ``defaults`` as in :func:`add_lever`."""
+    _add(parser, names, defaults=defaults)
 
 
 def given(args, names) -> dict[str, float]:
