@@ -74,6 +74,13 @@ QUANTITIES: tuple[Quantity, ...] = (
              open_low=False),
     Quantity("poisson", "nu", "1", "k2 policy: k2/k1 of a Hertz-Mindlin contact on a sample of this "
              "Poisson's ratio", 0.0, 0.5, open_low=False, aliases=("poisson_ratio",)),
+    # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
+    Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
+             0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),
+    Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (with --reduced-modulus)", 1e-10, 1e-3,
+             aliases=("tip_radius_m",)),
+    Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (with --reduced-modulus)",
+             0.0, 1.0, aliases=("load", "load_n")),
     # Damping.
     Quantity("quality_factor", "Q", "1", "internal friction: complex modulus E (1 + i/Q)", 0.1, 1e9,
              aliases=("Q",)),

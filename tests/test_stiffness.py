@@ -196,3 +196,40 @@ def test_cli_contact_frequency_map_takes_the_lever_flags_and_refuses_the_rest(tm
     assert "median k1 160 N/m" in capsys.readouterr().out          # k1/k = 40 at the flag's k
     assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "b"), "--tilt", "12"]) == 2
     assert "--tilt" in capsys.readouterr().err and not (tmp_path / "b").exists()
+
+
+def test_contact_map_uncertainty_under_its_name_and_its_old_spelling(tmp_path, capsys):
+    """The map attribute ``contact_uncertainty`` (Hz; ``contact_uncertainty_hz`` still read) and the flag
+    ``--contact-uncertainty`` give the same k1 standard error, which grows with it."""
+    h5py = pytest.importorskip("h5py")
+    zarr = pytest.importorskip("zarr")
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    stderr = {}
+    for name, attrs, extra in (("new", {"contact_uncertainty": 200.0}, []),
+                               ("old", {"contact_uncertainty_hz": 200.0}, []),
+                               ("flag", {}, ["--contact-uncertainty", "200"]),
+                               ("double", {"contact_uncertainty": 200.0}, ["--contact-uncertainty", "400"])):
+        path = tmp_path / f"{name}.h5"
+        with h5py.File(path, "w") as h:
+            h["contact_frequency_hz"] = np.full((2, 3), fc)
+            h.attrs.update(spring_constant=2.0, free_resonance=75e3, **attrs)
+        assert cli.main(["stiffness", str(path), "--out", str(tmp_path / name), *extra]) == 0
+        stderr[name] = float(zarr.open_group(str(tmp_path / name / "maps.zarr"), mode="r")["k1_stderr"][0, 0])
+    assert stderr["new"] > 0 and stderr["old"] == stderr["new"] == stderr["flag"]
+    assert stderr["double"] == pytest.approx(2 * stderr["new"], rel=1e-9)
+    assert cli.main(["stiffness", str(tmp_path / "new.h5"), "--out", str(tmp_path / "bad"),
+                     "--contact-uncertainty", "-1"]) == 2
+    assert "--contact-uncertainty" in capsys.readouterr().err
+
+
+def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
+    """``--normal-load`` (the name of the quantity) and the hidden old ``--load`` give the same E*."""
+    base = ["stiffness", "--free-resonance", "75e3", "--contact", "300e3", "--spring-constant", "2",
+            "--reduced-modulus", "--tip-radius", "20e-9"]
+    docs = []
+    for flag in ("--normal-load", "--load"):
+        out = tmp_path / f"{flag}.json"
+        assert cli.main(base + [flag, "1e-7", "--json", str(out)]) == 0
+        docs.append(json.loads(out.read_text()))
+    assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
+    assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)

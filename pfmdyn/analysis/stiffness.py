@@ -358,7 +358,7 @@ def coupled_contact_stiffness(contact_resonance, free_resonance, spring_constant
     return StiffnessResult(k1, sigma, a, z, proof)
 
 
-def reduced_modulus(k1, tip_radius_m, load_n):
+def reduced_modulus(k1, tip_radius, normal_load):
     """Reduced modulus E* (Pa) of a Hertz contact of stiffness k1 (N/m), tip radius R (m), load P (N).
 
     Inverts ``k1 = (6 E*^2 R P)^(1/3)`` (derivations/contact_mechanics.py: hertz_stiffness),
@@ -367,13 +367,13 @@ def reduced_modulus(k1, tip_radius_m, load_n):
     >>> round(float(reduced_modulus(100.0, 25e-9, 100e-9)), -6)   # Pa
     8165000000.0
     """
-    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius, normal_load))
     if np.any(r <= 0) or np.any(p <= 0):
         raise UserError("tip radius and load must be positive (m, N)")
     return formulas.reduced_modulus(k1, r, p)
 
 
-def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius_m, load_n):
+def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius, normal_load):
     """Standard uncertainty of :func:`reduced_modulus` from that of k1 (R and P taken as exact).
 
     The slope dE*/dk1 is the complex-step derivative of the generated Hertz inversion, so it
@@ -383,7 +383,7 @@ def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius_m, load_n):
     >>> round(float(de / e), 6)   # E* ~ k1**(3/2): 1.5 % per 1 % of k1
     0.015
     """
-    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius, normal_load))
     reduced_modulus(k1, r, p)                       # same input checks
     h = 1e-20 * np.maximum(np.abs(k1), 1.0)
     slope = np.imag(formulas.reduced_modulus(k1 + 1j * h, r, p)) / h

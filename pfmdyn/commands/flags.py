@@ -15,10 +15,17 @@ from ..errors import UserError
 from ..io.record import FIELDS, MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 
-__all__ = ["add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
+__all__ = ["add", "add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
 
 
-def _add(parser, names, required=(), defaults=None):
+def add(parser, names, required=(), defaults=None) -> None:
+    """Flags of any quantities of :mod:`pfmdyn.names` (``defaults`` as in :func:`add_lever`).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add(p, ("tip_radius",))
+    >>> p.parse_args(["--tip-radius", "2e-8"]).tip_radius
+    '2e-8'
+    """
     defaults = defaults or {}
     for name in names:
         q = NAMES[name]
@@ -40,18 +47,18 @@ def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
     >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position, p.parse_args([]).tip_height
     ('0.93', 1e-05)
     """
-    _add(parser, names, required, defaults)
+    add(parser, names, required, defaults)
 
 
 def add_contact(parser, names=CONTACT, required=(), defaults=None) -> None:
     """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``); ``defaults`` as in :func:`add_lever`."""
-    _add(parser, names, required, defaults)
+    add(parser, names, required, defaults)
 
 
 def add_damping(parser, names=DAMPING, defaults=None) -> None:
     """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``);
     ``defaults`` as in :func:`add_lever`."""
-    _add(parser, names, defaults=defaults)
+    add(parser, names, defaults=defaults)
 
 
 def given(args, names) -> dict[str, float]:
