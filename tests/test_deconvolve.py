@@ -216,13 +216,14 @@ def _lever_args(k, f1, L, H, k1, k2, sigma, extra=()):
             repr(H), "--k1", repr(k1), "--k2", repr(k2), *(["--spot-position", repr(sigma)] if sigma else []), *extra]
 
 
-def _reference_pole(p, f1, sigma, low, high):
-    """The contact resonance of the reference in (low, high) Hz: where the d1 slope changes sign
-    through a pole (its magnitude large on both sides)."""
+def _reference_poles_and_zeros(p, f1, sigma, low, high):
+    """Frequencies in (low, high) Hz where the reference's d1 slope at the spot changes sign:
+    through a pole (a contact resonance: large on both sides) or through a zero."""
     f = np.linspace(low, high, 4000)
     s = np.array([spot_response(BETA1 * np.sqrt(x / f1), sigma, **p, d1=1.0)[0].real for x in f])
-    i = np.flatnonzero((np.sign(s[1:]) != np.sign(s[:-1])) & (np.abs(s[1:]) + np.abs(s[:-1]) > 10 * np.median(np.abs(s))))
-    return f[i]
+    i = np.flatnonzero(np.sign(s[1:]) != np.sign(s[:-1]))
+    pole = np.abs(s[i]) + np.abs(s[i + 1]) > 10 * np.median(np.abs(s))
+    return f[i[pole]], f[i[~pole]]
 
 
 @pytest.mark.parametrize("sigma", [0.7, None])
@@ -256,11 +257,11 @@ def test_cli_recovers_the_true_surface_displacement_at_the_spot(sigma, tmp_path,
     np.testing.assert_allclose(g, ref, rtol=1e-6)
     undetermined = [line for line in preamble if line.startswith("# undetermined")]
     ranges = [tuple(float(x) for x in line.split()[2].split("-")) for line in undetermined]
-    poles = _reference_pole(p, f1, spot, freqs[0], freqs[-1])
-    assert len(poles) >= 1
-    for pole in poles:
-        assert any(lo <= pole <= hi for lo, hi in ranges), (pole, ranges)
-    assert any("contact resonance" in line for line in undetermined)
+    poles, zeros = _reference_poles_and_zeros(p, f1, spot, freqs[0], freqs[-1])
+    assert len(poles) >= 1 and len(zeros) >= 1
+    for where, words in ((poles, "contact resonance"), (zeros, "a zero of the spot's response")):
+        for x in where:
+            assert any(lo <= x <= hi and words in line for (lo, hi), line in zip(ranges, undetermined)), (x, ranges)
     assert "true surface displacement at x_s/L" in capsys.readouterr().out
 
 

@@ -316,21 +316,40 @@ def surface_displacement(result: Deconvolution, lever: Cantilever, contact: Cont
     up, _ = calibration(lever, contact, f * (1 + _STEP))
     down, _ = calibration(lever, contact, f * (1 - _STEP))
     with np.errstate(divide="ignore", invalid="ignore"):
-        condition = np.abs(np.log(np.abs(up / down))) / (2 * _STEP)
-        bad = ~(condition <= CONDITION_LIMIT) | ~np.isfinite(factor) | (factor == 0)
+        slope = np.log(np.abs(up / down)) / (2 * _STEP)            # d ln|C| / d ln f
+        bad = ~(np.abs(slope) <= CONDITION_LIMIT) | ~np.isfinite(factor) | (factor == 0)
     ranges = []
     for run in np.split(np.flatnonzero(bad), np.flatnonzero(np.diff(np.flatnonzero(bad)) > 1) + 1):
         if run.size:
-            near_pole = np.max(np.abs(factor[run])) > 1.0     # C is 1 statically: large near a pole
-            why = ("a contact resonance: the lossless calibration has a pole, the lever's damping decides"
-                   if near_pole else "a zero of the spot's response to the surface: the spot reads almost none of it")
-            ranges.append((float(f[run[0]]), float(f[run[-1]]), why))
+            ranges.append((float(f[run[0]]), float(f[run[-1]]), _why(slope, factor, run)))
     used = np.where(bad, np.nan, factor)
     with np.errstate(invalid="ignore"):     # NaN where undetermined, on purpose
         return SurfaceDisplacement(spot_position=float(lever.spot_position), calibration_factor=used,
                                    d_eff=result.d_eff / used, g_elec=result.g_elec / used,
                                    d_eff_se=result.d_eff_se / np.abs(used), d_eff_error_per_volt=error,
                                    undetermined=tuple(ranges))
+
+
+_POLE = "a contact resonance (the lossless calibration has a pole there; the lever's damping decides)"
+_ZERO = "a zero of the spot's response to the surface (the spot reads almost none of its motion)"
+
+
+def _why(slope, factor, run) -> str:
+    """What makes the calibration undetermined over the samples ``run``: ``|C|`` rises into a pole
+    and falls out of it (``d ln|C|/d ln f`` from + to -), falls into a zero and rises out of it
+    (from - to +); the samples either side of the run are read too.  With no such turn in the data
+    (the run at an end of the sweep), a large ``|C|`` (it is 1 statically) means a pole.
+
+    >>> _why(np.array([5.0, 40.0, -30.0, -4.0]), np.array([3.0, 20.0, -9.0, -2.0]), np.array([1, 2]))[:18]
+    'a contact resonanc'
+    """
+    lo, hi = max(run[0] - 1, 0), min(run[-1] + 2, len(slope))
+    signs = np.sign(slope[lo:hi])
+    turns = signs[1:] - signs[:-1]
+    found = ([_POLE] if np.any(turns < 0) else []) + ([_ZERO] if np.any(turns > 0) else [])
+    if not found:
+        found = [_POLE if np.nanmax(np.abs(factor[run])) > 1.0 else _ZERO]
+    return " and ".join(found)
 
 
 def summary(result: Deconvolution, unit: str) -> str:
