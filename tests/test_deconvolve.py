@@ -302,3 +302,18 @@ def test_a_lever_missing_its_tip_height_is_one_line_and_writes_nothing(tmp_path,
                        "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100"])
     err = capsys.readouterr().err.strip()
     assert status == 2 and "give --tip-height" in err and "\n" not in err and not (tmp_path / "o").exists()
+
+
+def test_calibration_is_that_of_pfmdyn_spot():
+    """deconvolve's calibration factor and d_eff error at a frequency are pfmdyn spot's there."""
+    from pfmdyn.analysis.deconvolve import surface_displacement
+    from pfmdyn.analysis.spot import spot_analysis
+    from pfmdyn.cantilever import Cantilever, Contact
+    lever = Cantilever(0.8, 6e4, 3e-4, tip_height=1.2e-5, width=3e-5, tip_position=0.95, tip_mass_ratio=0.1,
+                       tilt=11.0, spot_position=0.75)
+    contact = Contact(k1=120.0, k2_over_k1=0.7)
+    fit = deconvolve([45e3] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    mine, spot = surface_displacement(fit, lever, contact), spot_analysis(lever, contact, 45e3, positions=5)
+    assert mine.calibration_factor[0] == pytest.approx(spot.calibration_factor.real, rel=1e-12)
+    assert mine.d_eff_error_per_volt[0] == pytest.approx(spot.d_eff_error_per_volt.real, rel=1e-12)
+    assert abs(mine.calibration_factor[0] - 1) > 1e-3        # the frequency matters at all

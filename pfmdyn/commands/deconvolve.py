@@ -183,5 +183,10 @@ def _surface_summary(surface: SurfaceDisplacement, unit: str) -> str:
     head = (f"true surface displacement at x_s/L = {surface.spot_position:g}: median |d_eff| "
             f"{np.median(np.abs(surface.d_eff[finite])):.4g} {unit} at {finite.sum()} of {finite.size} frequencies"
             if finite.any() else f"true surface displacement at x_s/L = {surface.spot_position:g}: undetermined everywhere")
-    return "\n".join([head] + [f"  undetermined {low / 1e3:.5g}-{high / 1e3:.5g} kHz: {why}"
-                               for low, high, why in surface.undetermined])
+    lines = [head] + [f"  undetermined {low / 1e3:.5g}-{high / 1e3:.5g} kHz: {why}"
+                      for low, high, why in surface.undetermined]
+    if surface.d_eff_error_per_volt is not None:
+        lines.append(f"  d_eff error of the distributed load at the spot (parallel plate): "
+                     f"{surface.d_eff_error_per_volt[0] * 1e12:+.4g} pm/V per volt of V_dc - V_surf at "
+                     "the lowest frequency (d_eff_error_per_volt in the table)")
+    return "\n".join(lines)
