@@ -80,7 +80,7 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (with --reduced-modulus)", 1e-10, 1e-3,
              aliases=("tip_radius_m",)),
     Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (with --reduced-modulus)",
-             0.0, 1.0, aliases=("load", "load_n")),
+             0.0, 1.0, aliases=("load_n",)),
     # Damping.
     Quantity("quality_factor", "Q", "1", "internal friction: complex modulus E (1 + i/Q)", 0.1, 1e9,
              aliases=("Q",)),

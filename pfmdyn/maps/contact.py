@@ -2,7 +2,7 @@
 
 The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
 ``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
-and ``contact_uncertainty``).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
+and ``contact_uncertainty`` in Hz, ``contact_uncertainty_hz`` read too).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
 from __future__ import annotations
