@@ -170,9 +170,9 @@ def run(args) -> int:
 
 def _probe(args):
     """``(lever, contact)`` when any probe flag is given (all of the lever's essentials then), else None."""
-    if not flags.given(args, LEVER + CONTACT):
-        return None
     values = flags.given(args, LEVER + CONTACT)
+    if not values:
+        return None
     flags.require(values, ("spring_constant", "free_resonance", "length", "tip_height", "k1"))
     return flags.cantilever(args), flags.contact(args)
 
