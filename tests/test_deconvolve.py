@@ -265,10 +265,10 @@ def test_cli_recovers_the_true_surface_displacement_at_the_spot(sigma, tmp_path,
     assert "true surface displacement at x_s/L" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_surface_displacement_over_real_levers(seed):
-    """k 0.05-50 N/m, k1/k 1-1e4, L 100-500 um, spot 0.5-1, set-back tip: d1 to 1e-6 where
-    determined, and the d_eff error of the distributed load as the reference gives it."""
+@pytest.mark.parametrize("seed,ends", [(0, None), (1, None), (2, None), (3, None), (4, (0.05, 1.2)), (5, (50.0, 1e4))])
+def test_surface_displacement_over_real_levers(seed, ends):
+    """k 0.05-50 N/m, k1/k 1-1e4 (random, and at both ends), L 100-500 um, spot 0.5-1, set-back tip:
+    d1 to 1e-6 where determined, and the d_eff error of the distributed load as the reference gives it."""
     from pfmdyn.analysis.deconvolve import surface_displacement
     from pfmdyn.analysis.spot import EPSILON_0
     from pfmdyn.cantilever import Cantilever, Contact
@@ -276,6 +276,8 @@ def test_surface_displacement_over_real_levers(seed):
     rng = np.random.default_rng(100 + seed)
     k = 10 ** rng.uniform(np.log10(0.05), np.log10(50))
     k1 = k * 10 ** rng.uniform(0, 4)
+    if ends:
+        k, k1 = ends[0], ends[0] * ends[1]
     L, H, w = rng.uniform(100e-6, 500e-6), rng.uniform(5e-6, 20e-6), rng.uniform(20e-6, 50e-6)
     f1, gamma, sigma = rng.uniform(1e4, 3e5), float(rng.choice([1.0, rng.uniform(0.9, 1.0)])), rng.uniform(0.5, 1.0)
     p = dict(k=k, L=L, H=H, kvv=k1, kll=0.6 * k1, gamma=gamma)
