@@ -155,7 +155,7 @@ def run(args) -> int:
 
     args.out.mkdir(parents=True, exist_ok=True)
     written = write_tables(result, args.out, surface, unit)
-    for name, figure in (("spectra", plotting.plot_spectra(result, unit)),
+    for name, figure in (("spectra", plotting.plot_spectra(result, unit, surface)),
                          ("nulling_bias", plotting.plot_nulling_bias(result)),
                          ("error_map", plotting.plot_error_map(result, unit))):
         figure.savefig(args.out / f"{name}.png", dpi=120)
