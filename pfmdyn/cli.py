@@ -31,8 +31,17 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its refusals as one line ``pfmdyn COMMAND: error: ...`` (no usage block):
+    a missing or malformed option is a user error like any other (``--help`` shows the usage)."""
+
+    def error(self, message):
+        print(f"{self.prog}: error: {message} (see {self.prog} --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
+    parser = _Parser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (module, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)

@@ -9,6 +9,7 @@ import numpy as np
 from ..analysis.deconvolve import CONDITION_LIMIT, Deconvolution, SurfaceDisplacement, deconvolve, summary, \
     surface_displacement
 from ..errors import UserError
+from ..io.results import check_directory
 from ..io.spectra import read_spectra
 from ..names import CONTACT, LEVER
 from . import flags
@@ -143,8 +144,7 @@ def run(args) -> int:
     """Read, fit, then write tables and plots; nothing is written if the input is bad."""
     if not np.isfinite(args.surface_potential):
         raise UserError("--surface-potential must be a finite number of volts")
-    if args.out.exists() and not args.out.is_dir():
-        raise UserError(f"{args.out}: exists and is not a directory")
+    check_directory(args.out)
     probe = _probe(args)
     data = read_spectra(args.data)
     result = deconvolve(data.frequency_hz, data.bias_v, data.response, args.surface_potential)

@@ -11,6 +11,7 @@ from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
 from ..errors import UserError
+from ..io.results import check_writable
 from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
 from . import flags
@@ -106,9 +107,8 @@ def run(args) -> int:
         raise UserError("--frequency-points and --bias-points must be at least 2")
     if args.out.suffix.lower() != ".png":
         raise UserError(f"--out must name a .png file, got {str(args.out)!r}")
-    for path in (args.out, args.csv):
-        if path is not None and not path.parent.is_dir():
-            raise UserError(f"directory {str(path.parent)!r} does not exist")
+    check_writable(args.out, figure=True)
+    check_writable(args.csv)
     spacing = np.geomspace if args.log_frequency else np.linspace
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)

@@ -12,7 +12,7 @@ from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, summary, thin
 from ..errors import UserError
 from ..discrepancy.inputs import read
-from ..io.results import dumps, write_json
+from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from ..names import flag
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
@@ -51,6 +51,8 @@ def _analyse(data, args) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
+    check_writable(args.json)
+    check_writable(args.plot, figure=True)
     data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
     stride = 1
     if isinstance(data, SpectrumData):

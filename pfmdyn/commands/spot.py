@@ -56,6 +56,9 @@ def _lever(args):
 
 def run(args) -> int:
     """Analyse, print, write what was asked."""
+    from ..io.results import check_writable
+    check_writable(args.json)
+    check_writable(args.plot, figure=True)
     lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
     print(report(result))

@@ -168,8 +168,9 @@ def _mode(text) -> int:
 def run(args) -> int:
     """Parse, analyse (:func:`pfmdyn.analysis.stiffness_report.analyse`), print, write JSON if asked."""
     from ..analysis.stiffness_report import analyse
-    from ..io.results import write_json
+    from ..io.results import check_writable, write_json
 
+    check_writable(args.json)
     if args.file and _is_contact_map(args.file):
         return _contact_map(args)
     if args.out:
