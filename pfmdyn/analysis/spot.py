@@ -254,6 +254,12 @@ class SpotResult:
         return out
 
 
+MAX_BETA = 200.0
+"""Highest dimensionless frequency analysed (about the 64th mode): beyond it an Euler-Bernoulli
+lever is no model of a real one, and the blind-spot proof's Taylor degree (grows with beta)
+makes a run take minutes."""
+
+
 def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
                   positions=201) -> SpotResult:
     """Blind spots, the q0/d1 slope ratio along the lever and, at the lever's ``spot_position``,
@@ -270,7 +276,15 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
     """
     if not (math.isfinite(frequency) and frequency > 0):
         raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
+    if not (contact.k1 or 0.0) > 0:
+        # With no contact spring the surface does not drive the tip: no d1 response, no force curve.
+        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m, got {contact.k1}")
     beta = float(lossless_beta(lever, frequency))
+    if beta > MAX_BETA:
+        top = frequency * (MAX_BETA / beta) ** 2
+        raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
+                        f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
+                        "for this lever")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position
