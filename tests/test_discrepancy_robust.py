@@ -176,14 +176,15 @@ def test_lateral_stiffness_trial_after_another_effect_is_never_worse(tmp_path):
     assert problem.trial(current, "lateral_stiffness").gap <= current.gap * (1 + 1e-9)
 
 
-def test_a_plot_path_that_cannot_be_written_is_one_line_after_the_report(tmp_path, capsys):
+def test_a_plot_path_that_cannot_be_written_is_one_line_before_the_analysis(tmp_path, capsys):
     path = tmp_path / "r.csv"
     path.write_text(META + "mode,condition,frequency_hz\n1,free,63200\n2,free,396000\n1,contact,310500\n")
     for plot in (tmp_path / "missing" / "p.png", tmp_path / "p.xyz"):
-        assert cli.main(["discrepancy", str(path), "--plot", str(plot)]) == 2
+        json_out = tmp_path / "r.json"
+        assert cli.main(["discrepancy", str(path), "--plot", str(plot), "--json", str(json_out)]) == 2
         captured = capsys.readouterr()
-        assert "baseline gap" in captured.out
-        last = captured.err.splitlines()[-1]        # after the progress bar
+        assert "baseline gap" not in captured.out and not json_out.exists()     # nothing written
+        last = captured.err.splitlines()[-1]
         assert last.startswith("pfmdyn discrepancy: error: ") and f"cannot write {plot}" in last
 
 

@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.json:
         write_json(args.json, report)
     if args.plot:
-        # Last: a path the plot cannot take costs the figure, not the report.
+        # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         try:
             plot(data, {**report, "_fits": fits}).savefig(args.plot, dpi=120)
