@@ -278,13 +278,13 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
         raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
     if not (contact.k1 or 0.0) > 0:
         # With no contact spring the surface does not drive the tip: no d1 response, no force curve.
-        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m, got {contact.k1}")
+        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m (--k1), got {contact.k1}")
     beta = float(lossless_beta(lever, frequency))
     if beta > MAX_BETA:
         top = frequency * (MAX_BETA / beta) ** 2
         raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
                         f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
-                        "for this lever")
+                        "for this lever (--frequency)")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position

@@ -99,6 +99,12 @@ def run(args) -> int:
     lever, width = _cli_cantilever(args)
     lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
     contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
+    if not contact["k1"] > 0:
+        raise UserError(f"--k1 must be > 0 N/m: the diagram is of the lever in contact, got {contact['k1']:g}")
+    for option, value in (("--d-eff", args.d_eff), ("--local-force", args.local_force),
+                          ("--surface-potential", args.surface_potential)):
+        if not math.isfinite(value):
+            raise UserError(f"{option} must be a finite number, got {value}")
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
     if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):

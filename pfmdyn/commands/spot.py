@@ -1,6 +1,8 @@
 """``pfmdyn spot``: where to put the laser spot (electrostatic blind spots, calibration, d_eff error)."""
 from __future__ import annotations
 
+import math
+
 from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
 from ..names import LEVER
@@ -59,6 +61,8 @@ def run(args) -> int:
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
+    if not (math.isfinite(args.frequency) and args.frequency > 0):
+        raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
     lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
     print(report(result))

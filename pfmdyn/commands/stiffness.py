@@ -160,6 +160,8 @@ def _contact_map(args) -> int:
 
 def _mode(text) -> int:
     value = _number(text, "--mode")
+    if value > 1000:        # no instrument resolves a higher flexural mode (and the root counts would run for hours)
+        raise UserError(f"--mode must be at most 1000, got {text}")
     if value != int(value):
         raise UserError(f"--mode must be a whole number, got {text}")
     return int(value)
@@ -187,12 +189,10 @@ def run(args) -> int:
         where = f" in {Path(args.file).name}" if args.file else ""
         raise UserError(f"no contact resonance{where}: give --contact HZ")
     lever, notes = _lever(args, found)
-    hertz = None
-    if args.reduced_modulus:
-        hertz = flags.given(args, ("tip_radius", "normal_load"))
-        if len(hertz) < 2:
-            raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
-        hertz = (hertz["tip_radius"], hertz["normal_load"])
+    hertz = flags.given(args, ("tip_radius", "normal_load"))     # checked even when not used
+    if args.reduced_modulus and len(hertz) < 2:
+        raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
+    hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
     report = analyse(
         lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
         tip_position_stated=args.tip_position is not None or "tip_position" in found,
