@@ -103,7 +103,11 @@ REFUSED = [
     ("stiffness", ["--json", "{tmp}"], "cannot write"),
     ("diagram", ["--spot-position", "0"], "--spot-position"),
     ("diagram", ["--spot-position", "1.01"], "--spot-position"),
-    ("diagram", ["--d-eff", "nan"], "d_eff"),
+    ("diagram", ["--d-eff", "nan"], "--d-eff"),
+    ("diagram", ["--k1", "0"], "--k1"),
+    ("stiffness", ["--tip-radius", "-1"], "--tip-radius"),               # was accepted, unused
+    ("stiffness", ["--mode", "1e30"], "--mode"),                         # was a ValueError traceback
+    ("spot", ["--frequency", "nan"], "--frequency"),
     ("diagram", ["--fmin", "0"], "--fmin"),
     ("diagram", ["--out", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
     ("diagram", ["--csv", "{tmp}/data.csv/out.csv"], "cannot write"),

@@ -305,9 +305,12 @@ def _peak(lever: Cantilever, contact: Contact | None, rc: complex, rn: float) ->
     lo, hi = max(centre - 4 * width, 0.5 * centre), centre + 4 * width
     grid = np.linspace(lo, hi, 81)
     magnitude = np.abs(_slope(lever, contact, grid))
-    i = int(np.argmax(magnitude))
-    if i in (0, len(grid) - 1):         # the largest amplitude at the window's edge: no peak here
+    # The local maximum nearest the mode (a wide window of a damped mode may hold a neighbour's
+    # higher peak); none inside the window: no peak of its own.
+    inner = np.flatnonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] >= magnitude[2:])) + 1
+    if inner.size == 0:
         return math.nan
+    i = int(inner[np.argmin(np.abs(grid[inner] - centre))])
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
     best = minimize_scalar(lambda r: -abs(complex(_slope(lever, contact, np.array([r]))[0])), bounds=(a, b),
                            method="bounded", options={"xatol": 1e-13 * centre})
