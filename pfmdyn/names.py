@@ -72,8 +72,9 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("k2", "k2", "N/m", "lateral (longitudinal) contact stiffness", 0.0, 1e9, open_low=False),
     Quantity("k2_over_k1", "k2/k1", "1", "k2 policy: k2 tied to k1 at this ratio", 0.0, 100.0,
              open_low=False),
+    # An isotropic solid has -1 < nu <= 1/2 (auxetic samples below 0); the Mindlin ratio holds over all of it.
     Quantity("poisson", "nu", "1", "k2 policy: k2/k1 of a Hertz-Mindlin contact on a sample of this "
-             "Poisson's ratio", 0.0, 0.5, open_low=False, aliases=("poisson_ratio",)),
+             "Poisson's ratio", -1.0, 0.5, aliases=("poisson_ratio",)),
     # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
     Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
              0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),

@@ -79,6 +79,7 @@ REFUSED = [
     ("resonances", ["--spot-position", "0"], "--spot-position"),
     ("resonances", ["--tilt", "91"], "--tilt"),
     ("resonances", ["--poisson", "0.7", "--k1", "100"], "--poisson"),
+    ("resonances", ["--poisson", "-1", "--k1", "100"], "--poisson"),
     ("resonances", ["--k1", "100", "--k2", "5", "--k2-over-k1", "0.5"], "not several"),
     ("resonances", ["--modes", "0"], "--modes"),
     ("resonances", ["--modes", "51"], "--modes"),
@@ -251,3 +252,12 @@ def test_error_is_not_a_catch_all(monkeypatch):
 def test_no_nan_printed_for_spot_at_free_end_in_stiff_contact(capsys):
     assert _run(["spot", *LEVER, "--tip-height", "1e-5", "--k1", "2e4", "--frequency", "2e5"]) == 0
     assert not re.search(r"\bnan\b", capsys.readouterr().out, re.IGNORECASE)
+
+
+def test_auxetic_sample_is_a_valid_poisson_ratio():
+    """-1 < nu <= 1/2 for an isotropic solid; Mindlin's k2/k1 = 2 (1 - nu) / (2 - nu) = 1.2 at nu = -1/2."""
+    from pfmdyn.commands import flags
+    import argparse
+
+    contact = flags.contact(argparse.Namespace(k1="100", poisson="-0.5"))
+    assert contact.k2_of(100.0) == pytest.approx(120.0, rel=1e-12)

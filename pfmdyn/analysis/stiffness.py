@@ -46,6 +46,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..generated import formulas
+from ..names import checked
 from ..generated.characteristic import BETA1_FREE, elastic
 
 __all__ = ["StiffnessResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
@@ -302,9 +303,7 @@ def mindlin_k2_over_k1(poisson_ratio):
     >>> round(mindlin_k2_over_k1(0.3), 6)
     0.823529
     """
-    if not 0 <= poisson_ratio < 0.5 + 1e-12:
-        raise UserError(f"Poisson's ratio must be in [0, 0.5], got {poisson_ratio}")
-    return formulas.mindlin_k2_over_k1(poisson_ratio)
+    return formulas.mindlin_k2_over_k1(checked("poisson", poisson_ratio))
 
 
 def coupled_contact_stiffness(contact_resonance, free_resonance, spring_constant, *, k2_over_k1: float,
