@@ -17,7 +17,11 @@ Three parts:
 2. *Outputs.*  Every path a command writes (``--json``, ``--plot``, ``--out``, ``--csv``) set to
    a directory, to a path under a regular file, under a missing folder and (not as root) under
    a folder without write permission: refused, nothing written.
-3. *Probes over the real ranges* (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4, Q 5-500, tilt,
+3. *Files.*  Frequency-bias CSVs (``deconvolve``, ``discrepancy``) and resonance tables
+   (``discrepancy``, ``stiffness FILE``) empty, header only, with one row or one bias, a NaN,
+   an infinity, text, a negative frequency, identical repeated rows (kept once) and repeated
+   rows that disagree.  (``benchmarks/malformed_inputs.py`` does map and instrument files.)
+4. *Probes over the real ranges* (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4, Q 5-500, tilt,
    set-back tip, viscous drag up to overdamping): ``pfmdyn resonances --json`` succeeds and
    every null in its report (a number JSON cannot hold) is an undamped Q or is explained in
    ``*_undetermined``.
@@ -32,7 +36,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
-import math
 import os
 import shutil
 import sys
@@ -133,7 +136,7 @@ def judge(command: str, argv: list, expect: str, out: Path) -> tuple[str, str]:
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir()
     start = time.perf_counter()
-    status, stdout, stderr, escaped = _run(argv)
+    status, _, stderr, escaped = _run(argv)
     elapsed = time.perf_counter() - start
     written = sorted(p.name for p in out.iterdir())
     if isinstance(escaped, _Timeout):
@@ -191,6 +194,47 @@ def output_cases(tmp: Path):
                 yield f"{option} {fault}", command, _set(argv, option, target), "error"
 
 
+META = "# spring_constant: 2\n# length: 2.25e-4\n# tip_height: 1e-5\n# free_resonance: 7e4\n# width: 4e-5\n"
+TABLE = META + "mode,condition,frequency_hz\n1,free,70000\n1,contact,300000\n2,contact,900000\n"
+SPECTRUM = META + CSV
+FILES = {   # name -> (text, expected: 'error' or 'any')
+    "spectrum/empty": ("", "error"), "spectrum/header_only": (META + CSV.splitlines()[0] + "\n", "error"),
+    "spectrum/one_bias": (META + "frequency_hz,bias_v,x,y\n100000,0,1,0\n200000,0,1,0\n", "error"),
+    "spectrum/nan": (SPECTRUM.replace("1.1,", "nan,", 1), "error"),
+    "spectrum/inf": (SPECTRUM.replace("1.1,", "inf,", 1), "error"),
+    "spectrum/text": (SPECTRUM.replace("1.1,", "abc,", 1), "error"),
+    "spectrum/negative_frequency": (SPECTRUM.replace("100000.0,", "-100000.0,"), "error"),
+    "spectrum/identical_repeat": (SPECTRUM + CSV.splitlines()[1] + "\n", "any"),
+    "spectrum/clashing_repeat": (SPECTRUM + "100000.0,-1,5,5\n", "error"),
+    "table/one_row": (META + "mode,condition,frequency_hz\n1,contact,300000\n", "any"),
+    "table/free_only": (META + "mode,condition,frequency_hz\n1,free,70000\n", "any"),
+    "table/nan": (TABLE.replace("300000", "nan"), "error"), "table/text": (TABLE.replace("300000", "abc"), "error"),
+    "table/negative_frequency": (TABLE.replace("300000", "-300000"), "error"),
+    "table/identical_repeat": (TABLE + "1,contact,300000\n", "any"),
+    "table/clashing_repeat": (TABLE + "1,contact,310000\n", "error"),
+    "table/mode_zero": (TABLE.replace("1,contact", "0,contact"), "error"),
+    "table/negative_spring_constant": (TABLE.replace("spring_constant: 2", "spring_constant: -2"), "error"),
+    "table/no_header": (META, "error"),
+}
+
+
+def file_cases(tmp: Path):
+    """(name, command, argv, expected) of part 3."""
+    out = tmp / "out"
+    for name, (text, expect) in FILES.items():
+        path = tmp / (name.replace("/", "_") + ".csv")
+        path.write_text(text)
+        commands = {"discrepancy": ["discrepancy", str(path), "--json", f"{out}/q.json"]}
+        if name.startswith("spectrum/"):
+            commands["deconvolve"] = ["deconvolve", str(path), "--surface-potential", "0", "--out", f"{out}/dec"]
+        else:
+            commands["stiffness"] = ["stiffness", str(path), "--json", f"{out}/k.json"]
+        for command, argv in commands.items():
+            # a table of free modes only has no contact resonance for stiffness to invert
+            wanted = "error" if (command, name) == ("stiffness", "table/free_only") else expect
+            yield name, command, argv, wanted
+
+
 def probe_cases():
     """Part 3: probes over the real ranges (silicon levers 40 um wide), for ``resonances``."""
     for k in (0.05, 0.5, 5.0, 50.0):
@@ -225,7 +269,7 @@ def main(argv=None) -> int:
     with recorded("cli_inputs"), tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         out = tmp / "out"
-        for part, cases in (("values", value_cases(tmp)), ("outputs", output_cases(tmp))):
+        for part, cases in (("values", value_cases(tmp)), ("outputs", output_cases(tmp)), ("files", file_cases(tmp))):
             counts = {}
             for name, command, line, expect in cases:
                 outcome, detail = judge(command, line, expect, out)

@@ -17,7 +17,7 @@ import pytest
 
 from pfmdyn import cli
 from pfmdyn.analysis.resonances import resonances
-from pfmdyn.cantilever import Cantilever, Contact
+from pfmdyn.cantilever import Cantilever
 
 LEVER = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"]
 PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "100"]
@@ -256,8 +256,9 @@ def test_no_nan_printed_for_spot_at_free_end_in_stiff_contact(capsys):
 
 def test_auxetic_sample_is_a_valid_poisson_ratio():
     """-1 < nu <= 1/2 for an isotropic solid; Mindlin's k2/k1 = 2 (1 - nu) / (2 - nu) = 1.2 at nu = -1/2."""
-    from pfmdyn.commands import flags
     import argparse
+
+    from pfmdyn.commands import flags
 
     contact = flags.contact(argparse.Namespace(k1="100", poisson="-0.5"))
     assert contact.k2_of(100.0) == pytest.approx(120.0, rel=1e-12)

@@ -252,7 +252,7 @@ def _followed_root(lever: Cantilever, contact: Contact | None, rn: float) -> tup
         step_contact = replace(contact, contact_loss=s * x) if contact is not None else None
         guess = path[-1] if len(path) < 2 else 2 * path[-1] - path[-2]       # linear extrapolation
         try:
-            rc = complex(newton(lambda r: complex(_damped_characteristic(step_lever, step_contact, r)),
+            rc = complex(newton(lambda r, lv=step_lever, ct=step_contact: complex(_damped_characteristic(lv, ct, r)),
                                 guess, x1=guess + complex(1e-4, 1e-4) * rn, tol=1e-14 * rn, maxiter=100))
         except (RuntimeError, ZeroDivisionError):
             return complex(math.nan, math.nan), _lost(path[-1])
