@@ -110,6 +110,7 @@ REFUSED = [
     ("stiffness", ["--mode", "1e30"], "--mode"),                         # was a ValueError traceback
     ("spot", ["--frequency", "nan"], "--frequency"),
     ("diagram", ["--fmin", "0"], "--fmin"),
+    ("diagram", ["--frequency-points", "100000000"], "--frequency-points"),   # was a MemoryError or a swap
     ("diagram", ["--out", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
     ("diagram", ["--csv", "{tmp}/data.csv/out.csv"], "cannot write"),
     ("deconvolve", ["--out", "{tmp}/data.csv/sub"], "not a directory"),        # was a NotADirectoryError

@@ -48,6 +48,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
 
 
+MAX_POINTS = 2e7
+"""Largest diagram (frequencies x biases): a few GB of complex responses and shares."""
 _CUSTOM = ("spring_constant", "length", "width", "thickness", "density")
 """The custom lever's flags (:mod:`pfmdyn.names`, SI)."""
 
@@ -111,6 +113,9 @@ def run(args) -> int:
         raise UserError(f"need --vmin < --vmax (finite), got {args.vmin:g} and {args.vmax:g} V")
     if args.frequency_points < 2 or args.bias_points < 2:
         raise UserError("--frequency-points and --bias-points must be at least 2")
+    if args.frequency_points * args.bias_points > MAX_POINTS:
+        raise UserError(f"--frequency-points x --bias-points must be at most {MAX_POINTS:g} (a diagram of "
+                        f"{args.frequency_points * args.bias_points:g} points would not fit in memory)")
     if args.out.suffix.lower() != ".png":
         raise UserError(f"--out must name a .png file, got {str(args.out)!r}")
     check_writable(args.out, figure=True)
