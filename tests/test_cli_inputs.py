@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import cmath
 import json
+import math
 import re
 from pathlib import Path
 
@@ -263,3 +264,23 @@ def test_auxetic_sample_is_a_valid_poisson_ratio():
 
     contact = flags.contact(argparse.Namespace(k1="100", poisson="-0.5"))
     assert contact.k2_of(100.0) == pytest.approx(120.0, rel=1e-12)
+
+
+def test_a_mode_without_an_amplitude_peak_says_so():
+    """Contact mode 3 of a stiff, tilted, damped lever (Q 5) is a shoulder on mode 4's flank: no local
+    maximum of |slope| within its width (dense evaluation), so no peak frequency, with the reason;
+    its Q and damped frequency stand.  Before, the window's largest value (its edge) was reported."""
+    import numpy as np
+
+    from pfmdyn.cantilever import Contact
+
+    lever = Cantilever(50.0, 4e4, 5e-4, tip_height=1e-5, tilt=12.0, tip_position=0.9, quality_factor=5.0)
+    contact = Contact(k1=5e5, k2_over_k1=0.8)
+    modes = resonances(lever, contact, modes=3).in_contact
+    centre, q = modes.damped_hz[2], modes.q[2]
+    f = np.linspace(centre * (1 - 1 / q), centre * (1 + 1 / q), 2001)
+    a = np.abs(lever.response(f, contact).vertical)
+    assert not np.any((a[1:-1] > a[:-2]) & (a[1:-1] > a[2:]))
+    assert math.isnan(modes.peak_hz[2]) and "no amplitude peak" in modes.undetermined[2]
+    assert math.isfinite(q) and 4 < q < 8
+    assert all(math.isfinite(p) for p in modes.peak_hz[:2])
