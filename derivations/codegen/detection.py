@@ -161,20 +161,26 @@ def _render_branch(name: str) -> dict:
             "q0": _blind_spot_coefficients(branch)}
 
 
-def _render_branches() -> list[dict]:
-    """Both branches; the ``beyond`` one in a forked process where there is a second core.
+def _stored_examples() -> tuple:
+    """The doctests (:func:`_examples`) of the registry's parameters."""
+    row = registry.by_module("tip_setback")
+    return _examples(detection.solve(), [symbol(p, tip_setback) for p in row.parameters])
 
-    The two branches share nothing after :func:`derivations.detection.solve` (solved here,
-    before the fork, so the child inherits it) and each is rendered by the same code in
-    either process: the text does not depend on where it was made.
+
+def _rendered() -> tuple[list[dict], tuple]:
+    """Both branches and the doctests; the ``beyond`` branch and the doctests in forked
+    processes where there is a second core.
+
+    The three share nothing after :func:`derivations.detection.solve` (solved here, before
+    the fork, so the children inherit it) and each is made by the same code in any process:
+    the text does not depend on where it was made.
     """
     detection.solve()
-    fork = "fork" in multiprocessing.get_all_start_methods() and (os.cpu_count() or 1) > 1
-    if not fork:
-        return [_render_branch("before"), _render_branch("beyond")]
-    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
-        beyond = pool.submit(_render_branch, "beyond")
-        return [_render_branch("before"), beyond.result()]
+    if "fork" not in multiprocessing.get_all_start_methods() or (os.cpu_count() or 1) < 2:
+        return [_render_branch("before"), _render_branch("beyond")], _stored_examples()
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork")) as pool:
+        beyond, examples_ = pool.submit(_render_branch, "beyond"), pool.submit(_stored_examples)
+        return [_render_branch("before"), beyond.result()], examples_.result()
 
 
 @lru_cache(maxsize=None)
@@ -185,9 +191,8 @@ def render() -> str:
     sol = detection.solve()
     names = ", ".join(map(str, params))
     signature = f"beta, sigma, {names}"
-    branches = _render_branches()
+    branches, (slope_example, deflection_example, jacobian_example) = _rendered()
     hashed = [e for b in (sol.before, sol.beyond) for e in (b.denominator, *b.slope.values(), *b.deflection.values())]
-    slope_example, deflection_example, jacobian_example = _examples(sol, params)
     exported = ["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", "slope", "deflection", "slope_and_jacobian",
                 *(f"q0_slope_{b}{suffix}" for b in ("before", "beyond") for suffix in ("", "_coefficients"))]
     return templates.render(
