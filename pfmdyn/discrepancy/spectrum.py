@@ -208,7 +208,8 @@ class SpectrumProblem:
         may have bent to mimic it: the springs (and missed a peak the spot weakened), the
         damping values and even the mechanism.  Starts: the nested one (spot at the free
         end), and the ``count`` best by misfit of the current springs and of springs matched
-        to the peaks 3x above the median (not 5x), with the current damping or the value the
+        to the peaks 3x above the median (not 5x; also leaving modes where no peak is: the
+        spot can hide a mode), with the current damping or the value the
         peak widths give, in the current mechanism or (one mechanism) each other one, each
         with the spot seed of least misfit (one projection per seed); the best per set of
         springs, so that the current springs do not crowd out the re-matched ones.
@@ -228,9 +229,10 @@ class SpectrumProblem:
             rest = model.parameters[springs:-1]
             others = [np.array([values.get(p.name, widths.get(p.name)) for p in rest]),
                       np.array([widths.get(p.name, values.get(p.name)) for p in rest])]
-            matched = match_starts(model, [np.append(o, spot.null) for o in others], self.widths[0], self.band,
-                                   (self.k1_grid, self.k2_grid), lambda x, m=model: self.cost(m, x), 3,
-                                   per_value=3 if self.sharp else 1, joint=6 if self.sharp else 4, sharp=self.sharp)
+            matched = [x for unseen in (False, True) for x in match_starts(
+                model, [np.append(o, spot.null) for o in others], self.widths[0], self.band,
+                (self.k1_grid, self.k2_grid), lambda x, m=model: self.cost(m, x), 3,
+                per_value=4 if unseen else (3 if self.sharp else 1), joint=6, sharp=self.sharp, unseen=unseen)]
             bases = [np.concatenate([current.internal[:springs], o]) for o in others] + [x[:-1] for x in matched]
             for base in bases:
                 rows = [np.append(base, v) for v in spot.seeds]
