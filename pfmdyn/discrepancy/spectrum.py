@@ -207,12 +207,11 @@ class SpectrumProblem:
         The spot moves no resonance but reweights the modes, so what was fitted without it
         may have bent to mimic it: the springs (and missed a peak the spot weakened), the
         damping values and even the mechanism.  Starts: the nested one (spot at the free
-        end), and the ``count`` best by misfit of the current springs and of springs matched
+        end), and the ``count`` best sets of springs among the current ones and those matched
         to the peaks 3x above the median (not 5x; also leaving modes where no peak is: the
-        spot can hide a mode), with the current damping or the value the
-        peak widths give, in the current mechanism or (one mechanism) each other one, each
-        with the spot seed of least misfit (one projection per seed); the best per set of
-        springs, so that the current springs do not crowd out the re-matched ones.
+        spot can hide a mode), each with the current damping or the value the peak widths
+        give, in the current mechanism or (one mechanism) each other one, ranked by the
+        misfit at a few spot positions, then with the spot seed of least misfit.
         """
         effects, meta, vertical = current.model.effects, current.model.meta, current.model.vertical_only
         spot = EFFECTS["spot_position"]
@@ -224,25 +223,32 @@ class SpectrumProblem:
         springs = 1 if vertical else 2
         values = dict(zip((p.name for p in current.model.parameters), current.internal))
         widths = {EFFECTS[DAMPING[m]].parameters[0].name: v for m, v in self.damping_seeds().items()}
-        ranked = {}         # springs -> (misfit, model, start): the best start per set of springs
+        # Undamped resonances: the springs matched once serve every damping variant.
+        others = np.append(current.internal[springs:], spot.null)
+        matched = [x[:springs] for unseen in (False, True) for x in match_starts(
+            models[0], [others], self.widths[0], self.band, (self.k1_grid, self.k2_grid),
+            lambda x: self.cost(models[0], x), 3, per_value=4 if unseen else (3 if self.sharp else 1), joint=6,
+            sharp=self.sharp, unseen=unseen)]
+        # The best model and damping per set of springs, at a few spot positions (so that the
+        # current springs do not crowd out the re-matched ones), then its best spot seed.
+        coarse = {}
         for model in models:
             rest = model.parameters[springs:-1]
-            others = [np.array([values.get(p.name, widths.get(p.name)) for p in rest]),
-                      np.array([widths.get(p.name, values.get(p.name)) for p in rest])]
-            matched = [x for unseen in (False, True) for x in match_starts(
-                model, [np.append(o, spot.null) for o in others], self.widths[0], self.band,
-                (self.k1_grid, self.k2_grid), lambda x, m=model: self.cost(m, x), 3,
-                per_value=4 if unseen else (3 if self.sharp else 1), joint=6, sharp=self.sharp, unseen=unseen)]
-            bases = [np.concatenate([current.internal[:springs], o]) for o in others] + [x[:-1] for x in matched]
-            for base in bases:
-                rows = [np.append(base, v) for v in spot.seeds]
-                costs = [self.cost(model, x) for x in rows]
-                key = tuple(np.round(base[:springs], 3))
-                if key not in ranked or min(costs) < ranked[key][0]:
-                    ranked[key] = (min(costs), model, rows[int(np.argmin(costs))])
-        best = sorted(ranked.values(), key=lambda t: t[0])[:count]
+            variants = {tuple(np.array([source.get(p.name, backup.get(p.name)) for p in rest]))
+                        for source, backup in ((values, widths), (widths, values))}
+            for k in [current.internal[:springs]] + matched:
+                for o in variants:
+                    base = np.concatenate([k, o])
+                    misfit = min(self.cost(model, np.append(base, v)) for v in (0.95, 0.85, 0.75, 0.6))
+                    key = tuple(np.round(k, 3))
+                    if key not in coarse or misfit < coarse[key][0]:
+                        coarse[key] = (misfit, model, base)
+        best = []
+        for _, model, base in sorted(coarse.values(), key=lambda t: t[0])[:count]:
+            rows = [np.append(base, v) for v in spot.seeds]
+            best.append((model, rows[int(np.argmin([self.cost(model, x) for x in rows]))]))
         fits = [fit(models[0], self.data, [np.append(current.internal, spot.null)], self.sigma, max_nfev=TRIAL_NFEV)]
-        fits += [fit(model, self.data, [x], self.sigma, max_nfev=TRIAL_NFEV) for _, model, x in best]
+        fits += [fit(model, self.data, [x], self.sigma, max_nfev=TRIAL_NFEV) for model, x in best]
         return min(fits, key=lambda f: f.bic)
 
     def damping_seeds(self) -> dict[str, float]:
