@@ -167,6 +167,9 @@ def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData,
                                response=data.response[keep]), stride
 
 
+SPOT_COARSE = (0.95, 0.85, 0.75, 0.6)
+"""Spot positions at which :meth:`SpectrumProblem.spot_trial` ranks its starts."""
+
 TRIAL_NFEV = 30
 """Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
 then converged (:meth:`SpectrumProblem.polish`)."""
@@ -211,7 +214,8 @@ class SpectrumProblem:
         to the peaks 3x above the median (not 5x; also leaving modes where no peak is: the
         spot can hide a mode), each with the current damping or the value the peak widths
         give, in the current mechanism or (one mechanism) each other one, ranked by the
-        misfit at a few spot positions, then with the spot seed of least misfit.
+        misfit at the spot positions :data:`SPOT_COARSE`, then with the spot seed of least
+        misfit.
         """
         effects, meta, vertical = current.model.effects, current.model.meta, current.model.vertical_only
         spot = EFFECTS["spot_position"]
@@ -225,10 +229,10 @@ class SpectrumProblem:
         widths = {EFFECTS[DAMPING[m]].parameters[0].name: v for m, v in self.damping_seeds().items()}
         # Undamped resonances: the springs matched once serve every damping variant.
         others = np.append(current.internal[springs:], spot.null)
-        matched = [x[:springs] for unseen in (False, True) for x in match_starts(
+        matched = {tuple(np.round(x[:springs], 3)): x[:springs] for unseen in (False, True) for x in match_starts(
             models[0], [others], self.widths[0], self.band, (self.k1_grid, self.k2_grid),
             lambda x: self.cost(models[0], x), 3, per_value=4 if unseen else (3 if self.sharp else 1), joint=6,
-            sharp=self.sharp, unseen=unseen)]
+            sharp=self.sharp, unseen=unseen)}
         # The best model and damping per set of springs, at a few spot positions (so that the
         # current springs do not crowd out the re-matched ones), then its best spot seed.
         coarse = {}
@@ -236,10 +240,10 @@ class SpectrumProblem:
             rest = model.parameters[springs:-1]
             variants = {tuple(np.array([source.get(p.name, backup.get(p.name)) for p in rest]))
                         for source, backup in ((values, widths), (widths, values))}
-            for k in [current.internal[:springs]] + matched:
+            for k in [current.internal[:springs]] + list(matched.values()):
                 for o in variants:
                     base = np.concatenate([k, o])
-                    misfit = min(self.cost(model, np.append(base, v)) for v in (0.95, 0.85, 0.75, 0.6))
+                    misfit = min(self.cost(model, np.append(base, v)) for v in SPOT_COARSE)
                     key = tuple(np.round(k, 3))
                     if key not in coarse or misfit < coarse[key][0]:
                         coarse[key] = (misfit, model, base)
