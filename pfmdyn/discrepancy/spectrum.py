@@ -295,13 +295,17 @@ class SpectrumProblem:
         return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
 
     def candidates(self, current: FitResult) -> list[str]:
-        """Effects not yet in the model (damping while a mechanism is left)."""
+        """Effects not yet in the model (damping while a mechanism is left; the laser spot
+        with two peaks or more: it sets the relative heights of the modes, and the scale of
+        a lone peak is a linear coefficient's)."""
         present = current.model.effects
         out = []
         for name in self.library:
             if name == "damping":
                 if len(current.model.damping_mechanisms) < 2 and any(c not in present for c in DAMPING.values()):
                     out.append(name)
+            elif name == "spot_position" and len(self.widths[0]) < 2:
+                continue
             elif name not in present:
                 out.append(name)
         return out
