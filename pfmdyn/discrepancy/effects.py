@@ -7,9 +7,9 @@ started there is never worse), seed values for fresh starts (for an effect that 
 resonances, the profile along which the springs are matched to the peaks, dense enough that
 one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
 linear design columns it adds, whether it moves the undamped resonances, whether only a
-spectrum can show it (``spectrum_only``: background; damping shows in a table's Q values),
-and the derivation it comes from.  ``damping`` is one effect name with three mechanisms
-(components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
+spectrum can show it (``spectrum_only``: background, the laser spot; damping shows in a
+table's Q values), and the derivation it comes from.  ``damping`` is one effect name with
+three mechanisms (components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
 :mod:`pfmdyn.derivations.damping`).
 
 Bounds of the springs depend on the cantilever: :func:`spring_parameters` centres them on
@@ -112,13 +112,19 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("lateral_stiffness", (), (), (), "derivations/elastic_contact.py", moves_resonances=True),
     Effect("background", (), (), (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2,
            spectrum_only=True),
+    # The laser spot moves no resonance: it reweights the modes (and can put a zero between
+    # them), so only a spectrum shows it; its seeds span where users put the spot.
+    Effect("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position",
+                                       description="detection (laser) spot x_s / L"),),
+           (1.0,), (0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68, 0.65, 0.6, 0.55, 0.5),
+           "derivations/detection.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 
 DAMPING = {"internal": "damping_internal", "viscous": "damping_viscous", "contact": "damping_contact"}
 """Damping mechanism -> component name; every one is reported as the effect ``damping``."""
 
-NAMES = ("damping", "tip_setback", "tip_mass", "background", "lateral_stiffness", "tilt")
+NAMES = ("damping", "tip_setback", "tip_mass", "background", "lateral_stiffness", "tilt", "spot_position")
 """The effect vocabulary of reports."""
 
 

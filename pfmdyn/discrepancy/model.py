@@ -16,7 +16,8 @@ inside the nonlinear fit of the other parameters (variable projection).  The eff
 compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
-``(b0 + b1 V) f / f_max``.
+``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
+solution at ``x_s = sigma L`` instead of the free end (:mod:`pfmdyn.generated.detection`).
 
 The solver's Jacobian comes from the derivations too: the generated partials of the slopes
 (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
@@ -33,14 +34,14 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..cantilever import free_root
-from ..generated import damping, formulas, tip_setback
+from ..generated import damping, detection, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
 from .effects import EFFECTS, Parameter, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
 
-_DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
+_DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0, "sigma": 1.0}
 """Internal coordinates of absent effects (their null values)."""
 
 
@@ -87,7 +88,8 @@ class Model:
         return {p.name: p.value(v) for p, v in zip(self.parameters, internal)}
 
     def slopes(self, frequency_hz, internal):
-        """Tip slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays."""
+        """Slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays (at the free
+        end, or at the laser spot with the effect ``spot_position``)."""
         c = self.coords(internal)
         m = self.meta
         r = np.asarray(frequency_hz, dtype=float) / m.f1
@@ -95,14 +97,19 @@ class Model:
         with np.errstate(all="ignore"):
             beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-            return tip_setback.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                     c["mu"] * mu_f, c["gamma"], 0.0)
+            args = (formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                    c["mu"] * mu_f, c["gamma"], 0.0)
+            if "spot_position" in self.effects:
+                # The effect spot_position: the beam read at x_s = sigma L (derivations/detection.py).
+                return detection.slope(args[0], c["sigma"], *args[1:])
+            return tip_setback.slope(*args)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
 
         Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
-        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`) are composed by
+        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`, or with the effect
+        ``spot_position`` :func:`pfmdyn.generated.detection.slope_and_jacobian`) are composed by
         the chain rule with the generated damping factors' derivatives
         (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
@@ -120,12 +127,19 @@ class Model:
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
-            T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                                  c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c))
+            args = (root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L, c["mu"] * mu_f, c["gamma"], 0.0)
+            if "spot_position" in self.effects:
+                # The effect spot_position: read at x_s = sigma L, one more partial (sigma).
+                module = detection
+                T, J = detection.slope_and_jacobian(args[0], c["sigma"], *args[1:],
+                                                    wrt=("sigma",) + self._partials_needed(c))
+            else:
+                module = tip_setback
+                T, J = tip_setback.slope_and_jacobian(*args, wrt=self._partials_needed(c))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
-                    for j, p in enumerate(tip_setback.JACOBIAN_PARAMETERS)}
+                    for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             j_beta, j_k, j_mu, j_gamma = part["beta"], part["k"], part["mu"], part["gamma"]
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
@@ -146,6 +160,8 @@ class Model:
                     out[:, j] = j_mu * mu_f + j_beta * (root_r / b1 * beta_f * d_b1[0])
                 elif p.name == "gamma":
                     out[:, j] = j_gamma + j_beta * (root_r / b1 * beta_f * d_b1[1])
+                elif p.name == "sigma":     # the spot moves no resonance: no free-root term
+                    out[:, j] = part["sigma"]
         return T, out
 
     def _partials_needed(self, c) -> tuple[str, ...]:

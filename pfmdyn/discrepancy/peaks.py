@@ -165,11 +165,11 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     return np.where(np.isfinite(p.real), p.real, found), formulas.half_power_width_from_root(np.abs(p.imag))
 
 
-def peak_match(roots, peaks, band, d_roots=None):
+def peak_match(roots, peaks, band, d_roots=None, unseen: bool = False):
     """Log-frequency distance of each peak to the nearest of the resonances ``roots`` (Hz),
     then one entry for the resonances in the band that no peak explains (fixed length, for
-    least squares).  With ``d_roots`` (roots x parameters) also its Jacobian, where each
-    minimum is attained.
+    least squares; zero with ``unseen``: a laser spot near a mode's node hides that mode).
+    With ``d_roots`` (roots x parameters) also its Jacobian, where each minimum is attained.
 
     >>> peak_match(np.array([100.0, 300.0]), np.array([100.0]), (50.0, 400.0)).round(3).tolist()
     [0.0, 1.099]
@@ -178,7 +178,7 @@ def peak_match(roots, peaks, band, d_roots=None):
     if not len(roots):
         out = np.full(len(peaks) + 1, 10.0)
         return out if d_roots is None else (out, np.zeros((len(out), p)))
-    inside = (roots > band[0]) & (roots < band[1])
+    inside = (roots > band[0]) & (roots < band[1]) & (not unseen)
     lp, lr = np.log(peaks), np.log(roots)
     near = np.argmin(np.abs(lr[None, :] - lp[:, None]), axis=1)          # nearest root of each peak
     there = np.abs(lr[near] - lp)
@@ -197,7 +197,7 @@ def peak_match(roots, peaks, band, d_roots=None):
     return out, jac
 
 
-def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
+def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):
     """Least-squares match of the model's resonances to the peaks from ``start``, moving the
     parameters where ``moving`` is True; the Jacobian comes from the resonances'
     sensitivities (no root search per parameter).  Returns (parameters, sum of squares)."""
@@ -219,15 +219,15 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
         roots = roots_at(v)
         d_roots = (resonance_sensitivity(model, full(v), True, roots) if len(roots)
                    else np.zeros((0, len(start))))
-        return peak_match(roots, peaks, band, d_roots[:, moving])[1]
+        return peak_match(roots, peaks, band, d_roots[:, moving], unseen)[1]
 
-    res = least_squares(lambda v: peak_match(roots_at(v), peaks, band), start[moving], jac=jac,
+    res = least_squares(lambda v: peak_match(roots_at(v), peaks, band, unseen=unseen), start[moving], jac=jac,
                         bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
     return full(res.x), 2 * res.cost
 
 
 def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
-                 per_value: int = 3, joint: int = 6, sharp: bool = False) -> list[np.ndarray]:
+                 per_value: int = 3, joint: int = 6, sharp: bool = False, unseen: bool = False) -> list[np.ndarray]:
     """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
 
     ``extra``: values of the parameters after the springs (one vector per profile point).
@@ -235,7 +235,8 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     distinct ``k1`` rows are matched by least squares over the springs alone; the best
     ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
     are returned; with ``sharp`` (peaks narrower than half a frequency step: an undamped
-    spectrum) each is first moved along its curve of matches to the least misfit.
+    spectrum) each is first moved along its curve of matches to the least misfit.  With
+    ``unseen`` a resonance may lie where no peak is (:func:`peak_match`).
     """
     if not len(peaks):
         return []
@@ -250,12 +251,12 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     for e in extra:
         grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
         roots = resonances_many(model, grid, True, band[1] * 1.3)
-        score = [float(np.sum(peak_match(r, peaks, band) ** 2)) for r in roots]
+        score = [float(np.sum(peak_match(r, peaks, band, unseen=unseen) ** 2)) for r in roots]
         best_k1 = {}
         for i in np.argsort(score):
             best_k1.setdefault(round(float(grid[i][0]), 6), i)
         for i in list(best_k1.values())[:per_value]:
-            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15)
+            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15, unseen)
             matched.append((ss, x))
     # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
     exact = sorted((x for r, x in matched if r < 1e-6), key=cost)
@@ -264,7 +265,7 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     every = np.ones(len(lower), bool)
     for x in (exact + rest)[:joint]:
         if len(x) > n_springs:
-            x = _peak_fit(model, x, every, peaks, band, lower, upper, 20)[0]
+            x = _peak_fit(model, x, every, peaks, band, lower, upper, 20, unseen)[0]
         if not any(np.allclose(x, s, atol=1e-3) for s in starts):
             starts.append(x)
     best = sorted(starts, key=cost)[:count]

@@ -34,9 +34,10 @@ so they are tried only when there are more contact modes than contact parameters
 fitted, or when those parameters leave a contact misfit (frequencies, and with damping Q
 values) above the noise; the effect's parameter may then be undetermined, and tied
 candidates are listed (set-back before tilt).  The others are listed in the report's
-``untestable_effects``.  ``background`` never (it changes spectra, not resonances).  Every
-candidate needs a degree of freedom left once its parameters are fitted (data values reproduced by
-construction, free mode 1, do not count), a second damping mechanism a Q value left over.
+``untestable_effects``.  ``background`` and ``spot_position`` never (they change spectra, not
+resonances).  Every candidate needs a degree of freedom left once its parameters are fitted
+(data values reproduced by construction, free mode 1, do not count), a second damping
+mechanism a Q value left over.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.
 """
@@ -518,7 +519,7 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
     """The effect library of a resonance table, in the order ties are broken.
 
     * ``damping`` only when the table gives Q values (undamped resonances do not move);
-    * ``background`` never (it changes a spectrum, not its resonances);
+    * ``background`` and ``spot_position`` never (they change a spectrum, not its resonances);
     * ``tilt`` and ``lateral_stiffness`` only with contact modes (they act through the
       springs); ``lateral_stiffness`` only with ``--vertical-only``, since the baseline
       already fits ``k2``.  Whether the data have room for each is decided per step

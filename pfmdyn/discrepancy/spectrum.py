@@ -167,6 +167,9 @@ def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData,
                                response=data.response[keep]), stride
 
 
+SPOT_COARSE = (0.95, 0.85, 0.75, 0.6)
+"""Spot positions at which :meth:`SpectrumProblem.spot_trial` ranks its starts."""
+
 TRIAL_NFEV = 30
 """Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
 then converged (:meth:`SpectrumProblem.polish`)."""
@@ -188,7 +191,7 @@ class SpectrumProblem:
         self.sharp = bool(np.any(self.widths[1] < 0.5 * step))
         # Library order breaks ties between candidates the data do not tell apart.
         self.library = (["lateral_stiffness"] if vertical_only else []) + [
-            "damping", "tip_mass", "tilt", "tip_setback", "background"]
+            "damping", "tip_mass", "tilt", "tip_setback", "background", "spot_position"]
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
@@ -200,6 +203,57 @@ class SpectrumProblem:
         return match_starts(model, extra, self.peaks, self.band, (self.k1_grid, self.k2_grid),
                             lambda x: self.cost(model, x), count, per_value=3 if self.sharp else 1,
                             joint=6 if self.sharp else 4, sharp=self.sharp)
+
+    def spot_trial(self, current: FitResult, count: int = 3) -> FitResult:
+        """Best fit of the current model plus the laser spot (``spot_position``).
+
+        The spot moves no resonance but reweights the modes, so what was fitted without it
+        may have bent to mimic it: the springs (and missed a peak the spot weakened), the
+        damping values and even the mechanism.  Starts: the nested one (spot at the free
+        end), and the ``count`` best sets of springs among the current ones and those matched
+        to the peaks 3x above the median (not 5x; also leaving modes where no peak is: the
+        spot can hide a mode), each with the current damping or the value the peak widths
+        give, in the current mechanism or (one mechanism) each other one, ranked by the
+        misfit at the spot positions :data:`SPOT_COARSE`, then with the spot seed of least
+        misfit.
+        """
+        effects, meta, vertical = current.model.effects, current.model.meta, current.model.vertical_only
+        spot = EFFECTS["spot_position"]
+        models = [current.model.with_effect("spot_position")]
+        present = [c for c in effects if c.startswith("damping_")]
+        if len(present) == 1:
+            models += [Model(meta, tuple(c if e == present[0] else e for e in effects) + ("spot_position",), vertical)
+                       for c in DAMPING.values() if c != present[0]]
+        springs = 1 if vertical else 2
+        values = dict(zip((p.name for p in current.model.parameters), current.internal))
+        widths = {EFFECTS[DAMPING[m]].parameters[0].name: v for m, v in self.damping_seeds().items()}
+        # Undamped resonances: the springs matched once serve every damping variant.
+        others = np.append(current.internal[springs:], spot.null)
+        matched = {tuple(np.round(x[:springs], 3)): x[:springs] for unseen in (False, True) for x in match_starts(
+            models[0], [others], self.widths[0], self.band, (self.k1_grid, self.k2_grid),
+            lambda x: self.cost(models[0], x), 3, per_value=4 if unseen else (3 if self.sharp else 1), joint=6,
+            sharp=self.sharp, unseen=unseen)}
+        # The best model and damping per set of springs, at a few spot positions (so that the
+        # current springs do not crowd out the re-matched ones), then its best spot seed.
+        coarse = {}
+        for model in models:
+            rest = model.parameters[springs:-1]
+            variants = {tuple(np.array([source.get(p.name, backup.get(p.name)) for p in rest]))
+                        for source, backup in ((values, widths), (widths, values))}
+            for k in [current.internal[:springs]] + list(matched.values()):
+                for o in variants:
+                    base = np.concatenate([k, o])
+                    misfit = min(self.cost(model, np.append(base, v)) for v in SPOT_COARSE)
+                    key = tuple(np.round(k, 3))
+                    if key not in coarse or misfit < coarse[key][0]:
+                        coarse[key] = (misfit, model, base)
+        best = []
+        for _, model, base in sorted(coarse.values(), key=lambda t: t[0])[:count]:
+            rows = [np.append(base, v) for v in spot.seeds]
+            best.append((model, rows[int(np.argmin([self.cost(model, x) for x in rows]))]))
+        fits = [fit(models[0], self.data, [np.append(current.internal, spot.null)], self.sigma, max_nfev=TRIAL_NFEV)]
+        fits += [fit(model, self.data, [x], self.sigma, max_nfev=TRIAL_NFEV) for model, x in best]
+        return min(fits, key=lambda f: f.bic)
 
     def damping_seeds(self) -> dict[str, float]:
         """Start values of each damping mechanism's parameter from the measured peak widths."""
@@ -241,13 +295,17 @@ class SpectrumProblem:
         return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
 
     def candidates(self, current: FitResult) -> list[str]:
-        """Effects not yet in the model (damping while a mechanism is left)."""
+        """Effects not yet in the model (damping while a mechanism is left; the laser spot
+        with two peaks or more: it sets the relative heights of the modes, and the scale of
+        a lone peak is a linear coefficient's)."""
         present = current.model.effects
         out = []
         for name in self.library:
             if name == "damping":
                 if len(current.model.damping_mechanisms) < 2 and any(c not in present for c in DAMPING.values()):
                     out.append(name)
+            elif name == "spot_position" and len(self.widths[0]) < 2:
+                continue
             elif name not in present:
                 out.append(name)
         return out
@@ -263,6 +321,8 @@ class SpectrumProblem:
             best = min(fits, key=lambda m: fits[m].bic)
             rematched = self._fit_with(current, DAMPING[best], [seeds[best]], rematch=True)
             return min([rematched] + list(fits.values()), key=lambda f: f.bic)
+        if name == "spot_position":
+            return self.spot_trial(current)
         return self._fit_with(current, name, None)
 
     def _fit_with(self, current: FitResult, component: str, seeds, rematch: bool = False) -> FitResult:
