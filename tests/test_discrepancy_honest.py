@@ -113,3 +113,21 @@ def test_band_limited_spectrum_finds_every_band_peak_and_names_damping(tmp_path)
     report = analyse(data, progress=False)
     assert report["missing_effects"] == ["damping"] and report["gap_after"] < 1.5
     assert report["dof"] == report["data_values"] - report["fitted_parameters"] > 0
+
+
+@pytest.mark.skipif(not THERMAL.is_file(), reason="real data absent")
+def test_one_q_value_rejects_the_undamped_model_but_does_not_test_damping(tmp_path, capsys):
+    """The thermal tune (one free mode and its Q, 390): the undamped baseline (Q infinite) is
+    rejected, so damping is named, but its one parameter reproduces the one Q by construction
+    (dof 0): the report says the damping model is not testable with these data, and the
+    mechanisms fit alike."""
+    report = _run(tmp_path, THERMAL, "--tip-height", "1.2e-5", "--length", "2.25e-4")
+    summary = capsys.readouterr().out
+    assert (report["data_values"], report["fitted_parameters"], report["dof"]) == (1, 1, 0)
+    assert report["missing_effects"] == ["damping"] and len(report["damping_mechanisms"]) == 1
+    assert report["gap_before"] > 5 and report["unexplained"] is None
+    why = report["untestable_effects"]["damping"]
+    assert why.startswith("not testable with these data: 1 Q value(s) and 1 damping parameter(s) "
+                          "(0 degree(s) of freedom left)"), why
+    assert f"damping: {why}" in summary
+    assert report["damping_mechanisms_indistinguishable_from"]
