@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
+
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 from fe_beam import ACQUISITION, acquisition_case  # noqa: E402
@@ -67,7 +69,8 @@ def run_case(kind: str, seed: int) -> dict:
         path.write_text(text)
         data = read(path)
     started = time.perf_counter()
-    report = analyse(data, progress=False, time_budget_s=TIME_BUDGET_S)
+    with threadpool_limits(1, user_api="blas"):        # as the command runs it
+        report = analyse(data, progress=False, time_budget_s=TIME_BUDGET_S)
     sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
     return {"kind": kind, "seed": seed, "hidden": truth["hidden"], "named": report["missing_effects"],
             "mechanisms": report["damping_mechanisms"], "gap_after": round(report["gap_after"], 3),

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
+from scipy.signal import peak_prominences
 
 from ..generated import formulas
 from .model import bounds, resonance_sensitivity, resonances, resonances_many
@@ -50,15 +51,36 @@ def bands(freq_u) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(gap)])
 
 
-def _maxima(size, factor, freq_u=None):
-    """Local maxima above ``factor`` times the median of ``size``; with several bands
-    (:func:`bands` of ``freq_u``), also each band's highest interior sample when it stands
-    twice above the band's lowest: in a band around one resonance most samples lie on the
-    peak, so the median of all bands hides the weaker peaks."""
+PROMINENCE = 20.0
+"""A local maximum of the bias-summed magnitude is a resonance when it rises this many noise
+levels above the higher of its two bases (noise maxima rise 2-5 noise levels)."""
+
+
+def _maxima(size, freq_u=None):
+    """Resonances among the local maxima of ``size``: those that rise :data:`PROMINENCE` noise
+    levels above their bases; with several bands (:func:`bands` of ``freq_u``), also each band's
+    highest interior sample when it stands twice above the band's lowest (a band holding only
+    the top of a peak has no base on either side).
+
+    Height alone (a maximum five times above the median) is no test: a weakly coupled mode (a
+    set-back tip near a node of its slope) stands only 2-3 times above the median, beside its
+    antiresonance, yet rises hundreds of noise levels (missed, the spring starts matched the
+    other peaks with that mode elsewhere: a false tip mass and tilt), while a noise wiggle on
+    the skirt of a strong peak stands high and rises three noise levels (taken, a false peak).
+
+    >>> f = np.linspace(0.0, 10.0, 1001)
+    >>> size = 1 + 100 * np.exp(-((f - 3) / 0.05) ** 2) + 2 * np.exp(-((f - 7) / 0.05) ** 2)
+    >>> f[_maxima(size)].round(2).tolist()
+    [3.0, 7.0]
+    """
     inner = np.arange(1, len(size) - 1)
-    keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > factor * np.median(size))
+    local = inner[(size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1])]
+    # Noise of ``size`` from its second differences (their median ignores the peaks), with a
+    # floor for data without noise: a thousandth of the median.
+    noise = max(np.median(np.abs(np.diff(size, 2))) / (0.6745 * math.sqrt(6)), 1e-3 * np.median(size))
+    rise = peak_prominences(size, local)[0] if len(local) else np.zeros(0)
     which = bands(freq_u) if freq_u is not None else np.zeros(len(size), int)
-    found = set(inner[keep].tolist())
+    found = set(local[rise > PROMINENCE * noise].tolist())
     if which.max() > 0:
         for b in range(which.max() + 1):
             idx = np.flatnonzero(which == b)
@@ -134,8 +156,8 @@ def poles(data, guesses_hz, half_width: int | None = None) -> np.ndarray:
 
 
 def data_peaks(data) -> np.ndarray:
-    """Resonance frequencies (Hz): the maxima of the bias-summed |response| (5x above its
-    median in their band, :func:`bands`), each located by its complex pole (:func:`poles`).
+    """Resonance frequencies (Hz): the prominent maxima of the bias-summed |response|
+    (:func:`_maxima`), each located by its complex pole (:func:`poles`).
 
     >>> from types import SimpleNamespace
     >>> f = np.repeat(np.linspace(1, 10, 91), 2); y = 1 / (f - 4.03) + 0j   # pole off the grid
@@ -143,12 +165,12 @@ def data_peaks(data) -> np.ndarray:
     [4.03]
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 5.0, freq_u)]
+    found = freq_u[_maxima(size, freq_u)]
     return poles(data, found).real if len(found) else found
 
 
 def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
-    """Peaks (3x above the median of the bias-summed |response|) and their half-power widths
+    """Peaks (as :func:`data_peaks` finds them) and their half-power widths
     (Hz), ``2 |Im p|`` of each pole; NaN where no pole was found near the peak.
 
     >>> from types import SimpleNamespace
@@ -158,7 +180,7 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     ([100.0], [2.0])
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 3.0, freq_u)]
+    found = freq_u[_maxima(size, freq_u)]
     if not len(found):
         return found, found
     p = poles(data, found)

@@ -445,7 +445,25 @@ class ResonanceProblem:
             if why is None or why in ("in the model", "every mechanism the table can show is in the model"):
                 continue
             out[e] = f"not testable with these data: {why}"
+        fitted = self._fitted_damping(current)
+        if fitted:
+            out["damping"] = fitted
         return out
+
+    def _fitted_damping(self, current: FitResult) -> str | None:
+        """Why the damping in ``current`` is fitted rather than tested, when its mechanism
+        parameters use up every Q value (one Q, as a thermal tune gives): the undamped baseline
+        (Q infinite) is rejected, but the fitted Q reproduces the measured ones by construction,
+        so neither the mechanism nor how the width scales with the mode is tested."""
+        mechanisms = current.model.damping_mechanisms
+        n_q = int(_has_q(self.data).sum())
+        if not mechanisms or n_q > len(mechanisms):
+            return None
+        left = degrees(current)["dof"]
+        return (f"not testable with these data: {n_q} Q value(s) and {len(mechanisms)} damping parameter(s) "
+                f"({left} degree(s) of freedom left): the undamped model is rejected, but the fitted Q "
+                "reproduces the measured one by construction, so the mechanism and the law of the width "
+                "with frequency are not tested (another Q value, e.g. of a second mode, would test them)")
 
     def _mechanisms(self, current: FitResult | None = None) -> list[str]:
         """Damping components not yet in the model (the dashpot only with a contact Q)."""

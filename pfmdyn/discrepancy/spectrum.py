@@ -170,6 +170,11 @@ def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData,
 SPOT_COARSE = (0.95, 0.85, 0.75, 0.6)
 """Spot positions at which :meth:`SpectrumProblem.spot_trial` ranks its starts."""
 
+PEAK_WIDTHS = 3.0
+BACKGROUND_AWAY = 0.5
+"""A background is named only when at least this share of the misfit it removes lies more than
+:data:`PEAK_WIDTHS` half-power widths from every resonance (:meth:`SpectrumProblem.not_a_background`)."""
+
 TRIAL_NFEV = 30
 """Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
 then converged (:meth:`SpectrumProblem.polish`)."""
@@ -323,7 +328,48 @@ class SpectrumProblem:
             return min([rematched] + list(fits.values()), key=lambda f: f.bic)
         if name == "spot_position":
             return self.spot_trial(current)
-        return self._fit_with(current, name, None)
+        trial = self._fit_with(current, name, None)
+        if name == "background":
+            why = self.not_a_background(current, trial)
+            if why:
+                trial.extra["refused"] = why
+        return trial
+
+    def not_a_background(self, current: FitResult, trial: FitResult) -> str | None:
+        """Why ``trial`` (``current`` plus the background) does not lower the misfit as a
+        background does, or None.
+
+        The background must change the fitted response by more than the noise (RMS): a cross-talk
+        below the noise at every point, named because it lowers a gap already near the noise by
+        a few per cent (air damping: 1.22 -> 1.10 with a background at 0.4 % of the median
+        response), is the smooth remainder of another misfit as much as a background.  And a
+        cross-talk background is smooth in frequency and small beside a resonance, so most of
+        the misfit it removes lies away from the peaks (more than :data:`PEAK_WIDTHS` half-power
+        widths from each).  When most lies within them, the two columns only reshape the peaks:
+        a damping law or a per-sweep gain outside the library (air damping, width ~ sqrt f; a
+        gain drifting between bias sweeps) leaves a misfit there that a background absorbs in
+        part.  Band-limited data (bands of a few widths around each resonance) cannot tell a
+        background from that at all.
+        """
+        change = (float(np.sqrt(np.mean(np.abs(trial.prediction - current.prediction) ** 2)))
+                  if trial.prediction is not None and current.prediction is not None else math.inf)
+        if change < self.sigma:
+            return (f"it changes the fitted response by {change / self.sigma:.2g} x the noise (RMS): a cross-talk "
+                    "below the noise at every point cannot be told from the smooth remainder of another misfit "
+                    "(a damping law outside the library)")
+        peaks, widths = self.widths
+        near = np.zeros(len(self.data.frequency_hz), bool)
+        for p, w in zip(peaks, widths):
+            if np.isfinite(w):
+                near |= np.abs(self.data.frequency_hz - p) < PEAK_WIDTHS * w
+        removed = np.abs(current.residual) ** 2 - np.abs(trial.residual) ** 2
+        total = float(removed.sum())
+        away = min(max(float(removed[~near].sum()), 0.0) / total, 1.0) if total > 0 else 1.0
+        if away >= BACKGROUND_AWAY:
+            return None
+        return (f"only {away:.0%} of the misfit it removes lies more than {PEAK_WIDTHS:g} half-power widths "
+                "from the resonances: it reshapes the peaks, which a smooth cross-talk does not (a damping "
+                "law or gain outside the library)")
 
     def _fit_with(self, current: FitResult, component: str, seeds, rematch: bool = False) -> FitResult:
         model = current.model.with_effect(component)
