@@ -216,9 +216,11 @@ def _polish(problem, trial):
 
 
 def _best_pair(problem, current, trials, bar):
-    """The material pair of effects (among the three best single ones) with the largest gain."""
-    ranked = sorted((n for n in trials if not refusal(trials[n])), key=lambda n: current.bic - trials[n].bic,
-                    reverse=True)[:3]
+    """The material pair of effects (among the three best single ones, none of the problem's
+    ``alone``) with the largest gain."""
+    alone = getattr(problem, "alone", ())
+    ranked = sorted((n for n in trials if not refusal(trials[n]) and n not in alone),
+                    key=lambda n: current.bic - trials[n].bic, reverse=True)[:3]
     found = None
     for i, a in enumerate(ranked):
         for b in ranked[i + 1:]:

@@ -183,6 +183,12 @@ then converged (:meth:`SpectrumProblem.polish`)."""
 class SpectrumProblem:
     """What :func:`pfmdyn.discrepancy.select.run` needs for a spectrum (see there)."""
 
+    alone = ("spot_position",)
+    """Effects named only on their own merit, never as half of a pair: the spot reweights the
+    modes, as a damping law outside the library does (air damping, width ~ sqrt f), and paired
+    with a set-back it absorbed such a misfit (band-limited air damping then also took a tilt
+    and a tip mass, five effects where one was hidden)."""
+
     def __init__(self, data: SpectrumData, vertical_only: bool = False):
         self.data, self.vertical_only = data, vertical_only
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
