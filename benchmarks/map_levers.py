@@ -134,10 +134,10 @@ def build(lever, path, rng):
 def _truth_start(model, lever, truth):
     """Internal parameters of the truth, per pixel (the fit's column order)."""
     n = truth["k1"].size
-    column = {"log_k1": np.log(truth["k1"].ravel()), "log_q": np.full(n, math.log(lever["Q"])),
-              "log_k2": np.log(truth.get("k2", truth["k1"]).ravel()),
+    column = {"k1": np.log10(truth["k1"].ravel()), "q": np.full(n, math.log10(lever["Q"])),
+              "k2": np.log10(truth.get("k2", truth["k1"]).ravel()),
               "g": truth.get("viscous_loss", np.zeros(n)).ravel(), "x": truth.get("contact_loss", np.zeros(n)).ravel()}
-    return np.stack([column[name] for name in model.parameters], axis=1)
+    return np.stack([column[name] for name in model.names], axis=1)
 
 
 def diagnose(model, y, lever, truth, out, failing):

@@ -21,56 +21,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
 from ..generated import formulas
 
-__all__ = ["Parameter", "Effect", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A nonlinear parameter: name, unit, internal transform, bounds (internal coordinates).
-
-    ``name`` is the internal coordinate (the derivations' symbol), ``public`` the name reports use
-    (:mod:`pfmdyn.names`; default ``name``).  ``log``: internal is log10 of the value;
-    ``inverse``: internal is 1/value (a loss factor, 0 meaning no loss); otherwise the value is
-    ``scale`` times the internal coordinate (the tilt: the derivations' angle in rad is minus the
-    public tilt in degrees).
-    """
-
-    name: str
-    unit: str
-    lower: float
-    upper: float
-    log: bool = False
-    inverse: bool = False
-    description: str = ""
-    public: str = ""
-    scale: float = 1.0
-
-    @property
-    def key(self) -> str:
-        """The name reports use.
-
-        >>> Parameter("gamma", "", 0.5, 1.0, public="tip_position").key
-        'tip_position'
-        """
-        return self.public or self.name
-
-    def value(self, internal: float) -> float:
-        """Physical value of an internal coordinate.
-
-        >>> Parameter("inv_q", "", 0.0, 0.5, inverse=True).value(0.01)
-        100.0
-        """
-        if self.inverse:
-            return math.inf if internal <= 0 else 1.0 / internal
-        return 10.0**internal if self.log else self.scale * float(internal)
-
-    def stderr(self, internal: float, sd: float) -> float:
-        """Uncertainty of the physical value from that of the internal one (delta method)."""
-        if self.inverse:
-            return math.inf if internal <= 0 else sd / internal**2
-        return self.value(internal) * math.log(10) * sd if self.log else abs(self.scale) * sd
+__all__ = ["Effect", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
 
 @dataclass(frozen=True)
@@ -79,39 +33,39 @@ class Effect:
 
     name: str
     parameters: tuple[Parameter, ...]
-    null: tuple[float, ...]
-    seeds: tuple[float, ...]
     derivation: str
     columns: int = 0
     moves_resonances: bool = False
     spectrum_only: bool = False
 
+    @property
+    def null(self) -> tuple[float, ...]:
+        """Internal values that switch the effect off."""
+        return tuple(p.null for p in self.parameters)
 
-_LOSS = "internal friction: complex modulus E (1 + i/Q)"
+    @property
+    def seeds(self) -> tuple[float, ...]:
+        """Seed values of the effect's (one) parameter for fresh starts."""
+        return self.parameters[0].seeds if self.parameters else ()
+
+
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
-    Effect("damping_internal", (Parameter("inv_q", "", 0.0, 0.5, inverse=True, description=_LOSS,
-                                          public="quality_factor"),),
-           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py"),
-    Effect("damping_viscous", (Parameter("g", "", 0.0, 1.0, public="viscous_loss",
-                                         description="viscous force c u_t per length: 1/Q of free mode 1"),),
-           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py"),
-    Effect("damping_contact", (Parameter("x", "", 0.0, 5.0, public="contact_loss",
-                                         description="dashpot eta parallel to k1: omega1 eta / k1"),),
-           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py"),
-    Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass",
-                                  public="tip_mass_ratio"),),
-           (0.0,), (0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5), "derivations/tip_mass.py",
-           moves_resonances=True),
-    Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position"),),
-           (1.0,), (0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68),
+    Effect("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py"),
+    Effect("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py"),
+    Effect("damping_contact", (CONTACT_LOSS,), "derivations/damping.py"),
+    Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
+                                  null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
+           "derivations/tip_mass.py", moves_resonances=True),
+    Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
+                                     null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
+                                                      0.68)),),
            "derivations/tip_setback.py", moves_resonances=True),
-    Effect("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi,
+    Effect("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
+                              seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
                               description="beam inclination, positive when the free end is nearer the sample"),),
-           (0.0,), (-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45), "derivations/tilt.py",
-           moves_resonances=True),
-    Effect("lateral_stiffness", (), (), (), "derivations/elastic_contact.py", moves_resonances=True),
-    Effect("background", (), (), (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2,
-           spectrum_only=True),
+           "derivations/tilt.py", moves_resonances=True),
+    Effect("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
+    Effect("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2, spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 
@@ -141,8 +95,9 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     """
     a = math.log10(meta.k)
     b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L))
-    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, log=True, description="normal contact stiffness")
-    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, log=True, description="lateral contact stiffness")
+    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10", description="normal contact stiffness")
+    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf,
+                   description="lateral contact stiffness")
     return (k1,) if vertical_only else (k1, k2)
 
 

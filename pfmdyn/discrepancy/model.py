@@ -33,12 +33,14 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..cantilever import free_root
+from ..fitting.parameters import Parameter
+from ..fitting.projection import jacobian_covariance, project
 from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
-from .effects import EFFECTS, Parameter, public_name, spring_parameters
+from .effects import EFFECTS, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many"]
 
 _DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
 """Internal coordinates of absent effects (their null values)."""
@@ -377,36 +379,6 @@ class FitResult:
         return "\n".join(lines)
 
 
-def project(A: np.ndarray, y: np.ndarray):
-    """Linear least squares (column-scaled normal equations, eigenvalue cutoff).
-
-    Returns the coefficients and the prediction.  Near-dependent column combinations
-    (eigenvalues of the scaled Gram matrix below 1e-13 of the largest) get no weight
-    rather than a huge one.
-
-    >>> A = np.array([[1.0, 0.0], [0.0, 1e-9], [1.0, 1e-9]])
-    >>> c, pred = project(A, np.array([1.0, 2e-9, 1.0 + 2e-9]))
-    >>> np.round(c.real, 6).tolist()
-    [1.0, 2.0]
-    """
-    c, _, As, norms, _ = _solve(A, y)
-    return c / norms, As @ c
-
-
-def _solve(A, y):
-    """Coefficients, pseudo-inverse of the Gram matrix of the scaled columns ``As = A / norms``,
-    ``As``, ``norms`` and ``As^H``."""
-    norms = np.linalg.norm(A, axis=0)
-    norms[~(np.isfinite(norms) & (norms > 0))] = np.inf
-    As = A / norms
-    As[~np.isfinite(As)] = 0.0
-    AsH = As.conj().T
-    w, V = np.linalg.eigh(AsH @ As)
-    keep = w > 1e-13 * max(w.max(), 1e-300)
-    ginv = (V[:, keep] / w[keep]) @ V[:, keep].conj().T
-    return ginv @ (AsH @ y), ginv, As, norms, AsH
-
-
 JACOBIAN = "analytic"
 """How :func:`fit` differentiates: ``"analytic"`` (variable-projection Jacobian, Kaufman's
 approximation, from the generated partials of the design matrix), ``"projection"`` (the
@@ -430,11 +402,12 @@ class _Problem:
         self._key, self._state = None, None
 
     def _at(self, x):
+        """Design matrix, amplitudes and projection (:func:`pfmdyn.fitting.projection.project`)."""
         key = tuple(np.asarray(x, float))
         if key != self._key:
             A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
-            c, ginv, As, norms, AsH = _solve(A, self.y)
-            self._key, self._state = key, (A, c / norms, ginv, As, AsH)
+            projection = project(A[None], self.y[None, :, None])
+            self._key, self._state = key, (A, projection.amplitudes[0, :, 0], projection)
         return self._state
 
     def residual(self, x):
@@ -444,7 +417,7 @@ class _Problem:
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, x):
-        A, c, ginv, As, AsH = self._at(x)
+        A, c, projection = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
             v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
@@ -457,31 +430,12 @@ class _Problem:
                 xs = x.copy()
                 xs[j] += step
                 v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
-        # v = (d design / d x_j) c, shape (rows, parameters)
-        v = v - As @ (ginv @ (AsH @ v))                     # (I - P) dA c
-        col = -v / self.sigma
+        # v = (d design / d x_j) c, shape (rows, parameters); Kaufman's -(I - P) dA c treats every
+        # column alike, so the parameters go in as right-hand sides (one product for all)
+        col = projection.jacobian(v[None, None])[0, 0] / self.sigma
         out = np.concatenate([col.real, col.imag])
         out[~np.isfinite(out)] = 0.0
         return out
-
-
-def covariance(jac: np.ndarray, scale: float = 1.0) -> np.ndarray:
-    """``scale (J^T J)^-1`` by SVD; a parameter with a share in a direction the data do not
-    constrain (singular value below 1e-8 of the largest) gets infinite variance.
-
-    >>> covariance(np.array([[1.0, 1.0], [2.0, 2.0]])).diagonal().tolist()
-    [inf, inf]
-    """
-    if not jac.size:
-        return np.zeros((jac.shape[1], jac.shape[1]))
-    jac = np.where(np.isfinite(jac), jac, 0.0)
-    # Eigen-decomposition of J^T J (p x p): squared singular values, cheap for tall J.
-    w, v = np.linalg.eigh(jac.T @ jac)
-    good = w > 1e-16 * max(w.max(), 1e-300)
-    cov = (v[:, good] / w[good]) @ v[:, good].T * scale
-    loose = np.any(np.abs(v[:, ~good]) > 1e-3, axis=1) if (~good).any() else np.zeros(len(w), bool)
-    cov[loose, :] = np.where(loose[:, None] & loose[None, :], np.inf, 0.0)[loose, :]
-    return cov
 
 
 def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
@@ -504,7 +458,7 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
         raise FloatingPointError("no start gave a finite misfit")
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
-    cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
+    cov = jacobian_covariance(best.jac, 2 * best.cost / max(n - k, 1))
     A, c = problem._at(best.x)[:2]
     pred = A @ c
     return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)

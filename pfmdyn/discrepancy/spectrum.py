@@ -27,10 +27,11 @@ import math
 
 import numpy as np
 
+from ..fitting.projection import project
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit, project
+from .model import FitResult, Model, bounds, fit
 from .peaks import data_peaks, match_starts, peak_widths
 from .report import report, summary  # noqa: F401  (summary: public here too)
 
@@ -236,7 +237,7 @@ class SpectrumProblem:
         """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
         freq_u, inverse = np.unique(self.data.frequency_hz, return_inverse=True)
         A = model.design(freq_u, inverse, self.data.bias_v, np.asarray(internal))
-        _, pred = project(A, self.data.response)
+        pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
         r = np.abs(self.data.response - pred) ** 2
         return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
 
