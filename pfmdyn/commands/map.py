@@ -21,6 +21,7 @@ import dataclasses
 import math
 
 from ..errors import UserError
+from ..fitting.noise import GAP_LIMIT
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -56,8 +57,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
-    parser.add_argument("--gap-threshold", type=float, default=0.2,
-                        help="relative residual above which a pixel is marked unexplained (default 0.2)")
+    parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
+                        help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
+                             f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
     parser.add_argument("--surface-potential", type=float, default=None,
                         help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
                              "this bias (default: fitted with +distributed, else 0, the intercept); the "

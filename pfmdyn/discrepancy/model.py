@@ -33,6 +33,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..cantilever import free_root
+from ..fitting.noise import gap
 from ..fitting.parameters import Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..generated import damping, formulas, tip_setback
@@ -323,8 +324,8 @@ class FitResult:
 
     @property
     def gap(self) -> float:
-        """``sqrt(mean |r / sigma|**2)``: 1 when the residual is noise."""
-        return float(math.sqrt(self.chi2 / max(len(self.residual), 1)))
+        """``sqrt(mean |r / sigma|**2)``: 1 when the residual is noise (:func:`pfmdyn.fitting.noise.gap`)."""
+        return float(gap(self.chi2, len(self.residual)))
 
     @property
     def bic(self) -> float:

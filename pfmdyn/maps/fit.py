@@ -34,6 +34,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
+from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..fitting.parameters import CONTACT_LOSS, LN10, VISCOUS_LOSS, Parameter
 from ..fitting.parameters import bounds as parameter_bounds
 from ..fitting.projection import covariance, normal_matrix, project
@@ -69,10 +70,12 @@ _QUANTITIES = {
     "amplitude_stderr": ("response units per unit d1", "standard error of amplitude"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
     **bias_axis.QUANTITIES, **bias_axis.DISTRIBUTED, **bias_axis.SURFACE,
-    "gap": ("1", "relative residual |y - model| / |y|"),
+    "gap": ("1", "noise-normalised RMS residual sqrt(mean |y - model|^2) / sigma: 1 = fitted to the noise "
+                 "(sigma from the pixel's spectra, pfmdyn.fitting.noise, as pfmdyn discrepancy)"),
     "at_bound": ("1", "1 where a fitted parameter sits at its bound: the model cannot reach the data there, "
                       "so nothing is reported for the pixel"),
-    "explained": ("1", "1 where the model explains the pixel (gap below threshold, no parameter at a bound), else 0"),
+    "explained": ("1", "1 where the model explains the pixel (gap below the threshold, default 2, no parameter at "
+                       "a bound), else 0"),
 }
 _REQUIRES = {"viscous_loss": {"viscous"}, "viscous_loss_stderr": {"viscous"},
              "contact_loss": {"contact"}, "contact_loss_stderr": {"contact"},
@@ -523,13 +526,14 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2, tolerance=1e-3, surface_potential_v=None) -> dict[str, np.ndarray]:
+              gap_threshold=GAP_LIMIT, tolerance=1e-3, surface_potential_v=None) -> dict[str, np.ndarray]:
     """Fit every pixel of ``response``, :data:`CHUNK` pixels at once.
 
     ``response`` is complex, ``(..., n_freq)``, or ``(..., n_bias, n_freq)`` when the model has
     biases.  Returns the arrays of :attr:`BeamMapModel.outputs`, each of the pixel shape
     ``response.shape[:-1]`` (``[:-2]`` with biases), plus ``cost`` (the squared relative
-    residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
+    residual).  ``gap`` is the noise-normalised RMS residual (:mod:`pfmdyn.fitting.noise`); a pixel
+    is ``explained`` below ``gap_threshold`` (2: a misfit the noise does not explain is above).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
     line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  A pixel whose spectra hold
@@ -621,6 +625,9 @@ def _column(n_p, q, j, k, n_bands, K) -> int:
 def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v):
     scale = np.sqrt(np.sum(np.abs(y) ** 2, axis=(1, 2)))
     scale[scale == 0] = 1.0
+    # the noise of each pixel's spectra as pfmdyn discrepancy estimates it (floored: noise-free data)
+    sigma = np.maximum(noise_sigmas(model.frequency_hz, model.bias_v, y), 1e-15 * scale)
+    count = y.shape[1] * y.shape[2]
     y, outside = bias_axis.project(y / scale[:, None, None], bias)
     names = model.names
     p = _initial(model, y, q0, k1_range, iterations, tolerance)
@@ -636,7 +643,7 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     k2 = model.k2_of(k1, col.get("k2"))
     k2_sd = k2 * spread["k2"] if "k2" in spread else (
         np.zeros(len(y)) if model.k2_mode == "fixed" else k2 * spread["k1"])
-    gap = np.sqrt(cost)
+    gap_map = gap(cost * (scale / sigma) ** 2, count)
     at_bound = np.any([q.at_bound(col[q.name]) for q in model.parameters], axis=0)
     _, m, n_bands, K = c.shape
     first = np.concatenate([_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
@@ -647,8 +654,8 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
            "quality_factor": 10.0**col["q"], "quality_factor_stderr": 10.0**col["q"] * spread["q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
-           "gap": gap, "at_bound": at_bound.astype(float),
-           "explained": ((gap < gap_threshold) & ~at_bound).astype(float), "cost": cost}
+           "gap": gap_map, "at_bound": at_bound.astype(float),
+           "explained": ((gap_map < gap_threshold) & ~at_bound).astype(float), "cost": cost}
     out.update({name: value * scale if name in _SCALED else value for name, value in linear.items()})
     # a parameter at its bound is where the fit was stopped, not a measurement: report nothing there
     for name in out:
