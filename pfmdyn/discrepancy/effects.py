@@ -24,12 +24,43 @@ from dataclasses import dataclass
 from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
 from ..generated import formulas
 
-__all__ = ["Effect", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
+__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
+
+
+@dataclass
+class Chain:
+    """What the chain rule composes at one parameter vector (:meth:`pfmdyn.discrepancy.model.Model.slopes_and_jacobian`).
+
+    ``part``: the generated partials of the four slopes w.r.t. :data:`pfmdyn.generated.tip_setback.JACOBIAN_PARAMETERS`
+    (0 where not computed); ``rotation``: d slopes / d (k1 in beam axes, k2, alpha) through the
+    rotated spring tensor; ``coords``: :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
+    the undamped ``beta`` at each frequency, ``b1`` and ``d_b1`` the free root and its derivatives
+    w.r.t. ``(mu, gamma)``; ``factors`` and ``d_factors`` the generated damping factors
+    (:mod:`pfmdyn.generated.damping`) and their derivatives; ``spring`` the damped ``k1``.
+    """
+
+    part: dict
+    rotation: list
+    coords: dict
+    meta: object
+    root_r: object
+    b1: float
+    d_b1: tuple
+    factors: tuple
+    d_factors: tuple
+    spring: object
 
 
 @dataclass(frozen=True)
 class Effect:
-    """One component of the discrepancy model (see module docstring)."""
+    """One component of the discrepancy model (see module docstring): its parameters and what
+    it does to the model.  The base class moves nothing; a subclass gives its behaviour:
+
+    * :meth:`jacobian`: d slopes / d each of its internal parameters, by the chain rule
+      (:class:`Chain`), and :meth:`partials` the generated partials that needs;
+    * :meth:`design_columns` (``columns`` of them) and :meth:`design_derivative`: linear columns
+      it adds to the design and their parameter derivatives times their coefficients.
+    """
 
     name: str
     parameters: tuple[Parameter, ...]
@@ -48,24 +79,162 @@ class Effect:
         """Seed values of the effect's (one) parameter for fresh starts."""
         return self.parameters[0].seeds if self.parameters else ()
 
+    @property
+    def frees_lateral_spring(self) -> bool:
+        """Whether the effect fits ``k2`` where the baseline holds it at 0 (``--vertical-only``)."""
+        return False
+
+    def partials(self, coords) -> set[str]:
+        """The generated partials its :meth:`jacobian` uses at coordinates ``coords``."""
+        return set()
+
+    def jacobian(self, chain: Chain) -> tuple:
+        """d slopes (4, n) / d each internal parameter, in order."""
+        return ()
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        """Its linear design columns (rows) from the slopes per row ``(d1, d2, f0, q0)``."""
+        return []
+
+    def design_derivative(self, dT, coef):
+        """``(bias-independent, per-volt)`` parts of ``(d columns / d internal) @ coef`` from the
+        slope derivatives ``dT`` (4, p, n) and its own coefficients ``coef``, or None."""
+        return None
+
+    def derived(self, values: dict, meta) -> dict:
+        """Reported quantities that follow from its parameters' ``values`` (:meth:`FitResult.parameters`)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class Damping(Effect):
+    """One damping mechanism: the generated substitution of :mod:`pfmdyn.generated.damping`
+    (complex ``beta``, ``k``, ``k1`` and tip mass), the loss ``index``-th of ``(1/Q, g, x)``;
+    ``uses``: the generated partials its factors move (the others' factors stay 1)."""
+
+    index: int = 0
+    uses: tuple[str, ...] = ()
+
+    def partials(self, coords) -> set[str]:
+        return set(self.uses)
+
+    def jacobian(self, chain: Chain) -> tuple:
+        q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
+        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.k * d_f[1][q])
+                + chain.rotation[0] * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
+
+
+@dataclass(frozen=True)
+class ViscousDamping(Damping):
+    """Viscous drag; reports the half-power width it gives every peak (Hz)."""
+
+    def partials(self, coords) -> set[str]:
+        # drag acts on a tip mass too (its mass factor)
+        return set(self.uses) | ({"mu"} if coords["mu"] != 0.0 else set())
+
+    def derived(self, values: dict, meta) -> dict:
+        loss = values["viscous_loss"]
+        if loss["value"] is None:
+            return {}
+        width = formulas.viscous_width(loss["value"], meta.f1)
+        return {"viscous_width_hz": {"value": float(width), "stderr": None, "unit": "Hz",
+                                     "determined": loss["determined"]}}
+
+
+@dataclass(frozen=True)
+class ContactDamping(Damping):
+    """A dashpot beside ``k1``: ``T_d1`` no longer carries the constant part of ``f0``, so ``T_f``
+    is a column of its own (coefficient ``f0`` at zero bias); reports the dashpot ``eta``."""
+
+    columns: int = 1
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        return [slopes[2]]
+
+    def design_derivative(self, dT, coef):
+        return dT[2] * coef[0], None
+
+    def derived(self, values: dict, meta) -> dict:
+        if not values.get("k1", {}).get("value"):
+            return {}
+        loss = values["contact_loss"]
+        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.f1)
+        return {"eta": {"value": float(eta), "stderr": None, "unit": "N s/m", "determined": loss["determined"]}}
+
+
+@dataclass(frozen=True)
+class TipMass(Effect):
+    """A point mass ``mu`` (tip mass / beam mass) at the tip; it lowers the free root too."""
+
+    def partials(self, coords) -> set[str]:
+        return {"mu", "beta"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        part = chain.part
+        return (part["mu"] * chain.factors[3] + part["beta"] * (chain.root_r / chain.b1 * chain.factors[0] * chain.d_b1[0]),)
+
+
+@dataclass(frozen=True)
+class TipSetback(Effect):
+    """The tip at ``gamma L`` from the clamp; with a tip mass the free root moves with it."""
+
+    def partials(self, coords) -> set[str]:
+        return {"gamma"} | ({"beta"} if coords["mu"] != 0.0 else set())
+
+    def jacobian(self, chain: Chain) -> tuple:
+        part = chain.part
+        return (part["gamma"] + part["beta"] * (chain.root_r / chain.b1 * chain.factors[0] * chain.d_b1[1]),)
+
+
+@dataclass(frozen=True)
+class Tilt(Effect):
+    """The lever inclined by ``alpha``: the spring tensor rotated onto the beam axes."""
+
+    def partials(self, coords) -> set[str]:
+        return {"kvl"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        return (chain.rotation[2],)
+
+
+@dataclass(frozen=True)
+class LateralStiffness(Effect):
+    """``k2`` fitted where the baseline holds it at 0 (``--vertical-only``): a spring
+    (:func:`spring_parameters`), placed beside ``k1``."""
+
+    @property
+    def frees_lateral_spring(self) -> bool:
+        return True
+
+
+@dataclass(frozen=True)
+class Background(Effect):
+    """Additive cross-talk, two linear columns ``(b0 + b1 V) f / f_max``."""
+
+    columns: int = 2
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        ramp = freq_unique[inverse] / freq_unique.max()
+        return [ramp, bias * ramp]
+
 
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
-    Effect("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py"),
-    Effect("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py"),
-    Effect("damping_contact", (CONTACT_LOSS,), "derivations/damping.py"),
-    Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
-                                  null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
-           "derivations/tip_mass.py", moves_resonances=True),
-    Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
-                                     null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
-                                                      0.68)),),
-           "derivations/tip_setback.py", moves_resonances=True),
-    Effect("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
-                              seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
-                              description="beam inclination, positive when the free end is nearer the sample"),),
-           "derivations/tilt.py", moves_resonances=True),
-    Effect("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
-    Effect("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2, spectrum_only=True),
+    Damping("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py", index=0, uses=("beta", "k")),
+    ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
+    ContactDamping("damping_contact", (CONTACT_LOSS,), "derivations/damping.py", index=2),
+    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
+                                   null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
+            "derivations/tip_mass.py", moves_resonances=True),
+    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
+                                         null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
+                                                          0.68)),),
+               "derivations/tip_setback.py", moves_resonances=True),
+    Tilt("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
+                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
+                            description="beam inclination, positive when the free end is nearer the sample"),),
+         "derivations/tilt.py", moves_resonances=True),
+    LateralStiffness("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
+    Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 

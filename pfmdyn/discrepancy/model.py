@@ -34,18 +34,14 @@ from scipy.optimize import least_squares
 
 from ..cantilever import free_root
 from ..fitting.noise import gap
-from ..fitting.parameters import Parameter
+from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
-from .effects import EFFECTS, public_name, spring_parameters
+from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many"]
-
-_DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0}
-"""Internal coordinates of absent effects (their null values)."""
-
 
 @dataclass(frozen=True)
 class Model:
@@ -56,13 +52,31 @@ class Model:
     vertical_only: bool = False
 
     @cached_property
+    def components(self) -> tuple[Effect, ...]:
+        """The effect components, in the model's order."""
+        return tuple(EFFECTS[e] for e in self.effects)
+
+    @cached_property
+    def springs(self) -> tuple[Parameter, ...]:
+        """``k1`` and, unless held at 0 (``vertical_only`` without an effect that frees it), ``k2``."""
+        held = self.vertical_only and not any(e.frees_lateral_spring for e in self.components)
+        return spring_parameters(self.meta, held)
+
+    @cached_property
     def parameters(self) -> tuple[Parameter, ...]:
-        """Nonlinear parameters in order: k1, [k2], then each effect's (k2 for lateral_stiffness)."""
-        springs = spring_parameters(self.meta, self.vertical_only)
-        extra = ()
-        if "lateral_stiffness" in self.effects and self.vertical_only:
-            extra = spring_parameters(self.meta, False)[1:]
-        return springs + extra + tuple(p for e in self.effects for p in EFFECTS[e].parameters)
+        """Nonlinear parameters in order: the springs, then each effect's."""
+        return self.springs + tuple(p for e in self.components for p in e.parameters)
+
+    @cached_property
+    def _absent(self) -> dict[str, float]:
+        """Coordinates (:meth:`coords`) of every parameter of the library at its null value."""
+        every = spring_parameters(self.meta, False) + tuple(p for e in EFFECTS.values() for p in e.parameters)
+        return {p.name: _coordinate(p, p.null) for p in every if p.null is not None}
+
+    @cached_property
+    def _column_components(self) -> tuple[Effect, ...]:
+        """The components that add design columns, in the library's order (their columns' order)."""
+        return tuple(e for e in EFFECTS.values() if e.columns and e.name in self.effects)
 
     def with_effect(self, component: str) -> "Model":
         """This model plus one effect component."""
@@ -80,9 +94,9 @@ class Model:
 
     def coords(self, internal) -> dict[str, float]:
         """Internal coordinates by name (springs converted to N/m), null values for absent effects."""
-        out = dict(_DEFAULTS)
+        out = dict(self._absent)
         for p, v in zip(self.parameters, internal):
-            out[p.name] = 10.0**v if p.name in ("k1", "k2") else float(v)
+            out[p.name] = _coordinate(p, v)
         return out
 
     def values(self, internal) -> dict[str, float]:
@@ -129,42 +143,28 @@ class Model:
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
                     for j, p in enumerate(tip_setback.JACOBIAN_PARAMETERS)}
-            j_beta, j_k, j_mu, j_gamma = part["beta"], part["k"], part["mu"], part["gamma"]
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
+            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, (beta_f, k_f, k1_f, mu_f), d_f, spring)
+            # the springs' terms (log10 coordinates), then each component's
+            terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
+            terms += [t for e in self.components for t in e.jacobian(chain)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
-            loss_index = {"inv_q": 0, "g": 1, "x": 2}
-            for j, p in enumerate(self.parameters):
-                if p.name == "k1":
-                    out[:, j] = j_rot[0] * (spring * math.log(10))
-                elif p.name == "k2":
-                    out[:, j] = j_rot[1] * (c["k2"] * math.log(10))
-                elif p.name == "alpha":
-                    out[:, j] = j_rot[2]
-                elif p.name in loss_index:
-                    q = loss_index[p.name]
-                    out[:, j] = (j_beta * (root_r * d_f[0][q]) + j_k * (m.k * d_f[1][q])
-                                 + j_rot[0] * (c["k1"] * d_f[2][q]) + j_mu * (c["mu"] * d_f[3][q]))
-                elif p.name == "mu":
-                    out[:, j] = j_mu * mu_f + j_beta * (root_r / b1 * beta_f * d_b1[0])
-                elif p.name == "gamma":
-                    out[:, j] = j_gamma + j_beta * (root_r / b1 * beta_f * d_b1[1])
+            for j, term in enumerate(terms):
+                out[:, j] = term
         return T, out
 
     def _partials_needed(self, c) -> tuple[str, ...]:
         """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
-        names = {p.name for p in self.parameters}
-        root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
-        need = {"beta": bool(names & {"inv_q", "g"}) or root_moves, "k": "inv_q" in names,
-                "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
-                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names,
-                "rho_g": False}
-        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
+        need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
+        for e in self.components:
+            need |= e.partials(c)
+        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if p in need)
 
     @property
     def n_linear(self) -> int:
         """Number of complex linear coefficients."""
-        return 5 + ("damping_contact" in self.effects) + (2 if "background" in self.effects else 0)
+        return 5 + sum(e.columns for e in self.components)
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
@@ -179,21 +179,28 @@ class Model:
         _, dT = self.slopes_and_jacobian(freq_unique, internal)
         d_d1, d_d2, d_f, d_q = dT
         fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
-        if "damping_contact" in self.effects:
-            fixed = fixed + d_f * coef[5]
         per_volt = d_f * coef[3] + d_q * coef[4]
+        start = 5
+        for e in self._column_components:
+            moved = e.design_derivative(dT, coef[start:start + e.columns])
+            start += e.columns
+            if moved is not None:
+                fixed = fixed if moved[0] is None else fixed + moved[0]
+                per_volt = per_volt if moved[1] is None else per_volt + moved[1]
         return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
 
     def _columns(self, slopes, freq_unique, inverse, bias):
         """Design columns from the slopes at the unique frequencies (order: see module)."""
-        t_d1, t_d2, t_f, t_q = (t[inverse] for t in slopes)
+        rows = t_d1, t_d2, t_f, t_q = tuple(t[inverse] for t in slopes)
         cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
-        if "damping_contact" in self.effects:
-            cols.append(t_f)
-        if "background" in self.effects:
-            ramp = freq_unique[inverse] / freq_unique.max()
-            cols += [ramp, bias * ramp]
+        for e in self._column_components:
+            cols += e.design_columns(rows, freq_unique, inverse, bias)
         return np.stack(cols, axis=1)
+
+
+def _coordinate(p: Parameter, internal) -> float:
+    """The coordinate :meth:`Model.coords` gives a parameter: springs in N/m, others internal."""
+    return 10.0**internal if p.log else float(internal)
 
 
 def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots: bool = True) -> np.ndarray:
@@ -348,14 +355,8 @@ class FitResult:
             determined = bool(math.isfinite(err) and (err < abs(value) or (p.inverse and err < 1e12)))
             out[p.key] = {"value": value, "stderr": err, "unit": p.unit, "determined": determined}
             j += 1
-        if "damping_contact" in self.model.effects and out.get("k1", {}).get("value"):
-            loss = out["contact_loss"]["value"]
-            out["eta"] = {"value": float(formulas.contact_dashpot(loss, out["k1"]["value"], self.model.meta.f1)),
-                          "stderr": None, "unit": "N s/m", "determined": out["contact_loss"]["determined"]}
-        if "damping_viscous" in self.model.effects and out["viscous_loss"]["value"] is not None:
-            width = formulas.viscous_width(out["viscous_loss"]["value"], self.model.meta.f1)
-            out["viscous_width_hz"] = {"value": float(width), "stderr": None,
-                                       "unit": "Hz", "determined": out["viscous_loss"]["determined"]}
+        for e in self.model.components:
+            out.update(e.derived(out, self.model.meta))
         return out
 
     def report(self) -> str:
