@@ -123,10 +123,15 @@ class Parameter:
         >>> p.spread(np.array([2.0]), np.array([1.0])).round(3).tolist()
         [495.0]
         """
+        sd = np.asarray(sd, float)
+        if self.inverse:
+            internal = np.asarray(internal, float)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.where(internal > 0, sd / internal**2, np.inf)
         if not self.log:
-            return np.abs(self.scale) * np.asarray(sd, float)
+            return np.abs(self.scale) * sd
         with np.errstate(over="ignore"):
-            return self.values(internal) * np.sinh(LN10 * np.asarray(sd, float))
+            return self.values(internal) * np.sinh(LN10 * sd)
 
     def at_bound(self, internal, tolerance: float = 1e-6):
         """Where ``internal`` (arrays) sits at a bound that is not the null (within ``tolerance``,
