@@ -152,7 +152,6 @@ def run(args) -> int:
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    ny, nx = source.shape
     if args.png:
         from ..maps import open_result
         from ..plots.maps import plot_maps
@@ -163,10 +162,5 @@ def run(args) -> int:
         from ..maps.usid import write_usid
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
-    explained = (f"explained {100 * s['explained_fraction']:.1f} %"
-                 + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
-                    if s.get("at_bound_fraction") else "") + f", median gap {s['median_gap']:.3g}"
-                 + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))
-    print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
-          f"{s['blocks_done']}/{s['blocks_total']} done; {explained}; maps in {s['out']}{written}")
+    print(s.report() + written)
     return 0

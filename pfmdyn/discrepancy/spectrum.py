@@ -29,7 +29,7 @@ from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
 from .model import FitResult, Model, bounds, fit
 from .peaks import data_peaks, match_starts, peak_widths
-from .report import report, summary  # noqa: F401  (summary: public here too)
+from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
 
@@ -291,8 +291,8 @@ class SpectrumProblem:
 
 
 def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = False,
-            time_budget_s: float | None = None) -> dict:
-    """Run the discrepancy loop on a spectrum; return the JSON-ready report.
+            time_budget_s: float | None = None) -> DiscrepancyReport:
+    """Run the discrepancy loop on a spectrum; return its report (:class:`~pfmdyn.discrepancy.report.DiscrepancyReport`).
 
     Examples
     --------
@@ -301,5 +301,4 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     problem = SpectrumProblem(data, vertical_only)
     result = select.run(problem, progress, time_budget_s)
     return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
-                  "from second differences along frequency", noise_sigma=problem.sigma,
-                  _fits=(result["baseline"], result["final"]))
+                  "from second differences along frequency", noise_sigma=problem.sigma)
