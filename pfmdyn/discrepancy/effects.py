@@ -8,7 +8,11 @@ resonances, the profile along which the springs are matched to the peaks, dense 
 one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
 linear design columns it adds, whether it moves the undamped resonances, whether only a
 spectrum can show it (``spectrum_only``: background; damping shows in a table's Q values),
-and the derivation it comes from.  ``damping`` is one effect name with three mechanisms
+and the derivation it comes from; and what it does to the model: each component is a subclass
+of :class:`Effect` that gives its chain-rule term of the Jacobian (:class:`Chain`), the
+generated partials that needs, its design columns and their derivatives, and the quantities
+derived from its parameters, so that adding an effect is adding one component (parameters:
+:class:`pfmdyn.fitting.parameters.Parameter`).  ``damping`` is one effect name with three mechanisms
 (components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
 :mod:`pfmdyn.derivations.damping`).
 

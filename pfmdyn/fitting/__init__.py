@@ -7,6 +7,8 @@
   leading axes (a map block of pixels and a single spectrum run the same code);
 * :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS
   residual (1 = fitted to the noise).
+* :mod:`~pfmdyn.fitting.result`: a fit's result, JSON-ready fields (``to_dict()``) and a text
+  summary (``report()``).
 
 A compute layer below the engines: nothing here imports :mod:`pfmdyn.discrepancy` or
 :mod:`pfmdyn.maps`.
