@@ -90,7 +90,7 @@ def main():
         with h5py.File(path, "w") as h:
             h.create_dataset("response", data=spectra, chunks=(16, 16, spectra.shape[-1]))
             h["frequency_hz"] = model.frequency_hz
-            h.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=F1)
+            h.attrs.update(spring_constant=K, length=L, tip_height=H, free_resonance=F1)
         for i in range(args.repeat):
             with threadpool_limits(1):
                 cpu = time.process_time()

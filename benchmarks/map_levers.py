@@ -117,7 +117,7 @@ def build(lever, path, rng):
         h["response"], h["frequency_hz"] = y, f
         if lever["variant"] == "bias":
             h["bias_v"] = BIASES
-        h.attrs.update(spring_constant_n_per_m=k, length_m=L, tip_height_m=H, free_resonance_hz=free)
+        h.attrs.update(spring_constant=k, length=L, tip_height=H, free_resonance=free)
     truth = {"k1": k1}
     if two:
         truth["k2"] = 0.8 * k1

@@ -71,7 +71,7 @@ def write_map(path, ny, nx, n_freq, rng):
     response = group.create_dataset("response", shape=(ny, nx, n_freq), chunks=(BLOCK, BLOCK, n_freq),
                                     dtype="c16", compressor=None)
     group["frequency_hz"] = f
-    group.attrs.update(spring_constant_n_per_m=K, length_m=L, tip_height_m=H, free_resonance_hz=F1)
+    group.attrs.update(spring_constant=K, length=L, tip_height=H, free_resonance=F1)
     for y0 in range(0, ny, BLOCK):
         k1 = rng.uniform(150, 1500, BLOCK * nx)
         y = 1e-3 * model.shape_functions(k1, np.full(k1.size, 60.0))

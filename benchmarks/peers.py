@@ -182,7 +182,7 @@ def sho_scores(f0, q, best, k1_true, free):
     """Fraction right (frequency 2e-4, Q 3 %), and k1 by the SHO route: median error, fraction within 2 %."""
     from pfmdyn.analysis.stiffness import contact_stiffness
     right = (np.abs(f0 / best[:, 0] - 1) < 2e-4) & (np.abs(q / best[:, 1] - 1) < 0.03)
-    k1 = np.asarray(contact_stiffness(np.where(f0 > 0, f0, np.nan), free, K, out_of_range="nan").k1_n_per_m)
+    k1 = np.asarray(contact_stiffness(np.where(f0 > 0, f0, np.nan), free, K, out_of_range="nan").k1)
     return float(np.mean(right)), *k1_scores(k1, k1_true)
 
 

@@ -1,7 +1,7 @@
 """Certified resonance roots of derived (SymPy) characteristic functions.
 
 A thin adapter: :func:`certified_roots` turns a SymPy expression into a python-flint
-callable and hands it to :func:`pfmdyn.roots.certify.certify`, the project's one certified-root
+callable and hands it to :func:`pfmdyn.derivations.certify.certify`, the project's one certified-root
 engine (complete isolation with ``arb_series.find_roots``, then interval Newton).  It is
 the symbolic entry point used by ``pfmdyn verify``; feeding it the SymPy denominators
 gives a code path independent of the generated characteristic functions.
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import mpmath as mp
 import sympy as sp
 
-from pfmdyn.roots.certify import certify, interval_strings
+from .certify import certify, interval_strings
 
 __all__ = ["CertifiedRoot", "certified_roots"]
 

@@ -191,19 +191,57 @@ class Cantilever:
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
         3.750208
         """
-        return self._damped(frequency)[0]
+        return self._damped(_positive(frequency))[0]
 
     def _damped(self, frequency, contact_loss: float = 0.0):
-        """``(beta, k, k1_factor, mu_factor)`` with the damping substituted (``derivations/damping.py``)."""
-        f = np.asarray(frequency, dtype=float)
-        if not np.all(np.isfinite(f)) or np.any(f <= 0):
-            raise ValueError("frequency must be positive and finite (Hz)")
-        r = f / self.free_resonance
+        """``(beta, k, k1_factor, mu_factor)`` at ``frequency`` (Hz, real or complex) with the damping
+        substituted (``derivations/damping.py``)."""
         beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
-            r, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
+            frequency / self.free_resonance, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
         b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        return (formulas.beta_from_frequency(f, self.free_resonance, b1) * beta_factor, self.spring_constant * k_factor,
-                k1_factor, mu_factor)
+        return (formulas.beta_from_frequency(frequency, self.free_resonance, b1) * beta_factor,
+                self.spring_constant * k_factor, k1_factor, mu_factor)
+
+    def model_arguments(self, frequency, contact: "Contact | None" = None) -> tuple:
+        """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
+        (``generated/tip_setback.py``) at ``frequency`` in Hz, with the damping substituted.
+
+        The frequency may be complex (a damped mode's root); ``contact=None`` is the free lever.
+        :meth:`response` and the damped modes of :mod:`pfmdyn.analysis.resonances` both read the
+        model through this one substitution.
+
+        >>> c = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0, tilt=10.0, tip_height=1e-5)
+        >>> args = c.model_arguments(7e4, Contact(k1=50.0))
+        >>> round(float(abs(args[0])), 4), [round(float(np.real(x)), 3) for x in args[2:5]]   # |beta|; kvv, kll, kvl
+        (1.8751, [48.492, 1.508, -8.551])
+        >>> c.model_arguments(7e4)[2:6]                                           # free: no springs
+        (0.0, 0.0, 0.0, 1e-05)
+        """
+        loss = contact.contact_loss if contact is not None else 0.0
+        beta, k, k1_factor, mu_factor = self._damped(frequency, loss)
+        _, kvv, kll, kvl, height, length, mu, gamma, rho_g = self.model_parameters(contact, k1_factor=k1_factor)
+        return beta, k, kvv, kll, kvl, height, length, mu * mu_factor, gamma, rho_g
+
+    def model_parameters(self, contact: "Contact | None" = None, *, k1_factor=1.0) -> tuple:
+        """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
+        damping (``generated/tip_setback.py``, ``generated/detection.py``).
+
+        The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
+        ``contact`` is None); ``k1_factor`` multiplies ``k1`` before the rotation (the contact
+        dashpot's factor, ``derivations/damping.py``).
+
+        >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, tilt=10.0)
+        >>> k, kvv, kll, kvl, H, *_ = lever.model_parameters(Contact(k1=50.0))
+        >>> k, round(float(kvv), 3), round(float(kll), 3), round(float(kvl), 3), H
+        (2.0, 48.492, 1.508, -8.551, 1e-05)
+        """
+        if contact is None:
+            springs, height = (0.0, 0.0, 0.0), self.tip_height or 0.0
+        else:
+            springs = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
+            height = self._tip_height(contact)
+        return (self.spring_constant, *springs, height, self.length, self.tip_mass_ratio, self.tip_position,
+                self.rho_g)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
         """Slope at the laser spot per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
@@ -220,15 +258,21 @@ class Cantilever:
         """
         if contact.k1 is None:
             raise UserError("the contact needs k1 (--k1)")
-        beta, k, k1_factor, mu_factor = self._damped(frequency, contact.contact_loss)
-        kvv, kll, kvl = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
-        rest = (self._tip_height(contact), self.length, self.tip_mass_ratio * mu_factor, self.tip_position, self.rho_g)
+        beta, *rest = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
             if self.spot_position == 1.0:
-                slopes = tip_setback.slope(beta, k, kvv, kll, kvl, *rest)
+                slopes = tip_setback.slope(beta, *rest)
             else:       # the lever read at the laser spot (derivations/detection.py)
-                slopes = detection.slope(beta, self.spot_position, k, kvv, kll, kvl, *rest)
+                slopes = detection.slope(beta, self.spot_position, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
+
+
+def _positive(frequency) -> np.ndarray:
+    """Frequencies in Hz as a float array; not positive and finite: ValueError."""
+    f = np.asarray(frequency, dtype=float)
+    if not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("frequency must be positive and finite (Hz)")
+    return f
 
 
 @lru_cache(maxsize=4096)
@@ -352,7 +396,7 @@ def _response_method(row):
         if not self.is_paper_probe:
             raise UserError(f"{row.method} is the paper's family ({row.equations}): massless tip at the free end, "
                             "no tilt, spot at the end; use Cantilever.response for this lever")
-        beta, k = self._damped(frequency)[:2]
+        beta, k = self._damped(_positive(frequency))[:2]
         values = transfer.check_parameters({p: given[p] for p in extra})
         return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
                                  given.get("output"))

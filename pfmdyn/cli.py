@@ -31,11 +31,21 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its refusals as one line ``pfmdyn COMMAND: error: ...`` (no usage block):
+    a missing or malformed option is a user error like any other (``--help`` shows the usage)."""
+
+    def error(self, message):
+        print(f"{self.prog}: error: {message} (see {self.prog} --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
+    parser = _Parser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    parsers = {}
     for name, (module, help_text) in COMMANDS.items():
-        p = sub.add_parser(name, help=help_text, description=help_text)
+        p = parsers[name] = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(_module=module)
         # Argument definitions are cheap; import only the chosen module's arguments lazily.
         if argv is None and len(sys.argv) > 1 and sys.argv[1] != name:
@@ -43,7 +53,9 @@ def main(argv: list[str] | None = None) -> int:
         if argv is not None and (not argv or argv[0] != name):
             continue
         importlib.import_module(module).add_arguments(p)
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:       # refused by the command's parser, so that the line names the command
+        parsers[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .errors import UserError
 
-__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "canonical", "flag",
+__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "canonical", "flag",
            "checked", "markdown_table"]
 
 
@@ -35,6 +35,9 @@ class Quantity:
     high: float
     open_low: bool = True
     aliases: tuple[str, ...] = ()
+    option: bool = True
+    """False for a value that files and reports hold but no command takes as a flag (what an
+    instrument measured: a contact resonance, a mode's Q, its drive settings)."""
 
     @property
     def flag(self) -> str:
@@ -69,8 +72,16 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("k2", "k2", "N/m", "lateral (longitudinal) contact stiffness", 0.0, 1e9, open_low=False),
     Quantity("k2_over_k1", "k2/k1", "1", "k2 policy: k2 tied to k1 at this ratio", 0.0, 100.0,
              open_low=False),
+    # An isotropic solid has -1 < nu <= 1/2 (auxetic samples below 0); the Mindlin ratio holds over all of it.
     Quantity("poisson", "nu", "1", "k2 policy: k2/k1 of a Hertz-Mindlin contact on a sample of this "
-             "Poisson's ratio", 0.0, 0.5, open_low=False, aliases=("poisson_ratio",)),
+             "Poisson's ratio", -1.0, 0.5, aliases=("poisson_ratio",)),
+    # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
+    Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
+             0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),
+    Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (with --reduced-modulus)", 1e-10, 1e-3,
+             aliases=("tip_radius_m",)),
+    Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (with --reduced-modulus)",
+             0.0, 1.0, aliases=("load_n",)),
     # Damping.
     Quantity("quality_factor", "Q", "1", "internal friction: complex modulus E (1 + i/Q)", 0.1, 1e9,
              aliases=("Q",)),
@@ -78,6 +89,17 @@ QUANTITIES: tuple[Quantity, ...] = (
              0.0, 100.0, open_low=False),
     Quantity("contact_loss", "x", "1", "contact dashpot omega1 eta/k1: loss tangent of the contact at f1",
              0.0, 1e4, open_low=False),
+    # What an instrument measured and its settings (instrument files, ``pfmdyn inspect``).
+    Quantity("free_quality_factor", "Q_free", "1", "measured Q of the first free resonance (thermal tune fit)",
+             0.1, 1e9, option=False),
+    Quantity("contact_resonance", "f_c", "Hz", "measured first contact resonance (tune fit)", 500.0, 1e9,
+             aliases=("contact_resonance_hz",), option=False),
+    Quantity("contact_quality_factor", "Q_c", "1", "measured Q of the first contact resonance (tune fit)",
+             0.1, 1e9, option=False),
+    Quantity("drive_frequency", "f_drive", "Hz", "frequency the instrument drove at", 0.0, 1e10,
+             aliases=("drive_frequency_hz",), option=False),
+    Quantity("tip_bias", "V_tip", "V", "DC bias on the tip", -1e4, 1e4, open_low=False,
+             aliases=("tip_bias_v",), option=False),
 )
 
 NAMES: dict[str, Quantity] = {q.name: q for q in QUANTITIES}
@@ -89,6 +111,8 @@ CONTACT = ("k1", "k2", "k2_over_k1", "poisson")
 """Names describing the contact (:class:`pfmdyn.Contact`)."""
 DAMPING = ("quality_factor", "viscous_loss", "contact_loss")
 """The three damping mechanisms: internal friction, viscous drag, contact dashpot."""
+MEASURED = ("free_quality_factor", "contact_resonance", "contact_quality_factor", "drive_frequency", "tip_bias")
+"""What an instrument file may hold besides the lever: measured resonances, their Q, the drive settings."""
 
 _ALIASES = {alias.lower(): q.name for q in QUANTITIES for alias in (q.name, *q.aliases)}
 
@@ -136,11 +160,12 @@ def checked(name: str, value, where: str = "") -> float:
 
 
 def markdown_table() -> str:
-    """The README's table: one row per quantity (name, flag, unit, meaning).
+    """The README's table: one row per quantity (name, flag or ``(files)``, unit, meaning).
 
     >>> markdown_table().splitlines()[2]
     '| `spring_constant` | `--spring-constant` | N/m | lever spring constant 3 EI / L^3 |'
     """
     rows = ["| name (Python, JSON, file, Zarr) | flag | unit | meaning |", "|---|---|---|---|"]
-    rows += [f"| `{q.name}` | `{q.flag}` | {q.unit} | {q.meaning} |" for q in QUANTITIES]
+    rows += [f"| `{q.name}` | {f'`{q.flag}`' if q.option else '(files)'} | {q.unit} | {q.meaning} |"
+             for q in QUANTITIES]
     return "\n".join(rows)

@@ -13,12 +13,14 @@ tip (``D``, rotated with ``k1`` by the tilt).  The tip node may sit inside the b
 (tilt); a uniform load uses the consistent load vector.  The tilt is given either as
 pfmdyn's internal ``alpha`` (the rotation of :mod:`derivations.tilt`) or, independently,
 as ``tilt_deg`` in the public convention (free end nearer the sample > 0), from which the
-springs are built from the explicit geometry (:meth:`FEBeam.spring_tensor`).  The output is the slope at the last node.
+springs are built from the explicit geometry (:meth:`FEBeam.spring_tensor`).  The output is the slope at the last node,
+or at a detection spot ``x_s = spot L`` inside the beam (the elements' Hermite shape functions).
 Test data follow :func:`spectrum` and :func:`resonances`; :func:`random_case` draws a
 cantilever, contact and hidden effects over realistic ranges.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -52,6 +54,8 @@ class FEBeam:
     ``viscous_hz`` is the width at f1."""
     gyration_radius: float = 0.0
     tilt_deg: float = 0.0
+    spot: float = 1.0
+    """Detection (laser) spot ``x_s / L`` where :meth:`slope` reads the beam (1: the free end)."""
 
     def spring_tensor(self, normal: float, tangential: float) -> tuple[float, float, float]:
         """``(kvv, kll, kvl)`` on the beam axes (v: beam normal, l: beam axis) of springs
@@ -144,8 +148,19 @@ class FEBeam:
         for i, f in enumerate(np.asarray(frequency_hz, float)):
             w = 2 * math.pi * f
             ab = kb + 1j * w * (cb * (f / self.f1) ** self.air_exponent + db) - w**2 * mb
-            out[i] = scipy.linalg.solve_banded((3, 3), ab, F + 1j * w * Fd)[-1] / self.L
+            out[i] = self._at_spot(scipy.linalg.solve_banded((3, 3), ab, F + 1j * w * Fd))
         return out
+
+    def _at_spot(self, U) -> np.ndarray:
+        """Slope at ``spot L`` of the solution ``U`` (clamp removed, rotations times L), from the
+        derivatives of the Hermite shape functions of the element holding the spot (exact at a node)."""
+        n, le = self.n_elements, self.L / self.n_elements
+        nodes = np.concatenate([np.zeros((2,) + U.shape[1:], U.dtype), U])    # node 0: clamped
+        e = min(int(math.floor(self.spot * n)), n - 1)
+        xi = self.spot * n - e
+        u0, r0, u1, r1 = nodes[2 * e], nodes[2 * e + 1] / self.L, nodes[2 * e + 2], nodes[2 * e + 3] / self.L
+        return ((6 * xi * xi - 6 * xi) * (u0 - u1) / le + (1 - 4 * xi + 3 * xi * xi) * r0
+                + (3 * xi * xi - 2 * xi) * r1)
 
     def free_resonances(self, count: int = 3) -> np.ndarray:
         """First ``count`` free flexural resonances (Hz) with the tip mass, no contact."""
@@ -329,6 +344,10 @@ def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_ele
 ACQUISITION = ("band_viscous", "band_air", "band_air_setback", "gain_drift", "large_setback")
 """Classes of :func:`acquisition_case`: how real instruments record (band excitation, DFRT)."""
 
+SPOT = ("band_spot", "spot")
+"""Classes of :func:`acquisition_case` read at a laser spot 0.6-0.95 L from the clamp."""
+ACQUISITION += SPOT
+
 
 def noise_truth(text: str, noise: float) -> float:
     """The RMS complex noise :func:`spectrum` added (``noise`` times the median |response|
@@ -341,7 +360,7 @@ def noise_truth(text: str, noise: float) -> float:
     return float(noise * np.median(np.abs(z)))
 
 
-def acquisition_case(seed: int, kind: str, n_elements: int = 80) -> tuple[str, dict]:
+def acquisition_case(seed: int, kind: str, n_elements: int = 80, *, spot: float | None = None) -> tuple[str, dict]:
     """A spectrum recorded as instruments do, of class ``kind`` (:data:`ACQUISITION`):
 
     * ``band_viscous``: 2-4 bands of 64-256 bins around the contact resonances, viscous
@@ -352,10 +371,13 @@ def acquisition_case(seed: int, kind: str, n_elements: int = 80) -> tuple[str, d
       between bias sweeps (hidden: damping; the drift is outside the library);
     * ``large_setback``: a soft (k 0.3-0.8 N/m, L 130-190 um) or stiff (k 5-40 N/m, L
       200-450 um) lever, tip at 0.70-0.97 L, viscous damping, three biases, noise 1-2 %,
-      full sweep in instrument order (hidden: damping, tip_setback).
+      full sweep in instrument order (hidden: damping, tip_setback);
+    * ``band_spot``, ``spot``: the bands, or a full sweep, read at a laser spot drawn in
+      0.6-0.95 L (or ``spot``: 1 reads the free end of the same lever), viscous damping (air
+      damping on odd seeds) (hidden: damping, spot_position).
 
     Returns the CSV text and the truth (``hidden``: the effect names; ``noise_sigma``: the
-    RMS complex noise added).
+    RMS complex noise added; ``spot``: x_s / L).
     """
     rng = np.random.default_rng(seed)
     E, rho = 169e9, 2330.0
@@ -387,6 +409,12 @@ def acquisition_case(seed: int, kind: str, n_elements: int = 80) -> tuple[str, d
     beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, gamma=gamma, n_elements=n_elements, viscous_hz=f1 / q1,
                   air_exponent=0.5 if air else 0.0)
     hidden = ["damping"] + (["tip_setback"] if gamma < 1 else [])
+    if kind in SPOT:
+        # The laser spot where users put it; it moves no resonance (the bands stay).
+        drawn = float(rng.uniform(0.6, 0.95))
+        beam = dataclasses.replace(beam, spot=drawn if spot is None else spot,
+                                   air_exponent=0.5 if seed % 2 else 0.0)
+        hidden += ["spot_position"] if beam.spot < 1 else []
     if kind == "large_setback":
         biases, noise = (-2.0, 0.0, 2.0), rng.uniform(0.01, 0.02)
     else:
@@ -408,4 +436,5 @@ def acquisition_case(seed: int, kind: str, n_elements: int = 80) -> tuple[str, d
              "gamma": gamma, "q1": q1, "noise": noise, "gain_drift": drift, "biases": len(biases),
              "rows": len(freq) * len(biases), "contact_hz": [float(c) for c in contact[:n_modes]]}
     truth["noise_sigma"] = noise_truth(text, noise)
+    truth["spot"] = beam.spot
     return text, truth

@@ -1,5 +1,7 @@
 """Deconvolution of frequency-bias data (Section VI.4, Eq. 41) and the ``pfmdyn deconvolve`` command."""
 import csv
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -7,6 +9,10 @@ import pytest
 from pfmdyn import cli
 from pfmdyn.analysis.deconvolve import deconvolve, nulling_bias, tip_quality
 from pfmdyn.io.spectra import read_spectra
+
+# The independent reference lives beside the tests (importlib mode: not on sys.path).
+sys.path.insert(0, str(Path(__file__).parent))
+from segment_beam import spot_response  # noqa: E402
 
 V_SURF = 0.4
 BIASES = np.linspace(-5, 5, 21)
@@ -160,3 +166,156 @@ def test_cli_rejects_an_output_path_that_is_a_file(tmp_path, capsys):
     status = cli.main(["deconvolve", str(data_file), "--surface-potential", "0", "--out", str(tmp_path / "taken")])
     assert status == 2
     assert "not a directory" in capsys.readouterr().err
+
+
+def test_help_states_the_lever_is_optional_and_offers_the_probe_flags():
+    """Without lever flags no lever model enters; with them, the spot's calibration (default: the end)."""
+    import argparse
+
+    from pfmdyn.commands.deconvolve import add_arguments
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    dests = {a.dest for a in parser._actions}
+    assert {"spring_constant", "k1", "spot_position", "tip_position", "width"} <= dests
+    assert "no lever model enters" in parser.epilog and "--spot-position, default 1" in parser.epilog
+
+
+OLD_COLUMNS = ["frequency_hz", "n_bias", "g_elec_x", "g_elec_y", "g_elec_abs", "g_elec_se", "intercept_x",
+               "intercept_y", "d_eff_x", "d_eff_y", "d_eff_abs", "d_eff_se", "v_null_v", "v_null_se_v"]
+
+
+def test_without_a_lever_the_table_is_the_model_free_one(tmp_path):
+    data_file = write_csv(tmp_path / "data.csv", *synthetic(0.05, seed=5))
+    assert cli.main(["deconvolve", str(data_file), "--surface-potential", "0.4", "--out", str(tmp_path / "o")]) == 0
+    lines = (tmp_path / "o" / "deconvolution.csv").read_text().splitlines()
+    assert lines[0] == "# surface_potential_v: 0.4" and lines[1].split(",") == OLD_COLUMNS
+
+
+# --- True surface displacement at the spot, against the independent two-segment beam -------------
+
+BETA1 = 1.8751040687119611  # first root of cos(b) cosh(b) = -1: free lever, massless tip
+
+
+def _beam_data(p, f1, sigma, frequencies, d1, g_tip, q_per_volt, rng):
+    """Frequency-bias data as an instrument gives them: slope at the spot, InvOLS from the static
+    force-curve slope at the same spot (1 / theta_d1(beta = 0)), d1 and a tip force plus the
+    distributed load both proportional to V - V_surf; rows shuffled."""
+    invols = 1.0 / spot_response(0.0, sigma, **p, d1=1.0)[0].real
+    rows = []
+    for f in frequencies:
+        beta = BETA1 * np.sqrt(f / f1)
+        t_d1, t_f0, t_q0 = (spot_response(beta, sigma, **p, **{drive: 1.0})[0] for drive in ("d1", "f0", "q0"))
+        for v in BIASES[::4]:
+            rows.append((f, v, invols * (t_d1 * d1 + (t_f0 * g_tip + t_q0 * q_per_volt) * (v - V_SURF))))
+    rows = [rows[i] for i in rng.permutation(len(rows))]
+    return [np.array(c) for c in zip(*rows)], invols
+
+
+def _lever_args(k, f1, L, H, k1, k2, sigma, extra=()):
+    return ["--spring-constant", repr(k), "--free-resonance", repr(f1), "--length", repr(L), "--tip-height",
+            repr(H), "--k1", repr(k1), "--k2", repr(k2), *(["--spot-position", repr(sigma)] if sigma else []), *extra]
+
+
+def _reference_poles_and_zeros(p, f1, sigma, low, high):
+    """Frequencies in (low, high) Hz where the reference's d1 slope at the spot changes sign:
+    through a pole (a contact resonance: large on both sides) or through a zero."""
+    f = np.linspace(low, high, 4000)
+    s = np.array([spot_response(BETA1 * np.sqrt(x / f1), sigma, **p, d1=1.0)[0].real for x in f])
+    i = np.flatnonzero(np.sign(s[1:]) != np.sign(s[:-1]))
+    pole = np.abs(s[i]) + np.abs(s[i + 1]) > 10 * np.median(np.abs(s))
+    return f[i[pole]], f[i[~pole]]
+
+
+@pytest.mark.parametrize("sigma", [0.7, None])
+def test_cli_recovers_the_true_surface_displacement_at_the_spot(sigma, tmp_path, capsys):
+    """Spot at 0.7 L (and at the end by default): d_eff_surface = d1 to 1e-6 wherever determined,
+    NaN with a reason around the contact resonance, which the reference places inside that range."""
+    k, f1, L, H, k1 = 2.0, 7e4, 2.25e-4, 1.5e-5, 300.0
+    p = dict(k=k, L=L, H=H, kvv=k1, kll=0.5 * k1)
+    spot = sigma or 1.0
+    freqs = np.linspace(0.05, 9.0, 90) * f1
+    d1, g_tip, q_per_volt = 12.5 * np.exp(0.4j), 0.02, 0.8       # pm, pm/V per N, pm/V per N/m
+    (f, v, r), invols = _beam_data(p, f1, spot, freqs, d1, g_tip, q_per_volt, np.random.default_rng(1))
+    data_file = write_csv(tmp_path / "data.csv", f, v, r)
+    out = tmp_path / "out"
+    assert cli.main(["deconvolve", str(data_file), "--surface-potential", str(V_SURF), "--out", str(out),
+                     *_lever_args(k, f1, L, H, k1, 0.5 * k1, sigma)]) == 0
+    text = (out / "deconvolution.csv").read_text()
+    preamble = [line for line in text.splitlines() if line.startswith("#")]
+    assert f"# spot_position: {spot:g}" in preamble and any("d_eff_surface" in x and "(pm" in x for x in preamble)
+    with open(out / "deconvolution.csv") as handle:
+        rows = list(csv.DictReader(line for line in handle if not line.startswith("#")))
+    got = np.array([complex(float(x["d_eff_surface_x"]), float(x["d_eff_surface_y"])) for x in rows])
+    determined = np.isfinite(got)
+    assert determined.sum() > 0.6 * got.size and not determined.all()
+    np.testing.assert_allclose(got[determined], d1, rtol=1e-6)
+    # the electrostatic slope in surface units: (theta_f0 g + theta_q0 q) / theta_d1 of the reference
+    beta = BETA1 * np.sqrt(freqs[determined] / f1)
+    ref = [(spot_response(b, spot, **p, f0=g_tip)[0] + spot_response(b, spot, **p, q0=q_per_volt)[0])
+           / spot_response(b, spot, **p, d1=1.0)[0] for b in beta]
+    g = np.array([complex(float(x["g_elec_surface_x"]), float(x["g_elec_surface_y"])) for x in rows])[determined]
+    np.testing.assert_allclose(g, ref, rtol=1e-6)
+    undetermined = [line for line in preamble if line.startswith("# undetermined")]
+    ranges = [tuple(float(x) for x in line.split()[2].split("-")) for line in undetermined]
+    poles, zeros = _reference_poles_and_zeros(p, f1, spot, freqs[0], freqs[-1])
+    assert len(poles) >= 1 and len(zeros) >= 1
+    for where, words in ((poles, "contact resonance"), (zeros, "a zero of the spot's response")):
+        for x in where:
+            assert any(lo <= x <= hi and words in line for (lo, hi), line in zip(ranges, undetermined)), (x, ranges)
+    assert "true surface displacement at x_s/L" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("seed,ends", [(0, None), (1, None), (2, None), (3, None), (4, (0.05, 1.2)), (5, (50.0, 1e4))])
+def test_surface_displacement_over_real_levers(seed, ends):
+    """k 0.05-50 N/m, k1/k 1-1e4 (random, and at both ends), L 100-500 um, spot 0.5-1, set-back tip:
+    d1 to 1e-6 where determined, and the d_eff error of the distributed load as the reference gives it."""
+    from pfmdyn.analysis.deconvolve import surface_displacement
+    from pfmdyn.analysis.spot import EPSILON_0
+    from pfmdyn.cantilever import Cantilever, Contact
+    from pfmdyn.generated import formulas
+    rng = np.random.default_rng(100 + seed)
+    k = 10 ** rng.uniform(np.log10(0.05), np.log10(50))
+    k1 = k * 10 ** rng.uniform(0, 4)
+    if ends:
+        k, k1 = ends[0], ends[0] * ends[1]
+    L, H, w = rng.uniform(100e-6, 500e-6), rng.uniform(5e-6, 20e-6), rng.uniform(20e-6, 50e-6)
+    f1, gamma, sigma = rng.uniform(1e4, 3e5), float(rng.choice([1.0, rng.uniform(0.9, 1.0)])), rng.uniform(0.5, 1.0)
+    p = dict(k=k, L=L, H=H, kvv=k1, kll=0.6 * k1, gamma=gamma)
+    q = float(formulas.capacitive_load_per_volt2(EPSILON_0, w, H))
+    freqs = np.geomspace(0.02, 12.0, 60) * f1
+    (f, v, r), invols = _beam_data(p, f1, sigma, freqs, 3e-12, 0.0, q, rng)
+    order = np.lexsort((v, f))
+    fit = deconvolve(f[order], v[order], r[order], surface_potential_v=V_SURF)
+    lever = Cantilever(k, f1, L, tip_height=H, width=w, tip_position=gamma, spot_position=sigma)
+    out = surface_displacement(fit, lever, Contact(k1=k1, k2=0.6 * k1))
+    determined = np.isfinite(out.d_eff)
+    assert determined.sum() > 0.4 * determined.size
+    np.testing.assert_allclose(out.d_eff[determined], 3e-12, rtol=1e-6)
+    beta = BETA1 * np.sqrt(freqs / f1)
+    error = np.array([invols * spot_response(b, sigma, **p, q0=q)[0].real for b in beta])
+    np.testing.assert_allclose(out.d_eff_error_per_volt, error, rtol=1e-6, atol=1e-6 * np.max(np.abs(error)))
+    # the measured slope is the distributed load's alone: the reported error is what was measured
+    np.testing.assert_allclose(fit.g_elec.real, error, rtol=1e-6, atol=1e-6 * np.max(np.abs(error)))
+
+
+def test_a_lever_missing_its_tip_height_is_one_line_and_writes_nothing(tmp_path, capsys):
+    data_file = write_csv(tmp_path / "data.csv", *synthetic())
+    status = cli.main(["deconvolve", str(data_file), "--surface-potential", "0", "--out", str(tmp_path / "o"),
+                       "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100"])
+    err = capsys.readouterr().err.strip()
+    assert status == 2 and "give --tip-height" in err and "\n" not in err and not (tmp_path / "o").exists()
+
+
+def test_calibration_is_that_of_pfmdyn_spot():
+    """deconvolve's calibration factor and d_eff error at a frequency are pfmdyn spot's there."""
+    from pfmdyn.analysis.deconvolve import surface_displacement
+    from pfmdyn.analysis.spot import spot_analysis
+    from pfmdyn.cantilever import Cantilever, Contact
+    lever = Cantilever(0.8, 6e4, 3e-4, tip_height=1.2e-5, width=3e-5, tip_position=0.95, tip_mass_ratio=0.1,
+                       tilt=11.0, spot_position=0.75)
+    contact = Contact(k1=120.0, k2_over_k1=0.7)
+    fit = deconvolve([45e3] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    mine, spot = surface_displacement(fit, lever, contact), spot_analysis(lever, contact, 45e3, positions=5)
+    assert mine.calibration_factor[0] == pytest.approx(spot.calibration_factor.real, rel=1e-12)
+    assert mine.d_eff_error_per_volt[0] == pytest.approx(spot.d_eff_error_per_volt.real, rel=1e-12)
+    assert abs(mine.calibration_factor[0] - 1) > 1e-3        # the frequency matters at all

@@ -1,5 +1,9 @@
 """Frequency-bias response diagrams (Section IV.2, Figs. 6-7) and the ``pfmdyn diagram`` command."""
 import csv
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -197,3 +201,86 @@ def test_attractive_electrostatics_is_the_default_and_mirrors_the_nulling_bias()
     np.testing.assert_allclose(attractive - 0.4, -(printed - 0.4), rtol=1e-12)
     with pytest.raises(ValueError, match="electrostatic_sign"):
         nulling_bias(lever, frequency, width=WIDTH, electrostatic_sign=2)
+
+
+# --- the laser spot away from the free end (issue 21 item 5) --------------------------------------
+
+sys.path.insert(0, str(Path(__file__).parent))   # the independent reference beside the tests
+from segment_beam import spot_response  # noqa: E402
+
+
+def _segment_beam_height(lever, f, bias, *, k1, quality_factor, local_force, surface_potential):
+    """``A(f, V)`` per V_ac from the two-segment exact beam: ``(2L/3)`` times the slope at the spot
+    under ``d1 = d_eff``, ``f0 = -F_loc dV`` and ``q0 = -eps0 w dV / H**2`` (attractive)."""
+    loss = 1 + 1j / quality_factor                    # complex modulus E (1 + i/Q)
+    beta = BETA1_FREE * np.sqrt(f / lever.free_resonance) * loss ** -0.25
+    dv = bias - surface_potential
+    slope = spot_response(beta, lever.spot_position, k=lever.spring_constant * loss, L=lever.length, H=H, kvv=k1,
+                          d1=D_EFF, f0=-local_force * dv, q0=-EPSILON_0 * WIDTH * dv / H**2)[0]
+    return 2 * lever.length / 3 * slope
+
+
+@pytest.mark.parametrize("name, quality_factor", [("A", math.inf), ("B", math.inf), ("C", 40.0)])
+def test_spot_away_from_the_end_matches_the_segment_beam(name, quality_factor):
+    """Spot at 0.7 L: the diagram at (f, V) points below, between and above contact resonances."""
+    lever = replace(table1_cantilever(name, quality_factor=quality_factor), spot_position=0.7)
+    frequency = np.array([0.05, 1.3, 3.7, 9.0]) * lever.free_resonance
+    bias = np.array([-7.0, 0.2, 0.5, 4.0])
+    m = response_map(lever, frequency, bias, width=WIDTH, k1=K1, H=H, local_force=0.7e-9, surface_potential_v=0.2)
+    for i, f in enumerate(frequency):
+        for j, v in enumerate(bias):
+            ref = _segment_beam_height(lever, f, v, k1=K1, quality_factor=quality_factor, local_force=0.7e-9,
+                                       surface_potential=0.2)
+            assert abs(m.total[i, j] - ref) <= 1e-8 * abs(ref), (f, v, m.total[i, j], ref)
+    # the spot matters: the same points read at the end differ by more than 5 %
+    end = response_map(replace(lever, spot_position=1.0), frequency, bias, width=WIDTH, k1=K1, H=H,
+                       local_force=0.7e-9, surface_potential_v=0.2)
+    assert np.max(np.abs(end.total / m.total - 1)) > 0.05
+
+
+def test_spot_at_the_end_is_the_paper_diagram(tmp_path):
+    """--spot-position 1 writes the old diagram byte for byte; a spot a hair before the end is continuous."""
+    common = ["diagram", "--cantilever", "B", "--frequency-points", "12", "--bias-points", "5",
+              "--local-force", "0.7e-9", "--log-frequency"]
+    tables = []
+    for extra in ([], ["--spot-position", "1"], ["--spot-position", "0.6"]):
+        table = tmp_path / f"d{len(tables)}.csv"
+        assert cli.main([*common, *extra, "--out", str(tmp_path / "d.png"), "--csv", str(table)]) == 0
+        tables.append(table.read_text())
+    assert tables[0] == tables[1] and tables[0] != tables[2]
+    lever = table1_cantilever("B")
+    frequency = np.geomspace(2e3, 3e6, 40)
+    paper = response_map(lever, frequency, [-3.0, 2.0], width=WIDTH, local_force=0.7e-9)
+    near = response_map(replace(lever, spot_position=1 - 1e-9), frequency, [-3.0, 2.0], width=WIDTH,
+                        local_force=0.7e-9)
+    np.testing.assert_allclose(near.total, paper.total, rtol=1e-6)
+
+
+def test_spot_below_its_frequency_range_is_an_error(tmp_path, capsys):
+    """The read-out at a spot needs beta > 0.1: a lower frequency is a one-line error, not a wrong number."""
+    lever = replace(table1_cantilever("A"), spot_position=0.7)
+    with pytest.raises(ValueError, match="lowest frequency"):
+        response_map(lever, [10.0, 1e4], [0.0], width=WIDTH)
+    with pytest.raises(ValueError, match="paper's probe"):
+        low_frequency_crossover_bias(lever, width=WIDTH)
+    assert cli.main(["diagram", "--spot-position", "0.7", "--fmin", "10", "--out", str(tmp_path / "x.png")]) == 2
+    assert "lowest frequency" in capsys.readouterr().err
+    assert cli.main(["diagram", "--spot-position", "1.5", "--out", str(tmp_path / "x.png")]) == 2
+    assert "--spot-position: spot_position must be in" in capsys.readouterr().err
+
+
+def test_at_the_blind_spot_the_nonlocal_part_vanishes():
+    """The spot where the segment beam's distributed-load slope is zero (brentq) nulls the diagram's
+    non-local coefficient at that frequency, and only there (1e-6 of its value at the end)."""
+    lever = table1_cantilever("B")
+    f = 0.3 * lever.free_resonance
+    beta = BETA1_FREE * np.sqrt(0.3)
+    slope = lambda s: spot_response(beta, s, k=lever.spring_constant, L=lever.length, H=H, kvv=K1, q0=1.0)[0].real  # noqa: E731
+    grid = np.linspace(0.3, 1.0, 141)
+    values = [slope(s) for s in grid]
+    i = next(i for i in range(len(grid) - 1) if values[i] * values[i + 1] < 0)
+    blind = brentq(slope, grid[i], grid[i + 1], xtol=1e-14)
+    end = response_map(lever, [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    at = response_map(replace(lever, spot_position=blind), [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    beside = response_map(replace(lever, spot_position=blind + 0.02), [f], [1.0], width=WIDTH).nonlocal_coefficient[0]
+    assert abs(at) < 1e-6 * abs(end) and abs(beside) > 1e-3 * abs(end)

@@ -9,21 +9,24 @@ the fitted model; real files from ``../shared/realdata``.  Sweeps with pass rate
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
-from fe_beam import acquisition_case  # noqa: E402
+from fe_beam import BETA1, FEBeam, acquisition_case, spectrum  # noqa: E402
 from test_instruments import ASYLUM, THERMAL  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
 from pfmdyn.discrepancy.model import Model  # noqa: E402
 from pfmdyn.discrepancy.plausible import implausible  # noqa: E402
-from pfmdyn.discrepancy.spectrum import analyse, noise_sigma  # noqa: E402
+from pfmdyn.discrepancy.effects import EFFECTS  # noqa: E402
+from pfmdyn.discrepancy.spectrum import SpectrumProblem, analyse, noise_sigma  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
 
 REAL = [ASYLUM / name for name in ("PTO_Funakubo0001.h5", "PMN28Pt0000.h5", "IgorIBWReader_ImageStack_BTFO_DSO.ibw",
@@ -113,3 +116,149 @@ def test_band_limited_spectrum_finds_every_band_peak_and_names_damping(tmp_path)
     report = analyse(data, progress=False)
     assert report["missing_effects"] == ["damping"] and report["gap_after"] < 1.5
     assert report["dof"] == report["data_values"] - report["fitted_parameters"] > 0
+
+
+@pytest.mark.skipif(not THERMAL.is_file(), reason="real data absent")
+def test_one_q_value_rejects_the_undamped_model_but_does_not_test_damping(tmp_path, capsys):
+    """The thermal tune (one free mode and its Q, 390): the undamped baseline (Q infinite) is
+    rejected, so damping is named, but its one parameter reproduces the one Q by construction
+    (dof 0): the report says the damping model is not testable with these data, and the
+    mechanisms fit alike."""
+    report = _run(tmp_path, THERMAL, "--tip-height", "1.2e-5", "--length", "2.25e-4")
+    summary = capsys.readouterr().out
+    assert (report["data_values"], report["fitted_parameters"], report["dof"]) == (1, 1, 0)
+    assert report["missing_effects"] == ["damping"] and len(report["damping_mechanisms"]) == 1
+    assert report["gap_before"] > 5 and report["unexplained"] is None
+    why = report["untestable_effects"]["damping"]
+    assert why.startswith("not testable with these data: 1 Q value(s) and 1 damping parameter(s) "
+                          "(0 degree(s) of freedom left)"), why
+    assert f"damping: {why}" in summary
+    assert report["damping_mechanisms_indistinguishable_from"]
+
+
+def _read_text(tmp_path, text):
+    path = tmp_path / "s.csv"
+    path.write_text(text)
+    return read(path)
+
+
+def _analyse(data) -> dict:
+    with threadpool_limits(1, user_api="blas"):        # as the command runs it
+        return analyse(data, progress=False)
+
+
+def _honest_or_exact(report: dict, hidden: list[str]) -> str:
+    """``exact`` (the hidden set, gap within the unexplained threshold) or ``honest``
+    (unexplained, with where); fails on a false effect or a miss without ``unexplained``."""
+    named = report["missing_effects"]
+    assert set(named) <= set(hidden), f"false effect: {named} (hidden {hidden})"
+    if sorted(named) == sorted(hidden) and report["gap_after"] <= 2:
+        return "exact"
+    assert report["unexplained"] is not None, (named, report["gap_after"])
+    assert len(report["unexplained"]["where"]) == 2, report["unexplained"]
+    return "honest"
+
+
+@pytest.mark.parametrize("seed", [0, 1], ids=["soft-tip-0.71L", "stiff-tip-0.74L"])
+def test_large_setback_named_exactly(tmp_path, seed):
+    """Soft (k 0.62 N/m, tip at 0.711 L) and stiff (k 14.5 N/m, tip at 0.739 L) levers with
+    viscous damping, three biases, 1-2 % noise, instrument order: damping and the set-back are
+    named, the tip position within 0.01 L, the gap at the noise.  Seed 0 named a false tip
+    mass and tilt (gap 6) and seed 1 nothing but damping (gap 614): the set-back tip puts
+    contact mode 2 near a node of the slope, where its peak stands only 2-3 times above the
+    median (beside its antiresonance) though hundreds of noise levels, and the peak search
+    (5 x the median) missed it; the spring starts then matched the other two peaks with that
+    mode elsewhere."""
+    text, truth = acquisition_case(seed, "large_setback")
+    data = _read_text(tmp_path, text)
+    report = _analyse(data)
+    assert _honest_or_exact(report, truth["hidden"]) == "exact", report["missing_effects"]
+    assert report["damping_mechanisms"] == ["viscous"] and report["gap_after"] < 1.2
+    assert abs(report["parameters"]["tip_position"]["value"] - truth["gamma"]) < 0.01
+    assert abs(math.log10(report["parameters"]["k1"]["value"] / truth["k1"])) < 0.02
+
+
+@pytest.mark.parametrize("kind, seed", [("gain_drift", 1), ("band_air", 1)])
+def test_misfit_outside_the_library_is_unexplained_not_a_background(tmp_path, kind, seed):
+    """A detector gain drifting by 0.4 % between bias sweeps (with air damping), and air
+    damping alone (width ~ sqrt f) sampled in bands: no library effect explains what is left
+    once damping is named; a background lowered it by reshaping the peaks (a false
+    ``background`` before), and is now refused with the reason: ``unexplained`` with where."""
+    text, truth = acquisition_case(seed, kind)
+    report = _analyse(_read_text(tmp_path, text))
+    assert _honest_or_exact(report, truth["hidden"]) == "honest"
+    assert report["missing_effects"] == ["damping"] and report["gap_after"] > 2
+    refused = [row for step in report["steps"] for row in step.get("candidates", []) if "refused" in row]
+    assert refused and all(row["effect"] == "background" for row in refused)
+    assert "reshapes the peaks" in refused[0]["refused"]
+
+
+def _damped_lever(seed: int, law: str, gamma: float = 1.0) -> tuple[str, dict]:
+    """One lever (k 0.2-40 N/m, L 120-450 um, k1/k 10-1000) with free mode-1 Q 20-63 under each
+    damping law: ``viscous`` (constant width), ``air`` (width ~ sqrt f), ``internal`` (width ~ f);
+    400 frequencies over the first two contact modes, three biases, 1 % noise."""
+    rng = np.random.default_rng(seed)
+    E, rho = 169e9, 2330.0
+    k, L = 10 ** rng.uniform(math.log10(0.2), math.log10(40)), rng.uniform(120e-6, 450e-6)
+    w, H = rng.uniform(25e-6, 50e-6), rng.uniform(5e-6, 15e-6)
+    f1 = BETA1**2 / (2 * math.pi) * (4 * k * L**3 / (E * w)) ** (1 / 3) / L**2 * math.sqrt(E / 12 / rho)
+    k1 = k * 10 ** rng.uniform(1, 3)
+    k2 = k1 * rng.uniform(0.5, 1.0)
+    q1 = 10 ** rng.uniform(1.3, 1.8)
+    damping = {"viscous": dict(viscous_hz=f1 / q1), "air": dict(viscous_hz=f1 / q1, air_exponent=0.5),
+               "internal": dict(Q=q1)}[law]
+    beam = FEBeam(k, L, f1, H, k1=k1, k2=k2, gamma=gamma, n_elements=60, **damping)
+    contact = FEBeam(k, L, f1, H, k1=k1, k2=k2, gamma=gamma, n_elements=60).contact_resonances(3)
+    freq = np.linspace(0.5 * contact[0], 0.5 * (contact[1] + contact[2]), 400)
+    return spectrum(beam, freq, (-2.0, 0.0, 2.0), noise=0.01, seed=seed, order="instrument"), {"k1": k1}
+
+
+@pytest.mark.parametrize("seed, gamma", [(0, 1.0), (1, 1.0), (2, 1.0), (0, 0.85), (1, 0.85)])
+def test_spring_starts_do_not_depend_on_the_damping_law(tmp_path, seed, gamma):
+    """The same lever with viscous, air (sqrt f) and internal damping: the springs matched to
+    the peaks (the start of every fit) agree within 2 % whatever the law.  Tip at the end: the
+    baseline's start, within 3 % of the truth.  Tip set back to 0.85 L: the set-back's start as
+    the loop makes it once damping is in the model (viscous, from the peak widths, over the
+    set-back's profile), k1 within 20 % and the tip within 0.03 L of the truth, the same
+    basin for all three laws.  (Ranked by the undamped misfit instead, the internal-friction
+    lever's start moved to 0.92 L: the peak shapes, not the positions, decided.)"""
+    k1, tip = {}, {}
+    for law in ("viscous", "air", "internal"):
+        text, truth = _damped_lever(seed, law, gamma)
+        problem = SpectrumProblem(_read_text(tmp_path, text))
+        meta = problem.data.metadata
+        if gamma == 1.0:
+            start = problem.resonance_starts(Model(meta), [np.array([])], count=1)[0]
+        else:
+            g = problem.damping_seeds()["viscous"]
+            seeds = [np.array([g, gamma_seed]) for gamma_seed in EFFECTS["tip_setback"].seeds]
+            start = problem.resonance_starts(Model(meta, ("damping_viscous", "tip_setback")), seeds, count=1)[0]
+            tip[law] = start[-1]
+        k1[law] = 10 ** start[0]
+    assert max(k1.values()) / min(k1.values()) < 1.02, k1
+    tolerance = 0.03 if gamma == 1.0 else 0.2
+    assert all(abs(v / truth["k1"] - 1) < tolerance for v in k1.values()), (k1, truth["k1"])
+    assert all(abs(v - gamma) < 0.03 for v in tip.values()), tip
+
+
+def test_same_named_set_under_every_damping_law(tmp_path):
+    """The set-back lever (tip at 0.85 L) under viscous, air (sqrt f) and internal damping:
+    damping and the set-back are named for each, nothing else, the gap within the unexplained
+    threshold (air damping named a false background before: its smooth remainder, 0.4 % of
+    the response, below the noise)."""
+    for law in ("viscous", "air", "internal"):
+        text, _ = _damped_lever(0, law, 0.85)
+        report = _analyse(_read_text(tmp_path, text))
+        assert sorted(report["missing_effects"]) == ["damping", "tip_setback"], (law, report["missing_effects"])
+        assert report["gap_after"] <= 2 and report["unexplained"] is None, (law, report["gap_after"])
+        assert abs(report["parameters"]["tip_position"]["value"] - 0.85) < 0.02, law
+
+
+def test_band_air_setback_is_honest(tmp_path):
+    """Bands around three contact modes, air damping and the tip at 0.82 L: damping and the
+    set-back are named and nothing else; no mechanism of the library has the sqrt f width, so
+    the misfit left (gap 6.6) is reported as unexplained, with where."""
+    text, truth = acquisition_case(1, "band_air_setback")
+    report = _analyse(_read_text(tmp_path, text))
+    assert _honest_or_exact(report, truth["hidden"]) in ("exact", "honest")
+    assert "tip_setback" in report["missing_effects"]

@@ -97,8 +97,8 @@ def _spectrum_text(freq_hz, meta=META, header="frequency_hz,bias_v,x,y", x=1.0):
 
 @pytest.mark.parametrize("text, message", [
     (_spectrum_text(np.linspace(150, 400, 20)), "lie far from the free resonance 63200 Hz"),      # kHz as Hz
-    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")), "'length_m' is 223 m"),
-    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")), "'free_resonance_hz' is 63.2"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")), "'length' is 223 m"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")), "'free_resonance' is 63.2"),
     (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.4\n", "2.4 lbf/in\n")), "unit 'lbf/in' not understood"),
     (_spectrum_text(np.linspace(150e3, 400e3, 20), x=0.0).replace(",0.5\n", ",0\n"), "zero in every row"),
     (META + "mode,condition,frequency_hz\n1,free,63.2\n1,contact,310.5\n", "lie far from the free resonance"),
@@ -176,14 +176,15 @@ def test_lateral_stiffness_trial_after_another_effect_is_never_worse(tmp_path):
     assert problem.trial(current, "lateral_stiffness").gap <= current.gap * (1 + 1e-9)
 
 
-def test_a_plot_path_that_cannot_be_written_is_one_line_after_the_report(tmp_path, capsys):
+def test_a_plot_path_that_cannot_be_written_is_one_line_before_the_analysis(tmp_path, capsys):
     path = tmp_path / "r.csv"
     path.write_text(META + "mode,condition,frequency_hz\n1,free,63200\n2,free,396000\n1,contact,310500\n")
     for plot in (tmp_path / "missing" / "p.png", tmp_path / "p.xyz"):
-        assert cli.main(["discrepancy", str(path), "--plot", str(plot)]) == 2
+        json_out = tmp_path / "r.json"
+        assert cli.main(["discrepancy", str(path), "--plot", str(plot), "--json", str(json_out)]) == 2
         captured = capsys.readouterr()
-        assert "baseline gap" in captured.out
-        last = captured.err.splitlines()[-1]        # after the progress bar
+        assert "baseline gap" not in captured.out and not json_out.exists()     # nothing written
+        last = captured.err.splitlines()[-1]
         assert last.startswith("pfmdyn discrepancy: error: ") and f"cannot write {plot}" in last
 
 

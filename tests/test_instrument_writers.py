@@ -28,16 +28,16 @@ pytestmark = [pytest.mark.filterwarnings("ignore::UserWarning:pyUSID"),
               pytest.mark.filterwarnings("ignore::UserWarning:sidpy")]
 
 # Asylum note keys -> (value as written, pfmdyn field, SI value); a PFM lever in contact.
-ASYLUM = {"SpringConstant": ("2.7193", "spring_constant_n_per_m", 2.7193),
-          "ThermalFrequency": ("71324", "free_resonance_hz", 71324.0),
+ASYLUM = {"SpringConstant": ("2.7193", "spring_constant", 2.7193),
+          "ThermalFrequency": ("71324", "free_resonance", 71324.0),
           "ThermalQ": ("151.2", "free_quality_factor", 151.2),
-          "TuneFreqResult": ("331250", "contact_resonance_hz", 331250.0),
+          "TuneFreqResult": ("331250", "contact_resonance", 331250.0),
           "TuneQResult": ("87.5", "contact_quality_factor", 87.5),
-          "DriveFrequency": ("330000", "drive_frequency_hz", 330000.0),
-          "CustomLeverLength": ("2.25e-4", "length_m", 2.25e-4),
-          "CustomLeverWidth": ("4e-5", "width_m", 4e-5)}
+          "DriveFrequency": ("330000", "drive_frequency", 330000.0),
+          "CustomLeverLength": ("2.25e-4", "length", 2.25e-4),
+          "CustomLeverWidth": ("4e-5", "width", 4e-5)}
 LAYERS = {"HeightRetrace": "m", "AmplitudeRetrace": "m", "PhaseRetrace": "deg", "UserIn0Retrace": "V"}
-TIP = {"tip_height_m": 1.4e-5}
+TIP = {"tip_height": 1.4e-5}
 
 
 def asylum_note(values: dict, end="\r") -> str:
@@ -71,7 +71,7 @@ def image_scales(unit="m", step=1e-7):
 def assert_fields(record, written: dict):
     for key, (_, field, value) in written.items():
         assert record.fields[field] == pytest.approx(value, rel=1e-12), key
-    assert "tip_height_m" in record.missing
+    assert "tip_height" in record.missing
 
 
 @pytest.mark.parametrize("end", ["\r", "\n", "\r\n"])
@@ -96,7 +96,7 @@ def test_ibw_note_missing_keys_and_nan_are_missing_not_zero(tmp_path, capsys):
     path = igor_wave(tmp_path / "bare.ibw", np.ones((16, 12, 2), "f4"), "bare", image_scales(), "m",
                      {2: ["HeightTrace", "PhaseTrace"]}, note)
     record = read_instrument(path)
-    assert record.fields == {"contact_resonance_hz": 331250.0}
+    assert record.fields == {"contact_resonance": 331250.0}
     with pytest.raises(UserError, match="free resonance not in bare.ibw$"):
         instrument_resonances(path, TIP)
     out = tmp_path / "d.json"
@@ -120,8 +120,8 @@ def test_ibw_non_ascii_note_and_units(tmp_path, unicode):
     record = read_instrument(path)
     assert record.kind == "image"
     assert [(c.name, c.unit, c.scale) for c in record.channels] == [("HeightRetrace", "m", 1e-9)]
-    assert record.fields == {"spring_constant_n_per_m": 0.5, "length_m": pytest.approx(2.25e-4),
-                             "drive_frequency_hz": 312500.0}
+    assert record.fields == {"spring_constant": 0.5, "length": pytest.approx(2.25e-4),
+                             "drive_frequency": 312500.0}
     assert any("CustomLeverWidth '35 furlong'" in n and "lever width" in n for n in record.notes)
 
 
@@ -207,7 +207,7 @@ def test_sweep_columns_and_header_in_khz(tmp_path):
     path.write_text("Q factor:\t3.1\nPeak amplitude frequency (kHz):\t72.5\nSweep data\n"
                     f"Frequency (kHz)\tAmplitude (mV)\tPhase (deg)\n{rows}\n")
     record = read_instrument(path)
-    assert record.fields == {"free_resonance_hz": 72500.0, "free_quality_factor": 3.1}
+    assert record.fields == {"free_resonance": 72500.0, "free_quality_factor": 3.1}
     freq, values, unit = record.spectrum
     assert unit == "V" and freq[0] == 70000.0 and values.max() == pytest.approx(1.0)
 
@@ -248,10 +248,10 @@ def test_usid_band_excitation_written_by_pyusid(tmp_path, usid, unit):
     record = read_instrument(path)
     assert record.kind == "spectrum" and record.instrument == "pycroscopy HDF5 (USID)"
     assert [(c.name, c.unit, c.shape) for c in record.channels] == [("Piezoresponse", "V", (12, 24))]
-    assert record.fields == {"spring_constant_n_per_m": 1.8, "free_resonance_hz": 65000.0,
-                             "contact_resonance_hz": 320000.0, "drive_frequency_hz": 3.2e5}
+    assert record.fields == {"spring_constant": 1.8, "free_resonance": 65000.0,
+                             "contact_resonance": 320000.0, "drive_frequency": 3.2e5}
     assert "12 spectra of 24 frequencies (300000 to 340000 Hz)" in record.notes[0]
-    assert instrument_resonances(path, {"length_m": 2e-4, "width_m": 3e-5, **TIP}).frequency_hz.tolist() == \
+    assert instrument_resonances(path, {"length": 2e-4, "width": 3e-5, **TIP}).frequency_hz.tolist() == \
         [65000.0, 320000.0]
     # Without cantilever attributes: the same data, every field missing, a one-line error.
     bare, response = write_usid_be(tmp_path / "bare.h5", usid, unit, positions=(1, 1),
@@ -323,7 +323,7 @@ def test_nsid_images_with_asylum_metadata(tmp_path):
     out = tmp_path / "r.json"
     assert cli.main(["inspect", str(path), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["fields"]["contact_resonance_hz"] == {"value": 331250.0, "unit": "Hz"}
+    assert doc["fields"]["contact_resonance"] == {"value": 331250.0, "unit": "Hz"}
     assert doc["channels"][0]["scale"] == 1e-9
 
 
@@ -392,7 +392,7 @@ def test_ibw_force_curve_columns_and_stale_label_bytes(tmp_path):
     raw = path.read_bytes()
     path.write_bytes(raw.replace(b"Defl\0\0\0\0\0\0", b"Defl\0ectio").replace(b"Raw\0\0\0", b"Raw\0ac"))
     record = read_instrument(path)
-    assert record.kind == "curve" and record.fields == {"spring_constant_n_per_m": 0.81}
+    assert record.kind == "curve" and record.fields == {"spring_constant": 0.81}
     assert [(c.name, c.unit, c.shape) for c in record.channels] == [(n, "m", (200,)) for n in ("Raw", "Defl", "ZSnsr")]
 
 
@@ -409,7 +409,7 @@ def test_ibw_long_names_version_7(tmp_path):
     wave.save(str(tmp_path / "long.ibw"))
     record = read_instrument(tmp_path / "long.ibw")
     assert [(c.name, c.unit) for c in record.channels] == [("HeightRetrace", "m"), ("PhaseRetrace", "deg")]
-    assert record.fields == {"spring_constant_n_per_m": 2.5}
+    assert record.fields == {"spring_constant": 2.5}
 
 
 def _version2_wave(path, values, x0, dx, x_unit, data_unit, note=b""):
@@ -437,7 +437,7 @@ def test_ibw_version_2_spectrum(tmp_path):
     freq, values, unit = record.spectrum
     np.testing.assert_allclose(freq, f_khz * 1e3, rtol=1e-9)
     np.testing.assert_allclose(values, amplitude.astype("f4") * 1e-9, rtol=1e-6)
-    assert unit == "m" and record.fields == {"spring_constant_n_per_m": 2.5}
+    assert unit == "m" and record.fields == {"spring_constant": 2.5}
 
 
 def test_ibw_axis_in_unknown_unit_is_said(tmp_path):
@@ -465,19 +465,23 @@ def test_usid_beps_frequency_and_dc_steps(tmp_path, usid):
     assert "24 spectra of 10 frequencies (300000 to 340000 Hz)" in record.notes[0]
 
 
-def test_pfmdyn_map_layout_and_root_attributes(tmp_path):
-    """The plain layout ``pfmdyn map`` reads: response (ny, nx, n_freq), frequency_hz, root attributes."""
+@pytest.mark.parametrize("spelling", ["names", "older"])
+def test_pfmdyn_map_layout_and_root_attributes(tmp_path, spelling):
+    """The plain layout ``pfmdyn map`` reads: response (ny, nx, n_freq), frequency_hz, root attributes
+    (under their names, or the older spellings with units, read as the names)."""
     import h5py
     path = tmp_path / "map.h5"
+    attrs = {"spring_constant": 3.1, "length": 2.25e-4, "tip_height": 1.2e-5, "free_resonance": 7.1e4}
+    if spelling == "older":
+        attrs = dict(zip(("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz"), attrs.values()))
     with h5py.File(path, "w") as h5:
         h5["response"] = np.ones((3, 4, 16), "c8")
         h5["frequency_hz"] = np.linspace(3e5, 3.3e5, 16)
-        h5.attrs.update({"spring_constant_n_per_m": 3.1, "length_m": 2.25e-4, "tip_height_m": 1.2e-5,
-                         "free_resonance_hz": 7.1e4})
+        h5.attrs.update(attrs)
     record = read_instrument(path)
     assert record.kind == "spectrum" and record.instrument == "HDF5 (pfmdyn map layout)"
-    assert record.fields == {"spring_constant_n_per_m": 3.1, "length_m": 2.25e-4, "tip_height_m": 1.2e-5,
-                             "free_resonance_hz": 7.1e4}
+    assert record.fields == {"spring_constant": 3.1, "length": 2.25e-4, "tip_height": 1.2e-5,
+                             "free_resonance": 7.1e4}
     assert "12 spectra of 16 frequencies (300000 to 330000 Hz)" in record.notes[0]
 
 

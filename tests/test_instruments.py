@@ -30,8 +30,8 @@ ASYLUM_TABLE = {
     "PTO_Funakubo0001.h5": (1.1747, 59758, 138, 371710, 312.72, 369110, 2.4e-4, 3e-5),
     "PMN28Pt0000.h5": (1, 74369, 20, 348400, 218.47, 357810, None, None),
 }
-FIELD_ORDER = ("spring_constant_n_per_m", "free_resonance_hz", "free_quality_factor", "contact_resonance_hz",
-               "contact_quality_factor", "drive_frequency_hz", "length_m", "width_m")
+FIELD_ORDER = ("spring_constant", "free_resonance", "free_quality_factor", "contact_resonance",
+               "contact_quality_factor", "drive_frequency", "length", "width")
 # README table 2: header Q factor and peak (or f_res) frequency of each drive sweep.
 SWEEPS = {
     "20180628_SBC_3_C_4_B.txt": (3.034, 81780.70), "20180628_SBC_3_C_4_A.txt": (2.991, 81246.50),
@@ -57,7 +57,7 @@ def test_asylum_metadata_matches_the_readme(name):
             assert field in record.missing
         else:
             assert record.fields[field] == pytest.approx(expected, rel=1e-9), field
-    assert "tip_height_m" in record.missing       # Asylum records no tip height
+    assert "tip_height" in record.missing       # Asylum records no tip height
     units = {c.name: c.unit for c in record.channels}
     assert units["HeightRetrace"] == "m" and units["AmplitudeRetrace"] == "m" and units["PhaseRetrace"] == "deg"
     assert all(c.shape == (256, 256) for c in record.channels)
@@ -67,13 +67,13 @@ def test_asylum_metadata_matches_the_readme(name):
 def test_thermal_tune_header_spectrum_and_fitted_mode():
     record = read_instrument(real(THERMAL))
     assert record.kind == "thermal spectrum"
-    assert record.fields == pytest.approx({"spring_constant_n_per_m": 27.13, "free_resonance_hz": 179.8e3,
+    assert record.fields == pytest.approx({"spring_constant": 27.13, "free_resonance": 179.8e3,
                                            "free_quality_factor": 442.0})
     freq, asd, unit = record.spectrum
     assert unit == "m/sqrt(Hz)" and len(freq) == 8369 and freq[-1] == pytest.approx(319214)
     peak = np.argmax(np.where(freq > 1e4, asd, 0))
     assert freq[peak] == pytest.approx(179.79e3, abs=40) and asd[peak] == pytest.approx(777e-15, rel=2e-3)
-    data = instrument_resonances(THERMAL, {"length_m": 225e-6, "width_m": 40e-6, "tip_height_m": 12e-6})
+    data = instrument_resonances(THERMAL, {"length": 225e-6, "width": 40e-6, "tip_height": 12e-6})
     assert data.mode.tolist() == [1] and data.condition.tolist() == ["free"]
     assert data.frequency_hz[0] == pytest.approx(179.8e3, rel=2e-3)
     assert data.quality_factor[0] == pytest.approx(442, rel=0.15) and data.metadata.k == 27.13
@@ -85,7 +85,7 @@ def test_drive_sweeps_header_fit(name):
     q, f = SWEEPS[name]
     assert record.kind == "spectrum"
     assert record.fields["free_quality_factor"] == pytest.approx(q, abs=6e-4)
-    assert record.fields["free_resonance_hz"] == pytest.approx(f, abs=6e-3)
+    assert record.fields["free_resonance"] == pytest.approx(f, abs=6e-3)
     assert [c.unit for c in record.channels][1] == "deg"
 
 
@@ -93,11 +93,11 @@ def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():
     path = real(ASYLUM / "IgorIBWReader_P0089OP0027.ibw")
     with pytest.raises(UserError, match="tip height not in IgorIBWReader_P0089OP0027.ibw$"):
         instrument_resonances(path)
-    data = instrument_resonances(path, {"tip_height_m": 12e-6})
+    data = instrument_resonances(path, {"tip_height": 12e-6})
     assert data.condition.tolist() == ["free", "contact"] and data.mode.tolist() == [1, 1]
     assert data.frequency_hz.tolist() == [59162, 349890] and data.quality_factor.tolist() == [134.21, 166.43]
     assert (data.metadata.k, data.metadata.L, data.metadata.H) == (8.3589, 2.4e-4, 12e-6)
-    assert instrument_resonances(path, {"tip_height_m": 1e-5, "spring_constant_n_per_m": 3.0}).metadata.k == 3.0
+    assert instrument_resonances(path, {"tip_height": 1e-5, "spring_constant": 3.0}).metadata.k == 3.0
 
 
 def test_inspect_exits_0_on_every_real_file_and_writes_numbers(tmp_path):
@@ -163,10 +163,10 @@ def test_image_without_spring_constant(tmp_path, capsys):
     path = write_nsid(tmp_path / "nok.h5", {"ThermalFrequency": 6e4, "ThermalQ": 120.0, "TuneFreqResult": 3.5e5,
                                             "TuneQResult": 200.0, "SpringConstant": "NaN"})
     record = read_instrument(path)
-    assert record.kind == "image" and "spring_constant_n_per_m" in record.missing
-    assert record.fields["contact_resonance_hz"] == 3.5e5
+    assert record.kind == "image" and "spring_constant" in record.missing
+    assert record.fields["contact_resonance"] == 3.5e5
     with pytest.raises(UserError, match="spring constant not in nok.h5$"):
-        instrument_resonances(path, {"tip_height_m": 1e-5, "length_m": 2e-4, "width_m": 3e-5})
+        instrument_resonances(path, {"tip_height": 1e-5, "length": 2e-4, "width": 3e-5})
     out = tmp_path / "k.json"
     one_line_error(capsys, ["stiffness", str(path), "--json", str(out)], "give --spring-constant")
     assert not out.exists()
@@ -189,7 +189,7 @@ def test_usid_band_excitation_is_a_spectrum(tmp_path):
         raw.attrs.update({"quantity": "Piezoresponse", "units": "V", "Spectroscopic_Values": spec.ref})
     record = read_instrument(path)
     assert record.kind == "spectrum" and record.instrument.endswith("(USID)")
-    assert record.fields == {"spring_constant_n_per_m": 2.5, "drive_frequency_hz": 3.2e5}
+    assert record.fields == {"spring_constant": 2.5, "drive_frequency": 3.2e5}
     assert [(c.name, c.unit, c.shape) for c in record.channels] == [("Piezoresponse", "V", (16, 8))]
 
 

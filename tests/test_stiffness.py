@@ -40,7 +40,7 @@ def test_k1_recovered_to_1e9_from_certified_roots_over_real_levers():
     worst = 0.0
     for ki, fi, ri, mode in zip(k, f1, ratio, modes):
         fc = certified_contact_hz(fi, mode, k1_over_k=ri, k2_ratio=0)
-        got = contact_stiffness(fc, fi, ki, mode=mode).k1_n_per_m
+        got = contact_stiffness(fc, fi, ki, mode=mode).k1
         worst = max(worst, abs(float(got) / (float(ri) * ki) - 1))
     assert worst < 1e-9, worst
 
@@ -51,7 +51,7 @@ def test_k1_recovered_with_a_fixed_longitudinal_spring():
     for ki, fi, ri, bi in zip(k, f1, ratio, b):
         b_text = f"{bi:.4f}"
         fc = certified_contact_hz(fi, 1, k1_over_k=ri, k2_ratio=b_text)
-        got = contact_stiffness(fc, fi, ki, k2_ratio=float(b_text)).k1_n_per_m
+        got = contact_stiffness(fc, fi, ki, k2_ratio=float(b_text)).k1
         assert abs(float(got) / (float(ri) * ki) - 1) < 1e-9
 
 
@@ -60,9 +60,9 @@ def test_vectorised_map_matches_scalar_and_marks_impossible_pixels():
     fc = np.array([[certified_contact_hz(f1, 1, k1_over_k=r, k2_ratio=0) for r in ("1", "30", "3000")],
                    [f1 * 0.9, f1 * 5.0, certified_contact_hz(f1, 1, k1_over_k="10000", k2_ratio=0)]])
     r = contact_stiffness(fc, f1, k, out_of_range="nan")
-    assert r.k1_n_per_m.shape == (2, 3)
-    np.testing.assert_allclose(r.k1_n_per_m[0], [3.0, 90.0, 9000.0], rtol=1e-9)
-    assert np.isnan(r.k1_n_per_m[1, :2]).all() and abs(r.k1_n_per_m[1, 2] / 30000 - 1) < 1e-9
+    assert r.k1.shape == (2, 3)
+    np.testing.assert_allclose(r.k1[0], [3.0, 90.0, 9000.0], rtol=1e-9)
+    assert np.isnan(r.k1[1, :2]).all() and abs(r.k1[1, 2] / 30000 - 1) < 1e-9
 
 
 def test_noise_scatter_matches_the_propagated_uncertainty():
@@ -73,9 +73,9 @@ def test_noise_scatter_matches_the_propagated_uncertainty():
     n = 4000
     fc = fc_true + sig_c * rng.standard_normal(n)
     f1s = f1 + sig_f * rng.standard_normal(n)
-    got = contact_stiffness(fc, f1s, k).k1_n_per_m
-    sigma = float(contact_stiffness(fc_true, f1, k, contact_uncertainty_hz=sig_c,
-                                    free_uncertainty_hz=sig_f).k1_uncertainty_n_per_m)
+    got = contact_stiffness(fc, f1s, k).k1
+    sigma = float(contact_stiffness(fc_true, f1, k, contact_uncertainty=sig_c,
+                                    free_resonance_uncertainty=sig_f).k1_stderr)
     assert abs(np.std(got) / sigma - 1) < 0.06
     assert abs(np.mean(got) - 120.0) < 4 * sigma / math.sqrt(n) + 1e-3 * sigma
     inside = np.abs(got - 120.0) < 2 * sigma
@@ -168,10 +168,10 @@ def test_k1_recovered_when_k2_follows_k1_mindlin():
     for ki, li, fi, ri, hi in zip(k, length, f1, ratio, height):
         b = float(float(ri) * c * (hi / li) ** 2)
         fc = certified_contact_hz(fi, 1, k1_over_k=ri, k2_ratio=repr(b))
-        r = coupled_contact_stiffness(fc, fi, ki, k2_over_k1=c, length_m=li, tip_height_m=hi)
-        assert abs(float(r.k1_n_per_m) / (float(ri) * ki) - 1) < 1e-9
+        r = coupled_contact_stiffness(fc, fi, ki, k2_over_k1=c, length=li, tip_height=hi)
+        assert abs(float(r.k1) / (float(ri) * ki) - 1) < 1e-9
     with pytest.raises(UserError, match="tip mass"):
-        coupled_contact_stiffness(6.5 * 60e3, 60e3, 1.0, k2_over_k1=c, length_m=2e-4, tip_height_m=1e-5)
+        coupled_contact_stiffness(6.5 * 60e3, 60e3, 1.0, k2_over_k1=c, length=2e-4, tip_height=1e-5)
 
 
 def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
@@ -196,3 +196,40 @@ def test_cli_contact_frequency_map_takes_the_lever_flags_and_refuses_the_rest(tm
     assert "median k1 160 N/m" in capsys.readouterr().out          # k1/k = 40 at the flag's k
     assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "b"), "--tilt", "12"]) == 2
     assert "--tilt" in capsys.readouterr().err and not (tmp_path / "b").exists()
+
+
+def test_contact_map_uncertainty_under_its_name_and_its_old_spelling(tmp_path, capsys):
+    """The map attribute ``contact_uncertainty`` (Hz; ``contact_uncertainty_hz`` still read) and the flag
+    ``--contact-uncertainty`` give the same k1 standard error, which grows with it."""
+    h5py = pytest.importorskip("h5py")
+    zarr = pytest.importorskip("zarr")
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    stderr = {}
+    for name, attrs, extra in (("new", {"contact_uncertainty": 200.0}, []),
+                               ("old", {"contact_uncertainty_hz": 200.0}, []),
+                               ("flag", {}, ["--contact-uncertainty", "200"]),
+                               ("double", {"contact_uncertainty": 200.0}, ["--contact-uncertainty", "400"])):
+        path = tmp_path / f"{name}.h5"
+        with h5py.File(path, "w") as h:
+            h["contact_frequency_hz"] = np.full((2, 3), fc)
+            h.attrs.update(spring_constant=2.0, free_resonance=75e3, **attrs)
+        assert cli.main(["stiffness", str(path), "--out", str(tmp_path / name), *extra]) == 0
+        stderr[name] = float(zarr.open_group(str(tmp_path / name / "maps.zarr"), mode="r")["k1_stderr"][0, 0])
+    assert stderr["new"] > 0 and stderr["old"] == stderr["new"] == stderr["flag"]
+    assert stderr["double"] == pytest.approx(2 * stderr["new"], rel=1e-9)
+    assert cli.main(["stiffness", str(tmp_path / "new.h5"), "--out", str(tmp_path / "bad"),
+                     "--contact-uncertainty", "-1"]) == 2
+    assert "--contact-uncertainty" in capsys.readouterr().err
+
+
+def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
+    """``--normal-load`` (the name of the quantity) and the hidden old ``--load`` give the same E*."""
+    base = ["stiffness", "--free-resonance", "75e3", "--contact", "300e3", "--spring-constant", "2",
+            "--reduced-modulus", "--tip-radius", "20e-9"]
+    docs = []
+    for flag in ("--normal-load", "--load"):
+        out = tmp_path / f"{flag}.json"
+        assert cli.main(base + [flag, "1e-7", "--json", str(out)]) == 0
+        docs.append(json.loads(out.read_text()))
+    assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
+    assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)

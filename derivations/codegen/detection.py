@@ -20,6 +20,9 @@ Written:
 """
 from __future__ import annotations
 
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
 from functools import lru_cache
 
 import sympy as sp
@@ -138,6 +141,48 @@ def _keywords(params) -> str:
     return ", ".join(["beta", "gamma", *(str(p) for p in params if str(p) not in dimensional), *DIMENSIONLESS])
 
 
+def _render_branch(name: str) -> dict:
+    """Template context of one branch, ``before`` or ``beyond`` the tip."""
+    row = registry.by_module("tip_setback")
+    params = [symbol(p, tip_setback) for p in row.parameters]
+    signature = f"beta, sigma, {', '.join(map(str, params))}"
+    branch, tags = {"before": (detection.solve().before, "abs"), "beyond": (detection.solve().beyond, "abr")}[name]
+    values, defl, d_values, wrt = _scaled_branch(branch, params)
+    atoms = _atoms(tags)
+    printed = {}
+    for what, exprs in (("slope", values), ("deflection", defl)):
+        lines, reduced = cse_lines(exprs)
+        printed[what] = {"lines": lines, "den": reduced[0], "nums": reduced[1:]}
+    jacobian = and_jacobian(f"_slope_{name}", signature, f"slope at the spot, spot {name} the tip", atoms,
+                            wrt, values, d_values, Example())
+    return {"name": name, "atoms": atoms, **printed, "jacobian": jacobian,
+            "lever_atoms": _atoms(tags[:-1], m="m"), "spot": tags[-1], "argument": _ARGS[tags[-1]],
+            "where": "0 < sigma <= gamma" if name == "before" else "gamma <= sigma <= 1",
+            "q0": _blind_spot_coefficients(branch)}
+
+
+def _stored_examples() -> tuple:
+    """The doctests (:func:`_examples`) of the registry's parameters."""
+    row = registry.by_module("tip_setback")
+    return _examples(detection.solve(), [symbol(p, tip_setback) for p in row.parameters])
+
+
+def _rendered() -> tuple[list[dict], tuple]:
+    """Both branches and the doctests; the ``beyond`` branch and the doctests in forked
+    processes where there is a second core.
+
+    The three share nothing after :func:`derivations.detection.solve` (solved here, before
+    the fork, so the children inherit it) and each is made by the same code in any process:
+    the text does not depend on where it was made.
+    """
+    detection.solve()
+    if "fork" not in multiprocessing.get_all_start_methods() or (os.cpu_count() or 1) < 2:
+        return [_render_branch("before"), _render_branch("beyond")], _stored_examples()
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork")) as pool:
+        beyond, examples_ = pool.submit(_render_branch, "beyond"), pool.submit(_stored_examples)
+        return [_render_branch("before"), beyond.result()], examples_.result()
+
+
 @lru_cache(maxsize=None)
 def render() -> str:
     """Source text of ``generated/detection.py`` (once per process: it takes minutes)."""
@@ -146,22 +191,8 @@ def render() -> str:
     sol = detection.solve()
     names = ", ".join(map(str, params))
     signature = f"beta, sigma, {names}"
-    branches, hashed = [], []
-    for name, branch, tags in (("before", sol.before, "abs"), ("beyond", sol.beyond, "abr")):
-        values, defl, d_values, wrt = _scaled_branch(branch, params)
-        hashed += [branch.denominator, *branch.slope.values(), *branch.deflection.values()]
-        atoms = _atoms(tags)
-        printed = {}
-        for what, exprs in (("slope", values), ("deflection", defl)):
-            lines, reduced = cse_lines(exprs)
-            printed[what] = {"lines": lines, "den": reduced[0], "nums": reduced[1:]}
-        jacobian = and_jacobian(f"_slope_{name}", signature, f"slope at the spot, spot {name} the tip", atoms,
-                                wrt, values, d_values, Example())
-        branches.append({"name": name, "atoms": atoms, **printed, "jacobian": jacobian,
-                         "lever_atoms": _atoms(tags[:-1], m="m"), "spot": tags[-1], "argument": _ARGS[tags[-1]],
-                         "where": "0 < sigma <= gamma" if name == "before" else "gamma <= sigma <= 1",
-                         "q0": _blind_spot_coefficients(branch)})
-    slope_example, deflection_example, jacobian_example = _examples(sol, params)
+    branches, (slope_example, deflection_example, jacobian_example) = _rendered()
+    hashed = [e for b in (sol.before, sol.beyond) for e in (b.denominator, *b.slope.values(), *b.deflection.values())]
     exported = ["PARAMETERS", "DRIVES", "JACOBIAN_PARAMETERS", "slope", "deflection", "slope_and_jacobian",
                 *(f"q0_slope_{b}{suffix}" for b in ("before", "beyond") for suffix in ("", "_coefficients"))]
     return templates.render(

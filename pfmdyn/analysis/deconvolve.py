@@ -16,6 +16,10 @@ every point; that variance is estimated from the residuals of each frequency's f
 needs at least three biases (with two, the standard errors are NaN).  All reported standard
 errors are those of the real part, which equal those of the imaginary part.
 
+With a lever and contact given, :func:`surface_displacement` turns the measured ``d_eff``
+(in the units of the data, i.e. as calibrated by the deflection sensitivity) into the true
+surface displacement per volt, with the calibration factor of :mod:`pfmdyn.analysis.spot`.
+
 References
 ----------
 Jesse, Baddorf, Kalinin (2006), Sections VI.2-VI.4, Eq. 41.
@@ -27,8 +31,18 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..cantilever import Cantilever, Contact
 from ..generated import formulas
 from ..io.spectra import frequency_group_starts
+from .spot import calibration
+
+CONDITION_LIMIT = 10.0
+"""Largest ``|d ln C / d ln f|`` of the calibration factor ``C`` at which it is used: beyond,
+a 1 % error in the lever's resonances (or the damping the lossless calibration leaves out)
+changes it by more than 10 %, so the true displacement is undetermined there."""
+
+_STEP = 1e-4
+"""Relative frequency step of the central difference for ``d ln C / d ln f``."""
 
 
 @dataclass(frozen=True)
@@ -236,6 +250,106 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
         point_bias_v=bias_v,
         residual=residual,
     )
+
+
+@dataclass(frozen=True)
+class SurfaceDisplacement:
+    """Per-frequency conversion of a :class:`Deconvolution` to true surface displacement.
+
+    Attributes
+    ----------
+    spot_position : float
+        ``x_s/L`` of the spot.
+    calibration_factor : ndarray
+        Measured over true displacement (:func:`pfmdyn.analysis.spot.calibration`); NaN where
+        undetermined.
+    d_eff, g_elec : ndarray of complex
+        ``d_eff / C`` and ``G_elec / C``, in the units of the data (NaN where undetermined).
+    d_eff_se : ndarray
+        ``d_eff_se / |C|``.
+    d_eff_error_per_volt : ndarray or None
+        The amplitude the distributed capacitive load adds at the spot, as measured (m per
+        volt of ac drive per volt of ``V_dc - V_surf``); None without the lever width.
+    undetermined : tuple of (float, float, str)
+        Frequency ranges (Hz) where the calibration is undetermined, and why.
+    """
+
+    spot_position: float
+    calibration_factor: np.ndarray
+    d_eff: np.ndarray
+    g_elec: np.ndarray
+    d_eff_se: np.ndarray
+    d_eff_error_per_volt: np.ndarray | None
+    undetermined: tuple
+
+
+def surface_displacement(result: Deconvolution, lever: Cantilever, contact: Contact) -> SurfaceDisplacement:
+    """True surface displacement per volt at every frequency, for the lever's spot.
+
+    The measured ``d_eff`` (and ``G_elec``) are divided by the calibration factor ``C`` of
+    :func:`pfmdyn.analysis.spot.calibration`: the data are taken to be calibrated with a
+    deflection sensitivity (InvOLS) from a static force curve in the same contact, read at
+    the same spot.  Where ``|d ln C / d ln f| >`` :data:`CONDITION_LIMIT` (around a contact
+    resonance, a pole of ``C``, or a zero of the spot's response to the surface, a zero of
+    ``C``) the values are NaN and the range is listed with its reason.
+
+    Parameters
+    ----------
+    result : Deconvolution
+        From :func:`deconvolve`.
+    lever, contact : Cantilever, Contact
+        The probe, its ``spot_position``, and the contact (``k1``, ``k2`` or a policy).
+
+    Returns
+    -------
+    SurfaceDisplacement
+
+    Examples
+    --------
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, spot_position=0.8)
+    >>> fit = deconvolve([70.0] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    >>> round(float(surface_displacement(fit, lever, Contact(k1=200.0)).d_eff[0].real), 6)  # static: C = 1
+    2.0
+    """
+    f = result.frequency_hz
+    factor, error = calibration(lever, contact, f)
+    up, _ = calibration(lever, contact, f * (1 + _STEP))
+    down, _ = calibration(lever, contact, f * (1 - _STEP))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.log(np.abs(up / down)) / (2 * _STEP)            # d ln|C| / d ln f
+        bad = ~(np.abs(slope) <= CONDITION_LIMIT) | ~np.isfinite(factor) | (factor == 0)
+    ranges = []
+    for run in np.split(np.flatnonzero(bad), np.flatnonzero(np.diff(np.flatnonzero(bad)) > 1) + 1):
+        if run.size:
+            ranges.append((float(f[run[0]]), float(f[run[-1]]), _why(slope, factor, run)))
+    used = np.where(bad, np.nan, factor)
+    with np.errstate(invalid="ignore"):     # NaN where undetermined, on purpose
+        return SurfaceDisplacement(spot_position=float(lever.spot_position), calibration_factor=used,
+                                   d_eff=result.d_eff / used, g_elec=result.g_elec / used,
+                                   d_eff_se=result.d_eff_se / np.abs(used), d_eff_error_per_volt=error,
+                                   undetermined=tuple(ranges))
+
+
+_POLE = "a contact resonance (the lossless calibration has a pole there; the lever's damping decides)"
+_ZERO = "a zero of the spot's response to the surface (the spot reads almost none of its motion)"
+
+
+def _why(slope, factor, run) -> str:
+    """What makes the calibration undetermined over the samples ``run``: ``|C|`` rises into a pole
+    and falls out of it (``d ln|C|/d ln f`` from + to -), falls into a zero and rises out of it
+    (from - to +); the samples either side of the run are read too.  With no such turn in the data
+    (the run at an end of the sweep), a large ``|C|`` (it is 1 statically) means a pole.
+
+    >>> _why(np.array([5.0, 40.0, -30.0, -4.0]), np.array([3.0, 20.0, -9.0, -2.0]), np.array([1, 2]))[:18]
+    'a contact resonanc'
+    """
+    lo, hi = max(run[0] - 1, 0), min(run[-1] + 2, len(slope))
+    signs = np.sign(slope[lo:hi])
+    turns = signs[1:] - signs[:-1]
+    found = ([_POLE] if np.any(turns < 0) else []) + ([_ZERO] if np.any(turns > 0) else [])
+    if not found:
+        found = [_POLE if np.nanmax(np.abs(factor[run])) > 1.0 else _ZERO]
+    return " and ".join(found)
 
 
 def summary(result: Deconvolution, unit: str) -> str:

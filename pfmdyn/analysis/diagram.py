@@ -18,6 +18,14 @@ surface).  The capacitive force is attractive, so ``s = electrostatic_sign = -1`
 the bias enters linearly, the transfer coefficients are evaluated once per frequency and
 the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
 
+The paper reads the slope at the free end.  A lever with its laser spot elsewhere
+(``Cantilever.spot_position``, ``x_s/L``; or any other departure from the paper's probe: a
+set-back, heavy or tilted tip) is evaluated on the composed model read at the spot
+(:meth:`pfmdyn.Cantilever.response`, ``generated/detection.py``) with ``k2 = 0`` as in
+Eq. 23, and its slope is turned into a height with the same ``2L/3`` the instrument would use.
+The shares and the dominance do not depend on that factor; at a blind spot of the distributed
+load (``pfmdyn spot``) the non-local part vanishes.
+
 :func:`response_map` computes the map; :func:`pfmdyn.plots.diagram.plot_diagram` draws the
 amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour (Fig. 7) maps, and
 :mod:`pfmdyn.commands.diagram` is the ``pfmdyn diagram`` subcommand.
@@ -25,11 +33,11 @@ amplitude, phase, dominance (Fig. 6 b,d,f) and three-colour (Fig. 7) maps, and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever
+from ..cantilever import Cantilever, Contact
 from ..generated import formulas, paper_inputs
 
 __all__ = ["EPSILON_0", "SILICON_DENSITY", "TABLE1", "ResponseMap", "table1_cantilever",
@@ -205,11 +213,30 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force,
     frequency = np.atleast_1d(np.asarray(frequency_hz, dtype=float))
     if frequency.ndim != 1:
         raise ValueError("frequency_hz must be one-dimensional")
-    t = cantilever.frictionless_response(frequency, k1=k1)
+    if cantilever.is_paper_probe:
+        t = cantilever.frictionless_response(frequency, k1=k1)
+    else:       # read at the spot (or with the tip's extras): the composed model, k2 = 0 as in Eq. 23
+        beta = cantilever.beta(frequency)
+        if np.any(beta.real < _LOWEST_BETA):
+            raise ValueError(f"read at a spot away from the free end (or with a set-back, heavy or tilted tip) the "
+                             f"lowest frequency is {_lowest_frequency(cantilever):.4g} Hz (the closed forms lose "
+                             "precision below)")
+        t = replace(cantilever, tip_height=H).response(frequency, Contact(k1=k1))
     to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
     s = electrostatic_sign * to_height
     return (frequency, to_height * d_eff * t.vertical, s * local_force * t.local_force,
             s * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
+
+
+_LOWEST_BETA = 0.1
+"""Lowest ``Re beta`` of the composed model's closed forms (``generated/detection.py``,
+``generated/tip_setback.py``: no series branch; below, they cancel, about ``beta**-6`` of the
+largest term lost: 1e-8 of the distributed-load slope at 0.1 against the two-segment beam)."""
+
+
+def _lowest_frequency(cantilever) -> float:
+    """Frequency (Hz) at which ``beta`` of ``cantilever`` is :data:`_LOWEST_BETA` (``beta**2 ~ f``)."""
+    return cantilever.free_resonance * (_LOWEST_BETA / float(cantilever.beta(cantilever.free_resonance).real)) ** 2
 
 
 def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,
@@ -220,7 +247,9 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     Parameters
     ----------
     cantilever : Cantilever
-        E.g. from :func:`table1_cantilever`; its ``quality_factor`` sets the losses.
+        E.g. from :func:`table1_cantilever`; its ``quality_factor`` sets the losses and its
+        ``spot_position`` where the slope is read (1, the free end, as in the paper; elsewhere
+        the frequencies must lie where ``beta > 0.1``, above about 0.3 % of ``f1``).
     frequency_hz : array_like, 1-D
         Drive frequencies, Hz (> 0).
     bias_v : array_like, 1-D
@@ -230,7 +259,8 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     k1 : float, optional
         Vertical contact stiffness, N/m (Section IV.2: 1000).
     H : float, optional
-        Tip height = cantilever-surface separation, m (15 um).
+        Tip height = cantilever-surface separation, m (15 um); also the lever arm of a tilted
+        lever's contact (the cantilever's own ``tip_height`` is replaced by it).
     d_eff : float, optional
         Effective piezoelectric coefficient, m/V (5 pm/V); the sign is the domain's.
     local_force : float, optional
@@ -255,6 +285,9 @@ def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPE
     4.785
     >>> m.dominance()[0].round(3)
     array([1. , 0.8])
+    >>> spot = replace(c, spot_position=0.7)            # the laser spot at 0.7 L
+    >>> round(float(abs(response_map(spot, [1e3], [0.0], width=24e-6).total[0, 0])) * 1e12, 3)
+    4.354
     """
     frequency, piezo, local, nonlocal_ = _coefficients(
         cantilever, frequency_hz, width=width, k1=k1, H=H, d_eff=d_eff, local_force=local_force,
@@ -308,13 +341,18 @@ def low_frequency_crossover_bias(cantilever, *, width, k1=PAPER_K1, H=PAPER_TIP_
     The ratio of the electromechanical coefficient to the non-local one per volt, taken from
     the generated transfer functions at a frequency ``1e-6 f1`` (their series branch: the
     static limit of Eq. 23).  For ``k1 >> k`` it grows in proportion to ``k``; it is
-    infinite at ``k1 = 8k``, where the static non-local slope vanishes.
+    infinite at ``k1 = 8k``, where the static non-local slope vanishes.  The paper's probe
+    only: a lever read elsewhere than at its free end has no series branch to take the static
+    limit from (ValueError; its static blind spot is ``pfmdyn spot``'s).
 
     Examples
     --------
     >>> [round(low_frequency_crossover_bias(table1_cantilever(n), width=24e-6), 3) for n in "ABC"]
     [39.883, 1.388, 0.057]
     """
+    if not cantilever.is_paper_probe:
+        raise ValueError("the static crossover bias is the paper's probe's (spot at the free end, massless "
+                         "tip there, no tilt)")
     static = [1e-6 * cantilever.free_resonance]
     _, piezo, _, nonlocal_ = _coefficients(cantilever, static, width=width, k1=k1, H=H,
                                            d_eff=d_eff, local_force=0.0)

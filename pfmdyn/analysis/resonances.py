@@ -11,7 +11,7 @@ so the bare lever's scale follows from the first free root ``beta_1`` of the sam
 ``f_n = f1 (beta_n / beta_1)**2`` for every root ``beta_n`` (free or in contact).
 
 Proof.  The roots in ``beta`` are isolated and refined in ball arithmetic
-(:func:`pfmdyn.roots.certify.certify`) on ``characteristic_balls``, the generated
+(:func:`pfmdyn.derivations.certify.certify`) on ``characteristic_balls``, the generated
 characteristic in a math namespace: the trivial zero at ``beta = 0`` is cleared with exact
 rational series, every bracket holds exactly one simple zero, and the list is complete up to
 the highest root reported (``*_complete_below_hz``).  The parameters enter exactly as the
@@ -20,15 +20,19 @@ result with ``certified = False``, the reason, and no numbers.
 
 Damping (``quality_factor``, ``viscous_loss``, ``contact_loss``).  Each mode's complex
 frequency ``r_c = f_c / f1`` is the zero of the damped characteristic (the generated damping
-factors are analytic in ``r``), found by the secant method from the undamped root;
-``Q = |r_c| / (2 Im r_c)``, the damped frequency is ``f1 Re r_c``.  The amplitude-peak frequency
+factors are analytic in ``r``), followed from the undamped root as the losses grow from zero
+to the given ones (the secant method at each step: a heavily damped mode's root lies far from
+the undamped one, where a single secant run lands on another mode's root or on ``beta = 0``);
+``Q = |r_c| / (2 Im r_c)``, the damped frequency is ``f1 Re r_c``.  A mode whose root cannot be
+followed, or that is overdamped (the root reaches the imaginary axis: no oscillation), has no
+Q, damped or peak frequency: NaN, with the reason in ``Modes.undetermined``.  The amplitude-peak frequency
 is the maximum of the tip slope's magnitude near the mode for the drive an instrument uses:
 the surface displacement ``d1`` in contact, a uniform load ``q0`` for free modes.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import flint
@@ -36,10 +40,9 @@ import numpy as np
 from scipy.optimize import minimize_scalar, newton
 
 from ..cantilever import Cantilever, Contact
-from ..generated import damping, formulas, tip_setback
+from ..generated import formulas, tip_setback
 from ..generated.characteristic import FLINT
-from ..generated.tilt_rotation import rotated
-from ..roots.certify import CertificationError, certify
+from ..derivations.certify import CertificationError, certify
 
 __all__ = ["Modes", "ResonanceResult", "resonances"]
 
@@ -62,6 +65,8 @@ class Modes:
     q: tuple = ()
     damped_hz: tuple = ()
     peak_hz: tuple = ()
+    undetermined: tuple = ()
+    """Per mode with damping: why its Q, damped and peak frequencies are NaN ('' when they are not)."""
 
 
 @dataclass(frozen=True)
@@ -106,6 +111,8 @@ class ResonanceResult:
                 out[f"{prefix}_q"] = list(modes.q)
                 out[f"{prefix}_damped_hz"] = list(modes.damped_hz)
                 out[f"{prefix}_peak_hz"] = list(modes.peak_hz)
+                # null above is "undetermined": say why, per mode (None where determined).
+                out[f"{prefix}_undetermined"] = [why or None for why in modes.undetermined]
         return out
 
     def report(self) -> str:
@@ -126,7 +133,10 @@ class ResonanceResult:
             for i, f in enumerate(modes.hz):
                 row = f"{i + 1:4d}  {label:9s}  {f:<14.1f}"
                 if damped:
-                    row += f"   {modes.damped_hz[i]:<14.1f}   {modes.peak_hz[i]:<14.1f}  {modes.q[i]:.4g}"
+                    values = (modes.damped_hz[i], modes.peak_hz[i])
+                    row += "".join(f"   {v:<14.1f}" if math.isfinite(v) else f"   {'-':<14}" for v in values)
+                    row += f"  {modes.q[i]:.4g}" if math.isfinite(modes.q[i]) else "  -"
+                    row += f"  ({modes.undetermined[i]})" if modes.undetermined[i] else ""
                 lines.append(row.rstrip())
         proof = [f"{m.complete_below_hz:.1f} Hz ({label})" for label, m in (("free", self.free),
                                                                            ("contact", self.in_contact)) if m.hz]
@@ -137,20 +147,6 @@ class ResonanceResult:
 def _damped(lever: Cantilever, contact: Contact | None) -> bool:
     return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0
             or (contact is not None and contact.contact_loss > 0))
-
-
-def _springs(lever: Cantilever, contact: Contact | None, k1_factor=1.0) -> tuple:
-    """``(kvv, kll, kvl)`` of the contact in the lever's axes (zeros when free)."""
-    if contact is None:
-        return 0.0, 0.0, 0.0
-    return rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), lever.alpha)
-
-
-def _parameters(lever: Cantilever, contact: Contact | None) -> tuple:
-    """Arguments of the generated characteristic after ``beta``."""
-    H = lever._tip_height(contact) if contact is not None else (lever.tip_height or 0.0)
-    return (lever.spring_constant, *_springs(lever, contact), H, lever.length, lever.tip_mass_ratio,
-            lever.tip_position, lever.rho_g)
 
 
 def _fmpq(value: float) -> flint.fmpq:
@@ -201,8 +197,8 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         contact = None
     old = flint.ctx.prec
     try:
-        free_balls, free_top = _certified_roots(_parameters(lever, None), modes)
-        contact_balls, contact_top = (_certified_roots(_parameters(lever, contact), modes)
+        free_balls, free_top = _certified_roots(lever.model_parameters(None), modes)
+        contact_balls, contact_top = (_certified_roots(lever.model_parameters(contact), modes)
                                       if contact is not None else ([], None))
     except CertificationError as exc:
         return ResonanceResult(lever, contact, reason=str(exc))
@@ -221,8 +217,7 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         if not _damped(lever, contact):
             return out
         ratios = [float(formulas.frequency_from_beta(b, 1, beta1).mid()) for b in balls]      # f / f1
-        q, damped_hz, peak = _damped_modes(lever, where, ratios)
-        return Modes(out.hz, out.intervals_hz, out.complete_below_hz, q, damped_hz, peak)
+        return Modes(out.hz, out.intervals_hz, out.complete_below_hz, *_damped_modes(lever, where, ratios))
 
     return ResonanceResult(lever, contact, condition(free_balls, free_top, None),
                            condition(contact_balls, contact_top, contact) if contact is not None else Modes(),
@@ -230,14 +225,9 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
 
 
 def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
-    """The damped characteristic at (complex) ``r = f / f1``: the damping factors substituted."""
-    loss = contact.contact_loss if contact is not None else 0.0
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, 1.0 / lever.quality_factor, lever.viscous_loss, loss)
-    k, kvv, kll, kvl, H, L, mu, gamma, rho_g = _parameters(lever, contact)
-    kvv, kll, kvl = _springs(lever, contact, k1_f)
-    beta = formulas.beta_from_frequency(r, 1.0, lever.free_root())
-    return tip_setback.characteristic(beta * beta_f, k * k_f, kvv, kll, kvl, H, L,
-                                      mu * mu_f, gamma, rho_g)
+    """The damped characteristic at (complex) ``r = f / f1`` (the probe's own damping
+    substitution, :meth:`pfmdyn.Cantilever.model_arguments`)."""
+    return tip_setback.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):
@@ -247,33 +237,80 @@ def _slope(lever: Cantilever, contact: Contact | None, r):
     return response.vertical if contact is not None else response.distributed_load
 
 
-def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple]:
-    """(Q, damped Hz, peak Hz) of the modes near the undamped roots ``r0`` (NaN where not found)."""
+_STEPS = 24
+"""Steps of the losses from zero to the given ones along which each damped root is followed."""
+
+
+def _followed_root(lever: Cantilever, contact: Contact | None, rn: float) -> tuple[complex, str]:
+    """The damped root ``r_c`` continuing the undamped root ``rn``, and '' or why there is none."""
+    inv_q, g = 1.0 / lever.quality_factor, lever.viscous_loss
+    x = contact.contact_loss if contact is not None else 0.0
+    path = [complex(rn, 0.0)]
+    for s in (np.arange(1, _STEPS + 1) / _STEPS) ** 2:      # fine steps first, where the root turns
+        q = min(1.0 / (s * inv_q), 1e9) if inv_q else math.inf
+        step_lever = replace(lever, quality_factor=q, viscous_loss=s * g)
+        step_contact = replace(contact, contact_loss=s * x) if contact is not None else None
+        guess = path[-1] if len(path) < 2 else 2 * path[-1] - path[-2]       # linear extrapolation
+        try:
+            rc = complex(newton(lambda r, lv=step_lever, ct=step_contact: complex(_damped_characteristic(lv, ct, r)),
+                                guess, x1=guess + complex(1e-4, 1e-4) * rn, tol=1e-14 * rn, maxiter=100))
+        except (RuntimeError, ZeroDivisionError):
+            return complex(math.nan, math.nan), _lost(path[-1])
+        if not (math.isfinite(rc.real) and math.isfinite(rc.imag)) or abs(rc - path[-1]) > 0.5 * abs(path[-1]):
+            return complex(math.nan, math.nan), _lost(path[-1])
+        if rc.real <= 1e-6 * abs(rc):
+            return complex(math.nan, math.nan), "overdamped: the mode does not oscillate (no resonance)"
+        path.append(rc)
+    return path[-1], ""
+
+
+def _lost(last: complex) -> str:
+    """Why a followed root was lost, from the last one found (critical damping: Q = 1/2)."""
+    if last.imag and abs(last) / (2 * abs(last.imag)) < 1.0:
+        return f"overdamped or nearly: the root was lost at Q = {abs(last) / (2 * abs(last.imag)):.2g} (critical: 0.5)"
+    return "the damped root could not be followed from the undamped mode"
+
+
+def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple, tuple]:
+    """(Q, damped Hz, peak Hz, why undetermined) of the modes near the undamped roots ``r0``
+    (NaN and the reason where a mode has none)."""
     f1 = lever.free_resonance
-    q, damped_hz, peak = [], [], []
+    roots, why = [], []
     with np.errstate(all="ignore"):
         for rn in r0:
-            try:
-                # The secant method in the complex plane from the undamped root, nudged off the axis.
-                rc = complex(newton(lambda r: complex(_damped_characteristic(lever, contact, r)),
-                                    complex(rn, 1e-3 * rn), x1=complex(rn * (1 + 1e-3), 2e-3 * rn),
-                                    tol=1e-14 * rn, maxiter=100))
-            except (RuntimeError, ZeroDivisionError):
-                rc = complex(math.nan, math.nan)
-            q.append(abs(rc) / (2 * abs(rc.imag)) if rc.imag else math.inf)
-            damped_hz.append(f1 * rc.real)
-            peak.append(_peak(lever, contact, rc, rn) * f1)
-    return tuple(q), tuple(damped_hz), tuple(peak)
+            rc, reason = _followed_root(lever, contact, rn)
+            roots.append(rc)
+            why.append(reason)
+        for i, rc in enumerate(roots):      # two modes followed onto one root: neither is known
+            if any(j != i and abs(rc - other) <= 1e-9 * abs(rc) for j, other in enumerate(roots)):
+                why[i] = "two modes lead to the same damped root"
+        q = tuple(math.nan if w else abs(rc) / (2 * abs(rc.imag)) if rc.imag else math.inf
+                  for rc, w in zip(roots, why))
+        damped_hz = tuple(math.nan if w else f1 * rc.real for rc, w in zip(roots, why))
+        peak = [math.nan if w else _peak(lever, contact, rc, rn) * f1 for rc, rn, w in zip(roots, r0, why)]
+    # A heavily damped mode may have no amplitude maximum of its own: none in its window,
+    # or the one maximum two overlapping modes share.
+    shared = [any(j != i and abs(p - other) <= 1e-6 * p for j, other in enumerate(peak)) for i, p in enumerate(peak)]
+    for i, p in enumerate(peak):
+        if not why[i] and (not math.isfinite(p) or shared[i]):
+            peak[i] = math.nan
+            why[i] = "no amplitude peak of its own (too heavily damped); Q and damped frequency stand"
+    return q, damped_hz, tuple(peak), tuple(why)
 
 
 def _peak(lever: Cantilever, contact: Contact | None, rc: complex, rn: float) -> float:
-    """``r`` of the slope magnitude's maximum near the mode (bounded search over half-widths)."""
-    centre = rc.real if math.isfinite(rc.real) else rn
-    width = max(abs(rc.imag), 1e-9 * rn) if math.isfinite(rc.imag) else 1e-3 * rn
+    """``r`` of the slope magnitude's maximum near the mode (bounded search over half-widths);
+    NaN when the window holds no maximum."""
+    centre, width = rc.real, max(abs(rc.imag), 1e-9 * rn)
     lo, hi = max(centre - 4 * width, 0.5 * centre), centre + 4 * width
     grid = np.linspace(lo, hi, 81)
     magnitude = np.abs(_slope(lever, contact, grid))
-    i = int(np.argmax(magnitude))
+    # The local maximum nearest the mode (a wide window of a damped mode may hold a neighbour's
+    # higher peak); none inside the window: no peak of its own.
+    inner = np.flatnonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] >= magnitude[2:])) + 1
+    if inner.size == 0:
+        return math.nan
+    i = int(inner[np.argmin(np.abs(grid[inner] - centre))])
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
     best = minimize_scalar(lambda r: -abs(complex(_slope(lever, contact, np.array([r]))[0])), bounds=(a, b),
                            method="bounded", options={"xatol": 1e-13 * centre})

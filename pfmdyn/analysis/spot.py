@@ -7,7 +7,7 @@ gives, for one lever in contact at one frequency:
 
 * the **electrostatic blind spots**: every ``x_s/L`` in ``(0, 1]`` where the slope response
   to the uniform capacitive load ``q0`` vanishes, certified with ball arithmetic (complete,
-  none twice: :func:`pfmdyn.roots.certify.zeros_in` on the generated numerator);
+  none twice: :func:`pfmdyn.derivations.certify.zeros_in` on the generated numerator);
 * the **electrostatic-to-electromechanical slope ratio** ``theta_q0 / theta_d1`` along the
   lever;
 * the **static sensitivity** ``S = u_tip / (L theta(x_s))`` (``2/3`` at the end of a free
@@ -32,12 +32,12 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from ..generated import detection, formulas, tilt_rotation
+from ..generated import detection, formulas
 from ..generated.characteristic import FLINT
-from ..roots.certify import CertificationError, zeros_in
+from ..derivations.certify import CertificationError, zeros_in
 
 __all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_beta", "blind_spots", "slope_along",
-           "static_limit", "sensitivities", "spot_analysis", "ratio_map", "EPSILON_0"]
+           "static_limit", "sensitivities", "calibration", "spot_analysis", "ratio_map", "EPSILON_0"]
 
 EPSILON_0 = 8.8541878128e-12
 """Vacuum permittivity (F/m), for the capacitive load per volt."""
@@ -58,17 +58,14 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height (--tip-height)")
-    kvv, kll, kvl = tilt_rotation.rotated(contact.k1, contact.k2_of(contact.k1), lever.alpha)
-    return {"k": lever.spring_constant, "kvv": float(kvv), "kll": float(kll), "kvl": float(kvl),
-            "H": lever.tip_height, "L": lever.length, "mu": lever.tip_mass_ratio, "gamma": lever.tip_position,
-            "rho_g": lever.rho_g}
+    return {name: float(value) for name, value in zip(detection.PARAMETERS, lever.model_parameters(contact))}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:
     """The parameters of the blind-spot functions (``kvv/k``, ``kll H**2/(k L**2)``, ``kvl H/(k L)``)."""
     p = parameters(lever, contact)
     k, H, L = p["k"], p["H"], p["L"]
-    return {"kvv_over_k": p["kvv"] / k, "kll_ratio": p["kll"] * H**2 / (k * L**2),
+    return {"kvv_over_k": p["kvv"] / k, "kll_ratio": float(formulas.k2_ratio(p["kll"], k, H, L)),
             "kvl_ratio": p["kvl"] * H / (k * L), "mu": p["mu"], "gamma": p["gamma"], "rho_g": p["rho_g"]}
 
 
@@ -119,7 +116,7 @@ def blind_spots(lever: Cantilever, contact: Contact, beta: float, digits: int = 
 
     Zeros of the generated numerator (the denominator does not depend on the spot) on
     ``(0, gamma]`` (spot before the tip; the clamp's zero at 0 is excluded by proof) and on
-    ``[gamma, 1]`` (beyond it), by :func:`pfmdyn.roots.certify.zeros_in` on a Taylor model
+    ``[gamma, 1]`` (beyond it), by :func:`pfmdyn.derivations.certify.zeros_in` on a Taylor model
     (:func:`_taylor_model`).  A failed proof (a double zero, a zero exactly at the tip or at
     the end) gives ``certified = False`` with the reason and no positions.
 
@@ -257,6 +254,12 @@ class SpotResult:
         return out
 
 
+MAX_BETA = 200.0
+"""Highest dimensionless frequency analysed (about the 64th mode): beyond it an Euler-Bernoulli
+lever is no model of a real one, and the blind-spot proof's Taylor degree (grows with beta)
+makes a run take minutes."""
+
+
 def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
                   positions=201) -> SpotResult:
     """Blind spots, the q0/d1 slope ratio along the lever and, at the lever's ``spot_position``,
@@ -273,22 +276,68 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
     """
     if not (math.isfinite(frequency) and frequency > 0):
         raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
+    if not (contact.k1 or 0.0) > 0:
+        # With no contact spring the surface does not drive the tip: no d1 response, no force curve.
+        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m (--k1), got {contact.k1}")
     beta = float(lossless_beta(lever, frequency))
+    if beta > MAX_BETA:
+        top = frequency * (MAX_BETA / beta) ** 2
+        raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
+                        f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
+                        "for this lever (--frequency)")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position
     sens = sensitivities(lever, contact, spot)
     at = slope_along(lever, contact, beta, spot)
-    invols = sens["contact"] * lever.length        # metres of d1 per unit slope, static
-    error = None
-    if lever.width is not None:
-        q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, lever.width, lever.tip_height))
-        error = complex(invols * at[3] * q_per_volt)
+    factor, error = calibration(lever, contact, frequency, sensitivity=sens["contact"])
     return SpotResult(lever=lever, contact=contact, frequency=float(frequency), beta=beta,
                       blind_spot=blind_spots(lever, contact, beta), positions=grid, ratio=theta[3] / theta[0],
                       spot_position=float(spot), free_sensitivity=float(sens["free"]),
-                      contact_sensitivity=float(sens["contact"]), calibration_factor=complex(invols * at[0]),
-                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]), d_eff_error_per_volt=error)
+                      contact_sensitivity=float(sens["contact"]), calibration_factor=complex(factor),
+                      paper_calibration_factor=complex(2 * lever.length / 3 * at[0]),
+                      d_eff_error_per_volt=None if error is None else complex(error))
+
+
+def calibration(lever: Cantilever, contact: Contact, frequency, *, sensitivity=None) -> tuple:
+    """Calibration factor and d_eff error per volt at the lever's ``spot_position``, per frequency.
+
+    The factor is the measured amplitude over the true surface displacement ``d1`` when the
+    deflection sensitivity (InvOLS) comes from a static force curve on this contact read at
+    the same spot: ``L S_contact theta_d1(x_s, omega)`` (1 in the static limit).  The d_eff
+    error is the amplitude the distributed capacitive load (parallel plate over the tip
+    height, needs the lever ``width``) adds at the spot, in metres per volt of the ac drive per
+    volt of ``V_dc - V_surf``; None without the width.  Lossless lever, as everywhere here: at a
+    contact resonance the factor has a pole, at a zero of the spot's ``d1`` response a zero.
+
+    Parameters
+    ----------
+    lever, contact : Cantilever, Contact
+        The probe (its ``spot_position`` is the spot) and the contact (``k1`` needed).
+    frequency : float or array_like
+        Drive frequencies (Hz, > 0).
+    sensitivity : float, optional
+        :func:`sensitivities` ``["contact"]`` at the spot, if already known.
+
+    Returns
+    -------
+    factor : ndarray (real)
+    error : ndarray (real) or None
+
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, spot_position=0.8)
+    >>> factor, error = calibration(lever, Contact(k1=200.0), [70.0, 20e3])
+    >>> [round(float(c), 4) for c in factor], error is None
+    ([1.0, 0.9965], True)
+    """
+    if sensitivity is None:
+        sensitivity = sensitivities(lever, contact, lever.spot_position)["contact"]
+    at = slope_along(lever, contact, lossless_beta(lever, np.asarray(frequency, float)), lever.spot_position)
+    invols = float(sensitivity) * lever.length        # metres of d1 per unit slope, static
+    error = None
+    if lever.width is not None:
+        q_per_volt = float(formulas.capacitive_load_per_volt2(EPSILON_0, lever.width, lever.tip_height))
+        error = np.real(invols * at[3] * q_per_volt)
+    return np.real(invols * at[0]), error
 
 
 def ratio_map(lever: Cantilever, contact: Contact, frequencies, positions) -> np.ndarray:

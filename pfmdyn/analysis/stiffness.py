@@ -46,6 +46,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..generated import formulas
+from ..names import checked
 from ..generated.characteristic import BETA1_FREE, elastic
 
 __all__ = ["StiffnessResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
@@ -80,10 +81,10 @@ class BranchProof:
 
 @dataclass(frozen=True)
 class StiffnessResult:
-    """k1 (N/m) with its standard uncertainty, k1/k, the z used and the branch limits (arrays)."""
+    """k1 (N/m) with its standard uncertainty ``k1_stderr``, k1/k, the z used and the branch limits (arrays)."""
 
-    k1_n_per_m: np.ndarray
-    k1_uncertainty_n_per_m: np.ndarray
+    k1: np.ndarray
+    k1_stderr: np.ndarray
     k1_over_k: np.ndarray
     z: np.ndarray
     proof: BranchProof
@@ -112,13 +113,13 @@ def _a_and_slope(z, b):
     return a, -(fa.imag + a * fb.imag) / (_STEP * fb.real)
 
 
-def z_from_frequency(frequency_hz, free_resonance_hz):
+def z_from_frequency(frequency, free_resonance):
     """``z = z1 sqrt(f/f1)``: the dimensionless root of a resonance at ``f`` (Hz).
 
     >>> round(float(z_from_frequency(4e5, 1e5)), 10)
     3.7502081374
     """
-    return formulas.beta_from_frequency(np.asarray(frequency_hz, dtype=float), np.asarray(free_resonance_hz, dtype=float),
+    return formulas.beta_from_frequency(np.asarray(frequency, dtype=float), np.asarray(free_resonance, dtype=float),
                                         BETA1_FREE)
 
 
@@ -231,19 +232,20 @@ def out_of_range_message(ratio: float, mode: int, soft_ratio: float, stiff_ratio
             "being a higher mode could explain it")
 
 
-def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2_ratio: float = 0.0,
-                      contact_uncertainty_hz=0.0, free_uncertainty_hz=0.0, spring_constant_uncertainty=0.0,
+def contact_stiffness(contact_resonance, free_resonance, spring_constant, *, mode: int = 1, k2_ratio: float = 0.0,
+                      contact_uncertainty=0.0, free_resonance_uncertainty=0.0, spring_constant_uncertainty=0.0,
                       out_of_range: str = "raise", certify_root: bool = False) -> StiffnessResult:
     """Vertical contact stiffness k1 (N/m) from contact resonances of one mode, vectorised.
 
     Parameters
     ----------
-    contact_hz : array_like, contact resonance(s) of mode ``mode`` (Hz), any shape (a map)
-    free_hz : first free resonance (Hz), broadcast against ``contact_hz``
+    contact_resonance : array_like, contact resonance(s) of mode ``mode`` (Hz), any shape (a map)
+    free_resonance : first free resonance (Hz), broadcast against ``contact_resonance``
     spring_constant : k (N/m), broadcast
     mode : flexural mode number of the contact resonance (1-based)
     k2_ratio : longitudinal contact stiffness ``k2 H**2/(k L**2)`` held fixed (default 0)
-    contact_uncertainty_hz, free_uncertainty_hz, spring_constant_uncertainty : standard uncertainties
+    contact_uncertainty, free_resonance_uncertainty, spring_constant_uncertainty : standard uncertainties
+        (Hz, Hz, N/m)
     out_of_range : ``"raise"`` (a :class:`UserError` naming the effect) or ``"nan"`` (NaN there, for maps)
     certify_root : also compute the certified root at the recovered k1 (scalar input only)
 
@@ -253,10 +255,10 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
 
     Examples
     --------
-    >>> r = contact_stiffness(300e3, 75e3, 2.0, contact_uncertainty_hz=100.0)
-    >>> round(float(r.k1_n_per_m), 4), round(float(r.k1_uncertainty_n_per_m), 4)
+    >>> r = contact_stiffness(300e3, 75e3, 2.0, contact_uncertainty=100.0)
+    >>> round(float(r.k1), 4), round(float(r.k1_stderr), 4)
     (109.7483, 0.393)
-    >>> contact_stiffness([300e3, 350e3], 75e3, 2.0, out_of_range="nan").k1_n_per_m.round(3).tolist()
+    >>> contact_stiffness([300e3, 350e3], 75e3, 2.0, out_of_range="nan").k1.round(3).tolist()
     [109.748, nan]
     """
     if out_of_range not in ("raise", "nan"):
@@ -265,8 +267,8 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
         raise UserError(f"mode must be a positive integer, got {mode!r}")
     if not (math.isfinite(k2_ratio) and k2_ratio >= 0):
         raise UserError(f"k2 ratio must be non-negative and finite, got {k2_ratio}")
-    fc = np.asarray(contact_hz, dtype=float)
-    f1 = np.asarray(free_hz, dtype=float)
+    fc = np.asarray(contact_resonance, dtype=float)
+    f1 = np.asarray(free_resonance, dtype=float)
     k = np.asarray(spring_constant, dtype=float)
     for name, value in (("contact frequency", fc), ("free resonance", f1), ("spring constant", k)):
         bad = ~(np.isfinite(value) & (value > 0))
@@ -283,7 +285,7 @@ def contact_stiffness(contact_hz, free_hz, spring_constant, *, mode: int = 1, k2
                                                   f"k2 H^2/(k L^2) = {k2_ratio:g}"))
         zc = np.where(inside, z, 0.5 * (proof.soft_z + proof.stiff_z))
         a, dadz = _a_and_slope(zc, float(k2_ratio))
-        rel_z = 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc, np.asarray(free_uncertainty_hz) / f1)
+        rel_z = 0.5 * np.hypot(np.asarray(contact_uncertainty) / fc, np.asarray(free_resonance_uncertainty) / f1)
         k1 = a * k
         sigma = np.hypot(k * dadz * zc * rel_z, a * np.asarray(spring_constant_uncertainty))
         k1, sigma, a = (np.where(inside, v, np.nan) for v in (k1, sigma, a))
@@ -301,14 +303,12 @@ def mindlin_k2_over_k1(poisson_ratio):
     >>> round(mindlin_k2_over_k1(0.3), 6)
     0.823529
     """
-    if not 0 <= poisson_ratio < 0.5 + 1e-12:
-        raise UserError(f"Poisson's ratio must be in [0, 0.5], got {poisson_ratio}")
-    return formulas.mindlin_k2_over_k1(poisson_ratio)
+    return formulas.mindlin_k2_over_k1(checked("poisson", poisson_ratio))
 
 
-def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k1: float, length_m: float,
-                              tip_height_m: float, mode: int = 1, contact_uncertainty_hz=0.0,
-                              free_uncertainty_hz=0.0, out_of_range: str = "raise") -> StiffnessResult:
+def coupled_contact_stiffness(contact_resonance, free_resonance, spring_constant, *, k2_over_k1: float,
+                              length: float, tip_height: float, mode: int = 1, contact_uncertainty=0.0,
+                              free_resonance_uncertainty=0.0, out_of_range: str = "raise") -> StiffnessResult:
     """k1 when the longitudinal stiffness follows it, ``k2 = c k1`` (e.g. Mindlin), vectorised.
 
     Then ``b = c (H/L)**2 a`` and ``F = P + a (Q + c' R) + c' a**2 S = 0`` (``c' = c H**2/L**2``):
@@ -317,17 +317,17 @@ def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k
     value: the path is not affine, so uniqueness is verified, not assumed); two positive
     roots are reported as ambiguous (NaN or an error).
 
-    >>> r = coupled_contact_stiffness(5.0 * 60e3, 60e3, 1.0, k2_over_k1=0.8235, length_m=240e-6, tip_height_m=15e-6)
-    >>> round(float(r.k1_n_per_m), 3)
+    >>> r = coupled_contact_stiffness(5.0 * 60e3, 60e3, 1.0, k2_over_k1=0.8235, length=240e-6, tip_height=15e-6)
+    >>> round(float(r.k1), 3)
     394.337
     """
     if out_of_range not in ("raise", "nan"):
         raise ValueError("out_of_range must be 'raise' or 'nan'")
-    if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length_m, tip_height_m)):
+    if not all(v > 0 and math.isfinite(v) for v in (k2_over_k1, length, tip_height)):
         raise UserError("k2/k1, lever length and tip height must be positive and finite")
-    c = formulas.k2_ratio(k2_over_k1, 1.0, tip_height_m, length_m)     # b per unit a = k1/k
+    c = formulas.k2_ratio(k2_over_k1, 1.0, tip_height, length)     # b per unit a = k1/k
     soft, stiff = coupled_limits(max(4, mode + 1))
-    fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_hz, free_hz, spring_constant))
+    fc, f1, k = (np.asarray(v, dtype=float) for v in (contact_resonance, free_resonance, spring_constant))
     with np.errstate(invalid="ignore", divide="ignore", under="ignore"):
         z = z_from_frequency(fc, f1)
         p, q, r, s_ = _parts(z)
@@ -349,15 +349,15 @@ def coupled_contact_stiffness(contact_hz, free_hz, spring_constant, *, k2_over_k
         a = np.where(positive[0], roots[0], roots[1])
         fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=c * a).imag / _STEP
         dadz = -fz / (lin + 2 * quad * a)
-        sigma = k * np.abs(dadz) * z * 0.5 * np.hypot(np.asarray(contact_uncertainty_hz) / fc,
-                                                      np.asarray(free_uncertainty_hz) / f1)
+        sigma = k * np.abs(dadz) * z * 0.5 * np.hypot(np.asarray(contact_uncertainty) / fc,
+                                                      np.asarray(free_resonance_uncertainty) / f1)
         k1, sigma, a = (np.where(inside, v, np.nan) for v in (a * k, sigma, a))
     proof = BranchProof(mode, float("nan"), float(soft[mode - 1]), float(stiff[mode - 1]),
                         float(_ratio(soft[mode - 1])), float(_ratio(stiff[mode - 1])))
     return StiffnessResult(k1, sigma, a, z, proof)
 
 
-def reduced_modulus(k1, tip_radius_m, load_n):
+def reduced_modulus(k1, tip_radius, normal_load):
     """Reduced modulus E* (Pa) of a Hertz contact of stiffness k1 (N/m), tip radius R (m), load P (N).
 
     Inverts ``k1 = (6 E*^2 R P)^(1/3)`` (derivations/contact_mechanics.py: hertz_stiffness),
@@ -366,13 +366,13 @@ def reduced_modulus(k1, tip_radius_m, load_n):
     >>> round(float(reduced_modulus(100.0, 25e-9, 100e-9)), -6)   # Pa
     8165000000.0
     """
-    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius, normal_load))
     if np.any(r <= 0) or np.any(p <= 0):
         raise UserError("tip radius and load must be positive (m, N)")
     return formulas.reduced_modulus(k1, r, p)
 
 
-def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius_m, load_n):
+def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius, normal_load):
     """Standard uncertainty of :func:`reduced_modulus` from that of k1 (R and P taken as exact).
 
     The slope dE*/dk1 is the complex-step derivative of the generated Hertz inversion, so it
@@ -382,7 +382,7 @@ def reduced_modulus_uncertainty(k1, k1_uncertainty, tip_radius_m, load_n):
     >>> round(float(de / e), 6)   # E* ~ k1**(3/2): 1.5 % per 1 % of k1
     0.015
     """
-    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius_m, load_n))
+    k1, r, p = (np.asarray(v, dtype=float) for v in (k1, tip_radius, normal_load))
     reduced_modulus(k1, r, p)                       # same input checks
     h = 1e-20 * np.maximum(np.abs(k1), 1.0)
     slope = np.imag(formulas.reduced_modulus(k1 + 1j * h, r, p)) / h

@@ -151,7 +151,7 @@ def instrument_resonances(path, overrides: dict | None = None):
 
     A thermal tune's free modes are fitted (:func:`fit_thermal_peaks`); any other file gives
     the resonances its instrument stored (:func:`pfmdyn.io.instruments.resonance_table`).
-    ``overrides`` (field keys, e.g. ``tip_height_m``) win over the file.
+    ``overrides`` (field names, e.g. ``tip_height``) win over the file.
 
     >>> instrument_resonances("scan.xyz")
     Traceback (most recent call last):

@@ -6,9 +6,10 @@ import csv
 import numpy as np
 
 from ..errors import UserError
+from ..io.results import check_writable
 from ..plots.branches import plot_branches
 from ..roots.branches import SWEPT, frequency_ratio, branch_limits, crossovers, sweep
-from ..roots.certify import CertificationError
+from ..derivations.certify import CertificationError
 from .roots import parse_parameters, positive_int
 
 
@@ -58,9 +59,11 @@ def run(args) -> int:
     indentation: crossover of mode 2 at k1_over_k = 47.9 (beta = 5.881)
     0
     """
+    check_writable(args.out, figure=True)
+    check_writable(args.csv)
     if args.family not in SWEPT:
         raise UserError(f"no branches for {args.family!r}; choose from {', '.join(SWEPT)}")
-    points, modes = positive_int(args.points, "--points"), positive_int(args.modes, "--modes")
+    points, modes = positive_int(args.points, "--points", 100_000), positive_int(args.modes, "--modes", 50)
     if points < 2:
         raise UserError("--points must be at least 2")
     fixed = {}

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
 from ..errors import UserError
+from ..io.results import check_writable
 from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
 from . import flags
@@ -21,10 +23,11 @@ def add_arguments(parser) -> None:
                         help="Table 1 cantilever, or 'custom' with --spring-constant --length --width --thickness "
                              "(SI: N/m, m)")
     flags.add_lever(parser, _CUSTOM)
-    parser.add_argument("--quality-factor", type=float, default=math.inf,
-                        help="Q of the loss factor 1/Q (default: lossless, as in the paper)")
-    parser.add_argument("--k1", type=float, default=PAPER_K1, help="contact stiffness, N/m (1000)")
-    parser.add_argument("--tip-height", type=float, default=PAPER_TIP_HEIGHT, help=f"H, m ({PAPER_TIP_HEIGHT:g})")
+    flags.add_lever(parser, ("spot_position",))
+    # The paper's values where the diagram needs a number (Figs. 6-7); the lossless lever as in the paper.
+    flags.add_damping(parser, ("quality_factor",), defaults={"quality_factor": (None, "lossless, as in the paper")})
+    flags.add_contact(parser, ("k1",), defaults={"k1": (PAPER_K1, f"{PAPER_K1:g}, the paper's")})
+    flags.add_lever(parser, ("tip_height",), defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
     parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF, help=f"d_eff, m/V ({PAPER_D_EFF:g})")
     parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
                         help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
@@ -45,8 +48,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
 
 
+MAX_POINTS = 2e7
+"""Largest diagram (frequencies x biases): a few GB of complex responses and shares."""
 _CUSTOM = ("spring_constant", "length", "width", "thickness", "density")
 """The custom lever's flags (:mod:`pfmdyn.names`, SI)."""
+
+
+def _quality_factor(args) -> float:
+    """``--quality-factor``, checked; lossless (inf) when not given."""
+    return flags.given(args, ("quality_factor",)).get("quality_factor", math.inf)
 
 
 def _cli_cantilever(args):
@@ -60,7 +70,7 @@ def _cli_cantilever(args):
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
                 thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
-                quality_factor=args.quality_factor)
+                quality_factor=_quality_factor(args))
         except ValueError as exc:
             raise UserError(str(exc)) from None
         return lever, custom["width"]
@@ -70,7 +80,7 @@ def _cli_cantilever(args):
     if given:
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
     try:
-        lever = table1_cantilever(args.cantilever, quality_factor=args.quality_factor)
+        lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
     except ValueError as exc:
         raise UserError(str(exc)) from None
     return lever, TABLE1[args.cantilever][0]
@@ -89,32 +99,43 @@ def _write_csv(path, response: ResponseMap) -> None:
 def run(args) -> int:
     """Compute the diagram, write the PNG (and CSV)."""
     lever, width = _cli_cantilever(args)
+    lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
+    contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
+    if not contact["k1"] > 0:
+        raise UserError(f"--k1 must be > 0 N/m: the diagram is of the lever in contact, got {contact['k1']:g}")
+    for option, value in (("--d-eff", args.d_eff), ("--local-force", args.local_force),
+                          ("--surface-potential", args.surface_potential)):
+        if not math.isfinite(value):
+            raise UserError(f"{option} must be a finite number, got {value}")
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
     if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):
         raise UserError(f"need --vmin < --vmax (finite), got {args.vmin:g} and {args.vmax:g} V")
     if args.frequency_points < 2 or args.bias_points < 2:
         raise UserError("--frequency-points and --bias-points must be at least 2")
+    if args.frequency_points * args.bias_points > MAX_POINTS:
+        raise UserError(f"--frequency-points x --bias-points must be at most {MAX_POINTS:g} (a diagram of "
+                        f"{args.frequency_points * args.bias_points:g} points would not fit in memory)")
     if args.out.suffix.lower() != ".png":
         raise UserError(f"--out must name a .png file, got {str(args.out)!r}")
-    for path in (args.out, args.csv):
-        if path is not None and not path.parent.is_dir():
-            raise UserError(f"directory {str(path.parent)!r} does not exist")
+    check_writable(args.out, figure=True)
+    check_writable(args.csv)
     spacing = np.geomspace if args.log_frequency else np.linspace
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)
     try:
-        response = response_map(lever, frequency, bias, width=width, k1=args.k1,
-                                H=args.tip_height, d_eff=args.d_eff, local_force=args.local_force,
+        response = response_map(lever, frequency, bias, width=width, k1=contact["k1"],
+                                H=contact["tip_height"], d_eff=args.d_eff, local_force=args.local_force,
                                 surface_potential_v=args.surface_potential,
                                 electrostatic_sign=args.electrostatic_sign)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
-             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {args.k1:g} N/m\n"
-             f"H = {args.tip_height * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
-             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {args.quality_factor:g}")
+             f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {contact['k1']:g} N/m\n"
+             f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
+             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
+             + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
     plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
     print(f"wrote {args.out}")
     if args.csv is not None:

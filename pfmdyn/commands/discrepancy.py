@@ -12,9 +12,9 @@ from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
 from ..discrepancy.inputs import read
-from ..io.results import dumps, write_json
+from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
-from ..names import canonical, flag
+from ..names import flag
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
 
 
@@ -37,10 +37,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
 
 
-OVERRIDES = tuple((flag(canonical(key)), key, what) for key, what in (
-    ("spring_constant_n_per_m", "cantilever spring constant, N/m"), ("length_m", "cantilever length, m"),
-    ("width_m", "cantilever width, m"), ("tip_height_m", "tip height, m"),
-    ("free_resonance_hz", "first free flexural resonance, Hz")))
+OVERRIDES = tuple((flag(key), key, what) for key, what in (
+    ("spring_constant", "cantilever spring constant, N/m"), ("length", "cantilever length, m"),
+    ("width", "cantilever width, m"), ("tip_height", "tip height, m"),
+    ("free_resonance", "first free flexural resonance, Hz")))
 
 
 def _analyse(data, args):
@@ -51,6 +51,8 @@ def _analyse(data, args):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
+    check_writable(args.json)
+    check_writable(args.plot, figure=True)
     data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
     stride = 1
     if isinstance(data, SpectrumData):
@@ -75,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.json:
         write_json(args.json, report.to_dict())
     if args.plot:
-        # Last: a path the plot cannot take costs the figure, not the report.
+        # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         try:
             plot(data, report).savefig(args.plot, dpi=120)

@@ -8,41 +8,57 @@ have, and a bad one is a one-line error naming the flag.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
-from ..io.record import MissingFieldError
+from ..errors import UserError
+from ..io.record import FIELDS, MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 
-__all__ = ["add_lever", "add_contact", "add_damping", "given", "cantilever", "contact", "option_hint"]
+__all__ = ["add", "add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
 
 
-def _add(parser, names, required=()):
+def add(parser, names, required=(), defaults=None) -> None:
+    """Flags of any quantities of :mod:`pfmdyn.names` (``defaults`` as in :func:`add_lever`).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add(p, ("tip_radius",))
+    >>> p.parse_args(["--tip-radius", "2e-8"]).tip_radius
+    '2e-8'
+    """
+    defaults = defaults or {}
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        parser.add_argument(q.flag, dest=name, default=None, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
-                            required=name in required, help=f"{q.meaning} ({q.symbol}{unit})")
+        value, why = defaults.get(name, (None, ""))
+        parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
+                            required=name in required,
+                            help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
 
 
-def add_lever(parser, names=LEVER, required=()) -> None:
+def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
     """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``).
 
+    ``defaults`` maps a name to ``(value, words)``: the value taken when the flag is not given
+    (checked like a given one by :func:`given`) and how ``--help`` states it.
+
     >>> import argparse
-    >>> p = argparse.ArgumentParser(); add_lever(p)
-    >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position
-    '0.93'
+    >>> p = argparse.ArgumentParser(); add_lever(p, defaults={"tip_height": (1e-5, "1e-05, the paper's")})
+    >>> p.parse_args(["--tip-position", "0.93", "--tilt", "12"]).tip_position, p.parse_args([]).tip_height
+    ('0.93', 1e-05)
     """
-    _add(parser, names, required)
+    add(parser, names, required, defaults)
 
 
-def add_contact(parser, names=CONTACT, required=()) -> None:
-    """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``)."""
-    _add(parser, names, required)
+def add_contact(parser, names=CONTACT, required=(), defaults=None) -> None:
+    """Flags of the contact (``--k1 --k2 --k2-over-k1 --poisson``); ``defaults`` as in :func:`add_lever`."""
+    add(parser, names, required, defaults)
 
 
-def add_damping(parser, names=DAMPING) -> None:
-    """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``)."""
-    _add(parser, names)
+def add_damping(parser, names=DAMPING, defaults=None) -> None:
+    """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``);
+    ``defaults`` as in :func:`add_lever`."""
+    add(parser, names, defaults=defaults)
 
 
 def given(args, names) -> dict[str, float]:
@@ -62,6 +78,21 @@ def given(args, names) -> dict[str, float]:
         if value is not None:
             out[name] = checked(name, value, NAMES[name].flag)
     return out
+
+
+def require(values: dict, names, file=None) -> None:
+    """A one-line error for the first of ``names`` with no value: what is missing, where, which flag.
+
+    >>> require({"length": 2e-4}, ("length", "tip_height"), "scan.ibw")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: no tip height in scan.ibw: give --tip-height
+    """
+    for name in names:
+        if values.get(name) is None:
+            what = FIELDS[name][0] if name in FIELDS else name.replace("_", " ")
+            where = f" in {Path(file).name}" if file else ""
+            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
 
 
 def cantilever(args, found: dict | None = None) -> Cantilever:
@@ -97,10 +128,10 @@ def option_hint(error: Exception) -> str:
     The readers name the field (:class:`pfmdyn.io.record.MissingFieldError`); only the
     commands know flags.
 
-    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height_m"))
+    >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
     ': give --tip-height'
-    >>> option_hint(ValueError("x"))
-    ''
+    >>> option_hint(MissingFieldError("no contact resonance in a.ibw", "contact_resonance")), option_hint(ValueError("x"))
+    ('', '')
     """
     name = canonical(error.field) if isinstance(error, MissingFieldError) else None
-    return f": give {NAMES[name].flag}" if name else ""
+    return f": give {NAMES[name].flag}" if name and NAMES[name].option else ""

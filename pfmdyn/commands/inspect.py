@@ -8,7 +8,7 @@ from __future__ import annotations
 
 
 from ..io.instruments import FIELDS, InstrumentRecord, read_instrument
-from ..io.results import write_json
+from ..io.results import check_writable, write_json
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -30,7 +30,7 @@ def report(record: InstrumentRecord) -> str:
 
     >>> from pfmdyn.io.instruments import Channel, make_record
     >>> r = make_record("a.ibw", "image", "Asylum", [Channel("HeightRetrace", "m", (2, 2))],
-    ...                 {"spring_constant_n_per_m": 0.5})
+    ...                 {"spring_constant": 0.5})
     >>> print(report(r).splitlines()[0])
     a.ibw: image (Asylum)
     """
@@ -51,6 +51,7 @@ def report(record: InstrumentRecord) -> str:
 
 def run(args) -> int:
     """Read the file, print the report, write JSON if asked."""
+    check_writable(args.json)
     record = read_instrument(args.file)
     print(report(record))
     if args.json:

@@ -22,6 +22,7 @@ import math
 
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT
+from ..names import checked
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -111,7 +112,8 @@ def run(args) -> int:
     """Fit the map and print a summary line."""
     import os
     from ..maps.driver import check_scheduler, open_map, run_map
-    for name in ("block", "quality_factor", "gap_threshold", "workers", "max_blocks"):
+    checked("quality_factor", args.quality_factor, "--quality-factor")
+    for name in ("block", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ..analysis.resonances import resonances
 from ..errors import UserError
-from ..io.results import write_json
+from ..io.results import check_writable, write_json
 from . import flags
 from .roots import positive_int
 
@@ -36,9 +36,8 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     """Compute, print the table, write JSON if asked; 1 when a proof fails."""
-    modes = positive_int(args.modes, "--modes")
-    if modes > 50:
-        raise UserError(f"--modes must be at most 50, got {modes}")
+    check_writable(args.json)
+    modes = positive_int(args.modes, "--modes", 50)
     lever = flags.cantilever(args)
     contact = flags.contact(args)
     if contact.k1 is None and (contact.k2 is not None or contact.k2_over_k1 is not None

@@ -9,7 +9,7 @@ from fractions import Fraction
 
 from ..errors import UserError
 from ..generated import characteristic
-from ..io.results import write_json
+from ..io.results import check_writable, write_json
 from ..roots.core import FAMILIES, PARAMETER_HELP, RootResult, family_roots
 
 __all__ = ["OPTIONS", "add_arguments", "parse_parameters", "positive_int", "run", "table"]
@@ -35,11 +35,20 @@ def add_arguments(parser) -> None:
     parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
 
 
-def positive_int(text: str, what: str) -> int:
-    """``text`` as an integer > 0, else a :class:`UserError`.
+MAX_ROOTS, MAX_DIGITS = 1000, 4000
+"""Largest ``--n`` and ``--digits``: beyond them a proof runs for hours (and Python prints no
+integer of more than 4300 digits)."""
+
+
+def positive_int(text: str, what: str, most: int | None = None) -> int:
+    """``text`` as an integer > 0 (and at most ``most``), else a :class:`UserError`.
 
     >>> positive_int("12", "--n")
     12
+    >>> positive_int("5000", "--digits", MAX_DIGITS)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --digits must be at most 4000, got 5000
     """
     try:
         value = int(text)
@@ -47,6 +56,8 @@ def positive_int(text: str, what: str) -> int:
         raise UserError(f"{what} must be an integer, got {text!r}") from None
     if value <= 0:
         raise UserError(f"{what} must be positive, got {value}")
+    if most is not None and value > most:
+        raise UserError(f"{what} must be at most {most}, got {value}")
     return value
 
 
@@ -110,8 +121,9 @@ def run(args) -> int:
       1  1.5708  [1.5707963, 1.5707964]
     0
     """
+    check_writable(args.json)
     params = parse_parameters(args.family, {name: getattr(args, name) for name in OPTIONS})
-    n, digits = positive_int(args.n, "--n"), positive_int(args.digits, "--digits")
+    n, digits = positive_int(args.n, "--n", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
     if args.json:

@@ -1,9 +1,11 @@
 """``pfmdyn spot``: where to put the laser spot (electrostatic blind spots, calibration, d_eff error)."""
 from __future__ import annotations
 
+import math
+
 from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
-from ..names import LEVER, NAMES, canonical
+from ..names import LEVER
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -48,17 +50,19 @@ def _lever(args):
     if args.file:
         from ..io.instruments import read_instrument
         record = read_instrument(args.file)
-        found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
+        found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
-    for name in ("spring_constant", "free_resonance", "length", "tip_height"):
-        if given.get(name) is None:
-            where = f" in {args.file}" if args.file else ""
-            raise UserError(f"no {NAMES[name].meaning.split(',')[0]}{where}: give {NAMES[name].flag}")
+    flags.require(given, ("spring_constant", "free_resonance", "length", "tip_height"), args.file)
     return flags.cantilever(args, found)
 
 
 def run(args) -> int:
     """Analyse, print, write what was asked."""
+    from ..io.results import check_writable
+    check_writable(args.json)
+    check_writable(args.plot, figure=True)
+    if not (math.isfinite(args.frequency) and args.frequency > 0):
+        raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
     lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
     print(report(result))

@@ -19,9 +19,9 @@ becomes a k1 map::
 
     pfmdyn stiffness dart.h5 --out result/      # result/maps.zarr: k1, k1_stderr
 
-``--reduced-modulus`` converts k1 to E* with the Hertz relation (``--tip-radius``, ``--load``).
-``--free`` and ``--free-uncertainty`` are the old spellings of ``--free-resonance`` and
-``--free-resonance-uncertainty`` (hidden, still read).
+``--reduced-modulus`` converts k1 to E* with the Hertz relation (``--tip-radius``, ``--normal-load``).
+``--free``, ``--free-uncertainty`` and ``--load`` are the old spellings of ``--free-resonance``,
+``--free-resonance-uncertainty`` and ``--normal-load`` (hidden, still read).
 """
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ import os
 from pathlib import Path
 
 from ..errors import UserError
-from ..names import LEVER, NAMES, canonical, checked
+from ..names import LEVER, NAMES, checked
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -62,8 +62,7 @@ def add_arguments(parser) -> None:
                         "more contact modes (the L1/L method)")
     parser.add_argument("--free", dest="free_resonance", default=None, help=argparse.SUPPRESS)
     flags.add_contact(parser, ("k2", "k2_over_k1", "poisson"))
-    parser.add_argument("--contact-uncertainty", default=None, metavar="HZ",
-                        help="standard uncertainty of each contact frequency")
+    flags.add(parser, ("contact_uncertainty",))
     parser.add_argument("--free-resonance-uncertainty", dest="free_resonance_uncertainty", default=None,
                         metavar="HZ", help="standard uncertainty of the free resonance")
     parser.add_argument("--free-uncertainty", dest="free_resonance_uncertainty", default=None,
@@ -71,8 +70,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spring-constant-uncertainty", default=None, metavar="N/m",
                         help="standard uncertainty of the spring constant")
     parser.add_argument("--reduced-modulus", action="store_true", help="also give E* from k1 (Hertz contact)")
-    parser.add_argument("--tip-radius", default=None, metavar="M", help="tip radius R (with --reduced-modulus)")
-    parser.add_argument("--load", default=None, metavar="N", help="normal load P (with --reduced-modulus)")
+    flags.add(parser, ("tip_radius", "normal_load"))
+    parser.add_argument("--load", dest="normal_load", default=None, help=argparse.SUPPRESS)
     parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
     parser.add_argument("--out", default=None, metavar="DIR",
                         help="for a contact-frequency map (contact_frequency_hz): write DIR/maps.zarr with k1")
@@ -108,18 +107,15 @@ def _from_file(path: str) -> tuple[dict, list, list]:
                  "free_resonance": free[0] if free else meta.f1}
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
     record = read_instrument(path)
-    found = {canonical(key): value for key, value in record.fields.items() if canonical(key) in LEVER}
-    contact = record.fields.get("contact_resonance_hz")
+    found = {key: value for key, value in record.fields.items() if key in LEVER}
+    contact = record.fields.get("contact_resonance")
     return found, [contact] if contact else [], [1] if contact else []
 
 
 def _lever(args, found: dict):
     """The lever from the file's values and the flags; the length may be left out when nothing needs it."""
     values = {**found, **flags.given(args, _LEVER)}
-    for name, what in (("free_resonance", "free resonance"), ("spring_constant", "spring constant")):
-        if values.get(name) is None:
-            where = f" in {Path(args.file).name}" if args.file else ""
-            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
+    flags.require(values, ("free_resonance", "spring_constant"), args.file)
     notes = []
     if values.get("length") is None:
         if values.get("tip_height") is not None or values.get("tilt"):
@@ -153,8 +149,7 @@ def _contact_map(args) -> int:
         raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
                         "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
-    if args.contact_uncertainty is not None:
-        overrides["contact_uncertainty_hz"] = _number(args.contact_uncertainty, "--contact-uncertainty", allow_zero=True)
+    overrides.update(flags.given(args, ("contact_uncertainty",)))
     if args.mode:
         if len(args.mode) != 1:
             raise UserError("a contact-frequency map has one mode: give --mode once")
@@ -165,6 +160,8 @@ def _contact_map(args) -> int:
 
 def _mode(text) -> int:
     value = _number(text, "--mode")
+    if value > 1000:        # no instrument resolves a higher flexural mode (and the root counts would run for hours)
+        raise UserError(f"--mode must be at most 1000, got {text}")
     if value != int(value):
         raise UserError(f"--mode must be a whole number, got {text}")
     return int(value)
@@ -173,8 +170,9 @@ def _mode(text) -> int:
 def run(args) -> int:
     """Parse, analyse (:func:`pfmdyn.analysis.stiffness_report.analyse`), print, write JSON if asked."""
     from ..analysis.stiffness_report import analyse
-    from ..io.results import write_json
+    from ..io.results import check_writable, write_json
 
+    check_writable(args.json)
     if args.file and _is_contact_map(args.file):
         return _contact_map(args)
     if args.out:
@@ -191,16 +189,14 @@ def run(args) -> int:
         where = f" in {Path(args.file).name}" if args.file else ""
         raise UserError(f"no contact resonance{where}: give --contact HZ")
     lever, notes = _lever(args, found)
-    hertz = None
-    if args.reduced_modulus:
-        radius, load = _number(args.tip_radius, "--tip-radius"), _number(args.load, "--load")
-        if radius is None or load is None:
-            raise UserError("--reduced-modulus needs --tip-radius (m) and --load (N)")
-        hertz = (radius, load)
+    hertz = flags.given(args, ("tip_radius", "normal_load"))     # checked even when not used
+    if args.reduced_modulus and len(hertz) < 2:
+        raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
+    hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
     report = analyse(
         lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
         tip_position_stated=args.tip_position is not None or "tip_position" in found,
-        contact_uncertainty=_number(args.contact_uncertainty, "--contact-uncertainty", allow_zero=True) or 0.0,
+        contact_uncertainty=flags.given(args, ("contact_uncertainty",)).get("contact_uncertainty", 0.0),
         free_resonance_uncertainty=_number(args.free_resonance_uncertainty, "--free-resonance-uncertainty",
                                            allow_zero=True) or 0.0,
         spring_constant_uncertainty=_number(args.spring_constant_uncertainty, "--spring-constant-uncertainty",

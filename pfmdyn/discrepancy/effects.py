@@ -7,8 +7,8 @@ started there is never worse), seed values for fresh starts (for an effect that 
 resonances, the profile along which the springs are matched to the peaks, dense enough that
 one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
 linear design columns it adds, whether it moves the undamped resonances, whether only a
-spectrum can show it (``spectrum_only``: background; damping shows in a table's Q values),
-and the derivation it comes from; and what it does to the model: each component is a subclass
+spectrum can show it (``spectrum_only``: background, the laser spot; damping shows in a
+table's Q values), and the derivation it comes from; and what it does to the model: each component is a subclass
 of :class:`Effect` that gives its chain-rule term of the Jacobian (:class:`Chain`), the
 generated partials that needs, its design columns and their derivatives, and the quantities
 derived from its parameters, so that adding an effect is adding one component (parameters:
@@ -26,7 +26,7 @@ import math
 from dataclasses import dataclass
 
 from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
-from ..generated import formulas
+from ..generated import detection, formulas
 
 __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
@@ -91,6 +91,11 @@ class Effect:
     def partials(self, coords) -> set[str]:
         """The generated partials its :meth:`jacobian` uses at coordinates ``coords``."""
         return set()
+
+    def reading(self, coords):
+        """Where the model reads the slope when the effect is present: None (the free end,
+        :mod:`pfmdyn.generated.tip_setback`) or a generated module and its arguments after ``beta``."""
+        return None
 
     def jacobian(self, chain: Chain) -> tuple:
         """d slopes (4, n) / d each internal parameter, in order."""
@@ -222,6 +227,22 @@ class Background(Effect):
         return [ramp, bias * ramp]
 
 
+@dataclass(frozen=True)
+class SpotPosition(Effect):
+    """The slope read at the laser spot ``x_s = sigma L`` (:mod:`pfmdyn.generated.detection`)
+    instead of the free end: it reweights the modes (and can put a zero between them) but moves
+    no resonance, so its Jacobian term has no free-root part."""
+
+    def reading(self, coords):
+        return detection, (coords["sigma"],)
+
+    def partials(self, coords) -> set[str]:
+        return {"sigma"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        return (chain.part["sigma"],)
+
+
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Damping("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py", index=0, uses=("beta", "k")),
     ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
@@ -239,13 +260,20 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
          "derivations/tilt.py", moves_resonances=True),
     LateralStiffness("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
     Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
+    # The laser spot moves no resonance: it reweights the modes (and can put a zero between
+    # them), so only a spectrum shows it; its seeds span where users put the spot.
+    SpotPosition("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position", null=1.0,
+                                             seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
+                                                    0.65, 0.6, 0.55, 0.5),
+                                             description="detection (laser) spot x_s / L"),),
+                 "derivations/detection.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 
 DAMPING = {"internal": "damping_internal", "viscous": "damping_viscous", "contact": "damping_contact"}
 """Damping mechanism -> component name; every one is reported as the effect ``damping``."""
 
-NAMES = ("damping", "tip_setback", "tip_mass", "background", "lateral_stiffness", "tilt")
+NAMES = ("damping", "tip_setback", "tip_mass", "background", "lateral_stiffness", "tilt", "spot_position")
 """The effect vocabulary of reports."""
 
 

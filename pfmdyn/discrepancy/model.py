@@ -16,7 +16,8 @@ inside the nonlinear fit of the other parameters (variable projection).  The eff
 compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
-``(b0 + b1 V) f / f_max``.
+``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
+solution at ``x_s = sigma L`` instead of the free end (:mod:`pfmdyn.generated.detection`).
 
 The solver's Jacobian comes from the derivations too: the generated partials of the slopes
 (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
@@ -104,7 +105,8 @@ class Model:
         return {p.name: p.value(v) for p, v in zip(self.parameters, internal)}
 
     def slopes(self, frequency_hz, internal):
-        """Tip slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays."""
+        """Slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays (at the free
+        end, or where a component reads it: the laser spot with the effect ``spot_position``)."""
         c = self.coords(internal)
         m = self.meta
         r = np.asarray(frequency_hz, dtype=float) / m.f1
@@ -112,14 +114,16 @@ class Model:
         with np.errstate(all="ignore"):
             beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-            return tip_setback.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                     c["mu"] * mu_f, c["gamma"], 0.0)
+            module, at = self._reading(c)
+            return module.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H,
+                                m.L, c["mu"] * mu_f, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
 
         Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
-        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`) are composed by
+        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`, or with the effect
+        ``spot_position`` :func:`pfmdyn.generated.detection.slope_and_jacobian`) are composed by
         the chain rule with the generated damping factors' derivatives
         (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
@@ -137,12 +141,13 @@ class Model:
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
-            T, J = tip_setback.slope_and_jacobian(root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                                  c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c))
+            module, at = self._reading(c)
+            T, J = module.slope_and_jacobian(root_r * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                             c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
-                    for j, p in enumerate(tip_setback.JACOBIAN_PARAMETERS)}
+                    for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
             chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, (beta_f, k_f, k1_f, mu_f), d_f, spring)
@@ -154,12 +159,22 @@ class Model:
                 out[:, j] = term
         return T, out
 
-    def _partials_needed(self, c) -> tuple[str, ...]:
-        """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
+    def _reading(self, c):
+        """The generated slope the model reads and its arguments after ``beta``: the free end
+        (:mod:`pfmdyn.generated.tip_setback`) unless a component reads elsewhere (the laser spot)."""
+        for e in self.components:
+            reading = e.reading(c)
+            if reading is not None:
+                return reading
+        return tip_setback, ()
+
+    def _partials_needed(self, c, module=tip_setback) -> tuple[str, ...]:
+        """The generated partials of ``module`` the chain rule uses at coordinates ``c`` (others
+        multiply zero)."""
         need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
         for e in self.components:
             need |= e.partials(c)
-        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if p in need)
+        return tuple(p for p in module.JACOBIAN_PARAMETERS if p in need)
 
     @property
     def n_linear(self) -> int:

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
+from scipy.signal import peak_prominences
 
 from ..generated import formulas
 from .model import bounds, resonance_sensitivity, resonances, resonances_many
@@ -50,15 +51,36 @@ def bands(freq_u) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(gap)])
 
 
-def _maxima(size, factor, freq_u=None):
-    """Local maxima above ``factor`` times the median of ``size``; with several bands
-    (:func:`bands` of ``freq_u``), also each band's highest interior sample when it stands
-    twice above the band's lowest: in a band around one resonance most samples lie on the
-    peak, so the median of all bands hides the weaker peaks."""
+PROMINENCE = 20.0
+"""A local maximum of the bias-summed magnitude is a resonance when it rises this many noise
+levels above the higher of its two bases (noise maxima rise 2-5 noise levels)."""
+
+
+def _maxima(size, freq_u=None):
+    """Resonances among the local maxima of ``size``: those that rise :data:`PROMINENCE` noise
+    levels above their bases; with several bands (:func:`bands` of ``freq_u``), also each band's
+    highest interior sample when it stands twice above the band's lowest (a band holding only
+    the top of a peak has no base on either side).
+
+    Height alone (a maximum five times above the median) is no test: a weakly coupled mode (a
+    set-back tip near a node of its slope) stands only 2-3 times above the median, beside its
+    antiresonance, yet rises hundreds of noise levels (missed, the spring starts matched the
+    other peaks with that mode elsewhere: a false tip mass and tilt), while a noise wiggle on
+    the skirt of a strong peak stands high and rises three noise levels (taken, a false peak).
+
+    >>> f = np.linspace(0.0, 10.0, 1001)
+    >>> size = 1 + 100 * np.exp(-((f - 3) / 0.05) ** 2) + 2 * np.exp(-((f - 7) / 0.05) ** 2)
+    >>> f[_maxima(size)].round(2).tolist()
+    [3.0, 7.0]
+    """
     inner = np.arange(1, len(size) - 1)
-    keep = (size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1]) & (size[inner] > factor * np.median(size))
+    local = inner[(size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1])]
+    # Noise of ``size`` from its second differences (their median ignores the peaks), with a
+    # floor for data without noise: a thousandth of the median.
+    noise = max(np.median(np.abs(np.diff(size, 2))) / (0.6745 * math.sqrt(6)), 1e-3 * np.median(size))
+    rise = peak_prominences(size, local)[0] if len(local) else np.zeros(0)
     which = bands(freq_u) if freq_u is not None else np.zeros(len(size), int)
-    found = set(inner[keep].tolist())
+    found = set(local[rise > PROMINENCE * noise].tolist())
     if which.max() > 0:
         for b in range(which.max() + 1):
             idx = np.flatnonzero(which == b)
@@ -134,8 +156,8 @@ def poles(data, guesses_hz, half_width: int | None = None) -> np.ndarray:
 
 
 def data_peaks(data) -> np.ndarray:
-    """Resonance frequencies (Hz): the maxima of the bias-summed |response| (5x above its
-    median in their band, :func:`bands`), each located by its complex pole (:func:`poles`).
+    """Resonance frequencies (Hz): the prominent maxima of the bias-summed |response|
+    (:func:`_maxima`), each located by its complex pole (:func:`poles`).
 
     >>> from types import SimpleNamespace
     >>> f = np.repeat(np.linspace(1, 10, 91), 2); y = 1 / (f - 4.03) + 0j   # pole off the grid
@@ -143,12 +165,12 @@ def data_peaks(data) -> np.ndarray:
     [4.03]
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 5.0, freq_u)]
+    found = freq_u[_maxima(size, freq_u)]
     return poles(data, found).real if len(found) else found
 
 
 def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
-    """Peaks (3x above the median of the bias-summed |response|) and their half-power widths
+    """Peaks (as :func:`data_peaks` finds them) and their half-power widths
     (Hz), ``2 |Im p|`` of each pole; NaN where no pole was found near the peak.
 
     >>> from types import SimpleNamespace
@@ -158,18 +180,18 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     ([100.0], [2.0])
     """
     freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, 3.0, freq_u)]
+    found = freq_u[_maxima(size, freq_u)]
     if not len(found):
         return found, found
     p = poles(data, found)
     return np.where(np.isfinite(p.real), p.real, found), formulas.half_power_width_from_root(np.abs(p.imag))
 
 
-def peak_match(roots, peaks, band, d_roots=None):
+def peak_match(roots, peaks, band, d_roots=None, unseen: bool = False):
     """Log-frequency distance of each peak to the nearest of the resonances ``roots`` (Hz),
     then one entry for the resonances in the band that no peak explains (fixed length, for
-    least squares).  With ``d_roots`` (roots x parameters) also its Jacobian, where each
-    minimum is attained.
+    least squares; zero with ``unseen``: a laser spot near a mode's node hides that mode).
+    With ``d_roots`` (roots x parameters) also its Jacobian, where each minimum is attained.
 
     >>> peak_match(np.array([100.0, 300.0]), np.array([100.0]), (50.0, 400.0)).round(3).tolist()
     [0.0, 1.099]
@@ -178,7 +200,7 @@ def peak_match(roots, peaks, band, d_roots=None):
     if not len(roots):
         out = np.full(len(peaks) + 1, 10.0)
         return out if d_roots is None else (out, np.zeros((len(out), p)))
-    inside = (roots > band[0]) & (roots < band[1])
+    inside = (roots > band[0]) & (roots < band[1]) & (not unseen)
     lp, lr = np.log(peaks), np.log(roots)
     near = np.argmin(np.abs(lr[None, :] - lp[:, None]), axis=1)          # nearest root of each peak
     there = np.abs(lr[near] - lp)
@@ -197,7 +219,7 @@ def peak_match(roots, peaks, band, d_roots=None):
     return out, jac
 
 
-def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
+def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):
     """Least-squares match of the model's resonances to the peaks from ``start``, moving the
     parameters where ``moving`` is True; the Jacobian comes from the resonances'
     sensitivities (no root search per parameter).  Returns (parameters, sum of squares)."""
@@ -219,15 +241,15 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev):
         roots = roots_at(v)
         d_roots = (resonance_sensitivity(model, full(v), True, roots) if len(roots)
                    else np.zeros((0, len(start))))
-        return peak_match(roots, peaks, band, d_roots[:, moving])[1]
+        return peak_match(roots, peaks, band, d_roots[:, moving], unseen)[1]
 
-    res = least_squares(lambda v: peak_match(roots_at(v), peaks, band), start[moving], jac=jac,
+    res = least_squares(lambda v: peak_match(roots_at(v), peaks, band, unseen=unseen), start[moving], jac=jac,
                         bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
     return full(res.x), 2 * res.cost
 
 
 def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
-                 per_value: int = 3, joint: int = 6, sharp: bool = False) -> list[np.ndarray]:
+                 per_value: int = 3, joint: int = 6, sharp: bool = False, unseen: bool = False) -> list[np.ndarray]:
     """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
 
     ``extra``: values of the parameters after the springs (one vector per profile point).
@@ -235,7 +257,8 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     distinct ``k1`` rows are matched by least squares over the springs alone; the best
     ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
     are returned; with ``sharp`` (peaks narrower than half a frequency step: an undamped
-    spectrum) each is first moved along its curve of matches to the least misfit.
+    spectrum) each is first moved along its curve of matches to the least misfit.  With
+    ``unseen`` a resonance may lie where no peak is (:func:`peak_match`).
     """
     if not len(peaks):
         return []
@@ -250,12 +273,12 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     for e in extra:
         grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
         roots = resonances_many(model, grid, True, band[1] * 1.3)
-        score = [float(np.sum(peak_match(r, peaks, band) ** 2)) for r in roots]
+        score = [float(np.sum(peak_match(r, peaks, band, unseen=unseen) ** 2)) for r in roots]
         best_k1 = {}
         for i in np.argsort(score):
             best_k1.setdefault(round(float(grid[i][0]), 6), i)
         for i in list(best_k1.values())[:per_value]:
-            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15)
+            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15, unseen)
             matched.append((ss, x))
     # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
     exact = sorted((x for r, x in matched if r < 1e-6), key=cost)
@@ -264,7 +287,7 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     every = np.ones(len(lower), bool)
     for x in (exact + rest)[:joint]:
         if len(x) > n_springs:
-            x = _peak_fit(model, x, every, peaks, band, lower, upper, 20)[0]
+            x = _peak_fit(model, x, every, peaks, band, lower, upper, 20, unseen)[0]
         if not any(np.allclose(x, s, atol=1e-3) for s in starts):
             starts.append(x)
     best = sorted(starts, key=cost)[:count]

@@ -34,9 +34,10 @@ so they are tried only when there are more contact modes than contact parameters
 fitted, or when those parameters leave a contact misfit (frequencies, and with damping Q
 values) above the noise; the effect's parameter may then be undetermined, and tied
 candidates are listed (set-back before tilt).  The others are listed in the report's
-``untestable_effects``.  ``background`` never (it changes spectra, not resonances).  Every
-candidate needs a degree of freedom left once its parameters are fitted (data values reproduced by
-construction, free mode 1, do not count), a second damping mechanism a Q value left over.
+``untestable_effects``.  ``background`` and ``spot_position`` never (they change spectra, not
+resonances).  Every candidate needs a degree of freedom left once its parameters are fitted
+(data values reproduced by construction, free mode 1, do not count), a second damping
+mechanism a Q value left over.
 
 :func:`paper_tables` holds the resonances of Section VI.1 of the paper as input files.
 """
@@ -445,7 +446,25 @@ class ResonanceProblem:
             if why is None or why in ("in the model", "every mechanism the table can show is in the model"):
                 continue
             out[e] = f"not testable with these data: {why}"
+        fitted = self._fitted_damping(current)
+        if fitted:
+            out["damping"] = fitted
         return out
+
+    def _fitted_damping(self, current: FitResult) -> str | None:
+        """Why the damping in ``current`` is fitted rather than tested, when its mechanism
+        parameters use up every Q value (one Q, as a thermal tune gives): the undamped baseline
+        (Q infinite) is rejected, but the fitted Q reproduces the measured ones by construction,
+        so neither the mechanism nor how the width scales with the mode is tested."""
+        mechanisms = current.model.damping_mechanisms
+        n_q = int(_has_q(self.data).sum())
+        if not mechanisms or n_q > len(mechanisms):
+            return None
+        left = degrees(current)["dof"]
+        return (f"not testable with these data: {n_q} Q value(s) and {len(mechanisms)} damping parameter(s) "
+                f"({left} degree(s) of freedom left): the undamped model is rejected, but the fitted Q "
+                "reproduces the measured one by construction, so the mechanism and the law of the width "
+                "with frequency are not tested (another Q value, e.g. of a second mode, would test them)")
 
     def _mechanisms(self, current: FitResult | None = None) -> list[str]:
         """Damping components not yet in the model (the dashpot only with a contact Q)."""
@@ -519,7 +538,7 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
     """The effect library of a resonance table, in the order ties are broken.
 
     * ``damping`` only when the table gives Q values (undamped resonances do not move);
-    * ``background`` never (it changes a spectrum, not its resonances);
+    * ``background`` and ``spot_position`` never (they change a spectrum, not its resonances);
     * ``tilt`` and ``lateral_stiffness`` only with contact modes (they act through the
       springs); ``lateral_stiffness`` only with ``--vertical-only``, since the baseline
       already fits ``k2``.  Whether the data have room for each is decided per step

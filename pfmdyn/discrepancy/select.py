@@ -9,6 +9,9 @@ step every candidate effect is fitted on top of the current model (by the data k
 * it shrinks the gap by at least :data:`MIN_REDUCTION` (25 %), or brings it within
   :data:`NEAR_NOISE` (1.5) times the noise while shrinking it by at least 5 %.
 
+A candidate the problem refuses (:func:`refusal`: it lowers the misfit but not the way the
+effect would, e.g. a background that only reshapes the peaks) is not material.
+
 With a misfit far above the noise any extra parameter wins the BIC, so the criterion
 alone would name effects that explain 1 % of the misfit; the gap rule prevents that.  A
 misfit already below :data:`WITHIN_NOISE` (0.5) times the noise estimate needs nothing
@@ -33,7 +36,7 @@ from tqdm import tqdm
 
 from .plausible import describe, implausible
 
-__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "material", "run"]
+__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "material", "refusal", "run"]
 
 BIC_THRESHOLD = 10.0
 MIN_REDUCTION = 0.25
@@ -43,7 +46,10 @@ UNEXPLAINED = 2.0
 TIME_BUDGET_S = 35.0
 """``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
 start (then prune and report), so that a hard file still ends in a report within about a
-minute.  Library calls have no budget unless given one."""
+minute.  The seconds are the process's CPU time, not the wall clock: on a loaded machine the
+same file gets the same report (a wall-clock budget stopped a large set-back spectrum after
+its first step when other jobs shared the cores).  Library calls have no budget unless given
+one."""
 
 CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
              f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %)")
@@ -61,13 +67,28 @@ def material(old, new) -> bool:
     False
     """
     gain = old.bic - new.bic
-    if not gain > BIC_THRESHOLD or old.gap <= WITHIN_NOISE:
+    if not gain > BIC_THRESHOLD or old.gap <= WITHIN_NOISE or refusal(new):
         return False
     return new.gap <= (1 - MIN_REDUCTION) * old.gap or (new.gap <= NEAR_NOISE and new.gap <= 0.95 * old.gap)
 
 
+def refusal(fit) -> str | None:
+    """Why the problem refused ``fit``'s new effect although it lowers the misfit (it does not
+    act as that effect does, e.g. a background reshaping the peaks), or None.
+
+    >>> from types import SimpleNamespace as S
+    >>> refusal(S(extra={"refused": "reshapes the peaks"})), refusal(S(bic=0.0, gap=1.0))
+    ('reshapes the peaks', None)
+    """
+    extra = getattr(fit, "extra", None)
+    return extra.get("refused") if extra else None
+
+
 def _row(name, old, new) -> dict:
-    return {"effect": name, "bic": new.bic, "delta_bic": old.bic - new.bic, "gap": new.gap}
+    row = {"effect": name, "bic": new.bic, "delta_bic": old.bic - new.bic, "gap": new.gap}
+    if refusal(new):
+        row["refused"] = refusal(new)
+    return row
 
 
 def run(problem, progress: bool = False, time_budget_s: float | None = None) -> dict:
@@ -78,13 +99,13 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
     (refit with one component removed), ``locate(fit) -> dict`` and optionally
     ``polish(fit) -> fit`` (converge a trial that is accepted).
     """
-    started = time.perf_counter()
+    started = time.process_time()
     current = problem.baseline()
     baseline, steps = current, []
     with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
         while True:
             where = problem.locate(current)
-            if time_budget_s is not None and time.perf_counter() - started > time_budget_s:
+            if time_budget_s is not None and time.process_time() - started > time_budget_s:
                 steps.append({"effect": None, "located": where, "candidates": [],
                               "decision": f"stop: time budget of {time_budget_s:g} s used"})
                 break
@@ -196,7 +217,8 @@ def _polish(problem, trial):
 
 def _best_pair(problem, current, trials, bar):
     """The material pair of effects (among the three best single ones) with the largest gain."""
-    ranked = sorted(trials, key=lambda n: current.bic - trials[n].bic, reverse=True)[:3]
+    ranked = sorted((n for n in trials if not refusal(trials[n])), key=lambda n: current.bic - trials[n].bic,
+                    reverse=True)[:3]
     found = None
     for i, a in enumerate(ranked):
         for b in ranked[i + 1:]:

@@ -92,6 +92,14 @@ def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData,
                                response=data.response[keep]), stride
 
 
+SPOT_COARSE = (0.95, 0.85, 0.75, 0.6)
+"""Spot positions at which :meth:`SpectrumProblem.spot_trial` ranks its starts."""
+
+PEAK_WIDTHS = 3.0
+BACKGROUND_AWAY = 0.5
+"""A background is named only when at least this share of the misfit it removes lies more than
+:data:`PEAK_WIDTHS` half-power widths from every resonance (:meth:`SpectrumProblem.not_a_background`)."""
+
 TRIAL_NFEV = 30
 """Evaluations per start of a candidate's fit: enough to rank candidates; the one added is
 then converged (:meth:`SpectrumProblem.polish`)."""
@@ -113,7 +121,7 @@ class SpectrumProblem:
         self.sharp = bool(np.any(self.widths[1] < 0.5 * step))
         # Library order breaks ties between candidates the data do not tell apart.
         self.library = (["lateral_stiffness"] if vertical_only else []) + [
-            "damping", "tip_mass", "tilt", "tip_setback", "background"]
+            "damping", "tip_mass", "tilt", "tip_setback", "background", "spot_position"]
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
@@ -125,6 +133,57 @@ class SpectrumProblem:
         return match_starts(model, extra, self.peaks, self.band, (self.k1_grid, self.k2_grid),
                             lambda x: self.cost(model, x), count, per_value=3 if self.sharp else 1,
                             joint=6 if self.sharp else 4, sharp=self.sharp)
+
+    def spot_trial(self, current: FitResult, count: int = 3) -> FitResult:
+        """Best fit of the current model plus the laser spot (``spot_position``).
+
+        The spot moves no resonance but reweights the modes, so what was fitted without it
+        may have bent to mimic it: the springs (and missed a peak the spot weakened), the
+        damping values and even the mechanism.  Starts: the nested one (spot at the free
+        end), and the ``count`` best sets of springs among the current ones and those matched
+        to the peaks 3x above the median (not 5x; also leaving modes where no peak is: the
+        spot can hide a mode), each with the current damping or the value the peak widths
+        give, in the current mechanism or (one mechanism) each other one, ranked by the
+        misfit at the spot positions :data:`SPOT_COARSE`, then with the spot seed of least
+        misfit.
+        """
+        effects, meta, vertical = current.model.effects, current.model.meta, current.model.vertical_only
+        spot = EFFECTS["spot_position"]
+        models = [current.model.with_effect("spot_position")]
+        present = [c for c in effects if c.startswith("damping_")]
+        if len(present) == 1:
+            models += [Model(meta, tuple(c if e == present[0] else e for e in effects) + ("spot_position",), vertical)
+                       for c in DAMPING.values() if c != present[0]]
+        springs = 1 if vertical else 2
+        values = dict(zip((p.name for p in current.model.parameters), current.internal))
+        widths = {EFFECTS[DAMPING[m]].parameters[0].name: v for m, v in self.damping_seeds().items()}
+        # Undamped resonances: the springs matched once serve every damping variant.
+        others = np.append(current.internal[springs:], spot.null)
+        matched = {tuple(np.round(x[:springs], 3)): x[:springs] for unseen in (False, True) for x in match_starts(
+            models[0], [others], self.widths[0], self.band, (self.k1_grid, self.k2_grid),
+            lambda x: self.cost(models[0], x), 3, per_value=4 if unseen else (3 if self.sharp else 1), joint=6,
+            sharp=self.sharp, unseen=unseen)}
+        # The best model and damping per set of springs, at a few spot positions (so that the
+        # current springs do not crowd out the re-matched ones), then its best spot seed.
+        coarse = {}
+        for model in models:
+            rest = model.parameters[springs:-1]
+            variants = {tuple(np.array([source.get(p.name, backup.get(p.name)) for p in rest]))
+                        for source, backup in ((values, widths), (widths, values))}
+            for k in [current.internal[:springs]] + list(matched.values()):
+                for o in variants:
+                    base = np.concatenate([k, o])
+                    misfit = min(self.cost(model, np.append(base, v)) for v in SPOT_COARSE)
+                    key = tuple(np.round(k, 3))
+                    if key not in coarse or misfit < coarse[key][0]:
+                        coarse[key] = (misfit, model, base)
+        best = []
+        for _, model, base in sorted(coarse.values(), key=lambda t: t[0])[:count]:
+            rows = [np.append(base, v) for v in spot.seeds]
+            best.append((model, rows[int(np.argmin([self.cost(model, x) for x in rows]))]))
+        fits = [fit(models[0], self.data, [np.append(current.internal, spot.null)], self.sigma, max_nfev=TRIAL_NFEV)]
+        fits += [fit(model, self.data, [x], self.sigma, max_nfev=TRIAL_NFEV) for model, x in best]
+        return min(fits, key=lambda f: f.bic)
 
     def damping_seeds(self) -> dict[str, float]:
         """Start values of each damping mechanism's parameter from the measured peak widths."""
@@ -166,13 +225,17 @@ class SpectrumProblem:
         return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
 
     def candidates(self, current: FitResult) -> list[str]:
-        """Effects not yet in the model (damping while a mechanism is left)."""
+        """Effects not yet in the model (damping while a mechanism is left; the laser spot
+        with two peaks or more: it sets the relative heights of the modes, and the scale of
+        a lone peak is a linear coefficient's)."""
         present = current.model.effects
         out = []
         for name in self.library:
             if name == "damping":
                 if len(current.model.damping_mechanisms) < 2 and any(c not in present for c in DAMPING.values()):
                     out.append(name)
+            elif name == "spot_position" and len(self.widths[0]) < 2:
+                continue
             elif name not in present:
                 out.append(name)
         return out
@@ -188,7 +251,50 @@ class SpectrumProblem:
             best = min(fits, key=lambda m: fits[m].bic)
             rematched = self._fit_with(current, DAMPING[best], [seeds[best]], rematch=True)
             return min([rematched] + list(fits.values()), key=lambda f: f.bic)
-        return self._fit_with(current, name, None)
+        if name == "spot_position":
+            return self.spot_trial(current)
+        trial = self._fit_with(current, name, None)
+        if name == "background":
+            why = self.not_a_background(current, trial)
+            if why:
+                trial.extra["refused"] = why
+        return trial
+
+    def not_a_background(self, current: FitResult, trial: FitResult) -> str | None:
+        """Why ``trial`` (``current`` plus the background) does not lower the misfit as a
+        background does, or None.
+
+        The background must change the fitted response by more than the noise (RMS): a cross-talk
+        below the noise at every point, named because it lowers a gap already near the noise by
+        a few per cent (air damping: 1.22 -> 1.10 with a background at 0.4 % of the median
+        response), is the smooth remainder of another misfit as much as a background.  And a
+        cross-talk background is smooth in frequency and small beside a resonance, so most of
+        the misfit it removes lies away from the peaks (more than :data:`PEAK_WIDTHS` half-power
+        widths from each).  When most lies within them, the two columns only reshape the peaks:
+        a damping law or a per-sweep gain outside the library (air damping, width ~ sqrt f; a
+        gain drifting between bias sweeps) leaves a misfit there that a background absorbs in
+        part.  Band-limited data (bands of a few widths around each resonance) cannot tell a
+        background from that at all.
+        """
+        change = (float(np.sqrt(np.mean(np.abs(trial.prediction - current.prediction) ** 2)))
+                  if trial.prediction is not None and current.prediction is not None else math.inf)
+        if change < self.sigma:
+            return (f"it changes the fitted response by {change / self.sigma:.2g} x the noise (RMS): a cross-talk "
+                    "below the noise at every point cannot be told from the smooth remainder of another misfit "
+                    "(a damping law outside the library)")
+        peaks, widths = self.widths
+        near = np.zeros(len(self.data.frequency_hz), bool)
+        for p, w in zip(peaks, widths):
+            if np.isfinite(w):
+                near |= np.abs(self.data.frequency_hz - p) < PEAK_WIDTHS * w
+        removed = np.abs(current.residual) ** 2 - np.abs(trial.residual) ** 2
+        total = float(removed.sum())
+        away = min(max(float(removed[~near].sum()), 0.0) / total, 1.0) if total > 0 else 1.0
+        if away >= BACKGROUND_AWAY:
+            return None
+        return (f"only {away:.0%} of the misfit it removes lies more than {PEAK_WIDTHS:g} half-power widths "
+                "from the resonances: it reshapes the peaks, which a smooth cross-talk does not (a damping "
+                "law or gain outside the library)")
 
     def _fit_with(self, current: FitResult, component: str, seeds, rematch: bool = False) -> FitResult:
         model = current.model.with_effect(component)

@@ -21,15 +21,15 @@ from .record import FIELDS, si_unit, si_value
 __all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
 
 NOTE_KEYS = {
-    "spring_constant_n_per_m": "SpringConstant",
-    "free_resonance_hz": "ThermalFrequency",
+    "spring_constant": "SpringConstant",
+    "free_resonance": "ThermalFrequency",
     "free_quality_factor": "ThermalQ",
-    "contact_resonance_hz": "TuneFreqResult",
+    "contact_resonance": "TuneFreqResult",
     "contact_quality_factor": "TuneQResult",
-    "length_m": "CustomLeverLength",
-    "width_m": "CustomLeverWidth",
-    "drive_frequency_hz": "DriveFrequency",
-    "tip_bias_v": "TipVoltage",
+    "length": "CustomLeverLength",
+    "width": "CustomLeverWidth",
+    "drive_frequency": "DriveFrequency",
+    "tip_bias": "TipVoltage",
 }
 """pfmdyn field -> Asylum note key (values already in SI units)."""
 
@@ -76,9 +76,9 @@ def cantilever_fields(note: dict, keys: dict = NOTE_KEYS) -> tuple[dict, list[st
     (``'300 kHz'``).  NaN means never measured; a unit of the wrong kind is reported.
 
     >>> cantilever_fields({"SpringConstant": "0.46538", "ThermalQ": "NaN", "TipVoltage": 3})
-    ({'spring_constant_n_per_m': 0.46538, 'tip_bias_v': 3.0}, [])
+    ({'spring_constant': 0.46538, 'tip_bias': 3.0}, [])
     >>> cantilever_fields({"DriveFrequency": "300 kHz", "CustomLeverLength": "225 furlong"})
-    ({'drive_frequency_hz': 300000.0}, ["CustomLeverLength '225 furlong' not understood as m: lever length left out"])
+    ({'drive_frequency': 300000.0}, ["CustomLeverLength '225 furlong' not understood as m: lever length left out"])
     """
     found, problems = {}, []
     for name, key in keys.items():

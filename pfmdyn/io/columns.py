@@ -13,7 +13,7 @@ module maps what a file says onto it, with the factor to the canonical unit:
   a line of its own under the header, or implied (``freq``: Hz, ``bias``: V);
   a phase needs its unit (``phase_deg``, ``Phase (rad)``): degrees and radians cannot be
   told apart safely from the numbers;
-* metadata values may carry a unit of the key's dimension (``length_m: 223 um``).
+* metadata values may carry a unit of the key's dimension (``length: 223 um``).
 
 :func:`read_table` is the one CSV reader: metadata lines, the header, the data rows as text
 fields with their line numbers.  The readers of each kind of table interpret them.
@@ -28,6 +28,7 @@ from decimal import Decimal
 from pathlib import Path
 
 from ..errors import UserError
+from .. import names as vocabulary
 from .record import si_unit
 
 __all__ = ["Table", "read_table", "delimiter", "split", "comment_entry", "is_comment", "units_line", "column",
@@ -52,8 +53,9 @@ the analyses are invariant to its scale."""
 _RESPONSE_UNITS = ("pm", "nm", "um", "m", "v", "mv", "uv", "au", "a.u.", "arb")
 
 _METADATA_UNITS = (("_n_per_m", "N/m"), ("_m", "m"), ("_hz", "Hz"))
-"""Metadata key suffix -> its SI unit (the first suffix that matches counts: ``_n_per_m``
-before ``_m``); a value may be written in any prefixed form of it (:func:`pfmdyn.io.record.si_unit`)."""
+"""Unit of a metadata key that is no quantity of :mod:`pfmdyn.names` (``frequency_uncertainty_hz``),
+from its suffix (the first that matches counts: ``_n_per_m`` before ``_m``); a value may be
+written in any prefixed form of it (:func:`pfmdyn.io.record.si_unit`)."""
 
 
 def delimiter(header: str) -> str | None:
@@ -229,9 +231,11 @@ def column(name: str) -> tuple[str, float, str] | None:
 
 
 def metadata_number(where: str, key: str, text: str) -> float:
-    """A metadata value as a float in the key's SI unit (``223 um`` for ``length_m``).
+    """A metadata value as a float in the key's SI unit (``223 um`` for ``length``).
 
-    >>> metadata_number("f", "length_m", "223 um"), metadata_number("f", "free_resonance_hz", "63,2kHz")
+    The unit is the quantity's (:mod:`pfmdyn.names`, any spelling) or the key's suffix.
+
+    >>> metadata_number("f", "length", "223 um"), metadata_number("f", "free_resonance_hz", "63,2kHz")
     (0.000223, 63200.0)
     """
     text = re.sub(r"^(\s*[-+]?\d+),(\d)", r"\1.\2", text)     # a decimal comma
@@ -242,7 +246,11 @@ def metadata_number(where: str, key: str, text: str) -> float:
     number, unit = match.group(1), match.group(2)
     if not unit:
         return float(number)
-    wanted = next((si for suffix, si in _METADATA_UNITS if key.endswith(suffix)), None)
+    name = vocabulary.canonical(key)
+    if name is not None:
+        wanted = None if vocabulary.NAMES[name].unit == "1" else vocabulary.NAMES[name].unit
+    else:
+        wanted = next((si for suffix, si in _METADATA_UNITS if key.endswith(suffix)), None)
     converted = si_unit(unit)
     if wanted is None or converted is None or converted[0] != wanted:
         raise UserError(f"{where}: metadata '{key}' is '{text}': unit '{unit}' not understood "

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MissingExtraError, UserError
+from ..names import canonical
 from . import asylum
 from .record import (
     FIELDS,
@@ -169,10 +170,11 @@ def read_hdf5(path) -> InstrumentRecord:
         convention = ("NSID" if any("data_type" in d.attrs for _, d in mains) else
                       "USID" if any(name.endswith("Raw_Data") or "quantity" in d.attrs for name, d in mains)
                       else "")
-    # Asylum's names first, then pfmdyn's own, then the band-excitation settings.
+    # Asylum's names first, then pfmdyn's own (any spelling pfmdyn.names knows), then the
+    # band-excitation settings.
+    own = {canonical(key): key for key in metadata if canonical(key) in FIELDS}
     found, problems = {}, []
-    for keys in (asylum.NOTE_KEYS, {name: name for name in FIELDS},
-                 *({"drive_frequency_hz": key} for key in _BE_DRIVE)):
+    for keys in (asylum.NOTE_KEYS, own, *({"drive_frequency": key} for key in _BE_DRIVE)):
         more, said = asylum.cantilever_fields(metadata, keys)
         found, problems = {**more, **found}, problems + said
     kind = next(k for k in ("spectrum", "image", "curve") if k in kinds)

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..names import canonical
 from .columns import read_table
 from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
 
@@ -72,11 +73,12 @@ def _read_csv(path: Path) -> InstrumentRecord:
         raise UserError(f"{path}: no header line")
     units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in table.header]
     found = {}
-    for key in FIELDS:
-        try:
-            found[key] = float(table.metadata[key])
-        except (KeyError, ValueError):
-            pass
+    for key, value in table.metadata.items():     # any spelling of a field (``length_m`` is ``length``)
+        if canonical(key) in FIELDS:
+            try:
+                found[canonical(key)] = float(value)
+            except ValueError:
+                pass
     kind = "resonance metadata" if {"mode", "condition"} <= set(table.header) else "spectrum"
     channels = [Channel(c, u, (len(table.rows),)) for c, u in zip(table.header, units)]
     return make_record(path, kind, "CSV table", channels, found)
@@ -114,10 +116,10 @@ def required_field(record: InstrumentRecord, name: str, overrides: dict | None =
     """A field from ``overrides`` (the caller's values) or else the file; missing ->
     :class:`~pfmdyn.io.record.MissingFieldError` naming the field.
 
-    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0})
-    >>> required_field(r, "spring_constant_n_per_m"), required_field(r, "length_m", {"length_m": 2e-4})
+    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant": 2.0})
+    >>> required_field(r, "spring_constant"), required_field(r, "length", {"length": 2e-4})
     (2.0, 0.0002)
-    >>> required_field(r, "tip_height_m")
+    >>> required_field(r, "tip_height")
     Traceback (most recent call last):
     ...
     pfmdyn.io.record.MissingFieldError: tip height not in a.ibw
@@ -141,7 +143,7 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
     thermal spectrum: ``peaks``, the free modes the caller fitted in it (objects with
     ``mode``, ``frequency_hz``, ``quality_factor``:
     :func:`pfmdyn.analysis.thermal.instrument_resonances` fits and calls this).
-    ``overrides`` (keys of :data:`FIELDS`) win over the file.
+    ``overrides`` (names of :data:`FIELDS`, or their older spellings) win over the file.
 
     Returns
     -------
@@ -149,15 +151,15 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
 
     Examples
     --------
-    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length_m": 2e-4,
-    ...     "width_m": 3e-5, "free_resonance_hz": 6e4, "contact_resonance_hz": 3e5})
-    >>> table = resonance_table(r, {"tip_height_m": 1e-5})
+    >>> r = make_record("a.ibw", "image", "test", (), {"spring_constant": 2.0, "length": 2e-4,
+    ...     "width": 3e-5, "free_resonance": 6e4, "contact_resonance": 3e5})
+    >>> table = resonance_table(r, {"tip_height": 1e-5})
     >>> table.condition.tolist(), table.frequency_hz.tolist()
     (['free', 'contact'], [60000.0, 300000.0])
     """
     from .discrepancy_data import Metadata, ResonanceData
 
-    overrides = dict(overrides or {})
+    overrides = {canonical(key) or key: value for key, value in (overrides or {}).items()}
     name = Path(record.path).name
     if record.kind == "thermal spectrum":
         if not peaks:
@@ -166,21 +168,21 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
         conditions = np.array(["free"] * len(peaks))
         freqs = np.array([p.frequency_hz for p in peaks])
         qs = np.array([p.quality_factor for p in peaks])
-        overrides.setdefault("free_resonance_hz", freqs[0])
+        overrides.setdefault("free_resonance", freqs[0])
     else:
-        f_free = required_field(record, "free_resonance_hz", overrides)
+        f_free = required_field(record, "free_resonance", overrides)
         q_free = record.fields.get("free_quality_factor", np.nan)
-        if "contact_resonance_hz" in record.fields:
+        if "contact_resonance" in record.fields:
             modes, conditions = np.array([1, 1]), np.array(["free", "contact"])
-            freqs = np.array([f_free, record.fields["contact_resonance_hz"]])
+            freqs = np.array([f_free, record.fields["contact_resonance"]])
             qs = np.array([q_free, record.fields.get("contact_quality_factor", np.nan)])
         else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
             modes, conditions = np.array([1]), np.array(["free"])
             freqs, qs = np.array([f_free]), np.array([q_free])
     k, length, height, f1 = [required_field(record, key, overrides) for key in
-                             ("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz")]
+                             ("spring_constant", "length", "tip_height", "free_resonance")]
     # No resonance depends on the width: taken when known, never asked for.
-    width = required_field(record, "width_m", overrides) if ("width_m" in record.fields or
-                                                             overrides.get("width_m") is not None) else None
+    width = required_field(record, "width", overrides) if ("width" in record.fields or
+                                                             overrides.get("width") is not None) else None
     metadata = Metadata(k, length, width, height, f1, description=f"{record.instrument}: {name}")
     return ResonanceData(metadata, modes, conditions, freqs, quality_factor=qs)

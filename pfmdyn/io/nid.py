@@ -20,11 +20,11 @@ from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si
 __all__ = ["read_nid"]
 
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
-_THERMAL_KEYS = {"frequency": ("free_resonance_hz", "Hz"), "q factor": ("free_quality_factor", ""),
-                 "spring constant": ("spring_constant_n_per_m", "N/m")}
+_THERMAL_KEYS = {"frequency": ("free_resonance", "Hz"), "q factor": ("free_quality_factor", ""),
+                 "spring constant": ("spring_constant", "N/m")}
 # Scan settings of images and spectroscopy files.
-_SCAN_KEYS = {"tip voltage": ("tip_bias_v", "V"), "vibration freq.": ("drive_frequency_hz", "Hz"),
-              "spring constant": ("spring_constant_n_per_m", "N/m")}
+_SCAN_KEYS = {"tip voltage": ("tip_bias", "V"), "vibration freq.": ("drive_frequency", "Hz"),
+              "spring constant": ("spring_constant", "N/m")}
 
 
 def _unit(text: str) -> str:

@@ -10,24 +10,26 @@ import re
 from dataclasses import dataclass, field
 
 from ..errors import UserError
+from ..names import canonical
 
 __all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord", "make_record", "make_channel",
            "si_unit",
            "si_value", "si_spectrum", "decode_text"]
 
 FIELDS = {
-    "spring_constant_n_per_m": ("spring constant", "N/m"),
-    "free_resonance_hz": ("free resonance", "Hz"),
+    "spring_constant": ("spring constant", "N/m"),
+    "free_resonance": ("free resonance", "Hz"),
     "free_quality_factor": ("free Q", ""),
-    "contact_resonance_hz": ("contact resonance", "Hz"),
+    "contact_resonance": ("contact resonance", "Hz"),
     "contact_quality_factor": ("contact Q", ""),
-    "length_m": ("lever length", "m"),
-    "width_m": ("lever width", "m"),
-    "tip_height_m": ("tip height", "m"),
-    "drive_frequency_hz": ("drive frequency", "Hz"),
-    "tip_bias_v": ("tip bias", "V"),
+    "length": ("lever length", "m"),
+    "width": ("lever width", "m"),
+    "tip_height": ("tip height", "m"),
+    "drive_frequency": ("drive frequency", "Hz"),
+    "tip_bias": ("tip bias", "V"),
 }
-"""Cantilever field -> (what it is, SI unit).  Every record lists each as found or missing."""
+"""Cantilever field (its name in :mod:`pfmdyn.names`) -> (what it is, SI unit).  Every record
+lists each as found or missing."""
 
 KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
@@ -90,13 +92,16 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
     A spectrum whose values are an amplitude spectral density (a unit per ``sqrt(Hz)``) is a
     thermal spectrum, whatever the format.
 
-    >>> r = make_record("x.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length_m": float("nan")})
-    >>> r.fields, "length_m" in r.missing
-    ({'spring_constant_n_per_m': 2.0}, True)
+    Keys of ``found`` may be any spelling :func:`pfmdyn.names.canonical` knows (``length_m``).
+
+    >>> r = make_record("x.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length": float("nan")})
+    >>> r.fields, "length" in r.missing
+    ({'spring_constant': 2.0}, True)
     """
     assert kind in KINDS, kind
     if kind == "spectrum" and spectrum is not None and str(spectrum[2]).endswith("/sqrt(Hz)"):
         kind = "thermal spectrum"
+    found = {canonical(key) or key: value for key, value in found.items()}
     fields = {}
     for name in FIELDS:
         value = found.get(name)
@@ -104,7 +109,7 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
             continue
         value = float(value)
         # Tip bias may be zero or negative; every other field is a positive quantity.
-        if math.isfinite(value) and (value > 0 or (name == "tip_bias_v")):
+        if math.isfinite(value) and (value > 0 or (name == "tip_bias")):
             fields[name] = value
     missing = tuple(name for name in FIELDS if name not in fields)
     # A unit pfmdyn cannot convert is kept as written; say so rather than let it pass as SI.

@@ -2,7 +2,7 @@
 
 The format, shared by every command that reads measured spectra::
 
-    # spring_constant_n_per_m: 4.5      <- optional metadata, "# key: value", before the header
+    # spring_constant: 4.5              <- optional metadata, "# key: value", before the header
     # response_unit: pm                 <- other comment lines are allowed there too
     frequency_hz,bias_v,x,y             <- or amplitude,phase_deg instead of x,y
     10000,-5,1.2,-0.3

@@ -32,8 +32,8 @@ from .record import (
 __all__ = ["read_sweep", "split_unit", "is_drive_sweep"]
 
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
-_KEYS = {"Peak amplitude frequency": "free_resonance_hz", "Q factor": "free_quality_factor",
-         "f_res": "free_resonance_hz", "Q": "free_quality_factor"}
+_KEYS = {"Peak amplitude frequency": "free_resonance", "Q factor": "free_quality_factor",
+         "f_res": "free_resonance", "Q": "free_quality_factor"}
 _TABLE_START = ("Sweep data", "[DATA]")
 
 

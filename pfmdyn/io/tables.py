@@ -2,11 +2,11 @@
 
 Format (SI units)::
 
-    # spring_constant_n_per_m: 2.4
-    # length_m: 223e-6
-    # width_m: 24e-6                  <- optional: no resonance depends on it
-    # tip_height_m: 1e-5
-    # free_resonance_hz: 63200          <- first free flexural resonance
+    # spring_constant: 2.4
+    # length: 223e-6
+    # width: 24e-6                  <- optional: no resonance depends on it
+    # tip_height: 1e-5
+    # free_resonance: 63200         <- first free flexural resonance
     # description: optional text
     frequency_hz,bias_v,x,y             <- spectrum (or amplitude,phase_deg), several biases
     ...
@@ -24,10 +24,11 @@ mode measured without damping), and an optional ``quality_factor_uncertainty`` m
 its relative uncertainty (default 5 %). Any other column is an error naming it.
 
 Spellings are forgiven as for spectra (:mod:`pfmdyn.io.columns`): separators, ``%`` comments,
-``key = value``, metadata keys without their unit whose value carries it (``length: 223 um``,
-``f1: 63.2 kHz``), conditions ``air``/``non-contact`` and ``in contact``.  Metadata outside
-any cantilever's range, and frequencies far from ``free_resonance_hz``, are errors: they are
-in another unit than the file says.
+``key = value``, values with their unit (``length: 223 um``, ``f1: 63.2 kHz``), the older
+key spellings (``length_m``, ``free_resonance_hz``: :func:`pfmdyn.names.canonical`),
+conditions ``air``/``non-contact`` and ``in contact``.  Metadata outside any cantilever's
+range, and frequencies far from ``free_resonance``, are errors: they are in another unit than
+the file says.
 
 :func:`read` reads these CSV files; ``overrides`` (metadata keys, from the command line)
 win over the file's values.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
@@ -47,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..names import NAMES, canonical
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
 from .spectra import read_spectra
@@ -55,8 +57,8 @@ from .sweeps import is_drive_sweep
 __all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "is_instrument_file",
            "check_resonance_rows"]
 
-REQUIRED_KEYS = ("spring_constant_n_per_m", "length_m", "tip_height_m", "free_resonance_hz")
-OPTIONAL_KEYS = ("width_m", "frequency_uncertainty_hz", "quality_factor_uncertainty")
+REQUIRED_KEYS = ("spring_constant", "length", "tip_height", "free_resonance")
+OPTIONAL_KEYS = ("width", "frequency_uncertainty_hz", "quality_factor_uncertainty")
 """The width is read when given but never required: no resonance depends on it."""
 RESONANCE_COLUMNS = ("mode", "condition", "frequency_hz")
 OPTIONAL_RESONANCE_COLUMNS = ("quality_factor",)
@@ -65,20 +67,14 @@ FREQUENCY_UNITS = {"frequency_hz": 1.0, "frequency_khz": 1e3, "frequency_mhz": 1
 COLUMN_ALIASES = {"q": "quality_factor", "quality": "quality_factor", "q_factor": "quality_factor",
                   "cond": "condition", "state": "condition", "boundary_condition": "condition",
                   "mode_number": "mode", "mode_no": "mode", "mode_index": "mode"}
-METADATA_ALIASES = {"spring_constant": "spring_constant_n_per_m", "k": "spring_constant_n_per_m",
-                    "k_n_per_m": "spring_constant_n_per_m", "length": "length_m", "width": "width_m",
-                    "tip_height": "tip_height_m", "free_resonance": "free_resonance_hz", "f1": "free_resonance_hz",
-                    "f1_hz": "free_resonance_hz"}
-"""Metadata keys without their unit (the value then carries it: ``length: 223 um``)."""
 CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free", "out_of_contact": "free",
                      "in_contact": "contact", "engaged": "contact"}
 SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
 """Where measured frequencies lie, in units of the free resonance f1: a spectrum may stay below
 f1 (not 20x below); a table's modes are free mode 1 (f1) or above."""
-PLAUSIBLE = {"spring_constant_n_per_m": (1e-4, 1e4, "N/m"), "length_m": (1e-6, 1e-2, "m"),
-             "width_m": (1e-7, 1e-2, "m"), "tip_height_m": (1e-8, 1e-3, "m"),
-             "free_resonance_hz": (500.0, 1e8, "Hz")}
-"""Ranges no AFM cantilever leaves: a value outside is in another unit (um for m, kHz for Hz)."""
+PLAUSIBLE = {name: (NAMES[name].low, NAMES[name].high, NAMES[name].unit) for name in REQUIRED_KEYS + ("width",)}
+"""Ranges no AFM cantilever leaves (:mod:`pfmdyn.names`): a value outside is in another unit
+(um for m, kHz for Hz)."""
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
@@ -92,8 +88,8 @@ discrepancy report says which parameters so few rows leave undetermined."""
 
 
 def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
-    meta = {METADATA_ALIASES.get(key, key): value for key, value in meta.items()}
-    meta.update({key: value for key, value in (overrides or {}).items() if value is not None})
+    meta = {canonical(key) or key: value for key, value in meta.items()}
+    meta.update({canonical(key) or key: value for key, value in (overrides or {}).items() if value is not None})
     missing = [key for key in REQUIRED_KEYS if key not in meta]
     if missing:
         raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
@@ -109,8 +105,8 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         if not low <= values[key] <= high:
             raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
                             f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
-    return Metadata(values["spring_constant_n_per_m"], values["length_m"], values.get("width_m"),
-                    values["tip_height_m"], values["free_resonance_hz"],
+    return Metadata(values["spring_constant"], values["length"], values.get("width"),
+                    values["tip_height"], values["free_resonance"],
                     meta.get("description", ""), values.get("frequency_uncertainty_hz"),
                     values.get("quality_factor_uncertainty"))
 
@@ -122,8 +118,8 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     applied over the file's values.
 
     >>> import tempfile, os
-    >>> text = ("# spring_constant_n_per_m: 2.4\\n# length_m: 2e-4\\n# width_m: 3e-5\\n"
-    ...         "# tip_height_m: 1e-5\\n# free_resonance_hz: 6e4\\nmode,condition,frequency_hz\\n"
+    >>> text = ("# spring_constant: 2.4\\n# length: 2e-4\\n# width: 3e-5\\n"
+    ...         "# tip_height: 1e-5\\n# free_resonance: 6e4\\nmode,condition,frequency_hz\\n"
     ...         "1,free,6e4\\n2,free,3.7e5\\n1,contact,4e5\\n")
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     name = os.path.join(tmp, "r.csv")
@@ -176,12 +172,12 @@ def is_instrument_file(path) -> bool:
 
 def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:
     """Frequencies outside ``band`` (multiples of the free resonance ``f1``) are in another unit
-    than the column (or ``free_resonance_hz``) says."""
+    than the column (or ``free_resonance``) says."""
     low, high = float(np.min(frequency_hz)), float(np.max(frequency_hz))
     if high < band[0] * f1 or low > band[1] * f1:
         raise UserError(f"{where}: frequencies {low:.6g}-{high:.6g} Hz lie far from the free resonance "
                         f"{f1:.6g} Hz of the metadata; check their units (frequency_hz or frequency_khz "
-                        "column, free_resonance_hz in Hz)")
+                        "column, free_resonance in Hz)")
 
 
 def _column(name: str) -> str:

@@ -2,7 +2,7 @@
 
 The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
 ``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
-and ``contact_uncertainty_hz``).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
+and ``contact_uncertainty`` in Hz, ``contact_uncertainty_hz`` read too).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
 from __future__ import annotations
@@ -57,23 +57,23 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
                      else str(path)) for key in ("spring_constant", "free_resonance"))
     try:
         mode, sigma = (float(scalar(attrs.get(key, default))) for key, default in
-                       (("contact_mode", 1), ("contact_uncertainty_hz", 0.0)))
+                       (("contact_mode", 1), ("contact_uncertainty", 0.0)))
     except (TypeError, ValueError):
         mode = sigma = math.nan
     if not (math.isfinite(mode) and mode == int(mode) and mode >= 1 and math.isfinite(sigma) and sigma >= 0):
-        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty_hz a number "
-                        f"from 0, got {attrs.get('contact_mode', 1)!r} and {attrs.get('contact_uncertainty_hz', 0.0)!r}")
-    result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty_hz=sigma,
+        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty a number "
+                        f"from 0, got {attrs.get('contact_mode', 1)!r} and {attrs.get('contact_uncertainty', 0.0)!r}")
+    result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty=sigma,
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
     try:        # a new map each time (nothing to resume): whatever was at out is replaced
         group = open_group(out, "w")
-        for name, value in (("k1", result.k1_n_per_m), ("k1_stderr", result.k1_uncertainty_n_per_m)):
+        for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr)):
             write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
                         description=f"{name} from the contact resonance", dims=["y", "x"])
     except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
         raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
-    k1 = np.asarray(result.k1_n_per_m)
+    k1 = np.asarray(result.k1)
     median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
     return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}
 

@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..analysis.deconvolve import Deconvolution
+from ..analysis.deconvolve import Deconvolution, SurfaceDisplacement
 
 
-def plot_spectra(result: Deconvolution, unit: str = "a.u.") -> Figure:
+def plot_spectra(result: Deconvolution, unit: str = "a.u.", surface: SurfaceDisplacement | None = None) -> Figure:
     """Plot :math:`|G_{elec}|` and :math:`|d_{eff}|` against frequency on log scales (cf. Fig. 15 a,b).
 
     Parameters
@@ -22,6 +22,9 @@ def plot_spectra(result: Deconvolution, unit: str = "a.u.") -> Figure:
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     unit : str, optional
         Unit of the response.
+    surface : SurfaceDisplacement, optional
+        With a lever given: the true surface displacement drawn over ``|d_eff|``, the
+        frequencies where it is undetermined shaded.
 
     Returns
     -------
@@ -54,6 +57,13 @@ def plot_spectra(result: Deconvolution, unit: str = "a.u.") -> Figure:
         ax.set_ylabel(label)
         ax.set_title(title, fontsize="medium")
         ax.grid(True, which="both", alpha=0.3)
+    if surface is not None:
+        bottom.plot(khz, np.abs(surface.d_eff), "k--", lw=1.0,
+                    label=f"true surface displacement at $x_s/L$ = {surface.spot_position:g}")
+        for i, (low, high, _) in enumerate(surface.undetermined):
+            bottom.axvspan(low / 1e3, high / 1e3, color="0.5", alpha=0.2, lw=0,
+                           label="calibration undetermined" if i == 0 else None)
+        bottom.legend(loc="best", fontsize="small")
     top.legend(loc="best", fontsize="small")
     bottom.set_xlabel("frequency (kHz)")
     return fig

@@ -4,7 +4,7 @@ Every bracket ``[a, b]`` with ``f(a) f(b) <= 0`` is refined at once (one vectori
 of ``f`` per iteration).  Regula falsi steps to the secant root; when the same end is kept
 twice running, its stored value is halved (Illinois), so both ends move and convergence
 stays superlinear (halving at every step would fall back to bisection-like speed).
-Certified roots (interval arithmetic) are :mod:`pfmdyn.roots.certify`'s business; this is
+Certified roots (interval arithmetic) are :mod:`pfmdyn.derivations.certify`'s business; this is
 the fast path used by the discrepancy fits and by branch sweeps.
 """
 from __future__ import annotations

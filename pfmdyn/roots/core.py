@@ -5,7 +5,7 @@ The resonances of a family are the real zeros ``z > 0`` of its characteristic fu
 torsion).  The scaled forms vanish at ``z = 0`` as well (the beam at rest, not a mode),
 so **a root is a zero with z > 0**; the zero at the origin is never reported.
 
-How a list of roots is certified: :mod:`pfmdyn.roots.certify` (exact series near the origin,
+How a list of roots is certified: :mod:`pfmdyn.derivations.certify` (exact series near the origin,
 complete isolation with ``arb_series.find_roots``, interval Newton refinement).
 
 When any proof fails (a double root, an undecidable sign, fewer roots than asked below the
@@ -25,7 +25,7 @@ from fractions import Fraction
 
 import flint
 
-from .certify import CertificationError, certify, floor_string, interval_strings, rounded
+from ..derivations.certify import CertificationError, certify, floor_string, interval_strings, rounded
 from ..generated import characteristic, families
 
 __all__ = ["FAMILIES", "PARAMETER_HELP", "CertificationError", "RootResult", "characteristic_function",

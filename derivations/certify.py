@@ -14,8 +14,10 @@ The project's one certified-root algorithm (python-flint ``arb`` balls throughou
    a rigorous bisection step whenever Newton fails to halve the width.
 
 Any failed proof raises :class:`CertificationError`.  The functions here know nothing of
-beams: :mod:`pfmdyn.roots` applies them to the generated characteristic functions and
-:mod:`pfmdyn.derivations.roots` to SymPy expressions.
+beams: :mod:`pfmdyn.derivations.roots` applies them to SymPy expressions (the checks of
+``pfmdyn verify``), :mod:`pfmdyn.roots` and the analyses to the generated characteristic
+functions.  It lives at the bottom layer so that both sides use the one algorithm, and it
+imports python-flint only (no SymPy): numeric code may import it at module level.
 """
 from __future__ import annotations
 

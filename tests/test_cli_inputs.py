@@ -1,0 +1,286 @@
+"""Every command on bad and edge-case command-line input (issue 23, item 2).
+
+A bad value, a missing or conflicting option, a malformed file or an output path that cannot
+be written ends in exit status 2 and one line ``pfmdyn COMMAND: error: ...`` naming the option
+or the file, with nothing written; a valid but extreme input succeeds and states what it
+cannot determine.  The wide sweep is ``benchmarks/cli_inputs.py``; here the failures it found
+(now fixed) and a representative set of the rest, each run in-process.
+"""
+from __future__ import annotations
+
+import cmath
+import json
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from pfmdyn import cli
+from pfmdyn.analysis.resonances import resonances
+from pfmdyn.cantilever import Cantilever
+
+LEVER = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"]
+PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "100"]
+CSV = "frequency_hz,bias_v,x,y\n" + "".join(f"{f},{v},{1 + 0.1 * v},{0.1 * v}\n"
+                                          for f in (1e5, 2e5, 3e5) for v in (-1, 0, 1))
+
+
+def _run(argv) -> int:
+    """Exit status of the command in-process (argparse's refusals raise SystemExit)."""
+    try:
+        return cli.main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+
+def _argv(tmp: Path, command: str) -> dict:
+    """Base command lines (their outputs all under ``tmp``) and the outputs they may write."""
+    data = tmp / "data.csv"
+    data.write_text(CSV)
+    json_out, png = str(tmp / "out.json"), str(tmp / "out.png")
+    return {
+        "resonances": ["resonances", *LEVER, "--json", json_out],
+        "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", json_out, "--plot", png],
+        "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
+                      "--json", json_out],
+        "diagram": ["diagram", "--out", png, "--frequency-points", "20", "--bias-points", "5"],
+        "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp / "dec")],
+        "roots": ["roots", "free", "--n", "2", "--json", json_out],
+        "branches": ["branches", "indentation", "--out", png, "--points", "20", "--modes", "1"],
+        "inspect": ["inspect", str(data), "--json", json_out],
+    }[command]
+
+
+def _outputs(tmp: Path) -> list[Path]:
+    return [p for p in (tmp / "out.json", tmp / "out.png", tmp / "dec", tmp / "out.csv", tmp / "sub") if p.exists()]
+
+
+def _override(argv: list, extra: list) -> list:
+    """``argv`` with each flag of ``extra`` replacing its earlier value (or appended)."""
+    argv = list(argv)
+    i = 0
+    while i < len(extra):
+        flag = extra[i]
+        value = extra[i + 1] if i + 1 < len(extra) and not extra[i + 1].startswith("--") else None
+        if flag in argv and value is not None:
+            argv[argv.index(flag) + 1] = value
+        else:
+            argv += [flag] + ([value] if value is not None else [])
+        i += 2 if value is not None else 1
+    return argv
+
+
+REFUSED = [
+    # (command, extra arguments, words the one line must hold)
+    ("resonances", ["--k1", "nan"], "--k1"),
+    ("resonances", ["--k1", "abc"], "--k1"),
+    ("resonances", ["--tip-position", "1.5"], "--tip-position"),
+    ("resonances", ["--tip-position", "0"], "--tip-position"),
+    ("resonances", ["--spot-position", "0"], "--spot-position"),
+    ("resonances", ["--tilt", "91"], "--tilt"),
+    ("resonances", ["--poisson", "0.7", "--k1", "100"], "--poisson"),
+    ("resonances", ["--poisson", "-1", "--k1", "100"], "--poisson"),
+    ("resonances", ["--k1", "100", "--k2", "5", "--k2-over-k1", "0.5"], "not several"),
+    ("resonances", ["--modes", "0"], "--modes"),
+    ("resonances", ["--modes", "51"], "--modes"),
+    ("resonances", ["--length", "-2e-4"], "--length"),
+    ("resonances", ["--quality-factor", "inf"], "--quality-factor"),
+    ("resonances", ["--k2", "5"], "--k1"),
+    ("resonances", ["--json", "{tmp}"], "cannot write"),                       # a directory
+    ("resonances", ["--json", "{tmp}/data.csv/out.json"], "cannot write"),     # a file among its parents
+    ("spot", ["--frequency", "0"], "frequency"),
+    ("spot", ["--frequency", "x"], "--frequency"),                              # argparse: one line too
+    ("spot", ["--frequency", "1e12"], "beyond what the beam model"),          # was a 40 s run
+    ("spot", ["--k1", "0"], "needs a contact"),                                 # was inf and NaN numbers
+    ("spot", ["--spot-position", "1.5"], "--spot-position"),
+    ("spot", ["--plot", "{tmp}/out.xyz"], "cannot write"),                      # was a ValueError traceback
+    ("spot", ["--plot", "{tmp}/data.csv/out.png"], "cannot write"),            # was written: the JSON
+    ("stiffness", ["--contact", "0"], "--contact"),
+    ("stiffness", ["--contact", "nan"], "--contact"),
+    ("stiffness", ["--mode", "0"], "--mode"),
+    ("stiffness", ["--tip-position", "1.5"], "--tip-position"),
+    ("stiffness", ["--k2", "5", "--poisson", "0.3"], "not several"),
+    ("stiffness", ["--contact", "6e4"], "free limit"),
+    ("stiffness", ["--json", "{tmp}"], "cannot write"),
+    ("diagram", ["--spot-position", "0"], "--spot-position"),
+    ("diagram", ["--spot-position", "1.01"], "--spot-position"),
+    ("diagram", ["--d-eff", "nan"], "--d-eff"),
+    ("diagram", ["--k1", "0"], "--k1"),
+    ("stiffness", ["--tip-radius", "-1"], "--tip-radius"),               # was accepted, unused
+    ("stiffness", ["--mode", "1e30"], "--mode"),                         # was a ValueError traceback
+    ("spot", ["--frequency", "nan"], "--frequency"),
+    ("diagram", ["--fmin", "0"], "--fmin"),
+    ("diagram", ["--frequency-points", "100000000"], "--frequency-points"),   # was a MemoryError or a swap
+    ("diagram", ["--out", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
+    ("diagram", ["--csv", "{tmp}/data.csv/out.csv"], "cannot write"),
+    ("deconvolve", ["--out", "{tmp}/data.csv/sub"], "not a directory"),        # was a NotADirectoryError
+    ("deconvolve", ["--surface-potential", "nan"], "--surface-potential"),
+    ("deconvolve", [*PROBE, "--spot-position", "0"], "--spot-position"),
+    ("deconvolve", ["--spring-constant", "2"], "--free-resonance"),
+    ("roots", ["--digits", "5000"], "--digits"),                                 # was a ValueError traceback
+    ("roots", ["--n", "0"], "--n"),
+    ("roots", ["--n", "100000"], "--n"),                                         # was a run of hours
+    ("branches", ["--points", "1"], "--points"),
+    ("branches", ["--modes", "51"], "--modes"),
+    ("branches", ["--out", "{tmp}/out.xyz"], "cannot write"),
+    ("inspect", ["--json", "{tmp}"], "cannot write"),
+]
+
+
+@pytest.mark.parametrize("command, extra, words", REFUSED, ids=[f"{c}{' '.join(e)}" for c, e, _ in REFUSED])
+def test_bad_input_is_one_line_and_writes_nothing(command, extra, words, tmp_path, capsys):
+    (tmp_path / "dir.png").mkdir()
+    extra = [e.replace("{tmp}", str(tmp_path)) for e in extra]
+    code = _run(_override(_argv(tmp_path, command), extra))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2, err
+    assert len(err) == 1 and err[0].startswith(f"pfmdyn {command}: error: "), err
+    assert words in err[0], err
+    assert _outputs(tmp_path) == []
+
+
+@pytest.mark.parametrize("command, missing", [("resonances", "--length"), ("spot", "--frequency"),
+                                              ("deconvolve", "--surface-potential"), ("branches", "--out")])
+def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys):
+    argv = _argv(tmp_path, command)
+    i = argv.index(missing)
+    assert _run(argv[:i] + argv[i + 2:]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"pfmdyn {command}: error: ") and missing in err[0], err
+
+
+@pytest.mark.parametrize("name, text, words", [
+    ("empty", "", "empty"),
+    ("one_bias", "frequency_hz,bias_v,x,y\n100000,0,1,0\n200000,0,1,0\n", "one bias"),
+    ("nan", CSV.replace("1.1,", "nan,", 1), "'x'"),
+    ("text", CSV.replace("1.1,", "abc,", 1), "'x'"),
+    ("clashing_duplicate", CSV + "100000,1,9,9\n", "duplicate"),
+])
+def test_deconvolve_malformed_csv(name, text, words, tmp_path, capsys):
+    data = tmp_path / f"{name}.csv"
+    data.write_text(text)
+    out = tmp_path / "dec"
+    assert _run(["deconvolve", str(data), "--surface-potential", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and data.name in err[0] and words in err[0], err
+    assert not out.exists()
+
+
+def test_valid_extremes_succeed(tmp_path, capsys):
+    """Spot exactly at the free end, k1/k = 1e4 and a lever at the ends of the real ranges."""
+    out = tmp_path / "r.json"
+    assert _run(["spot", *PROBE, "--frequency", "1e5", "--spot-position", "1", "--k1", "2e4"]) == 0
+    assert _run(["resonances", "--spring-constant", "0.05", "--free-resonance", "1.3e4", "--length", "5e-4",
+                 "--k1", "500", "--tip-height", "1e-5", "--tilt", "15", "--poisson", "0.3", "--json", str(out)]) == 0
+    document = json.loads(out.read_text())
+    assert all(f is not None and f > 0 for f in document["free_hz"] + document["contact_hz"])
+    capsys.readouterr()
+
+
+def _numbers(document) -> list:
+    if isinstance(document, dict):
+        return [x for value in document.values() for x in _numbers(value)]
+    if isinstance(document, list):
+        return [x for value in document for x in _numbers(value)]
+    return [document]
+
+
+@pytest.mark.parametrize("k, length, f1", [(0.05, 5e-4, 1.3e4), (0.05, 1e-4, 3e5), (50.0, 5e-4, 4e4),
+                                           (50.0, 1e-4, 1e6)])
+@pytest.mark.parametrize("k1_over_k", [1.0, 1e4])
+def test_resonances_json_over_real_ranges(k, length, f1, k1_over_k, tmp_path, capsys):
+    """No null in the report where a number is promised (the lever is undamped, Q lossless aside)."""
+    out = tmp_path / "r.json"
+    assert _run(["resonances", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", str(length),
+                 "--k1", str(k * k1_over_k), "--tip-height", "1e-5", "--k2-over-k1", "0.8", "--tilt", "12",
+                 "--tip-position", "0.9", "--json", str(out)]) == 0
+    document = json.loads(out.read_text())
+    for key in ("free_hz", "contact_hz", "free_complete_below_hz", "contact_complete_below_hz"):
+        assert None not in _numbers(document[key]), key
+    # contact modes lie above the free ones of the same order (k1 only stiffens)
+    assert all(c > f for c, f in zip(document["contact_hz"], document["free_hz"]))
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("quality_factor", [0.3, 1.0, 5.0])
+def test_heavy_internal_friction_keeps_each_mode(quality_factor):
+    """E (1 + i/Q) makes omega**2 complex by the same factor: r_c = r_n sqrt(1 + i/Q) for each free
+    mode.  Before, at Q <= 1 the secant run from the undamped root landed on the next mode's root
+    (mode 2 reported mode 1's Q and frequency) or failed."""
+    lever = Cantilever(2.0, 7e4, 2e-4, quality_factor=quality_factor)
+    result = resonances(lever, None, modes=3)
+    for hz, damped_hz, q in zip(result.free.hz, result.free.damped_hz, result.free.q):
+        exact = (hz / 7e4) * cmath.sqrt(1 + 1j / quality_factor)
+        assert damped_hz == pytest.approx(7e4 * exact.real, rel=1e-8)
+        assert q == pytest.approx(abs(exact) / (2 * exact.imag), rel=1e-8)
+
+
+@pytest.mark.parametrize("g", [0.5, 1.0, 3.0, 10.0])
+def test_viscous_drag_overdamped_modes_are_undetermined(g, tmp_path, capsys):
+    """Drag on a free lever: r (r - i g) = r_n**2, so r_c = (i g + sqrt(4 r_n**2 - g**2)) / 2 while
+    g < 2 r_n, and the mode is overdamped (no resonance) beyond.  Before, g = 1 ended in a traceback."""
+    out = tmp_path / "r.json"
+    assert _run(["resonances", *LEVER, "--viscous-loss", str(g), "--json", str(out)]) == 0
+    document = json.loads(out.read_text())
+    for hz, damped_hz, q, why in zip(document["free_hz"], document["free_damped_hz"], document["free_q"],
+                                     document["free_undetermined"]):
+        rn = hz / 7e4
+        if g < 1.9 * rn:
+            exact = (1j * g + cmath.sqrt(4 * rn ** 2 - g ** 2)) / 2
+            assert damped_hz == pytest.approx(7e4 * exact.real, rel=1e-8)
+            assert q == pytest.approx(abs(exact) / (2 * exact.imag), rel=1e-8)
+        elif g >= 2 * rn:
+            assert damped_hz is None and q is None and "overdamped" in why
+    assert not re.search(r"\bnan\b", capsys.readouterr().out, re.IGNORECASE)
+
+
+def test_argparse_refusal_is_one_line_in_every_command(capsys):
+    for command in cli.COMMANDS:
+        assert _run([command, "--no-such-option"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"pfmdyn {command}: error: "), (command, err)
+
+
+def test_error_is_not_a_catch_all(monkeypatch):
+    """A programming error still surfaces as an exception (only UserError becomes one line)."""
+    from pfmdyn.commands import resonances as command
+
+    monkeypatch.setattr(command, "resonances", lambda *a, **k: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        cli.main(["resonances", *LEVER])
+
+
+def test_no_nan_printed_for_spot_at_free_end_in_stiff_contact(capsys):
+    assert _run(["spot", *LEVER, "--tip-height", "1e-5", "--k1", "2e4", "--frequency", "2e5"]) == 0
+    assert not re.search(r"\bnan\b", capsys.readouterr().out, re.IGNORECASE)
+
+
+def test_auxetic_sample_is_a_valid_poisson_ratio():
+    """-1 < nu <= 1/2 for an isotropic solid; Mindlin's k2/k1 = 2 (1 - nu) / (2 - nu) = 1.2 at nu = -1/2."""
+    import argparse
+
+    from pfmdyn.commands import flags
+
+    contact = flags.contact(argparse.Namespace(k1="100", poisson="-0.5"))
+    assert contact.k2_of(100.0) == pytest.approx(120.0, rel=1e-12)
+
+
+def test_a_mode_without_an_amplitude_peak_says_so():
+    """Contact mode 3 of a stiff, tilted, damped lever (Q 5) is a shoulder on mode 4's flank: no local
+    maximum of |slope| within its width (dense evaluation), so no peak frequency, with the reason;
+    its Q and damped frequency stand.  Before, the window's largest value (its edge) was reported."""
+    import numpy as np
+
+    from pfmdyn.cantilever import Contact
+
+    lever = Cantilever(50.0, 4e4, 5e-4, tip_height=1e-5, tilt=12.0, tip_position=0.9, quality_factor=5.0)
+    contact = Contact(k1=5e5, k2_over_k1=0.8)
+    modes = resonances(lever, contact, modes=3).in_contact
+    centre, q = modes.damped_hz[2], modes.q[2]
+    f = np.linspace(centre * (1 - 1 / q), centre * (1 + 1 / q), 2001)
+    a = np.abs(lever.response(f, contact).vertical)
+    assert not np.any((a[1:-1] > a[:-2]) & (a[1:-1] > a[2:]))
+    assert math.isnan(modes.peak_hz[2]) and "no amplitude peak" in modes.undetermined[2]
+    assert math.isfinite(q) and 4 < q < 8
+    assert all(math.isfinite(p) for p in modes.peak_hz[:2])
