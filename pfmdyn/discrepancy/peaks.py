@@ -55,12 +55,17 @@ PROMINENCE = 20.0
 """A local maximum of the bias-summed magnitude is a resonance when it rises this many noise
 levels above the higher of its two bases (noise maxima rise 2-5 noise levels)."""
 
+RISE_RATIO = 2.0
+"""... and to at least this many times that base: a broad hump (the shoulder beyond an
+antiresonance, carrying noise) can rise a hundred noise levels on a quiet spectrum yet only
+a quarter above its base, while resonances, even weakly coupled ones, rise three times and more."""
+
 
 def _maxima(size, freq_u=None):
     """Resonances among the local maxima of ``size``: those that rise :data:`PROMINENCE` noise
-    levels above their bases; with several bands (:func:`bands` of ``freq_u``), also each band's
-    highest interior sample when it stands twice above the band's lowest (a band holding only
-    the top of a peak has no base on either side).
+    levels above their bases and to :data:`RISE_RATIO` times the higher base; with several bands
+    (:func:`bands` of ``freq_u``), also each band's highest interior sample when it stands twice
+    above the band's lowest (a band holding only the top of a peak has no base on either side).
 
     Height alone (a maximum five times above the median) is no test: a weakly coupled mode (a
     set-back tip near a node of its slope) stands only 2-3 times above the median, beside its
@@ -78,9 +83,10 @@ def _maxima(size, freq_u=None):
     # Noise of ``size`` from its second differences (their median ignores the peaks), with a
     # floor for data without noise: a thousandth of the median.
     noise = max(np.median(np.abs(np.diff(size, 2))) / (0.6745 * math.sqrt(6)), 1e-3 * np.median(size))
-    rise = peak_prominences(size, local)[0] if len(local) else np.zeros(0)
+    rise, left, right = peak_prominences(size, local) if len(local) else (np.zeros(0), local, local)
     which = bands(freq_u) if freq_u is not None else np.zeros(len(size), int)
-    found = set(local[rise > PROMINENCE * noise].tolist())
+    found = set(local[(rise > PROMINENCE * noise)
+                      & (size[local] >= RISE_RATIO * np.maximum(size[left], size[right]))].tolist())
     if which.max() > 0:
         for b in range(which.max() + 1):
             idx = np.flatnonzero(which == b)
