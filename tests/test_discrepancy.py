@@ -90,8 +90,7 @@ def test_row_order_does_not_change_the_report(tmp_path):
     reports = []
     for order in ("instrument", "frequency", "shuffled"):
         report = _run(tmp_path, spectrum(beam, FREQ[::2], (-1.0, 0.0, 2.0), seed=2, order=order))
-        report.pop("_fits")
-        reports.append(json.dumps(report, sort_keys=True, default=str))
+        reports.append(json.dumps(report.to_dict(), sort_keys=True, default=str))
     assert reports[0] == reports[1] == reports[2]
     assert '"missing_effects": ["damping"]' in reports[0]
 
@@ -117,7 +116,7 @@ def test_plot_axis_follows_data(tmp_path):
                            response=(1 + f / 1e5) * np.exp(1j * f / 1e4))
     collapsed = SimpleNamespace(prediction=1e-12 * data.response, residual=data.response)
     exact = SimpleNamespace(prediction=data.response, residual=0 * data.response)
-    fig = plot_spectrum_report(data, {"_fits": (collapsed, exact)})
+    fig = plot_spectrum_report(data, SimpleNamespace(fits=(collapsed, exact)))
     low, high = fig.axes[0].get_ylim()
     fig.clear()
     assert 0.5 < low < 2 and 3 < high < 10

@@ -227,8 +227,8 @@ def test_closed_form_normal_matrix_matches_the_explicit_jacobian():
     model = fit.BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f,
                              mechanisms=("internal", "viscous", "distributed"))
     n = 5
-    p = np.column_stack([np.log(rng.uniform(200, 400, n)), np.log(rng.uniform(30, 90, n)),
-                         np.log(rng.uniform(100, 300, n)), rng.uniform(0, 0.1, n)])
+    p = np.column_stack([np.log10(rng.uniform(200, 400, n)), np.log10(rng.uniform(30, 90, n)),
+                         np.log10(rng.uniform(100, 300, n)), rng.uniform(0, 0.1, n)])
     c = rng.standard_normal((n, 2, 2, 2)) + 1j * rng.standard_normal((n, 2, 2, 2))   # (pixel, q, band, drive)
     g, dg = model.design(p)
     columns = []

@@ -9,7 +9,7 @@ from threadpoolctl import threadpool_limits
 from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
-from ..discrepancy.spectrum import analyse, summary, thin
+from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
 from ..discrepancy.inputs import read
 from ..io.results import check_writable, dumps, write_json
@@ -43,7 +43,7 @@ OVERRIDES = tuple((flag(key), key, what) for key, what in (
     ("free_resonance", "first free flexural resonance, Hz")))
 
 
-def _analyse(data, args) -> dict:
+def _analyse(data, args):
     if isinstance(data, SpectrumData):
         return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
     return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
@@ -67,21 +67,20 @@ def run(args: argparse.Namespace) -> int:
         # Data that read correctly but defeat the numerics still get one line, not a traceback.
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
                         "check the metadata (spring constant, length, tip height, free resonance)") from None
-    fits = report.pop("_fits", None)
     if stride > 1:
-        report["frequency_stride"] = stride
-    print(summary(report))
+        report = report.updated(frequency_stride=stride)
+    print(report.report())
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     if args.json == "-":
-        print(dumps(report))
+        print(dumps(report.to_dict()))
     elif args.json:
-        write_json(args.json, report)
+        write_json(args.json, report.to_dict())
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         try:
-            plot(data, {**report, "_fits": fits}).savefig(args.plot, dpi=120)
+            plot(data, report).savefig(args.plot, dpi=120)
         except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
             raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
     return 0

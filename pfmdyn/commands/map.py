@@ -21,6 +21,7 @@ import dataclasses
 import math
 
 from ..errors import UserError
+from ..fitting.noise import GAP_LIMIT
 from ..names import checked
 from . import flags
 
@@ -57,8 +58,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
-    parser.add_argument("--gap-threshold", type=float, default=0.2,
-                        help="relative residual above which a pixel is marked unexplained (default 0.2)")
+    parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
+                        help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
+                             f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
     parser.add_argument("--surface-potential", type=float, default=None,
                         help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
                              "this bias (default: fitted with +distributed, else 0, the intercept); the "
@@ -152,7 +154,6 @@ def run(args) -> int:
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    ny, nx = source.shape
     if args.png:
         from ..maps import open_result
         from ..plots.maps import plot_maps
@@ -163,10 +164,5 @@ def run(args) -> int:
         from ..maps.usid import write_usid
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
-    explained = (f"explained {100 * s['explained_fraction']:.1f} %"
-                 + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
-                    if s.get("at_bound_fraction") else "") + f", median gap {s['median_gap']:.3g}"
-                 + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))
-    print(f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} pixels/s), "
-          f"{s['blocks_done']}/{s['blocks_total']} done; {explained}; maps in {s['out']}{written}")
+    print(s.report() + written)
     return 0

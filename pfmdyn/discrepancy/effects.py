@@ -8,8 +8,12 @@ resonances, the profile along which the springs are matched to the peaks, dense 
 one lies near each exact match: :func:`pfmdyn.discrepancy.peaks.match_starts`), how many
 linear design columns it adds, whether it moves the undamped resonances, whether only a
 spectrum can show it (``spectrum_only``: background, the laser spot; damping shows in a
-table's Q values), and the derivation it comes from.  ``damping`` is one effect name with
-three mechanisms (components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
+table's Q values), and the derivation it comes from; and what it does to the model: each component is a subclass
+of :class:`Effect` that gives its chain-rule term of the Jacobian (:class:`Chain`), the
+generated partials that needs, its design columns and their derivatives, and the quantities
+derived from its parameters, so that adding an effect is adding one component (parameters:
+:class:`pfmdyn.fitting.parameters.Parameter`).  ``damping`` is one effect name with three mechanisms
+(components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
 :mod:`pfmdyn.derivations.damping`).
 
 Bounds of the springs depend on the cantilever: :func:`spring_parameters` centres them on
@@ -21,103 +25,248 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..generated import formulas
+from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
+from ..generated import detection, formulas
 
-__all__ = ["Parameter", "Effect", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
+__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
 
-@dataclass(frozen=True)
-class Parameter:
-    """A nonlinear parameter: name, unit, internal transform, bounds (internal coordinates).
+@dataclass
+class Chain:
+    """What the chain rule composes at one parameter vector (:meth:`pfmdyn.discrepancy.model.Model.slopes_and_jacobian`).
 
-    ``name`` is the internal coordinate (the derivations' symbol), ``public`` the name reports use
-    (:mod:`pfmdyn.names`; default ``name``).  ``log``: internal is log10 of the value;
-    ``inverse``: internal is 1/value (a loss factor, 0 meaning no loss); otherwise the value is
-    ``scale`` times the internal coordinate (the tilt: the derivations' angle in rad is minus the
-    public tilt in degrees).
+    ``part``: the generated partials of the four slopes w.r.t. :data:`pfmdyn.generated.tip_setback.JACOBIAN_PARAMETERS`
+    (0 where not computed); ``rotation``: d slopes / d (k1 in beam axes, k2, alpha) through the
+    rotated spring tensor; ``coords``: :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
+    the undamped ``beta`` at each frequency, ``b1`` and ``d_b1`` the free root and its derivatives
+    w.r.t. ``(mu, gamma)``; ``factors`` and ``d_factors`` the generated damping factors
+    (:mod:`pfmdyn.generated.damping`) and their derivatives; ``spring`` the damped ``k1``.
     """
 
-    name: str
-    unit: str
-    lower: float
-    upper: float
-    log: bool = False
-    inverse: bool = False
-    description: str = ""
-    public: str = ""
-    scale: float = 1.0
-
-    @property
-    def key(self) -> str:
-        """The name reports use.
-
-        >>> Parameter("gamma", "", 0.5, 1.0, public="tip_position").key
-        'tip_position'
-        """
-        return self.public or self.name
-
-    def value(self, internal: float) -> float:
-        """Physical value of an internal coordinate.
-
-        >>> Parameter("inv_q", "", 0.0, 0.5, inverse=True).value(0.01)
-        100.0
-        """
-        if self.inverse:
-            return math.inf if internal <= 0 else 1.0 / internal
-        return 10.0**internal if self.log else self.scale * float(internal)
-
-    def stderr(self, internal: float, sd: float) -> float:
-        """Uncertainty of the physical value from that of the internal one (delta method)."""
-        if self.inverse:
-            return math.inf if internal <= 0 else sd / internal**2
-        return self.value(internal) * math.log(10) * sd if self.log else abs(self.scale) * sd
+    part: dict
+    rotation: list
+    coords: dict
+    meta: object
+    root_r: object
+    b1: float
+    d_b1: tuple
+    factors: tuple
+    d_factors: tuple
+    spring: object
 
 
 @dataclass(frozen=True)
 class Effect:
-    """One component of the discrepancy model (see module docstring)."""
+    """One component of the discrepancy model (see module docstring): its parameters and what
+    it does to the model.  The base class moves nothing; a subclass gives its behaviour:
+
+    * :meth:`jacobian`: d slopes / d each of its internal parameters, by the chain rule
+      (:class:`Chain`), and :meth:`partials` the generated partials that needs;
+    * :meth:`design_columns` (``columns`` of them) and :meth:`design_derivative`: linear columns
+      it adds to the design and their parameter derivatives times their coefficients.
+    """
 
     name: str
     parameters: tuple[Parameter, ...]
-    null: tuple[float, ...]
-    seeds: tuple[float, ...]
     derivation: str
     columns: int = 0
     moves_resonances: bool = False
     spectrum_only: bool = False
 
+    @property
+    def null(self) -> tuple[float, ...]:
+        """Internal values that switch the effect off."""
+        return tuple(p.null for p in self.parameters)
 
-_LOSS = "internal friction: complex modulus E (1 + i/Q)"
+    @property
+    def seeds(self) -> tuple[float, ...]:
+        """Seed values of the effect's (one) parameter for fresh starts."""
+        return self.parameters[0].seeds if self.parameters else ()
+
+    @property
+    def frees_lateral_spring(self) -> bool:
+        """Whether the effect fits ``k2`` where the baseline holds it at 0 (``--vertical-only``)."""
+        return False
+
+    def partials(self, coords) -> set[str]:
+        """The generated partials its :meth:`jacobian` uses at coordinates ``coords``."""
+        return set()
+
+    def reading(self, coords):
+        """Where the model reads the slope when the effect is present: None (the free end,
+        :mod:`pfmdyn.generated.tip_setback`) or a generated module and its arguments after ``beta``."""
+        return None
+
+    def jacobian(self, chain: Chain) -> tuple:
+        """d slopes (4, n) / d each internal parameter, in order."""
+        return ()
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        """Its linear design columns (rows) from the slopes per row ``(d1, d2, f0, q0)``."""
+        return []
+
+    def design_derivative(self, dT, coef):
+        """``(bias-independent, per-volt)`` parts of ``(d columns / d internal) @ coef`` from the
+        slope derivatives ``dT`` (4, p, n) and its own coefficients ``coef``, or None."""
+        return None
+
+    def derived(self, values: dict, meta) -> dict:
+        """Reported quantities that follow from its parameters' ``values`` (:meth:`FitResult.parameters`)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class Damping(Effect):
+    """One damping mechanism: the generated substitution of :mod:`pfmdyn.generated.damping`
+    (complex ``beta``, ``k``, ``k1`` and tip mass), the loss ``index``-th of ``(1/Q, g, x)``;
+    ``uses``: the generated partials its factors move (the others' factors stay 1)."""
+
+    index: int = 0
+    uses: tuple[str, ...] = ()
+
+    def partials(self, coords) -> set[str]:
+        return set(self.uses)
+
+    def jacobian(self, chain: Chain) -> tuple:
+        q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
+        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.k * d_f[1][q])
+                + chain.rotation[0] * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
+
+
+@dataclass(frozen=True)
+class ViscousDamping(Damping):
+    """Viscous drag; reports the half-power width it gives every peak (Hz)."""
+
+    def partials(self, coords) -> set[str]:
+        # drag acts on a tip mass too (its mass factor)
+        return set(self.uses) | ({"mu"} if coords["mu"] != 0.0 else set())
+
+    def derived(self, values: dict, meta) -> dict:
+        loss = values["viscous_loss"]
+        if loss["value"] is None:
+            return {}
+        width = formulas.viscous_width(loss["value"], meta.f1)
+        return {"viscous_width_hz": {"value": float(width), "stderr": None, "unit": "Hz",
+                                     "determined": loss["determined"]}}
+
+
+@dataclass(frozen=True)
+class ContactDamping(Damping):
+    """A dashpot beside ``k1``: ``T_d1`` no longer carries the constant part of ``f0``, so ``T_f``
+    is a column of its own (coefficient ``f0`` at zero bias); reports the dashpot ``eta``."""
+
+    columns: int = 1
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        return [slopes[2]]
+
+    def design_derivative(self, dT, coef):
+        return dT[2] * coef[0], None
+
+    def derived(self, values: dict, meta) -> dict:
+        if not values.get("k1", {}).get("value"):
+            return {}
+        loss = values["contact_loss"]
+        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.f1)
+        return {"eta": {"value": float(eta), "stderr": None, "unit": "N s/m", "determined": loss["determined"]}}
+
+
+@dataclass(frozen=True)
+class TipMass(Effect):
+    """A point mass ``mu`` (tip mass / beam mass) at the tip; it lowers the free root too."""
+
+    def partials(self, coords) -> set[str]:
+        return {"mu", "beta"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        part = chain.part
+        return (part["mu"] * chain.factors[3] + part["beta"] * (chain.root_r / chain.b1 * chain.factors[0] * chain.d_b1[0]),)
+
+
+@dataclass(frozen=True)
+class TipSetback(Effect):
+    """The tip at ``gamma L`` from the clamp; with a tip mass the free root moves with it."""
+
+    def partials(self, coords) -> set[str]:
+        return {"gamma"} | ({"beta"} if coords["mu"] != 0.0 else set())
+
+    def jacobian(self, chain: Chain) -> tuple:
+        part = chain.part
+        return (part["gamma"] + part["beta"] * (chain.root_r / chain.b1 * chain.factors[0] * chain.d_b1[1]),)
+
+
+@dataclass(frozen=True)
+class Tilt(Effect):
+    """The lever inclined by ``alpha``: the spring tensor rotated onto the beam axes."""
+
+    def partials(self, coords) -> set[str]:
+        return {"kvl"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        return (chain.rotation[2],)
+
+
+@dataclass(frozen=True)
+class LateralStiffness(Effect):
+    """``k2`` fitted where the baseline holds it at 0 (``--vertical-only``): a spring
+    (:func:`spring_parameters`), placed beside ``k1``."""
+
+    @property
+    def frees_lateral_spring(self) -> bool:
+        return True
+
+
+@dataclass(frozen=True)
+class Background(Effect):
+    """Additive cross-talk, two linear columns ``(b0 + b1 V) f / f_max``."""
+
+    columns: int = 2
+
+    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
+        ramp = freq_unique[inverse] / freq_unique.max()
+        return [ramp, bias * ramp]
+
+
+@dataclass(frozen=True)
+class SpotPosition(Effect):
+    """The slope read at the laser spot ``x_s = sigma L`` (:mod:`pfmdyn.generated.detection`)
+    instead of the free end: it reweights the modes (and can put a zero between them) but moves
+    no resonance, so its Jacobian term has no free-root part."""
+
+    def reading(self, coords):
+        return detection, (coords["sigma"],)
+
+    def partials(self, coords) -> set[str]:
+        return {"sigma"}
+
+    def jacobian(self, chain: Chain) -> tuple:
+        return (chain.part["sigma"],)
+
+
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
-    Effect("damping_internal", (Parameter("inv_q", "", 0.0, 0.5, inverse=True, description=_LOSS,
-                                          public="quality_factor"),),
-           (0.0,), (0.003, 0.01, 0.03), "derivations/damping.py"),
-    Effect("damping_viscous", (Parameter("g", "", 0.0, 1.0, public="viscous_loss",
-                                         description="viscous force c u_t per length: 1/Q of free mode 1"),),
-           (0.0,), (0.01, 0.03, 0.1), "derivations/damping.py"),
-    Effect("damping_contact", (Parameter("x", "", 0.0, 5.0, public="contact_loss",
-                                         description="dashpot eta parallel to k1: omega1 eta / k1"),),
-           (0.0,), (0.003, 0.02, 0.1), "derivations/damping.py"),
-    Effect("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass",
-                                  public="tip_mass_ratio"),),
-           (0.0,), (0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5), "derivations/tip_mass.py",
-           moves_resonances=True),
-    Effect("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position"),),
-           (1.0,), (0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68),
-           "derivations/tip_setback.py", moves_resonances=True),
-    Effect("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi,
-                              description="beam inclination, positive when the free end is nearer the sample"),),
-           (0.0,), (-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45), "derivations/tilt.py",
-           moves_resonances=True),
-    Effect("lateral_stiffness", (), (), (), "derivations/elastic_contact.py", moves_resonances=True),
-    Effect("background", (), (), (), "pfmdyn/discrepancy/model.py (additive cross-talk)", columns=2,
-           spectrum_only=True),
+    Damping("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py", index=0, uses=("beta", "k")),
+    ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
+    ContactDamping("damping_contact", (CONTACT_LOSS,), "derivations/damping.py", index=2),
+    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
+                                   null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
+            "derivations/tip_mass.py", moves_resonances=True),
+    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
+                                         null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
+                                                          0.68)),),
+               "derivations/tip_setback.py", moves_resonances=True),
+    Tilt("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
+                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
+                            description="beam inclination, positive when the free end is nearer the sample"),),
+         "derivations/tilt.py", moves_resonances=True),
+    LateralStiffness("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
+    Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
     # The laser spot moves no resonance: it reweights the modes (and can put a zero between
     # them), so only a spectrum shows it; its seeds span where users put the spot.
-    Effect("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position",
-                                       description="detection (laser) spot x_s / L"),),
-           (1.0,), (0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68, 0.65, 0.6, 0.55, 0.5),
-           "derivations/detection.py", spectrum_only=True),
+    SpotPosition("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position", null=1.0,
+                                             seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
+                                                    0.65, 0.6, 0.55, 0.5),
+                                             description="detection (laser) spot x_s / L"),),
+                 "derivations/detection.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 
@@ -147,8 +296,9 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     """
     a = math.log10(meta.k)
     b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L))
-    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, log=True, description="normal contact stiffness")
-    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, log=True, description="lateral contact stiffness")
+    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10", description="normal contact stiffness")
+    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf,
+                   description="lateral contact stiffness")
     return (k1,) if vertical_only else (k1, k2)
 
 

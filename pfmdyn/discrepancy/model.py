@@ -34,16 +34,15 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..cantilever import free_root
-from ..generated import damping, detection, formulas, tip_setback
+from ..fitting.noise import gap
+from ..fitting.parameters import LN10, Parameter
+from ..fitting.projection import jacobian_covariance, project
+from ..generated import damping, formulas, tip_setback
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
-from .effects import EFFECTS, Parameter, public_name, spring_parameters
+from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many", "project"]
-
-_DEFAULTS = {"k2": 0.0, "inv_q": 0.0, "g": 0.0, "x": 0.0, "mu": 0.0, "gamma": 1.0, "alpha": 0.0, "sigma": 1.0}
-"""Internal coordinates of absent effects (their null values)."""
-
+__all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many"]
 
 @dataclass(frozen=True)
 class Model:
@@ -54,13 +53,31 @@ class Model:
     vertical_only: bool = False
 
     @cached_property
+    def components(self) -> tuple[Effect, ...]:
+        """The effect components, in the model's order."""
+        return tuple(EFFECTS[e] for e in self.effects)
+
+    @cached_property
+    def springs(self) -> tuple[Parameter, ...]:
+        """``k1`` and, unless held at 0 (``vertical_only`` without an effect that frees it), ``k2``."""
+        held = self.vertical_only and not any(e.frees_lateral_spring for e in self.components)
+        return spring_parameters(self.meta, held)
+
+    @cached_property
     def parameters(self) -> tuple[Parameter, ...]:
-        """Nonlinear parameters in order: k1, [k2], then each effect's (k2 for lateral_stiffness)."""
-        springs = spring_parameters(self.meta, self.vertical_only)
-        extra = ()
-        if "lateral_stiffness" in self.effects and self.vertical_only:
-            extra = spring_parameters(self.meta, False)[1:]
-        return springs + extra + tuple(p for e in self.effects for p in EFFECTS[e].parameters)
+        """Nonlinear parameters in order: the springs, then each effect's."""
+        return self.springs + tuple(p for e in self.components for p in e.parameters)
+
+    @cached_property
+    def _absent(self) -> dict[str, float]:
+        """Coordinates (:meth:`coords`) of every parameter of the library at its null value."""
+        every = spring_parameters(self.meta, False) + tuple(p for e in EFFECTS.values() for p in e.parameters)
+        return {p.name: _coordinate(p, p.null) for p in every if p.null is not None}
+
+    @cached_property
+    def _column_components(self) -> tuple[Effect, ...]:
+        """The components that add design columns, in the library's order (their columns' order)."""
+        return tuple(e for e in EFFECTS.values() if e.columns and e.name in self.effects)
 
     def with_effect(self, component: str) -> "Model":
         """This model plus one effect component."""
@@ -78,9 +95,9 @@ class Model:
 
     def coords(self, internal) -> dict[str, float]:
         """Internal coordinates by name (springs converted to N/m), null values for absent effects."""
-        out = dict(_DEFAULTS)
+        out = dict(self._absent)
         for p, v in zip(self.parameters, internal):
-            out[p.name] = 10.0**v if p.name in ("k1", "k2") else float(v)
+            out[p.name] = _coordinate(p, v)
         return out
 
     def values(self, internal) -> dict[str, float]:
@@ -89,7 +106,7 @@ class Model:
 
     def slopes(self, frequency_hz, internal):
         """Slope per unit (d1, d2, f0, q0) at each frequency: 4 complex arrays (at the free
-        end, or at the laser spot with the effect ``spot_position``)."""
+        end, or where a component reads it: the laser spot with the effect ``spot_position``)."""
         c = self.coords(internal)
         m = self.meta
         r = np.asarray(frequency_hz, dtype=float) / m.f1
@@ -97,12 +114,9 @@ class Model:
         with np.errstate(all="ignore"):
             beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
             kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-            args = (formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                    c["mu"] * mu_f, c["gamma"], 0.0)
-            if "spot_position" in self.effects:
-                # The effect spot_position: the beam read at x_s = sigma L (derivations/detection.py).
-                return detection.slope(args[0], c["sigma"], *args[1:])
-            return tip_setback.slope(*args)
+            module, at = self._reading(c)
+            return module.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H,
+                                m.L, c["mu"] * mu_f, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -127,57 +141,45 @@ class Model:
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
-            args = (root_r * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L, c["mu"] * mu_f, c["gamma"], 0.0)
-            if "spot_position" in self.effects:
-                # The effect spot_position: read at x_s = sigma L, one more partial (sigma).
-                module = detection
-                T, J = detection.slope_and_jacobian(args[0], c["sigma"], *args[1:],
-                                                    wrt=("sigma",) + self._partials_needed(c))
-            else:
-                module = tip_setback
-                T, J = tip_setback.slope_and_jacobian(*args, wrt=self._partials_needed(c))
+            module, at = self._reading(c)
+            T, J = module.slope_and_jacobian(root_r * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+                                             c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
-            j_beta, j_k, j_mu, j_gamma = part["beta"], part["k"], part["mu"], part["gamma"]
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
+            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, (beta_f, k_f, k1_f, mu_f), d_f, spring)
+            # the springs' terms (log10 coordinates), then each component's
+            terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
+            terms += [t for e in self.components for t in e.jacobian(chain)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
-            loss_index = {"inv_q": 0, "g": 1, "x": 2}
-            for j, p in enumerate(self.parameters):
-                if p.name == "k1":
-                    out[:, j] = j_rot[0] * (spring * math.log(10))
-                elif p.name == "k2":
-                    out[:, j] = j_rot[1] * (c["k2"] * math.log(10))
-                elif p.name == "alpha":
-                    out[:, j] = j_rot[2]
-                elif p.name in loss_index:
-                    q = loss_index[p.name]
-                    out[:, j] = (j_beta * (root_r * d_f[0][q]) + j_k * (m.k * d_f[1][q])
-                                 + j_rot[0] * (c["k1"] * d_f[2][q]) + j_mu * (c["mu"] * d_f[3][q]))
-                elif p.name == "mu":
-                    out[:, j] = j_mu * mu_f + j_beta * (root_r / b1 * beta_f * d_b1[0])
-                elif p.name == "gamma":
-                    out[:, j] = j_gamma + j_beta * (root_r / b1 * beta_f * d_b1[1])
-                elif p.name == "sigma":     # the spot moves no resonance: no free-root term
-                    out[:, j] = part["sigma"]
+            for j, term in enumerate(terms):
+                out[:, j] = term
         return T, out
 
-    def _partials_needed(self, c) -> tuple[str, ...]:
-        """The generated partials the chain rule uses at coordinates ``c`` (others multiply zero)."""
-        names = {p.name for p in self.parameters}
-        root_moves = "mu" in names or ("gamma" in names and c["mu"] != 0.0)
-        need = {"beta": bool(names & {"inv_q", "g"}) or root_moves, "k": "inv_q" in names,
-                "kvv": True, "kll": True, "kvl": "alpha" in names or c["alpha"] != 0.0,
-                "mu": "mu" in names or ("g" in names and c["mu"] != 0.0), "gamma": "gamma" in names,
-                "rho_g": False}
-        return tuple(p for p in tip_setback.JACOBIAN_PARAMETERS if need[p])
+    def _reading(self, c):
+        """The generated slope the model reads and its arguments after ``beta``: the free end
+        (:mod:`pfmdyn.generated.tip_setback`) unless a component reads elsewhere (the laser spot)."""
+        for e in self.components:
+            reading = e.reading(c)
+            if reading is not None:
+                return reading
+        return tip_setback, ()
+
+    def _partials_needed(self, c, module=tip_setback) -> tuple[str, ...]:
+        """The generated partials of ``module`` the chain rule uses at coordinates ``c`` (others
+        multiply zero)."""
+        need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
+        for e in self.components:
+            need |= e.partials(c)
+        return tuple(p for p in module.JACOBIAN_PARAMETERS if p in need)
 
     @property
     def n_linear(self) -> int:
         """Number of complex linear coefficients."""
-        return 5 + ("damping_contact" in self.effects) + (2 if "background" in self.effects else 0)
+        return 5 + sum(e.columns for e in self.components)
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
@@ -192,21 +194,28 @@ class Model:
         _, dT = self.slopes_and_jacobian(freq_unique, internal)
         d_d1, d_d2, d_f, d_q = dT
         fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
-        if "damping_contact" in self.effects:
-            fixed = fixed + d_f * coef[5]
         per_volt = d_f * coef[3] + d_q * coef[4]
+        start = 5
+        for e in self._column_components:
+            moved = e.design_derivative(dT, coef[start:start + e.columns])
+            start += e.columns
+            if moved is not None:
+                fixed = fixed if moved[0] is None else fixed + moved[0]
+                per_volt = per_volt if moved[1] is None else per_volt + moved[1]
         return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
 
     def _columns(self, slopes, freq_unique, inverse, bias):
         """Design columns from the slopes at the unique frequencies (order: see module)."""
-        t_d1, t_d2, t_f, t_q = (t[inverse] for t in slopes)
+        rows = t_d1, t_d2, t_f, t_q = tuple(t[inverse] for t in slopes)
         cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
-        if "damping_contact" in self.effects:
-            cols.append(t_f)
-        if "background" in self.effects:
-            ramp = freq_unique[inverse] / freq_unique.max()
-            cols += [ramp, bias * ramp]
+        for e in self._column_components:
+            cols += e.design_columns(rows, freq_unique, inverse, bias)
         return np.stack(cols, axis=1)
+
+
+def _coordinate(p: Parameter, internal) -> float:
+    """The coordinate :meth:`Model.coords` gives a parameter: springs in N/m, others internal."""
+    return 10.0**internal if p.log else float(internal)
 
 
 def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots: bool = True) -> np.ndarray:
@@ -337,8 +346,8 @@ class FitResult:
 
     @property
     def gap(self) -> float:
-        """``sqrt(mean |r / sigma|**2)``: 1 when the residual is noise."""
-        return float(math.sqrt(self.chi2 / max(len(self.residual), 1)))
+        """``sqrt(mean |r / sigma|**2)``: 1 when the residual is noise (:func:`pfmdyn.fitting.noise.gap`)."""
+        return float(gap(self.chi2, len(self.residual)))
 
     @property
     def bic(self) -> float:
@@ -361,14 +370,8 @@ class FitResult:
             determined = bool(math.isfinite(err) and (err < abs(value) or (p.inverse and err < 1e12)))
             out[p.key] = {"value": value, "stderr": err, "unit": p.unit, "determined": determined}
             j += 1
-        if "damping_contact" in self.model.effects and out.get("k1", {}).get("value"):
-            loss = out["contact_loss"]["value"]
-            out["eta"] = {"value": float(formulas.contact_dashpot(loss, out["k1"]["value"], self.model.meta.f1)),
-                          "stderr": None, "unit": "N s/m", "determined": out["contact_loss"]["determined"]}
-        if "damping_viscous" in self.model.effects and out["viscous_loss"]["value"] is not None:
-            width = formulas.viscous_width(out["viscous_loss"]["value"], self.model.meta.f1)
-            out["viscous_width_hz"] = {"value": float(width), "stderr": None,
-                                       "unit": "Hz", "determined": out["viscous_loss"]["determined"]}
+        for e in self.model.components:
+            out.update(e.derived(out, self.model.meta))
         return out
 
     def report(self) -> str:
@@ -391,36 +394,6 @@ class FitResult:
                 err = "" if p["stderr"] is None else f" +/- {p['stderr']:.3g}"
                 lines.append(f"    {name}: {p['value']:.6g}{err} {p['unit']}".rstrip())
         return "\n".join(lines)
-
-
-def project(A: np.ndarray, y: np.ndarray):
-    """Linear least squares (column-scaled normal equations, eigenvalue cutoff).
-
-    Returns the coefficients and the prediction.  Near-dependent column combinations
-    (eigenvalues of the scaled Gram matrix below 1e-13 of the largest) get no weight
-    rather than a huge one.
-
-    >>> A = np.array([[1.0, 0.0], [0.0, 1e-9], [1.0, 1e-9]])
-    >>> c, pred = project(A, np.array([1.0, 2e-9, 1.0 + 2e-9]))
-    >>> np.round(c.real, 6).tolist()
-    [1.0, 2.0]
-    """
-    c, _, As, norms, _ = _solve(A, y)
-    return c / norms, As @ c
-
-
-def _solve(A, y):
-    """Coefficients, pseudo-inverse of the Gram matrix of the scaled columns ``As = A / norms``,
-    ``As``, ``norms`` and ``As^H``."""
-    norms = np.linalg.norm(A, axis=0)
-    norms[~(np.isfinite(norms) & (norms > 0))] = np.inf
-    As = A / norms
-    As[~np.isfinite(As)] = 0.0
-    AsH = As.conj().T
-    w, V = np.linalg.eigh(AsH @ As)
-    keep = w > 1e-13 * max(w.max(), 1e-300)
-    ginv = (V[:, keep] / w[keep]) @ V[:, keep].conj().T
-    return ginv @ (AsH @ y), ginv, As, norms, AsH
 
 
 JACOBIAN = "analytic"
@@ -446,11 +419,12 @@ class _Problem:
         self._key, self._state = None, None
 
     def _at(self, x):
+        """Design matrix, amplitudes and projection (:func:`pfmdyn.fitting.projection.project`)."""
         key = tuple(np.asarray(x, float))
         if key != self._key:
             A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
-            c, ginv, As, norms, AsH = _solve(A, self.y)
-            self._key, self._state = key, (A, c / norms, ginv, As, AsH)
+            projection = project(A[None], self.y[None, :, None])
+            self._key, self._state = key, (A, projection.amplitudes[0, :, 0], projection)
         return self._state
 
     def residual(self, x):
@@ -460,7 +434,7 @@ class _Problem:
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, x):
-        A, c, ginv, As, AsH = self._at(x)
+        A, c, projection = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
             v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
@@ -473,31 +447,12 @@ class _Problem:
                 xs = x.copy()
                 xs[j] += step
                 v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
-        # v = (d design / d x_j) c, shape (rows, parameters)
-        v = v - As @ (ginv @ (AsH @ v))                     # (I - P) dA c
-        col = -v / self.sigma
+        # v = (d design / d x_j) c, shape (rows, parameters); Kaufman's -(I - P) dA c treats every
+        # column alike, so the parameters go in as right-hand sides (one product for all)
+        col = projection.jacobian(v[None, None])[0, 0] / self.sigma
         out = np.concatenate([col.real, col.imag])
         out[~np.isfinite(out)] = 0.0
         return out
-
-
-def covariance(jac: np.ndarray, scale: float = 1.0) -> np.ndarray:
-    """``scale (J^T J)^-1`` by SVD; a parameter with a share in a direction the data do not
-    constrain (singular value below 1e-8 of the largest) gets infinite variance.
-
-    >>> covariance(np.array([[1.0, 1.0], [2.0, 2.0]])).diagonal().tolist()
-    [inf, inf]
-    """
-    if not jac.size:
-        return np.zeros((jac.shape[1], jac.shape[1]))
-    jac = np.where(np.isfinite(jac), jac, 0.0)
-    # Eigen-decomposition of J^T J (p x p): squared singular values, cheap for tall J.
-    w, v = np.linalg.eigh(jac.T @ jac)
-    good = w > 1e-16 * max(w.max(), 1e-300)
-    cov = (v[:, good] / w[good]) @ v[:, good].T * scale
-    loose = np.any(np.abs(v[:, ~good]) > 1e-3, axis=1) if (~good).any() else np.zeros(len(w), bool)
-    cov[loose, :] = np.where(loose[:, None] & loose[None, :], np.inf, 0.0)[loose, :]
-    return cov
 
 
 def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
@@ -520,7 +475,7 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
         raise FloatingPointError("no start gave a finite misfit")
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(problem.y)
-    cov = covariance(best.jac, 2 * best.cost / max(n - k, 1))
+    cov = jacobian_covariance(best.jac, 2 * best.cost / max(n - k, 1))
     A, c = problem._at(best.x)[:2]
     pred = A @ c
     return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)

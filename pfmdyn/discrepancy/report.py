@@ -1,11 +1,28 @@
-"""The report of ``pfmdyn discrepancy`` (both data kinds): JSON-ready dict and summary text."""
+"""The report of ``pfmdyn discrepancy`` (both data kinds): a :class:`DiscrepancyReport` with the
+JSON-ready fields (``to_dict()``), the summary text (``report()``) and the fits behind it."""
 from __future__ import annotations
 
+from ..fitting.result import Result
 from . import select
 from .effects import public_name
 from .plausible import describe
 
-__all__ = ["degrees", "parameters", "report", "summary"]
+__all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary"]
+
+
+class DiscrepancyReport(Result):
+    """What ``pfmdyn discrepancy`` found: the fields of its JSON report (read as a mapping or by
+    ``to_dict()``), the summary text (``report()``) and ``fits``, the baseline and final
+    :class:`pfmdyn.discrepancy.model.FitResult` (None when not kept).
+
+    >>> r = DiscrepancyReport({"missing_effects": ["damping"]}, fits=None)
+    >>> r["missing_effects"], r.fits
+    (['damping'], None)
+    """
+
+    def report(self) -> str:
+        """The summary the command prints (:func:`summary`)."""
+        return summary(self)
 
 
 def degrees(fit) -> dict:
@@ -39,8 +56,8 @@ def parameters(fit) -> dict:
     return out
 
 
-def report(result: dict, **extra) -> dict:
-    """The JSON-ready report of a loop result (both data kinds)."""
+def report(result: dict, **extra) -> DiscrepancyReport:
+    """The report of a loop result (both data kinds), with its baseline and final fits."""
     baseline, final = result["baseline"], result["final"]
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
@@ -49,10 +66,10 @@ def report(result: dict, **extra) -> dict:
            "criterion": select.CRITERION, "steps": steps, "parameters": parameters(final),
            "baseline_parameters": parameters(baseline), "fit_report": final.report()}
     out.update(extra)
-    return out
+    return DiscrepancyReport(out, fits=(baseline, final))
 
 
-def summary(report: dict) -> str:
+def summary(report) -> str:
     """Readable multi-line summary of a report."""
     mech = report.get("damping_mechanisms") or []
     tied = report.get("damping_mechanisms_indistinguishable_from") or []

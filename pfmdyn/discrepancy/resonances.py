@@ -49,13 +49,14 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..fitting.projection import jacobian_covariance
 from ..generated import formulas, paper_inputs
 from ..io.tables import Q_RELATIVE_UNCERTAINTY, Metadata, ResonanceData
 from . import select
 from .report import degrees, report
 from .effects import DAMPING, EFFECTS, spring_grid
 from .quality import loss_and_roots, loss_factors
-from .model import FitResult, Model, bounds, covariance, resonance_sensitivity, resonances
+from .model import FitResult, Model, bounds, resonance_sensitivity, resonances
 
 __all__ = ["CANDIDATES", "SPRINGS", "fit_resonances", "ResonanceProblem", "analyse_resonances", "paper_tables",
            "held_springs"]
@@ -329,7 +330,7 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
         jac = np.zeros((len(_residual(model, internal, data)), 0))
     residual = _residual(model, internal, data)
     sigma = np.concatenate([_sigma(data), _q_sigma(data)]) if _has_q(data).any() else _sigma(data)
-    return FitResult(model, internal, covariance(jac), residual * sigma, sigma, int(fitted.sum()),
+    return FitResult(model, internal, jacobian_covariance(jac), residual * sigma, sigma, int(fitted.sum()),
                      sigma_known=True, fitted=fitted, extra={"held": held, "by_construction": _scale_rows(data)})
 
 

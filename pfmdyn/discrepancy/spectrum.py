@@ -4,15 +4,10 @@ The loop is :func:`pfmdyn.discrepancy.select.run` (shared with resonance tables)
 module supplies the spectrum's :class:`SpectrumProblem`: the baseline fit, the candidate
 effects and their fits, and where the residual concentrates.
 
-The misfit ``gap`` is the noise-normalised RMS residual ``sqrt(mean |r|**2) / sigma``,
-where ``sigma`` (the RMS of the complex noise) is estimated from the data alone, as the
-smaller of two estimates that signal can only inflate: differences along frequency at each
-bias (orders 2-6) remove the smooth signal, and their median is robust to resonance peaks,
-``sigma**2 = median |d|**2 / (C(2m, m) ln 2)`` for ``m``-th differences; with three or more
-biases, the residual of a straight line in bias at each frequency (the response is affine in
-the bias) does not see the peak shape at all, however coarsely a band samples it.  Neither
-lowers the second-difference estimate below :data:`MAX_REFINEMENT` of it (data without noise).
-A model that explains the data reaches ``gap ~ 1``.
+The misfit ``gap`` is the noise-normalised RMS residual ``sqrt(mean |r|**2) / sigma``, with
+``sigma`` (the RMS of the complex noise) estimated from the data alone
+(:func:`pfmdyn.fitting.noise.noise_sigma`, shared with ``pfmdyn map``).  A model that explains
+the data reaches ``gap ~ 1``.
 
 Damping is one effect with three mechanisms (:mod:`pfmdyn.derivations.damping`); what
 tells them apart is how the half-power width of the peaks scales with their frequency
@@ -27,87 +22,17 @@ import math
 
 import numpy as np
 
+from ..fitting.noise import noise_sigma
+from ..fitting.projection import project
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit, project
+from .model import FitResult, Model, bounds, fit
 from .peaks import data_peaks, match_starts, peak_widths
-from .report import report, summary  # noqa: F401  (summary: public here too)
+from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
 
-
-
-def noise_sigma(frequency_hz, bias_v, response) -> float:
-    """RMS complex noise: the smallest of estimates that signal can only inflate (see module).
-
-    >>> rng = np.random.default_rng(1)
-    >>> f = np.repeat(np.arange(2000.0), 2); v = np.tile([0.0, 1.0], 2000)
-    >>> y = np.sin(f / 300) + (rng.standard_normal(4000) + 1j * rng.standard_normal(4000)) / 2**0.5
-    >>> round(noise_sigma(f, v, y), 1)
-    1.0
-    """
-    estimates = [_difference_noise(frequency_hz, bias_v, response, m) for m in DIFFERENCE_ORDERS]
-    across = _bias_noise(frequency_hz, bias_v, response)
-    refined = min(estimates[1:] + ([across] if across is not None else []))
-    # Coarse sampling reads second differences at most about 1.3x high; a refined estimate far
-    # below them means data without noise (a simulation), where the curvature is the floor.
-    return float(min(estimates[0], max(refined, MAX_REFINEMENT * estimates[0])))
-
-
-MAX_REFINEMENT = 0.7
-"""The refined estimates lower the second-difference one by at most this factor."""
-
-
-DIFFERENCE_ORDERS = (2, 3, 4, 5, 6)
-"""Orders of the differences along frequency.  Second differences leave the curvature of a
-peak sampled by few bins (band excitation: 64-256 bins over a few peak widths) and read the
-noise up to 30 % high there; higher orders cancel more of a smooth signal and less of the
-noise, and the smallest estimate is kept."""
-
-
-def _difference_noise(frequency_hz, bias_v, response, order: int) -> float:
-    """Noise from ``order``-th differences along frequency at each bias: for white complex
-    noise of RMS sigma, ``median |d|**2 = C(2 order, order) sigma**2 ln 2``."""
-    d = []
-    for b in np.unique(bias_v):
-        sel = bias_v == b
-        order_f = np.argsort(frequency_hz[sel])
-        d.append(np.diff(response[sel][order_f], order))
-    d = np.concatenate(d)
-    if not d.size:
-        # No bias has enough frequencies (a bias that changes with every row): along
-        # frequency over all rows, an upper bound.
-        d = np.diff(response[np.argsort(frequency_hz, kind="stable")], order)
-    return math.sqrt(np.median(np.abs(d) ** 2) / (math.comb(2 * order, order) * math.log(2)))
-
-
-def _bias_noise(frequency_hz, bias_v, response) -> float | None:
-    """Noise from the residual of a straight line in bias at each frequency (None with fewer
-    than three biases per frequency).
-
-    The response is affine in the bias at every frequency (the model's drives, d1, d2 and
-    ``f0``, ``q0`` proportional to ``V - V_surf``) whatever the peak shape or sampling, so the
-    residual of the line is noise plus whatever is not affine (which only raises this
-    estimate); ``n`` biases leave ``n - 2`` complex degrees of freedom, and ``RSS / sigma**2``
-    follows a Gamma(``n - 2``) law."""
-    from scipy.stats import gamma
-
-    freq_u, inverse = np.unique(frequency_hz, return_inverse=True)
-    count = np.bincount(inverse).astype(float)
-    s1, s2 = np.bincount(inverse, bias_v), np.bincount(inverse, bias_v**2)
-    sy = np.bincount(inverse, response.real) + 1j * np.bincount(inverse, response.imag)
-    vy = response * bias_v
-    svy = np.bincount(inverse, vy.real) + 1j * np.bincount(inverse, vy.imag)
-    det = count * s2 - s1**2
-    ok = (count >= 3) & (det > 1e-12 * np.maximum(count * s2, 1e-300))
-    if ok.sum() < 10:
-        return None
-    safe = np.where(ok, det, 1.0)
-    a, b = (s2 * sy - s1 * svy) / safe, (count * svy - s1 * sy) / safe
-    rss = np.bincount(inverse, np.abs(response - a[inverse] - b[inverse] * bias_v) ** 2)
-    dof = count[ok] - 2
-    return float(math.sqrt(np.median(rss[ok] / gamma.median(dof))))
 
 
 def signature(data: SpectrumData, result: FitResult, sigma: float) -> dict:
@@ -301,7 +226,7 @@ class SpectrumProblem:
         """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
         freq_u, inverse = np.unique(self.data.frequency_hz, return_inverse=True)
         A = model.design(freq_u, inverse, self.data.bias_v, np.asarray(internal))
-        _, pred = project(A, self.data.response)
+        pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
         r = np.abs(self.data.response - pred) ** 2
         return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
 
@@ -478,8 +403,8 @@ class SpectrumProblem:
 
 
 def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = False,
-            time_budget_s: float | None = None) -> dict:
-    """Run the discrepancy loop on a spectrum; return the JSON-ready report.
+            time_budget_s: float | None = None) -> DiscrepancyReport:
+    """Run the discrepancy loop on a spectrum; return its report (:class:`~pfmdyn.discrepancy.report.DiscrepancyReport`).
 
     Examples
     --------
@@ -488,5 +413,4 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     problem = SpectrumProblem(data, vertical_only)
     result = select.run(problem, progress, time_budget_s)
     return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
-                  "from second differences along frequency", noise_sigma=problem.sigma,
-                  _fits=(result["baseline"], result["final"]))
+                  "from second differences along frequency", noise_sigma=problem.sigma)

@@ -25,6 +25,7 @@ from ..errors import UserError
 from .fit import MECHANISMS, fit_block, model_name, quantities
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
+from .result import MapResult
 from .sho import band_centres, fit_sho_block, is_sho
 from .store import create_map, open_group
 
@@ -120,7 +121,7 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
 
 def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str | None = None,
             workers: int | None = None, max_blocks: int | None = None, progress=None,
-            selection: list | None = None, **options) -> dict:
+            selection: list | None = None, **options) -> MapResult:
     """Fit every pixel of ``source`` and write ``out_dir/maps.zarr``; returns a summary.
 
     ``scheduler``: None or ``"processes"`` (local pool of ``workers`` processes, default one per
@@ -133,8 +134,8 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     ``progress``: None, or a callable ``progress(blocks_done, blocks_total, pixels_fitted)``
     called before the first block and after each (the command draws its bar from it).
 
-    The summary: blocks and pixels fitted, pixels per second, the model, the fraction of
-    pixels explained and the median gap over the whole map.
+    Returns a :class:`pfmdyn.maps.result.MapResult`: blocks and pixels fitted, pixels per second,
+    the model, the fraction of pixels explained and the median gap over the whole map.
     """
     dask = _require("dask")
     import dask.delayed  # noqa: F401  (submodule import)
@@ -160,11 +161,11 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     extra = {"median_nulling_bias": _statistic(group["nulling_bias"][...])} if "nulling_bias" in group else {}
     if "at_bound" in group:
         extra["at_bound_fraction"] = _statistic(group["at_bound"][...], np.nanmean) if np.isfinite(gap).any() else 0.0
-    return {**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])), "blocks_total": done.size,
-            "pixels_fitted": pixels, "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
-            "model": group.attrs["model"],
-            "explained_fraction": _statistic(group["explained"][...], np.nanmean),
-            "median_gap": _statistic(gap), "out": out}
+    return MapResult({**extra, "blocks_run": len(todo), "blocks_done": int(np.sum(group["done"][...])),
+                      "blocks_total": done.size, "pixels_fitted": pixels,
+                      "pixels_per_s": pixels / elapsed if elapsed > 0 and pixels else float("nan"),
+                      "model": group.attrs["model"], "explained_fraction": _statistic(group["explained"][...], np.nanmean),
+                      "median_gap": _statistic(gap), "out": out}, shape=tuple(source.shape))
 
 
 def earlier_run(out: str) -> dict:

@@ -10,7 +10,7 @@ demodulated separately).  ``+distributed`` adds the response to a load along the
 electrostatic force on the lever's body) with amplitudes of its own.  With a bias axis
 (:mod:`pfmdyn.maps.bias`) every band and drive has two amplitudes, an intercept and a slope per
 volt of DC bias.  The amplitudes enter linearly and are projected out (variable projection);
-``log k1``, ``log Q``, ``log k2`` (when the frequencies hold two or more bands, one per contact
+``k1``, ``Q``, ``k2`` (as log10; ``k2`` when the frequencies hold two or more bands, one per contact
 mode; one mode cannot separate ``k1`` from ``k2``, so with one band ``k2`` follows the contact's
 policy, :meth:`pfmdyn.Contact.tie`: a stated ratio, or Mindlin's at Poisson 0.3, as ``pfmdyn
 stiffness`` and ``pfmdyn discrepancy`` do; a given ``k2`` is held), ``g`` and ``x`` are fitted by a Levenberg-Marquardt iteration that treats every pixel of a block at once, each
@@ -19,9 +19,10 @@ pixel with its own damping factor.
 Cost is dominated by the generated transfer function over ``(pixels, frequencies)``; one
 *design evaluation* per iteration gives the transfer functions and their derivatives for the
 whole block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow
-from them in closed form (Golub and Pereyra 1973).  The covariance of all parameters, nonlinear
-and amplitudes, is ``s**2`` times the inverse normal matrix of the full problem at the solution
-(:func:`_covariance`); its nonlinear block is the variable-projection one.
+from them in closed form (Golub and Pereyra 1973; :mod:`pfmdyn.fitting.projection`, shared with
+``pfmdyn discrepancy``).  The covariance of all parameters, nonlinear and amplitudes, is ``s**2``
+times the inverse normal matrix of the full problem at the solution (:func:`_covariance`); its
+nonlinear block is the variable-projection one.
 """
 from __future__ import annotations
 
@@ -33,6 +34,10 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
+from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
+from ..fitting.parameters import CONTACT_LOSS, LN10, VISCOUS_LOSS, Parameter
+from ..fitting.parameters import bounds as parameter_bounds
+from ..fitting.projection import covariance, normal_matrix, project
 from ..generated import damping, detection, elastic_contact, tip_setback
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
@@ -65,10 +70,12 @@ _QUANTITIES = {
     "amplitude_stderr": ("response units per unit d1", "standard error of amplitude"),
     "phase": ("rad", "d_eff phase arg c (first band)"),
     **bias_axis.QUANTITIES, **bias_axis.DISTRIBUTED, **bias_axis.SURFACE,
-    "gap": ("1", "relative residual |y - model| / |y|"),
+    "gap": ("1", "noise-normalised RMS residual sqrt(mean |y - model|^2) / sigma: 1 = fitted to the noise "
+                 "(sigma from the pixel's spectra, pfmdyn.fitting.noise, as pfmdyn discrepancy)"),
     "at_bound": ("1", "1 where a fitted parameter sits at its bound: the model cannot reach the data there, "
                       "so nothing is reported for the pixel"),
-    "explained": ("1", "1 where the model explains the pixel (gap below threshold, no parameter at a bound), else 0"),
+    "explained": ("1", "1 where the model explains the pixel (gap below the threshold, default 2, no parameter at "
+                       "a bound), else 0"),
 }
 _REQUIRES = {"viscous_loss": {"viscous"}, "viscous_loss_stderr": {"viscous"},
              "contact_loss": {"contact"}, "contact_loss_stderr": {"contact"},
@@ -139,8 +146,8 @@ class BeamMapModel:
     >>> m = BeamMapModel(lever, np.linspace(3e5, 4e5, 8))
     >>> m.shape_functions(np.array([200.0]), np.array([80.0])).shape
     (1, 8)
-    >>> m.parameters, m.k2_mode
-    (('log_k1', 'log_q'), 'tied')
+    >>> [p.name for p in m.parameters], m.k2_mode
+    (['k1', 'q'], 'tied')
     """
 
     lever: Cantilever
@@ -151,6 +158,9 @@ class BeamMapModel:
     contact: Contact = Contact()
     """The k2 policy: ``k2`` held, ``k2_over_k1``/``poisson`` tied, or nothing said (free with two
     or more bands, Mindlin's tie with one)."""
+    k1_range: tuple[float, float] | None = None
+    """k1 (N/m) the start grid covers (None: ``k`` to ``1e4 k``); the fit's bounds are a decade
+    wider."""
 
     @property
     def k(self) -> float:
@@ -203,17 +213,37 @@ class BeamMapModel:
                 "contact mode cannot separate k1 from k2)")
 
     @property
-    def parameters(self) -> tuple[str, ...]:
-        """Internal nonlinear parameters, in the order of the fit's columns."""
-        names = ["log_k1", "log_q"] + (["log_k2"] if self.k2_mode == "free" else [])
-        extra = {"viscous": "g", "contact": "x"}
-        return tuple(names + [extra[m] for m in self.mechanisms if m in extra])
+    def k1_span(self) -> tuple[float, float]:
+        """:attr:`k1_range` or its default."""
+        return tuple(self.k1_range) if self.k1_range else (self.k, 1e4 * self.k)
+
+    @functools.cached_property
+    def parameters(self) -> tuple[Parameter, ...]:
+        """Nonlinear parameters, in the order of the fit's columns: ``k1``, ``Q`` (log10), ``k2``
+        (log10, when fitted), then the damping mechanisms' losses.  Bounds: k1 a decade beyond
+        :attr:`k1_span`, k2 from a tenth of its lower end, Q 1 to 1e5 (its upper bound is no loss:
+        the null)."""
+        lo, hi = self.k1_span
+        out = [Parameter("k1", "N/m", math.log10(lo / 10), math.log10(hi * 10), transform="log10",
+                         description="vertical contact stiffness"),
+               Parameter("q", "1", 0.0, 5.0, transform="log10", public="quality_factor", null=5.0,
+                         description="quality factor Q of the beam loss 1/Q (internal friction)")]
+        if self.k2_mode == "free":
+            out.append(Parameter("k2", "N/m", math.log10(lo / 100), math.log10(hi * 10), transform="log10",
+                                 null=math.log10(lo / 100), description="longitudinal contact stiffness"))
+        extra = {"viscous": VISCOUS_LOSS, "contact": CONTACT_LOSS}
+        return tuple(out + [extra[m] for m in self.mechanisms if m in extra])
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Internal names of :attr:`parameters`."""
+        return tuple(p.name for p in self.parameters)
 
     def k2_of(self, k1, log_k2=None):
-        """``k2`` by the policy at contact stiffness ``k1`` (``log_k2`` when fitted)."""
+        """``k2`` by the policy at contact stiffness ``k1`` (``log_k2``, log10, when fitted)."""
         mode = self.k2_mode
         if mode == "free":
-            return np.exp(log_k2)
+            return 10.0**log_k2
         if mode == "fixed":
             return np.full_like(np.asarray(k1, float), self.contact.k2)
         return self.contact.tie() * np.asarray(k1, float)
@@ -278,10 +308,10 @@ class BeamMapModel:
 
     def _physical(self, p):
         """(inv_q, g, k1, k2, x) of internal parameters ``p`` (``(n, n_p)``), each ``(n, 1)``."""
-        col = {name: p[:, i, None] for i, name in enumerate(self.parameters)}
-        zero = np.zeros_like(col["log_k1"])
-        k1 = np.exp(col["log_k1"])
-        return (np.exp(-col["log_q"]), col.get("g", zero), k1, self.k2_of(k1, col.get("log_k2")), col.get("x", zero))
+        col = {name: p[:, i, None] for i, name in enumerate(self.names)}
+        zero = np.zeros_like(col["k1"])
+        k1 = 10.0**col["k1"]
+        return (10.0**-col["q"], col.get("g", zero), k1, self.k2_of(k1, col.get("k2")), col.get("x", zero))
 
     def shape_functions(self, k1, q, k2=None, g=0.0, x=0.0) -> np.ndarray:
         """Tip slope per unit d1 at every frequency, shape ``(len(k1), n_freq)``; ``k2`` by the
@@ -319,11 +349,12 @@ class BeamMapModel:
             spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
             # a tied k2 (k2 = ratio k1) moves with k1; a held one does not
             tied = d_k2 * k2e if self.k2_mode == "tied" else 0.0
-            chain = {"log_k1": d_k1 * k1e + tied, "log_k2": d_k2 * k2e,
-                     "log_q": -inv_q * (d_beta * beta0 * dbf_inv_q + spring_loss),
+            # log10 coordinates: d/d(log10 v) = ln(10) v d/dv
+            chain = {"k1": (d_k1 * k1e + tied) * LN10, "k2": d_k2 * k2e * LN10,
+                     "q": -inv_q * LN10 * (d_beta * beta0 * dbf_inv_q + spring_loss),
                      "g": d_beta * beta0 * dbf_g + (0.0 if d_mu is None else d_mu * self.lever.tip_mass_ratio * dmf_g),
                      "x": d_k1 * k1 * dk1f_x / k_factor}
-            for i, name in enumerate(self.parameters):
+            for i, name in enumerate(self.names):
                 d[i, :, j] = chain[name]
         return np.stack([values[i] for i in self.drives], axis=1), d
 
@@ -331,25 +362,23 @@ class BeamMapModel:
 def _project(g, dg, y, band_list):
     """Variable projection of ``y`` ``(n, m, n_freq)`` (``m`` bias components) on the transfer
     functions ``g`` ``(n, K, n_freq)``, with amplitudes of their own for every component and
-    band: amplitudes ``(n, m, n_bands, K)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``
-    ``(n_p, n, K, n_freq)``, its Jacobian ``(n, 2 m n_freq, n_p)``, the exact derivative of the
-    projection: ``dc = (A^H A)^-1 (dA^H r - A^H dA c)``, ``dr = -dA c - A dc``."""
+    band (:func:`pfmdyn.fitting.projection.project`, one band at a time): amplitudes
+    ``(n, m, n_bands, K)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``
+    ``(n_p, n, K, n_freq)``, its Jacobian ``(n, 2 m n_freq, n_p)``, the exact (Golub-Pereyra)
+    derivative of the projection."""
     c, r = [], np.empty_like(y)
     dr = None if dg is None else np.empty((dg.shape[0],) + y.shape, complex)
     for b in band_list:
         A, yb = g[..., b], y[..., b]
-        AhA = np.einsum("nkf,nlf->nkl", A.conj(), A)
-        scale = np.maximum(np.einsum("nkk->nk", AhA).real, 1e-300) ** -0.5     # equilibrate the columns
-        inverse = np.linalg.inv(AhA * scale[:, :, None] * scale[:, None, :]) * scale[:, :, None] * scale[:, None, :]
-        cb = np.einsum("nkl,nlf,nmf->nmk", inverse, A.conj(), yb)
+        projection = project(np.swapaxes(A, 1, 2), np.swapaxes(yb, 1, 2))
+        cb = np.swapaxes(projection.amplitudes, 1, 2)
         r[..., b] = rb = yb - np.einsum("nmk,nkf->nmf", cb, A)
         c.append(cb)
         if dg is not None:
             dA = dg[..., b]
-            dA_c = np.einsum("pnkf,nmk->pnmf", dA, cb)
-            rhs = np.einsum("pnkf,nmf->pnmk", dA.conj(), rb) - np.einsum("nkf,pnmf->pnmk", A.conj(), dA_c)
-            dc = np.einsum("nkl,pnml->pnmk", inverse, rhs)
-            dr[..., b] = -(dA_c + np.einsum("pnmk,nkf->pnmf", dc, A))
+            dA_c = np.einsum("pnkf,nmk->npfm", dA, cb)
+            dA_h_r = np.einsum("pnkf,nmf->npkm", dA.conj(), rb)
+            dr[..., b] = np.einsum("npfm->pnmf", projection.jacobian(dA_c, dA_h_r))
     n = len(y)
     J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).reshape(len(dr), n, -1).transpose(1, 2, 0)
     return np.stack(c, axis=2), np.concatenate([r.real, r.imag], axis=1).reshape(n, -1), J
@@ -387,10 +416,10 @@ def _grid(lever, contact, frequency_bytes, q0, k1_range):
     """
     model = BeamMapModel(lever, np.frombuffer(frequency_bytes), contact=contact)
     free = model.k2_mode == "free"
-    log_ratio = np.log([0.1, 0.4, 1.0]) if free else np.array([np.nan])
-    log_k1 = _resonant(model, np.log(np.geomspace(*k1_range, 400)), q0, np.exp(log_ratio))
-    log_q = np.log(q0 * np.geomspace(1 / 16, 4, 7))
-    ratio, q, k1 = (np.exp(a).ravel() for a in np.meshgrid(log_ratio, log_q, log_k1, indexing="ij"))
+    log_ratio = np.log10([0.1, 0.4, 1.0]) if free else np.array([np.nan])
+    log_k1 = _resonant(model, np.log10(np.geomspace(*k1_range, 400)), q0, 10.0**log_ratio)
+    log_q = np.log10(q0 * np.geomspace(1 / 16, 4, 7))
+    ratio, q, k1 = (10.0**a.ravel() for a in np.meshgrid(log_ratio, log_q, log_k1, indexing="ij"))
     return log_k1, log_q, log_ratio, model.shape_functions(k1, q, k2=ratio * k1 if free else None)
 
 
@@ -399,7 +428,7 @@ def _resonant(model, log_k1, q0, ratios, count=48):
     ``log_k1`` whose response peaks inside a band (not at its edges) for some k2/k1 of ``ratios``
     (NaN: k2 by the model's policy); all of ``log_k1``'s range when none does (a band away from
     every resonance)."""
-    k1 = np.exp(np.tile(log_k1, len(ratios)))
+    k1 = 10.0**np.tile(log_k1, len(ratios))
     k2 = None if np.isnan(ratios).all() else np.repeat(ratios, len(log_k1)) * k1
     g = np.abs(model.shape_functions(k1, np.full(k1.size, 4 * q0), k2=k2))
     inside = np.zeros(k1.size, bool)
@@ -425,14 +454,6 @@ def _vertex(values, best, axis):
     return axis[best] + np.clip(shift, -0.5, 0.5) * (axis[1] - axis[0])
 
 
-def _bounds(model, k1_range):
-    limits = {"log_k1": (k1_range[0] / 10, k1_range[1] * 10), "log_q": (1.0, 1e5),
-              "log_k2": (k1_range[0] / 100, k1_range[1] * 10)}
-    lower = [math.log(limits[n][0]) if n in limits else 0.0 for n in model.parameters]
-    upper = [math.log(limits[n][1]) if n in limits else {"g": 1.0, "x": 5.0}[n] for n in model.parameters]
-    return np.array(lower), np.array(upper)
-
-
 def _initial(model, y, q0, k1_range, iterations, tolerance):
     """Starting parameters: the (k1, Q) grid (with two or more bands, the lowest of the fits
     started at each k2/k1 of the grid); with extra damping mechanisms, the fitted baseline with
@@ -440,17 +461,17 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
     if model.mechanisms != ("internal",):
         base = replace(model, mechanisms=("internal",))
         p_base = _levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
-                                      _bounds(base, k1_range), iterations, tolerance)[0]
-        return np.stack([p_base[:, base.parameters.index(n)] if n in base.parameters else np.zeros(len(y))
-                         for n in model.parameters], axis=1)
+                                      parameter_bounds(base.parameters), iterations, tolerance)[0]
+        return np.stack([p_base[:, base.names.index(p.name)] if p.name in base.names else np.full(len(y), p.null)
+                         for p in model.parameters], axis=1)
     log_k1, log_q, log_ratio = _start(model, y, q0, k1_range)
-    start = {"log_k1": log_k1, "log_q": log_q, "log_k2": log_k1 + log_ratio[:, None]}
-    p = np.stack([start[n] for n in model.parameters], axis=2)          # (n_ratio, n, n_p)
+    start = {"k1": log_k1, "q": log_q, "k2": log_k1 + log_ratio[:, None]}
+    p = np.stack([start[n] for n in model.names], axis=2)          # (n_ratio, n, n_p)
     if len(p) == 1:
         return p[0]
     # k1 and k2 trade off against each other: one start per k2/k1, the fit that ends lowest wins
     p, *_, cost, _, _ = _levenberg_marquardt(model, np.concatenate([y] * len(p)), p.reshape(-1, p.shape[2]),
-                                             _bounds(model, k1_range), iterations, tolerance)
+                                             parameter_bounds(model.parameters), iterations, tolerance)
     best = np.argmin(cost.reshape(-1, len(y)), axis=0)
     return p.reshape(-1, len(y), p.shape[1])[best, np.arange(len(y))]
 
@@ -505,13 +526,14 @@ def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
-              gap_threshold=0.2, tolerance=1e-3, surface_potential_v=None) -> dict[str, np.ndarray]:
+              gap_threshold=GAP_LIMIT, tolerance=1e-3, surface_potential_v=None) -> dict[str, np.ndarray]:
     """Fit every pixel of ``response``, :data:`CHUNK` pixels at once.
 
     ``response`` is complex, ``(..., n_freq)``, or ``(..., n_bias, n_freq)`` when the model has
     biases.  Returns the arrays of :attr:`BeamMapModel.outputs`, each of the pixel shape
     ``response.shape[:-1]`` (``[:-2]`` with biases), plus ``cost`` (the squared relative
-    residual).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
+    residual).  ``gap`` is the noise-normalised RMS residual (:mod:`pfmdyn.fitting.noise`); a pixel
+    is ``explained`` below ``gap_threshold`` (2: a misfit the noise does not explain is above).  A pixel stops when the predicted decrease of its cost is below ``tolerance``
     times the noise variance (the step is then ~``sqrt(tolerance)`` standard errors).
     ``surface_potential_v`` (V) places ``d_eff`` (``amplitude``, ``phase``) on the response-bias
     line (None: the fitted ``V_surf`` with ``+distributed``, else 0).  A pixel whose spectra hold
@@ -550,7 +572,9 @@ def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterati
         raise UserError(f"response has shape {y.shape}; its last axes must be {tail} (biases, frequencies)")
     shape = y.shape[:-len(tail)]
     y = y.reshape(-1, bias.q.shape[0], tail[-1])
-    k1_range = k1_range or (model.k, 1e4 * model.k)
+    if k1_range:
+        model = replace(model, k1_range=tuple(k1_range))
+    k1_range = model.k1_span
     settings = (q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v)
     fitted = np.flatnonzero(fittable(y))
     out = {name: np.full(len(y), np.nan) for name in [*model.outputs, "cost"]}
@@ -575,36 +599,22 @@ def fittable(spectra) -> np.ndarray:
 
 def _covariance(model, g, dg, c, noise):
     """Covariance of ``(p, Re c, Im c)`` per pixel, ``(n, n_p + 2 c.size, ...)``: ``noise`` times
-    the inverse normal matrix of the full (unprojected) problem at the solution.  Its ``p`` block
-    is the variable-projection one; the amplitudes' block also carries their correlation with
-    ``p`` (an amplitude's error grows with that of the resonance it sits on).  The amplitude
-    columns are ``(Re, Im)`` pairs in ``c``'s (component, band, drive) order (:func:`_column`).
-
-    The residual in band ``j`` of component ``q`` is ``y - sum_k c_qjk g_k``, so the normal
-    matrix has closed-form blocks: with ``D_i = sum_k c_qjk dg_ik``, ``Re(D^H D)`` for ``p``,
-    ``Re(D_i^H g_k)`` and ``-Im(...)`` between ``p_i`` and ``(Re, Im) c_qjk``, and the real form
-    of ``g^H g`` between the amplitudes of one component and band.
+    the inverse normal matrix of the full (unprojected) problem at the solution
+    (:func:`pfmdyn.fitting.projection.covariance`).  Its ``p`` block is the variable-projection
+    one; the amplitudes' block also carries their correlation with ``p`` (an amplitude's error
+    grows with that of the resonance it sits on).  The amplitude columns are ``(Re, Im)`` pairs in
+    ``c``'s (component, band, drive) order (:func:`_column`); every band adds its normal matrix
+    (:func:`pfmdyn.fitting.projection.normal_matrix`, the bias components as right-hand sides).
     """
     n, m, n_bands, K = c.shape
     n_p = dg.shape[0]
     N = np.zeros((n, n_p + 2 * c[0].size, n_p + 2 * c[0].size))
     for j, b in enumerate(model.bands):
-        gb = g[..., b]
-        D = np.einsum("pnkf,nmk->pnmf", dg[..., b], c[:, :, j])
-        N[:, :n_p, :n_p] += np.einsum("pnmf,inmf->npi", D.conj(), D).real
-        cross = np.einsum("pnmf,nkf->npmk", D.conj(), gb)
-        H = np.einsum("nkf,nlf->nkl", gb.conj(), gb)
-        block = np.empty((n, 2 * K, 2 * K))
-        block[:, 0::2, 0::2] = block[:, 1::2, 1::2] = H.real
-        block[:, 0::2, 1::2], block[:, 1::2, 0::2] = -H.imag, H.imag
-        for q in range(m):
-            cols = _column(n_p, q, j, 0, n_bands, K) + np.arange(2 * K)
-            N[:, :n_p, cols[0::2]], N[:, :n_p, cols[1::2]] = cross[:, :, q].real, -cross[:, :, q].imag
-            N[:, cols[:, None], cols] = block
-    N[:, n_p:, :n_p] = N[:, :n_p, n_p:].transpose(0, 2, 1)
-    size = np.sqrt(np.maximum(np.einsum("nii->ni", N), 1e-300))      # columns of very different scales
-    inverse = np.linalg.pinv(N / (size[:, :, None] * size[:, None, :]), hermitian=True)
-    return inverse / (size[:, :, None] * size[:, None, :]) * noise[:, None, None]
+        D = np.einsum("pnkf,nmk->npfm", dg[..., b], c[:, :, j])
+        cols = np.concatenate([np.arange(n_p)] + [_column(n_p, q, j, 0, n_bands, K) + np.arange(2 * K)
+                                                  for q in range(m)])
+        N[:, cols[:, None], cols] += normal_matrix(D, np.swapaxes(g[..., b], 1, 2))
+    return covariance(N, noise)
 
 
 def _column(n_p, q, j, k, n_bands, K) -> int:
@@ -615,34 +625,37 @@ def _column(n_p, q, j, k, n_bands, K) -> int:
 def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v):
     scale = np.sqrt(np.sum(np.abs(y) ** 2, axis=(1, 2)))
     scale[scale == 0] = 1.0
+    # the noise of each pixel's spectra as pfmdyn discrepancy estimates it (floored: noise-free data)
+    sigma = np.maximum(noise_sigmas(model.frequency_hz, model.bias_v, y), 1e-15 * scale)
+    count = y.shape[1] * y.shape[2]
     y, outside = bias_axis.project(y / scale[:, None, None], bias)
-    names = model.parameters
+    names = model.names
     p = _initial(model, y, q0, k1_range, iterations, tolerance)
-    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, y, p, _bounds(model, k1_range), iterations, tolerance)
+    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, y, p, parameter_bounds(model.parameters), iterations, tolerance)
     cost = cost + outside
     dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
     cov = _covariance(model, g, dg, c, cost / dof)
     sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
-    with np.errstate(over="ignore"):
-        spread = {n: np.sinh(sd[n]) for n in ("log_k1", "log_q", "log_k2") if n in sd}     # see fit_block
     col = {n: p[:, i] for i, n in enumerate(names)}
-    k1 = np.exp(col["log_k1"])
-    k2 = model.k2_of(k1, col.get("log_k2"))
-    k2_sd = k2 * spread["log_k2"] if "log_k2" in spread else (
-        np.zeros(len(y)) if model.k2_mode == "fixed" else k2 * spread["log_k1"])
-    gap = np.sqrt(cost)
-    at_bound = _at_bound(model, p, k1_range)
+    # half the width of 10**(log10 x +- sd): see fit_block
+    spread = {q.name: q.spread(col[q.name], sd[q.name]) / q.values(col[q.name]) for q in model.parameters if q.log}
+    k1 = 10.0**col["k1"]
+    k2 = model.k2_of(k1, col.get("k2"))
+    k2_sd = k2 * spread["k2"] if "k2" in spread else (
+        np.zeros(len(y)) if model.k2_mode == "fixed" else k2 * spread["k1"])
+    gap_map = gap(cost * (scale / sigma) ** 2, count)
+    at_bound = np.any([q.at_bound(col[q.name]) for q in model.parameters], axis=0)
     _, m, n_bands, K = c.shape
     first = np.concatenate([_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
     band = model.bands[0]
     linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
                                    g[..., band])
-    out = {"k1": k1, "k1_stderr": k1 * spread["log_k1"], "k2": k2, "k2_stderr": k2_sd,
-           "quality_factor": np.exp(col["log_q"]), "quality_factor_stderr": np.exp(col["log_q"]) * spread["log_q"],
+    out = {"k1": k1, "k1_stderr": k1 * spread["k1"], "k2": k2, "k2_stderr": k2_sd,
+           "quality_factor": 10.0**col["q"], "quality_factor_stderr": 10.0**col["q"] * spread["q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),
-           "gap": gap, "at_bound": at_bound.astype(float),
-           "explained": ((gap < gap_threshold) & ~at_bound).astype(float), "cost": cost}
+           "gap": gap_map, "at_bound": at_bound.astype(float),
+           "explained": ((gap_map < gap_threshold) & ~at_bound).astype(float), "cost": cost}
     out.update({name: value * scale if name in _SCALED else value for name, value in linear.items()})
     # a parameter at its bound is where the fit was stopped, not a measurement: report nothing there
     for name in out:
@@ -653,20 +666,6 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
 
 _ALWAYS = {"gap", "at_bound", "explained", "cost"}
 """Outputs reported at every pixel, also where the fit sits at a bound."""
-
-
-_NULL_BOUNDS = {"log_q": "upper", "log_k2": "lower", "g": "lower", "x": "lower"}
-"""Bounds that are a parameter's null (no internal loss, no lateral spring, no drag or dashpot):
-reaching them switches an effect off, it does not mean the model cannot reach the data."""
-
-
-def _at_bound(model, p, k1_range) -> np.ndarray:
-    """Pixels where a fitted parameter sits at a bound (within 1e-6) other than its null."""
-    lower, upper = _bounds(model, k1_range)
-    names = model.parameters
-    low = np.array([_NULL_BOUNDS.get(n) != "lower" for n in names])
-    high = np.array([_NULL_BOUNDS.get(n) != "upper" for n in names])
-    return np.any((np.abs(p - upper) < 1e-6) & high, axis=1) | np.any((np.abs(p - lower) < 1e-6) & low, axis=1)
 
 
 _SCALED = {"amplitude", "amplitude_stderr", "electrostatic", "electrostatic_stderr"}

@@ -1,14 +1,40 @@
-"""A map's results as labelled arrays: :func:`open_result` gives an :class:`xarray.Dataset`."""
+"""A map's results: the run's :class:`MapResult` (summary fields and text) and the maps as labelled
+arrays (:func:`open_result` gives an :class:`xarray.Dataset`)."""
 from __future__ import annotations
 
 import os
 
 import numpy as np
 
+from ..fitting.result import Result
 from .readers import require
 from .store import open_group
 
-__all__ = ["open_result"]
+__all__ = ["MapResult", "open_result"]
+
+
+class MapResult(Result):
+    """What a run of ``pfmdyn map`` did (:func:`pfmdyn.maps.driver.run_map`): its fields (blocks and
+    pixels fitted, pixels per second, the model, the fraction of pixels explained, the median gap,
+    the output; ``to_dict()``), the map's pixel ``shape`` and the summary line (``report()``).
+
+    >>> r = MapResult({"blocks_run": 1, "blocks_done": 1, "blocks_total": 1, "pixels_per_s": 200.0,
+    ...                "model": "elastic", "explained_fraction": 1.0, "median_gap": 0.93, "out": "o/maps.zarr"},
+    ...               shape=(8, 8))
+    >>> r.report()
+    '8x8 pixels, model elastic: 1 blocks fitted (200 pixels/s), 1/1 done; explained 100.0 %, median gap 0.93; maps in o/maps.zarr'
+    """
+
+    def report(self) -> str:
+        """The summary line ``pfmdyn map`` prints."""
+        s = self
+        explained = (f"explained {100 * s['explained_fraction']:.1f} %"
+                     + (f" ({100 * s['at_bound_fraction']:.1f} % at a parameter bound: unexplained)"
+                        if s.get("at_bound_fraction") else "") + f", median gap {s['median_gap']:.3g}"
+                     + (f", median nulling bias {s['median_nulling_bias']:.3g} V" if "median_nulling_bias" in s else ""))
+        ny, nx = self.shape
+        return (f"{ny}x{nx} pixels, model {s['model']}: {s['blocks_run']} blocks fitted ({s['pixels_per_s']:.0f} "
+                f"pixels/s), {s['blocks_done']}/{s['blocks_total']} done; {explained}; maps in {s['out']}")
 
 
 def open_result(out_dir: str):

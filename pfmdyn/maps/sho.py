@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UserError
+from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..generated.formulas import sho_response, sho_response_d_log_quality, sho_response_d_log_resonance
 from .fit import _covariance, _levenberg_marquardt, _project, bands
 
@@ -47,8 +48,9 @@ _FIT = {
 _QUANTITIES = {
     **_FIT,
     **{f"guess_{name}": (unit, f"guess: {text}") for name, (unit, text) in _FIT.items() if not name.endswith("stderr")},
-    "gap": ("1", "relative residual |y - model| / |y|"),
-    "explained": ("1", "1 where the SHO explains the spectrum (gap below threshold), else 0"),
+    "gap": ("1", "noise-normalised RMS residual sqrt(mean |y - model|^2) / sigma: 1 = fitted to the noise "
+                 "(sigma from the spectrum, pfmdyn.fitting.noise)"),
+    "explained": ("1", "1 where the SHO explains the spectrum (gap below the threshold, default 2), else 0"),
 }
 
 _Q_RANGE = (0.1, 1e5)
@@ -158,7 +160,8 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict
     """SHO guess and least-squares fit of every spectrum ``(n, n_freq)`` over one band.
 
     Returns ``(n,)`` arrays named as :attr:`SHOMapModel.outputs` (guess and fit), ``cost``
-    (squared relative residual) and ``gap`` (its root).
+    (squared relative residual) and ``gap`` (the noise-normalised RMS residual,
+    :mod:`pfmdyn.fitting.noise`).
 
     >>> f = np.linspace(290e3, 310e3, 64)
     >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
@@ -190,11 +193,12 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict
                     f"{prefix}r2": _r2(yn, squares)})
     out["resonance_frequency_stderr"] = out["resonance_frequency"] * spread[:, 0]
     out["quality_factor_stderr"] = out["quality_factor"] * spread[:, 1]
-    out["cost"], out["gap"] = cost, np.sqrt(cost)
+    sigma = np.maximum(noise_sigmas(f, None, y[:, None, :]), 1e-15 * norm)
+    out["cost"], out["gap"] = cost, gap(cost * (norm / sigma) ** 2, f.size)
     return out
 
 
-def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=0.2, iterations=40, tolerance=1e-3,
+def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iterations=40, tolerance=1e-3,
                   chunk=1024) -> dict[str, np.ndarray]:
     """Fit every spectrum of ``response`` (``(..., n_freq)``, or ``(..., n_bias, n_freq)`` with
     biases), ``chunk`` spectra at once; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.

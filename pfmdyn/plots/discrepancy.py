@@ -13,16 +13,17 @@ __all__ = ["plot_resonance_report", "plot_spectrum_report"]
 
 def plot_spectrum_report(data, report) -> Figure:
     """Data, baseline, final model and residuals at the lowest and highest bias; ``report``
-    carries the baseline and final fits under ``"_fits"``.
+    (:class:`pfmdyn.discrepancy.report.DiscrepancyReport`) carries the baseline and final fits
+    as ``fits``.
 
     >>> from types import SimpleNamespace
     >>> f = np.repeat(np.linspace(1e5, 2e5, 5), 2)
     >>> data = SimpleNamespace(frequency_hz=f, bias_v=np.tile([0.0, 1.0], 5), response=1 + f / 1e5 + 0j)
     >>> fit = SimpleNamespace(prediction=data.response, residual=0 * data.response)
-    >>> plot_spectrum_report(data, {"_fits": (fit, fit)}).axes[1].get_xlabel()
+    >>> plot_spectrum_report(data, SimpleNamespace(fits=(fit, fit))).axes[1].get_xlabel()
     'frequency (kHz)'
     """
-    base, final = report["_fits"]
+    base, final = report.fits
     fig = Figure(figsize=(8, 7))
     axes = fig.subplots(2, 1, sharex=True)
     biases = np.unique(data.bias_v)[[0, -1]]

@@ -1,0 +1,15 @@
+"""The fitting core shared by ``pfmdyn discrepancy`` and ``pfmdyn map``.
+
+* :mod:`~pfmdyn.fitting.parameters`: a nonlinear parameter (public name, unit, internal
+  transform, bounds, null value, seeds), in the spirit of lmfit's ``Parameter``;
+* :mod:`~pfmdyn.fitting.projection`: variable projection of complex linear amplitudes, the
+  Jacobian of the projected residual and the covariance from a normal matrix, batched over
+  leading axes (a map block of pixels and a single spectrum run the same code);
+* :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS
+  residual (1 = fitted to the noise).
+* :mod:`~pfmdyn.fitting.result`: a fit's result, JSON-ready fields (``to_dict()``) and a text
+  summary (``report()``).
+
+A compute layer below the engines: nothing here imports :mod:`pfmdyn.discrepancy` or
+:mod:`pfmdyn.maps`.
+"""

@@ -1,0 +1,125 @@
+"""The noise of a spectrum and the gap: the noise-normalised RMS residual of a fit.
+
+``sigma`` (the RMS of the complex noise) is estimated from the data alone, as the smaller of
+two estimates that signal can only inflate: differences along frequency at each bias (orders
+2-6) remove the smooth signal, and their median is robust to resonance peaks,
+``sigma**2 = median |d|**2 / (C(2m, m) ln 2)`` for ``m``-th differences; with three or more
+biases, the residual of a straight line in bias at each frequency (the response is affine in
+the bias) does not see the peak shape at all, however coarsely a band samples it.  Neither
+lowers the second-difference estimate below :data:`MAX_REFINEMENT` of it (data without noise).
+
+The gap of a fit is ``sqrt(chi2 / n)``, ``chi2 = sum |r / sigma|**2`` over its ``n`` residuals
+(:func:`gap`): 1 when the residual is noise.  ``pfmdyn discrepancy`` and ``pfmdyn map`` (each
+pixel's spectra) report this one gap; a gap above :data:`GAP_LIMIT` is a misfit the noise does
+not explain.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["noise_sigma", "noise_sigmas", "gap", "GAP_LIMIT", "MAX_REFINEMENT", "DIFFERENCE_ORDERS"]
+
+GAP_LIMIT = 2.0
+"""A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
+(:data:`pfmdyn.discrepancy.select.UNEXPLAINED`), ``pfmdyn map`` marks the pixel unexplained
+(the default ``--gap-threshold``)."""
+
+
+def gap(chi2, count):
+    """``sqrt(chi2 / count)``: the noise-normalised RMS residual of ``count`` residuals whose
+    squares divided by the noise variance sum to ``chi2`` (arrays: element by element).
+
+    >>> float(gap(8.0, 2))
+    2.0
+    """
+    return np.sqrt(np.asarray(chi2, float) / np.maximum(count, 1))
+
+
+def noise_sigma(frequency_hz, bias_v, response) -> float:
+    """RMS complex noise: the smallest of estimates that signal can only inflate (see module).
+
+    >>> rng = np.random.default_rng(1)
+    >>> f = np.repeat(np.arange(2000.0), 2); v = np.tile([0.0, 1.0], 2000)
+    >>> y = np.sin(f / 300) + (rng.standard_normal(4000) + 1j * rng.standard_normal(4000)) / 2**0.5
+    >>> round(noise_sigma(f, v, y), 1)
+    1.0
+    """
+    estimates = [_difference_noise(frequency_hz, bias_v, response, m) for m in DIFFERENCE_ORDERS]
+    across = _bias_noise(frequency_hz, bias_v, response)
+    refined = min(estimates[1:] + ([across] if across is not None else []))
+    # Coarse sampling reads second differences at most about 1.3x high; a refined estimate far
+    # below them means data without noise (a simulation), where the curvature is the floor.
+    return float(min(estimates[0], max(refined, MAX_REFINEMENT * estimates[0])))
+
+
+MAX_REFINEMENT = 0.7
+"""The refined estimates lower the second-difference one by at most this factor."""
+
+
+DIFFERENCE_ORDERS = (2, 3, 4, 5, 6)
+"""Orders of the differences along frequency.  Second differences leave the curvature of a
+peak sampled by few bins (band excitation: 64-256 bins over a few peak widths) and read the
+noise up to 30 % high there; higher orders cancel more of a smooth signal and less of the
+noise, and the smallest estimate is kept."""
+
+
+def _difference_noise(frequency_hz, bias_v, response, order: int) -> float:
+    """Noise from ``order``-th differences along frequency at each bias: for white complex
+    noise of RMS sigma, ``median |d|**2 = C(2 order, order) sigma**2 ln 2``."""
+    d = []
+    for b in np.unique(bias_v):
+        sel = bias_v == b
+        order_f = np.argsort(frequency_hz[sel])
+        d.append(np.diff(response[sel][order_f], order))
+    d = np.concatenate(d)
+    if not d.size:
+        # No bias has enough frequencies (a bias that changes with every row): along
+        # frequency over all rows, an upper bound.
+        d = np.diff(response[np.argsort(frequency_hz, kind="stable")], order)
+    return math.sqrt(np.median(np.abs(d) ** 2) / (math.comb(2 * order, order) * math.log(2)))
+
+
+def _bias_noise(frequency_hz, bias_v, response) -> float | None:
+    """Noise from the residual of a straight line in bias at each frequency (None with fewer
+    than three biases per frequency).
+
+    The response is affine in the bias at every frequency (the model's drives, d1, d2 and
+    ``f0``, ``q0`` proportional to ``V - V_surf``) whatever the peak shape or sampling, so the
+    residual of the line is noise plus whatever is not affine (which only raises this
+    estimate); ``n`` biases leave ``n - 2`` complex degrees of freedom, and ``RSS / sigma**2``
+    follows a Gamma(``n - 2``) law."""
+    from scipy.stats import gamma
+
+    freq_u, inverse = np.unique(frequency_hz, return_inverse=True)
+    count = np.bincount(inverse).astype(float)
+    s1, s2 = np.bincount(inverse, bias_v), np.bincount(inverse, bias_v**2)
+    sy = np.bincount(inverse, response.real) + 1j * np.bincount(inverse, response.imag)
+    vy = response * bias_v
+    svy = np.bincount(inverse, vy.real) + 1j * np.bincount(inverse, vy.imag)
+    det = count * s2 - s1**2
+    ok = (count >= 3) & (det > 1e-12 * np.maximum(count * s2, 1e-300))
+    if ok.sum() < 10:
+        return None
+    safe = np.where(ok, det, 1.0)
+    a, b = (s2 * sy - s1 * svy) / safe, (count * svy - s1 * sy) / safe
+    rss = np.bincount(inverse, np.abs(response - a[inverse] - b[inverse] * bias_v) ** 2)
+    dof = count[ok] - 2
+    return float(math.sqrt(np.median(rss[ok] / gamma.median(dof))))
+
+
+def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
+    """:func:`noise_sigma` of each of ``spectra`` ``(n, n_bias, n_freq)`` (spectra on one grid:
+    ``frequency_hz`` ``(n_freq,)``, ``bias_v`` ``(n_bias,)`` or None for one spectrum each).
+
+    >>> rng = np.random.default_rng(2)
+    >>> y = (rng.standard_normal((2, 1, 4000)) + 1j * rng.standard_normal((2, 1, 4000))) * np.array([[[1.0]], [[3.0]]])
+    >>> (noise_sigmas(np.arange(4000.0), None, y) / 2**0.5).round(0).tolist()
+    [1.0, 3.0]
+    """
+    spectra = np.asarray(spectra)
+    n_bias, n_freq = spectra.shape[-2:]
+    f = np.tile(np.asarray(frequency_hz, float), n_bias)
+    v = np.repeat(np.zeros(n_bias) if bias_v is None else np.asarray(bias_v, float), n_freq)
+    return np.array([noise_sigma(f, v, s.ravel()) for s in spectra.reshape(-1, n_bias * n_freq)])
