@@ -14,7 +14,7 @@ from ..errors import UserError
 from ..discrepancy.inputs import read
 from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
-from ..names import flag
+from . import flags
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
 
 
@@ -30,17 +30,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", metavar="PATH",
                         help="write the full report as JSON here ('-': standard output, after the summary)")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
-    for option, key, what in OVERRIDES:
-        parser.add_argument(option, type=float, dest=key, metavar="VALUE",
-                            help=f"{what} (overrides the file's metadata)")
+    group = parser.add_argument_group("the lever (each overrides the file's metadata)")
+    flags.add(group, OVERRIDES)
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
 
 
-OVERRIDES = tuple((flag(key), key, what) for key, what in (
-    ("spring_constant", "cantilever spring constant, N/m"), ("length", "cantilever length, m"),
-    ("width", "cantilever width, m"), ("tip_height", "tip height, m"),
-    ("free_resonance", "first free flexural resonance, Hz")))
+OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance")
+"""The lever's quantities a file's metadata may hold and the command line may override."""
 
 
 def _analyse(data, args):
@@ -53,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    data = read(args.data, {key: getattr(args, key) for _, key, _ in OVERRIDES})
+    data = read(args.data, flags.given(args, OVERRIDES))
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
