@@ -1,0 +1,115 @@
+"""Packaging: what a user installs is what the tests test.
+
+An editable install (the README's, CI's) sees the source tree and cannot show a package or a data
+file that a built wheel leaves out.  Here the wheel of this checkout is built, installed into a
+fresh virtual environment (no system site packages, no source tree on the path), every module is
+imported from it and each subcommand runs once on small inputs.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import venv
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+TREES = {"pfmdyn": "pfmdyn", "derivations": "pfmdyn.derivations", "generated": "pfmdyn.generated",
+         "audit": "pfmdyn.audit"}
+LEVER = ["--spring-constant", "2", "--free-resonance", "6e4", "--length", "2e-4"]
+PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "200"]
+
+
+def _packages_in_tree() -> set[str]:
+    """Every folder with an ``__init__.py`` in the four trees, as the package it installs as."""
+    found = set()
+    for folder, package in TREES.items():
+        for init in (ROOT / folder).rglob("__init__.py"):
+            parts = init.parent.relative_to(ROOT / folder).parts
+            found.add(".".join((package, *parts)))
+    return found
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("wheel")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                    "-w", str(out), str(ROOT)], check=True, cwd=out)
+    (path,) = out.glob("pfmdyn-*.whl")
+    return path
+
+
+def test_wheel_holds_every_package_and_data_file(wheel):
+    """Each package of the trees ships, and so does each data file the code reads."""
+    names = zipfile.ZipFile(wheel).namelist()
+    shipped = {n.rsplit("/", 1)[0].replace("/", ".") for n in names if n.endswith("/__init__.py")}
+    assert _packages_in_tree() <= shipped, sorted(_packages_in_tree() - shipped)
+    data = [p for folder in TREES for p in (ROOT / folder).rglob("*")
+            if p.suffix in {".yaml", ".json", ".jinja", ".md"} and "__pycache__" not in p.parts]
+    for path in data:
+        folder = path.relative_to(ROOT).parts[0]
+        inside = "/".join((*TREES[folder].split("."), *path.relative_to(ROOT / folder).parts))
+        assert inside in names, f"{path.relative_to(ROOT)} is not in the wheel"
+
+
+@pytest.fixture(scope="module")
+def fresh(wheel, tmp_path_factory) -> dict:
+    """A fresh venv with the wheel (and the extras every module imports) installed."""
+    home = tmp_path_factory.mktemp("venv")
+    venv.create(home / "env", with_pip=True, system_site_packages=False)
+    python = home / "env" / "bin" / "python"
+    subprocess.run([str(python), "-m", "pip", "install", "-q", f"{wheel}[files,maps]"], check=True, cwd=home)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    shared = ROOT.parent / "shared"
+    if (shared / "claims.yaml").exists():
+        env["PFMDYN_CLAIMS"] = str(shared / "claims.yaml")
+    return {"python": python, "pfmdyn": home / "env" / "bin" / "pfmdyn", "cwd": home, "env": env}
+
+
+def _run(fresh, *argv) -> subprocess.CompletedProcess:
+    return subprocess.run([str(fresh["pfmdyn"]), *argv], cwd=fresh["cwd"], env=fresh["env"],
+                          capture_output=True, text=True, timeout=900)
+
+
+def test_every_module_imports_from_the_wheel(fresh):
+    """No module needs the source tree: each imports from the installed wheel alone."""
+    code = ("import importlib, pkgutil, pfmdyn, sys\n"
+            "assert 'site-packages' in pfmdyn.__file__, pfmdyn.__file__\n"
+            "bad = []\n"
+            "for m in pkgutil.walk_packages(pfmdyn.__path__, 'pfmdyn.'):\n"
+            "    try: importlib.import_module(m.name)\n"
+            "    except Exception as e: bad.append(f'{m.name}: {e!r}')\n"
+            "print(len(bad)); print('\\n'.join(bad))\n")
+    done = subprocess.run([str(fresh["python"]), "-c", code], cwd=fresh["cwd"], env=fresh["env"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.splitlines()[0] == "0", done.stdout + done.stderr
+
+
+def test_each_subcommand_runs_from_the_wheel(fresh):
+    """resonances, discrepancy on a resonance table made from them, stiffness, spot, roots, verify."""
+    cwd = fresh["cwd"]
+    done = _run(fresh, "resonances", *PROBE, "--json", "r.json")
+    assert done.returncode == 0, done.stderr
+    found = json.loads((cwd / "r.json").read_text())
+    rows = [f"free,{i + 1},{f}" for i, f in enumerate(found["free_hz"][:3])]
+    rows += [f"contact,{i + 1},{f}" for i, f in enumerate(found["contact_hz"][:3])]
+    (cwd / "table.csv").write_text("# spring_constant_n_per_m: 2\n# length_m: 2e-4\n# tip_height_m: 1e-5\n"
+                                   "# free_resonance_hz: 6e4\n"
+                                   "condition,mode,frequency_hz\n" + "\n".join(rows) + "\n")
+    done = _run(fresh, "discrepancy", "table.csv", "--json", "d.json")
+    assert done.returncode == 0, done.stderr
+    report = json.loads((cwd / "d.json").read_text())
+    assert report["missing_effects"] == [] and report["parameters"]["k1"]["value"] == pytest.approx(200, rel=1e-3)
+    contact = found["contact_hz"][0]
+    done = _run(fresh, "stiffness", *LEVER, "--tip-height", "1e-5", "--k2", "0", "--contact", str(contact),
+                "--json", "s.json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads((cwd / "s.json").read_text())["k1"] == pytest.approx(200, rel=1e-9)
+    for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--n", "2", "--digits", "20"],
+                 ["verify"]):
+        done = _run(fresh, *argv)
+        assert done.returncode == 0, (argv, done.stdout[-2000:], done.stderr[-2000:])
