@@ -29,9 +29,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import transfer
+from . import composed, transfer
 from .errors import UserError
-from .generated import damping, detection, families, formulas, tip_setback
+from .generated import damping, families, formulas
 from .generated.characteristic import BETA1_FREE
 from .generated.tilt_rotation import rotated
 from .names import checked
@@ -260,10 +260,7 @@ class Cantilever:
             raise UserError("the contact needs k1 (--k1)")
         beta, *rest = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
-            if self.spot_position == 1.0:
-                slopes = tip_setback.slope(beta, *rest)
-            else:       # the lever read at the laser spot (derivations/detection.py)
-                slopes = detection.slope(beta, self.spot_position, *rest)
+            slopes = composed.slope(beta, self.spot_position, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
@@ -288,7 +285,7 @@ def free_root(k, H, L, mu, gamma, rho_g=0.0) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
+    char = lambda b: composed.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
     with np.errstate(all="ignore"):
         vals = char(grid)

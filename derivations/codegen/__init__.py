@@ -26,7 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..trig import from_atoms
-from . import detection, effects, formulas, inputs, registry, setback
+from . import detection, effects, formulas, inputs, pieces, registry, setback
 from .characteristic import characteristic_families, dimensionless, render_characteristic
 from .examples import beta1_free
 from .stabilise import series_branch, split, switch_point
@@ -49,6 +49,7 @@ def render_all() -> dict[str, str]:
     files["characteristic.py"] = render_characteristic()
     files["tip_setback.py"] = setback.render()
     files["detection.py"] = detection.render()
+    files["lever_pieces.py"] = pieces.render()
     files["families.py"] = registry.render()
     files["paper_inputs.py"] = inputs.render()
     files["formulas.py"] = formulas.render()

@@ -38,7 +38,8 @@ import numpy as np
 
 from ..cantilever import Cantilever
 from ..errors import UserError
-from ..generated import formulas, tip_setback
+from .. import composed
+from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
@@ -88,7 +89,7 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     """
     kvv, kll, kvl = rotated(k1, k2, lever.alpha)
     with np.errstate(all="ignore"):
-        return tip_setback.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
+        return composed.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
                                           lever.length, lever.tip_mass_ratio, tip_position, lever.rho_g)
 
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
+from .. import composed
 from ..generated import detection, formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in
@@ -58,7 +59,7 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height (--tip-height)")
-    return {name: float(value) for name, value in zip(detection.PARAMETERS, lever.model_parameters(contact))}
+    return {name: float(value) for name, value in zip(composed.PARAMETERS, lever.model_parameters(contact))}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:
@@ -82,7 +83,7 @@ def slope_along(lever: Cantilever, contact: Contact, beta, sigma) -> tuple:
     >>> bool(abs(a - b) < 1e-5 * abs(a))
     True
     """
-    return detection.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
+    return composed.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
                             **parameters(lever, contact))
 
 
@@ -200,9 +201,9 @@ def sensitivities(lever: Cantilever, contact: Contact, sigma) -> dict:
     """
     L, gamma = lever.length, lever.tip_position
     params = {**parameters(lever, contact), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
-    theta = static_limit(lambda b: detection.slope(b, sigma, **params)[2])
-    tip = static_limit(lambda b: detection.deflection(b, gamma, **params)[2])
-    touching = static_limit(lambda b: detection.slope(b, sigma, **parameters(lever, contact))[0])
+    theta = static_limit(lambda b: composed.slope(b, sigma, **params)[2])
+    tip = static_limit(lambda b: composed.deflection(b, gamma, **params)[2])
+    touching = static_limit(lambda b: composed.slope(b, sigma, **parameters(lever, contact))[0])
     return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * touching))}
 
 

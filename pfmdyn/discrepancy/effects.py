@@ -26,7 +26,8 @@ import math
 from dataclasses import dataclass
 
 from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
-from ..generated import detection, formulas
+from .. import composed
+from ..generated import formulas
 
 __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
@@ -234,7 +235,7 @@ class SpotPosition(Effect):
     no resonance, so its Jacobian term has no free-root part."""
 
     def reading(self, coords):
-        return detection, (coords["sigma"],)
+        return composed.at_spot, (coords["sigma"],)
 
     def partials(self, coords) -> set[str]:
         return {"sigma"}

@@ -37,7 +37,8 @@ from ..cantilever import free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
-from ..generated import damping, formulas, tip_setback
+from .. import composed
+from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
 from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
@@ -166,9 +167,9 @@ class Model:
             reading = e.reading(c)
             if reading is not None:
                 return reading
-        return tip_setback, ()
+        return composed.at_end, ()
 
-    def _partials_needed(self, c, module=tip_setback) -> tuple[str, ...]:
+    def _partials_needed(self, c, module=composed.at_end) -> tuple[str, ...]:
         """The generated partials of ``module`` the chain rule uses at coordinates ``c`` (others
         multiply zero)."""
         need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
@@ -236,7 +237,7 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
     top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
-    roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
+    roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.f1, b1)
 
 
@@ -254,7 +255,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
-            vals = tip_setback.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+            vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
         change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
         for row, i in enumerate(rows):
             idx = np.flatnonzero(change[row])
@@ -269,8 +270,8 @@ def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, flo
     b1 = free_root(k, H, L, mu, gamma)
     if mu == 0.0:
         return b1, (0.0, 0.0)
-    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
-    names = tip_setback.JACOBIAN_PARAMETERS
+    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
+    names = composed.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
 
@@ -293,7 +294,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     internal = np.asarray(internal, float)
     m = model.meta
     f = np.asarray(frequency_hz, float)
-    F = tip_setback.characteristic
+    F = composed.characteristic
     c = model.coords(internal)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.f1, b1)

@@ -25,7 +25,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..generated import damping, formulas, tip_setback
+from .. import composed
+from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated
 from .model import Model, free_root
 
@@ -45,7 +46,7 @@ def _characteristic(model: Model, internal, contact: bool, r):
         kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
     else:
         kvv = kll = kvl = 0.0
-    return tip_setback.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+    return composed.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                       c["mu"] * mu_f, c["gamma"], 0.0)
 
 
