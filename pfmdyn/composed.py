@@ -56,31 +56,68 @@ def _solve(A, b):
         return out
 
 
+_CIRCULANT = np.array([[(j - m) % 4 for j in range(4)] for m in range(5)])
+"""``F[m][j] = K[(j - m) % 4]``: the field matrix and its ``d/ds`` (row 4) from ``K = (S, T, U, V)``."""
+
+
+def _columns(values, n, dtype=None) -> np.ndarray:
+    """``values`` (arrays of length ``n`` or scalars) as the columns of one ``(n, len(values))`` array."""
+    dtype = dtype or np.result_type(*values, float)
+    out = np.empty((n, len(values)), dtype)
+    for i, v in enumerate(values):
+        out[:, i] = v
+    return out
+
+
 class _Segment:
     """A segment read at ``t`` (length ``ell``): basis ``E[:, n, j]``, load ``P[:, n]`` per unit q0, and
     their derivatives along ``s = beta t`` (``dE``, ``dP``) and w.r.t. ``s_end = beta ell`` (``dE_end``).
 
-    Members with ``short`` use the Krylov-Duncan field matrix, the others the bounded basis."""
+    Members with ``short`` use the Krylov-Duncan field matrix, the others the bounded basis.  The
+    five rows ``d**n/ds**n``, ``n = 0..4``, are kept: the basis is rows 0-3, its ``d/ds`` rows 1-4."""
 
     def __init__(self, beta, t, ell, short, uc):
-        n, dtype = beta.shape[0], np.result_type(beta, uc)
-        self.E, self.dE, self.dE_end = (np.zeros((n, 4, 4), dtype) for _ in range(3))
-        self.P, self.dP = np.zeros((n, 4), dtype), np.zeros((n, 4), dtype)
         s = beta * t
-        if short.any():
-            i = np.flatnonzero(short)
-            s_1, tt, u, v = np.broadcast_arrays(*pieces.krylov_duncan(s[i]))
-            K = (s_1 + 1.0, tt, u, v)
-            F = np.stack([np.stack([K[(j - m) % 4] for j in range(4)], -1) for m in range(5)], -2)
-            self.E[i], self.dE[i] = F[:, :4], F[:, 1:]
-            self.P[i] = uc[i, None] * np.stack([-s_1, -v, -u, -tt], -1)
-            self.dP[i] = -uc[i, None] * F[:, 1:, 0]
-        if not short.all():
-            i = np.flatnonzero(~short)
-            B = np.stack(np.broadcast_arrays(*pieces.bounded_basis(s[i], beta[i] * ell[i])), -1).reshape(-1, 5, 4)
-            self.E[i], self.dE[i] = B[:, :4], B[:, 1:]
-            self.dE_end[i, :, 3] = -B[:, :4, 3]
-            self.P[i, 0] = uc[i]
+        if short.all():
+            self.rows, self.load = self._krylov_duncan(s, uc)
+        elif not short.any():
+            self.rows, self.load = self._bounded(s, beta * ell, uc)
+        else:
+            rows = np.empty(beta.shape + (5, 4), np.result_type(beta, uc))
+            load = np.empty(beta.shape + (5,), rows.dtype)
+            for mask, make in ((short, self._krylov_duncan), (~short, self._bounded)):
+                args = (s[mask], uc[mask]) if make == self._krylov_duncan else (s[mask], (beta * ell)[mask], uc[mask])
+                rows[mask], load[mask] = make(*args)
+            self.rows, self.load = rows, load
+        self.short = short
+        self.E, self.dE = self.rows[:, :4], self.rows[:, 1:]
+        self.P, self.dP = self.load[:, :4], self.load[:, 1:]
+
+    @staticmethod
+    def _krylov_duncan(s, uc):
+        s_1, t, u, v = pieces.krylov_duncan(s)
+        K = _columns((s_1 + 1.0, t, u, v), s.shape[0])
+        # the load of zero initial state, uc (e0 - F[:, 0]), and its d/ds: -uc (S - 1, V, U, T, S)
+        return K[:, _CIRCULANT], -uc[:, None] * _columns((s_1, v, u, t, K[:, 0]), s.shape[0])
+
+    @staticmethod
+    def _bounded(s, s_end, uc):
+        rows = _columns(pieces.bounded_basis(s, s_end), s.shape[0]).reshape(-1, 5, 4)
+        load = np.zeros(s.shape + (5,), np.result_type(rows, uc))
+        load[:, 0] = uc
+        return rows, load
+
+    @cached_property
+    def dE_end(self):
+        """``d E / d s_end``: only the bounded basis' ``e^{s - s_end}`` column depends on it."""
+        out = np.zeros_like(self.E)
+        out[:, :, 3] = np.where(self.short[:, None], 0.0, -self.E[:, :, 3])
+        return out
+
+    def parts(self, count):
+        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all)."""
+        n = self.E.shape[0] // count
+        return [_Part(self, slice(i * n, (i + 1) * n)) for i in range(count)]
 
     def derivative(self, name, beta, t, ell, moves_end, moves_start):
         """``(dE, dP)`` w.r.t. ``name``.  ``moves_end``, ``moves_start``: ``d ell/d gamma`` and
@@ -97,6 +134,20 @@ class _Segment:
         return None
 
 
+class _Part:
+    """One batch of a stacked :class:`_Segment` evaluation (views)."""
+
+    def __init__(self, whole, part):
+        self.whole, self.part = whole, part
+        self.E, self.dE, self.P, self.dP = whole.E[part], whole.dE[part], whole.P[part], whole.dP[part]
+
+    @property
+    def dE_end(self):
+        return self.whole.dE_end[self.part]
+
+    derivative = _Segment.derivative
+
+
 class _Lever:
     """The assembled system ``A c = b`` of one batch (all arguments broadcast and flattened).
 
@@ -104,18 +155,19 @@ class _Lever:
     else two; each segment four unknowns, one right-hand side per drive."""
 
     def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False):
-        args = np.broadcast_arrays(np.asarray(beta), k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
-        self.shape = args[0].shape
-        dtype = np.result_type(*args, float)
-        flat = [np.asarray(a, dtype=dtype).reshape(-1) for a in args]
+        args = [np.asarray(a) for a in (beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        dtype, n = np.result_type(*args, float), int(np.prod(self.shape))
+        flat = [np.full(n, a, dtype) if a.ndim == 0 else np.broadcast_to(a.astype(dtype), self.shape).reshape(-1)
+                for a in args]
         self.beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g = flat
         self.k, self.L, self.gamma = k, L, np.real(gamma)
         self.two = split or bool(np.any(self.gamma != 1.0))
         self.derivatives = derivatives      # solve for A^-1 with c: derivatives will be asked
         self.uc = pieces.load_constant(self.beta, k, L) + 0 * self.beta
         point = (self.beta, k, kvv, kll, kvl, H, L, mu, rho_g)
-        self.jump = np.stack(np.broadcast_arrays(*pieces.point_jump(*point)), -1)
-        self.jump_partials = pieces.point_jump_partials(*point)
+        self.point = point
+        self.jump = _columns(pieces.point_jump(*point), n)
         g = self.gamma
         self.lengths = (g, 1 - g) if self.two else (np.ones_like(g),)
         self.short = [np.abs(self.beta * ell) <= pieces.KD_SERIES_LIMIT for ell in self.lengths]
@@ -123,8 +175,16 @@ class _Lever:
         # (segment, t, d ell/d gamma, d t/d gamma) of the ends the rows use: clamp, tip (left, right), free end
         self.ends = [(0, zero, 1.0, 0.0), (0, g, 1.0, 1.0)] + ([(1, zero, -1.0, 0.0), (1, 1 - g, -1.0, -1.0)]
                                                                if self.two else [])
-        self.at = [_Segment(self.beta, t, self.lengths[j], self.short[j], self.uc) for j, t, _, _ in self.ends]
+        count = len(self.ends)
+        stacked = _Segment(np.tile(self.beta, count), np.concatenate([t for _, t, _, _ in self.ends]),
+                           np.concatenate([self.lengths[j] for j, _, _, _ in self.ends]),
+                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]), np.tile(self.uc, count))
+        self.at = stacked.parts(count)
         self.A, self.b = self._assemble(self.jump, [(e.E, e.P) for e in self.at])
+
+    @cached_property
+    def jump_partials(self):
+        return pieces.point_jump_partials(*self.point)
 
     @cached_property
     def c(self):
@@ -172,7 +232,7 @@ class _Lever:
 
     def _d_ends(self, name):
         """Derivatives of the jump and of the ends' values w.r.t. ``name``."""
-        djump = (np.stack(np.broadcast_arrays(*self.jump_partials[name], self.beta), -1)[:, :10]
+        djump = (_columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
                  if name in _POINT else np.zeros_like(self.jump))
         dends = []
         for (j, t, d_ell, d_t), seg in zip(self.ends, self.at):
@@ -207,7 +267,7 @@ class _Lever:
         for name in names:
             if name in _POINT and name not in ("beta", "k"):
                 tip = self._tip_state() if tip is None else tip
-                dpart = np.stack(np.broadcast_arrays(*self.jump_partials[name], self.beta), -1)[:, :10]
+                dpart = _columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
                 dJ, dG = dpart[:, :4].reshape(-1, 2, 2), dpart[:, 4:].reshape(-1, 2, 3)
                 r = np.zeros_like(self.b, dtype=np.result_type(self.b, dpart))
                 r[:, self._jump_rows] = dJ @ tip

@@ -288,29 +288,34 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
 
     Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
     ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
-    the free root ``beta_1`` (tip mass, set-back).  One vectorised evaluation of ``F`` per
-    parameter replaces a root search per parameter.
+    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from the assembled
+    system (:func:`pfmdyn.composed.characteristic_and_jacobian`, one call for the contact roots and
+    one for the free root); the model's parameters are algebraic functions of the internal ones.
     """
     internal = np.asarray(internal, float)
     m = model.meta
     f = np.asarray(frequency_hz, float)
-    F = composed.characteristic
     c = model.coords(internal)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.f1, b1)
-    a0, af0 = characteristic_args(model, internal, contact), characteristic_args(model, internal, False)
+    names = composed.JACOBIAN_PARAMETERS
+    moved = [names.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
+    at = [composed.PARAMETERS.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
+    out = np.empty((len(f), len(internal)))
     with np.errstate(all="ignore"):
-        hb = 1e-7 * beta
-        f_beta = (F(beta + hb, *a0) - F(beta - hb, *a0)) / (2 * hb)
-        f_b1 = (F(b1 * (1 + 1e-7), *af0) - F(b1 * (1 - 1e-7), *af0)) / (2e-7 * b1)
-        out = np.empty((len(f), len(internal)))
+        roots = []
+        for where, x in ((beta, contact), (np.array([b1]), False)):
+            a0 = characteristic_args(model, internal, x)
+            _, d = composed.characteristic_and_jacobian(where, *a0)
+            roots.append((a0, np.array([d[i] for i in moved]) / d[0]))
         for j in range(len(internal)):
+            # the model's parameters are plain functions of the internal ones: their change per unit
             h = 1e-7 * max(1.0, abs(internal[j]))
             xs = internal.copy()
             xs[j] += h
-            d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
-            d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
-            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1)
+            d_beta, d_b1 = (-(ratio.T @ ((np.array(characteristic_args(model, xs, x))[at] - np.array(a0)[at]) / h))
+                            for (a0, ratio), x in zip(roots, (contact, False)))
+            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1[0])
     out[~np.isfinite(out)] = 0.0
     return out
 
