@@ -397,13 +397,13 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
 def _scaled_det(lever):
     """``det A`` times a factor free of zeros that makes it one function of ``beta`` across the bases
     (a short segment's unknowns are its state, a long one's the bounded basis' coefficients) and
-    across the one- and two-segment systems; and ``d log(factor)/d beta``, ``/d gamma``."""
+    across the one- and two-segment systems; ``d log(factor)/d beta``, ``/d gamma``; the factor."""
     scale, d_beta, d_gamma = (1.0 if lever.two else _ONE_SEGMENT), 0.0, 0.0
     for short, ell, side in zip(lever.short, lever.lengths, (1.0, -1.0)):
         scale = scale * np.where(short, np.exp(-lever.beta * ell), 1.0 / _BOUNDED_AT_START)
         d_beta = d_beta + np.where(short, -ell, 0.0)
         d_gamma = d_gamma + np.where(short, -side * lever.beta, 0.0)
-    return np.linalg.det(lever.A) * scale, d_beta, d_gamma
+    return _det(lever.A) * scale, d_beta, d_gamma, scale
 
 
 def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
@@ -434,15 +434,32 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
     -1.875104
     """
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True, derivatives=True)
-    det, d_beta, d_gamma = _scaled_det(lever)
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True)
+    det, d_beta, d_gamma, scale = _scaled_det(lever)
+    # Jacobi's formula d det = tr(adj(A) dA), the adjugate from the SVD: finite at a resonance,
+    # where A is singular and its inverse is not.
+    adjugate = _adjugate(lever.A) * scale[:, None, None]
     partials = []
     for name in JACOBIAN_PARAMETERS:
-        dA = lever.d_system_matrix(name)
-        d = det * np.einsum("nij,nji->n", lever.inverse, dA)
+        d = np.einsum("nij,nji->n", adjugate, lever.d_system_matrix(name))
         d = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
         partials.append(lever.out(d))
     return lever.out(det), tuple(partials)
+
+
+def _det(A):
+    with np.errstate(all="ignore"):
+        return np.linalg.det(A)
+
+
+def _adjugate(A):
+    """``adj(A) = det(A) A^-1`` batched, from the SVD ``A = U diag(s) V^H``: ``det(U) det(V^H)
+    V diag(prod_{j != i} s_j) U^H``, finite where ``A`` is singular."""
+    u, sv, vh = np.linalg.svd(A)
+    n = sv.shape[-1]
+    others = np.stack([np.prod(np.delete(sv, i, axis=-1), axis=-1) for i in range(n)], -1)
+    phase = np.linalg.det(u) * np.linalg.det(vh)
+    return phase[:, None, None] * np.conj(np.swapaxes(vh, -1, -2)) @ (others[..., :, None] * np.conj(np.swapaxes(u, -1, -2)))
 
 
 def _one_segment_factor() -> float:

@@ -350,7 +350,7 @@ def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -
     """Shift in ``beta`` from each measured resonance to the nearest root of the model (a Newton step).
 
     >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
-    array([-0.016603])
+    array([-0.017213])
     """
     gamma = values.get("tip_position", lever.tip_position)
     k1 = values["k1"]

@@ -123,7 +123,7 @@ class ResonanceResult:
         mode  condition  resonance (Hz)
            1  free       70000.0
            2  free       438682.5
-        certified: no resonance missed or counted twice below 446374.5 Hz (free)
+        certified: no resonance missed or counted twice below 445306.2 Hz (free)
         """
         if not self.certified:
             return f"not certified: {self.reason}"
