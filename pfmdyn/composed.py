@@ -403,7 +403,17 @@ def _scaled_det(lever):
         scale = scale * np.where(short, np.exp(-lever.beta * ell), 1.0 / _BOUNDED_AT_START)
         d_beta = d_beta + np.where(short, -ell, 0.0)
         d_gamma = d_gamma + np.where(short, -side * lever.beta, 0.0)
-    return _det(lever.A) * scale, d_beta, d_gamma, scale
+    return _clamped_det(lever.A) * scale, d_beta, d_gamma, scale
+
+
+def _clamped_det(A):
+    """``det A`` by the Schur complement of the clamp's rows: in either basis they read
+    ``[I, B]`` on the first segment's unknowns, so ``det A = det(A22 - A21 B)``; with the tip at
+    the end that is a 2 x 2 determinant written out (no LAPACK call per frequency)."""
+    S = A[:, 2:, 2:] - A[:, 2:, 0:2] @ A[:, 0:2, 2:]
+    if S.shape[-1] == 2:
+        return S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] * S[:, 1, 0]
+    return _det(S)
 
 
 def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
