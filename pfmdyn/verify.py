@@ -107,8 +107,7 @@ def compute(ids: list[str] | None = None, progress: bool = False, workers: int |
     return [found[c.id] for c in checks]
 
 
-_COST = {"eq28.resonances_increase_with_k1": 12, "pfmdyn.derivations.checks.numbers": 3,
-         "pfmdyn.derivations.checks.flexural": 9,
+_COST = {"pfmdyn.derivations.checks.numbers": 5, "pfmdyn.derivations.checks.flexural": 9,
          "pfmdyn.derivations.checks.detection": 9, "pfmdyn.derivations.checks.electrostatics": 7,
          "pfmdyn.audit.statements": 4, "pfmdyn.derivations.checks.limits": 2}
 """Rough seconds of the slow check modules and claims (measured; a claim named here runs on its
