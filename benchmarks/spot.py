@@ -24,16 +24,16 @@ from segment_beam import spot_response  # noqa: E402
 
 from pfmdyn.analysis.spot import blind_spots, parameters  # noqa: E402
 from pfmdyn.cantilever import Cantilever, Contact  # noqa: E402
-from pfmdyn.generated import tip_setback  # noqa: E402
+from pfmdyn import composed  # noqa: E402
 
 N_LEVERS = 200
 TOLERANCE = 5e-5
 
 
 def _first_contact_beta(p) -> float:
-    """First zero of the generated characteristic above 0.3 (grid and bisection; a bound only)."""
+    """First zero of the composed characteristic above 0.3 (on a grid; a bound only)."""
     grid = np.linspace(0.31, 12.0, 2000)
-    values = tip_setback.characteristic(grid, *(p[n] for n in tip_setback.PARAMETERS))
+    values = composed.characteristic(grid, *(p[n] for n in composed.PARAMETERS))
     i = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
     return float(grid[i])
 

@@ -10,7 +10,7 @@ A family is one set of tip conditions for Eq. 2.  Each :class:`Family` row names
   characteristic function (``None``: not offered there);
 * ``function``, ``result``: the public wrapper in :mod:`pfmdyn.transfer` and its result
   class (``None``: no wrapper);
-* ``kind``: ``flexural``, ``torsion`` or ``setback`` (which renderer writes it);
+* ``kind``: ``flexural`` or ``torsion`` (which renderer writes it);
 * ``branch``, ``figure``: the stiffness parameter ``pfmdyn branches`` sweeps, and the
   paper's figure the sweep reproduces (``None``: no branch diagram);
 * ``method``: the :class:`pfmdyn.Cantilever` method evaluating it in SI units at
@@ -99,9 +99,6 @@ FAMILIES: tuple[Family, ...] = (
            outputs=("twist",), roots="torsion-force", function="torsion_force_transfer",
            result="TorsionTransfer", kind="torsion",
            chapter="torsion"),
-    Family("tip_setback", "tip_setback", "solve", "Eqs. 4-5 with the tip set back", _CONTACT,
-           ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g"),
-           outputs=("slope", "characteristic"), kind="setback"),
 )
 """Every family with a generated module."""
 

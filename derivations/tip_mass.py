@@ -2,7 +2,7 @@
 
 Equation: Eq. 2, ``u0'''' = kappa**4 u0 + q0/EI``, with the clamped end of Eq. 3.  The
 tip carries a point mass ``m_t`` (this family leaves out its rotary inertia;
-:func:`rotary_inertia` derives it for the composed model of :mod:`derivations.tip_setback`).  In harmonic motion ``u0 e^{i omega t}`` its inertia is a force
+:func:`rotary_inertia` derives it for the tip point of :mod:`derivations.pieces`).  In harmonic motion ``u0 e^{i omega t}`` its inertia is a force
 ``+m_t omega**2 u0(L)`` on the beam end (positive away from the surface when the tip is
 displaced that way), which adds to the local force ``f0`` in the shear condition::
 

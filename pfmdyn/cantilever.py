@@ -14,7 +14,7 @@ a heavy tip).  Losses are the damping substitution of ``derivations/damping.py``
 (``generated/damping.py``): internal friction ``E (1 + i/Q)`` and viscous drag ``g``; the contact
 dashpot belongs to :class:`Contact`.  Responses are complex.
 
-:meth:`Cantilever.response` evaluates the composed model (``derivations/tip_setback.py``: tip
+:meth:`Cantilever.response` evaluates the composed model (:mod:`pfmdyn.composed`: tip
 set back, tip mass, tilted springs, every damping mechanism) and serves every probe.  The
 per-family methods (``elastic_response``, ``free_response``, ...) are made from the family
 registry (``derivations/families.py``, field ``method``): each evaluates the paper's family,
@@ -29,9 +29,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import transfer
+from . import composed, transfer
 from .errors import UserError
-from .generated import damping, detection, families, formulas, tip_setback
+from .generated import damping, families, formulas
 from .generated.characteristic import BETA1_FREE
 from .generated.tilt_rotation import rotated
 from .names import checked
@@ -204,7 +204,7 @@ class Cantilever:
 
     def model_arguments(self, frequency, contact: "Contact | None" = None) -> tuple:
         """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
-        (``generated/tip_setback.py``) at ``frequency`` in Hz, with the damping substituted.
+        (:mod:`pfmdyn.composed`) at ``frequency`` in Hz, with the damping substituted.
 
         The frequency may be complex (a damped mode's root); ``contact=None`` is the free lever.
         :meth:`response` and the damped modes of :mod:`pfmdyn.analysis.resonances` both read the
@@ -224,7 +224,7 @@ class Cantilever:
 
     def model_parameters(self, contact: "Contact | None" = None, *, k1_factor=1.0) -> tuple:
         """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
-        damping (``generated/tip_setback.py``, ``generated/detection.py``).
+        damping (:mod:`pfmdyn.composed`).
 
         The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
         ``contact`` is None); ``k1_factor`` multiplies ``k1`` before the rotation (the contact
@@ -247,8 +247,7 @@ class Cantilever:
         """Slope at the laser spot per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.
 
         Set-back, heavy, tilted tips, the tip's rotary inertia and every damping mechanism at once
-        (``derivations/tip_setback.py``), read at ``spot_position`` (``derivations/detection.py``;
-        the free end by default); equal to :meth:`elastic_response` for the paper's probe.
+        (:mod:`pfmdyn.composed`), read at ``spot_position`` (the free end by default); equal to :meth:`elastic_response` for the paper's probe.
 
         >>> c = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0, tip_height=1e-5)
         >>> contact = Contact(k1=50.0, k2=20.0)
@@ -260,10 +259,7 @@ class Cantilever:
             raise UserError("the contact needs k1 (--k1)")
         beta, *rest = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
-            if self.spot_position == 1.0:
-                slopes = tip_setback.slope(beta, *rest)
-            else:       # the lever read at the laser spot (derivations/detection.py)
-                slopes = detection.slope(beta, self.spot_position, *rest)
+            slopes = composed.slope(beta, self.spot_position, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
 
@@ -280,7 +276,7 @@ def free_root(k, H, L, mu, gamma, rho_g=0.0) -> float:
     """First free root ``beta`` with a tip mass ``mu`` (radius of gyration ``rho_g L``) at ``gamma L``
     (1.8751... at ``mu = 0``).
 
-    The characteristic of the composed model (``generated/tip_setback.py``) with no contact has
+    The characteristic of the composed model (:mod:`pfmdyn.composed`) with no contact has
     one root in ``(0.3, BETA1_FREE]`` (a tip mass only lowers it): bracketed on a grid, refined.
 
     >>> round(free_root(1.0, 1e-5, 1e-4, 0.0, 1.0, 0.0), 10)
@@ -288,7 +284,7 @@ def free_root(k, H, L, mu, gamma, rho_g=0.0) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: tip_setback.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
+    char = lambda b: composed.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
     with np.errstate(all="ignore"):
         vals = char(grid)

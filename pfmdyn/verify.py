@@ -14,6 +14,7 @@ The sign convention of the electrostatic drives is :data:`SIGN_CONVENTION`
 """
 from __future__ import annotations
 
+import multiprocessing
 import os
 import sys
 from collections import Counter
@@ -67,11 +68,14 @@ def load_recorded() -> dict[str, str]:
     return yaml.safe_load(path.read_text()) if path.exists() else {}
 
 
-def compute(ids: list[str] | None = None, progress: bool = False):
+def compute(ids: list[str] | None = None, progress: bool = False, workers: int | None = None):
     """Run the checks; returns the list of :class:`Verdict` in registry order.
 
     Heavy symbolic steps are shared within one call (solutions, series, lambdified
-    expressions, verdicts that text statements reuse) and recomputed on the next call.
+    expressions, verdicts that text statements reuse) and recomputed on the next call.  The
+    checks run in ``workers`` processes (default: one per core), one module of checks at a
+    time, so the solutions a module's checks share are computed in one process; the largest
+    modules start first.
     """
     from tqdm import tqdm
 
@@ -83,8 +87,37 @@ def compute(ids: list[str] | None = None, progress: bool = False):
     if unknown:
         raise UserError(f"unknown claim id(s): {', '.join(sorted(unknown))}")
     core.clear_results()
-    return [core.result(check.id) for check in
-            tqdm(checks, desc="checking claims", unit="claim", disable=not progress, file=sys.stderr)]
+    groups: dict[str, list[str]] = {}
+    for c in checks:
+        groups.setdefault(c.id if c.id in _COST else c.run.__module__, []).append(c.id)
+    tasks = sorted(groups.values(), key=lambda g: -_COST.get(g[0], _COST.get(core.REGISTRY[g[0]].run.__module__, 0)))
+    workers = min(workers or os.cpu_count() or 1, len(tasks))
+    bar = tqdm(total=len(checks), desc="checking claims", unit="claim", disable=not progress, file=sys.stderr)
+    found: dict = {}
+    with bar:
+        if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+            with multiprocessing.get_context("fork").Pool(workers) as pool:
+                for group in pool.imap_unordered(_run_group, tasks):
+                    found.update(group)
+                    bar.update(len(group))
+        else:
+            for task in tasks:
+                found.update(_run_group(task))
+                bar.update(len(task))
+    return [found[c.id] for c in checks]
+
+
+_COST = {"pfmdyn.derivations.checks.numbers": 5, "pfmdyn.derivations.checks.flexural": 9,
+         "pfmdyn.derivations.checks.detection": 9, "pfmdyn.derivations.checks.electrostatics": 7,
+         "pfmdyn.audit.statements": 4, "pfmdyn.derivations.checks.limits": 2}
+"""Rough seconds of the slow check modules and claims (measured; a claim named here runs on its
+own): they are started first, so the processes finish together.  Only the order depends on it,
+never a verdict."""
+
+
+def _run_group(ids: list[str]) -> dict:
+    from .derivations.checks import core
+    return {i: core.result(i) for i in ids}
 
 
 def gate(verdicts, recorded: dict[str, str], shared_ids: list[str] | None = None) -> list[str]:

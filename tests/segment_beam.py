@@ -1,4 +1,5 @@
-"""Independent reference: the exact beam solved numerically on two segments (NumPy only).
+"""Independent reference: the exact beam solved numerically on two segments (NumPy; and in
+mpmath at high precision, :func:`spot_response_mp` and :func:`determinant_mp`, at the end).
 
 Nothing here uses ``derivations/`` or ``generated/``.  On each segment the frequency-domain
 Euler-Bernoulli beam ``u'''' = kappa**4 u + q0/EI`` has the exact solution
@@ -13,6 +14,9 @@ through the lever arm ``H``.  ``beta = 0`` is solved with the static basis ``1, 
 """
 from __future__ import annotations
 
+import math
+
+import mpmath
 import numpy as np
 
 
@@ -90,3 +94,113 @@ def spot_response(beta, sigma, *, k, L, H, kvv, kll=0.0, kvl=0.0, mu=0.0, gamma=
     B = _basis(kappa, x)
     c = coef[4 * seg:4 * seg + 4]
     return B[1] @ c + particular(x, 1), B[0] @ c + particular(x, 0)
+
+
+# --- The same beam in mpmath (high precision) -------------------------------------------------
+#
+# The rows of :func:`spot_response` with the right segment's basis taken from the tip
+# (``x - gamma L``), solved by ``mpmath.lu_solve``.  The textbook basis is ill-conditioned at
+# both ends of the range (``cos, cosh`` nearly dependent at small ``beta``, ``cosh(beta)``
+# against ``cos(beta)`` at large ``beta``): the working precision is ``dps`` digits plus those
+# the basis costs, so that about ``dps`` digits survive; ``check=True`` re-solves 20 digits
+# higher and asserts agreement (the reference verifies itself).
+
+
+def _extra_digits(beta) -> int:
+    """Digits the basis loses: ``cosh`` against ``cos`` (``exp(2 |beta|)``), and ``beta**-6``
+    at small ``beta`` (``cos + cosh``, ``sinh - sin`` nearly dependent, the load's ``beta**-4``)."""
+    b = complex(beta)
+    big = max(abs(b.real), abs(b.imag))
+    return int(2 * big / math.log(10) + 6 * max(0.0, -math.log10(abs(b)))) + 10
+
+
+def _mp_basis(mp, kappa, x):
+    c, s, ch, sh = mp.cos(kappa * x), mp.sin(kappa * x), mp.cosh(kappa * x), mp.sinh(kappa * x)
+    rows = [[c, s, ch, sh], [-s, c, sh, ch], [-c, -s, ch, sh], [s, -c, sh, ch]]
+    return [[v * kappa**n for v in r] for n, r in enumerate(rows)]
+
+
+def _mp_system(mp, beta, *, k, L, H, kvv, kll, kvl, mu, gamma, rho_g):
+    """``M`` and the right-hand sides (per unit ``d1, d2, f0, q0``) of the two-segment beam, and
+    the particular solution (per unit ``q0``).  All arguments mpmath numbers, ``beta != 0``."""
+    EI = k * L**3 / 3
+    kappa = beta / L
+    up = -1 / (EI * kappa**4)                    # particular deflection per unit q0 (constant)
+    a = gamma * L
+    inertia = mu * k * beta**4 / 3
+    rotary = inertia * (rho_g * L) ** 2
+    two = gamma != 1
+    n = 8 if two else 4
+    M = mp.zeros(n, n)
+    R = mp.zeros(n, 4)                            # columns: d1, d2, f0, q0
+    B0, left = _mp_basis(mp, kappa, 0), _mp_basis(mp, kappa, a)
+    for i in (0, 1):                              # clamp
+        for j in range(4):
+            M[i, j] = B0[i][j]
+    R[0, 3] = -up
+    u_row, du_row = left[0], left[1]
+    # springs F = -K (w - d), w = (u, H u'); constants per drive (d1, d2, q0 through u_p)
+    Fv_row = [-(kvv * u + kvl * H * du) for u, du in zip(u_row, du_row)]
+    Fl_row = [-(kvl * u + kll * H * du) for u, du in zip(u_row, du_row)]
+    Fv_const = [kvv, kvl, 0, -kvv * up]          # per unit d1, d2, f0, q0
+    Fl_const = [kvl, kll, 0, -kvl * up]
+    right = _mp_basis(mp, kappa, 0) if two else None
+    for j in range(4):                            # moment jump (row 2), shear jump (row 3)
+        M[2, j] = EI * left[2][j] - H * Fl_row[j] - rotary * du_row[j]
+        M[3, j] = EI * left[3][j] + Fv_row[j] + inertia * u_row[j]
+        if two:
+            M[2, 4 + j], M[3, 4 + j] = -EI * right[2][j], -EI * right[3][j]
+    for d in range(4):
+        R[2, d] = H * Fl_const[d]
+        R[3, d] = -(Fv_const[d] + (1 if d == 2 else 0) + (inertia * up if d == 3 else 0))
+    if two:
+        end = _mp_basis(mp, kappa, L - a)
+        for r, i in ((4, 0), (5, 1)):              # u, u' continuous
+            for j in range(4):
+                M[r, j], M[r, 4 + j] = left[i][j], -right[i][j]
+        for r, i in ((6, 2), (7, 3)):              # free end
+            for j in range(4):
+                M[r, 4 + j] = end[i][j]
+    return M, R, up
+
+
+def _mp_args(mp, beta, params):
+    names = ("k", "L", "H", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
+    defaults = {"kll": 0.0, "kvl": 0.0, "mu": 0.0, "gamma": 1.0, "rho_g": 0.0}
+    return mp.mpmathify(beta), {n: mp.mpmathify(params.get(n, defaults.get(n))) for n in names}
+
+
+def spot_response_mp(beta, sigmas, *, dps=60, check=False, **params):
+    """``[(slopes, deflections)]`` per ``sigma`` in ``sigmas``, each a tuple over ``d1, d2, f0, q0``
+    (mpmath numbers at ``dps`` significant digits); arguments as :func:`spot_response` but
+    ``beta != 0`` (complex allowed, as are complex springs, ``k`` and ``mu``)."""
+    mp = mpmath.mp
+    with mp.workdps(dps + _extra_digits(beta)):
+        b, p = _mp_args(mp, beta, params)
+        M, R, up = _mp_system(mp, b, **p)
+        columns = [mp.lu_solve(M, R.column(d)) for d in range(4)]
+        kappa, a, L = b / p["L"], p["gamma"] * p["L"], p["L"]
+        out = []
+        for sigma in sigmas:
+            x = mp.mpmathify(sigma) * L
+            beyond = p["gamma"] != 1 and x > a
+            B = _mp_basis(mp, kappa, x - a if beyond else x)
+            off = 4 if beyond else 0
+            slopes = tuple(sum(B[1][j] * c[off + j] for j in range(4)) for c in columns)
+            defl = tuple(sum(B[0][j] * c[off + j] for j in range(4)) + (up if d == 3 else 0)
+                         for d, c in enumerate(columns))
+            out.append((tuple(+v for v in slopes), tuple(+v for v in defl)))
+    if check:
+        finer = spot_response_mp(beta, sigmas, dps=dps + 20, **params)
+        for (s, d), (s2, d2) in zip(out, finer):
+            for v, w in zip(s + d, s2 + d2):
+                assert abs(v - w) <= mpmath.mpf(10) ** (-dps + 5) * abs(w), (beta, v, w)
+    return out
+
+
+def determinant_mp(beta, *, dps=40, **params):
+    """The determinant of :func:`spot_response_mp`'s system (its zeros in ``beta`` are the resonances)."""
+    mp = mpmath.mp
+    with mp.workdps(dps + _extra_digits(beta)):
+        b, p = _mp_args(mp, beta, params)
+        return +mp.det(_mp_system(mp, b, **p)[0])

@@ -282,7 +282,8 @@ def _generated_names():
 
 def test_no_module_under_pfmdyn_redefines_a_generated_formula():
     """A function named like a generated one must call it (e.g. to check its input), not retype it."""
-    names = _generated_names() - {"slope", "deflection", "twist", "characteristic"}
+    # the composed lever's entry points share the families' generic names (it assembles, not retypes)
+    names = _generated_names() - {"slope", "deflection", "twist", "characteristic", "slope_and_jacobian"}
     assert {"reduced_modulus", "spring_constant_from_geometry"} <= names
     offenders = []
     for path in sorted(PACKAGE.rglob("*.py")):

@@ -1,19 +1,36 @@
-"""Generated Jacobians of the transfer functions against central finite differences.
+"""Jacobians of the transfer functions (generated families, the composed lever) against central
+finite differences.
 
 Random points over realistic ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
-k2/k1 0-1.5, tip mass 0-1, tip at 0.6-1 L; ``beta`` from below the first mode to about the
-hundredth, with the phase of a damped ``beta``), fixed seed.  Each partial is compared with
-``(f(p + h) - f(p - h)) / 2h`` of the generated function itself; the discrepancy model's
-chain rule (damping, rotation, free root) likewise with differences of its slopes.
+k2/k1 0-1.5, tip mass 0-1, tip at 0.6-1 L, spot at 0.3-1 L; ``beta`` from below the first mode
+(the composed lever from the quasi-static 1e-3) to about the hundredth, with the phase of a
+damped ``beta``), fixed seed.  Each partial is compared with ``(f(p + h) - f(p - h)) / 2h`` of
+the function itself (``pfmdyn.composed``: its :func:`slope_and_jacobian` against differences of
+its :func:`slope`, read at the free end and at a spot); the discrepancy model's chain rule
+(damping, rotation, free root) likewise with differences of its slopes.
 """
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from pfmdyn.generated import elastic_contact, tilt, tip_mass, tip_setback
+from pfmdyn import composed
+from pfmdyn.generated import elastic_contact, tilt, tip_mass
 
 N = 200
+
+# The composed lever behind the generated families' interface (arguments by name).
+AT_END = SimpleNamespace(
+    __name__="composed.at_end", PARAMETERS=composed.PARAMETERS, JACOBIAN_PARAMETERS=composed.JACOBIAN_PARAMETERS,
+    slope=lambda beta, **p: composed.at_end.slope(beta, *(p[n] for n in composed.PARAMETERS)),
+    slope_and_jacobian=lambda beta, **p: composed.at_end.slope_and_jacobian(beta, *(p[n] for n in composed.PARAMETERS)))
+AT_SPOT = SimpleNamespace(
+    __name__="composed.at_spot", PARAMETERS=("sigma",) + composed.PARAMETERS,
+    JACOBIAN_PARAMETERS=composed.SPOT_JACOBIAN_PARAMETERS, slope=composed.slope,
+    slope_and_jacobian=composed.slope_and_jacobian)
+COMPOSED = (AT_END, AT_SPOT)
 
 
 def _points(module, seed):
@@ -23,28 +40,33 @@ def _points(module, seed):
     k1 = k * 10 ** rng.uniform(0, 4, N)
     k2 = k1 * rng.uniform(0, 1.5, N)
     alpha = rng.uniform(-0.5, 0.5, N)
-    # Down to 0.05 where the series branch applies (tip_setback documents Re beta > 0.3).
-    low = 0.3 if module is tip_setback else 0.05
+    # Down to 0.05 where the series branch applies; the composed lever from the quasi-static 1e-3.
+    low = 1e-3 if module in COMPOSED else 0.05
     beta = 10 ** rng.uniform(np.log10(low), np.log10(300), N) * np.exp(-1j * rng.uniform(0, 0.03, N))
     args = {"beta": beta, "k": k, "k1": k1, "k2": k2, "H": rng.uniform(3e-6, 20e-6, N),
             "L": rng.uniform(100e-6, 500e-6, N), "mu": rng.uniform(0, 1, N), "gamma": rng.uniform(0.6, 1, N),
             "rho_g": rng.uniform(0, 0.02, N),   # r_g about H/4 over L
+            "sigma": rng.uniform(0.3, 0.999, N),
             "kvv": k1 * np.cos(alpha) ** 2 + k2 * np.sin(alpha) ** 2,
             "kll": k1 * np.sin(alpha) ** 2 + k2 * np.cos(alpha) ** 2,
             "kvl": (k1 - k2) * np.sin(alpha) * np.cos(alpha)}
+    # The spot's slope has a kink in sigma and gamma where they meet (the moment jumps there).
+    near = np.abs(args["sigma"] - args["gamma"]) < 1e-3
+    args["sigma"][near] = np.minimum(args["gamma"][near] + 2e-3, 0.999)
+    args["sigma"][near & (args["gamma"] > 0.99)] = 0.9
     return {name: args[name] for name in ("beta",) + module.PARAMETERS}
 
 
-@pytest.mark.parametrize("module", [elastic_contact, tip_mass, tilt, tip_setback], ids=lambda m: m.__name__)
+@pytest.mark.parametrize("module", [elastic_contact, tip_mass, tilt, AT_END, AT_SPOT], ids=lambda m: m.__name__)
 def test_jacobian_matches_central_differences(module):
     args = _points(module, 11)
     values, jac = module.slope_and_jacobian(**args)
     reference = module.slope(**args)
     for v, r in zip(values, reference):
-        # Same expressions, other CSE: equal to rounding (tip_setback loses ~1e-12 near 0.3).
+        # Same expressions, other CSE (composed: the same solve): equal to rounding.
         np.testing.assert_allclose(v, r, rtol=2e-9, atol=0)
-    # Relative accuracy of the values themselves (tip_setback: ~5e-10 near beta = 0.3, see above).
-    accuracy = 1e-9 if module is tip_setback else 1e-12
+    # Relative accuracy of the values themselves (composed: ~1e-13, tests/test_composed.py).
+    accuracy = 1e-12
     for j, name in enumerate(module.JACOBIAN_PARAMETERS):
         p = args[name]
         # Steps relative to the parameter's scale (springs: k, so a zero k2 or kvl still moves).
@@ -67,13 +89,13 @@ def test_characteristic_jacobian_moves_resonances():
     """-D_p / D_beta at a root is the root's motion: compare with re-solved roots."""
     from pfmdyn.roots.bracket import refine
     args = {"k": 2.0, "kvv": 150.0, "kll": 40.0, "kvl": 3.0, "H": 1e-5, "L": 2.2e-4, "mu": 0.2, "gamma": 0.9, "rho_g": 0.02}
-    F = lambda b, **kw: tip_setback.characteristic(b, **{**args, **kw})  # noqa: E731
+    F = lambda b, **kw: composed.characteristic(b, **{**args, **kw})  # noqa: E731
     grid = np.linspace(0.5, 12, 2000)
     vals = F(grid)
     i = int(np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[1])
     root = float(refine(F, grid[i], grid[i + 1], rtol=1e-14))
-    _, d = tip_setback.characteristic_and_jacobian(root, **args)
-    names = tip_setback.JACOBIAN_PARAMETERS
+    _, d = composed.characteristic_and_jacobian(root, **args)
+    names = composed.JACOBIAN_PARAMETERS
     for j, name in enumerate(names[1:], 1):
         h = 1e-6 * max(abs(args[name]), 1.0)
         moved = [float(refine(lambda b, kw={name: args[name] + s}: F(b, **kw), grid[i] - 0.05, grid[i + 1] + 0.05,

@@ -19,7 +19,7 @@ from scipy.optimize import brentq
 from pfmdyn.analysis.spot import blind_spots, parameters, sensitivities, spot_analysis
 from pfmdyn.cantilever import Cantilever, Contact
 from pfmdyn.cli import main
-from pfmdyn.generated import detection
+from pfmdyn import composed
 from pfmdyn.generated.characteristic import BETA1_FREE
 
 # The independent reference lives beside the tests (importlib mode: not on sys.path).
@@ -44,7 +44,7 @@ def test_slope_and_deflection_match_the_segment_beam(seed):
     p = _random_lever(rng)
     sigma = np.sort(rng.uniform(0.3, 1.0, 25))
     for beta in (0.5, 1.7, 3.3, 6.1):
-        got = detection.slope(beta, sigma, **p), detection.deflection(beta, sigma, **p)
+        got = composed.slope(beta, sigma, **p), composed.deflection(beta, sigma, **p)
         for i, drive in enumerate(DRIVES):
             ref = np.array([spot_response(beta, s, **p, **{drive: 1.0}) for s in sigma]).T
             for g, r in zip((got[0][i], got[1][i]), ref):
@@ -52,11 +52,11 @@ def test_slope_and_deflection_match_the_segment_beam(seed):
 
 
 def test_jacobian_in_the_spot_position_is_the_slope_derivative():
-    """d(slope)/d(sigma) against a central difference of the generated slope (and the reference)."""
+    """d(slope)/d(sigma) of the composed lever against a central difference of the reference."""
     p = _random_lever(np.random.default_rng(7))
     sigma, h = np.array([0.45, 0.7, 0.93]), 1e-6
-    _, jac = detection.slope_and_jacobian(2.2, sigma, **p, wrt=("sigma",))
-    column = detection.JACOBIAN_PARAMETERS.index("sigma")
+    _, jac = composed.slope_and_jacobian(2.2, sigma, **p, wrt=("sigma",))
+    column = composed.SPOT_JACOBIAN_PARAMETERS.index("sigma")
     for i, drive in enumerate(DRIVES):
         ref = [(spot_response(2.2, s + h, **p, **{drive: 1.0})[0] - spot_response(2.2, s - h, **p, **{drive: 1.0})[0])
                / (2 * h) for s in sigma]
@@ -124,7 +124,7 @@ def test_local_force_reads_as_d1_over_k1_everywhere():
     p = {**_random_lever(np.random.default_rng(3)), "kvl": 0.0}
     sigma = np.linspace(0.3, 1, 11)
     for beta in (0.8, 4.0):
-        s = detection.slope(beta, sigma, **p)
+        s = composed.slope(beta, sigma, **p)
         np.testing.assert_allclose(s[2] * p["kvv"], s[0], rtol=1e-9)
 
 
@@ -177,7 +177,7 @@ def test_missing_lever_value_names_its_flag(capsys):
 def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
     """``Cantilever.response`` and the map model with ``spot_position`` against the independent
     two-segment beam (set-back, heavy, tilted tip with rotary inertia), and a map fit at the spot
-    recovers k1 (the generated partials w.r.t. the springs at the spot drive it there)."""
+    recovers k1 (the composed partials w.r.t. the springs at the spot drive it there)."""
     from pfmdyn import Cantilever, Contact
     from pfmdyn.generated.tilt_rotation import rotated
     from pfmdyn.maps.fit import BeamMapModel, fit_block

@@ -13,8 +13,7 @@ from scipy.optimize import brentq
 
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import BETA1, FEBeam  # noqa: E402
-from pfmdyn import Cantilever  # noqa: E402
-from pfmdyn.generated import tip_setback  # noqa: E402
+from pfmdyn import Cantilever, composed  # noqa: E402
 from pfmdyn.generated.tilt_rotation import rotated  # noqa: E402
 
 
@@ -23,9 +22,9 @@ def _contact_hz(lever: Cantilever, k1, k2, alpha, count=3):
     kvv, kll, kvl = rotated(k1, k2, alpha)
     args = (lever.spring_constant, kvv, kll, kvl, lever.tip_height, lever.length, 0.0, 1.0, 0.0)
     grid = np.linspace(0.5, 30.0, 6000)
-    vals = tip_setback.characteristic(grid, *args)
+    vals = composed.characteristic(grid, *args)
     change = np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[:count]
-    roots = np.array([brentq(lambda b: tip_setback.characteristic(b, *args), grid[i], grid[i + 1], xtol=1e-14)
+    roots = np.array([brentq(lambda b: composed.characteristic(b, *args), grid[i], grid[i + 1], xtol=1e-14)
                       for i in change])
     return lever.free_resonance * (roots / BETA1) ** 2
 

@@ -7,14 +7,14 @@ The family registry (:mod:`derivations.families`) says what is generated.  The p
 * :mod:`.examples`: the stored point and the doctest values computed there from SymPy;
 * :mod:`.templates`: one Jinja template per output kind (``templates/``), filled by its renderer;
 * one renderer per output kind: :mod:`.transfer` (one module per one-argument family),
-  :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.setback`
-  (``tip_setback.py``, two arguments), :mod:`.registry` (``families.py``, the family
+  :mod:`.characteristic` (``characteristic.py``, for root finding), :mod:`.pieces`
+  (``lever_pieces.py``, the pieces the composed lever is assembled from), :mod:`.registry` (``families.py``, the family
   registry as plain data for numeric code), :mod:`.inputs` (``paper_inputs.py``),
   :mod:`.formulas` (``formulas.py``, closed-form relations), :mod:`.effects` (``damping.py``, ``tilt_rotation.py``: the discrepancy
   model's damping substitution and tilt rotation, with their derivatives);
 * :mod:`.jacobian`: the partial derivatives generated with the transfer functions
   (``<function>_and_jacobian`` in the modules of :data:`.jacobian.JACOBIANS`, rendered by
-  :mod:`.transfer` and :mod:`.setback`).
+  :mod:`.transfer`).
 
 :func:`render_all` maps every output file name to its text; a renderer is added by adding
 its files there.  A ``.py`` file in ``generated/`` that no renderer writes (and not in
@@ -26,7 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..trig import from_atoms
-from . import detection, effects, formulas, inputs, registry, setback
+from . import effects, formulas, inputs, pieces, registry
 from .characteristic import characteristic_families, dimensionless, render_characteristic
 from .examples import beta1_free
 from .stabilise import series_branch, split, switch_point
@@ -47,8 +47,7 @@ def render_all() -> dict[str, str]:
     """File name -> text of every generated file (deterministic)."""
     files = {f"{fam.module}.py": render_family(fam) for fam in families()}
     files["characteristic.py"] = render_characteristic()
-    files["tip_setback.py"] = setback.render()
-    files["detection.py"] = detection.render()
+    files["lever_pieces.py"] = pieces.render()
     files["families.py"] = registry.render()
     files["paper_inputs.py"] = inputs.render()
     files["formulas.py"] = formulas.render()

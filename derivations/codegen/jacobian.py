@@ -26,7 +26,6 @@ JACOBIANS = {
     "elastic_contact": ("beta", "k1", "k2"),
     "tip_mass": ("beta", "k1", "k2", "mu"),
     "tilt": ("beta", "kvv", "kll", "kvl"),
-    "tip_setback": ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g"),
 }
 """Family module -> parameters of its generated Jacobian, in column order."""
 

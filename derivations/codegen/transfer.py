@@ -106,7 +106,7 @@ def families() -> tuple[Family, ...]:
     >>> [f.module for f in families()][:3]
     ['free_end', 'pinned', 'elastic_contact']
     """
-    return tuple(_derive(row) for row in registry.FAMILIES if row.kind != "setback")
+    return tuple(_derive(row) for row in registry.FAMILIES)
 
 
 def _partials(fam: Family) -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:

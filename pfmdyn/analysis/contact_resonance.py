@@ -1,6 +1,6 @@
 """Contact resonances of the whole lever model, and the contact stiffness that explains them.
 
-The model is the composed characteristic of ``derivations/tip_setback.py`` (tip at
+The model is the composed characteristic (:mod:`pfmdyn.composed`: tip at
 ``x_tip = gamma L``, tip mass, springs ``k1``, ``k2`` rotated by the tilt through
 ``generated/tilt_rotation.py``), evaluated in one place, :func:`characteristic`.  Four facts
 make the inverse problem exact and checkable:
@@ -38,7 +38,8 @@ import numpy as np
 
 from ..cantilever import Cantilever
 from ..errors import UserError
-from ..generated import formulas, tip_setback
+from .. import composed
+from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
@@ -78,7 +79,7 @@ class Lateral:
 def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     """The composed characteristic (zeros in ``beta``: the resonances) for springs ``k1``, ``k2``.
 
-    The one call of ``generated/tip_setback.py``'s characteristic in the stiffness code:
+    The one call of the composed characteristic in the stiffness code:
     springs rotated by the lever's tilt, its tip height, length, tip mass and rotary inertia
     (``rho_g``); broadcast over ``beta``, ``k1``, ``k2`` and ``tip_position``.
 
@@ -88,7 +89,7 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     """
     kvv, kll, kvl = rotated(k1, k2, lever.alpha)
     with np.errstate(all="ignore"):
-        return tip_setback.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
+        return composed.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
                                           lever.length, lever.tip_mass_ratio, tip_position, lever.rho_g)
 
 
@@ -349,7 +350,7 @@ def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -
     """Shift in ``beta`` from each measured resonance to the nearest root of the model (a Newton step).
 
     >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
-    array([-0.016603])
+    array([-0.017213])
     """
     gamma = values.get("tip_position", lever.tip_position)
     k1 = values["k1"]

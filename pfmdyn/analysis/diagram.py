@@ -21,7 +21,7 @@ the map is ``A(f, V) = P(f) + (G_loc(f) + G_nl(f)) dV``.
 The paper reads the slope at the free end.  A lever with its laser spot elsewhere
 (``Cantilever.spot_position``, ``x_s/L``; or any other departure from the paper's probe: a
 set-back, heavy or tilted tip) is evaluated on the composed model read at the spot
-(:meth:`pfmdyn.Cantilever.response`, ``generated/detection.py``) with ``k2 = 0`` as in
+(:meth:`pfmdyn.Cantilever.response`, :mod:`pfmdyn.composed`) with ``k2 = 0`` as in
 Eq. 23, and its slope is turned into a height with the same ``2L/3`` the instrument would use.
 The shares and the dominance do not depend on that factor; at a blind spot of the distributed
 load (``pfmdyn spot``) the non-local part vanishes.
@@ -216,27 +216,11 @@ def _coefficients(cantilever, frequency_hz, *, width, k1, H, d_eff, local_force,
     if cantilever.is_paper_probe:
         t = cantilever.frictionless_response(frequency, k1=k1)
     else:       # read at the spot (or with the tip's extras): the composed model, k2 = 0 as in Eq. 23
-        beta = cantilever.beta(frequency)
-        if np.any(beta.real < _LOWEST_BETA):
-            raise ValueError(f"read at a spot away from the free end (or with a set-back, heavy or tilted tip) the "
-                             f"lowest frequency is {_lowest_frequency(cantilever):.4g} Hz (the closed forms lose "
-                             "precision below)")
         t = replace(cantilever, tip_height=H).response(frequency, Contact(k1=k1))
     to_height = formulas.height_per_slope(cantilever.length)   # A = 2 theta L / 3 (Section III.2)
     s = electrostatic_sign * to_height
     return (frequency, to_height * d_eff * t.vertical, s * local_force * t.local_force,
             s * formulas.capacitive_load_per_volt2(EPSILON_0, width, H) * t.distributed_load)
-
-
-_LOWEST_BETA = 0.1
-"""Lowest ``Re beta`` of the composed model's closed forms (``generated/detection.py``,
-``generated/tip_setback.py``: no series branch; below, they cancel, about ``beta**-6`` of the
-largest term lost: 1e-8 of the distributed-load slope at 0.1 against the two-segment beam)."""
-
-
-def _lowest_frequency(cantilever) -> float:
-    """Frequency (Hz) at which ``beta`` of ``cantilever`` is :data:`_LOWEST_BETA` (``beta**2 ~ f``)."""
-    return cantilever.free_resonance * (_LOWEST_BETA / float(cantilever.beta(cantilever.free_resonance).real)) ** 2
 
 
 def response_map(cantilever, frequency_hz, bias_v, *, width, k1=PAPER_K1, H=PAPER_TIP_HEIGHT,

@@ -1,7 +1,7 @@
 """Where a probe's resonances are: certified undamped free and contact modes, and with damping
 each mode's Q, damped frequency and amplitude-peak frequency.
 
-The model is the composed one (``derivations/tip_setback.py``, ``generated/tip_setback.py``):
+The model is the composed lever (:mod:`pfmdyn.composed`; certified in :mod:`pfmdyn.composed_balls`):
 the tip at ``x_tip = tip_position L`` with its mass and rotary inertia, the contact springs
 ``k1`` (along the sample normal) and ``k2`` (along the surface) rotated into the lever's axes by
 the tilt, the three damping mechanisms of ``derivations/damping.py``.
@@ -40,7 +40,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar, newton
 
 from ..cantilever import Cantilever, Contact
-from ..generated import formulas, tip_setback
+from .. import composed, composed_balls
+from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, certify
 
@@ -122,7 +123,7 @@ class ResonanceResult:
         mode  condition  resonance (Hz)
            1  free       70000.0
            2  free       438682.5
-        certified: no resonance missed or counted twice below 446374.5 Hz (free)
+        certified: no resonance missed or counted twice below 445306.2 Hz (free)
         """
         if not self.certified:
             return f"not certified: {self.reason}"
@@ -160,10 +161,10 @@ def _certified_roots(params: tuple, count: int) -> tuple[list, flint.arb]:
     balls = [flint.arb(p) for p in exact]
 
     def on_series(s):
-        return tip_setback.characteristic_balls(s, FLINT, *balls)
+        return composed_balls.characteristic_balls(s, FLINT, *balls)
 
     def on_exact(s):
-        return tip_setback.characteristic_balls(s, FLINT, *exact)
+        return composed_balls.characteristic_balls(s, FLINT, *exact)
 
     return certify(on_series, count, _DIGITS, f_exact=on_exact)
 
@@ -227,7 +228,7 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
 def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
     """The damped characteristic at (complex) ``r = f / f1`` (the probe's own damping
     substitution, :meth:`pfmdyn.Cantilever.model_arguments`)."""
-    return tip_setback.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
+    return composed.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):

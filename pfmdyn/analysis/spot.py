@@ -1,13 +1,13 @@
 """Where the laser spot sits: the lever read at ``x_s`` instead of its end.
 
 The optical lever reads the slope ``u0'(x_s)`` wherever the spot was put; the paper reads it
-at ``x_s = L`` (Section II).  From the generated detection functions
-(:mod:`pfmdyn.generated.detection`, derived in ``derivations/detection.py``) this module
+at ``x_s = L`` (Section II).  From the composed lever (:mod:`pfmdyn.composed`, certified in
+:mod:`pfmdyn.composed_balls`, both assembled from ``derivations/pieces.py``) this module
 gives, for one lever in contact at one frequency:
 
 * the **electrostatic blind spots**: every ``x_s/L`` in ``(0, 1]`` where the slope response
   to the uniform capacitive load ``q0`` vanishes, certified with ball arithmetic (complete,
-  none twice: :func:`pfmdyn.derivations.certify.zeros_in` on the generated numerator);
+  none twice: :func:`pfmdyn.derivations.certify.zeros_in` on the composed numerator);
 * the **electrostatic-to-electromechanical slope ratio** ``theta_q0 / theta_d1`` along the
   lever;
 * the **static sensitivity** ``S = u_tip / (L theta(x_s))`` (``2/3`` at the end of a free
@@ -18,9 +18,8 @@ gives, for one lever in contact at one frequency:
   distributed load adds at ``x_s`` (zero at a blind spot), per volt of ``V_dc - V_surf``.
 
 Responses are those of the lossless lever (a blind spot is a real zero of the slope; the
-cantilever's losses are left out).  Static values are the generated (dynamic) functions
-extrapolated to ``beta = 0`` in ``beta**4`` from three points (:func:`static_limit`;
-relative error below 1e-7).
+cantilever's losses are left out).  Static values are the composed (dynamic) lever at the
+quasi-static ``beta = 1e-3`` (:func:`static_limit`; relative error below 1e-12).
 """
 from __future__ import annotations
 
@@ -32,7 +31,8 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from ..generated import detection, formulas
+from .. import composed, composed_balls
+from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in
 
@@ -42,8 +42,8 @@ __all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_
 EPSILON_0 = 8.8541878128e-12
 """Vacuum permittivity (F/m), for the capacitive load per volt."""
 
-_STATIC_BETA4 = 0.3**4
-"""Spacing in ``beta**4`` of the three points of the static extrapolation (see :func:`static_limit`)."""
+_QUASI_STATIC_BETA = 1e-3
+"""Where :func:`static_limit` evaluates a response (``beta**4`` 1e-12 of the first mode's)."""
 
 
 def parameters(lever: Cantilever, contact: Contact) -> dict:
@@ -58,7 +58,7 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height (--tip-height)")
-    return {name: float(value) for name, value in zip(detection.PARAMETERS, lever.model_parameters(contact))}
+    return {name: float(value) for name, value in zip(composed.PARAMETERS, lever.model_parameters(contact))}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:
@@ -82,23 +82,21 @@ def slope_along(lever: Cantilever, contact: Contact, beta, sigma) -> tuple:
     >>> bool(abs(a - b) < 1e-5 * abs(a))
     True
     """
-    return detection.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
+    return composed.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
                             **parameters(lever, contact))
 
 
 def static_limit(fn, *args, **kwargs):
-    """``fn(beta, ...)`` at ``beta = 0``: quadratic extrapolation in ``beta**4`` from three points.
+    """``fn(beta, ...)`` at ``beta = 0``: evaluated at the quasi-static ``beta = 1e-3``.
 
-    The generated closed forms cancel near ``beta = 0``; the responses are analytic in
-    ``beta**4`` (in ``omega**2``), so three points at ``beta**4 = h, 2h, 3h`` with
-    ``h = 0.3**4`` give the limit with an error of order ``(3h / beta_1**4)**3`` < 1e-7.
+    The composed lever is accurate to rounding there (tested against the static beam); the
+    responses are analytic in ``beta**4``, so the static value differs by ``(beta / beta_1)**4``,
+    below 1e-12.
 
     >>> round(float(static_limit(lambda b: 1 / (1 - b**4 / 12.36))), 8)    # a first resonance
     1.0
     """
-    values = [np.asarray(fn((j * _STATIC_BETA4) ** 0.25, *args, **kwargs)) for j in (1, 2, 3)]
-    # Lagrange weights of the quadratic through (h, 2h, 3h) evaluated at 0: 3, -3, 1.
-    return 3 * values[0] - 3 * values[1] + values[2]
+    return np.asarray(fn(_QUASI_STATIC_BETA, *args, **kwargs))
 
 
 @dataclass(frozen=True)
@@ -135,8 +133,8 @@ def blind_spots(lever: Cantilever, contact: Contact, beta: float, digits: int = 
         pieces = [("before", 0, gamma, 1)] + ([("beyond", gamma, 1, 0)] if gamma < 1 else [])
         balls = []
         for name, lo, hi, zero_at_lo in pieces:
-            coefficients = getattr(detection, f"q0_slope_{name}_coefficients")(FLINT, **params)
-            f = getattr(detection, f"q0_slope_{name}")
+            coefficients = composed_balls.q0_slope_coefficients(FLINT, **params)[name]
+            f = composed_balls.q0_slope
             model = _taylor_model(lambda s: f(s, FLINT, coefficients, b), coefficients, b, lo, hi)
             found = zeros_in(model, lo, hi, digits, zero_at_lower=zero_at_lo, prec=prec)
             if balls and found and balls[-1].overlaps(found[0]):
@@ -200,9 +198,9 @@ def sensitivities(lever: Cantilever, contact: Contact, sigma) -> dict:
     """
     L, gamma = lever.length, lever.tip_position
     params = {**parameters(lever, contact), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
-    theta = static_limit(lambda b: detection.slope(b, sigma, **params)[2])
-    tip = static_limit(lambda b: detection.deflection(b, gamma, **params)[2])
-    touching = static_limit(lambda b: detection.slope(b, sigma, **parameters(lever, contact))[0])
+    theta = static_limit(lambda b: composed.slope(b, sigma, **params)[2])
+    tip = static_limit(lambda b: composed.deflection(b, gamma, **params)[2])
+    touching = static_limit(lambda b: composed.slope(b, sigma, **parameters(lever, contact))[0])
     return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * touching))}
 
 

@@ -26,7 +26,8 @@ import math
 from dataclasses import dataclass
 
 from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
-from ..generated import detection, formulas
+from .. import composed
+from ..generated import formulas
 
 __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
 
@@ -35,7 +36,7 @@ __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spr
 class Chain:
     """What the chain rule composes at one parameter vector (:meth:`pfmdyn.discrepancy.model.Model.slopes_and_jacobian`).
 
-    ``part``: the generated partials of the four slopes w.r.t. :data:`pfmdyn.generated.tip_setback.JACOBIAN_PARAMETERS`
+    ``part``: the generated partials of the four slopes w.r.t. :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`
     (0 where not computed); ``rotation``: d slopes / d (k1 in beam axes, k2, alpha) through the
     rotated spring tensor; ``coords``: :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
     the undamped ``beta`` at each frequency, ``b1`` and ``d_b1`` the free root and its derivatives
@@ -94,7 +95,7 @@ class Effect:
 
     def reading(self, coords):
         """Where the model reads the slope when the effect is present: None (the free end,
-        :mod:`pfmdyn.generated.tip_setback`) or a generated module and its arguments after ``beta``."""
+        :data:`pfmdyn.composed.at_end`) or a reading of :mod:`pfmdyn.composed` and its arguments after ``beta``."""
         return None
 
     def jacobian(self, chain: Chain) -> tuple:
@@ -229,12 +230,12 @@ class Background(Effect):
 
 @dataclass(frozen=True)
 class SpotPosition(Effect):
-    """The slope read at the laser spot ``x_s = sigma L`` (:mod:`pfmdyn.generated.detection`)
+    """The slope read at the laser spot ``x_s = sigma L`` (:data:`pfmdyn.composed.at_spot`)
     instead of the free end: it reweights the modes (and can put a zero between them) but moves
     no resonance, so its Jacobian term has no free-root part."""
 
     def reading(self, coords):
-        return detection, (coords["sigma"],)
+        return composed.at_spot, (coords["sigma"],)
 
     def partials(self, coords) -> set[str]:
         return {"sigma"}
@@ -253,7 +254,7 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
                                          null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
                                                           0.68)),),
-               "derivations/tip_setback.py", moves_resonances=True),
+               "derivations/pieces.py", moves_resonances=True),
     Tilt("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
                             seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
                             description="beam inclination, positive when the free end is nearer the sample"),),
@@ -266,7 +267,7 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
                                              seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
                                                     0.65, 0.6, 0.55, 0.5),
                                              description="detection (laser) spot x_s / L"),),
-                 "derivations/detection.py", spectrum_only=True),
+                 "derivations/pieces.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 

@@ -11,16 +11,16 @@ model is linear in the complex coefficients of the columns::
 (``T_d1 = k1 T_f`` without a contact dashpot, so ``T_d1`` also carries the constant part
 of ``f0``; with the dashpot ``T_f`` is a sixth column), solved by linear least squares
 inside the nonlinear fit of the other parameters (variable projection).  The effects
-(:mod:`pfmdyn.discrepancy.effects`) share the generated two-segment solution
-(:mod:`pfmdyn.generated.tip_setback`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
+(:mod:`pfmdyn.discrepancy.effects`) share the composed lever
+(:mod:`pfmdyn.composed`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
 compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
 (complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
-solution at ``x_s = sigma L`` instead of the free end (:mod:`pfmdyn.generated.detection`).
+lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
 
-The solver's Jacobian comes from the derivations too: the generated partials of the slopes
-(:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`), of the damping substitution and
+The solver's Jacobian comes from the derivations too: the partials of the slopes
+(:func:`pfmdyn.composed.slope_and_jacobian`, from the same assembled system), of the damping substitution and
 of the rotation, composed by the chain rule (:meth:`Model.slopes_and_jacobian`), enter the
 variable-projection Jacobian (:data:`JACOBIAN`).
 """
@@ -37,7 +37,8 @@ from ..cantilever import free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
-from ..generated import damping, formulas, tip_setback
+from .. import composed
+from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
 from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
@@ -121,9 +122,9 @@ class Model:
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
 
-        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The generated
-        partials (:func:`pfmdyn.generated.tip_setback.slope_and_jacobian`, or with the effect
-        ``spot_position`` :func:`pfmdyn.generated.detection.slope_and_jacobian`) are composed by
+        Returns ``(T, dT)``: ``T`` of shape (4, n), ``dT`` of shape (4, p, n).  The composed
+        lever's partials (:func:`pfmdyn.composed.slope_and_jacobian`, read at the free end or,
+        with the effect ``spot_position``, at the spot) are composed by
         the chain rule with the generated damping factors' derivatives
         (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
@@ -161,14 +162,14 @@ class Model:
 
     def _reading(self, c):
         """The generated slope the model reads and its arguments after ``beta``: the free end
-        (:mod:`pfmdyn.generated.tip_setback`) unless a component reads elsewhere (the laser spot)."""
+        (:data:`pfmdyn.composed.at_end`) unless a component reads elsewhere (the laser spot)."""
         for e in self.components:
             reading = e.reading(c)
             if reading is not None:
                 return reading
-        return tip_setback, ()
+        return composed.at_end, ()
 
-    def _partials_needed(self, c, module=tip_setback) -> tuple[str, ...]:
+    def _partials_needed(self, c, module=composed.at_end) -> tuple[str, ...]:
         """The generated partials of ``module`` the chain rule uses at coordinates ``c`` (others
         multiply zero)."""
         need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
@@ -236,7 +237,7 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
     top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
-    roots = grid_roots(lambda b: tip_setback.characteristic(b, *args), grid, refine_roots)
+    roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.f1, b1)
 
 
@@ -254,7 +255,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
-            vals = tip_setback.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+            vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
         change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
         for row, i in enumerate(rows):
             idx = np.flatnonzero(change[row])
@@ -269,13 +270,13 @@ def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, flo
     b1 = free_root(k, H, L, mu, gamma)
     if mu == 0.0:
         return b1, (0.0, 0.0)
-    _, d = tip_setback.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
-    names = tip_setback.JACOBIAN_PARAMETERS
+    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
+    names = composed.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
 
 def characteristic_args(model: Model, internal, contact: bool) -> tuple:
-    """Parameters of :func:`pfmdyn.generated.tip_setback.characteristic` for the model."""
+    """Parameters of :func:`pfmdyn.composed.characteristic` for the model."""
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
@@ -287,29 +288,34 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
 
     Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
     ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
-    the free root ``beta_1`` (tip mass, set-back).  One vectorised evaluation of ``F`` per
-    parameter replaces a root search per parameter.
+    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from the assembled
+    system (:func:`pfmdyn.composed.characteristic_and_jacobian`, one call for the contact roots and
+    one for the free root); the model's parameters are algebraic functions of the internal ones.
     """
     internal = np.asarray(internal, float)
     m = model.meta
     f = np.asarray(frequency_hz, float)
-    F = tip_setback.characteristic
     c = model.coords(internal)
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.f1, b1)
-    a0, af0 = characteristic_args(model, internal, contact), characteristic_args(model, internal, False)
+    names = composed.JACOBIAN_PARAMETERS
+    moved = [names.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
+    at = [composed.PARAMETERS.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
+    out = np.empty((len(f), len(internal)))
     with np.errstate(all="ignore"):
-        hb = 1e-7 * beta
-        f_beta = (F(beta + hb, *a0) - F(beta - hb, *a0)) / (2 * hb)
-        f_b1 = (F(b1 * (1 + 1e-7), *af0) - F(b1 * (1 - 1e-7), *af0)) / (2e-7 * b1)
-        out = np.empty((len(f), len(internal)))
+        roots = []
+        for where, x in ((beta, contact), (np.array([b1]), False)):
+            a0 = characteristic_args(model, internal, x)
+            _, d = composed.characteristic_and_jacobian(where, *a0)
+            roots.append((a0, np.array([d[i] for i in moved]) / d[0]))
         for j in range(len(internal)):
+            # the model's parameters are plain functions of the internal ones: their change per unit
             h = 1e-7 * max(1.0, abs(internal[j]))
             xs = internal.copy()
             xs[j] += h
-            d_beta = -(F(beta, *characteristic_args(model, xs, contact)) - F(beta, *a0)) / h / f_beta
-            d_b1 = -(F(b1, *characteristic_args(model, xs, False)) - F(b1, *af0)) / h / f_b1
-            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1)
+            d_beta, d_b1 = (-(ratio.T @ ((np.array(characteristic_args(model, xs, x))[at] - np.array(a0)[at]) / h))
+                            for (a0, ratio), x in zip(roots, (contact, False)))
+            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1[0])
     out[~np.isfinite(out)] = 0.0
     return out
 

@@ -3,7 +3,7 @@
 A resonance table may give each mode's Q (an instrument's thermal or tune fit).  The model
 predicts it from the generated damping substitution (:func:`pfmdyn.generated.damping.factors`:
 complex ``beta``, ``k``, ``k1`` and ``mu`` at ``r = f / f1``) put into the generated
-characteristic (:func:`pfmdyn.generated.tip_setback.characteristic`).  That function of
+characteristic (:func:`pfmdyn.composed.characteristic`).  That function of
 ``r`` is analytic, and its zero near each undamped root ``r_n`` is the damped mode
 ``r_c``; ``Q = |r_c| / (2 Im r_c)`` (the damped-oscillator definition: half-power width
 ``f_n / Q``).  No formula for Q is typed here: the three mechanisms give their own laws,
@@ -25,7 +25,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..generated import damping, formulas, tip_setback
+from .. import composed
+from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated
 from .model import Model, free_root
 
@@ -45,7 +46,7 @@ def _characteristic(model: Model, internal, contact: bool, r):
         kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
     else:
         kvv = kll = kvl = 0.0
-    return tip_setback.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
+    return composed.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
                                       c["mu"] * mu_f, c["gamma"], 0.0)
 
 

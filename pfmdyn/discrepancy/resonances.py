@@ -1,7 +1,7 @@
 """The discrepancy loop for a resonances table (free and contact modes), and the paper's data.
 
-The model is the set of undamped characteristic roots (generated
-:func:`pfmdyn.generated.tip_setback.characteristic`, found by
+The model is the set of undamped characteristic roots (the composed lever's
+:func:`pfmdyn.composed.characteristic`, found by
 :func:`pfmdyn.discrepancy.model.resonances`): free modes with the contact springs off,
 contact modes with them on.  Frequencies follow ``f = f1 (beta / beta1)**2`` with ``f1``
 the metadata's free resonance and ``beta1`` the first free root of the same model, so the

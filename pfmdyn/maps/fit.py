@@ -38,7 +38,8 @@ from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..fitting.parameters import CONTACT_LOSS, LN10, VISCOUS_LOSS, Parameter
 from ..fitting.parameters import bounds as parameter_bounds
 from ..fitting.projection import covariance, normal_matrix, project
-from ..generated import damping, detection, elastic_contact, tip_setback
+from .. import composed
+from ..generated import damping, elastic_contact
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
@@ -286,9 +287,9 @@ class BeamMapModel:
             values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
             return values, [(*p, None) for p in partials]
         alpha = self.lever.alpha
-        # read at the laser spot (derivations/detection.py) or, by default, at the free end
+        # read at the laser spot or, by default, at the free end
         spot = self.lever.spot_position
-        module, at = (tip_setback, ()) if spot == 1.0 else (detection, (spot,))
+        module, at = (composed.at_end, ()) if spot == 1.0 else (composed.at_spot, (spot,))
         args = (beta, *at, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,
                 self.lever.rho_g)
         if not jacobian:

@@ -1,0 +1,517 @@
+"""The composed lever: the derived pieces assembled per frequency into one small linear system.
+
+The lever is two uniform segments, clamp to tip (``0 < xi < gamma``) and tip to free end
+(``gamma < xi < 1``; of zero length when the tip is at the end), joined at the tip point
+(contact springs ``kvv, kll, kvl`` at height ``H``, tip mass ``mu``, rotary inertia ``rho_g``,
+drives ``d1, d2, f0``) and loaded by ``q0`` along their length.  Each piece is derived once in
+``derivations/pieces.py`` and generated in ``generated/lever_pieces.py``; here they are only
+assembled (the dynamic-stiffness way): per segment four unknowns, eight rows (clamp, continuity
+and jump at the tip, free end), one right-hand side per drive, solved with NumPy and batched over
+every frequency and parameter given.  The beam is then read anywhere (:func:`slope`,
+:func:`deflection` at ``x_s = sigma L``).
+
+Numerics.  A segment with ``|beta l| <= 1`` uses the Krylov-Duncan field matrix (its state at the
+start as unknowns, series free of cancellation, and the load's particular solution of zero
+initial state), a longer one the bounded basis ``cos, sin, e^{-s}, e^{s - beta l}``: nothing
+overflows and nothing cancels, from the quasi-static ``beta = 1e-3`` to ``Re beta = 200``.
+Derivatives come from the same system (``dc = A^-1 (db - dA c)``), and the characteristic is its
+determinant, scaled to be continuous across the two bases.
+
+Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
+lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
+tip mass over the lever's, ``gamma = x_tip / L``, ``rho_g = r_g / L``, ``sigma = x_s / L``.
+"""
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from .generated import lever_pieces as pieces
+
+__all__ = ["PARAMETERS", "JACOBIAN_PARAMETERS", "SPOT_JACOBIAN_PARAMETERS", "DRIVES", "slope", "deflection",
+           "response", "slope_and_jacobian", "characteristic", "characteristic_and_jacobian"]
+
+PARAMETERS = ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g")
+JACOBIAN_PARAMETERS = ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
+"""The parameters of :func:`characteristic_and_jacobian`'s partials (and of the slope at the end)."""
+SPOT_JACOBIAN_PARAMETERS = ("beta", "sigma", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
+DRIVES = ("d1", "d2", "f0", "q0")
+_POINT = pieces.JACOBIAN_PARAMETERS
+_BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
+
+
+def _solve(A, b):
+    """``A^-1 b`` batched; NaN for the members whose ``A`` is singular or not finite."""
+    try:
+        with np.errstate(all="ignore"):
+            return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        eye = np.eye(A.shape[-1])
+        bad = ~np.isfinite(A).all(axis=(-2, -1))
+        with np.errstate(all="ignore"):
+            bad |= np.abs(np.linalg.det(np.where(bad[..., None, None], eye, A))) == 0
+        out = np.linalg.solve(np.where(bad[..., None, None], eye, A), b)
+        out[bad] = np.nan
+        return out
+
+
+_CIRCULANT = np.array([[(j - m) % 4 for j in range(4)] for m in range(5)])
+"""``F[m][j] = K[(j - m) % 4]``: the field matrix and its ``d/ds`` (row 4) from ``K = (S, T, U, V)``."""
+
+
+def _columns(values, n, dtype=None) -> np.ndarray:
+    """``values`` (arrays of length ``n`` or scalars) as the columns of one ``(n, len(values))`` array."""
+    dtype = dtype or np.result_type(*values, float)
+    out = np.empty((n, len(values)), dtype)
+    for i, v in enumerate(values):
+        out[:, i] = v
+    return out
+
+
+class _Segment:
+    """A segment read at ``t`` (length ``ell``): basis ``E[:, n, j]``, load ``P[:, n]`` per unit q0, and
+    their derivatives along ``s = beta t`` (``dE``, ``dP``) and w.r.t. ``s_end = beta ell`` (``dE_end``).
+
+    Members with ``short`` use the Krylov-Duncan field matrix, the others the bounded basis.  The
+    five rows ``d**n/ds**n``, ``n = 0..4``, are kept: the basis is rows 0-3, its ``d/ds`` rows 1-4."""
+
+    def __init__(self, beta, t, ell, short, uc):
+        s = beta * t
+        if short.all():
+            self.rows, self.load = self._krylov_duncan(s, uc)
+        elif not short.any():
+            self.rows, self.load = self._bounded(s, beta * ell, uc)
+        else:
+            rows = np.empty(beta.shape + (5, 4), np.result_type(beta, uc))
+            load = np.empty(beta.shape + (5,), rows.dtype)
+            for mask, make in ((short, self._krylov_duncan), (~short, self._bounded)):
+                args = (s[mask], uc[mask]) if make == self._krylov_duncan else (s[mask], (beta * ell)[mask], uc[mask])
+                rows[mask], load[mask] = make(*args)
+            self.rows, self.load = rows, load
+        self.short = short
+        self.E, self.dE = self.rows[:, :4], self.rows[:, 1:]
+        self.P, self.dP = self.load[:, :4], self.load[:, 1:]
+
+    @staticmethod
+    def _krylov_duncan(s, uc):
+        s_1, t, u, v = pieces.krylov_duncan(s)
+        K = _columns((s_1 + 1.0, t, u, v), s.shape[0])
+        # the load of zero initial state, uc (e0 - F[:, 0]), and its d/ds: -uc (S - 1, V, U, T, S)
+        return K[:, _CIRCULANT], -uc[:, None] * _columns((s_1, v, u, t, K[:, 0]), s.shape[0])
+
+    @staticmethod
+    def _bounded(s, s_end, uc):
+        rows = _columns(pieces.bounded_basis(s, s_end), s.shape[0]).reshape(-1, 5, 4)
+        load = np.zeros(s.shape + (5,), np.result_type(rows, uc))
+        load[:, 0] = uc
+        return rows, load
+
+    @cached_property
+    def dE_end(self):
+        """``d E / d s_end``: only the bounded basis' ``e^{s - s_end}`` column depends on it."""
+        out = np.zeros_like(self.E)
+        out[:, :, 3] = np.where(self.short[:, None], 0.0, -self.E[:, :, 3])
+        return out
+
+    def parts(self, count):
+        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all)."""
+        n = self.E.shape[0] // count
+        return [_Part(self, slice(i * n, (i + 1) * n)) for i in range(count)]
+
+    def derivative(self, name, beta, t, ell, moves_end, moves_start):
+        """``(dE, dP)`` w.r.t. ``name``.  ``moves_end``, ``moves_start``: ``d ell/d gamma`` and
+        ``d t/d gamma`` (the segment's length and the read point follow the tip)."""
+        b = beta[:, None, None]
+        if name == "beta":
+            return (t[:, None, None] * self.dE + ell[:, None, None] * self.dE_end,
+                    t[:, None] * self.dP - 4 * self.P / beta[:, None])
+        if name == "gamma":
+            ds = (moves_start * beta)[:, None, None]
+            return ds * self.dE + moves_end[:, None, None] * b * self.dE_end, ds[:, 0] * self.dP
+        if name == "sigma":
+            return b * self.dE, b[:, 0] * self.dP
+        return None
+
+
+class _Part:
+    """One batch of a stacked :class:`_Segment` evaluation (views)."""
+
+    def __init__(self, whole, part):
+        self.whole, self.part = whole, part
+        self.E, self.dE, self.P, self.dP = whole.E[part], whole.dE[part], whole.P[part], whole.dP[part]
+
+    @property
+    def dE_end(self):
+        return self.whole.dE_end[self.part]
+
+    derivative = _Segment.derivative
+
+
+class _Lever:
+    """The assembled system ``A c = b`` of one batch (all arguments broadcast and flattened).
+
+    One segment when the tip is at the end everywhere (``gamma = 1``, no ``gamma`` derivative asked),
+    else two; each segment four unknowns, one right-hand side per drive."""
+
+    def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False):
+        args = [np.asarray(a) for a in (beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        dtype, n = np.result_type(*args, float), int(np.prod(self.shape))
+        flat = [np.full(n, a, dtype) if a.ndim == 0 else np.broadcast_to(a.astype(dtype), self.shape).reshape(-1)
+                for a in args]
+        self.beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g = flat
+        self.k, self.L, self.gamma = k, L, np.real(gamma)
+        self.two = split or bool(np.any(self.gamma != 1.0))
+        self.derivatives = derivatives      # solve for A^-1 with c: derivatives will be asked
+        self.uc = pieces.load_constant(self.beta, k, L) + 0 * self.beta
+        point = (self.beta, k, kvv, kll, kvl, H, L, mu, rho_g)
+        self.point = point
+        self.jump = _columns(pieces.point_jump(*point), n)
+        g = self.gamma
+        self.lengths = (g, 1 - g) if self.two else (np.ones_like(g),)
+        self.short = [np.abs(self.beta * ell) <= pieces.KD_SERIES_LIMIT for ell in self.lengths]
+        zero = np.zeros_like(g)
+        # (segment, t, d ell/d gamma, d t/d gamma) of the ends the rows use: clamp, tip (left, right), free end
+        self.ends = [(0, zero, 1.0, 0.0), (0, g, 1.0, 1.0)] + ([(1, zero, -1.0, 0.0), (1, 1 - g, -1.0, -1.0)]
+                                                               if self.two else [])
+        count = len(self.ends)
+        stacked = _Segment(np.tile(self.beta, count), np.concatenate([t for _, t, _, _ in self.ends]),
+                           np.concatenate([self.lengths[j] for j, _, _, _ in self.ends]),
+                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]), np.tile(self.uc, count))
+        self.at = stacked.parts(count)
+        self.A, self.b = self._assemble(self.jump, [(e.E, e.P) for e in self.at])
+
+    @cached_property
+    def jump_partials(self):
+        return pieces.point_jump_partials(*self.point)
+
+    @cached_property
+    def c(self):
+        """The segments' coefficients per drive (NaN where the system is singular: an undamped
+        resonance met exactly, or a non-finite argument)."""
+        return self._solved[0] if self.derivatives else _solve(self.A, self.b)
+
+    @cached_property
+    def inverse(self):
+        """``A^-1``, from the same solve as :attr:`c` (derivatives are products with it)."""
+        return self._solved[1]
+
+    @cached_property
+    def _solved(self):
+        size = self.A.shape[-1]
+        out = _solve(self.A, np.concatenate([self.b, np.broadcast_to(np.eye(size), self.A.shape)], -1))
+        return out[..., :4], out[..., 4:]
+
+    def _assemble(self, jump, ends, djump=None, dends=None):
+        """``A``, ``b`` from the jump and the segments' end values; with ``djump``, ``dends`` given,
+        their derivative (the system is linear in each but for ``J`` times the tip's state)."""
+        J, G = jump[:, :4].reshape(-1, 2, 2), jump[:, 4:].reshape(-1, 2, 3)
+        (E10, P10), (E1g, P1g), *right = dends or ends
+        if djump is None:
+            JE, JP = J @ E1g[:, 0:2], np.einsum("nij,nj->ni", J, P1g[:, 0:2])
+        else:
+            dJ, G = djump[:, :4].reshape(-1, 2, 2), djump[:, 4:].reshape(-1, 2, 3)
+            E, P = ends[1]
+            JE = dJ @ E[:, 0:2] + J @ E1g[:, 0:2]
+            JP = np.einsum("nij,nj->ni", dJ, P[:, 0:2]) + np.einsum("nij,nj->ni", J, P1g[:, 0:2])
+        size = 8 if self.two else 4
+        A = np.zeros((self.beta.shape[0], size, size), dtype=np.result_type(E1g, J, P1g))
+        b = np.zeros((self.beta.shape[0], size, 4), dtype=A.dtype)
+        A[:, 0:2, 0:4], b[:, 0:2, 3] = E10[:, 0:2], -P10[:, 0:2]         # clamp
+        if not self.two:                                                 # the tip at the free end
+            A[:, 2:4, 0:4], b[:, 2:4, 0:3], b[:, 2:4, 3] = E1g[:, 2:4] - JE, G, JP - P1g[:, 2:4]
+            return A, b
+        (E20, P20), (E2e, P2e) = right
+        A[:, 2:4, 0:4], A[:, 2:4, 4:8] = E1g[:, 0:2], -E20[:, 0:2]         # u, u' continuous at the tip
+        b[:, 2:4, 3] = (P20 - P1g)[:, 0:2]
+        A[:, 4:6, 0:4], A[:, 4:6, 4:8] = E1g[:, 2:4] - JE, -E20[:, 2:4]    # moment and shear jump there
+        b[:, 4:6, 0:3], b[:, 4:6, 3] = G, JP + P20[:, 2:4] - P1g[:, 2:4]
+        A[:, 6:8, 4:8], b[:, 6:8, 3] = E2e[:, 2:4], -P2e[:, 2:4]           # free end
+        return A, b
+
+    def _d_ends(self, name):
+        """Derivatives of the jump and of the ends' values w.r.t. ``name``."""
+        djump = (_columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
+                 if name in _POINT else np.zeros_like(self.jump))
+        dends = []
+        for (j, t, d_ell, d_t), seg in zip(self.ends, self.at):
+            d = seg.derivative(name, self.beta, t, self.lengths[j], np.full_like(t, d_ell), np.full_like(t, d_t))
+            if d is None:
+                d = (np.zeros_like(seg.E), -seg.P / self.k[:, None] if name == "k" else np.zeros_like(seg.P))
+            elif name == "sigma":
+                d = (np.zeros_like(seg.E), np.zeros_like(seg.P))
+            dends.append(d)
+        return djump, dends
+
+    def d_system_matrix(self, name):
+        """``dA`` w.r.t. ``name``."""
+        djump, dends = self._d_ends(name)
+        return self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)[0]
+
+    @property
+    def _jump_rows(self):
+        return slice(4, 6) if self.two else slice(2, 4)
+
+    def _tip_state(self):
+        """``[u, z1]`` at the tip per drive (2 x 4): what a change of the jump acts on."""
+        E, P = self.at[1].E, self.at[1].P
+        z = E[:, 0:2] @ self.c[:, 0:4]
+        z[:, :, 3] += P[:, 0:2]
+        return z
+
+    def d_system(self, names):
+        """``{name: dc}``, one solve for all.  A parameter of the tip point alone changes only the
+        jump's rows of the system: there ``db - dA c = dG d + dJ [u, z1]``."""
+        rhs, tip = [], None
+        for name in names:
+            if name in _POINT and name not in ("beta", "k"):
+                tip = self._tip_state() if tip is None else tip
+                dpart = _columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
+                dJ, dG = dpart[:, :4].reshape(-1, 2, 2), dpart[:, 4:].reshape(-1, 2, 3)
+                r = np.zeros_like(self.b, dtype=np.result_type(self.b, dpart))
+                r[:, self._jump_rows] = dJ @ tip
+                r[:, self._jump_rows, 0:3] += dG
+            else:
+                djump, dends = self._d_ends(name)
+                dA, db = self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)
+                r = db - dA @ self.c
+            rhs.append(r)
+        if not rhs:
+            return {}
+        dc = self.inverse @ np.concatenate(rhs, -1)
+        return {name: dc[..., 4 * i:4 * i + 4] for i, name in enumerate(names)}
+
+    def reader(self, sigma):
+        """The read-out at ``sigma``: its segment evaluation, which coefficients it uses, and how it
+        moves with the tip."""
+        sigma = np.broadcast_to(np.real(np.asarray(sigma, dtype=float)), self.shape).reshape(-1)
+        before = (sigma <= self.gamma) if self.two else np.ones(sigma.shape, bool)
+        g = self.gamma
+        t = np.where(before, sigma, sigma - g)
+        ell = np.where(before, self.lengths[0], self.lengths[-1])
+        short = np.where(before, self.short[0], self.short[-1])
+        seg = _Segment(self.beta, t, ell, short, self.uc)
+        coefficients = np.where(before[:, None, None], self.c[:, 0:4], self.c[:, 4:8] if self.two else 0.0)
+        return seg, t, ell, before, coefficients
+
+    def state(self, reader, dc=None):
+        seg, _, _, before, coefficients = reader
+        if dc is not None:
+            coefficients = np.where(before[:, None, None], dc[:, 0:4], dc[:, 4:8] if self.two else 0.0)
+        z = seg.E @ coefficients
+        if dc is None:
+            z[:, :, 3] += seg.P
+        return z
+
+    def d_state(self, reader, name, dc):
+        """``d z(sigma)/d name`` (flat, 4 components x 4 drives)."""
+        seg, t, ell, before, coefficients = reader
+        z = self.state(reader, dc)
+        side = np.where(before, 1.0, -1.0)
+        d = seg.derivative(name, self.beta, t, ell, side, np.where(before, 0.0, -1.0))
+        if d is None:
+            if name == "k":
+                z[:, :, 3] -= seg.P / self.k[:, None]
+            return z
+        dE, dP = d
+        z = z + dE @ coefficients
+        z[:, :, 3] += dP
+        return z
+
+    def out(self, x):
+        """Flat results back to the arguments' broadcast shape (batch first)."""
+        return x.reshape(self.shape + x.shape[1:])
+
+
+def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over :data:`DRIVES`.
+
+    Examples
+    --------
+    >>> slopes, deflections = response(2.5, 1.0, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> [f"{v:.8g}" for v in slopes]
+    ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
+    """
+    beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+    z = lever.state(lever.reader(sigma))
+    theta = (lever.beta / lever.L)[:, None] * z[:, 1]
+    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
+
+
+def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """Slope ``u'(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
+    """
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[0]
+
+
+def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """Deflection ``u(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
+    """
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[1]
+
+
+def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS):
+    """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
+
+    Returns
+    -------
+    values : tuple of ndarray, as :func:`slope`
+    jacobian : ``jacobian[i][j]``, the derivative of ``values[i]`` w.r.t. ``SPOT_JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05,
+    ...                                       wrt=('sigma',))
+    >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
+    ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
+    """
+    names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
+    beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
+    reader = lever.reader(sigma)
+    scale = (lever.beta / lever.L)[:, None]
+    z1 = lever.state(reader)[:, 1]
+    dc = lever.d_system([p for p in names if p != "sigma"])
+    columns = {}
+    for name in names:
+        d = scale * lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1]
+        columns[name] = lever.out(d + z1 / lever.L[:, None] if name == "beta" else d)
+    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0))
+    jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
+                for i in range(4))
+    return values, jac
+
+
+def _scaled_det(lever):
+    """``det A`` times a factor free of zeros that makes it one function of ``beta`` across the bases
+    (a short segment's unknowns are its state, a long one's the bounded basis' coefficients) and
+    across the one- and two-segment systems; ``d log(factor)/d beta``, ``/d gamma``; the factor."""
+    scale, d_beta, d_gamma = (1.0 if lever.two else _ONE_SEGMENT), 0.0, 0.0
+    for short, ell, side in zip(lever.short, lever.lengths, (1.0, -1.0)):
+        scale = scale * np.where(short, np.exp(-lever.beta * ell), 1.0 / _BOUNDED_AT_START)
+        d_beta = d_beta + np.where(short, -ell, 0.0)
+        d_gamma = d_gamma + np.where(short, -side * lever.beta, 0.0)
+    return _clamped_det(lever.A) * scale, d_beta, d_gamma, scale
+
+
+def _clamped_det(A):
+    """``det A`` by the Schur complement of the clamp's rows: in either basis they read
+    ``[I, B]`` on the first segment's unknowns, so ``det A = det(A22 - A21 B)``; with the tip at
+    the end that is a 2 x 2 determinant written out (no LAPACK call per frequency)."""
+    S = A[:, 2:, 2:] - A[:, 2:, 0:2] @ A[:, 0:2, 2:]
+    if S.shape[-1] == 2:
+        return S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] * S[:, 1, 0]
+    return _det(S)
+
+
+def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """The composed lever's characteristic: its zeros in ``beta`` are the resonances.
+
+    The determinant of the assembled system, scaled (by ``e^{-beta l}`` per short segment) so that it
+    is one analytic function of ``beta`` whichever basis each segment uses.
+
+    Examples
+    --------
+    >>> from scipy.optimize import brentq
+    >>> f = lambda b: characteristic(b, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0)
+    >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
+    1.8751040687
+    """
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+    return lever.out(_scaled_det(lever)[0])
+
+
+def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS`.
+
+    At a zero only their ratios matter: a resonance moves with ``p`` as ``d beta/d p = -D_p / D_beta``.
+
+    Examples
+    --------
+    >>> value, partials = characteristic_and_jacobian(1.8751040687, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0)
+    >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
+    -1.875104
+    """
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True)
+    det, d_beta, d_gamma, scale = _scaled_det(lever)
+    # Jacobi's formula d det = tr(adj(A) dA), the adjugate from the SVD: finite at a resonance,
+    # where A is singular and its inverse is not.
+    adjugate = _adjugate(lever.A) * scale[:, None, None]
+    partials = []
+    for name in JACOBIAN_PARAMETERS:
+        d = np.einsum("nij,nji->n", adjugate, lever.d_system_matrix(name))
+        d = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
+        partials.append(lever.out(d))
+    return lever.out(det), tuple(partials)
+
+
+def _det(A):
+    with np.errstate(all="ignore"):
+        return np.linalg.det(A)
+
+
+def _adjugate(A):
+    """``adj(A) = det(A) A^-1`` batched, from the SVD ``A = U diag(s) V^H``: ``det(U) det(V^H)
+    V diag(prod_{j != i} s_j) U^H``, finite where ``A`` is singular."""
+    u, sv, vh = np.linalg.svd(A)
+    n = sv.shape[-1]
+    others = np.stack([np.prod(np.delete(sv, i, axis=-1), axis=-1) for i in range(n)], -1)
+    phase = np.linalg.det(u) * np.linalg.det(vh)
+    return phase[:, None, None] * np.conj(np.swapaxes(vh, -1, -2)) @ (others[..., :, None] * np.conj(np.swapaxes(u, -1, -2)))
+
+
+def _one_segment_factor() -> float:
+    """``det`` of the two-segment system with a zero-length second segment over the one-segment
+    ``det`` (a fixed sign: the second segment's unknowns are its state, eliminated by permutation)."""
+    args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-5, 2e-4, 0.1, 1.0, 0.05)
+    ratio = float(np.linalg.det(_Lever(*args, split=True).A)[0] / np.linalg.det(_Lever(*args).A)[0])
+    return round(ratio)
+
+
+_ONE_SEGMENT = _one_segment_factor()
+
+
+class Reading:
+    """Where an engine reads the lever: at the free end (``at_end``: arguments as the
+    characteristic's) or at a laser spot (``at_spot``: ``sigma`` after ``beta``).  One forward
+    model, :func:`slope_and_jacobian`, behind both.
+
+    Examples
+    --------
+    >>> args = (2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(at_end.slope(2.5, *args)[0] == at_spot.slope(2.5, 1.0, *args)[0])
+    True
+    """
+
+    def __init__(self, spot: bool):
+        self.spot = spot
+        self.JACOBIAN_PARAMETERS = SPOT_JACOBIAN_PARAMETERS if spot else JACOBIAN_PARAMETERS
+
+    def _split(self, beta, args):
+        return (args[0], args[1:]) if self.spot else (1.0, args)
+
+    def slope(self, beta, *args):
+        sigma, params = self._split(beta, args)
+        return slope(beta, sigma, *params)
+
+    def slope_and_jacobian(self, beta, *args, wrt=None):
+        sigma, params = self._split(beta, args)
+        wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
+        values, jac = slope_and_jacobian(beta, sigma, *params, wrt=wrt)
+        keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
+        return values, tuple(tuple(row[j] for j in keep) for row in jac)
+
+
+at_end, at_spot = Reading(False), Reading(True)
