@@ -8,11 +8,13 @@ State ``z = [u, u_xi/beta, u_xixi/beta**2, u_xixixi/beta**3]`` (``xi = x/L``); a
 """
 import numpy as np
 
-__all__ = ['KD_SERIES_LIMIT', 'PARAMETERS', 'JACOBIAN_PARAMETERS', 'krylov_duncan', 'krylov_duncan_closed',
+__all__ = ['KD_SERIES_LIMIT', 'KD_WEIGHTS', 'PARAMETERS', 'JACOBIAN_PARAMETERS', 'krylov_duncan', 'krylov_duncan_closed',
            'bounded_basis', 'load_constant', 'point_jump', 'point_jump_partials']
 
 KD_SERIES_LIMIT = 1.0
 """``|s|`` up to which :func:`krylov_duncan` is accurate to rounding (its series' first omitted term is below 1e-30)."""
+KD_WEIGHTS = ((1, 0, 1, 0), (0, 1, 0, 1), (1, 0, -1, 0), (0, 1, 0, -1))
+"""``2 S, 2 T, 2 U, 2 V`` as integer weights of ``cosh s, sinh s, cos s, sin s``."""
 PARAMETERS = ('beta', 'k', 'kvv', 'kll', 'kvl', 'H', 'L', 'mu', 'rho_g')
 JACOBIAN_PARAMETERS = ('beta', 'k', 'kvv', 'kll', 'kvl', 'mu', 'rho_g')
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import flint
 
-from .generated.lever_pieces import krylov_duncan_closed, point_jump
+from .generated.lever_pieces import KD_WEIGHTS, krylov_duncan_closed, point_jump
 
 __all__ = ["characteristic_balls", "q0_slope_coefficients", "q0_slope"]
 
@@ -27,8 +27,6 @@ BRANCHES = ("before", "beyond")
 
 PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
 """Index pairs of the 2x2 minors (the second compound matrices)."""
-_KD_TWICE = ((1, 0, 1, 0), (0, 1, 0, 1), (1, 0, -1, 0), (0, 1, 0, -1))
-"""``2 S, 2 T, 2 U, 2 V`` in ``cosh, sinh, cos, sin``."""
 
 
 def _minor_weights(rows, cols):
@@ -38,7 +36,7 @@ def _minor_weights(rows, cols):
     hyperbolic squares (a minor of ``F(s)`` grows like ``exp(s)``, not ``exp(2 s)``).
     """
     (n1, n2), (j1, j2) = rows, cols
-    p, q, r, t = (_KD_TWICE[(j - n) % 4] for n, j in ((n1, j1), (n2, j2), (n1, j2), (n2, j1)))
+    p, q, r, t = (KD_WEIGHTS[(j - n) % 4] for n, j in ((n1, j1), (n2, j2), (n1, j2), (n2, j1)))
     C = [[p[i] * q[j] - r[i] * t[j] for j in range(4)] for i in range(4)]
     assert C[0][0] + C[1][1] == 0 and C[0][1] + C[1][0] == 0, "a minor growing like exp(2 s)"
     return (C[0][0], C[0][2] + C[2][0], C[0][3] + C[3][0], C[1][2] + C[2][1], C[1][3] + C[3][1],

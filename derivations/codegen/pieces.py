@@ -44,6 +44,18 @@ def _series(expr: sp.Expr, j: int) -> str:
     return text if j == 0 else f"s{'**' + str(j) if j > 1 else ''} * ({text})"
 
 
+def krylov_duncan_weights(K: list[sp.Expr]) -> list[tuple[int, ...]]:
+    """``2 K_j`` as integer weights of ``cosh s, sinh s, cos s, sin s`` (checked to be exact)."""
+    basis = (sp.cosh(pieces.s), sp.sinh(pieces.s), sp.cos(pieces.s), sp.sin(pieces.s))
+    out = []
+    for k in K:
+        twice = sp.expand(2 * k)
+        weights = tuple(int(twice.coeff(b)) for b in basis)
+        assert sp.expand(twice - sum(w * b for w, b in zip(weights, basis))) == 0
+        out.append(weights)
+    return out
+
+
 def _in_namespace(expr: sp.Expr) -> str:
     """``expr`` in cos, sin, exp of a math namespace ``m`` (python-flint or mpmath)."""
     e, f = sp.symbols("_e _f")          # exp(s), exp(-s)
@@ -76,7 +88,7 @@ def render() -> str:
         "lever_pieces.py.jinja",
         header=header("derivations/pieces.py: unit_state(), bounded_basis(), load_constant(), point_jump()",
                       source_hash(sources)),
-        series=s_minus, closed=[_in_namespace(e) for e in K],
+        series=s_minus, closed=[_in_namespace(e) for e in K], weights=krylov_duncan_weights(K),
         bounded=cse_lines(list(B)),
         load=code(pieces.load_constant()), parameters=[str(p) for p in POINT_PARAMETERS],
         jump=[code(e) for e in jump], partials={p: [code(e) for e in v] for p, v in partials.items()},
