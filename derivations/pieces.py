@@ -31,6 +31,8 @@ The pieces:
   :mod:`derivations.tilt` and :mod:`derivations.tip_mass` moved to the point.
 * The clamp (Eq. 3) fixes ``z[0] = z[1] = 0`` at ``xi = 0``; the free end ``z[2] = z[3] = 0`` to
   the right of ``xi = 1`` (a point at the end adds its jump there): :data:`CLAMPED`, :data:`FREE`.
+  A clamp moved by the base (a dither piezo) by ``y0`` fixes ``z[0] = y0`` instead
+  (:data:`BASE_DRIVE`): the deflection is then absolute, the base's own motion included.
 * The read-outs: deflection ``z[0]`` and slope ``beta z[1] / L`` anywhere.
 """
 from __future__ import annotations
@@ -44,7 +46,7 @@ from .tilt import kll, kvl, kvv
 from .tip_mass import inertial_stiffness, mu, rho_g, rotary_inertia
 
 __all__ = ["gamma", "sigma", "s", "s_end", "unit_state", "bounded_basis", "load_constant", "point_jump", "POINT_DRIVES",
-           "CLAMPED", "FREE", "solves_equation", "clamped_segment_slope"]
+           "CLAMPED", "FREE", "BASE_DRIVE", "y0", "solves_equation", "clamped_segment_slope"]
 
 gamma, sigma = sp.symbols("gamma sigma", positive=True)
 """The tip's position ``x_tip / L`` (public name ``tip_position``) and the laser spot's ``x_s / L``
@@ -58,6 +60,10 @@ CLAMPED = (0, 1)
 """State components fixed to zero at the clamp (Eq. 3: ``u(0) = u'(0) = 0``)."""
 FREE = (2, 3)
 """State components zero beyond the free end (no moment, no shear)."""
+y0 = sp.Symbol("y0")
+"""The base's (the clamp's) displacement, a drive."""
+BASE_DRIVE = {0: y0}
+"""The clamp's state components a moving base sets (the others of :data:`CLAMPED` stay zero)."""
 
 
 def solves_equation(phi: sp.Expr) -> bool:

@@ -23,6 +23,7 @@ tip mass over the lever's, ``gamma = x_tip / L``, ``rho_g = r_g / L``, ``sigma =
 """
 from __future__ import annotations
 
+import math
 from functools import cached_property
 
 import numpy as np
@@ -36,7 +37,12 @@ PARAMETERS = ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g")
 JACOBIAN_PARAMETERS = ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
 """The parameters of :func:`characteristic_and_jacobian`'s partials (and of the slope at the end)."""
 SPOT_JACOBIAN_PARAMETERS = ("beta", "sigma", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
-DRIVES = ("d1", "d2", "f0", "q0")
+DRIVES = ("d1", "d2", "f0", "q0", "y0")
+"""Every drive the system is solved for: the tip's (surface displacements ``d1, d2``, force ``f0``),
+the distributed load ``q0`` and the base (the clamp's displacement ``y0``)."""
+TIP_DRIVES = DRIVES[:4]
+"""The drives the read-outs give by default (the paper's)."""
+_ND = len(DRIVES)
 _POINT = pieces.JACOBIAN_PARAMETERS
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 
@@ -157,17 +163,18 @@ class _Lever:
     def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False):
         args = [np.asarray(a) for a in (beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
         self.shape = np.broadcast_shapes(*(a.shape for a in args))
-        dtype, n = np.result_type(*args, float), int(np.prod(self.shape))
+        dtype, n = np.result_type(*args, float), math.prod(self.shape)
         flat = [np.full(n, a, dtype) if a.ndim == 0 else np.broadcast_to(a.astype(dtype), self.shape).reshape(-1)
                 for a in args]
         self.beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g = flat
         self.k, self.L, self.gamma = k, L, np.real(gamma)
         self.two = split or bool(np.any(self.gamma != 1.0))
         self.derivatives = derivatives      # solve for A^-1 with c: derivatives will be asked
-        self.uc = pieces.load_constant(self.beta, k, L) + 0 * self.beta
-        point = (self.beta, k, kvv, kll, kvl, H, L, mu, rho_g)
-        self.point = point
-        self.jump = _columns(pieces.point_jump(*point), n)
+        # the point's parameters as plain numbers where they are one value (cheaper than arrays)
+        one = [a.item() if a.ndim == 0 else f for a, f in zip(args, flat)]
+        self.uc = pieces.load_constant(self.beta, one[1], one[6]) + 0 * self.beta
+        self.point = (self.beta, *one[1:8], one[9])
+        self.jump = _columns(pieces.point_jump(*self.point), n, dtype)
         g = self.gamma
         self.lengths = (g, 1 - g) if self.two else (np.ones_like(g),)
         self.short = [np.abs(self.beta * ell) <= pieces.KD_SERIES_LIMIT for ell in self.lengths]
@@ -176,9 +183,10 @@ class _Lever:
         self.ends = [(0, zero, 1.0, 0.0), (0, g, 1.0, 1.0)] + ([(1, zero, -1.0, 0.0), (1, 1 - g, -1.0, -1.0)]
                                                                if self.two else [])
         count = len(self.ends)
-        stacked = _Segment(np.tile(self.beta, count), np.concatenate([t for _, t, _, _ in self.ends]),
+        stacked = _Segment(np.concatenate([self.beta] * count), np.concatenate([t for _, t, _, _ in self.ends]),
                            np.concatenate([self.lengths[j] for j, _, _, _ in self.ends]),
-                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]), np.tile(self.uc, count))
+                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]),
+                           np.concatenate([self.uc] * count))
         self.at = stacked.parts(count)
         self.A, self.b = self._assemble(self.jump, [(e.E, e.P) for e in self.at])
 
@@ -201,7 +209,7 @@ class _Lever:
     def _solved(self):
         size = self.A.shape[-1]
         out = _solve(self.A, np.concatenate([self.b, np.broadcast_to(np.eye(size), self.A.shape)], -1))
-        return out[..., :4], out[..., 4:]
+        return out[..., :_ND], out[..., _ND:]
 
     def _assemble(self, jump, ends, djump=None, dends=None):
         """``A``, ``b`` from the jump and the segments' end values; with ``djump``, ``dends`` given,
@@ -217,8 +225,10 @@ class _Lever:
             JP = np.einsum("nij,nj->ni", dJ, P[:, 0:2]) + np.einsum("nij,nj->ni", J, P1g[:, 0:2])
         size = 8 if self.two else 4
         A = np.zeros((self.beta.shape[0], size, size), dtype=np.result_type(E1g, J, P1g))
-        b = np.zeros((self.beta.shape[0], size, 4), dtype=A.dtype)
+        b = np.zeros((self.beta.shape[0], size, _ND), dtype=A.dtype)
         A[:, 0:2, 0:4], b[:, 0:2, 3] = E10[:, 0:2], -P10[:, 0:2]         # clamp
+        if djump is None:
+            b[:, 0, 4] = 1.0                                             # moved with the base: u(0) = y0
         if not self.two:                                                 # the tip at the free end
             A[:, 2:4, 0:4], b[:, 2:4, 0:3], b[:, 2:4, 3] = E1g[:, 2:4] - JE, G, JP - P1g[:, 2:4]
             return A, b
@@ -248,6 +258,18 @@ class _Lever:
         """``dA`` w.r.t. ``name``."""
         djump, dends = self._d_ends(name)
         return self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)[0]
+
+    def d_det_at_tip(self, adjugate, names):
+        """``tr(adj(A) dA)`` for parameters of the tip point alone (``k`` among them: the jump is
+        in units of the lever's stiffness): ``dA`` is ``-dJ`` times the tip's state, in the jump's
+        rows and the first segment's columns only."""
+        rows, E = self._jump_rows, self.at[1].E[:, 0:2]
+        adj = adjugate[:, 0:4, rows]
+        out = []
+        for name in names:
+            dJ = _columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)[:, :4].reshape(-1, 2, 2)
+            out.append(-np.einsum("nji,nij->n", adj, dJ @ E))
+        return out
 
     @property
     def _jump_rows(self):
@@ -280,7 +302,7 @@ class _Lever:
         if not rhs:
             return {}
         dc = self.inverse @ np.concatenate(rhs, -1)
-        return {name: dc[..., 4 * i:4 * i + 4] for i, name in enumerate(names)}
+        return {name: dc[..., _ND * i:_ND * (i + 1)] for i, name in enumerate(names)}
 
     def reader(self, sigma):
         """The read-out at ``sigma``: its segment evaluation, which coefficients it uses, and how it
@@ -305,7 +327,7 @@ class _Lever:
         return z
 
     def d_state(self, reader, name, dc):
-        """``d z(sigma)/d name`` (flat, 4 components x 4 drives)."""
+        """``d z(sigma)/d name`` (flat, 4 components x the drives)."""
         seg, t, ell, before, coefficients = reader
         z = self.state(reader, dc)
         side = np.where(before, 1.0, -1.0)
@@ -324,45 +346,58 @@ class _Lever:
         return x.reshape(self.shape + x.shape[1:])
 
 
-def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over :data:`DRIVES`.
+def _drive_columns(drives) -> list[int]:
+    unknown = [d for d in drives if d not in DRIVES]
+    if unknown:
+        raise ValueError(f"unknown drive {unknown[0]!r}: one of {', '.join(DRIVES)}")
+    return [DRIVES.index(d) for d in drives]
+
+
+def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
+    (of :data:`DRIVES`).  The deflection is absolute: driven by the base (``y0``), the deflection
+    relative to the base is this minus one.
 
     Examples
     --------
     >>> slopes, deflections = response(2.5, 1.0, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
     >>> [f"{v:.8g}" for v in slopes]
     ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
+    >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
+    [1.0]
     """
+    use = _drive_columns(drives)
     beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
-    z = lever.state(lever.reader(sigma))
+    z = lever.state(lever.reader(sigma))[:, :, use]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
     return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
 
 
-def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Slope ``u'(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``).
 
     Examples
     --------
     >>> [f"{v:.8g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
     ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[0]
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[0]
 
 
-def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Deflection ``u(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Deflection ``u(sigma L)`` per unit drive (a tuple of arrays over ``drives``; absolute).
 
     Examples
     --------
     >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
     ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[1]
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[1]
 
 
-def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS):
+def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS,
+                       drives=TIP_DRIVES):
     """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     Returns
@@ -378,6 +413,7 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
+    use = _drive_columns(drives)
     beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
     reader = lever.reader(sigma)
@@ -388,9 +424,9 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     for name in names:
         d = scale * lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1]
         columns[name] = lever.out(d + z1 / lever.L[:, None] if name == "beta" else d)
-    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0))
+    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
     jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
-                for i in range(4))
+                for i in use)
     return values, jac
 
 
@@ -433,8 +469,8 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     return lever.out(_scaled_det(lever)[0])
 
 
-def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS`.
+def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
+    """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     At a zero only their ratios matter: a resonance moves with ``p`` as ``d beta/d p = -D_p / D_beta``.
 
@@ -444,17 +480,17 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
     -1.875104
     """
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True)
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in wrt)
     det, d_beta, d_gamma, scale = _scaled_det(lever)
     # Jacobi's formula d det = tr(adj(A) dA), the adjugate from the SVD: finite at a resonance,
     # where A is singular and its inverse is not.
     adjugate = _adjugate(lever.A) * scale[:, None, None]
-    partials = []
-    for name in JACOBIAN_PARAMETERS:
+    at_tip = [p for p in JACOBIAN_PARAMETERS if p in wrt and p in _POINT and p != "beta"]
+    partials = dict(zip(at_tip, lever.d_det_at_tip(adjugate, at_tip)))
+    for name in (p for p in JACOBIAN_PARAMETERS if p in wrt and p not in partials):
         d = np.einsum("nij,nji->n", adjugate, lever.d_system_matrix(name))
-        d = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
-        partials.append(lever.out(d))
-    return lever.out(det), tuple(partials)
+        partials[name] = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
+    return lever.out(det), tuple(lever.out(partials[p]) if p in partials else None for p in JACOBIAN_PARAMETERS)
 
 
 def _det(A):

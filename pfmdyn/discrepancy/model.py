@@ -268,9 +268,8 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
 def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, float]]:
     """:func:`free_root` and its derivatives w.r.t. ``(mu, gamma)`` (implicit differentiation)."""
     b1 = free_root(k, H, L, mu, gamma)
-    if mu == 0.0:
-        return b1, (0.0, 0.0)
-    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
+    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0,
+                                                wrt=("beta", "mu", "gamma"))
     names = composed.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
@@ -296,26 +295,29 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     m = model.meta
     f = np.asarray(frequency_hz, float)
     c = model.coords(internal)
-    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    b1, d_b1_dp = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.f1, b1)
-    names = composed.JACOBIAN_PARAMETERS
-    moved = [names.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
-    at = [composed.PARAMETERS.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
-    out = np.empty((len(f), len(internal)))
+    moved = ("kvv", "kll", "kvl", "mu", "gamma")
+    at = [composed.PARAMETERS.index(p) for p in moved]
+    a0 = np.array(characteristic_args(model, internal, contact), float)
+    # the model's parameters are plain functions of the internal ones: their change per unit
+    # of each internal one, by forward differences (columns j)
+    steps = 1e-7 * np.maximum(1.0, np.abs(internal))
+    per_unit = np.empty((len(moved), len(internal)))
+    for j, h in enumerate(steps):
+        xs = internal.copy()
+        xs[j] += h
+        per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
+    # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
+    rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
+    wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
-        roots = []
-        for where, x in ((beta, contact), (np.array([b1]), False)):
-            a0 = characteristic_args(model, internal, x)
-            _, d = composed.characteristic_and_jacobian(where, *a0)
-            roots.append((a0, np.array([d[i] for i in moved]) / d[0]))
-        for j in range(len(internal)):
-            # the model's parameters are plain functions of the internal ones: their change per unit
-            h = 1e-7 * max(1.0, abs(internal[j]))
-            xs = internal.copy()
-            xs[j] += h
-            d_beta, d_b1 = (-(ratio.T @ ((np.array(characteristic_args(model, xs, x))[at] - np.array(a0)[at]) / h))
-                            for (a0, ratio), x in zip(roots, (contact, False)))
-            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1[0])
+        _, d = composed.characteristic_and_jacobian(beta, *a0, wrt=wrt)
+        names = composed.JACOBIAN_PARAMETERS
+        ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
+        d_beta = -(ratio.T @ per_unit[rows])
+        d_b1 = -(np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]])
+        out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
     out[~np.isfinite(out)] = 0.0
     return out
 
