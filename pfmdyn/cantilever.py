@@ -277,6 +277,35 @@ class Cantilever:
             (slope,), (deflection,) = composed.response(beta, self.spot_position, *rest, drives=("y0",))
         return transfer.BaseTransfer(np.asarray(slope, dtype=complex), np.asarray(deflection - 1.0, dtype=complex))
 
+    def thermal_noise(self, frequency, temperature: float, contact: "Contact | None" = None) -> transfer.ThermalNoise:
+        """The thermal spectrum at the laser spot, every mode at once, at ``frequency`` (Hz) and
+        ``temperature`` (K): one-sided power spectral densities of the slope and the deflection.
+
+        Fluctuation-dissipation: ``S_y(f) = -4 k_B T Im chi_yy / omega``, with ``chi_yy`` the response
+        of ``y`` to the force that does work on it, applied at the spot (a couple for the slope, a
+        force for the deflection), from the composed lever with a bare point there
+        (:data:`pfmdyn.composed.PROBE_DRIVES`).  Only the losses make noise: a lossless lever has none
+        between its resonances.
+
+        >>> lever = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0)
+        >>> psd = lever.thermal_noise([7e3, 7e4], 300.0)
+        >>> [f"{v:.3g}" for v in psd.deflection]            # m**2/Hz: the floor, the first mode's peak
+        ['1.92e-27', '1.83e-24']
+        """
+        f = _positive(frequency)
+        if not temperature > 0:
+            raise UserError(f"the temperature must be above 0 K, got {temperature!r}")
+        beta, *rest = self.model_arguments(f, contact)
+        with np.errstate(all="ignore"):
+            (_, per_couple), (per_force, _) = composed.response(beta, self.spot_position, *rest,
+                                                                drives=composed.PROBE_DRIVES, probe=self.spot_position)
+        scale = -2.0 * BOLTZMANN * temperature / (np.pi * f)
+        return transfer.ThermalNoise(scale * np.imag(per_couple), scale * np.imag(per_force))
+
+
+BOLTZMANN = 1.380649e-23
+"""J/K (exact in the SI since 2019)."""
+
 
 def _positive(frequency) -> np.ndarray:
     """Frequencies in Hz as a float array; not positive and finite: ValueError."""

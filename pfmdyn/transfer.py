@@ -41,6 +41,14 @@ class BaseTransfer(NamedTuple):
     deflection: np.ndarray
 
 
+class ThermalNoise(NamedTuple):
+    """One-sided power spectral densities of the lever's thermal motion read at the laser spot: the
+    slope (rad**2/Hz) and the deflection (m**2/Hz)."""
+
+    slope: np.ndarray
+    deflection: np.ndarray
+
+
 class FrictionlessTransfer(NamedTuple):
     """Tip slope per unit d1, f0, q0 (Eq. 23)."""
 
