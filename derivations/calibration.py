@@ -80,14 +80,13 @@ def mode_shape() -> sp.Expr:
 
 
 @lru_cache(maxsize=None)
-def static_shape() -> sp.Expr:
-    """Static deflection ``w(xi)`` under a unit force ``F`` at ``gamma``, in units of ``F L**3 / EI``.
+def static_shape(region: str = "beyond") -> sp.Expr:
+    """Static deflection ``w(xi)`` under a unit force ``F`` at ``gamma``, in units of ``F L**3 / EI``: Eq. 2
+    at ``beta = 0`` on ``[0, gamma]`` (clamp, no moment and shear ``-F`` at the force; ``region="inside"``),
+    straight beyond it (``region="beyond"``, ``xi >= gamma``).
 
-    Eq. 2 at ``beta = 0`` on ``[0, gamma]`` (clamp, no moment and shear ``-F`` at the force), straight
-    beyond; written with ``Min`` so that one expression covers the spot before and beyond the tip.
-
-    >>> sp.simplify(static_shape().subs({xi: 1, gamma: 1}))       # F L**3 / (3 EI)
-    1/3
+    >>> static_shape().subs({xi: 1, gamma: 1}), static_shape("inside").subs(xi, gamma)
+    (1/3, gamma**3/3)
     """
     c = sp.symbols("c0:4")
     cubic = sum(ci * xi**i for i, ci in enumerate(c))
@@ -95,18 +94,20 @@ def static_shape() -> sp.Expr:
     solved = sp.solve([cubic.subs(xi, 0), cubic.diff(xi).subs(xi, 0), cubic.diff(xi, 2).subs(xi, gamma),
                        cubic.diff(xi, 3).subs(xi, gamma) + 1], c, dict=True)[0]
     cubic = cubic.subs(solved)
-    inside = sp.Min(xi, gamma)
-    return cubic.subs(xi, inside) + cubic.diff(xi).subs(xi, inside) * (xi - inside)
+    if region == "inside":
+        return cubic
+    return cubic.subs(xi, gamma) + cubic.diff(xi).subs(xi, gamma) * (xi - gamma)
 
 
-def thermal_factor(detection: str = "slope") -> sp.Expr:
+def thermal_factor(detection: str = "slope", region: str = "beyond") -> sp.Expr:
     """``chi(sigma, gamma)`` of ``k_tip = chi kB T / <d*_1**2>`` (module docstring), for an optical lever
-    (``"slope"``) or a displacement sensor (``"deflection"``) calibrated statically.
+    (``"slope"``) or a displacement sensor (``"deflection"``) calibrated statically, with the spot
+    beyond the tip (``sigma >= gamma``) or inside (``sigma <= gamma``); both agree at ``sigma = gamma``.
 
     >>> [round(float(thermal_factor(d).subs({sigma: 1, gamma: 1})), 4) for d in ("deflection", "slope")]
     [0.9707, 0.8174]
     """
-    phi, w = mode_shape(), static_shape()
+    phi, w = mode_shape(), static_shape(region)
     if detection == "slope":
         read, static = phi.diff(xi), w.diff(xi)
     elif detection == "deflection":
@@ -114,7 +115,7 @@ def thermal_factor(detection: str = "slope") -> sp.Expr:
     else:
         raise ValueError(detection)
     # k_tip <d*^2> / kB T with <a^2> = kB T L^3 / (EI beta1^4), k_tip = 3 EI / (gamma L)^3.
-    scale = (read * w.subs(xi, gamma) / static).subs(xi, sigma)
+    scale = (read * static_shape("inside").subs(xi, gamma) / static).subs(xi, sigma)
     return 3 / (gamma**3 * first_root()**4) * scale**2
 
 

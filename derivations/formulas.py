@@ -113,14 +113,14 @@ def _calibration() -> tuple[Formula, ...]:
     source = "derivations/calibration.py"
     f0, q, a = sp.symbols("f0 q amplitude", positive=True)
     return (
-        Formula("thermal_factor_slope", (cal.sigma, cal.gamma), cal.thermal_factor("slope"),
-                "chi of k_tip = chi kB T / <d*^2> for the first mode read as a slope at the spot sigma = x_s/L through "
-                "a static InvOLS measured with the tip at gamma = x_tip/L (0.817 at sigma = gamma = 1)",
-                f"{source}: thermal_factor('slope')"),
-        Formula("thermal_factor_deflection", (cal.sigma, cal.gamma), cal.thermal_factor("deflection"),
-                "chi of k_tip = chi kB T / <d*^2> for the first mode read as a deflection at sigma through a static "
-                "sensitivity measured with the tip at gamma (0.971 at sigma = gamma = 1)",
-                f"{source}: thermal_factor('deflection')"),
+        *(Formula(f"thermal_factor_{detection}{'' if region == 'beyond' else '_inside'}", (cal.sigma, cal.gamma),
+                  cal.thermal_factor(detection, region),
+                  f"chi of k_tip = chi kB T / <d*^2> for the first mode read as a {detection} at the spot sigma = x_s/L "
+                  f"through a static sensitivity measured with the tip at gamma = x_tip/L, spot "
+                  f"{'beyond' if region == 'beyond' else 'inside'} the tip (sigma {'>=' if region == 'beyond' else '<='} "
+                  f"gamma; {0.817 if detection == 'slope' else 0.971} at sigma = gamma = 1)",
+                  f"{source}: thermal_factor({detection!r}, {region!r})")
+          for detection in ("slope", "deflection") for region in ("beyond", "inside")),
         Formula("sader_spring_constant", (cal.rho_fluid, cal.width, L, cal.Q, cal.gamma_i, cal.f_fluid),
                 cal.sader_spring_constant(),
                 "Sader's spring constant (N/m) from the fluid density, lever width and length, the first mode's Q and "

@@ -115,14 +115,12 @@ def _optical_lever():
 def _tip_position():
     rows, ok = [], True
     for detection in ("slope", "deflection"):
-        chi = cal.thermal_factor(detection)
+        chi = cal.thermal_factor(detection)       # the spot beyond the tip: the usual set-back
         w = cal.static_shape()
         read = w.diff(cal.xi) if detection == "slope" else w
         # <d*^2> scales with the InvOLS, w(gamma)/w_read(sigma); k_tip <d*^2> must be k_end <d*^2>_end (L/x_tip)^3.
         sensitivity = (w.subs(cal.xi, cal.gamma) / read).subs(cal.xi, cal.sigma)
         ratio = chi * cal.gamma**3 / sensitivity**2
-        # Spot beyond the tip (the usual set-back): Min(sigma, gamma) = gamma.
-        ratio = ratio.replace(sp.Min, lambda *a: cal.gamma)
         at_end = ratio.subs(cal.gamma, 1)
         same = sp.simplify(ratio - at_end) == 0
         ok = ok and same
@@ -137,7 +135,7 @@ def _tip_position():
        "the optical-lever factor is stationary at the free end: a spot near the end barely changes it",
        chapter="calibrating")
 def _spot_position():
-    chi = cal.thermal_factor("slope").subs(cal.gamma, 1).replace(sp.Min, lambda *a: cal.sigma)
+    chi = cal.thermal_factor("slope", "inside").subs(cal.gamma, 1)
     slope = chi.diff(cal.sigma).subs(cal.sigma, 1)
     values = [chi.subs(cal.sigma, s) for s in (1, 0.9, 0.8)]
     ok = abs(slope) < 1e-20 and values[0] < values[1] < values[2]
