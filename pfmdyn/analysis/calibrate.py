@@ -30,7 +30,7 @@ from ..errors import UserError
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium, hydrodynamic_function, reynolds_number
-from .thermal import ThermalPeak, fit_thermal_peaks
+from .thermal import ThermalPeak, fit_thermal_peaks, oscillator_asd
 
 __all__ = ["BOLTZMANN", "Estimate", "Calibration", "thermal_factor", "thermal_spring_constant",
            "sader_spring_constant", "calibrate"]
@@ -119,8 +119,32 @@ class Calibration:
                 "assumptions": list(self.assumptions), "inputs": dict(self.inputs), "instrument": dict(self.instrument)}
 
 
+def _broad_mode(f, y) -> ThermalPeak | None:
+    """The tallest peak as one oscillator over the whole band: a low-Q mode (in liquid) is wider than
+    the windows :func:`fit_thermal_peaks` searches and fits in."""
+    from scipy.optimize import curve_fit
+
+    start = max(3, int(0.01 * f.size))
+    i = start + int(np.argmax(y[start:]))
+    above = np.flatnonzero(y[start:] > y[i] / np.sqrt(2)) + start
+    q0 = max(f[i] / max(f[above[-1]] - f[above[0]], f[1] - f[0]), 0.5)
+    band = (f > f[start]) & (y > 0)
+    model = lambda x, a, b, c, d: np.log(oscillator_asd(x, a, abs(b), abs(c), abs(d)))   # noqa: E731
+    try:
+        popt, pcov = curve_fit(model, f[band], np.log(y[band]), p0=(f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])),
+                               maxfev=20000)
+    except (RuntimeError, ValueError):
+        return None
+    if not (f[band][0] < popt[0] < f[band][-1]) or not np.all(np.isfinite(pcov)):
+        return None
+    err = np.sqrt(np.clip(np.diag(pcov), 0, None))
+    return ThermalPeak(1, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
+                       float(err[0]), float(err[1]), tuple(map(tuple, pcov.tolist())))
+
+
 def _first_mode(tune: ThermalTune) -> ThermalPeak:
-    peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1]
+    peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
+        [p for p in (_broad_mode(tune.frequency_hz, tune.asd),) if p]
     if not peaks:
         raise UserError(f"{tune.path}: no resonance peak found in the thermal spectrum")
     return peaks[0]
@@ -142,9 +166,12 @@ def _bisect(f, low: float, high: float):
     """Root of ``f`` on ``[low, high]`` in log space, or None without a sign change."""
     from scipy.optimize import brentq
 
-    a, b = f(low), f(high)
-    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0:
+    grid = np.geomspace(low, high, 25)
+    values = np.array([f(g) for g in grid])
+    change = np.flatnonzero(np.isfinite(values[:-1]) & np.isfinite(values[1:]) & (values[:-1] * values[1:] <= 0))
+    if not change.size:
         return None
+    low, high = grid[change[0]], grid[change[0] + 1]
     return math.exp(brentq(lambda t: f(math.exp(t)), math.log(low), math.log(high), xtol=1e-12))
 
 
@@ -230,7 +257,12 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
             if width_factor:
                 reconcile.append(("width", width_factor))
             if medium_factory is not None:
-                t_factor = _bisect(lambda s: thermal.value * s - sader(t=temperature * s), 0.5, 2.0)
+                def mismatch(s):        # NaN where the medium has no such temperature (water below 0 C)
+                    try:
+                        return thermal.value * s - sader(t=temperature * s)
+                    except UserError:
+                        return math.nan
+                t_factor = _bisect(mismatch, 0.5, 2.0)
                 if t_factor:
                     reconcile.append(("temperature", t_factor))
             reconcile.append(("medium", ratio))                # density and viscosity scaled alike: same Re
