@@ -9,3 +9,4 @@ from . import core  # noqa: F401
 from . import flexural, limits, torsion, numbers, electrostatics  # noqa: F401,I001  (registration)
 from . import detection  # noqa: F401,E402  (the detection point: claims beyond the paper)
 from . import drives  # noqa: F401,E402  (the base drive: beyond the paper)
+from . import calibration  # noqa: F401,E402  (the free lever's calibration: claims beyond the paper)
