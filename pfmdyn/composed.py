@@ -183,22 +183,26 @@ class _Lever:
         g = self.gamma
         self.drives = DRIVES if probe is None else DRIVES + PROBE_DRIVES
         # the points in order along the lever: (position, J, G over the drives); the tip's index
-        points = [(g, self.jump[:, :4].reshape(-1, 2, 2), self._drive_block(self.jump[:, 4:], DRIVES.index("d1")))]
+        tip_drives = self._drive_block(self.jump[:, 4:], DRIVES.index("d1"))
+        points = [(g, self.jump[:, :4].reshape(-1, 2, 2), tip_drives)]
         self.tip = 0
         if probe is not None:
             if derivatives or split:
                 raise ValueError("a probed lever is solved for its response only")
             at = np.broadcast_to(np.real(np.asarray(probe, dtype=float)), self.shape).reshape(-1)
-            first = at < g
-            if first.any() and not first.all():
-                raise ValueError("the probe must lie on the same side of the tip throughout a batch")
-            bare = _columns(pieces.point_jump(self.beta, one[1], 0.0, 0.0, 0.0, one[5], one[6], 0.0, 0.0), n, dtype)
-            # a bare point's force and couple: the tip's f0 and m0 columns, without springs or mass
-            probe_point = (at, np.zeros((n, 2, 2), dtype),
-                           self._drive_block(bare[:, 4:].reshape(-1, 2, 4)[:, :, 2:4], len(DRIVES)))
-            points.insert(0 if first.all() else 1, probe_point)
-            self.tip = 1 if first.all() else 0
-        self.two = probe is not None or split or bool(np.any(g != 1.0))
+            # a force and a couple act on a point through the f0 and m0 columns of its jump, which
+            # hold no spring or mass: a bare point's drives are the tip's
+            forced = np.zeros_like(tip_drives)
+            forced[:, :, len(DRIVES):] = tip_drives[:, :, [DRIVES.index("f0"), DRIVES.index("m0")]]
+            if np.all(at == g):             # at the tip: its point takes them
+                points = [(g, points[0][1], tip_drives + forced)]
+            else:
+                first = at < g
+                if first.any() and not first.all():
+                    raise ValueError("the probe must lie on the same side of the tip throughout a batch")
+                self.tip = int(first.all())
+                points.insert(1 - self.tip, (at, np.zeros((n, 2, 2), dtype), forced))
+        self.two = len(points) > 1 or split or bool(np.any(g != 1.0))
         self.points = points if self.two else []
         bounds = [np.zeros_like(g)] + [p[0] for p in self.points] + [np.ones_like(g)]
         self.starts = bounds[:-1]
@@ -206,7 +210,7 @@ class _Lever:
         self.short = [np.abs(self.beta * ell) <= pieces.KD_SERIES_LIMIT for ell in self.lengths]
         # (segment, t, d ell/d gamma, d t/d gamma) of the ends the rows use: each segment's start and
         # end (the tip moves the segments about it: d/d gamma is +1 on its left, -1 on its right)
-        slopes = [1.0, -1.0] if probe is None else [0.0] * len(self.lengths)
+        slopes = [1.0, -1.0] if len(self.lengths) == 2 and self.tip == 0 else [0.0] * len(self.lengths)
         self.ends = [end for j, ell in enumerate(self.lengths)
                      for end in ((j, np.zeros_like(g), slopes[j], 0.0), (j, ell, slopes[j], slopes[j]))]
         count = len(self.ends)
