@@ -1,7 +1,7 @@
 """Quality factors of the damped model's modes: complex roots of the damped characteristic.
 
 A resonance table may give each mode's Q (an instrument's thermal or tune fit).  The model
-predicts it from the generated damping substitution (:func:`pfmdyn.generated.damping.factors`:
+predicts it from the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`:
 complex ``beta``, ``k``, ``k1`` and ``mu`` at ``r = f / f1``) put into the generated
 characteristic (:func:`pfmdyn.composed.characteristic`).  That function of
 ``r`` is analytic, and its zero near each undamped root ``r_n`` is the damped mode
@@ -26,7 +26,8 @@ from functools import lru_cache
 import numpy as np
 
 from .. import composed
-from ..generated import damping, formulas
+from ..cantilever import damping_substitution
+from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from .model import Model, free_root
 
@@ -41,13 +42,10 @@ def _characteristic(model: Model, internal, contact: bool, r):
     c = model.coords(internal)
     m = model.meta
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
-    if contact:
-        kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-    else:
-        kvv = kll = kvl = 0.0
-    return composed.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                      c["mu"] * mu_f, c["gamma"], 0.0)
+    d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+                             c["inv_q"], c["g"], c["x"])
+    kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    return composed.characteristic(d.beta, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
 
 
 def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.ndarray:

@@ -31,14 +31,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever, Contact
+from ..cantilever import Cantilever, Contact, damping_substitution
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..fitting.parameters import CONTACT_LOSS, LN10, VISCOUS_LOSS, Parameter
 from ..fitting.parameters import bounds as parameter_bounds
 from ..fitting.batched import amplitude_column, band_covariance, levenberg_marquardt, project_bands
 from .. import composed
-from ..generated import damping, elastic_contact
+from ..generated import damping, elastic_contact, formulas
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
@@ -255,25 +255,19 @@ class BeamMapModel:
         return not self.lever.is_paper_probe
 
     def _arguments(self, inv_q, g, k1, k2, x):
-        """``beta`` and the springs relative to the complex EI, with the damping factors.
+        """``(beta0, r, beta, k1 / k_factor, k2 / k_factor, k_factor, mu)``: the undamped ``beta``,
+        ``r = f / f1``, and the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`).
 
         Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
         on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
         contact springs are divided by that factor (the dashpot multiplies ``k1``).  A heavy tip
-        moves the lever's first free root (:meth:`pfmdyn.Cantilever.beta` accounts for it).
+        moves the lever's first free root (:meth:`pfmdyn.Cantilever.free_root`).
         """
         f = np.asarray(self.frequency_hz, float)
         r = f / self.f1
-        beta0 = Cantilever(self.k, self.f1, self.L, tip_height=self.lever.tip_height,
-                           tip_position=self.lever.tip_position,
-                           tip_mass_ratio=self.lever.tip_mass_ratio,
-                           tip_gyration_radius=self.lever.tip_gyration_radius).beta(f)
-        # Without drag the beta factor does not depend on r: keep it one number per pixel.
-        r_beta = r if "viscous" in self.mechanisms else 1.0
-        beta_factor, k_factor, _, mu_factor = damping.factors(r_beta, inv_q, g, 0.0)
-        k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
-        return (beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor,
-                self.lever.tip_mass_ratio * mu_factor)
+        beta0 = formulas.beta_from_frequency(f, self.f1, self.lever.free_root())
+        d = damping_substitution(r, beta0, 1.0, k1, self.lever.tip_mass_ratio, inv_q, g, x)   # k = 1: d.k is the factor
+        return beta0, r, d.beta, d.k1 / d.k, k2 / d.k, d.k, d.mu
 
     def _transfer(self, beta, k1e, k2e, mu, jacobian):
         """Slopes per drive and (with ``jacobian``) per drive the partials w.r.t. (beta, k1, k2,
@@ -319,7 +313,7 @@ class BeamMapModel:
         k1 = np.asarray(k1, float)
         k2 = self.k2_of(k1, 0.0 * k1) if k2 is None and self.k2_mode != "free" else (0.0 if k2 is None else k2)
         col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
-        _, _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
+        _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
         return self._transfer(beta, k1e, k2e, mu, jacobian=False)[0][0]
 
     @property
@@ -336,12 +330,11 @@ class BeamMapModel:
         generated derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
-        beta0, r, r_beta, beta, k1e, k2e, k_factor, mu = self._arguments(inv_q, g, k1, k2, x)
+        beta0, r, beta, k1e, k2e, k_factor, mu = self._arguments(inv_q, g, k1, k2, x)
         values, partials = self._transfer(beta, k1e, k2e, mu, jacobian)
         if not jacobian:
             return np.stack([values[i] for i in self.drives], axis=1), None
-        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, (_, dmf_g, _) = damping.d_factors(r_beta, inv_q, g, 0.0)
-        dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2] if "contact" in self.mechanisms else 0.0
+        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), (_, _, dk1f_x), (_, dmf_g, _) = damping.d_factors(r, inv_q, g, x)
         d = np.empty((len(self.parameters), len(k1), len(self.drives), values[0].shape[-1]), complex)
         for j, drive in enumerate(self.drives):
             d_beta, d_k1, d_k2, d_mu = partials[drive]
