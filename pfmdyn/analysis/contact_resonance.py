@@ -44,7 +44,7 @@ from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
 __all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
-           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
+           "branch_limits", "spring_parts", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
            "require_tip_height"]
 
 GRID_STEP = 0.02
@@ -191,8 +191,14 @@ def branch_limits(mode: int, lever: Cantilever, contact: Contact, tip_position: 
     return out[0], out[1]
 
 
-def _parts(beta, lever: Cantilever, tip_position, scale_k1: float, scale_k2: float):
-    """``F = P + k1 Q + k2 R + k1 k2 S`` at ``beta`` (module, fact 2)."""
+def spring_parts(beta, lever: Cantilever, tip_position, scale_k1: float, scale_k2: float):
+    """``(P, Q, R, S)`` of the characteristic ``F = P + k1 Q + k2 R + k1 k2 S`` at ``beta``
+    (module, fact 2), from ``F`` at ``k1 = 0, scale_k1`` and ``k2 = 0, scale_k2``.
+
+    >>> p, q, r, s = spring_parts(3.0, Cantilever(2.0, 7e4, 2e-4), 1.0, 2.0, 1.0)
+    >>> round(float(-p / q), 4)        # k1 (N/m) making beta = 3 a resonance, k2 = 0
+    14.2352
+    """
     f = lambda k1, k2: characteristic(beta, lever, k1, k2, tip_position)     # noqa: E731
     p = f(0.0, 0.0)
     q = (f(scale_k1, 0.0) - p) / scale_k1
@@ -216,7 +222,7 @@ def k1_k2_at(beta_pair, mode_pair, lever: Cantilever, tip_position: float) -> li
     """
     k, H = lever.spring_constant, lever.tip_height
     scale_k2 = formulas.k2_from_ratio(1.0, k, H, lever.length)     # k2 H**2/(k L**2) = 1
-    (p1, q1, r1, s1), (p2, q2, r2, s2) = (_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
+    (p1, q1, r1, s1), (p2, q2, r2, s2) = (spring_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
     coefficients = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
     out = []
     with np.errstate(all="ignore"):

@@ -10,7 +10,10 @@ back, heavy, tilted) and two or more modes are :mod:`pfmdyn.analysis.contact_res
 and ``pfmdyn stiffness``'s report is :mod:`pfmdyn.analysis.stiffness_report`.
 
 ``F`` is affine in ``a`` (and bilinear in ``a, b``): ``F = A(z) + a B(z)``, with ``A``, ``B``
-evaluated from the generated function itself (at ``a = 0`` and ``a = 1``).  Hence:
+evaluated from the characteristic itself (at ``a = 0`` and ``a = 1``): the composed one of the
+whole-lever inversion (:func:`pfmdyn.analysis.contact_resonance.spring_parts`) on the paper's
+lever, proven equal to the paper's ``F`` (one characteristic; the certified limits below are
+the paper's).  Hence:
 
 * **one contact mode** (``b`` given, default 0): ``a = -A(z)/B(z)``, in closed form,
   vectorised over any array of frequencies (a map);
@@ -47,7 +50,9 @@ import numpy as np
 from ..errors import UserError
 from ..generated import formulas
 from ..names import checked
-from ..generated.characteristic import BETA1_FREE, elastic
+from ..generated.characteristic import BETA1_FREE
+from ..cantilever import Cantilever
+from .contact_resonance import characteristic, spring_parts
 
 __all__ = ["StiffnessResult", "BranchProof", "k1_limits", "coupled_limits", "z_from_frequency",
            "k1_over_k_from_z", "contact_stiffness", "coupled_contact_stiffness", "out_of_range_message",
@@ -90,13 +95,20 @@ class StiffnessResult:
     proof: BranchProof
 
 
+_REFERENCE = Cantilever(1.0, 1e5, 1e-4, tip_height=1e-4)
+"""The paper's lever with ``k = 1`` and ``H = L``: its springs in N/m are ``a = k1/k`` and
+``b = k2 H**2/(k L**2)`` (the characteristic of any paper's lever depends on these only)."""
+
+
+def _characteristic(z, a, b):
+    """``F(z; a, b)``: the composed characteristic of the paper's lever
+    (:func:`pfmdyn.analysis.contact_resonance.characteristic`, the one the whole-lever inversion uses)."""
+    return characteristic(z, _REFERENCE, a, b, 1.0)
+
+
 def _parts(z):
-    """``F = P + a Q + b R + a b S``: the four parts of the bilinear characteristic function."""
-    p = elastic(z, np, k1_over_k=0.0, k2_ratio=0.0)
-    q = elastic(z, np, k1_over_k=1.0, k2_ratio=0.0) - p
-    r = elastic(z, np, k1_over_k=0.0, k2_ratio=1.0) - p
-    s = elastic(z, np, k1_over_k=1.0, k2_ratio=1.0) - p - q - r
-    return p, q, r, s
+    """``F = P + a Q + b R + a b S`` (:func:`pfmdyn.analysis.contact_resonance.spring_parts`)."""
+    return spring_parts(z, _REFERENCE, 1.0, 1.0, 1.0)
 
 
 def _a_of_z(z, b):
@@ -107,8 +119,8 @@ def _a_of_z(z, b):
 def _a_and_slope(z, b):
     """``a = -A/B`` and ``da/dz = -(A' + a B')/B`` from one complex-step evaluation of A and B."""
     zc = z + 1j * _STEP
-    fa = elastic(zc, np, k1_over_k=0.0, k2_ratio=b)
-    fb = elastic(zc, np, k1_over_k=1.0, k2_ratio=b) - fa
+    fa = _characteristic(zc, 0.0, b)
+    fb = _characteristic(zc, 1.0, b) - fa
     a = -fa.real / fb.real
     return a, -(fa.imag + a * fb.imag) / (_STEP * fb.real)
 
@@ -347,7 +359,7 @@ def coupled_contact_stiffness(contact_resonance, free_resonance, spring_constant
                             f"{_ratio(stiff[mode - 1]):.6g}), what k1 with k2 = {k2_over_k1:g} k1 can produce: "
                             "a tip mass, the tip set back from the end, or another mode could explain it")
         a = np.where(positive[0], roots[0], roots[1])
-        fz = elastic(z + 1j * _STEP, np, k1_over_k=a, k2_ratio=c * a).imag / _STEP
+        fz = _characteristic(z + 1j * _STEP, a, c * a).imag / _STEP
         dadz = -fz / (lin + 2 * quad * a)
         sigma = k * np.abs(dadz) * z * 0.5 * np.hypot(np.asarray(contact_uncertainty) / fc,
                                                       np.asarray(free_resonance_uncertainty) / f1)
