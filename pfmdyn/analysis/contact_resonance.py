@@ -43,9 +43,9 @@ from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
-__all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
-           "branch_limits", "spring_parts", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
-           "require_tip_height"]
+__all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_candidates", "k1_at",
+           "k1_k2_at", "branch_limits", "spring_parts", "tip_position_scan", "beta_shifts", "fit", "covariance",
+           "Crossings", "require_tip_height"]
 
 GRID_STEP = 0.02
 """Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
@@ -127,33 +127,46 @@ def _degree(contact: Contact) -> int:
     return 2 if contact.ratio else 1
 
 
+def k1_candidates(f, scale: float, degree: int) -> list[np.ndarray]:
+    """The ``k1`` zeroing ``f(k1) = c0 + c1 k1 (+ c2 k1**2)``, a characteristic along a contact's
+    path (module, fact 2), from ``f`` at ``k1 = 0, scale`` (and ``1e4 scale``); NaN where complex.
+
+    The one inversion of the stiffness code: the whole lever's (:func:`k1_at`) and the paper's
+    lever's in closed form, per pixel of a map (:mod:`pfmdyn.analysis.stiffness`).  The roots are
+    analytic in ``f``'s other arguments: at ``beta + i h`` their imaginary parts are ``h`` times
+    their slopes (complex step).
+
+    >>> f = lambda k1: 6.0 - 5.0 * k1 + k1**2
+    >>> sorted(float(r.real) for r in k1_candidates(f, 1.0, 2))
+    [2.0, 3.0]
+    """
+    f0, fs = f(0.0), f(scale)
+    with np.errstate(all="ignore"):
+        if degree == 1:
+            return [-f0 * scale / (fs - f0)]
+        big = 1e4 * scale
+        slope_s, slope_big = (fs - f0) / scale, (f(big) - f0) / big
+        c2 = (slope_big - slope_s) / (big - scale)
+        c1 = slope_s - c2 * scale
+        root = np.sqrt(c1 * c1 - 4 * c2 * f0 + 0j)
+        return [np.where(np.abs(r.imag) <= 1e-9 * np.abs(r), r, np.nan)
+                for r in ((-c1 + root) / (2 * c2), (-c1 - root) / (2 * c2))]
+
+
 def k1_at(beta, mode, lever: Cantilever, contact: Contact, tip_position) -> np.ndarray:
     """The ``k1`` (N/m) making ``beta`` resonance ``mode``; NaN where none does (vectorised).
 
     The characteristic at ``beta`` is a polynomial of degree :func:`_degree` in ``k1``
-    (module, fact 2): its coefficients come from the characteristic at ``k1 = 0, k, 1e4 k``,
-    its real positive roots are polished by Newton steps on the characteristic itself, and
-    the root whose ``beta`` is mode ``mode`` is kept (fact 3).
+    (module, fact 2): its real positive roots (:func:`k1_candidates`) are polished by Newton
+    steps on the characteristic itself, and the root whose ``beta`` is mode ``mode`` is kept (fact 3).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4)
     >>> round(float(k1_at(betas(lever, 300e3), 1, lever, Contact(), 1.0)), 4)   # the paper's model
     109.7483
     """
     beta, gamma = np.broadcast_arrays(np.asarray(beta, dtype=float), np.asarray(tip_position, dtype=float))
-    k = lever.spring_constant
     f = lambda k1: characteristic(beta, lever, k1, contact.k2_of(k1), gamma)    # noqa: E731
-    f0, fs = f(0.0), f(k)
-    with np.errstate(all="ignore"):
-        if _degree(contact) == 1:
-            candidates = [-f0 * k / (fs - f0)]
-        else:
-            big = 1e4 * k
-            slope_s, slope_big = (fs - f0) / k, (f(big) - f0) / big
-            c2 = (slope_big - slope_s) / (big - k)
-            c1 = slope_s - c2 * k
-            root = np.sqrt(c1 * c1 - 4 * c2 * f0 + 0j)
-            candidates = [np.where(np.abs(r.imag) <= 1e-9 * np.abs(r), r.real, np.nan)
-                          for r in ((-c1 + root) / (2 * c2), (-c1 - root) / (2 * c2))]
+    candidates = [c.real for c in k1_candidates(f, lever.spring_constant, _degree(contact))]
     out = np.full(beta.shape, np.nan)
     for candidate in candidates:
         candidate = np.where(np.isfinite(candidate) & (candidate > 0), candidate, np.nan)
