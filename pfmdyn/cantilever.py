@@ -26,6 +26,7 @@ import inspect
 import math
 from dataclasses import dataclass, fields
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from .generated.tilt_rotation import rotated
 from .names import checked
 from .roots.bracket import refine
 
-__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON", "free_root"]
+__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON", "Damped", "damping_substitution", "free_root"]
 
 DEFAULT_POISSON = 0.3
 """Poisson's ratio of the Mindlin tie ``k2 = c k1`` when one contact mode must fix both springs
@@ -191,16 +192,17 @@ class Cantilever:
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
         3.750208
         """
-        return self._damped(_positive(frequency))[0]
+        return self._damped(_positive(frequency)).beta
 
-    def _damped(self, frequency, contact_loss: float = 0.0):
-        """``(beta, k, k1_factor, mu_factor)`` at ``frequency`` (Hz, real or complex) with the damping
-        substituted (``derivations/damping.py``)."""
-        beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
-            frequency / self.free_resonance, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
+    def _damped(self, frequency, contact: "Contact | None" = None) -> "Damped":
+        """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at
+        ``frequency`` (Hz, real or complex)."""
         b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        return (formulas.beta_from_frequency(frequency, self.free_resonance, b1) * beta_factor,
-                self.spring_constant * k_factor, k1_factor, mu_factor)
+        k1, loss = (contact.k1, contact.contact_loss) if contact is not None else (0.0, 0.0)
+        return damping_substitution(frequency / self.free_resonance,
+                                    formulas.beta_from_frequency(frequency, self.free_resonance, b1),
+                                    self.spring_constant, k1, self.tip_mass_ratio,
+                                    1.0 / self.quality_factor, self.viscous_loss, loss)
 
     def model_arguments(self, frequency, contact: "Contact | None" = None) -> tuple:
         """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
@@ -217,18 +219,17 @@ class Cantilever:
         >>> c.model_arguments(7e4)[2:6]                                           # free: no springs
         (0.0, 0.0, 0.0, 1e-05)
         """
-        loss = contact.contact_loss if contact is not None else 0.0
-        beta, k, k1_factor, mu_factor = self._damped(frequency, loss)
-        _, kvv, kll, kvl, height, length, mu, gamma, rho_g = self.model_parameters(contact, k1_factor=k1_factor)
-        return beta, k, kvv, kll, kvl, height, length, mu * mu_factor, gamma, rho_g
+        damped = self._damped(frequency, contact)
+        _, kvv, kll, kvl, height, length, _, gamma, rho_g = self.model_parameters(contact, k1=damped.k1)
+        return damped.beta, damped.k, kvv, kll, kvl, height, length, damped.mu, gamma, rho_g
 
-    def model_parameters(self, contact: "Contact | None" = None, *, k1_factor=1.0) -> tuple:
+    def model_parameters(self, contact: "Contact | None" = None, *, k1=None) -> tuple:
         """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
         damping (:mod:`pfmdyn.composed`).
 
         The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
-        ``contact`` is None); ``k1_factor`` multiplies ``k1`` before the rotation (the contact
-        dashpot's factor, ``derivations/damping.py``).
+        ``contact`` is None); ``k1``, when given, replaces the contact's before the rotation (the
+        contact dashpot's complex ``k1``, :func:`damping_substitution`).
 
         >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, tilt=10.0)
         >>> k, kvv, kll, kvl, H, *_ = lever.model_parameters(Contact(k1=50.0))
@@ -238,7 +239,7 @@ class Cantilever:
         if contact is None:
             springs, height = (0.0, 0.0, 0.0), self.tip_height or 0.0
         else:
-            springs = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
+            springs = rotated(contact.k1 if k1 is None else k1, contact.k2_of(contact.k1), self.alpha)
             height = self._tip_height(contact)
         return (self.spring_constant, *springs, height, self.length, self.tip_mass_ratio, self.tip_position,
                 self.rho_g)
@@ -313,6 +314,35 @@ def _positive(frequency) -> np.ndarray:
     if not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise ValueError("frequency must be positive and finite (Hz)")
     return f
+
+
+class Damped(NamedTuple):
+    """The model's ``beta``, ``k``, ``k1`` and ``mu`` with the damping substituted, and the
+    generated factors ``(beta, k, k1, mu)`` that made them (the chain rule of a fit needs them)."""
+
+    beta: object
+    k: object
+    k1: object
+    mu: object
+    factors: tuple
+
+
+def damping_substitution(r, beta, k, k1, mu, inv_q, g, x) -> Damped:
+    """The undamped model's ``beta``, ``k``, ``k1`` and ``mu`` damped at ``r = f / f1``
+    (``derivations/damping.py``, generated: :func:`pfmdyn.generated.damping.factors`).
+
+    Internal friction ``inv_q`` (1/Q of the modulus), viscous drag ``g`` and the contact dashpot
+    ``x`` (loss tangent at f1).  The one place the substitution is applied: the probe's responses
+    and resonances, the discrepancy model and its quality factors, and the map fit.  ``r`` may be
+    complex (a damped mode's root); arrays broadcast.
+
+    >>> d = damping_substitution(1.5, 2.0, 1.0, 100.0, 0.1, 0.01, 0.02, 0.03)
+    >>> complex(d.k), complex(d.k1), round(float(abs(d.beta)), 6)
+    ((1+0.01j), (100+4.5j), 2.000019)
+    """
+    factors = damping.factors(r, inv_q, g, x)
+    beta_f, k_f, k1_f, mu_f = factors
+    return Damped(beta * beta_f, k * k_f, k1 * k1_f, mu * mu_f, factors)
 
 
 @lru_cache(maxsize=4096)
@@ -436,9 +466,9 @@ def _response_method(row):
         if not self.is_paper_probe:
             raise UserError(f"{row.method} is the paper's family ({row.equations}): massless tip at the free end, "
                             "no tilt, spot at the end; use Cantilever.response for this lever")
-        beta, k = self._damped(_positive(frequency))[:2]
+        damped = self._damped(_positive(frequency))
         values = transfer.check_parameters({p: given[p] for p in extra})
-        return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
+        return transfer.evaluate(row.module, damped.beta, {"k": damped.k, "L": self.length, **values},
                                  given.get("output"))
 
     call = ", ".join(["[1e3, 1e6]"] + [f"{p}={_EXAMPLE[p]!r}" for p in extra])

@@ -13,8 +13,8 @@ of ``f0``; with the dashpot ``T_f`` is a sixth column), solved by linear least s
 inside the nonlinear fit of the other parameters (variable projection).  The effects
 (:mod:`pfmdyn.discrepancy.effects`) share the composed lever
 (:mod:`pfmdyn.composed`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
-compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
-(complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
+compose; damping enters as the generated substitution (:func:`pfmdyn.cantilever.damping_substitution`:
+complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
 lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
@@ -33,7 +33,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..cantilever import free_root
+from ..cantilever import damping_substitution, free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
@@ -113,11 +113,11 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
-            kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
+            d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+                                     c["inv_q"], c["g"], c["x"])
+            kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            return module.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H,
-                                m.L, c["mu"] * mu_f, c["gamma"], 0.0)
+            return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -136,22 +136,22 @@ class Model:
         b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
             loss = (c["inv_q"], c["g"], c["x"])
-            beta_f, k_f, k1_f, mu_f = damping.factors(r, *loss)
+            root_r = formulas.beta_from_frequency(r, 1.0, b1)
+            d = damping_substitution(r, root_r, m.k, c["k1"], c["mu"], *loss)
             d_f = damping.d_factors(r, *loss)
-            spring = c["k1"] * k1_f
+            spring = d.k1
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
-            root_r = formulas.beta_from_frequency(r, 1.0, b1)
             module, at = self._reading(c)
-            T, J = module.slope_and_jacobian(root_r * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                             c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
+            T, J = module.slope_and_jacobian(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L,
+                                             d.mu, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
-            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, (beta_f, k_f, k1_f, mu_f), d_f, spring)
+            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, d.factors, d_f, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
             terms += [t for e in self.components for t in e.jacobian(chain)]
