@@ -24,14 +24,15 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass, fields
-from functools import lru_cache
+from dataclasses import dataclass, fields, replace
+from functools import cached_property, lru_cache
 from typing import NamedTuple
 
 import numpy as np
 
 from . import composed, transfer
 from .errors import UserError
+from .medium import Medium, load_ratio, mass_per_length
 from .generated import damping, families, formulas
 from .generated.characteristic import BETA1_FREE
 from .generated.tilt_rotation import rotated
@@ -75,6 +76,12 @@ class Cantilever:
         ``x_s / L`` of the detection (laser) spot: 1 at the free end.
     viscous_loss : float
         Viscous drag ``g = c / (rho S omega1)`` (1/Q of free mode 1 under drag alone).
+    medium : pfmdyn.medium.Medium, optional
+        The fluid around the lever (None: vacuum, the paper's case).  Its load per unit length
+        (Sader's hydrodynamic function, :mod:`pfmdyn.medium`) enters Eq. 2 as added mass and
+        damping at every frequency; it needs ``width``.  ``free_resonance`` is then the first
+        resonance *in the medium*, as measured there; the vacuum one follows from Sader's relation
+        (:attr:`vacuum_resonance`).
 
     Examples
     --------
@@ -100,11 +107,18 @@ class Cantilever:
     tilt: float = 0.0
     spot_position: float = 1.0
     viscous_loss: float = 0.0
+    medium: Medium | None = None
 
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if value is None and f.name in ("tip_height", "width"):
+            if value is None and f.name in ("tip_height", "width", "medium"):
+                continue
+            if f.name == "medium":
+                if not isinstance(value, Medium):
+                    raise UserError(f"medium must be a pfmdyn.medium.Medium, got {value!r}")
+                if self.width is None:
+                    raise UserError("a lever in a medium needs its width (the fluid acts across it)")
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
                 raise UserError(f"{f.name} must be a number, got {value!r}")
@@ -148,9 +162,11 @@ class Cantilever:
         """The description as names -> SI values (``None``: not known).
 
         >>> sorted(Cantilever(2.0, 7e4, 2e-4).to_dict())[:3]
-        ['free_resonance', 'length', 'quality_factor']
+        ['free_resonance', 'length', 'medium']
         """
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["medium"] = None if self.medium is None else self.medium.name
+        return out
 
     @property
     def alpha(self) -> float:
@@ -194,17 +210,67 @@ class Cantilever:
         """
         return self._damped(_positive(frequency)).beta
 
-    def _damped(self, frequency, contact: "Contact | None" = None) -> "Damped":
-        """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at
-        ``frequency`` (Hz, real or complex)."""
-        b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        k1, loss = (contact.k1, contact.contact_loss) if contact is not None else (0.0, 0.0)
-        return damping_substitution(frequency / self.free_resonance,
-                                    formulas.beta_from_frequency(frequency, self.free_resonance, b1),
-                                    self.spring_constant, k1, self.tip_mass_ratio,
-                                    1.0 / self.quality_factor, self.viscous_loss, loss)
+    @cached_property
+    def vacuum_resonance(self) -> float:
+        """The first free resonance in vacuum (Hz): ``free_resonance`` itself without a medium; in one,
+        from Sader's first-mode relation ``f = f_vac / sqrt(1 + T Re Gamma(f))`` with the fluid's mass
+        ratio ``T`` (its load over the lever's mass per length ``k beta1**4 / (3 L omega_vac**2)``),
+        solved for ``f_vac`` in closed form.
 
-    def model_arguments(self, frequency, contact: "Contact | None" = None) -> tuple:
+        >>> from pfmdyn.medium import Medium
+        >>> lever = Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+        >>> round(lever.vacuum_resonance / lever.free_resonance, 5)
+        1.00292
+        """
+        if self.medium is None:
+            return self.free_resonance
+        # the load ratio is proportional to 1 / mass per length, i.e. to omega_vac**2: evaluate it
+        # for the mass per length a lever of vacuum resonance f would have, then scale
+        at_f = load_ratio(self.medium, self.free_resonance, self.width,
+                          mass_per_length(self.spring_constant, self.length, self.free_resonance)).real
+        denominator = 1.0 - at_f
+        if not denominator > 0:
+            raise UserError(f"the medium's load exceeds the lever's inertia at {self.free_resonance:g} Hz "
+                            "(check the spring constant, length and width)")
+        return self.free_resonance / math.sqrt(denominator)
+
+    def with_medium(self, medium: Medium, width: float | None = None) -> "Cantilever":
+        """This lever, whose ``free_resonance`` is its vacuum one (a lever from its geometry, a data
+        sheet), put in ``medium``: the same lever with the first resonance it has there (the inverse of
+        :attr:`vacuum_resonance`, by fixed-point iteration on Sader's relation).
+
+        >>> from pfmdyn.medium import Medium
+        >>> vacuum = Cantilever(2.0, 7e4, 2e-4, width=3e-5)
+        >>> wet = vacuum.with_medium(Medium.water(298.15))
+        >>> round(wet.free_resonance), round(wet.vacuum_resonance)
+        (27493, 70000)
+        """
+        lever = replace(self, width=self.width if width is None else width, medium=medium)
+        f = self.free_resonance
+        for _ in range(60):
+            trial = replace(lever, free_resonance=f)
+            if abs(trial.vacuum_resonance / self.free_resonance - 1) < 1e-13:
+                return trial
+            f *= self.free_resonance / trial.vacuum_resonance
+        raise UserError(f"no first resonance in {medium.name} found for this lever")
+
+    def _damped(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> "Damped":
+        """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at
+        ``frequency`` (Hz, real or complex); a medium's load, ``fluid`` times it (a continuation from
+        vacuum), enters as a drag (``g + i r load``, ``derivations/damping.py``: ``fluid_as_drag``)."""
+        b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
+        f1 = self.vacuum_resonance
+        k1, loss = (contact.k1, contact.contact_loss) if contact is not None else (0.0, 0.0)
+        r = frequency / f1
+        drag = self.viscous_loss
+        if self.medium is not None:
+            drag = drag + 1j * r * fluid * load_ratio(self.medium, frequency, self.width,
+                                                      mass_per_length(self.spring_constant, self.length, f1))
+        return damping_substitution(r, formulas.beta_from_frequency(frequency, f1, b1),
+                                    self.spring_constant, k1, self.tip_mass_ratio,
+                                    1.0 / self.quality_factor, drag, loss)
+
+    def model_arguments(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> tuple:
         """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
         (:mod:`pfmdyn.composed`) at ``frequency`` in Hz, with the damping substituted.
 
@@ -219,7 +285,7 @@ class Cantilever:
         >>> c.model_arguments(7e4)[2:6]                                           # free: no springs
         (0.0, 0.0, 0.0, 1e-05)
         """
-        damped = self._damped(frequency, contact)
+        damped = self._damped(frequency, contact, fluid)
         _, kvv, kll, kvl, height, length, _, gamma, rho_g = self.model_parameters(contact, k1=damped.k1)
         return damped.beta, damped.k, kvv, kll, kvl, height, length, damped.mu, gamma, rho_g
 

@@ -120,7 +120,9 @@ def reynolds_number(medium: Medium, frequency_hz, width: float):
     >>> round(float(reynolds_number(Medium(1000.0, 1e-3), 1e4, 4e-5)), 4)
     25.1327
     """
-    return medium.density * 2 * np.pi * np.asarray(frequency_hz, dtype=float) * width**2 / (4 * medium.viscosity)
+    f = np.asarray(frequency_hz)
+    f = f.astype(complex if np.iscomplexobj(f) else float)
+    return medium.density * 2 * np.pi * f * width**2 / (4 * medium.viscosity)
 
 
 def hydrodynamic_function(reynolds):
@@ -152,9 +154,25 @@ def load_ratio(medium: Medium, frequency_hz, width: float, mass_per_length: floa
     >>> round(r.real, 5), round(r.imag, 5), round((1 + r.real) / -r.imag)    # the first mode's Q
     (0.00577, -0.00209, 481)
     """
-    gamma = hydrodynamic_function(reynolds_number(medium, frequency_hz, width))
-    out = np.pi * medium.density * width**2 * np.conj(gamma) / (4 * mass_per_length)
+    out = np.pi * medium.density * width**2 * _conjugate_function(reynolds_number(medium, frequency_hz, width))
+    out = out / (4 * mass_per_length)
     return complex(out) if np.ndim(out) == 0 else out
+
+
+def _conjugate_function(reynolds):
+    """``conj(Gamma(Re))`` for real ``Re``, continued analytically to complex ``Re`` (a damped mode's
+    frequency): ``i`` turned to ``-i`` in the circular function, the correction's real coefficients
+    kept.  NaN where ``Re.real`` is outside :data:`VALID_REYNOLDS`."""
+    from scipy.special import kv
+
+    re = np.asarray(reynolds, dtype=complex)
+    inside = (re.real >= VALID_REYNOLDS[0]) & (re.real <= VALID_REYNOLDS[1])
+    safe = np.where(inside, re, 1.0)
+    root = np.sqrt(-1j * safe)
+    circular = 1 - 4j * kv(1, 1j * root) / (root * kv(0, 1j * root))
+    tau = np.log10(safe)
+    omega = formulas.rectangular_correction_real(tau) - 1j * formulas.rectangular_correction_imag(tau)
+    return np.where(inside, omega * circular, np.nan + 1j * np.nan)
 
 
 def mass_per_length(spring_constant: float, length: float, free_resonance: float) -> float:

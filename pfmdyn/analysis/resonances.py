@@ -148,7 +148,7 @@ class ResonanceResult:
 
 
 def _damped(lever: Cantilever, contact: Contact | None) -> bool:
-    return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0
+    return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0 or lever.medium is not None
             or (contact is not None and contact.contact_loss > 0))
 
 
@@ -207,7 +207,7 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         return ResonanceResult(lever, contact, reason=str(exc))
     finally:
         flint.ctx.prec = old
-    f1 = flint.arb(_fmpq(lever.free_resonance))
+    f1 = flint.arb(_fmpq(lever.vacuum_resonance))      # the undamped modes are the lever's in vacuum
     beta1 = free_balls[0]
 
     def hz(ball):
@@ -227,16 +227,16 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
                            certified=True)
 
 
-def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
-    """The damped characteristic at (complex) ``r = f / f1`` (the probe's own damping
-    substitution, :meth:`pfmdyn.Cantilever.model_arguments`)."""
-    return composed.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
+def _damped_characteristic(lever: Cantilever, contact: Contact | None, r, fluid: float = 1.0):
+    """The damped characteristic at (complex) ``r = f / f1`` (``f1`` in vacuum; the probe's own damping
+    substitution, :meth:`pfmdyn.Cantilever.model_arguments`, with ``fluid`` times a medium's load)."""
+    return composed.characteristic(*lever.model_arguments(r * lever.vacuum_resonance, contact, fluid=fluid))
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):
     """Slope per unit drive at real ``r``: ``d1`` in contact, ``q0`` when free (the probe's own
     damped response, :meth:`pfmdyn.Cantilever.response`)."""
-    response = lever.response(np.asarray(r, dtype=float) * lever.free_resonance, contact or Contact(k1=0.0))
+    response = lever.response(np.asarray(r, dtype=float) * lever.vacuum_resonance, contact or Contact(k1=0.0))
     return response.vertical if contact is not None else response.distributed_load
 
 
@@ -253,7 +253,8 @@ def _followed_roots(lever: Cantilever, contact: Contact | None, r0: list) -> tup
     def f(r, s):
         q = min(1.0 / (s * inv_q), 1e9) if inv_q else math.inf
         step_contact = replace(contact, contact_loss=s * x) if contact is not None else None
-        return _damped_characteristic(replace(lever, quality_factor=q, viscous_loss=s * g), step_contact, r)
+        # a medium's load grows with the other losses, from the vacuum's undamped roots
+        return _damped_characteristic(replace(lever, quality_factor=q, viscous_loss=s * g), step_contact, r, s)
 
     out = follow(f, r0, _STEPS)
     why = ["overdamped: the mode does not oscillate (no resonance)" if over
@@ -272,7 +273,7 @@ def _lost(last: complex) -> str:
 def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple, tuple]:
     """(Q, damped Hz, peak Hz, why undetermined) of the modes near the undamped roots ``r0``
     (NaN and the reason where a mode has none)."""
-    f1 = lever.free_resonance
+    f1 = lever.vacuum_resonance
     with np.errstate(all="ignore"):
         roots, why = _followed_roots(lever, contact, r0)
         roots = [complex(rc) for rc in roots]

@@ -38,8 +38,9 @@ def add(parser, names, required=(), defaults=None) -> None:
                             help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
 
 
-def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
-    """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``).
+def add_lever(parser, names=LEVER, required=(), defaults=None, medium: bool = True) -> None:
+    """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``), and with
+    ``medium`` the fluid around it (``--medium --temperature``, and ``--width`` it acts across).
 
     ``defaults`` maps a name to ``(value, words)``: the value taken when the flag is not given
     (checked like a given one by :func:`given`) and how ``--help`` states it.
@@ -50,6 +51,8 @@ def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
     ('0.93', 1e-05)
     """
     add(parser, names, required, defaults)
+    if medium:
+        add(parser, [n for n in ("medium", "width", "temperature") if n not in names])
 
 
 def add_contact(parser, names=CONTACT, required=(), defaults=None) -> None:
@@ -141,6 +144,9 @@ def cantilever(args, found: dict | None = None) -> Cantilever:
     values.update(given(args, LEVER + ("quality_factor", "viscous_loss")))
     if values.get("quality_factor") is None:
         values["quality_factor"] = math.inf
+    if getattr(args, "medium", None) or (found or {}).get("medium"):      # else vacuum, the paper's case
+        values["medium"] = medium_from_args(args, found)
+        require(values, ("width",))
     return Cantilever.from_values(values)
 
 

@@ -56,7 +56,7 @@ def add_arguments(parser) -> None:
                         help="contact resonance (Hz); repeat for several modes")
     parser.add_argument("--mode", action="append", default=None, metavar="N",
                         help="mode number of each --contact (default 1, 2, ...)")
-    flags.add_lever(parser, _LEVER)
+    flags.add_lever(parser, _LEVER, medium=False)     # contact resonances are inverted in vacuum
     parser.add_argument("--tip-position", dest="tip_position", default=None, metavar="X|fit",
                         help=f"{NAMES['tip_position'].meaning} (x_tip/L); 'fit': solve it with k1 from two or "
                         "more contact modes (the L1/L method)")
