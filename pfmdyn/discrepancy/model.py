@@ -41,7 +41,7 @@ from .. import composed
 from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
-from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
+from .effects import EFFECTS, Chain, Effect, drag, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many"]
 
@@ -114,7 +114,7 @@ class Model:
         b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
             d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
-                                     c["inv_q"], c["g"], c["x"])
+                                     c["inv_q"], drag(c, r), c["x"])
             kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"])
             module, at = self._reading(c)
             return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
@@ -135,7 +135,7 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            loss = (c["inv_q"], c["g"], c["x"])
+            loss = (c["inv_q"], drag(c, r), c["x"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
             d = damping_substitution(r, root_r, m.k, c["k1"], c["mu"], *loss)
             d_f = damping.d_factors(r, *loss)
@@ -316,7 +316,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
         names = composed.JACOBIAN_PARAMETERS
         ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
         d_beta = -(ratio.T @ per_unit[rows])
-        d_b1 = -(np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]])
+        d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
         out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
     out[~np.isfinite(out)] = 0.0
     return out

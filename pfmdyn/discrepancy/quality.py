@@ -31,6 +31,7 @@ from ..cantilever import damping_substitution
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.damped import follow
+from .effects import drag
 from .model import Model, free_root
 
 __all__ = ["damped_roots", "loss_factors", "loss_and_roots"]
@@ -49,7 +50,7 @@ def _characteristic(model: Model, internal, contact: bool):
 
     def f(r, s):
         d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
-                                 s * c["inv_q"], s * c["g"], s * c["x"])
+                                 s * c["inv_q"], s * drag(c, r), s * c["x"])
         kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
         return composed.characteristic(d.beta, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
     return f

@@ -238,12 +238,13 @@ def _damping_seeds(data: ResonanceData) -> dict[str, tuple]:
     """Start values of the damping parameters from the table's Q values."""
     has_q = _has_q(data)
     if not has_q.any():
-        return {"inv_q": (0.01,), "g": (0.02,), "x": (0.01,)}
+        return {"inv_q": (0.01,), "g": (0.02,), "fluid": (0.02,), "x": (0.01,)}
     q, r = data.quality_factor[has_q], data.frequency_hz[has_q] / data.metadata.f1
     contact = data.condition[has_q] == "contact"
     x = float(np.median(1 / (q * r)[contact])) if contact.any() else 0.01
     return {"inv_q": (float(np.clip(np.median(1 / q), 1e-4, 0.4)),),
             "g": (float(np.clip(np.median(r / q), 1e-4, 0.9)),),
+            "fluid": (float(np.clip(np.median(np.sqrt(r) / q), 1e-4, 0.9)),),
             "x": tuple(float(np.clip(v, 1e-4, 4.0)) for v in (x, 4 * x))}
 
 
