@@ -36,15 +36,17 @@ __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spr
 
 
 def fluid_law(r):
-    """The drag per unit ``fluid_loss`` at ``r = f / f1`` (complex allowed): ``(1 + i) sqrt(r)``, the
-    Stokes layer's load (Sader's ``Gamma`` at high Reynolds number, ``1 + 2 sqrt(2) (1 + i) / sqrt(Re)``,
-    less its constant added mass) carried as a drag (:func:`pfmdyn.derivations.damping.fluid_as_drag`):
-    a half-power width growing as ``sqrt(f)`` and as much added mass.
+    """The drag per unit ``fluid_loss`` at ``r = f / f1`` (complex allowed): ``sqrt(r)``, a half-power
+    width growing as ``sqrt(f)``: the loss of a Stokes layer, Sader's ``Gamma`` at high Reynolds
+    number (``1 + 2 sqrt(2) (1 + i) / sqrt(Re)``), carried as a drag
+    (:func:`pfmdyn.derivations.damping.fluid_as_drag`).  The added mass of the same term is left out:
+    the fit takes the measured resonances as they are; a lever of known width in a known medium has the
+    whole load from :class:`pfmdyn.Cantilever` (``medium``).
 
     >>> complex(fluid_law(4.0))
-    (2+2j)
+    (2+0j)
     """
-    return (1 + 1j) * np.sqrt(r)
+    return np.sqrt(r)
 
 
 def drag(coords, r):

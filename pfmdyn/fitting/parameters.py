@@ -167,10 +167,9 @@ VISCOUS_LOSS = Parameter("g", "", 0.0, 1.0, public="viscous_loss", null=0.0, see
 
 FLUID_LOSS = Parameter("fluid", "", 0.0, 1.0, public="fluid_loss", null=0.0, seeds=(0.003, 0.01, 0.03),
                        description="a fluid's drag at high Reynolds number: half-power width at f1 over f1, "
-                                   "growing as sqrt(f), with as much added mass")
-"""A fluid's Stokes-layer load, the frequency-dependent part of Sader's hydrodynamic function at high
-Reynolds number (:func:`pfmdyn.derivations.damping.fluid_as_drag` with ``Lambda ~ (1 - i) / sqrt(r)``):
-the drag ``fluid (1 + i) sqrt(r)`` (:func:`pfmdyn.discrepancy.effects.drag`)."""
+                                   "growing as sqrt(f)")
+"""A fluid's Stokes-layer loss, Sader's hydrodynamic function at high Reynolds number: the drag
+``fluid sqrt(r)`` (:func:`pfmdyn.discrepancy.effects.fluid_law`)."""
 
 CONTACT_LOSS = Parameter("x", "", 0.0, 5.0, public="contact_loss", null=0.0, seeds=(0.003, 0.02, 0.1),
                          description="dashpot eta parallel to k1: omega1 eta / k1")
