@@ -144,6 +144,9 @@ class ResonanceResult:
         proof = [f"{m.complete_below_hz:.1f} Hz ({label})" for label, m in (("free", self.free),
                                                                            ("contact", self.in_contact)) if m.hz]
         lines.append("certified: no resonance missed or counted twice below " + " and ".join(proof))
+        if self.lever.medium is not None:
+            lines.append(f"in {self.lever.medium.name}: 'resonance' is the undamped lever's in vacuum, the others "
+                         "are in the medium")
         return "\n".join(lines)
 
 

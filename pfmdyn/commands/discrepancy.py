@@ -6,6 +6,7 @@ import argparse
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from ..discrepancy.report import medium_comparison
 from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
@@ -32,6 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
+    flags.add(group, ("medium", "temperature"))
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
 
@@ -44,6 +46,13 @@ def _analyse(data, args):
     if isinstance(data, SpectrumData):
         return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
     return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
+
+
+def _lever_in_medium(data, args):
+    """The data's lever (its measured free resonance) in ``--medium``: it needs the width."""
+    meta = data.metadata
+    found = {"spring_constant": meta.k, "length": meta.L, "width": meta.width, "free_resonance": meta.f1}
+    return flags.cantilever(args, {k: v for k, v in found.items() if v is not None})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,7 +75,15 @@ def run(args: argparse.Namespace) -> int:
                         "check the metadata (spring constant, length, tip height, free resonance)") from None
     if stride > 1:
         report = report.updated(frequency_stride=stride)
+    if args.medium:
+        report = report.updated(medium=medium_comparison(report.to_dict(), _lever_in_medium(data, args)))
     print(report.report())
+    if args.medium:
+        m = report.to_dict()["medium"]
+        fitted = "no free-mode damping fitted" if m["fitted_quality_factor"] is None else \
+            f"the fitted damping gives Q {m['fitted_quality_factor']:.4g}"
+        print(f"medium: {m['medium']} predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
+              f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     if args.json == "-":

@@ -2,12 +2,14 @@
 JSON-ready fields (``to_dict()``), the summary text (``report()``) and the fits behind it."""
 from __future__ import annotations
 
+import math
+
 from ..fitting.result import Result
 from . import select
 from .effects import public_name
 from .plausible import describe
 
-__all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary"]
+__all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary", "medium_comparison"]
 
 
 class DiscrepancyReport(Result):
@@ -110,3 +112,28 @@ def summary(report) -> str:
             note = "" if p.get("determined", True) else " (not determined by these data)"
             lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
     return "\n".join(lines)
+
+
+def medium_comparison(report: dict, lever) -> dict:
+    """The first free mode's Q the fitted damping gives beside the one ``lever``'s medium predicts
+    (Sader's load on a lever of that width, :mod:`pfmdyn.medium`; the exact damped root of
+    :func:`pfmdyn.analysis.resonances.resonances`).  The fitted losses add at ``f1``: ``1/Q`` of
+    internal friction, the viscous ``g``, the fluid's ``fluid_loss``; a contact dashpot damps no
+    free mode.  ``fitted`` is None when the fit holds no free-mode damping.
+
+    >>> from pfmdyn import Cantilever
+    >>> from pfmdyn.medium import Medium
+    >>> lever = Cantilever(27.0, 1.798e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+    >>> out = medium_comparison({"parameters": {"fluid_loss": {"value": 1 / 440}}}, lever)
+    >>> round(out["predicted_quality_factor"]), out["fitted_quality_factor"]
+    (474, 440.0)
+    """
+    from ..analysis.resonances import resonances
+
+    p = report.get("parameters", {})
+    value = lambda name: (p.get(name) or {}).get("value") or 0.0     # noqa: E731
+    q = value("quality_factor")
+    loss = (1.0 / q if q and math.isfinite(q) else 0.0) + value("viscous_loss") + value("fluid_loss")
+    predicted = resonances(lever, None, modes=1).free.q[0]
+    return {"medium": lever.medium.name, "width": lever.width, "predicted_quality_factor": float(predicted),
+            "fitted_quality_factor": round(1.0 / loss, 10) if loss else None}
