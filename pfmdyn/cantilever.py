@@ -236,22 +236,25 @@ class Cantilever:
 
     def with_medium(self, medium: Medium, width: float | None = None) -> "Cantilever":
         """This lever, whose ``free_resonance`` is its vacuum one (a lever from its geometry, a data
-        sheet), put in ``medium``: the same lever with the first resonance it has there (the inverse of
-        :attr:`vacuum_resonance`, by fixed-point iteration on Sader's relation).
+        sheet), put in ``medium``: the same lever with the first resonance it has there (Sader's relation,
+        the inverse of :attr:`vacuum_resonance`, by fixed-point iteration).
 
         >>> from pfmdyn.medium import Medium
         >>> vacuum = Cantilever(2.0, 7e4, 2e-4, width=3e-5)
         >>> wet = vacuum.with_medium(Medium.water(298.15))
         >>> round(wet.free_resonance), round(wet.vacuum_resonance)
-        (27493, 70000)
+        (28975, 70000)
         """
         lever = replace(self, width=self.width if width is None else width, medium=medium)
-        f = self.free_resonance
-        for _ in range(60):
-            trial = replace(lever, free_resonance=f)
-            if abs(trial.vacuum_resonance / self.free_resonance - 1) < 1e-13:
-                return trial
-            f *= self.free_resonance / trial.vacuum_resonance
+        f_vac = self.free_resonance
+        mass = mass_per_length(self.spring_constant, self.length, f_vac)
+        f = f_vac
+        for _ in range(100):
+            # Sader's relation forward, f = f_vac / sqrt(1 + T Re Gamma(f)), with the lever's own mass
+            f_next = f_vac / math.sqrt(1.0 + load_ratio(medium, f, lever.width, mass).real)
+            if abs(f_next / f - 1) < 1e-14:
+                return replace(lever, free_resonance=f_next)
+            f = f_next
         raise UserError(f"no first resonance in {medium.name} found for this lever")
 
     def _damped(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> "Damped":

@@ -96,3 +96,31 @@ def test_thermal_noise_refuses_a_temperature_at_or_below_zero():
     from pfmdyn.errors import UserError
     with pytest.raises(UserError, match="temperature"):
         Cantilever(2.0, 7e4, 2e-4).thermal_noise([7e4], 0.0)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_lever_in_a_fluid_is_the_loaded_beam(seed):
+    """Base-driven in air or water: the lever's response is the high-precision beam's
+    (``tests/segment_beam.py``) at ``beta**4 (1 + load)``, the load from Sader's function (itself
+    checked against mpmath in ``tests/test_medium.py``), read at a spot."""
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).parent))
+    from segment_beam import DRIVES, spot_response_mp
+    from pfmdyn.medium import Medium, load_ratio, mass_per_length
+
+    rng = np.random.default_rng(seed)
+    k, L = 10 ** rng.uniform(math.log10(0.05), math.log10(50)), rng.uniform(100e-6, 500e-6)
+    width, spot = rng.uniform(20e-6, 60e-6), rng.uniform(0.6, 1.0)
+    medium = (Medium.air if seed % 2 else Medium.water)(rng.uniform(285.0, 315.0))
+    vacuum = Cantilever(k, 10 ** rng.uniform(4, 5.5), L, width=width, spot_position=spot)
+    lever = vacuum.with_medium(medium)
+    f = lever.free_resonance * np.array([0.3, 1.0, 4.0])
+    got = lever.base_response(f)
+    load = load_ratio(medium, f, width, mass_per_length(k, L, vacuum.free_resonance))
+    beta = BETA1 * np.sqrt(f / vacuum.free_resonance) * (1 + load) ** 0.25
+    for i, b in enumerate(beta):
+        (slopes, deflections), = spot_response_mp(complex(b), [spot], k=k, L=L, H=1e-5, kvv=0.0)
+        j = DRIVES.index("y0")
+        assert complex(got.slope[i]) == pytest.approx(complex(slopes[j]), rel=1e-8)
+        assert complex(got.deflection[i]) == pytest.approx(complex(deflections[j]) - 1, rel=1e-8)
