@@ -75,7 +75,7 @@ def test_tables_end_in_a_report_or_one_line(tmp_path, capsys, p, shuffle):
     assert _run(path, capsys) == 0
 
 
-@settings(max_examples=3, deadline=None, derandomize=True,
+@settings(max_examples=1, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(p=levers)
 def test_spectra_end_in_a_report_or_one_line(tmp_path, capsys, p):

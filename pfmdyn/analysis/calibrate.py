@@ -266,5 +266,9 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
                 if t_factor:
                     reconcile.append(("temperature", t_factor))
             reconcile.append(("medium", ratio))                # density and viscosity scaled alike: same Re
-    return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs,
-                       dict(tune.instrument, **{k: v for k, v in tune.conditions.items()}))
+    instrument = dict(tune.instrument, **{k: v for k, v in tune.conditions.items()})
+    if length is not None and width is not None and {"free_resonance", "free_quality_factor"} <= set(instrument):
+        # the textbook formula on the instrument's own fit of the tune, beside ours on the data
+        instrument["sader_spring_constant_of_its_fit"] = sader_spring_constant(
+            medium, width, length, instrument["free_resonance"], instrument["free_quality_factor"], tip_position)
+    return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument)

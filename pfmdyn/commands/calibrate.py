@@ -60,7 +60,9 @@ def report(result) -> str:
     if "spring_constant" in inst:
         lines.append(f"instrument: k = {inst['spring_constant']:.4g} N/m"
                      + (f" at {inst['temperature'] - 273.15:g} C" if "temperature" in inst else "")
-                     + (f" in {inst['environment']}" if "environment" in inst else ""))
+                     + (f" in {inst['environment']}" if "environment" in inst else "")
+                     + (f"; Sader's formula on its own fit of the tune: {inst['sader_spring_constant_of_its_fit']:.4g} N/m"
+                        if "sader_spring_constant_of_its_fit" in inst else ""))
     if d["consistent"] is None:
         lines.append("agreement: undetermined (one estimate is)")
     elif d["consistent"]:
