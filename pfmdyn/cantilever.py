@@ -128,11 +128,17 @@ class Cantilever:
 
     @classmethod
     def from_geometry(cls, *, length, width, thickness, youngs_modulus, density,
-                      quality_factor=math.inf) -> "Cantilever":
-        """Rectangular section from SI geometry and material (m, Pa, kg/m**3).
+                      quality_factor=math.inf, medium: Medium | None = None) -> "Cantilever":
+        """Rectangular section from SI geometry and material (m, Pa, kg/m**3), in vacuum or in ``medium``.
 
         ``k = E w t**3 / (4 L**3)``; ``f1 = BETA1_FREE**2 / (2 pi L**2) sqrt(E I / (rho S))``
-        with ``I = w t**3 / 12`` and ``S = w t``.
+        with ``I = w t**3 / 12`` and ``S = w t`` (in vacuum; in a medium, :meth:`with_medium`).
+
+        >>> from pfmdyn.medium import Medium
+        >>> wet = Cantilever.from_geometry(length=225e-6, width=40e-6, thickness=3e-6, youngs_modulus=169e9,
+        ...                                density=2330.0, medium=Medium.water(298.15))
+        >>> round(wet.vacuum_resonance / 1e3, 2), round(wet.free_resonance / 1e3, 2)   # kHz
+        (81.53, 30.72)
         """
         for name, value in [("length", length), ("width", width), ("thickness", thickness),
                             ("youngs_modulus", youngs_modulus), ("density", density)]:
@@ -141,7 +147,8 @@ class Cantilever:
         k = formulas.spring_constant_from_geometry(youngs_modulus, width, thickness, length)
         f1 = formulas.free_resonance_from_geometry(youngs_modulus, width, thickness, length,
                                                    density, BETA1_FREE)
-        return cls(float(k), float(f1), length, quality_factor, width=width)
+        lever = cls(float(k), float(f1), length, quality_factor, width=width)
+        return lever if medium is None else lever.with_medium(medium)
 
     @classmethod
     def from_values(cls, values: dict) -> "Cantilever":
