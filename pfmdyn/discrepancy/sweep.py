@@ -1,0 +1,380 @@
+"""Drive sweeps explained as spectra: a base-driven free lever in a fluid, and what changed between two.
+
+A drive sweep (:func:`pfmdyn.io.sweeps.read_sweep_table`: Cytomass ``.txt``, Nanonis ``.dat``) is the
+read-out of a lever whose clamp a dither piezo shakes.  Its model (:func:`fit_sweep`) is
+
+``y(f) = G s(f) + b0 + b1 (f / f_c - 1)``,
+
+``s`` the slope at the laser spot per unit base displacement (:meth:`pfmdyn.Cantilever.base_response`,
+every mode, the fluid's load from Sader's hydrodynamic function, :mod:`pfmdyn.medium`), ``G`` a complex
+gain (a real scale of ``|s|`` when the file has no phase), ``b0 + b1 (...)`` a linear background
+(cross-talk, the piezo's own signal) and ``f_c`` the sweep's centre.  The lever's spring constant and
+length are given; fitted are its first resonance *in the medium* and a viscous damping beyond the fluid's
+(``viscous_loss``, 0 when none is needed); the width the fluid acts across is given, else assumed
+(:data:`WIDTH_NOTE`: one mode cannot tell the two dampings apart).  The amplitudes
+are solved out of the fit (variable projection, :func:`pfmdyn.fitting.projection.project`); the
+instrument's own fit in the header is reported beside, never used instead of the data.
+
+Two sweeps (:func:`compare_sweeps`): the lever, the fluid, the gain and the background calibrated on
+the reference (before), the other sweep (after) explained from them by nested candidates -- nothing,
+a gain or background change (nuisances), a point mass (``added_mass``, kg, at ``added_mass_position``
+x/L: given, fitted when the sweep spans two modes or more, else undetermined and the mass given as
+the end-equivalent one) and the mass with the nuisances -- the one of least BIC named, each with its
+gap (the noise-normalised RMS residual, :func:`pfmdyn.fitting.noise.gap`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..cantilever import BETA1_FREE, Cantilever
+from ..errors import UserError
+from ..fitting.noise import gap, noise_sigma
+from ..fitting.parameters import Parameter
+from ..fitting.projection import jacobian_covariance, project
+from ..fitting.result import Result
+from ..io.sweeps import SweepTable
+from ..medium import Medium
+
+__all__ = ["SweepFit", "fit_sweep", "compare_sweeps", "with_added_mass", "CANDIDATES"]
+
+RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
+                      description="first free resonance in the medium")
+EXTRA_LOSS = Parameter("viscous_loss", "", 0.0, 10.0, null=0.0, seeds=(0.0, 0.1, 0.5),
+                       description="viscous damping beyond the fluid's: 1/Q of free mode 1 under it alone")
+ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
+                       description="point mass over the lever's mass")
+POSITION = Parameter("added_mass_position", "", 0.05, 1.0, description="point mass position x/L")
+
+ASSUMED_WIDTH = 0.1
+"""The width, over the length, of a lever whose width is not given (:data:`WIDTH_NOTE`)."""
+WIDTH_NOTE = ("not given: assumed L/10; one mode cannot tell the fluid's damping from a viscous one (both "
+              "widen the peak), so a narrow lever leaves it to viscous_loss; give --width for the fluid's share")
+
+CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
+              ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
+              ("added_mass+gain+background", ("added_mass", "gain", "background")))
+"""The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
+
+_PENALTY = 1e6
+"""Residual (in noise units) of a lever the fluid cannot carry (its load exceeds the lever's inertia)."""
+
+
+def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> Cantilever:
+    """``lever`` (in its medium) with a point mass ``ratio`` times its own mass at ``position`` (x/L):
+    its vacuum resonance lowered by the mass (the free root of the loaded beam), then put back in
+    the medium; the viscous drag per length kept.
+
+    >>> from pfmdyn.medium import Medium
+    >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
+    >>> round(with_added_mass(lever, 0.0).free_resonance), with_added_mass(lever, 0.01).free_resonance < 7.2e4
+    (72000, True)
+    """
+    f_vac = lever.vacuum_resonance
+    bare = replace(lever, free_resonance=f_vac, medium=None, tip_mass_ratio=0.0, tip_position=1.0)
+    if ratio == 0.0:
+        loaded, f_loaded = bare, f_vac
+    else:
+        loaded = replace(bare, tip_mass_ratio=float(ratio), tip_position=float(position))
+        f_loaded = f_vac * (loaded.free_root() / BETA1_FREE)**2
+    loaded = replace(loaded, free_resonance=f_loaded, viscous_loss=lever.viscous_loss * f_vac / f_loaded)
+    return loaded if lever.medium is None else loaded.with_medium(lever.medium)
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """One least-squares fit: internal parameters, their covariance, the linear amplitudes, chi2."""
+
+    internal: np.ndarray
+    covariance: np.ndarray
+    amplitudes: np.ndarray
+    chi2: float
+
+
+def _columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) -> np.ndarray:
+    """The model's columns ``(n, 3)``: the slope per base displacement, 1 and ``f / f_c - 1``."""
+    slope = lever.base_response(frequency).slope
+    columns = np.stack([slope, np.ones_like(slope), frequency / centre - 1.0], axis=-1)
+    return np.abs(columns) * np.sign(columns.real) if amplitude_only else columns
+
+
+def _solve(residual, starts, lower, upper):
+    """Least squares from each of ``starts`` (internal coordinates); the best, with its covariance
+    scaled by the reduced chi2 (a misfit widens the uncertainties)."""
+    best = None
+    for x0 in starts:
+        if not len(x0):
+            r = residual(np.zeros(0))
+            return _Fit(np.zeros(0), np.zeros((0, 0)), None, float(r @ r)), r.size
+        out = least_squares(residual, np.clip(x0, lower, upper), bounds=(lower, upper), x_scale="jac",
+                            diff_step=1e-7, max_nfev=200)
+        if best is None or out.cost < best.cost:
+            best = out
+    r = best.fun
+    dof = max(r.size - len(best.x), 1)
+    covariance = jacobian_covariance(best.jac, max(float(r @ r) / dof, 1.0))
+    return _Fit(best.x, covariance, None, float(r @ r)), r.size
+
+
+def _value(parameter: Parameter, internal: float, variance: float) -> dict:
+    sd = math.sqrt(variance) if math.isfinite(variance) else math.inf
+    return {"value": float(parameter.value(internal)), "stderr": parameter.stderr(internal, sd) if math.isfinite(sd)
+            else math.nan, "unit": parameter.unit or "1"}
+
+
+class SweepFit(Result):
+    """One sweep fitted (:func:`fit_sweep`): ``to_dict()`` the JSON fields, ``report()`` the summary;
+    attributes ``lever`` (the fitted :class:`~pfmdyn.Cantilever`), ``gain``, ``background`` (``b0,
+    b1``), ``centre_hz``, ``amplitude_only``, ``conjugate`` (the file's phase runs the other way),
+    ``sigma`` (the noise) and :meth:`model`."""
+
+    def model(self, frequency, lever: Cantilever | None = None, gain=None, background=None) -> np.ndarray:
+        """The fitted model at ``frequency`` (Hz), with any of the lever, gain, background replaced."""
+        lever = self.lever if lever is None else lever
+        gain = self.gain if gain is None else gain
+        b0, b1 = self.background if background is None else background
+        columns = _columns(lever, np.asarray(frequency, float), self.centre_hz, self.amplitude_only)
+        return columns @ np.array([gain, b0, b1])
+
+    def data(self, table: SweepTable) -> np.ndarray:
+        """``table``'s response as this fit reads it (amplitude only, or conjugated)."""
+        y = table.amplitude if self.amplitude_only else table.response
+        return np.conj(y) if self.conjugate else y
+
+    def report(self) -> str:
+        """``sweep FILE: ... resonance ..., Q ...; instrument: ...; gap ...``."""
+        d = self._fields
+        p = d["parameters"]
+        width = p["width"]
+        extra = p["viscous_loss"]
+        lines = [f"sweep {d['path']}: {d['points']} measured points fitted as a base-driven free lever in "
+                 f"{d['medium']} (k {d['spring_constant']:g} N/m, L {d['length']:g} m)",
+                 f"  resonance in the medium {_pm(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
+                 f"Q {d['quality_factor']:.3g}, amplitude peak {d['peak_hz']:.6g} Hz",
+                 f"  width {_pm(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
+                 f"  damping beyond the fluid's: viscous_loss {_pm(extra, '')}",
+                 f"  instrument: {_instrument(d['instrument_fit'])}",
+                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
+        return "\n".join(lines)
+
+
+def _pm(entry: dict, unit: str) -> str:
+    value, err = entry["value"], entry.get("stderr")
+    text = f"{value:.6g}" + (f" +- {err:.2g}" if err is not None and math.isfinite(err) and err > 0 else "")
+    return text + (f" {unit}" if unit else "")
+
+
+def _instrument(fields: dict) -> str:
+    f, q = fields.get("free_resonance"), fields.get("free_quality_factor")
+    if f is None and q is None:
+        return "no fit in the header"
+    return ", ".join(([f"{f:,.0f} Hz".replace(",", " ")] if f else []) + ([f"Q {q:.3g}"] if q else []))
+
+
+def _noise(frequency, y) -> float:
+    sigma = noise_sigma(frequency, np.zeros(len(y)), y)
+    return max(sigma, 1e-9 * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
+
+
+def _penalty(y) -> np.ndarray:
+    return np.full(2 * len(y) if np.iscomplexobj(y) else len(y), _PENALTY)
+
+
+def _stack(r) -> np.ndarray:
+    return np.concatenate([r.real, r.imag]) if np.iscomplexobj(r) else r
+
+
+def _peak(lever: Cantilever, frequency) -> float:
+    grid = np.linspace(frequency.min(), frequency.max(), 2001)
+    return float(grid[np.argmax(np.abs(lever.base_response(grid).slope))])
+
+
+def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: Medium,
+              width: float | None = None) -> SweepFit:
+    """Fit a drive sweep over its measured points (see the module): the lever's resonance in
+    ``medium`` and a damping beyond the fluid's; ``width`` None: assumed (:data:`WIDTH_NOTE`).
+
+    >>> from pfmdyn.medium import Medium
+    >>> f = np.linspace(4e4, 1e5, 120)
+    >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
+    >>> y = (0.3 - 2j) * lever.base_response(f).slope + 0.5
+    >>> table = SweepTable("s.txt", f, np.abs(y), "V", np.degrees(np.angle(y)), {}, None, "synthetic")
+    >>> fit = fit_sweep(table, 8.0, 1e-4, Medium.water(), width=4e-5)
+    >>> round(fit["parameters"]["free_resonance"]["value"]), round(fit["parameters"]["viscous_loss"]["value"], 6)
+    (72000, 0.0)
+    """
+    frequency = table.frequency_hz
+    amplitude_only = table.phase_deg is None
+    centre = 0.5 * (frequency.min() + frequency.max())
+    params = (RESONANCE, EXTRA_LOSS)
+    lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+    given = width is not None
+    width = width if given else ASSUMED_WIDTH * length
+
+    def lever_of(x) -> Cantilever:
+        return Cantilever(spring_constant, 10.0**x[0], length, width=width, medium=medium, viscous_loss=x[1])
+
+    seeds_f = np.log10(np.linspace(frequency.min(), frequency.max(), 9)[1:-1])
+    grid = [np.array([a, b]) for a in seeds_f for b in EXTRA_LOSS.seeds]
+    best = None
+    for conjugate in ((False,) if amplitude_only else (False, True)):
+        y = table.amplitude if amplitude_only else (np.conj(table.response) if conjugate else table.response)
+        sigma = _noise(frequency, y)
+
+        def residual(x, y=y, sigma=sigma):
+            try:
+                columns = _columns(lever_of(x), frequency, centre, amplitude_only)
+            except UserError:       # a width whose fluid the lever cannot carry
+                return _penalty(y)
+            pr = project(columns[None], y[None, :, None].astype(columns.dtype))
+            return _stack(pr.residual[0, :, 0]) / sigma
+
+        costs = [float(np.sum(residual(x)**2)) for x in grid]
+        starts = [grid[i] for i in np.argsort(costs)[:3]]
+        fit, _ = _solve(residual, starts, lower, upper)
+        if best is None or fit.chi2 < best[0].chi2:
+            best = (fit, conjugate, y, sigma)
+    fit, conjugate, y, sigma = best
+    lever = lever_of(fit.internal)
+    columns = _columns(lever, frequency, centre, amplitude_only)
+    amplitudes = project(columns[None], y[None, :, None].astype(columns.dtype)).amplitudes[0, :, 0]
+    parameters = {p.key: _value(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
+    parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
+    if not given:
+        parameters["width"]["why"] = WIDTH_NOTE
+    from ..analysis.resonances import resonances
+
+    modes = resonances(lever, None, modes=1).free
+    fields = {"kind": "drive sweep", "path": table.path, "instrument": table.instrument, "points": len(frequency),
+              "medium": medium.name, "spring_constant": spring_constant, "length": length,
+              "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(modes.q[0]),
+              "peak_hz": _peak(lever, frequency), "parameters": parameters,
+              "gain": {"value": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
+                       "unit": f"{table.unit or '1'}/rad"},
+              "background": {"value": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
+                             "unit": table.unit or "1"},
+              "amplitude_only": amplitude_only, "phase_reversed": conjugate,
+              "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y)))}
+    return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
+                    amplitude_only=amplitude_only, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
+
+
+def _modes_in(lever: Cantilever, frequency) -> int:
+    """How many of the lever's free modes (undamped, in the medium) lie inside the sweep."""
+    from ..analysis.resonances import resonances
+
+    wet = resonances(lever, None, modes=3).free.peak_hz
+    return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
+
+
+def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None = None) -> Result:
+    """Explain ``after`` from the lever, fluid, gain and background of ``before`` (a :func:`fit_sweep`):
+    each of :data:`CANDIDATES` fitted, the one of least BIC named (see the module).  ``position``:
+    the added mass's x/L (None: fitted when the sweep spans two modes, else undetermined and the mass
+    given at the free end, the end-equivalent mass).
+
+    >>> from pfmdyn.medium import Medium
+    >>> f = np.linspace(4e4, 1e5, 120)
+    >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
+    >>> table = lambda y: SweepTable("s.txt", f, np.abs(y), "V", np.degrees(np.angle(y)), {}, None, "synthetic")
+    >>> y = lambda lev: (0.3 - 2j) * lev.base_response(f).slope + 0.5
+    >>> before = fit_sweep(table(y(lever)), 8.0, 1e-4, Medium.water(), width=4e-5)
+    >>> out = compare_sweeps(table(y(with_added_mass(lever, 0.02, 0.9))), before, position=0.9)
+    >>> out["effect"], round(out["parameters"]["added_mass_ratio"]["value"], 4)
+    ('added_mass', 0.02)
+    """
+    frequency = after.frequency_hz
+    y = before.data(after)
+    sigma = _noise(frequency, y)
+    n = len(y)
+    count = 2 * n if np.iscomplexobj(y) else n
+    fit_position = position is None and _modes_in(before.lever, frequency) >= 2
+    x_mass = 1.0 if position is None else float(position)
+    rows, fits = [], {}
+    for name, refit in CANDIDATES:
+        mass = "added_mass" in refit
+        params = (ADDED_MASS,) + ((POSITION,) if fit_position else ()) if mass else ()
+        lower = np.array([p.lower for p in params]); upper = np.array([p.upper for p in params])
+        free = [i for i, (key, on) in enumerate((("gain", True), ("background", True), ("background", True)))
+                if key in refit]
+        fixed = [i for i in range(3) if i not in free]
+        known = np.array([before.gain, *before.background])
+
+        def lever_of(x, mass=mass):
+            if not mass:
+                return before.lever
+            return with_added_mass(before.lever, x[0], x[1] if fit_position else x_mass)
+
+        def solve(x, free=free, fixed=fixed, lever_of=lever_of):
+            columns = _columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
+            rest = y - columns[:, fixed] @ known[fixed]
+            if not free:
+                return rest, known
+            pr = project(columns[None][..., free], rest[None, :, None].astype(complex))
+            amplitudes = known.copy()
+            amplitudes[free] = pr.amplitudes[0, :, 0]
+            return pr.residual[0, :, 0], amplitudes
+
+        def residual(x, solve=solve):
+            try:
+                return _stack(np.asarray(solve(x)[0])) / sigma
+            except UserError:       # a mass that takes the lever's resonance out of any real range
+                return _penalty(y)
+
+        starts = [np.array([s] + ([0.9] if fit_position else [])) for s in (0.0, 0.02, 0.2)] if mass else [[]]
+        fit, _ = _solve(residual, starts, lower, upper)
+        k = len(params) + len(free) * (1 if before.amplitude_only else 2)
+        bic = fit.chi2 + k * math.log(count)
+        fits[name] = (fit, params, solve(fit.internal)[1], lever_of(fit.internal))
+        rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
+                     "bic": bic, "gap": float(gap(fit.chi2, n))})
+    best = min(rows, key=lambda r: r["bic"])
+    fit, params, amplitudes, lever = fits[best["effect"]]
+    named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
+    lever_mass = before.lever.mass_per_length(before.lever.vacuum_resonance) * before.lever.length
+    parameters = {}
+    mass_fit, mass_params = fits["added_mass+gain+background"][:2] if named != "added_mass" else (fit, params)
+    ratio = _value(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
+    parameters["added_mass_ratio"] = ratio
+    parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
+                                "unit": "kg", "determined": named == "added_mass"}
+    if fit_position:
+        parameters["added_mass_position"] = _value(POSITION, mass_fit.internal[1], mass_fit.covariance[1, 1])
+    elif position is not None:
+        parameters["added_mass_position"] = {"value": x_mass, "stderr": 0.0, "unit": "1", "given": True}
+    else:
+        parameters["added_mass_position"] = {"value": None, "stderr": None, "unit": "1", "undetermined": True,
+                                             "why": "one mode in the sweep: the mass and its position move the "
+                                                    "resonance together; the mass is the end-equivalent one (x/L = 1)"}
+    fields = {"kind": "drive sweep comparison", "path": after.path, "reference": before["path"],
+              "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
+              "parameters": parameters, "lever_mass": lever_mass,
+              "resonance_before": before.lever.free_resonance, "resonance_after": lever.free_resonance,
+              "gap_before": rows[0]["gap"], "gap_after": best["gap"], "steps": rows,
+              "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
+              "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
+              "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma}
+    return _Comparison(fields, lever=lever)
+
+
+class _Comparison(Result):
+    def report(self) -> str:
+        d = self._fields
+        p = d["parameters"]
+        lines = [f"{d['path']} explained from {d['reference']} (lever, fluid, gain, background calibrated there)",
+                 "  effect                       refitted  gap     BIC"]
+        lines += [f"  {r['effect']:<28} {r['parameters']:>8}  {r['gap']:<7.3g} {r['bic']:.6g}" for r in d["steps"]]
+        lines.append(f"  named: {d['effect']}" + (f" (nuisances: {', '.join(d['nuisances'])})" if d["nuisances"] else ""))
+        if d["effect"] == "added_mass":
+            m = p["added_mass"]
+            where = p["added_mass_position"]
+            at = "undetermined (one mode); end-equivalent mass" if where.get("undetermined") else \
+                f"at x/L {_pm(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
+            lines.append(f"  added_mass {_pm(m, 'kg')} ({m['value'] * 1e15:.4g} pg), {at}")
+        lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
+                     f"instrument: {_instrument(d['reference_fit']['instrument_fit'])} -> {_instrument(d['instrument_fit'])}")
+        lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
+        return "\n".join(lines)
