@@ -43,7 +43,7 @@ __all__ = ["SweepFit", "fit_sweep", "compare_sweeps", "with_added_mass", "CANDID
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
                       description="first free resonance in the medium")
-EXTRA_LOSS = Parameter("viscous_loss", "", 0.0, 10.0, null=0.0, seeds=(0.0, 0.1, 0.5),
+EXTRA_LOSS = Parameter("viscous_loss", "", 0.0, 10.0, null=0.0, seeds=(0.0, 0.003, 0.03, 0.3),
                        description="viscous damping beyond the fluid's: 1/Q of free mode 1 under it alone")
 ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
                        description="point mass over the lever's mass")
@@ -58,6 +58,9 @@ CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background"
               ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
               ("added_mass+gain+background", ("added_mass", "gain", "background")))
 """The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
+
+MIN_POINTS = 8
+"""Fewer measured points than this cannot fix a resonance, a damping, a gain and a background."""
 
 _PENALTY = 1e6
 """Residual (in noise units) of a lever the fluid cannot carry (its load exceeds the lever's inertia)."""
@@ -97,8 +100,8 @@ class _Fit:
 def _columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) -> np.ndarray:
     """The model's columns ``(n, 3)``: the slope per base displacement, 1 and ``f / f_c - 1``."""
     slope = lever.base_response(frequency).slope
-    columns = np.stack([slope, np.ones_like(slope), frequency / centre - 1.0], axis=-1)
-    return np.abs(columns) * np.sign(columns.real) if amplitude_only else columns
+    slope = np.abs(slope) if amplitude_only else slope
+    return np.stack([slope, np.ones_like(slope), frequency / centre - 1.0 + 0 * slope], axis=-1)
 
 
 def _solve(residual, starts, lower, upper):
@@ -207,6 +210,8 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     (72000, 0.0)
     """
     frequency = table.frequency_hz
+    if len(frequency) < MIN_POINTS:
+        raise UserError(f"{table.path}: {len(frequency)} measured points; a sweep fit needs at least {MIN_POINTS}")
     amplitude_only = table.phase_deg is None
     centre = 0.5 * (frequency.min() + frequency.max())
     params = (RESONANCE, EXTRA_LOSS)
@@ -217,7 +222,9 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     def lever_of(x) -> Cantilever:
         return Cantilever(spring_constant, 10.0**x[0], length, width=width, medium=medium, viscous_loss=x[1])
 
-    seeds_f = np.log10(np.linspace(frequency.min(), frequency.max(), 9)[1:-1])
+    # the frequencies across the sweep and where the response departs most from its median (a sharp peak)
+    deviation = np.abs(table.response - np.median(table.response.real) - 1j * np.median(np.imag(table.response)))
+    seeds_f = np.log10(np.append(np.geomspace(frequency.min() / 3, frequency.max(), 20), frequency[np.argmax(deviation)]))
     grid = [np.array([a, b]) for a in seeds_f for b in EXTRA_LOSS.seeds]
     best = None
     for conjugate in ((False,) if amplitude_only else (False, True)):
@@ -233,6 +240,9 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
             return _stack(pr.residual[0, :, 0]) / sigma
 
         costs = [float(np.sum(residual(x)**2)) for x in grid]
+        if min(costs) >= _PENALTY**2:
+            raise UserError(f"{table.path}: no lever of this spring constant, length and width carries {medium.name}'s "
+                            "load at a resonance near the sweep (check them)")
         starts = [grid[i] for i in np.argsort(costs)[:3]]
         fit, _ = _solve(residual, starts, lower, upper)
         if best is None or fit.chi2 < best[0].chi2:
