@@ -17,7 +17,7 @@ instrument's own fit in the header is reported beside, never used instead of the
 
 Two sweeps (:func:`compare_sweeps`): the lever, the fluid, the gain and the background calibrated on
 the reference (before), the other sweep (after) explained from them by nested candidates -- nothing,
-a gain or background change (nuisances), a point mass (``added_mass``, kg, at ``added_mass_position``
+a gain, background or damping change (nuisances; the damping is ``viscous_loss``, the cell's drag), a point mass (``added_mass``, kg, at ``added_mass_position``
 x/L: given, fitted when the sweep spans two modes or more, else undetermined and the mass given as
 the end-equivalent one) and the mass with the nuisances -- the one of least BIC named, each with its
 gap (the noise-normalised RMS residual, :func:`pfmdyn.fitting.noise.gap`).
@@ -56,7 +56,8 @@ WIDTH_NOTE = ("not given: assumed L/10; one mode cannot tell the fluid's damping
 
 CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
               ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
-              ("added_mass+gain+background", ("added_mass", "gain", "background")))
+              ("damping", ("damping",)), ("added_mass+gain+background", ("added_mass", "gain", "background")),
+              ("added_mass+damping+gain+background", ("added_mass", "damping", "gain", "background")))
 """The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
 
 MIN_POINTS = 8
@@ -306,17 +307,18 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     rows, fits = [], {}
     for name, refit in CANDIDATES:
         mass = "added_mass" in refit
-        params = (ADDED_MASS,) + ((POSITION,) if fit_position else ()) if mass else ()
+        params = ((ADDED_MASS,) + ((POSITION,) if fit_position else ()) if mass else ()) \
+            + ((EXTRA_LOSS,) if "damping" in refit else ())
         lower = np.array([p.lower for p in params]); upper = np.array([p.upper for p in params])
-        free = [i for i, (key, on) in enumerate((("gain", True), ("background", True), ("background", True)))
-                if key in refit]
+        free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
         fixed = [i for i in range(3) if i not in free]
         known = np.array([before.gain, *before.background])
 
-        def lever_of(x, mass=mass):
+        def lever_of(x, mass=mass, damping="damping" in refit):
+            lever = replace(before.lever, viscous_loss=x[-1]) if damping else before.lever
             if not mass:
-                return before.lever
-            return with_added_mass(before.lever, x[0], x[1] if fit_position else x_mass)
+                return lever
+            return with_added_mass(lever, x[0], x[1] if fit_position else x_mass)
 
         def solve(x, free=free, fixed=fixed, lever_of=lever_of):
             columns = _columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
@@ -334,7 +336,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             except UserError:       # a mass that takes the lever's resonance out of any real range
                 return _penalty(y)
 
-        starts = [np.array([s] + ([0.9] if fit_position else [])) for s in (0.0, 0.02, 0.2)] if mass else [[]]
+        starts = [np.array(([s] + ([0.9] if fit_position else []) if mass else [])
+                           + ([before.lever.viscous_loss] if "damping" in refit else []))
+                  for s in ((0.0, 0.02, 0.2) if mass else (0.0,))]
         fit, _ = _solve(residual, starts, lower, upper)
         k = len(params) + len(free) * (1 if before.amplitude_only else 2)
         bic = fit.chi2 + k * math.log(count)
@@ -346,11 +350,14 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
     lever_mass = before.lever.mass_per_length(before.lever.vacuum_resonance) * before.lever.length
     parameters = {}
-    mass_fit, mass_params = fits["added_mass+gain+background"][:2] if named != "added_mass" else (fit, params)
+    mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
     ratio = _value(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
     parameters["added_mass_ratio"] = ratio
     parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
                                 "unit": "kg", "determined": named == "added_mass"}
+    if "damping" in best["refitted"]:
+        parameters["viscous_loss"] = {**_value(EXTRA_LOSS, fit.internal[-1], fit.covariance[-1, -1]),
+                                      "before": before.lever.viscous_loss}
     if fit_position:
         parameters["added_mass_position"] = _value(POSITION, mass_fit.internal[1], mass_fit.covariance[1, 1])
     elif position is not None:
@@ -375,8 +382,8 @@ class _Comparison(Result):
         d = self._fields
         p = d["parameters"]
         lines = [f"{d['path']} explained from {d['reference']} (lever, fluid, gain, background calibrated there)",
-                 "  effect                       refitted  gap     BIC"]
-        lines += [f"  {r['effect']:<28} {r['parameters']:>8}  {r['gap']:<7.3g} {r['bic']:.6g}" for r in d["steps"]]
+                 f"  {'effect':<36} refitted  gap     BIC"]
+        lines += [f"  {r['effect']:<36} {r['parameters']:>8}  {r['gap']:<7.3g} {r['bic']:.6g}" for r in d["steps"]]
         lines.append(f"  named: {d['effect']}" + (f" (nuisances: {', '.join(d['nuisances'])})" if d["nuisances"] else ""))
         if d["effect"] == "added_mass":
             m = p["added_mass"]
@@ -384,6 +391,9 @@ class _Comparison(Result):
             at = "undetermined (one mode); end-equivalent mass" if where.get("undetermined") else \
                 f"at x/L {_pm(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
             lines.append(f"  added_mass {_pm(m, 'kg')} ({m['value'] * 1e15:.4g} pg), {at}")
+        if "viscous_loss" in p:
+            lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
+                         f"{_pm(p['viscous_loss'], '')}")
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
                      f"instrument: {_instrument(d['reference_fit']['instrument_fit'])} -> {_instrument(d['instrument_fit'])}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
