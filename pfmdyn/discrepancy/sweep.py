@@ -32,7 +32,7 @@ from scipy.optimize import least_squares
 
 from ..cantilever import BETA1_FREE, Cantilever
 from ..errors import UserError
-from ..fitting.noise import gap, noise_sigma
+from ..fitting.noise import GAP_LIMIT, gap, noise_sigma
 from ..fitting.parameters import Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
@@ -63,6 +63,12 @@ CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background"
 MIN_POINTS = 8
 """Fewer measured points than this cannot fix a resonance, a damping, a gain and a background."""
 
+MODE_RATIOS = (1.0, 6.2669, 17.5475)
+"""The free beam's first three resonances over the first: ``(beta_n / beta_1)**2``."""
+
+POSITION_GRID = tuple(np.linspace(0.1, 1.0, 10))
+"""Starting positions (x/L) of a fitted added mass."""
+
 _PENALTY = 1e6
 """Residual (in noise units) of a lever the fluid cannot carry (its load exceeds the lever's inertia)."""
 
@@ -90,12 +96,13 @@ def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> C
 
 @dataclass(frozen=True)
 class _Fit:
-    """One least-squares fit: internal parameters, their covariance, the linear amplitudes, chi2."""
+    """One least-squares fit: internal parameters, their covariance, chi2, and the other minima
+    refined from other starts as ``(internal, chi2)``."""
 
     internal: np.ndarray
     covariance: np.ndarray
-    amplitudes: np.ndarray
     chi2: float
+    others: tuple = ()
 
 
 def _columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) -> np.ndarray:
@@ -105,22 +112,19 @@ def _columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) 
     return np.stack([slope, np.ones_like(slope), frequency / centre - 1.0 + 0 * slope], axis=-1)
 
 
-def _solve(residual, starts, lower, upper):
-    """Least squares from each of ``starts`` (internal coordinates); the best, with its covariance
-    scaled by the reduced chi2 (a misfit widens the uncertainties)."""
-    best = None
-    for x0 in starts:
-        if not len(x0):
-            r = residual(np.zeros(0))
-            return _Fit(np.zeros(0), np.zeros((0, 0)), None, float(r @ r)), r.size
-        out = least_squares(residual, np.clip(x0, lower, upper), bounds=(lower, upper), x_scale="jac",
-                            diff_step=1e-7, max_nfev=200)
-        if best is None or out.cost < best.cost:
-            best = out
-    r = best.fun
-    dof = max(r.size - len(best.x), 1)
-    covariance = jacobian_covariance(best.jac, max(float(r @ r) / dof, 1.0))
-    return _Fit(best.x, covariance, None, float(r @ r)), r.size
+def _solve(residual, starts, lower, upper, keep: int = 3) -> _Fit:
+    """Least squares refined from the ``keep`` cheapest of ``starts`` (internal coordinates); the best,
+    with its covariance scaled by the reduced chi2 (a misfit widens the uncertainties)."""
+    if not len(starts[0]):
+        r = residual(np.zeros(0))
+        return _Fit(np.zeros(0), np.zeros((0, 0)), float(r @ r))
+    costs = [float(np.sum(residual(x)**2)) for x in starts]
+    outs = sorted((least_squares(residual, np.clip(starts[i], lower, upper), bounds=(lower, upper), x_scale="jac",
+                                 diff_step=1e-7, max_nfev=200) for i in np.argsort(costs)[:keep]),
+                  key=lambda out: out.cost)
+    best, r = outs[0], outs[0].fun
+    covariance = jacobian_covariance(best.jac, max(float(r @ r) / max(r.size - len(best.x), 1), 1.0))
+    return _Fit(best.x, covariance, float(r @ r), tuple((o.x, 2 * o.cost) for o in outs[1:]))
 
 
 def _value(parameter: Parameter, internal: float, variance: float) -> dict:
@@ -223,31 +227,35 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     def lever_of(x) -> Cantilever:
         return Cantilever(spring_constant, 10.0**x[0], length, width=width, medium=medium, viscous_loss=x[1])
 
-    # the frequencies across the sweep and where the response departs most from its median (a sharp peak)
+    # the frequencies across the sweep, and where the response departs most from its median (a sharp
+    # peak) read as the first mode; only when that leaves a misfit, as the second or third too (a
+    # narrow sweep around one peak fits either way: the first mode is the one meant)
     deviation = np.abs(table.response - np.median(table.response.real) - 1j * np.median(np.imag(table.response)))
-    seeds_f = np.log10(np.append(np.geomspace(frequency.min() / 3, frequency.max(), 20), frequency[np.argmax(deviation)]))
-    grid = [np.array([a, b]) for a in seeds_f for b in EXTRA_LOSS.seeds]
     best = None
-    for conjugate in ((False,) if amplitude_only else (False, True)):
-        y = table.amplitude if amplitude_only else (np.conj(table.response) if conjugate else table.response)
-        sigma = _noise(frequency, y)
+    for ratios in ((1.0,), MODE_RATIOS):
+        seeds_f = np.log10(np.append(np.geomspace(frequency.min() / 3, frequency.max(), 20),
+                                     frequency[np.argmax(deviation)] / np.array(ratios)))
+        grid = [np.array([a, b]) for a in seeds_f for b in EXTRA_LOSS.seeds]
+        for conjugate in ((False,) if amplitude_only else (False, True)):
+            y = table.amplitude if amplitude_only else (np.conj(table.response) if conjugate else table.response)
+            sigma = _noise(frequency, y)
 
-        def residual(x, y=y, sigma=sigma):
-            try:
-                columns = _columns(lever_of(x), frequency, centre, amplitude_only)
-            except UserError:       # a width whose fluid the lever cannot carry
-                return _penalty(y)
-            pr = project(columns[None], y[None, :, None].astype(columns.dtype))
-            return _stack(pr.residual[0, :, 0]) / sigma
+            def residual(x, y=y, sigma=sigma):
+                try:
+                    columns = _columns(lever_of(x), frequency, centre, amplitude_only)
+                except UserError:       # a width whose fluid the lever cannot carry
+                    return _penalty(y)
+                pr = project(columns[None], y[None, :, None].astype(columns.dtype))
+                return _stack(pr.residual[0, :, 0]) / sigma
 
-        costs = [float(np.sum(residual(x)**2)) for x in grid]
-        if min(costs) >= _PENALTY**2:
-            raise UserError(f"{table.path}: no lever of this spring constant, length and width carries {medium.name}'s "
-                            "load at a resonance near the sweep (check them)")
-        starts = [grid[i] for i in np.argsort(costs)[:3]]
-        fit, _ = _solve(residual, starts, lower, upper)
-        if best is None or fit.chi2 < best[0].chi2:
-            best = (fit, conjugate, y, sigma)
+            fit = _solve(residual, grid, lower, upper)
+            if best is None or fit.chi2 < best[0].chi2:
+                best = (fit, conjugate, y, sigma)
+        if gap(best[0].chi2, len(frequency)) <= GAP_LIMIT:
+            break
+    if best[0].chi2 >= _PENALTY**2:
+        raise UserError(f"{table.path}: no lever of this spring constant, length and width carries {medium.name}'s "
+                        "load at a resonance near the sweep (check them)")
     fit, conjugate, y, sigma = best
     lever = lever_of(fit.internal)
     columns = _columns(lever, frequency, centre, amplitude_only)
@@ -307,44 +315,17 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     rows, fits = [], {}
     for name, refit in CANDIDATES:
         mass = "added_mass" in refit
-        params = ((ADDED_MASS,) + ((POSITION,) if fit_position else ()) if mass else ()) \
-            + ((EXTRA_LOSS,) if "damping" in refit else ())
-        lower = np.array([p.lower for p in params]); upper = np.array([p.upper for p in params])
-        free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
-        fixed = [i for i in range(3) if i not in free]
-        known = np.array([before.gain, *before.background])
-
-        def lever_of(x, mass=mass, damping="damping" in refit):
-            lever = replace(before.lever, viscous_loss=x[-1]) if damping else before.lever
-            if not mass:
-                return lever
-            return with_added_mass(lever, x[0], x[1] if fit_position else x_mass)
-
-        def solve(x, free=free, fixed=fixed, lever_of=lever_of):
-            columns = _columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
-            rest = y - columns[:, fixed] @ known[fixed]
-            if not free:
-                return rest, known
-            pr = project(columns[None][..., free], rest[None, :, None].astype(complex))
-            amplitudes = known.copy()
-            amplitudes[free] = pr.amplitudes[0, :, 0]
-            return pr.residual[0, :, 0], amplitudes
-
-        def residual(x, solve=solve):
-            try:
-                return _stack(np.asarray(solve(x)[0])) / sigma
-            except UserError:       # a mass that takes the lever's resonance out of any real range
-                return _penalty(y)
-
-        starts = [np.array(([s] + ([0.9] if fit_position else []) if mass else [])
-                           + ([before.lever.viscous_loss] if "damping" in refit else []))
-                  for s in ((0.0, 0.02, 0.2) if mass else (0.0,))]
-        fit, _ = _solve(residual, starts, lower, upper)
-        k = len(params) + len(free) * (1 if before.amplitude_only else 2)
-        bic = fit.chi2 + k * math.log(count)
+        if mass and fit_position:
+            fit, solve, lever_of, params = _position_profile(before, refit, frequency, y, sigma)
+        else:
+            solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma, x_mass)
+            lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+            fit = _solve(residual, _starts(before, refit), lower, upper)
+        free = [key for key in ("gain", "background") if key in refit]
+        k = len(params) + sum(1 if key == "gain" else 2 for key in free) * (1 if before.amplitude_only else 2)
         fits[name] = (fit, params, solve(fit.internal)[1], lever_of(fit.internal))
         rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
-                     "bic": bic, "gap": float(gap(fit.chi2, n))})
+                     "bic": fit.chi2 + k * math.log(count), "gap": float(gap(fit.chi2, n))})
     best = min(rows, key=lambda r: r["bic"])
     fit, params, amplitudes, lever = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
@@ -360,6 +341,10 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
                                       "before": before.lever.viscous_loss}
     if fit_position:
         parameters["added_mass_position"] = _value(POSITION, mass_fit.internal[1], mass_fit.covariance[1, 1])
+        rivals = [x for x, chi2 in _rivals(mass_fit, count)]
+        if rivals:
+            parameters["added_mass_position"].update(
+                undetermined=True, why="the modes' shifts agree as well at x/L " + ", ".join(f"{x:.3g}" for x in rivals))
     elif position is not None:
         parameters["added_mass_position"] = {"value": x_mass, "stderr": 0.0, "unit": "1", "given": True}
     else:
@@ -375,6 +360,73 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
               "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma}
     return _Comparison(fields, lever=lever)
+
+
+def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
+    """One explanation of the after-sweep: ``solve(x) -> (residual, amplitudes)``, ``lever_of(x)``, the
+    noise-scaled real ``residual(x)`` and the nonlinear parameters (the mass's ratio, its position when
+    ``position`` is None, the damping), the rest of gain and background kept at ``before``'s."""
+    mass, damping = "added_mass" in refit, "damping" in refit
+    params = ((ADDED_MASS,) + ((POSITION,) if position is None else ()) if mass else ()) \
+        + ((EXTRA_LOSS,) if damping else ())
+    free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
+    fixed = [i for i in range(3) if i not in free]
+    known = np.array([before.gain, *before.background])
+
+    def lever_of(x):
+        lever = replace(before.lever, viscous_loss=x[-1]) if damping else before.lever
+        return with_added_mass(lever, x[0], x[1] if position is None else position) if mass else lever
+
+    def solve(x):
+        columns = _columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
+        rest = y - columns[:, fixed] @ known[fixed]
+        if not free:
+            return rest, known
+        pr = project(columns[None][..., free], rest[None, :, None].astype(complex))
+        amplitudes = known.copy()
+        amplitudes[free] = pr.amplitudes[0, :, 0]
+        return pr.residual[0, :, 0], amplitudes
+
+    def residual(x):
+        try:
+            return _stack(np.asarray(solve(x)[0])) / sigma
+        except UserError:       # a mass that takes the lever's resonance out of any real range
+            return _penalty(y)
+
+    return solve, lever_of, residual, params
+
+
+def _starts(before: SweepFit, refit) -> list:
+    """Starting points at a given position: masses over decades, the damping at ``before``'s."""
+    tail = [before.lever.viscous_loss] if "damping" in refit else []
+    return [np.array(([s] if "added_mass" in refit else []) + tail)
+            for s in ((0.0, 0.003, 0.03, 0.3) if "added_mass" in refit else (0.0,))]
+
+
+def _position_profile(before, refit, frequency, y, sigma):
+    """The mass and its position fitted: the mass at each position of :data:`POSITION_GRID` (a profile
+    of chi2 along the lever), then both refined from the profile's local minima, the best kept and the
+    others kept as its ``others`` (:func:`_rivals`: the shifts of two modes can agree on both sides
+    of a node)."""
+    profile = []
+    for x in POSITION_GRID:
+        _, _, residual, params = _candidate(before, refit, frequency, y, sigma, x)
+        lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+        fit = _solve(residual, _starts(before, refit), lower, upper, keep=1)
+        profile.append((fit.chi2, np.insert(fit.internal, 1, x)))
+    chi2 = np.array([c for c, _ in profile])
+    minima = [i for i in range(len(chi2)) if chi2[i] <= chi2[max(i - 1, 0)] and chi2[i] <= chi2[min(i + 1, len(chi2) - 1)]]
+    solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma)
+    lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+    refined = sorted((_solve(residual, [profile[i][1]], lower, upper, keep=1) for i in minima), key=lambda f: f.chi2)
+    best = replace(refined[0], others=tuple((f.internal, f.chi2) for f in refined[1:]))
+    return best, solve, lever_of, params
+
+
+def _rivals(fit: _Fit, count: int) -> list:
+    """Other minima of ``fit`` at another position (x/L more than 0.05 away) within 4 reduced-chi2 units."""
+    scale = max(fit.chi2 / count, 1.0)
+    return [(x[1], chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
 
 
 class _Comparison(Result):
