@@ -251,3 +251,13 @@ def test_two_modes_fit_the_position(tmp_path):
     else:
         assert p["added_mass_position"]["value"] == pytest.approx(0.7, abs=0.02)
         assert p["added_mass_ratio"]["value"] == pytest.approx(0.1, rel=0.05)
+
+
+def test_sweeps_of_different_kinds_are_refused(tmp_path):
+    rng, case = lever_case(2)
+    f, y = sweep_of(rng, case)
+    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y, rng)), case["k"], case["L"],
+                       case["medium"], width=case["w"])
+    after = read_sweep_table(write_sweep(tmp_path / "a.txt", f, np.abs(y), rng, phase=False))
+    with pytest.raises(UserError, match="a.txt: no phase column, while the reference has one"):
+        compare_sweeps(after, before)

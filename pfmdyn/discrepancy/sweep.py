@@ -39,7 +39,7 @@ from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from ..medium import Medium
 
-__all__ = ["SweepFit", "fit_sweep", "compare_sweeps", "with_added_mass", "CANDIDATES"]
+__all__ = ["SweepFit", "SweepComparison", "fit_sweep", "compare_sweeps", "with_added_mass", "CANDIDATES"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
                       description="first free resonance in the medium")
@@ -289,7 +289,7 @@ def _modes_in(lever: Cantilever, frequency) -> int:
     return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
 
 
-def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None = None) -> Result:
+def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None = None) -> "SweepComparison":
     """Explain ``after`` from the lever, fluid, gain and background of ``before`` (a :func:`fit_sweep`):
     each of :data:`CANDIDATES` fitted, the one of least BIC named (see the module).  ``position``:
     the added mass's x/L (None: fitted when the sweep spans two modes, else undetermined and the mass
@@ -305,6 +305,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     >>> out["effect"], round(out["parameters"]["added_mass_ratio"]["value"], 4)
     ('added_mass', 0.02)
     """
+    if before.amplitude_only != (after.phase_deg is None):
+        raise UserError(f"{after.path}: {'no' if after.phase_deg is None else 'a'} phase column, while the reference "
+                        f"has {'none' if before.amplitude_only else 'one'}: compare sweeps of the same kind")
     frequency = after.frequency_hz
     y = before.data(after)
     sigma = _noise(frequency, y)
@@ -359,7 +362,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
               "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma}
-    return _Comparison(fields, lever=lever)
+    return SweepComparison(fields, lever=lever)
 
 
 def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
@@ -429,8 +432,12 @@ def _rivals(fit: _Fit, count: int) -> list:
     return [(x[1], chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
 
 
-class _Comparison(Result):
+class SweepComparison(Result):
+    """Two sweeps compared (:func:`compare_sweeps`): ``to_dict()`` the JSON fields, ``report()`` the
+    table of candidates and the named change; attribute ``lever``, the after-sweep's lever."""
+
     def report(self) -> str:
+        """The candidates (refitted parameters, gap, BIC), the named change, the resonances, the gaps."""
         d = self._fields
         p = d["parameters"]
         lines = [f"{d['path']} explained from {d['reference']} (lever, fluid, gain, background calibrated there)",
