@@ -234,12 +234,26 @@ class Cantilever:
         # the load ratio is proportional to 1 / mass per length, i.e. to omega_vac**2: evaluate it
         # for the mass per length a lever of vacuum resonance f would have, then scale
         at_f = load_ratio(self.medium, self.free_resonance, self.width,
-                          mass_per_length(self.spring_constant, self.length, self.free_resonance)).real
+                          self.mass_per_length(self.free_resonance)).real
         denominator = 1.0 - at_f
         if not denominator > 0:
             raise UserError(f"the medium's load exceeds the lever's inertia at {self.free_resonance:g} Hz "
                             "(check the spring constant, length and width)")
         return self.free_resonance / math.sqrt(denominator)
+
+    def mass_per_length(self, vacuum_resonance: float) -> float:
+        """The lever's own mass per length (kg/m) if its first vacuum resonance, *with its tip*, is
+        ``vacuum_resonance`` (Hz): ``k beta1**4 / (3 L omega1**2)`` with this lever's root ``beta1``
+        (:meth:`free_root`), so that a tip mass, which lowers both, leaves the lever's mass unchanged.
+
+        >>> bare = Cantilever(2.0, 7e4, 2e-4)
+        >>> heavy = Cantilever(2.0, 7e4, 2e-4, tip_mass_ratio=0.5)
+        >>> f_heavy = 7e4 * (heavy.free_root() / BETA1_FREE)**2        # the same beam with the mass
+        >>> round(heavy.mass_per_length(f_heavy) / bare.mass_per_length(7e4), 12)
+        1.0
+        """
+        mass = mass_per_length(self.spring_constant, self.length, vacuum_resonance)
+        return mass * (self.free_root() / BETA1_FREE)**4 if self.tip_mass_ratio else mass
 
     def with_medium(self, medium: Medium, width: float | None = None) -> "Cantilever":
         """This lever, whose ``free_resonance`` is its vacuum one (a lever from its geometry, a data
@@ -254,7 +268,7 @@ class Cantilever:
         """
         lever = replace(self, width=self.width if width is None else width, medium=medium)
         f_vac = self.free_resonance
-        mass = mass_per_length(self.spring_constant, self.length, f_vac)
+        mass = self.mass_per_length(f_vac)
         f = f_vac
         for _ in range(100):
             # Sader's relation forward, f = f_vac / sqrt(1 + T Re Gamma(f)), with the lever's own mass
@@ -274,8 +288,7 @@ class Cantilever:
         r = frequency / f1
         drag = self.viscous_loss
         if self.medium is not None:
-            drag = drag + 1j * r * fluid * load_ratio(self.medium, frequency, self.width,
-                                                      mass_per_length(self.spring_constant, self.length, f1))
+            drag = drag + 1j * r * fluid * load_ratio(self.medium, frequency, self.width, self.mass_per_length(f1))
         return damping_substitution(r, formulas.beta_from_frequency(frequency, f1, b1),
                                     self.spring_constant, k1, self.tip_mass_ratio,
                                     1.0 / self.quality_factor, drag, loss)

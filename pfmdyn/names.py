@@ -100,6 +100,11 @@ QUANTITIES: tuple[Quantity, ...] = (
              0.0, 1e-2, open_low=False),
     Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 % of it)",
              0.0, 1e-2, open_low=False),
+    # What changed between two drive sweeps (``pfmdyn discrepancy AFTER --reference BEFORE``).
+    Quantity("added_mass_position", "x_m/L", "1", "where a point mass added to the free lever sits "
+             "(1: at the free end)", 0.0, 1.0),
+    Quantity("added_mass", "m_add", "kg", "point mass added to the free lever (a cell), explained from two "
+             "drive sweeps", 0.0, 1.0, open_low=False, option=False),
     # What an instrument measured and its settings (instrument files, ``pfmdyn inspect``).
     Quantity("free_quality_factor", "Q_free", "1", "measured Q of the first free resonance (thermal tune fit)",
              0.1, 1e9, option=False),
