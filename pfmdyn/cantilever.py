@@ -352,13 +352,13 @@ class Cantilever:
             slopes = composed.slope(beta, self.spot_position, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
-    def base_response(self, frequency, contact: "Contact | None" = None) -> transfer.BaseTransfer:
+    def base_driven(self, frequency, contact: "Contact | None" = None) -> transfer.BaseTransfer:
         """Driven at the base (the clamp moved by ``y0``: a dither piezo), per unit ``y0``: the slope at
         the laser spot and the deflection there relative to the base, at ``frequency`` (Hz), free
         (``contact=None``) or in contact, with the damping substituted (:mod:`pfmdyn.composed`).
 
         >>> lever = Cantilever(2.0, 7e4, 2e-4, quality_factor=50.0)
-        >>> r = lever.base_response([7e2, 7e4])
+        >>> r = lever.base_driven([7e2, 7e4])
         >>> round(float(abs(r.deflection[0])), 6), round(float(abs(r.deflection[1])), 1)   # beta**4 / 8; 1.566 Q
         (0.000155, 78.3)
         """

@@ -41,7 +41,7 @@ def test_base_drive_first_mode_and_quasi_static(k, f1, L, q):
     phi = _mode_shape(x)
     participation = _mode_shape(1.0) * np.trapezoid(phi, x) / np.trapezoid(phi**2, x)
     low = 1e-3 * f1
-    r = lever.base_response([low, f1])
+    r = lever.base_driven([low, f1])
     beta = BETA1 * math.sqrt(1e-3)
     assert abs(r.deflection[0]) == pytest.approx(abs(beta**4 * (1 - 1j / (q * 1e-3))) / 8, rel=1e-3)
     assert abs(r.deflection[1]) == pytest.approx(q * participation, rel=3e-3 + 2.0 / q)
@@ -116,7 +116,7 @@ def test_lever_in_a_fluid_is_the_loaded_beam(seed):
     vacuum = Cantilever(k, 10 ** rng.uniform(4, 5.5), L, width=width, spot_position=spot)
     lever = vacuum.with_medium(medium)
     f = lever.free_resonance * np.array([0.3, 1.0, 4.0])
-    got = lever.base_response(f)
+    got = lever.base_driven(f)
     load = load_ratio(medium, f, width, mass_per_length(k, L, vacuum.free_resonance))
     beta = BETA1 * np.sqrt(f / vacuum.free_resonance) * (1 + load) ** 0.25
     for i, b in enumerate(beta):

@@ -5,7 +5,7 @@ read-out of a lever whose clamp a dither piezo shakes.  Its model (:func:`fit_sw
 
 ``y(f) = G s(f) + b0 + b1 (f / f_c - 1)``,
 
-``s`` the slope at the laser spot per unit base displacement (:meth:`pfmdyn.Cantilever.base_response`,
+``s`` the slope at the laser spot per unit base displacement (:meth:`pfmdyn.Cantilever.base_driven`,
 every mode, the fluid's load from Sader's hydrodynamic function, :mod:`pfmdyn.medium`), ``G`` a complex
 gain (a real scale of ``|s|`` when the file has no phase), ``b0 + b1 (...)`` a linear background
 (cross-talk, the piezo's own signal) and ``f_c`` the sweep's centre.  The lever's spring constant and
@@ -107,7 +107,7 @@ class _Fit:
 
 def _columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) -> np.ndarray:
     """The model's columns ``(n, 3)``: the slope per base displacement, 1 and ``f / f_c - 1``."""
-    slope = lever.base_response(frequency).slope
+    slope = lever.base_driven(frequency).slope
     slope = np.abs(slope) if amplitude_only else slope
     return np.stack([slope, np.ones_like(slope), frequency / centre - 1.0 + 0 * slope], axis=-1)
 
@@ -197,7 +197,7 @@ def _stack(r) -> np.ndarray:
 
 def _peak(lever: Cantilever, frequency) -> float:
     grid = np.linspace(frequency.min(), frequency.max(), 2001)
-    return float(grid[np.argmax(np.abs(lever.base_response(grid).slope))])
+    return float(grid[np.argmax(np.abs(lever.base_driven(grid).slope))])
 
 
 def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: Medium,
@@ -208,7 +208,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     >>> from pfmdyn.medium import Medium
     >>> f = np.linspace(4e4, 1e5, 120)
     >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
-    >>> y = (0.3 - 2j) * lever.base_response(f).slope + 0.5
+    >>> y = (0.3 - 2j) * lever.base_driven(f).slope + 0.5
     >>> table = SweepTable("s.txt", f, np.abs(y), "V", np.degrees(np.angle(y)), {}, None, "synthetic")
     >>> fit = fit_sweep(table, 8.0, 1e-4, Medium.water(), width=4e-5)
     >>> round(fit["parameters"]["free_resonance"]["value"]), round(fit["parameters"]["viscous_loss"]["value"], 6)
@@ -299,7 +299,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     >>> f = np.linspace(4e4, 1e5, 120)
     >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
     >>> table = lambda y: SweepTable("s.txt", f, np.abs(y), "V", np.degrees(np.angle(y)), {}, None, "synthetic")
-    >>> y = lambda lev: (0.3 - 2j) * lev.base_response(f).slope + 0.5
+    >>> y = lambda lev: (0.3 - 2j) * lev.base_driven(f).slope + 0.5
     >>> before = fit_sweep(table(y(lever)), 8.0, 1e-4, Medium.water(), width=4e-5)
     >>> out = compare_sweeps(table(y(with_added_mass(lever, 0.02, 0.9))), before, position=0.9)
     >>> out["effect"], round(out["parameters"]["added_mass_ratio"]["value"], 4)
