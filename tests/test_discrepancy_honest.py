@@ -240,7 +240,7 @@ def test_spring_starts_do_not_depend_on_the_damping_law(tmp_path, seed, gamma):
 
 
 def test_same_named_set_under_every_damping_law(tmp_path):
-    """The set-back lever (tip at 0.85 L) under viscous, air (sqrt f) and internal damping:
+    """The set-back lever (tip at 0.85 L) under air (sqrt f) and internal damping:
     damping and the set-back are named for each, nothing else, the gap within the unexplained
     threshold (air damping named a false background before: its smooth remainder, 0.4 % of
     the response, below the noise)."""
