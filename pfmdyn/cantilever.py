@@ -278,6 +278,20 @@ class Cantilever:
             f = f_next
         raise UserError(f"no first resonance in {medium.name} found for this lever")
 
+    def fluid_load(self, frequency):
+        """The medium's load per unit length over the lever's inertia at ``frequency`` (Hz, real or
+        complex): ``beta**4 -> beta**4 (1 + load)``; real part added mass, imaginary part (negative)
+        the loss (:func:`pfmdyn.medium.load_ratio`); 0 in vacuum.
+
+        >>> from pfmdyn.medium import Medium
+        >>> wet = Cantilever(2.0, 3e4, 2e-4, width=3e-5, medium=Medium.water(298.15))
+        >>> load = wet.fluid_load(3e4); round(load.real, 2), round(load.imag, 2)
+        (7.62, -2.24)
+        """
+        if self.medium is None:
+            return 0.0
+        return load_ratio(self.medium, frequency, self.width, self.mass_per_length(self.vacuum_resonance))
+
     def _damped(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> "Damped":
         """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at
         ``frequency`` (Hz, real or complex); a medium's load, ``fluid`` times it (a continuation from
@@ -288,7 +302,7 @@ class Cantilever:
         r = frequency / f1
         drag = self.viscous_loss
         if self.medium is not None:
-            drag = drag + 1j * r * fluid * load_ratio(self.medium, frequency, self.width, self.mass_per_length(f1))
+            drag = drag + 1j * r * fluid * self.fluid_load(frequency)
         return damping_substitution(r, formulas.beta_from_frequency(frequency, f1, b1),
                                     self.spring_constant, k1, self.tip_mass_ratio,
                                     1.0 / self.quality_factor, drag, loss)

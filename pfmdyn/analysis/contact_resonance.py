@@ -78,7 +78,8 @@ def _free_root(lever: Cantilever, tip_position: float) -> float:
 
 
 def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
-    """``beta = beta_1 sqrt(f / f1)`` of frequencies ``f`` (Hz) with the tip at ``tip_position``.
+    """``beta = beta_1 sqrt(f / f1)`` of frequencies ``f`` (Hz) with the tip at ``tip_position`` (``f1`` in
+    vacuum; in a medium, times ``(1 + Re load)**(1/4)``, its added mass).
 
     >>> round(float(betas(Cantilever(2.0, 7e4, 2e-4), 4 * 7e4)), 10)
     3.7502081374
@@ -88,7 +89,10 @@ def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
         b1 = np.array([_free_root(lever, float(g)) for g in np.ravel(gamma)]).reshape(np.shape(gamma))
     else:
         b1 = _free_root(lever, float(gamma))
-    return formulas.beta_from_frequency(np.asarray(frequency, dtype=float), lever.free_resonance, b1)
+    f = np.asarray(frequency, dtype=float)
+    beta = formulas.beta_from_frequency(f, lever.vacuum_resonance, b1)
+    # in a medium, its added mass at each frequency (an undamped inversion takes no loss)
+    return beta if lever.medium is None else beta * (1.0 + np.real(lever.fluid_load(f))) ** 0.25
 
 
 def mode_numbers(beta, lever: Cantilever, k1, k2, tip_position) -> np.ndarray:

@@ -56,7 +56,7 @@ def add_arguments(parser) -> None:
                         help="contact resonance (Hz); repeat for several modes")
     parser.add_argument("--mode", action="append", default=None, metavar="N",
                         help="mode number of each --contact (default 1, 2, ...)")
-    flags.add_lever(parser, _LEVER, medium=False)     # contact resonances are inverted in vacuum
+    flags.add_lever(parser, _LEVER)
     parser.add_argument("--tip-position", dest="tip_position", default=None, metavar="X|fit",
                         help=f"{NAMES['tip_position'].meaning} (x_tip/L); 'fit': solve it with k1 from two or "
                         "more contact modes (the L1/L method)")
@@ -124,7 +124,8 @@ def _lever(args, found: dict):
         notes.append("length not given and not needed (no tip height, no tilt)")
     if args.tip_position is not None:
         values["tip_position"] = checked("tip_position", args.tip_position, "--tip-position")
-    return flags.cantilever(argparse.Namespace(), values), notes
+    medium = argparse.Namespace(medium=args.medium, temperature=args.temperature)
+    return flags.cantilever(medium, values), notes
 
 
 def _is_contact_map(path: str) -> bool:
