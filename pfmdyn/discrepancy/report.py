@@ -108,7 +108,7 @@ def summary(report) -> str:
         if report["unexplained"].get("implausible"):
             lines.append(describe(report["unexplained"]["implausible"]))
         if report["unexplained"].get("small_share"):
-            lines.append(f"not named, each takes under {select.MIN_SHARE:.0%} of the misfit: " + ", ".join(
+            lines.append(f"not named, under {select.MIN_SHARE:.0%} of the misfit the others leave: " + ", ".join(
                 f"{e} ({v:.1%})" for e, v in report["unexplained"]["small_share"].items()))
     for name, why in (report.get("untestable_effects") or {}).items():
         lines.append(f"{name}: {why}")
