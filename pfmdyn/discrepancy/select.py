@@ -196,8 +196,9 @@ def share(baseline_gap: float, without_gap: float, gap: float) -> float:
 
 def shares(problem, baseline, current, known=None) -> dict[str, dict]:
     """Each named effect's share of the misfit in ``current``: the gap without it (all its
-    components: damping may hold two mechanisms), the least of the refit's and of the ``known`` fits
-    (effect set -> fit) of the other effects or fewer; ``share`` of ``baseline``'s misfit and
+    components: damping may hold two mechanisms), the least of the ``known`` fits (effect set ->
+    fit) of the other effects or fewer, and of the refit when none is known of the others exactly;
+    ``share`` of ``baseline``'s misfit and
     ``share_of_rest`` of what the others leave (:func:`share`); ``fit``, the best by BIC of those.
 
     >>> from types import SimpleNamespace as S
@@ -208,11 +209,13 @@ def shares(problem, baseline, current, known=None) -> dict[str, dict]:
     """
     out = {}
     for name in dict.fromkeys(public_name(c) for c in current.model.effects):
-        rest = {c for c in current.model.effects if public_name(c) != name}
-        fit = current
-        for component in [c for c in current.model.effects if c not in rest]:
-            fit = problem.without(fit, component)
-        fits = [fit] + [f for effects, f in (known or {}).items() if effects <= rest]
+        rest = frozenset(c for c in current.model.effects if public_name(c) != name)
+        fits = [f for effects, f in (known or {}).items() if effects <= rest]
+        if rest not in (known or {}):
+            fit = current
+            for component in [c for c in current.model.effects if c not in rest]:
+                fit = problem.without(fit, component)
+            fits.append(fit)
         gap = min(f.gap for f in fits)
         out[name] = {"share": share(baseline.gap, gap, current.gap), "gap_without": gap,
                      "share_of_rest": share(gap, gap, current.gap), "fit": min(fits, key=lambda f: f.bic)}
@@ -232,10 +235,10 @@ def _drop_small(problem, baseline, current, steps):
         name = min(below, key=lambda n: below[n]["share_of_rest"])
         fit = below[name]["fit"]
         gone = [n for n in found if n not in {public_name(c) for c in fit.model.effects}]
+        who = "it" if gone == [name] else name
         steps.append({"effect": None, "removed": ", ".join(gone), "gap_before": current.gap, "gap_after": fit.gap,
-                      "decision": f"removed {', '.join(gone)}: {'it' if gone == [name] else name} takes {below[name]['share_of_rest']:.0%} of "
-                      f"the misfit the others leave (at least {MIN_SHARE:.0%} while the gap stays "
-                      f"{current.gap:.3g} x noise)"})
+                      "decision": f"removed {', '.join(gone)}: {who} takes {below[name]['share_of_rest']:.0%} of the "
+                      f"misfit the others leave (at least {MIN_SHARE:.0%} while the gap stays {current.gap:.3g} x noise)"})
         small.update({n: found[n]["share_of_rest"] for n in gone})
         current = fit
 
