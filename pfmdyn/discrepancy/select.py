@@ -238,7 +238,8 @@ def _drop_small(problem, baseline, current, steps):
         who = "it" if gone == [name] else name
         steps.append({"effect": None, "removed": ", ".join(gone), "gap_before": current.gap, "gap_after": fit.gap,
                       "decision": f"removed {', '.join(gone)}: {who} takes {below[name]['share_of_rest']:.0%} of the "
-                      f"misfit the others leave (at least {MIN_SHARE:.0%} while the gap stays {current.gap:.3g} x noise)"})
+                      f"misfit the others leave (at least {MIN_SHARE:.0%} while the gap stays "
+                      f"{current.gap:.3g} x noise)"})
         small.update({n: found[n]["share_of_rest"] for n in gone})
         current = fit
 
