@@ -31,8 +31,9 @@ Every named effect's *share* is reported (:func:`shares`): the part of the basel
 noise (``gap**2 - 1``) that the final model loses without the effect, and its part of the misfit the
 other effects leave (``share_of_rest``).  Without it means the best fit known of the other effects or
 of fewer: a refit can land in a worse minimum than the baseline, and a drop measured from there makes
-any effect look needed (five effects, each material in the final model, took 16 % of a misfit
-together: gap 188 -> 172).  Near the noise every kept effect is material and the data are explained.
+any effect look needed.  Near the noise every kept effect is material and the data are explained.
+Far from it that is not enough (a report named five effects that together took 16 % of a misfit:
+gap 188 -> 172).
 While the final gap stays above :data:`UNEXPLAINED` (2), an effect must also explain at least as much
 as stays unexplained (``share_of_rest`` >= :data:`MIN_SHARE`, a half); the one of least share is
 removed, the best fit of the rest taken (the refit or a known fit of fewer effects, by BIC), until all
@@ -70,7 +71,9 @@ its first step when other jobs shared the cores).  Library calls have no budget 
 one."""
 
 CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
-             f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %)")
+             f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %); while the final gap "
+             f"stays above {UNEXPLAINED:g} x noise, keep only effects that take >= {MIN_SHARE:.0%} of the misfit "
+             "the others leave")
 
 
 def material(old, new) -> bool:
