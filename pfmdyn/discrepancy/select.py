@@ -201,8 +201,8 @@ def shares(problem, baseline, current, known=None) -> dict[str, dict]:
     """Each named effect's share of the misfit in ``current``: the gap without it (all its
     components: damping may hold two mechanisms), the least of the ``known`` fits (effect set ->
     fit) of the other effects or fewer, and of the refit when none is known of the others exactly;
-    ``share`` of ``baseline``'s misfit and
-    ``share_of_rest`` of what the others leave (:func:`share`); ``fit``, the best by BIC of those.
+    ``share`` of ``baseline``'s misfit and ``share_of_rest`` of what the others leave
+    (:func:`share`); ``fit``, the best by BIC of those.
 
     >>> from types import SimpleNamespace as S
     >>> problem = S(without=lambda fit, c: S(gap=40.0, bic=9.0, model=S(effects=())))
@@ -231,7 +231,8 @@ def _drop_small(problem, baseline, current, steps):
     removed effects' shares of the rest and the final shares."""
     small = {}
     while True:
-        found = shares(problem, baseline, current, problem.best)
+        known = {effects: f for effects, f in problem.best.items() if not implausible(f)}
+        found = shares(problem, baseline, current, known)
         below = {n: s for n, s in found.items() if s["share_of_rest"] < MIN_SHARE}
         if current.gap <= UNEXPLAINED or not below:
             return current, small, found
