@@ -63,6 +63,7 @@ def report(result: dict, **extra) -> DiscrepancyReport:
     baseline, final = result["baseline"], result["final"]
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
+           "explained_share": select.share(baseline.gap, baseline.gap, final.gap), "effect_shares": result["shares"],
            **degrees(final), "baseline_fitted_parameters": baseline.k,
            "damping_mechanisms": final.model.damping_mechanisms, "unexplained": result["unexplained"],
            "criterion": select.CRITERION, "steps": steps, "parameters": parameters(final),
@@ -76,7 +77,9 @@ def summary(report) -> str:
     mech = report.get("damping_mechanisms") or []
     tied = report.get("damping_mechanisms_indistinguishable_from") or []
     detail = ", ".join(mech) + (f"; {' or '.join(tied)} fit the data as well" if tied else "")
-    named = [e + (f" ({detail})" if e == "damping" and mech else "") for e in report["missing_effects"]]
+    shares = report.get("effect_shares") or {}
+    named = [e + (f" ({detail})" if e == "damping" and mech else "")
+             + (f" [{_share_text(shares[e])}]" if e in shares else "") for e in report["missing_effects"]]
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}",
              f"{report['data_values']} data values, {report['fitted_parameters']} fitted parameters: "
@@ -98,10 +101,15 @@ def summary(report) -> str:
         where = report["unexplained"]["where"]
         place = (f"at {where[0] / 1e3:.4g}-{where[1] / 1e3:.4g} kHz" if isinstance(where, (list, tuple))
                  else f"at {where}")
+        left = report["unexplained"].get("share")
         lines.append(f"no effect of the library explains the residual {place} "
-                     f"(gap {report['unexplained']['gap']:.3g} x noise)")
+                     f"(gap {report['unexplained']['gap']:.3g} x noise"
+                     + (f", {left:.1%} of the baseline misfit" if left is not None else "") + ")")
         if report["unexplained"].get("implausible"):
             lines.append(describe(report["unexplained"]["implausible"]))
+        if report["unexplained"].get("small_share"):
+            lines.append(f"not named, under {select.MIN_SHARE:.0%} of the misfit the others leave: " + ", ".join(
+                f"{e} ({v:.1%})" for e, v in report["unexplained"]["small_share"].items()))
     for name, why in (report.get("untestable_effects") or {}).items():
         lines.append(f"{name}: {why}")
     for name, p in report["parameters"].items():
@@ -112,6 +120,17 @@ def summary(report) -> str:
             note = "" if p.get("determined", True) else " (not determined by these data)"
             lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
     return "\n".join(lines)
+
+
+def _share_text(share: dict) -> str:
+    """An effect's share of the misfit, as the summary states it.
+
+    >>> _share_text({"share": 0.012, "share_of_rest": 0.99, "gap_without": 9.0})
+    '1.2% of the misfit, 99.0% of what the others leave'
+    """
+    text = f"{share['share']:.1%} of the misfit"
+    return text + (f", {share['share_of_rest']:.1%} of what the others leave"
+                   if share["share_of_rest"] > share["share"] + 0.001 else "")
 
 
 def medium_comparison(report: dict, lever) -> dict:
