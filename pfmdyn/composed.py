@@ -122,10 +122,11 @@ class _Segment:
         out[:, :, 3] = np.where(self.short[:, None], 0.0, -self.E[:, :, 3])
         return out
 
-    def parts(self, count):
-        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all)."""
+    def parts(self, count, take=None, uc=None):
+        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all); with
+        ``take``, each member's row among shared ones and its load constant ``uc`` (the rows' is 1)."""
         n = self.E.shape[0] // count
-        return [_Part(self, slice(i * n, (i + 1) * n)) for i in range(count)]
+        return [_Part(self, slice(i * n, (i + 1) * n), take, uc) for i in range(count)]
 
     def derivative(self, name, beta, t, ell, moves_end, moves_start):
         """``(dE, dP)`` w.r.t. ``name``.  ``moves_end``, ``moves_start``: ``d ell/d gamma`` and
@@ -143,15 +144,19 @@ class _Segment:
 
 
 class _Part:
-    """One batch of a stacked :class:`_Segment` evaluation (views)."""
+    """One batch of a stacked :class:`_Segment` evaluation (views; copies of shared rows with ``take``)."""
 
-    def __init__(self, whole, part):
-        self.whole, self.part = whole, part
-        self.E, self.dE, self.P, self.dP = whole.E[part], whole.dE[part], whole.P[part], whole.dP[part]
+    def __init__(self, whole, part, take=None, uc=None):
+        self.whole, self.part, self.take = whole, part, take
+        rows, load = whole.rows[part], whole.load[part]
+        if take is not None:
+            rows, load = rows[take], load[take] * uc[:, None]
+        self.E, self.dE, self.P, self.dP = rows[:, :4], rows[:, 1:], load[:, :4], load[:, 1:]
 
     @property
     def dE_end(self):
-        return self.whole.dE_end[self.part]
+        d = self.whole.dE_end[self.part]
+        return d if self.take is None else d[self.take]
 
     derivative = _Segment.derivative
 
@@ -214,12 +219,28 @@ class _Lever:
         self.ends = [end for j, ell in enumerate(self.lengths)
                      for end in ((j, np.zeros_like(g), slopes[j], 0.0), (j, ell, slopes[j], slopes[j]))]
         count = len(self.ends)
-        stacked = _Segment(np.concatenate([self.beta] * count), np.concatenate([t for _, t, _, _ in self.ends]),
-                           np.concatenate([self.lengths[j] for j, _, _, _ in self.ends]),
-                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]),
-                           np.concatenate([self.uc] * count))
-        self.at = stacked.parts(count)
+        rows, take = self._shared_rows([args[0], args[8]] + ([np.asarray(probe)] if probe is not None else []))
+        pick = (lambda x: x) if rows is None else (lambda x: x[rows])      # noqa: E731
+        uc = self.uc if rows is None else np.ones(len(rows), self.uc.dtype)
+        stacked = _Segment(np.concatenate([pick(self.beta)] * count), np.concatenate([pick(t) for _, t, _, _ in self.ends]),
+                           np.concatenate([pick(self.lengths[j]) for j, _, _, _ in self.ends]),
+                           np.concatenate([pick(self.short[j]) for j, _, _, _ in self.ends]),
+                           np.concatenate([uc] * count))
+        self.at = stacked.parts(count, take, None if rows is None else self.uc)
         self.A, self.b = self._assemble(points, [(e.E, e.P) for e in self.at])
+
+    def _shared_rows(self, args):
+        """Members whose segments are the same (the same ``beta`` and points, other parameters
+        varying: a grid of springs): one row per distinct set and each member's row among them,
+        ``(rows, take)``; ``(None, None)`` when too little is shared to gain."""
+        small = np.broadcast_shapes(*(np.shape(a) for a in args))
+        m, n = math.prod(small), self.beta.shape[0]
+        if 2 * m > n:
+            return None, None
+        take = np.broadcast_to(np.arange(m).reshape(small), self.shape).reshape(-1)
+        rows = np.empty(m, int)
+        rows[take] = np.arange(n)
+        return rows, take
 
     def _drive_block(self, G, first):
         """A point's drive columns ``G`` (n, 2, m) placed among :attr:`drives` from column ``first``."""
