@@ -234,14 +234,14 @@ class Cantilever:
         # the load ratio is proportional to 1 / mass per length, i.e. to omega_vac**2: evaluate it
         # for the mass per length a lever of vacuum resonance f would have, then scale
         at_f = load_ratio(self.medium, self.free_resonance, self.width,
-                          self.mass_per_length(self.free_resonance)).real
+                          self.beam_mass_per_length(self.free_resonance)).real
         denominator = 1.0 - at_f
         if not denominator > 0:
             raise UserError(f"the medium's load exceeds the lever's inertia at {self.free_resonance:g} Hz "
                             "(check the spring constant, length and width)")
         return self.free_resonance / math.sqrt(denominator)
 
-    def mass_per_length(self, vacuum_resonance: float) -> float:
+    def beam_mass_per_length(self, vacuum_resonance: float) -> float:
         """The lever's own mass per length (kg/m) if its first vacuum resonance, *with its tip*, is
         ``vacuum_resonance`` (Hz): ``k beta1**4 / (3 L omega1**2)`` with this lever's root ``beta1``
         (:meth:`free_root`), so that a tip mass, which lowers both, leaves the lever's mass unchanged.
@@ -249,7 +249,7 @@ class Cantilever:
         >>> bare = Cantilever(2.0, 7e4, 2e-4)
         >>> heavy = Cantilever(2.0, 7e4, 2e-4, tip_mass_ratio=0.5)
         >>> f_heavy = 7e4 * (heavy.free_root() / BETA1_FREE)**2        # the same beam with the mass
-        >>> round(heavy.mass_per_length(f_heavy) / bare.mass_per_length(7e4), 12)
+        >>> round(heavy.beam_mass_per_length(f_heavy) / bare.beam_mass_per_length(7e4), 12)
         1.0
         """
         mass = mass_per_length(self.spring_constant, self.length, vacuum_resonance)
@@ -268,7 +268,7 @@ class Cantilever:
         """
         lever = replace(self, width=self.width if width is None else width, medium=medium)
         f_vac = self.free_resonance
-        mass = self.mass_per_length(f_vac)
+        mass = self.beam_mass_per_length(f_vac)
         f = f_vac
         for _ in range(100):
             # Sader's relation forward, f = f_vac / sqrt(1 + T Re Gamma(f)), with the lever's own mass
@@ -290,7 +290,7 @@ class Cantilever:
         """
         if self.medium is None:
             return 0.0
-        return load_ratio(self.medium, frequency, self.width, self.mass_per_length(self.vacuum_resonance))
+        return load_ratio(self.medium, frequency, self.width, self.beam_mass_per_length(self.vacuum_resonance))
 
     def _damped(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> "Damped":
         """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at

@@ -332,7 +332,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     best = min(rows, key=lambda r: r["bic"])
     fit, params, amplitudes, lever = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
-    lever_mass = before.lever.mass_per_length(before.lever.vacuum_resonance) * before.lever.length
+    lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
     parameters = {}
     mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
     ratio = _value(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
