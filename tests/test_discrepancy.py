@@ -68,9 +68,9 @@ def test_baseline_exact_names_nothing(tmp_path):
 
 @pytest.mark.parametrize("hidden,name,polar", [
     ({"Q": 100.0}, "damping", False),
-    ({"viscous_hz": 1500.0}, "damping", True),
+    pytest.param({"viscous_hz": 1500.0}, "damping", True, marks=pytest.mark.slow),
     ({"mu": 0.2}, "tip_mass", True),
-    ({"alpha": 0.3}, "tilt", True),
+    pytest.param({"alpha": 0.3}, "tilt", True, marks=pytest.mark.slow),
 ])       # a hidden set-back: test_undamped_random_lever_effect_found, test_discrepancy_honest; wide sweeps in benchmarks/
 def test_hidden_effect_is_named(tmp_path, hidden, name, polar):
     text = spectrum(_beam(**hidden), FREQ, polar=polar, seed=3)
@@ -129,6 +129,7 @@ def test_plot_axis_follows_data(tmp_path):
     assert 0.5 < low < 2 and 3 < high < 10
 
 
+@pytest.mark.slow
 def test_vertical_only_start_finds_lateral_stiffness(tmp_path):
     path = tmp_path / "d.csv"
     path.write_text(spectrum(_beam(), FREQ, seed=7))
@@ -265,6 +266,7 @@ def test_overrides_order_and_quality_factors(tmp_path):
         read(path)
 
 
+@pytest.mark.slow
 def test_random_lever_in_instrument_order(tmp_path):
     """One fixed-seed case of the benchmark's generator (benchmarks/discrepancy.py): a random
     lever with viscous damping and a set-back tip, rows one bias sweep after another."""

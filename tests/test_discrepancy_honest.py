@@ -159,6 +159,7 @@ def _honest_or_exact(report: dict, hidden: list[str]) -> str:
     return "honest"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0], ids=["soft-tip-0.71L"])      # the class's sweep: benchmarks/discrepancy_acquisition.py
 def test_large_setback_named_exactly(tmp_path, seed):
     """Soft (k 0.62 N/m, tip at 0.711 L) and stiff (k 14.5 N/m, tip at 0.739 L) levers with
@@ -239,6 +240,7 @@ def test_spring_starts_do_not_depend_on_the_damping_law(tmp_path, seed, gamma):
     assert all(abs(v - gamma) < 0.03 for v in tip.values()), tip
 
 
+@pytest.mark.slow
 def test_same_named_set_under_every_damping_law(tmp_path):
     """The set-back lever (tip at 0.85 L) under air (sqrt f) and internal damping:
     damping and the set-back are named for each, nothing else, the gap within the unexplained
@@ -252,6 +254,7 @@ def test_same_named_set_under_every_damping_law(tmp_path):
         assert abs(report["parameters"]["tip_position"]["value"] - 0.85) < 0.02, law
 
 
+@pytest.mark.slow
 def test_band_air_setback_is_explained_by_the_fluid(tmp_path):
     """Bands around three contact modes, air damping (width ~ sqrt f) and the tip at 0.82 L: damping
     and the set-back are named and nothing else, the mechanism is the fluid's (its law with

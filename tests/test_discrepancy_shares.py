@@ -172,6 +172,7 @@ def _spot_lever(seed: int, size: float) -> tuple[str, dict]:
     return _instrument_resonance(text, extra, size), {"k1": k1, "contact_hz": contact[:3], "extra_hz": extra}
 
 
+@pytest.mark.slow
 def test_spot_lever_with_a_resonance_outside_the_library_is_unexplained_there(tmp_path):
     """A lever read at 0.7 L with a background, viscous damping and an instrument resonance between
     contact modes 1 and 2 (peak 4 x the median response): no library effect reaches it, the gap
