@@ -30,6 +30,11 @@ the substitution is::
     beta**4 = beta0**4 (1 - i g / r) / (1 + i inv_q),   k -> k (1 + i inv_q),
     k1 -> k1 (1 + i x r),   mu -> mu / (1 - i g / r)
 
+A fluid around the lever (:mod:`pfmdyn.medium`: Sader's hydrodynamic function) loads it by
+``rho S omega**2 Lambda u`` per unit length, ``Lambda`` the complex ratio of its load to the lever's
+inertia at that frequency; it adds to the drag's term, so it is the drag ``g + i r Lambda``
+(:func:`fluid_as_drag`): the generated substitution serves it unchanged.
+
 ``pfmdyn codegen`` writes it to ``generated/damping.py`` with its derivatives with respect
 to ``inv_q``, ``g``, ``x`` (for the least-squares Jacobian; :mod:`derivations.codegen.effects`).
 """
@@ -40,10 +45,12 @@ import sympy as sp
 from .beam import EI, L, beta, k, k1, q0, x as coordinate
 from .tip_mass import mu, rotary_inertia
 
-__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width"]
+__all__ = ["MECHANISMS", "substitution", "check_substitution", "half_power_width", "fluid_as_drag"]
 
 omega, omega1, rho_s, c, eta, Q = sp.symbols("omega omega1 rho_S c eta Q", positive=True)
 r, g, xc, inv_q, beta0 = sp.symbols("r g x inv_q beta0", positive=True)
+fluid = sp.Symbol("Lambda")
+"""A fluid's load over the lever's inertia (complex, frequency dependent)."""
 
 MECHANISMS = {"internal": inv_q, "viscous": g, "contact": xc}
 """Mechanism name -> its dimensionless parameter (0 switches it off exactly)."""
@@ -60,13 +67,23 @@ def substitution() -> dict[str, sp.Expr]:
             "k": k * (1 + sp.I * inv_q), "k1": k1 * (1 + sp.I * xc * r), "mu": mu / (1 - sp.I * g / r)}
 
 
+def fluid_as_drag() -> sp.Expr:
+    """The drag ``g`` that carries a fluid's load ``Lambda`` as well (module docstring).
+
+    >>> fluid_as_drag()
+    I*Lambda*r + g
+    """
+    return g + sp.I * r * fluid
+
+
 def check_substitution() -> bool:
     """The damped Eq. 2 is Eq. 2 at the substituted ``beta``, ``k``: an exact identity.
 
     Damped: ``EI (1 + i/Q) u'''' = (rho S omega**2 - i omega c) u + q0`` with
     ``beta0**4 = rho S omega**2 L**4 / EI``, ``omega = r omega1``, ``c = g rho S omega1``;
     the contact dashpot: ``(k1 + i omega eta) = k1 (1 + i x r)`` with ``eta = x k1 / omega1``;
-    the tip's mass and rotary inertia come out undamped.
+    the tip's mass and rotary inertia come out undamped; with a fluid's load ``Lambda`` added to the
+    damped equation, the substitution holds with the drag :func:`fluid_as_drag`.
 
     >>> check_substitution()
     True
@@ -83,7 +100,10 @@ def check_substitution() -> bool:
     inertia = s["mu"] * s["beta4"] - mu * beta0**4 / (1 + sp.I * inv_q)
     rotary = (rotary_inertia().subs({mu: s["mu"], k: s["k"]}).subs(beta**4, s["beta4"])
               - rotary_inertia().subs(beta, beta0))
-    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia, rotary))
+    wet = damped - rho_s * w**2 * fluid * u
+    wet_undamped = undamped.subs(g, fluid_as_drag())
+    return all(sp.simplify(sp.expand(e)) == 0 for e in (damped - undamped, dashpot, inertia, rotary,
+                                                         wet - wet_undamped))
 
 
 def half_power_width(mechanism: str) -> sp.Expr:

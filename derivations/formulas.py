@@ -11,9 +11,11 @@ from functools import lru_cache
 
 import sympy as sp
 
+from . import calibration as cal
 from . import contact_mechanics as cm
 from . import damping as dm
 from . import domain_contrast as dc
+from . import hydrodynamics as hyd
 from .beam import EI, H, L, beta, f0, k, k2
 from .elastic_contact import tip_conditions
 from .free_end import solve as solve_free_end
@@ -102,6 +104,39 @@ def formulas() -> tuple[Formula, ...]:
         *_domain_contrast(),
         *_domain_contrast_printed(),
         *_band_excitation_sho(),
+        *_calibration(),
+    )
+
+
+def _calibration() -> tuple[Formula, ...]:
+    """The free lever's calibration (:mod:`derivations.calibration`, :mod:`derivations.hydrodynamics`)."""
+    source = "derivations/calibration.py"
+    f0, q, a = sp.symbols("f0 q amplitude", positive=True)
+    return (
+        *(Formula(f"thermal_factor_{detection}{'' if region == 'beyond' else '_inside'}", (cal.sigma, cal.gamma),
+                  cal.thermal_factor(detection, region),
+                  f"chi of k_tip = chi kB T / <d*^2> for the first mode read as a {detection} at the spot sigma = x_s/L "
+                  f"through a static sensitivity measured with the tip at gamma = x_tip/L, spot "
+                  f"{'beyond' if region == 'beyond' else 'inside'} the tip (sigma {'>=' if region == 'beyond' else '<='} "
+                  f"gamma; {0.817 if detection == 'slope' else 0.971} at sigma = gamma = 1)",
+                  f"{source}: thermal_factor({detection!r}, {region!r})")
+          for detection in ("slope", "deflection") for region in ("beyond", "inside")),
+        Formula("sader_spring_constant", (cal.rho_fluid, cal.width, L, cal.Q, cal.gamma_i, cal.f_fluid),
+                cal.sader_spring_constant(),
+                "Sader's spring constant (N/m) from the fluid density, lever width and length, the first mode's Q and "
+                "frequency (Hz) in the fluid and Gamma_i there", f"{source}: sader_spring_constant()"),
+        Formula("mass_per_length", (k, L, sp.Symbol("free_resonance", positive=True)), cal.mass_per_length(),
+                "the lever's mass per length rho_c h b (kg/m) from k, L and its first resonance in vacuum (Hz)",
+                f"{source}: mass_per_length()"),
+        Formula("oscillator_mean_square", (f0, q, a), cal.oscillator_mean_square(),
+                "mean square of the oscillator whose ASD is A f0**2/|f0**2 - f**2 + i f f0/q| (area under its PSD)",
+                f"{source}: oscillator_mean_square()"),
+        Formula("rectangular_correction_real", (hyd.tau,), hyd.rectangular_correction("real"),
+                "real part of Sader's fitted correction Omega(tau), tau = log10 Re (valid 1e-6 <= Re <= 1e4)",
+                "derivations/hydrodynamics.py: OMEGA (Sader 1998, Eq. 21)"),
+        Formula("rectangular_correction_imag", (hyd.tau,), hyd.rectangular_correction("imag"),
+                "imaginary part of Sader's fitted correction Omega(tau), tau = log10 Re (valid 1e-6 <= Re <= 1e4)",
+                "derivations/hydrodynamics.py: OMEGA (Sader 1998, Eq. 21)"),
     )
 
 

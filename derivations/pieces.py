@@ -26,11 +26,14 @@ The pieces:
   zero state at the segment's start (no cancellation at low frequency).
 * :func:`point_jump`: a point on the beam carrying the tip (contact springs ``kvv, kll, kvl`` at
   height ``H`` below the neutral axis, tip mass ``mu``, rotary inertia ``rho_g``, drives ``d1,
-  d2, f0``): the state is continuous in ``u, u'``; moment and shear jump by
+  d2, f0`` and a couple ``m0``; a bare point, nothing but its drives, probes the beam elsewhere):
+  the state is continuous in ``u, u'``; moment and shear jump by
   ``z_left - z_right = J z + G [d1, d2, f0]`` (rows 2, 3), from the free-body balances of
   :mod:`derivations.tilt` and :mod:`derivations.tip_mass` moved to the point.
 * The clamp (Eq. 3) fixes ``z[0] = z[1] = 0`` at ``xi = 0``; the free end ``z[2] = z[3] = 0`` to
   the right of ``xi = 1`` (a point at the end adds its jump there): :data:`CLAMPED`, :data:`FREE`.
+  A clamp moved by the base (a dither piezo) by ``y0`` fixes ``z[0] = y0`` instead
+  (:data:`BASE_DRIVE`): the deflection is then absolute, the base's own motion included.
 * The read-outs: deflection ``z[0]`` and slope ``beta z[1] / L`` anywhere.
 """
 from __future__ import annotations
@@ -44,7 +47,7 @@ from .tilt import kll, kvl, kvv
 from .tip_mass import inertial_stiffness, mu, rho_g, rotary_inertia
 
 __all__ = ["gamma", "sigma", "s", "s_end", "unit_state", "bounded_basis", "load_constant", "point_jump", "POINT_DRIVES",
-           "CLAMPED", "FREE", "solves_equation", "clamped_segment_slope"]
+           "CLAMPED", "FREE", "BASE_DRIVE", "y0", "m0", "solves_equation", "clamped_segment_slope"]
 
 gamma, sigma = sp.symbols("gamma sigma", positive=True)
 """The tip's position ``x_tip / L`` (public name ``tip_position``) and the laser spot's ``x_s / L``
@@ -53,11 +56,17 @@ gamma, sigma = sp.symbols("gamma sigma", positive=True)
 s, s_end = sp.symbols("s s_end")
 """The segment's argument ``beta t`` and its value at the segment's end, ``beta l``."""
 
-POINT_DRIVES = (d1, d2, f0)
+m0 = sp.Symbol("m0", real=True)
+"""A couple applied at a point (work-conjugate to the slope there, as ``f0`` is to the deflection)."""
+POINT_DRIVES = (d1, d2, f0, m0)
 CLAMPED = (0, 1)
 """State components fixed to zero at the clamp (Eq. 3: ``u(0) = u'(0) = 0``)."""
 FREE = (2, 3)
 """State components zero beyond the free end (no moment, no shear)."""
+y0 = sp.Symbol("y0")
+"""The base's (the clamp's) displacement, a drive."""
+BASE_DRIVE = {0: y0}
+"""The clamp's state components a moving base sets (the others of :data:`CLAMPED` stay zero)."""
 
 
 def solves_equation(phi: sp.Expr) -> bool:
@@ -118,12 +127,12 @@ def load_constant() -> sp.Expr:
 
 @lru_cache(maxsize=None)
 def point_jump() -> tuple[sp.Matrix, sp.Matrix]:
-    """``(J, G)``: moment and shear rows of ``z_left - z_right = J z + G [d1, d2, f0]`` at the tip.
+    """``(J, G)``: moment and shear rows of ``z_left - z_right = J z + G [d1, d2, f0, m0]`` at the tip.
 
-    ``J`` is 2x2 (rows: moment, shear; columns: ``z[0] = u``, ``z[1]``), ``G`` 2x3.  Free-body
+    ``J`` is 2x2 (rows: moment, shear; columns: ``z[0] = u``, ``z[1]``), ``G`` 2x4.  Free-body
     balances at the point ``a`` (left minus right)::
 
-        EI [u''(a-) - u''(a+)]   = H F_l + J_t omega**2 u'(a)
+        EI [u''(a-) - u''(a+)]   = H F_l + m0 + J_t omega**2 u'(a)
         EI [u'''(a-) - u'''(a+)] = -(F_v + f0 + m_t omega**2 u(a))
 
     with the spring forces ``F = -K (w - d)`` of :mod:`derivations.tilt` (``w = [u, H u']``) and
@@ -137,7 +146,8 @@ def point_jump() -> tuple[sp.Matrix, sp.Matrix]:
     u, slope = z0, beta * z1 / L
     force_v = -(kvv * (u - d1) + kvl * (H * slope - d2))
     force_l = -(kvl * (u - d1) + kll * (H * slope - d2))
-    moment = H * force_l + rotary_inertia() * slope                 # EI u'' jump
+    # the couple m0 enters as the lateral force's moment H F_l does: both do work on the slope
+    moment = H * force_l + m0 + rotary_inertia() * slope            # EI u'' jump
     shear = -(force_v + f0 + inertial_stiffness() * u)             # EI u''' jump
     rows = [sp.expand(moment / (EI * kappa**2)), sp.expand(shear / (EI * kappa**3))]
     J = sp.Matrix([[r.coeff(v) for v in (z0, z1)] for r in rows])

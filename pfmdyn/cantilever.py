@@ -24,20 +24,22 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass, fields
-from functools import lru_cache
+from dataclasses import dataclass, fields, replace
+from functools import cached_property, lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
 from . import composed, transfer
 from .errors import UserError
+from .medium import Medium, load_ratio, mass_per_length
 from .generated import damping, families, formulas
 from .generated.characteristic import BETA1_FREE
 from .generated.tilt_rotation import rotated
 from .names import checked
 from .roots.bracket import refine
 
-__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON", "free_root"]
+__all__ = ["Cantilever", "Contact", "BETA1_FREE", "DEFAULT_POISSON", "Damped", "damping_substitution", "free_root"]
 
 DEFAULT_POISSON = 0.3
 """Poisson's ratio of the Mindlin tie ``k2 = c k1`` when one contact mode must fix both springs
@@ -74,6 +76,12 @@ class Cantilever:
         ``x_s / L`` of the detection (laser) spot: 1 at the free end.
     viscous_loss : float
         Viscous drag ``g = c / (rho S omega1)`` (1/Q of free mode 1 under drag alone).
+    medium : pfmdyn.medium.Medium, optional
+        The fluid around the lever (None: vacuum, the paper's case).  Its load per unit length
+        (Sader's hydrodynamic function, :mod:`pfmdyn.medium`) enters Eq. 2 as added mass and
+        damping at every frequency; it needs ``width``.  ``free_resonance`` is then the first
+        resonance *in the medium*, as measured there; the vacuum one follows from Sader's relation
+        (:attr:`vacuum_resonance`).
 
     Examples
     --------
@@ -99,11 +107,18 @@ class Cantilever:
     tilt: float = 0.0
     spot_position: float = 1.0
     viscous_loss: float = 0.0
+    medium: Medium | None = None
 
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if value is None and f.name in ("tip_height", "width"):
+            if value is None and f.name in ("tip_height", "width", "medium"):
+                continue
+            if f.name == "medium":
+                if not isinstance(value, Medium):
+                    raise UserError(f"medium must be a pfmdyn.medium.Medium, got {value!r}")
+                if self.width is None:
+                    raise UserError("a lever in a medium needs its width (the fluid acts across it)")
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
                 raise UserError(f"{f.name} must be a number, got {value!r}")
@@ -113,11 +128,17 @@ class Cantilever:
 
     @classmethod
     def from_geometry(cls, *, length, width, thickness, youngs_modulus, density,
-                      quality_factor=math.inf) -> "Cantilever":
-        """Rectangular section from SI geometry and material (m, Pa, kg/m**3).
+                      quality_factor=math.inf, medium: Medium | None = None) -> "Cantilever":
+        """Rectangular section from SI geometry and material (m, Pa, kg/m**3), in vacuum or in ``medium``.
 
         ``k = E w t**3 / (4 L**3)``; ``f1 = BETA1_FREE**2 / (2 pi L**2) sqrt(E I / (rho S))``
-        with ``I = w t**3 / 12`` and ``S = w t``.
+        with ``I = w t**3 / 12`` and ``S = w t`` (in vacuum; in a medium, :meth:`with_medium`).
+
+        >>> from pfmdyn.medium import Medium
+        >>> wet = Cantilever.from_geometry(length=225e-6, width=40e-6, thickness=3e-6, youngs_modulus=169e9,
+        ...                                density=2330.0, medium=Medium.water(298.15))
+        >>> round(wet.vacuum_resonance / 1e3, 2), round(wet.free_resonance / 1e3, 2)   # kHz
+        (81.53, 30.72)
         """
         for name, value in [("length", length), ("width", width), ("thickness", thickness),
                             ("youngs_modulus", youngs_modulus), ("density", density)]:
@@ -126,7 +147,8 @@ class Cantilever:
         k = formulas.spring_constant_from_geometry(youngs_modulus, width, thickness, length)
         f1 = formulas.free_resonance_from_geometry(youngs_modulus, width, thickness, length,
                                                    density, BETA1_FREE)
-        return cls(float(k), float(f1), length, quality_factor, width=width)
+        lever = cls(float(k), float(f1), length, quality_factor, width=width)
+        return lever if medium is None else lever.with_medium(medium)
 
     @classmethod
     def from_values(cls, values: dict) -> "Cantilever":
@@ -147,9 +169,11 @@ class Cantilever:
         """The description as names -> SI values (``None``: not known).
 
         >>> sorted(Cantilever(2.0, 7e4, 2e-4).to_dict())[:3]
-        ['free_resonance', 'length', 'quality_factor']
+        ['free_resonance', 'length', 'medium']
         """
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["medium"] = None if self.medium is None else self.medium.name
+        return out
 
     @property
     def alpha(self) -> float:
@@ -191,18 +215,99 @@ class Cantilever:
         >>> round(float(c.beta(4e5).real), 6)   # beta scales as sqrt(f)
         3.750208
         """
-        return self._damped(_positive(frequency))[0]
+        return self._damped(_positive(frequency)).beta
 
-    def _damped(self, frequency, contact_loss: float = 0.0):
-        """``(beta, k, k1_factor, mu_factor)`` at ``frequency`` (Hz, real or complex) with the damping
-        substituted (``derivations/damping.py``)."""
-        beta_factor, k_factor, k1_factor, mu_factor = damping.factors(
-            frequency / self.free_resonance, 1.0 / self.quality_factor, self.viscous_loss, contact_loss)
+    @cached_property
+    def vacuum_resonance(self) -> float:
+        """The first free resonance in vacuum (Hz): ``free_resonance`` itself without a medium; in one,
+        from Sader's first-mode relation ``f = f_vac / sqrt(1 + T Re Gamma(f))`` with the fluid's mass
+        ratio ``T`` (its load over the lever's mass per length ``k beta1**4 / (3 L omega_vac**2)``),
+        solved for ``f_vac`` in closed form.
+
+        >>> from pfmdyn.medium import Medium
+        >>> lever = Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+        >>> round(lever.vacuum_resonance / lever.free_resonance, 5)
+        1.00292
+        """
+        if self.medium is None:
+            return self.free_resonance
+        # the load ratio is proportional to 1 / mass per length, i.e. to omega_vac**2: evaluate it
+        # for the mass per length a lever of vacuum resonance f would have, then scale
+        at_f = load_ratio(self.medium, self.free_resonance, self.width,
+                          self.beam_mass_per_length(self.free_resonance)).real
+        denominator = 1.0 - at_f
+        if not denominator > 0:
+            raise UserError(f"the medium's load exceeds the lever's inertia at {self.free_resonance:g} Hz "
+                            "(check the spring constant, length and width)")
+        return self.free_resonance / math.sqrt(denominator)
+
+    def beam_mass_per_length(self, vacuum_resonance: float) -> float:
+        """The lever's own mass per length (kg/m) if its first vacuum resonance, *with its tip*, is
+        ``vacuum_resonance`` (Hz): ``k beta1**4 / (3 L omega1**2)`` with this lever's root ``beta1``
+        (:meth:`free_root`), so that a tip mass, which lowers both, leaves the lever's mass unchanged.
+
+        >>> bare = Cantilever(2.0, 7e4, 2e-4)
+        >>> heavy = Cantilever(2.0, 7e4, 2e-4, tip_mass_ratio=0.5)
+        >>> f_heavy = 7e4 * (heavy.free_root() / BETA1_FREE)**2        # the same beam with the mass
+        >>> round(heavy.beam_mass_per_length(f_heavy) / bare.beam_mass_per_length(7e4), 12)
+        1.0
+        """
+        mass = mass_per_length(self.spring_constant, self.length, vacuum_resonance)
+        return mass * (self.free_root() / BETA1_FREE)**4 if self.tip_mass_ratio else mass
+
+    def with_medium(self, medium: Medium, width: float | None = None) -> "Cantilever":
+        """This lever, whose ``free_resonance`` is its vacuum one (a lever from its geometry, a data
+        sheet), put in ``medium``: the same lever with the first resonance it has there (Sader's relation,
+        the inverse of :attr:`vacuum_resonance`, by fixed-point iteration).
+
+        >>> from pfmdyn.medium import Medium
+        >>> vacuum = Cantilever(2.0, 7e4, 2e-4, width=3e-5)
+        >>> wet = vacuum.with_medium(Medium.water(298.15))
+        >>> round(wet.free_resonance), round(wet.vacuum_resonance)
+        (28975, 70000)
+        """
+        lever = replace(self, width=self.width if width is None else width, medium=medium)
+        f_vac = self.free_resonance
+        mass = self.beam_mass_per_length(f_vac)
+        f = f_vac
+        for _ in range(100):
+            # Sader's relation forward, f = f_vac / sqrt(1 + T Re Gamma(f)), with the lever's own mass
+            f_next = f_vac / math.sqrt(1.0 + load_ratio(medium, f, lever.width, mass).real)
+            if abs(f_next / f - 1) < 1e-14:
+                return replace(lever, free_resonance=f_next)
+            f = f_next
+        raise UserError(f"no first resonance in {medium.name} found for this lever")
+
+    def fluid_load(self, frequency):
+        """The medium's load per unit length over the lever's inertia at ``frequency`` (Hz, real or
+        complex): ``beta**4 -> beta**4 (1 + load)``; real part added mass, imaginary part (negative)
+        the loss (:func:`pfmdyn.medium.load_ratio`); 0 in vacuum.
+
+        >>> from pfmdyn.medium import Medium
+        >>> wet = Cantilever(2.0, 3e4, 2e-4, width=3e-5, medium=Medium.water(298.15))
+        >>> load = wet.fluid_load(3e4); round(load.real, 2), round(load.imag, 2)
+        (7.62, -2.24)
+        """
+        if self.medium is None:
+            return 0.0
+        return load_ratio(self.medium, frequency, self.width, self.beam_mass_per_length(self.vacuum_resonance))
+
+    def _damped(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> "Damped":
+        """:func:`damping_substitution` of this lever (and ``contact``'s ``k1`` and dashpot) at
+        ``frequency`` (Hz, real or complex); a medium's load, ``fluid`` times it (a continuation from
+        vacuum), enters as a drag (``g + i r load``, ``derivations/damping.py``: ``fluid_as_drag``)."""
         b1 = self.free_root() if self.tip_mass_ratio else BETA1_FREE
-        return (formulas.beta_from_frequency(frequency, self.free_resonance, b1) * beta_factor,
-                self.spring_constant * k_factor, k1_factor, mu_factor)
+        f1 = self.vacuum_resonance
+        k1, loss = (contact.k1, contact.contact_loss) if contact is not None else (0.0, 0.0)
+        r = frequency / f1
+        drag = self.viscous_loss
+        if self.medium is not None:
+            drag = drag + 1j * r * fluid * self.fluid_load(frequency)
+        return damping_substitution(r, formulas.beta_from_frequency(frequency, f1, b1),
+                                    self.spring_constant, k1, self.tip_mass_ratio,
+                                    1.0 / self.quality_factor, drag, loss)
 
-    def model_arguments(self, frequency, contact: "Contact | None" = None) -> tuple:
+    def model_arguments(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> tuple:
         """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
         (:mod:`pfmdyn.composed`) at ``frequency`` in Hz, with the damping substituted.
 
@@ -217,18 +322,17 @@ class Cantilever:
         >>> c.model_arguments(7e4)[2:6]                                           # free: no springs
         (0.0, 0.0, 0.0, 1e-05)
         """
-        loss = contact.contact_loss if contact is not None else 0.0
-        beta, k, k1_factor, mu_factor = self._damped(frequency, loss)
-        _, kvv, kll, kvl, height, length, mu, gamma, rho_g = self.model_parameters(contact, k1_factor=k1_factor)
-        return beta, k, kvv, kll, kvl, height, length, mu * mu_factor, gamma, rho_g
+        damped = self._damped(frequency, contact, fluid)
+        _, kvv, kll, kvl, height, length, _, gamma, rho_g = self.model_parameters(contact, k1=damped.k1)
+        return damped.beta, damped.k, kvv, kll, kvl, height, length, damped.mu, gamma, rho_g
 
-    def model_parameters(self, contact: "Contact | None" = None, *, k1_factor=1.0) -> tuple:
+    def model_parameters(self, contact: "Contact | None" = None, *, k1=None) -> tuple:
         """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
         damping (:mod:`pfmdyn.composed`).
 
         The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
-        ``contact`` is None); ``k1_factor`` multiplies ``k1`` before the rotation (the contact
-        dashpot's factor, ``derivations/damping.py``).
+        ``contact`` is None); ``k1``, when given, replaces the contact's before the rotation (the
+        contact dashpot's complex ``k1``, :func:`damping_substitution`).
 
         >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, tilt=10.0)
         >>> k, kvv, kll, kvl, H, *_ = lever.model_parameters(Contact(k1=50.0))
@@ -238,7 +342,7 @@ class Cantilever:
         if contact is None:
             springs, height = (0.0, 0.0, 0.0), self.tip_height or 0.0
         else:
-            springs = rotated(contact.k1 * k1_factor, contact.k2_of(contact.k1), self.alpha)
+            springs = rotated(contact.k1 if k1 is None else k1, contact.k2_of(contact.k1), self.alpha)
             height = self._tip_height(contact)
         return (self.spring_constant, *springs, height, self.length, self.tip_mass_ratio, self.tip_position,
                 self.rho_g)
@@ -262,6 +366,50 @@ class Cantilever:
             slopes = composed.slope(beta, self.spot_position, *rest)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
+    def base_driven(self, frequency, contact: "Contact | None" = None) -> transfer.BaseTransfer:
+        """Driven at the base (the clamp moved by ``y0``: a dither piezo), per unit ``y0``: the slope at
+        the laser spot and the deflection there relative to the base, at ``frequency`` (Hz), free
+        (``contact=None``) or in contact, with the damping substituted (:mod:`pfmdyn.composed`).
+
+        >>> lever = Cantilever(2.0, 7e4, 2e-4, quality_factor=50.0)
+        >>> r = lever.base_driven([7e2, 7e4])
+        >>> round(float(abs(r.deflection[0])), 6), round(float(abs(r.deflection[1])), 1)   # beta**4 / 8; 1.566 Q
+        (0.000155, 78.3)
+        """
+        beta, *rest = self.model_arguments(_positive(frequency), contact)
+        with np.errstate(all="ignore"):
+            (slope,), (deflection,) = composed.response(beta, self.spot_position, *rest, drives=("y0",))
+        return transfer.BaseTransfer(np.asarray(slope, dtype=complex), np.asarray(deflection - 1.0, dtype=complex))
+
+    def thermal_noise(self, frequency, temperature: float, contact: "Contact | None" = None) -> transfer.ThermalNoise:
+        """The thermal spectrum at the laser spot, every mode at once, at ``frequency`` (Hz) and
+        ``temperature`` (K): one-sided power spectral densities of the slope and the deflection.
+
+        Fluctuation-dissipation: ``S_y(f) = -4 k_B T Im chi_yy / omega``, with ``chi_yy`` the response
+        of ``y`` to the force that does work on it, applied at the spot (a couple for the slope, a
+        force for the deflection), from the composed lever with a bare point there
+        (:data:`pfmdyn.composed.PROBE_DRIVES`).  Only the losses make noise: a lossless lever has none
+        between its resonances.
+
+        >>> lever = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0)
+        >>> psd = lever.thermal_noise([7e3, 7e4], 300.0)
+        >>> [f"{v:.3g}" for v in psd.deflection]            # m**2/Hz: the floor, the first mode's peak
+        ['1.92e-27', '1.83e-24']
+        """
+        f = _positive(frequency)
+        if not temperature > 0:
+            raise UserError(f"the temperature must be above 0 K, got {temperature!r}")
+        beta, *rest = self.model_arguments(f, contact)
+        with np.errstate(all="ignore"):
+            (_, per_couple), (per_force, _) = composed.response(beta, self.spot_position, *rest,
+                                                                drives=composed.PROBE_DRIVES, probe=self.spot_position)
+        scale = -2.0 * BOLTZMANN * temperature / (np.pi * f)
+        return transfer.ThermalNoise(scale * np.imag(per_couple), scale * np.imag(per_force))
+
+
+BOLTZMANN = 1.380649e-23
+"""J/K (exact in the SI since 2019)."""
+
 
 def _positive(frequency) -> np.ndarray:
     """Frequencies in Hz as a float array; not positive and finite: ValueError."""
@@ -269,6 +417,35 @@ def _positive(frequency) -> np.ndarray:
     if not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise ValueError("frequency must be positive and finite (Hz)")
     return f
+
+
+class Damped(NamedTuple):
+    """The model's ``beta``, ``k``, ``k1`` and ``mu`` with the damping substituted, and the
+    generated factors ``(beta, k, k1, mu)`` that made them (the chain rule of a fit needs them)."""
+
+    beta: object
+    k: object
+    k1: object
+    mu: object
+    factors: tuple
+
+
+def damping_substitution(r, beta, k, k1, mu, inv_q, g, x) -> Damped:
+    """The undamped model's ``beta``, ``k``, ``k1`` and ``mu`` damped at ``r = f / f1``
+    (``derivations/damping.py``, generated: :func:`pfmdyn.generated.damping.factors`).
+
+    Internal friction ``inv_q`` (1/Q of the modulus), viscous drag ``g`` and the contact dashpot
+    ``x`` (loss tangent at f1).  The one place the substitution is applied: the probe's responses
+    and resonances, the discrepancy model and its quality factors, and the map fit.  ``r`` may be
+    complex (a damped mode's root); arrays broadcast.
+
+    >>> d = damping_substitution(1.5, 2.0, 1.0, 100.0, 0.1, 0.01, 0.02, 0.03)
+    >>> complex(d.k), complex(d.k1), round(float(abs(d.beta)), 6)
+    ((1+0.01j), (100+4.5j), 2.000019)
+    """
+    factors = damping.factors(r, inv_q, g, x)
+    beta_f, k_f, k1_f, mu_f = factors
+    return Damped(beta * beta_f, k * k_f, k1 * k1_f, mu * mu_f, factors)
 
 
 @lru_cache(maxsize=4096)
@@ -392,9 +569,9 @@ def _response_method(row):
         if not self.is_paper_probe:
             raise UserError(f"{row.method} is the paper's family ({row.equations}): massless tip at the free end, "
                             "no tilt, spot at the end; use Cantilever.response for this lever")
-        beta, k = self._damped(_positive(frequency))[:2]
+        damped = self._damped(_positive(frequency))
         values = transfer.check_parameters({p: given[p] for p in extra})
-        return transfer.evaluate(row.module, beta, {"k": k, "L": self.length, **values},
+        return transfer.evaluate(row.module, damped.beta, {"k": damped.k, "L": self.length, **values},
                                  given.get("output"))
 
     call = ", ".join(["[1e3, 1e6]"] + [f"{p}={_EXAMPLE[p]!r}" for p in extra])

@@ -27,6 +27,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stiffness": ("pfmdyn.commands.stiffness", "contact stiffness k1 (with k2 or the tip position) from contact resonances"),
     "map": ("pfmdyn.commands.map", "fit the beam model at every pixel of a band-excitation map (Dask, Zarr)"),
     "resonances": ("pfmdyn.commands.resonances", "certified free and contact resonances of a probe (and Q, damped and peak frequencies)"),
+    "calibrate": ("pfmdyn.commands.calibrate", "spring constant of the free lever from its thermal tune (thermal and Sader)"),
     "spot": ("pfmdyn.commands.spot", "electrostatic blind spots, calibration and d_eff error at the laser spot"),
 }
 

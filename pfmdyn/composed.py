@@ -23,6 +23,7 @@ tip mass over the lever's, ``gamma = x_tip / L``, ``rho_g = r_g / L``, ``sigma =
 """
 from __future__ import annotations
 
+import math
 from functools import cached_property
 
 import numpy as np
@@ -36,7 +37,14 @@ PARAMETERS = ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g")
 JACOBIAN_PARAMETERS = ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
 """The parameters of :func:`characteristic_and_jacobian`'s partials (and of the slope at the end)."""
 SPOT_JACOBIAN_PARAMETERS = ("beta", "sigma", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
-DRIVES = ("d1", "d2", "f0", "q0")
+DRIVES = ("d1", "d2", "f0", "m0", "q0", "y0")
+"""Every drive the system is solved for: the tip's (surface displacements ``d1, d2``, force ``f0``,
+couple ``m0``), the distributed load ``q0`` and the base (the clamp's displacement ``y0``)."""
+TIP_DRIVES = ("d1", "d2", "f0", "q0")
+"""The drives the read-outs give by default (the paper's)."""
+PROBE_DRIVES = ("f_probe", "m_probe")
+"""A force and a couple at a bare point of the lever (the probe), where asked."""
+_Q0, _Y0 = DRIVES.index("q0"), DRIVES.index("y0")
 _POINT = pieces.JACOBIAN_PARAMETERS
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 
@@ -114,10 +122,11 @@ class _Segment:
         out[:, :, 3] = np.where(self.short[:, None], 0.0, -self.E[:, :, 3])
         return out
 
-    def parts(self, count):
-        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all)."""
+    def parts(self, count, take=None, uc=None):
+        """The segment evaluations of ``count`` stacked batches (one evaluation serves them all); with
+        ``take``, each member's row among shared ones and its load constant ``uc`` (the rows' is 1)."""
         n = self.E.shape[0] // count
-        return [_Part(self, slice(i * n, (i + 1) * n)) for i in range(count)]
+        return [_Part(self, slice(i * n, (i + 1) * n), take, uc) for i in range(count)]
 
     def derivative(self, name, beta, t, ell, moves_end, moves_start):
         """``(dE, dP)`` w.r.t. ``name``.  ``moves_end``, ``moves_start``: ``d ell/d gamma`` and
@@ -135,15 +144,19 @@ class _Segment:
 
 
 class _Part:
-    """One batch of a stacked :class:`_Segment` evaluation (views)."""
+    """One batch of a stacked :class:`_Segment` evaluation (views; copies of shared rows with ``take``)."""
 
-    def __init__(self, whole, part):
-        self.whole, self.part = whole, part
-        self.E, self.dE, self.P, self.dP = whole.E[part], whole.dE[part], whole.P[part], whole.dP[part]
+    def __init__(self, whole, part, take=None, uc=None):
+        self.whole, self.part, self.take = whole, part, take
+        rows, load = whole.rows[part], whole.load[part]
+        if take is not None:
+            rows, load = rows[take], load[take] * uc[:, None]
+        self.E, self.dE, self.P, self.dP = rows[:, :4], rows[:, 1:], load[:, :4], load[:, 1:]
 
     @property
     def dE_end(self):
-        return self.whole.dE_end[self.part]
+        d = self.whole.dE_end[self.part]
+        return d if self.take is None else d[self.take]
 
     derivative = _Segment.derivative
 
@@ -151,36 +164,90 @@ class _Part:
 class _Lever:
     """The assembled system ``A c = b`` of one batch (all arguments broadcast and flattened).
 
-    One segment when the tip is at the end everywhere (``gamma = 1``, no ``gamma`` derivative asked),
-    else two; each segment four unknowns, one right-hand side per drive."""
+    Segments run between the clamp, the points and the free end: the tip's point, and with
+    ``probe`` a bare point at ``x = probe L`` driven by its own force and couple (:data:`PROBE_DRIVES`;
+    on the same side of the tip for the whole batch).  One segment when the tip is at the end
+    everywhere and nothing else is asked (``gamma = 1``, no ``gamma`` derivative, no probe); each
+    segment four unknowns, one right-hand side per drive."""
 
-    def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False):
+    def __init__(self, beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, *, split=False, derivatives=False,
+                 probe=None):
         args = [np.asarray(a) for a in (beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
         self.shape = np.broadcast_shapes(*(a.shape for a in args))
-        dtype, n = np.result_type(*args, float), int(np.prod(self.shape))
+        dtype, n = np.result_type(*args, float), math.prod(self.shape)
         flat = [np.full(n, a, dtype) if a.ndim == 0 else np.broadcast_to(a.astype(dtype), self.shape).reshape(-1)
                 for a in args]
         self.beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g = flat
         self.k, self.L, self.gamma = k, L, np.real(gamma)
-        self.two = split or bool(np.any(self.gamma != 1.0))
         self.derivatives = derivatives      # solve for A^-1 with c: derivatives will be asked
-        self.uc = pieces.load_constant(self.beta, k, L) + 0 * self.beta
-        point = (self.beta, k, kvv, kll, kvl, H, L, mu, rho_g)
-        self.point = point
-        self.jump = _columns(pieces.point_jump(*point), n)
+        # the point's parameters as plain numbers where they are one value (cheaper than arrays)
+        one = [a.item() if a.ndim == 0 else f for a, f in zip(args, flat)]
+        self.uc = pieces.load_constant(self.beta, one[1], one[6]) + 0 * self.beta
+        self.point = (self.beta, *one[1:8], one[9])
+        self.jump = _columns(pieces.point_jump(*self.point), n, dtype)
         g = self.gamma
-        self.lengths = (g, 1 - g) if self.two else (np.ones_like(g),)
+        self.drives = DRIVES if probe is None else DRIVES + PROBE_DRIVES
+        # the points in order along the lever: (position, J, G over the drives); the tip's index
+        tip_drives = self._drive_block(self.jump[:, 4:], DRIVES.index("d1"))
+        points = [(g, self.jump[:, :4].reshape(-1, 2, 2), tip_drives)]
+        self.tip = 0
+        if probe is not None:
+            if derivatives or split:
+                raise ValueError("a probed lever is solved for its response only")
+            at = np.broadcast_to(np.real(np.asarray(probe, dtype=float)), self.shape).reshape(-1)
+            # a force and a couple act on a point through the f0 and m0 columns of its jump, which
+            # hold no spring or mass: a bare point's drives are the tip's
+            forced = np.zeros_like(tip_drives)
+            forced[:, :, len(DRIVES):] = tip_drives[:, :, [DRIVES.index("f0"), DRIVES.index("m0")]]
+            if np.all(at == g):             # at the tip: its point takes them
+                points = [(g, points[0][1], tip_drives + forced)]
+            else:
+                first = at < g
+                if first.any() and not first.all():
+                    raise ValueError("the probe must lie on the same side of the tip throughout a batch")
+                self.tip = int(first.all())
+                points.insert(1 - self.tip, (at, np.zeros((n, 2, 2), dtype), forced))
+        self.two = len(points) > 1 or split or bool(np.any(g != 1.0))
+        self.points = points if self.two else []
+        bounds = [np.zeros_like(g)] + [p[0] for p in self.points] + [np.ones_like(g)]
+        self.starts = bounds[:-1]
+        self.lengths = tuple(b - a for a, b in zip(bounds[:-1], bounds[1:]))
         self.short = [np.abs(self.beta * ell) <= pieces.KD_SERIES_LIMIT for ell in self.lengths]
-        zero = np.zeros_like(g)
-        # (segment, t, d ell/d gamma, d t/d gamma) of the ends the rows use: clamp, tip (left, right), free end
-        self.ends = [(0, zero, 1.0, 0.0), (0, g, 1.0, 1.0)] + ([(1, zero, -1.0, 0.0), (1, 1 - g, -1.0, -1.0)]
-                                                               if self.two else [])
+        # (segment, t, d ell/d gamma, d t/d gamma) of the ends the rows use: each segment's start and
+        # end (the tip moves the segments about it: d/d gamma is +1 on its left, -1 on its right)
+        slopes = [1.0, -1.0] if len(self.lengths) == 2 and self.tip == 0 else [0.0] * len(self.lengths)
+        self.ends = [end for j, ell in enumerate(self.lengths)
+                     for end in ((j, np.zeros_like(g), slopes[j], 0.0), (j, ell, slopes[j], slopes[j]))]
         count = len(self.ends)
-        stacked = _Segment(np.tile(self.beta, count), np.concatenate([t for _, t, _, _ in self.ends]),
-                           np.concatenate([self.lengths[j] for j, _, _, _ in self.ends]),
-                           np.concatenate([self.short[j] for j, _, _, _ in self.ends]), np.tile(self.uc, count))
-        self.at = stacked.parts(count)
-        self.A, self.b = self._assemble(self.jump, [(e.E, e.P) for e in self.at])
+        rows, take = self._shared_rows([args[0], args[8]] + ([np.asarray(probe)] if probe is not None else []))
+        pick = (lambda x: x) if rows is None else (lambda x: x[rows])      # noqa: E731
+        uc = self.uc if rows is None else np.ones(len(rows), self.uc.dtype)
+        stacked = _Segment(np.concatenate([pick(self.beta)] * count), np.concatenate([pick(t) for _, t, _, _ in self.ends]),
+                           np.concatenate([pick(self.lengths[j]) for j, _, _, _ in self.ends]),
+                           np.concatenate([pick(self.short[j]) for j, _, _, _ in self.ends]),
+                           np.concatenate([uc] * count))
+        self.at = stacked.parts(count, take, None if rows is None else self.uc)
+        self.A, self.b = self._assemble(points, [(e.E, e.P) for e in self.at])
+
+    def _shared_rows(self, args):
+        """Members whose segments are the same (the same ``beta`` and points, other parameters
+        varying: a grid of springs): one row per distinct set and each member's row among them,
+        ``(rows, take)``; ``(None, None)`` when too little is shared to gain."""
+        small = np.broadcast_shapes(*(np.shape(a) for a in args))
+        m, n = math.prod(small), self.beta.shape[0]
+        if 2 * m > n:
+            return None, None
+        take = np.broadcast_to(np.arange(m).reshape(small), self.shape).reshape(-1)
+        rows = np.empty(m, int)
+        rows[take] = np.arange(n)
+        return rows, take
+
+    def _drive_block(self, G, first):
+        """A point's drive columns ``G`` (n, 2, m) placed among :attr:`drives` from column ``first``."""
+        G = G.reshape(G.shape[0], 2, -1)
+        out = np.zeros(G.shape[:2] + (len(self.drives),), G.dtype)
+        out[:, :, first:first + G.shape[-1]] = G
+        return out
 
     @cached_property
     def jump_partials(self):
@@ -199,41 +266,56 @@ class _Lever:
 
     @cached_property
     def _solved(self):
-        size = self.A.shape[-1]
+        size, nd = self.A.shape[-1], self.b.shape[-1]
         out = _solve(self.A, np.concatenate([self.b, np.broadcast_to(np.eye(size), self.A.shape)], -1))
-        return out[..., :4], out[..., 4:]
+        return out[..., :nd], out[..., nd:]
 
-    def _assemble(self, jump, ends, djump=None, dends=None):
-        """``A``, ``b`` from the jump and the segments' end values; with ``djump``, ``dends`` given,
-        their derivative (the system is linear in each but for ``J`` times the tip's state)."""
-        J, G = jump[:, :4].reshape(-1, 2, 2), jump[:, 4:].reshape(-1, 2, 3)
-        (E10, P10), (E1g, P1g), *right = dends or ends
-        if djump is None:
-            JE, JP = J @ E1g[:, 0:2], np.einsum("nij,nj->ni", J, P1g[:, 0:2])
-        else:
-            dJ, G = djump[:, :4].reshape(-1, 2, 2), djump[:, 4:].reshape(-1, 2, 3)
-            E, P = ends[1]
-            JE = dJ @ E[:, 0:2] + J @ E1g[:, 0:2]
-            JP = np.einsum("nij,nj->ni", dJ, P[:, 0:2]) + np.einsum("nij,nj->ni", J, P1g[:, 0:2])
-        size = 8 if self.two else 4
-        A = np.zeros((self.beta.shape[0], size, size), dtype=np.result_type(E1g, J, P1g))
-        b = np.zeros((self.beta.shape[0], size, 4), dtype=A.dtype)
-        A[:, 0:2, 0:4], b[:, 0:2, 3] = E10[:, 0:2], -P10[:, 0:2]         # clamp
-        if not self.two:                                                 # the tip at the free end
-            A[:, 2:4, 0:4], b[:, 2:4, 0:3], b[:, 2:4, 3] = E1g[:, 2:4] - JE, G, JP - P1g[:, 2:4]
-            return A, b
-        (E20, P20), (E2e, P2e) = right
-        A[:, 2:4, 0:4], A[:, 2:4, 4:8] = E1g[:, 0:2], -E20[:, 0:2]         # u, u' continuous at the tip
-        b[:, 2:4, 3] = (P20 - P1g)[:, 0:2]
-        A[:, 4:6, 0:4], A[:, 4:6, 4:8] = E1g[:, 2:4] - JE, -E20[:, 2:4]    # moment and shear jump there
-        b[:, 4:6, 0:3], b[:, 4:6, 3] = G, JP + P20[:, 2:4] - P1g[:, 2:4]
-        A[:, 6:8, 4:8], b[:, 6:8, 3] = E2e[:, 2:4], -P2e[:, 2:4]           # free end
+    def _assemble(self, points, ends, dpoints=None, dends=None):
+        """``A``, ``b`` from the points ``(position, J, G)`` and the segments' end values; with
+        ``dpoints``, ``dends`` given, their derivative (the system is linear in each but for each
+        point's ``J`` times the state there)."""
+        values = dends or ends
+        n, size = self.beta.shape[0], 4 * len(self.lengths)
+        dtype = np.result_type(values[1][0], points[0][1], values[1][1])
+        A = np.zeros((n, size, size), dtype=dtype)
+        b = np.zeros((n, size, len(self.drives)), dtype=dtype)
+        E0, P0 = values[0]
+        A[:, 0:2, 0:4], b[:, 0:2, _Q0] = E0[:, 0:2], -P0[:, 0:2]         # clamp
+        if dpoints is None:
+            b[:, 0, _Y0] = 1.0                                           # moved with the base: u(0) = y0
+        for i, (_, J, G) in enumerate(points):
+            (El, Pl), (dEl, dPl) = ends[2 * i + 1], values[2 * i + 1]
+            if dpoints is None:
+                JE, JP = J @ El[:, 0:2], np.einsum("nij,nj->ni", J, Pl[:, 0:2])
+            else:
+                dJ, G = dpoints[i]
+                JE = dJ @ El[:, 0:2] + J @ dEl[:, 0:2]
+                JP = np.einsum("nij,nj->ni", dJ, Pl[:, 0:2]) + np.einsum("nij,nj->ni", J, dPl[:, 0:2])
+            if not self.points:                 # the tip at the free end: its jump ends the lever
+                A[:, 2:4, 0:4], b[:, 2:4], b[:, 2:4, _Q0] = dEl[:, 2:4] - JE, G, JP - dPl[:, 2:4]
+                return A, b
+            left, right, r = slice(4 * i, 4 * i + 4), slice(4 * i + 4, 4 * i + 8), 4 * i + 2
+            Er, Pr = values[2 * i + 2]
+            A[:, r:r + 2, left], A[:, r:r + 2, right] = dEl[:, 0:2], -Er[:, 0:2]        # u, u' continuous
+            b[:, r:r + 2, _Q0] = (Pr - dPl)[:, 0:2]
+            A[:, r + 2:r + 4, left], A[:, r + 2:r + 4, right] = dEl[:, 2:4] - JE, -Er[:, 2:4]  # moment, shear jump
+            b[:, r + 2:r + 4] = G
+            b[:, r + 2:r + 4, _Q0] = JP + Pr[:, 2:4] - dPl[:, 2:4]
+        Ee, Pe = values[-1]
+        A[:, -2:, -4:], b[:, -2:, _Q0] = Ee[:, 2:4], -Pe[:, 2:4]         # free end
         return A, b
 
+    def _tip_partial(self, name):
+        """``(dJ, dG)`` of the tip's point w.r.t. ``name`` (zeros for a parameter it does not hold)."""
+        if name not in _POINT:
+            n = self.beta.shape[0]
+            return np.zeros((n, 2, 2), self.jump.dtype), np.zeros((n, 2, len(self.drives)), self.jump.dtype)
+        d = _columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
+        return d[:, :4].reshape(-1, 2, 2), self._drive_block(d[:, 4:], DRIVES.index("d1"))
+
     def _d_ends(self, name):
-        """Derivatives of the jump and of the ends' values w.r.t. ``name``."""
-        djump = (_columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
-                 if name in _POINT else np.zeros_like(self.jump))
+        """Derivatives of the points and of the ends' values w.r.t. ``name``."""
+        dpoints = [self._tip_partial(name)]
         dends = []
         for (j, t, d_ell, d_t), seg in zip(self.ends, self.at):
             d = seg.derivative(name, self.beta, t, self.lengths[j], np.full_like(t, d_ell), np.full_like(t, d_t))
@@ -242,22 +324,34 @@ class _Lever:
             elif name == "sigma":
                 d = (np.zeros_like(seg.E), np.zeros_like(seg.P))
             dends.append(d)
-        return djump, dends
+        return dpoints, dends
+
+    def _tip_points(self):
+        return self.points or [(self.gamma, self.jump[:, :4].reshape(-1, 2, 2),
+                                self._drive_block(self.jump[:, 4:], DRIVES.index("d1")))]
 
     def d_system_matrix(self, name):
         """``dA`` w.r.t. ``name``."""
-        djump, dends = self._d_ends(name)
-        return self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)[0]
+        dpoints, dends = self._d_ends(name)
+        return self._assemble(self._tip_points(), [(e.E, e.P) for e in self.at], dpoints, dends)[0]
+
+    def d_det_at_tip(self, adjugate, names):
+        """``tr(adj(A) dA)`` for parameters of the tip point alone (``k`` among them: the jump is
+        in units of the lever's stiffness): ``dA`` is ``-dJ`` times the tip's state, in the jump's
+        rows and the first segment's columns only."""
+        rows, E = self._jump_rows, self.at[1].E[:, 0:2]
+        adj = adjugate[:, 0:4, rows]
+        return [-np.einsum("nji,nij->n", adj, self._tip_partial(name)[0] @ E) for name in names]
 
     @property
     def _jump_rows(self):
         return slice(4, 6) if self.two else slice(2, 4)
 
     def _tip_state(self):
-        """``[u, z1]`` at the tip per drive (2 x 4): what a change of the jump acts on."""
+        """``[u, z1]`` at the tip per drive (2 x drives): what a change of the jump acts on."""
         E, P = self.at[1].E, self.at[1].P
         z = E[:, 0:2] @ self.c[:, 0:4]
-        z[:, :, 3] += P[:, 0:2]
+        z[:, :, _Q0] += P[:, 0:2]
         return z
 
     def d_system(self, names):
@@ -267,56 +361,59 @@ class _Lever:
         for name in names:
             if name in _POINT and name not in ("beta", "k"):
                 tip = self._tip_state() if tip is None else tip
-                dpart = _columns(self.jump_partials[name], self.beta.shape[0], self.jump.dtype)
-                dJ, dG = dpart[:, :4].reshape(-1, 2, 2), dpart[:, 4:].reshape(-1, 2, 3)
-                r = np.zeros_like(self.b, dtype=np.result_type(self.b, dpart))
-                r[:, self._jump_rows] = dJ @ tip
-                r[:, self._jump_rows, 0:3] += dG
+                dJ, dG = self._tip_partial(name)
+                r = np.zeros_like(self.b, dtype=np.result_type(self.b, dJ))
+                r[:, self._jump_rows] = dJ @ tip + dG
             else:
-                djump, dends = self._d_ends(name)
-                dA, db = self._assemble(self.jump, [(e.E, e.P) for e in self.at], djump, dends)
+                dpoints, dends = self._d_ends(name)
+                dA, db = self._assemble(self._tip_points(), [(e.E, e.P) for e in self.at], dpoints, dends)
                 r = db - dA @ self.c
             rhs.append(r)
         if not rhs:
             return {}
+        nd = self.b.shape[-1]
         dc = self.inverse @ np.concatenate(rhs, -1)
-        return {name: dc[..., 4 * i:4 * i + 4] for i, name in enumerate(names)}
+        return {name: dc[..., nd * i:nd * (i + 1)] for i, name in enumerate(names)}
 
     def reader(self, sigma):
         """The read-out at ``sigma``: its segment evaluation, which coefficients it uses, and how it
         moves with the tip."""
         sigma = np.broadcast_to(np.real(np.asarray(sigma, dtype=float)), self.shape).reshape(-1)
-        before = (sigma <= self.gamma) if self.two else np.ones(sigma.shape, bool)
-        g = self.gamma
-        t = np.where(before, sigma, sigma - g)
-        ell = np.where(before, self.lengths[0], self.lengths[-1])
-        short = np.where(before, self.short[0], self.short[-1])
+        index = sum((sigma > p[0]).astype(int) for p in self.points) if self.points else np.zeros(sigma.shape, int)
+        pick = lambda values: np.choose(index, values)   # noqa: E731  (one per segment, chosen per member)
+        t = sigma - pick(self.starts)
+        ell, short = pick(self.lengths), pick(self.short)
         seg = _Segment(self.beta, t, ell, short, self.uc)
-        coefficients = np.where(before[:, None, None], self.c[:, 0:4], self.c[:, 4:8] if self.two else 0.0)
-        return seg, t, ell, before, coefficients
+        return seg, t, ell, index, self._coefficients(index, self.c)
+
+    @staticmethod
+    def _coefficients(index, c):
+        """The coefficients of the segment each member reads (``index``)."""
+        rows = 4 * index[:, None] + np.arange(4)
+        return np.take_along_axis(c, rows[:, :, None], axis=1)
 
     def state(self, reader, dc=None):
-        seg, _, _, before, coefficients = reader
+        seg, _, _, index, coefficients = reader
         if dc is not None:
-            coefficients = np.where(before[:, None, None], dc[:, 0:4], dc[:, 4:8] if self.two else 0.0)
+            coefficients = self._coefficients(index, dc)
         z = seg.E @ coefficients
         if dc is None:
-            z[:, :, 3] += seg.P
+            z[:, :, _Q0] += seg.P
         return z
 
     def d_state(self, reader, name, dc):
-        """``d z(sigma)/d name`` (flat, 4 components x 4 drives)."""
-        seg, t, ell, before, coefficients = reader
+        """``d z(sigma)/d name`` (flat, 4 components x the drives)."""
+        seg, t, ell, index, coefficients = reader
         z = self.state(reader, dc)
-        side = np.where(before, 1.0, -1.0)
-        d = seg.derivative(name, self.beta, t, ell, side, np.where(before, 0.0, -1.0))
+        before = index == 0
+        d = seg.derivative(name, self.beta, t, ell, np.where(before, 1.0, -1.0), np.where(before, 0.0, -1.0))
         if d is None:
             if name == "k":
-                z[:, :, 3] -= seg.P / self.k[:, None]
+                z[:, :, _Q0] -= seg.P / self.k[:, None]
             return z
         dE, dP = d
         z = z + dE @ coefficients
-        z[:, :, 3] += dP
+        z[:, :, _Q0] += dP
         return z
 
     def out(self, x):
@@ -324,45 +421,59 @@ class _Lever:
         return x.reshape(self.shape + x.shape[1:])
 
 
-def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over :data:`DRIVES`.
+def _drive_columns(drives, known) -> list[int]:
+    unknown = [d for d in drives if d not in known]
+    if unknown:
+        raise ValueError(f"unknown drive {unknown[0]!r}: one of {', '.join(known)}")
+    return [known.index(d) for d in drives]
+
+
+def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES, probe=None):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
+    (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L`` when ``probe`` is given).
+    The deflection is absolute: driven by the base (``y0``), the deflection relative to the base
+    is this minus one.
 
     Examples
     --------
     >>> slopes, deflections = response(2.5, 1.0, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
     >>> [f"{v:.8g}" for v in slopes]
     ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
+    >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
+    [1.0]
     """
     beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
-    z = lever.state(lever.reader(sigma))
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
+    use = _drive_columns(drives, lever.drives)
+    z = lever.state(lever.reader(sigma))[:, :, use]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
     return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
 
 
-def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Slope ``u'(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``).
 
     Examples
     --------
     >>> [f"{v:.8g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
     ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[0]
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[0]
 
 
-def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """Deflection ``u(sigma L)`` per unit ``d1, d2, f0, q0`` (a tuple of arrays).
+def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Deflection ``u(sigma L)`` per unit drive (a tuple of arrays over ``drives``; absolute).
 
     Examples
     --------
     >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
     ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)[1]
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[1]
 
 
-def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS):
+def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS,
+                       drives=TIP_DRIVES):
     """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     Returns
@@ -378,6 +489,7 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
+    use = _drive_columns(drives, DRIVES)
     beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
     reader = lever.reader(sigma)
@@ -388,9 +500,9 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     for name in names:
         d = scale * lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1]
         columns[name] = lever.out(d + z1 / lever.L[:, None] if name == "beta" else d)
-    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0))
+    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
     jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
-                for i in range(4))
+                for i in use)
     return values, jac
 
 
@@ -433,8 +545,8 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     return lever.out(_scaled_det(lever)[0])
 
 
-def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-    """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS`.
+def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
+    """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     At a zero only their ratios matter: a resonance moves with ``p`` as ``d beta/d p = -D_p / D_beta``.
 
@@ -444,17 +556,17 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
     -1.875104
     """
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split=True)
+    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in wrt)
     det, d_beta, d_gamma, scale = _scaled_det(lever)
     # Jacobi's formula d det = tr(adj(A) dA), the adjugate from the SVD: finite at a resonance,
     # where A is singular and its inverse is not.
     adjugate = _adjugate(lever.A) * scale[:, None, None]
-    partials = []
-    for name in JACOBIAN_PARAMETERS:
+    at_tip = [p for p in JACOBIAN_PARAMETERS if p in wrt and p in _POINT and p != "beta"]
+    partials = dict(zip(at_tip, lever.d_det_at_tip(adjugate, at_tip)))
+    for name in (p for p in JACOBIAN_PARAMETERS if p in wrt and p not in partials):
         d = np.einsum("nij,nji->n", adjugate, lever.d_system_matrix(name))
-        d = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
-        partials.append(lever.out(d))
-    return lever.out(det), tuple(partials)
+        partials[name] = d + det * (d_beta if name == "beta" else d_gamma if name == "gamma" else 0.0)
+    return lever.out(det), tuple(lever.out(partials[p]) if p in partials else None for p in JACOBIAN_PARAMETERS)
 
 
 def _det(A):

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .errors import UserError
 
-__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "canonical", "flag",
+__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "canonical", "flag",
            "checked", "markdown_table"]
 
 
@@ -89,6 +89,22 @@ QUANTITIES: tuple[Quantity, ...] = (
              0.0, 100.0, open_low=False),
     Quantity("contact_loss", "x", "1", "contact dashpot omega1 eta/k1: loss tangent of the contact at f1",
              0.0, 1e4, open_low=False),
+    # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
+    Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
+             aliases=("temperature_k",)),
+    Quantity("medium", "medium", "1", "fluid around the lever: air, water (at --temperature) or DENSITY,VISCOSITY "
+             "(kg/m^3,Pa s)", 0.0, 0.0),
+    Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",
+             1e-12, 1e-3, aliases=("invols_m_per_v",)),
+    Quantity("length_uncertainty", "u(L)", "m", "standard uncertainty of a nominal length (default 2 % of it)",
+             0.0, 1e-2, open_low=False),
+    Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 % of it)",
+             0.0, 1e-2, open_low=False),
+    # What changed between two drive sweeps (``pfmdyn discrepancy AFTER --reference BEFORE``).
+    Quantity("added_mass_position", "x_m/L", "1", "where a point mass added to the free lever sits "
+             "(1: at the free end)", 0.0, 1.0),
+    Quantity("added_mass", "m_add", "kg", "point mass added to the free lever (a cell), explained from two "
+             "drive sweeps", 0.0, 1.0, open_low=False, option=False),
     # What an instrument measured and its settings (instrument files, ``pfmdyn inspect``).
     Quantity("free_quality_factor", "Q_free", "1", "measured Q of the first free resonance (thermal tune fit)",
              0.1, 1e9, option=False),
@@ -111,6 +127,8 @@ CONTACT = ("k1", "k2", "k2_over_k1", "poisson")
 """Names describing the contact (:class:`pfmdyn.Contact`)."""
 DAMPING = ("quality_factor", "viscous_loss", "contact_loss")
 """The three damping mechanisms: internal friction, viscous drag, contact dashpot."""
+CALIBRATION = ("temperature", "medium", "invols", "length_uncertainty", "width_uncertainty")
+"""What calibrating the free lever takes besides its size: the fluid and its temperature, the detector."""
 MEASURED = ("free_quality_factor", "contact_resonance", "contact_quality_factor", "drive_frequency", "tip_bias")
 """What an instrument file may hold besides the lever: measured resonances, their Q, the drive settings."""
 

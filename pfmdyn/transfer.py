@@ -33,6 +33,22 @@ class ElasticTransfer(NamedTuple):
     distributed_load: np.ndarray
 
 
+class BaseTransfer(NamedTuple):
+    """Driven at the base (the clamp moved by ``y0``, a dither piezo), per unit ``y0`` (m): the slope
+    at the laser spot (1/m) and the deflection there relative to the base (m/m)."""
+
+    slope: np.ndarray
+    deflection: np.ndarray
+
+
+class ThermalNoise(NamedTuple):
+    """One-sided power spectral densities of the lever's thermal motion read at the laser spot: the
+    slope (rad**2/Hz) and the deflection (m**2/Hz)."""
+
+    slope: np.ndarray
+    deflection: np.ndarray
+
+
 class FrictionlessTransfer(NamedTuple):
     """Tip slope per unit d1, f0, q0 (Eq. 23)."""
 

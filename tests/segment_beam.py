@@ -114,6 +114,10 @@ def _extra_digits(beta) -> int:
     return int(2 * big / math.log(10) + 6 * max(0.0, -math.log10(abs(b)))) + 10
 
 
+DRIVES = ("d1", "d2", "f0", "q0", "y0", "m0")
+"""The reference's drives: the tip's, the load, the base, a couple at the tip."""
+
+
 def _mp_basis(mp, kappa, x):
     c, s, ch, sh = mp.cos(kappa * x), mp.sin(kappa * x), mp.cosh(kappa * x), mp.sinh(kappa * x)
     rows = [[c, s, ch, sh], [-s, c, sh, ch], [-c, -s, ch, sh], [s, -c, sh, ch]]
@@ -121,7 +125,7 @@ def _mp_basis(mp, kappa, x):
 
 
 def _mp_system(mp, beta, *, k, L, H, kvv, kll, kvl, mu, gamma, rho_g):
-    """``M`` and the right-hand sides (per unit ``d1, d2, f0, q0``) of the two-segment beam, and
+    """``M`` and the right-hand sides (per unit drive, :data:`DRIVES`) of the two-segment beam, and
     the particular solution (per unit ``q0``).  All arguments mpmath numbers, ``beta != 0``."""
     EI = k * L**3 / 3
     kappa = beta / L
@@ -132,12 +136,14 @@ def _mp_system(mp, beta, *, k, L, H, kvv, kll, kvl, mu, gamma, rho_g):
     two = gamma != 1
     n = 8 if two else 4
     M = mp.zeros(n, n)
-    R = mp.zeros(n, 4)                            # columns: d1, d2, f0, q0
+    R = mp.zeros(n, len(DRIVES))                  # columns: DRIVES
     B0, left = _mp_basis(mp, kappa, 0), _mp_basis(mp, kappa, a)
     for i in (0, 1):                              # clamp
         for j in range(4):
             M[i, j] = B0[i][j]
     R[0, 3] = -up
+    R[0, 4] = 1                                   # the clamp moved with the base: u(0) = y0
+    R[2, 5] = 1                                   # the couple m0 turns as the lateral force's moment does
     u_row, du_row = left[0], left[1]
     # springs F = -K (w - d), w = (u, H u'); constants per drive (d1, d2, q0 through u_p)
     Fv_row = [-(kvv * u + kvl * H * du) for u, du in zip(u_row, du_row)]
@@ -171,14 +177,14 @@ def _mp_args(mp, beta, params):
 
 
 def spot_response_mp(beta, sigmas, *, dps=60, check=False, **params):
-    """``[(slopes, deflections)]`` per ``sigma`` in ``sigmas``, each a tuple over ``d1, d2, f0, q0``
+    """``[(slopes, deflections)]`` per ``sigma`` in ``sigmas``, each a tuple over :data:`DRIVES`
     (mpmath numbers at ``dps`` significant digits); arguments as :func:`spot_response` but
     ``beta != 0`` (complex allowed, as are complex springs, ``k`` and ``mu``)."""
     mp = mpmath.mp
     with mp.workdps(dps + _extra_digits(beta)):
         b, p = _mp_args(mp, beta, params)
         M, R, up = _mp_system(mp, b, **p)
-        columns = [mp.lu_solve(M, R.column(d)) for d in range(4)]
+        columns = [mp.lu_solve(M, R.column(d)) for d in range(len(DRIVES))]
         kappa, a, L = b / p["L"], p["gamma"] * p["L"], p["L"]
         out = []
         for sigma in sigmas:

@@ -23,9 +23,10 @@ import pytest
 from pfmdyn import composed
 
 sys.path.insert(0, str(Path(__file__).parent))
+import segment_beam  # noqa: E402
 from segment_beam import spot_response_mp  # noqa: E402
 
-DRIVES = ("d1", "d2", "f0", "q0")
+DRIVES = segment_beam.DRIVES      # the tip's, the load, the base and a couple at the tip
 BETAS = (1e-3, 1e-2, 0.1, 0.6, 1.9, 4.2, 9.0, 23.0, 57.0, 120.0, 200.0)
 TOLERANCE = 1e-9
 
@@ -57,7 +58,7 @@ def _spots(rng, gamma):
 
 def _worst(p, beta, sigma):
     """Largest relative difference (and where) of composed's slope and deflection to the reference."""
-    slopes, deflections = composed.response(beta, sigma, **{n: p[n] for n in composed.PARAMETERS})
+    slopes, deflections = composed.response(beta, sigma, **{n: p[n] for n in composed.PARAMETERS}, drives=DRIVES)
     reference = spot_response_mp(beta, sigma, **p)
     worst = (0.0, None)
     for i, (ref_slope, ref_deflection) in enumerate(reference):

@@ -68,11 +68,10 @@ def test_baseline_exact_names_nothing(tmp_path):
 
 @pytest.mark.parametrize("hidden,name,polar", [
     ({"Q": 100.0}, "damping", False),
-    ({"viscous_hz": 1500.0}, "damping", True),
+    pytest.param({"viscous_hz": 1500.0}, "damping", True, marks=pytest.mark.slow),
     ({"mu": 0.2}, "tip_mass", True),
-    ({"gamma": 0.9}, "tip_setback", False),
-    ({"alpha": 0.3}, "tilt", True),
-])
+    pytest.param({"alpha": 0.3}, "tilt", True, marks=pytest.mark.slow),
+])       # a hidden set-back: test_undamped_random_lever_effect_found, test_discrepancy_honest; wide sweeps in benchmarks/
 def test_hidden_effect_is_named(tmp_path, hidden, name, polar):
     text = spectrum(_beam(**hidden), FREQ, polar=polar, seed=3)
     report = _run(tmp_path, text)
@@ -86,14 +85,21 @@ def test_hidden_effect_is_named(tmp_path, hidden, name, polar):
 
 
 def test_row_order_does_not_change_the_report(tmp_path):
-    """Instrument order (one sweep per bias), frequency-grouped and shuffled rows: one report."""
+    """Instrument order (one sweep per bias), frequency-grouped and shuffled rows: the analysis
+    receives the same data, element for element (the reader orders the rows), so one report,
+    which names the damping."""
     beam = _beam(viscous_hz=1500.0)
-    reports = []
+    data = []
     for order in ("instrument", "frequency", "shuffled"):
-        report = _run(tmp_path, spectrum(beam, FREQ[::2], (-1.0, 0.0, 2.0), seed=2, order=order))
-        reports.append(json.dumps(report.to_dict(), sort_keys=True, default=str))
-    assert reports[0] == reports[1] == reports[2]
-    assert '"missing_effects": ["damping"]' in reports[0]
+        path = tmp_path / f"{order}.csv"
+        path.write_text(spectrum(beam, FREQ[::2], (-1.0, 0.0, 2.0), seed=2, order=order))
+        data.append(read(path))
+    for other in data[1:]:
+        assert other.metadata == data[0].metadata
+        for name in ("frequency_hz", "bias_v", "response"):
+            assert np.array_equal(getattr(other, name), getattr(data[0], name)), name
+    report = analyse(data[2], progress=False)
+    assert report["missing_effects"] == ["damping"]
 
 
 def test_cli_hidden_background(tmp_path):
@@ -123,6 +129,7 @@ def test_plot_axis_follows_data(tmp_path):
     assert 0.5 < low < 2 and 3 < high < 10
 
 
+@pytest.mark.slow
 def test_vertical_only_start_finds_lateral_stiffness(tmp_path):
     path = tmp_path / "d.csv"
     path.write_text(spectrum(_beam(), FREQ, seed=7))
@@ -259,6 +266,7 @@ def test_overrides_order_and_quality_factors(tmp_path):
         read(path)
 
 
+@pytest.mark.slow
 def test_random_lever_in_instrument_order(tmp_path):
     """One fixed-seed case of the benchmark's generator (benchmarks/discrepancy.py): a random
     lever with viscous damping and a set-back tip, rows one bias sweep after another."""
@@ -271,9 +279,8 @@ def test_random_lever_in_instrument_order(tmp_path):
 
 
 @pytest.mark.parametrize("seed,hidden,parameter,tolerance", [
-    (8002, "tip_mass", "tip_mass_ratio", 0.01),       # soft long lever (k 0.05 N/m, L 382 um), stiff contact
     (11003, "tip_setback", "tip_position", 0.005),  # stiff short lever (k 10 N/m, L 173 um)
-])
+])       # more levers and effects, undamped and damped: benchmarks/discrepancy.py (pass rates)
 def test_undamped_random_lever_effect_found(tmp_path, seed, hidden, parameter, tolerance):
     """Undamped spectra have needle peaks: the effect is found only when the peaks are
     located as poles and the fit starts on the curve of exact peak matches.  The FE mesh

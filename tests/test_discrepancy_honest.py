@@ -159,7 +159,8 @@ def _honest_or_exact(report: dict, hidden: list[str]) -> str:
     return "honest"
 
 
-@pytest.mark.parametrize("seed", [0, 1], ids=["soft-tip-0.71L", "stiff-tip-0.74L"])
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0], ids=["soft-tip-0.71L"])      # the class's sweep: benchmarks/discrepancy_acquisition.py
 def test_large_setback_named_exactly(tmp_path, seed):
     """Soft (k 0.62 N/m, tip at 0.711 L) and stiff (k 14.5 N/m, tip at 0.739 L) levers with
     viscous damping, three biases, 1-2 % noise, instrument order: damping and the set-back are
@@ -179,18 +180,16 @@ def test_large_setback_named_exactly(tmp_path, seed):
 
 
 @pytest.mark.parametrize("kind, seed", [("gain_drift", 1), ("band_air", 1)])
-def test_misfit_outside_the_library_is_unexplained_not_a_background(tmp_path, kind, seed):
-    """A detector gain drifting by 0.4 % between bias sweeps (with air damping), and air
-    damping alone (width ~ sqrt f) sampled in bands: no library effect explains what is left
-    once damping is named; a background lowered it by reshaping the peaks (a false
-    ``background`` before), and is now refused with the reason: ``unexplained`` with where."""
+def test_air_damping_is_the_fluid_not_a_background(tmp_path, kind, seed):
+    """A detector gain drifting by 0.4 % between bias sweeps (with air damping), and air damping
+    alone (width ~ sqrt f) sampled in bands.  Before the fluid's law was in the library, the
+    damping named left a misfit that a background lowered by reshaping the peaks (refused, and
+    reported as unexplained); with it, the damping is the fluid's and the gap is at the noise."""
     text, truth = acquisition_case(seed, kind)
     report = _analyse(_read_text(tmp_path, text))
-    assert _honest_or_exact(report, truth["hidden"]) == "honest"
-    assert report["missing_effects"] == ["damping"] and report["gap_after"] > 2
-    refused = [row for step in report["steps"] for row in step.get("candidates", []) if "refused" in row]
-    assert refused and all(row["effect"] == "background" for row in refused)
-    assert "reshapes the peaks" in refused[0]["refused"]
+    assert _honest_or_exact(report, truth["hidden"]) == "exact", report["missing_effects"]
+    assert report["missing_effects"] == ["damping"] and report["damping_mechanisms"] == ["fluid"]
+    assert report["gap_after"] <= 1.5 and report["unexplained"] is None
 
 
 def _damped_lever(seed: int, law: str, gamma: float = 1.0) -> tuple[str, dict]:
@@ -241,12 +240,13 @@ def test_spring_starts_do_not_depend_on_the_damping_law(tmp_path, seed, gamma):
     assert all(abs(v - gamma) < 0.03 for v in tip.values()), tip
 
 
+@pytest.mark.slow
 def test_same_named_set_under_every_damping_law(tmp_path):
-    """The set-back lever (tip at 0.85 L) under viscous, air (sqrt f) and internal damping:
+    """The set-back lever (tip at 0.85 L) under air (sqrt f) and internal damping:
     damping and the set-back are named for each, nothing else, the gap within the unexplained
     threshold (air damping named a false background before: its smooth remainder, 0.4 % of
     the response, below the noise)."""
-    for law in ("viscous", "air", "internal"):
+    for law in ("air", "internal"):         # (viscous: test_hidden_effect_is_named and the spring starts above)
         text, _ = _damped_lever(0, law, 0.85)
         report = _analyse(_read_text(tmp_path, text))
         assert sorted(report["missing_effects"]) == ["damping", "tip_setback"], (law, report["missing_effects"])
@@ -254,11 +254,13 @@ def test_same_named_set_under_every_damping_law(tmp_path):
         assert abs(report["parameters"]["tip_position"]["value"] - 0.85) < 0.02, law
 
 
-def test_band_air_setback_is_honest(tmp_path):
-    """Bands around three contact modes, air damping and the tip at 0.82 L: damping and the
-    set-back are named and nothing else; no mechanism of the library has the sqrt f width, so
-    the misfit left (gap 6.6) is reported as unexplained, with where."""
+@pytest.mark.slow
+def test_band_air_setback_is_explained_by_the_fluid(tmp_path):
+    """Bands around three contact modes, air damping (width ~ sqrt f) and the tip at 0.82 L: damping
+    and the set-back are named and nothing else, the mechanism is the fluid's (its law with
+    frequency; before it was in the library the gap stopped at 6.6) and the gap is at the noise."""
     text, truth = acquisition_case(1, "band_air_setback")
     report = _analyse(_read_text(tmp_path, text))
-    assert _honest_or_exact(report, truth["hidden"]) in ("exact", "honest")
-    assert "tip_setback" in report["missing_effects"]
+    assert sorted(report["missing_effects"]) == truth["hidden"], report["missing_effects"]
+    assert report["damping_mechanisms"] == ["fluid"], report["damping_mechanisms"]
+    assert report["gap_after"] <= 1.5 and report["unexplained"] is None, report["gap_after"]

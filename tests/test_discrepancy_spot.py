@@ -15,6 +15,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import BETA1, acquisition_case  # noqa: E402
@@ -61,6 +62,7 @@ def test_spot_away_from_the_end_is_named(tmp_path):
     assert report["unexplained"] is None and report["gap_after"] < 1.5
 
 
+@pytest.mark.slow
 def test_spot_that_hides_a_mode_is_named(tmp_path):
     """A full sweep where the spot (0.80 L) sits near the slope node of contact mode 1, so
     that no peak shows it: the springs are matched to the two visible peaks with a mode left

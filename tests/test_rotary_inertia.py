@@ -107,7 +107,8 @@ def test_stiffness_model_recovers_k1_with_a_turning_tip(seed):
     of the FE lever (J on the tip node), to 1e-5 (higher modes see k1 less: the FE's 1e-7 in
     frequency grows there); without J it is off by more."""
     from pfmdyn import Cantilever
-    from pfmdyn.analysis.contact_resonance import Lateral, betas, k1_at
+    from pfmdyn import Contact
+    from pfmdyn.analysis.contact_resonance import betas, k1_at
     p = _lever(np.random.default_rng(40 + seed))
     beam = FEBeam(n_elements=N_ELEMENTS, **p)
     f1 = float(beam.free_resonances(1)[0])
@@ -116,7 +117,7 @@ def test_stiffness_model_recovers_k1_with_a_turning_tip(seed):
     for r_g in (p["gyration_radius"], 0.0):
         lever = Cantilever(p["k"], f1, p["L"], tip_height=p["H"], tip_position=p["gamma"], tip_mass_ratio=p["mu"],
                            tip_gyration_radius=r_g, tilt=-math.degrees(p["alpha"]))
-        found[r_g] = [float(k1_at(betas(lever, f), mode, lever, Lateral(ratio=0.85), p["gamma"]))
+        found[r_g] = [float(k1_at(betas(lever, f), mode, lever, Contact(k2_over_k1=0.85), p["gamma"]))
                       for mode, f in enumerate(contact_hz, 1)]
     error = abs(found[p["gyration_radius"]][0] / p["k1"] - 1)
     assert error < 1e-5

@@ -47,7 +47,7 @@ def test_exact_beam_matches_the_composed_model_and_the_tilt_sign():
     for tilt, close in ((12.0, True), (-12.0, False)):
         lever = lever_of(e, tip_position=0.93, tilt=tilt)
         modes = cr.mode_numbers(cr.betas(lever, exact), lever, 300.0, 50.0, 0.93)
-        k1 = [float(cr.k1_at(b, m, lever, cr.Lateral(fixed=50.0), 0.93))
+        k1 = [float(cr.k1_at(b, m, lever, Contact(k2=50.0), 0.93))
               for b, m in zip(cr.betas(lever, exact), (1, 2))]
         assert (np.allclose(k1, 300.0, rtol=1e-9) and modes.tolist() == [1, 2]) == close
 
@@ -142,9 +142,9 @@ def test_propagated_uncertainty_of_k1_and_tip_position_matches_the_scatter(examp
     """Gaussian noise on both contact frequencies: the scatter of the refit equals the propagated sigma."""
     lever, sigma = lever_of(EXAMPLE), 30.0
     truth = {"k1": 300.0, "tip_position": 0.93}
-    cov = cr.covariance(lever, cr.Lateral(), example_hz, truth, sigma)
+    cov = cr.covariance(lever, Contact(), example_hz, truth, sigma)
     rng = np.random.default_rng(3)
-    draws = np.array([list(cr.fit(lever, cr.Lateral(), np.array(example_hz) + sigma * rng.standard_normal(2),
+    draws = np.array([list(cr.fit(lever, Contact(), np.array(example_hz) + sigma * rng.standard_normal(2),
                                   truth)[0].values()) for _ in range(150)])
     ratio = draws.std(axis=0) / np.sqrt(np.diag(cov))
     assert np.all(np.abs(ratio - 1) < 0.2), ratio          # 150 draws: about 6 % scatter of a std

@@ -69,11 +69,12 @@ for _name in _FAMILIES:
 def _setback_at_end():
     at_paper = {mu: 0, kvv: k1, kll: k2, kvl: 0}
     J, G = (part.subs(at_paper) for part in point_jump())
+    drives = POINT_DRIVES[:3]           # the paper's: d1, d2, f0 (no couple)
 
     def tip_at_end(z):          # the tip's jump with nothing beyond the end: z_left = J z + G d
-        jump = J * sp.Matrix(z[:2]) + G * sp.Matrix(POINT_DRIVES)
+        jump = J * sp.Matrix(z[:2]) + G[:, :3] * sp.Matrix(drives)
         return [z[2] - jump[0], z[3] - jump[1]]
-    den, slope = clamped_segment_slope(tip_at_end, POINT_DRIVES)
+    den, slope = clamped_segment_slope(tip_at_end, drives)
     rows, ok = [], True
     for drive, printed in P.ELASTIC.items():
         cmp = compare(printed / P.N, (slope[drive] / den).subs(s, beta))

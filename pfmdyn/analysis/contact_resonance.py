@@ -11,8 +11,8 @@ make the inverse problem exact and checkable:
    tip has mass).
 2. **Polynomial in the springs.**  The rotated springs are linear in ``(k1, k2)`` and the
    characteristic holds them linearly and through ``kvv kll - kvl**2 = k1 k2`` only: at a
-   fixed ``beta`` and tip position it is bilinear in ``(k1, k2)``.  With ``k2 = k2_0 + r k1``
-   (:class:`Lateral`) it is a polynomial in ``k1`` of degree 1 (``r = 0``) or 2, so at most
+   fixed ``beta`` and tip position it is bilinear in ``(k1, k2)``.  With ``k2`` given or tied,
+   ``k2 = r k1`` (:class:`pfmdyn.Contact`), it is a polynomial in ``k1`` of degree 1 or 2, so at most
    two ``k1`` put a resonance at a measured frequency, found in closed form
    (:func:`k1_at`); two modes at a known tip position give ``(k1, k2)`` from a quadratic
    (:func:`k1_k2_at`).
@@ -36,16 +36,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever
+from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
-__all__ = ["GRID_STEP", "BETA_MIN", "Lateral", "characteristic", "betas", "mode_numbers", "k1_at", "k1_k2_at",
-           "branch_limits", "tip_position_scan", "beta_shifts", "fit", "covariance", "Crossings",
-           "require_tip_height"]
+__all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_candidates", "k1_at",
+           "k1_k2_at", "branch_limits", "spring_parts", "tip_position_scan", "beta_shifts", "fit", "covariance",
+           "Crossings", "require_tip_height"]
 
 GRID_STEP = 0.02
 """Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
@@ -53,27 +53,6 @@ BETA_MIN = 0.3
 """Lowest ``beta`` searched (the generated characteristic's domain, ``Re beta > 0.3``)."""
 _STEP = 1e-30          # complex step: exact first derivatives in beta
 _STIFF = 1e12          # k1 / k of the stiff (k1 -> oo) limit
-
-
-@dataclass(frozen=True)
-class Lateral:
-    """The lateral spring as a function of ``k1``: ``k2 = fixed + ratio * k1`` (N/m, 1).
-
-    >>> Lateral(ratio=0.5).k2(100.0), Lateral(fixed=20.0).degree
-    (50.0, 1)
-    """
-
-    fixed: float = 0.0
-    ratio: float = 0.0
-
-    def k2(self, k1):
-        """``k2`` at ``k1``."""
-        return self.fixed + self.ratio * k1
-
-    @property
-    def degree(self) -> int:
-        """Degree of the characteristic in ``k1`` (fact 2 of the module)."""
-        return 2 if self.ratio else 1
 
 
 def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
@@ -99,7 +78,8 @@ def _free_root(lever: Cantilever, tip_position: float) -> float:
 
 
 def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
-    """``beta = beta_1 sqrt(f / f1)`` of frequencies ``f`` (Hz) with the tip at ``tip_position``.
+    """``beta = beta_1 sqrt(f / f1)`` of frequencies ``f`` (Hz) with the tip at ``tip_position`` (``f1`` in
+    vacuum; in a medium, times ``(1 + Re load)**(1/4)``, its added mass).
 
     >>> round(float(betas(Cantilever(2.0, 7e4, 2e-4), 4 * 7e4)), 10)
     3.7502081374
@@ -109,7 +89,10 @@ def betas(lever: Cantilever, frequency, tip_position=None) -> np.ndarray:
         b1 = np.array([_free_root(lever, float(g)) for g in np.ravel(gamma)]).reshape(np.shape(gamma))
     else:
         b1 = _free_root(lever, float(gamma))
-    return formulas.beta_from_frequency(np.asarray(frequency, dtype=float), lever.free_resonance, b1)
+    f = np.asarray(frequency, dtype=float)
+    beta = formulas.beta_from_frequency(f, lever.vacuum_resonance, b1)
+    # in a medium, its added mass at each frequency (an undamped inversion takes no loss)
+    return beta if lever.medium is None else beta * (1.0 + np.real(lever.fluid_load(f))) ** 0.25
 
 
 def mode_numbers(beta, lever: Cantilever, k1, k2, tip_position) -> np.ndarray:
@@ -143,33 +126,51 @@ def _polish(g, x, iterations: int = 6):
     return x
 
 
-def k1_at(beta, mode, lever: Cantilever, lateral: Lateral, tip_position) -> np.ndarray:
+def _degree(contact: Contact) -> int:
+    """Degree of the characteristic in ``k1`` (module, fact 2): 2 when ``k2`` is tied to ``k1``."""
+    return 2 if contact.ratio else 1
+
+
+def k1_candidates(f, scale: float, degree: int) -> list[np.ndarray]:
+    """The ``k1`` zeroing ``f(k1) = c0 + c1 k1 (+ c2 k1**2)``, a characteristic along a contact's
+    path (module, fact 2), from ``f`` at ``k1 = 0, scale`` (and ``1e4 scale``); NaN where complex.
+
+    The one inversion of the stiffness code: the whole lever's (:func:`k1_at`) and the paper's
+    lever's in closed form, per pixel of a map (:mod:`pfmdyn.analysis.stiffness`).  The roots are
+    analytic in ``f``'s other arguments: at ``beta + i h`` their imaginary parts are ``h`` times
+    their slopes (complex step).
+
+    >>> f = lambda k1: 6.0 - 5.0 * k1 + k1**2
+    >>> sorted(float(r.real) for r in k1_candidates(f, 1.0, 2))
+    [2.0, 3.0]
+    """
+    f0, fs = f(0.0), f(scale)
+    with np.errstate(all="ignore"):
+        if degree == 1:
+            return [-f0 * scale / (fs - f0)]
+        big = 1e4 * scale
+        slope_s, slope_big = (fs - f0) / scale, (f(big) - f0) / big
+        c2 = (slope_big - slope_s) / (big - scale)
+        c1 = slope_s - c2 * scale
+        root = np.sqrt(c1 * c1 - 4 * c2 * f0 + 0j)
+        return [np.where(np.abs(r.imag) <= 1e-9 * np.abs(r), r, np.nan)
+                for r in ((-c1 + root) / (2 * c2), (-c1 - root) / (2 * c2))]
+
+
+def k1_at(beta, mode, lever: Cantilever, contact: Contact, tip_position) -> np.ndarray:
     """The ``k1`` (N/m) making ``beta`` resonance ``mode``; NaN where none does (vectorised).
 
-    The characteristic at ``beta`` is a polynomial of degree ``lateral.degree`` in ``k1``
-    (module, fact 2): its coefficients come from the characteristic at ``k1 = 0, k, 1e4 k``,
-    its real positive roots are polished by Newton steps on the characteristic itself, and
-    the root whose ``beta`` is mode ``mode`` is kept (fact 3).
+    The characteristic at ``beta`` is a polynomial of degree :func:`_degree` in ``k1``
+    (module, fact 2): its real positive roots (:func:`k1_candidates`) are polished by Newton
+    steps on the characteristic itself, and the root whose ``beta`` is mode ``mode`` is kept (fact 3).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4)
-    >>> round(float(k1_at(betas(lever, 300e3), 1, lever, Lateral(), 1.0)), 4)   # the paper's model
+    >>> round(float(k1_at(betas(lever, 300e3), 1, lever, Contact(), 1.0)), 4)   # the paper's model
     109.7483
     """
     beta, gamma = np.broadcast_arrays(np.asarray(beta, dtype=float), np.asarray(tip_position, dtype=float))
-    k = lever.spring_constant
-    f = lambda k1: characteristic(beta, lever, k1, lateral.k2(k1), gamma)    # noqa: E731
-    f0, fs = f(0.0), f(k)
-    with np.errstate(all="ignore"):
-        if lateral.degree == 1:
-            candidates = [-f0 * k / (fs - f0)]
-        else:
-            big = 1e4 * k
-            slope_s, slope_big = (fs - f0) / k, (f(big) - f0) / big
-            c2 = (slope_big - slope_s) / (big - k)
-            c1 = slope_s - c2 * k
-            root = np.sqrt(c1 * c1 - 4 * c2 * f0 + 0j)
-            candidates = [np.where(np.abs(r.imag) <= 1e-9 * np.abs(r), r.real, np.nan)
-                          for r in ((-c1 + root) / (2 * c2), (-c1 - root) / (2 * c2))]
+    f = lambda k1: characteristic(beta, lever, k1, contact.k2_of(k1), gamma)    # noqa: E731
+    candidates = [c.real for c in k1_candidates(f, lever.spring_constant, _degree(contact))]
     out = np.full(beta.shape, np.nan)
     for candidate in candidates:
         candidate = np.where(np.isfinite(candidate) & (candidate > 0), candidate, np.nan)
@@ -177,24 +178,24 @@ def k1_at(beta, mode, lever: Cantilever, lateral: Lateral, tip_position) -> np.n
             continue
         candidate = _polish(f, candidate)
         ok = np.isfinite(candidate) & (candidate > 0)
-        ok &= mode_numbers(beta, lever, np.where(ok, candidate, 0.0), lateral.k2(np.where(ok, candidate, 0.0)),
+        ok &= mode_numbers(beta, lever, np.where(ok, candidate, 0.0), contact.k2_of(np.where(ok, candidate, 0.0)),
                            gamma) == mode
         out = np.where(ok & np.isnan(out), candidate, out)
     return out
 
 
-def branch_limits(mode: int, lever: Cantilever, lateral: Lateral, tip_position: float) -> tuple[float, float]:
+def branch_limits(mode: int, lever: Cantilever, contact: Contact, tip_position: float) -> tuple[float, float]:
     """``beta`` of resonance ``mode`` at ``k1 = 0`` and ``k1 -> oo`` (``k1 = 1e12 k``).
 
     Every resonance is nondecreasing in ``k1`` (the contact springs add a positive
     semi-definite stiffness), so a resonance of this mode lies between the two.
 
-    >>> [round(b, 4) for b in branch_limits(1, Cantilever(2.0, 7e4, 2e-4), Lateral(), 1.0)]
+    >>> [round(b, 4) for b in branch_limits(1, Cantilever(2.0, 7e4, 2e-4), Contact(), 1.0)]
     [1.8751, 3.9266]
     """
     out = []
     for k1 in (0.0, _STIFF * lever.spring_constant):
-        f = lambda b: characteristic(b, lever, k1, lateral.k2(k1), tip_position)   # noqa: E731
+        f = lambda b: characteristic(b, lever, k1, contact.k2_of(k1), tip_position)   # noqa: E731
         top = BETA_MIN + 6.0 * (mode + 1)         # above any branch limit of a lever tipped at >= 0.5 L
         grid = np.arange(BETA_MIN, top, GRID_STEP)
         values = f(grid)
@@ -207,8 +208,14 @@ def branch_limits(mode: int, lever: Cantilever, lateral: Lateral, tip_position: 
     return out[0], out[1]
 
 
-def _parts(beta, lever: Cantilever, tip_position, scale_k1: float, scale_k2: float):
-    """``F = P + k1 Q + k2 R + k1 k2 S`` at ``beta`` (module, fact 2)."""
+def spring_parts(beta, lever: Cantilever, tip_position, scale_k1: float, scale_k2: float):
+    """``(P, Q, R, S)`` of the characteristic ``F = P + k1 Q + k2 R + k1 k2 S`` at ``beta``
+    (module, fact 2), from ``F`` at ``k1 = 0, scale_k1`` and ``k2 = 0, scale_k2``.
+
+    >>> p, q, r, s = spring_parts(3.0, Cantilever(2.0, 7e4, 2e-4), 1.0, 2.0, 1.0)
+    >>> round(float(-p / q), 4)        # k1 (N/m) making beta = 3 a resonance, k2 = 0
+    14.2352
+    """
     f = lambda k1, k2: characteristic(beta, lever, k1, k2, tip_position)     # noqa: E731
     p = f(0.0, 0.0)
     q = (f(scale_k1, 0.0) - p) / scale_k1
@@ -232,7 +239,7 @@ def k1_k2_at(beta_pair, mode_pair, lever: Cantilever, tip_position: float) -> li
     """
     k, H = lever.spring_constant, lever.tip_height
     scale_k2 = formulas.k2_from_ratio(1.0, k, H, lever.length)     # k2 H**2/(k L**2) = 1
-    (p1, q1, r1, s1), (p2, q2, r2, s2) = (_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
+    (p1, q1, r1, s1), (p2, q2, r2, s2) = (spring_parts(b, lever, tip_position, k, scale_k2) for b in beta_pair)
     coefficients = [q2 * s1 - s2 * q1, p2 * s1 + q2 * r1 - r2 * q1 - s2 * p1, p2 * r1 - r2 * p1]
     out = []
     with np.errstate(all="ignore"):
@@ -278,32 +285,32 @@ class Crossings:
                 "interval proof)")
 
 
-def _k1_curves(lever, lateral, contact_hz, modes, gammas):
+def _k1_curves(lever, contact, contact_hz, modes, gammas):
     """``k1`` of each mode alone at each tip position, and the same compactified to
     ``s = k1 / (k1 + k)``, continued past the branch: ``-(soft - beta) / soft`` below its soft
     limit (no ``k1`` is small enough), ``1 + (beta - stiff) / stiff`` above its stiff limit
     (none is large enough).  So ``s`` is continuous in ``gamma`` and its curves of two modes
     change order exactly where they cross, even where both run off to ``k1 -> oo``."""
     b = np.stack([betas(lever, f, gammas) for f in contact_hz])
-    k1 = np.stack([k1_at(b[i], m, lever, lateral, gammas) for i, m in enumerate(modes)])
+    k1 = np.stack([k1_at(b[i], m, lever, contact, gammas) for i, m in enumerate(modes)])
     s = k1 / (k1 + lever.spring_constant)
     for i, m in enumerate(modes):
         for j in np.flatnonzero(np.isnan(k1[i])):
-            soft, stiff = branch_limits(m, lever, lateral, float(gammas[j]))
+            soft, stiff = branch_limits(m, lever, contact, float(gammas[j]))
             beta = b[i][j]
             s[i][j] = -(soft - beta) / soft if beta <= soft else 1.0 + (beta - stiff) / stiff
     return k1, s
 
 
-def _crossings(lever, lateral, contact_hz, modes, gammas):
-    _, s = _k1_curves(lever, lateral, contact_hz[:2], modes[:2], gammas)
+def _crossings(lever, contact, contact_hz, modes, gammas):
+    _, s = _k1_curves(lever, contact, contact_hz[:2], modes[:2], gammas)
     d = s[1] - s[0]
     brackets = [i for i in range(len(gammas) - 1) if d[i] * d[i + 1] < 0]
     brackets += [i - 0.5 for i in range(len(gammas)) if d[i] == 0.0]
     return sorted(brackets)
 
 
-def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, low: float = 0.5,
+def tip_position_scan(lever: Cantilever, contact: Contact, contact_hz, modes, low: float = 0.5,
                       points: int = 101) -> Crossings:
     """``(tip_position, k1)`` explaining the first two resonances, by crossing their ``k1(gamma)`` curves.
 
@@ -316,19 +323,19 @@ def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, lo
     >>> from pfmdyn.roots.bracket import grid_roots
     >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5)   # tip at 0.9 L, k1 = 100 N/m, k2 = 0
     >>> b = grid_roots(lambda x: characteristic(x, lever, 100.0, 0.0, 0.9), np.arange(1, 9, 0.01))[:2]
-    >>> c = tip_position_scan(lever, Lateral(), 7e4 * (b / lever.free_root()) ** 2, (1, 2), low=0.8)
+    >>> c = tip_position_scan(lever, Contact(), 7e4 * (b / lever.free_root()) ** 2, (1, 2), low=0.8)
     >>> [round(g, 9) for g in c.tip_positions], [round(k, 6) for k in c.k1]
     ([0.9], [100.0])
     """
     from scipy.optimize import brentq
 
     def curves(g):
-        return _k1_curves(lever, lateral, contact_hz[:2], modes[:2], np.array([g]))
+        return _k1_curves(lever, contact, contact_hz[:2], modes[:2], np.array([g]))
 
     def crossings(count):
         gammas = np.linspace(low, 1.0, count)
         found = []
-        for i in _crossings(lever, lateral, contact_hz, modes, gammas):
+        for i in _crossings(lever, contact, contact_hz, modes, gammas):
             if i != int(i):                                # a grid point on the crossing
                 g = float(gammas[int(i + 0.5)])
             else:
@@ -346,15 +353,15 @@ def tip_position_scan(lever: Cantilever, lateral: Lateral, contact_hz, modes, lo
                      (int(modes[0]), int(modes[1])))
 
 
-def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -> np.ndarray:
+def beta_shifts(lever: Cantilever, contact: Contact, contact_hz, values: dict) -> np.ndarray:
     """Shift in ``beta`` from each measured resonance to the nearest root of the model (a Newton step).
 
-    >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
+    >>> beta_shifts(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3], {"k1": 100.0}).round(6)   # k1 too soft
     array([-0.017213])
     """
     gamma = values.get("tip_position", lever.tip_position)
     k1 = values["k1"]
-    k2 = values["k2"] if "k2" in values else lateral.k2(k1)
+    k2 = values["k2"] if "k2" in values else contact.k2_of(k1)
     b = betas(lever, contact_hz, gamma)
     value = characteristic(b + 1j * _STEP * b, lever, k1, k2, gamma)
     return -value.real / (value.imag / (_STEP * b))
@@ -363,11 +370,11 @@ def beta_shifts(lever: Cantilever, lateral: Lateral, contact_hz, values: dict) -
 _BOUNDS = {"k1": (0.0, np.inf), "k2": (0.0, np.inf), "tip_position": (0.05, 1.0)}
 
 
-def fit(lever: Cantilever, lateral: Lateral, contact_hz, start: dict) -> tuple[dict, float]:
+def fit(lever: Cantilever, contact: Contact, contact_hz, start: dict) -> tuple[dict, float]:
     """Least-squares polish of ``start`` (names -> values) on all resonances; the RMS ``beta`` shift.
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4)
-    >>> values, rms = fit(lever, Lateral(), [300e3], {"k1": 109.7})
+    >>> values, rms = fit(lever, Contact(), [300e3], {"k1": 109.7})
     >>> round(values["k1"], 4), rms < 1e-12
     (109.7483, True)
     """
@@ -381,14 +388,14 @@ def fit(lever: Cantilever, lateral: Lateral, contact_hz, start: dict) -> tuple[d
     x0 = np.clip(np.array([start[n] for n in names]) / scale, low, high)
 
     def residual(x):
-        return beta_shifts(lever, lateral, contact_hz, dict(zip(names, x * scale)))
+        return beta_shifts(lever, contact, contact_hz, dict(zip(names, x * scale)))
     with np.errstate(all="ignore"):
         sol = least_squares(residual, x0, bounds=(low, high), xtol=1e-15, ftol=1e-15, gtol=1e-15, method="trf")
     values = {n: float(v) for n, v in zip(names, sol.x * scale)}
     return values, float(np.sqrt(np.mean(sol.fun ** 2)))
 
 
-def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, contact_stderr: float = 0.0,
+def covariance(lever: Cantilever, contact: Contact, contact_hz, values: dict, contact_stderr: float = 0.0,
                free_stderr: float = 0.0, spring_constant_stderr: float = 0.0) -> np.ndarray:
     """First-order covariance of ``values`` (their order) from the input standard uncertainties.
 
@@ -396,7 +403,7 @@ def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, co
     theorem ``d values / d data = -pinv(J_values) J_data``, both Jacobians by central
     differences of the residuals (relative step 1e-6).
 
-    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Lateral(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
+    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
     >>> round(float(np.sqrt(cov[0, 0])), 3)   # N/m
     0.393
     """
@@ -405,7 +412,7 @@ def covariance(lever: Cantilever, lateral: Lateral, contact_hz, values: dict, co
 
     def residual(p, data):
         lv = replace(lever, free_resonance=data[-2], spring_constant=data[-1])
-        return beta_shifts(lv, lateral, data[:-2], dict(zip(names, p)))
+        return beta_shifts(lv, contact, data[:-2], dict(zip(names, p)))
 
     p0 = np.array([values[n] for n in names])
     d0 = np.concatenate([fc, [lever.free_resonance, lever.spring_constant]])

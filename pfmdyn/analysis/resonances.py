@@ -21,8 +21,9 @@ result with ``certified = False``, the reason, and no numbers.
 Damping (``quality_factor``, ``viscous_loss``, ``contact_loss``).  Each mode's complex
 frequency ``r_c = f_c / f1`` is the zero of the damped characteristic (the generated damping
 factors are analytic in ``r``), followed from the undamped root as the losses grow from zero
-to the given ones (the secant method at each step: a heavily damped mode's root lies far from
-the undamped one, where a single secant run lands on another mode's root or on ``beta = 0``);
+to the given ones in :data:`_STEPS` steps (:func:`pfmdyn.roots.damped.follow`, the one damped-root
+engine, also the discrepancy's: a heavily damped mode's root lies far from the undamped one,
+where a single run may land on another mode's root or on ``beta = 0``);
 ``Q = |r_c| / (2 Im r_c)``, the damped frequency is ``f1 Re r_c``.  A mode whose root cannot be
 followed, or that is overdamped (the root reaches the imaginary axis: no oscillation), has no
 Q, damped or peak frequency: NaN, with the reason in ``Modes.undetermined``.  The amplitude-peak frequency
@@ -37,13 +38,14 @@ from fractions import Fraction
 
 import flint
 import numpy as np
-from scipy.optimize import minimize_scalar, newton
+from scipy.optimize import minimize_scalar
 
 from ..cantilever import Cantilever, Contact
 from .. import composed, composed_balls
 from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, certify
+from ..roots.damped import follow
 
 __all__ = ["Modes", "ResonanceResult", "resonances"]
 
@@ -142,11 +144,14 @@ class ResonanceResult:
         proof = [f"{m.complete_below_hz:.1f} Hz ({label})" for label, m in (("free", self.free),
                                                                            ("contact", self.in_contact)) if m.hz]
         lines.append("certified: no resonance missed or counted twice below " + " and ".join(proof))
+        if self.lever.medium is not None:
+            lines.append(f"in {self.lever.medium.name}: 'resonance' is the undamped lever's in vacuum, the others "
+                         "are in the medium")
         return "\n".join(lines)
 
 
 def _damped(lever: Cantilever, contact: Contact | None) -> bool:
-    return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0
+    return (math.isfinite(lever.quality_factor) or lever.viscous_loss > 0 or lever.medium is not None
             or (contact is not None and contact.contact_loss > 0))
 
 
@@ -205,7 +210,7 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
         return ResonanceResult(lever, contact, reason=str(exc))
     finally:
         flint.ctx.prec = old
-    f1 = flint.arb(_fmpq(lever.free_resonance))
+    f1 = flint.arb(_fmpq(lever.vacuum_resonance))      # the undamped modes are the lever's in vacuum
     beta1 = free_balls[0]
 
     def hz(ball):
@@ -225,44 +230,40 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
                            certified=True)
 
 
-def _damped_characteristic(lever: Cantilever, contact: Contact | None, r):
-    """The damped characteristic at (complex) ``r = f / f1`` (the probe's own damping
-    substitution, :meth:`pfmdyn.Cantilever.model_arguments`)."""
-    return composed.characteristic(*lever.model_arguments(r * lever.free_resonance, contact))
+def _damped_characteristic(lever: Cantilever, contact: Contact | None, r, fluid: float = 1.0):
+    """The damped characteristic at (complex) ``r = f / f1`` (``f1`` in vacuum; the probe's own damping
+    substitution, :meth:`pfmdyn.Cantilever.model_arguments`, with ``fluid`` times a medium's load)."""
+    return composed.characteristic(*lever.model_arguments(r * lever.vacuum_resonance, contact, fluid=fluid))
 
 
 def _slope(lever: Cantilever, contact: Contact | None, r):
     """Slope per unit drive at real ``r``: ``d1`` in contact, ``q0`` when free (the probe's own
     damped response, :meth:`pfmdyn.Cantilever.response`)."""
-    response = lever.response(np.asarray(r, dtype=float) * lever.free_resonance, contact or Contact(k1=0.0))
+    response = lever.response(np.asarray(r, dtype=float) * lever.vacuum_resonance, contact or Contact(k1=0.0))
     return response.vertical if contact is not None else response.distributed_load
 
 
 _STEPS = 24
-"""Steps of the losses from zero to the given ones along which each damped root is followed."""
+"""Steps of the losses from zero to the given ones along which each damped root is followed (a probe's
+Q may be near critical: finer than the discrepancy fits')."""
 
 
-def _followed_root(lever: Cantilever, contact: Contact | None, rn: float) -> tuple[complex, str]:
-    """The damped root ``r_c`` continuing the undamped root ``rn``, and '' or why there is none."""
+def _followed_roots(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[np.ndarray, list]:
+    """The damped roots ``r_c`` continuing the undamped roots ``r0``, and per mode '' or why there is none."""
     inv_q, g = 1.0 / lever.quality_factor, lever.viscous_loss
     x = contact.contact_loss if contact is not None else 0.0
-    path = [complex(rn, 0.0)]
-    for s in (np.arange(1, _STEPS + 1) / _STEPS) ** 2:      # fine steps first, where the root turns
+
+    def f(r, s):
         q = min(1.0 / (s * inv_q), 1e9) if inv_q else math.inf
-        step_lever = replace(lever, quality_factor=q, viscous_loss=s * g)
         step_contact = replace(contact, contact_loss=s * x) if contact is not None else None
-        guess = path[-1] if len(path) < 2 else 2 * path[-1] - path[-2]       # linear extrapolation
-        try:
-            rc = complex(newton(lambda r, lv=step_lever, ct=step_contact: complex(_damped_characteristic(lv, ct, r)),
-                                guess, x1=guess + complex(1e-4, 1e-4) * rn, tol=1e-14 * rn, maxiter=100))
-        except (RuntimeError, ZeroDivisionError):
-            return complex(math.nan, math.nan), _lost(path[-1])
-        if not (math.isfinite(rc.real) and math.isfinite(rc.imag)) or abs(rc - path[-1]) > 0.5 * abs(path[-1]):
-            return complex(math.nan, math.nan), _lost(path[-1])
-        if rc.real <= 1e-6 * abs(rc):
-            return complex(math.nan, math.nan), "overdamped: the mode does not oscillate (no resonance)"
-        path.append(rc)
-    return path[-1], ""
+        # a medium's load grows with the other losses, from the vacuum's undamped roots
+        return _damped_characteristic(replace(lever, quality_factor=q, viscous_loss=s * g), step_contact, r, s)
+
+    out = follow(f, r0, _STEPS)
+    why = ["overdamped: the mode does not oscillate (no resonance)" if over
+           else "two modes lead to the same damped root" if shared else _lost(complex(last)) if np.isnan(rc) else ""
+           for rc, last, over, shared in zip(out.roots, out.last, out.overdamped, out.shared)]
+    return out.roots, why
 
 
 def _lost(last: complex) -> str:
@@ -275,16 +276,10 @@ def _lost(last: complex) -> str:
 def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple[tuple, tuple, tuple, tuple]:
     """(Q, damped Hz, peak Hz, why undetermined) of the modes near the undamped roots ``r0``
     (NaN and the reason where a mode has none)."""
-    f1 = lever.free_resonance
-    roots, why = [], []
+    f1 = lever.vacuum_resonance
     with np.errstate(all="ignore"):
-        for rn in r0:
-            rc, reason = _followed_root(lever, contact, rn)
-            roots.append(rc)
-            why.append(reason)
-        for i, rc in enumerate(roots):      # two modes followed onto one root: neither is known
-            if any(j != i and abs(rc - other) <= 1e-9 * abs(rc) for j, other in enumerate(roots)):
-                why[i] = "two modes lead to the same damped root"
+        roots, why = _followed_roots(lever, contact, r0)
+        roots = [complex(rc) for rc in roots]
         q = tuple(math.nan if w else abs(rc) / (2 * abs(rc.imag)) if rc.imag else math.inf
                   for rc, w in zip(roots, why))
         damped_hz = tuple(math.nan if w else f1 * rc.real for rc, w in zip(roots, why))
@@ -305,7 +300,8 @@ def _peak(lever: Cantilever, contact: Contact | None, rc: complex, rn: float) ->
     centre, width = rc.real, max(abs(rc.imag), 1e-9 * rn)
     lo, hi = max(centre - 4 * width, 0.5 * centre), centre + 4 * width
     grid = np.linspace(lo, hi, 81)
-    magnitude = np.abs(_slope(lever, contact, grid))
+    # exactly at an undamped mode's real root the response is singular (NaN): its peak
+    magnitude = np.nan_to_num(np.abs(_slope(lever, contact, grid)), nan=np.inf)
     # The local maximum nearest the mode (a wide window of a damped mode may hold a neighbour's
     # higher peak); none inside the window: no peak of its own.
     inner = np.flatnonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] >= magnitude[2:])) + 1

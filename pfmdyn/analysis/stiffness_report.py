@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever, Contact
+from ..cantilever import DEFAULT_POISSON, Cantilever, Contact
 from ..errors import UserError
 from ..generated import formulas
 from . import contact_resonance as cr
@@ -180,24 +180,22 @@ def _check_inputs(contact_hz, modes, stderrs):
     return fc, modes
 
 
-def _lateral(lever: Cantilever, contact: Contact, default: str) -> tuple[cr.Lateral, str]:
+def _lateral(lever: Cantilever, contact: Contact, default: str) -> tuple[Contact, str]:
     """The k2 law and its words: stated, else ``default`` ("tie": Mindlin; "zero": the L1/L method)."""
     stated_nonzero = (contact.k2 or 0.0) > 0 or (contact.ratio or 0.0) > 0
     if stated_nonzero:
         cr.require_tip_height(lever, "a lateral contact stiffness k2")
-    if contact.k2 is not None:
-        return cr.Lateral(fixed=float(contact.k2)), contact.describe_k2()
-    if contact.ratio is not None:
-        return cr.Lateral(ratio=contact.ratio), contact.describe_k2()
+    if contact.k2 is not None or contact.ratio is not None:
+        return contact, contact.describe_k2()
     if lever.tip_height is None and lever.tilt == 0.0:
-        return cr.Lateral(), ("k2 left out: without a tip height (--tip-height) the lateral spring does not act "
-                              "on the lever")
+        return Contact(), ("k2 left out: without a tip height (--tip-height) the lateral spring does not act "
+                           "on the lever")
     if default == "zero":
-        return cr.Lateral(), ("k2 = 0, the L1/L method's assumption (give --k2, --k2-over-k1 or --poisson to "
-                              "include it)")
-    ratio = contact.tie()
-    return cr.Lateral(ratio=ratio), (f"k2 tied to k1 by Mindlin at Poisson's ratio 0.3 (assumed: k2 = {ratio:.3g} k1; "
-                                     "give --k2, --k2-over-k1 or --poisson)")
+        return Contact(), ("k2 = 0, the L1/L method's assumption (give --k2, --k2-over-k1 or --poisson to "
+                           "include it)")
+    tied = Contact(poisson=DEFAULT_POISSON)
+    return tied, (f"k2 tied to k1 by Mindlin at Poisson's ratio {DEFAULT_POISSON:g} (assumed: k2 = {tied.ratio:.3g} k1; "
+                  "give --k2, --k2-over-k1 or --poisson)")
 
 
 def _same(a: dict, b: dict) -> bool:
@@ -213,7 +211,7 @@ def _keep(lever, lateral, fc, modes, candidates, check_modes: bool = True) -> li
             out.append((values, rms))
             continue
         gamma = values.get("tip_position", lever.tip_position)
-        k2 = values["k2"] if "k2" in values else lateral.k2(values["k1"])
+        k2 = values["k2"] if "k2" in values else lateral.k2_of(values["k1"])
         placed = replace(lever, tip_position=gamma)
         # The model's resonance nearest each measured one (they differ in a least-squares fit).
         nearest = cr.betas(placed, fc) + cr.beta_shifts(lever, lateral, fc, values)
@@ -241,7 +239,7 @@ def _k1_only(lever, lateral, words, fc, modes):
     # Each mode's own k1 has its mode number checked; their least-squares compromise need not
     # reproduce any resonance exactly, so its modes are not counted again.
     found = _keep(lever, lateral, fc, modes, [{"k1": float(np.median(k1s))}], check_modes=False)
-    degree = "1 (k2 fixed)" if lateral.degree == 1 else "2 (k2 tied to k1)"
+    degree = "2 (k2 tied to k1)" if lateral.ratio else "1 (k2 fixed)"
     proof = [f"mode {m}: at the measured frequency the characteristic is a polynomial of degree {degree} in k1; of "
              f"its positive roots exactly one puts the resonance at mode {m} (the roots below it counted): one k1"
              for m in modes]
@@ -266,7 +264,7 @@ def _k1_k2(lever, fc, modes, noise_beta: float):
     cr.require_tip_height(lever, "k1 and k2 from two modes")
     b = cr.betas(lever, fc)
     candidates = cr.k1_k2_at(b[:2], modes[:2], lever, lever.tip_position)
-    found = _keep(lever, cr.Lateral(), fc, modes, [{"k1": k1, "k2": k2} for k1, k2 in candidates])
+    found = _keep(lever, Contact(), fc, modes, [{"k1": k1, "k2": k2} for k1, k2 in candidates])
     proof = [f"modes {modes[0]} and {modes[1]} with the tip at {lever.tip_position:g} L: the characteristic is "
              f"bilinear in (k1, k2); eliminating k2 leaves a quadratic in k1 with {len(candidates)} root(s) giving "
              f"k1 > 0, k2 >= 0, {len(found)} of them with the measured mode numbers"
@@ -290,7 +288,7 @@ def _two_readings(lever, fc, modes, noise_beta: float):
     pairs, proof_pairs = [], ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
     if lever.tip_height is not None:
         pairs, proof_pairs = _k1_k2(lever, fc, modes, noise_beta)
-    tips, proof_tips, _ = _k1_tip(lever, cr.Lateral(), fc, modes, noise_beta)
+    tips, proof_tips, _ = _k1_tip(lever, Contact(), fc, modes, noise_beta)
     both = ": both explain them equally" if pairs and tips else ""
     proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position are "
               "three unknowns, so no answer is unique; the two usual readings are (k1, k2) with the tip at "
@@ -307,7 +305,7 @@ def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=Non
     sigma = {n: float(math.sqrt(max(cov[i, i], 0.0))) for i, n in enumerate(values)}
     k1 = values["k1"]
     acts = lever.tip_height is not None or lever.tilt != 0.0
-    k2 = values["k2"] if "k2" in values else (float(lateral.k2(k1)) if acts else None)
+    k2 = values["k2"] if "k2" in values else (float(lateral.k2_of(k1)) if acts else None)
     e_star = e_sigma = None
     if hertz is not None:
         radius, load = hertz
@@ -365,10 +363,10 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         found, proof, k1_by_mode = _k1_only(lever, lateral, words, fc, modes)
     elif tip_position_stated:
         found, proof = _k1_k2(lever, fc, modes, noise)
-        lateral, words = cr.Lateral(), "k2 solved with k1 from the modes"
+        lateral, words = Contact(), "k2 solved with k1 from the modes"
     else:
         found, proof = _two_readings(lever, fc, modes, noise)
-        lateral, words = cr.Lateral(), "none stated: k2 solved with k1, or k2 = 0 with the tip position solved"
+        lateral, words = Contact(), "none stated: k2 solved with k1, or k2 = 0 with the tip position solved"
         settled = False
     if k1_by_mode and found and found[0][1] > max(3 * noise, 1e-9):
         notes.append("the modes disagree beyond their uncertainties (k1 from each mode alone differs): the lever "

@@ -36,7 +36,8 @@ __all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks", "instrument_res
 
 @dataclass(frozen=True)
 class ThermalPeak:
-    """One fitted flexural mode (1-based): f0 (Hz), Q, peak amplitude A and white floor w (units of the ASD), 1-sigma errors."""
+    """One fitted flexural mode (1-based): f0 (Hz), Q, peak amplitude A and white floor w (units of the ASD), 1-sigma errors;
+    ``covariance`` of (f0, Q, A, w) from the fit (None when the fit gave none)."""
 
     mode: int
     frequency_hz: float
@@ -45,6 +46,7 @@ class ThermalPeak:
     white: float
     frequency_uncertainty_hz: float
     quality_factor_uncertainty: float
+    covariance: tuple | None = None
 
 
 def oscillator_asd(f, f0, q, amplitude, white):
@@ -137,11 +139,13 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
                                    p0=guess, maxfev=5000)
         except (RuntimeError, ValueError):
             continue
-        err = np.sqrt(np.clip(np.diag(pcov), 0, None)) if np.all(np.isfinite(pcov)) else np.full(4, np.nan)
+        finite = bool(np.all(np.isfinite(pcov)))
+        err = np.sqrt(np.clip(np.diag(pcov), 0, None)) if finite else np.full(4, np.nan)
         if not (f[window][0] < popt[0] < f[window][-1]):
             continue
         out.append(ThermalPeak(mode, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
-                               float(err[0]), float(err[1])))
+                               float(err[0]), float(err[1]),
+                               tuple(map(tuple, pcov.tolist())) if finite else None))
     return out
 
 

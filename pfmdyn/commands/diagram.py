@@ -23,11 +23,11 @@ def add_arguments(parser) -> None:
                         help="Table 1 cantilever, or 'custom' with --spring-constant --length --width --thickness "
                              "(SI: N/m, m)")
     flags.add_lever(parser, _CUSTOM)
-    flags.add_lever(parser, ("spot_position",))
+    flags.add_lever(parser, ("spot_position",), medium=False)
     # The paper's values where the diagram needs a number (Figs. 6-7); the lossless lever as in the paper.
     flags.add_damping(parser, ("quality_factor",), defaults={"quality_factor": (None, "lossless, as in the paper")})
     flags.add_contact(parser, ("k1",), defaults={"k1": (PAPER_K1, f"{PAPER_K1:g}, the paper's")})
-    flags.add_lever(parser, ("tip_height",), defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
+    flags.add_lever(parser, ("tip_height",), medium=False, defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
     parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF, help=f"d_eff, m/V ({PAPER_D_EFF:g})")
     parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
                         help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
@@ -73,7 +73,7 @@ def _cli_cantilever(args):
                 quality_factor=_quality_factor(args))
         except ValueError as exc:
             raise UserError(str(exc)) from None
-        return lever, custom["width"]
+        return _in_medium(args, lever, custom["width"]), custom["width"]
     if args.cantilever not in TABLE1:
         raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
     given = [flag(name) for name in custom]
@@ -83,7 +83,12 @@ def _cli_cantilever(args):
         lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    return lever, TABLE1[args.cantilever][0]
+    return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
+
+
+def _in_medium(args, lever, width):
+    """The lever (resonance from its geometry: in vacuum) in ``--medium``, or as it is."""
+    return lever.with_medium(flags.medium_from_args(args), width) if args.medium else lever
 
 
 def _write_csv(path, response: ResponseMap) -> None:

@@ -6,12 +6,13 @@ import argparse
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from ..discrepancy.report import medium_comparison
 from ..discrepancy.resonances import analyse_resonances
 from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
-from ..discrepancy.inputs import read
+from ..discrepancy.inputs import is_sweep, read
 from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from . import flags
@@ -32,8 +33,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
+    flags.add(group, ("medium", "temperature"))
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
+    sweeps = parser.add_argument_group("drive sweeps (.txt/.dat): the free lever driven at its base, in a fluid")
+    sweeps.add_argument("--reference", metavar="BEFORE",
+                        help="the drive sweep before the change: lever, fluid, gain and background calibrated on it, "
+                             "DATA explained from them (an added mass, a gain or background change, or nothing)")
+    flags.add(sweeps, ("added_mass_position",))
 
 
 OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance")
@@ -46,10 +53,51 @@ def _analyse(data, args):
     return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
 
 
+def _lever_in_medium(data, args):
+    """The data's lever (its measured free resonance) in ``--medium``: it needs the width."""
+    meta = data.metadata
+    found = {"spring_constant": meta.k, "length": meta.L, "width": meta.width, "free_resonance": meta.f1}
+    return flags.cantilever(args, {k: v for k, v in found.items() if v is not None})
+
+
+def _sweeps(args) -> int:
+    """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
+    from ..discrepancy.sweep import compare_sweeps, fit_sweep
+    from ..io.sweeps import read_sweep_table
+
+    if args.plot:
+        raise UserError(f"{args.data}: --plot is not available for drive sweeps (the JSON holds the fit)")
+    if args.reference and not is_sweep(args.reference):
+        raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table)")
+    values = flags.given(args, ("spring_constant", "length", "width", "added_mass_position"))
+    flags.require(values, ("spring_constant", "length"), args.data)
+    after = read_sweep_table(args.data)
+    before = read_sweep_table(args.reference) if args.reference else None
+    medium = flags.medium_from_args(args, {"medium": (before or after).medium} if (before or after).medium else None,
+                                    default="water")
+    try:
+        with threadpool_limits(1, user_api="blas"):
+            fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
+            result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
+                        "check the spring constant and length") from None
+    if before:
+        print(fit.report())
+    print(result.report())
+    if args.json == "-":
+        print(dumps(result.to_dict()))
+    elif args.json:
+        write_json(args.json, result.to_dict())
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
     check_writable(args.json)
     check_writable(args.plot, figure=True)
+    if is_sweep(args.data) or args.reference:
+        return _sweeps(args)
     data = read(args.data, flags.given(args, OVERRIDES))
     stride = 1
     if isinstance(data, SpectrumData):
@@ -66,7 +114,15 @@ def run(args: argparse.Namespace) -> int:
                         "check the metadata (spring constant, length, tip height, free resonance)") from None
     if stride > 1:
         report = report.updated(frequency_stride=stride)
+    if args.medium:
+        report = report.updated(medium=medium_comparison(report.to_dict(), _lever_in_medium(data, args)))
     print(report.report())
+    if args.medium:
+        m = report.to_dict()["medium"]
+        fitted = "no free-mode damping fitted" if m["fitted_quality_factor"] is None else \
+            f"the fitted damping gives Q {m['fitted_quality_factor']:.4g}"
+        print(f"medium: {m['medium']} predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
+              f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     if args.json == "-":

@@ -12,10 +12,12 @@ from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
+from ..medium import Medium
 from ..io.record import FIELDS, MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
 
-__all__ = ["add", "add_lever", "add_contact", "add_damping", "given", "require", "cantilever", "contact", "option_hint"]
+__all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "given",
+           "require", "cantilever", "contact", "option_hint"]
 
 
 def add(parser, names, required=(), defaults=None) -> None:
@@ -36,8 +38,9 @@ def add(parser, names, required=(), defaults=None) -> None:
                             help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
 
 
-def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
-    """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``).
+def add_lever(parser, names=LEVER, required=(), defaults=None, medium: bool = True) -> None:
+    """Flags of the lever, its tip and the spot (``--spring-constant ... --spot-position``), and with
+    ``medium`` the fluid around it (``--medium --temperature``, and ``--width`` it acts across).
 
     ``defaults`` maps a name to ``(value, words)``: the value taken when the flag is not given
     (checked like a given one by :func:`given`) and how ``--help`` states it.
@@ -48,6 +51,8 @@ def add_lever(parser, names=LEVER, required=(), defaults=None) -> None:
     ('0.93', 1e-05)
     """
     add(parser, names, required, defaults)
+    if medium:
+        add(parser, [n for n in ("medium", "width", "temperature") if n not in names])
 
 
 def add_contact(parser, names=CONTACT, required=(), defaults=None) -> None:
@@ -59,6 +64,37 @@ def add_damping(parser, names=DAMPING, defaults=None) -> None:
     """Flags of the three damping mechanisms (``--quality-factor --viscous-loss --contact-loss``);
     ``defaults`` as in :func:`add_lever`."""
     add(parser, names, defaults=defaults)
+
+
+def add_medium_arguments(parser, width_required: bool = False) -> None:
+    """``--medium --width --temperature``: the fluid around the lever and the width it acts on.
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_medium_arguments(p)
+    >>> p.parse_args(["--medium", "water", "--temperature", "298.15"]).medium
+    'water'
+    """
+    add(parser, ("medium", "width", "temperature"), required=("width",) if width_required else ())
+
+
+def medium_from_args(args, found: dict | None = None, default: str = "air") -> Medium:
+    """The :class:`~pfmdyn.medium.Medium` of ``--medium`` at ``--temperature`` (K); ``found`` (values a
+    file holds: ``medium``, ``temperature``) fills what the flags leave out, then ``default`` at 293.15 K.
+
+    >>> import argparse
+    >>> medium_from_args(argparse.Namespace(medium=None, temperature="313.15")).name
+    'air at 40 C'
+    >>> medium_from_args(argparse.Namespace(medium="1000,1e-3", temperature=None)).viscosity
+    0.001
+    """
+    found = found or {}
+    values = given(args, ("temperature",))
+    temperature = values.get("temperature", found.get("temperature", 293.15))
+    text = getattr(args, "medium", None) or found.get("medium") or default
+    try:
+        return Medium.parse(text, temperature)
+    except UserError as exc:
+        raise UserError(f"{NAMES['medium'].flag}: {exc}") from None
 
 
 def given(args, names) -> dict[str, float]:
@@ -108,6 +144,9 @@ def cantilever(args, found: dict | None = None) -> Cantilever:
     values.update(given(args, LEVER + ("quality_factor", "viscous_loss")))
     if values.get("quality_factor") is None:
         values["quality_factor"] = math.inf
+    if getattr(args, "medium", None) or (found or {}).get("medium"):      # else vacuum, the paper's case
+        values["medium"] = medium_from_args(args, found)
+        require(values, ("width",))
     return Cantilever.from_values(values)
 
 

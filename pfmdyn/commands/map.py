@@ -67,7 +67,7 @@ def add_arguments(parser) -> None:
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
-    flags.add_lever(parser, _LEVER)
+    flags.add_lever(parser, _LEVER, medium=False)     # the map models fit their own damping
     flags.add_contact(parser, _CONTACT)
 
 

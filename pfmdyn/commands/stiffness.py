@@ -124,7 +124,8 @@ def _lever(args, found: dict):
         notes.append("length not given and not needed (no tip height, no tilt)")
     if args.tip_position is not None:
         values["tip_position"] = checked("tip_position", args.tip_position, "--tip-position")
-    return flags.cantilever(argparse.Namespace(), values), notes
+    medium = argparse.Namespace(medium=args.medium, temperature=args.temperature)
+    return flags.cantilever(medium, values), notes
 
 
 def _is_contact_map(path: str) -> bool:

@@ -25,11 +25,37 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
+import numpy as np
+
+from ..fitting.parameters import CONTACT_LOSS, FLUID_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
 from .. import composed
 from ..generated import formulas
 
-__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters"]
+__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters", "drag",
+           "fluid_law"]
+
+
+def fluid_law(r):
+    """The drag per unit ``fluid_loss`` at ``r = f / f1`` (complex allowed): ``sqrt(r)``, a half-power
+    width growing as ``sqrt(f)``: the loss of a Stokes layer, Sader's ``Gamma`` at high Reynolds
+    number (``1 + 2 sqrt(2) (1 + i) / sqrt(Re)``), carried as a drag
+    (:func:`pfmdyn.derivations.damping.fluid_as_drag`).  The added mass of the same term is left out:
+    the fit takes the measured resonances as they are; a lever of known width in a known medium has the
+    whole load from :class:`pfmdyn.Cantilever` (``medium``).
+
+    >>> complex(fluid_law(4.0))
+    (2+0j)
+    """
+    return np.sqrt(r)
+
+
+def drag(coords, r):
+    """The drag the damping substitution takes: the viscous ``g`` and the fluid's law.
+
+    >>> complex(drag({"g": 0.01, "fluid": 0.0}, 2.0))
+    (0.01+0j)
+    """
+    return coords["g"] + coords["fluid"] * fluid_law(r) if coords["fluid"] else coords["g"]
 
 
 @dataclass
@@ -152,6 +178,19 @@ class ViscousDamping(Damping):
 
 
 @dataclass(frozen=True)
+class FluidDamping(ViscousDamping):
+    """A fluid's drag growing as ``sqrt(f)`` (:func:`fluid_law`): the viscous term times the law."""
+
+    def jacobian(self, chain: Chain) -> tuple:
+        d_f, part, c = chain.d_factors, chain.part, chain.coords
+        law = fluid_law((chain.root_r / chain.b1) ** 2)
+        return (law * (part["beta"] * (chain.root_r * d_f[0][1]) + part["mu"] * (c["mu"] * d_f[3][1])),)
+
+    def derived(self, values: dict, meta) -> dict:
+        return {}
+
+
+@dataclass(frozen=True)
 class ContactDamping(Damping):
     """A dashpot beside ``k1``: ``T_d1`` no longer carries the constant part of ``f0``, so ``T_f``
     is a column of its own (coefficient ``f0`` at zero bias); reports the dashpot ``eta``."""
@@ -247,6 +286,7 @@ class SpotPosition(Effect):
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Damping("damping_internal", (INTERNAL_LOSS,), "derivations/damping.py", index=0, uses=("beta", "k")),
     ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
+    FluidDamping("damping_fluid", (FLUID_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
     ContactDamping("damping_contact", (CONTACT_LOSS,), "derivations/damping.py", index=2),
     TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
                                    null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
@@ -271,7 +311,8 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
 
-DAMPING = {"internal": "damping_internal", "viscous": "damping_viscous", "contact": "damping_contact"}
+DAMPING = {"internal": "damping_internal", "viscous": "damping_viscous", "fluid": "damping_fluid",
+           "contact": "damping_contact"}
 """Damping mechanism -> component name; every one is reported as the effect ``damping``."""
 
 NAMES = ("damping", "tip_setback", "tip_mass", "background", "lateral_stiffness", "tilt", "spot_position")

@@ -4,15 +4,26 @@ A CSV spectrum or resonances table is read by :func:`pfmdyn.io.tables.read`; an 
 file (.ibw, .nid, .h5/.hdf5, drive sweeps .txt/.dat) gives the resonance table its
 instrument stored, or, for a thermal tune, the free modes fitted in it
 (:func:`pfmdyn.analysis.thermal.instrument_resonances`); its short tables (one or two
-resonances) are accepted.
+resonances) are accepted.  A drive sweep (.txt/.dat) is fitted over its measured points instead
+(:mod:`pfmdyn.discrepancy.sweep`): :func:`is_sweep` tells the two apart.
 """
 from __future__ import annotations
 
 from ..analysis.thermal import instrument_resonances
 from ..io import tables
 from ..io.discrepancy_data import ResonanceData, SpectrumData
+from ..io.sweeps import is_drive_sweep
 
-__all__ = ["read"]
+__all__ = ["read", "is_sweep"]
+
+
+def is_sweep(path) -> bool:
+    """Whether ``path`` is a drive sweep (a .txt/.dat file with a sweep table), fitted as a spectrum.
+
+    >>> is_sweep("scan.ibw"), is_sweep("missing.txt")
+    (False, True)
+    """
+    return str(path).lower().endswith(tables.TEXT_SUFFIXES) and is_drive_sweep(path)
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:

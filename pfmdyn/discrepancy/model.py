@@ -13,8 +13,8 @@ of ``f0``; with the dashpot ``T_f`` is a sixth column), solved by linear least s
 inside the nonlinear fit of the other parameters (variable projection).  The effects
 (:mod:`pfmdyn.discrepancy.effects`) share the composed lever
 (:mod:`pfmdyn.composed`, Eq. 5 at ``gamma = 1``, ``mu = 0``, no tilt), so they
-compose; damping enters as the generated substitution of :mod:`pfmdyn.generated.damping`
-(complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
+compose; damping enters as the generated substitution (:func:`pfmdyn.cantilever.damping_substitution`:
+complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
 lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
@@ -33,7 +33,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..cantilever import free_root
+from ..cantilever import damping_substitution, free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
@@ -41,7 +41,7 @@ from .. import composed
 from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from ..roots.bracket import grid_roots
-from .effects import EFFECTS, Chain, Effect, public_name, spring_parameters
+from .effects import EFFECTS, Chain, Effect, drag, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "resonances", "resonances_many"]
 
@@ -113,11 +113,11 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
-            kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
+            d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+                                     c["inv_q"], drag(c, r), c["x"])
+            kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            return module.slope(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H,
-                                m.L, c["mu"] * mu_f, c["gamma"], 0.0)
+            return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -135,23 +135,23 @@ class Model:
         r = np.asarray(frequency_hz, dtype=float) / m.f1
         b1, d_b1 = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            loss = (c["inv_q"], c["g"], c["x"])
-            beta_f, k_f, k1_f, mu_f = damping.factors(r, *loss)
+            loss = (c["inv_q"], drag(c, r), c["x"])
+            root_r = formulas.beta_from_frequency(r, 1.0, b1)
+            d = damping_substitution(r, root_r, m.k, c["k1"], c["mu"], *loss)
             d_f = damping.d_factors(r, *loss)
-            spring = c["k1"] * k1_f
+            spring = d.k1
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
-            root_r = formulas.beta_from_frequency(r, 1.0, b1)
             module, at = self._reading(c)
-            T, J = module.slope_and_jacobian(root_r * beta_f, *at, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                             c["mu"] * mu_f, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
+            T, J = module.slope_and_jacobian(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L,
+                                             d.mu, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
-            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, (beta_f, k_f, k1_f, mu_f), d_f, spring)
+            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, d.factors, d_f, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
             terms += [t for e in self.components for t in e.jacobian(chain)]
@@ -268,9 +268,8 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
 def _free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, float]]:
     """:func:`free_root` and its derivatives w.r.t. ``(mu, gamma)`` (implicit differentiation)."""
     b1 = free_root(k, H, L, mu, gamma)
-    if mu == 0.0:
-        return b1, (0.0, 0.0)
-    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0)
+    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0,
+                                                wrt=("beta", "mu", "gamma"))
     names = composed.JACOBIAN_PARAMETERS
     return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
 
@@ -296,26 +295,29 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     m = model.meta
     f = np.asarray(frequency_hz, float)
     c = model.coords(internal)
-    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    b1, d_b1_dp = _free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.f1, b1)
-    names = composed.JACOBIAN_PARAMETERS
-    moved = [names.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
-    at = [composed.PARAMETERS.index(p) for p in ("kvv", "kll", "kvl", "mu", "gamma")]
-    out = np.empty((len(f), len(internal)))
+    moved = ("kvv", "kll", "kvl", "mu", "gamma")
+    at = [composed.PARAMETERS.index(p) for p in moved]
+    a0 = np.array(characteristic_args(model, internal, contact), float)
+    # the model's parameters are plain functions of the internal ones: their change per unit
+    # of each internal one, by forward differences (columns j)
+    steps = 1e-7 * np.maximum(1.0, np.abs(internal))
+    per_unit = np.empty((len(moved), len(internal)))
+    for j, h in enumerate(steps):
+        xs = internal.copy()
+        xs[j] += h
+        per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
+    # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
+    rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
+    wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
-        roots = []
-        for where, x in ((beta, contact), (np.array([b1]), False)):
-            a0 = characteristic_args(model, internal, x)
-            _, d = composed.characteristic_and_jacobian(where, *a0)
-            roots.append((a0, np.array([d[i] for i in moved]) / d[0]))
-        for j in range(len(internal)):
-            # the model's parameters are plain functions of the internal ones: their change per unit
-            h = 1e-7 * max(1.0, abs(internal[j]))
-            xs = internal.copy()
-            xs[j] += h
-            d_beta, d_b1 = (-(ratio.T @ ((np.array(characteristic_args(model, xs, x))[at] - np.array(a0)[at]) / h))
-                            for (a0, ratio), x in zip(roots, (contact, False)))
-            out[:, j] = formulas.frequency_change(f, beta, d_beta, b1, d_b1[0])
+        _, d = composed.characteristic_and_jacobian(beta, *a0, wrt=wrt)
+        names = composed.JACOBIAN_PARAMETERS
+        ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
+        d_beta = -(ratio.T @ per_unit[rows])
+        d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
+        out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
     out[~np.isfinite(out)] = 0.0
     return out
 

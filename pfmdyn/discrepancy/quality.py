@@ -1,7 +1,7 @@
 """Quality factors of the damped model's modes: complex roots of the damped characteristic.
 
 A resonance table may give each mode's Q (an instrument's thermal or tune fit).  The model
-predicts it from the generated damping substitution (:func:`pfmdyn.generated.damping.factors`:
+predicts it from the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`:
 complex ``beta``, ``k``, ``k1`` and ``mu`` at ``r = f / f1``) put into the generated
 characteristic (:func:`pfmdyn.composed.characteristic`).  That function of
 ``r`` is analytic, and its zero near each undamped root ``r_n`` is the damped mode
@@ -14,10 +14,11 @@ characteristic (:func:`pfmdyn.composed.characteristic`).  That function of
 * contact dashpot: free modes undamped, contact modes damped by ``k1``'s share of the
   modal energy times ``omega eta / k1``.
 
-The damped characteristic takes real ``r`` only (the generated factors are real-frequency
-transfer substitutions), so the complex zero is found from real samples: a polynomial
-through samples around ``Re r_c`` (span ``1.5 Im r_c``, degree 5), re-centred three times.
-Its accuracy is better than 0.1 % in Q down to Q = 5.
+The damped characteristic takes complex ``r`` (the damping factors are analytic in it), and
+its zeros are followed from the undamped roots as the losses grow by the one damped-root engine,
+:func:`pfmdyn.roots.damped.follow`, the same as the probe's modes
+(:mod:`pfmdyn.analysis.resonances`), to about ``1e-14`` in ``r``; a mode that has no damped root
+(lost or overdamped) has no loss here (0).
 """
 from __future__ import annotations
 
@@ -26,35 +27,41 @@ from functools import lru_cache
 import numpy as np
 
 from .. import composed
-from ..generated import damping, formulas
+from ..cantilever import damping_substitution
+from ..generated import formulas
 from ..generated.tilt_rotation import rotated
+from ..roots.damped import follow
+from .effects import drag
 from .model import Model, free_root
 
 __all__ = ["damped_roots", "loss_factors", "loss_and_roots"]
 
-_PASSES = ((1, 3), (5, 11), (5, 11))
-"""(polynomial degree, samples) per pass of the complex-root search."""
+_STEPS = 1
+"""Loss steps of the continuation: one, as a fit's modes are mostly lightly damped (a mode lost or
+landing on another's root is followed again in finer steps by the engine)."""
 
 
-def _characteristic(model: Model, internal, contact: bool, r):
-    """The damped characteristic at real ``r = f / f1`` (array of any shape)."""
+def _characteristic(model: Model, internal, contact: bool):
+    """The damped characteristic ``f(r, s)`` at complex ``r = f / f1`` (array of any shape), the
+    losses scaled by ``s``."""
     c = model.coords(internal)
     m = model.meta
     b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    beta_f, k_f, k1_f, mu_f = damping.factors(r, c["inv_q"], c["g"], c["x"])
-    if contact:
-        kvv, kll, kvl = rotated(c["k1"] * k1_f, c["k2"], c["alpha"])
-    else:
-        kvv = kll = kvl = 0.0
-    return composed.characteristic(formulas.beta_from_frequency(r, 1.0, b1) * beta_f, m.k * k_f, kvv, kll, kvl, m.H, m.L,
-                                      c["mu"] * mu_f, c["gamma"], 0.0)
+
+    def f(r, s):
+        d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+                                 s * c["inv_q"], s * drag(c, r), s * c["x"])
+        kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+        return composed.characteristic(d.beta, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
+    return f
 
 
 def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.ndarray:
-    """Complex zeros ``r_c`` of the damped characteristic near the undamped roots ``r0``.
+    """Complex zeros ``r_c`` of the damped characteristic continuing the undamped roots ``r0``
+    (NaN where a mode has none: lost or overdamped).
 
-    ``guess``: roots of a nearby model (e.g. before a finite-difference step): one pass
-    around them replaces the three.
+    ``guess``: roots of a nearby model (e.g. before a finite-difference step): one Newton run
+    from them replaces the continuation.
 
     >>> from types import SimpleNamespace
     >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
@@ -63,38 +70,9 @@ def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.nd
     >>> (np.abs(rc) / (2 * rc.imag)).round(1).tolist()     # same width: Q = r / 0.02
     [50.0, 313.3]
     """
-    r0 = np.atleast_1d(np.asarray(r0, float))
-    centre, span, passes = r0.astype(complex), 1e-3 * r0, _PASSES
-    if guess is not None and np.all(np.isfinite(guess)):
-        centre = np.asarray(guess, complex).copy()
-        span, passes = np.maximum(1.5 * np.abs(centre.imag), 1e-4 * r0), _PASSES[-1:]
-    with np.errstate(all="ignore"):
-        for degree, count in passes:
-            t = np.linspace(-1.0, 1.0, count)
-            y = _characteristic(model, internal, contact, np.maximum(centre.real[:, None] + span[:, None] * t, 1e-9))
-            # Scaling each row keeps the fit well conditioned whatever the characteristic's size;
-            # all modes share the sample points, hence one least-squares solve.
-            y = y / np.max(np.abs(y), axis=1, keepdims=True)
-            coef = np.linalg.lstsq(np.vander(t, degree + 1), y.T, rcond=None)[0]     # highest power first
-            dcoef = coef[:-1] * np.arange(degree, 0, -1)[:, None]
-            # Newton on each polynomial from the previous estimate: the zero nearest to it.
-            z = 1j * centre.imag / span
-            for _ in range(30):
-                step = _horner(coef, z) / _horner(dcoef, z)
-                z = z - step
-                if np.all(np.abs(step[np.isfinite(step)]) < 1e-13):
-                    break
-            centre = centre.real + span * z
-            span = np.where(np.isfinite(centre), np.maximum(1.5 * np.abs(centre.imag), 1e-4 * r0), span)
-    return centre
-
-
-def _horner(coef, z):
-    """Polynomials (columns of ``coef``, highest power first) at ``z`` (one point per column)."""
-    out = np.zeros_like(z) + coef[0]
-    for c in coef[1:]:
-        out = out * z + c
-    return out
+    if guess is not None and not np.all(np.isfinite(guess)):
+        guess = None
+    return follow(_characteristic(model, internal, contact), r0, _STEPS, guess).roots
 
 
 def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:

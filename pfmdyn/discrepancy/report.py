@@ -2,12 +2,14 @@
 JSON-ready fields (``to_dict()``), the summary text (``report()``) and the fits behind it."""
 from __future__ import annotations
 
+import math
+
 from ..fitting.result import Result
 from . import select
 from .effects import public_name
 from .plausible import describe
 
-__all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary"]
+__all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary", "medium_comparison"]
 
 
 class DiscrepancyReport(Result):
@@ -61,6 +63,7 @@ def report(result: dict, **extra) -> DiscrepancyReport:
     baseline, final = result["baseline"], result["final"]
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
+           "explained_share": select.share(baseline.gap, baseline.gap, final.gap), "effect_shares": result["shares"],
            **degrees(final), "baseline_fitted_parameters": baseline.k,
            "damping_mechanisms": final.model.damping_mechanisms, "unexplained": result["unexplained"],
            "criterion": select.CRITERION, "steps": steps, "parameters": parameters(final),
@@ -74,7 +77,9 @@ def summary(report) -> str:
     mech = report.get("damping_mechanisms") or []
     tied = report.get("damping_mechanisms_indistinguishable_from") or []
     detail = ", ".join(mech) + (f"; {' or '.join(tied)} fit the data as well" if tied else "")
-    named = [e + (f" ({detail})" if e == "damping" and mech else "") for e in report["missing_effects"]]
+    shares = report.get("effect_shares") or {}
+    named = [e + (f" ({detail})" if e == "damping" and mech else "")
+             + (f" [{_share_text(shares[e])}]" if e in shares else "") for e in report["missing_effects"]]
     lines = [f"baseline gap {report['gap_before']:.2f} -> final gap {report['gap_after']:.2f} "
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}",
              f"{report['data_values']} data values, {report['fitted_parameters']} fitted parameters: "
@@ -96,10 +101,15 @@ def summary(report) -> str:
         where = report["unexplained"]["where"]
         place = (f"at {where[0] / 1e3:.4g}-{where[1] / 1e3:.4g} kHz" if isinstance(where, (list, tuple))
                  else f"at {where}")
+        left = report["unexplained"].get("share")
         lines.append(f"no effect of the library explains the residual {place} "
-                     f"(gap {report['unexplained']['gap']:.3g} x noise)")
+                     f"(gap {report['unexplained']['gap']:.3g} x noise"
+                     + (f", {left:.1%} of the baseline misfit" if left is not None else "") + ")")
         if report["unexplained"].get("implausible"):
             lines.append(describe(report["unexplained"]["implausible"]))
+        if report["unexplained"].get("small_share"):
+            lines.append(f"not named, under {select.MIN_SHARE:.0%} of the misfit the others leave: " + ", ".join(
+                f"{e} ({v:.1%})" for e, v in report["unexplained"]["small_share"].items()))
     for name, why in (report.get("untestable_effects") or {}).items():
         lines.append(f"{name}: {why}")
     for name, p in report["parameters"].items():
@@ -110,3 +120,39 @@ def summary(report) -> str:
             note = "" if p.get("determined", True) else " (not determined by these data)"
             lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
     return "\n".join(lines)
+
+
+def _share_text(share: dict) -> str:
+    """An effect's share of the misfit, as the summary states it.
+
+    >>> _share_text({"share": 0.012, "share_of_rest": 0.99, "gap_without": 9.0})
+    '1.2% of the misfit, 99.0% of what the others leave'
+    """
+    text = f"{share['share']:.1%} of the misfit"
+    return text + (f", {share['share_of_rest']:.1%} of what the others leave"
+                   if share["share_of_rest"] > share["share"] + 0.001 else "")
+
+
+def medium_comparison(report: dict, lever) -> dict:
+    """The first free mode's Q the fitted damping gives beside the one ``lever``'s medium predicts
+    (Sader's load on a lever of that width, :mod:`pfmdyn.medium`; the exact damped root of
+    :func:`pfmdyn.analysis.resonances.resonances`).  The fitted losses add at ``f1``: ``1/Q`` of
+    internal friction, the viscous ``g``, the fluid's ``fluid_loss``; a contact dashpot damps no
+    free mode.  ``fitted`` is None when the fit holds no free-mode damping.
+
+    >>> from pfmdyn import Cantilever
+    >>> from pfmdyn.medium import Medium
+    >>> lever = Cantilever(27.0, 1.798e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+    >>> out = medium_comparison({"parameters": {"fluid_loss": {"value": 1 / 440}}}, lever)
+    >>> round(out["predicted_quality_factor"]), out["fitted_quality_factor"]
+    (474, 440.0)
+    """
+    from ..analysis.resonances import resonances
+
+    p = report.get("parameters", {})
+    value = lambda name: (p.get(name) or {}).get("value") or 0.0     # noqa: E731
+    q = value("quality_factor")
+    loss = (1.0 / q if q and math.isfinite(q) else 0.0) + value("viscous_loss") + value("fluid_loss")
+    predicted = resonances(lever, None, modes=1).free.q[0]
+    return {"medium": lever.medium.name, "width": lever.width, "predicted_quality_factor": float(predicted),
+            "fitted_quality_factor": round(1.0 / loss, 10) if loss else None}

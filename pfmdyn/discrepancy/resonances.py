@@ -49,8 +49,9 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..cantilever import DEFAULT_POISSON, Contact
 from ..fitting.projection import jacobian_covariance
-from ..generated import formulas, paper_inputs
+from ..generated import paper_inputs
 from ..io.tables import Q_RELATIVE_UNCERTAINTY, Metadata, ResonanceData
 from . import select
 from .report import degrees, report
@@ -79,9 +80,9 @@ def _contact_only(effect: str, effects) -> bool:
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
 SPRINGS = ("k1", "k2")
 """Contact springs: they act on contact modes only, so free-only tables leave them undetermined."""
-POISSON_RATIO = 0.3
-K2_OVER_K1 = float(formulas.mindlin_k2_over_k1(POISSON_RATIO))
-"""``k2 / k1`` when one contact mode must determine both springs (Mindlin, generated)."""
+K2_OVER_K1 = Contact().tie()
+"""``k2 / k1`` when one contact mode must determine both springs (:meth:`pfmdyn.Contact.tie`: Mindlin at
+:data:`pfmdyn.cantilever.DEFAULT_POISSON`)."""
 
 
 def _sigma(data: ResonanceData) -> np.ndarray:
@@ -139,7 +140,7 @@ def held_springs(model: Model, data: ResonanceData) -> dict[str, str]:
                 for n in names}
     if n_contact == 1 and len(names) == 2:
         return {"k2": f"tied to k1 at the Mindlin ratio k2 = {K2_OVER_K1:.3g} k1 (Poisson's ratio "
-                      f"{POISSON_RATIO:g}): one contact mode determines one spring, k1"}
+                      f"{DEFAULT_POISSON:g}): one contact mode determines one spring, k1"}
     return {}
 
 
@@ -237,12 +238,13 @@ def _damping_seeds(data: ResonanceData) -> dict[str, tuple]:
     """Start values of the damping parameters from the table's Q values."""
     has_q = _has_q(data)
     if not has_q.any():
-        return {"inv_q": (0.01,), "g": (0.02,), "x": (0.01,)}
+        return {"inv_q": (0.01,), "g": (0.02,), "fluid": (0.02,), "x": (0.01,)}
     q, r = data.quality_factor[has_q], data.frequency_hz[has_q] / data.metadata.f1
     contact = data.condition[has_q] == "contact"
     x = float(np.median(1 / (q * r)[contact])) if contact.any() else 0.01
     return {"inv_q": (float(np.clip(np.median(1 / q), 1e-4, 0.4)),),
             "g": (float(np.clip(np.median(r / q), 1e-4, 0.9)),),
+            "fluid": (float(np.clip(np.median(np.sqrt(r) / q), 1e-4, 0.9)),),
             "x": tuple(float(np.clip(v, 1e-4, 4.0)) for v in (x, 4 * x))}
 
 

@@ -25,8 +25,21 @@ helps on its own), and the loop stops when no pair is material either.  A backwa
 then removes every component that is no longer material in the final model (an effect
 that only helped a fit out of a local minimum, a damping mechanism replaced by another).  An effect whose
 fitted values no lever has (:func:`pfmdyn.discrepancy.plausible.implausible`) is then removed: it is not a
-finding.  A final gap above :data:`UNEXPLAINED` (2), or any such removal, is reported as ``unexplained``,
-with where the misfit concentrates (and, for a removal, why).
+finding.
+
+Every named effect's *share* is reported (:func:`shares`): the part of the baseline's misfit above the
+noise (``gap**2 - 1``) that the final model loses without the effect, and its part of the misfit the
+other effects leave (``share_of_rest``).  Without it means the best fit known of the other effects or
+of fewer: a refit can land in a worse minimum than the baseline, and a drop measured from there makes
+any effect look needed.  Near the noise every kept effect is material and the data are explained.
+Far from it that is not enough (a report named five effects that together took 16 % of a misfit:
+gap 188 -> 172).
+While the final gap stays above :data:`UNEXPLAINED` (2), an effect must also explain at least as much
+as stays unexplained (``share_of_rest`` >= :data:`MIN_SHARE`, a half); the one of least share is
+removed, the best fit of the rest taken (the refit or a known fit of fewer effects, by BIC), until all
+do: the named set explains most with fewest parameters.  A final gap above :data:`UNEXPLAINED`, or any
+removal, is reported as ``unexplained``: how large (the gap and the share of the misfit left), where
+the misfit concentrates, and what was removed and why.
 """
 from __future__ import annotations
 
@@ -34,15 +47,21 @@ import time
 
 from tqdm import tqdm
 
+from .effects import public_name
 from .plausible import describe, implausible
 
-__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "material", "refusal", "run"]
+__all__ = ["BIC_THRESHOLD", "MIN_REDUCTION", "NEAR_NOISE", "WITHIN_NOISE", "UNEXPLAINED", "MIN_SHARE", "material",
+           "refusal", "share", "shares", "run"]
 
 BIC_THRESHOLD = 10.0
 MIN_REDUCTION = 0.25
 NEAR_NOISE = 1.5
 WITHIN_NOISE = 0.5
 UNEXPLAINED = 2.0
+MIN_SHARE = 0.5
+"""Part of the misfit the other named effects leave that an effect must take while the final gap
+stays above :data:`UNEXPLAINED`: a half, i.e. it explains at least as much as stays unexplained
+(a material step, the gap lowered by 25 %, takes 44 %: far from the noise that is not enough)."""
 TIME_BUDGET_S = 35.0
 """``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
 start (then prune and report), so that a hard file still ends in a report within about a
@@ -52,7 +71,9 @@ its first step when other jobs shared the cores).  Library calls have no budget 
 one."""
 
 CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
-             f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %)")
+             f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %); while the final gap "
+             f"stays above {UNEXPLAINED:g} x noise, keep only effects that take >= {MIN_SHARE:.0%} of the misfit "
+             "the others leave")
 
 
 def material(old, new) -> bool:
@@ -100,6 +121,7 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
     ``polish(fit) -> fit`` (converge a trial that is accepted).
     """
     started = time.process_time()
+    problem = _Record(problem)
     current = problem.baseline()
     baseline, steps = current, []
     with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
@@ -150,13 +172,103 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
             steps[-1].update(gap_after=current.gap, parameters=current.parameters())
     current = _prune(problem, current, steps)
     current, dropped = _drop_implausible(problem, current, steps)
+    current, small, found = _drop_small(problem, baseline, current, steps)
     unexplained = None
-    if current.gap > UNEXPLAINED or dropped:
+    if current.gap > UNEXPLAINED or dropped or small:
         loc = problem.locate(current)
-        unexplained = {"gap": current.gap, "where": loc.get("band_hz", loc.get("worst"))}
+        unexplained = {"gap": current.gap, "share": share(baseline.gap, current.gap, 1.0),
+                       "where": loc.get("band_hz", loc.get("worst"))}
         if dropped:
             unexplained["implausible"] = dropped
-    return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained}
+        if small:
+            unexplained["small_share"] = small
+    return {"baseline": baseline, "final": current, "steps": steps, "unexplained": unexplained,
+            "shares": {name: {k: v for k, v in s.items() if k != "fit"} for name, s in found.items()}}
+
+
+def share(baseline_gap: float, without_gap: float, gap: float) -> float:
+    """Share of the baseline's misfit above the noise (``gap**2 - 1``, gaps in noise levels) that
+    going from ``without_gap`` to ``gap`` removes, within [0, 1].
+
+    >>> round(share(188.0, 188.0, 172.0), 3), share(300.0, 300.0, 1.0)
+    (0.163, 1.0)
+    """
+    excess = max(baseline_gap**2 - 1.0, 1e-300)
+    return float(min(max((without_gap**2 - gap**2) / excess, 0.0), 1.0))
+
+
+def shares(problem, baseline, current, known=None) -> dict[str, dict]:
+    """Each named effect's share of the misfit in ``current``: the gap without it (all its
+    components: damping may hold two mechanisms), the least of the ``known`` fits (effect set ->
+    fit) of the other effects or fewer, and of the refit when none is known of the others exactly;
+    ``share`` of ``baseline``'s misfit and ``share_of_rest`` of what the others leave
+    (:func:`share`); ``fit``, the best by BIC of those.
+
+    >>> from types import SimpleNamespace as S
+    >>> problem = S(without=lambda fit, c: S(gap=40.0, bic=9.0, model=S(effects=())))
+    >>> out = shares(problem, S(gap=300.0), S(gap=20.0, model=S(effects=("damping_viscous",))))
+    >>> round(out["damping"]["share"], 4), out["damping"]["gap_without"], round(out["damping"]["share_of_rest"], 3)
+    (0.0133, 40.0, 0.75)
+    """
+    out = {}
+    for name in dict.fromkeys(public_name(c) for c in current.model.effects):
+        rest = frozenset(c for c in current.model.effects if public_name(c) != name)
+        fits = [f for effects, f in (known or {}).items() if effects <= rest]
+        if rest not in (known or {}):
+            fit = current
+            for component in [c for c in current.model.effects if c not in rest]:
+                fit = problem.without(fit, component)
+            fits.append(fit)
+        gap = min(f.gap for f in fits)
+        out[name] = {"share": share(baseline.gap, gap, current.gap), "gap_without": gap,
+                     "share_of_rest": share(gap, gap, current.gap), "fit": min(fits, key=lambda f: f.bic)}
+    return out
+
+
+def _drop_small(problem, baseline, current, steps):
+    """While the gap stays above :data:`UNEXPLAINED`, remove the effect of least ``share_of_rest``
+    below :data:`MIN_SHARE` (and any the best fit of the rest leaves out).  Returns the fit, the
+    removed effects' shares of the rest and the final shares."""
+    small = {}
+    while True:
+        known = {effects: f for effects, f in problem.best.items() if not implausible(f)}
+        found = shares(problem, baseline, current, known)
+        below = {n: s for n, s in found.items() if s["share_of_rest"] < MIN_SHARE}
+        if current.gap <= UNEXPLAINED or not below:
+            return current, small, found
+        name = min(below, key=lambda n: below[n]["share_of_rest"])
+        fit = below[name]["fit"]
+        gone = [n for n in found if n not in {public_name(c) for c in fit.model.effects}]
+        who = "it" if gone == [name] else name
+        steps.append({"effect": None, "removed": ", ".join(gone), "gap_before": current.gap, "gap_after": fit.gap,
+                      "decision": f"removed {', '.join(gone)}: {who} takes {below[name]['share_of_rest']:.0%} of the "
+                      f"misfit the others leave (at least {MIN_SHARE:.0%} while the gap stays "
+                      f"{current.gap:.3g} x noise)"})
+        small.update({n: found[n]["share_of_rest"] for n in gone})
+        current = fit
+
+
+class _Record:
+    """``problem`` keeping ``best``, the fit of least gap of every set of effects it returned."""
+
+    FITTING = ("baseline", "trial", "without", "polish", "alternatives")
+
+    def __init__(self, problem):
+        self.problem, self.best = problem, {}
+
+    def __getattr__(self, name):
+        attr = getattr(self.problem, name)
+        if name not in self.FITTING:
+            return attr
+
+        def recorded(*args):
+            out = attr(*args)
+            for fit in out if isinstance(out, list) else [out]:
+                key = frozenset(fit.model.effects)
+                if key not in self.best or fit.gap < self.best[key].gap:
+                    self.best[key] = fit
+            return out
+        return recorded
 
 
 def _drop_implausible(problem, current, steps):

@@ -197,11 +197,12 @@ class SpectrumProblem:
         peaks, widths = self.widths
         ok = np.isfinite(widths) & (widths > 0)
         if not ok.any():
-            return {"internal": 0.01, "viscous": 0.02, "contact": 0.01}
+            return {"internal": 0.01, "viscous": 0.02, "fluid": 0.02, "contact": 0.01}
         q = peaks[ok] / widths[ok]
         r = peaks[ok] / m.f1
         return {"internal": float(np.clip(np.median(1 / q), 1e-4, 0.4)),
                 "viscous": float(np.clip(np.median(widths[ok]) / m.f1, 1e-4, 0.9)),
+                "fluid": float(np.clip(np.median(widths[ok] / np.sqrt(r)) / m.f1, 1e-4, 0.9)),
                 "contact": float(np.clip(np.median(1 / (q * r)), 1e-4, 4.0))}
 
     # -- the problem interface -----------------------------------------------------------

@@ -5,6 +5,8 @@
 * :mod:`~pfmdyn.fitting.projection`: variable projection of complex linear amplitudes, the
   Jacobian of the projected residual and the covariance from a normal matrix, batched over
   leading axes (a map block of pixels and a single spectrum run the same code);
+* :mod:`~pfmdyn.fitting.batched`: a Levenberg-Marquardt iteration over variable projection that
+  fits a block of spectra at once (``pfmdyn map``'s beam and SHO models), and their covariance;
 * :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS
   residual (1 = fitted to the noise).
 * :mod:`~pfmdyn.fitting.result`: a fit's result, JSON-ready fields (``to_dict()``) and a text

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Parameter", "VISCOUS_LOSS", "CONTACT_LOSS", "INTERNAL_LOSS", "bounds"]
+__all__ = ["Parameter", "VISCOUS_LOSS", "FLUID_LOSS", "CONTACT_LOSS", "INTERNAL_LOSS", "bounds"]
 
 LN10 = math.log(10.0)
 
@@ -164,6 +164,12 @@ INTERNAL_LOSS = Parameter("inv_q", "", 0.0, 0.5, transform="inverse", public="qu
 VISCOUS_LOSS = Parameter("g", "", 0.0, 1.0, public="viscous_loss", null=0.0, seeds=(0.01, 0.03, 0.1),
                          description="viscous force c u_t per length: 1/Q of free mode 1")
 """Viscous drag ``g = c / (rho S omega1)`` (:mod:`pfmdyn.derivations.damping`)."""
+
+FLUID_LOSS = Parameter("fluid", "", 0.0, 1.0, public="fluid_loss", null=0.0, seeds=(0.003, 0.01, 0.03),
+                       description="a fluid's drag at high Reynolds number: half-power width at f1 over f1, "
+                                   "growing as sqrt(f)")
+"""A fluid's Stokes-layer loss, Sader's hydrodynamic function at high Reynolds number: the drag
+``fluid sqrt(r)`` (:func:`pfmdyn.discrepancy.effects.fluid_law`)."""
 
 CONTACT_LOSS = Parameter("x", "", 0.0, 5.0, public="contact_loss", null=0.0, seeds=(0.003, 0.02, 0.1),
                          description="dashpot eta parallel to k1: omega1 eta / k1")

@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import MissingExtraError, UserError
 from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_value
 
-__all__ = ["read_nid"]
+__all__ = ["read_nid", "thermal_conditions"]
 
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
 _THERMAL_KEYS = {"frequency": ("free_resonance", "Hz"), "q factor": ("free_quality_factor", ""),
@@ -143,3 +143,31 @@ def read_nid(path) -> InstrumentRecord:
                       data.shape[1:] if data.ndim > 1 and data.shape[0] == 1 else data.shape)
               for name, data, unit, _ in channels]
     return make_record(path, kind, "Nanosurf (NID)", listed, found, notes, spectrum)
+
+
+def thermal_conditions(path) -> dict:
+    """What a thermal tune's header says of its conditions: ``temperature`` (K, from the "Cantilever
+    temperature" in degrees C) and ``environment`` (``"air"``, ``"liquid"``, lower case), each when written.
+
+    >>> thermal_conditions("missing.nid")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: missing.nid: no such file
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    info = _sections(_load(path)).get("DataSet-Info", {}) or {}
+    out = {}
+    for key, value in info.items():
+        key = str(key).strip().rstrip(":").lower()
+        if key == "cantilever temperature":
+            match = re.fullmatch(r"\s*([-+0-9.eE]+)\s*(.*)", str(value))
+            unit = _unit(match.group(2)) if match else ""
+            if match and unit in ("°C", "deg", "degC", "C"):
+                out["temperature"] = float(match.group(1)) + 273.15
+            elif match and unit == "K":
+                out["temperature"] = float(match.group(1))
+        elif key == "measurement environment":
+            out["environment"] = str(value).strip().lower()
+    return out

@@ -14,6 +14,7 @@ this module parses both directly (with :mod:`numpy`).
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,12 +30,44 @@ from .record import (
     si_value,
 )
 
-__all__ = ["read_sweep", "split_unit", "is_drive_sweep"]
+__all__ = ["read_sweep", "read_sweep_table", "SweepTable", "split_unit", "is_drive_sweep"]
 
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
 _KEYS = {"Peak amplitude frequency": "free_resonance", "Q factor": "free_quality_factor",
          "f_res": "free_resonance", "Q": "free_quality_factor"}
 _TABLE_START = ("Sweep data", "[DATA]")
+# Header keys naming the fluid around the lever (``air``, ``water`` or ``DENSITY,VISCOSITY``).
+_MEDIUM_KEYS = ("Medium", "Environment")
+
+
+@dataclass(frozen=True)
+class SweepTable:
+    """A drive sweep as measured: ``frequency_hz``, the response ``amplitude`` in ``unit`` (SI when
+    pfmdyn knows the unit), ``phase_deg`` (None: the file has amplitude only), the header's own fit
+    ``fields`` (``free_resonance``, ``free_quality_factor``), ``medium`` (the header's word, None when
+    it does not say), ``instrument`` and ``notes``."""
+
+    path: str
+    frequency_hz: np.ndarray
+    amplitude: np.ndarray
+    unit: str
+    phase_deg: np.ndarray | None
+    fields: dict
+    medium: str | None
+    instrument: str
+    notes: tuple = ()
+
+    @property
+    def response(self) -> np.ndarray:
+        """The complex response ``amplitude exp(i phase)`` (the amplitude itself without a phase).
+
+        >>> t = SweepTable("s.txt", np.array([1.0]), np.array([2.0]), "V", np.array([90.0]), {}, None, "x")
+        >>> complex(t.response[0]).imag
+        2.0
+        """
+        if self.phase_deg is None:
+            return self.amplitude
+        return self.amplitude * np.exp(1j * np.radians(self.phase_deg))
 
 
 def split_unit(column: str) -> tuple[str, str]:
@@ -96,9 +129,8 @@ def _split(path: Path) -> tuple[dict, list[str], np.ndarray]:
     return header, columns, np.array(rows)
 
 
-def read_sweep(path) -> InstrumentRecord:
-    """Read a Cytomass ``.txt`` or Nanonis ``.dat`` drive sweep: channels and the resonance fit."""
-    path = Path(path)
+def _parse(path: Path):
+    """Header fields, their notes, the table's columns as (name, unit), the table and the drive frequency."""
     header, columns, table = _split(path)
     names = [split_unit(c) for c in columns]
     found, notes = {}, []
@@ -118,8 +150,46 @@ def read_sweep(path) -> InstrumentRecord:
     # Nanonis gives a centre frequency and a shift from it; their sum is the drive frequency.
     frequency = sum(table[:, i] * converted[i][1] for i in hz)
     others = [i for i in range(len(names)) if i not in hz]
-    channels = [make_channel(names[i][0], names[i][1], (len(table),)) for i in others]
     nanonis = any(k.startswith("Oscillation Control") for k in header)
     instrument = "Nanonis oscillation control" if nanonis else "Cytomass frequency sweep"
+    return header, found, notes, names, table, frequency, others, instrument
+
+
+def read_sweep(path) -> InstrumentRecord:
+    """Read a Cytomass ``.txt`` or Nanonis ``.dat`` drive sweep: channels and the resonance fit."""
+    path = Path(path)
+    _, found, notes, names, table, frequency, others, instrument = _parse(path)
+    channels = [make_channel(names[i][0], names[i][1], (len(table),)) for i in others]
     spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], names[others[0]][1]) if others else None
     return make_record(path, "spectrum", instrument, channels, found, notes, spectrum)
+
+
+def read_sweep_table(path) -> SweepTable:
+    """A drive sweep's measured points: the first non-frequency column is the amplitude, a column in
+    degrees (``Phase (deg)``) the phase; rows sorted by frequency, with the header's own fit.
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "s.txt")
+    ...     _ = open(name, "w").write("Q factor:\\t3.1\\nSweep data\\nFrequency (Hz)\\tAmplitude (mV)\\tPhase (deg)\\n"
+    ...                               "2e4\\t5\\t10\\n1e4\\t4\\t20\\n")
+    ...     t = read_sweep_table(name)
+    >>> t.frequency_hz.tolist(), t.amplitude.tolist(), t.unit, t.phase_deg.tolist(), t.fields
+    ([10000.0, 20000.0], [0.004, 0.005], 'V', [20.0, 10.0], {'free_quality_factor': 3.1})
+    """
+    path = Path(path)
+    header, found, notes, names, table, frequency, others, instrument = _parse(path)
+    phases = [i for i in others if si_unit(names[i][1]) == ("deg", 1.0)]
+    amplitudes = [i for i in others if i not in phases]
+    if not amplitudes:
+        raise UserError(f"{path}: no amplitude column in the sweep table")
+    _, amplitude, unit = si_spectrum(path, frequency, "Hz", table[:, amplitudes[0]], names[amplitudes[0]][1])
+    order = np.argsort(frequency, kind="stable")
+    if not (np.all(np.isfinite(frequency)) and np.all(np.isfinite(table[:, others])) and frequency.min() > 0):
+        raise UserError(f"{path}: the sweep table holds a non-finite value or a frequency <= 0")
+    if np.unique(frequency).size < len(frequency):
+        raise UserError(f"{path}: the sweep repeats a drive frequency")
+    medium = next((header[k] for k in _MEDIUM_KEYS if header.get(k)), None)
+    phase = table[order, phases[0]] if phases else None
+    return SweepTable(str(path), frequency[order], amplitude[order], unit, phase, found, medium, instrument,
+                      tuple(notes))

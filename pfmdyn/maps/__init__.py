@@ -1,6 +1,7 @@
 """Maps: the elastic-contact beam model (or BGlib's SHO) fitted at every pixel of a band-excitation map, on Dask.
 
-:mod:`pfmdyn.maps.fit` fits all pixels of a block at once (batched Levenberg-Marquardt);
+:mod:`pfmdyn.maps.fit` fits all pixels of a block at once (the batched Levenberg-Marquardt of
+:mod:`pfmdyn.fitting.batched`);
 :mod:`pfmdyn.maps.sho` fits BGlib's simple harmonic oscillator the same way;
 :mod:`pfmdyn.maps.bias` derives the electrostatic maps when the spectra have a bias axis;
 :mod:`pfmdyn.maps.select` chooses the mechanisms (``--model auto``);

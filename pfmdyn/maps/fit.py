@@ -20,9 +20,8 @@ Cost is dominated by the generated transfer function over ``(pixels, frequencies
 *design evaluation* per iteration gives the transfer functions and their derivatives for the
 whole block (:meth:`BeamMapModel.design`), and the derivatives of the projected residual follow
 from them in closed form (Golub and Pereyra 1973; :mod:`pfmdyn.fitting.projection`, shared with
-``pfmdyn discrepancy``).  The covariance of all parameters, nonlinear and amplitudes, is ``s**2``
-times the inverse normal matrix of the full problem at the solution (:func:`_covariance`); its
-nonlinear block is the variable-projection one.
+``pfmdyn discrepancy``).  The iteration and the covariance of all parameters, nonlinear and
+amplitudes, are the batched engine's (:mod:`pfmdyn.fitting.batched`, shared with the SHO fit).
 """
 from __future__ import annotations
 
@@ -32,14 +31,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cantilever import Cantilever, Contact
+from ..cantilever import Cantilever, Contact, damping_substitution
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..fitting.parameters import CONTACT_LOSS, LN10, VISCOUS_LOSS, Parameter
 from ..fitting.parameters import bounds as parameter_bounds
-from ..fitting.projection import covariance, normal_matrix, project
+from ..fitting.batched import amplitude_column, band_covariance, levenberg_marquardt, project_bands
 from .. import composed
-from ..generated import damping, elastic_contact
+from ..generated import damping, elastic_contact, formulas
 from ..generated.tilt_rotation import rotated
 from . import bias as bias_axis
 
@@ -256,25 +255,19 @@ class BeamMapModel:
         return not self.lever.is_paper_probe
 
     def _arguments(self, inv_q, g, k1, k2, x):
-        """``beta`` and the springs relative to the complex EI, with the damping factors.
+        """``(beta0, r, beta, k1 / k_factor, k2 / k_factor, k_factor, mu)``: the undamped ``beta``,
+        ``r = f / f1``, and the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`).
 
         Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
         on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
         contact springs are divided by that factor (the dashpot multiplies ``k1``).  A heavy tip
-        moves the lever's first free root (:meth:`pfmdyn.Cantilever.beta` accounts for it).
+        moves the lever's first free root (:meth:`pfmdyn.Cantilever.free_root`).
         """
         f = np.asarray(self.frequency_hz, float)
         r = f / self.f1
-        beta0 = Cantilever(self.k, self.f1, self.L, tip_height=self.lever.tip_height,
-                           tip_position=self.lever.tip_position,
-                           tip_mass_ratio=self.lever.tip_mass_ratio,
-                           tip_gyration_radius=self.lever.tip_gyration_radius).beta(f)
-        # Without drag the beta factor does not depend on r: keep it one number per pixel.
-        r_beta = r if "viscous" in self.mechanisms else 1.0
-        beta_factor, k_factor, _, mu_factor = damping.factors(r_beta, inv_q, g, 0.0)
-        k1_factor = damping.factors(r, 0.0, 0.0, x)[2] if "contact" in self.mechanisms else 1.0
-        return (beta0, r, r_beta, beta0 * beta_factor, k1 * k1_factor / k_factor, k2 / k_factor, k_factor,
-                self.lever.tip_mass_ratio * mu_factor)
+        beta0 = formulas.beta_from_frequency(f, self.f1, self.lever.free_root())
+        d = damping_substitution(r, beta0, 1.0, k1, self.lever.tip_mass_ratio, inv_q, g, x)   # k = 1: d.k is the factor
+        return beta0, r, d.beta, d.k1 / d.k, k2 / d.k, d.k, d.mu
 
     def _transfer(self, beta, k1e, k2e, mu, jacobian):
         """Slopes per drive and (with ``jacobian``) per drive the partials w.r.t. (beta, k1, k2,
@@ -320,7 +313,7 @@ class BeamMapModel:
         k1 = np.asarray(k1, float)
         k2 = self.k2_of(k1, 0.0 * k1) if k2 is None and self.k2_mode != "free" else (0.0 if k2 is None else k2)
         col = [np.asarray(v, float) * np.ones(np.shape(k1)) for v in (1.0 / np.asarray(q, float), g, k1, k2, x)]
-        _, _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
+        _, _, beta, k1e, k2e, _, mu = self._arguments(*(c[:, None] for c in col))
         return self._transfer(beta, k1e, k2e, mu, jacobian=False)[0][0]
 
     @property
@@ -337,12 +330,11 @@ class BeamMapModel:
         generated derivatives of the damping factors.
         """
         inv_q, g, k1, k2, x = self._physical(p)
-        beta0, r, r_beta, beta, k1e, k2e, k_factor, mu = self._arguments(inv_q, g, k1, k2, x)
+        beta0, r, beta, k1e, k2e, k_factor, mu = self._arguments(inv_q, g, k1, k2, x)
         values, partials = self._transfer(beta, k1e, k2e, mu, jacobian)
         if not jacobian:
             return np.stack([values[i] for i in self.drives], axis=1), None
-        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), _, (_, dmf_g, _) = damping.d_factors(r_beta, inv_q, g, 0.0)
-        dk1f_x = damping.d_factors(r, 0.0, 0.0, x)[2][2] if "contact" in self.mechanisms else 0.0
+        (dbf_inv_q, dbf_g, _), (dkf_inv_q, _, _), (_, _, dk1f_x), (_, dmf_g, _) = damping.d_factors(r, inv_q, g, x)
         d = np.empty((len(self.parameters), len(k1), len(self.drives), values[0].shape[-1]), complex)
         for j, drive in enumerate(self.drives):
             d_beta, d_k1, d_k2, d_mu = partials[drive]
@@ -358,31 +350,6 @@ class BeamMapModel:
             for i, name in enumerate(self.names):
                 d[i, :, j] = chain[name]
         return np.stack([values[i] for i in self.drives], axis=1), d
-
-
-def _project(g, dg, y, band_list):
-    """Variable projection of ``y`` ``(n, m, n_freq)`` (``m`` bias components) on the transfer
-    functions ``g`` ``(n, K, n_freq)``, with amplitudes of their own for every component and
-    band (:func:`pfmdyn.fitting.projection.project`, one band at a time): amplitudes
-    ``(n, m, n_bands, K)``, real residual ``(n, 2 m n_freq)`` and, given ``dg``
-    ``(n_p, n, K, n_freq)``, its Jacobian ``(n, 2 m n_freq, n_p)``, the exact (Golub-Pereyra)
-    derivative of the projection."""
-    c, r = [], np.empty_like(y)
-    dr = None if dg is None else np.empty((dg.shape[0],) + y.shape, complex)
-    for b in band_list:
-        A, yb = g[..., b], y[..., b]
-        projection = project(np.swapaxes(A, 1, 2), np.swapaxes(yb, 1, 2))
-        cb = np.swapaxes(projection.amplitudes, 1, 2)
-        r[..., b] = rb = yb - np.einsum("nmk,nkf->nmf", cb, A)
-        c.append(cb)
-        if dg is not None:
-            dA = dg[..., b]
-            dA_c = np.einsum("pnkf,nmk->npfm", dA, cb)
-            dA_h_r = np.einsum("pnkf,nmf->npkm", dA.conj(), rb)
-            dr[..., b] = np.einsum("npfm->pnmf", projection.jacobian(dA_c, dA_h_r))
-    n = len(y)
-    J = None if dr is None else np.concatenate([dr.real, dr.imag], axis=2).reshape(len(dr), n, -1).transpose(1, 2, 0)
-    return np.stack(c, axis=2), np.concatenate([r.real, r.imag], axis=1).reshape(n, -1), J
 
 
 def _start(model, y, q0, k1_range):
@@ -461,7 +428,7 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
     the extras switched off (nested, so the fit never ends worse than the baseline)."""
     if model.mechanisms != ("internal",):
         base = replace(model, mechanisms=("internal",))
-        p_base = _levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
+        p_base = levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
                                       parameter_bounds(base.parameters), iterations, tolerance)[0]
         return np.stack([p_base[:, base.names.index(p.name)] if p.name in base.names else np.full(len(y), p.null)
                          for p in model.parameters], axis=1)
@@ -471,59 +438,10 @@ def _initial(model, y, q0, k1_range, iterations, tolerance):
     if len(p) == 1:
         return p[0]
     # k1 and k2 trade off against each other: one start per k2/k1, the fit that ends lowest wins
-    p, *_, cost, _, _ = _levenberg_marquardt(model, np.concatenate([y] * len(p)), p.reshape(-1, p.shape[2]),
+    p, *_, cost, _, _ = levenberg_marquardt(model, np.concatenate([y] * len(p)), p.reshape(-1, p.shape[2]),
                                              parameter_bounds(model.parameters), iterations, tolerance)
     best = np.argmin(cost.reshape(-1, len(y)), axis=0)
     return p.reshape(-1, len(y), p.shape[1])[best, np.arange(len(y))]
-
-
-def _levenberg_marquardt(model, y, p, bounds, iterations, tolerance):
-    """All pixels at once, one design evaluation per iteration; returns (p, c, r, J, cost, g, dg).
-
-    A step predicted to gain less than 100 ``tolerance`` is the last one (Gauss-Newton converges
-    quadratically: the next would gain below ``tolerance``), so its point gets values only; ``J``
-    and the transfer function ``g`` and its derivatives ``dg`` then stay those of the previous
-    point, a fraction of a standard error away.
-    """
-    lower, upper = bounds
-    n_p, band_list = p.shape[1], model.bands
-    g, dg = model.design(p)
-    c, r, J = _project(g, dg, y, band_list)
-    cost = np.sum(r**2, axis=1)
-    lam = np.full(len(y), 1e-3)
-    dof = max(r.shape[1] - n_p - 2 * c[0].size, 1)
-    active = np.arange(len(y))   # pixels still moving: converged ones cost nothing more
-    for _ in range(iterations):
-        Ja, ra, la = J[active], r[active], lam[active]
-        JtJ = np.einsum("nki,nkj->nij", Ja, Ja)
-        grad = np.einsum("nki,nk->ni", Ja, ra)
-        A = JtJ + la[:, None, None] * (JtJ * np.eye(n_p) + 1e-12 * np.eye(n_p))
-        step = np.clip(p[active] - np.linalg.solve(A, grad[..., None])[..., 0], lower, upper) - p[active]
-        # predicted decrease of the cost (Gauss-Newton) in units of the tolerance
-        gain = -np.einsum("ni,ni->n", step, grad) / (tolerance * cost[active] / dof)
-        moving = (gain > 1) & (la < 1e8)
-        active, step, gain = active[moving], step[moving], gain[moving]
-        if active.size == 0:
-            break
-        finished = np.zeros(len(active), bool)
-        for last in (False, True):
-            sel = (gain < 100) == last
-            if not sel.any():
-                continue
-            act = active[sel]
-            trial = p[act] + step[sel]
-            g_t, dg_t = model.design(trial, jacobian=not last)
-            c_t, r_t, J_t = _project(g_t, dg_t, y[act], band_list)
-            cost_t = np.sum(r_t**2, axis=1)
-            better = cost_t < cost[act]
-            idx = act[better]
-            p[idx], c[idx], r[idx], cost[idx] = trial[better], c_t[better], r_t[better], cost_t[better]
-            if not last:
-                J[idx], g[idx], dg[:, idx] = J_t[better], g_t[better], dg_t[:, better]
-            lam[act] = np.where(better, lam[act] / 3, lam[act] * 4)
-            finished[np.flatnonzero(sel)[better]] = last
-        active = active[~finished]
-    return p, c, r, J, cost, g, dg
 
 
 def fit_block(model: BeamMapModel, response, *, q0=100.0, k1_range=None, iterations=40,
@@ -598,31 +516,6 @@ def fittable(spectra) -> np.ndarray:
     return np.all(np.isfinite(spectra), axis=axes) & np.any(spectra != 0, axis=axes)
 
 
-def _covariance(model, g, dg, c, noise):
-    """Covariance of ``(p, Re c, Im c)`` per pixel, ``(n, n_p + 2 c.size, ...)``: ``noise`` times
-    the inverse normal matrix of the full (unprojected) problem at the solution
-    (:func:`pfmdyn.fitting.projection.covariance`).  Its ``p`` block is the variable-projection
-    one; the amplitudes' block also carries their correlation with ``p`` (an amplitude's error
-    grows with that of the resonance it sits on).  The amplitude columns are ``(Re, Im)`` pairs in
-    ``c``'s (component, band, drive) order (:func:`_column`); every band adds its normal matrix
-    (:func:`pfmdyn.fitting.projection.normal_matrix`, the bias components as right-hand sides).
-    """
-    n, m, n_bands, K = c.shape
-    n_p = dg.shape[0]
-    N = np.zeros((n, n_p + 2 * c[0].size, n_p + 2 * c[0].size))
-    for j, b in enumerate(model.bands):
-        D = np.einsum("pnkf,nmk->npfm", dg[..., b], c[:, :, j])
-        cols = np.concatenate([np.arange(n_p)] + [_column(n_p, q, j, 0, n_bands, K) + np.arange(2 * K)
-                                                  for q in range(m)])
-        N[:, cols[:, None], cols] += normal_matrix(D, np.swapaxes(g[..., b], 1, 2))
-    return covariance(N, noise)
-
-
-def _column(n_p, q, j, k, n_bands, K) -> int:
-    """Index of ``Re c_qjk`` (``Im`` is the next) among the covariance's parameters."""
-    return n_p + 2 * ((q * n_bands + j) * K + k)
-
-
 def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bias, surface_potential_v):
     scale = np.sqrt(np.sum(np.abs(y) ** 2, axis=(1, 2)))
     scale[scale == 0] = 1.0
@@ -632,10 +525,10 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     y, outside = bias_axis.project(y / scale[:, None, None], bias)
     names = model.names
     p = _initial(model, y, q0, k1_range, iterations, tolerance)
-    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, y, p, parameter_bounds(model.parameters), iterations, tolerance)
+    p, c, _, _, cost, g, dg = levenberg_marquardt(model, y, p, parameter_bounds(model.parameters), iterations, tolerance)
     cost = cost + outside
     dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
-    cov = _covariance(model, g, dg, c, cost / dof)
+    cov = band_covariance(model, g, dg, c, cost / dof)
     sd = {n: np.sqrt(np.abs(cov[:, i, i])) for i, n in enumerate(names)}
     col = {n: p[:, i] for i, n in enumerate(names)}
     # half the width of 10**(log10 x +- sd): see fit_block
@@ -647,7 +540,7 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     gap_map = gap(cost * (scale / sigma) ** 2, count)
     at_bound = np.any([q.at_bound(col[q.name]) for q in model.parameters], axis=0)
     _, m, n_bands, K = c.shape
-    first = np.concatenate([_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
+    first = np.concatenate([amplitude_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
     band = model.bands[0]
     linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
                                    g[..., band])

@@ -14,7 +14,7 @@ spectroscopic step on its own) is fitted in two stages, every spectrum of a bloc
    No start values, no grid: resonances anywhere in or near the band, any Q.
 2. *Fit*: the complex amplitude enters linearly and is projected out (variable projection);
    ``log w0`` and ``log Q`` follow the Levenberg-Marquardt iteration of the beam fit
-   (:func:`pfmdyn.maps.fit._levenberg_marquardt`), which treats all spectra at once.
+   (:func:`pfmdyn.fitting.batched.levenberg_marquardt`), which treats all spectra at once.
 
 Both stages report BGlib's ``R2 Criterion``, ``1 - sum|y - model|**2 / sum|y - mean(y)|**2``.
 """
@@ -28,7 +28,8 @@ import numpy as np
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..generated.formulas import sho_response, sho_response_d_log_quality, sho_response_d_log_resonance
-from .fit import _covariance, _levenberg_marquardt, _project, bands
+from ..fitting.batched import band_covariance, levenberg_marquardt, project_bands
+from .fit import bands
 
 __all__ = ["FIELDS", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
 
@@ -102,7 +103,7 @@ def is_sho(model) -> bool:
 
 @dataclass(frozen=True)
 class _Oscillator:
-    """The SHO over one band as the Levenberg-Marquardt of :mod:`pfmdyn.maps.fit` wants a model:
+    """The SHO over one band as the Levenberg-Marquardt of :mod:`pfmdyn.fitting.batched` wants a model:
     internal parameters ``(log w0, log Q)``, one transfer function, one band."""
 
     frequency_hz: np.ndarray
@@ -181,9 +182,9 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict
     out = {}
     p0 = _guess(f, yn)
     g0 = model.design(p0, jacobian=False)[0]
-    c0, r0, _ = _project(g0, None, yn[:, None, :], model.bands)
-    p, c, _, _, cost, g, dg = _levenberg_marquardt(model, yn[:, None, :], p0.copy(), bounds, iterations, tolerance)
-    cov = _covariance(model, g, dg, c, cost / max(2 * f.size - 4, 1))
+    c0, r0, _ = project_bands(g0, None, yn[:, None, :], model.bands)
+    p, c, _, _, cost, g, dg = levenberg_marquardt(model, yn[:, None, :], p0.copy(), bounds, iterations, tolerance)
+    cov = band_covariance(model, g, dg, c, cost / max(2 * f.size - 4, 1))
     with np.errstate(over="ignore"):
         spread = np.sinh(np.sqrt(np.abs(cov[:, [0, 1], [0, 1]])))
     for prefix, params, amp, squares in (("guess_", p0, c0, np.sum(r0**2, axis=1)), ("", p, c, cost)):

@@ -1,0 +1,274 @@
+"""The spring constant of a free lever from its thermal tune, two independent ways.
+
+* **Thermal** (equipartition): the first mode is fitted as a damped oscillator over a white floor
+  (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`); its mean square ``pi A**2 f0 Q / 2`` (generated
+  ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``--invols``) gives
+  ``k = chi kB T / <d*^2>`` with the first-mode factor ``chi`` of the optical lever read at the spot
+  through a static InvOLS measured with the tip at ``tip_position`` (generated
+  ``formulas.thermal_factor_slope*``, derived in ``derivations/calibration.py``; 0.817 at the end).
+  A spectrum already in metres was converted by the instrument; it is taken as converted with the
+  instrument's static InvOLS, which is what the factor assumes (said in :attr:`Calibration.assumptions`).
+* **Sader** (Sader, Chon & Mulvaney 1999): ``k = 0.1906 rho b**2 L Q Gamma_i(Re) omega_f**2`` with the
+  fitted f and Q, the medium's density and viscosity and the lever's plan (``formulas.sader_spring_constant``).
+
+Both give the spring constant *at the tip* (``k (L/x_tip)**3`` for a set-back tip, Proksch et al. 2004).
+Uncertainties (standard, 1 sigma) combine the fit's covariance with the stated inputs: the length and
+width (defaults 2 % and 5 % of the nominal values, a datasheet's usual spread), the temperature (1 K);
+the InvOLS carries none here (it is named when it could reconcile the two).  The two are *consistent*
+when they differ by less than twice their combined uncertainty; otherwise :attr:`Calibration.reconcile`
+lists each single input that would make them agree and the factor it would need.  They are never
+averaged.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import UserError
+from ..generated import formulas
+from ..io.thermal_tune import ThermalTune
+from ..medium import Medium, hydrodynamic_function, reynolds_number
+from .thermal import ThermalPeak, fit_thermal_peaks, oscillator_asd
+
+__all__ = ["BOLTZMANN", "Estimate", "Calibration", "thermal_factor", "thermal_spring_constant",
+           "sader_spring_constant", "calibrate"]
+
+BOLTZMANN = 1.380649e-23
+"""J/K (exact, SI 2019)."""
+LENGTH_TOLERANCE, WIDTH_TOLERANCE, TEMPERATURE_UNCERTAINTY = 0.02, 0.05, 1.0
+"""Default standard uncertainties: relative for a nominal length and width, K for the temperature."""
+COVERAGE = 2.0
+"""Two estimates agree when they differ by less than this many combined standard uncertainties."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A spring constant (N/m) with its standard uncertainty and the relative share of each source;
+    NaN with ``reason`` when the inputs cannot determine it."""
+
+    value: float
+    stderr: float
+    sources: dict = field(default_factory=dict)
+    reason: str = ""
+
+    @property
+    def determined(self) -> bool:
+        return math.isfinite(self.value)
+
+
+def thermal_factor(spot_position: float = 1.0, tip_position: float = 1.0) -> float:
+    """First-mode factor ``chi`` of ``k_tip = chi kB T / <d*^2>`` for an optical lever read at the spot and
+    calibrated statically with the tip at ``tip_position`` (fractions of L).
+
+    >>> round(thermal_factor(), 4), round(thermal_factor(0.9), 4), round(thermal_factor(1.0, 0.95), 4)
+    (0.8174, 0.8316, 0.8605)
+    """
+    beyond = spot_position >= tip_position
+    f = formulas.thermal_factor_slope if beyond else formulas.thermal_factor_slope_inside
+    return float(f(spot_position, tip_position))
+
+
+def thermal_spring_constant(mean_square: float, temperature: float, spot_position: float = 1.0,
+                            tip_position: float = 1.0) -> float:
+    """``chi kB T / <d*^2>`` (N/m): equipartition of the first mode's mean square (m^2).
+
+    >>> round(thermal_spring_constant(1e-22, 300.0), 2)
+    33.86
+    """
+    return thermal_factor(spot_position, tip_position) * BOLTZMANN * temperature / mean_square
+
+
+def sader_spring_constant(medium: Medium, width: float, length: float, frequency_hz: float, quality_factor: float,
+                          tip_position: float = 1.0) -> float:
+    """Sader's spring constant (N/m) at the tip from the first mode's frequency and Q in ``medium``; NaN
+    outside the hydrodynamic function's fitted range.
+
+    >>> round(sader_spring_constant(Medium.air(313.15), 40e-6, 225e-6, 179.8e3, 442.0), 2)
+    25.15
+    """
+    gamma = hydrodynamic_function(reynolds_number(medium, frequency_hz, width))
+    k = formulas.sader_spring_constant(medium.density, width, length, quality_factor, gamma.imag, frequency_hz)
+    return float(k) / tip_position**3
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What :func:`calibrate` found: the fitted first mode, both estimates, their agreement."""
+
+    peak: ThermalPeak
+    thermal: Estimate
+    sader: Estimate
+    consistent: bool | None
+    reconcile: list
+    assumptions: list
+    inputs: dict
+    instrument: dict
+
+    def to_json(self) -> dict:
+        """The JSON document of ``pfmdyn calibrate --json`` (undetermined numbers are NaN, written null)."""
+        def estimate(e):
+            return {"spring_constant": e.value, "spring_constant_stderr": e.stderr,
+                    "sources": {k: v for k, v in e.sources.items()}, "reason": e.reason}
+        return {"free_resonance": self.peak.frequency_hz, "free_resonance_stderr": self.peak.frequency_uncertainty_hz,
+                "free_quality_factor": self.peak.quality_factor,
+                "free_quality_factor_stderr": self.peak.quality_factor_uncertainty,
+                "thermal": estimate(self.thermal), "sader": estimate(self.sader), "consistent": self.consistent,
+                "reconcile": [{"input": name, "factor": factor} for name, factor in self.reconcile],
+                "assumptions": list(self.assumptions), "inputs": dict(self.inputs), "instrument": dict(self.instrument)}
+
+
+def _broad_mode(f, y) -> ThermalPeak | None:
+    """The tallest peak as one oscillator over the whole band: a low-Q mode (in liquid) is wider than
+    the windows :func:`fit_thermal_peaks` searches and fits in."""
+    from scipy.optimize import curve_fit
+
+    start = max(3, int(0.01 * f.size))
+    i = start + int(np.argmax(y[start:]))
+    above = np.flatnonzero(y[start:] > y[i] / np.sqrt(2)) + start
+    q0 = max(f[i] / max(f[above[-1]] - f[above[0]], f[1] - f[0]), 0.5)
+    band = (f > f[start]) & (y > 0)
+    model = lambda x, a, b, c, d: np.log(oscillator_asd(x, a, abs(b), abs(c), abs(d)))   # noqa: E731
+    try:
+        popt, pcov = curve_fit(model, f[band], np.log(y[band]), p0=(f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])),
+                               maxfev=20000)
+    except (RuntimeError, ValueError):
+        return None
+    if not (f[band][0] < popt[0] < f[band][-1]) or not np.all(np.isfinite(pcov)):
+        return None
+    err = np.sqrt(np.clip(np.diag(pcov), 0, None))
+    return ThermalPeak(1, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
+                       float(err[0]), float(err[1]), tuple(map(tuple, pcov.tolist())))
+
+
+def _first_mode(tune: ThermalTune) -> ThermalPeak:
+    peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
+        [p for p in (_broad_mode(tune.frequency_hz, tune.asd),) if p]
+    if not peaks:
+        raise UserError(f"{tune.path}: no resonance peak found in the thermal spectrum")
+    return peaks[0]
+
+
+def _relative_fit_error(peak: ThermalPeak, gradient) -> float:
+    """Relative standard error of a quantity whose log has ``gradient`` w.r.t. (f0, Q, A, w)."""
+    if peak.covariance is None:
+        return math.nan
+    g = np.asarray(gradient, dtype=float)
+    return float(np.sqrt(max(g @ np.asarray(peak.covariance) @ g, 0.0)))
+
+
+def _combine(value: float, sources: dict) -> Estimate:
+    return Estimate(value, abs(value) * math.sqrt(sum(v**2 for v in sources.values())), sources)
+
+
+def _bisect(f, low: float, high: float):
+    """Root of ``f`` on ``[low, high]`` in log space, or None without a sign change."""
+    from scipy.optimize import brentq
+
+    grid = np.geomspace(low, high, 25)
+    values = np.array([f(g) for g in grid])
+    change = np.flatnonzero(np.isfinite(values[:-1]) & np.isfinite(values[1:]) & (values[:-1] * values[1:] <= 0))
+    if not change.size:
+        return None
+    low, high = grid[change[0]], grid[change[0] + 1]
+    return math.exp(brentq(lambda t: f(math.exp(t)), math.log(low), math.log(high), xtol=1e-12))
+
+
+def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | None = None, medium: Medium,
+              temperature: float, invols: float | None = None, spot_position: float = 1.0,
+              tip_position: float = 1.0, length_uncertainty: float | None = None,
+              width_uncertainty: float | None = None, temperature_uncertainty: float = TEMPERATURE_UNCERTAINTY,
+              medium_factory=None) -> Calibration:
+    """Both spring constants of the lever whose thermal tune is ``tune``.
+
+    ``medium_factory(temperature)`` rebuilds the medium at another temperature (how the temperature's
+    uncertainty and a reconciling temperature reach Sader's estimate); None keeps ``medium`` fixed.
+
+    Examples
+    --------
+    >>> f = np.linspace(0, 4e5, 8001)
+    >>> tune = ThermalTune("synthetic", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1.03e-15, 3e-14), "m", {}, {})
+    >>> c = calibrate(tune, length=225e-6, width=40e-6, medium=Medium.air(313.15), temperature=313.15)
+    >>> round(c.thermal.value, 1), round(c.sader.value, 1), c.consistent
+    (26.8, 25.1, True)
+    """
+    peak = _first_mode(tune)
+    f0, q, amp = peak.frequency_hz, peak.quality_factor, peak.amplitude
+    assumptions, inputs = [], {"temperature": temperature, "medium": medium.name, "spot_position": spot_position,
+                               "tip_position": tip_position}
+    # Thermal.
+    mean_square = float(formulas.oscillator_mean_square(f0, q, amp))
+    if tune.unit == "V":
+        if invols is None:
+            thermal = Estimate(math.nan, math.nan, reason="the spectrum is in volts: needs the InvOLS")
+        else:
+            mean_square *= invols**2
+            inputs["invols"] = invols
+    else:
+        if invols is not None:
+            raise UserError(f"{tune.path}: the spectrum is already in metres; an InvOLS applies to a spectrum in volts")
+        assumptions.append("the spectrum in metres was converted by the instrument with a static InvOLS (optical "
+                           "lever, tip pressed on a hard surface): the thermal factor assumes it")
+    if tune.unit == "m" or invols is not None:
+        fit = _relative_fit_error(peak, (1 / f0, 1 / q, 2 / amp, 0.0))
+        thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
+                           {"fit": fit, "temperature": temperature_uncertainty / temperature})
+    # Sader.
+    rebuild = medium_factory or (lambda t: medium)
+
+    def sader(L=length, b=width, t=temperature, f=f0, quality=q, scale=1.0):
+        fluid = rebuild(t)
+        fluid = Medium(fluid.density * scale, fluid.viscosity * scale, fluid.name)
+        return sader_spring_constant(fluid, b, L, f, quality, tip_position)
+
+    if length is None or width is None:
+        sader_estimate = Estimate(math.nan, math.nan, reason="needs the lever's length and width")
+    else:
+        inputs.update(length=length, width=width)
+        u_length = LENGTH_TOLERANCE * length if length_uncertainty is None else length_uncertainty
+        u_width = WIDTH_TOLERANCE * width if width_uncertainty is None else width_uncertainty
+        k_s = sader()
+        if not math.isfinite(k_s):
+            re = float(reynolds_number(medium, f0, width))
+            sader_estimate = Estimate(math.nan, math.nan, reason=f"Re = {re:.3g} is outside the hydrodynamic "
+                                      "function's fitted range 1e-6 to 1e4")
+        else:
+            def rel(**change):          # relative change of k_s for a one-sigma change of one input
+                return abs(sader(**change) / k_s - 1)
+            sources = {"fit": math.hypot(rel(f=f0 + peak.frequency_uncertainty_hz),
+                                         rel(quality=q + peak.quality_factor_uncertainty)),
+                       "length": rel(L=length + u_length), "width": rel(b=width + u_width)}
+            if medium_factory is not None:
+                sources["temperature"] = rel(t=temperature + temperature_uncertainty)
+            sader_estimate = _combine(k_s, sources)
+            assumptions.append(f"length {length:.4g} m +- {u_length:.2g}, width {width:.4g} m +- {u_width:.2g} "
+                               f"(standard uncertainties), temperature +- {temperature_uncertainty:g} K")
+    # Agreement, and what would restore it.
+    consistent, reconcile = None, []
+    if thermal.determined and sader_estimate.determined:
+        combined = math.hypot(thermal.stderr, sader_estimate.stderr)
+        consistent = bool(abs(thermal.value - sader_estimate.value) <= COVERAGE * combined)
+        if not consistent:
+            ratio = thermal.value / sader_estimate.value
+            reconcile.append(("invols", math.sqrt(ratio)))     # k_thermal ~ 1/InvOLS^2
+            reconcile.append(("length", ratio))                # k_Sader ~ L
+            width_factor = _bisect(lambda s: sader(b=width * s) - thermal.value, 0.2, 5.0)
+            if width_factor:
+                reconcile.append(("width", width_factor))
+            if medium_factory is not None:
+                def mismatch(s):        # NaN where the medium has no such temperature (water below 0 C)
+                    try:
+                        return thermal.value * s - sader(t=temperature * s)
+                    except UserError:
+                        return math.nan
+                t_factor = _bisect(mismatch, 0.5, 2.0)
+                if t_factor:
+                    reconcile.append(("temperature", t_factor))
+            reconcile.append(("medium", ratio))                # density and viscosity scaled alike: same Re
+    instrument = dict(tune.instrument, **{k: v for k, v in tune.conditions.items()})
+    if length is not None and width is not None and {"free_resonance", "free_quality_factor"} <= set(instrument):
+        # the textbook formula on the instrument's own fit of the tune, beside ours on the data
+        instrument["sader_spring_constant_of_its_fit"] = sader_spring_constant(
+            medium, width, length, instrument["free_resonance"], instrument["free_quality_factor"], tip_position)
+    return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument)

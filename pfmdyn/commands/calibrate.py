@@ -1,0 +1,117 @@
+"""``pfmdyn calibrate``: the spring constant of a free lever from its thermal tune, thermal and Sader."""
+from __future__ import annotations
+
+import math
+
+from ..errors import UserError
+from . import flags
+
+__all__ = ["add_arguments", "run", "report"]
+
+
+def add_arguments(parser) -> None:
+    """Options of ``pfmdyn calibrate`` (names and units: :mod:`pfmdyn.names`).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> a = p.parse_args(["t.nid", "--length", "225e-6", "--width", "40e-6"]); a.file, a.medium, a.spot_position
+    ('t.nid', None, None)
+    """
+    parser.add_argument("file", help="thermal tune: Nanosurf .nid, or a CSV of frequency_hz and an ASD column "
+                        "ending in _m_per_sqrthz or _v_per_sqrthz")
+    flags.add(parser, ("length",))
+    flags.add_medium_arguments(parser)
+    flags.add(parser, ("invols", "spot_position", "tip_position", "length_uncertainty", "width_uncertainty"))
+    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    parser.add_argument("--plot", metavar="PNG", help="write the spectrum with the fitted first mode")
+
+
+def _number(value, unit="N/m", digits=4) -> str:
+    return f"{value:.{digits}g} {unit}" if value is not None and math.isfinite(value) else "undetermined"
+
+
+def report(result) -> str:
+    """The lines ``pfmdyn calibrate`` prints.
+
+    >>> import numpy as np
+    >>> from pfmdyn.analysis.calibrate import calibrate
+    >>> from pfmdyn.generated import formulas
+    >>> from pfmdyn.io.thermal_tune import ThermalTune
+    >>> from pfmdyn.medium import Medium
+    >>> f = np.linspace(0, 4e5, 8001)
+    >>> tune = ThermalTune("t.csv", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1.03e-15, 3e-14), "m", {}, {})
+    >>> print(report(calibrate(tune, medium=Medium.air(313.15), temperature=313.15)).splitlines()[2])
+    Sader:   undetermined (needs the lever's length and width)
+    """
+    d, p = result.to_json(), result.peak
+    inst = result.instrument
+    lines = [f"first mode: f = {p.frequency_hz:.6g} +- {p.frequency_uncertainty_hz:.2g} Hz, "
+             f"Q = {p.quality_factor:.4g} +- {p.quality_factor_uncertainty:.2g}"
+             + (f"  (instrument: {inst['free_resonance']:.6g} Hz, Q {inst['free_quality_factor']:.4g})"
+                if "free_resonance" in inst and "free_quality_factor" in inst else "")]
+    for name, label in (("thermal", "thermal"), ("sader", "Sader")):
+        e = d[name]
+        if e["spring_constant"] is not None and math.isfinite(e["spring_constant"]):
+            shares = ", ".join(f"{k} {v:.1%}" for k, v in e["sources"].items())
+            lines.append(f"{label + ':':8} k = {_number(e['spring_constant'])} +- {_number(e['spring_constant_stderr'], '', 2)}"
+                         f"N/m ({shares})")
+        else:
+            lines.append(f"{label + ':':8} undetermined ({e['reason']})")
+    if "spring_constant" in inst:
+        lines.append(f"instrument: k = {inst['spring_constant']:.4g} N/m"
+                     + (f" at {inst['temperature'] - 273.15:g} C" if "temperature" in inst else "")
+                     + (f" in {inst['environment']}" if "environment" in inst else "")
+                     + (f"; Sader's formula on its own fit of the tune: {inst['sader_spring_constant_of_its_fit']:.4g} N/m"
+                        if "sader_spring_constant_of_its_fit" in inst else ""))
+    if d["consistent"] is None:
+        lines.append("agreement: undetermined (one estimate is)")
+    elif d["consistent"]:
+        lines.append("agreement: thermal and Sader agree within twice their combined uncertainty")
+    else:
+        lines.append("agreement: thermal and Sader DISAGREE beyond twice their combined uncertainty; "
+                     "either alone would reconcile them:")
+        lines += [f"  {r['input']} x {r['factor']:.4g}" for r in d["reconcile"]]
+    lines += [f"assumed: {a}" for a in d["assumptions"]]
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """Read, calibrate, print, write what was asked."""
+    from ..analysis.calibrate import calibrate
+    from ..io.results import check_writable
+    from ..io.thermal_tune import read_thermal_tune
+    from ..medium import Medium
+
+    check_writable(args.json)
+    check_writable(args.plot, figure=True)
+    tune = read_thermal_tune(args.file)
+    values = flags.given(args, ("length", "width", "temperature", "invols", "spot_position", "tip_position",
+                                "length_uncertainty", "width_uncertainty"))
+    environment = tune.conditions.get("environment")
+    if args.medium is None and environment not in (None, "air"):
+        raise UserError(f"{args.file}: measured in {environment}: give {flags.NAMES['medium'].flag}")
+    medium = flags.medium_from_args(args, tune.conditions)
+    temperature = values.get("temperature", tune.conditions.get("temperature", 293.15))
+    word = (args.medium or environment or "air").strip().lower()
+    factory = getattr(Medium, word) if word in ("air", "water") else None
+    result = calibrate(tune, length=values.get("length"), width=values.get("width"), medium=medium,
+                       temperature=temperature, invols=values.get("invols"),
+                       spot_position=values.get("spot_position", 1.0), tip_position=values.get("tip_position", 1.0),
+                       length_uncertainty=values.get("length_uncertainty"),
+                       width_uncertainty=values.get("width_uncertainty"), medium_factory=factory)
+    if "temperature" not in values and "temperature" not in tune.conditions:
+        result.assumptions.append("temperature 293.15 K (give --temperature)")
+    if args.medium is None and environment is None:
+        result.assumptions.append(f"medium {medium.name} (give --medium)")
+    print(report(result))
+    if args.json:
+        from ..io.results import write_json
+        write_json(args.json, result.to_json())
+    if args.plot:
+        from ..plots.calibrate import plot_calibration
+        fig = plot_calibration(tune, result)
+        try:
+            fig.savefig(args.plot, dpi=120)
+        except OSError as exc:
+            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+    return 0

@@ -1,0 +1,82 @@
+"""A thermal tune as ``pfmdyn calibrate`` needs it: the amplitude spectral density with its unit, what
+the instrument concluded from it, and the conditions it was taken in.
+
+Read from any instrument file :func:`pfmdyn.io.instruments.read_instrument` calls a thermal spectrum
+(Nanosurf ``.nid``), or from a CSV table of a frequency column (Hz) and an ASD column whose name ends
+in its unit, ``_m_per_sqrthz`` or ``_v_per_sqrthz`` (the first such column; ``thermal_asd.csv``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UserError
+
+__all__ = ["ThermalTune", "read_thermal_tune"]
+
+_ASD_UNITS = {"_m_per_sqrthz": "m", "_v_per_sqrthz": "V"}
+
+
+@dataclass(frozen=True)
+class ThermalTune:
+    """``asd`` in ``unit`` per sqrt(Hz) (``unit`` ``"m"`` or ``"V"``) at ``frequency_hz``; ``instrument``:
+    the instrument's own results (names of :mod:`pfmdyn.names`, SI); ``conditions``: ``temperature`` (K)
+    and ``environment`` when the file says."""
+
+    path: str
+    frequency_hz: np.ndarray = field(repr=False)
+    asd: np.ndarray = field(repr=False)
+    unit: str
+    instrument: dict
+    conditions: dict
+
+
+def _from_csv(path: Path) -> ThermalTune:
+    from .columns import read_table
+
+    table = read_table(path)
+    names = [c.lower() for c in table.header]
+    freq = next((i for i, c in enumerate(names) if c.endswith("_hz") and "freq" in c), None)
+    asd = next(((i, u) for i, c in enumerate(names) for s, u in _ASD_UNITS.items() if c.endswith(s)), None)
+    if freq is None or asd is None:
+        raise UserError(f"{path}: a thermal tune CSV needs a frequency column ending in _hz and an ASD column "
+                        "ending in _m_per_sqrthz or _v_per_sqrthz")
+    rows = []
+    for number, cells in table.rows:
+        try:
+            rows.append((float(cells[freq]), float(cells[asd[0]])))
+        except (ValueError, IndexError):
+            raise UserError(f"{path}, line {number}: not a number in the frequency or ASD column") from None
+    values = np.array(rows, dtype=float).reshape(-1, 2)
+    return ThermalTune(str(path), values[:, 0], values[:, 1], asd[1], {}, {})
+
+
+def read_thermal_tune(path) -> ThermalTune:
+    """Read a thermal tune; anything else is a one-line :class:`~pfmdyn.errors.UserError`.
+
+    >>> read_thermal_tune("tune.xyz")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: tune.xyz: unknown instrument file type '.xyz'; pfmdyn reads .ibw (Asylum), .h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv
+    """
+    from .instruments import read_instrument
+
+    path = Path(path)
+    record = read_instrument(path)          # checks the type, the file's existence and emptiness
+    if path.suffix.lower() == ".csv":
+        return _from_csv(path)
+    if record.kind != "thermal spectrum" or record.spectrum is None:
+        raise UserError(f"{path}: not a thermal tune (a {record.kind} of {record.instrument})")
+    frequency, asd, unit = record.spectrum
+    base = str(unit).replace("/sqrt(Hz)", "")
+    if base not in ("m", "V"):
+        raise UserError(f"{path}: the spectrum is in {unit}; pfmdyn calibrates spectra in m/sqrt(Hz) or V/sqrt(Hz)")
+    conditions = {}
+    if path.suffix.lower() == ".nid":
+        from .nid import thermal_conditions
+        conditions = thermal_conditions(path)
+    instrument = {k: v for k, v in record.fields.items()
+                  if k in ("spring_constant", "free_resonance", "free_quality_factor")}
+    return ThermalTune(str(path), np.asarray(frequency, float), np.asarray(asd, float), base, instrument, conditions)

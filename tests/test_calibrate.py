@@ -1,0 +1,161 @@
+"""``pfmdyn calibrate`` on thermal tunes made by an independent route, and on the shared real one.
+
+The synthetic tunes are written here from the beam itself: the free modes' roots and shapes (SciPy's
+root finder on 1 + cos cosh), equipartition per mode, each mode's frequency and Q in the fluid from the
+exact complex root of the lever in it (mpmath, derivations/hydrodynamics.py), the optical lever's
+reading through a static InvOLS (slope at the end times 2L/3), a white floor and the chi-squared
+scatter of an averaged spectrum.  None of it is the code path that fits.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from pfmdyn.analysis.calibrate import calibrate, sader_spring_constant
+from pfmdyn.cli import main
+from pfmdyn.derivations import hydrodynamics as hyd
+from pfmdyn.io.thermal_tune import ThermalTune
+from pfmdyn.medium import Medium
+
+KB = 1.380649e-23
+REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "nsfopen_thermal_ACL-A"
+if not REAL.is_dir():
+    REAL = Path("/work/shared/realdata/nsfopen_thermal_ACL-A")
+
+
+def _roots(n):
+    return [brentq(lambda b: 1 + math.cos(b) * math.cosh(b), (i + 0.3) * math.pi, (i + 0.7) * math.pi) for i in range(n)]
+
+
+def _end_slope(b):
+    """phi'(1)/sqrt(int phi^2) of the free mode at root b (phi(xi) = cosh - cos - s (sinh - sin))."""
+    s = (math.cosh(b) + math.cos(b)) / (math.sinh(b) + math.sin(b))
+    xi = np.linspace(0, 1, 4001)
+    phi = np.cosh(b * xi) - np.cos(b * xi) - s * (np.sinh(b * xi) - np.sin(b * xi))
+    norm = math.sqrt(np.trapezoid(phi**2, xi))
+    return b * (math.sinh(b) + math.sin(b) - s * (math.cosh(b) - math.cos(b))) / norm
+
+
+def synthetic_tune(length, width, thickness, medium, temperature, seed, modes=2, averages=200):
+    """(tune, true k, first mode's f and Q) of a silicon lever in ``medium``."""
+    E, rho = 169e9, 2330.0
+    ei = E * width * thickness**3 / 12
+    k = 3 * ei / length**3
+    m = rho * width * thickness
+    f_top = None
+    parts = []
+    for n, b in enumerate(_roots(modes)):
+        f_vac = b**2 / (2 * math.pi * length**2) * math.sqrt(ei / m)
+        f_n, q_n = (float(v) for v in hyd.fluid_first_mode(f_vac, m, medium.density, medium.viscosity, width))
+        mean_square = KB * temperature * length**3 / (ei * b**4) * (_end_slope(b) * 2 / 3)**2
+        parts.append((f_n, q_n, mean_square))
+        f_top = f_top or (f_n, q_n)
+    f = np.linspace(0, 2.5 * f_top[0], 20001)
+    psd = np.zeros_like(f)
+    for f_n, q_n, ms in parts:
+        psd += ms * 2 / (math.pi * f_n * q_n) * f_n**4 / ((f_n**2 - f**2)**2 + (f * f_n / q_n)**2)
+    floor = 0.03 * math.sqrt(psd.max())
+    rng = np.random.default_rng(seed)
+    asd = np.sqrt((psd + floor**2) * rng.chisquare(2 * averages, f.size) / (2 * averages))
+    return ThermalTune(f"synthetic-{seed}", f, asd, "m", {}, {}), k, f_top
+
+
+CASES = [  # (medium, L, width, thickness): Q from about 2 (water, soft) to about 1000 (air, stiff)
+    ("air", 450e-6, 50e-6, 2.0e-6), ("air", 225e-6, 40e-6, 7e-6), ("air", 125e-6, 30e-6, 4e-6),
+    ("air", 60e-6, 20e-6, 4e-6), ("air", 500e-6, 60e-6, 10e-6),
+    ("water", 225e-6, 40e-6, 4e-6), ("water", 125e-6, 30e-6, 3e-6), ("water", 450e-6, 50e-6, 2e-6),
+]
+
+
+@pytest.mark.parametrize("seed, case", list(enumerate(CASES)))
+def test_both_methods_find_the_spring_constant(seed, case):
+    name, length, width, thickness = case
+    temperature = 298.15
+    medium = getattr(Medium, name)(temperature)
+    tune, k, (f1, q1) = synthetic_tune(length, width, thickness, medium, temperature, seed)
+    c = calibrate(tune, length=length, width=width, medium=medium, temperature=temperature,
+                  medium_factory=getattr(Medium, name))
+    assert c.peak.frequency_hz == pytest.approx(f1, rel=0.02)
+    assert c.peak.quality_factor == pytest.approx(q1, rel=0.25 if q1 < 10 else 0.1)
+    # Sader's closed forms hold to O(1/Q); the single-oscillator fit of a low-Q mode is coarser still.
+    tolerance = 0.05 if q1 > 20 else 0.3
+    assert c.thermal.value == pytest.approx(k, rel=tolerance), (q1, c.thermal.value, k)
+    assert c.sader.value == pytest.approx(k, rel=tolerance), (q1, c.sader.value, k)
+    if q1 > 20:
+        assert c.consistent
+
+
+def test_qs_span_the_real_range():
+    qs = [synthetic_tune(length, width, t, getattr(Medium, name)(298.15), 298.15, 0)[2][1] for name, length, width, t in CASES]
+    assert min(qs) < 4 and max(qs) > 500
+
+
+def test_a_wrong_invols_is_named():
+    medium = Medium.air(298.15)
+    tune, k, _ = synthetic_tune(225e-6, 40e-6, 7e-6, medium, 298.15, 11)
+    volts = ThermalTune("v", tune.frequency_hz, tune.asd / 50e-9, "V", {}, {})
+    good = calibrate(volts, length=225e-6, width=40e-6, medium=medium, temperature=298.15, invols=50e-9)
+    bad = calibrate(volts, length=225e-6, width=40e-6, medium=medium, temperature=298.15, invols=40e-9)
+    assert good.consistent and not bad.consistent
+    factors = dict(bad.reconcile)
+    assert factors["invols"] == pytest.approx(50 / 40, rel=0.05)
+    assert not calibrate(volts, medium=medium, temperature=298.15).thermal.determined
+
+
+def _textbook_sader(density, viscosity, width, length, f, q):
+    """0.1906 rho b^2 L Q Gamma_i omega^2 with Gamma from SciPy's Bessel functions and Sader's printed fit."""
+    from scipy.special import kv
+    re = density * 2 * math.pi * f * width**2 / (4 * viscosity)
+    z = -1j * np.sqrt(1j * re)
+    circ = 1 + 4j * kv(1, z) / (np.sqrt(1j * re) * kv(0, z))
+    t = math.log10(re)
+    omega_r = np.polyval([0.00069085, -0.0035117, 0.044055, -0.12886, 0.46842, -0.48274, 0.91324], t) / \
+        np.polyval([0.00069085, -0.0035862, 0.045155, -0.13444, 0.48690, -0.56964, 1], t)
+    omega_i = np.polyval([-0.000044510, 0.000064577, -0.00010961, 0.016294, -0.029256, -0.024134], t) / \
+        np.polyval([0.0028361, -0.014369, 0.079156, -0.18357, 0.55182, -0.59702, 1], t)
+    gamma = (omega_r + 1j * omega_i) * circ
+    return 0.1906 * density * width**2 * length * q * gamma.imag * (2 * math.pi * f)**2
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason="shared real data absent")
+def test_sader_on_the_real_tune_is_the_textbook_formula(tmp_path, capsys):
+    air = Medium.air(313.15)
+    ours = sader_spring_constant(air, 40e-6, 225e-6, 179.8e3, 442.0)
+    assert ours == pytest.approx(_textbook_sader(air.density, air.viscosity, 40e-6, 225e-6, 179.8e3, 442.0), rel=1e-3)
+    out = tmp_path / "c.json"
+    assert main(["calibrate", str(REAL / "thermal.nid"), "--length", "225e-6", "--width", "40e-6",
+                 "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["instrument"]["spring_constant"] == 27.13 and doc["instrument"]["temperature"] == pytest.approx(313.15)
+    fitted = _textbook_sader(air.density, air.viscosity, 40e-6, 225e-6, doc["free_resonance"], doc["free_quality_factor"])
+    assert doc["sader"]["spring_constant"] == pytest.approx(fitted, rel=1e-3)
+    assert isinstance(doc["consistent"], bool) and "instrument: k = 27.13 N/m" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("text, error", [
+    ("", "empty"), ("frequency_hz,amplitude\n1,2\n", "ASD column"),
+    ("frequency_hz,asd_m_per_sqrthz\n1,x\n", "not a number")])
+def test_malformed_files_end_in_one_line(tmp_path, capsys, text, error):
+    path = tmp_path / "tune.csv"
+    path.write_text(text)
+    out = tmp_path / "c.json"
+    assert main(["calibrate", str(path), "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and error in err[0] and not out.exists()
+
+
+def test_truncated_nid_and_bad_flags_end_in_one_line(tmp_path, capsys):
+    if not REAL.is_dir():
+        pytest.skip("shared real data absent")
+    broken = tmp_path / "t.nid"
+    broken.write_bytes((REAL / "thermal.nid").read_bytes()[:3000])
+    assert main(["calibrate", str(broken)]) == 2
+    assert main(["calibrate", str(REAL / "thermal.nid"), "--invols", "5e-8"]) == 2
+    assert main(["calibrate", str(REAL / "thermal.nid"), "--width", "-1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(line.startswith("pfmdyn calibrate: error: ") for line in err)
