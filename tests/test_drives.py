@@ -124,3 +124,17 @@ def test_lever_in_a_fluid_is_the_loaded_beam(seed):
         j = DRIVES.index("y0")
         assert complex(got.slope[i]) == pytest.approx(complex(slopes[j]), rel=1e-8)
         assert complex(got.deflection[i]) == pytest.approx(complex(deflections[j]) - 1, rel=1e-8)
+
+
+def test_the_map_model_loads_the_lever_as_the_lever_does():
+    """A lever in air: the map's beam model substitutes the same fluid-loaded ``beta`` as the lever's
+    own response (one damping substitution, the medium a drag in it)."""
+    from pfmdyn.maps.fit import BeamMapModel
+    from pfmdyn.medium import Medium
+
+    lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, width=3e-5, medium=Medium.air(300.0))
+    f = np.linspace(2e5, 4e5, 7)
+    beta = BeamMapModel(lever, f)._arguments(0.0, 0.0, 100.0, 50.0, 0.0)[2]
+    np.testing.assert_allclose(beta, lever.beta(f), rtol=1e-14)
+    vacuum = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, width=3e-5)
+    assert np.all(np.abs(beta / vacuum.beta(f) - 1) > 1e-4)       # the fluid moved it

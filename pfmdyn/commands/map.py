@@ -67,7 +67,7 @@ def add_arguments(parser) -> None:
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
-    flags.add_lever(parser, _LEVER, medium=False)     # the map models fit their own damping
+    flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
 
 
@@ -118,9 +118,14 @@ def run(args) -> int:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
-    overrides = flags.given(args, _LEVER + _CONTACT)
+    overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
+    if args.medium:             # the fluid around the lever: its load enters the beam model
+        overrides["medium"] = flags.medium_from_args(args)
     from ..maps.contact import contact_map, describe, is_contact_map
     if is_contact_map(args.data):
+        if args.medium:
+            raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
+                            "for a lever in a medium use pfmdyn stiffness")
         print(describe(contact_map(args.data, args.out, overrides)))
         return 0
     sho = args.model == "sho"

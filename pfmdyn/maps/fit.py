@@ -261,12 +261,16 @@ class BeamMapModel:
         Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
         on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
         contact springs are divided by that factor (the dashpot multiplies ``k1``).  A heavy tip
-        moves the lever's first free root (:meth:`pfmdyn.Cantilever.free_root`).
+        moves the lever's first free root (:meth:`pfmdyn.Cantilever.free_root`); a medium
+        (:attr:`pfmdyn.Cantilever.medium`) loads it at every frequency, ``r`` then from the vacuum ``f1``.
         """
         f = np.asarray(self.frequency_hz, float)
-        r = f / self.f1
-        beta0 = formulas.beta_from_frequency(f, self.f1, self.lever.free_root())
-        d = damping_substitution(r, beta0, 1.0, k1, self.lever.tip_mass_ratio, inv_q, g, x)   # k = 1: d.k is the factor
+        f1 = self.lever.vacuum_resonance          # the lever's own (free_resonance without a medium)
+        r = f / f1
+        beta0 = formulas.beta_from_frequency(f, f1, self.lever.free_root())
+        # a medium's load is a drag of its own beside the fitted one (derivations/damping.py: fluid_as_drag)
+        drag = g if self.lever.medium is None else g + 1j * r * self.lever.fluid_load(f)
+        d = damping_substitution(r, beta0, 1.0, k1, self.lever.tip_mass_ratio, inv_q, drag, x)   # k = 1: d.k is the factor
         return beta0, r, d.beta, d.k1 / d.k, k2 / d.k, d.k, d.mu
 
     def _transfer(self, beta, k1e, k2e, mu, jacobian):

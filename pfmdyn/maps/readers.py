@@ -269,7 +269,8 @@ def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> Map
         return MapInput(path, SHOMapModel(frequency_hz=f, bias_v=bias), tuple(grid), usid or "response",
                         "usid" if usid else "plain", columns)
     try:
-        lever = Cantilever.from_values({name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs})
+        values = {name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs}
+        lever = Cantilever.from_values({**values, "medium": attrs.get("medium")})
         contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
                              if name in attrs and name != "k1"})
     except (TypeError, ValueError, UserError) as exc:
