@@ -278,6 +278,7 @@ def test_random_lever_in_instrument_order(tmp_path):
     assert abs(report["parameters"]["tip_position"]["value"] - truth["gamma"]) < 0.01
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,hidden,parameter,tolerance", [
     (11003, "tip_setback", "tip_position", 0.005),  # stiff short lever (k 10 N/m, L 173 um)
 ])       # more levers and effects, undamped and damped: benchmarks/discrepancy.py (pass rates)
