@@ -238,6 +238,16 @@ EFFECTS = ("damping", "tip_mass", "tip_setback", "tilt", "background", "lateral_
 """Hidden-effect classes of :func:`random_case` (the vocabulary of ``pfmdyn discrepancy``)."""
 
 
+def silicon_lever(rng) -> tuple[float, float, float, float, float]:
+    """``(k, L, w, H, f1)`` of a silicon lever drawn over everyday ranges: k 0.2-40 N/m (log-uniform),
+    L 120-450 um, w 25-50 um, H 5-15 um; ``f1`` from the thickness that gives ``k``."""
+    E, rho = 169e9, 2330.0
+    k, L = 10 ** rng.uniform(math.log10(0.2), math.log10(40)), rng.uniform(120e-6, 450e-6)
+    w, H = rng.uniform(25e-6, 50e-6), rng.uniform(5e-6, 15e-6)
+    f1 = BETA1**2 / (2 * math.pi) * (4 * k * L**3 / (E * w)) ** (1 / 3) / L**2 * math.sqrt(E / 12 / rho)
+    return k, L, w, H, f1
+
+
 def random_beam(rng, hidden=(), n_elements: int = 120) -> tuple[FEBeam, dict, np.ndarray]:
     """A random silicon lever in contact with the ``hidden`` geometric effects and damping.
 

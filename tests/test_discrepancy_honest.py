@@ -19,7 +19,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
-from fe_beam import BETA1, FEBeam, acquisition_case, spectrum  # noqa: E402
+from fe_beam import FEBeam, acquisition_case, silicon_lever, spectrum  # noqa: E402
 from test_instruments import ASYLUM, THERMAL  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -197,10 +197,7 @@ def _damped_lever(seed: int, law: str, gamma: float = 1.0) -> tuple[str, dict]:
     damping law: ``viscous`` (constant width), ``air`` (width ~ sqrt f), ``internal`` (width ~ f);
     400 frequencies over the first two contact modes, three biases, 1 % noise."""
     rng = np.random.default_rng(seed)
-    E, rho = 169e9, 2330.0
-    k, L = 10 ** rng.uniform(math.log10(0.2), math.log10(40)), rng.uniform(120e-6, 450e-6)
-    w, H = rng.uniform(25e-6, 50e-6), rng.uniform(5e-6, 15e-6)
-    f1 = BETA1**2 / (2 * math.pi) * (4 * k * L**3 / (E * w)) ** (1 / 3) / L**2 * math.sqrt(E / 12 / rho)
+    k, L, w, H, f1 = silicon_lever(rng)
     k1 = k * 10 ** rng.uniform(1, 3)
     k2 = k1 * rng.uniform(0.5, 1.0)
     q1 = 10 ** rng.uniform(1.3, 1.8)

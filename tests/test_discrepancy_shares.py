@@ -20,7 +20,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
-from fe_beam import BETA1, FEBeam, spectrum  # noqa: E402
+from fe_beam import FEBeam, silicon_lever, spectrum  # noqa: E402
 
 from pfmdyn.discrepancy import select  # noqa: E402
 from pfmdyn.discrepancy.report import report as make_report  # noqa: E402
@@ -157,10 +157,7 @@ def _spot_lever(seed: int, size: float) -> tuple[str, dict]:
     10 % of the median response, three biases, 0.5 % noise, 400 frequencies over three contact
     modes, and an instrument resonance of ``size`` between contact modes 1 and 2."""
     rng = np.random.default_rng(seed)
-    E, rho = 169e9, 2330.0
-    k, L = 10 ** rng.uniform(math.log10(0.2), math.log10(40)), rng.uniform(120e-6, 450e-6)
-    w, H = rng.uniform(25e-6, 50e-6), rng.uniform(5e-6, 15e-6)
-    f1 = BETA1**2 / (2 * math.pi) * (4 * k * L**3 / (E * w)) ** (1 / 3) / L**2 * math.sqrt(E / 12 / rho)
+    k, L, w, H, f1 = silicon_lever(rng)
     k1 = k * 10 ** rng.uniform(1, 2.5)
     k2 = k1 * rng.uniform(0.5, 1.0)
     q1 = 10 ** rng.uniform(1.3, 1.8)
