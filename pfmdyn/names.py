@@ -89,6 +89,8 @@ QUANTITIES: tuple[Quantity, ...] = (
              0.0, 100.0, open_low=False),
     Quantity("contact_loss", "x", "1", "contact dashpot omega1 eta/k1: loss tangent of the contact at f1",
              0.0, 1e4, open_low=False),
+    Quantity("fluid_loss", "g_f", "1", "a fluid's drag at high Reynolds number: half-power width at f1 over f1, "
+             "growing as sqrt(f)", 0.0, 100.0, open_low=False, option=False),
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
              aliases=("temperature_k",)),

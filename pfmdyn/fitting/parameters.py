@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..names import NAMES
+
 __all__ = ["Parameter", "VISCOUS_LOSS", "FLUID_LOSS", "CONTACT_LOSS", "INTERNAL_LOSS", "bounds"]
 
 LN10 = math.log(10.0)
@@ -166,8 +168,7 @@ VISCOUS_LOSS = Parameter("g", "", 0.0, 1.0, public="viscous_loss", null=0.0, see
 """Viscous drag ``g = c / (rho S omega1)`` (:mod:`pfmdyn.derivations.damping`)."""
 
 FLUID_LOSS = Parameter("fluid", "", 0.0, 1.0, public="fluid_loss", null=0.0, seeds=(0.003, 0.01, 0.03),
-                       description="a fluid's drag at high Reynolds number: half-power width at f1 over f1, "
-                                   "growing as sqrt(f)")
+                       description=NAMES["fluid_loss"].meaning)
 """A fluid's Stokes-layer loss, Sader's hydrodynamic function at high Reynolds number: the drag
 ``fluid sqrt(r)`` (:func:`pfmdyn.discrepancy.effects.fluid_law`)."""
 
