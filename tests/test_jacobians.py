@@ -105,7 +105,8 @@ def test_characteristic_jacobian_moves_resonances():
 
 @pytest.mark.parametrize("effects", [("damping_internal", "tip_mass"), ("damping_viscous", "tip_setback", "tilt"),
                                      ("damping_contact", "tip_mass", "tip_setback", "background"),
-                                     ("damping_viscous", "tip_setback", "tilt", "spot_position")])
+                                     ("damping_viscous", "tip_setback", "tilt", "spot_position"),
+                                     ("damping_fluid", "tip_mass", "tip_setback")])
 def test_model_jacobian_matches_central_differences(effects):
     """The discrepancy model's chain rule (damping, rotation, free root, spot) against differences."""
     from types import SimpleNamespace
