@@ -157,3 +157,24 @@ def test_design_derivative_times_coefficients():
         down[j] -= h
         fd = (model.design(freq_u, inverse, bias, up) - model.design(freq_u, inverse, bias, down)) @ coef / (2 * h)
         np.testing.assert_allclose(v[:, j], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())
+
+
+@pytest.mark.parametrize("contact", [False, True])
+def test_resonance_sensitivity_matches_differences(contact):
+    """d f_n / d (internal parameters) of the discrepancy model's resonances, free and in contact, with a
+    tip mass and a set-back (the free root moves with both), against central differences of the roots."""
+    from types import SimpleNamespace
+
+    from pfmdyn.discrepancy.model import Model, resonances, resonance_sensitivity
+    meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=54.55e3)
+    model = Model(meta, ("tip_mass", "tip_setback"))
+    x = np.array([2.0, 1.0, 0.05, 0.9])
+    f = resonances(model, x, contact, 1.2e6)
+    got = resonance_sensitivity(model, x, contact, f)
+    for j in range(len(x)):
+        h = 1e-6
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        fd = (resonances(model, up, contact, 1.2e6) - resonances(model, down, contact, 1.2e6)) / (2 * h)
+        np.testing.assert_allclose(got[:, j], fd, rtol=1e-4, atol=1e-3 * f.max() * 1e-3)
