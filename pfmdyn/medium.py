@@ -132,16 +132,8 @@ def hydrodynamic_function(reynolds):
     >>> g = hydrodynamic_function(1.0); round(g.real, 4), round(g.imag, 4)
     (3.734, 4.0746)
     """
-    from scipy.special import kv
-
-    re = np.asarray(reynolds, dtype=float)
-    inside = (re >= VALID_REYNOLDS[0]) & (re <= VALID_REYNOLDS[1])
-    safe = np.where(inside, re, 1.0)
-    root = np.sqrt(1j * safe)
-    circular = 1 + 4j * kv(1, -1j * root) / (root * kv(0, -1j * root))
-    tau = np.log10(safe)
-    omega = formulas.rectangular_correction_real(tau) + 1j * formulas.rectangular_correction_imag(tau)
-    out = np.where(inside, omega * circular, np.nan + 1j * np.nan)
+    # the conjugate of the analytic continuation pfmdyn's time convention uses, on real Re
+    out = np.conj(_conjugate_function(np.asarray(reynolds, dtype=float)))
     return complex(out) if out.ndim == 0 else out
 
 
