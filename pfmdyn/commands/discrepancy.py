@@ -12,7 +12,7 @@ from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
-from ..discrepancy.inputs import is_sweep, read
+from ..discrepancy.inputs import is_sweep, read, read_sweep
 from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from . import flags
@@ -63,16 +63,15 @@ def _lever_in_medium(data, args):
 def _sweeps(args) -> int:
     """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
     from ..discrepancy.sweep import compare_sweeps, fit_sweep
-    from ..io.sweeps import read_sweep_table
 
     if args.plot:
         raise UserError(f"{args.data}: --plot is not available for drive sweeps (the JSON holds the fit)")
     if args.reference and not is_sweep(args.reference):
-        raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table)")
+        raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
     values = flags.given(args, ("spring_constant", "length", "width", "added_mass_position"))
     flags.require(values, ("spring_constant", "length"), args.data)
-    after = read_sweep_table(args.data)
-    before = read_sweep_table(args.reference) if args.reference else None
+    after = read_sweep(args.data)
+    before = read_sweep(args.reference) if args.reference else None
     medium = flags.medium_from_args(args, {"medium": (before or after).medium} if (before or after).medium else None,
                                     default="water")
     try:

@@ -12,18 +12,27 @@ from __future__ import annotations
 from ..analysis.thermal import instrument_resonances
 from ..io import tables
 from ..io.discrepancy_data import ResonanceData, SpectrumData
-from ..io.sweeps import is_drive_sweep
+from ..io import nid, sweeps
 
-__all__ = ["read", "is_sweep"]
+__all__ = ["read", "is_sweep", "read_sweep"]
 
 
 def is_sweep(path) -> bool:
-    """Whether ``path`` is a drive sweep (a .txt/.dat file with a sweep table), fitted as a spectrum.
+    """Whether ``path`` is a drive sweep (a .txt/.dat file with a sweep table, a Nanosurf .nid
+    frequency sweep), fitted as a spectrum.
 
-    >>> is_sweep("scan.ibw"), is_sweep("missing.txt")
-    (False, True)
+    >>> is_sweep("scan.ibw"), is_sweep("missing.txt"), is_sweep("missing.nid")
+    (False, True, False)
     """
-    return str(path).lower().endswith(tables.TEXT_SUFFIXES) and is_drive_sweep(path)
+    if str(path).lower().endswith(".nid"):
+        return nid.is_drive_sweep(path)
+    return str(path).lower().endswith(tables.TEXT_SUFFIXES) and sweeps.is_drive_sweep(path)
+
+
+def read_sweep(path) -> sweeps.SweepTable:
+    """The measured points of a drive sweep, whichever format holds them."""
+    reader = nid.read_sweep_table if str(path).lower().endswith(".nid") else sweeps.read_sweep_table
+    return reader(path)
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..fitting.noise import noise_sigma
+from ..fitting.noise import misfit_band, noise_sigma
 from ..fitting.projection import project
 from ..io.tables import SpectrumData
 from . import select
@@ -47,8 +47,7 @@ def signature(data: SpectrumData, result: FitResult, sigma: float) -> dict:
     size = np.bincount(inverse, np.abs(result.prediction))
     peaks = [i for i in range(1, len(size) - 1) if size[i] >= size[i - 1] and size[i] >= size[i + 1]
              and size[i] > 3 * np.median(size)]
-    cum = np.cumsum(energy) / energy.sum()
-    band = [float(freq_u[np.searchsorted(cum, 0.1)]), float(freq_u[min(np.searchsorted(cum, 0.9), len(freq_u) - 1)])]
+    band = misfit_band(freq_u, energy)
     near = np.zeros(len(freq_u), bool)
     for p in peaks:
         near |= np.abs(freq_u - freq_u[p]) < 0.05 * freq_u[p]

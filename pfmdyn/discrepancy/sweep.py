@@ -32,7 +32,7 @@ from scipy.optimize import least_squares
 
 from ..cantilever import BETA1_FREE, Cantilever
 from ..errors import UserError
-from ..fitting.noise import GAP_LIMIT, gap, noise_sigma
+from ..fitting.noise import GAP_LIMIT, gap, misfit_band, noise_sigma
 from ..fitting.parameters import Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
@@ -165,7 +165,7 @@ class SweepFit(Result):
                  f"  width {_pm(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {_pm(extra, '')}",
                  f"  instrument: {_instrument(d['instrument_fit'])}",
-                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
+                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"] + _unexplained_line(d.get("unexplained"))
         return "\n".join(lines)
 
 
@@ -180,6 +180,24 @@ def _instrument(fields: dict) -> str:
     if f is None and q is None:
         return "no fit in the header"
     return ", ".join(([f"{f:,.0f} Hz".replace(",", " ")] if f else []) + ([f"Q {q:.3g}"] if q else []))
+
+
+def _unexplained(frequency, y, residual, sigma) -> dict | None:
+    """What the fit leaves when its gap exceeds :data:`GAP_LIMIT`: the gap, the band holding most of
+    the misfit and the largest residual as a share of the largest measured value; None otherwise."""
+    g = float(gap(np.sum(np.abs(residual / sigma) ** 2), len(residual)))
+    if g <= GAP_LIMIT:
+        return None
+    return {"gap": g, "where": misfit_band(frequency, np.abs(residual / sigma) ** 2),
+            "largest_residual": float(np.max(np.abs(residual)) / np.max(np.abs(y)))}
+
+
+def _unexplained_line(entry: dict | None) -> list[str]:
+    if not entry:
+        return []
+    low, high = entry["where"]
+    return [f"  unexplained: the residual at {low / 1e3:.6g}-{high / 1e3:.6g} kHz (gap {entry['gap']:.3g} x noise, "
+            f"largest {entry['largest_residual']:.1%} of the largest measured value) is beyond the model"]
 
 
 def _noise(frequency, y) -> float:
@@ -229,7 +247,8 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
 
     # the frequencies across the sweep, and where the response departs most from its median (a sharp
     # peak) read as the first mode; only when that leaves a misfit, as the second or third too (a
-    # narrow sweep around one peak fits either way: the first mode is the one meant)
+    # narrow sweep around one peak fits either way: the first mode is the one meant, and a higher one
+    # replaces it only when it halves the misfit)
     deviation = np.abs(table.response - np.median(table.response.real) - 1j * np.median(np.imag(table.response)))
     best = None
     for ratios in ((1.0,), MODE_RATIOS):
@@ -249,17 +268,20 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
                 return _stack(pr.residual[0, :, 0]) / sigma
 
             fit = _solve(residual, grid, lower, upper)
-            if best is None or fit.chi2 < best[0].chi2:
-                best = (fit, conjugate, y, sigma)
+            to_beat = best[0].chi2 * (0.5 if best[4] and len(ratios) > 1 else 1.0) if best else np.inf
+            if fit.chi2 < to_beat:
+                best = (fit, conjugate, y, sigma, len(ratios) == 1)
         if gap(best[0].chi2, len(frequency)) <= GAP_LIMIT:
             break
-    if best[0].chi2 >= _PENALTY**2:
+    fit, conjugate, y, sigma, _ = best
+    try:
+        lever = lever_of(fit.internal)
+        columns = _columns(lever, frequency, centre, amplitude_only)
+    except UserError:       # every start ended on the penalty
         raise UserError(f"{table.path}: no lever of this spring constant, length and width carries {medium.name}'s "
-                        "load at a resonance near the sweep (check them)")
-    fit, conjugate, y, sigma = best
-    lever = lever_of(fit.internal)
-    columns = _columns(lever, frequency, centre, amplitude_only)
-    amplitudes = project(columns[None], y[None, :, None].astype(columns.dtype)).amplitudes[0, :, 0]
+                        "load at a resonance near the sweep (check them)") from None
+    projected = project(columns[None], y[None, :, None].astype(columns.dtype))
+    amplitudes = projected.amplitudes[0, :, 0]
     parameters = {p.key: _value(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
@@ -276,7 +298,8 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
               "background": {"value": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
                              "unit": table.unit or "1"},
               "amplitude_only": amplitude_only, "phase_reversed": conjugate,
-              "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y)))}
+              "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y))),
+              "unexplained": _unexplained(frequency, y, projected.residual[0, :, 0], sigma)}
     return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
                     amplitude_only=amplitude_only, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
 
@@ -326,11 +349,12 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             fit = _solve(residual, _starts(before, refit), lower, upper)
         free = [key for key in ("gain", "background") if key in refit]
         k = len(params) + sum(1 if key == "gain" else 2 for key in free) * (1 if before.amplitude_only else 2)
-        fits[name] = (fit, params, solve(fit.internal)[1], lever_of(fit.internal))
+        residual, amplitudes = solve(fit.internal)
+        fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual)
         rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
                      "bic": fit.chi2 + k * math.log(count), "gap": float(gap(fit.chi2, n))})
     best = min(rows, key=lambda r: r["bic"])
-    fit, params, amplitudes, lever = fits[best["effect"]]
+    fit, params, amplitudes, lever, _ = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
     lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
     parameters = {}
@@ -361,7 +385,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "gap_before": rows[0]["gap"], "gap_after": best["gap"], "steps": rows,
               "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
-              "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma}
+              "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma,
+              "unexplained": _unexplained(frequency, y, fits[best["effect"]][4], sigma)}
     return SweepComparison(fields, lever=lever)
 
 
@@ -456,4 +481,4 @@ class SweepComparison(Result):
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
                      f"instrument: {_instrument(d['reference_fit']['instrument_fit'])} -> {_instrument(d['instrument_fit'])}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
-        return "\n".join(lines)
+        return "\n".join(lines + _unexplained_line(d.get("unexplained")))

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-__all__ = ["noise_sigma", "noise_sigmas", "gap", "GAP_LIMIT", "MAX_REFINEMENT", "DIFFERENCE_ORDERS"]
+__all__ = ["noise_sigma", "noise_sigmas", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT", "DIFFERENCE_ORDERS"]
 
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
@@ -35,6 +35,19 @@ def gap(chi2, count):
     2.0
     """
     return np.sqrt(np.asarray(chi2, float) / np.maximum(count, 1))
+
+
+def misfit_band(frequency_hz, energy) -> list[float]:
+    """The band (Hz) holding the central 80 % of a misfit: ``energy`` per frequency (sorted), e.g.
+    ``|residual / sigma|**2``.
+
+    >>> misfit_band(np.arange(10.0), np.r_[np.zeros(4), np.ones(2), np.zeros(4)])
+    [4.0, 5.0]
+    """
+    cum = np.cumsum(energy) / np.sum(energy)
+    last = len(frequency_hz) - 1
+    return [float(frequency_hz[min(np.searchsorted(cum, 0.1), last)]),
+            float(frequency_hz[min(np.searchsorted(cum, 0.9), last)])]
 
 
 def noise_sigma(frequency_hz, bias_v, response) -> float:

@@ -3,8 +3,15 @@
 A thermal tune (``[DataSet-Info]`` section "-- Thermal Tuning --") holds the measured
 amplitude spectral density ("Spectrum FFT", m/sqrt(Hz) against Hz) and the instrument's fit
 ("Spectrum Fit"), whose result is written as text with units: ``Frequency:=179.8kHz``,
-``Q Factor:=442``, ``Spring Constant:=27.13 N/m``.  Images and spectroscopy files are
+``Q Factor:=442``, ``Spring Constant:=27.13 N/m``.  A drive sweep ("Frequency sweep", the
+Bode plot of the lever's resonance) holds the amplitude against the drive frequency and the
+peak the software found (``Freq. peak=179.405kHz``).  Images and spectroscopy files are
 listed with their channels.
+
+Files of older software (easyScan 2) declare more channels per group than they store, which
+NSFopen cannot read; such files are read from the layout itself: an INI header up to ``#!``,
+then each listed data set as ``Points x Lines`` signed little-endian integers of ``SaveBits``,
+scaled onto ``Dim2Min + [0, Dim2Range]``.
 """
 from __future__ import annotations
 
@@ -16,14 +23,16 @@ import numpy as np
 
 from ..errors import MissingExtraError, UserError
 from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_value
+from .sweeps import SweepTable
 
-__all__ = ["read_nid", "thermal_conditions"]
+__all__ = ["read_nid", "thermal_conditions", "is_drive_sweep", "read_sweep_table"]
 
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
 _THERMAL_KEYS = {"frequency": ("free_resonance", "Hz"), "q factor": ("free_quality_factor", ""),
                  "spring constant": ("spring_constant", "N/m")}
 # Scan settings of images and spectroscopy files.
 _SCAN_KEYS = {"tip voltage": ("tip_bias", "V"), "vibration freq.": ("drive_frequency", "Hz"),
+              "freq. peak": ("free_resonance", "Hz"),
               "spring constant": ("spring_constant", "N/m")}
 
 
@@ -60,6 +69,89 @@ def _load(path: Path):
     except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}") from None
+
+
+def _open(path: Path) -> tuple[dict, list[tuple]]:
+    """The header's sections and the channels, (name, data, unit, header) in file order: by NSFopen,
+    or from the layout when NSFopen cannot read the file or finds no channel in it."""
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    try:
+        nid = _load(path)
+    except MissingExtraError:
+        raise
+    except UserError:
+        return _read_layout(path)
+    sections = _sections(nid)
+    channels = _channels(nid, sections)
+    return (sections, channels) if channels else _read_layout(path)
+
+
+def _ini(text: str) -> dict:
+    """``[Section]`` -> {key: value} of an INI header; lines without ``=`` carry nothing."""
+    sections, current = {}, None
+    for line in re.split(r"\r\n|\r|\n", text):
+        line = line.strip()
+        if line.startswith("[") and line.endswith("]"):
+            current = sections.setdefault(line[1:-1], {})
+        elif current is not None and "=" in line:
+            key, value = line.split("=", 1)
+            current[key] = value.strip()
+    return sections
+
+
+def _read_layout(path: Path) -> tuple[dict, list[tuple]]:
+    """Sections and channels read from the documented layout (see the module's docstring).
+
+    >>> import tempfile, os
+    >>> header = ("[DataSet]\\r\\nGroupCount=1\\r\\nGr0-Count=3\\r\\nGr0-Ch2=DataSet-0:2\\r\\n"
+    ...           "[DataSet-0:2]\\r\\nPoints=2\\r\\nLines=1\\r\\nFrame=Frequency sweep\\r\\n"
+    ...           "Dim2Name=Amplitude\\r\\nDim2Unit=V\\r\\nDim2Range=20\\r\\nDim2Min=-10\\r\\nSaveBits=16\\r\\n#!")
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "sweep.nid")
+    ...     _ = open(name, "wb").write(header.encode() + np.array([-32768, 0], "<i2").tobytes())
+    ...     sections, channels = _read_layout(Path(name))
+    >>> channels[0][0], channels[0][1].tolist(), channels[0][2]
+    (('Frequency sweep', 'Amplitude'), [[-10.0, 0.0]], 'V')
+    """
+    raw = path.read_bytes()
+    start = raw.find(b"#!")
+    if not raw.startswith(b"[DataSet]") or start < 0:
+        missing = "[DataSet] header" if not raw.startswith(b"[DataSet]") else "'#!' mark before the data"
+        raise UserError(f"{path}: not a readable Nanosurf NID file: no {missing}")
+    sections = _ini(raw[:start].decode("latin-1"))
+    listing = sections.get("DataSet", {})
+    offset, channels = start + 2, []
+    try:
+        for group in range(int(listing["GroupCount"])):
+            for slot in range(int(listing.get(f"Gr{group}-Count", 0))):
+                # easyScan 2 counts channels it did not save; only those listed are stored.
+                name = listing.get(f"Gr{group}-Ch{slot}")
+                if name is None:
+                    continue
+                header = sections[name]
+                points, lines, bits = int(header["Points"]), int(header["Lines"]), int(header["SaveBits"])
+                if bits not in (16, 32):
+                    raise UserError(f"{path}: data set {name} is saved with {bits} bits; pfmdyn reads 16 or 32")
+                count = points * max(lines, 1)
+                if offset + count * bits // 8 > len(raw):
+                    raise UserError(f"{path}: not a readable Nanosurf NID file: data set {name} needs "
+                                    f"{count * bits // 8} bytes, {len(raw) - offset} are left (truncated?)")
+                stored = np.frombuffer(raw, dtype=f"<i{bits // 8}", count=count, offset=offset)
+                scale = 2.0 ** bits
+                values = (stored + scale / 2) / scale * float(header.get("Dim2Range", scale)) \
+                    + float(header.get("Dim2Min", -scale / 2))
+                frame = str(header.get("Frame", name))
+                channels.append(((frame, str(header.get("Dim2Name", ""))), values.reshape(max(lines, 1), points),
+                                 _unit(str(header.get("Dim2Unit", ""))), header))
+                offset += count * bits // 8
+    except KeyError as exc:
+        raise UserError(f"{path}: not a readable Nanosurf NID file: its header has no {exc.args[0]!r}") from None
+    except ValueError as exc:
+        raise UserError(f"{path}: not a readable Nanosurf NID file: {exc}") from None
+    if not channels:
+        raise UserError(f"{path}: the NID file holds no data sets")
+    return sections, channels
 
 
 def _sections(nid) -> dict:
@@ -108,14 +200,22 @@ def _array(values) -> np.ndarray:
         return out
 
 
+def _is_sweep_frame(header: dict) -> bool:
+    return str(header.get("Frame", "")).strip().lower().startswith("frequency sweep")
+
+
+def _spectrum(path: Path, channel: tuple) -> tuple:
+    """(frequency in Hz, values, unit) of a spectrum channel: its first line over ``Dim0Min + [0, Dim0Range]``."""
+    _, data, unit, header = channel
+    n = data.shape[-1]
+    frequency = float(header.get("Dim0Min", 0.0)) + np.linspace(0.0, float(header.get("Dim0Range", n - 1)), n)
+    return si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", ""))) or "Hz", data.reshape(-1, n)[0], unit)
+
+
 def read_nid(path) -> InstrumentRecord:
     """Read a Nanosurf ``.nid`` file: channels with units; for a thermal tune, its fit and spectrum."""
     path = Path(path)
-    nid = _load(path)
-    sections = _sections(nid)
-    channels = _channels(nid, sections)
-    if not channels:
-        raise UserError(f"{path}: the NID file holds no data sets")
+    sections, channels = _open(path)
     info = sections.get("DataSet-Info", {}) or {}
     thermal = any("thermal tuning" in str(k).lower() for k in info)
     group = str(channels[0][0][0]).lower() if isinstance(channels[0][0], tuple) else ""
@@ -123,15 +223,15 @@ def read_nid(path) -> InstrumentRecord:
     if thermal:
         kind = "thermal spectrum"
         found = _fields(info, _THERMAL_KEYS)
-        name, data, unit, header = channels[0]
-        n = data.shape[-1]
-        f0 = float(header.get("Dim0Min", 0.0))
-        frequency = f0 + np.linspace(0.0, float(header.get("Dim0Range", n - 1)), n)
-        spectrum = si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", ""))) or "Hz",
-                               data.reshape(-1, n)[0], unit)
+        spectrum = _spectrum(path, channels[0])
         lever = info.get("Cantilever type")
         if lever:
             notes.append(f"cantilever type {lever}: its length and width are not in the file")
+    elif sweeps := [c for c in channels if _is_sweep_frame(c[3])]:
+        kind = "spectrum"
+        found = _fields(info, _SCAN_KEYS)
+        spectrum = _spectrum(path, sweeps[0])
+        notes.append("a drive sweep: 'Freq. peak' is the software's peak of it, not a fit")
     else:
         kind = "image" if group.startswith("image") else "curve" if group.startswith("spec") else "spectrum"
         found = _fields(info, _SCAN_KEYS)
@@ -154,10 +254,7 @@ def thermal_conditions(path) -> dict:
     ...
     pfmdyn.errors.UserError: missing.nid: no such file
     """
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"{path}: no such file")
-    info = _sections(_load(path)).get("DataSet-Info", {}) or {}
+    info = _open(Path(path))[0].get("DataSet-Info", {}) or {}
     out = {}
     for key, value in info.items():
         key = str(key).strip().rstrip(":").lower()
@@ -171,3 +268,36 @@ def thermal_conditions(path) -> dict:
         elif key == "measurement environment":
             out["environment"] = str(value).strip().lower()
     return out
+
+
+def is_drive_sweep(path) -> bool:
+    """Whether a ``.nid`` file's header lists a "Frequency sweep" data set (read from the header alone).
+
+    >>> is_drive_sweep("missing.nid")
+    False
+    """
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(1 << 16)
+    except OSError:
+        return False
+    return re.search(rb"^Frame=Frequency sweep", head.split(b"#!")[0], re.MULTILINE | re.IGNORECASE) is not None
+
+
+def read_sweep_table(path) -> SweepTable:
+    """A Nanosurf drive sweep as measured: the first "Frequency sweep" channel against the drive
+    frequency, the software's peak as its fit, the medium when the header names air."""
+    path = Path(path)
+    record = read_nid(path)
+    if record.spectrum is None or record.kind != "spectrum":
+        raise UserError(f"{path}: the NID file holds no frequency sweep")
+    frequency, amplitude, unit = record.spectrum
+    if not (np.all(np.isfinite(amplitude)) and frequency.min() > 0 and np.all(np.diff(frequency) > 0)):
+        raise UserError(f"{path}: the frequency sweep holds a non-finite value or a frequency <= 0")
+    environment = thermal_conditions(path).get("environment")
+    # "Liquid" does not say which liquid; the caller's --medium or default decides.
+    medium = "air" if environment == "air" else None
+    notes = list(record.notes) + ([f"measured in {environment}; which liquid is not written"]
+                                  if environment and medium is None else [])
+    return SweepTable(str(path), frequency, amplitude, unit, None, dict(record.fields), medium,
+                      "Nanosurf frequency sweep", tuple(notes))
