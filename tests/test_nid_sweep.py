@@ -118,3 +118,23 @@ def test_truncated_nid_sweep_names_the_missing_bytes(tmp_path, capsys):
     assert cli.main(["discrepancy", str(path), "--spring-constant", "2", "--length", "2e-4"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "602 bytes, 592 are left" in err
+
+
+def test_nid_sweeps_compared_with_a_figure(tmp_path, capsys):
+    """Two sweeps of one lever, the second's peak lower by 0.3 %: a mass is named, both are drawn."""
+    rng = np.random.default_rng(7)
+    k, length, width, f0, thickness = silicon_lever(rng)
+    q = min(300.0, 400 * thickness / width)
+    f, a = oscillator_sweep(f0, q, rng)
+    u = f / (0.997 * f0)
+    shifted = 0.2 * u**2 / np.sqrt((1 - u**2) ** 2 + (u / q) ** 2) / q + 0.001 * rng.standard_normal(f.size)
+    before = write_sweep_nid(tmp_path / "before.nid", f, a, f0, environment="Air")
+    after = write_sweep_nid(tmp_path / "after.nid", f, shifted, 0.997 * f0, environment="Air")
+    figure, out = tmp_path / "pair.png", tmp_path / "pair.json"
+    assert cli.main(["discrepancy", str(after), "--reference", str(before), "--spring-constant", f"{k:.6g}",
+                     "--length", f"{length:.6g}", "--width", f"{width:.6g}", "--plot", str(figure),
+                     "--json", str(out)]) == 0
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+    result = json.loads(out.read_text())
+    assert result["effect"] == "added_mass" and result["parameters"]["added_mass"]["value"] > 0
+    assert result["resonance_after"] / result["resonance_before"] == pytest.approx(0.997, abs=3e-4)

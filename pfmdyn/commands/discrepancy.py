@@ -17,6 +17,7 @@ from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from . import flags
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
+from ..plots.sweep import plot_sweep
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,8 +65,6 @@ def _sweeps(args) -> int:
     """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
     from ..discrepancy.sweep import compare_sweeps, fit_sweep
 
-    if args.plot:
-        raise UserError(f"{args.data}: --plot is not available for drive sweeps (the JSON holds the fit)")
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
     values = flags.given(args, ("spring_constant", "length", "width", "added_mass_position"))
@@ -88,6 +87,9 @@ def _sweeps(args) -> int:
         print(dumps(result.to_dict()))
     elif args.json:
         write_json(args.json, result.to_dict())
+    if args.plot:
+        figure = plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after)
+        _save(figure, args.plot)
     return 0
 
 
@@ -131,8 +133,13 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
-        try:
-            plot(data, report).savefig(args.plot, dpi=120)
-        except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
-            raise UserError(f"cannot write {args.plot}: {getattr(exc, 'strerror', None) or exc}") from None
+        _save(plot(data, report), args.plot)
     return 0
+
+
+def _save(figure, path) -> None:
+    """Save a figure to a path checked before the analysis; what matplotlib then cannot save is one line."""
+    try:
+        figure.savefig(path, dpi=120)
+    except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
+        raise UserError(f"cannot write {path}: {getattr(exc, 'strerror', None) or exc}") from None

@@ -410,7 +410,7 @@ def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
         rest = y - columns[:, fixed] @ known[fixed]
         if not free:
             return rest, known
-        pr = project(columns[None][..., free], rest[None, :, None].astype(complex))
+        pr = project(columns[None][..., free], rest[None, :, None].astype(np.result_type(columns, rest)))
         amplitudes = known.copy()
         amplitudes[free] = pr.amplitudes[0, :, 0]
         return pr.residual[0, :, 0], amplitudes
