@@ -12,7 +12,7 @@ from ..discrepancy.select import TIME_BUDGET_S
 from ..discrepancy import spectrum
 from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
-from ..discrepancy.inputs import is_sweep, read, read_sweep
+from ..discrepancy.inputs import is_sweep, is_thermal_tune, read, read_sweep
 from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from . import flags
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     'o.json'
     """
     parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
-                        "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat)")
+                        "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat/.nid, thermal tune)")
     parser.add_argument("--json", metavar="PATH",
                         help="write the full report as JSON here ('-': standard output, after the summary)")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
@@ -37,7 +37,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     flags.add(group, ("medium", "temperature"))
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
-    sweeps = parser.add_argument_group("drive sweeps (.txt/.dat): the free lever driven at its base, in a fluid")
+    sweeps = parser.add_argument_group("drive sweeps (.txt/.dat/.nid) and thermal tunes: the free lever in a fluid, "
+                                       "driven at its base or by thermal noise")
     sweeps.add_argument("--reference", metavar="BEFORE",
                         help="the drive sweep before the change: lever, fluid, gain and background calibrated on it, "
                              "DATA explained from them (an added mass, a gain or background change, or nothing)")
@@ -93,12 +94,45 @@ def _sweeps(args) -> int:
     return 0
 
 
+def _thermal(args) -> int:
+    """A thermal tune fitted as a thermally driven spectrum (:mod:`pfmdyn.discrepancy.thermal`)."""
+    from ..discrepancy.thermal import fit_thermal
+    from ..io.thermal_tune import read_thermal_tune
+
+    tune = read_thermal_tune(args.data)
+    values = flags.given(args, ("spring_constant", "length", "width"))
+    values.setdefault("spring_constant", tune.instrument.get("spring_constant"))
+    flags.require({k: v for k, v in values.items() if v is not None}, ("spring_constant", "length"), args.data)
+    found = {"medium": tune.conditions.get("environment"), "temperature": tune.conditions.get("temperature")}
+    medium = flags.medium_from_args(args, {k: v for k, v in found.items() if v is not None}, default="air")
+    temperature = flags.given(args, ("temperature",)).get("temperature", tune.conditions.get("temperature", 293.15))
+    try:
+        with threadpool_limits(1, user_api="blas"):
+            fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        if isinstance(exc, UserError):
+            raise
+        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
+                        "check the spring constant and length") from None
+    print(fit.report())
+    if args.json == "-":
+        print(dumps(fit.to_dict()))
+    elif args.json:
+        write_json(args.json, fit.to_dict())
+    if args.plot:
+        from ..plots.sweep import plot_thermal
+        _save(plot_thermal(fit), args.plot)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
     check_writable(args.json)
     check_writable(args.plot, figure=True)
     if is_sweep(args.data) or args.reference:
         return _sweeps(args)
+    if is_thermal_tune(args.data):
+        return _thermal(args)
     data = read(args.data, flags.given(args, OVERRIDES))
     stride = 1
     if isinstance(data, SpectrumData):

@@ -12,9 +12,10 @@ from __future__ import annotations
 from ..analysis.thermal import instrument_resonances
 from ..io import tables
 from ..io.discrepancy_data import ResonanceData, SpectrumData
+from ..errors import UserError
 from ..io import nid, sweeps
 
-__all__ = ["read", "is_sweep", "read_sweep"]
+__all__ = ["read", "is_sweep", "read_sweep", "is_thermal_tune"]
 
 
 def is_sweep(path) -> bool:
@@ -27,6 +28,23 @@ def is_sweep(path) -> bool:
     if str(path).lower().endswith(".nid"):
         return nid.is_drive_sweep(path)
     return str(path).lower().endswith(tables.TEXT_SUFFIXES) and sweeps.is_drive_sweep(path)
+
+
+def is_thermal_tune(path) -> bool:
+    """Whether ``path`` is an instrument file holding a thermal tune (fitted as a thermal spectrum); an
+    unreadable file is not, so that the general reader reports it.
+
+    >>> is_thermal_tune("missing.nid"), is_thermal_tune("table.csv")
+    (False, False)
+    """
+    from ..io.instruments import read_instrument
+
+    if not tables.is_instrument_file(path) or str(path).lower().endswith(tables.TEXT_SUFFIXES):
+        return False
+    try:
+        return read_instrument(path).kind == "thermal spectrum"
+    except UserError:
+        return False
 
 
 def read_sweep(path) -> sweeps.SweepTable:

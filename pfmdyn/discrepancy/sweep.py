@@ -196,8 +196,9 @@ def _unexplained_line(entry: dict | None) -> list[str]:
     if not entry:
         return []
     low, high = entry["where"]
+    of = "the value there" if entry.get("relative") else "the largest measured value"
     return [f"  unexplained: the residual at {low / 1e3:.6g}-{high / 1e3:.6g} kHz (gap {entry['gap']:.3g} x noise, "
-            f"largest {entry['largest_residual']:.1%} of the largest measured value) is beyond the model"]
+            f"largest {entry['largest_residual']:.1%} of {of}) is beyond the model"]
 
 
 def _noise(frequency, y) -> float:

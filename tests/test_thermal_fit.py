@@ -1,0 +1,98 @@
+"""Thermal tunes fitted as spectra (:mod:`pfmdyn.discrepancy.thermal`, ``pfmdyn discrepancy TUNE``).
+
+The synthetic tunes come from an independent route: fluctuation-dissipation on the clamped-free beam
+solved here as a 4 x 4 system in the ``cos, sin, cosh, sinh`` basis, driven by a couple at its free
+end (``EI u''(L) = M``), at the fluid-loaded ``beta**4 = B1**4 r**2 (1 + load - i g / r)`` (Sader's load,
+:func:`pfmdyn.medium.load_ratio`): ``S(f) = -4 k_B T Im(chi) / omega`` with ``chi`` the end slope per
+couple, read as a deflection with the static factor ``2L/3``, with a white floor and the scatter of an
+averaged spectrum.  Levers are silicon of drawn k, L and width, in air and water.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_sweeps_fit import B1, SILICON  # noqa: E402
+
+from pfmdyn import cli  # noqa: E402
+from pfmdyn.discrepancy.thermal import fit_thermal  # noqa: E402
+from pfmdyn.io.thermal_tune import ThermalTune  # noqa: E402
+from pfmdyn.medium import Medium, load_ratio, mass_per_length  # noqa: E402
+
+KB = 1.380649e-23
+REAL = Path("/work/shared/realdata/nsfopen_thermal_ACL-A/thermal.nid")
+
+
+def end_slope_psd(f, *, k, L, w, f_vac, g, medium, temperature):
+    """One-sided PSD (rad**2/Hz) of the end slope: -4 k_B T Im(chi) / omega, chi = slope per end couple."""
+    f = np.asarray(f, float)
+    r = f / f_vac
+    load = load_ratio(medium, f, w, mass_per_length(k, L, f_vac))
+    beta = (B1**4 * r**2 * (1 + load - 1j * g / r)) ** 0.25
+    ei = k * L**3 / 3
+    chi = []
+    for b in beta:
+        c, s, ch, sh = np.cos(b), np.sin(b), np.cosh(b), np.sinh(b)
+        A = np.array([[1, 0, 1, 0], [0, 1, 0, 1],                        # u(0) = u'(0) = 0, unit length
+                      [-c * b**2, -s * b**2, ch * b**2, sh * b**2],     # u_ss(1) = M L**2 / EI, M = 1
+                      [s * b**3, -c * b**3, sh * b**3, ch * b**3]], complex)
+        coef = np.linalg.solve(A, np.array([0, 0, L**2 / ei, 0], complex))
+        chi.append(np.array([-s * b, c * b, sh * b, ch * b]) @ coef / L)
+    return -4 * KB * temperature * np.imag(np.array(chi)) / (2 * np.pi * f)
+
+
+def tune_case(seed, points=6000):
+    rng = np.random.default_rng(seed)
+    E, rho = SILICON
+    while True:
+        k, L = 10 ** rng.uniform(math.log10(0.05), math.log10(50)), rng.uniform(100e-6, 500e-6)
+        w = rng.uniform(20e-6, 60e-6)
+        t = (4 * k * L**3 / (E * w)) ** (1 / 3)
+        f_vac = B1**2 / (2 * math.pi * L**2) * t * math.sqrt(E / (12 * rho))
+        if f_vac < 4e5:
+            break
+    case = dict(k=k, L=L, w=w, f_vac=f_vac, g=10 ** rng.uniform(-3.5, -2), medium=Medium.air(),
+                temperature=rng.uniform(290, 320))
+    f = np.linspace(0, 2.5 * f_vac, points)[1:]
+    psd = (2 * L / 3) ** 2 * end_slope_psd(f, **case)
+    floor = 0.05 * np.sqrt(psd.max())
+    # 1000 averages: each point's scatter about 1.6 % of its value
+    asd = np.sqrt(psd + floor**2) * (1 + 0.016 * rng.standard_normal(len(f)))
+    return case, ThermalTune("tune.nid", f, asd, "m", {}, {})
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_thermal_tune_recovers_the_lever_and_the_detection(seed):
+    case, tune = tune_case(seed)
+    fit = fit_thermal(tune, case["k"], case["L"], case["medium"], case["temperature"], width=case["w"])
+    assert fit.lever.vacuum_resonance == pytest.approx(case["f_vac"], rel=2e-3), case
+    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03), case
+    assert fit["gap"] < 1.5 and fit["unexplained"] is None
+
+
+def test_a_wrong_spring_constant_shows_in_the_detection(tmp_path):
+    """Told k twice too large, the spectrum needs a factor sqrt(2) more: the k that makes it 1 is the true one."""
+    case, tune = tune_case(4)
+    fit = fit_thermal(tune, 2 * case["k"], case["L"], case["medium"], case["temperature"], width=case["w"])
+    assert fit["detection_scale"] == pytest.approx(math.sqrt(2), rel=0.03)
+    assert 2 * case["k"] / fit["detection_scale"] ** 2 == pytest.approx(case["k"], rel=0.05)
+
+
+@pytest.mark.skipif(not REAL.is_file(), reason="real data absent")
+def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
+    """The Nanosurf tune: the whole spectrum around the mode, its temperature and air from the header,
+    the instrument's fit printed beside; no tip height asked."""
+    out = tmp_path / "t.json"
+    assert cli.main(["discrepancy", str(REAL), "--length", "225e-6", "--width", "40e-6", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    fit = json.loads(out.read_text())
+    assert fit["temperature"] == pytest.approx(313.15) and fit["medium"].startswith("air")
+    assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
+    assert fit["points"] > 5000 and "instrument: 179 800 Hz, Q 442, k 27.13 N/m" in text
+    assert fit["gap"] < 3
