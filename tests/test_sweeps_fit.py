@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pfmdyn import cli
 from pfmdyn.discrepancy.sweep import compare_sweeps, fit_sweep
 from pfmdyn.errors import UserError
 from pfmdyn.io.sweeps import read_sweep_table
@@ -261,3 +262,19 @@ def test_sweeps_of_different_kinds_are_refused(tmp_path):
     after = read_sweep_table(write_sweep(tmp_path / "a.txt", f, np.abs(y), rng, phase=False))
     with pytest.raises(UserError, match="a.txt: no phase column, while the reference has one"):
         compare_sweeps(after, before)
+
+
+@pytest.mark.parametrize("word, expected", [("air", "air at 20 C"), ("Water", "water at 20 C"), (None, "water at 20 C")])
+def test_the_medium_comes_from_the_header_unless_given(tmp_path, capsys, word, expected):
+    """A header's ``Medium`` line is the fluid (water when the header says none); ``--medium`` wins."""
+    rng, case = lever_case(2 if word == "air" else 1)
+    f, y = sweep_of(rng, case)
+    path = write_sweep(tmp_path / "s.txt", f, y, rng)
+    if word:
+        path.write_text(f"Medium:\t{word}\n" + path.read_text())
+    out = tmp_path / "fit.json"
+    args = ["discrepancy", str(path), "--spring-constant", f"{case['k']:.6g}", "--length", f"{case['L']:.6g}",
+            "--width", f"{case['w']:.6g}", "--json", str(out)]
+    assert cli.main(args) == 0 and json.loads(out.read_text())["medium"] == expected
+    assert cli.main(args + ["--medium", "1.2,1.8e-5"]) == 0
+    assert json.loads(out.read_text())["medium"].startswith("fluid of 1.2 kg/m^3")
