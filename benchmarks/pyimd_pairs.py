@@ -19,7 +19,8 @@ from pathlib import Path
 
 from recording import recorded
 
-from pfmdyn.discrepancy.sweep import compare_sweeps, fit_sweep
+from pfmdyn.discrepancy.reference import compare_sweeps
+from pfmdyn.discrepancy.sweep import fit_sweep
 from pfmdyn.io.sweeps import read_sweep_table
 from pfmdyn.medium import Medium
 

@@ -1,4 +1,4 @@
-"""Benchmark: before/after drive-sweep pairs explained by :func:`pfmdyn.discrepancy.sweep.compare_sweeps`.
+"""Benchmark: before/after drive-sweep pairs explained by :func:`pfmdyn.discrepancy.reference.compare_sweeps`.
 
 The pairs come from the independent beam of ``tests/test_sweeps_fit.py`` (base-driven, Sader's load,
 air and water alternately, k 0.05-50 N/m, L 50-500 um, widths 20-60 um, Q 2-1000), written as
@@ -23,7 +23,8 @@ from recording import recorded
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from test_sweeps_fit import lever_case, sweep_of, write_sweep  # noqa: E402
 
-from pfmdyn.discrepancy.sweep import compare_sweeps, fit_sweep  # noqa: E402
+from pfmdyn.discrepancy.reference import compare_sweeps  # noqa: E402
+from pfmdyn.discrepancy.sweep import fit_sweep  # noqa: E402
 from pfmdyn.io.sweeps import read_sweep_table  # noqa: E402
 from pfmdyn.medium import mass_per_length  # noqa: E402
 

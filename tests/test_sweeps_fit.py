@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
-from pfmdyn.discrepancy.sweep import compare_sweeps, fit_sweep
+from pfmdyn.discrepancy.reference import compare_sweeps
+from pfmdyn.discrepancy.sweep import fit_sweep
 from pfmdyn.errors import UserError
 from pfmdyn.io.sweeps import read_sweep_table
 from pfmdyn.medium import Medium, load_ratio, mass_per_length

@@ -64,7 +64,8 @@ def _lever_in_medium(data, args):
 
 def _sweeps(args) -> int:
     """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
-    from ..discrepancy.sweep import compare_sweeps, fit_sweep
+    from ..discrepancy.reference import compare_sweeps
+    from ..discrepancy.sweep import fit_sweep
 
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")

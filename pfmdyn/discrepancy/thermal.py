@@ -28,8 +28,8 @@ from ..errors import UserError
 from ..fitting.result import Result
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
-from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, _instrument, _noise, _pm, _solve,
-                    _unexplained, _unexplained_line, _value)
+from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, instrument_text, noise_level,
+                    parameter_entry, plus_minus, solve_from_starts, unexplained_entry, unexplained_line)
 
 __all__ = ["ThermalFit", "fit_thermal", "BAND"]
 
@@ -51,18 +51,18 @@ class ThermalFit(Result):
         lines = [f"thermal tune {d['path']}: {d['points']} points ({low / 1e3:.4g}-{high / 1e3:.4g} kHz) fitted as a "
                  f"thermally driven free lever in {d['medium']} "
                  f"(k {d['spring_constant']:g} N/m, L {d['length']:g} m, T {d['temperature']:.2f} K)",
-                 f"  resonance in the medium {_pm(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
+                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
                  f"Q {d['quality_factor']:.3g}",
-                 f"  width {_pm(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
-                 f"  damping beyond the fluid's: viscous_loss {_pm(p['viscous_loss'], '')}",
+                 f"  width {plus_minus(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
+                 f"  damping beyond the fluid's: viscous_loss {plus_minus(p['viscous_loss'], '')}",
                  f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "
                  f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
                  f"{d['white_floor']:.3g} {d['unit']}",
-                 f"  instrument: {_instrument(d['instrument_fit'])}"
+                 f"  instrument: {instrument_text(d['instrument_fit'])}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
                     else ""),
                  f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
-        return "\n".join(lines + _unexplained_line(d.get("unexplained")))
+        return "\n".join(lines + unexplained_line(d.get("unexplained")))
 
 
 def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
@@ -109,7 +109,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     width = width if given else ASSUMED_WIDTH * length
     power = asd**2
     log_asd = np.log(asd)
-    sigma = _noise(frequency, log_asd)
+    sigma = noise_level(frequency, log_asd)
     params = (RESONANCE, EXTRA_LOSS)
     lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
 
@@ -130,7 +130,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
             return np.nan_to_num((np.log(fitted) - log_asd) / sigma, nan=1e6, posinf=1e6, neginf=1e6)
 
     grid = [np.array([np.log10(start * s), loss]) for s in (0.999, 1.0, 1.001) for loss in EXTRA_LOSS.seeds]
-    fit = _solve(residual, grid, lower, upper)
+    fit = solve_from_starts(residual, grid, lower, upper)
     try:
         lever = lever_of(fit.internal)
         fitted, a, b = model(fit.internal)
@@ -139,12 +139,12 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
                         "load at a resonance near the peak (check them)") from None
     from ..analysis.resonances import resonances
 
-    parameters = {p.key: _value(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
+    parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
     r = np.log(fitted) - log_asd
-    unexplained = _unexplained(frequency, r, r, sigma)
+    unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
         unexplained["largest_residual"] = float(np.expm1(np.max(np.abs(r))))
         unexplained["relative"] = True

@@ -15,7 +15,7 @@ __all__ = ["plot_sweep", "plot_thermal"]
 
 def plot_sweep(fit, table, comparison=None, after=None) -> Figure:
     """``fit`` (:class:`pfmdyn.discrepancy.sweep.SweepFit`) on ``table``; with ``comparison`` (its
-    :class:`~pfmdyn.discrepancy.sweep.SweepComparison`) and the ``after`` table, both sweeps.
+    :class:`~pfmdyn.discrepancy.reference.SweepComparison`) and the ``after`` table, both sweeps.
 
     >>> from pfmdyn import Cantilever
     >>> from pfmdyn.discrepancy.sweep import fit_sweep

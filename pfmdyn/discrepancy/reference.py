@@ -1,0 +1,235 @@
+"""Two measurements compared: what changed between a reference drive sweep and another.
+
+The lever, the fluid, the gain and the background are calibrated on the reference (before,
+:func:`pfmdyn.discrepancy.sweep.fit_sweep`); the other sweep (after) is explained from them by nested
+candidates (:func:`compare_sweeps`) -- nothing, a gain, background or damping change (nuisances; the
+damping is ``viscous_loss``, the cell's drag), a point mass (``added_mass``, kg, at
+``added_mass_position`` x/L: given, fitted when the sweep spans two modes or more, else undetermined and
+the mass given as the end-equivalent one) and the mass with the nuisances -- the one of least BIC
+named, each with its gap (the noise-normalised RMS residual, :func:`pfmdyn.fitting.noise.gap`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..cantilever import BETA1_FREE, Cantilever
+from ..errors import UserError
+from ..fitting.noise import gap
+from ..fitting.parameters import Parameter
+from ..fitting.projection import project
+from ..fitting.result import Result
+from ..io.sweeps import SweepTable
+from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, base_driven_columns, instrument_text, noise_level, parameter_entry,
+                    penalty, plus_minus, solve_from_starts, stacked, unexplained_entry, unexplained_line)
+
+__all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "CANDIDATES"]
+
+ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
+                       description="point mass over the lever's mass")
+
+POSITION = Parameter("added_mass_position", "", 0.05, 1.0, description="point mass position x/L")
+
+CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
+              ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
+              ("damping", ("damping",)), ("added_mass+gain+background", ("added_mass", "gain", "background")),
+              ("added_mass+damping+gain+background", ("added_mass", "damping", "gain", "background")))
+"""The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
+
+POSITION_GRID = tuple(np.linspace(0.1, 1.0, 10))
+"""Starting positions (x/L) of a fitted added mass."""
+
+def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> Cantilever:
+    """``lever`` (in its medium) with a point mass ``ratio`` times its own mass at ``position`` (x/L):
+    its vacuum resonance lowered by the mass (the free root of the loaded beam), then put back in
+    the medium; the viscous drag per length kept.
+
+    >>> from pfmdyn.medium import Medium
+    >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
+    >>> round(with_added_mass(lever, 0.0).free_resonance), with_added_mass(lever, 0.01).free_resonance < 7.2e4
+    (72000, True)
+    """
+    f_vac = lever.vacuum_resonance
+    bare = replace(lever, free_resonance=f_vac, medium=None, tip_mass_ratio=0.0, tip_position=1.0)
+    if ratio == 0.0:
+        loaded, f_loaded = bare, f_vac
+    else:
+        loaded = replace(bare, tip_mass_ratio=float(ratio), tip_position=float(position))
+        f_loaded = f_vac * (loaded.free_root() / BETA1_FREE)**2
+    loaded = replace(loaded, free_resonance=f_loaded, viscous_loss=lever.viscous_loss * f_vac / f_loaded)
+    return loaded if lever.medium is None else loaded.with_medium(lever.medium)
+
+def _modes_in(lever: Cantilever, frequency) -> int:
+    """How many of the lever's free modes (undamped, in the medium) lie inside the sweep."""
+    from ..analysis.resonances import resonances
+
+    wet = resonances(lever, None, modes=3).free.peak_hz
+    return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
+
+def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None = None) -> "SweepComparison":
+    """Explain ``after`` from the lever, fluid, gain and background of ``before`` (a :func:`fit_sweep`):
+    each of :data:`CANDIDATES` fitted, the one of least BIC named (see the module).  ``position``:
+    the added mass's x/L (None: fitted when the sweep spans two modes, else undetermined and the mass
+    given at the free end, the end-equivalent mass).
+
+    >>> from pfmdyn.medium import Medium
+    >>> f = np.linspace(4e4, 1e5, 120)
+    >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
+    >>> table = lambda y: SweepTable("s.txt", f, np.abs(y), "V", np.degrees(np.angle(y)), {}, None, "synthetic")
+    >>> y = lambda lev: (0.3 - 2j) * lev.base_driven(f).slope + 0.5
+    >>> before = fit_sweep(table(y(lever)), 8.0, 1e-4, Medium.water(), width=4e-5)
+    >>> out = compare_sweeps(table(y(with_added_mass(lever, 0.02, 0.9))), before, position=0.9)
+    >>> out["effect"], round(out["parameters"]["added_mass_ratio"]["value"], 4)
+    ('added_mass', 0.02)
+    """
+    if before.amplitude_only != (after.phase_deg is None):
+        raise UserError(f"{after.path}: {'no' if after.phase_deg is None else 'a'} phase column, while the reference "
+                        f"has {'none' if before.amplitude_only else 'one'}: compare sweeps of the same kind")
+    frequency = after.frequency_hz
+    y = before.data(after)
+    sigma = noise_level(frequency, y)
+    n = len(y)
+    count = 2 * n if np.iscomplexobj(y) else n
+    fit_position = position is None and _modes_in(before.lever, frequency) >= 2
+    x_mass = 1.0 if position is None else float(position)
+    rows, fits = [], {}
+    for name, refit in CANDIDATES:
+        mass = "added_mass" in refit
+        if mass and fit_position:
+            fit, solve, lever_of, params = _position_profile(before, refit, frequency, y, sigma)
+        else:
+            solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma, x_mass)
+            lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+            fit = solve_from_starts(residual, _starts(before, refit), lower, upper)
+        free = [key for key in ("gain", "background") if key in refit]
+        k = len(params) + sum(1 if key == "gain" else 2 for key in free) * (1 if before.amplitude_only else 2)
+        residual, amplitudes = solve(fit.internal)
+        fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual)
+        rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
+                     "bic": fit.chi2 + k * math.log(count), "gap": float(gap(fit.chi2, n))})
+    best = min(rows, key=lambda r: r["bic"])
+    fit, params, amplitudes, lever, _ = fits[best["effect"]]
+    named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
+    lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
+    parameters = {}
+    mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
+    ratio = parameter_entry(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
+    parameters["added_mass_ratio"] = ratio
+    parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
+                                "unit": "kg", "determined": named == "added_mass"}
+    if "damping" in best["refitted"]:
+        parameters["viscous_loss"] = {**parameter_entry(EXTRA_LOSS, fit.internal[-1], fit.covariance[-1, -1]),
+                                      "before": before.lever.viscous_loss}
+    if fit_position:
+        parameters["added_mass_position"] = parameter_entry(POSITION, mass_fit.internal[1], mass_fit.covariance[1, 1])
+        rivals = [x for x, chi2 in _rivals(mass_fit, count)]
+        if rivals:
+            parameters["added_mass_position"].update(
+                undetermined=True, why="the modes' shifts agree as well at x/L " + ", ".join(f"{x:.3g}" for x in rivals))
+    elif position is not None:
+        parameters["added_mass_position"] = {"value": x_mass, "stderr": 0.0, "unit": "1", "given": True}
+    else:
+        parameters["added_mass_position"] = {"value": None, "stderr": None, "unit": "1", "undetermined": True,
+                                             "why": "one mode in the sweep: the mass and its position move the "
+                                                    "resonance together; the mass is the end-equivalent one (x/L = 1)"}
+    fields = {"kind": "drive sweep comparison", "path": after.path, "reference": before["path"],
+              "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
+              "parameters": parameters, "lever_mass": lever_mass,
+              "resonance_before": before.lever.free_resonance, "resonance_after": lever.free_resonance,
+              "gap_before": rows[0]["gap"], "gap_after": best["gap"], "steps": rows,
+              "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
+              "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
+              "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma,
+              "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma)}
+    return SweepComparison(fields, lever=lever)
+
+def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
+    """One explanation of the after-sweep: ``solve(x) -> (residual, amplitudes)``, ``lever_of(x)``, the
+    noise-scaled real ``residual(x)`` and the nonlinear parameters (the mass's ratio, its position when
+    ``position`` is None, the damping), the rest of gain and background kept at ``before``'s."""
+    mass, damping = "added_mass" in refit, "damping" in refit
+    params = ((ADDED_MASS,) + ((POSITION,) if position is None else ()) if mass else ()) \
+        + ((EXTRA_LOSS,) if damping else ())
+    free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
+    fixed = [i for i in range(3) if i not in free]
+    known = np.array([before.gain, *before.background])
+
+    def lever_of(x):
+        lever = replace(before.lever, viscous_loss=x[-1]) if damping else before.lever
+        return with_added_mass(lever, x[0], x[1] if position is None else position) if mass else lever
+
+    def solve(x):
+        columns = base_driven_columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
+        rest = y - columns[:, fixed] @ known[fixed]
+        if not free:
+            return rest, known
+        pr = project(columns[None][..., free], rest[None, :, None].astype(np.result_type(columns, rest)))
+        amplitudes = known.copy()
+        amplitudes[free] = pr.amplitudes[0, :, 0]
+        return pr.residual[0, :, 0], amplitudes
+
+    def residual(x):
+        try:
+            return stacked(np.asarray(solve(x)[0])) / sigma
+        except UserError:       # a mass that takes the lever's resonance out of any real range
+            return penalty(y)
+
+    return solve, lever_of, residual, params
+
+def _starts(before: SweepFit, refit) -> list:
+    """Starting points at a given position: masses over decades, the damping at ``before``'s."""
+    tail = [before.lever.viscous_loss] if "damping" in refit else []
+    return [np.array(([s] if "added_mass" in refit else []) + tail)
+            for s in ((0.0, 0.003, 0.03, 0.3) if "added_mass" in refit else (0.0,))]
+
+def _position_profile(before, refit, frequency, y, sigma):
+    """The mass and its position fitted: the mass at each position of :data:`POSITION_GRID` (a profile
+    of chi2 along the lever), then both refined from the profile's local minima, the best kept and the
+    others kept as its ``others`` (:func:`_rivals`: the shifts of two modes can agree on both sides
+    of a node)."""
+    profile = []
+    for x in POSITION_GRID:
+        _, _, residual, params = _candidate(before, refit, frequency, y, sigma, x)
+        lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+        fit = solve_from_starts(residual, _starts(before, refit), lower, upper, keep=1)
+        profile.append((fit.chi2, np.insert(fit.internal, 1, x)))
+    chi2 = np.array([c for c, _ in profile])
+    minima = [i for i in range(len(chi2)) if chi2[i] <= chi2[max(i - 1, 0)] and chi2[i] <= chi2[min(i + 1, len(chi2) - 1)]]
+    solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma)
+    lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
+    refined = sorted((solve_from_starts(residual, [profile[i][1]], lower, upper, keep=1) for i in minima), key=lambda f: f.chi2)
+    best = replace(refined[0], others=tuple((f.internal, f.chi2) for f in refined[1:]))
+    return best, solve, lever_of, params
+
+def _rivals(fit: StartsFit, count: int) -> list:
+    """Other minima of ``fit`` at another position (x/L more than 0.05 away) within 4 reduced-chi2 units."""
+    scale = max(fit.chi2 / count, 1.0)
+    return [(x[1], chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
+
+class SweepComparison(Result):
+    """Two sweeps compared (:func:`compare_sweeps`): ``to_dict()`` the JSON fields, ``report()`` the
+    table of candidates and the named change; attribute ``lever``, the after-sweep's lever."""
+
+    def report(self) -> str:
+        """The candidates (refitted parameters, gap, BIC), the named change, the resonances, the gaps."""
+        d = self._fields
+        p = d["parameters"]
+        lines = [f"{d['path']} explained from {d['reference']} (lever, fluid, gain, background calibrated there)",
+                 f"  {'effect':<36} refitted  gap     BIC"]
+        lines += [f"  {r['effect']:<36} {r['parameters']:>8}  {r['gap']:<7.3g} {r['bic']:.6g}" for r in d["steps"]]
+        lines.append(f"  named: {d['effect']}" + (f" (nuisances: {', '.join(d['nuisances'])})" if d["nuisances"] else ""))
+        if d["effect"] == "added_mass":
+            m = p["added_mass"]
+            where = p["added_mass_position"]
+            at = "undetermined (one mode); end-equivalent mass" if where.get("undetermined") else \
+                f"at x/L {plus_minus(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
+            lines.append(f"  added_mass {plus_minus(m, 'kg')} ({m['value'] * 1e15:.4g} pg), {at}")
+        if "viscous_loss" in p:
+            lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
+                         f"{plus_minus(p['viscous_loss'], '')}")
+        lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
+                     f"instrument: {instrument_text(d['reference_fit']['instrument_fit'])} -> {instrument_text(d['instrument_fit'])}")
+        lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
+        return "\n".join(lines + unexplained_line(d.get("unexplained")))
