@@ -223,7 +223,7 @@ class SpotResult:
     d_eff_error_per_volt: complex | None = None
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (the document ``pfmdyn spot --json`` writes).
+        """JSON-ready dictionary (the document ``pfmdyn spot`` writes).
 
         >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5)
         >>> spot_analysis(lever, Contact(k1=200.0), 20e3, positions=5).to_dict()["blind_spot"]

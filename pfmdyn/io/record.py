@@ -85,7 +85,7 @@ class InstrumentRecord:
     spectrum: tuple | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict:
-        """The JSON document of ``pfmdyn inspect --json``: numbers stay numbers."""
+        """The JSON document of ``pfmdyn inspect``: numbers stay numbers."""
         return {"path": self.path, "kind": self.kind, "instrument": self.instrument,
                 "channels": [{"name": c.name, "unit": c.unit, "shape": list(c.shape), "scale": c.scale}
                              for c in self.channels],
