@@ -21,8 +21,9 @@ from __future__ import annotations
 class UserError(ValueError):
     """A problem with the user's input (a file, a number, a name); reported as one line.
 
-    ``quantity`` names the value to give or to fix (a name of :mod:`pfmdyn.names`; for a
-    command's own setting, the name of its option, such as ``out``), or is None.
+    ``quantity`` names the value to give or to fix: a name of :mod:`pfmdyn.names`, or, for what
+    a command takes under an option of its own (``out``, ``model``, a contact resonance's
+    ``contact``, the spot's drive ``frequency``), that option's name; None when no value is at fault.
 
     >>> UserError("the contact needs k1", quantity="k1").quantity
     'k1'

@@ -282,7 +282,7 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
         top = frequency * (MAX_BETA / beta) ** 2
         raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
                         f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
-                        "for this lever", quantity="drive_frequency")
+                        "for this lever", quantity="frequency")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position

@@ -166,7 +166,7 @@ class StiffnessReport:
 def _check_inputs(contact_hz, modes, stderrs):
     fc = np.asarray(contact_hz, dtype=float)
     if fc.ndim != 1 or not len(fc):
-        raise UserError("no contact resonance (Hz)", quantity="contact_resonance")
+        raise UserError("no contact resonance (Hz)", quantity="contact")
     if not (np.all(np.isfinite(fc)) and np.all(fc > 0)):
         raise UserError("contact resonances must be positive and finite (Hz)")
     modes = list(range(1, len(fc) + 1)) if modes is None else [int(m) for m in modes]
@@ -354,8 +354,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         stderrs["contact_uncertainty"] / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
     if fit_tip_position:
         if len(fc) < 2:
-            raise UserError("the tip position is fitted from two or more contact modes: give a second contact "
-                            "resonance (and its mode), or the tip position as a number", quantity="contact_resonance")
+            raise UserError("a fitted tip position needs two or more contact resonances, with their modes (or give "
+                            "the tip position as a number)", quantity="contact")
         lateral, words = _lateral(lever, contact, "zero")
         found, proof, settled = _k1_tip(lever, lateral, fc, modes, noise)
     elif len(fc) == 1 or policy:

@@ -17,7 +17,7 @@ def add_arguments(parser) -> None:
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
-    parser.add_argument("--frequency", dest="drive_frequency", type=float, required=True, help="drive frequency, Hz")
+    parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
     parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
     parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
 
@@ -61,10 +61,10 @@ def run(args) -> int:
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    if not (math.isfinite(args.drive_frequency) and args.drive_frequency > 0):
-        raise UserError(f"--frequency must be a positive number of Hz, got {args.drive_frequency}")
+    if not (math.isfinite(args.frequency) and args.frequency > 0):
+        raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
     lever, contact = _lever(args), flags.contact(args)
-    result = spot_analysis(lever, contact, args.drive_frequency)
+    result = spot_analysis(lever, contact, args.frequency)
     print(report(result))
     if args.json:
         from ..io.results import write_json
@@ -73,7 +73,7 @@ def run(args) -> int:
         import numpy as np
 
         from ..plots.spot import plot_spot
-        fmax = max(2.0 * args.drive_frequency, 8.0 * lever.free_resonance)
+        fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)
         fig = plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions))
         try:

@@ -47,12 +47,12 @@ def add_arguments(parser) -> None:
 
     >>> p = argparse.ArgumentParser(); add_arguments(p)
     >>> a = p.parse_args(["--contact", "3e5", "--contact", "9e5", "--mode", "1", "--mode", "2", "--free", "7e4"])
-    >>> a.contact_resonance, a.free_resonance
+    >>> a.contact, a.free_resonance
     (['3e5', '9e5'], '7e4')
     """
     parser.add_argument("file", nargs="?", default=None,
                         help="instrument file (.ibw, .h5, .nid) or resonance table (.csv); optional")
-    parser.add_argument("--contact", dest="contact_resonance", action="append", default=None, metavar="HZ",
+    parser.add_argument("--contact", action="append", default=None, metavar="HZ",
                         help="contact resonance (Hz); repeat for several modes")
     parser.add_argument("--mode", action="append", default=None, metavar="N",
                         help="mode number of each --contact (default 1, 2, ...)")
@@ -146,7 +146,7 @@ def _contact_map(args) -> int:
         raise UserError(f"{args.file}: a contact-frequency map needs --out DIR (gets maps.zarr with k1)")
     others = [NAMES[n].flag for n in _LEVER + ("tip_position", "k2", "k2_over_k1", "poisson")
               if n not in ("spring_constant", "free_resonance") and getattr(args, n, None) is not None]
-    if args.contact_resonance or args.reduced_modulus or others:
+    if args.contact or args.reduced_modulus or others:
         raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
                         "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
@@ -182,8 +182,8 @@ def run(args) -> int:
     if fit:
         args = argparse.Namespace(**{**vars(args), "tip_position": None})
     found, contacts, modes = _from_file(args.file) if args.file else ({}, [], [])
-    if args.contact_resonance:
-        contacts = [_number(c, "--contact") for c in args.contact_resonance]
+    if args.contact:
+        contacts = [_number(c, "--contact") for c in args.contact]
         modes = []
     modes = [_mode(m) for m in args.mode] if args.mode else modes or None
     if not contacts:
