@@ -3,7 +3,7 @@
 The book's chapters (MyST notebooks in ``book/``) compute everything at build time.  The
 verdicts of ``pfmdyn verify`` are computed once per build, before Sphinx starts, written to
 ``<out>/verdicts.json`` (each with its evidence already typeset by :mod:`pfmdyn.typeset`, the
-module that also writes ``pfmdyn verify --errata``) and passed to the notebook kernels through
+module that also writes ``pfmdyn verify``'s errata list) and passed to the notebook kernels through
 the environment variable :data:`VERDICTS_ENV`; the chapters read them with :func:`verdicts`.
 The build is strict: notebook execution is forced, a cell that raises fails the build, and
 Sphinx warnings are errors (``-W -n``).
@@ -47,7 +47,7 @@ def chapter_of(claim_id: str) -> str | None:
 # --- verdicts, computed once per build -------------------------------------------------------
 
 def record(v) -> dict:
-    """One verdict for the book: the plain fields of ``pfmdyn verify --json`` and, under ``html``,
+    """One verdict for the book: the plain fields of ``pfmdyn verify``'s JSON and, under ``html``,
     the claim's place, printed form, evidence and correction typeset for a table cell; errata also
     carry their typeset parts under ``erratum`` (:func:`pfmdyn.typeset.erratum`)."""
     from . import typeset

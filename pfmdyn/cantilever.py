@@ -143,7 +143,7 @@ class Cantilever:
         for name, value in [("length", length), ("width", width), ("thickness", thickness),
                             ("youngs_modulus", youngs_modulus), ("density", density)]:
             if not value > 0:
-                raise ValueError(f"{name} must be positive, got {value!r}")
+                raise UserError(f"{name} must be positive, got {value!r}")
         k = formulas.spring_constant_from_geometry(youngs_modulus, width, thickness, length)
         f1 = formulas.free_resonance_from_geometry(youngs_modulus, width, thickness, length,
                                                    density, BETA1_FREE)
@@ -196,7 +196,7 @@ class Cantilever:
         lateral = self.tilt != 0.0 or (contact is not None and contact.k2_of(contact.k1 or 0.0) != 0.0)
         if self.tip_height is None:
             if lateral:
-                raise UserError("tip_height is needed with k2 or a tilt (--tip-height)")
+                raise UserError("tip_height is needed with k2 or a tilt", quantity="tip_height")
             return 0.0
         return self.tip_height
 
@@ -360,7 +360,7 @@ class Cantilever:
         True
         """
         if contact.k1 is None:
-            raise UserError("the contact needs k1 (--k1)")
+            raise UserError("the contact needs k1", quantity="k1")
         beta, *rest = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
             slopes = composed.slope(beta, self.spot_position, *rest)

@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:
         from .commands.flags import option_hint
-        print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc)}", file=sys.stderr)
+        print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc, parsers[args.command])}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # Output piped into `head` and closed early: not an error of ours or the user's.

@@ -1,12 +1,37 @@
 """Errors that pfmdyn reports to its user as one line, never as a traceback.
 
 The library raises them; :mod:`pfmdyn.cli` catches them and prints
-``pfmdyn COMMAND: error: MESSAGE`` with exit status 2.
+``pfmdyn COMMAND: error: MESSAGE`` with exit status 2.  A :class:`UserError` is a
+:class:`ValueError`, so that a Python caller catches a bad input as any bad argument.
+
+The library names quantities, never command-line flags: an error about a value the user
+should give carries its name (:attr:`UserError.quantity`, a name of :mod:`pfmdyn.names`) and
+the command line adds the flag that gives it.
+
+>>> import pfmdyn
+>>> try:
+...     pfmdyn.Cantilever(-1.0, 7e4, 2e-4)
+... except ValueError as exc:
+...     print(exc)
+spring_constant must be in (0.0001, 10000] N/m, got -1.0
 """
+from __future__ import annotations
 
 
-class UserError(Exception):
-    """A problem with the user's input (a file, a number, a name); reported as one line."""
+class UserError(ValueError):
+    """A problem with the user's input (a file, a number, a name); reported as one line.
+
+    ``quantity`` names the value to give or to fix: a name of :mod:`pfmdyn.names`, or, for what
+    a command takes under an option of its own (``out``, ``model``, a contact resonance's
+    ``contact``, the spot's drive ``frequency``), that option's name; None when no value is at fault.
+
+    >>> UserError("the contact needs k1", quantity="k1").quantity
+    'k1'
+    """
+
+    def __init__(self, message: str, quantity: str | None = None):
+        super().__init__(message)
+        self.quantity = quantity
 
 
 class MissingExtraError(UserError):

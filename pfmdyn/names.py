@@ -78,9 +78,9 @@ QUANTITIES: tuple[Quantity, ...] = (
     # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
     Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
              0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),
-    Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (with --reduced-modulus)", 1e-10, 1e-3,
+    Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (for the reduced modulus E*)", 1e-10, 1e-3,
              aliases=("tip_radius_m",)),
-    Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (with --reduced-modulus)",
+    Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (for the reduced modulus E*)",
              0.0, 1.0, aliases=("load_n",)),
     # Damping.
     Quantity("quality_factor", "Q", "1", "internal friction: complex modulus E (1 + i/Q)", 0.1, 1e9,
@@ -94,7 +94,7 @@ QUANTITIES: tuple[Quantity, ...] = (
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
              aliases=("temperature_k",)),
-    Quantity("medium", "medium", "1", "fluid around the lever: air, water (at --temperature) or DENSITY,VISCOSITY "
+    Quantity("medium", "medium", "1", "fluid around the lever: air, water (at the temperature) or DENSITY,VISCOSITY "
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",
              1e-12, 1e-3, aliases=("invols_m_per_v",)),

@@ -1,4 +1,4 @@
-"""Typesetting for ``pfmdyn verify --errata`` and the book: the one place that writes LaTeX.
+"""Typesetting for the errata list of ``pfmdyn verify`` and the book: the one place that writes LaTeX.
 
 SymPy objects become LaTeX with the project's symbol names (:func:`latex`); long expressions
 are broken over lines that fit the text column (:func:`latex_rows`, :func:`display_latex`).

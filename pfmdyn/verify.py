@@ -170,7 +170,7 @@ def _short(counter: dict) -> str:
 
 
 def to_json(verdicts) -> dict:
-    """The JSON payload of ``pfmdyn verify --json``."""
+    """The JSON payload of ``pfmdyn verify``."""
     return {"summary": summary(verdicts), "counts": counts(verdicts), "sign_convention": SIGN_CONVENTION,
             "claims": [v.as_dict() for v in verdicts]}
 
@@ -187,7 +187,7 @@ def render_errata(verdicts) -> str:
     as printed, the correct form, the proof (sentence and decisive expression); then the text
     audit's errata, one line each.  Long formulas are display blocks broken over lines.
     """
-    lines = ["<!-- generated — do not edit: written by `pfmdyn verify --errata` from derivations/checks and audit -->",
+    lines = ["<!-- generated — do not edit: written by `pfmdyn verify` (its errata list) from derivations/checks and audit -->",
              "# Errata of Jesse, Baddorf & Kalinin (2006), as computed by pfmdyn", "",
              f"Sign convention: {typeset.markdown(SIGN_CONVENTION_SENTENCE)}.", ""]
     registry = [v for v in verdicts if v.kind == "claim" and v.verdict in (Outcome.ERRATUM, Outcome.SIGN)]

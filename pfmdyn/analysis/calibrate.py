@@ -2,7 +2,7 @@
 
 * **Thermal** (equipartition): the first mode is fitted as a damped oscillator over a white floor
   (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`); its mean square ``pi A**2 f0 Q / 2`` (generated
-  ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``--invols``) gives
+  ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``invols``) gives
   ``k = chi kB T / <d*^2>`` with the first-mode factor ``chi`` of the optical lever read at the spot
   through a static InvOLS measured with the tip at ``tip_position`` (generated
   ``formulas.thermal_factor_slope*``, derived in ``derivations/calibration.py``; 0.817 at the end).
@@ -107,7 +107,7 @@ class Calibration:
     instrument: dict
 
     def to_json(self) -> dict:
-        """The JSON document of ``pfmdyn calibrate --json`` (undetermined numbers are NaN, written null)."""
+        """The JSON document of ``pfmdyn calibrate`` (undetermined numbers are NaN, written null)."""
         def estimate(e):
             return {"spring_constant": e.value, "spring_constant_stderr": e.stderr,
                     "sources": {k: v for k, v in e.sources.items()}, "reason": e.reason}

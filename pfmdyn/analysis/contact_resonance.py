@@ -445,7 +445,7 @@ def require_tip_height(lever: Cantilever, why: str) -> None:
     >>> require_tip_height(Cantilever(2.0, 7e4, 2e-4), "a tilt")
     Traceback (most recent call last):
     ...
-    pfmdyn.errors.UserError: a tilt needs the tip height: give --tip-height (and --length)
+    pfmdyn.errors.UserError: a tilt needs the tip height (with the lever length)
     """
     if lever.tip_height is None:
-        raise UserError(f"{why} needs the tip height: give --tip-height (and --length)")
+        raise UserError(f"{why} needs the tip height (with the lever length)", quantity="tip_height")

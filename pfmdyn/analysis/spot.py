@@ -55,9 +55,9 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
     200.0
     """
     if contact.k1 is None:
-        raise UserError("the spot analysis needs the contact stiffness k1 (--k1)")
+        raise UserError("the spot analysis needs the contact stiffness k1", quantity="k1")
     if lever.tip_height is None:
-        raise UserError("the spot analysis needs the tip height (--tip-height)")
+        raise UserError("the spot analysis needs the tip height", quantity="tip_height")
     return {name: float(value) for name, value in zip(composed.PARAMETERS, lever.model_parameters(contact))}
 
 
@@ -223,7 +223,7 @@ class SpotResult:
     d_eff_error_per_volt: complex | None = None
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (the document ``pfmdyn spot --json`` writes).
+        """JSON-ready dictionary (the document ``pfmdyn spot`` writes).
 
         >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5)
         >>> spot_analysis(lever, Contact(k1=200.0), 20e3, positions=5).to_dict()["blind_spot"]
@@ -248,7 +248,7 @@ class SpotResult:
         if not self.blind_spot.certified:
             out["reason"] = self.blind_spot.reason
         if self.d_eff_error_per_volt is None:
-            out["d_eff_error_per_volt_undetermined"] = "needs the lever width (--width)"
+            out["d_eff_error_per_volt_undetermined"] = "needs the lever width"
         return out
 
 
@@ -276,13 +276,13 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
         raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
     if not (contact.k1 or 0.0) > 0:
         # With no contact spring the surface does not drive the tip: no d1 response, no force curve.
-        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m (--k1), got {contact.k1}")
+        raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m, got {contact.k1}", quantity="k1")
     beta = float(lossless_beta(lever, frequency))
     if beta > MAX_BETA:
         top = frequency * (MAX_BETA / beta) ** 2
         raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
                         f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
-                        "for this lever (--frequency)")
+                        "for this lever", quantity="frequency")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position

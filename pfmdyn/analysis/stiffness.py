@@ -219,8 +219,8 @@ def out_of_range_message(ratio: float, mode: int, soft_ratio: float, stiff_ratio
     beyond = f"between that limit and free mode {mode + 1} ({next_soft_ratio:.6g})" \
         if ratio < next_soft_ratio else "beyond it"
     return (f"contact/free ratio {ratio:.6g} of mode {mode} is above its stiff limit {stiff_ratio:.6g} "
-            f"with {lateral} ({beyond}): k1 alone cannot reach it; a lateral contact stiffness k2 (--k2, "
-            "--k2-over-k1, --poisson, or a second contact mode), the tip set back from the end, or the peak "
+            f"with {lateral} ({beyond}): k1 alone cannot reach it; a lateral contact stiffness (k2, "
+            "k2_over_k1 or poisson, or a second contact mode), the tip set back from the end, or the peak "
             "being a higher mode could explain it")
 
 

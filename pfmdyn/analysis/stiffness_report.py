@@ -155,8 +155,8 @@ class StiffnessReport:
             for i, s in enumerate(self.solutions, 1):
                 lines += [f"solution {i}:"] + ["  " + line for line in s.lines(k)]
         if not any(s.stderr.get("k1", 0.0) > 0 for s in self.solutions):
-            lines.append("(no uncertainty given: --contact-uncertainty, --free-resonance-uncertainty, "
-                         "--spring-constant-uncertainty)")
+            lines.append("(no uncertainty given: contact_uncertainty, free_resonance_uncertainty, "
+                         "spring_constant_uncertainty)")
         lines.append(f"k2 policy: {self.k2_policy}")
         lines += [f"why: {text}" for text in self.proof]
         lines += [f"note: {text}" for text in self.notes]
@@ -166,7 +166,7 @@ class StiffnessReport:
 def _check_inputs(contact_hz, modes, stderrs):
     fc = np.asarray(contact_hz, dtype=float)
     if fc.ndim != 1 or not len(fc):
-        raise UserError("no contact resonance: give --contact HZ")
+        raise UserError("no contact resonance (Hz)", quantity="contact")
     if not (np.all(np.isfinite(fc)) and np.all(fc > 0)):
         raise UserError("contact resonances must be positive and finite (Hz)")
     modes = list(range(1, len(fc) + 1)) if modes is None else [int(m) for m in modes]
@@ -188,14 +188,14 @@ def _lateral(lever: Cantilever, contact: Contact, default: str) -> tuple[Contact
     if contact.k2 is not None or contact.ratio is not None:
         return contact, contact.describe_k2()
     if lever.tip_height is None and lever.tilt == 0.0:
-        return Contact(), ("k2 left out: without a tip height (--tip-height) the lateral spring does not act "
+        return Contact(), ("k2 left out: without a tip height the lateral spring does not act "
                            "on the lever")
     if default == "zero":
-        return Contact(), ("k2 = 0, the L1/L method's assumption (give --k2, --k2-over-k1 or --poisson to "
+        return Contact(), ("k2 = 0, the L1/L method's assumption (give k2, k2_over_k1 or poisson to "
                            "include it)")
     tied = Contact(poisson=DEFAULT_POISSON)
     return tied, (f"k2 tied to k1 by Mindlin at Poisson's ratio {DEFAULT_POISSON:g} (assumed: k2 = {tied.ratio:.3g} k1; "
-                  "give --k2, --k2-over-k1 or --poisson)")
+                  "give k2, k2_over_k1 or poisson)")
 
 
 def _same(a: dict, b: dict) -> bool:
@@ -285,15 +285,15 @@ def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
 
 def _two_readings(lever, fc, modes, noise_beta: float):
     """Neither a k2 policy nor a tip position: (k1, k2) at the lever's tip position and (k1, tip position) at k2 = 0."""
-    pairs, proof_pairs = [], ["(k1, k2) not computed: k2 acts through the tip height (--tip-height)"]
+    pairs, proof_pairs = [], ["(k1, k2) not computed: k2 acts through the tip height, not given"]
     if lever.tip_height is not None:
         pairs, proof_pairs = _k1_k2(lever, fc, modes, noise_beta)
     tips, proof_tips, _ = _k1_tip(lever, Contact(), fc, modes, noise_beta)
     both = ": both explain them equally" if pairs and tips else ""
     proof = ([f"{len(fc)} contact modes with neither a k2 policy nor a tip position: k1, k2 and the tip position are "
               "three unknowns, so no answer is unique; the two usual readings are (k1, k2) with the tip at "
-              f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give --k2, --k2-over-k1 or "
-              "--poisson, or --tip-position (a number, or fit)"] + proof_pairs + proof_tips)
+              f"{lever.tip_position:g} L and (k1, tip position) with k2 = 0{both}; give k2, k2_over_k1 or "
+              "poisson, or tip_position (a number, or fit)"] + proof_pairs + proof_tips)
     return pairs + tips, proof
 
 
@@ -354,8 +354,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         stderrs["contact_uncertainty"] / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
     if fit_tip_position:
         if len(fc) < 2:
-            raise UserError("the tip position is fitted from two or more contact modes: give a second --contact "
-                            "(and --mode), or a --tip-position number")
+            raise UserError("a fitted tip position needs two or more contact resonances, with their modes (or give "
+                            "the tip position as a number)", quantity="contact")
         lateral, words = _lateral(lever, contact, "zero")
         found, proof, settled = _k1_tip(lever, lateral, fc, modes, noise)
     elif len(fc) == 1 or policy:
@@ -370,7 +370,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         settled = False
     if k1_by_mode and found and found[0][1] > max(3 * noise, 1e-9):
         notes.append("the modes disagree beyond their uncertainties (k1 from each mode alone differs): the lever "
-                     "(tip position, tip mass, tilt) or the k2 policy may be wrong; --tip-position fit solves the tip "
+                     "(tip position, tip mass, tilt) or the k2 policy may be wrong; tip_position fit solves the tip "
                      "position with k1")
     if not found:
         raise UserError("no k1 > 0 of this lever model gives these contact resonances as modes "

@@ -71,6 +71,8 @@ def _cli_cantilever(args):
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
                 thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
                 quality_factor=_quality_factor(args))
+        except UserError:       # a ValueError, already one line: as it is
+            raise
         except ValueError as exc:
             raise UserError(str(exc)) from None
         return _in_medium(args, lever, custom["width"]), custom["width"]
@@ -81,6 +83,8 @@ def _cli_cantilever(args):
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
     try:
         lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
+    except UserError:       # a ValueError, already one line: as it is
+        raise
     except ValueError as exc:
         raise UserError(str(exc)) from None
     return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
@@ -133,6 +137,8 @@ def run(args) -> int:
                                 H=contact["tip_height"], d_eff=args.d_eff, local_force=args.local_force,
                                 surface_potential_v=args.surface_potential,
                                 electrostatic_sign=args.electrostatic_sign)
+    except UserError:       # a ValueError, already one line: as it is
+        raise
     except ValueError as exc:
         raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"

@@ -7,6 +7,7 @@ have, and a bad one is a one-line error naming the flag.
 """
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
@@ -14,7 +15,7 @@ from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..medium import Medium
 from ..io.record import FIELDS, MissingFieldError
-from ..names import CONTACT, DAMPING, LEVER, NAMES, canonical, checked
+from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "given",
            "require", "cantilever", "contact", "option_hint"]
@@ -161,16 +162,28 @@ def contact(args) -> Contact:
     return Contact(**values)
 
 
-def option_hint(error: Exception) -> str:
-    """``": give --flag"`` when ``error`` is a field missing from a file that a flag supplies.
+def option_hint(error: Exception, parser=None) -> str:
+    """``": give --flag"`` when ``error`` concerns a quantity that a flag supplies.
 
-    The readers name the field (:class:`pfmdyn.io.record.MissingFieldError`); only the
-    commands know flags.
+    The library names the quantity (:attr:`pfmdyn.errors.UserError.quantity`; a field missing
+    from a file: :class:`pfmdyn.io.record.MissingFieldError`); only the commands know flags.  The
+    flag is the option of ``parser`` (the command's) that sets the quantity, else the name's own
+    (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint.
 
     >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
     ': give --tip-height'
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); _ = p.add_argument("--out", dest="out")
+    >>> option_hint(UserError("maps.zarr holds another map", quantity="out"), p)
+    ': give --out'
     >>> option_hint(MissingFieldError("no contact resonance in a.ibw", "contact_resonance")), option_hint(ValueError("x"))
     ('', '')
     """
-    name = canonical(error.field) if isinstance(error, MissingFieldError) else None
-    return f": give {NAMES[name].flag}" if name and NAMES[name].option else ""
+    name = getattr(error, "quantity", None)
+    if name is None:
+        return ""
+    options = [option for action in getattr(parser, "_actions", ()) if action.dest == name
+               and action.help != argparse.SUPPRESS for option in action.option_strings if option.startswith("--")]
+    if options:
+        return f": give {options[0]}"
+    return f": give {NAMES[name].flag}" if name in NAMES and NAMES[name].option else ""

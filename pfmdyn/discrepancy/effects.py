@@ -112,7 +112,7 @@ class Effect:
 
     @property
     def frees_lateral_spring(self) -> bool:
-        """Whether the effect fits ``k2`` where the baseline holds it at 0 (``--vertical-only``)."""
+        """Whether the effect fits ``k2`` where the baseline holds it at 0 (a vertical-only baseline)."""
         return False
 
     def partials(self, coords) -> set[str]:
@@ -248,7 +248,7 @@ class Tilt(Effect):
 
 @dataclass(frozen=True)
 class LateralStiffness(Effect):
-    """``k2`` fitted where the baseline holds it at 0 (``--vertical-only``): a spring
+    """``k2`` fitted where the baseline holds it at 0 (a vertical-only baseline): a spring
     (:func:`spring_parameters`), placed beside ``k1``."""
 
     @property

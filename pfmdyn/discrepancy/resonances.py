@@ -28,7 +28,7 @@ uncertainty (``k2`` as not determined, with the rule as its ``note``; the report
 ``spring_rule`` repeats it); two or more fit both.
 
 Candidates (:func:`candidate_rule`): ``damping`` with Q values; ``tip_mass``;
-``tip_setback``, ``tilt`` and (with ``--vertical-only``: the baseline has ``k2`` otherwise)
+``tip_setback``, ``tilt`` and (with a vertical-only baseline: the baseline has ``k2`` otherwise)
 ``lateral_stiffness`` change contact modes only (the set-back when the tip carries no mass),
 so they are tried only when there are more contact modes than contact parameters already
 fitted, or when those parameters leave a contact misfit (frequencies, and with damping Q
@@ -373,7 +373,7 @@ class ResonanceProblem:
     """What :func:`pfmdyn.discrepancy.select.run` needs for a resonance table.
 
     The library (see :func:`candidate_rule`): ``damping`` when the table gives Q values;
-    tip mass and set-back; tilt (and ``lateral_stiffness`` with ``--vertical-only``: the
+    tip mass and set-back; tilt (and ``lateral_stiffness`` with a vertical-only baseline: the
     baseline has ``k2`` otherwise) when there is a contact mode for each contact parameter.
     """
 
@@ -542,7 +542,7 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
     * ``damping`` only when the table gives Q values (undamped resonances do not move);
     * ``background`` and ``spot_position`` never (they change a spectrum, not its resonances);
     * ``tilt`` and ``lateral_stiffness`` only with contact modes (they act through the
-      springs); ``lateral_stiffness`` only with ``--vertical-only``, since the baseline
+      springs); ``lateral_stiffness`` only with a vertical-only baseline, since any other
       already fits ``k2``.  Whether the data have room for each is decided per step
       (:meth:`ResonanceProblem.candidates`: one contact mode per contact parameter).
 

@@ -24,7 +24,7 @@ __all__ = ["noise_sigma", "noise_sigmas", "gap", "misfit_band", "GAP_LIMIT", "MA
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
 (:data:`pfmdyn.discrepancy.select.UNEXPLAINED`), ``pfmdyn map`` marks the pixel unexplained
-(the default ``--gap-threshold``)."""
+(the default gap threshold)."""
 
 
 def gap(chi2, count):

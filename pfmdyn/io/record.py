@@ -36,11 +36,20 @@ KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
 class MissingFieldError(UserError):
     """A cantilever field that neither the file nor the caller gives; ``field`` names it (a key
-    of :data:`FIELDS`), so that a command can say which option supplies it."""
+    of :data:`FIELDS`) and is the error's :attr:`~pfmdyn.errors.UserError.quantity`, so that a
+    command can say which option supplies it.
+
+    >>> MissingFieldError("tip height not in a.ibw", "tip_height").quantity
+    'tip_height'
+    """
 
     def __init__(self, message: str, field: str):
-        super().__init__(message)
-        self.field = field
+        super().__init__(message, quantity=field)
+
+    @property
+    def field(self) -> str:
+        """The missing field's name (the quantity)."""
+        return self.quantity
 
 
 @dataclass(frozen=True)
@@ -76,7 +85,7 @@ class InstrumentRecord:
     spectrum: tuple | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict:
-        """The JSON document of ``pfmdyn inspect --json``: numbers stay numbers."""
+        """The JSON document of ``pfmdyn inspect``: numbers stay numbers."""
         return {"path": self.path, "kind": self.kind, "instrument": self.instrument,
                 "channels": [{"name": c.name, "unit": c.unit, "shape": list(c.shape), "scale": c.scale}
                              for c in self.channels],

@@ -4,7 +4,7 @@
 :mod:`pfmdyn.fitting.batched`);
 :mod:`pfmdyn.maps.sho` fits BGlib's simple harmonic oscillator the same way;
 :mod:`pfmdyn.maps.bias` derives the electrostatic maps when the spectra have a bias axis;
-:mod:`pfmdyn.maps.select` chooses the mechanisms (``--model auto``);
+:mod:`pfmdyn.maps.select` chooses the mechanisms (the model ``auto``);
 :mod:`pfmdyn.maps.driver` reads the map, runs the blocks on a Dask scheduler and streams the
 result to Zarr (:mod:`pfmdyn.maps.store`), skipping blocks an interrupted run already wrote;
 :mod:`pfmdyn.maps.usid` writes the fit into a USID file in BGlib's layout;

@@ -71,6 +71,8 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
         for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr)):
             write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
                         description=f"{name} from the contact resonance", dims=["y", "x"])
+    except UserError:       # zarr not installed: already one line
+        raise
     except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
         raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
     k1 = np.asarray(result.k1)

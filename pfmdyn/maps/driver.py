@@ -101,10 +101,11 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     steps, dims = (model.step_shape, model.dims) if sho else ((), ("y", "x"))
     if "done" in group:     # an interrupted run: only the same map of the same model may continue it
         if group["done"].shape != grid:
-            raise UserError(f"{out}: holds a map of another shape or block size; choose another --out")
+            raise UserError(f"{out}: holds a map of another shape or block size; choose another output", quantity="out")
         for key, value in settings.items():
             if group.attrs.get(key, value) != value:
-                raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another --out")
+                raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another output",
+                                quantity="out")
     for name, (unit, text) in model.outputs.items():
         if name not in group:
             create_map(group, name, (ny, nx, *steps), (block, block, *steps), units=unit, description=text,
@@ -170,7 +171,7 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
 
 def earlier_run(out: str) -> dict:
     """The attributes of the map output ``out`` an earlier run left (empty when there is none);
-    a file, or a damaged Zarr group, in its place is one line asking for another ``--out``.
+    a file, or a damaged Zarr group, in its place is one line asking for another output.
 
     >>> import tempfile
     >>> earlier_run(tempfile.mkdtemp() + "/maps.zarr")
@@ -183,9 +184,11 @@ def earlier_run(out: str) -> dict:
         if "done" in group:
             np.asarray(group["done"][...])          # the flags a rerun continues from
         return dict(group.attrs)
+    except UserError:       # zarr not installed: already one line
+        raise
     except (OSError, ValueError, KeyError) as exc:    # zarr: not a group, unreadable metadata
         raise UserError(f"{out}: not a map output a run can continue ({type(exc).__name__}: "
-                        f"{' '.join(str(exc).split())[:80]}); choose another --out") from None
+                        f"{' '.join(str(exc).split())[:80]}); choose another output", quantity="out") from None
 
 
 def _forget(made: list[str], out: str) -> None:
@@ -196,6 +199,8 @@ def _forget(made: list[str], out: str) -> None:
     try:
         if out in made and np.any(_require("zarr").open_group(out, mode="r")["done"][...]):
             return
+    except UserError:       # zarr not installed: already one line
+        raise
     except (OSError, KeyError, ValueError):     # not even the flags were written
         pass
     for path in reversed(made):

@@ -98,7 +98,7 @@ def quantities(mechanisms=("internal",), bias: bool = False) -> dict[str, tuple[
 
 
 def parse_model(spec: str) -> tuple[str, ...]:
-    """Mechanisms of a ``--model`` spec ``elastic[+viscous][+contact][+distributed]``.
+    """Mechanisms of a model spec ``elastic[+viscous][+contact][+distributed]``.
 
     >>> parse_model("elastic+contact")
     ('internal', 'contact')

@@ -82,6 +82,8 @@ class open_root:
             if os.path.isdir(self.path):
                 return require("zarr").open_group(self.path, mode="r")
             self._file = require("h5py").File(self.path, "r")
+        except UserError:       # the library not installed: already one line
+            raise
         except (OSError, ValueError, KeyError) as exc:   # h5py: not HDF5; zarr: no group here
             kind = "Zarr group" if os.path.isdir(self.path) else "HDF5 file"
             raise UserError(f"{self.path}: not a readable {kind} ({' '.join(str(exc).split())[:120]}); maps are read "
@@ -273,8 +275,8 @@ def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> Map
         lever = Cantilever.from_values({**values, "medium": attrs.get("medium")})
         contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
                              if name in attrs and name != "k1"})
-    except (TypeError, ValueError, UserError) as exc:
-        raise UserError(f"{path}: {exc}") from None
+    except (TypeError, ValueError) as exc:      # UserError among them: named after the file, quantity kept
+        raise UserError(f"{path}: {exc}", getattr(exc, "quantity", None)) from None
     return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
                     usid or "response", "usid" if usid else "plain", columns)
 
@@ -296,7 +298,7 @@ def _check_axes(path, grid, f, bias):
     try:
         basis(bias)                                  # one-line error unless two distinct finite biases
     except UserError as exc:
-        raise UserError(f"{path}: {exc}") from None
+        raise UserError(f"{path}: {exc}", exc.quantity) from None
 
 
 def read_block(source: MapInput, ys: slice, xs: slice) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""``pfmdyn map --model auto``: choose the mechanisms on a few representative pixels.
+"""``pfmdyn map`` with the model ``auto``: choose the mechanisms on a few representative pixels.
 
 The baseline is the elastic-contact beam with internal friction (``elastic``).  The candidates
 add the mechanisms maps support (:data:`pfmdyn.maps.fit.MECHANISMS`: viscous drag, a contact
@@ -37,7 +37,7 @@ def sample_pixels(source: MapInput, count: int = 16) -> np.ndarray:
     """Spectra ``(n, n_freq)`` (``(n, n_bias, n_freq)`` with a bias axis) at the centres of a
     ``sqrt(count)`` x ``sqrt(count)`` grid of cells (fewer on a map with fewer rows or columns);
     only those spectra are read.  Pixels the fit masks (NaN, inf, no response) are left out; if
-    all are, a one-line error asks for ``--model``."""
+    all are, a one-line error asks for the model."""
     ny, nx = source.shape
     side = max(1, int(math.isqrt(count)))
     ys = np.unique(((np.arange(side) + 0.5) * ny / side).astype(int))
@@ -46,7 +46,7 @@ def sample_pixels(source: MapInput, count: int = 16) -> np.ndarray:
     usable = fittable(y)
     if not usable.any():
         raise UserError(f"{source.path}: the {len(y)} pixels sampled to choose the model hold NaN, inf or no "
-                        "response; give --model (e.g. elastic)")
+                        "response; choose the model (e.g. elastic)", quantity="model")
     return y[usable]
 
 

@@ -3,7 +3,7 @@ pipeline (pycroscopy's viewers, loop fitters) reads them as its own.
 
 Beside the main dataset (e.g. ``/Measurement_000/Channel_000/Raw_Data``) a results group:
 
-* ``Raw_Data-SHO_Fit_NNN`` (``pfmdyn map --model sho``), as BGlib's ``BESHOfitter`` writes it:
+* ``Raw_Data-SHO_Fit_NNN`` (``pfmdyn map`` with the model ``sho``), as BGlib's ``BESHOfitter`` writes it:
   ``Guess`` and ``Fit``, compound datasets with the fields of :data:`pfmdyn.maps.sho.FIELDS`
   (``'Amplitude [V]'``, ``'Frequency [Hz]'``, ``'Quality Factor'``, ``'Phase [rad]'``,
   ``'R2 Criterion'``), shaped (positions, spectroscopic steps): every spectroscopic row of the
@@ -12,7 +12,7 @@ Beside the main dataset (e.g. ``/Measurement_000/Channel_000/Raw_Data``) a resul
   an extra, fastest-varying ``Band`` row whose values are the bands' centre frequencies (Hz).
   ``completed_guess_positions`` and ``completed_fit_positions`` (uint8, one per position) say
   which positions hold results.
-* ``Raw_Data-Beam_Fit_NNN`` (the beam fit, any other ``--model``): one compound dataset ``Fit``
+* ``Raw_Data-Beam_Fit_NNN`` (the beam fit, any other model): one compound dataset ``Fit``
   shaped (positions, 1) over a ``Single_Step`` (the beam model uses every spectrum of a
   position, all biases included), one field ``'NAME [UNIT]'`` per map of ``maps.zarr`` (``k1
   [N/m]``, ``quality_factor [1]``, ...), the model settings in the group's attributes, and

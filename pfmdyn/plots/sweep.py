@@ -1,5 +1,5 @@
 """Figures of ``pfmdyn discrepancy`` on a drive sweep: the measured amplitude (and phase) with the
-fitted base-driven lever, and the residual in noise levels; with ``--reference``, the reference
+fitted base-driven lever, and the residual in noise levels; with a reference sweep, the reference
 sweep and its fit beside the explained sweep and the lever that explains it.  On a thermal tune:
 the measured spectral density with the thermally driven lever.
 

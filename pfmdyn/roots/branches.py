@@ -15,7 +15,7 @@ Families and the reading of the paper's figures:
 * ``indentation`` (Fig. 4b, Eq. 28; ``frictionless`` is the same equation): ``k1_over_k``
   swept; free cantilever (Eq. 22) -> supported end (Eq. 20).
 * ``elastic`` (Fig. 4e, longitudinal coupling, case 4c): ``k2_ratio`` swept with the
-  vertical spring held at ``--k1-over-k`` (default 0, the figure's longitudinal spring
+  vertical spring held at ``k1_over_k`` (default 0, the figure's longitudinal spring
   alone); with k1 = 0: free cantilever -> tip slope held (``tan z = -tanh z``).
 * ``torsion-elastic`` (Fig. 5c, Eq. 33): ``k2t_HL`` swept; clamped-free torsion
   ``(2n-1) pi/2`` -> clamped-clamped ``n pi``.

@@ -61,7 +61,7 @@ class RootResult:
     balls: tuple = field(default=(), repr=False, compare=False)
 
     def to_json(self) -> dict:
-        """The JSON document written by ``pfmdyn roots --json``.
+        """The JSON document ``pfmdyn roots`` writes.
 
         >>> family_roots("free", 1, 5).to_json()["roots"]
         ['1.8751']
