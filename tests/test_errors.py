@@ -17,13 +17,6 @@ from pfmdyn.io.record import MissingFieldError
 
 PACKAGE = Path(pfmdyn.__file__).resolve().parent
 
-ALLOWED = {
-    # Being reworded by another change; remove each entry once its file names the quantity instead.
-    ("discrepancy/sweep.py", "--width"),        # WIDTH_NOTE: "...; give --width for the fluid's share"
-}
-"""(file under pfmdyn/, flag) pairs still spelled outside the command line."""
-
-
 def cli_flags() -> set[str]:
     """Every long flag of every command, from the parsers the command line builds."""
     flags = set()
@@ -54,19 +47,14 @@ def test_no_flag_is_spelled_outside_the_command_line():
     assert {"--tip-height", "--width", "--temperature", "--out"} <= flags
     spelled = re.compile(r"(?<![\w-])(" + "|".join(map(re.escape, sorted(flags, key=len, reverse=True)))
                          + r")(?![\w-])")
-    found, used = [], set()
+    found = []
     for path in sorted(PACKAGE.rglob("*.py")):
         relative = path.relative_to(PACKAGE).as_posix()
         if relative.startswith("commands/") or relative == "cli.py":
             continue
         for line, text in library_strings(path):
-            for flag in spelled.findall(text):
-                if (relative, flag) in ALLOWED:
-                    used.add((relative, flag))
-                else:
-                    found.append(f"pfmdyn/{relative}:{line}: {flag}")
+            found += [f"pfmdyn/{relative}:{line}: {flag}" for flag in spelled.findall(text)]
     assert not found, "flags spelled in library code (name the quantity instead):\n" + "\n".join(found)
-    assert used == ALLOWED, f"allowed but no longer spelled, remove from ALLOWED: {ALLOWED - used}"
 
 
 def test_a_python_user_catches_bad_input_as_a_value_error():

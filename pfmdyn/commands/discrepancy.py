@@ -79,6 +79,8 @@ def _sweeps(args) -> int:
         with threadpool_limits(1, user_api="blas"):
             fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
             result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
+    except UserError:
+        raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
                         "check the spring constant and length") from None
@@ -110,9 +112,9 @@ def _thermal(args) -> int:
     try:
         with threadpool_limits(1, user_api="blas"):
             fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
+    except UserError:
+        raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        if isinstance(exc, UserError):
-            raise
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
                         "check the spring constant and length") from None
     print(fit.report())
@@ -144,6 +146,8 @@ def run(args: argparse.Namespace) -> int:
         # (about 1.5x slower on a shared machine).
         with threadpool_limits(1, user_api="blas"):
             report = _analyse(data, args)
+    except UserError:
+        raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         # Data that read correctly but defeat the numerics still get one line, not a traceback.
         raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "

@@ -47,7 +47,7 @@ EXTRA_LOSS = Parameter("viscous_loss", "", 0.0, 10.0, null=0.0, seeds=(0.0, 0.00
 ASSUMED_WIDTH = 0.1
 """The width, over the length, of a lever whose width is not given (:data:`WIDTH_NOTE`)."""
 WIDTH_NOTE = ("not given: assumed L/10; one mode cannot tell the fluid's damping from a viscous one (both "
-              "widen the peak), so a narrow lever leaves it to viscous_loss; give --width for the fluid's share")
+              "widen the peak), so a narrow lever leaves it to viscous_loss; give the width for the fluid's share")
 
 MIN_POINTS = 8
 """Fewer measured points than this cannot fix a resonance, a damping, a gain and a background."""

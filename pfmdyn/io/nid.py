@@ -147,7 +147,9 @@ def _read_layout(path: Path) -> tuple[dict, list[tuple]]:
                 offset += count * bits // 8
     except KeyError as exc:
         raise UserError(f"{path}: not a readable Nanosurf NID file: its header has no {exc.args[0]!r}") from None
-    except ValueError as exc:
+    except UserError:
+        raise
+    except ValueError as exc:       # a header number that is not one
         raise UserError(f"{path}: not a readable Nanosurf NID file: {exc}") from None
     if not channels:
         raise UserError(f"{path}: the NID file holds no data sets")
