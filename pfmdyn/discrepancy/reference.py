@@ -74,6 +74,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     the added mass's x/L (None: fitted when the sweep spans two modes, else undetermined and the mass
     given at the free end, the end-equivalent mass).
 
+    >>> from pfmdyn.discrepancy.sweep import fit_sweep
     >>> from pfmdyn.medium import Medium
     >>> f = np.linspace(4e4, 1e5, 120)
     >>> lever = Cantilever(8.0, 7.2e4, 1e-4, width=4e-5, medium=Medium.water())
