@@ -528,11 +528,62 @@ def _clamped_det(A):
     return _det(S)
 
 
+def _short_end(s):
+    """A short segment's rows at its end with the clamp eliminated, ``R[m, c]`` (``s`` flat): its
+    unknowns are its state at the clamp, which zeroes the first two, so ``R`` is the field matrix's
+    last two columns; and the scale of :func:`_scaled_det`."""
+    s_1, t, u, v = pieces.krylov_duncan(s)
+    return np.array((s_1 + 1.0, t, u, v))[_CIRCULANT[:4, 2:]], np.exp(-s)
+
+
+def _long_end(s):
+    """:func:`_short_end` in the bounded basis: the clamp's rows read ``[I, B]``, so
+    ``R = E[:, 2:] - E[:, :2] B``."""
+    E = np.array(pieces.bounded_basis(s, s)[:16]).reshape(4, 4, -1)
+    at_clamp = pieces.bounded_basis(0.0, s)
+    B = np.empty((4, len(s)), np.result_type(s, float))     # contiguous per entry: the products stream
+    for i, j in enumerate((2, 3, 6, 7)):
+        B[i] = at_clamp[j]
+    B = B.reshape(2, 2, -1)
+    return E[:, 2:] - E[:, 0, None] * B[0] - E[:, 1, None] * B[1], np.full(len(s), 1.0 / _BOUNDED_AT_START)
+
+
+def _tip_at_end_characteristic(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    """:func:`characteristic` of a lever of one segment (the tip at the free end), without
+    assembling it: the Schur complement of the clamp's rows is ``R[2:] - J R[:2]``, ``R`` the
+    segment's end rows with the clamp eliminated (:func:`_short_end`, :func:`_long_end`) and ``J``
+    the tip's jump; its 2 x 2 determinant is written out over the arguments' broadcast shape.
+    ``R`` depends on ``beta`` alone: evaluated once for a grid of springs.
+
+    Examples
+    --------
+    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 1.0, 0.05)
+    >>> lever = _Lever(*args)           # the assembled system it stands for
+    >>> f"{_tip_at_end_characteristic(*args[:8], args[9]) / _scaled_det(lever)[0][0]:.12f}"
+    '1.000000000000'
+    """
+    beta = np.asarray(beta)
+    flat = beta.reshape(-1)
+    short = np.abs(flat) <= pieces.KD_SERIES_LIMIT
+    if short.all() or not short.any():
+        R, scale = (_short_end if short.all() else _long_end)(flat)
+    else:
+        dtype = np.result_type(flat, float)
+        R, scale = np.empty((4, 2, len(flat)), dtype), np.empty(len(flat), dtype)
+        for mask, end in ((short, _short_end), (~short, _long_end)):
+            R[:, :, mask], scale[mask] = end(flat[mask])
+    R, scale = R.reshape((4, 2) + beta.shape), scale.reshape(beta.shape)
+    J = pieces.point_jump(beta, k, kvv, kll, kvl, H, L, mu, rho_g)
+    S = [R[2 + r, c] - J[2 * r] * R[0, c] - J[2 * r + 1] * R[1, c] for r in (0, 1) for c in (0, 1)]
+    return (S[0] * S[3] - S[1] * S[2]) * (scale * _ONE_SEGMENT)
+
+
 def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     """The composed lever's characteristic: its zeros in ``beta`` are the resonances.
 
     The determinant of the assembled system, scaled (by ``e^{-beta l}`` per short segment) so that it
-    is one analytic function of ``beta`` whichever basis each segment uses.
+    is one analytic function of ``beta`` whichever basis each segment uses.  With the tip at the end
+    throughout (one segment), :func:`_tip_at_end_characteristic` gives it without the assembly.
 
     Examples
     --------
@@ -541,8 +592,17 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
     1.8751040687
     """
+    if _tip_at_end(gamma):
+        out = _tip_at_end_characteristic(beta, k, kvv, kll, kvl, H, L, mu, rho_g)
+        shape = np.broadcast_shapes(np.shape(out), np.shape(gamma))
+        return np.asarray(out) if np.shape(out) == shape else np.broadcast_to(out, shape).copy()
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
     return lever.out(_scaled_det(lever)[0])
+
+
+def _tip_at_end(gamma) -> bool:
+    """Whether the lever is one segment throughout: the case of :func:`_tip_at_end_characteristic`."""
+    return bool(np.all(np.asarray(gamma) == 1.0))
 
 
 def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
