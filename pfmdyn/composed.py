@@ -528,16 +528,30 @@ def _clamped_det(A):
     return _det(S)
 
 
-def _short_end(s):
-    """A short segment's rows at its end with the clamp eliminated, ``R[m, c]`` (``s`` flat): its
-    unknowns are its state at the clamp, which zeroes the first two, so ``R`` is the field matrix's
-    last two columns; and the scale of :func:`_scaled_det`."""
+def _by_basis(s, short, long, shape):
+    """``(X, factor)`` of a segment of argument ``s`` (flat) from ``short(s)`` where ``|s| <= 1`` (the
+    Krylov-Duncan field matrix) and ``long(s)`` elsewhere (the bounded basis), as the assembled
+    system chooses; ``X`` of ``shape + s.shape``."""
+    is_short = np.abs(s) <= pieces.KD_SERIES_LIMIT
+    if is_short.all() or not is_short.any():
+        return (short if is_short.all() else long)(s)
+    dtype = np.result_type(s, float)
+    X, factor = np.empty(shape + s.shape, dtype), np.empty(s.shape, dtype)
+    for mask, make in ((is_short, short), (~is_short, long)):
+        X[..., mask], factor[mask] = make(s[mask])
+    return X, factor
+
+
+def _short_from_clamp(s):
+    """A short segment from the clamp: its state at the end per unit of the two unknowns the clamp
+    leaves, ``R[m, c]``: its unknowns are its state at the clamp, which zeroes the first two, so ``R``
+    is the field matrix's last two columns; and its factor in :func:`_scaled_det`."""
     s_1, t, u, v = pieces.krylov_duncan(s)
     return np.array((s_1 + 1.0, t, u, v))[_CIRCULANT[:4, 2:]], np.exp(-s)
 
 
-def _long_end(s):
-    """:func:`_short_end` in the bounded basis: the clamp's rows read ``[I, B]``, so
+def _long_from_clamp(s):
+    """:func:`_short_from_clamp` in the bounded basis: the clamp's rows read ``[I, B]``, so
     ``R = E[:, 2:] - E[:, :2] B``."""
     E = np.array(pieces.bounded_basis(s, s)[:16]).reshape(4, 4, -1)
     at_clamp = pieces.bounded_basis(0.0, s)
@@ -548,42 +562,80 @@ def _long_end(s):
     return E[:, 2:] - E[:, 0, None] * B[0] - E[:, 1, None] * B[1], np.full(len(s), 1.0 / _BOUNDED_AT_START)
 
 
-def _tip_at_end_characteristic(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    """:func:`characteristic` of a lever of one segment (the tip at the free end), without
-    assembling it: the Schur complement of the clamp's rows is ``R[2:] - J R[:2]``, ``R`` the
-    segment's end rows with the clamp eliminated (:func:`_short_end`, :func:`_long_end`) and ``J``
-    the tip's jump; its 2 x 2 determinant is written out over the arguments' broadcast shape.
-    ``R`` depends on ``beta`` alone: evaluated once for a grid of springs.
+_PAIRS = np.array([(i, j) for i in range(4) for j in range(i + 1, 4)])
+"""Index pairs of the 2 x 2 minors; reversed, each pair's complement."""
+_SIGNS = (-1.0) ** (_PAIRS.sum(1)[:, None] + _PAIRS.sum(1)[None, :])
+
+
+def _minors(X, rows, cols):
+    """``det X[r][:, c]`` for the index pairs ``r`` in ``rows``, ``c`` in ``cols`` (X stacked, frequencies last)."""
+    r, c = rows[:, None], cols[None, :]
+    return X[r[..., 0], c[..., 0]] * X[r[..., 1], c[..., 1]] - X[r[..., 0], c[..., 1]] * X[r[..., 1], c[..., 0]]
+
+
+def _short_to_free_end(s):
+    """A short segment ending free: the weights ``v[K]`` of the minors of the state it starts from
+    (rows ``K``, :data:`_PAIRS`, of two states) in the system's determinant, the minors of the free
+    end's moment and shear rows of the field matrix (its unknowns are that state: Cauchy-Binet);
+    and its factor in :func:`_scaled_det`."""
+    s_1, t, u, v = pieces.krylov_duncan(s)
+    G = np.array((s_1 + 1.0, t, u, v))[_CIRCULANT[2:4]]
+    return _minors(G, _PAIRS[:1], _PAIRS)[0], np.exp(-s)
+
+
+def _long_to_free_end(s):
+    """:func:`_short_to_free_end` in the bounded basis: the segment's unknowns eliminated, the
+    determinant is ``det(G E^-1 T) det E`` (``E`` its rows at the start, ``G`` the free end's); by
+    Cauchy-Binet and Jacobi's complementary minors it is ``sum g_I (-1)^(I + K) det E[K', I'] t_K``:
+    bounded terms, where ``G E^-1`` grows as ``e^s`` in both rows (and their 2 x 2 determinant
+    would cancel)."""
+    E = np.array(pieces.bounded_basis(np.zeros_like(s), s)[:16] + pieces.bounded_basis(s, s)[8:16]).reshape(6, 4, -1)
+    g = _minors(E[4:], _PAIRS[:1], _PAIRS)[0]
+    others = _PAIRS[::-1]
+    return np.einsum("in,kin->kn", g, _SIGNS[..., None] * _minors(E[:4], others, others)), \
+        np.full(len(s), 1.0 / _BOUNDED_AT_START)
+
+
+def _transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+    """:func:`characteristic` without assembling the system.  The segment from the clamp gives the
+    tip's state per unit of the two unknowns the clamp leaves, ``R`` (4 x 2); the tip's jump ``J``
+    maps it across, ``T = R`` but for rows 2, 3, ``R[2:] - J R[:2]``; the segment beyond reads the
+    free end's moment and shear off it, ``W T`` (2 x 2).  The system's determinant is ``det(W T)``
+    times the segments' factors (the Schur complement of the clamp's rows and of the second
+    segment's unknowns), written out over the arguments' broadcast shape.  The segments depend on
+    ``beta`` and ``gamma`` alone: evaluated once for a grid of springs.  With the tip at the end
+    throughout there is no segment beyond (``W = [0, I]``).
 
     Examples
     --------
-    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 1.0, 0.05)
+    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
     >>> lever = _Lever(*args)           # the assembled system it stands for
-    >>> f"{_tip_at_end_characteristic(*args[:8], args[9]) / _scaled_det(lever)[0][0]:.12f}"
+    >>> f"{_transferred(*args) / _scaled_det(lever)[0][0]:.12f}"
     '1.000000000000'
     """
-    beta = np.asarray(beta)
-    flat = beta.reshape(-1)
-    short = np.abs(flat) <= pieces.KD_SERIES_LIMIT
-    if short.all() or not short.any():
-        R, scale = (_short_end if short.all() else _long_end)(flat)
-    else:
-        dtype = np.result_type(flat, float)
-        R, scale = np.empty((4, 2, len(flat)), dtype), np.empty(len(flat), dtype)
-        for mask, end in ((short, _short_end), (~short, _long_end)):
-            R[:, :, mask], scale[mask] = end(flat[mask])
-    R, scale = R.reshape((4, 2) + beta.shape), scale.reshape(beta.shape)
+    beta, g = np.asarray(beta), np.real(np.asarray(gamma))
+    if g.ndim and (g == g.flat[0]).all():           # one tip position: the segments once per beta
+        g = g.flat[0]
+    s = beta * g
+    R, factor = _by_basis(s.reshape(-1), _short_from_clamp, _long_from_clamp, (4, 2))
+    R, factor = R.reshape((4, 2) + s.shape), factor.reshape(s.shape)
     J = pieces.point_jump(beta, k, kvv, kll, kvl, H, L, mu, rho_g)
-    S = [R[2 + r, c] - J[2 * r] * R[0, c] - J[2 * r + 1] * R[1, c] for r in (0, 1) for c in (0, 1)]
-    return (S[0] * S[3] - S[1] * S[2]) * (scale * _ONE_SEGMENT)
+    T = [[R[m, c] - J[2 * m - 4] * R[0, c] - J[2 * m - 3] * R[1, c] if m > 1 else R[m, c] for c in (0, 1)]
+         for m in range(4)]
+    if not np.all(g == 1.0):
+        s = beta * (1.0 - g)
+        v, beyond = _by_basis(s.reshape(-1), _short_to_free_end, _long_to_free_end, (6,))
+        v, factor = v.reshape((6,) + s.shape), factor * beyond.reshape(s.shape)
+        return sum(v[K] * (T[i][0] * T[j][1] - T[i][1] * T[j][0]) for K, (i, j) in enumerate(_PAIRS)) * factor
+    return (T[2][0] * T[3][1] - T[2][1] * T[3][0]) * factor
 
 
 def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     """The composed lever's characteristic: its zeros in ``beta`` are the resonances.
 
     The determinant of the assembled system, scaled (by ``e^{-beta l}`` per short segment) so that it
-    is one analytic function of ``beta`` whichever basis each segment uses.  With the tip at the end
-    throughout (one segment), :func:`_tip_at_end_characteristic` gives it without the assembly.
+    is one analytic function of ``beta`` whichever basis each segment uses; formed without assembling
+    the system (:func:`_transferred`).
 
     Examples
     --------
@@ -592,17 +644,9 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
     1.8751040687
     """
-    if _tip_at_end(gamma):
-        out = _tip_at_end_characteristic(beta, k, kvv, kll, kvl, H, L, mu, rho_g)
-        shape = np.broadcast_shapes(np.shape(out), np.shape(gamma))
-        return np.asarray(out) if np.shape(out) == shape else np.broadcast_to(out, shape).copy()
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
-    return lever.out(_scaled_det(lever)[0])
-
-
-def _tip_at_end(gamma) -> bool:
-    """Whether the lever is one segment throughout: the case of :func:`_tip_at_end_characteristic`."""
-    return bool(np.all(np.asarray(gamma) == 1.0))
+    out = _transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+    shape = np.broadcast_shapes(np.shape(out), np.shape(gamma))
+    return np.asarray(out) if np.shape(out) == shape else np.broadcast_to(out, shape).copy()
 
 
 def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):

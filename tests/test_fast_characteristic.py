@@ -1,8 +1,9 @@
-"""The characteristic of a lever with its tip at the end, written out (no assembly), against the
-assembled system's (``pfmdyn.composed``'s general path).
+"""The characteristic written out from the segments (``composed._transferred``, no assembly), against
+the assembled system's determinant (``composed._scaled_det``, the general path).
 
 Random levers over the real ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
-k2/k1 0-1, tilt 0-15 deg, tip mass 0-0.5, r_g/L 0-0.05), fixed seeds; ``beta`` from the
+k2/k1 0-1, tilt 0-15 deg, tip mass 0-0.5, r_g/L 0-0.05, the tip at the end or set back to
+0.7-1 L), fixed seeds; ``beta`` from the
 quasi-static 1e-3 to 200 across the two bases' boundary, undamped and damped (Q 5-500: complex
 ``beta``, ``k``, contact springs and tip mass).  The same value, sign and scale: the roots are
 the same.  Each value to 1e-10 relative.
@@ -28,7 +29,7 @@ def _lever(rng):
     c, s = math.cos(t), math.sin(t)
     return dict(k=k, kvv=k1 * c**2 + k2 * s**2, kll=k1 * s**2 + k2 * c**2, kvl=-(k1 - k2) * s * c,
                 H=rng.uniform(3e-6, 20e-6), L=rng.uniform(100e-6, 500e-6), mu=rng.uniform(0, 0.5),
-                gamma=1.0, rho_g=rng.uniform(0, 0.05))
+                gamma=1.0 if rng.uniform() < 0.5 else rng.uniform(0.7, 1.0), rho_g=rng.uniform(0, 0.05))
 
 
 def _damped(rng, p, beta):
@@ -46,7 +47,7 @@ def _general(beta, p):
 
 @pytest.mark.parametrize("seed", range(40))
 @pytest.mark.parametrize("damping", ["undamped", "damped"])
-def test_tip_at_end_matches_the_assembled_system(seed, damping):
+def test_matches_the_assembled_system(seed, damping):
     rng = np.random.default_rng(seed)
     p = _lever(rng)
     if seed % 4 == 0:           # the free lever, and one with the springs alone
@@ -60,10 +61,11 @@ def test_tip_at_end_matches_the_assembled_system(seed, damping):
     assert err.max() <= TOLERANCE, (err.max(), beta[np.argmax(err)], p)
 
 
-def test_tip_at_end_broadcasts_as_the_general_path():
-    """A grid of springs against a grid of frequencies (the start grids' call), a scalar, and a
-    ``gamma`` of ones wider than the rest."""
-    p = _lever(np.random.default_rng(7))
+@pytest.mark.parametrize("gamma", [1.0, 0.85])
+def test_broadcasts_as_the_general_path(gamma):
+    """A grid of springs against a grid of frequencies (the start grids' call), a scalar, a
+    ``gamma`` of one value wider than the rest, and tip positions varying over the batch."""
+    p = {**_lever(np.random.default_rng(7)), "gamma": gamma}
     springs = np.array([0.0, 1.0, 30.0])[:, None] * p["kvv"]
     beta = np.linspace(0.3, 30.0, 50)
     args = {**p, "kvv": springs}
@@ -72,7 +74,10 @@ def test_tip_at_end_broadcasts_as_the_general_path():
     np.testing.assert_allclose(got, _general(beta, args), rtol=TOLERANCE, atol=0)
     scalar = composed.characteristic(2.5, *(p[n] for n in composed.PARAMETERS))
     assert np.shape(scalar) == () and scalar == pytest.approx(float(_general(2.5, p)), rel=TOLERANCE)
-    wide = {**p, "gamma": np.ones((2, 1))}
+    wide = {**p, "gamma": np.full((2, 1), gamma)}
     got = composed.characteristic(beta, *(wide[n] for n in composed.PARAMETERS))
     assert got.shape == (2, 50)
     np.testing.assert_allclose(got, _general(beta, wide), rtol=TOLERANCE, atol=0)
+    varying = {**p, "gamma": np.array([[1.0], [0.7], [0.999]])}
+    got = composed.characteristic(beta, *(varying[n] for n in composed.PARAMETERS))
+    np.testing.assert_allclose(got, _general(beta, varying), rtol=TOLERANCE, atol=0)
