@@ -7,10 +7,11 @@ Run ``python benchmarks/fast_characteristic.py [--repeat N]``.  In one run:
   characteristic on 5 points above the bases' boundary (what root refinement calls), on 5 points
   with one at ``beta = 1`` (``benchmarks/compose.py``'s), on a 400-point grid from 0.3 (both
   bases), and on a start grid's batch (200 spring sets x 150 frequencies, each argument a column);
+* per call, :func:`characteristic_and_jacobian` at 4 points as the resonances' sensitivity asks it;
 * end to end, each in a fresh interpreter, alternating: the discrepancy workload of
   ``benchmarks/compose.py`` (a spectrum with the spot away from the end) with the fast path, with
-  it switched off (every characteristic from the assembled system), and on the previous design (expanded closed
-  forms, commit 5e52f54, from a temporary git worktree).
+  it switched off (every characteristic and its partials from the assembled system), and on the
+  previous design (expanded closed forms, commit 5e52f54, from a temporary git worktree).
 
 Ratios are fast / general (below 1: the fast path is faster).  Measure on a quiet machine.
 Results: ``benchmarks/results/fast_characteristic.md``.
@@ -42,7 +43,8 @@ def general(beta, *args):
 """
 exec(GENERAL)
 SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed" + GENERAL + "composed.characteristic = general; "
-                "sys.exit(pytest.main(sys.argv[1:]))")
+                "composed._tip_at_end = lambda gamma: False; sys.exit(pytest.main(sys.argv[1:]))")
+"""The workload with every characteristic and its partials from the assembled system."""
 
 
 def _best(f, seconds: float = 0.4) -> float:
@@ -78,6 +80,14 @@ def per_call() -> None:
                 slow.append(_best(lambda: general(beta, *a)))
             new, old = min(fast), min(slow)
             print(f"| {label} | {gamma:g} L | {new * 1e6:.1f} | {old * 1e6:.1f} | {new / old:.2f} |")
+    # the partials at the roots, as resonance_sensitivity asks them (the tip at the end, no gamma)
+    beta, wrt = np.array([1.9, 4.7, 7.9, 11.0]), ("beta", "kvv", "kll", "kvl", "mu")
+    fast = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
+    composed._tip_at_end, before = (lambda gamma: False), composed._tip_at_end
+    slow = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
+    composed._tip_at_end = before
+    print(f"| its partials (beta and 4 more) at 4 points | 1 L | {fast * 1e6:.1f} | {slow * 1e6:.1f} | "
+          f"{fast / slow:.2f} |")
 
 
 def _timed(argv, cwd, env) -> float:

@@ -81,3 +81,32 @@ def test_broadcasts_as_the_general_path(gamma):
     varying = {**p, "gamma": np.array([[1.0], [0.7], [0.999]])}
     got = composed.characteristic(beta, *(varying[n] for n in composed.PARAMETERS))
     np.testing.assert_allclose(got, _general(beta, varying), rtol=TOLERANCE, atol=0)
+
+
+WRT = tuple(p for p in composed.JACOBIAN_PARAMETERS if p != "gamma")
+
+
+@pytest.mark.parametrize("seed", range(40))
+@pytest.mark.parametrize("damping", ["undamped", "damped"])
+def test_partials_with_the_tip_at_the_end(seed, damping):
+    """:func:`composed.characteristic_and_jacobian` with the tip at the end (no ``gamma`` partial),
+    written out, against the assembled system's (asked for ``gamma``: the general path) where that
+    one's adjugate is accurate (``beta`` 0.9-110), to 1e-10; and its ``beta`` partial against
+    central differences of the characteristic over the whole range (the assembled system's
+    adjugate loses digits to the jump's ``1/beta**3`` below ``beta ~ 0.5``)."""
+    rng = np.random.default_rng(seed)
+    p = {**_lever(rng), "gamma": 1.0}
+    beta = BETAS
+    if damping == "damped":
+        p, beta = _damped(rng, p, beta)
+    value, partials = composed.characteristic_and_jacobian(beta, **p, wrt=WRT)
+    assert partials[composed.JACOBIAN_PARAMETERS.index("gamma")] is None
+    general_value, general = composed.characteristic_and_jacobian(beta, **p)
+    np.testing.assert_allclose(value, general_value, rtol=TOLERANCE, atol=0)
+    fair = (np.abs(beta) >= 0.9) & (np.abs(beta) <= 110)
+    for name, got, want in zip(composed.JACOBIAN_PARAMETERS, partials, general):
+        if name in WRT:
+            np.testing.assert_allclose(got[fair], want[fair], rtol=TOLERANCE, atol=0, err_msg=name)
+    h = 1e-6 * beta
+    differences = (composed.characteristic(beta + h, **p) - composed.characteristic(beta - h, **p)) / (2 * h)
+    np.testing.assert_allclose(partials[0], differences, rtol=2e-5, atol=0)
