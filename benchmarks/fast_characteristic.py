@@ -1,0 +1,136 @@
+"""Benchmark: the characteristic written out from the segments, against the assembled system's
+determinant (the general path), and what it does to the discrepancy.
+
+Run ``python benchmarks/fast_characteristic.py [--repeat N]``.  In one run:
+
+* per call, in this interpreter, alternating, with the tip at the end and set back to 0.9 L: the
+  characteristic on 5 points above the bases' boundary (what root refinement calls), on 5 points
+  with one at ``beta = 1`` (``benchmarks/compose.py``'s), on a 400-point grid from 0.3 (both
+  bases), and on a start grid's batch (200 spring sets x 150 frequencies, each argument a column);
+* per call, :func:`characteristic_and_jacobian` at 4 points as the resonances' sensitivity asks it;
+* end to end, each in a fresh interpreter, alternating: the discrepancy workload of
+  ``benchmarks/compose.py`` (a spectrum with the spot away from the end) with the fast path, with
+  it switched off (every characteristic and its partials from the assembled system), and on the
+  previous design (expanded closed forms, commit 5e52f54, from a temporary git worktree).
+
+Ratios are fast / general (below 1: the fast path is faster).  Measure on a quiet machine.
+Results: ``benchmarks/results/fast_characteristic.md``.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from compose import BASELINE, ROOT, WORKLOADS, _baseline_tree
+from recording import recorded
+
+from pfmdyn import composed
+
+ARGS = (2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+"""``benchmarks/compose.py``'s lever."""
+WORKLOAD = "discrepancy, spot away from the end"
+GENERAL = """
+def general(beta, *args):
+    lever = composed._Lever(beta, *args)
+    return lever.out(composed._scaled_det(lever)[0])
+"""
+exec(GENERAL)
+SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed" + GENERAL + "composed.characteristic = general; "
+                "composed._tip_at_end = lambda gamma: False; sys.exit(pytest.main(sys.argv[1:]))")
+"""The workload with every characteristic and its partials from the assembled system."""
+
+
+def _best(f, seconds: float = 0.4) -> float:
+    """The best of five timings of ``f`` per call (each of about ``seconds / 5``)."""
+    f()
+    t = time.perf_counter()
+    f()
+    repeat = max(1, int(seconds / 5 / max(time.perf_counter() - t, 1e-7)))
+    out = []
+    for _ in range(5):
+        t = time.perf_counter()
+        for _ in range(repeat):
+            f()
+        out.append((time.perf_counter() - t) / repeat)
+    return min(out)
+
+
+def per_call() -> None:
+    print("| characteristic | tip at | fast (us) | general (us) | fast / general |\n|---|---|---|---|---|")
+    for gamma in (1.0, 0.9):
+        args = (*ARGS[:7], gamma, ARGS[8])
+        columns = [np.full((200, 1), a) for a in args]
+        columns[1] = np.linspace(0.0, 300.0, 200)[:, None]
+        cases = {"5 points in 2-10 (refinement)": (np.linspace(2.0, 10.0, 5), args),
+                 "5 points in 1-10 (compose.py's)": (np.linspace(1.0, 10.0, 5), args),
+                 "400-point grid, 0.3-30": (np.linspace(0.3, 30.0, 400), args),
+                 "start grid: 200 springs x 150 points": (np.linspace(0.3, 20.0, 150), columns)}
+        for label, (beta, a) in cases.items():
+            assert np.allclose(composed.characteristic(beta, *a), general(beta, *a), rtol=1e-10, atol=0)
+            fast, slow = [], []
+            for _ in range(2):
+                fast.append(_best(lambda: composed.characteristic(beta, *a)))
+                slow.append(_best(lambda: general(beta, *a)))
+            new, old = min(fast), min(slow)
+            print(f"| {label} | {gamma:g} L | {new * 1e6:.1f} | {old * 1e6:.1f} | {new / old:.2f} |")
+    # the partials at the roots, as resonance_sensitivity asks them (the tip at the end, no gamma)
+    beta, wrt = np.array([1.9, 4.7, 7.9, 11.0]), ("beta", "kvv", "kll", "kvl", "mu")
+    fast = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
+    composed._tip_at_end, before = (lambda gamma: False), composed._tip_at_end
+    slow = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
+    composed._tip_at_end = before
+    print(f"| its partials (beta and 4 more) at 4 points | 1 L | {fast * 1e6:.1f} | {slow * 1e6:.1f} | "
+          f"{fast / slow:.2f} |")
+
+
+def _timed(argv, cwd, env) -> float:
+    t = time.perf_counter()
+    done = subprocess.run([sys.executable, *argv], cwd=cwd, env=env, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed: {done.stdout[-1500:]}{done.stderr[-1500:]}")
+    return time.perf_counter() - t
+
+
+def workload(repeat: int) -> None:
+    test = ["-q", "-p", "no:cacheprovider", WORKLOADS[WORKLOAD]]
+    with tempfile.TemporaryDirectory() as tmp:
+        base, base_env = _baseline_tree(BASELINE, Path(tmp))
+        shared = {"PFMDYN_CLAIMS": str(ROOT.parent / "shared" / "claims.yaml"),
+                  "PFMDYN_PAPER": str(ROOT.parent / "shared" / "paper" / "jesse2006_dynamic_pfm.md")}
+        env = {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"}, **shared}
+        runs = {"fast path": (["-m", "pytest", *test], ROOT, env),
+                "fast path off": (["-c", SWITCHED_OFF, *test], ROOT, env),
+                f"previous design ({BASELINE})": (["-m", "pytest", *test], base, {**base_env, **shared})}
+        try:
+            times = {name: [] for name in runs}
+            for _ in range(repeat):
+                for name, (argv, cwd, e) in runs.items():
+                    times[name].append(_timed(argv, cwd, e))
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT, check=False)
+    fast = min(times["fast path"])
+    print(f"\n| {WORKLOAD} (best of {repeat}) | s | fast path / this |\n|---|---|---|")
+    for name, ts in times.items():
+        print(f"| {name} | {min(ts):.1f} | {fast / min(ts):.2f} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=2, help="runs of each end-to-end variant")
+    repeat = parser.parse_args().repeat
+    print(f"machine load at start: {os.getloadavg()[0]:.2f}\n")
+    per_call()
+    workload(repeat)
+    print(f"\nmachine load at the end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    with recorded("fast_characteristic"):
+        main()
