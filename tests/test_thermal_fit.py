@@ -96,3 +96,21 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
     assert fit["points"] > 5000 and "instrument: 179 800 Hz, Q 442, k 27.13 N/m" in text
     assert fit["gap"] < 3
+
+
+def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
+    """A tune saved as CSV (frequency_hz and an ASD column in m/sqrt(Hz)), rows in random order."""
+    case, tune = tune_case(5, points=3000)
+    order = np.random.default_rng(0).permutation(len(tune.frequency_hz))
+    path = tmp_path / "tune.csv"
+    path.write_text("frequency_hz,asd_m_per_sqrthz\n"
+                    + "".join(f"{tune.frequency_hz[i]:.17g},{tune.asd[i]:.17g}\n" for i in order))
+    base = ["discrepancy", str(path), "--length", f"{case['L']:.17g}", "--width", f"{case['w']:.17g}",
+            "--temperature", f"{case['temperature']:.17g}"]
+    assert cli.main(base) == 2
+    assert "give --spring-constant" in capsys.readouterr().err
+    out = tmp_path / "t.json"
+    assert cli.main(base + ["--spring-constant", f"{case['k']:.17g}", "--json", str(out)]) == 0
+    fit = json.loads(out.read_text())
+    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)

@@ -31,14 +31,17 @@ def is_sweep(path) -> bool:
 
 
 def is_thermal_tune(path) -> bool:
-    """Whether ``path`` is an instrument file holding a thermal tune (fitted as a thermal spectrum); an
-    unreadable file is not, so that the general reader reports it.
+    """Whether ``path`` holds a thermal tune (an instrument file's, or a CSV with an ASD column), fitted as
+    a thermal spectrum; an unreadable file is not, so that the general reader reports it.
 
     >>> is_thermal_tune("missing.nid"), is_thermal_tune("table.csv")
     (False, False)
     """
     from ..io.instruments import read_instrument
+    from ..io.thermal_tune import is_thermal_csv
 
+    if str(path).lower().endswith(".csv"):
+        return is_thermal_csv(path)
     if not tables.is_instrument_file(path) or str(path).lower().endswith(tables.TEXT_SUFFIXES):
         return False
     try:

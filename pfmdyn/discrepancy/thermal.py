@@ -68,7 +68,8 @@ class ThermalFit(Result):
 def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
     """The points fitted and the tallest peak's frequency (the first mode's start)."""
     ok = (tune.frequency_hz > 0) & np.isfinite(tune.asd) & (tune.asd > 0)
-    f, asd = tune.frequency_hz[ok], tune.asd[ok]
+    order = np.argsort(tune.frequency_hz[ok], kind="stable")        # a table's rows in any order
+    f, asd = tune.frequency_hz[ok][order], tune.asd[ok][order]
     if len(f) < 5 * MIN_POINTS:
         raise UserError(f"{tune.path}: {len(f)} usable points; a thermal fit needs at least {5 * MIN_POINTS}")
     # the tallest of the log spectrum smoothed over 5 bins (no single-bin spike), above the lowest

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import UserError
 
-__all__ = ["ThermalTune", "read_thermal_tune"]
+__all__ = ["ThermalTune", "read_thermal_tune", "is_thermal_csv"]
 
 _ASD_UNITS = {"_m_per_sqrthz": "m", "_v_per_sqrthz": "V"}
 
@@ -31,6 +31,22 @@ class ThermalTune:
     unit: str
     instrument: dict
     conditions: dict
+
+
+def is_thermal_csv(path) -> bool:
+    """Whether a CSV file's header names an amplitude-spectral-density column (``..._m_per_sqrthz``,
+    ``..._v_per_sqrthz``); an unreadable file is not one.
+
+    >>> is_thermal_csv("missing.csv")
+    False
+    """
+    from .columns import read_table
+
+    try:
+        header = read_table(path).header
+    except (UserError, OSError):
+        return False
+    return any(str(c).lower().endswith(tuple(_ASD_UNITS)) for c in header)
 
 
 def _from_csv(path: Path) -> ThermalTune:
