@@ -279,3 +279,29 @@ def test_the_medium_comes_from_the_header_unless_given(tmp_path, capsys, word, e
     assert cli.main(args) == 0 and json.loads(out.read_text())["medium"] == expected
     assert cli.main(args + ["--medium", "1.2,1.8e-5"]) == 0
     assert json.loads(out.read_text())["medium"].startswith("fluid of 1.2 kg/m^3")
+
+
+def test_amplitude_of_a_response_with_feedthrough(tmp_path):
+    """Amplitude only, as a lock-in's R: |G s + b0 + b1 u| with a complex feedthrough b that skews the
+    peak; the background is added to the response (coherent), the lever found, the gap at the noise;
+    then a mass added to the same lever (the same gain and feedthrough) is named and measured."""
+    rng, case = lever_case(12)
+    case["g"] = 0.02
+    f, _ = sweep_of(rng, case)
+    f0 = in_medium(case)[0]
+
+    def amplitude(lever_case, **mass):
+        s = beam_slope(f, **lever_case, **mass)
+        scale = np.abs(beam_slope(f0, **case))[0]
+        return np.abs(2.0 * s / scale + (0.4 - 0.5j) + (0.1 + 0.2j) * (f / f.mean() - 1))
+
+    noisy = lambda y: y + 2e-3 * rng.standard_normal(len(f))      # noqa: E731
+    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, noisy(amplitude(case)), rng, phase=False)),
+                       case["k"], case["L"], case["medium"], width=case["w"])
+    assert before.coherent and before["background"]["adds_to"] == "response"
+    assert before.lever.free_resonance == pytest.approx(f0, rel=2e-3) and before["gap"] < 1.6
+    after = read_sweep_table(write_sweep(tmp_path / "a.txt", f, noisy(amplitude(case, mass_ratio=0.02, x_m=0.9)),
+                                         rng, phase=False))
+    out = compare_sweeps(after, before, 0.9)
+    truth = 0.02 * mass_per_length(case["k"], case["L"], case["f_vac"]) * case["L"]
+    assert out["effect"] == "added_mass" and out["parameters"]["added_mass"]["value"] == pytest.approx(truth, rel=0.03)

@@ -23,14 +23,16 @@ from ..fitting.projection import project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, base_driven_columns, instrument_text, noise_level, parameter_entry,
-                    penalty, plus_minus, solve_from_starts, stacked, unexplained_entry, unexplained_line)
+                    penalty, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
 __all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "CANDIDATES"]
 
 ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
                        description="point mass over the lever's mass")
 
+
 POSITION = Parameter("added_mass_position", "", 0.05, 1.0, description="point mass position x/L")
+
 
 CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
               ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
@@ -38,8 +40,10 @@ CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background"
               ("added_mass+damping+gain+background", ("added_mass", "damping", "gain", "background")))
 """The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
 
+
 POSITION_GRID = tuple(np.linspace(0.1, 1.0, 10))
 """Starting positions (x/L) of a fitted added mass."""
+
 
 def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> Cantilever:
     """``lever`` (in its medium) with a point mass ``ratio`` times its own mass at ``position`` (x/L):
@@ -61,12 +65,14 @@ def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> C
     loaded = replace(loaded, free_resonance=f_loaded, viscous_loss=lever.viscous_loss * f_vac / f_loaded)
     return loaded if lever.medium is None else loaded.with_medium(lever.medium)
 
+
 def _modes_in(lever: Cantilever, frequency) -> int:
     """How many of the lever's free modes (undamped, in the medium) lie inside the sweep."""
     from ..analysis.resonances import resonances
 
     wet = resonances(lever, None, modes=3).free.peak_hz
     return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
+
 
 def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None = None) -> "SweepComparison":
     """Explain ``after`` from the lever, fluid, gain and background of ``before`` (a :func:`fit_sweep`):
@@ -102,10 +108,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             fit, solve, lever_of, params = _position_profile(before, refit, frequency, y, sigma)
         else:
             solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma, x_mass)
-            lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
-            fit = solve_from_starts(residual, _starts(before, refit), lower, upper)
-        free = [key for key in ("gain", "background") if key in refit]
-        k = len(params) + sum(1 if key == "gain" else 2 for key in free) * (1 if before.amplitude_only else 2)
+            fit = solve_from_starts(residual, _starts(before, refit), *_bounds(before, refit, params))
+        k = len(params) + len(_free_reals(before, refit))
         residual, amplitudes = solve(fit.internal)
         fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual)
         rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
@@ -121,7 +125,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
                                 "unit": "kg", "determined": named == "added_mass"}
     if "damping" in best["refitted"]:
-        parameters["viscous_loss"] = {**parameter_entry(EXTRA_LOSS, fit.internal[-1], fit.covariance[-1, -1]),
+        i = len(params) - 1
+        parameters["viscous_loss"] = {**parameter_entry(EXTRA_LOSS, fit.internal[i], fit.covariance[i, i]),
                                       "before": before.lever.viscous_loss}
     if fit_position:
         parameters["added_mass_position"] = parameter_entry(POSITION, mass_fit.internal[1], mass_fit.covariance[1, 1])
@@ -146,27 +151,47 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma)}
     return SweepComparison(fields, lever=lever)
 
+
+def _free_reals(before: SweepFit, refit) -> list[tuple[int, bool]]:
+    """The amplitudes refitted, as ``(index in (G, b0, b1), imaginary part)``: a gain is complex for a
+    complex sweep and real for an amplitude; the background complex unless it adds to the amplitude."""
+    complex_gain, complex_background = not before.amplitude_only, before.coherent
+    out = [(0, False)] + ([(0, True)] if complex_gain else []) if "gain" in refit else []
+    for i in (1, 2) if "background" in refit else ():
+        out += [(i, False)] + ([(i, True)] if complex_background else [])
+    return out
+
+
 def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
     """One explanation of the after-sweep: ``solve(x) -> (residual, amplitudes)``, ``lever_of(x)``, the
     noise-scaled real ``residual(x)`` and the nonlinear parameters (the mass's ratio, its position when
-    ``position`` is None, the damping), the rest of gain and background kept at ``before``'s."""
+    ``position`` is None, the damping), the rest of gain and background kept at ``before``'s.  A complex
+    sweep's refitted amplitudes are solved out (linear); an amplitude's are parameters after those (its
+    model is not linear in them, :func:`~pfmdyn.discrepancy.sweep.sweep_model`)."""
     mass, damping = "added_mass" in refit, "damping" in refit
     params = ((ADDED_MASS,) + ((POSITION,) if position is None else ()) if mass else ()) \
         + ((EXTRA_LOSS,) if damping else ())
+    n = len(params)
     free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
     fixed = [i for i in range(3) if i not in free]
-    known = np.array([before.gain, *before.background])
+    known = np.array([before.gain, *before.background], dtype=complex)
+    reals = _free_reals(before, refit)
 
     def lever_of(x):
-        lever = replace(before.lever, viscous_loss=x[-1]) if damping else before.lever
+        lever = replace(before.lever, viscous_loss=x[n - 1]) if damping else before.lever
         return with_added_mass(lever, x[0], x[1] if position is None else position) if mass else lever
 
     def solve(x):
-        columns = base_driven_columns(lever_of(x), frequency, before.centre_hz, before.amplitude_only)
+        columns = base_driven_columns(lever_of(x), frequency, before.centre_hz)
+        if before.amplitude_only:
+            amplitudes = known.copy()
+            for value, (i, imaginary) in zip(x[n:], reals):
+                amplitudes[i] = amplitudes[i].real + 1j * value if imaginary else value + 1j * amplitudes[i].imag
+            return y - sweep_model(columns, amplitudes, True, before.coherent), amplitudes
         rest = y - columns[:, fixed] @ known[fixed]
         if not free:
             return rest, known
-        pr = project(columns[None][..., free], rest[None, :, None].astype(np.result_type(columns, rest)))
+        pr = project(columns[None][..., free], rest[None, :, None].astype(complex))
         amplitudes = known.copy()
         amplitudes[free] = pr.amplitudes[0, :, 0]
         return pr.residual[0, :, 0], amplitudes
@@ -179,11 +204,24 @@ def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
 
     return solve, lever_of, residual, params
 
+
+def _bounds(before: SweepFit, refit, params) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of :func:`_candidate`'s parameters (an amplitude's are free)."""
+    extra = len(_free_reals(before, refit)) if before.amplitude_only else 0
+    return (np.r_[[p.lower for p in params], np.full(extra, -np.inf)],
+            np.r_[[p.upper for p in params], np.full(extra, np.inf)])
+
+
 def _starts(before: SweepFit, refit) -> list:
-    """Starting points at a given position: masses over decades, the damping at ``before``'s."""
+    """Starting points at a given position: masses over decades, the damping and an amplitude's refitted
+    parts at ``before``'s."""
     tail = [before.lever.viscous_loss] if "damping" in refit else []
+    known = [before.gain, *before.background]
+    tail += [known[i].imag if imaginary else known[i].real for i, imaginary in _free_reals(before, refit)] \
+        if before.amplitude_only else []
     return [np.array(([s] if "added_mass" in refit else []) + tail)
             for s in ((0.0, 0.003, 0.03, 0.3) if "added_mass" in refit else (0.0,))]
+
 
 def _position_profile(before, refit, frequency, y, sigma):
     """The mass and its position fitted: the mass at each position of :data:`POSITION_GRID` (a profile
@@ -193,21 +231,22 @@ def _position_profile(before, refit, frequency, y, sigma):
     profile = []
     for x in POSITION_GRID:
         _, _, residual, params = _candidate(before, refit, frequency, y, sigma, x)
-        lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
-        fit = solve_from_starts(residual, _starts(before, refit), lower, upper, keep=1)
+        fit = solve_from_starts(residual, _starts(before, refit), *_bounds(before, refit, params), keep=1)
         profile.append((fit.chi2, np.insert(fit.internal, 1, x)))
     chi2 = np.array([c for c, _ in profile])
     minima = [i for i in range(len(chi2)) if chi2[i] <= chi2[max(i - 1, 0)] and chi2[i] <= chi2[min(i + 1, len(chi2) - 1)]]
     solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma)
-    lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
-    refined = sorted((solve_from_starts(residual, [profile[i][1]], lower, upper, keep=1) for i in minima), key=lambda f: f.chi2)
+    bounds = _bounds(before, refit, params)
+    refined = sorted((solve_from_starts(residual, [profile[i][1]], *bounds, keep=1) for i in minima), key=lambda f: f.chi2)
     best = replace(refined[0], others=tuple((f.internal, f.chi2) for f in refined[1:]))
     return best, solve, lever_of, params
+
 
 def _rivals(fit: StartsFit, count: int) -> list:
     """Other minima of ``fit`` at another position (x/L more than 0.05 away) within 4 reduced-chi2 units."""
     scale = max(fit.chi2 / count, 1.0)
     return [(x[1], chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
+
 
 class SweepComparison(Result):
     """Two sweeps compared (:func:`compare_sweeps`): ``to_dict()`` the JSON fields, ``report()`` the

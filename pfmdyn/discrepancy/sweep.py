@@ -37,7 +37,7 @@ from ..io.sweeps import SweepTable
 from ..medium import Medium
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
-           "plus_minus", "instrument_text", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
+           "sweep_model", "plus_minus", "instrument_text", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
            "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "MODE_RATIOS"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
@@ -70,11 +70,26 @@ class StartsFit:
     others: tuple = ()
 
 
-def base_driven_columns(lever: Cantilever, frequency, centre: float, amplitude_only: bool) -> np.ndarray:
+def base_driven_columns(lever: Cantilever, frequency, centre: float) -> np.ndarray:
     """The model's columns ``(n, 3)``: the slope per base displacement, 1 and ``f / f_c - 1``."""
     slope = lever.base_driven(frequency).slope
-    slope = np.abs(slope) if amplitude_only else slope
     return np.stack([slope, np.ones_like(slope), frequency / centre - 1.0 + 0 * slope], axis=-1)
+
+
+def sweep_model(columns, amplitudes, amplitude_only: bool, coherent: bool = True) -> np.ndarray:
+    """The sweep the model predicts from its columns and amplitudes ``(G, b0, b1)``: the response; or, for a
+    file with amplitude only, ``|G s + b0 + b1 u|`` (``coherent``: the background adds to the response, as
+    a lock-in's feedthrough does) or ``G |s| + b0 + b1 u`` (it adds to the amplitude, real ``G, b0, b1``).
+
+    >>> columns = np.array([[1j, 1.0, 0.0]])
+    >>> sweep_model(columns, np.array([2.0, 1.0, 0.0]), True).tolist(), sweep_model(columns, np.array([2.0, 1.0, 0.0]), True, False).tolist()
+    ([2.23606797749979], [3.0])
+    """
+    if not amplitude_only:
+        return columns @ amplitudes
+    if coherent:
+        return np.abs(columns @ amplitudes)
+    return np.abs(columns[:, 0]) * amplitudes[0].real + (columns[:, 1:].real @ np.real(amplitudes[1:]))
 
 
 def solve_from_starts(residual, starts, lower, upper, keep: int = 3) -> StartsFit:
@@ -101,16 +116,16 @@ def parameter_entry(parameter: Parameter, internal: float, variance: float) -> d
 class SweepFit(Result):
     """One sweep fitted (:func:`fit_sweep`): ``to_dict()`` the JSON fields, ``report()`` the summary;
     attributes ``lever`` (the fitted :class:`~pfmdyn.Cantilever`), ``gain``, ``background`` (``b0,
-    b1``), ``centre_hz``, ``amplitude_only``, ``conjugate`` (the file's phase runs the other way),
-    ``sigma`` (the noise) and :meth:`model`."""
+    b1``), ``centre_hz``, ``amplitude_only``, ``coherent`` (:func:`sweep_model`), ``conjugate`` (the
+    file's phase runs the other way), ``sigma`` (the noise) and :meth:`model`."""
 
     def model(self, frequency, lever: Cantilever | None = None, gain=None, background=None) -> np.ndarray:
         """The fitted model at ``frequency`` (Hz), with any of the lever, gain, background replaced."""
         lever = self.lever if lever is None else lever
         gain = self.gain if gain is None else gain
         b0, b1 = self.background if background is None else background
-        columns = base_driven_columns(lever, np.asarray(frequency, float), self.centre_hz, self.amplitude_only)
-        return columns @ np.array([gain, b0, b1])
+        columns = base_driven_columns(lever, np.asarray(frequency, float), self.centre_hz)
+        return sweep_model(columns, np.array([gain, b0, b1]), self.amplitude_only, self.coherent)
 
     def data(self, table: SweepTable) -> np.ndarray:
         """``table``'s response as this fit reads it (amplitude only, or conjugated)."""
@@ -227,9 +242,10 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
 
             def residual(x, y=y, sigma=sigma):
                 try:
-                    columns = base_driven_columns(lever_of(x), frequency, centre, amplitude_only)
+                    columns = base_driven_columns(lever_of(x), frequency, centre)
                 except UserError:       # a width whose fluid the lever cannot carry
                     return penalty(y)
+                columns = _amplitude_columns(columns) if amplitude_only else columns
                 pr = project(columns[None], y[None, :, None].astype(columns.dtype))
                 return stacked(pr.residual[0, :, 0]) / sigma
 
@@ -242,12 +258,20 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     fit, conjugate, y, sigma, _ = best
     try:
         lever = lever_of(fit.internal)
-        columns = base_driven_columns(lever, frequency, centre, amplitude_only)
+        columns = base_driven_columns(lever, frequency, centre)
     except UserError:       # every start ended on the penalty
         raise UserError(f"{table.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the sweep (check them)") from None
-    projected = project(columns[None], y[None, :, None].astype(columns.dtype))
-    amplitudes = projected.amplitudes[0, :, 0]
+    coherent = not amplitude_only
+    amplitudes = project((_amplitude_columns(columns) if amplitude_only else columns)[None],
+                         y[None, :, None].astype(float if amplitude_only else complex)).amplitudes[0, :, 0]
+    if amplitude_only:
+        refined = _coherent_fit(lever_of, fit, amplitudes, columns, frequency, centre, y, sigma, lower, upper)
+        if refined is not None and refined[0].chi2 < fit.chi2:
+            fit, amplitudes, coherent = refined[0], refined[1], True
+            lever = lever_of(fit.internal)
+            columns = base_driven_columns(lever, frequency, centre)
+    residual = y - sweep_model(columns, amplitudes, amplitude_only, coherent)
     parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
@@ -262,10 +286,47 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
               "gain": {"value": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
                        "unit": f"{table.unit or '1'}/rad"},
               "background": {"value": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
-                             "unit": table.unit or "1"},
+                             "unit": table.unit or "1", "adds_to": "response" if coherent else "amplitude"},
               "amplitude_only": amplitude_only, "phase_reversed": conjugate,
               "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y))),
-              "unexplained": unexplained_entry(frequency, y, projected.residual[0, :, 0], sigma)}
+              "unexplained": unexplained_entry(frequency, y, residual, sigma)}
     return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
-                    amplitude_only=amplitude_only, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
+                    amplitude_only=amplitude_only, coherent=coherent, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
+
+
+def _amplitude_columns(columns) -> np.ndarray:
+    """Real columns ``|s|, 1, u`` of the background added to the amplitude (:func:`sweep_model`)."""
+    return np.stack([np.abs(columns[:, 0]), columns[:, 1].real, columns[:, 2].real], axis=-1)
+
+
+PHASES = 8
+"""Starting phases of a background added to the response of a file with amplitude only."""
+
+
+def _coherent_fit(lever_of, fit: StartsFit, amplitudes, columns, frequency, centre, y, sigma, lower, upper):
+    """An amplitude-only sweep refitted with its background added to the response: the lever's parameters
+    and ``G`` (real: the amplitude has no phase), ``b0``, ``b1`` (complex), started from the background
+    added to the amplitude at :data:`PHASES` phases of ``b0``; ``(fit, amplitudes)`` or None."""
+    g, c0, c1 = (float(np.real(a)) for a in amplitudes)
+    starts = [np.r_[fit.internal, abs(g), abs(c0) * np.cos(phi), abs(c0) * np.sin(phi), c1, 0.0]
+              for phi in np.linspace(0.0, 2 * np.pi, PHASES, endpoint=False)]
+    n = len(fit.internal)
+
+    def amplitudes_of(z):
+        return np.array([z[n], z[n + 1] + 1j * z[n + 2], z[n + 3] + 1j * z[n + 4]])
+
+    def residual(z):
+        try:
+            model = sweep_model(base_driven_columns(lever_of(z[:n]), frequency, centre), amplitudes_of(z), True)
+        except UserError:
+            return penalty(y)
+        return (model - y) / sigma
+
+    free = np.full(5, np.inf)
+    refined = solve_from_starts(residual, starts, np.r_[lower, 0.0, -free[1:]], np.r_[upper, free])
+    try:
+        lever_of(refined.internal[:n])
+    except UserError:       # every start ended on the penalty
+        return None
+    return StartsFit(refined.internal[:n], refined.covariance[:n, :n], refined.chi2), amplitudes_of(refined.internal)
 
