@@ -33,7 +33,7 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..generated import formulas
-from ..io.spectra import frequency_group_starts
+from ..fitting.bias_line import bias_lines
 from .spot import calibration
 
 CONDITION_LIMIT = 10.0
@@ -184,8 +184,8 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     Parameters
     ----------
     frequency_hz, bias_v : array_like
-        Point coordinates, grouped by frequency (as :func:`pfmdyn.io.spectra.read_spectra`
-        guarantees), with at least two distinct biases per frequency.
+        Point coordinates, in any order (:func:`pfmdyn.fitting.bias_line.bias_lines`), with at least
+        two distinct biases per frequency.
     response : array_like of complex
         Measured response :math:`x + iy` at every point.
     surface_potential_v : float
@@ -207,24 +207,15 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     frequency_hz = np.asarray(frequency_hz, dtype=float)
     bias_v = np.asarray(bias_v, dtype=float)
     response = np.asarray(response, dtype=complex)
-    starts = frequency_group_starts(frequency_hz)
-    n = np.diff(np.append(starts, len(frequency_hz)))
-    group = np.repeat(np.arange(len(starts)), n)
-
-    # Centred sums keep the fit well conditioned when the bias range sits far from zero.
-    mean_v = np.add.reduceat(bias_v, starts) / n
-    centred = bias_v - mean_v[group]
-    sxx = np.add.reduceat(centred**2, starts)
-    if np.any(sxx <= 0):
+    lines = bias_lines(frequency_hz, bias_v, response)
+    if np.any(lines.spread <= 0):
         raise ValueError("every frequency needs at least two distinct bias values")
-    slope = np.add.reduceat(centred * response, starts) / sxx
-    mean_r = np.add.reduceat(response, starts) / n
-    intercept = mean_r - slope * mean_v
-    residual = response - (intercept[group] + slope[group] * bias_v)
+    n, mean_v, sxx = lines.count, lines.mean_bias, lines.spread
+    slope, intercept, residual = lines.slope, lines.intercept, lines.residual
 
     dof = 2 * (n - 2)  # real and imaginary parts each lose two degrees of freedom
     with np.errstate(invalid="ignore", divide="ignore"):
-        noise_var = np.where(dof > 0, np.add.reduceat(np.abs(residual) ** 2, starts) / dof, np.nan)
+        noise_var = np.where(dof > 0, lines.squared_residual() / dof, np.nan)
 
     def variance(u_b, u_c):
         """Variance of u_b*b + u_c*c for one real/imaginary component, from (X^T X)^-1."""
@@ -236,7 +227,7 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
         d_b_re, d_b_im, d_c_re, d_c_im = nulling_bias_gradient(intercept, slope)
     v_null_var = variance(d_b_re, d_c_re) + variance(d_b_im, d_c_im)
     return Deconvolution(
-        frequency_hz=frequency_hz[starts],
+        frequency_hz=lines.frequency_hz,
         n_bias=n,
         g_elec=slope,
         intercept=intercept,

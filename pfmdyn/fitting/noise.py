@@ -19,6 +19,8 @@ import math
 
 import numpy as np
 
+from .bias_line import bias_lines
+
 __all__ = ["noise_sigma", "noise_sigmas", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT", "DIFFERENCE_ORDERS"]
 
 GAP_LIMIT = 2.0
@@ -105,21 +107,13 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
     follows a Gamma(``n - 2``) law."""
     from scipy.stats import gamma
 
-    freq_u, inverse = np.unique(frequency_hz, return_inverse=True)
-    count = np.bincount(inverse).astype(float)
-    s1, s2 = np.bincount(inverse, bias_v), np.bincount(inverse, bias_v**2)
-    sy = np.bincount(inverse, response.real) + 1j * np.bincount(inverse, response.imag)
-    vy = response * bias_v
-    svy = np.bincount(inverse, vy.real) + 1j * np.bincount(inverse, vy.imag)
-    det = count * s2 - s1**2
-    ok = (count >= 3) & (det > 1e-12 * np.maximum(count * s2, 1e-300))
+    lines = bias_lines(frequency_hz, bias_v, response)
+    s2 = lines.spread + lines.count * lines.mean_bias**2
+    ok = (lines.count >= 3) & (lines.spread > 1e-12 * np.maximum(s2, 1e-300))
     if ok.sum() < 10:
         return None
-    safe = np.where(ok, det, 1.0)
-    a, b = (s2 * sy - s1 * svy) / safe, (count * svy - s1 * sy) / safe
-    rss = np.bincount(inverse, np.abs(response - a[inverse] - b[inverse] * bias_v) ** 2)
-    dof = count[ok] - 2
-    return float(math.sqrt(np.median(rss[ok] / gamma.median(dof))))
+    dof = lines.count[ok] - 2
+    return float(math.sqrt(np.median(lines.squared_residual()[ok] / gamma.median(dof))))
 
 
 def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:

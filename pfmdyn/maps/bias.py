@@ -17,6 +17,8 @@ of ``[1, V] = Q R``: the spectra projected on ``Q``'s columns share ``T`` and ha
 amplitude each (so the centring of the biases never matters for the conditioning), and the part
 of the data outside that span, a response that is not linear in bias (e.g. polarisation
 switching), counts as residual.  Intercept and slope are ``R^-1`` times the basis amplitudes.
+This is the line of :func:`pfmdyn.fitting.bias_line.bias_lines` with the bias grid every pixel
+shares factored once, inside each band's fit.
 """
 from __future__ import annotations
 

@@ -1,0 +1,75 @@
+"""The straight line in DC bias at each frequency: ``R(f, V) = b(f) + c(f) V``.
+
+The first-harmonic response is affine in the tip bias at every frequency (the electrostatic drives
+are proportional to ``V - V_surf``), so a spectrum measured at several biases is a set of lines,
+one per frequency.  :func:`bias_lines` fits them all at once, for points in any order; the
+deconvolution (:mod:`pfmdyn.analysis.deconvolve`) reads ``G_elec``, ``d_eff`` and the nulling bias
+from them, and the noise estimate (:mod:`pfmdyn.fitting.noise`) reads the noise from their
+residual.  (A map's pixels share one bias grid, so :mod:`pfmdyn.maps.bias` factors that grid once
+and fits the lines inside each band's model instead.)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BiasLines", "bias_lines"]
+
+
+@dataclass(frozen=True)
+class BiasLines:
+    """The lines of :func:`bias_lines`, per frequency in the order they first appear: ``frequency_hz``,
+    ``count`` (points), ``mean_bias``, ``spread`` (``sum (V - mean)**2``), ``intercept`` ``b`` and
+    ``slope`` ``c`` (NaN at a frequency with one distinct bias); per point: ``group`` (its frequency's
+    index) and ``residual``."""
+
+    frequency_hz: np.ndarray
+    count: np.ndarray
+    mean_bias: np.ndarray
+    spread: np.ndarray
+    intercept: np.ndarray
+    slope: np.ndarray
+    group: np.ndarray
+    residual: np.ndarray
+
+    def squared_residual(self) -> np.ndarray:
+        """``sum |residual|**2`` at each frequency."""
+        return np.bincount(self.group, np.abs(self.residual) ** 2, minlength=len(self.count))
+
+
+def _sums(group, values, n) -> np.ndarray:
+    values = np.asarray(values)
+    if np.iscomplexobj(values):
+        return np.bincount(group, values.real, minlength=n) + 1j * np.bincount(group, values.imag, minlength=n)
+    return np.bincount(group, values, minlength=n)
+
+
+def bias_lines(frequency_hz, bias_v, response) -> BiasLines:
+    """Fit ``b + c V`` to ``response`` at each frequency (least squares; sums centred on each
+    frequency's mean bias, so a bias range far from zero keeps the fit conditioned).
+
+    >>> f = np.array([2.0, 1.0, 2.0, 1.0, 2.0])
+    >>> v = np.array([0.0, 1.0, 1.0, 3.0, 2.0])
+    >>> lines = bias_lines(f, v, (1 + 2j) + (3 - 1j) * v)
+    >>> lines.frequency_hz.tolist(), lines.count.tolist(), lines.slope.round(12).tolist()
+    ([2.0, 1.0], [3, 2], [(3-1j), (3-1j)])
+    """
+    frequency_hz = np.asarray(frequency_hz, float)
+    bias_v = np.asarray(bias_v, float)
+    response = np.asarray(response)
+    _, first, inverse = np.unique(frequency_hz, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    group = rank[inverse.reshape(-1)]
+    n = len(order)
+    count = np.bincount(group, minlength=n)
+    mean_bias = _sums(group, bias_v, n) / count
+    centred = bias_v - mean_bias[group]
+    spread = _sums(group, centred**2, n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(spread > 0, _sums(group, centred * response, n) / np.where(spread > 0, spread, 1.0), np.nan)
+    intercept = _sums(group, response, n) / count - slope * mean_bias
+    residual = response - (intercept[group] + slope[group] * bias_v)
+    return BiasLines(frequency_hz[first[order]], count, mean_bias, spread, intercept, slope, group, residual)
