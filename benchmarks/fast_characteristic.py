@@ -8,6 +8,9 @@ Run ``python benchmarks/fast_characteristic.py [--repeat N]``.  In one run:
   with one at ``beta = 1`` (``benchmarks/compose.py``'s), on a 400-point grid from 0.3 (both
   bases), and on a start grid's batch (200 spring sets x 150 frequencies, each argument a column);
 * per call, :func:`characteristic_and_jacobian` at 4 points as the resonances' sensitivity asks it;
+* per call, the read-outs with the tip at the end (written out) against the assembled system: the
+  slope and 5 partials at a spot at 4,000 damped frequencies (``benchmarks/compose.py``'s, the tip
+  at the end), and the response;
 * end to end, each in a fresh interpreter, alternating: the discrepancy workload of
   ``benchmarks/compose.py`` (a spectrum with the spot away from the end) with the fast path, with
   it switched off (every characteristic and its partials from the assembled system), and on the
@@ -90,6 +93,26 @@ def per_call() -> None:
           f"{fast / slow:.2f} |")
 
 
+def read_outs() -> None:
+    beta, args = np.linspace(0.5, 30, 4000) * (1 + 0.01j), (*ARGS[:7], 1.0, ARGS[8])
+    wrt = ("beta", "sigma", "kvv", "kll", "kvl")
+    cases = {"slope and 5 partials at a spot, 4,000 damped frequencies":
+             lambda: composed.slope_and_jacobian(beta, 0.8, *args, wrt=wrt),
+             "response at a spot, 4,000 damped frequencies": lambda: composed.response(beta, 0.8, *args)}
+    print("\n| read-out (tip at the end) | fast (ms) | general (ms) | fast / general |\n|---|---|---|---|")
+    before = composed._tip_at_end
+    for label, f in cases.items():
+        fast, slow = [], []
+        for _ in range(2):
+            composed._tip_at_end = before
+            fast.append(_best(f))
+            composed._tip_at_end = lambda gamma: False
+            slow.append(_best(f))
+        composed._tip_at_end = before
+        new, old = min(fast), min(slow)
+        print(f"| {label} | {new * 1e3:.1f} | {old * 1e3:.1f} | {new / old:.2f} |")
+
+
 def _timed(argv, cwd, env) -> float:
     t = time.perf_counter()
     done = subprocess.run([sys.executable, *argv], cwd=cwd, env=env, capture_output=True, text=True)
@@ -127,6 +150,7 @@ def main() -> None:
     repeat = parser.parse_args().repeat
     print(f"machine load at start: {os.getloadavg()[0]:.2f}\n")
     per_call()
+    read_outs()
     workload(repeat)
     print(f"\nmachine load at the end: {os.getloadavg()[0]:.2f}")
 

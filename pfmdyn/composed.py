@@ -430,6 +430,107 @@ def _drive_columns(drives, known) -> list[int]:
     return [known.index(d) for d in drives]
 
 
+class _TipAtEnd:
+    """The lever with its tip at the free end (one segment) read at ``sigma`` without assembling the
+    system: the clamp eliminated as in :func:`_transferred`.  Its rows read ``[I, B]`` on the
+    coefficients, so ``c = [b0 - B x, x]`` (``b0`` the base's and the load's share); the tip's rows
+    ``z[2:] - J z[:2] = G d`` (``z = E c + P q0``) leave for ``x`` the 2 x 2 system ``X x = G d -
+    X(w)``, ``X(V) = V[2:] - J V[:2]``, ``X = X(R)``, ``R = E[:, 2:] - E[:, :2] B``, ``w`` the state
+    from ``b0``: solved by its adjugate.  The segment is evaluated at the clamp, the tip and the
+    spot in one stack.  The interface of :class:`_Lever`'s read-outs (batch first, flat; drives
+    :data:`DRIVES`); NaN where the system is singular, as there.
+
+    Examples
+    --------
+    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 1.0, 0.05)
+    >>> general = _Lever(*args)
+    >>> want = general.state(general.reader(0.8))[:, :2]
+    >>> bool(np.allclose(_TipAtEnd(args[0], 0.8, *args[1:]).z, want, rtol=1e-13, atol=0))
+    True
+    """
+
+    def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, rho_g)]
+        self.shape = np.broadcast_shapes(np.shape(gamma), *(a.shape for a in args))
+        n = math.prod(self.shape)
+        flat = [a if a.ndim == 0 else np.broadcast_to(a, self.shape).reshape(-1) for a in args]
+        beta, sigma = (np.broadcast_to(a, (n,)) for a in flat[:2])
+        self.beta, self.k, self.L = beta.astype(np.result_type(beta, float)), flat[2], flat[7]
+        self.point = (self.beta, *flat[2:])
+        self.t = np.concatenate([np.zeros(n), np.ones(n), np.real(sigma).astype(float)])
+        beta3, ones = np.tile(self.beta, 3), np.ones(3 * n)
+        self.seg = _Segment(beta3, self.t, ones, np.abs(beta3) <= pieces.KD_SERIES_LIMIT, ones)
+        self.uc = (pieces.load_constant(self.beta, self.k, self.L) + 0 * self.beta)[:, None]
+        self.E = np.split(self.seg.E, 3)
+        self.P = [self.uc * P for P in np.split(self.seg.P, 3)]
+        jump = _columns(pieces.point_jump(*self.point), n)
+        self.J = jump[:, :4].reshape(-1, 2, 2)
+        self.G = np.zeros((n, 2, len(DRIVES)), jump.dtype)
+        self.G[:, :, :4] = jump[:, 4:].reshape(-1, 2, 4)
+        self.B = self.E[0][:, :2, 2:]
+        b0 = np.zeros((n, 2, len(DRIVES)), self.P[0].dtype)
+        b0[:, :, _Q0], b0[:, 0, _Y0] = -self.P[0][:, :2], 1.0
+        w = self.E[1][:, :, :2] @ b0
+        w[:, :, _Q0] += self.P[1]
+        X = self._across(self.E[1][:, :, 2:] - self.E[1][:, :, :2] @ self.B)
+        with np.errstate(all="ignore"):
+            det = X[:, 0, 0] * X[:, 1, 1] - X[:, 0, 1] * X[:, 1, 0]
+            adjugate = np.stack([X[:, 1, 1], -X[:, 0, 1], -X[:, 1, 0], X[:, 0, 0]], -1).reshape(-1, 2, 2)
+            self.inverse = adjugate / np.where(det == 0, np.nan, det)[:, None, None]
+            x = self.inverse @ (self.G - self._across(w))
+            self.c = np.concatenate([b0 - self.B @ x, x], 1)
+        self.z_tip, self.z = (self._state(E, P) for E, P in zip(self.E[1:], self.P[1:]))
+
+    def _across(self, V):
+        """``V[2:] - J V[:2]``: what the tip's rows ask of a state ``V``."""
+        return V[:, 2:] - self.J @ V[:, :2]
+
+    def _state(self, E, P):
+        """``[u, z1]`` per drive from the segment's rows ``E`` and load ``P`` there."""
+        z = E[:, :2] @ self.c
+        z[:, :, _Q0] += P[:, :2]
+        return z
+
+    def partials(self, names):
+        """``{name: d [u, z1](sigma) / d name}`` per drive (``names`` of :data:`SPOT_JACOBIAN_PARAMETERS`
+        but ``gamma``).  The state's change at fixed coefficients ``e = dE c + dP q0``, less the
+        clamp's rows' share (``E[:, :2] e(0)[:2]``: they read ``[I, B]``), is ``dw``; the tip's rows
+        then move ``x`` by ``X^-1 (dG d + dJ z(1)[:2] - X(dw(1)))``, one product for all."""
+        moved, at_spot = [], []
+        for name in names:
+            e = [None] * 3
+            if name in ("beta", "sigma"):
+                dE, dP = self.seg.derivative(name, np.tile(self.beta, 3), self.t, np.ones_like(self.t), 1.0, 0.0)
+                e = [E @ self.c for E in np.split(dE, 3)]
+                for changed, P in zip(e, np.split(dP, 3)):
+                    changed[:, :, _Q0] += self.uc * P
+                if name == "sigma":     # the spot alone moves
+                    e[:2] = [None, None]
+            elif name == "k":           # through the load constant: P is in units of 1/k
+                e = [np.zeros_like(self.c) for _ in range(3)]
+                for changed, P in zip(e, self.P):
+                    changed[:, :, _Q0] = -P / self.k[..., None]
+            if e[0] is not None:
+                e[1:] = [changed - E[:, :, :2] @ e[0][:, :2] for changed, E in zip(e[1:], self.E[1:])]
+            q = np.zeros_like(self.G)
+            if name in _POINT:
+                dJG = _columns(self.jump_partials[name], self.beta.shape[0], self.J.dtype)
+                q = dJG[:, :4].reshape(-1, 2, 2) @ self.z_tip
+                q[:, :, :4] += dJG[:, 4:].reshape(-1, 2, 4)
+            if e[1] is not None:
+                q -= self._across(e[1])
+            moved.append(q)
+            at_spot.append(0.0 if e[2] is None else e[2][:, :2])
+        R = self.E[2][:, :2, 2:] - self.E[2][:, :2, :2] @ self.B
+        d = np.split(R @ (self.inverse @ np.concatenate(moved, -1)), len(names), -1) if names else []
+        return {name: x + w for name, x, w in zip(names, d, at_spot)}
+
+    @cached_property
+    def jump_partials(self):
+        return pieces.point_jump_partials(*self.point)
+
+    out = _Lever.out
+
 def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES, probe=None):
     """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
     (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L`` when ``probe`` is given).
@@ -444,10 +545,13 @@ def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_D
     >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
     [1.0]
     """
-    beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
-    use = _drive_columns(drives, lever.drives)
-    z = lever.state(lever.reader(sigma))[:, :, use]
+    if probe is None and _tip_at_end(gamma):           # one segment: written out, no assembly
+        lever = _TipAtEnd(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+        z = lever.z[:, :, _drive_columns(drives, DRIVES)]
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
+        z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
     return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
 
@@ -492,16 +596,21 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     use = _drive_columns(drives, DRIVES)
-    beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-    lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
-    reader = lever.reader(sigma)
+    if "gamma" not in names and _tip_at_end(gamma):     # one segment: written out, no assembly
+        lever = _TipAtEnd(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
+        reader = lever.reader(sigma)
+        z1 = lever.state(reader)[:, 1]
+        dc = lever.d_system([p for p in names if p != "sigma"])
+        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c))) for name in names}
     scale = (lever.beta / lever.L)[:, None]
-    z1 = lever.state(reader)[:, 1]
-    dc = lever.d_system([p for p in names if p != "sigma"])
     columns = {}
     for name in names:
-        d = scale * lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1]
-        columns[name] = lever.out(d + z1 / lever.L[:, None] if name == "beta" else d)
+        d = scale * dz[name][:, 1]
+        columns[name] = lever.out(d + z1 / lever.L[..., None] if name == "beta" else d)
     values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
     jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
                 for i in use)
