@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import re
 
-from .record import FIELDS, si_unit, si_value
+from .record import FIELDS, decode_text, si_unit, si_value
 
 __all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
 
@@ -87,8 +87,7 @@ def cantilever_fields(note: dict, keys: dict = NOTE_KEYS) -> tuple[dict, list[st
             continue
         if hasattr(value, "item") and getattr(value, "size", 1) == 1:
             value = value.item()         # HDF5 attributes come as NumPy scalars
-        if isinstance(value, bytes):
-            value = value.decode("utf-8", "replace")
+        value = decode_text(value) if isinstance(value, bytes) else value
         number = _number(value)
         if number is None and isinstance(value, str) and value.strip().lower() not in ("nan", ""):
             number = si_value(value, FIELDS[name][1])

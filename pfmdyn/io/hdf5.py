@@ -22,25 +22,26 @@ from . import asylum
 from .record import (
     FIELDS,
     InstrumentRecord,
+    attribute_texts,
     make_channel,
     make_record,
     si_spectrum,
     si_unit,
 )
 
-__all__ = ["read_hdf5"]
+__all__ = ["read_hdf5", "is_usid_main"]
 
 # Band-excitation settings as pyUSID translators name them.
 _BE_DRIVE = ("BE_center_frequency_[Hz]", "BE_center_frequency")
 
 
-def _text(value) -> str:
-    """An attribute as text: str, bytes or a one-element array of either."""
-    if isinstance(value, np.ndarray) and value.size == 1:
-        value = value.item()
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    return str(value)
+def _attribute(value) -> str:
+    return attribute_texts(value)[0] if np.size(value) == 1 else " ".join(attribute_texts(value))
+
+
+def is_usid_main(dataset) -> bool:
+    """A USID main dataset: it references its Position_ and Spectroscopic_ tables."""
+    return "Spectroscopic_Values" in dataset.attrs and "Position_Indices" in dataset.attrs
 
 
 def _scan(h5, h5py):
@@ -62,7 +63,7 @@ def _scan(h5, h5py):
     h5.visititems(visit)
     # Some converters keep the instrument's whole note as one text attribute ('Key: value' lines).
     for value in list(metadata.values()):
-        text = _text(value)
+        text = _attribute(value)
         if "\n" in text or "\r" in text:
             for key, item in asylum.parse_note(text).items():
                 metadata.setdefault(key, item)
@@ -71,13 +72,13 @@ def _scan(h5, h5py):
 
 def _is_main(base: str, dataset) -> bool:
     """A main dataset: not a dimension scale (NSID) nor a Position/Spectroscopic table (USID)."""
-    if _text(dataset.attrs.get("CLASS", "")) == "DIMENSION_SCALE":
+    if _attribute(dataset.attrs.get("CLASS", "")) == "DIMENSION_SCALE":
         return False
     if base.startswith(("Position_", "Spectroscopic_")):
         return False
     if base == "response" and "frequency_hz" in dataset.parent:     # pfmdyn's plain map layout
         return True
-    return base == "Raw_Data" or ("quantity" in dataset.attrs and "units" in dataset.attrs)
+    return base == "Raw_Data" or is_usid_main(dataset) or ("quantity" in dataset.attrs and "units" in dataset.attrs)
 
 
 def _frequency_axis(h5, dataset):
@@ -94,7 +95,7 @@ def _frequency_axis(h5, dataset):
             table = h5[ref]
         except (KeyError, ValueError, TypeError):
             return None
-        units = [_text(u) for u in np.ravel(table.attrs.get("units", []))]
+        units = [_attribute(u) for u in np.ravel(table.attrs.get("units", []))]
         for row, unit in enumerate(units):
             converted = si_unit(unit)
             if converted and converted[0] == "Hz":
@@ -104,7 +105,7 @@ def _frequency_axis(h5, dataset):
         return None
     for dim in range(dataset.ndim):
         for scale in dataset.dims[dim].values():
-            converted = si_unit(_text(scale.attrs.get("units", "")))
+            converted = si_unit(_attribute(scale.attrs.get("units", "")))
             if converted and converted[0] == "Hz" and scale.shape == (dataset.shape[dim],):
                 return np.asarray(scale[()], dtype=float) * converted[1]
     return None
@@ -120,7 +121,7 @@ def _spectroscopic_size(h5, dataset) -> int:
 
 def _names(mains) -> list[str]:
     """Channel names: the ``quantity`` of each dataset, with the dataset's name when two share one."""
-    quantities = [_text(d.attrs.get("quantity", "")) or name.rsplit("/", 1)[-1] for name, d in mains]
+    quantities = [_attribute(d.attrs.get("quantity", "")) or name.rsplit("/", 1)[-1] for name, d in mains]
     return [q if quantities.count(q) == 1 else f"{q} ({name.rsplit('/', 1)[-1]})"
             for q, (name, _) in zip(quantities, mains)]
 
@@ -148,9 +149,9 @@ def read_hdf5(path) -> InstrumentRecord:
                             "or pfmdyn's map layout: response, frequency_hz)")
         channels, kinds, notes, spectra = [], set(), [], []
         for label, (name, dataset) in zip(_names(mains), mains):
-            unit = asylum.layer_unit(_text(dataset.attrs.get("quantity", "")), _text(dataset.attrs.get("units", "")))
+            unit = asylum.layer_unit(_attribute(dataset.attrs.get("quantity", "")), _attribute(dataset.attrs.get("units", "")))
             channels.append(make_channel(label, unit, dataset.shape))
-            data_type = _text(dataset.attrs.get("data_type", "")).upper()
+            data_type = _attribute(dataset.attrs.get("data_type", "")).upper()
             frequency = _frequency_axis(h5, dataset)
             if frequency is not None and data_type not in ("IMAGE", "IMAGE_STACK"):
                 kinds.add("spectrum")

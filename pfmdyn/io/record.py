@@ -14,7 +14,7 @@ from ..names import canonical
 
 __all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord", "make_record", "make_channel",
            "si_unit",
-           "si_value", "si_spectrum", "decode_text"]
+           "si_value", "si_spectrum", "decode_text", "attribute_texts"]
 
 FIELDS = {
     "spring_constant": ("spring constant", "N/m"),
@@ -226,6 +226,19 @@ def decode_text(raw) -> str:
         return raw.decode("utf-8")
     except UnicodeDecodeError:
         return raw.decode("latin-1")
+
+
+def attribute_texts(values) -> list[str]:
+    r"""An HDF5 attribute or note value as texts: a str, bytes (:func:`decode_text`) or an array of
+    either, one text per element.
+
+    >>> import numpy as np
+    >>> attribute_texts(np.array([b"Frequency", "Bias"], dtype=object)), attribute_texts(b"\xb5m")
+    (['Frequency', 'Bias'], ['µm'])
+    """
+    import numpy as np
+
+    return [decode_text(v) for v in np.ravel(np.asarray(values, dtype=object))]
 
 
 def si_spectrum(path, frequency, frequency_unit: str, values, unit: str) -> tuple:

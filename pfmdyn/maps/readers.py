@@ -21,7 +21,8 @@ import numpy as np
 from ..cantilever import Cantilever, Contact
 from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
-from ..io.record import si_unit
+from ..io.hdf5 import is_usid_main
+from ..io.record import attribute_texts, si_unit
 from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
 from .fit import BeamMapModel
@@ -98,16 +99,15 @@ class open_root:
 
 
 def _usid_main(root):
-    """Name of the first USID main dataset (one carrying Spectroscopic_Values), or None."""
+    """Name of the first USID main dataset (:func:`pfmdyn.io.hdf5.is_usid_main`), or None."""
     found = []
     if hasattr(root, "visititems"):
-        root.visititems(lambda name, obj: found.append(name) if "Spectroscopic_Values" in obj.attrs
-                        and "Position_Indices" in obj.attrs else None)
+        root.visititems(lambda name, obj: found.append(name) if is_usid_main(obj) else None)
     return found[0] if found else None
 
 
 def _labels(table, key) -> list[str]:
-    return [str(v.decode() if isinstance(v, bytes) else v) for v in np.ravel(table.attrs.get(key, []))]
+    return attribute_texts(table.attrs.get(key, []))
 
 
 _BIAS_LABELS = {"dcoffset", "dc", "bias", "dcbias", "vdc", "tipbias", "biasv"}

@@ -33,6 +33,7 @@ import shutil
 import numpy as np
 
 from ..errors import UserError
+from ..io.record import attribute_texts
 from .readers import MapInput, require
 from .sho import FIELDS, band_centres, is_sho
 from .store import open_group
@@ -108,8 +109,6 @@ def _spectroscopic(results, rows_index, rows_values, labels, units):
     return out
 
 
-def _labels(dataset, key):
-    return [v.decode() if isinstance(v, bytes) else str(v) for v in np.ravel(dataset.attrs.get(key, []))]
 
 
 def _sho_steps(main, source):
@@ -117,7 +116,7 @@ def _sho_steps(main, source):
     order, the index of the model's bias step (``source.columns``'s row)."""
     index = main.file[main.attrs["Spectroscopic_Indices"]] if "Spectroscopic_Indices" in main.attrs else None
     values = main.file[main.attrs["Spectroscopic_Values"]]
-    labels, units = _labels(values, "labels"), _labels(values, "units")
+    labels, units = attribute_texts(values.attrs.get("labels", [])), attribute_texts(values.attrs.get("units", []))
     spec_values = np.asarray(values[...], float).reshape(len(labels), -1)
     spec_index = np.asarray(index[...]).reshape(spec_values.shape) if index is not None else None
     columns = np.asarray(source.columns)             # (bias step, frequency) -> file column
