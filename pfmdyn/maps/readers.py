@@ -24,8 +24,8 @@ from ..io.asylum import cantilever_fields
 from ..io.record import si_unit
 from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
-from .fit import BeamMapModel
-from .fit import bands as fit_bands
+from .beam import BeamMapModel
+from .spec import bands as fit_bands
 from .sho import SHOMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
