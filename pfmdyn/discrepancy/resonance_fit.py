@@ -3,7 +3,7 @@ Jacobian and the multi-start least-squares fit.
 
 The model is the set of undamped characteristic roots (the composed lever's
 :func:`pfmdyn.composed.characteristic`, found by
-:func:`pfmdyn.discrepancy.model.resonances`): free modes with the contact springs off,
+:func:`pfmdyn.discrepancy.undamped_modes.resonances`): free modes with the contact springs off,
 contact modes with them on.  Frequencies follow ``f = f1 (beta / beta1)**2`` with ``f1``
 the metadata's free resonance and ``beta1`` the first free root of the same model, so the
 free mode 1 is reproduced by construction.  Residuals are ``(f_model - f) / sigma`` with
@@ -34,7 +34,8 @@ from ..fitting.projection import jacobian_covariance
 from ..io.tables import Q_RELATIVE_UNCERTAINTY, ResonanceData
 from .effects import spring_grid
 from .quality import loss_and_roots, loss_factors
-from .model import FitResult, Model, bounds, resonance_sensitivity, resonances
+from .model import FitResult, Model, bounds
+from .undamped_modes import resonance_sensitivity, resonances
 
 __all__ = ["K2_OVER_K1", "SPRINGS", "contact_modes", "damping_seeds", "fit_resonances", "frequency_sigma",
            "held_springs", "rows_with_q"]
