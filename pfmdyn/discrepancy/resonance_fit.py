@@ -41,6 +41,7 @@ __all__ = ["K2_OVER_K1", "SPRINGS", "contact_modes", "damping_seeds", "fit_reson
            "held_springs", "rows_with_q"]
 
 _SEEDS = {"mu": (0.02, 0.1, 0.3, 1.0), "gamma": (0.97, 0.92, 0.85, 0.75), "alpha": (-0.3, 0.3)}
+"""Start values of the tip mass, set-back and tilt in the multi-start grid of :func:`fit_resonances`."""
 SPRINGS = ("k1", "k2")
 """Contact springs: they act on contact modes only, so free-only tables leave them undetermined."""
 K2_OVER_K1 = Contact().tie()
