@@ -28,12 +28,13 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-# The FE generator is test support, not part of the package: import it from tests/.
+# The FE generator and the paper's tables are test support, not part of the package: import it from tests/.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from fe_beam import FEBeam, random_case, random_table, spectrum  # noqa: E402
+from paper_resonances import paper_tables  # noqa: E402
 
 from pfmdyn.discrepancy import model as model_module  # noqa: E402
-from pfmdyn.discrepancy.resonances import analyse_resonances, paper_tables  # noqa: E402
+from pfmdyn.discrepancy.resonances import analyse_resonances  # noqa: E402
 from pfmdyn.discrepancy.spectrum import analyse  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
 from recording import recorded  # noqa: E402

@@ -47,7 +47,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from fe_beam import FEBeam, random_case, random_table, spectrum  # noqa: E402
 
-from pfmdyn.discrepancy.resonances import paper_inputs  # noqa: E402
+from pfmdyn.generated import paper_inputs  # noqa: E402
 from pfmdyn.errors import UserError  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
 from recording import recorded  # noqa: E402

@@ -34,7 +34,8 @@ from threadpoolctl import threadpool_limits
 
 from pfmdyn.maps.driver import open_map, run_map
 from pfmdyn import Cantilever
-from pfmdyn.maps.fit import BeamMapModel, fit_block
+from pfmdyn.maps.beam import BeamMapModel
+from pfmdyn.maps.fit import fit_block
 from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6

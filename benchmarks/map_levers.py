@@ -45,7 +45,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from fe_beam import FEBeam  # noqa: E402
 
-from pfmdyn.maps import fit  # noqa: E402
 from pfmdyn.maps.driver import open_map  # noqa: E402
 from pfmdyn.maps.fit import fit_block  # noqa: E402
 from pfmdyn.maps.readers import read_block  # noqa: E402
@@ -148,7 +147,7 @@ def diagnose(model, y, lever, truth, out, failing):
     a tail of the noise, or the FE spectra's distance from the model)."""
     p = _truth_start(model, lever, truth)
     with patch.object(fit, "_initial", lambda *args: p.copy()):
-        from_truth = fit.fit_block(model, y, q0=100.0)
+        from_truth = fit_block(model, y, q0=100.0)
     dof = 2 * y[0, 0].size          # real data per pixel (the few parameters aside)
     chi2 = (out["cost"] - from_truth["cost"]) / (out["cost"] / dof)
     moved = np.abs(from_truth["k1"] - out["k1"]) > 0.1 * out["k1_stderr"]

@@ -25,7 +25,7 @@ import numpy as np
 import zarr
 
 from pfmdyn import Cantilever
-from pfmdyn.maps.fit import BeamMapModel
+from pfmdyn.maps.beam import BeamMapModel
 from recording import recorded
 
 K, L, F1, H = 2.0, 225e-6, 75e3, 10e-6

@@ -20,7 +20,8 @@ from fe_quality import damped_table, quality_factors  # noqa: E402
 from test_instruments import ASYLUM  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
-from pfmdyn.discrepancy.resonances import K2_OVER_K1, analyse_resonances  # noqa: E402
+from pfmdyn.discrepancy.resonance_fit import K2_OVER_K1  # noqa: E402
+from pfmdyn.discrepancy.resonances import analyse_resonances  # noqa: E402
 from pfmdyn.errors import UserError  # noqa: E402
 from pfmdyn.discrepancy.inputs import read as read_input  # noqa: E402
 from pfmdyn.io.tables import ResonanceData, read  # noqa: E402

@@ -129,7 +129,7 @@ def test_lever_in_a_fluid_is_the_loaded_beam(seed):
 def test_the_map_model_loads_the_lever_as_the_lever_does():
     """A lever in air: the map's beam model substitutes the same fluid-loaded ``beta`` as the lever's
     own response (one damping substitution, the medium a drag in it)."""
-    from pfmdyn.maps.fit import BeamMapModel
+    from pfmdyn.maps.beam import BeamMapModel
     from pfmdyn.medium import Medium
 
     lever = Cantilever(2.0, 7e4, 2e-4, tip_height=1e-5, width=3e-5, medium=Medium.air(300.0))

@@ -18,7 +18,8 @@ from pfmdyn.discrepancy.model import FitResult, Model
 from pfmdyn.fitting.noise import noise_sigma
 from pfmdyn.fitting.parameters import CONTACT_LOSS, INTERNAL_LOSS, Parameter
 from pfmdyn.fitting.projection import covariance, jacobian_covariance, normal_matrix, project
-from pfmdyn.maps.fit import BeamMapModel, fit_block
+from pfmdyn.maps.beam import BeamMapModel
+from pfmdyn.maps.fit import fit_block
 
 
 def _complex(rng, *shape):

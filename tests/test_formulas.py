@@ -105,7 +105,8 @@ def test_beta_and_frequency_scale_as_the_modes_of_a_finite_element_beam():
 
 def test_free_resonances_with_a_tip_mass_scale_from_the_loaded_root():
     """The discrepancy model's free resonances (beta1 of the loaded lever) against the FE beam."""
-    from pfmdyn.discrepancy.model import Model, resonances
+    from pfmdyn.discrepancy.model import Model
+    from pfmdyn.discrepancy.undamped_modes import resonances
 
     for (k, L, f1, H), mu, gamma in zip(_levers(8, 3), (0.05, 0.3, 1.0), (1.0, 0.95, 0.85)):
         fe = FEBeam(k, L, f1, H, mu=mu, gamma=gamma, n_elements=120).free_resonances(3)
@@ -117,7 +118,8 @@ def test_free_resonances_with_a_tip_mass_scale_from_the_loaded_root():
 def test_resonance_grid_and_sensitivity_follow_the_refined_resonances():
     """The discrepancy model's quick (interpolated) resonances and d f_n / d p against its refined
     ones and their central differences: each maps roots beta to Hz through the loaded beta1."""
-    from pfmdyn.discrepancy.model import Model, resonance_sensitivity, resonances, resonances_many
+    from pfmdyn.discrepancy.model import Model
+    from pfmdyn.discrepancy.undamped_modes import resonance_sensitivity, resonances, resonances_many
 
     model = Model(SimpleNamespace(k=2.0, H=1e-5, L=2.2e-4, f1=6e4), ("tip_mass", "tip_setback"))
     internal = np.array([math.log10(150.0), math.log10(60.0), 0.2, 0.9])
@@ -175,7 +177,8 @@ def test_contact_dashpot_and_viscous_width_as_reported_by_a_fit():
 
 def test_viscous_width_is_every_free_modes_half_power_width():
     """Drag alone: each free mode's f_n / Q_n, from the damped model's complex roots, is viscous_width."""
-    from pfmdyn.discrepancy.model import Model, resonances
+    from pfmdyn.discrepancy.model import Model
+    from pfmdyn.discrepancy.undamped_modes import resonances
     from pfmdyn.discrepancy.quality import loss_factors
     from pfmdyn.io.tables import Metadata
 

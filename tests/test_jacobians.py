@@ -165,7 +165,8 @@ def test_resonance_sensitivity_matches_differences(contact):
     tip mass and a set-back (the free root moves with both), against central differences of the roots."""
     from types import SimpleNamespace
 
-    from pfmdyn.discrepancy.model import Model, resonances, resonance_sensitivity
+    from pfmdyn.discrepancy.model import Model
+    from pfmdyn.discrepancy.undamped_modes import resonance_sensitivity, resonances
     meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=54.55e3)
     model = Model(meta, ("tip_mass", "tip_setback"))
     x = np.array([2.0, 1.0, 0.05, 0.9])

@@ -269,7 +269,8 @@ def test_levers_the_start_grid_used_to_miss(case):
     stiff contact seen in two bands (k1/k 2000-1e4, k2 = 0.8 k1: the grid had k2 = 0, which moves
     the modes of such a contact by decades of k1).  k1 (and k2) within 3 standard errors."""
     from pfmdyn import Cantilever, Contact
-    from pfmdyn.maps.fit import BeamMapModel, fit_block
+    from pfmdyn.maps.beam import BeamMapModel
+    from pfmdyn.maps.fit import fit_block
     rng = np.random.default_rng({"low_q": 1, "stiff_two_band": 27}[case])
     k, length, height = 10 ** rng.uniform(-1, 1.5), rng.uniform(150e-6, 450e-6), rng.uniform(5e-6, 20e-6)
     f1 = 300e3 * (k / 40) ** (1 / 3) * (125e-6 / length)

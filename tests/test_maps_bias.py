@@ -222,11 +222,11 @@ def test_closed_form_normal_matrix_matches_the_explicit_jacobian():
     """The covariance's closed-form blocks against the real Jacobian of the full problem, built
     column by column (two bands, two bias components, two drives, drag: every block type)."""
     from pfmdyn.fitting.batched import band_covariance
-    from pfmdyn.maps import fit
+    from pfmdyn.maps.beam import BeamMapModel
     rng = np.random.default_rng(1)
     f = np.concatenate([np.linspace(2.5e5, 3.5e5, 30), np.linspace(9e5, 1.1e6, 30)])
-    model = fit.BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f,
-                             mechanisms=("internal", "viscous", "distributed"))
+    model = BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f,
+                         mechanisms=("internal", "viscous", "distributed"))
     n = 5
     p = np.column_stack([np.log10(rng.uniform(200, 400, n)), np.log10(rng.uniform(30, 90, n)),
                          np.log10(rng.uniform(100, 300, n)), rng.uniform(0, 0.1, n)])

@@ -180,7 +180,8 @@ def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
     recovers k1 (the composed partials w.r.t. the springs at the spot drive it there)."""
     from pfmdyn import Cantilever, Contact
     from pfmdyn.generated.tilt_rotation import rotated
-    from pfmdyn.maps.fit import BeamMapModel, fit_block
+    from pfmdyn.maps.beam import BeamMapModel
+    from pfmdyn.maps.fit import fit_block
     rng = np.random.default_rng(21)
     for _ in range(3):
         k, length, height = 10 ** rng.uniform(-1, 1.5), rng.uniform(150e-6, 450e-6), rng.uniform(5e-6, 20e-6)

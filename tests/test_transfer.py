@@ -147,8 +147,8 @@ def test_cantilever_methods_follow_the_registry(row):
 
 def test_cantilever_losses_are_the_derived_complex_modulus():
     """E -> E (1 + i/Q): beta**4 / (1 + i/Q) and k (1 + i/Q), typed here independently; the maps
-    (pfmdyn.maps.fit) apply the same model by dividing the contact springs by 1 + i/Q instead."""
-    from pfmdyn.maps.fit import BeamMapModel
+    (pfmdyn.maps.beam) apply the same model by dividing the contact springs by 1 + i/Q instead."""
+    from pfmdyn.maps.beam import BeamMapModel
 
     q, k_, f1, length = 40.0, 3.0, 7e4, 2e-4
     c = Cantilever(k_, f1, length, quality_factor=q)

@@ -32,6 +32,7 @@ from ..errors import UserError
 from ..generated import formulas
 from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
+from .tip_position import tip_position_scan
 
 __all__ = ["TIP_POSITION_LOW", "Solution", "StiffnessReport", "analyse"]
 
@@ -274,7 +275,7 @@ def _k1_k2(lever, fc, modes, noise_beta: float):
 
 
 def _k1_tip(lever, lateral, fc, modes, noise_beta: float):
-    crossings = cr.tip_position_scan(lever, lateral, fc, modes, low=TIP_POSITION_LOW)
+    crossings = tip_position_scan(lever, lateral, fc, modes, low=TIP_POSITION_LOW)
     found = _keep(lever, lateral, fc, modes,
                   [{"k1": k1, "tip_position": g} for g, k1 in zip(crossings.tip_positions, crossings.k1)
                    if math.isfinite(k1)])

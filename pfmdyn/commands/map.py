@@ -75,7 +75,7 @@ def _mechanisms(args, source, fit_options):
     """Mechanisms from --model (and the selection rows when auto): auto reuses an
     interrupted run's choice, else selects on pixels spread over the map."""
     import os
-    from ..maps.fit import model_name, parse_model
+    from ..maps.spec import model_name, parse_model
     if args.model != "auto":
         return parse_model(args.model), None
     from ..maps.driver import earlier_run

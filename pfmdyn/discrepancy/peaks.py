@@ -24,7 +24,8 @@ from scipy.optimize import least_squares, minimize_scalar
 from scipy.signal import peak_prominences
 
 from ..generated import formulas
-from .model import bounds, resonance_sensitivity, resonances, resonances_many
+from .model import bounds
+from .undamped_modes import resonance_sensitivity, resonances, resonances_many
 
 __all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
 

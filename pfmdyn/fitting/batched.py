@@ -10,7 +10,7 @@ spectrum of a block at once, each with its own damping factor.  A *model* is any
 * ``design(p, jacobian=True)``: the transfer functions ``(n, K, n_freq)`` at parameters ``p``
   ``(n, n_p)`` and their partials ``(n_p, n, K, n_freq)`` (None unless ``jacobian``).
 
-``pfmdyn map``'s beam model (:class:`pfmdyn.maps.fit.BeamMapModel`) and its simple harmonic
+``pfmdyn map``'s beam model (:class:`pfmdyn.maps.beam.BeamMapModel`) and its simple harmonic
 oscillator (:mod:`pfmdyn.maps.sho`) are two.  The covariance of all parameters, nonlinear and
 amplitudes, is the noise times the inverse normal matrix of the full problem at the solution
 (:func:`band_covariance`); its nonlinear block is the variable-projection one.

@@ -22,7 +22,9 @@ import time
 import numpy as np
 
 from ..errors import UserError
-from .fit import MECHANISMS, fit_block, model_name, quantities
+from .fit import fit_block
+from .outputs import quantities
+from .spec import MECHANISMS, model_name
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 from .result import MapResult

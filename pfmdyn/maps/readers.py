@@ -25,8 +25,8 @@ from ..io.hdf5 import is_usid_main
 from ..io.record import attribute_texts, si_unit
 from ..names import CONTACT, LEVER, canonical, checked
 from .bias import basis
-from .fit import BeamMapModel
-from .fit import bands as fit_bands
+from .beam import BeamMapModel
+from .spec import bands as fit_bands
 from .sho import SHOMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]

@@ -1,7 +1,7 @@
 """``pfmdyn map`` with the model ``auto``: choose the mechanisms on a few representative pixels.
 
 The baseline is the elastic-contact beam with internal friction (``elastic``).  The candidates
-add the mechanisms maps support (:data:`pfmdyn.maps.fit.MECHANISMS`: viscous drag, a contact
+add the mechanisms maps support (:data:`pfmdyn.maps.spec.MECHANISMS`: viscous drag, a contact
 dashpot, the electrostatic load distributed along the lever).  Each model is fitted by :func:`pfmdyn.maps.fit.fit_block` at a grid of pixels spread
 over the map (only their spectra are read), and the totals over those pixels are judged by the
 discrepancy workflow's rule (:func:`pfmdyn.discrepancy.select.material`): a mechanism is added
@@ -27,7 +27,8 @@ import numpy as np
 
 from ..discrepancy.select import material
 from ..errors import UserError
-from .fit import MECHANISMS, fit_block, fittable, model_name
+from .fit import fit_block, fittable
+from .spec import MECHANISMS, model_name
 from .readers import MapInput, read_block
 
 __all__ = ["choose_model", "sample_pixels"]
@@ -85,7 +86,7 @@ def choose_model(source: MapInput, count: int = 16, **options) -> tuple[tuple[st
     --------
     >>> import tempfile, h5py
     >>> from pfmdyn.maps.driver import open_map
-    >>> from pfmdyn.maps.fit import BeamMapModel
+    >>> from pfmdyn.maps.beam import BeamMapModel
     >>> f = np.linspace(2.2e5, 4.2e5, 64)
     >>> from pfmdyn import Cantilever, Contact
     >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)

@@ -29,7 +29,7 @@ from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, noise_sigmas
 from ..generated.formulas import sho_response, sho_response_d_log_quality, sho_response_d_log_resonance
 from ..fitting.batched import band_covariance, levenberg_marquardt, project_bands
-from .fit import bands
+from .spec import bands
 
 __all__ = ["FIELDS", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
 
@@ -72,7 +72,7 @@ class SHOMapModel:
 
     @property
     def bands(self) -> list[slice]:
-        """Frequency bands (:func:`pfmdyn.maps.fit.bands`): each gets an SHO of its own."""
+        """Frequency bands (:func:`pfmdyn.maps.spec.bands`): each gets an SHO of its own."""
         return bands(self.frequency_hz)
 
     @property

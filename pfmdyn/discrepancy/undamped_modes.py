@@ -1,0 +1,130 @@
+"""The undamped resonances of a discrepancy model: the real roots of the composed characteristic
+(:func:`pfmdyn.composed.characteristic`) with the model's springs (contact modes) or without
+(free modes), and their sensitivity to the model's parameters.
+
+Frequencies follow ``f = f1 (beta / beta1)**2`` with ``f1`` the metadata's free resonance and
+``beta1`` the first free root of the same model (:func:`pfmdyn.cantilever.free_root`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..cantilever import free_root
+from .. import composed
+from ..generated import formulas
+from ..generated.tilt_rotation import rotated
+from ..roots.bracket import grid_roots
+from .model import Model, free_root_and_jacobian
+
+__all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
+
+
+def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots: bool = True) -> np.ndarray:
+    """Undamped resonances (Hz) below ``f_max``: real zeros of the generated characteristic.
+
+    Sign changes on a grid in ``beta`` bracket the roots (:func:`pfmdyn.roots.bracket.grid_roots`);
+    the characteristic function is entire (no poles), so every sign change is a root.
+
+    >>> from types import SimpleNamespace
+    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> (resonances(Model(meta), [-9.0, -9.0], True, 7e4) / 1e4).round(4).tolist()   # 6.267:1
+    [1.0, 6.2669]
+    """
+    c = model.coords(internal)
+    m = model.meta
+    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
+    top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
+    grid = np.linspace(0.3, top, max(150, int(12 * top)))
+    roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
+    return formulas.frequency_from_beta(roots, m.f1, b1)
+
+
+def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
+    """:func:`resonances` without refinement (roots linearly interpolated on the same grid)
+    for many parameter vectors at once: one vectorised evaluation of the characteristic
+    per distinct free root, for start grids.
+
+    >>> from types import SimpleNamespace
+    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> [(f / 1e4).round(3).tolist() for f in resonances_many(Model(meta), [[-9.0, -9.0]] * 2, True, 7e4)]
+    [[1.0, 6.267], [1.0, 6.267]]
+    """
+    m = model.meta
+    args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    b1s = np.array([free_root(m.k, m.H, m.L, a[6], a[7]) for a in args])
+    out: list[np.ndarray] = [np.empty(0)] * len(args)
+    for b1 in np.unique(b1s):
+        rows = np.flatnonzero(b1s == b1)
+        top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
+        grid = np.linspace(0.3, top, max(150, int(12 * top)))
+        with np.errstate(all="ignore"):
+            vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+        change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
+        for row, i in enumerate(rows):
+            idx = np.flatnonzero(change[row])
+            lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
+            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.f1, b1)
+    return out
+
+
+def characteristic_args(model: Model, internal, contact: bool) -> tuple:
+    """Parameters of :func:`pfmdyn.composed.characteristic` for the model: ``(k, kvv, kll, kvl, H, L,
+    mu, gamma, rho_g)``, the springs rotated by the tilt (zero for free modes).
+
+    >>> from types import SimpleNamespace
+    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> [float(a) for a in characteristic_args(Model(meta), [2.0, 2.0], True)]
+    [1.0, 100.0, 100.0, 0.0, 1e-05, 0.0001, 0.0, 1.0, 0.0]
+    """
+    c = model.coords(internal)
+    m = model.meta
+    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
+    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
+
+
+def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
+    """``d f_n / d internal_j`` (Hz) at undamped resonances ``frequency_hz`` of the model.
+
+    Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
+    ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
+    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from the assembled
+    system (:func:`pfmdyn.composed.characteristic_and_jacobian`, one call for the contact roots and
+    one for the free root); the model's parameters are algebraic functions of the internal ones.
+
+    >>> from types import SimpleNamespace
+    >>> model = Model(SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4))
+    >>> f = resonances(model, [2.0, 2.0], True, 7e4)       # contact mode 1 at k1 = k2 = 100 k
+    >>> (resonance_sensitivity(model, [2.0, 2.0], True, f) / f[:, None]).round(3).tolist()
+    [[0.19, 0.143]]
+    """
+    internal = np.asarray(internal, float)
+    m = model.meta
+    f = np.asarray(frequency_hz, float)
+    c = model.coords(internal)
+    b1, d_b1_dp = free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
+    beta = formulas.beta_from_frequency(f, m.f1, b1)
+    moved = ("kvv", "kll", "kvl", "mu", "gamma")
+    at = [composed.PARAMETERS.index(p) for p in moved]
+    a0 = np.array(characteristic_args(model, internal, contact), float)
+    # the model's parameters are plain functions of the internal ones: their change per unit
+    # of each internal one, by forward differences (columns j)
+    steps = 1e-7 * np.maximum(1.0, np.abs(internal))
+    per_unit = np.empty((len(moved), len(internal)))
+    for j, h in enumerate(steps):
+        xs = internal.copy()
+        xs[j] += h
+        per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
+    # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
+    rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
+    wrt = ("beta",) + tuple(moved[i] for i in rows)
+    with np.errstate(all="ignore"):
+        _, d = composed.characteristic_and_jacobian(beta, *a0, wrt=wrt)
+        names = composed.JACOBIAN_PARAMETERS
+        ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
+        d_beta = -(ratio.T @ per_unit[rows])
+        d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
+        out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
+    out[~np.isfinite(out)] = 0.0
+    return out
