@@ -1,5 +1,5 @@
 """What a beam map model is asked to fit: the mechanisms its spec names
-(``elastic[+viscous][+contact][+distributed]``, ``pfmdyn map --model``) and the frequency bands of
+(``elastic[+viscous][+contact][+distributed]``, the model ``pfmdyn map`` is given) and the frequency bands of
 its spectra, one per contact mode driven.
 """
 from __future__ import annotations
