@@ -1,25 +1,18 @@
-"""Independent test data: resonances of a two-segment Euler-Bernoulli lever, exact, in mpmath.
+"""Independent test data: resonances of a two-segment Euler-Bernoulli lever with a set-back, heavy,
+tilted tip in contact, exact, in mpmath.
 
-Nothing here uses ``derivations/`` or ``generated/``.  The lever (clamped at 0, free at L) is
-split at the tip, ``x = gamma L``; on each segment the deflection is the textbook
-``A cos(beta s) + B sin(beta s) + C cosh(beta s) + D sinh(beta s)`` (``s`` the position from the
-segment's start over L), eight constants in all.  Eight conditions: clamp (2), free end (2),
-continuity of deflection and slope at the tip (2), and the jumps of shear and moment there,
-from the variation of the energy of the tip's springs and inertia::
-
-    shear  : u'''(a-) - u'''(a+) = 3 (kvv u + kvl h u') / k - mu beta**4 u
-    moment : u''(a-)  - u''(a+)  = -3 h (kvl u + kll h u') / k + mu beta**4 (r_g / L)**2 u'
-
-(``h = H / L``; derivatives in ``s``; ``EI / L**3 = k / 3``; a tip of mass ``mu rho S L`` and
-radius of gyration ``r_g``).  The contact springs come from the energy
-``k1 (w.n)**2 / 2 + k2 (w.t)**2 / 2`` of the tip apex, ``w = u e_y + H u' e_x``, on a lever
-whose free end is tilted by ``tilt`` towards the sample::
+Nothing here uses ``derivations/`` or ``generated/``.  The beam is :mod:`segment_beam`'s (the textbook
+``cos, sin, cosh, sinh`` basis on each side of the tip, the clamp, the free end, continuity at the tip
+and the jumps of shear and moment from its springs and inertia): its determinant
+(:func:`segment_beam.determinant_mp`) vanishes at the resonances.  This module turns a lever given as
+an AFM user describes it (SI, a tilt, ``k1`` and ``k2``) into that beam's springs, from the energy
+``k1 (w.n)**2 / 2 + k2 (w.t)**2 / 2`` of the tip apex, ``w = u e_y + H u' e_x``, on a lever whose free
+end is tilted by ``tilt`` towards the sample::
 
     kvv = k1 c**2 + k2 s**2,   kll = k1 s**2 + k2 c**2,   kvl = -(k1 - k2) s c   (c, s of the tilt)
 
-The resonances are the zeros of the 8 x 8 determinant in ``beta``, found by sign changes on a
-grid and refined by bisection at 30 digits; ``f_n = f1 (beta_n / beta_1)**2`` with ``beta_1``
-the free root of the same lever (its tip has mass).
+and finds the roots by sign changes on a grid in ``beta``, refined to 28 digits;
+``f_n = f1 (beta_n / beta_1)**2`` with ``beta_1`` the free root of the same lever (its tip has mass).
 """
 from __future__ import annotations
 
@@ -27,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 import mpmath as mp
+from segment_beam import determinant_mp
 
 mp.mp.dps = 30
 
@@ -55,36 +49,11 @@ class ExactLever:
         return k1 * c**2 + k2 * s**2, k1 * s**2 + k2 * c**2, -(k1 - k2) * s * c
 
     def determinant(self, beta, contact: bool = True):
-        """The 8 x 8 determinant of the boundary and interface conditions at ``beta``."""
-        b = mp.mpf(beta)
-        g = mp.mpf(self.tip_position)
-        k = mp.mpf(self.spring_constant)
-        h = mp.mpf(self.tip_height) / mp.mpf(self.length)
-        mu = mp.mpf(self.tip_mass_ratio)
-        rg = mp.mpf(self.tip_gyration_radius) / mp.mpf(self.length)
+        """The determinant of the beam's boundary and interface conditions at ``beta``."""
         kvv, kll, kvl = self._springs(contact)
-
-        def basis(s, n):
-            """n-th derivative (in s) of cos, sin, cosh, sinh of beta s."""
-            x = b * s
-            c, sn, ch, sh = mp.cos(x), mp.sin(x), mp.cosh(x), mp.sinh(x)
-            trig = [(c, sn), (-sn, c), (-c, -sn), (sn, -c)][n]
-            hyp = [(ch, sh), (sh, ch)][n % 2]
-            return [b**n * v for v in (*trig, *hyp)]
-
-        zero = [mp.mpf(0)] * 4
-        rows = [basis(0, 0) + zero, basis(0, 1) + zero,                          # clamp
-                zero + basis(1 - g, 2), zero + basis(1 - g, 3)]                  # free end
-        u_a, du_a = basis(g, 0), basis(g, 1)
-        rows.append(u_a + [-v for v in basis(0, 0)])                            # deflection continuous
-        rows.append(du_a + [-v for v in basis(0, 1)])                           # slope continuous
-        shear = [t - 3 * (kvv * u + kvl * h * du) / k + mu * b**4 * u
-                 for t, u, du in zip(basis(g, 3), u_a, du_a)]
-        rows.append(shear + [-v for v in basis(0, 3)])
-        moment = [m + 3 * h * (kvl * u + kll * h * du) / k - mu * b**4 * rg**2 * du
-                  for m, u, du in zip(basis(g, 2), u_a, du_a)]
-        rows.append(moment + [-v for v in basis(0, 2)])
-        return mp.det(mp.matrix(rows))
+        return determinant_mp(beta, dps=30, k=self.spring_constant, L=self.length, H=self.tip_height, kvv=kvv,
+                              kll=kll, kvl=kvl, mu=self.tip_mass_ratio, gamma=self.tip_position,
+                              rho_g=self.tip_gyration_radius / self.length)
 
     def roots(self, count: int, contact: bool = True, step: float = 0.05) -> list:
         """The first ``count`` roots in ``beta`` (mpf, 30 digits)."""
@@ -94,7 +63,8 @@ class ExactLever:
             y = x + step
             fy = f(y)
             if fx == 0 or fx * fy < 0:
-                out.append(mp.findroot(f, (x, y), solver="anderson", tol=mp.mpf(10) ** -28))
+                # the determinant carries the beam's units: the bracket's width, not |f|, decides
+                out.append(mp.findroot(f, (x, y), solver="anderson", tol=mp.mpf(10) ** -28, verify=False))
             x, fx = y, fy
             if x > 60:
                 raise RuntimeError("roots not found below beta = 60")
