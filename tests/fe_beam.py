@@ -178,8 +178,8 @@ class FEBeam:
 
 
 def _metadata(beam: FEBeam, description: str) -> str:
-    return (f"# spring_constant_n_per_m: {beam.k!r}\n# length_m: {beam.L!r}\n# width_m: 3e-05\n"
-            f"# tip_height_m: {beam.H!r}\n# free_resonance_hz: {float(beam.free_resonances(1)[0])!r}\n"
+    return (f"# spring_constant: {beam.k!r}\n# length: {beam.L!r}\n# width: 3e-05\n"
+            f"# tip_height: {beam.H!r}\n# free_resonance: {float(beam.free_resonances(1)[0])!r}\n"
             f"# description: {description}\n")
 
 
@@ -333,7 +333,7 @@ def random_case(seed: int, hidden=(), n_freq: int = 1000, order: str = "instrume
     background = rng.uniform(0.05, 0.3) if "background" in hidden else 0.0
     text = spectrum(beam, np.linspace(lo, hi, n_freq), biases, noise=noise, background=background,
                     polar=bool(rng.integers(2)), seed=seed, order=order)
-    return text.replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}"), truth
+    return text.replace("# width: 3e-05", f"# width: {truth['width']!r}"), truth
 
 
 def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_elements: int = 120) -> tuple[str, dict]:
@@ -347,7 +347,7 @@ def random_table(seed: int, hidden=(), relative_uncertainty: float = 1e-4, n_ele
     rows = [f"{i + 1},free,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(free)]
     rows += [f"{i + 1},contact,{float(v + sigma * rng.standard_normal())!r}" for i, v in enumerate(contact)]
     rows = [rows[i] for i in rng.permutation(len(rows))]
-    head = _metadata(beam, "FE synthetic resonances").replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}")
+    head = _metadata(beam, "FE synthetic resonances").replace("# width: 3e-05", f"# width: {truth['width']!r}")
     return head + f"# frequency_uncertainty_hz: {sigma!r}\nmode,condition,frequency_hz\n" + "\n".join(rows) + "\n", truth
 
 

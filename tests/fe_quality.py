@@ -75,7 +75,7 @@ def damped_table(seed: int, mechanism: str, hidden=(), relative_uncertainty: flo
             f_noisy = float(f + sigma * rng.standard_normal())
             rows.append((i + 1, "contact" if contact else "free", f_noisy, q_text))
     rows = [rows[i] for i in rng.permutation(len(rows))]
-    head = _metadata(beam, "FE damped resonances").replace("# width_m: 3e-05", f"# width_m: {truth['width']!r}")
+    head = _metadata(beam, "FE damped resonances").replace("# width: 3e-05", f"# width: {truth['width']!r}")
     head += f"# frequency_uncertainty_hz: {sigma!r}\n"
     if q_noise:
         head += f"# quality_factor_uncertainty: {max(q_noise, 0.01)!r}\n"
