@@ -114,3 +114,22 @@ def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
     fit = json.loads(out.read_text())
     assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
     assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)
+
+
+def test_an_asylum_tune_takes_the_lever_from_its_note(tmp_path):
+    """A thermal tune saved as an Igor wave (pm/sqrt(Hz)) with the lever in its note: no flag needed but
+    the temperature."""
+    pytest.importorskip("igorwriter")
+    from test_instrument_writers import asylum_note, igor_wave
+
+    case, tune = tune_case(7, points=4000)
+    note = asylum_note({"SpringConstant": f"{case['k']:.17g}", "CustomLeverLength": f"{case['L']:.17g}",
+                        "CustomLeverWidth": f"{case['w']:.17g}"})
+    f = tune.frequency_hz
+    path = igor_wave(tmp_path / "Thermal.ibw", tune.asd * 1e12, "ThermalData", [(f[0], f[1] - f[0], "Hz")],
+                     "pm/sqrt(Hz)", note=note)
+    out = tmp_path / "t.json"
+    assert cli.main(["discrepancy", str(path), "--temperature", f"{case['temperature']:.17g}", "--json", str(out)]) == 0
+    fit = json.loads(out.read_text())
+    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03) and fit["parameters"]["width"]["given"]

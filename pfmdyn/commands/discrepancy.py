@@ -100,12 +100,14 @@ def _sweeps(args) -> int:
 def _thermal(args) -> int:
     """A thermal tune fitted as a thermally driven spectrum (:mod:`pfmdyn.discrepancy.thermal`)."""
     from ..discrepancy.thermal import fit_thermal
+    from ..io.instruments import read_instrument
     from ..io.thermal_tune import read_thermal_tune
 
     tune = read_thermal_tune(args.data)
-    values = flags.given(args, ("spring_constant", "length", "width"))
-    values.setdefault("spring_constant", tune.instrument.get("spring_constant"))
-    flags.require({k: v for k, v in values.items() if v is not None}, ("spring_constant", "length"), args.data)
+    lever = read_instrument(args.data).fields       # what the file says of the lever; the flags win
+    values = {**{k: lever[k] for k in ("spring_constant", "length", "width") if k in lever},
+              **flags.given(args, ("spring_constant", "length", "width"))}
+    flags.require(values, ("spring_constant", "length"), args.data)
     found = {"medium": tune.conditions.get("environment"), "temperature": tune.conditions.get("temperature")}
     medium = flags.medium_from_args(args, {k: v for k, v in found.items() if v is not None}, default="air")
     temperature = flags.given(args, ("temperature",)).get("temperature", tune.conditions.get("temperature", 293.15))
