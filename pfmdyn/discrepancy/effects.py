@@ -156,7 +156,7 @@ class Damping(Effect):
 
     def jacobian(self, chain: Chain) -> tuple:
         q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
-        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.k * d_f[1][q])
+        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.spring_constant * d_f[1][q])
                 + chain.rotation[0] * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
 
 
@@ -172,7 +172,7 @@ class ViscousDamping(Damping):
         loss = values["viscous_loss"]
         if loss["value"] is None:
             return {}
-        width = formulas.viscous_width(loss["value"], meta.f1)
+        width = formulas.viscous_width(loss["value"], meta.free_resonance)
         return {"viscous_width_hz": {"value": float(width), "stderr": None, "unit": "Hz",
                                      "determined": loss["determined"]}}
 
@@ -207,7 +207,7 @@ class ContactDamping(Damping):
         if not values.get("k1", {}).get("value"):
             return {}
         loss = values["contact_loss"]
-        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.f1)
+        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.free_resonance)
         return {"eta": {"value": float(eta), "stderr": None, "unit": "N s/m", "determined": loss["determined"]}}
 
 
@@ -332,12 +332,12 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     """``k1`` (and ``k2`` unless ``vertical_only``) with bounds scaled to the cantilever.
 
     >>> from types import SimpleNamespace
-    >>> p = spring_parameters(SimpleNamespace(k=26.0, L=450e-6, H=12e-6), False)
+    >>> p = spring_parameters(SimpleNamespace(spring_constant=26.0, length=450e-6, tip_height=12e-6), False)
     >>> [(q.name, round(q.lower, 2), round(q.upper, 2)) for q in p]
     [('k1', -0.59, 7.41), ('k2', -1.44, 7.56)]
     """
-    a = math.log10(meta.k)
-    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L))
+    a = math.log10(meta.spring_constant)
+    b = math.log10(formulas.k2_from_ratio(1.0, meta.spring_constant, meta.tip_height, meta.length))
     k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10", description="normal contact stiffness")
     k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf,
                    description="lateral contact stiffness")
@@ -347,6 +347,7 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
 def spring_grid(meta, count_k1: int, count_k2: int):
     """Start grids (internal log10) for ``k1`` (``k/10 .. 1e4 k``) and ``k2`` (lateral scale)."""
     import numpy as np
-    a = math.log10(meta.k) + np.linspace(-1, 4.3, count_k1)
-    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L)) + np.linspace(-4.5, 1, count_k2)
+    a = math.log10(meta.spring_constant) + np.linspace(-1, 4.3, count_k1)
+    b = (math.log10(formulas.k2_from_ratio(1.0, meta.spring_constant, meta.tip_height, meta.length))
+         + np.linspace(-4.5, 1, count_k2))
     return a, b
