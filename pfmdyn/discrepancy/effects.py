@@ -269,15 +269,15 @@ class Background(Effect):
 
 @dataclass(frozen=True)
 class SpotPosition(Effect):
-    """The slope read at the laser spot ``x_s = sigma L`` (:data:`pfmdyn.composed.at_spot`)
+    """The slope read at the laser spot ``x_s = spot_position L`` (:data:`pfmdyn.composed.at_spot`)
     instead of the free end: it reweights the modes (and can put a zero between them) but moves
     no resonance, so its Jacobian term has no free-root part."""
 
     def reading(self, coords):
-        return composed.at_spot, (coords["sigma"],)
+        return composed.at_spot, (coords["spot_position"],)
 
     def partials(self, coords) -> set[str]:
-        return {"sigma"}
+        return {"sigma"}        # the generated module's symbol for x_s / L (pfmdyn.composed)
 
     def jacobian(self, chain: Chain) -> tuple:
         return (chain.part["sigma"],)
@@ -303,7 +303,7 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
     # The laser spot moves no resonance: it reweights the modes (and can put a zero between
     # them), so only a spectrum shows it; its seeds span where users put the spot.
-    SpotPosition("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position", null=1.0,
+    SpotPosition("spot_position", (Parameter("spot_position", "", 0.3, 1.0, null=1.0,
                                              seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
                                                     0.65, 0.6, 0.55, 0.5),
                                              description="detection (laser) spot x_s / L"),),

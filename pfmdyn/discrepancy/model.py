@@ -17,7 +17,7 @@ compose; damping enters as the generated substitution (:func:`pfmdyn.cantilever.
 complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
-lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
+lever at ``x_s = spot_position L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
 
 The solver's Jacobian comes from the derivations too: the partials of the slopes
 (:func:`pfmdyn.composed.slope_and_jacobian`, from the same assembled system), of the damping substitution and
