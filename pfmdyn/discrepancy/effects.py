@@ -288,16 +288,15 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
     FluidDamping("damping_fluid", (FLUID_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
     ContactDamping("damping_contact", (CONTACT_LOSS,), "derivations/damping.py", index=2),
-    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
+    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, public="tip_mass_ratio",
                                    null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
             "derivations/tip_mass.py", moves_resonances=True),
-    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
+    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, public="tip_position",
                                          null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
                                                           0.68)),),
                "derivations/pieces.py", moves_resonances=True),
     Tilt("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
-                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
-                            description="beam inclination, positive when the free end is nearer the sample"),),
+                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45)),),
          "derivations/tilt.py", moves_resonances=True),
     LateralStiffness("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
     Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
@@ -305,8 +304,7 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     # them), so only a spectrum shows it; its seeds span where users put the spot.
     SpotPosition("spot_position", (Parameter("spot_position", "", 0.3, 1.0, null=1.0,
                                              seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
-                                                    0.65, 0.6, 0.55, 0.5),
-                                             description="detection (laser) spot x_s / L"),),
+                                                    0.65, 0.6, 0.55, 0.5)),),
                  "derivations/pieces.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
@@ -338,9 +336,8 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     """
     a = math.log10(meta.spring_constant)
     b = math.log10(formulas.k2_from_ratio(1.0, meta.spring_constant, meta.tip_height, meta.length))
-    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10", description="normal contact stiffness")
-    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf,
-                   description="lateral contact stiffness")
+    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10")
+    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf)
     return (k1,) if vertical_only else (k1, k2)
 
 

@@ -115,13 +115,11 @@ class BeamMapModel:
         :attr:`k1_span`, k2 from a tenth of its lower end, Q 1 to 1e5 (its upper bound is no loss:
         the null)."""
         lo, hi = self.k1_span
-        out = [Parameter("k1", "N/m", math.log10(lo / 10), math.log10(hi * 10), transform="log10",
-                         description="vertical contact stiffness"),
-               Parameter("q", "1", 0.0, 5.0, transform="log10", public="quality_factor", null=5.0,
-                         description="quality factor Q of the beam loss 1/Q (internal friction)")]
+        out = [Parameter("k1", "N/m", math.log10(lo / 10), math.log10(hi * 10), transform="log10"),
+               Parameter("q", "1", 0.0, 5.0, transform="log10", public="quality_factor", null=5.0)]
         if self.k2_mode == "free":
             out.append(Parameter("k2", "N/m", math.log10(lo / 100), math.log10(hi * 10), transform="log10",
-                                 null=math.log10(lo / 100), description="longitudinal contact stiffness"))
+                                 null=math.log10(lo / 100)))
         extra = {"viscous": VISCOUS_LOSS, "contact": CONTACT_LOSS}
         return tuple(out + [extra[m] for m in self.mechanisms if m in extra])
 
