@@ -38,6 +38,12 @@ class Quantity:
     option: bool = True
     """False for a value that files and reports hold but no command takes as a flag (what an
     instrument measured: a contact resonance, a mode's Q, its drive settings)."""
+    label: str = ""
+    """What reports and messages call it in a few words (default: the name with spaces)."""
+
+    def __post_init__(self):
+        if not self.label:
+            object.__setattr__(self, "label", self.name.replace("_", " "))
 
     @property
     def flag(self) -> str:
@@ -51,8 +57,9 @@ QUANTITIES: tuple[Quantity, ...] = (
              aliases=("spring_constant_n_per_m", "k", "k_n_per_m")),
     Quantity("free_resonance", "f1", "Hz", "first free flexural resonance, as measured (with the tip)",
              500.0, 1e8, aliases=("free_resonance_hz", "f1", "f1_hz")),
-    Quantity("length", "L", "m", "lever length, clamp to free end", 1e-6, 1e-2, aliases=("length_m",)),
-    Quantity("width", "w", "m", "lever width", 1e-7, 1e-2, aliases=("width_m",)),
+    Quantity("length", "L", "m", "lever length, clamp to free end", 1e-6, 1e-2, aliases=("length_m",),
+             label="lever length"),
+    Quantity("width", "w", "m", "lever width", 1e-7, 1e-2, aliases=("width_m",), label="lever width"),
     Quantity("thickness", "t", "m", "lever thickness (geometry input)", 1e-8, 1e-3, aliases=("thickness_m",)),
     Quantity("density", "rho", "kg/m^3", "lever material density (geometry input)", 100.0, 3e4),
     Quantity("tip_height", "H", "m", "tip height, the lever arm of the lateral contact force", 1e-8, 1e-3,
@@ -109,11 +116,11 @@ QUANTITIES: tuple[Quantity, ...] = (
              "drive sweeps", 0.0, 1.0, open_low=False, option=False),
     # What an instrument measured and its settings (instrument files, ``pfmdyn inspect``).
     Quantity("free_quality_factor", "Q_free", "1", "measured Q of the first free resonance (thermal tune fit)",
-             0.1, 1e9, option=False),
+             0.1, 1e9, option=False, label="free Q"),
     Quantity("contact_resonance", "f_c", "Hz", "measured first contact resonance (tune fit)", 500.0, 1e9,
              aliases=("contact_resonance_hz",), option=False),
     Quantity("contact_quality_factor", "Q_c", "1", "measured Q of the first contact resonance (tune fit)",
-             0.1, 1e9, option=False),
+             0.1, 1e9, option=False, label="contact Q"),
     Quantity("drive_frequency", "f_drive", "Hz", "frequency the instrument drove at", 0.0, 1e10,
              aliases=("drive_frequency_hz",), option=False),
     Quantity("tip_bias", "V_tip", "V", "DC bias on the tip", -1e4, 1e4, open_low=False,

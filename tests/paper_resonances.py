@@ -24,8 +24,9 @@ def paper_tables() -> dict[str, ResonanceData]:
         free, contact = list(free), list(contact)
         modes = list(range(1, len(free) + 1)) + list(range(1, len(contact) + 1))
         conds = ["free"] * len(free) + ["contact"] * len(contact)
-        meta = Metadata(g["k"], g["L"], g["w"], 10e-6, free[0] * 1e3, "Jesse et al. 2006, Section VI.1",
-                        sigma)
+        meta = Metadata(spring_constant=g["k"], length=g["L"], width=g["w"], tip_height=10e-6,
+                        free_resonance=free[0] * 1e3, description="Jesse et al. 2006, Section VI.1",
+                        frequency_uncertainty_hz=sigma)
         return ResonanceData(meta, np.array(modes), np.array(conds), np.array(free + contact) * 1e3)
 
     return {"tip 1": table(paper_inputs.TIP1_FREE_KHZ, paper_inputs.TIP1_CONTACT_KHZ, 300.0),

@@ -46,7 +46,7 @@ def test_generated_composite_against_finite_elements(damping, component, interna
     beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, mu=0.15, gamma=0.9, alpha=0.2,
                   n_elements=200, **damping)
     f1 = float(FEBeam(2.4, 223e-6, 63.2e3, 1e-5, mu=0.15, gamma=0.9, n_elements=200).free_resonances(1)[0])
-    meta = SimpleNamespace(k=2.4, H=1e-5, L=223e-6, f1=f1)
+    meta = SimpleNamespace(spring_constant=2.4, tip_height=1e-5, length=223e-6, free_resonance=f1)
     model = Model(meta, ("tip_mass", "tip_setback", "tilt", component))
     f = np.array([30e3, 200e3, 500e3, 900e3])
     got = np.array(model.slopes(f, [math.log10(120.0), 2.0, 0.15, 0.9, 0.2, internal(f1)])).T
@@ -212,8 +212,8 @@ def test_cli_free_modes_only(tmp_path, capsys):
     m = tip2.metadata
     rows = "".join(f"{n},{c},{float(f)!r}\n" for n, c, f in zip(tip2.mode, tip2.condition, tip2.frequency_hz))
     data = tmp_path / "tip2.csv"
-    data.write_text(f"# spring_constant_n_per_m: {m.k}\n# length_m: {m.L}\n# width_m: {m.width}\n"
-                    f"# tip_height_m: {m.H}\n# free_resonance_hz: {m.f1}\n"
+    data.write_text(f"# spring_constant_n_per_m: {m.spring_constant}\n# length_m: {m.length}\n# width_m: {m.width}\n"
+                    f"# tip_height_m: {m.tip_height}\n# free_resonance_hz: {m.free_resonance}\n"
                     f"# frequency_uncertainty_hz: {m.frequency_uncertainty_hz}\n"
                     f"mode,condition,frequency_hz\n{rows}")
     out, png = tmp_path / "o.json", tmp_path / "o.png"
@@ -259,7 +259,7 @@ def test_overrides_order_and_quality_factors(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text(head + "1,contact,3e5,80\n2,free,3.7e5,\n1,free,6e4,200\n1,free,6e4,200\n")
     data = read(path, {"spring_constant_n_per_m": 4.0, "length_m": None})
-    assert data.metadata.k == 4.0 and data.metadata.L == 2e-4
+    assert data.metadata.spring_constant == 4.0 and data.metadata.length == 2e-4
     assert data.condition.tolist() == ["free", "free", "contact"] and data.mode.tolist() == [1, 2, 1]
     assert data.quality_factor[0] == 200 and math.isnan(data.quality_factor[1])
     path.write_text(head + "1,contact,3e5,80\n1,free,6e4,200\n1,free,6.1e4,200\n")

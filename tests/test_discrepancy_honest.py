@@ -78,7 +78,7 @@ def test_second_mechanism_untestable_from_two_q_values(tmp_path):
 def test_implausible_effects_are_not_findings():
     """A tip heavier than twice the beam, k2 five decades below k1, a set-back at the bound:
     each flagged with why; a plausible tip mass and set-back pass."""
-    meta = SimpleNamespace(k=0.5, L=1.6e-4, H=1e-5, f1=2e4)
+    meta = SimpleNamespace(spring_constant=0.5, length=1.6e-4, tip_height=1e-5, free_resonance=2e4)
     heavy = SimpleNamespace(model=Model(meta, ("tip_mass",)), internal=np.array([2.0, 1.0, 2.2]), fitted=None)
     assert "times the beam mass" in implausible(heavy)["tip_mass"]
     loose = SimpleNamespace(model=Model(meta, ("tip_mass",)), internal=np.array([3.6, -2.0, 0.3]), fitted=None)

@@ -36,16 +36,16 @@ def test_model_reads_the_spot_like_a_two_segment_beam():
     """The effect's slopes (undamped, set-back tip, spot on either side of it) against the
     exact beam solved on segments, per unit d1, d2, f0, q0; a spot mirrored about the tip
     or read at the free end would fail."""
-    meta = SimpleNamespace(k=2.0, H=1e-5, L=2e-4, f1=5e4)
+    meta = SimpleNamespace(spring_constant=2.0, tip_height=1e-5, length=2e-4, free_resonance=5e4)
     k1, k2 = 120.0, 70.0
     freq = np.array([3e4, 2.3e5, 6.1e5])
     for gamma, sigma in ((0.9, 0.72), (0.85, 0.93)):
         model = Model(meta, ("tip_setback", "spot_position"))
         got = np.array(model.slopes(freq, [math.log10(k1), math.log10(k2), gamma, sigma]))
         for j, f in enumerate(freq):
-            beta = BETA1 * math.sqrt(f / meta.f1)
-            want = [spot_response(beta, sigma, k=meta.k, L=meta.L, H=meta.H, kvv=k1, kll=k2, gamma=gamma,
-                                  **{drive: 1.0})[0] for drive in ("d1", "d2", "f0", "q0")]
+            beta = BETA1 * math.sqrt(f / meta.free_resonance)
+            want = [spot_response(beta, sigma, k=meta.spring_constant, L=meta.length, H=meta.tip_height, kvv=k1, kll=k2,
+                                  gamma=gamma, **{drive: 1.0})[0] for drive in ("d1", "d2", "f0", "q0")]
             np.testing.assert_allclose(got[:, j], want, rtol=1e-7)
 
 

@@ -138,7 +138,7 @@ def test_map_and_discrepancy_give_one_gap():
     prediction = (out["amplitude"][0] * np.exp(1j * out["phase"][0])
                   * model.shape_functions(out["k1"], out["quality_factor"])[0])
     sigma = noise_sigma(f, np.zeros(f.size), y)
-    meta = SimpleNamespace(k=2.0, H=10e-6, L=225e-6, f1=75e3)
+    meta = SimpleNamespace(spring_constant=2.0, tip_height=10e-6, length=225e-6, free_resonance=75e3)
     result = FitResult(Model(meta), np.zeros(2), np.zeros((2, 2)), y - prediction, sigma, 6)
     assert result.gap == pytest.approx(float(out["gap"][0]), rel=1e-6)
     assert 0.8 < result.gap < 1.25 and out["explained"][0] == 1.0

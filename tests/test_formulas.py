@@ -110,7 +110,8 @@ def test_free_resonances_with_a_tip_mass_scale_from_the_loaded_root():
 
     for (k, L, f1, H), mu, gamma in zip(_levers(8, 3), (0.05, 0.3, 1.0), (1.0, 0.95, 0.85)):
         fe = FEBeam(k, L, f1, H, mu=mu, gamma=gamma, n_elements=120).free_resonances(3)
-        model = Model(SimpleNamespace(k=k, H=H, L=L, f1=fe[0]), ("tip_mass", "tip_setback"))
+        model = Model(SimpleNamespace(spring_constant=k, tip_height=H, length=L, free_resonance=fe[0]),
+                      ("tip_mass", "tip_setback"))
         got = resonances(model, [0.0, 0.0, mu, gamma], False, 1.05 * fe[-1])
         np.testing.assert_allclose(got, fe, rtol=1e-6)
 
@@ -121,7 +122,8 @@ def test_resonance_grid_and_sensitivity_follow_the_refined_resonances():
     from pfmdyn.discrepancy.model import Model
     from pfmdyn.discrepancy.undamped_modes import resonance_sensitivity, resonances, resonances_many
 
-    model = Model(SimpleNamespace(k=2.0, H=1e-5, L=2.2e-4, f1=6e4), ("tip_mass", "tip_setback"))
+    lever = SimpleNamespace(spring_constant=2.0, tip_height=1e-5, length=2.2e-4, free_resonance=6e4)
+    model = Model(lever, ("tip_mass", "tip_setback"))
     internal = np.array([math.log10(150.0), math.log10(60.0), 0.2, 0.9])
     exact = resonances(model, internal, True, 1.2e6)
     [quick] = resonances_many(model, [internal], True, 1.2e6)
@@ -166,7 +168,7 @@ def test_contact_dashpot_and_viscous_width_as_reported_by_a_fit():
     np.testing.assert_allclose(formulas.contact_dashpot(x, k1, f1), x * k1 / (2 * math.pi * f1), rtol=1e-14)
     g = RNG.uniform(1e-4, 0.2, 20)
     np.testing.assert_allclose(formulas.viscous_width(g, f1), g * f1, rtol=1e-15)
-    meta = SimpleNamespace(k=2.0, H=1e-5, L=2e-4, f1=6e4)
+    meta = SimpleNamespace(spring_constant=2.0, tip_height=1e-5, length=2e-4, free_resonance=6e4)
     model = Model(meta, ("damping_contact", "damping_viscous"))
     internal = np.array([math.log10(150.0), math.log10(90.0), 0.02, 0.01])
     fit = FitResult(model, internal, np.eye(4) * 1e-12, np.zeros(8), 1.0, 4)
@@ -182,12 +184,12 @@ def test_viscous_width_is_every_free_modes_half_power_width():
     from pfmdyn.discrepancy.quality import loss_factors
     from pfmdyn.io.tables import Metadata
 
-    meta = Metadata(k=2.0, L=2e-4, width=3e-5, H=1e-5, f1=6e4)
+    meta = Metadata(spring_constant=2.0, length=2e-4, width=3e-5, tip_height=1e-5, free_resonance=6e4)
     model = Model(meta, ("damping_viscous",))
     f = resonances(model, [0.0, 0.0, 0.0], False, 2e6)
     for g in (0.002, 0.02):
         width = f * loss_factors(model, [0.0, 0.0, g], False, f)
-        np.testing.assert_allclose(width, formulas.viscous_width(g, meta.f1), rtol=1e-3)
+        np.testing.assert_allclose(width, formulas.viscous_width(g, meta.free_resonance), rtol=1e-3)
 
 
 def test_stiffness_limits_are_stated_as_frequency_ratios(capsys):
@@ -208,7 +210,7 @@ def test_spring_bounds_scale_with_the_lever():
     from pfmdyn.discrepancy.effects import spring_parameters
 
     for k, L, _, H in _levers(10, 5):
-        k1, k2 = spring_parameters(SimpleNamespace(k=k, L=L, H=H), False)
+        k1, k2 = spring_parameters(SimpleNamespace(spring_constant=k, length=L, tip_height=H), False)
         assert (k2.lower, k2.upper) == pytest.approx(math.log10(k * L**2 / H**2) + np.array([-6.0, 3.0]), abs=1e-12)
         assert (k1.lower, k1.upper) == pytest.approx(math.log10(k) + np.array([-2.0, 6.0]), abs=1e-12)
 

@@ -88,7 +88,7 @@ def test_ibw_asylum_image_layers_and_note(tmp_path, end):
     data = instrument_resonances(path, TIP)
     assert sorted(zip(data.condition, data.frequency_hz, data.quality_factor)) == \
         [("contact", 331250.0, 87.5), ("free", 71324.0, 151.2)]
-    assert data.metadata.k == 2.7193 and data.metadata.L == 2.25e-4
+    assert data.metadata.spring_constant == 2.7193 and data.metadata.length == 2.25e-4
 
 
 def test_ibw_note_missing_keys_and_nan_are_missing_not_zero(tmp_path, capsys):
@@ -531,4 +531,4 @@ def test_ibw_thermal_tune_gives_the_free_mode(tmp_path):
     data = instrument_resonances(path, TIP)
     assert data.condition.tolist() == ["free"] and data.mode.tolist() == [1]
     assert data.frequency_hz[0] == pytest.approx(f0, rel=2e-3) and data.quality_factor[0] == pytest.approx(q, rel=0.15)
-    assert data.metadata.k == 2.7193
+    assert data.metadata.spring_constant == 2.7193

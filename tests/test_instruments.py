@@ -76,7 +76,7 @@ def test_thermal_tune_header_spectrum_and_fitted_mode():
     data = instrument_resonances(THERMAL, {"length": 225e-6, "width": 40e-6, "tip_height": 12e-6})
     assert data.mode.tolist() == [1] and data.condition.tolist() == ["free"]
     assert data.frequency_hz[0] == pytest.approx(179.8e3, rel=2e-3)
-    assert data.quality_factor[0] == pytest.approx(442, rel=0.15) and data.metadata.k == 27.13
+    assert data.quality_factor[0] == pytest.approx(442, rel=0.15) and data.metadata.spring_constant == 27.13
 
 
 @pytest.mark.parametrize("name", sorted(SWEEPS))
@@ -96,8 +96,8 @@ def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():
     data = instrument_resonances(path, {"tip_height": 12e-6})
     assert data.condition.tolist() == ["free", "contact"] and data.mode.tolist() == [1, 1]
     assert data.frequency_hz.tolist() == [59162, 349890] and data.quality_factor.tolist() == [134.21, 166.43]
-    assert (data.metadata.k, data.metadata.L, data.metadata.H) == (8.3589, 2.4e-4, 12e-6)
-    assert instrument_resonances(path, {"tip_height": 1e-5, "spring_constant": 3.0}).metadata.k == 3.0
+    assert (data.metadata.spring_constant, data.metadata.length, data.metadata.tip_height) == (8.3589, 2.4e-4, 12e-6)
+    assert instrument_resonances(path, {"tip_height": 1e-5, "spring_constant": 3.0}).metadata.spring_constant == 3.0
 
 
 def test_inspect_exits_0_on_every_real_file_and_writes_numbers(tmp_path):

@@ -113,7 +113,7 @@ def test_model_jacobian_matches_central_differences(effects):
 
     from pfmdyn.discrepancy.model import Model
     rng = np.random.default_rng(5)
-    meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=63.2e3)
+    meta = SimpleNamespace(spring_constant=2.4, tip_height=1e-5, length=2.23e-4, free_resonance=63.2e3)
     model = Model(meta, effects)
     lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
     x = lower + (upper - lower) * rng.uniform(0.2, 0.8, len(lower))
@@ -141,7 +141,7 @@ def test_design_derivative_times_coefficients():
 
     from pfmdyn.discrepancy.model import Model
     rng = np.random.default_rng(8)
-    model = Model(SimpleNamespace(k=0.3, H=4e-6, L=4.5e-4, f1=2.1e3),
+    model = Model(SimpleNamespace(spring_constant=0.3, tip_height=4e-6, length=4.5e-4, free_resonance=2.1e3),
                   ("damping_contact", "tilt", "background"))
     lower, upper = (np.array([getattr(p, b) for p in model.parameters]) for b in ("lower", "upper"))
     x = lower + (upper - lower) * rng.uniform(0.3, 0.7, len(lower))
@@ -167,7 +167,7 @@ def test_resonance_sensitivity_matches_differences(contact):
 
     from pfmdyn.discrepancy.model import Model
     from pfmdyn.discrepancy.undamped_modes import resonance_sensitivity, resonances
-    meta = SimpleNamespace(k=2.4, H=1e-5, L=2.23e-4, f1=54.55e3)
+    meta = SimpleNamespace(spring_constant=2.4, tip_height=1e-5, length=2.23e-4, free_resonance=54.55e3)
     model = Model(meta, ("tip_mass", "tip_setback"))
     x = np.array([2.0, 1.0, 0.05, 0.9])
     f = resonances(model, x, contact, 1.2e6)

@@ -57,8 +57,7 @@ def _analyse(data, args):
 
 def _lever_in_medium(data, args):
     """The data's lever (its measured free resonance) in ``--medium``: it needs the width."""
-    meta = data.metadata
-    found = {"spring_constant": meta.k, "length": meta.L, "width": meta.width, "free_resonance": meta.f1}
+    found = {name: getattr(data.metadata, name) for name in ("spring_constant", "length", "width", "free_resonance")}
     return flags.cantilever(args, {k: v for k, v in found.items() if v is not None})
 
 

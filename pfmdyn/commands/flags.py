@@ -14,7 +14,7 @@ from pathlib import Path
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..medium import Medium
-from ..io.record import FIELDS, MissingFieldError
+from ..io.record import MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "given",
@@ -127,7 +127,7 @@ def require(values: dict, names, file=None) -> None:
     """
     for name in names:
         if values.get(name) is None:
-            what = FIELDS[name][0] if name in FIELDS else name.replace("_", " ")
+            what = NAMES[name].label
             where = f" in {Path(file).name}" if file else ""
             raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
 

@@ -102,9 +102,9 @@ def _from_file(path: str) -> tuple[dict, list, list]:
         if not contact.any():
             raise UserError(f"{path}: no contact resonance in the table")
         free = [f for m, c, f in zip(data.mode, data.condition, data.frequency_hz) if c == "free" and m == 1]
-        meta = data.metadata
-        found = {"spring_constant": meta.k, "length": meta.L, "width": meta.width, "tip_height": meta.H,
-                 "free_resonance": free[0] if free else meta.f1}
+        found = {name: value for name, value in vars(data.metadata).items() if name in LEVER}
+        if free:
+            found["free_resonance"] = free[0]
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
     record = read_instrument(path)
     found = {key: value for key, value in record.fields.items() if key in LEVER}

@@ -156,7 +156,7 @@ class Damping(Effect):
 
     def jacobian(self, chain: Chain) -> tuple:
         q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
-        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.k * d_f[1][q])
+        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.spring_constant * d_f[1][q])
                 + chain.rotation[0] * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
 
 
@@ -172,7 +172,7 @@ class ViscousDamping(Damping):
         loss = values["viscous_loss"]
         if loss["value"] is None:
             return {}
-        width = formulas.viscous_width(loss["value"], meta.f1)
+        width = formulas.viscous_width(loss["value"], meta.free_resonance)
         return {"viscous_width_hz": {"value": float(width), "stderr": None, "unit": "Hz",
                                      "determined": loss["determined"]}}
 
@@ -207,7 +207,7 @@ class ContactDamping(Damping):
         if not values.get("k1", {}).get("value"):
             return {}
         loss = values["contact_loss"]
-        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.f1)
+        eta = formulas.contact_dashpot(loss["value"], values["k1"]["value"], meta.free_resonance)
         return {"eta": {"value": float(eta), "stderr": None, "unit": "N s/m", "determined": loss["determined"]}}
 
 
@@ -269,15 +269,15 @@ class Background(Effect):
 
 @dataclass(frozen=True)
 class SpotPosition(Effect):
-    """The slope read at the laser spot ``x_s = sigma L`` (:data:`pfmdyn.composed.at_spot`)
+    """The slope read at the laser spot ``x_s = spot_position L`` (:data:`pfmdyn.composed.at_spot`)
     instead of the free end: it reweights the modes (and can put a zero between them) but moves
     no resonance, so its Jacobian term has no free-root part."""
 
     def reading(self, coords):
-        return composed.at_spot, (coords["sigma"],)
+        return composed.at_spot, (coords["spot_position"],)
 
     def partials(self, coords) -> set[str]:
-        return {"sigma"}
+        return {"sigma"}        # the generated module's symbol for x_s / L (pfmdyn.composed)
 
     def jacobian(self, chain: Chain) -> tuple:
         return (chain.part["sigma"],)
@@ -288,25 +288,23 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     ViscousDamping("damping_viscous", (VISCOUS_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
     FluidDamping("damping_fluid", (FLUID_LOSS,), "derivations/damping.py", index=1, uses=("beta",)),
     ContactDamping("damping_contact", (CONTACT_LOSS,), "derivations/damping.py", index=2),
-    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, description="tip mass / beam mass", public="tip_mass_ratio",
+    TipMass("tip_mass", (Parameter("mu", "", 0.0, 3.0, public="tip_mass_ratio",
                                    null=0.0, seeds=(0.03, 0.05, 0.08, 0.13, 0.2, 0.3, 0.45, 0.7, 1.0, 1.5)),),
             "derivations/tip_mass.py", moves_resonances=True),
-    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, description="tip position / L", public="tip_position",
+    TipSetback("tip_setback", (Parameter("gamma", "", 0.5, 1.0, public="tip_position",
                                          null=1.0, seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71,
                                                           0.68)),),
                "derivations/pieces.py", moves_resonances=True),
     Tilt("tilt", (Parameter("alpha", "deg", -0.8, 0.8, public="tilt", scale=-180.0 / math.pi, null=0.0,
-                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45),
-                            description="beam inclination, positive when the free end is nearer the sample"),),
+                            seeds=(-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45)),),
          "derivations/tilt.py", moves_resonances=True),
     LateralStiffness("lateral_stiffness", (), "derivations/elastic_contact.py", moves_resonances=True),
     Background("background", (), "pfmdyn/discrepancy/model.py (additive cross-talk)", spectrum_only=True),
     # The laser spot moves no resonance: it reweights the modes (and can put a zero between
     # them), so only a spectrum shows it; its seeds span where users put the spot.
-    SpotPosition("spot_position", (Parameter("sigma", "", 0.3, 1.0, public="spot_position", null=1.0,
+    SpotPosition("spot_position", (Parameter("spot_position", "", 0.3, 1.0, null=1.0,
                                              seeds=(0.98, 0.95, 0.92, 0.89, 0.86, 0.83, 0.8, 0.77, 0.74, 0.71, 0.68,
-                                                    0.65, 0.6, 0.55, 0.5),
-                                             description="detection (laser) spot x_s / L"),),
+                                                    0.65, 0.6, 0.55, 0.5)),),
                  "derivations/pieces.py", spectrum_only=True),
 )}
 """Component name -> :class:`Effect` (``lateral_stiffness``'s parameter ``k2`` is a spring)."""
@@ -332,21 +330,21 @@ def spring_parameters(meta, vertical_only: bool) -> tuple[Parameter, ...]:
     """``k1`` (and ``k2`` unless ``vertical_only``) with bounds scaled to the cantilever.
 
     >>> from types import SimpleNamespace
-    >>> p = spring_parameters(SimpleNamespace(k=26.0, L=450e-6, H=12e-6), False)
+    >>> p = spring_parameters(SimpleNamespace(spring_constant=26.0, length=450e-6, tip_height=12e-6), False)
     >>> [(q.name, round(q.lower, 2), round(q.upper, 2)) for q in p]
     [('k1', -0.59, 7.41), ('k2', -1.44, 7.56)]
     """
-    a = math.log10(meta.k)
-    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L))
-    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10", description="normal contact stiffness")
-    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf,
-                   description="lateral contact stiffness")
+    a = math.log10(meta.spring_constant)
+    b = math.log10(formulas.k2_from_ratio(1.0, meta.spring_constant, meta.tip_height, meta.length))
+    k1 = Parameter("k1", "N/m", a - 2.0, a + 6.0, transform="log10")
+    k2 = Parameter("k2", "N/m", b - 6.0, b + 3.0, transform="log10", null=-math.inf)
     return (k1,) if vertical_only else (k1, k2)
 
 
 def spring_grid(meta, count_k1: int, count_k2: int):
     """Start grids (internal log10) for ``k1`` (``k/10 .. 1e4 k``) and ``k2`` (lateral scale)."""
     import numpy as np
-    a = math.log10(meta.k) + np.linspace(-1, 4.3, count_k1)
-    b = math.log10(formulas.k2_from_ratio(1.0, meta.k, meta.H, meta.L)) + np.linspace(-4.5, 1, count_k2)
+    a = math.log10(meta.spring_constant) + np.linspace(-1, 4.3, count_k1)
+    b = (math.log10(formulas.k2_from_ratio(1.0, meta.spring_constant, meta.tip_height, meta.length))
+         + np.linspace(-4.5, 1, count_k2))
     return a, b

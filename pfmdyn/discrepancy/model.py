@@ -17,7 +17,7 @@ compose; damping enters as the generated substitution (:func:`pfmdyn.cantilever.
 complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
-lever at ``x_s = sigma L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
+lever at ``x_s = spot_position L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
 
 The solver's Jacobian comes from the derivations too: the partials of the slopes
 (:func:`pfmdyn.composed.slope_and_jacobian`, from the same assembled system), of the damping substitution and
@@ -110,14 +110,14 @@ class Model:
         end, or where a component reads it: the laser spot with the effect ``spot_position``)."""
         c = self.coords(internal)
         m = self.meta
-        r = np.asarray(frequency_hz, dtype=float) / m.f1
-        b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+        r = np.asarray(frequency_hz, dtype=float) / m.free_resonance
+        b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
-            d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+            d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                      c["inv_q"], drag(c, r), c["x"])
             kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
+            return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.tip_height, m.length, d.mu, c["gamma"], 0.0)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -132,18 +132,18 @@ class Model:
         """
         c = self.coords(internal)
         m = self.meta
-        r = np.asarray(frequency_hz, dtype=float) / m.f1
-        b1, d_b1 = free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
+        r = np.asarray(frequency_hz, dtype=float) / m.free_resonance
+        b1, d_b1 = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
         with np.errstate(all="ignore"):
             loss = (c["inv_q"], drag(c, r), c["x"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
-            d = damping_substitution(r, root_r, m.k, c["k1"], c["mu"], *loss)
+            d = damping_substitution(r, root_r, m.spring_constant, c["k1"], c["mu"], *loss)
             d_f = damping.d_factors(r, *loss)
             spring = d.k1
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            T, J = module.slope_and_jacobian(d.beta, *at, d.k, kvv, kll, kvl, m.H, m.L,
+            T, J = module.slope_and_jacobian(d.beta, *at, d.k, kvv, kll, kvl, m.tip_height, m.length,
                                              d.mu, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
@@ -299,7 +299,7 @@ class FitResult:
         """lmfit-style text: effects, fit statistics, parameters.
 
         >>> from types import SimpleNamespace
-        >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+        >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
         >>> r = FitResult(Model(meta, ("tip_mass",), True), np.array([2.0, 0.1]), np.eye(2) * 1e-4,
         ...               np.ones(4), 1.0, 2, sigma_known=True)
         >>> print(r.report().splitlines()[1])

@@ -40,7 +40,7 @@ def implausible(fit) -> dict[str, str]:
 
     >>> from types import SimpleNamespace as S
     >>> from pfmdyn.discrepancy.model import Model
-    >>> meta = S(k=0.5, L=1.6e-4, H=1e-5, f1=2e4)
+    >>> meta = S(spring_constant=0.5, length=1.6e-4, tip_height=1e-5, free_resonance=2e4)
     >>> model = Model(meta, ("tip_mass",))
     >>> implausible(S(model=model, internal=np.array([1.0, 0.0, 2.2]), fitted=None))["tip_mass"]
     'tip mass 2.2 times the beam mass (at most 2 is a tip)'

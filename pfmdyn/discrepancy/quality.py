@@ -46,13 +46,13 @@ def _characteristic(model: Model, internal, contact: bool):
     losses scaled by ``s``."""
     c = model.coords(internal)
     m = model.meta
-    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
+    b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
 
     def f(r, s):
-        d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.k, c["k1"], c["mu"],
+        d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                  s * c["inv_q"], s * drag(c, r), s * c["x"])
         kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-        return composed.characteristic(d.beta, d.k, kvv, kll, kvl, m.H, m.L, d.mu, c["gamma"], 0.0)
+        return composed.characteristic(d.beta, d.k, kvv, kll, kvl, m.tip_height, m.length, d.mu, c["gamma"], 0.0)
     return f
 
 
@@ -64,7 +64,7 @@ def damped_roots(model: Model, internal, contact: bool, r0, guess=None) -> np.nd
     from them replaces the continuation.
 
     >>> from types import SimpleNamespace
-    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
     >>> model = Model(meta, ("damping_viscous",))
     >>> rc = damped_roots(model, [-9.0, -9.0, 0.02], False, [1.0, 6.2669])
     >>> (np.abs(rc) / (2 * rc.imag)).round(1).tolist()     # same width: Q = r / 0.02
@@ -79,7 +79,7 @@ def loss_factors(model: Model, internal, contact: bool, frequency_hz) -> np.ndar
     """``1 / Q`` of the model's modes at the undamped resonances ``frequency_hz`` (0: no damping).
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(k=1.0, L=1e-4, width=3e-5, H=1e-5, f1=1e4)
+    >>> meta = Metadata(spring_constant=1.0, length=1e-4, width=3e-5, tip_height=1e-5, free_resonance=1e4)
     >>> loss = loss_factors(Model(meta, ("damping_internal",)), [-9.0, -9.0, 0.01], False, [1e4, 6.2669e4])
     >>> (1 / loss).round(2).tolist()
     [100.0, 100.0]
@@ -102,7 +102,7 @@ def _loss(model, internal, contact, f, guess=None):
 def loss_and_roots(model: Model, internal, contact: bool, frequency_hz, guess=None):
     """``1 / Q`` and the complex roots ``r_c`` (for ``guess`` of a nearby model), no cache."""
     f = np.asarray(frequency_hz, float)
-    rc = damped_roots(model, internal, contact, f / model.meta.f1, guess)
+    rc = damped_roots(model, internal, contact, f / model.meta.free_resonance, guess)
     loss = formulas.loss_factor_from_root(rc.real, np.abs(rc.imag))
     return np.where(np.isfinite(loss), loss, 0.0), rc
 

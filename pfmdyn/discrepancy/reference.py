@@ -31,7 +31,7 @@ ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
                        description="point mass over the lever's mass")
 
 
-POSITION = Parameter("added_mass_position", "", 0.05, 1.0, description="point mass position x/L")
+POSITION = Parameter("added_mass_position", "", 0.05, 1.0)
 
 
 CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),

@@ -55,7 +55,7 @@ def frequency_sigma(data: ResonanceData) -> np.ndarray:
     in quadrature where Q is given.
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3)
     >>> data = ResonanceData(meta, np.array([1, 1]), np.array(["free", "contact"]), np.array([54.55e3, 260e3]),
     ...                      quality_factor=np.array([150.0, np.nan]))
     >>> frequency_sigma(data).round(3).tolist()
@@ -73,7 +73,7 @@ def rows_with_q(data: ResonanceData) -> np.ndarray:
     """Rows whose Q is given (``inf``: a mode measured without damping).
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3)
     >>> data = ResonanceData(meta, np.array([1, 1]), np.array(["free", "contact"]), np.array([54.55e3, 260e3]),
     ...                      quality_factor=np.array([150.0, np.nan]))
     >>> rows_with_q(data).tolist()
@@ -99,7 +99,7 @@ def contact_modes(data: ResonanceData) -> int:
     """How many rows are contact modes.
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3)
     >>> contact_modes(ResonanceData(meta, np.array([1, 1]), np.array(["free", "contact"]), np.array([54.55e3, 260e3])))
     1
     """
@@ -118,7 +118,8 @@ def held_springs(model: Model, data: ResonanceData) -> dict[str, str]:
     neither spring is fitted.
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3, "free modes", 100.0)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3,
+    ...                 description="free modes", frequency_uncertainty_hz=100.0)
     >>> free = ResonanceData(meta, np.array([1, 2, 3]), np.array(["free"] * 3),
     ...                      np.array([54.55, 346.73, 980.55]) * 1e3)
     >>> held_springs(Model(meta), free)["k2"][:24]
@@ -230,7 +231,7 @@ def damping_seeds(data: ResonanceData) -> dict[str, tuple]:
     """Start values of the damping parameters from the table's Q values.
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3)
     >>> data = ResonanceData(meta, np.array([1, 1]), np.array(["free", "contact"]), np.array([54.55e3, 260e3]),
     ...                      quality_factor=np.array([150.0, np.nan]))
     >>> damping_seeds(data)["inv_q"]
@@ -239,7 +240,7 @@ def damping_seeds(data: ResonanceData) -> dict[str, tuple]:
     has_q = rows_with_q(data)
     if not has_q.any():
         return {"inv_q": (0.01,), "g": (0.02,), "fluid": (0.02,), "x": (0.01,)}
-    q, r = data.quality_factor[has_q], data.frequency_hz[has_q] / data.metadata.f1
+    q, r = data.quality_factor[has_q], data.frequency_hz[has_q] / data.metadata.free_resonance
     contact = data.condition[has_q] == "contact"
     x = float(np.median(1 / (q * r)[contact])) if contact.any() else 0.01
     return {"inv_q": (float(np.clip(np.median(1 / q), 1e-4, 0.4)),),
@@ -263,7 +264,8 @@ def fit_resonances(model: Model, data: ResonanceData, start: np.ndarray | None =
     criterion and the covariance count every fitted parameter).
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3, "free modes", 100.0)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3,
+    ...                 description="free modes", frequency_uncertainty_hz=100.0)
     >>> free = ResonanceData(meta, np.array([1, 2, 3]), np.array(["free"] * 3),
     ...                      np.array([54.55, 346.73, 980.55]) * 1e3)
     >>> result = fit_resonances(Model(meta, ("tip_mass",)), free)

@@ -268,7 +268,7 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
       (:meth:`ResonanceProblem.candidates`: one contact mode per contact parameter).
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> meta = Metadata(2.4, 223e-6, 24e-6, 10e-6, 54.55e3)
+    >>> meta = Metadata(spring_constant=2.4, length=223e-6, width=24e-6, tip_height=10e-6, free_resonance=54.55e3)
     >>> free = ResonanceData(meta, np.array([1, 2, 3]), np.array(["free"] * 3), np.array([54.55, 346.73, 980.55]) * 1e3)
     >>> candidate_rule(free, vertical_only=True)
     ['tip_setback', 'tip_mass']

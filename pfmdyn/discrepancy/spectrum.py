@@ -76,7 +76,7 @@ def thin(data: SpectrumData, max_rows: int | None = None) -> tuple[SpectrumData,
     ``max_rows`` rows (default :data:`MAX_ROWS`); returns the data and k.
 
     >>> from pfmdyn.io.tables import Metadata
-    >>> m = Metadata(2.4, 2.2e-4, 3e-5, 1e-5, 6e4)
+    >>> m = Metadata(spring_constant=2.4, length=2.2e-4, width=3e-5, tip_height=1e-5, free_resonance=6e4)
     >>> f = np.repeat(np.arange(1.0, 11.0), 2); v = np.tile([0.0, 1.0], 10)
     >>> small, k = thin(SpectrumData(m, f, v, f + 0j), max_rows=8)
     >>> k, small.frequency_hz.tolist()
@@ -198,10 +198,10 @@ class SpectrumProblem:
         if not ok.any():
             return {"internal": 0.01, "viscous": 0.02, "fluid": 0.02, "contact": 0.01}
         q = peaks[ok] / widths[ok]
-        r = peaks[ok] / m.f1
+        r = peaks[ok] / m.free_resonance
         return {"internal": float(np.clip(np.median(1 / q), 1e-4, 0.4)),
-                "viscous": float(np.clip(np.median(widths[ok]) / m.f1, 1e-4, 0.9)),
-                "fluid": float(np.clip(np.median(widths[ok] / np.sqrt(r)) / m.f1, 1e-4, 0.9)),
+                "viscous": float(np.clip(np.median(widths[ok]) / m.free_resonance, 1e-4, 0.9)),
+                "fluid": float(np.clip(np.median(widths[ok] / np.sqrt(r)) / m.free_resonance, 1e-4, 0.9)),
                 "contact": float(np.clip(np.median(1 / (q * r)), 1e-4, 4.0))}
 
     # -- the problem interface -----------------------------------------------------------

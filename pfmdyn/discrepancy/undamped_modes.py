@@ -26,19 +26,19 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     the characteristic function is entire (no poles), so every sign change is a root.
 
     >>> from types import SimpleNamespace
-    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
     >>> (resonances(Model(meta), [-9.0, -9.0], True, 7e4) / 1e4).round(4).tolist()   # 6.267:1
     [1.0, 6.2669]
     """
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-    b1 = free_root(m.k, m.H, m.L, c["mu"], c["gamma"])
-    args = (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
-    top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
+    b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
+    args = (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
+    top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
-    return formulas.frequency_from_beta(roots, m.f1, b1)
+    return formulas.frequency_from_beta(roots, m.free_resonance, b1)
 
 
 def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
@@ -47,17 +47,17 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     per distinct free root, for start grids.
 
     >>> from types import SimpleNamespace
-    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
     >>> [(f / 1e4).round(3).tolist() for f in resonances_many(Model(meta), [[-9.0, -9.0]] * 2, True, 7e4)]
     [[1.0, 6.267], [1.0, 6.267]]
     """
     m = model.meta
     args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
-    b1s = np.array([free_root(m.k, m.H, m.L, a[6], a[7]) for a in args])
+    b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, a[6], a[7]) for a in args])
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
         rows = np.flatnonzero(b1s == b1)
-        top = float(formulas.beta_from_frequency(f_max, m.f1, b1))
+        top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
             vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
@@ -65,7 +65,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         for row, i in enumerate(rows):
             idx = np.flatnonzero(change[row])
             lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
-            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.f1, b1)
+            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
     return out
 
 
@@ -74,14 +74,14 @@ def characteristic_args(model: Model, internal, contact: bool) -> tuple:
     mu, gamma, rho_g)``, the springs rotated by the tilt (zero for free modes).
 
     >>> from types import SimpleNamespace
-    >>> meta = SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4)
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
     >>> [float(a) for a in characteristic_args(Model(meta), [2.0, 2.0], True)]
     [1.0, 100.0, 100.0, 0.0, 1e-05, 0.0001, 0.0, 1.0, 0.0]
     """
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-    return (m.k, kvv, kll, kvl, m.H, m.L, c["mu"], c["gamma"], 0.0)
+    return (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
 
 
 def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:
@@ -94,7 +94,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     one for the free root); the model's parameters are algebraic functions of the internal ones.
 
     >>> from types import SimpleNamespace
-    >>> model = Model(SimpleNamespace(k=1.0, H=1e-5, L=1e-4, f1=1e4))
+    >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4))
     >>> f = resonances(model, [2.0, 2.0], True, 7e4)       # contact mode 1 at k1 = k2 = 100 k
     >>> (resonance_sensitivity(model, [2.0, 2.0], True, f) / f[:, None]).round(3).tolist()
     [[0.19, 0.143]]
@@ -103,8 +103,8 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     m = model.meta
     f = np.asarray(frequency_hz, float)
     c = model.coords(internal)
-    b1, d_b1_dp = free_root_and_jacobian(m.k, m.H, m.L, c["mu"], c["gamma"])
-    beta = formulas.beta_from_frequency(f, m.f1, b1)
+    b1, d_b1_dp = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
+    beta = formulas.beta_from_frequency(f, m.free_resonance, b1)
     moved = ("kvv", "kll", "kvl", "mu", "gamma")
     at = [composed.PARAMETERS.index(p) for p in moved]
     a0 = np.array(characteristic_args(model, internal, contact), float)

@@ -43,6 +43,7 @@ class Parameter:
     upper: float
     transform: str = "linear"
     description: str = ""
+    """What it is; by default the meaning :mod:`pfmdyn.names` gives its :attr:`key`."""
     public: str = ""
     scale: float = 1.0
     null: float | None = None
@@ -51,6 +52,8 @@ class Parameter:
     def __post_init__(self):
         if self.transform not in ("linear", "log10", "inverse"):
             raise ValueError(f"unknown transform {self.transform!r}")
+        if not self.description and self.key in NAMES:
+            object.__setattr__(self, "description", NAMES[self.key].meaning)
 
     @property
     def key(self) -> str:
@@ -158,20 +161,16 @@ def bounds(parameters) -> tuple[np.ndarray, np.ndarray]:
     return np.array([p.lower for p in parameters], float), np.array([p.upper for p in parameters], float)
 
 
-INTERNAL_LOSS = Parameter("inv_q", "", 0.0, 0.5, transform="inverse", public="quality_factor",
-                          description="internal friction: complex modulus E (1 + i/Q)", null=0.0,
+INTERNAL_LOSS = Parameter("inv_q", "", 0.0, 0.5, transform="inverse", public="quality_factor", null=0.0,
                           seeds=(0.003, 0.01, 0.03))
 """Internal friction as the loss factor ``1/Q`` (0: none)."""
 
-VISCOUS_LOSS = Parameter("g", "", 0.0, 1.0, public="viscous_loss", null=0.0, seeds=(0.01, 0.03, 0.1),
-                         description="viscous force c u_t per length: 1/Q of free mode 1")
+VISCOUS_LOSS = Parameter("g", "", 0.0, 1.0, public="viscous_loss", null=0.0, seeds=(0.01, 0.03, 0.1))
 """Viscous drag ``g = c / (rho S omega1)`` (:mod:`pfmdyn.derivations.damping`)."""
 
-FLUID_LOSS = Parameter("fluid", "", 0.0, 1.0, public="fluid_loss", null=0.0, seeds=(0.003, 0.01, 0.03),
-                       description=NAMES["fluid_loss"].meaning)
+FLUID_LOSS = Parameter("fluid", "", 0.0, 1.0, public="fluid_loss", null=0.0, seeds=(0.003, 0.01, 0.03))
 """A fluid's Stokes-layer loss, Sader's hydrodynamic function at high Reynolds number: the drag
 ``fluid sqrt(r)`` (:func:`pfmdyn.discrepancy.effects.fluid_law`)."""
 
-CONTACT_LOSS = Parameter("x", "", 0.0, 5.0, public="contact_loss", null=0.0, seeds=(0.003, 0.02, 0.1),
-                         description="dashpot eta parallel to k1: omega1 eta / k1")
+CONTACT_LOSS = Parameter("x", "", 0.0, 5.0, public="contact_loss", null=0.0, seeds=(0.003, 0.02, 0.1))
 """Contact dashpot ``x = omega1 eta / k1`` (:mod:`pfmdyn.derivations.damping`)."""

@@ -16,16 +16,18 @@ __all__ = ["Metadata", "SpectrumData", "ResonanceData"]
 
 @dataclass(frozen=True)
 class Metadata:
-    """Cantilever description: k (N/m), L, width, H (m), first free resonance f1 (Hz).
+    """Cantilever description in the names of :mod:`pfmdyn.names` (SI units).
 
-    ``width`` is None when not given: no resonance depends on it.
+    ``width`` is None when not given: no resonance depends on it.  ``frequency_uncertainty_hz``
+    applies to every resonance of a table, free and contact alike (``contact_uncertainty`` of
+    :mod:`pfmdyn.names` covers contact resonances only).
     """
 
-    k: float
-    L: float
+    spring_constant: float
+    length: float
     width: float | None
-    H: float
-    f1: float
+    tip_height: float
+    free_resonance: float
     description: str = ""
     frequency_uncertainty_hz: float | None = None
     quality_factor_uncertainty: float | None = None

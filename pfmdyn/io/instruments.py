@@ -179,10 +179,10 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
         else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
             modes, conditions = np.array([1]), np.array(["free"])
             freqs, qs = np.array([f_free]), np.array([q_free])
-    k, length, height, f1 = [required_field(record, key, overrides) for key in
-                             ("spring_constant", "length", "tip_height", "free_resonance")]
+    lever = {key: required_field(record, key, overrides)
+             for key in ("spring_constant", "length", "tip_height", "free_resonance")}
     # No resonance depends on the width: taken when known, never asked for.
     width = required_field(record, "width", overrides) if ("width" in record.fields or
                                                              overrides.get("width") is not None) else None
-    metadata = Metadata(k, length, width, height, f1, description=f"{record.instrument}: {name}")
+    metadata = Metadata(**lever, width=width, description=f"{record.instrument}: {name}")
     return ResonanceData(metadata, modes, conditions, freqs, quality_factor=qs)

@@ -10,26 +10,17 @@ import re
 from dataclasses import dataclass, field
 
 from ..errors import UserError
-from ..names import canonical
+from ..names import NAMES, canonical
 
 __all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord", "make_record", "make_channel",
            "si_unit",
            "si_value", "si_spectrum", "decode_text", "attribute_texts"]
 
-FIELDS = {
-    "spring_constant": ("spring constant", "N/m"),
-    "free_resonance": ("free resonance", "Hz"),
-    "free_quality_factor": ("free Q", ""),
-    "contact_resonance": ("contact resonance", "Hz"),
-    "contact_quality_factor": ("contact Q", ""),
-    "length": ("lever length", "m"),
-    "width": ("lever width", "m"),
-    "tip_height": ("tip height", "m"),
-    "drive_frequency": ("drive frequency", "Hz"),
-    "tip_bias": ("tip bias", "V"),
-}
-"""Cantilever field (its name in :mod:`pfmdyn.names`) -> (what it is, SI unit).  Every record
-lists each as found or missing."""
+FIELDS = {name: (NAMES[name].label, "" if NAMES[name].unit == "1" else NAMES[name].unit)
+          for name in ("spring_constant", "free_resonance", "free_quality_factor", "contact_resonance",
+                       "contact_quality_factor", "length", "width", "tip_height", "drive_frequency", "tip_bias")}
+"""Cantilever field (its name in :mod:`pfmdyn.names`) -> (what it is, SI unit; '' for a pure
+number), both from :mod:`pfmdyn.names`.  Every record lists each as found or missing."""
 
 KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 

@@ -105,10 +105,8 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         if not low <= values[key] <= high:
             raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
                             f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
-    return Metadata(values["spring_constant"], values["length"], values.get("width"),
-                    values["tip_height"], values["free_resonance"],
-                    meta.get("description", ""), values.get("frequency_uncertainty_hz"),
-                    values.get("quality_factor_uncertainty"))
+    return Metadata(**{key: values.get(key) for key in REQUIRED_KEYS + OPTIONAL_KEYS},
+                    description=meta.get("description", ""))
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
@@ -156,7 +154,7 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
                         f"{MIN_SPECTRUM_FREQUENCIES} to show its resonances")
     if not np.any(spectra.response):
         raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
-    check_band(str(path), spectra.frequency_hz, metadata.f1, SPECTRUM_BAND)
+    check_band(str(path), spectra.frequency_hz, metadata.free_resonance, SPECTRUM_BAND)
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
 
 
@@ -234,7 +232,7 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
     if len(freqs):
-        check_band(str(path), freqs, metadata.f1, TABLE_BAND)
+        check_band(str(path), freqs, metadata.free_resonance, TABLE_BAND)
     order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
                          quality_factor=qs[order] if q_idx is not None else None)

@@ -65,24 +65,8 @@ class BeamMapModel:
     """The k2 policy: ``k2`` held, ``k2_over_k1``/``poisson`` tied, or nothing said (free with two
     or more bands, Mindlin's tie with one)."""
     k1_range: tuple[float, float] | None = None
-    """k1 (N/m) the start grid covers (None: ``k`` to ``1e4 k``); the fit's bounds are a decade
-    wider."""
-
-    @property
-    def k(self) -> float:
-        return self.lever.spring_constant
-
-    @property
-    def L(self) -> float:
-        return self.lever.length
-
-    @property
-    def f1(self) -> float:
-        return self.lever.free_resonance
-
-    @property
-    def H(self) -> float:
-        return self.lever.tip_height or 0.0
+    """k1 (N/m) the start grid covers (None: the lever's spring constant to 1e4 times it); the
+    fit's bounds are a decade wider."""
 
     @property
     def outputs(self) -> dict[str, tuple[str, str]]:
@@ -121,7 +105,8 @@ class BeamMapModel:
     @property
     def k1_span(self) -> tuple[float, float]:
         """:attr:`k1_range` or its default."""
-        return tuple(self.k1_range) if self.k1_range else (self.k, 1e4 * self.k)
+        k = self.lever.spring_constant
+        return tuple(self.k1_range) if self.k1_range else (k, 1e4 * k)
 
     @functools.cached_property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -130,13 +115,11 @@ class BeamMapModel:
         :attr:`k1_span`, k2 from a tenth of its lower end, Q 1 to 1e5 (its upper bound is no loss:
         the null)."""
         lo, hi = self.k1_span
-        out = [Parameter("k1", "N/m", math.log10(lo / 10), math.log10(hi * 10), transform="log10",
-                         description="vertical contact stiffness"),
-               Parameter("q", "1", 0.0, 5.0, transform="log10", public="quality_factor", null=5.0,
-                         description="quality factor Q of the beam loss 1/Q (internal friction)")]
+        out = [Parameter("k1", "N/m", math.log10(lo / 10), math.log10(hi * 10), transform="log10"),
+               Parameter("q", "1", 0.0, 5.0, transform="log10", public="quality_factor", null=5.0)]
         if self.k2_mode == "free":
             out.append(Parameter("k2", "N/m", math.log10(lo / 100), math.log10(hi * 10), transform="log10",
-                                 null=math.log10(lo / 100), description="longitudinal contact stiffness"))
+                                 null=math.log10(lo / 100)))
         extra = {"viscous": VISCOUS_LOSS, "contact": CONTACT_LOSS}
         return tuple(out + [extra[m] for m in self.mechanisms if m in extra])
 
@@ -184,17 +167,19 @@ class BeamMapModel:
         mu), None where not needed: the generated elastic contact for the paper's probe, else the
         generated composed model (set-back, heavy or tilted tip: springs rotated onto the beam
         axes, so the partials w.r.t. k1 and k2 combine those w.r.t. kvv, kll, kvl)."""
+        lever = self.lever
+        height = lever.tip_height or 0.0        # no tip height: the lateral force has no lever arm
+        k, length = lever.spring_constant, lever.length
         if not self._composed:
             if not jacobian:
-                return elastic_contact.slope(beta, self.k, k1e, k2e, self.H, self.L), None
-            values, partials = elastic_contact.slope_and_jacobian(beta, self.k, k1e, k2e, self.H, self.L)
+                return elastic_contact.slope(beta, k, k1e, k2e, height, length), None
+            values, partials = elastic_contact.slope_and_jacobian(beta, k, k1e, k2e, height, length)
             return values, [(*p, None) for p in partials]
-        alpha = self.lever.alpha
+        alpha = lever.alpha
         # read at the laser spot or, by default, at the free end
-        spot = self.lever.spot_position
+        spot = lever.spot_position
         module, at = (composed.at_end, ()) if spot == 1.0 else (composed.at_spot, (spot,))
-        args = (beta, *at, self.k, *rotated(k1e, k2e, alpha), self.H, self.L, mu, self.lever.tip_position,
-                self.lever.rho_g)
+        args = (beta, *at, k, *rotated(k1e, k2e, alpha), height, length, mu, lever.tip_position, lever.rho_g)
         if not jacobian:
             return module.slope(*args), None
         wanted = ("beta", "kvv", "kll", "kvl", "mu")
