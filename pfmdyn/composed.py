@@ -52,17 +52,18 @@ _POINT = pieces.JACOBIAN_PARAMETERS
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 
 
-def _solve(A, b):
-    """``A^-1 b`` batched; NaN for the members whose ``A`` is singular or not finite."""
+def _solve(A, b=None):
+    """``A^-1 b`` batched (``A^-1`` without ``b``); NaN for the members whose ``A`` is singular or not finite."""
+    solve = np.linalg.inv if b is None else lambda A: np.linalg.solve(A, b)   # noqa: E731
     try:
         with np.errstate(all="ignore"):
-            return np.linalg.solve(A, b)
+            return solve(A)
     except np.linalg.LinAlgError:
         eye = np.eye(A.shape[-1])
         bad = ~np.isfinite(A).all(axis=(-2, -1))
         with np.errstate(all="ignore"):
             bad |= np.abs(np.linalg.det(np.where(bad[..., None, None], eye, A))) == 0
-        out = np.linalg.solve(np.where(bad[..., None, None], eye, A), b)
+        out = solve(np.where(bad[..., None, None], eye, A))
         out[bad] = np.nan
         return out
 
@@ -437,7 +438,7 @@ _REORDERED = [2, 3, 0, 1]
 
 class _WrittenOut:
     """The lever read at ``sigma`` without assembling the system: each segment's rows at its outer
-    end eliminated, as in :func:`_transferred`, and the tip's rows solved by the adjugate.
+    end eliminated, as in :func:`_transferred`, and the tip's rows solved (2 x 2 or 4 x 4).
 
     A segment's end rows ``E[rows] c + P[rows] q0 = h`` (the clamp's ``u, z1``, ``h`` the base's
     ``y0``; beyond a set-back tip, the free end's moment and shear, ``h = 0``) read ``[Gp, Gf]`` on
@@ -488,8 +489,8 @@ class _WrittenOut:
             beyond = short & np.concatenate([np.zeros(2 * n, bool), np.ones(2 * n, bool), ~self.before])
             self.seg.rows[beyond] = self.seg.rows[beyond][:, :, _REORDERED]
         self.uc = (pieces.load_constant(self.beta, self.k, self.L) + 0 * self.beta)[:, None]
-        self.E = np.split(self.seg.E, self.count)
-        self.P = [self.uc * P for P in np.split(self.seg.P, self.count)]
+        self.E = self._batches(self.seg.E)
+        self.P = [self.uc * P for P in self._batches(self.seg.P)]
         jump = _columns(pieces.point_jump(*self.point), n)
         self.J = jump[:, :4].reshape(-1, 2, 2)
         self.G = np.zeros((n, 2, len(DRIVES)), jump.dtype)
@@ -508,16 +509,23 @@ class _WrittenOut:
             u = np.split(self.inverse @ r, len(self.ends), 1)
             self.c = [np.concatenate([b0 - B @ x, x], 1) for (_, B, b0), x in zip(self.eliminated, u)]
         self.c_spot = self._on_spot_segment(lambda j: self.c[j])
-        self.z_tip, self.z = self._state(1, self.c[0]), self._state(-1, self.c_spot)
+        self.z = self._state(-1, self.c_spot)
+
+    def _batches(self, x):
+        """``x``, stacked over the batches, split per batch (views: cheaper than ``np.split``)."""
+        n = self.beta.shape[0]
+        return [x[i * n:(i + 1) * n] for i in range(self.count)]
 
     def _eliminate(self, batch, rows, base):
-        """``(Gp^-1, B, b0)`` of a segment from its end rows (``base``: the clamp's, moved by ``y0``)."""
+        """``(Gp^-1, B, b0)`` of a segment from its end rows; ``base``: the clamp's, moved by ``y0``,
+        where ``Gp = I`` (``Gp^-1`` None: nothing to solve)."""
         E, P = self.E[batch][:, rows], self.P[batch][:, rows]
-        inverse = _small_inverse(E[:, :, :2])
-        b0 = np.zeros(P.shape + (len(DRIVES),), np.result_type(inverse, P))
-        b0[:, :, _Q0] = -(inverse @ P[:, :, None])[:, :, 0]
+        b0 = np.zeros(P.shape + (len(DRIVES),), np.result_type(E, P))
         if base:
-            b0[:, :, _Y0] = inverse[:, :, 0]
+            b0[:, :, _Q0], b0[:, 0, _Y0] = -P, 1.0
+            return None, E[:, :, 2:], b0
+        inverse = _small_inverse(E[:, :, :2])
+        b0[:, :, _Q0] = -(inverse @ P[:, :, None])[:, :, 0]
         return inverse, inverse @ E[:, :, 2:], b0
 
     def _per_unknown(self, batch, segment):
@@ -559,8 +567,8 @@ class _WrittenOut:
             e = [None] * count
             if name == "beta":
                 dE, dP = self.seg.derivative(name, np.tile(self.beta, count), self.t, self.ell, 1.0, 0.0)
-                e = [E @ c for E, c in zip(np.split(dE, count), coefficients)]
-                for changed, P in zip(e, np.split(dP, count)):
+                e = [E @ c for E, c in zip(self._batches(dE), coefficients)]
+                for changed, P in zip(e, self._batches(dP)):
                     changed[:, :, _Q0] += self.uc * P
             elif name == "sigma":       # the spot alone moves
                 dE, dP = _Part(self.seg, spot).derivative(name, self.beta, None, None, 1.0, 0.0)
@@ -578,10 +586,10 @@ class _WrittenOut:
             if self.two:
                 q = np.concatenate([np.zeros_like(q), q], 1)
             if e[0] is not None:
-                e = self._at_fixed_unknowns(e)
-                q -= self._across(e[1])
+                left, right, e[-1] = self._at_fixed_unknowns(e)
+                q -= self._across(left)
                 if self.two:
-                    q += e[2]
+                    q += right
             moved.append(q)
             at_spot.append(0.0 if e[-1] is None else e[-1][:, :2])
         if not names:
@@ -592,11 +600,17 @@ class _WrittenOut:
         return {name: x + w for name, x, w in zip(names, np.split(d, len(names), -1), at_spot)}
 
     def _at_fixed_unknowns(self, e):
-        """``dw`` per batch from the changes ``e`` at fixed coefficients: less the eliminated rows'
-        share, ``E[:, :2] Gp^-1 e_end[rows]``, of the segment each batch lies on."""
-        fixed = [inverse @ e[batch][:, rows] for (batch, rows), (inverse, _, _) in zip(self.ends, self.eliminated)]
+        """``dw`` at the tip (either side) and the spot from the changes ``e`` at fixed coefficients
+        (per batch): less the eliminated rows' share, ``E[:, :2] Gp^-1 e_end[rows]``, of the segment
+        each lies on; ``(dw_l, dw_r or None, dw at the spot)``."""
+        fixed = [e[batch][:, rows] if inverse is None else inverse @ e[batch][:, rows]
+                 for (batch, rows), (inverse, _, _) in zip(self.ends, self.eliminated)]
         share = lambda i, j: e[i] - self.E[i][:, :, :2] @ fixed[j]      # noqa: E731
-        return [share(i, i // 2) for i in range(self.count - 1)] + [self._on_spot_segment(lambda j: share(-1, j))]
+        return share(1, 0), share(2, 1) if self.two else None, self._on_spot_segment(lambda j: share(-1, j))
+
+    @cached_property
+    def z_tip(self):
+        return self._state(1, self.c[0])
 
     @cached_property
     def jump_partials(self):
@@ -606,34 +620,19 @@ class _WrittenOut:
 
 
 def _small_inverse(M):
-    """``M^-1`` of a batch of 2 x 2 or 4 x 4 ``M`` by the adjugate (NaN where ``det M = 0``).  The
-    4 x 4's by Laplace's expansion on its two column pairs ``A, B``: with ``a_K, b_K`` their 2 x 2
-    minors on the row pairs ``K`` (:data:`_PAIRS`) and ``s_K`` the signs, ``det M = sum_K s_K a_K
-    b_K'`` (``K'`` the complement), and by Cramer's rule ``adj M = [W A_1, -W A_0, W' B_1, -W' B_0]``
-    (rows), ``W, W'`` antisymmetric with ``W_K = s_K b_K'``, ``W'_K = s_K a_K'``.
+    """``M^-1`` of a batch of 2 x 2 ``M`` by the adjugate, of larger ones by LAPACK (one call: less
+    overhead than the adjugate's products); NaN where ``M`` is singular.
 
     Examples
     --------
-    >>> M = np.random.default_rng(1).normal(size=(3, 4, 4))
-    >>> bool(np.allclose(_small_inverse(M) @ M, np.eye(4), rtol=0, atol=1e-13))
+    >>> M = np.random.default_rng(1).normal(size=(3, 2, 2))
+    >>> bool(np.allclose(_small_inverse(M) @ M, np.eye(2), rtol=0, atol=1e-13))
     True
     """
-    if M.shape[-1] == 2:
-        det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
-        adjugate = np.stack([M[:, 1, 1], -M[:, 0, 1], -M[:, 1, 0], M[:, 0, 0]], -1).reshape(-1, 2, 2)
-    else:
-        by_row = np.moveaxis(M, 0, -1)
-        a, b = (_minors(by_row, _PAIRS, cols) for cols in (_PAIRS[:1], _PAIRS[-1:]))
-        signs = _SIGNS[:, :1]                       # s_K: the columns' pair is (0, 1)
-        det = np.sum(signs * a[:, 0] * b[::-1, 0], 0)
-        i, j = _PAIRS.T
-        adjugate = np.empty_like(M)
-        for rows, minors, columns in ((slice(0, 2), b, M[:, :, :2]), (slice(2, 4), a, M[:, :, 2:])):
-            W = np.zeros_like(M)
-            W[:, i, j] = (signs * minors[::-1, 0]).T
-            W[:, j, i] = -W[:, i, j]
-            WC = W @ columns
-            adjugate[:, rows] = np.stack([WC[:, :, 1], -WC[:, :, 0]], 1)
+    if M.shape[-1] != 2:
+        return _solve(M)
+    det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
+    adjugate = np.stack([M[:, 1, 1], -M[:, 0, 1], -M[:, 1, 0], M[:, 0, 0]], -1).reshape(-1, 2, 2)
     return adjugate / np.where(det == 0, np.nan, det)[:, None, None]
 
 
