@@ -506,10 +506,18 @@ class _WrittenOut:
             M, r = np.concatenate([M, -R], -1), r + w
         with np.errstate(all="ignore"):
             self.inverse = _small_inverse(M)
-            u = np.split(self.inverse @ r, len(self.ends), 1)
-            self.c = [np.concatenate([b0 - B @ x, x], 1) for (_, B, b0), x in zip(self.eliminated, u)]
-        self.c_spot = self._on_spot_segment(lambda j: self.c[j])
+            self.u = np.split(self.inverse @ r, len(self.ends), 1)
+        self._c = {}
+        self.c_spot = self._on_spot_segment(self.coefficients)
         self.z = self._state(-1, self.c_spot)
+
+    def coefficients(self, j):
+        """Segment ``j``'s coefficients per drive, ``[b0 - B u, u]`` (once: the values need only the
+        spot's segment)."""
+        if j not in self._c:
+            _, B, b0 = self.eliminated[j]
+            self._c[j] = np.concatenate([b0 - B @ self.u[j], self.u[j]], 1)
+        return self._c[j]
 
     def _batches(self, x):
         """``x``, stacked over the batches, split per batch (views: cheaper than ``np.split``)."""
@@ -561,7 +569,7 @@ class _WrittenOut:
         T(dw_l) + dw_r)``, one product for all."""
         n, count = self.beta.shape[0], self.count
         spot = slice((count - 1) * n, count * n)
-        coefficients = [self.c[j] for j in np.arange(count - 1) // 2] + [self.c_spot]
+        coefficients = [self.coefficients(j) for j in np.arange(count - 1) // 2] + [self.c_spot]
         moved, at_spot = [], []
         for name in names:
             e = [None] * count
@@ -610,7 +618,7 @@ class _WrittenOut:
 
     @cached_property
     def z_tip(self):
-        return self._state(1, self.c[0])
+        return self._state(1, self.coefficients(0))
 
     @cached_property
     def jump_partials(self):
