@@ -8,9 +8,11 @@ Run ``python benchmarks/fast_characteristic.py [--repeat N]``.  In one run:
   with one at ``beta = 1`` (``benchmarks/compose.py``'s), on a 400-point grid from 0.3 (both
   bases), and on a start grid's batch (200 spring sets x 150 frequencies, each argument a column);
 * per call, :func:`characteristic_and_jacobian` at 4 points as the resonances' sensitivity asks it;
-* per call, the read-outs with the tip at the end (written out) against the assembled system: the
-  slope and 5 partials at a spot at 4,000 damped frequencies (``benchmarks/compose.py``'s, the tip
-  at the end), and the response;
+* per call, the read-outs (written out) against the assembled system, at 4,000 damped frequencies,
+  the tip at the end and set back to 0.9 L: the slope and 5 partials at a spot at 0.8 L
+  (``benchmarks/compose.py``'s) and, set back, at the end; the partials a map fit asks at the end
+  (``pfmdyn/maps/fit.py``'s: ``beta, kvv, kll, kvl, mu``), also on 64 frequencies (a pixel's); the
+  response;
 * end to end, each in a fresh interpreter, alternating: the discrepancy workload of
   ``benchmarks/compose.py`` (a spectrum with the spot away from the end) with the fast path, with
   it switched off (every characteristic and its partials from the assembled system), and on the
@@ -46,8 +48,9 @@ def general(beta, *args):
 """
 exec(GENERAL)
 SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed" + GENERAL + "composed.characteristic = general; "
-                "composed._tip_at_end = lambda gamma: False; sys.exit(pytest.main(sys.argv[1:]))")
-"""The workload with every characteristic and its partials from the assembled system."""
+                "composed._tip_at_end = lambda gamma: False; composed._written_out = lambda *a, **k: False; "
+                "sys.exit(pytest.main(sys.argv[1:]))")
+"""The workload with every characteristic, its partials and the read-outs from the assembled system."""
 
 
 def _best(f, seconds: float = 0.4) -> float:
@@ -94,23 +97,27 @@ def per_call() -> None:
 
 
 def read_outs() -> None:
-    beta, args = np.linspace(0.5, 30, 4000) * (1 + 0.01j), (*ARGS[:7], 1.0, ARGS[8])
-    wrt = ("beta", "sigma", "kvv", "kll", "kvl")
-    cases = {"slope and 5 partials at a spot, 4,000 damped frequencies":
-             lambda: composed.slope_and_jacobian(beta, 0.8, *args, wrt=wrt),
-             "response at a spot, 4,000 damped frequencies": lambda: composed.response(beta, 0.8, *args)}
-    print("\n| read-out (tip at the end) | fast (ms) | general (ms) | fast / general |\n|---|---|---|---|")
-    before = composed._tip_at_end
-    for label, f in cases.items():
+    five, fit = ("beta", "sigma", "kvv", "kll", "kvl"), ("beta", "kvv", "kll", "kvl", "mu")
+    cases = [("slope and 5 partials", 4000, 1.0, 0.8, five), ("response", 4000, 1.0, 0.8, None),
+             ("slope and 5 partials", 4000, 0.9, 0.8, five), ("slope and 5 partials", 4000, 0.9, 1.0, five),
+             ("slope and a map fit's partials", 4000, 0.9, 1.0, fit), ("response", 4000, 0.9, 0.8, None),
+             ("response", 4000, 0.9, 1.0, None),
+             ("slope and a map fit's partials", 64, 0.9, 1.0, fit), ("response", 64, 0.9, 1.0, None)]
+    print("\n| read-out | damped frequencies | tip at | spot at | fast (ms) | general (ms) | fast / general |\n"
+          "|---|---|---|---|---|---|---|")
+    before = composed._written_out
+    for label, n, gamma, sigma, wrt in cases:
+        args = (np.linspace(0.5, 30, n) * (1 + 0.01j), sigma, *ARGS[:7], gamma, ARGS[8])
+        f = (lambda: composed.response(*args)) if wrt is None else (lambda: composed.slope_and_jacobian(*args, wrt=wrt))
         fast, slow = [], []
         for _ in range(2):
-            composed._tip_at_end = before
+            composed._written_out = before
             fast.append(_best(f))
-            composed._tip_at_end = lambda gamma: False
+            composed._written_out = lambda *args, **kwargs: False
             slow.append(_best(f))
-        composed._tip_at_end = before
+        composed._written_out = before
         new, old = min(fast), min(slow)
-        print(f"| {label} | {new * 1e3:.1f} | {old * 1e3:.1f} | {new / old:.2f} |")
+        print(f"| {label} | {n:,} | {gamma:g} L | {sigma:g} L | {new * 1e3:.2f} | {old * 1e3:.2f} | {new / old:.2f} |")
 
 
 def _timed(argv, cwd, env) -> float:

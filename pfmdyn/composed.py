@@ -17,7 +17,8 @@ overflows and nothing cancels, from the quasi-static ``beta = 1e-3`` to ``Re bet
 Derivatives come from the same system (``dc = A^-1 (db - dA c)``), and the characteristic is its
 determinant, scaled to be continuous across the two bases: written out from the segments' values
 (the Schur complements of the clamp's rows and of the segment beyond the tip), not assembled, as
-are its partials with the tip at the end.
+are its partials with the tip at the end and the read-outs but a probe's and the ``gamma`` partial
+(:class:`_WrittenOut`).
 
 Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
 lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
@@ -51,17 +52,18 @@ _POINT = pieces.JACOBIAN_PARAMETERS
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 
 
-def _solve(A, b):
-    """``A^-1 b`` batched; NaN for the members whose ``A`` is singular or not finite."""
+def _solve(A, b=None):
+    """``A^-1 b`` batched (``A^-1`` without ``b``); NaN for the members whose ``A`` is singular or not finite."""
+    solve = np.linalg.inv if b is None else lambda A: np.linalg.solve(A, b)   # noqa: E731
     try:
         with np.errstate(all="ignore"):
-            return np.linalg.solve(A, b)
+            return solve(A)
     except np.linalg.LinAlgError:
         eye = np.eye(A.shape[-1])
         bad = ~np.isfinite(A).all(axis=(-2, -1))
         with np.errstate(all="ignore"):
             bad |= np.abs(np.linalg.det(np.where(bad[..., None, None], eye, A))) == 0
-        out = np.linalg.solve(np.where(bad[..., None, None], eye, A), b)
+        out = solve(np.where(bad[..., None, None], eye, A))
         out[bad] = np.nan
         return out
 
@@ -430,106 +432,223 @@ def _drive_columns(drives, known) -> list[int]:
     return [known.index(d) for d in drives]
 
 
-class _TipAtEnd:
-    """The lever with its tip at the free end (one segment) read at ``sigma`` without assembling the
-    system: the clamp eliminated as in :func:`_transferred`.  Its rows read ``[I, B]`` on the
-    coefficients, so ``c = [b0 - B x, x]`` (``b0`` the base's and the load's share); the tip's rows
-    ``z[2:] - J z[:2] = G d`` (``z = E c + P q0``) leave for ``x`` the 2 x 2 system ``X x = G d -
-    X(w)``, ``X(V) = V[2:] - J V[:2]``, ``X = X(R)``, ``R = E[:, 2:] - E[:, :2] B``, ``w`` the state
-    from ``b0``: solved by its adjugate.  The segment is evaluated at the clamp, the tip and the
-    spot in one stack.  The interface of :class:`_Lever`'s read-outs (batch first, flat; drives
-    :data:`DRIVES`); NaN where the system is singular, as there.
+_REORDERED = [2, 3, 0, 1]
+"""A short segment's unknowns (its state at the start) with the moment and shear first."""
+
+
+class _WrittenOut:
+    """The lever read at ``sigma`` without assembling the system: each segment's rows at its outer
+    end eliminated, as in :func:`_transferred`, and the tip's rows solved (2 x 2 or 4 x 4).
+
+    A segment's end rows ``E[rows] c + P[rows] q0 = h`` (the clamp's ``u, z1``, ``h`` the base's
+    ``y0``; beyond a set-back tip, the free end's moment and shear, ``h = 0``) read ``[Gp, Gf]`` on
+    its coefficients, so ``c = [b0 - B u, u]``, ``B = Gp^-1 Gf``, ``b0 = Gp^-1 (h - P[rows] q0)``:
+    two unknowns ``u`` per segment, its state anywhere ``z = R u + w`` (``R = E[:, 2:] - E[:, :2] B``,
+    ``w`` from ``b0`` and the load).  ``Gp`` is ``I`` at the clamp in either basis; at the free end
+    the bounded basis' ``cos, sin`` columns (a rotation) and, the short members' columns reordered
+    (:data:`_REORDERED`), the field matrix's last two: well conditioned, where inverting the whole
+    basis at the segment's start is not (its ``e^{s - s_end}`` column is ``e^{-beta l}`` there).
+
+    With the tip at the end its rows ``X(z) = G d`` (``X(V) = V[2:] - J V[:2]``) leave the 2 x 2
+    ``X(R) x = G d - X(w)``; set back, the states either side of the tip (``z_l = R_l x + w_l``,
+    ``z_r = R_r y + w_r``: continuity, then the jump) the 4 x 4 ``[T(R_l), -R_r] [x; y] = [0; G d] -
+    T(w_l) + w_r``, ``T(V) = [V[:2], X(V)]`` (:meth:`_across`); each solved by :func:`_small_inverse`.
+    The segments are evaluated at their ends and the spot in one stack.  The interface of
+    :class:`_Lever`'s read-outs (batch first, flat; drives :data:`DRIVES`); NaN where the system is
+    singular, as there.
 
     Examples
     --------
-    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 1.0, 0.05)
+    >>> args = (2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
     >>> general = _Lever(*args)
-    >>> want = general.state(general.reader(0.8))[:, :2]
-    >>> bool(np.allclose(_TipAtEnd(args[0], 0.8, *args[1:]).z, want, rtol=1e-13, atol=0))
+    >>> want = general.state(general.reader(0.95))[:, :2]
+    >>> bool(np.allclose(_WrittenOut(args[0], 0.95, *args[1:]).z, want, rtol=1e-13, atol=0))
     True
     """
 
     def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
-        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, rho_g)]
-        self.shape = np.broadcast_shapes(np.shape(gamma), *(a.shape for a in args))
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast_shapes(*(a.shape for a in args))
         n = math.prod(self.shape)
         flat = [a if a.ndim == 0 else np.broadcast_to(a, self.shape).reshape(-1) for a in args]
-        beta, sigma = (np.broadcast_to(a, (n,)) for a in flat[:2])
+        beta, sigma, g = (np.broadcast_to(a, (n,)) for a in (flat[0], np.real(flat[1]), np.real(flat[9])))
         self.beta, self.k, self.L = beta.astype(np.result_type(beta, float)), flat[2], flat[7]
-        self.point = (self.beta, *flat[2:])
-        self.t = np.concatenate([np.zeros(n), np.ones(n), np.real(sigma).astype(float)])
-        beta3, ones = np.tile(self.beta, 3), np.ones(3 * n)
-        self.seg = _Segment(beta3, self.t, ones, np.abs(beta3) <= pieces.KD_SERIES_LIMIT, ones)
+        self.point = (self.beta, *flat[2:9], flat[10])
+        self.two = bool(np.any(g != 1.0))
+        self.before = sigma <= g if self.two else np.ones(n, bool)
+        # (t, segment length) of the clamp, the tip from the left, [the tip from the right, the free
+        # end,] and the spot
+        at = [(np.zeros(n), g), (g, g)] + ([(np.zeros(n), 1.0 - g), (1.0 - g, 1.0 - g)] if self.two else [])
+        at.append((np.where(self.before, sigma, sigma - g), np.where(self.before, g, 1.0 - g)))
+        self.t, self.ell = (np.concatenate(x).astype(float) for x in zip(*at))
+        self.count = len(at)
+        stacked = np.tile(self.beta, self.count)
+        short = np.abs(stacked * self.ell) <= pieces.KD_SERIES_LIMIT
+        self.seg = _Segment(stacked, self.t, self.ell, short, np.ones(len(stacked)))
+        if self.two:
+            beyond = short & np.concatenate([np.zeros(2 * n, bool), np.ones(2 * n, bool), ~self.before])
+            self.seg.rows[beyond] = self.seg.rows[beyond][:, :, _REORDERED]
         self.uc = (pieces.load_constant(self.beta, self.k, self.L) + 0 * self.beta)[:, None]
-        self.E = np.split(self.seg.E, 3)
-        self.P = [self.uc * P for P in np.split(self.seg.P, 3)]
+        self.E = self._batches(self.seg.E)
+        self.P = [self.uc * P for P in self._batches(self.seg.P)]
         jump = _columns(pieces.point_jump(*self.point), n)
         self.J = jump[:, :4].reshape(-1, 2, 2)
         self.G = np.zeros((n, 2, len(DRIVES)), jump.dtype)
         self.G[:, :, :4] = jump[:, 4:].reshape(-1, 2, 4)
-        self.B = self.E[0][:, :2, 2:]
-        b0 = np.zeros((n, 2, len(DRIVES)), self.P[0].dtype)
-        b0[:, :, _Q0], b0[:, 0, _Y0] = -self.P[0][:, :2], 1.0
-        w = self.E[1][:, :, :2] @ b0
-        w[:, :, _Q0] += self.P[1]
-        X = self._across(self.E[1][:, :, 2:] - self.E[1][:, :, :2] @ self.B)
+        # (batch, rows) eliminated per segment: the clamp's u, z1; the free end's moment and shear
+        self.ends = [(0, slice(0, 2))] + ([(3, slice(2, 4))] if self.two else [])
+        self.eliminated = [self._eliminate(*end, base=j == 0) for j, end in enumerate(self.ends)]
+        R, w = self._per_unknown(1, 0)
+        M, r = self._across(R), -self._across(w)
+        r[:, -2:] += self.G                 # the jump's rows
+        if self.two:
+            R, w = self._per_unknown(2, 1)
+            M, r = np.concatenate([M, -R], -1), r + w
         with np.errstate(all="ignore"):
-            det = X[:, 0, 0] * X[:, 1, 1] - X[:, 0, 1] * X[:, 1, 0]
-            adjugate = np.stack([X[:, 1, 1], -X[:, 0, 1], -X[:, 1, 0], X[:, 0, 0]], -1).reshape(-1, 2, 2)
-            self.inverse = adjugate / np.where(det == 0, np.nan, det)[:, None, None]
-            x = self.inverse @ (self.G - self._across(w))
-            self.c = np.concatenate([b0 - self.B @ x, x], 1)
-        self.z_tip, self.z = (self._state(E, P) for E, P in zip(self.E[1:], self.P[1:]))
+            self.inverse = _small_inverse(M)
+            self.u = np.split(self.inverse @ r, len(self.ends), 1)
+        self._c = {}
+        self.c_spot = self._on_spot_segment(self.coefficients)
+        self.z = self._state(-1, self.c_spot)
+
+    def coefficients(self, j):
+        """Segment ``j``'s coefficients per drive, ``[b0 - B u, u]`` (once: the values need only the
+        spot's segment)."""
+        if j not in self._c:
+            _, B, b0 = self.eliminated[j]
+            self._c[j] = np.concatenate([b0 - B @ self.u[j], self.u[j]], 1)
+        return self._c[j]
+
+    def _batches(self, x):
+        """``x``, stacked over the batches, split per batch (views: cheaper than ``np.split``)."""
+        n = self.beta.shape[0]
+        return [x[i * n:(i + 1) * n] for i in range(self.count)]
+
+    def _eliminate(self, batch, rows, base):
+        """``(Gp^-1, B, b0)`` of a segment from its end rows; ``base``: the clamp's, moved by ``y0``,
+        where ``Gp = I`` (``Gp^-1`` None: nothing to solve)."""
+        E, P = self.E[batch][:, rows], self.P[batch][:, rows]
+        b0 = np.zeros(P.shape + (len(DRIVES),), np.result_type(E, P))
+        if base:
+            b0[:, :, _Q0], b0[:, 0, _Y0] = -P, 1.0
+            return None, E[:, :, 2:], b0
+        inverse = _small_inverse(E[:, :, :2])
+        b0[:, :, _Q0] = -(inverse @ P[:, :, None])[:, :, 0]
+        return inverse, inverse @ E[:, :, 2:], b0
+
+    def _per_unknown(self, batch, segment):
+        """``(R, w)`` at ``batch`` of ``segment``: its state ``z = R u + w`` per its unknowns ``u``."""
+        E, (_, B, b0) = self.E[batch], self.eliminated[segment]
+        w = E[:, :, :2] @ b0
+        w[:, :, _Q0] += self.P[batch]
+        return E[:, :, 2:] - E[:, :, :2] @ B, w
 
     def _across(self, V):
-        """``V[2:] - J V[:2]``: what the tip's rows ask of a state ``V``."""
-        return V[:, 2:] - self.J @ V[:, :2]
+        """What the tip's rows ask of a state ``V`` left of it: the jump's ``X(V) = V[2:] - J V[:2]``,
+        after continuity's ``V[:2]`` when a segment lies beyond."""
+        X = V[:, 2:] - self.J @ V[:, :2]
+        return np.concatenate([V[:, :2], X], 1) if self.two else X
 
-    def _state(self, E, P):
-        """``[u, z1]`` per drive from the segment's rows ``E`` and load ``P`` there."""
-        z = E[:, :2] @ self.c
-        z[:, :, _Q0] += P[:, :2]
+    def _on_spot_segment(self, f):
+        """``f(j)`` of the segment ``j`` the spot lies on, per member."""
+        if self.before.all() or not self.before.any():
+            return f(0 if self.before.all() else 1)
+        return np.where(self.before[:, None, None], f(0), f(1))
+
+    def _state(self, batch, c):
+        """``[u, z1]`` per drive at ``batch`` from its segment's coefficients ``c``."""
+        z = self.E[batch][:, :2] @ c
+        z[:, :, _Q0] += self.P[batch][:, :2]
         return z
 
     def partials(self, names):
         """``{name: d [u, z1](sigma) / d name}`` per drive (``names`` of :data:`SPOT_JACOBIAN_PARAMETERS`
-        but ``gamma``).  The state's change at fixed coefficients ``e = dE c + dP q0``, less the
-        clamp's rows' share (``E[:, :2] e(0)[:2]``: they read ``[I, B]``), is ``dw``; the tip's rows
-        then move ``x`` by ``X^-1 (dG d + dJ z(1)[:2] - X(dw(1)))``, one product for all."""
+        but ``gamma``).  The states' change at fixed coefficients, ``e = dE c + dP q0``, less the
+        eliminated rows' share (``E[:, :2] Gp^-1 e_end[rows]``), is ``dw``, their change at fixed
+        unknowns; the tip's rows then move the unknowns by ``inverse ([0; dG d + dJ z_l[:2]] -
+        T(dw_l) + dw_r)``, one product for all."""
+        n, count = self.beta.shape[0], self.count
+        spot = slice((count - 1) * n, count * n)
+        coefficients = [self.coefficients(j) for j in np.arange(count - 1) // 2] + [self.c_spot]
         moved, at_spot = [], []
         for name in names:
-            e = [None] * 3
-            if name in ("beta", "sigma"):
-                dE, dP = self.seg.derivative(name, np.tile(self.beta, 3), self.t, np.ones_like(self.t), 1.0, 0.0)
-                e = [E @ self.c for E in np.split(dE, 3)]
-                for changed, P in zip(e, np.split(dP, 3)):
+            e = [None] * count
+            if name == "beta":
+                dE, dP = self.seg.derivative(name, np.tile(self.beta, count), self.t, self.ell, 1.0, 0.0)
+                e = [E @ c for E, c in zip(self._batches(dE), coefficients)]
+                for changed, P in zip(e, self._batches(dP)):
                     changed[:, :, _Q0] += self.uc * P
-                if name == "sigma":     # the spot alone moves
-                    e[:2] = [None, None]
+            elif name == "sigma":       # the spot alone moves
+                dE, dP = _Part(self.seg, spot).derivative(name, self.beta, None, None, 1.0, 0.0)
+                e[-1] = dE @ coefficients[-1]
+                e[-1][:, :, _Q0] += self.uc * dP
             elif name == "k":           # through the load constant: P is in units of 1/k
-                e = [np.zeros_like(self.c) for _ in range(3)]
+                e = [np.zeros_like(c) for c in coefficients]
                 for changed, P in zip(e, self.P):
                     changed[:, :, _Q0] = -P / self.k[..., None]
-            if e[0] is not None:
-                e[1:] = [changed - E[:, :, :2] @ e[0][:, :2] for changed, E in zip(e[1:], self.E[1:])]
             q = np.zeros_like(self.G)
             if name in _POINT:
-                dJG = _columns(self.jump_partials[name], self.beta.shape[0], self.J.dtype)
+                dJG = _columns(self.jump_partials[name], n, self.J.dtype)
                 q = dJG[:, :4].reshape(-1, 2, 2) @ self.z_tip
                 q[:, :, :4] += dJG[:, 4:].reshape(-1, 2, 4)
-            if e[1] is not None:
-                q -= self._across(e[1])
+            if self.two:
+                q = np.concatenate([np.zeros_like(q), q], 1)
+            if e[0] is not None:
+                left, right, e[-1] = self._at_fixed_unknowns(e)
+                q -= self._across(left)
+                if self.two:
+                    q += right
             moved.append(q)
-            at_spot.append(0.0 if e[2] is None else e[2][:, :2])
-        R = self.E[2][:, :2, 2:] - self.E[2][:, :2, :2] @ self.B
-        d = np.split(R @ (self.inverse @ np.concatenate(moved, -1)), len(names), -1) if names else []
-        return {name: x + w for name, x, w in zip(names, d, at_spot)}
+            at_spot.append(0.0 if e[-1] is None else e[-1][:, :2])
+        if not names:
+            return {}
+        du = np.split(self.inverse @ np.concatenate(moved, -1), len(self.ends), 1)
+        E = self.E[-1][:, :2]
+        d = self._on_spot_segment(lambda j: (E[:, :, 2:] - E[:, :, :2] @ self.eliminated[j][1]) @ du[j])
+        return {name: x + w for name, x, w in zip(names, np.split(d, len(names), -1), at_spot)}
+
+    def _at_fixed_unknowns(self, e):
+        """``dw`` at the tip (either side) and the spot from the changes ``e`` at fixed coefficients
+        (per batch): less the eliminated rows' share, ``E[:, :2] Gp^-1 e_end[rows]``, of the segment
+        each lies on; ``(dw_l, dw_r or None, dw at the spot)``."""
+        fixed = [e[batch][:, rows] if inverse is None else inverse @ e[batch][:, rows]
+                 for (batch, rows), (inverse, _, _) in zip(self.ends, self.eliminated)]
+        share = lambda i, j: e[i] - self.E[i][:, :, :2] @ fixed[j]      # noqa: E731
+        return share(1, 0), share(2, 1) if self.two else None, self._on_spot_segment(lambda j: share(-1, j))
+
+    @cached_property
+    def z_tip(self):
+        return self._state(1, self.coefficients(0))
 
     @cached_property
     def jump_partials(self):
         return pieces.point_jump_partials(*self.point)
 
     out = _Lever.out
+
+
+def _small_inverse(M):
+    """``M^-1`` of a batch of 2 x 2 ``M`` by the adjugate, of larger ones by LAPACK (one call: less
+    overhead than the adjugate's products); NaN where ``M`` is singular.
+
+    Examples
+    --------
+    >>> M = np.random.default_rng(1).normal(size=(3, 2, 2))
+    >>> bool(np.allclose(_small_inverse(M) @ M, np.eye(2), rtol=0, atol=1e-13))
+    True
+    """
+    if M.shape[-1] != 2:
+        return _solve(M)
+    det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
+    adjugate = np.stack([M[:, 1, 1], -M[:, 0, 1], -M[:, 1, 0], M[:, 0, 0]], -1).reshape(-1, 2, 2)
+    return adjugate / np.where(det == 0, np.nan, det)[:, None, None]
+
+
+def _written_out(names=(), probe=None) -> bool:
+    """Whether a read-out is written out (:class:`_WrittenOut`, no assembly): all but a probe's and
+    the partial w.r.t. ``gamma``, which the assembled system gives."""
+    return probe is None and "gamma" not in names
+
 
 def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES, probe=None):
     """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
@@ -545,8 +664,8 @@ def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_D
     >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
     [1.0]
     """
-    if probe is None and _tip_at_end(gamma):           # one segment: written out, no assembly
-        lever = _TipAtEnd(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+    if _written_out(probe=probe):
+        lever = _WrittenOut(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
         z = lever.z[:, :, _drive_columns(drives, DRIVES)]
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
@@ -596,8 +715,8 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     use = _drive_columns(drives, DRIVES)
-    if "gamma" not in names and _tip_at_end(gamma):     # one segment: written out, no assembly
-        lever = _TipAtEnd(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
+    if _written_out(names):
+        lever = _WrittenOut(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
         z1, dz = lever.z[:, 1], lever.partials(names)
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
