@@ -84,7 +84,14 @@ def point_jump(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
     >>> [f"{v:.8g}" for v in point_jump(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.05)[:4]]
     ['-0.108', '-0.07409375', '9.158', '0.108']
     """
-    return (-3*H*kvl/(L*beta**2*k), -3*H**2*kll/(L**2*beta*k) + beta**3*mu*rho_g**2, -beta*mu + 3*kvv/(beta**3*k), 3*H*kvl/(L*beta**2*k), 3*H*kvl/(L*beta**2*k), 3*H*kll/(L*beta**2*k), 0, 3/(L*beta**2*k), -3*kvv/(beta**3*k), -3*kvl/(beta**3*k), -3/(beta**3*k), 0)
+    _t0 = 3/k
+    _t1 = _t0/(L*beta**2)
+    _t2 = H*_t1
+    _t3 = _t2*kvl
+    _t4 = beta**3
+    _t5 = _t0/_t4
+    _t6 = -_t5*kvv
+    return (-_t3, -H**2*_t0*kll/(L**2*beta) + _t4*mu*rho_g**2, -_t6 - beta*mu, _t3, _t3, _t2*kll, 0, _t1, _t6, -_t5*kvl, -_t5, 0)
 
 
 def point_jump_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
