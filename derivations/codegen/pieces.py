@@ -33,15 +33,12 @@ def krylov_duncan() -> list[sp.Expr]:
     return K
 
 
-def _series(expr: sp.Expr, j: int) -> str:
-    """``s**j * poly(s**4)`` from the Taylor series of ``expr`` (Horner in ``_u = s**4``)."""
+def _series(expr: sp.Expr, j: int) -> tuple[float, ...]:
+    """Coefficients of ``poly`` in ``expr = s**j * poly(s**4)`` (the Taylor series), lowest first."""
     poly = sp.series(expr, pieces.s, 0, 4 * SERIES_TERMS + j).removeO()
     coeffs = [poly.coeff(pieces.s, 4 * i + j) for i in range(SERIES_TERMS)]
     assert sp.expand(poly - sum(c * pieces.s**(4 * i + j) for i, c in enumerate(coeffs))) == 0
-    text = repr(float(coeffs[-1]))
-    for c in reversed(coeffs[:-1]):
-        text = f"{float(c)!r} + _u * ({text})"
-    return text if j == 0 else f"s{'**' + str(j) if j > 1 else ''} * ({text})"
+    return tuple(float(c) for c in coeffs)
 
 
 def krylov_duncan_weights(K: list[sp.Expr]) -> list[tuple[int, ...]]:
