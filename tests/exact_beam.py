@@ -17,10 +17,14 @@ and finds the roots by sign changes on a grid in ``beta``, refined to 28 digits;
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import mpmath as mp
-from segment_beam import determinant_mp
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from segment_beam import determinant_mp  # noqa: E402
 
 mp.mp.dps = 30
 
