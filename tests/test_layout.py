@@ -8,6 +8,8 @@ The four source trees installed as one package -- ``pfmdyn/``, ``derivations/``
   imports ``generated``, ``audit`` or the rest of ``pfmdyn``; ``audit`` imports only
   ``derivations`` (and itself); within ``pfmdyn``, ``io`` lies below ``analysis``,
   ``discrepancy`` and ``maps``, which lie below ``plots``, which lies below ``commands``;
+* inside ``analysis``, ``discrepancy`` and ``maps``, a rank order of their own (:data:`INNER_RANKS`:
+  a module imports only modules of a lower layer; a new module must be placed in one);
 * the library never imports ``pfmdyn.commands`` or ``pfmdyn.cli`` (commands call the library,
   not the other way round), and never imports the plots (plots import results);
 * numeric code never imports SymPy at module level, nor a ``pfmdyn.derivations`` module that
@@ -177,3 +179,32 @@ def _loads_sympy(name: str) -> bool:
             return True
         todo += graph[module]
     return False
+
+
+INNER_RANKS = {
+    "analysis": (("contact_resonance", "diagram", "domains", "resonances", "spot", "thermal"),
+                 ("calibrate", "deconvolve", "stiffness", "tip_position"),
+                 ("stiffness_report",)),
+    "discrepancy": (("effects", "inputs", "sweep"),                        # the model's pieces, the inputs
+                    ("model", "plausible", "reference", "thermal"),          # a model; the free lever's fits
+                    ("quality", "select", "undamped_modes"),
+                    ("peaks", "report", "resonance_fit"),
+                    ("resonances", "spectrum")),                             # the two analyses
+    "maps": (("bias", "spec"), ("outputs", "sho"), ("beam",), ("fit", "readers"), ("select", "store"),
+             ("contact", "result", "usid"), ("driver",)),
+}
+"""Layers of each package's modules, lowest first."""
+
+
+@pytest.mark.parametrize("package", sorted(INNER_RANKS))
+def test_rank_order_inside_packages(package):
+    layer = {module: i for i, names in enumerate(INNER_RANKS[package]) for module in names}
+    present = {p.stem for p in (PACKAGE / package).glob("*.py") if p.stem != "__init__"}
+    assert present == set(layer), f"place in INNER_RANKS: {sorted(present - set(layer))}; gone: {sorted(set(layer) - present)}"
+    prefix = f"pfmdyn.{package}."
+    for module in present:
+        for target, _ in _imports(PACKAGE / package / f"{module}.py"):
+            other = target[len(prefix):].split(".")[0] if target.startswith(prefix) else None
+            if other in layer and other != module:
+                assert layer[other] < layer[module], f"{package}.{module} imports {other}, not below it"
+
