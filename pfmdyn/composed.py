@@ -23,6 +23,10 @@ are its partials with the tip at the end and the read-outs but a probe's and the
 Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
 lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
 tip mass over the lever's, ``gamma = x_tip / L``, ``rho_g = r_g / L``, ``sigma = x_s / L``.
+
+One module, over 450 lines, because the assembled system and its written-out forms are one model:
+they share the choice of basis per segment, its scale factors and the determinant's sign (a root
+bracket reads the sign), and the tests hold each written-out form to the assembled one.
 """
 from __future__ import annotations
 
