@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from contextlib import contextmanager
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -17,7 +18,7 @@ from ..io.results import check_writable, dumps, write_json
 from ..io.tables import SpectrumData
 from . import flags
 from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
-from ..plots.sweep import plot_sweep
+from ..plots.sweep import plot_sweep, plot_thermal
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -74,26 +75,12 @@ def _sweeps(args) -> int:
     before = read_sweep(args.reference) if args.reference else None
     medium = flags.medium_from_args(args, {"medium": (before or after).medium} if (before or after).medium else None,
                                     default="water")
-    try:
-        with threadpool_limits(1, user_api="blas"):
-            fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
-            result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
-    except UserError:
-        raise
-    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
-                        "check the spring constant and length") from None
+    with _fitting(args.data, "the spring constant and length"):
+        fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
+        result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
     if before:
         print(fit.report())
-    print(result.report())
-    if args.json == "-":
-        print(dumps(result.to_dict()))
-    elif args.json:
-        write_json(args.json, result.to_dict())
-    if args.plot:
-        figure = plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after)
-        _save(figure, args.plot)
-    return 0
+    return _emit(args, result, lambda: plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after))
 
 
 def _thermal(args) -> int:
@@ -110,22 +97,33 @@ def _thermal(args) -> int:
     found = {"medium": tune.conditions.get("environment"), "temperature": tune.conditions.get("temperature")}
     medium = flags.medium_from_args(args, {k: v for k, v in found.items() if v is not None}, default="air")
     temperature = flags.given(args, ("temperature",)).get("temperature", tune.conditions.get("temperature", 293.15))
+    with _fitting(args.data, "the spring constant and length"):
+        fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
+    return _emit(args, fit, lambda: plot_thermal(fit))
+
+
+@contextmanager
+def _fitting(where, check: str):
+    """The fits run with one BLAS thread (they multiply tall, narrow matrices: threads only add overhead,
+    about 1.5x on a shared machine); data that read correctly but defeat the numerics end in one line."""
     try:
         with threadpool_limits(1, user_api="blas"):
-            fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
+            yield
     except UserError:
         raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
-                        "check the spring constant and length") from None
-    print(fit.report())
+        raise UserError(f"{where}: the fit failed ({type(exc).__name__}: {exc}); check {check}") from None
+
+
+def _emit(args, result, figure) -> int:
+    """Print a free lever's result, write its JSON and (``--plot``) the ``figure()`` it makes."""
+    print(result.report())
     if args.json == "-":
-        print(dumps(fit.to_dict()))
+        print(dumps(result.to_dict()))
     elif args.json:
-        write_json(args.json, fit.to_dict())
+        write_json(args.json, result.to_dict())
     if args.plot:
-        from ..plots.sweep import plot_thermal
-        _save(plot_thermal(fit), args.plot)
+        _save(figure(), args.plot)
     return 0
 
 
@@ -142,17 +140,8 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
         data, stride = thin(data)
-    try:
-        # The fits multiply tall, narrow matrices: threaded BLAS only adds overhead there
-        # (about 1.5x slower on a shared machine).
-        with threadpool_limits(1, user_api="blas"):
-            report = _analyse(data, args)
-    except UserError:
-        raise
-    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        # Data that read correctly but defeat the numerics still get one line, not a traceback.
-        raise UserError(f"{args.data}: the fit failed ({type(exc).__name__}: {exc}); "
-                        "check the metadata (spring constant, length, tip height, free resonance)") from None
+    with _fitting(args.data, "the metadata (spring constant, length, tip height, free resonance)"):
+        report = _analyse(data, args)
     if stride > 1:
         report = report.updated(frequency_stride=stride)
     if args.medium:
