@@ -26,14 +26,13 @@ from __future__ import annotations
 import argparse
 import os
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from compose import BASELINE, ROOT, WORKLOADS, _baseline_tree
+from compose import BASELINE, ROOT, WORKLOADS, _baseline_tree, _timed
 from recording import recorded
 
 from pfmdyn import composed
@@ -118,14 +117,6 @@ def read_outs() -> None:
         composed._written_out = before
         new, old = min(fast), min(slow)
         print(f"| {label} | {n:,} | {gamma:g} L | {sigma:g} L | {new * 1e3:.2f} | {old * 1e3:.2f} | {new / old:.2f} |")
-
-
-def _timed(argv, cwd, env) -> float:
-    t = time.perf_counter()
-    done = subprocess.run([sys.executable, *argv], cwd=cwd, env=env, capture_output=True, text=True)
-    if done.returncode != 0:
-        raise SystemExit(f"{' '.join(argv)} failed: {done.stdout[-1500:]}{done.stderr[-1500:]}")
-    return time.perf_counter() - t
 
 
 def workload(repeat: int) -> None:
