@@ -14,7 +14,7 @@ fitted are the first resonance *in the medium* and a viscous damping beyond the 
 drive sweep (:mod:`pfmdyn.discrepancy.sweep`), over a band around the tallest peak.  The residual is
 taken in ``log ASD`` (an averaged spectrum's scatter is relative), in units of its noise.
 
-``g`` over the static end-load factor ``2L/3`` is ``detection_scale``: 1 when the spring constant and the
+``g`` over the static end-load factor ``2L/3`` (:func:`pfmdyn.generated.formulas.height_per_slope`) is ``detection_scale``: 1 when the spring constant and the
 deflection sensitivity the spectrum was converted with agree (the thermal method of ``pfmdyn calibrate``
 then gives the same ``k``); otherwise the spring constant that would make it 1 is ``k / scale**2``.
 The instrument's own fit in the header is reported beside, never used instead of the data.
@@ -26,6 +26,7 @@ import numpy as np
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..fitting.result import Result
+from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, instrument_text, noise_level,
@@ -153,7 +154,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "band_hz": [float(frequency.min()), float(frequency.max())], "medium": medium.name,
               "temperature": temperature, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(resonances(lever, None, modes=1).free.q[0]),
-              "parameters": parameters, "detection_scale": float(np.sqrt(a) / (2 * length / 3)),
+              "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
               "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
               "unexplained": unexplained}
