@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -38,7 +39,7 @@ from ..medium import Medium
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
            "sweep_model", "plus_minus", "instrument_text", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
-           "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "MODE_RATIOS"]
+           "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
                       description="first free resonance in the medium")
@@ -52,8 +53,21 @@ WIDTH_NOTE = ("not given: assumed L/10; one mode cannot tell the fluid's damping
 MIN_POINTS = 8
 """Fewer measured points than this cannot fix a resonance, a damping, a gain and a background."""
 
-MODE_RATIOS = (1.0, 6.2669, 17.5475)
-"""The free beam's first three resonances over the first: ``(beta_n / beta_1)**2``."""
+def mode_ratios() -> tuple[float, ...]:
+    """The free beam's first three resonances over the first, ``(beta_n / beta_1)**2``, from its certified roots.
+
+    >>> [round(r, 4) for r in mode_ratios()]
+    [1.0, 6.2669, 17.5475]
+    """
+    roots = [float(r) for r in _free_roots()]
+    return tuple((r / roots[0]) ** 2 for r in roots)
+
+
+@lru_cache(maxsize=1)
+def _free_roots() -> tuple[str, ...]:
+    from ..roots.core import family_roots
+
+    return family_roots("free", 3, 12).roots
 
 _PENALTY = 1e6
 """Residual (in noise units) of a lever the fluid cannot carry (its load exceeds the lever's inertia)."""
@@ -232,7 +246,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     # replaces it only when it halves the misfit)
     deviation = np.abs(table.response - np.median(table.response.real) - 1j * np.median(np.imag(table.response)))
     best = None
-    for ratios in ((1.0,), MODE_RATIOS):
+    for ratios in ((1.0,), mode_ratios()):
         seeds_f = np.log10(np.append(np.geomspace(frequency.min() / 3, frequency.max(), 20),
                                      frequency[np.argmax(deviation)] / np.array(ratios)))
         grid = [np.array([a, b]) for a in seeds_f for b in EXTRA_LOSS.seeds]
