@@ -105,7 +105,8 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
     residual of the line is noise plus whatever is not affine (which only raises this
     estimate); ``n`` biases leave ``n - 2`` complex degrees of freedom, and ``RSS / sigma**2``
     follows a Gamma(``n - 2``) law."""
-    from scipy.stats import gamma
+    # the Gamma law's median, gammaincinv(a, 1/2) (scipy.stats would cost a second to import)
+    from scipy.special import gammaincinv
 
     lines = bias_lines(frequency_hz, bias_v, response)
     s2 = lines.spread + lines.count * lines.mean_bias**2
@@ -113,7 +114,7 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
     if ok.sum() < 10:
         return None
     dof = lines.count[ok] - 2
-    return float(math.sqrt(np.median(lines.squared_residual()[ok] / gamma.median(dof))))
+    return float(math.sqrt(np.median(lines.squared_residual()[ok] / gammaincinv(dof, 0.5))))
 
 
 def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
