@@ -260,18 +260,15 @@ def _unexplained_nulls(document: dict) -> list[str]:
     return missing
 
 
-def _judged(tmp: Path) -> tuple[list[str], str]:
+def _judged(tmp: Path, report) -> str:
     """The values, outputs and files of every command, then the probes over the real ranges."""
-    rows = []
     out = tmp / "out"
     for part, cases in (("values", value_cases(tmp)), ("outputs", output_cases(tmp)), ("files", file_cases(tmp))):
         counts = {}
         for name, command, line, expect in cases:
             outcome, detail = judge(command, line, expect, out)
-            rows.append(outcome)
+            report(outcome, f"{part:<8} {command:<12} {name:<36} {detail.replace(str(tmp), 'TMP')[:100]}")
             counts.setdefault(command, []).append(outcome)
-            print(f"{outcome:<5} {part:<8} {command:<12} {name:<36} {detail.replace(str(tmp), 'TMP')[:100]}",
-                  flush=True)
         print("  " + "; ".join(f"{c} {v.count('pass')}/{len(v)}" for c, v in counts.items()))
     for name, line in probe_cases():
         target = out / "r.json"
@@ -284,15 +281,10 @@ def _judged(tmp: Path) -> tuple[list[str], str]:
                 document = json.loads(target.read_text())
                 said = sum(bool(w) for p in ("free", "contact") for w in document.get(f"{p}_undetermined", []))
                 detail += f"; {said} mode(s) stated undetermined" if said else ""
-        rows.append(outcome)
-        print(f"{outcome:<5} probes   resonances   {name:<36} {detail[:100]}", flush=True)
-    return rows, (f"commands {', '.join(base_lines(tmp))}; values {', '.join(map(repr, VALUES))}; "
-                  f"permission faults {'skipped (run as root)' if os.geteuid() == 0 else 'included'}")
-
-
-def main(argv=None) -> int:
-    return sweep("cli_inputs", __doc__, argv, _judged)
+        report(outcome, f"probes   resonances   {name:<36} {detail[:100]}")
+    return (f"commands {', '.join(base_lines(tmp))}; values {', '.join(map(repr, VALUES))}; "
+            f"permission faults {'skipped (run as root)' if os.geteuid() == 0 else 'included'}")
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweep("cli_inputs", __doc__, _judged))

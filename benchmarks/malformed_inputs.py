@@ -368,21 +368,26 @@ def judge(command, expect, path, argv, out: Path) -> tuple[str, str]:
     return "pass", (stdout.strip().splitlines() or [""])[-1][:200]
 
 
-def sweep(name: str, doc: str, argv, judged) -> int:
-    """A sweep's command line: ``judged(tmp)`` runs every case in a scratch folder ``tmp``, printing a
-    row each, and returns the outcomes and what the sweep covered; the output is recorded as
-    ``results/<name>.md``.  Exit status 0 when every case passed."""
-    argparse.ArgumentParser(description=doc.splitlines()[0]).parse_args(argv)
+def sweep(name: str, doc: str, judged) -> int:
+    """A sweep's command line: ``judged(tmp, report)`` runs every case in a scratch folder ``tmp``,
+    reporting each (its outcome and the rest of its row), and returns what the sweep covered; the
+    output is recorded as ``results/<name>.md``.  Exit status 0 when every case passed."""
+    argparse.ArgumentParser(description=doc.splitlines()[0]).parse_args()
+    rows = []
+
+    def report(outcome: str, row: str) -> None:
+        rows.append(outcome)
+        print(f"{outcome:<5} {row}", flush=True)
+
     with recorded(name), tempfile.TemporaryDirectory() as tmp:
-        rows, covered = judged(Path(tmp))
+        covered = judged(Path(tmp), report)
         passed = rows.count("pass")
         print(f"\n{passed}/{len(rows)} pass ({covered})")
     return 0 if passed == len(rows) else 1
 
 
-def _judged(tmp: Path) -> tuple[list[str], str]:
+def _judged(tmp: Path, report) -> str:
     """Every variant through every command that reads it."""
-    rows = []
     cases = variants(tmp)
     for name, path, extra, expect in cases:
         for command in _commands():
@@ -391,15 +396,10 @@ def _judged(tmp: Path) -> tuple[list[str], str]:
                 continue
             out = tmp / "out" / f"{name.replace('/', '_').replace('.', '_')}_{command}"
             outcome, detail = judge(command, wanted, path, _argv(command, path, extra, out), out)
-            rows.append(outcome)
-            print(f"{outcome:<5} {name:<44} {command:<10} {detail.replace(str(tmp), 'TMP')[:110]}", flush=True)
-    return rows, (f"{len(cases)} variants x commands {', '.join(_commands())}; "
-                  f"real files {'included' if REALDATA is not None else 'absent'}")
-
-
-def main(argv=None) -> int:
-    return sweep("malformed_inputs", __doc__, argv, _judged)
+            report(outcome, f"{name:<44} {command:<10} {detail.replace(str(tmp), 'TMP')[:110]}")
+    return (f"{len(cases)} variants x commands {', '.join(_commands())}; "
+            f"real files {'included' if REALDATA is not None else 'absent'}")
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweep("malformed_inputs", __doc__, _judged))
