@@ -45,6 +45,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from malformed_inputs import _h5, _run, _Timeout, sweep  # noqa: E402  (the same in-process runner)
+from recording import recorded  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
 from pfmdyn.cantilever import Cantilever  # noqa: E402
@@ -287,4 +288,4 @@ def _judged(tmp: Path, report) -> str:
 
 
 if __name__ == "__main__":
-    sys.exit(sweep("cli_inputs", __doc__, _judged))
+    sys.exit(sweep(recorded("cli_inputs"), __doc__, _judged))

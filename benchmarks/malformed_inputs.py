@@ -368,10 +368,11 @@ def judge(command, expect, path, argv, out: Path) -> tuple[str, str]:
     return "pass", (stdout.strip().splitlines() or [""])[-1][:200]
 
 
-def sweep(name: str, doc: str, judged) -> int:
+def sweep(record, doc: str, judged) -> int:
     """A sweep's command line: ``judged(tmp, report)`` runs every case in a scratch folder ``tmp``,
     reporting each (its outcome and the rest of its row), and returns what the sweep covered; the
-    output is recorded as ``results/<name>.md``.  Exit status 0 when every case passed."""
+    output goes to ``record`` (the script's :func:`recording.recorded`).  Exit status 0 when every
+    case passed."""
     argparse.ArgumentParser(description=doc.splitlines()[0]).parse_args()
     rows = []
 
@@ -379,7 +380,7 @@ def sweep(name: str, doc: str, judged) -> int:
         rows.append(outcome)
         print(f"{outcome:<5} {row}", flush=True)
 
-    with recorded(name), tempfile.TemporaryDirectory() as tmp:
+    with record, tempfile.TemporaryDirectory() as tmp:
         covered = judged(Path(tmp), report)
         passed = rows.count("pass")
         print(f"\n{passed}/{len(rows)} pass ({covered})")
@@ -402,4 +403,4 @@ def _judged(tmp: Path, report) -> str:
 
 
 if __name__ == "__main__":
-    sys.exit(sweep("malformed_inputs", __doc__, _judged))
+    sys.exit(sweep(recorded("malformed_inputs"), __doc__, _judged))
