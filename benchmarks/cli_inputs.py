@@ -39,13 +39,12 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from malformed_inputs import _h5, _run, _Timeout  # noqa: E402  (the same in-process runner)
+from malformed_inputs import _h5, _run, _Timeout, sweep  # noqa: E402  (the same in-process runner)
 from recording import recorded  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -262,40 +261,31 @@ def _unexplained_nulls(document: dict) -> list[str]:
     return missing
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.parse_args(argv)
-    rows = []
-    with recorded("cli_inputs"), tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        out = tmp / "out"
-        for part, cases in (("values", value_cases(tmp)), ("outputs", output_cases(tmp)), ("files", file_cases(tmp))):
-            counts = {}
-            for name, command, line, expect in cases:
-                outcome, detail = judge(command, line, expect, out)
-                rows.append(outcome)
-                counts.setdefault(command, []).append(outcome)
-                print(f"{outcome:<5} {part:<8} {command:<12} {name:<36} {detail.replace(str(tmp), 'TMP')[:100]}",
-                      flush=True)
-            print("  " + "; ".join(f"{c} {v.count('pass')}/{len(v)}" for c, v in counts.items()))
-        for name, line in probe_cases():
-            target = out / "r.json"
-            outcome, detail = judge("resonances", line + ["--json", str(target)], "any", out)
-            if outcome == "pass" and target.exists():
-                nulls = _unexplained_nulls(json.loads(target.read_text()))
-                if nulls:
-                    outcome, detail = "FAIL", f"null without a reason: {', '.join(nulls)[:100]}"
-                else:
-                    document = json.loads(target.read_text())
-                    said = sum(bool(w) for p in ("free", "contact") for w in document.get(f"{p}_undetermined", []))
-                    detail += f"; {said} mode(s) stated undetermined" if said else ""
-            rows.append(outcome)
-            print(f"{outcome:<5} probes   resonances   {name:<36} {detail[:100]}", flush=True)
-        passed = rows.count("pass")
-        print(f"\n{passed}/{len(rows)} pass (commands {', '.join(base_lines(tmp))}; values {', '.join(map(repr, VALUES))}; "
-              f"permission faults {'skipped (run as root)' if os.geteuid() == 0 else 'included'})")
-    return 0 if passed == len(rows) else 1
+def _judged(tmp: Path, report) -> str:
+    """The values, outputs and files of every command, then the probes over the real ranges."""
+    out = tmp / "out"
+    for part, cases in (("values", value_cases(tmp)), ("outputs", output_cases(tmp)), ("files", file_cases(tmp))):
+        counts = {}
+        for name, command, line, expect in cases:
+            outcome, detail = judge(command, line, expect, out)
+            report(outcome, f"{part:<8} {command:<12} {name:<36} {detail.replace(str(tmp), 'TMP')[:100]}")
+            counts.setdefault(command, []).append(outcome)
+        print("  " + "; ".join(f"{c} {v.count('pass')}/{len(v)}" for c, v in counts.items()))
+    for name, line in probe_cases():
+        target = out / "r.json"
+        outcome, detail = judge("resonances", line + ["--json", str(target)], "any", out)
+        if outcome == "pass" and target.exists():
+            nulls = _unexplained_nulls(json.loads(target.read_text()))
+            if nulls:
+                outcome, detail = "FAIL", f"null without a reason: {', '.join(nulls)[:100]}"
+            else:
+                document = json.loads(target.read_text())
+                said = sum(bool(w) for p in ("free", "contact") for w in document.get(f"{p}_undetermined", []))
+                detail += f"; {said} mode(s) stated undetermined" if said else ""
+        report(outcome, f"probes   resonances   {name:<36} {detail[:100]}")
+    return (f"commands {', '.join(base_lines(tmp))}; values {', '.join(map(repr, VALUES))}; "
+            f"permission faults {'skipped (run as root)' if os.geteuid() == 0 else 'included'}")
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweep(recorded("cli_inputs"), __doc__, _judged))

@@ -17,6 +17,7 @@ Results: ``benchmarks/results/compose.md``, written by each completed run.
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import os
 import subprocess
@@ -31,7 +32,24 @@ ROOT = Path(__file__).resolve().parent.parent
 BASELINE = "5e52f54"
 REPEAT = 3
 """Runs of each end-to-end workload per design (the best is kept)."""
+SHARED = {"PFMDYN_CLAIMS": str(ROOT.parent / "shared" / "claims.yaml"),
+          "PFMDYN_PAPER": str(ROOT.parent / "shared" / "paper" / "jesse2006_dynamic_pfm.md")}
+"""The claims and paper both designs read (the baseline's worktree has no shared/ beside it)."""
 
+
+def best(f, repeat: int) -> float:
+    """The best of five timings of ``f`` per call, each over ``repeat`` calls, after one call to warm up."""
+    f()
+    out = []
+    for _ in range(5):
+        t = time.perf_counter()
+        for _ in range(repeat):
+            f()
+        out.append((time.perf_counter() - t) / repeat)
+    return min(out)
+
+
+# Run in a fresh interpreter in either tree; it times with the source of best above, so both designs are timed alike.
 FORWARD = """
 import os, sys, time, numpy as np
 import pfmdyn
@@ -49,19 +67,11 @@ beta = np.linspace(0.5, 30, 4000) * (1 + 0.01j)
 small = np.linspace(1.0, 10.0, 5)
 grid = np.linspace(0.3, 30, 400)
 
-def best(f, repeat):
-    f()
-    out = []
-    for _ in range(5):
-        t = time.perf_counter()
-        for _ in range(repeat):
-            f()
-        out.append((time.perf_counter() - t) / repeat)
-    return min(out)
+{best}
 
 print(best(lambda: spot(beta, 0.8, *args, wrt=("beta", "sigma", "kvv", "kll", "kvl")), 3),
       best(lambda: char(small, *args), 200), best(lambda: char(grid, *args), 50))
-"""
+""".replace("{best}", inspect.getsource(best))
 
 WORKLOADS = {
     "discrepancy, spot away from the end": "tests/test_discrepancy_spot.py::test_spot_away_from_the_end_is_named",
@@ -100,11 +110,8 @@ def main() -> None:
     print(f"machine load at start: {load:.2f}" + ("" if load < 1 else " (above 1: ratios are unreliable)"))
     with tempfile.TemporaryDirectory() as tmp:
         base, base_env = _baseline_tree(rev, Path(tmp))
-        # both read the same claims and paper (the baseline's worktree has no shared/ beside it)
-        shared = {"PFMDYN_CLAIMS": str(ROOT.parent / "shared" / "claims.yaml"),
-                  "PFMDYN_PAPER": str(ROOT.parent / "shared" / "paper" / "jesse2006_dynamic_pfm.md")}
-        now = (ROOT, {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"}, **shared})
-        trees = {"current": now, f"baseline {rev}": (base, {**base_env, **shared})}
+        now = (ROOT, {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"}, **SHARED})
+        trees = {"current": now, f"baseline {rev}": (base, {**base_env, **SHARED})}
         try:
             rows = []
             for label, argv, target in (("pfmdyn verify, cold", ["-m", "pfmdyn.cli", "verify", "--quiet"], 15),

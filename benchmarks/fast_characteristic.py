@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from compose import BASELINE, ROOT, WORKLOADS, _baseline_tree, _timed
+from compose import BASELINE, ROOT, SHARED, WORKLOADS, _baseline_tree, _timed, best
 from recording import recorded
 
 from pfmdyn import composed
@@ -54,17 +54,10 @@ SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed" + GENERAL + "c
 
 def _best(f, seconds: float = 0.4) -> float:
     """The best of five timings of ``f`` per call (each of about ``seconds / 5``)."""
-    f()
+    f()                 # warm, so that the next call sizes the repeat count
     t = time.perf_counter()
     f()
-    repeat = max(1, int(seconds / 5 / max(time.perf_counter() - t, 1e-7)))
-    out = []
-    for _ in range(5):
-        t = time.perf_counter()
-        for _ in range(repeat):
-            f()
-        out.append((time.perf_counter() - t) / repeat)
-    return min(out)
+    return best(f, max(1, int(seconds / 5 / max(time.perf_counter() - t, 1e-7))))
 
 
 def per_call() -> None:
@@ -123,12 +116,10 @@ def workload(repeat: int) -> None:
     test = ["-q", "-p", "no:cacheprovider", WORKLOADS[WORKLOAD]]
     with tempfile.TemporaryDirectory() as tmp:
         base, base_env = _baseline_tree(BASELINE, Path(tmp))
-        shared = {"PFMDYN_CLAIMS": str(ROOT.parent / "shared" / "claims.yaml"),
-                  "PFMDYN_PAPER": str(ROOT.parent / "shared" / "paper" / "jesse2006_dynamic_pfm.md")}
-        env = {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"}, **shared}
+        env = {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"}, **SHARED}
         runs = {"fast path": (["-m", "pytest", *test], ROOT, env),
                 "fast path off": (["-c", SWITCHED_OFF, *test], ROOT, env),
-                f"previous design ({BASELINE})": (["-m", "pytest", *test], base, {**base_env, **shared})}
+                f"previous design ({BASELINE})": (["-m", "pytest", *test], base, {**base_env, **SHARED})}
         try:
             times = {name: [] for name in runs}
             for _ in range(repeat):

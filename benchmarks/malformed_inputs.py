@@ -368,27 +368,39 @@ def judge(command, expect, path, argv, out: Path) -> tuple[str, str]:
     return "pass", (stdout.strip().splitlines() or [""])[-1][:200]
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.parse_args(argv)
+def sweep(record, doc: str, judged) -> int:
+    """A sweep's command line: ``judged(tmp, report)`` runs every case in a scratch folder ``tmp``,
+    reporting each (its outcome and the rest of its row), and returns what the sweep covered; the
+    output goes to ``record`` (the script's :func:`recording.recorded`).  Exit status 0 when every
+    case passed."""
+    argparse.ArgumentParser(description=doc.splitlines()[0]).parse_args()
     rows = []
-    with recorded("malformed_inputs"), tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        cases = variants(tmp)
-        for name, path, extra, expect in cases:
-            for command in _commands():
-                wanted = expect.get(command, ANY)
-                if wanted is None:          # a command-line option of another command
-                    continue
-                out = tmp / "out" / f"{name.replace('/', '_').replace('.', '_')}_{command}"
-                outcome, detail = judge(command, wanted, path, _argv(command, path, extra, out), out)
-                rows.append(outcome)
-                print(f"{outcome:<5} {name:<44} {command:<10} {detail.replace(str(tmp), 'TMP')[:110]}", flush=True)
+
+    def report(outcome: str, row: str) -> None:
+        rows.append(outcome)
+        print(f"{outcome:<5} {row}", flush=True)
+
+    with record, tempfile.TemporaryDirectory() as tmp:
+        covered = judged(Path(tmp), report)
         passed = rows.count("pass")
-        print(f"\n{passed}/{len(rows)} pass ({len(cases)} variants x commands {', '.join(_commands())}; "
-              f"real files {'included' if REALDATA is not None else 'absent'})")
+        print(f"\n{passed}/{len(rows)} pass ({covered})")
     return 0 if passed == len(rows) else 1
 
 
+def _judged(tmp: Path, report) -> str:
+    """Every variant through every command that reads it."""
+    cases = variants(tmp)
+    for name, path, extra, expect in cases:
+        for command in _commands():
+            wanted = expect.get(command, ANY)
+            if wanted is None:          # a command-line option of another command
+                continue
+            out = tmp / "out" / f"{name.replace('/', '_').replace('.', '_')}_{command}"
+            outcome, detail = judge(command, wanted, path, _argv(command, path, extra, out), out)
+            report(outcome, f"{name:<44} {command:<10} {detail.replace(str(tmp), 'TMP')[:110]}")
+    return (f"{len(cases)} variants x commands {', '.join(_commands())}; "
+            f"real files {'included' if REALDATA is not None else 'absent'}")
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweep(recorded("malformed_inputs"), __doc__, _judged))

@@ -17,7 +17,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from recording import recorded
+from recording import recorded, tally
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from test_nid_sweep import oscillator_sweep, silicon_lever, write_sweep_nid  # noqa: E402
@@ -49,9 +49,7 @@ def main(cases: int = 100) -> None:
             if not ok:
                 failures.append(f"seed {1000 + seed}: k {k:.3g} N/m, L {length:.3g} m, Q {q:.3g}: peak "
                                 f"{fit['peak_hz'] / peak - 1:+.2e}, Q {fit['quality_factor']:.3g}, gap {fit['gap']:.3g}")
-    print(f"passed {passed} of {cases} ({passed / cases:.0%})")
-    for line in failures:
-        print(f"- {line}")
+    tally(passed, cases, failures)
 
 
 if __name__ == "__main__":

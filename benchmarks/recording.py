@@ -17,7 +17,7 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["RESULTS", "recorded"]
+__all__ = ["RESULTS", "recorded", "tally"]
 
 RESULTS = Path(__file__).resolve().parent / "results"
 """Where the result files go."""
@@ -89,3 +89,15 @@ def recorded(name: str, argv: list[str] | None = None, folder: Path = RESULTS):
     text += ("" if text.endswith("\n") else "\n") + "```\n"
     folder.mkdir(parents=True, exist_ok=True)
     (folder / f"{name}.md").write_text(text, encoding="utf-8")
+
+
+def tally(passed: int, cases: int, failures: list[str], label: str = "") -> None:
+    """Print how many of ``cases`` passed, then each failure on a line of its own.
+
+    >>> tally(1, 2, ["seed 7: exit 2"], "null pairs: ")
+    null pairs: passed 1 of 2 (50%)
+    - seed 7: exit 2
+    """
+    print(f"{label}passed {passed} of {cases} ({passed / cases:.0%})")
+    for line in failures:
+        print(f"- {line}")

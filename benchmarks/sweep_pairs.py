@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from recording import recorded
+from recording import recorded, tally
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from test_sweeps_fit import lever_case, sweep_of, write_sweep  # noqa: E402
@@ -68,9 +68,7 @@ def main(cases: int = 40) -> None:
                 rows["null"][1].append(f"seed {seed} ({case['medium'].name}): named {out['effect']}")
     print(f"masses within two standard errors of the truth: {consistent} of {cases}")
     for name, (passed, failures) in rows.items():
-        print(f"{name} pairs: passed {passed} of {cases} ({passed / cases:.0%})")
-        for line in failures:
-            print(f"- {line}")
+        tally(passed, cases, failures, f"{name} pairs: ")
 
 
 if __name__ == "__main__":

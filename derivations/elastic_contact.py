@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .beam import EI, H, TipProblem, TipSolution, d1, d2, f0, k1, k2, q0, solve_tip_problem
+from .beam import EI, H, TipProblem, TipSolution, d1, d2, f0, is_identically_zero, k1, k2, q0, solve_tip_problem
 
-__all__ = ["tip_conditions", "problem", "solve", "transfer", "DRIVES"]
+__all__ = ["tip_conditions", "problem", "solve", "transfer", "reduces_to_elastic_contact", "DRIVES"]
 
 DRIVES = (d1, d2, f0, q0)
 """Excitations in the order of Eq. 5: vertical, longitudinal, local force, uniform load."""
@@ -66,3 +66,15 @@ def transfer() -> dict[sp.Symbol, sp.Expr]:
     """
     sol = solve()
     return {d: sol.theta(d) for d in DRIVES}
+
+
+def reduces_to_elastic_contact(solution: TipSolution, limit: dict, drive: sp.Symbol) -> bool:
+    """Whether ``solution``'s tip slope per ``drive`` becomes this problem's under the substitution ``limit``.
+
+    The extensions of elastic contact (a tilted lever, a tip mass) must reduce to it when their own
+    parameters vanish.  Without its lateral spring elastic contact is another problem (frictionless):
+
+    >>> reduces_to_elastic_contact(solve(), {}, d2), reduces_to_elastic_contact(solve(), {k2: 0}, d1)
+    (True, False)
+    """
+    return is_identically_zero(solution.theta(drive).subs(limit) - solve().theta(drive))

@@ -64,6 +64,11 @@ def electrostatic_amplitude(g_elec, v_dc, v_av):
     return formulas.electrostatic_term(np.asarray(g_elec), np.asarray(v_dc), np.asarray(v_av))
 
 
+def _arrays(d_eff, d_el, psi):
+    """The two terms as arrays and the phase as a float array, as every formula of this module takes them."""
+    return np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
+
+
 def domain_responses(d_eff, d_el, psi):
     """Complex responses :math:`PR_+` and :math:`PR_-` over antiparallel domains (Eqs. 37-38).
 
@@ -86,33 +91,24 @@ def domain_responses(d_eff, d_el, psi):
     >>> [complex(pr) for pr in domain_responses(1.0, 0.5, 0.0)]
     [(1.5+0j), (-0.5+0j)]
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return formulas.domain_response_plus(d_eff, d_el, psi), formulas.domain_response_minus(d_eff, d_el, psi)
+    args = _arrays(d_eff, d_el, psi)
+    return formulas.domain_response_plus(*args), formulas.domain_response_minus(*args)
 
 
 def domain_amplitudes(d_eff, d_el, psi):
     """Exact amplitudes :math:`|PR_\\pm| = \\sqrt{d_{eff}^2 + d_{el}^2 \\pm 2 d_{eff} d_{el}\\cos\\psi}`.
 
-    Evaluated as ``hypot(d_eff ± d_el cos psi, d_el sin psi)``, which cannot round to the
-    square root of a negative number.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`.
-
-    Returns
-    -------
-    amp_plus, amp_minus : ndarray
-        :math:`|PR_+|` and :math:`|PR_-|`.
+    Arguments as in :func:`domain_responses`; returns ``amp_plus, amp_minus``.  Evaluated as
+    ``hypot(d_eff ± d_el cos psi, d_el sin psi)``, which cannot round to the square root of a
+    negative number.
 
     Examples
     --------
     >>> [round(float(a), 12) for a in domain_amplitudes(3.0, 4.0, np.pi / 2)]
     [5.0, 5.0]
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return formulas.domain_amplitude_plus(d_eff, d_el, psi), formulas.domain_amplitude_minus(d_eff, d_el, psi)
+    args = _arrays(d_eff, d_el, psi)
+    return formulas.domain_amplitude_plus(*args), formulas.domain_amplitude_minus(*args)
 
 
 def _half_open(angle):
@@ -128,18 +124,9 @@ def _wrap(angle):
 def phase_difference(d_eff, d_el, psi):
     """Exact phase difference :math:`\\Delta\\varphi = \\arg PR_+ - \\arg PR_-` in (-pi, pi].
 
-    Computed as ``atan2(-2 d_el d_eff sin psi, d_el**2 - d_eff**2)``, the argument of
+    Arguments as in :func:`domain_responses`; returns radians.  Computed as
+    ``atan2(-2 d_el d_eff sin psi, d_el**2 - d_eff**2)``, the argument of
     :math:`PR_+ \\overline{PR_-}`.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`.
-
-    Returns
-    -------
-    ndarray
-        Phase difference in radians, in :math:`(-\\pi, \\pi]`.
 
     Examples
     --------
@@ -148,8 +135,17 @@ def phase_difference(d_eff, d_el, psi):
     >>> abs(float(phase_difference(0.0, 1.0, 0.3)))  # pure electrostatics: no contrast
     0.0
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    return _half_open(formulas.domain_phase_difference(d_eff, d_el, psi))
+    return _half_open(formulas.domain_phase_difference(*_arrays(d_eff, d_el, psi)))
+
+
+def _larger_term_positive(d_eff, d_el, psi, larger):
+    """The arguments with the sign of ``larger`` (one of the two terms) taken out of both terms.
+
+    The leading-order amplitudes were derived with the larger term positive; PR -> -PR
+    (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
+    """
+    sign = np.sign(larger)
+    return sign * d_eff, sign * d_el, psi
 
 
 def amplitudes_small_electrostatic(d_eff, d_el, psi):
@@ -157,26 +153,15 @@ def amplitudes_small_electrostatic(d_eff, d_el, psi):
 
     :math:`|PR_\\pm| \\approx |d_{eff}| \\pm \\operatorname{sgn}(d_{eff})\\, d_{el}\\cos\\psi`
     (which is :math:`d_{eff} \\pm d_{el}\\cos\\psi` for :math:`d_{eff} > 0`); the absolute
-    error is :math:`O(d_{el}^2/|d_{eff}|)`.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`; ``d_eff`` must be nonzero.
-
-    Returns
-    -------
-    amp_plus, amp_minus : ndarray
-        Approximate :math:`|PR_+|` and :math:`|PR_-|`.
+    error is :math:`O(d_{el}^2/|d_{eff}|)`.  Arguments as in :func:`domain_responses`, ``d_eff``
+    nonzero; returns ``amp_plus, amp_minus``.
 
     Examples
     --------
     >>> [float(a) for a in amplitudes_small_electrostatic(1.0, 0.01, 0.0)]
     [1.01, 0.99]
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    # Derived for d_eff > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
-    args = (np.abs(d_eff), np.sign(d_eff) * d_el, psi)
+    args = _larger_term_positive(*_arrays(d_eff, d_el, psi), larger=d_eff)
     return (formulas.domain_amplitude_plus_small_electrostatic(*args),
             formulas.domain_amplitude_minus_small_electrostatic(*args))
 
@@ -188,51 +173,30 @@ def phase_difference_small_electrostatic(d_eff, d_el, psi):
     (-pi, pi]; equivalently :math:`|\\Delta\\varphi| \\approx \\pi - 2 |d_{el}/d_{eff}|
     |\\sin\\psi|`.  The deviation from 180 degrees is *first* order in the electrostatic term
     and the error is :math:`O((d_{el}/d_{eff})^3)`.  (The paper's Eq. 40, see
-    :func:`paper_eq40_phase_difference`, has a second-order deviation instead.)
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`; ``d_eff`` must be nonzero.
-
-    Returns
-    -------
-    ndarray
-        Approximate phase difference in radians, in (-pi, pi].
+    :func:`paper_eq40_phase_difference`, has a second-order deviation instead.)  Arguments as in
+    :func:`domain_responses`, ``d_eff`` nonzero; returns radians.
 
     Examples
     --------
     >>> round(float(phase_difference_small_electrostatic(1.0, -0.01, np.pi / 2)), 6)
     3.121593
     """
-    return _wrap(formulas.domain_phase_difference_small_electrostatic(
-        np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)))
+    return _wrap(formulas.domain_phase_difference_small_electrostatic(*_arrays(d_eff, d_el, psi)))
 
 
 def amplitudes_small_piezo(d_eff, d_el, psi):
     """Leading-order amplitudes for :math:`|d_{eff}| \\ll |d_{el}|`.
 
     :math:`|PR_\\pm| \\approx |d_{el}| \\pm \\operatorname{sgn}(d_{el})\\, d_{eff}\\cos\\psi`;
-    the absolute error is :math:`O(d_{eff}^2/|d_{el}|)`.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`; ``d_el`` must be nonzero.
-
-    Returns
-    -------
-    amp_plus, amp_minus : ndarray
-        Approximate :math:`|PR_+|` and :math:`|PR_-|`.
+    the absolute error is :math:`O(d_{eff}^2/|d_{el}|)`.  Arguments as in :func:`domain_responses`,
+    ``d_el`` nonzero; returns ``amp_plus, amp_minus``.
 
     Examples
     --------
     >>> [float(a) for a in amplitudes_small_piezo(0.01, -1.0, 0.0)]
     [0.99, 1.01]
     """
-    d_eff, d_el, psi = np.asarray(d_eff), np.asarray(d_el), np.asarray(psi, dtype=float)
-    # Derived for d_el > 0; PR -> -PR (d_eff, d_el -> -d_eff, -d_el) keeps both amplitudes.
-    args = (np.sign(d_el) * d_eff, np.abs(d_el), psi)
+    args = _larger_term_positive(*_arrays(d_eff, d_el, psi), larger=d_el)
     return formulas.domain_amplitude_plus_small_piezo(*args), formulas.domain_amplitude_minus_small_piezo(*args)
 
 
@@ -240,25 +204,15 @@ def phase_difference_small_piezo(d_eff, d_el, psi):
     """Leading-order phase difference for :math:`|d_{eff}| \\ll |d_{el}|`.
 
     :math:`\\Delta\\varphi \\approx -2 (d_{eff}/d_{el}) \\sin\\psi`, with error
-    :math:`O((d_{eff}/d_{el})^3)`: the contrast between the domains nearly vanishes.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`; ``d_el`` must be nonzero.
-
-    Returns
-    -------
-    ndarray
-        Approximate phase difference in radians.
+    :math:`O((d_{eff}/d_{el})^3)`: the contrast between the domains nearly vanishes.  Arguments
+    as in :func:`domain_responses`, ``d_el`` nonzero; returns radians.
 
     Examples
     --------
     >>> float(phase_difference_small_piezo(0.01, 1.0, np.pi / 2))
     -0.02
     """
-    return formulas.domain_phase_difference_small_piezo(np.asarray(d_eff), np.asarray(d_el),
-                                                        np.asarray(psi, dtype=float))
+    return formulas.domain_phase_difference_small_piezo(*_arrays(d_eff, d_el, psi))
 
 
 def paper_eq39_amplitudes(d_eff, d_el, phi):
@@ -284,7 +238,7 @@ def paper_eq39_amplitudes(d_eff, d_el, phi):
     >>> [float(a) for a in paper_eq39_amplitudes(1.0, 1.0, 0.0)]  # exact: 2 and 0
     [1.7320508075688772, 1.0]
     """
-    args = (np.asarray(d_eff), np.asarray(d_el), np.asarray(phi, dtype=float))
+    args = _arrays(d_eff, d_el, phi)
     return formulas.paper_eq39_amplitude_plus(*args), formulas.paper_eq39_amplitude_minus(*args)
 
 
@@ -323,25 +277,15 @@ def paper_eq40_phase_difference(d_eff, d_el, psi):
 
     The correct small-electrostatic limit, :func:`phase_difference_small_electrostatic`,
     deviates from pi at first order in :math:`d_{el}/d_{eff}` with a :math:`\\sin\\psi`
-    dependence.  Kept for comparison only.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`.
-
-    Returns
-    -------
-    ndarray
-        The printed phase difference (rad).
+    dependence.  Kept for comparison only.  Arguments as in :func:`domain_responses`; returns
+    radians.
 
     Examples
     --------
     >>> round(float(paper_eq40_phase_difference(1.0, 0.1, np.pi / 4)), 6)
     3.131593
     """
-    return formulas.paper_eq40_phase_difference(np.asarray(d_eff), np.asarray(d_el),
-                                                np.asarray(psi, dtype=float))
+    return formulas.paper_eq40_phase_difference(*_arrays(d_eff, d_el, psi))
 
 
 def paper_small_piezo_phase_difference(d_eff, d_el, psi):
@@ -350,22 +294,11 @@ def paper_small_piezo_phase_difference(d_eff, d_el, psi):
     :math:`\\Delta\\varphi = 2\\sin(2\\psi)\\, d_{eff} / (d_{el}(\\cos 2\\psi - 3))`.  The correct
     limit is :math:`-2 (d_{eff}/d_{el})\\sin\\psi` (:func:`phase_difference_small_piezo`);
     the printed form equals it times :math:`\\cos\\psi/(1 + \\sin^2\\psi)`.  Kept for
-    comparison only.
-
-    Parameters
-    ----------
-    d_eff, d_el, psi : array_like
-        As in :func:`domain_responses`.
-
-    Returns
-    -------
-    ndarray
-        The printed phase difference (rad).
+    comparison only.  Arguments as in :func:`domain_responses`; returns radians.
 
     Examples
     --------
     >>> round(float(paper_small_piezo_phase_difference(0.01, 1.0, np.pi / 3)), 6)  # correct: -0.017321
     -0.004949
     """
-    return formulas.paper_small_piezo_phase_difference(np.asarray(d_eff), np.asarray(d_el),
-                                                       np.asarray(psi, dtype=float))
+    return formulas.paper_small_piezo_phase_difference(*_arrays(d_eff, d_el, psi))

@@ -21,7 +21,7 @@ def plot_spectra(result: Deconvolution, unit: str = "a.u.", surface: SurfaceDisp
     result : Deconvolution
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     unit : str, optional
-        Unit of the response.
+        Unit of the response, shown in the axis labels.
     surface : SurfaceDisplacement, optional
         With a lever given: the true surface displacement drawn over ``|d_eff|``, the
         frequencies where it is undetermined shaded.
@@ -29,13 +29,14 @@ def plot_spectra(result: Deconvolution, unit: str = "a.u.", surface: SurfaceDisp
     Returns
     -------
     matplotlib.figure.Figure
+        Two panels on one frequency axis, :math:`|G_{elec}|` above :math:`|d_{eff}|`.
 
     Examples
     --------
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> len(plot_spectra(fit).axes) > 0
-    True
+    >>> [ax.get_ylabel() for ax in plot_spectra(fit, unit="pm").axes]
+    ['$|G_{elec}|$ (pm/V)', '$|d_{eff}|$ (pm)']
     """
     fig = Figure(figsize=(7, 6), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True)
@@ -84,13 +85,14 @@ def plot_nulling_bias(result: Deconvolution) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
+        One panel, the nulling bias against frequency.
 
     Examples
     --------
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> len(plot_nulling_bias(fit).axes) > 0
-    True
+    >>> [ax.get_ylabel() for ax in plot_nulling_bias(fit).axes]
+    ['nulling bias $V_{null}$ (V)']
     """
     fig = Figure(figsize=(7, 4), layout="constrained")
     ax = fig.subplots()
@@ -127,18 +129,19 @@ def plot_error_map(result: Deconvolution, unit: str = "a.u.") -> Figure:
     result : Deconvolution
         From :func:`pfmdyn.analysis.deconvolve.deconvolve`.
     unit : str, optional
-        Unit of the response.
+        Unit of the residual's colour bar (that of the response).
 
     Returns
     -------
     matplotlib.figure.Figure
+        The in-phase and the quadrature residual side by side, sharing one colour bar.
 
     Examples
     --------
     >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5, 1e5, 2e5, 2e5], [0.0, 1.0, 0.0, 1.0], [1, 2, 1, 3], 0.0)
-    >>> len(plot_error_map(fit).axes) > 0
-    True
+    >>> [ax.get_title() for ax in plot_error_map(fit).axes[:2]]   # the third is the colour bar
+    ['residual, in-phase x', 'residual, quadrature y']
     """
     fig = Figure(figsize=(9, 5), layout="constrained")
     axes = fig.subplots(1, 2, sharey=True)

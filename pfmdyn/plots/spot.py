@@ -31,6 +31,7 @@ def plot_spot(result: SpotResult, frequencies=None, ratio_map=None):
     Returns
     -------
     matplotlib.figure.Figure
+        The ratio along the lever and, with ``ratio_map``, its map beside it.
 
     Examples
     --------
