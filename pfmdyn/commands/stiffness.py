@@ -27,10 +27,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 
 from ..errors import UserError
+from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
 from . import flags
 
@@ -93,7 +93,7 @@ def _from_file(path: str) -> tuple[dict, list, list]:
     """Lever values (names -> SI), contact resonances and their modes from an instrument file or table."""
     from ..io.instruments import read_instrument
 
-    if Path(path).suffix.lower() == ".csv":
+    if file_kind(path) in CSV_KINDS:
         from ..io.tables import ResonanceData, read
         data = read(path)
         if not isinstance(data, ResonanceData):
@@ -126,17 +126,6 @@ def _lever(args, found: dict):
         values["tip_position"] = checked("tip_position", args.tip_position, "--tip-position")
     medium = argparse.Namespace(medium=args.medium, temperature=args.temperature)
     return flags.cantilever(medium, values), notes
-
-
-def _is_contact_map(path: str) -> bool:
-    """True for an HDF5 file or Zarr directory holding a contact-frequency map."""
-    if not (os.path.isdir(path) or Path(path).suffix.lower() in (".h5", ".hdf5")):
-        return False
-    from ..maps.contact import is_contact_map
-    try:
-        return is_contact_map(path)
-    except UserError:       # not HDF5 or Zarr: the instrument readers say what it is
-        return False
 
 
 def _contact_map(args) -> int:
@@ -174,7 +163,7 @@ def run(args) -> int:
     from ..io.results import check_writable, write_json
 
     check_writable(args.json)
-    if args.file and _is_contact_map(args.file):
+    if args.file and file_kind(args.file) in CONTACT_MAP_KINDS:
         return _contact_map(args)
     if args.out:
         raise UserError("--out is for a contact-frequency map (a file holding contact_frequency_hz)")

@@ -32,7 +32,7 @@ the file says.
 
 :func:`read` reads these CSV files; ``overrides`` (metadata keys, from the command line)
 win over the file's values.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
-.txt/.dat, :func:`is_instrument_file`) give their resonance table through
+.txt/.dat: :data:`pfmdyn.io.kinds.INSTRUMENT_KINDS`) give their resonance table through
 :func:`pfmdyn.analysis.thermal.instrument_resonances` (a thermal tune's peaks are fitted
 there); :func:`pfmdyn.discrepancy.inputs.read` takes either kind.
 
@@ -52,10 +52,9 @@ from ..names import NAMES, canonical
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
 from .spectra import read_spectra
-from .sweeps import is_drive_sweep
+from .kinds import INSTRUMENT_KINDS, file_kind
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "is_instrument_file",
-           "check_resonance_rows"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
 REQUIRED_KEYS = ("spring_constant", "length", "tip_height", "free_resonance")
 OPTIONAL_KEYS = ("width", "frequency_uncertainty_hz", "quality_factor_uncertainty")
@@ -77,9 +76,6 @@ PLAUSIBLE = {name: (NAMES[name].low, NAMES[name].high, NAMES[name].unit) for nam
 (um for m, kHz for Hz)."""
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
-INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
-TEXT_SUFFIXES = (".txt", ".dat")
-"""Drive sweeps, or tables in this module's format saved under a text-file name."""
 MIN_SPECTRUM_ROWS = 20
 MIN_SPECTRUM_FREQUENCIES = 10
 MIN_RESONANCES = 1
@@ -127,7 +123,7 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
-    if is_instrument_file(path):
+    if file_kind(path) in INSTRUMENT_KINDS:
         raise UserError(f"{path}: an instrument file, not a CSV table (read its resonances with "
                         "pfmdyn.discrepancy.inputs.read)")
     table = read_table(path)
@@ -156,16 +152,6 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
         raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
     check_band(str(path), spectra.frequency_hz, metadata.free_resonance, SPECTRUM_BAND)
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
-
-
-def is_instrument_file(path) -> bool:
-    """An instrument file (by its suffix; a .txt/.dat file only when it holds a drive sweep).
-
-    >>> is_instrument_file("scan.ibw"), is_instrument_file("table.csv")
-    (True, False)
-    """
-    suffix = Path(path).suffix.lower()
-    return suffix in INSTRUMENT_SUFFIXES and not (suffix in TEXT_SUFFIXES and not is_drive_sweep(path))
 
 
 def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:
