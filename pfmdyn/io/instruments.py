@@ -25,14 +25,13 @@ naming it, never a silent default (the commands add the option that supplies it)
 """
 from __future__ import annotations
 
-import math
 import struct
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
-from ..names import canonical
+from ..names import canonical, checked
 from .columns import read_table
 from .kinds import CSV_KINDS, NANOSURF_KINDS, file_kind
 from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
@@ -126,13 +125,14 @@ def required_field(record: InstrumentRecord, name: str, overrides: dict | None =
     Traceback (most recent call last):
     ...
     pfmdyn.io.record.MissingFieldError: tip height not in a.ibw
+    >>> required_field(r, "length", {"length": 223.0})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: length must be in (1e-06, 0.01] m, got 223.0
     """
     overrides = overrides or {}
     if overrides.get(name) is not None:
-        value = float(overrides[name])
-        if not (math.isfinite(value) and value > 0):
-            raise UserError(f"{FIELDS[name][0]} must be positive and finite, got {overrides[name]}")
-        return value
+        return checked(name, overrides[name])
     if name in record.fields:
         return record.fields[name]
     raise MissingFieldError(f"{FIELDS[name][0]} not in {Path(record.path).name}", name)

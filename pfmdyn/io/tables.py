@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..names import NAMES, canonical
+from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
 from .spectra import read_spectra
@@ -71,9 +71,6 @@ CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free",
 SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
 """Where measured frequencies lie, in units of the free resonance f1: a spectrum may stay below
 f1 (not 20x below); a table's modes are free mode 1 (f1) or above."""
-PLAUSIBLE = {name: (NAMES[name].low, NAMES[name].high, NAMES[name].unit) for name in REQUIRED_KEYS + ("width",)}
-"""Ranges no AFM cantilever leaves (:mod:`pfmdyn.names`): a value outside is in another unit
-(um for m, kHz for Hz)."""
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 MIN_SPECTRUM_ROWS = 20
@@ -95,14 +92,28 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         if key not in meta:
             continue
         values[key] = meta[key] if isinstance(meta[key], float) else metadata_number(where, key, str(meta[key]))
-        if not (math.isfinite(values[key]) and values[key] > 0):
+        if key in NAMES:
+            values[key] = _plausible(where, key, values[key])
+        elif not (math.isfinite(values[key]) and values[key] > 0):
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
-        low, high, unit = PLAUSIBLE.get(key, (0.0, math.inf, ""))
-        if not low <= values[key] <= high:
-            raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
-                            f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
     return Metadata(**{key: values.get(key) for key in REQUIRED_KEYS + OPTIONAL_KEYS},
                     description=meta.get("description", ""))
+
+
+def _plausible(where: str, key: str, value: float) -> float:
+    """``value`` checked against the range no cantilever leaves (:func:`pfmdyn.names.checked`):
+    outside it, a number in another unit (um for m, kHz for Hz), and the message says how to give it.
+
+    >>> _plausible("d.csv", "length", 223.0)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: d.csv: length must be in (1e-06, 0.01] m, got 223.0; give it in m (or with its unit, e.g. 'length: 223 um')
+    """
+    try:
+        return checked(key, value, where)
+    except UserError as exc:
+        unit = NAMES[key].unit
+        raise UserError(f"{exc}; give it in {unit} (or with its unit, e.g. '{key}: 223 um')", exc.quantity) from None
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
