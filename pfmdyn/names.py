@@ -85,6 +85,10 @@ QUANTITIES: tuple[Quantity, ...] = (
     # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
     Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
              0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),
+    Quantity("free_resonance_uncertainty", "u(f1)", "Hz", "standard uncertainty of the free resonance", 0.0, 1e8,
+             open_low=False),
+    Quantity("spring_constant_uncertainty", "u(k)", "N/m", "standard uncertainty of the spring constant", 0.0, 1e4,
+             open_low=False),
     Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (for the reduced modulus E*)", 1e-10, 1e-3,
              aliases=("tip_radius_m",)),
     Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (for the reduced modulus E*)",

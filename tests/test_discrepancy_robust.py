@@ -97,8 +97,10 @@ def _spectrum_text(freq_hz, meta=META, header="frequency_hz,bias_v,x,y", x=1.0):
 
 @pytest.mark.parametrize("text, message", [
     (_spectrum_text(np.linspace(150, 400, 20)), "lie far from the free resonance 63200 Hz"),      # kHz as Hz
-    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")), "'length' is 223 m"),
-    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")), "'free_resonance' is 63.2"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.23e-4", "223")),
+     "length must be in (1e-06, 0.01] m, got 223.0; give it in m"),
+    (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("6.32e4", "63.2")),
+     "free_resonance must be in (500, 1e+08] Hz, got 63.2; give it in Hz"),
     (_spectrum_text(np.linspace(150e3, 400e3, 20), META.replace("2.4\n", "2.4 lbf/in\n")), "unit 'lbf/in' not understood"),
     (_spectrum_text(np.linspace(150e3, 400e3, 20), x=0.0).replace(",0.5\n", ",0\n"), "zero in every row"),
     (META + "mode,condition,frequency_hz\n1,free,63.2\n1,contact,310.5\n", "lie far from the free resonance"),

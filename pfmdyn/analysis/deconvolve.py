@@ -213,6 +213,8 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     n, mean_v, sxx = lines.count, lines.mean_bias, lines.spread
     slope, intercept, residual = lines.slope, lines.intercept, lines.residual
 
+    # Each frequency's own variance, for its coefficients' uncertainties (the fits' one robust
+    # level from the same residuals: pfmdyn.fitting.noise).
     dof = 2 * (n - 2)  # real and imaginary parts each lose two degrees of freedom
     with np.errstate(invalid="ignore", divide="ignore"):
         noise_var = np.where(dof > 0, lines.squared_residual() / dof, np.nan)

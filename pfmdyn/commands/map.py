@@ -121,8 +121,9 @@ def run(args) -> int:
     overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
     if args.medium:             # the fluid around the lever: its load enters the beam model
         overrides["medium"] = flags.medium_from_args(args)
-    from ..maps.contact import contact_map, describe, is_contact_map
-    if is_contact_map(args.data):
+    from ..io.kinds import CONTACT_MAP_KINDS, file_kind
+    from ..maps.contact import contact_map, describe
+    if file_kind(args.data) in CONTACT_MAP_KINDS:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")

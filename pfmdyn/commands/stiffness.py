@@ -27,16 +27,19 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 
 from ..errors import UserError
+from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
 from . import flags
 
 __all__ = ["add_arguments", "run"]
 
 _LEVER = tuple(n for n in LEVER if n not in ("tip_position", "spot_position"))
+_UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty")
+_MAX_MODE = 1000
+"""No instrument resolves a higher flexural mode (and the root counts would run for hours)."""
 _NOMINAL_LENGTH = 1e-4
 """Length used when none is given and none is needed (no tip height, no tilt: the resonance
 ratios do not depend on it); reported as not given."""
@@ -62,13 +65,9 @@ def add_arguments(parser) -> None:
                         "more contact modes (the L1/L method)")
     parser.add_argument("--free", dest="free_resonance", default=None, help=argparse.SUPPRESS)
     flags.add_contact(parser, ("k2", "k2_over_k1", "poisson"))
-    flags.add(parser, ("contact_uncertainty",))
-    parser.add_argument("--free-resonance-uncertainty", dest="free_resonance_uncertainty", default=None,
-                        metavar="HZ", help="standard uncertainty of the free resonance")
+    flags.add(parser, _UNCERTAINTIES)
     parser.add_argument("--free-uncertainty", dest="free_resonance_uncertainty", default=None,
                         help=argparse.SUPPRESS)
-    parser.add_argument("--spring-constant-uncertainty", default=None, metavar="N/m",
-                        help="standard uncertainty of the spring constant")
     parser.add_argument("--reduced-modulus", action="store_true", help="also give E* from k1 (Hertz contact)")
     flags.add(parser, ("tip_radius", "normal_load"))
     parser.add_argument("--load", dest="normal_load", default=None, help=argparse.SUPPRESS)
@@ -77,23 +76,11 @@ def add_arguments(parser) -> None:
                         help="for a contact-frequency map (contact_frequency_hz): write DIR/maps.zarr with k1")
 
 
-def _number(text, flag: str, *, allow_zero: bool = False) -> float | None:
-    if text is None:
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        raise UserError(f"{flag} must be a number, got {text!r}") from None
-    if not math.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
-        raise UserError(f"{flag} must be {'non-negative' if allow_zero else 'positive'} and finite, got {text}")
-    return value
-
-
 def _from_file(path: str) -> tuple[dict, list, list]:
     """Lever values (names -> SI), contact resonances and their modes from an instrument file or table."""
     from ..io.instruments import read_instrument
 
-    if Path(path).suffix.lower() == ".csv":
+    if file_kind(path) in CSV_KINDS:
         from ..io.tables import ResonanceData, read
         data = read(path)
         if not isinstance(data, ResonanceData):
@@ -128,17 +115,6 @@ def _lever(args, found: dict):
     return flags.cantilever(medium, values), notes
 
 
-def _is_contact_map(path: str) -> bool:
-    """True for an HDF5 file or Zarr directory holding a contact-frequency map."""
-    if not (os.path.isdir(path) or Path(path).suffix.lower() in (".h5", ".hdf5")):
-        return False
-    from ..maps.contact import is_contact_map
-    try:
-        return is_contact_map(path)
-    except UserError:       # not HDF5 or Zarr: the instrument readers say what it is
-        return False
-
-
 def _contact_map(args) -> int:
     """k1 at every pixel of a contact-frequency map (command-line values win over the file's)."""
     from ..maps.contact import contact_map, describe
@@ -160,11 +136,21 @@ def _contact_map(args) -> int:
 
 
 def _mode(text) -> int:
-    value = _number(text, "--mode")
-    if value > 1000:        # no instrument resolves a higher flexural mode (and the root counts would run for hours)
-        raise UserError(f"--mode must be at most 1000, got {text}")
-    if value != int(value):
-        raise UserError(f"--mode must be a whole number, got {text}")
+    """A flexural mode number, 1 to :data:`_MAX_MODE` (a count, not a quantity of :mod:`pfmdyn.names`).
+
+    >>> _mode("2"), _mode("3.0")
+    (2, 3)
+    >>> _mode("0")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --mode must be a whole number from 1 to 1000, got 0
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise UserError(f"--mode must be a number, got {text!r}") from None
+    if not (math.isfinite(value) and 1 <= value <= _MAX_MODE and value == int(value)):
+        raise UserError(f"--mode must be a whole number from 1 to {_MAX_MODE}, got {text}")
     return int(value)
 
 
@@ -174,7 +160,7 @@ def run(args) -> int:
     from ..io.results import check_writable, write_json
 
     check_writable(args.json)
-    if args.file and _is_contact_map(args.file):
+    if args.file and file_kind(args.file) in CONTACT_MAP_KINDS:
         return _contact_map(args)
     if args.out:
         raise UserError("--out is for a contact-frequency map (a file holding contact_frequency_hz)")
@@ -183,7 +169,7 @@ def run(args) -> int:
         args = argparse.Namespace(**{**vars(args), "tip_position": None})
     found, contacts, modes = _from_file(args.file) if args.file else ({}, [], [])
     if args.contact:
-        contacts = [_number(c, "--contact") for c in args.contact]
+        contacts = [checked("contact_resonance", c, "--contact") for c in args.contact]
         modes = []
     modes = [_mode(m) for m in args.mode] if args.mode else modes or None
     if not contacts:
@@ -194,15 +180,11 @@ def run(args) -> int:
     if args.reduced_modulus and len(hertz) < 2:
         raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
     hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
+    uncertainties = {name: 0.0 for name in _UNCERTAINTIES} | flags.given(args, _UNCERTAINTIES)
     report = analyse(
         lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
         tip_position_stated=args.tip_position is not None or "tip_position" in found,
-        contact_uncertainty=flags.given(args, ("contact_uncertainty",)).get("contact_uncertainty", 0.0),
-        free_resonance_uncertainty=_number(args.free_resonance_uncertainty, "--free-resonance-uncertainty",
-                                           allow_zero=True) or 0.0,
-        spring_constant_uncertainty=_number(args.spring_constant_uncertainty, "--spring-constant-uncertainty",
-                                            allow_zero=True) or 0.0,
-        hertz=hertz, notes=tuple(notes))
+        hertz=hertz, notes=tuple(notes), **uncertainties)
     print(report.report())
     if args.json:
         document = report.to_dict()

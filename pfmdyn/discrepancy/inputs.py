@@ -5,7 +5,8 @@ file (.ibw, .nid, .h5/.hdf5, drive sweeps .txt/.dat) gives the resonance table i
 instrument stored, or, for a thermal tune, the free modes fitted in it
 (:func:`pfmdyn.analysis.thermal.instrument_resonances`); its short tables (one or two
 resonances) are accepted.  A drive sweep (.txt/.dat) is fitted over its measured points instead
-(:mod:`pfmdyn.discrepancy.sweep`): :func:`is_sweep` tells the two apart.
+(:mod:`pfmdyn.discrepancy.sweep`).  Which is which is the file's kind
+(:func:`pfmdyn.io.kinds.file_kind`).
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from ..io import tables
 from ..io.discrepancy_data import ResonanceData, SpectrumData
 from ..errors import UserError
 from ..io import nid, sweeps
+from ..io.kinds import INSTRUMENT_KINDS, NANOSURF_KINDS, SWEEP_KINDS, file_kind
 
 __all__ = ["read", "is_sweep", "read_sweep", "is_thermal_tune"]
 
@@ -25,9 +27,7 @@ def is_sweep(path) -> bool:
     >>> is_sweep("scan.ibw"), is_sweep("missing.txt"), is_sweep("missing.nid")
     (False, True, False)
     """
-    if str(path).lower().endswith(".nid"):
-        return nid.is_drive_sweep(path)
-    return str(path).lower().endswith(tables.TEXT_SUFFIXES) and sweeps.is_drive_sweep(path)
+    return file_kind(path) in SWEEP_KINDS
 
 
 def is_thermal_tune(path) -> bool:
@@ -38,11 +38,11 @@ def is_thermal_tune(path) -> bool:
     (False, False)
     """
     from ..io.instruments import read_instrument
-    from ..io.thermal_tune import is_thermal_csv
 
-    if str(path).lower().endswith(".csv"):
-        return is_thermal_csv(path)
-    if not tables.is_instrument_file(path) or str(path).lower().endswith(tables.TEXT_SUFFIXES):
+    kind = file_kind(path)
+    if kind == "thermal csv":
+        return True
+    if kind not in INSTRUMENT_KINDS - {"text sweep"}:
         return False
     try:
         return read_instrument(path).kind == "thermal spectrum"
@@ -52,7 +52,7 @@ def is_thermal_tune(path) -> bool:
 
 def read_sweep(path) -> sweeps.SweepTable:
     """The measured points of a drive sweep, whichever format holds them."""
-    reader = nid.read_sweep_table if str(path).lower().endswith(".nid") else sweeps.read_sweep_table
+    reader = nid.read_sweep_table if file_kind(path) in NANOSURF_KINDS else sweeps.read_sweep_table
     return reader(path)
 
 
@@ -65,6 +65,6 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ...
     pfmdyn.errors.UserError: scan.xyz: cannot read the file (No such file or directory)
     """
-    if tables.is_instrument_file(path):
+    if file_kind(path) in INSTRUMENT_KINDS:
         return instrument_resonances(path, overrides)
     return tables.read(path, overrides)

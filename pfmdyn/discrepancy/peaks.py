@@ -82,7 +82,8 @@ def _maxima(size, freq_u=None):
     inner = np.arange(1, len(size) - 1)
     local = inner[(size[inner] >= size[inner - 1]) & (size[inner] > size[inner + 1])]
     # Noise of ``size`` from its second differences (their median ignores the peaks), with a
-    # floor for data without noise: a thousandth of the median.
+    # floor for data without noise: a thousandth of the median (why not the fits' estimate:
+    # pfmdyn.fitting.noise).
     noise = max(np.median(np.abs(np.diff(size, 2))) / (0.6745 * math.sqrt(6)), 1e-3 * np.median(size))
     rise, left, right = peak_prominences(size, local) if len(local) else (np.zeros(0), local, local)
     which = bands(freq_u) if freq_u is not None else np.zeros(len(size), int)

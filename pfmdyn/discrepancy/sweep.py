@@ -30,7 +30,8 @@ from scipy.optimize import least_squares
 
 from ..cantilever import Cantilever
 from ..errors import UserError
-from ..fitting.noise import GAP_LIMIT, gap, misfit_band, noise_sigma
+from ..fitting.noise import GAP_LIMIT, gap, misfit_band
+from ..fitting.noise import spectrum_noise as noise_level
 from ..fitting.parameters import Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
@@ -193,11 +194,6 @@ def unexplained_line(entry: dict | None) -> list[str]:
     of = "the value there" if entry.get("relative") else "the largest measured value"
     return [f"  unexplained: the residual at {low / 1e3:.6g}-{high / 1e3:.6g} kHz (gap {entry['gap']:.3g} x noise, "
             f"largest {entry['largest_residual']:.1%} of {of}) is beyond the model"]
-
-
-def noise_level(frequency, y) -> float:
-    sigma = noise_sigma(frequency, np.zeros(len(y)), y)
-    return max(sigma, 1e-9 * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
 
 
 def penalty(y) -> np.ndarray:

@@ -12,6 +12,33 @@ The gap of a fit is ``sqrt(chi2 / n)``, ``chi2 = sum |r / sigma|**2`` over its `
 (:func:`gap`): 1 when the residual is noise.  ``pfmdyn discrepancy`` and ``pfmdyn map`` (each
 pixel's spectra) report this one gap; a gap above :data:`GAP_LIMIT` is a misfit the noise does
 not explain.
+
+Every noise estimate of pfmdyn, and why those that differ do:
+
+* bias spectra (``pfmdyn discrepancy`` on a CSV spectrum): :func:`noise_sigma`, as above;
+* one spectrum with no bias axis (a drive sweep, with or without a reference, and a thermal
+  tune's log ASD: :mod:`pfmdyn.discrepancy.sweep`, ``reference``, ``thermal``):
+  :func:`spectrum_noise`, the same estimate without the line in bias it cannot have, floored at
+  :data:`SPECTRUM_FLOOR` of the data's RMS.  Such data may be real (an amplitude-only sweep, a log
+  ASD); the estimate keeps the constant of complex noise and so reads real noise at 0.81 of its
+  standard deviation (the median of a chi-squared of one degree is 0.455 sigma**2, not
+  ``ln 2``): a real residual of pure noise has a gap of about 1.23, not 1.  Not corrected here,
+  since that would move every reported gap of such data;
+* each pixel of a map (:mod:`pfmdyn.maps.fit`, :mod:`pfmdyn.maps.sho`): :func:`noise_sigmas`,
+  floored at 1e-15 of the pixel's norm ``sqrt(sum |y|**2)`` (the maps' own floor for data
+  without noise, far below the one-spectrum floor);
+* choosing a map's model (:mod:`pfmdyn.maps.select`): the variance profiled from the fits, the
+  smallest residual sum of squares per degree of freedom over the candidate models, floored at
+  1e-12 of ``mean |y|**2``: the BIC compares models on the residuals of those fits, and there
+  the few sample pixels' bands, a handful of points per peak width, would leave curvature in
+  differences;
+* finding resonances (:mod:`pfmdyn.discrepancy.peaks`): the noise of the bias-summed magnitude,
+  real and before any fit, from the median absolute second difference (``/ 0.6745 sqrt 6``, the
+  real normal's constants), floored at 1e-3 of the median magnitude: a threshold of prominence;
+* deconvolving the bias lines (:mod:`pfmdyn.analysis.deconvolve`): the variance at each
+  frequency from the residual of its line in bias (``RSS / 2 (n - 2)``), unbiased and per
+  frequency, for the uncertainties of that frequency's coefficients; :func:`noise_sigma` takes
+  the median of the same residuals over frequencies, for one robust level.
 """
 from __future__ import annotations
 
@@ -21,7 +48,8 @@ import numpy as np
 
 from .bias_line import bias_lines
 
-__all__ = ["noise_sigma", "noise_sigmas", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT", "DIFFERENCE_ORDERS"]
+__all__ = ["noise_sigma", "noise_sigmas", "spectrum_noise", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT",
+           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR"]
 
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
@@ -115,6 +143,26 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
         return None
     dof = lines.count[ok] - 2
     return float(math.sqrt(np.median(lines.squared_residual()[ok] / gammaincinv(dof, 0.5))))
+
+
+SPECTRUM_FLOOR = 1e-9
+""":func:`spectrum_noise` is at least this fraction of the data's RMS (a simulated sweep without noise)."""
+
+
+def spectrum_noise(frequency_hz, y) -> float:
+    """RMS noise of one spectrum, ``y`` (complex or real) at ``frequency_hz``, with no bias axis:
+    :func:`noise_sigma` (differences along frequency alone), floored at :data:`SPECTRUM_FLOOR` of the
+    RMS of ``y`` (see the module for real data).
+
+    >>> rng = np.random.default_rng(3)
+    >>> f = np.linspace(1e4, 2e4, 4000)
+    >>> round(spectrum_noise(f, np.sin(f / 500) + 0.01 * rng.standard_normal(4000)) / 0.01, 1)  # real noise
+    0.8
+    >>> spectrum_noise(f, np.full(4000, 2.0))          # no noise: the floor
+    2e-09
+    """
+    sigma = noise_sigma(frequency_hz, np.zeros(len(y)), y)
+    return max(sigma, SPECTRUM_FLOOR * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
 
 
 def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:

@@ -25,15 +25,15 @@ naming it, never a silent default (the commands add the option that supplies it)
 """
 from __future__ import annotations
 
-import math
 import struct
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
-from ..names import canonical
+from ..names import canonical, checked
 from .columns import read_table
+from .kinds import CSV_KINDS, NANOSURF_KINDS, file_kind
 from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
 
 __all__ = ["FIELDS", "Channel", "InstrumentRecord", "MissingFieldError", "read_instrument", "resonance_table",
@@ -41,22 +41,24 @@ __all__ = ["FIELDS", "Channel", "InstrumentRecord", "MissingFieldError", "read_i
 
 
 def _reader(path: Path):
-    suffix = path.suffix.lower()
-    if suffix == ".ibw":
+    """The reader of the file's kind (:func:`pfmdyn.io.kinds.file_kind`); a text file is read as a
+    sweep whatever it holds, so that a table saved as .txt is told it is not one."""
+    kind = file_kind(path)
+    if kind == "asylum":
         from .ibw import read_ibw
         return read_ibw
-    if suffix in (".h5", ".hdf5"):
+    if kind in ("hdf5", "hdf5 contact map"):
         from .hdf5 import read_hdf5
         return read_hdf5
-    if suffix == ".nid":
+    if kind in NANOSURF_KINDS:
         from .nid import read_nid
         return read_nid
-    if suffix in (".txt", ".dat"):
+    if kind in ("text sweep", "text table"):
         from .sweeps import read_sweep
         return read_sweep
-    if suffix == ".csv":
+    if kind in CSV_KINDS:
         return _read_csv
-    raise UserError(f"{path}: unknown instrument file type '{suffix}'; pfmdyn reads .ibw (Asylum), "
+    raise UserError(f"{path}: unknown instrument file type '{path.suffix.lower()}'; pfmdyn reads .ibw (Asylum), "
                     ".h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv")
 
 
@@ -123,13 +125,14 @@ def required_field(record: InstrumentRecord, name: str, overrides: dict | None =
     Traceback (most recent call last):
     ...
     pfmdyn.io.record.MissingFieldError: tip height not in a.ibw
+    >>> required_field(r, "length", {"length": 223.0})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: length must be in (1e-06, 0.01] m, got 223.0
     """
     overrides = overrides or {}
     if overrides.get(name) is not None:
-        value = float(overrides[name])
-        if not (math.isfinite(value) and value > 0):
-            raise UserError(f"{FIELDS[name][0]} must be positive and finite, got {overrides[name]}")
-        return value
+        return checked(name, overrides[name])
     if name in record.fields:
         return record.fields[name]
     raise MissingFieldError(f"{FIELDS[name][0]} not in {Path(record.path).name}", name)

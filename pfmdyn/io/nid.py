@@ -25,7 +25,7 @@ from ..errors import MissingExtraError, UserError
 from .record import InstrumentRecord, make_channel, make_record, si_spectrum, si_value
 from .sweeps import SweepTable
 
-__all__ = ["read_nid", "thermal_conditions", "is_drive_sweep", "read_sweep_table"]
+__all__ = ["read_nid", "thermal_conditions", "read_sweep_table"]
 
 # Thermal-tune fit keys (colon and case ignored) -> (pfmdyn field, SI unit of the field).
 _THERMAL_KEYS = {"frequency": ("free_resonance", "Hz"), "q factor": ("free_quality_factor", ""),
@@ -270,20 +270,6 @@ def thermal_conditions(path) -> dict:
         elif key == "measurement environment":
             out["environment"] = str(value).strip().lower()
     return out
-
-
-def is_drive_sweep(path) -> bool:
-    """Whether a ``.nid`` file's header lists a "Frequency sweep" data set (read from the header alone).
-
-    >>> is_drive_sweep("missing.nid")
-    False
-    """
-    try:
-        with open(path, "rb") as handle:
-            head = handle.read(1 << 16)
-    except OSError:
-        return False
-    return re.search(rb"^Frame=Frequency sweep", head.split(b"#!")[0], re.MULTILINE | re.IGNORECASE) is not None
 
 
 def read_sweep_table(path) -> SweepTable:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from .kinds import SWEEP_TABLE_STARTS
 from .record import (
     FIELDS,
     InstrumentRecord,
@@ -30,12 +31,11 @@ from .record import (
     si_value,
 )
 
-__all__ = ["read_sweep", "read_sweep_table", "SweepTable", "split_unit", "is_drive_sweep"]
+__all__ = ["read_sweep", "read_sweep_table", "SweepTable", "split_unit"]
 
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
 _KEYS = {"Peak amplitude frequency": "free_resonance", "Q factor": "free_quality_factor",
          "f_res": "free_resonance", "Q": "free_quality_factor"}
-_TABLE_START = ("Sweep data", "[DATA]")
 # Header keys naming the fluid around the lever (``air``, ``water`` or ``DENSITY,VISCOSITY``).
 _MEDIUM_KEYS = ("Medium", "Environment")
 
@@ -80,30 +80,12 @@ def split_unit(column: str) -> tuple[str, str]:
     return (match.group(1), match.group(2)) if match else (column.strip(), "")
 
 
-def is_drive_sweep(path) -> bool:
-    """Whether a text file holds a drive sweep (a ``Sweep data`` or ``[DATA]`` line); an
-    unreadable file counts as one, so that its reader reports the problem.
-
-    >>> import tempfile, os
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     name = os.path.join(tmp, "s.txt")
-    ...     _ = open(name, "w").write("f\\tA\\n1\\t2\\n")
-    ...     is_drive_sweep(name)
-    False
-    """
-    try:
-        text = Path(path).read_text(encoding="latin-1")
-    except OSError:
-        return True
-    return any(line.strip() in _TABLE_START for line in re.split(r"\r\n|\r|\n", text))
-
-
 def _split(path: Path) -> tuple[dict, list[str], np.ndarray]:
     try:
         lines = re.split(r"\r\n|\r|\n", path.read_text(encoding="latin-1"))
     except OSError as exc:
         raise UserError(f"{path}: cannot read the file ({exc})") from None
-    starts = [i for i, line in enumerate(lines) if line.strip() in _TABLE_START]
+    starts = [i for i, line in enumerate(lines) if line.strip() in SWEEP_TABLE_STARTS]
     if not starts or starts[0] + 1 >= len(lines):
         raise UserError(f"{path}: not a drive sweep (no 'Sweep data' or '[DATA]' line before a table)")
     header = {}

@@ -32,7 +32,7 @@ the file says.
 
 :func:`read` reads these CSV files; ``overrides`` (metadata keys, from the command line)
 win over the file's values.  Instrument files (.ibw, .nid, .h5/.hdf5 and drive sweeps
-.txt/.dat, :func:`is_instrument_file`) give their resonance table through
+.txt/.dat: :data:`pfmdyn.io.kinds.INSTRUMENT_KINDS`) give their resonance table through
 :func:`pfmdyn.analysis.thermal.instrument_resonances` (a thermal tune's peaks are fitted
 there); :func:`pfmdyn.discrepancy.inputs.read` takes either kind.
 
@@ -48,14 +48,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..names import NAMES, canonical
+from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
 from .spectra import read_spectra
-from .sweeps import is_drive_sweep
+from .kinds import INSTRUMENT_KINDS, file_kind
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "is_instrument_file",
-           "check_resonance_rows"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
 
 REQUIRED_KEYS = ("spring_constant", "length", "tip_height", "free_resonance")
 OPTIONAL_KEYS = ("width", "frequency_uncertainty_hz", "quality_factor_uncertainty")
@@ -72,14 +71,8 @@ CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free",
 SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
 """Where measured frequencies lie, in units of the free resonance f1: a spectrum may stay below
 f1 (not 20x below); a table's modes are free mode 1 (f1) or above."""
-PLAUSIBLE = {name: (NAMES[name].low, NAMES[name].high, NAMES[name].unit) for name in REQUIRED_KEYS + ("width",)}
-"""Ranges no AFM cantilever leaves (:mod:`pfmdyn.names`): a value outside is in another unit
-(um for m, kHz for Hz)."""
 Q_RELATIVE_UNCERTAINTY = 0.05
 """Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
-INSTRUMENT_SUFFIXES = (".ibw", ".nid", ".h5", ".hdf5", ".txt", ".dat")
-TEXT_SUFFIXES = (".txt", ".dat")
-"""Drive sweeps, or tables in this module's format saved under a text-file name."""
 MIN_SPECTRUM_ROWS = 20
 MIN_SPECTRUM_FREQUENCIES = 10
 MIN_RESONANCES = 1
@@ -99,14 +92,28 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
         if key not in meta:
             continue
         values[key] = meta[key] if isinstance(meta[key], float) else metadata_number(where, key, str(meta[key]))
-        if not (math.isfinite(values[key]) and values[key] > 0):
+        if key in NAMES:
+            values[key] = _plausible(where, key, values[key])
+        elif not (math.isfinite(values[key]) and values[key] > 0):
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
-        low, high, unit = PLAUSIBLE.get(key, (0.0, math.inf, ""))
-        if not low <= values[key] <= high:
-            raise UserError(f"{where}: metadata '{key}' is {values[key]:.6g} {unit}, outside {low:g}-{high:g} {unit} "
-                            f"for a cantilever: give it in {unit} (or with its unit, e.g. '{key}: 223 um')")
     return Metadata(**{key: values.get(key) for key in REQUIRED_KEYS + OPTIONAL_KEYS},
                     description=meta.get("description", ""))
+
+
+def _plausible(where: str, key: str, value: float) -> float:
+    """``value`` checked against the range no cantilever leaves (:func:`pfmdyn.names.checked`):
+    outside it, a number in another unit (um for m, kHz for Hz), and the message says how to give it.
+
+    >>> _plausible("d.csv", "length", 223.0)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: d.csv: length must be in (1e-06, 0.01] m, got 223.0; give it in m (or with its unit, e.g. 'length: 223 um')
+    """
+    try:
+        return checked(key, value, where)
+    except UserError as exc:
+        unit = NAMES[key].unit
+        raise UserError(f"{exc}; give it in {unit} (or with its unit, e.g. '{key}: 223 um')", exc.quantity) from None
 
 
 def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
@@ -127,7 +134,7 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     ('resonances', ['free', 'free', 'contact'])
     """
     path = Path(path)
-    if is_instrument_file(path):
+    if file_kind(path) in INSTRUMENT_KINDS:
         raise UserError(f"{path}: an instrument file, not a CSV table (read its resonances with "
                         "pfmdyn.discrepancy.inputs.read)")
     table = read_table(path)
@@ -156,16 +163,6 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
         raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
     check_band(str(path), spectra.frequency_hz, metadata.free_resonance, SPECTRUM_BAND)
     return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
-
-
-def is_instrument_file(path) -> bool:
-    """An instrument file (by its suffix; a .txt/.dat file only when it holds a drive sweep).
-
-    >>> is_instrument_file("scan.ibw"), is_instrument_file("table.csv")
-    (True, False)
-    """
-    suffix = Path(path).suffix.lower()
-    return suffix in INSTRUMENT_SUFFIXES and not (suffix in TEXT_SUFFIXES and not is_drive_sweep(path))
 
 
 def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:

@@ -13,10 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from .kinds import ASD_UNITS, CSV_KINDS, NANOSURF_KINDS, file_kind
 
-__all__ = ["ThermalTune", "read_thermal_tune", "is_thermal_csv"]
-
-_ASD_UNITS = {"_m_per_sqrthz": "m", "_v_per_sqrthz": "V"}
+__all__ = ["ThermalTune", "read_thermal_tune"]
 
 
 @dataclass(frozen=True)
@@ -33,29 +32,13 @@ class ThermalTune:
     conditions: dict
 
 
-def is_thermal_csv(path) -> bool:
-    """Whether a CSV file's header names an amplitude-spectral-density column (``..._m_per_sqrthz``,
-    ``..._v_per_sqrthz``); an unreadable file is not one.
-
-    >>> is_thermal_csv("missing.csv")
-    False
-    """
-    from .columns import read_table
-
-    try:
-        header = read_table(path).header
-    except (UserError, OSError):
-        return False
-    return any(str(c).lower().endswith(tuple(_ASD_UNITS)) for c in header)
-
-
 def _from_csv(path: Path) -> ThermalTune:
     from .columns import read_table
 
     table = read_table(path)
     names = [c.lower() for c in table.header]
     freq = next((i for i, c in enumerate(names) if c.endswith("_hz") and "freq" in c), None)
-    asd = next(((i, u) for i, c in enumerate(names) for s, u in _ASD_UNITS.items() if c.endswith(s)), None)
+    asd = next(((i, u) for i, c in enumerate(names) for s, u in ASD_UNITS.items() if c.endswith(s)), None)
     if freq is None or asd is None:
         raise UserError(f"{path}: a thermal tune CSV needs a frequency column ending in _hz and an ASD column "
                         "ending in _m_per_sqrthz or _v_per_sqrthz")
@@ -81,7 +64,8 @@ def read_thermal_tune(path) -> ThermalTune:
 
     path = Path(path)
     record = read_instrument(path)          # checks the type, the file's existence and emptiness
-    if path.suffix.lower() == ".csv":
+    kind = file_kind(path)
+    if kind in CSV_KINDS:
         return _from_csv(path)
     if record.kind != "thermal spectrum" or record.spectrum is None:
         raise UserError(f"{path}: not a thermal tune (a {record.kind} of {record.instrument})")
@@ -90,7 +74,7 @@ def read_thermal_tune(path) -> ThermalTune:
     if base not in ("m", "V"):
         raise UserError(f"{path}: the spectrum is in {unit}; pfmdyn calibrates spectra in m/sqrt(Hz) or V/sqrt(Hz)")
     conditions = {}
-    if path.suffix.lower() == ".nid":
+    if kind in NANOSURF_KINDS:
         from .nid import thermal_conditions
         conditions = thermal_conditions(path)
     instrument = {k: v for k, v in record.fields.items()

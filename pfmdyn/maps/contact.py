@@ -1,6 +1,7 @@
 """Contact-resonance frequency maps (DART, CR-AFM tracking) to contact-stiffness maps.
 
-The input holds ``contact_frequency_hz`` (ny, nx) and the root attributes
+The input (:data:`pfmdyn.io.kinds.CONTACT_MAP_KINDS`) holds ``contact_frequency_hz`` (ny, nx) and no
+``response``, and the root attributes
 ``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
 and ``contact_uncertainty`` in Hz, ``contact_uncertainty_hz`` read too).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
@@ -18,15 +19,7 @@ from ..names import canonical, checked
 from .readers import open_root, scalar
 from .store import open_group, write_array
 
-__all__ = ["contact_map", "describe", "is_contact_map"]
-
-
-def is_contact_map(path: str) -> bool:
-    """True when ``path`` holds a contact-frequency map rather than spectra."""
-    if not os.path.exists(path):
-        raise UserError(f"{path}: no such file or directory")
-    with open_root(path) as root:
-        return "contact_frequency_hz" in root and "response" not in root
+__all__ = ["contact_map", "describe"]
 
 
 def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:

@@ -15,7 +15,8 @@ Every combination of mechanisms is fitted once (eight small fits); the noise var
 pixel is the smallest residual variance ``RSS / (n_freq - n_parameters / 2)`` any of them
 reaches (the usual full-model estimate, robust to one combination stopping in a local
 minimum), floored at 1 ppm of the signal.  Estimates from the spectrum alone (differences) fail here: a band-excitation
-band samples a sharp resonance with a few points per width.
+band samples a sharp resonance with a few points per width (every estimate of the noise, and why
+they differ: :mod:`pfmdyn.fitting.noise`).
 """
 from __future__ import annotations
 
