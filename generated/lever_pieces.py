@@ -96,14 +96,15 @@ def point_jump(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
     return (-_t3, -H**2*_t0*kll/(L**2*beta) + _t4*mu*rho_g**2, -_t6 - beta*mu, _t3, _t3, _t2*kll, 0, _t1, _t6, -_t5*kvl, -_t5, 0)
 
 
-def point_jump_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    """Partials of :func:`point_jump` w.r.t. ``JACOBIAN_PARAMETERS``: a dict of 12-tuples."""
-    return {
-        'beta': (6*H*kvl/(L*beta**3*k), 3*H**2*kll/(L**2*beta**2*k) + 3*beta**2*mu*rho_g**2, -mu - 9*kvv/(beta**4*k), -6*H*kvl/(L*beta**3*k), -6*H*kvl/(L*beta**3*k), -6*H*kll/(L*beta**3*k), 0, -6/(L*beta**3*k), 9*kvv/(beta**4*k), 9*kvl/(beta**4*k), 9/(beta**4*k), 0),
-        'k': (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/(beta**3*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/(beta**3*k**2), 3*kvl/(beta**3*k**2), 3/(beta**3*k**2), 0),
-        'kvv': (0, 0, 3/(beta**3*k), 0, 0, 0, 0, 0, -3/(beta**3*k), 0, 0, 0),
-        'kll': (0, -3*H**2/(L**2*beta*k), 0, 0, 0, 3*H/(L*beta**2*k), 0, 0, 0, 0, 0, 0),
-        'kvl': (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/(beta**3*k), 0, 0),
-        'mu': (0, beta**3*rho_g**2, -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0),
-        'rho_g': (0, 2*beta**3*mu*rho_g, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0),
+def point_jump_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g, wrt=JACOBIAN_PARAMETERS):
+    """Partials of :func:`point_jump` w.r.t. ``wrt`` (of ``JACOBIAN_PARAMETERS``; only those evaluated): a dict of 12-tuples."""
+    partials = {
+        'beta': lambda: (6*H*kvl/(L*beta**3*k), 3*H**2*kll/(L**2*beta**2*k) + 3*beta**2*mu*rho_g**2, -mu - 9*kvv/(beta**4*k), -6*H*kvl/(L*beta**3*k), -6*H*kvl/(L*beta**3*k), -6*H*kll/(L*beta**3*k), 0, -6/(L*beta**3*k), 9*kvv/(beta**4*k), 9*kvl/(beta**4*k), 9/(beta**4*k), 0),
+        'k': lambda: (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/(beta**3*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/(beta**3*k**2), 3*kvl/(beta**3*k**2), 3/(beta**3*k**2), 0),
+        'kvv': lambda: (0, 0, 3/(beta**3*k), 0, 0, 0, 0, 0, -3/(beta**3*k), 0, 0, 0),
+        'kll': lambda: (0, -3*H**2/(L**2*beta*k), 0, 0, 0, 3*H/(L*beta**2*k), 0, 0, 0, 0, 0, 0),
+        'kvl': lambda: (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/(beta**3*k), 0, 0),
+        'mu': lambda: (0, beta**3*rho_g**2, -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0),
+        'rho_g': lambda: (0, 2*beta**3*mu*rho_g, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0),
     }
+    return {name: partials[name]() for name in wrt}
