@@ -697,8 +697,8 @@ def _small_inverse(M):
 _LAST_READ = [None]
 """The last :class:`_WrittenOut` with its arguments: a least-squares fit asks for the values at a
 point, then for their partials at the same point, which need the same solution."""
-_KEPT_SIZE = 1 << 16
-"""Batches up to this size are kept (a map's block is not held after its fit)."""
+_KEPT_SIZE = 1 << 14
+"""Batches up to this size are kept (some megabytes; a map's block is not held after its fit)."""
 
 
 def _read_out(*args, drives=DRIVES) -> _WrittenOut:
