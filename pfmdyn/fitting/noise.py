@@ -20,10 +20,10 @@ Every noise estimate of pfmdyn, and why those that differ do:
   tune's log ASD: :mod:`pfmdyn.discrepancy.sweep`, ``reference``, ``thermal``):
   :func:`spectrum_noise`, the same estimate without the line in bias it cannot have, floored at
   :data:`SPECTRUM_FLOOR` of the data's RMS.  Such data may be real (an amplitude-only sweep, a log
-  ASD); the estimate keeps the constant of complex noise and so reads real noise at 0.81 of its
-  standard deviation (the median of a chi-squared of one degree is 0.455 sigma**2, not
-  ``ln 2``): a real residual of pure noise has a gap of about 1.23, not 1.  Not corrected here,
-  since that would move every reported gap of such data;
+  ASD): a real difference's ``|d|**2`` is a chi-squared of one degree, whose median is
+  :data:`REAL_MEDIAN` ``sigma**2``, not the exponential's ``ln 2``, so for real data that is the
+  constant (with ``ln 2`` real noise would read at 0.81 of its standard deviation, and a residual
+  of pure noise show a gap of 1.23);
 * each pixel of a map (:mod:`pfmdyn.maps.fit`, :mod:`pfmdyn.maps.sho`): :func:`noise_sigmas`,
   floored at 1e-15 of the pixel's norm ``sqrt(sum |y|**2)`` (the maps' own floor for data
   without noise, far below the one-spectrum floor);
@@ -49,7 +49,7 @@ import numpy as np
 from .bias_line import bias_lines
 
 __all__ = ["noise_sigma", "noise_sigmas", "spectrum_noise", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT",
-           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR"]
+           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR", "REAL_MEDIAN"]
 
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
@@ -147,6 +147,9 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
 
 SPECTRUM_FLOOR = 1e-9
 """:func:`spectrum_noise` is at least this fraction of the data's RMS (a simulated sweep without noise)."""
+REAL_MEDIAN = 0.4549364231195724
+"""The median of a chi-squared variable of one degree, ``2 gammaincinv(1/2, 1/2)``: real noise's
+``|d|**2`` over its variance."""
 
 
 def spectrum_noise(frequency_hz, y) -> float:
@@ -157,11 +160,13 @@ def spectrum_noise(frequency_hz, y) -> float:
     >>> rng = np.random.default_rng(3)
     >>> f = np.linspace(1e4, 2e4, 4000)
     >>> round(spectrum_noise(f, np.sin(f / 500) + 0.01 * rng.standard_normal(4000)) / 0.01, 1)  # real noise
-    0.8
+    1.0
     >>> spectrum_noise(f, np.full(4000, 2.0))          # no noise: the floor
     2e-09
     """
     sigma = noise_sigma(frequency_hz, np.zeros(len(y)), y)
+    if np.isrealobj(y):     # the constant of real noise (see the module)
+        sigma *= math.sqrt(math.log(2) / REAL_MEDIAN)
     return max(sigma, SPECTRUM_FLOOR * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
 
 
