@@ -192,13 +192,16 @@ def variants(tmp: Path):
                  "zarr_truncated_chunk", "zarr_missing_chunk"):
         store = _zarr(tmp / f"{name}.zarr")
         response = store / "response"
-        chunk = next(p for p in sorted(response.iterdir()) if not p.name.startswith("."))
+        # Zarr 2 keeps metadata in .zarray/.zattrs beside flat chunks, Zarr 3 in zarr.json with chunks under c/
+        metadata = ("zarr.json", ".zarray", ".zattrs", ".zgroup")
+        chunk = next(p for p in sorted(response.rglob("*")) if p.is_file() and p.name not in metadata)
+        array_meta = next(response / m for m in (".zarray", "zarr.json") if (response / m).exists())
         if name == "zarr_missing_array_metadata":
-            (response / ".zarray").unlink()
+            array_meta.unlink()
         elif name == "zarr_corrupt_array_metadata":
-            (response / ".zarray").write_text("{not json")
+            array_meta.write_text("{not json")
         elif name == "zarr_corrupt_group_attrs":
-            (store / ".zattrs").write_text("{not json")
+            next(store / m for m in (".zattrs", "zarr.json") if (store / m).exists()).write_text("{not json")
         elif name == "zarr_truncated_chunk":
             chunk.write_bytes(chunk.read_bytes()[:20])
         else:

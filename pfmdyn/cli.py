@@ -58,6 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     if extra:       # refused by the command's parser, so that the line names the command
         parsers[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
     try:
+        from .commands.flags import check_medium
+        check_medium(args)
         return int(importlib.import_module(args._module).run(args) or 0)
     except UserError as exc:
         from .commands.flags import option_hint

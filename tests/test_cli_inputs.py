@@ -49,6 +49,7 @@ def _argv(tmp: Path, command: str) -> dict:
         "roots": ["roots", "free", "--n", "2", "--json", json_out],
         "branches": ["branches", "indentation", "--out", png, "--points", "20", "--modes", "1"],
         "inspect": ["inspect", str(data), "--json", json_out],
+        "discrepancy": ["discrepancy", str(data), "--json", json_out],
     }[command]
 
 
@@ -125,6 +126,11 @@ REFUSED = [
     ("branches", ["--modes", "51"], "--modes"),
     ("branches", ["--out", "{tmp}/out.xyz"], "cannot write"),
     ("inspect", ["--json", "{tmp}"], "cannot write"),
+    ("resonances", ["--temperature", "abc"], "--temperature"),                  # was ignored in vacuum
+    ("stiffness", ["--temperature", "0"], "--temperature"),
+    ("diagram", ["--medium="], "--medium"),                                    # was vacuum, silently
+    ("discrepancy", ["--added-mass-position", "0.5"], "--added-mass-position"),  # was ignored for a spectrum
+    ("discrepancy", ["--added-mass-position", "nan"], "--added-mass-position"),
 ]
 
 

@@ -133,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
     check_writable(args.plot, figure=True)
     if is_sweep(args.data) or args.reference:
         return _sweeps(args)
+    if flags.given(args, ("added_mass_position",)):     # checked, then refused: it would be ignored
+        raise UserError("--added-mass-position is for a drive sweep compared with --reference")
     if is_thermal_tune(args.data):
         return _thermal(args)
     data = read(args.data, flags.given(args, OVERRIDES))

@@ -17,8 +17,8 @@ from ..medium import Medium
 from ..io.record import MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
-__all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "given",
-           "require", "cantilever", "contact", "option_hint"]
+__all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
+           "given", "require", "cantilever", "contact", "option_hint"]
 
 
 def add(parser, names, required=(), defaults=None) -> None:
@@ -91,7 +91,8 @@ def medium_from_args(args, found: dict | None = None, default: str = "air") -> M
     found = found or {}
     values = given(args, ("temperature",))
     temperature = values.get("temperature", found.get("temperature", 293.15))
-    text = getattr(args, "medium", None) or found.get("medium") or default
+    given_medium = getattr(args, "medium", None)
+    text = given_medium if given_medium is not None else found.get("medium") or default
     try:
         return Medium.parse(text, temperature)
     except UserError as exc:
@@ -130,6 +131,20 @@ def require(values: dict, names, file=None) -> None:
             what = NAMES[name].label
             where = f" in {Path(file).name}" if file else ""
             raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
+
+
+def check_medium(args) -> None:
+    """Refuse a bad ``--medium`` or ``--temperature`` even where the command would not use it (a
+    lever in vacuum): a value given is a value meant.
+
+    >>> import argparse
+    >>> check_medium(argparse.Namespace(medium=None, temperature="abc"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --temperature: temperature must be a number, got 'abc'
+    """
+    if getattr(args, "medium", None) is not None or getattr(args, "temperature", None) is not None:
+        medium_from_args(args)
 
 
 def cantilever(args, found: dict | None = None) -> Cantilever:

@@ -181,10 +181,16 @@ def run(args) -> int:
         raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
     hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
     uncertainties = {name: 0.0 for name in _UNCERTAINTIES} | flags.given(args, _UNCERTAINTIES)
-    report = analyse(
-        lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
-        tip_position_stated=args.tip_position is not None or "tip_position" in found,
-        hertz=hertz, notes=tuple(notes), **uncertainties)
+    try:
+        report = analyse(
+            lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
+            tip_position_stated=args.tip_position is not None or "tip_position" in found,
+            hertz=hertz, notes=tuple(notes), **uncertainties)
+    except UserError as exc:
+        if not args.file or str(exc).startswith(str(args.file)):
+            raise
+        # some of the numbers came from the file: the line names it
+        raise UserError(f"{args.file}: {exc}", quantity=exc.quantity) from None
     print(report.report())
     if args.json:
         document = report.to_dict()
