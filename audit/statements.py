@@ -318,7 +318,7 @@ def _frictionless_from_4a():
 def _symbol_verdict(symbol: str) -> Callable:
     """Decide a sentence by the audit of a symbol it defines."""
     def decide():
-        from .xref import check_symbol
+        from .xref_symbols import check_symbol
         evidence = check_symbol(symbol)
         return evidence.but(sentence=say("the symbol audit of ", Tex(symbol), ": ", evidence.sentence))
     return decide
