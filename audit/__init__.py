@@ -2,9 +2,10 @@
 numbering and qualitative statements, each checked against its target.
 
 The transcription reader (:mod:`.text`) cuts the paper into sections, sentences, references
-and symbols; :mod:`.xref` checks references, symbols and numbering; :mod:`.statements` (with
-:mod:`.wording` and :mod:`.restated`) decides the sentences that assert something.  The checks
-build on the registry's (``pfmdyn.derivations.checks``), which never import this package.
+and symbols; :mod:`.xref` checks references, symbols and numbering (with one ``xref_*`` module
+per kind of target); :mod:`.statements` (with :mod:`.wording` and :mod:`.restated`) decides
+the sentences that assert something.  The checks build on the registry's
+(``pfmdyn.derivations.checks``), which never import this package.
 :func:`register` adds the text's checks to the registry (none when the transcription is absent).
 """
 from __future__ import annotations

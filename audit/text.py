@@ -12,6 +12,9 @@ This module finds, in order of appearance:
 Nothing here decides whether a statement is right; :mod:`pfmdyn.audit.xref` and
 :mod:`pfmdyn.audit.statements` do.  :func:`quote` turns a passage into a sentence of evidence
 (its ``$...$`` formulas typeset, not shown as LaTeX source).
+
+The module stays whole past 450 lines because it is one reader: every extraction cuts the same
+cached sections, and the checkers use it as one namespace (``from . import text as T``).
 """
 from __future__ import annotations
 

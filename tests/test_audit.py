@@ -10,7 +10,7 @@ import re
 import pytest
 
 from pfmdyn import audit
-from pfmdyn.audit import statements, wording, xref
+from pfmdyn.audit import statements, wording, xref_equations, xref_figures, xref_sections, xref_symbols, xref_tables
 from pfmdyn.audit import text as T
 from pfmdyn.derivations.checks import core
 from pfmdyn.derivations.evidence import text
@@ -51,32 +51,32 @@ def test_captions_are_parsed_into_panels_with_properties():
     ("This mechanism is illustrated in Fig. 2b.", "Fig. 2b", ((2, ("b",)),), core.HOLDS),
 ])
 def test_panel_references_are_checked_against_the_caption(sentence, ref_text, targets, verdict):
-    assert xref.check_figure(_ref("figure", "VI1", sentence, ref_text, targets)).verdict == verdict
+    assert xref_figures.check_figure(_ref("figure", "VI1", sentence, ref_text, targets)).verdict == verdict
 
 
 def test_section_references_are_checked_against_the_section():
     wrong = "Tip wear effect of force-bias response spectrum is illustrated in Section IV.3."
     right = wrong.replace("IV.3", "VI.3")
-    assert xref.check_section(_ref("section", "VI", wrong, "Section IV.3", ("IV.3",))).verdict == core.ERRATUM
-    assert xref.check_section(_ref("section", "VI", right, "Section VI.3", ("VI.3",))).verdict == core.HOLDS
+    assert xref_sections.check_section(_ref("section", "VI", wrong, "Section IV.3", ("IV.3",))).verdict == core.ERRATUM
+    assert xref_sections.check_section(_ref("section", "VI", right, "Section VI.3", ("VI.3",))).verdict == core.HOLDS
     missing = wrong.replace("IV.3", "IX.3")
-    assert xref.check_section(_ref("section", "VI", missing, "Section IX.3", ("IX.3",))).verdict == core.ERRATUM
+    assert xref_sections.check_section(_ref("section", "VI", missing, "Section IX.3", ("IX.3",))).verdict == core.ERRATUM
 
 
 def test_equation_references_need_the_right_tip_conditions():
     s = "The resonances are similar to that of a free cantilever under the electrostatic forces given in Eq. (20)."
-    assert xref.check_equation(_ref("equation", "III4", s, "Eq. (20)", ("20",))).verdict == core.ERRATUM
+    assert xref_equations.check_equation(_ref("equation", "III4", s, "Eq. (20)", ("20",))).verdict == core.ERRATUM
     s22 = s.replace("(20)", "(22)")
-    assert xref.check_equation(_ref("equation", "III4", s22, "Eq. (22)", ("22",))).verdict == core.HOLDS
+    assert xref_equations.check_equation(_ref("equation", "III4", s22, "Eq. (22)", ("22",))).verdict == core.HOLDS
     s99 = s.replace("(20)", "(99)")
-    assert xref.check_equation(_ref("equation", "III4", s99, "Eq. (99)", ("99",))).verdict == core.ERRATUM
+    assert xref_equations.check_equation(_ref("equation", "III4", s99, "Eq. (99)", ("99",))).verdict == core.ERRATUM
 
 
 def test_symbol_misprints_are_found_and_defined_symbols_pass():
-    assert xref.check_symbol("d_{elf}").verdict == core.ERRATUM
-    assert "d_{el}" in text(xref.check_symbol("d_{elf}").sentence)
-    assert xref.check_symbol("d_{eff}").verdict == core.HOLDS
-    assert xref.check_symbol("A_{el}").verdict == core.ERRATUM       # defined with G_loc and with G_nl
+    assert xref_symbols.check_symbol("d_{elf}").verdict == core.ERRATUM
+    assert "d_{el}" in text(xref_symbols.check_symbol("d_{elf}").sentence)
+    assert xref_symbols.check_symbol("d_{eff}").verdict == core.HOLDS
+    assert xref_symbols.check_symbol("A_{el}").verdict == core.ERRATUM       # defined with G_loc and with G_nl
 
 
 def test_a_statement_decider_follows_the_derivation():
@@ -88,9 +88,9 @@ def test_a_statement_decider_follows_the_derivation():
 
 def test_a_roman_numeral_names_the_same_table():
     s = "Cantilever parameters are summarized in Table I."
-    assert xref.check_table(_ref("table", "captions", s, "Table I", ("I",))).verdict == core.HOLDS
+    assert xref_tables.check_table(_ref("table", "captions", s, "Table I", ("I",))).verdict == core.HOLDS
     s2 = s.replace("Table I", "Table II")
-    assert xref.check_table(_ref("table", "captions", s2, "Table II", ("II",))).verdict == core.ERRATUM
+    assert xref_tables.check_table(_ref("table", "captions", s2, "Table II", ("II",))).verdict == core.ERRATUM
 
 
 def test_loose_names_are_decided_by_the_physics_they_point_to(monkeypatch):
