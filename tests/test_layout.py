@@ -8,7 +8,7 @@ The four source trees installed as one package -- ``pfmdyn/``, ``derivations/``
   imports ``generated``, ``audit`` or the rest of ``pfmdyn``; ``audit`` imports only
   ``derivations`` (and itself); within ``pfmdyn``, ``io`` lies below ``analysis``,
   ``discrepancy`` and ``maps``, which lie below ``plots``, which lies below ``commands``;
-* inside ``analysis``, ``discrepancy`` and ``maps``, a rank order of their own (:data:`INNER_RANKS`:
+* inside ``analysis``, ``discrepancy``, ``maps`` and ``book``, a rank order of their own (:data:`INNER_RANKS`:
   a module imports only modules of a lower layer; a new module must be placed in one);
 * the library never imports ``pfmdyn.commands`` or ``pfmdyn.cli`` (commands call the library,
   not the other way round), and never imports the plots (plots import results);
@@ -192,6 +192,7 @@ INNER_RANKS = {
                     ("resonances", "spectrum")),                             # the two analyses
     "maps": (("bias", "spec"), ("outputs", "sho"), ("beam",), ("fit", "readers"), ("select", "store"),
              ("contact", "result", "usid"), ("driver",)),
+    "book": (("records",), ("build", "display")),                            # the verdicts; their build, their display
 }
 """Layers of each package's modules, lowest first."""
 

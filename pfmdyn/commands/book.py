@@ -1,11 +1,11 @@
-"""``pfmdyn book``: build the verified book (see :mod:`pfmdyn.book`)."""
+"""``pfmdyn book``: build the verified book (see :mod:`pfmdyn.book.build`)."""
 from __future__ import annotations
 
 import sys
 import time
 from pathlib import Path
 
-from .. import book
+from ..book.build import book_dir, build
 
 
 def add_arguments(parser) -> None:
@@ -14,9 +14,9 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    out = Path(args.out) if args.out else book.book_dir() / "_build"
+    out = Path(args.out) if args.out else book_dir() / "_build"
     t0 = time.perf_counter()
-    status = book.build(out, progress=lambda line: print(line, file=sys.stderr))
+    status = build(out, progress=lambda line: print(line, file=sys.stderr))
     elapsed = time.perf_counter() - t0
     index = out.resolve() / "html" / "index.html"
     if status != 0:

@@ -1,138 +1,16 @@
-"""``pfmdyn book``: build the verified book (jupyter-book 1.x, every page executed).
-
-The book's chapters (MyST notebooks in ``book/``) compute everything at build time.  The
-verdicts of ``pfmdyn verify`` are computed once per build, before Sphinx starts, written to
-``<out>/verdicts.json`` (each with its evidence already typeset by :mod:`pfmdyn.typeset`, the
-module that also writes ``pfmdyn verify``'s errata list) and passed to the notebook kernels through
-the environment variable :data:`VERDICTS_ENV`; the chapters read them with :func:`verdicts`.
-The build is strict: notebook execution is forced, a cell that raises fails the build, and
-Sphinx warnings are errors (``-W -n``).
-
-This module also holds the small display helpers the chapters share (:func:`claims_table`,
-:func:`math`), so that the pages contain prose and computation only.
+"""Display helpers the book's chapters share: verdict tables, errata and typeset math, so that the
+pages (``book/*.md``) contain prose and computation only.  The chapters reach them as
+``from pfmdyn import book``.
 """
 from __future__ import annotations
 
 import html
-import json
-import os
 import re
-import time
-from collections import Counter
-from functools import lru_cache
-from pathlib import Path
 
-from .errors import UserError
-
-VERDICTS_ENV = "PFMDYN_BOOK_VERDICTS"
-"""Path of the verdicts JSON written by ``pfmdyn book`` for the chapters to read."""
+from .records import claims_of, counts
 
 VERDICT_ORDER = ("holds", "holds_up_to_sign_convention", "erratum", "undecidable")
 """The verdict names in display order (the values of ``derivations.checks.core.Outcome``)."""
-
-
-def chapter_of(claim_id: str) -> str | None:
-    """The book page discussing a claim, as declared by its check (``@claim(..., chapter=...)``).
-
-    >>> chapter_of("eq22.roots"), chapter_of("eq22.static"), chapter_of("nope")
-    ('roots', 'free_end', None)
-    """
-    from . import audit
-    from .derivations.checks import core
-    audit.register()
-    check = core.REGISTRY.get(claim_id)
-    return (check.chapter or None) if check else None
-
-
-# --- verdicts, computed once per build -------------------------------------------------------
-
-def record(v) -> dict:
-    """One verdict for the book: the plain fields of ``pfmdyn verify``'s JSON and, under ``html``,
-    the claim's place, printed form, evidence and correction typeset for a table cell; errata also
-    carry their typeset parts under ``erratum`` (:func:`pfmdyn.typeset.erratum`)."""
-    from . import typeset
-    out = v.as_dict()
-    out["html"] = {"where": typeset.html(v.where), "printed": typeset.html(v.printed),
-                   "evidence": typeset.html(v.proof.proof), "correct": typeset.html(typeset.correction(v))}
-    if str(v.verdict) in ("erratum", "holds_up_to_sign_convention"):
-        f = typeset.erratum(v)
-        width = typeset.LINE_WIDTH
-        out["erratum"] = {"printed": typeset.html(f["printed"], width), "correct": f["correct"],
-                          "correction": typeset.html(f["correction"], width), "proof": typeset.html(f["proof"], width),
-                          "decisive": f["decisive"], "sign": f["sign"]}
-    return out
-
-
-def compute_verdicts() -> list[dict]:
-    """All verdicts of ``pfmdyn verify`` as :func:`record` dictionaries."""
-    from .verify import compute
-    return [record(v) for v in compute(progress=False)]
-
-
-def write_verdicts(path: Path) -> list[dict]:
-    """Compute the verdicts and write them to ``path`` (JSON)."""
-    data = compute_verdicts()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"claims": data}, indent=1))
-    return data
-
-
-@lru_cache(maxsize=None)
-def _read(path: str) -> tuple[dict, ...]:
-    return tuple(json.loads(Path(path).read_text())["claims"])
-
-
-@lru_cache(maxsize=1)
-def _computed() -> tuple[dict, ...]:
-    return tuple(compute_verdicts())
-
-
-def verdicts() -> list[dict]:
-    """The verdicts of this build, in registry order.
-
-    Read from the file named by :data:`VERDICTS_ENV` (set by ``pfmdyn book``).  When a page is
-    executed outside ``pfmdyn book`` (e.g. ``jupyter-book build book``) they are computed in
-    the kernel, once; nothing is written.
-    """
-    env = os.environ.get(VERDICTS_ENV)
-    return list(_read(env) if env else _computed())
-
-
-def claims(*ids: str) -> list[dict]:
-    """The verdicts with these exact ids; a missing id raises (so a renamed claim fails the build)."""
-    by_id = {v["id"]: v for v in verdicts()}
-    missing = [i for i in ids if i not in by_id]
-    if missing:
-        raise KeyError(f"no verdict for claim id(s) {missing}")
-    return [by_id[i] for i in ids]
-
-
-def claims_of(page: str) -> list[dict]:
-    """The verdicts a chapter discusses (declared by ``@claim(..., chapter=page)``), in registry order."""
-    return [v for v in verdicts() if v.get("chapter") == page]
-
-
-def counts(kind: str | None = None) -> Counter:
-    """Number of claims per verdict (of one kind: claim, cross-reference, symbol, statement)."""
-    return Counter(v["verdict"] for v in verdicts() if kind is None or v.get("kind", "claim") == kind)
-
-
-def counts_table() -> "HTML":
-    """Verdict counts: the registry's claims, the text audit's references, symbols and statements."""
-    kinds = (("claim", "registry claims"), ("cross-reference", "cross-references"), ("symbol", "symbols"),
-             ("statement", "statements"))
-    per = {kind: counts(kind) for kind, _ in kinds}
-    out = ['<table class="pfm-claims pfm-counts"><thead><tr><th>verdict</th>']
-    out += [f"<th>{label}</th>" for _, label in kinds] + ["<th>total</th></tr></thead><tbody>"]
-    for verdict in VERDICT_ORDER + ("total",):
-        cells = [sum(per[k].values()) if verdict == "total" else per[k][verdict] for k, _ in kinds]
-        head = "total" if verdict == "total" else _badge(verdict)
-        out.append(f"<tr><td>{head}</td>" + "".join(f"<td>{c}</td>" for c in cells) + f"<td>{sum(cells)}</td></tr>")
-    out.append("</tbody></table>")
-    return HTML("".join(out))
-
-
-# --- display helpers for the chapters ---------------------------------------------------------
 
 _BADGE = {"holds_up_to_sign_convention": "sign convention"}
 """Badge labels that differ from the verdict's name."""
@@ -152,6 +30,21 @@ class HTML:
         return self.text
 
 
+def counts_table() -> "HTML":
+    """Verdict counts: the registry's claims, the text audit's references, symbols and statements."""
+    kinds = (("claim", "registry claims"), ("cross-reference", "cross-references"), ("symbol", "symbols"),
+             ("statement", "statements"))
+    per = {kind: counts(kind) for kind, _ in kinds}
+    out = ['<table class="pfm-claims pfm-counts"><thead><tr><th>verdict</th>']
+    out += [f"<th>{label}</th>" for _, label in kinds] + ["<th>total</th></tr></thead><tbody>"]
+    for verdict in VERDICT_ORDER + ("total",):
+        cells = [sum(per[k].values()) if verdict == "total" else per[k][verdict] for k, _ in kinds]
+        head = "total" if verdict == "total" else _badge(verdict)
+        out.append(f"<tr><td>{head}</td>" + "".join(f"<td>{c}</td>" for c in cells) + f"<td>{sum(cells)}</td></tr>")
+    out.append("</tbody></table>")
+    return HTML("".join(out))
+
+
 def anchor(claim_id: str) -> str:
     """HTML id of a claim's row on the verdicts page.
 
@@ -167,7 +60,7 @@ def families_of(page: str) -> list:
     >>> [f.module for f in families_of("frictionless")]
     ['frictionless', 'frictionless_stiff']
     """
-    from .generated import families
+    from ..generated import families
     rows = [f for f in families.FAMILIES if f.chapter == page]
     if not rows:
         raise KeyError(f"no family of the registry has chapter {page!r}")
@@ -182,7 +75,7 @@ def family_table(page: str) -> "HTML":
     >>> "<code>pfmdyn.free_end_transfer</code>" in family_table("free_end").text
     True
     """
-    from .generated import families
+    from ..generated import families
     heads = ("family", "derived in", "per unit", "parameters", "Python", "roots / branches")
     out = ['<table class="pfm-claims pfm-families"><thead><tr>']
     out += [f"<th>{h}</th>" for h in heads] + ["</tr></thead><tbody>"]
@@ -236,7 +129,7 @@ def claims_table(rows: list[dict], *, columns=("id", "verdict", "evidence", "cor
             elif c == "where":
                 cell = v["html"]["where"]
                 if link == "anchor":
-                    cell = f'<span id="{anchor(v["id"])}"></span>{cell}' 
+                    cell = f'<span id="{anchor(v["id"])}"></span>{cell}'
             elif c == "chapter":
                 page = v.get("chapter") or None
                 cell = f'<a href="{page}.html">{page}</a>' if page and link else html.escape(page or "—")
@@ -254,8 +147,8 @@ def errata(rows: list[dict]) -> None:
     the decisive expression."""
     from IPython.display import Math, display
 
-    from .derivations.paper.convention import SIGN_CONVENTION_SENTENCE
-    from .typeset import html as typeset_html
+    from ..derivations.paper.convention import SIGN_CONVENTION_SENTENCE
+    from ..typeset import html as typeset_html
     for v in rows:
         f = v["erratum"]
         page = v.get("chapter")
@@ -290,7 +183,7 @@ def aligned(rows, *, relation: str = "="):
     over lines where it would be wider than the text column (:func:`pfmdyn.typeset.latex_rows`)."""
     from IPython.display import Math
 
-    from .typeset import latex, latex_rows
+    from ..typeset import latex, latex_rows
     lines = []
     for lhs, rhs in rows:
         if isinstance(rhs, str):
@@ -303,7 +196,7 @@ def aligned(rows, *, relation: str = "="):
 def tip_values():
     """Symbols standing for the tip values of ``u0`` and its first three derivatives, typeset
     as such (:class:`pfmdyn.typeset.TipValue`)."""
-    from .typeset import TipValue
+    from ..typeset import TipValue
     return [TipValue(f"U_{i}") for i in range(4)]
 
 
@@ -311,7 +204,7 @@ def ratios(rows):
     r"""Display printed/derived for ``(label, printed, derived)`` rows: the exact ratio of the
     canonical trigonometric normal forms, or "not constant" (then the 50-digit spread).
     """
-    from .derivations.checks.core import compare
+    from ..derivations.checks.core import compare
     out = []
     for label, printed, derived in rows:
         cmp = compare(printed, derived)
@@ -327,49 +220,3 @@ def ratios(rows):
 def conditions(exprs):
     """Display boundary conditions, given as expressions that vanish, as ``expr = 0``."""
     return aligned([(e, 0) for e in exprs])
-
-
-# --- the subcommand ------------------------------------------------------------------------------
-
-def book_dir() -> Path:
-    """The ``book/`` folder of the source tree."""
-    here = Path(__file__).resolve().parent.parent / "book"
-    if not (here / "_config.yml").exists():
-        raise UserError(f"book sources not found at {here} (pfmdyn book needs the source tree)")
-    return here
-
-
-def build(out: Path, *, progress=None) -> int:
-    """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success).
-
-    ``progress``: None (quiet), or a callable taking a line of news (the command prints it);
-    Sphinx reports its own progress only when one is given."""
-    try:
-        from jupyter_book.sphinx import build_sphinx
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise UserError(f"jupyter-book is not installed ({exc}); pip install -e '.[book]'") from exc
-    src = book_dir()
-    out = out.resolve()
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    verdict_file = out / "verdicts.json"
-    write_verdicts(verdict_file)
-    if progress is not None:
-        progress(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}")
-    os.environ[VERDICTS_ENV] = str(verdict_file)
-    result = build_sphinx(
-        src, out / "html",
-        doctreedir=out / ".doctrees",
-        noconfig=True,
-        path_config=str(src / "_config.yml"),
-        confoverrides={"external_toc_path": (src / "_toc.yml").as_posix(), "nitpicky": True,
-                       "latex_individualpages": False},
-        builder="html",
-        warningiserror=True,
-        keep_going=True,
-        freshenv=True,
-        quiet=progress is None,
-    )
-    if isinstance(result, BaseException):
-        return 1
-    return int(result or 0)
