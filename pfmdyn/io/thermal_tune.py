@@ -68,7 +68,7 @@ def read_thermal_tune(path) -> ThermalTune:
     if kind in CSV_KINDS:
         return _from_csv(path)
     if record.kind != "thermal spectrum" or record.spectrum is None:
-        raise UserError(f"{path}: not a thermal tune (a {record.kind} of {record.instrument})")
+        raise UserError(f"{path}: not a thermal tune ({record.instrument}: {record.kind})")
     frequency, asd, unit = record.spectrum
     base = str(unit).replace("/sqrt(Hz)", "")
     if base not in ("m", "V"):
