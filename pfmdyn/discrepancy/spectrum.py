@@ -413,4 +413,4 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     problem = SpectrumProblem(data, vertical_only)
     result = select.run(problem, progress, time_budget_s)
     return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
-                  "from second differences along frequency", noise_sigma=problem.sigma)
+                  "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)

@@ -25,8 +25,8 @@ Every noise estimate of pfmdyn, and why those that differ do:
   constant (with ``ln 2`` real noise would read at 0.81 of its standard deviation, and a residual
   of pure noise show a gap of 1.23);
 * each pixel of a map (:mod:`pfmdyn.maps.fit`, :mod:`pfmdyn.maps.sho`): :func:`noise_sigmas`,
-  floored at 1e-15 of the pixel's norm ``sqrt(sum |y|**2)`` (the maps' own floor for data
-  without noise, far below the one-spectrum floor);
+  floored at :data:`PIXEL_FLOOR` of the pixel's norm ``sqrt(sum |y|**2)`` (the maps' own floor for
+  data without noise, far below the one-spectrum floor);
 * choosing a map's model (:mod:`pfmdyn.maps.select`): the variance profiled from the fits, the
   smallest residual sum of squares per degree of freedom over the candidate models, floored at
   1e-12 of ``mean |y|**2``: the BIC compares models on the residuals of those fits, and there
@@ -49,7 +49,7 @@ import numpy as np
 from .bias_line import bias_lines
 
 __all__ = ["noise_sigma", "noise_sigmas", "spectrum_noise", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT",
-           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR", "REAL_MEDIAN"]
+           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR", "REAL_MEDIAN", "PIXEL_FLOOR"]
 
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
@@ -170,9 +170,15 @@ def spectrum_noise(frequency_hz, y) -> float:
     return max(sigma, SPECTRUM_FLOOR * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
 
 
+PIXEL_FLOOR = 1e-15
+""":func:`noise_sigmas` is at least this fraction of each pixel's norm ``sqrt(sum |y|**2)`` (1 when
+the pixel is all zero): a map's data without noise."""
+
+
 def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
     """:func:`noise_sigma` of each of ``spectra`` ``(n, n_bias, n_freq)`` (spectra on one grid:
-    ``frequency_hz`` ``(n_freq,)``, ``bias_v`` ``(n_bias,)`` or None for one spectrum each).
+    ``frequency_hz`` ``(n_freq,)``, ``bias_v`` ``(n_bias,)`` or None for one spectrum each), floored at
+    :data:`PIXEL_FLOOR` of each one's norm.
 
     >>> rng = np.random.default_rng(2)
     >>> y = (rng.standard_normal((2, 1, 4000)) + 1j * rng.standard_normal((2, 1, 4000))) * np.array([[[1.0]], [[3.0]]])
@@ -183,4 +189,7 @@ def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
     n_bias, n_freq = spectra.shape[-2:]
     f = np.tile(np.asarray(frequency_hz, float), n_bias)
     v = np.repeat(np.zeros(n_bias) if bias_v is None else np.asarray(bias_v, float), n_freq)
-    return np.array([noise_sigma(f, v, s.ravel()) for s in spectra.reshape(-1, n_bias * n_freq)])
+    flat = spectra.reshape(-1, n_bias * n_freq)
+    norm = np.sqrt(np.sum(np.abs(flat) ** 2, axis=1))
+    floor = PIXEL_FLOOR * np.where(norm == 0, 1.0, norm)
+    return np.maximum([noise_sigma(f, v, s) for s in flat], floor)

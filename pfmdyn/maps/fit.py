@@ -204,7 +204,7 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     scale = np.sqrt(np.sum(np.abs(y) ** 2, axis=(1, 2)))
     scale[scale == 0] = 1.0
     # the noise of each pixel's spectra as pfmdyn discrepancy estimates it (floored: noise-free data)
-    sigma = np.maximum(noise_sigmas(model.frequency_hz, model.bias_v, y), 1e-15 * scale)
+    sigma = noise_sigmas(model.frequency_hz, model.bias_v, y)
     count = y.shape[1] * y.shape[2]
     y, outside = bias_axis.project(y / scale[:, None, None], bias)
     names = model.names

@@ -194,7 +194,7 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict
                     f"{prefix}r2": _r2(yn, squares)})
     out["resonance_frequency_stderr"] = out["resonance_frequency"] * spread[:, 0]
     out["quality_factor_stderr"] = out["quality_factor"] * spread[:, 1]
-    sigma = np.maximum(noise_sigmas(f, None, y[:, None, :]), 1e-15 * norm)
+    sigma = noise_sigmas(f, None, y[:, None, :])
     out["cost"], out["gap"] = cost, gap(cost * (norm / sigma) ** 2, f.size)
     return out
 
