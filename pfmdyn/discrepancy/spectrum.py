@@ -185,7 +185,7 @@ class SpectrumProblem:
         best = []
         for _, model, base in sorted(coarse.values(), key=lambda t: t[0])[:count]:
             rows = [np.append(base, v) for v in spot.seeds]
-            best.append((model, rows[int(np.argmin([self.cost(model, x) for x in rows]))]))
+            best += [(model, rows[i]) for i in _lowest_valleys([self.cost(model, x) for x in rows], 2)]
         fits = [fit(models[0], self.data, [np.append(current.internal, spot.null)], self.sigma, max_nfev=TRIAL_NFEV)]
         fits += [fit(model, self.data, [x], self.sigma, max_nfev=TRIAL_NFEV) for model, x in best]
         return min(fits, key=lambda f: f.bic)
@@ -414,3 +414,16 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     result = select.run(problem, progress, time_budget_s)
     return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
                   "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)
+
+
+def _lowest_valleys(values, count: int) -> list[int]:
+    """Indices of the ``count`` lowest local minima of ``values`` along its grid (the misfit over
+    the spot's seeds: at damping not yet refitted, the true spot's valley need not be the lowest).
+
+    >>> _lowest_valleys([3.0, 1.0, 2.0, 0.5, 0.7, 4.0, 0.9], 2)
+    [3, 6]
+    """
+    v = np.asarray(values, float)
+    padded = np.concatenate([[np.inf], v, [np.inf]])
+    valleys = np.flatnonzero((v <= padded[:-2]) & (v <= padded[2:]))
+    return [int(i) for i in valleys[np.argsort(v[valleys])][:count]]
