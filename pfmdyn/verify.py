@@ -89,7 +89,9 @@ def compute(ids: list[str] | None = None, progress: bool = False, workers: int |
     core.clear_results()
     groups: dict[str, list[str]] = {}
     for c in checks:
-        groups.setdefault(c.id if c.id in _COST else c.run.__module__, []).append(c.id)
+        module = c.run.__module__
+        groups.setdefault(c.id if c.id in _COST else next((m for m in _TOGETHER if module.startswith(m)), module),
+                          []).append(c.id)
     tasks = sorted(groups.values(), key=lambda g: -_COST.get(g[0], _COST.get(core.REGISTRY[g[0]].run.__module__, 0)))
     workers = min(workers or os.cpu_count() or 1, len(tasks))
     bar = tqdm(total=len(checks), desc="checking claims", unit="claim", disable=not progress, file=sys.stderr)
@@ -113,6 +115,11 @@ _COST = {"pfmdyn.derivations.checks.numbers": 5, "pfmdyn.derivations.checks.flex
 """Rough seconds of the slow check modules and claims (measured; a claim named here runs on its
 own): they are started first, so the processes finish together.  Only the order depends on it,
 never a verdict."""
+
+
+_TOGETHER = ("pfmdyn.audit.xref",)
+"""Module prefixes whose checks run in one process: the cross-reference checkers (one module per
+kind of target) share the text's cached readings, which each process would compute again."""
 
 
 def _run_group(ids: list[str]) -> dict:
