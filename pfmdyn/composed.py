@@ -747,7 +747,8 @@ def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_D
         lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
         z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
-    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
+    # a copy: the kept read-out (:func:`_read_out`) must not change with what a caller does to it
+    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0].copy()), -1, 0))
 
 
 def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):

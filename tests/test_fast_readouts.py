@@ -195,3 +195,9 @@ def test_drives_asked_and_the_kept_read_out_change_nothing(seed):
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(first, again))
     values, _ = composed.slope_and_jacobian(*args, wrt=("beta",))
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(values, first))
+    # what a caller does to the results does not reach the kept read-out
+    slopes, deflections = composed.response(*args)
+    want = [d.copy() for d in deflections]
+    for a in (*slopes, *deflections):
+        a -= 1.0
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(composed.response(*args)[1], want))

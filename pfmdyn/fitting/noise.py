@@ -21,7 +21,7 @@ Every noise estimate of pfmdyn, and why those that differ do:
   :func:`spectrum_noise`, the same estimate without the line in bias it cannot have, floored at
   :data:`SPECTRUM_FLOOR` of the data's RMS.  Such data may be real (an amplitude-only sweep, a log
   ASD): a real difference's ``|d|**2`` is a chi-squared of one degree, whose median is
-  :data:`REAL_MEDIAN` ``sigma**2``, not the exponential's ``ln 2``, so for real data that is the
+  ``2 gammaincinv(1/2, 1/2) = 0.455`` ``sigma**2``, not the exponential's ``ln 2``, so for real data that is the
   constant (with ``ln 2`` real noise would read at 0.81 of its standard deviation, and a residual
   of pure noise show a gap of 1.23);
 * each pixel of a map (:mod:`pfmdyn.maps.fit`, :mod:`pfmdyn.maps.sho`): :func:`noise_sigmas`,
@@ -49,7 +49,7 @@ import numpy as np
 from .bias_line import bias_lines
 
 __all__ = ["noise_sigma", "noise_sigmas", "spectrum_noise", "gap", "misfit_band", "GAP_LIMIT", "MAX_REFINEMENT",
-           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR", "REAL_MEDIAN", "PIXEL_FLOOR"]
+           "DIFFERENCE_ORDERS", "SPECTRUM_FLOOR", "PIXEL_FLOOR"]
 
 GAP_LIMIT = 2.0
 """A gap above this is a misfit, not noise: ``pfmdyn discrepancy`` reports it ``unexplained``
@@ -147,9 +147,6 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
 
 SPECTRUM_FLOOR = 1e-9
 """:func:`spectrum_noise` is at least this fraction of the data's RMS (a simulated sweep without noise)."""
-REAL_MEDIAN = 0.4549364231195724
-"""The median of a chi-squared variable of one degree, ``2 gammaincinv(1/2, 1/2)``: real noise's
-``|d|**2`` over its variance."""
 
 
 def spectrum_noise(frequency_hz, y) -> float:
@@ -166,7 +163,8 @@ def spectrum_noise(frequency_hz, y) -> float:
     """
     sigma = noise_sigma(frequency_hz, np.zeros(len(y)), y)
     if np.isrealobj(y):     # the constant of real noise (see the module)
-        sigma *= math.sqrt(math.log(2) / REAL_MEDIAN)
+        from scipy.special import gammaincinv
+        sigma *= math.sqrt(math.log(2) / (2 * gammaincinv(0.5, 0.5)))     # a chi-squared of one degree's median
     return max(sigma, SPECTRUM_FLOOR * float(np.sqrt(np.mean(np.abs(y)**2))), 1e-300)
 
 
