@@ -26,6 +26,7 @@ from ..fitting.parameters import bounds as parameter_bounds
 from ..fitting.batched import amplitude_column, band_covariance, levenberg_marquardt
 from . import bias as bias_axis
 from .beam import BeamMapModel
+from .resonance_start import resonance_start
 from .outputs import ALWAYS, SCALED
 
 __all__ = ["CHUNK", "fit_block", "fittable"]
@@ -105,16 +106,30 @@ def _vertex(values, best, axis):
     return axis[best] + np.clip(shift, -0.5, 0.5) * (axis[1] - axis[0])
 
 
-def _initial(model, y, q0, k1_range, iterations, tolerance):
-    """Starting parameters: the (k1, Q) grid (with two or more bands, the lowest of the fits
-    started at each k2/k1 of the grid); with extra damping mechanisms, the fitted baseline with
-    the extras switched off (nested, so the fit never ends worse than the baseline)."""
+def _initial(model, y, q0, k1_range, iterations, tolerance, short_road=True):
+    """Starting parameters and where they came from the contact resonances
+    (:mod:`pfmdyn.maps.resonance_start`, with ``short_road``); the other pixels start from the
+    (k1, Q) grid (with two or more bands, the lowest of the fits started at each k2/k1 of the
+    grid).  With extra damping mechanisms, the fitted baseline with the extras switched off
+    (nested, so the fit never ends worse than the baseline)."""
     if model.mechanisms != ("internal",):
         base = replace(model, mechanisms=("internal",))
-        p_base = levenberg_marquardt(base, y, _initial(base, y, q0, k1_range, iterations, tolerance),
-                                      parameter_bounds(base.parameters), iterations, tolerance)[0]
+        p_base, short = _initial(base, y, q0, k1_range, iterations, tolerance, short_road)
+        p_base = levenberg_marquardt(base, y, p_base, parameter_bounds(base.parameters), iterations, tolerance)[0]
         return np.stack([p_base[:, base.names.index(p.name)] if p.name in base.names else np.full(len(y), p.null)
-                         for p in model.parameters], axis=1)
+                         for p in model.parameters], axis=1), short
+    if short_road:
+        p, short = resonance_start(model, y, iterations=iterations, tolerance=tolerance)
+    else:
+        p, short = np.empty((len(y), len(model.names))), np.zeros(len(y), bool)
+    if not short.all():
+        p[~short] = _grid_initial(model, y[~short], q0, k1_range, iterations, tolerance)
+    return p, short
+
+
+def _grid_initial(model, y, q0, k1_range, iterations, tolerance):
+    """Starts from the (k1, Q) grid (:func:`_start`); with k2 fitted, the best of the fits
+    started at each k2/k1 of the grid."""
     log_k1, log_q, log_ratio = _start(model, y, q0, k1_range)
     start = {"k1": log_k1, "q": log_q, "k2": log_k1 + log_ratio[:, None]}
     p = np.stack([start[n] for n in model.names], axis=2)          # (n_ratio, n, n_p)
@@ -208,8 +223,22 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     count = y.shape[1] * y.shape[2]
     y, outside = bias_axis.project(y / scale[:, None, None], bias)
     names = model.names
-    p = _initial(model, y, q0, k1_range, iterations, tolerance)
-    p, c, _, _, cost, g, dg = levenberg_marquardt(model, y, p, parameter_bounds(model.parameters), iterations, tolerance)
+    bounds = parameter_bounds(model.parameters)
+    p, short = _initial(model, y, q0, k1_range, iterations, tolerance)
+    fit = levenberg_marquardt(model, y, p, bounds, iterations, tolerance)
+    # a pixel started from its resonances that the fit leaves unexplained or at a bound is fitted
+    # again from the grid (a resonance the SHO misread, a start in another mode's basin): the lower cost wins
+    unexplained = (gap((fit[4] + outside) * (scale / sigma) ** 2, count) >= gap_threshold)
+    retry = np.flatnonzero(short & (unexplained | np.any([q.at_bound(fit[0][:, i])
+                                                         for i, q in enumerate(model.parameters)], axis=0)))
+    if retry.size:
+        p = _initial(model, y[retry], q0, k1_range, iterations, tolerance, short_road=False)[0]
+        again = levenberg_marquardt(model, y[retry], p, bounds, iterations, tolerance)
+        better = again[4] < fit[4][retry]
+        for whole, part in zip(fit[:6], again):
+            whole[retry[better]] = part[better]
+        fit[6][:, retry[better]] = again[6][:, better]         # the partials: pixels on their second axis
+    p, c, _, _, cost, g, dg = fit
     cost = cost + outside
     dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
     cov = band_covariance(model, g, dg, c, cost / dof)
