@@ -65,3 +65,19 @@ def test_short_road_finds_the_grid_fit(two, monkeypatch):
             np.testing.assert_array_less(np.abs(short[name] / grid[name] - 1)[one_minimum], 0.02, err_msg=name)
         same.append(one_minimum)
     assert np.mean(np.concatenate(started)) >= 0.75 and np.mean(np.concatenate(same)) >= 0.9
+
+
+def test_internal_friction_factors_once_per_pixel():
+    """With internal friction alone the damping factors are evaluated at one frequency per pixel
+    (they do not depend on it): the transfer functions and partials equal those of the model with
+    viscous drag (evaluated at every frequency) at zero drag."""
+    f = np.concatenate([np.linspace(2.5e5, 3.5e5, 40), np.linspace(8e5, 9e5, 40)])
+    rng = np.random.default_rng(5)
+    for contact in (Contact(), Contact(k2=0.0), Contact(k2_over_k1=0.5)):
+        internal = BeamMapModel(Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6), f, contact=contact)
+        viscous = BeamMapModel(internal.lever, f, mechanisms=("internal", "viscous"), contact=contact)
+        p = np.column_stack([rng.uniform(1, 3, 6), rng.uniform(1, 3, 6)] + [rng.uniform(1, 3, 6)] * (len(internal.names) - 2))
+        g, d = internal.design(p)
+        g_v, d_v = viscous.design(np.column_stack([p, np.zeros(6)]))
+        np.testing.assert_allclose(g, g_v, rtol=1e-10, atol=1e-10 * np.abs(g).max())
+        np.testing.assert_allclose(d, d_v[:len(internal.names)], rtol=1e-10, atol=1e-10 * np.abs(d).max())

@@ -87,22 +87,33 @@ def _log_q(lever, beta, q_mode, k1, k2):
 
 def _tied(model, beta):
     """``(k1, k2)`` candidates with ``k2`` by the model's policy, from each band's ``beta``."""
-    lever = model.lever
     degree = 1 if model.k2_mode == "fixed" or model.contact.tie() == 0 else 2
+    return _along(model.lever, beta, model.k2_of, degree)
+
+
+def _along(lever, beta, k2_of, degree):
+    """``(k1, k2)`` candidates with ``k2 = k2_of(k1)`` (a polynomial of ``degree`` in ``k1``), from
+    each band's ``beta`` (NaN where that band found no resonance)."""
     out = []
     for b in beta:
         found = np.isfinite(b)
         b = np.where(found, b, 1.0)          # a band without a resonance: its candidates are dropped
-        for k1 in k1_candidates(lambda k1: characteristic(b, lever, k1, model.k2_of(k1), lever.tip_position),
+        for k1 in k1_candidates(lambda k1: characteristic(b, lever, k1, k2_of(k1), lever.tip_position),
                                 lever.spring_constant, degree):
             k1 = np.where(found, np.real(k1), np.nan)
-            out.append((k1, model.k2_of(k1)))
+            out.append((k1, k2_of(k1)))
     return out
+
+
+_RATIOS = np.geomspace(0.1, 1.0, 5)
+"""k2/k1 tried along one band's resonance when the other band shows none."""
 
 
 def _free(model, beta):
     """``(k1, k2)`` candidates making the first two bands' ``beta`` resonances: the bilinear
-    characteristic ``P + k1 Q + k2 R + k1 k2 S`` of each, ``k2`` eliminated (a quadratic in ``k1``)."""
+    characteristic ``P + k1 Q + k2 R + k1 k2 S`` of each, ``k2`` eliminated (a quadratic in ``k1``).
+    Where one band's SHO found no resonance (a weak mode beside an antiresonance), the other's
+    with k2/k1 of :data:`_RATIOS`."""
     lever = model.lever
     k = lever.spring_constant
     scale_k2 = formulas.k2_from_ratio(1.0, k, lever.tip_height or 0.0, lever.length)
@@ -116,6 +127,8 @@ def _free(model, beta):
         with np.errstate(all="ignore"):
             k2 = -(p1 + k1 * q1) / (r1 + k1 * s1)
         out.append((k1, k2))
+    for ratio in _RATIOS:
+        out += [(np.where(found, np.nan, k1), k2) for k1, k2 in _along(lever, beta[:2], lambda k1, r=ratio: r * k1, 2)]
     return out
 
 
@@ -126,11 +139,11 @@ def _best(model, y, p, valid):
     choice = np.argmax(valid, axis=0)
     several = np.flatnonzero(count > 1)
     if several.size:
+        # one response evaluation for every (candidate, pixel) pair to compare
+        candidate, pixel = np.nonzero(valid[:, several])
+        g = model.design(p[candidate, several[pixel]], jacobian=False)[0]
         cost = np.full((len(p), several.size), np.inf)
-        for i in range(len(p)):
-            use = valid[i, several]
-            g = model.design(p[i, several[use]], jacobian=False)[0]
-            cost[i, use] = np.sum(project_bands(g, None, y[several[use]], model.bands)[1] ** 2, axis=1)
+        cost[candidate, pixel] = np.sum(project_bands(g, None, y[several[pixel]], model.bands)[1] ** 2, axis=1)
         choice[several] = np.argmin(cost, axis=0)
     ok = count > 0
     start = p[choice, np.arange(p.shape[1])]
