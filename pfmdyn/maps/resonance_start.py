@@ -75,11 +75,15 @@ def _log_q(lever, beta, q_mode, k1, k2):
     friction damps the beam, not the contact springs, so a mode's loss is the lever's times the
     share of its strain energy in the beam, ``1 - d ln omega**2 / d ln s`` with both springs
     scaled by ``s`` (``omega**2 ~ beta**4``; the slopes of the characteristic by complex step)."""
-    logs = []
-    for b, q in zip(beta, q_mode):
-        springs = characteristic(b, lever, k1 * (1 + 1j * _STEP), k2 * (1 + 1j * _STEP), lever.tip_position).imag
-        slope = characteristic(b * (1 + 1j * _STEP), lever, k1, k2, lever.tip_position).imag
-        logs.append(np.log10(q * (1 + 4 * springs / slope)))     # 1 - 4 (dF/d ln s) / (dF/d ln beta)
+    logs = np.full((len(beta), len(k1)), np.nan)
+    for i, (b, q) in enumerate(zip(beta, q_mode)):
+        at = np.flatnonzero(np.isfinite(b) & np.isfinite(k1) & np.isfinite(k2))
+        if at.size == 0:
+            continue
+        b, q, s1, s2 = b[at], q[at], k1[at], k2[at]
+        springs = characteristic(b, lever, s1 * (1 + 1j * _STEP), s2 * (1 + 1j * _STEP), lever.tip_position).imag
+        slope = characteristic(b * (1 + 1j * _STEP), lever, s1, s2, lever.tip_position).imag
+        logs[i, at] = np.log10(q * (1 + 4 * springs / slope))     # 1 - 4 (dF/d ln s) / (dF/d ln beta)
     found = np.isfinite(logs)
     return np.where(found.any(axis=0), np.sum(np.where(found, logs, 0.0), axis=0) / np.maximum(found.sum(axis=0), 1),
                     np.nan)
@@ -91,16 +95,19 @@ def _tied(model, beta):
     return _along(model.lever, beta, model.k2_of, degree)
 
 
-def _along(lever, beta, k2_of, degree):
+def _along(lever, beta, k2_of, degree, where=True):
     """``(k1, k2)`` candidates with ``k2 = k2_of(k1)`` (a polynomial of ``degree`` in ``k1``), from
-    each band's ``beta`` (NaN where that band found no resonance)."""
+    each band's ``beta`` at the pixels ``where`` that band found a resonance (NaN elsewhere)."""
     out = []
     for b in beta:
-        found = np.isfinite(b)
-        b = np.where(found, b, 1.0)          # a band without a resonance: its candidates are dropped
-        for k1 in k1_candidates(lambda k1: characteristic(b, lever, k1, k2_of(k1), lever.tip_position),
-                                lever.spring_constant, degree):
-            k1 = np.where(found, np.real(k1), np.nan)
+        at = np.flatnonzero(np.isfinite(b) & where)
+        if at.size == 0:
+            continue
+        roots = k1_candidates(lambda k1: characteristic(b[at], lever, k1, k2_of(k1), lever.tip_position),
+                              lever.spring_constant, degree)
+        for root in roots:
+            k1 = np.full(len(b), np.nan)
+            k1[at] = np.real(root)
             out.append((k1, k2_of(k1)))
     return out
 
@@ -128,7 +135,7 @@ def _free(model, beta):
             k2 = -(p1 + k1 * q1) / (r1 + k1 * s1)
         out.append((k1, k2))
     for ratio in _RATIOS:
-        out += [(np.where(found, np.nan, k1), k2) for k1, k2 in _along(lever, beta[:2], lambda k1, r=ratio: r * k1, 2)]
+        out += _along(lever, beta[:2], lambda k1, r=ratio: r * k1, 2, where=~found)
     return out
 
 
