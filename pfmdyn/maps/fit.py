@@ -4,7 +4,11 @@ to band-excitation spectra.
 The complex amplitudes of each band (and, with a bias axis, of each bias component) enter linearly
 and are projected out (variable projection); ``k1``, ``Q``, ``k2``, ``g`` and ``x`` are fitted by
 a Levenberg-Marquardt iteration that treats every pixel of a block at once, each pixel with its
-own damping factor, started from a grid of shape functions over ``k1`` and ``Q``.
+own damping factor, started from the pixel's contact resonances
+(:mod:`pfmdyn.maps.resonance_start`: an SHO per band, the springs by the stiffness inversion;
+two or three design evaluations then finish it).  Pixels it cannot start, or whose fit stays
+unexplained, at a bound or far above the block's gap (:data:`OUTLIER_GAP`), start from a grid of
+shape functions over ``k1`` and ``Q`` (with k2 fitted, from three k2/k1), the lower cost kept.
 
 Cost is dominated by the generated transfer function over ``(pixels, frequencies)``; one
 *design evaluation* per iteration gives the transfer functions and their derivatives for the
