@@ -236,19 +236,19 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     names = model.names
     bounds = parameter_bounds(model.parameters)
     p, short = _initial(model, y, q0, k1_range, iterations, tolerance)
-    fit = levenberg_marquardt(model, y, p, bounds, iterations, tolerance)
-    gaps = gap((fit[4] + outside) * (scale / sigma) ** 2, count)
-    at_bound = np.any([q.at_bound(fit[0][:, i]) for i, q in enumerate(model.parameters)], axis=0)
+    solution = levenberg_marquardt(model, y, p, bounds, iterations, tolerance)
+    gaps = gap((solution[4] + outside) * (scale / sigma) ** 2, count)
     typical = np.median(gaps[short]) if short.any() else np.inf
-    retry = np.flatnonzero(short & ((gaps >= gap_threshold) | (gaps > OUTLIER_GAP * typical) | at_bound))
+    retry = np.flatnonzero(short & ((gaps >= gap_threshold) | (gaps > OUTLIER_GAP * typical)
+                                    | _at_bound(model, solution[0])))
     if retry.size:
         p = _initial(model, y[retry], q0, k1_range, iterations, tolerance, short_road=False)[0]
         again = levenberg_marquardt(model, y[retry], p, bounds, iterations, tolerance)
-        better = again[4] < fit[4][retry]
-        for whole, part in zip(fit[:6], again):
+        better = again[4] < solution[4][retry]
+        for whole, part in zip(solution[:6], again):
             whole[retry[better]] = part[better]
-        fit[6][:, retry[better]] = again[6][:, better]         # the partials: pixels on their second axis
-    p, c, _, _, cost, g, dg = fit
+        solution[6][:, retry[better]] = again[6][:, better]         # the partials: pixels on their second axis
+    p, c, _, _, cost, g, dg = solution
     cost = cost + outside
     dof = max(2 * bias.q.shape[0] * y.shape[2] - len(names) - 2 * c[0].size, 1)
     cov = band_covariance(model, g, dg, c, cost / dof)
@@ -261,7 +261,7 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     k2_sd = k2 * spread["k2"] if "k2" in spread else (
         np.zeros(len(y)) if model.k2_mode == "fixed" else k2 * spread["k1"])
     gap_map = gap(cost * (scale / sigma) ** 2, count)
-    at_bound = np.any([q.at_bound(col[q.name]) for q in model.parameters], axis=0)
+    at_bound = _at_bound(model, p)
     _, m, n_bands, K = c.shape
     first = np.concatenate([amplitude_column(len(names), q, 0, 0, n_bands, K) + np.arange(2 * K) for q in range(m)])
     band = model.bands[0]
@@ -280,3 +280,7 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
             out[name] = np.where(at_bound, np.nan, out[name])
     return {name: out[name] for name in [*model.outputs, "cost"]}
 
+
+def _at_bound(model, p):
+    """Whether any parameter of ``p`` ``(n, n_p)`` sits at its bound, per pixel."""
+    return np.any([q.at_bound(p[:, i]) for i, q in enumerate(model.parameters)], axis=0)
