@@ -232,3 +232,9 @@ def test_compiled_sho_fit_is_the_numpy_fit(bins):
         np.testing.assert_allclose(compiled[name][noisy_rows], reference[name][noisy_rows], rtol=tolerance,
                                    err_msg=name)
     assert np.all(np.abs(compiled["resonance_frequency"] - p["f0"])[~noisy_rows] < 1e-9 * p["f0"][~noisy_rows])
+    # shared among threads: the same numbers; a spectrum of zeros, inf or NaN masked
+    y[:3] = np.array([0.0, np.inf, np.nan])[:, None]
+    threaded, alone = fit_spectra(f, y, threads=2), fit_spectra(f, y)
+    for name in compiled:
+        np.testing.assert_array_equal(threaded[name], alone[name], err_msg=name)
+        assert np.isnan(alone[name][:3]).all() and np.isfinite(alone[name][3:]).all(), name

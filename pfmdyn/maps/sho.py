@@ -155,18 +155,22 @@ def _guess(f, y, passes=3):
 
 
 def _r2(total, residual_squares):
-    """BGlib's R2 criterion per spectrum from ``total``, ``sum |y - mean(y)|**2`` (0 for a constant spectrum)."""
+    """BGlib's R2 criterion per spectrum from ``total``, ``sum |y - mean(y)|**2`` (0 for a constant
+    spectrum, NaN for a masked one)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(total > 0, 1 - residual_squares / total, 0.0)
+        return np.where(total == 0, 0.0, 1 - residual_squares / total)
 
 
-def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compiled=True) -> dict[str, np.ndarray]:
+def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compiled=True,
+                threads=1) -> dict[str, np.ndarray]:
     """SHO guess and least-squares fit of every spectrum ``(n, n_freq)`` over one band.
 
     Returns ``(n,)`` arrays named as :attr:`SHOMapModel.outputs` (guess and fit), ``cost``
     (squared relative residual) and ``gap`` (the noise-normalised RMS residual,
     :mod:`pfmdyn.fitting.noise`).  ``compiled``: the kernel of :mod:`pfmdyn.maps.sho_kernel`
-    (one spectrum at a time, compiled); else NumPy on all spectra at once (the reference).
+    (one spectrum at a time, on ``threads`` threads), which masks a spectrum holding NaN or inf
+    or nothing but zeros (NaN for all its values); else NumPy on all spectra at once, the
+    reference, for finite spectra.
 
     >>> f = np.linspace(290e3, 310e3, 64)
     >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
@@ -182,7 +186,7 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compile
     bounds = (np.log([f[0] / 2, _Q_RANGE[0]]), np.log([2 * f[-1], _Q_RANGE[1]]))
     if compiled:
         from .sho_kernel import fit_sho
-        fit = fit_sho(f, y, _Q_RANGE, bounds, iterations, tolerance)
+        fit = fit_sho(f, y, _Q_RANGE, bounds, iterations, tolerance, threads)
     else:
         fit = _fit_numpy(f, y, bounds, iterations, tolerance)
     norm, out = fit["norm"], {}
@@ -218,9 +222,9 @@ def _fit_numpy(f, y, bounds, iterations, tolerance) -> dict[str, np.ndarray]:
 
 
 def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iterations=40, tolerance=1e-3,
-                  chunk=1024) -> dict[str, np.ndarray]:
+                  threads=1) -> dict[str, np.ndarray]:
     """Fit every spectrum of ``response`` (``(..., n_freq)``, or ``(..., n_bias, n_freq)`` with
-    biases), ``chunk`` spectra at once; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.
+    biases) on ``threads`` threads; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.
 
     >>> f = np.concatenate([np.linspace(290e3, 310e3, 32), np.linspace(600e3, 640e3, 32)])
     >>> y = sho_response(f, 300e3, 80.0) * (f < 4e5) + 1j * sho_response(f, 620e3, 120.0) * (f > 4e5)
@@ -238,26 +242,13 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iter
     shape = y.shape[:y.ndim - 1]
     spectra = y.reshape(-1, tail[-1])
     f = np.asarray(model.frequency_hz, float)
-    per_band = []
-    for band in model.bands:
-        # a spectrum holding NaN or inf, or nothing but zeros, is masked: NaN maps, not explained
-        usable = np.all(np.isfinite(spectra[:, band]), axis=1) & np.any(spectra[:, band] != 0, axis=1)
-        good = spectra[usable][:, band]
-        parts = [fit_spectra(f[band], good[i:i + chunk], iterations=iterations, tolerance=tolerance)
-                 for i in range(0, len(good), chunk)] or [fit_spectra(f[band], np.ones((1, f[band].size)))]
-        fitted = {name: np.concatenate([part[name] for part in parts])[:len(good)] for name in parts[0]}
-        per_band.append({name: _unmask(value, usable) for name, value in fitted.items()})
-    stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in per_band[0]}
+    per_band = [fit_spectra(f[band], spectra[:, band], iterations=iterations, tolerance=tolerance, threads=threads)
+                for band in model.bands]
+    stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in model.outputs if name in per_band[0]}
+    # a masked spectrum (NaN or inf, or nothing but zeros) has NaN maps and is not explained
     stacked["explained"] = np.where(np.isfinite(stacked["gap"]), stacked["gap"] < gap_threshold, 0.0)
     bands_shape = (len(model.bands),) if len(model.bands) > 1 else ()
-    return {name: value.reshape(shape + bands_shape) for name, value in stacked.items() if name in model.outputs}
-
-
-def _unmask(values, usable):
-    """``values`` of the usable spectra in place among all, NaN elsewhere."""
-    out = np.full(usable.shape, np.nan)
-    out[usable] = values
-    return out
+    return {name: value.reshape(shape + bands_shape) for name, value in stacked.items()}
 
 
 def band_centres(model: SHOMapModel) -> list[float]:

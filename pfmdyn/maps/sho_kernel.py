@@ -36,13 +36,16 @@ _ESTIMATE_SCALES = np.array([math.comb(2 * m, m) * math.log(2) for m in DIFFEREN
 _COVARIANCE_CUTOFF = 1e-15      # pfmdyn.fitting.projection.covariance's default
 
 
-def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: float) -> dict[str, np.ndarray]:
+def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: float,
+            threads: int = 1) -> dict[str, np.ndarray]:
     """Guess (Q within ``q_range``) and fit (``(log f0, log Q)`` within ``bounds``) an SHO to every
-    spectrum ``(n, n_freq)`` over one sorted band, each divided by its norm: ``norm``, ``total``
+    spectrum ``(n, n_freq)`` over one sorted band, each divided by its norm, the spectra shared
+    among ``threads`` threads: ``norm``, ``total``
     (``sum |y/norm - mean|**2``), guess and fit parameters
     ``(log f0, log Q)``, complex amplitudes and residual sums of squares, ``spread`` (the
     standard deviation of ``log f0`` and ``log Q`` mapped through ``sinh``, as ``sho.fit_spectra``)
     and ``sigma``, the noise (:func:`pfmdyn.fitting.noise.noise_sigmas` of each spectrum alone).
+    A spectrum holding NaN or inf, or nothing but zeros, is masked: NaN everywhere.
 
     >>> f = np.linspace(290e3, 310e3, 64)
     >>> y = 2e-3 * formulas.sho_response(f, 301.2e3, 150.0)[None]
@@ -51,21 +54,30 @@ def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: 
     ([301200.0, 150.0], 0.002)
     """
     f = np.ascontiguousarray(frequency_hz, float)
-    y = np.ascontiguousarray(spectra, complex)
+    y = np.asarray(spectra, complex)      # rows may be strided (a band of wider spectra)
     n = len(y)
     out = {"norm": np.empty(n), "total": np.empty(n), "guess_p": np.empty((n, 2)), "guess_c": np.empty(n, complex),
            "guess_cost": np.empty(n), "p": np.empty((n, 2)), "c": np.empty(n, complex), "cost": np.empty(n),
            "spread": np.empty((n, 2)), "sigma": np.empty(n)}
     centre = float(np.mean(f))
-    _fit_all(f, f / centre, centre, y, float(q_range[0]), float(q_range[1]), np.asarray(bounds[0], float),
-             np.asarray(bounds[1], float), iterations, tolerance, out["norm"], out["total"], out["guess_p"], out["guess_c"], out["guess_cost"], out["p"],
-             out["c"], out["cost"], out["spread"], out["sigma"], _ESTIMATE_SCALES)
+    settings = (f, f / centre, centre, float(q_range[0]), float(q_range[1]), np.asarray(bounds[0], float),
+                np.asarray(bounds[1], float), iterations, tolerance, _ESTIMATE_SCALES)
+
+    def fit(rows):
+        _fit_all(y[rows], *settings, *(values[rows] for values in out.values()))
+
+    if threads > 1 and n >= 64 * threads:
+        from concurrent.futures import ThreadPoolExecutor
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(fit, [slice(i * n // threads, (i + 1) * n // threads) for i in range(threads)]))
+    else:
+        fit(slice(None))
     return out
 
 
 @_jit
-def _fit_all(f, x, centre, y, q_min, q_max, lower, upper, iterations, tolerance, norm, total, guess_p, guess_c, guess_cost, p_out,
-             c_out, cost_out, spread, sigma, estimate_scales):
+def _fit_all(y, f, x, centre, q_min, q_max, lower, upper, iterations, tolerance, estimate_scales, norm, total, guess_p,
+             guess_c, guess_cost, p_out, c_out, cost_out, spread, sigma):
     nf = f.size
     yn = np.empty(nf, np.complex128)
     weight = np.empty(nf)
@@ -79,7 +91,15 @@ def _fit_all(f, x, centre, y, q_min, q_max, lower, upper, iterations, tolerance,
         s = 0.0
         for k in range(nf):
             s += y[i, k].real ** 2 + y[i, k].imag ** 2
-        length = math.sqrt(s) if s > 0 else 1.0
+        if not (s > 0 and math.isfinite(s)):
+            for values in (norm, total, guess_cost, cost_out, sigma):
+                values[i] = math.nan
+            for values in (guess_c, c_out):
+                values[i] = complex(math.nan, math.nan)
+            for values in (guess_p, p_out, spread):
+                values[i, 0] = values[i, 1] = math.nan
+            continue
+        length = math.sqrt(s)
         mean = 0j
         for k in range(nf):
             yn[k] = y[i, k] / length
@@ -229,7 +249,7 @@ def _guess(x, y, q_min, q_max, weight, normal, rhs, scale, passes=3):
         q = min(max(x0 / max(abs(rhs[1] / scale[1]), x0 / q_max), q_min), q_max)
         top = 0.0
         for k in range(nf):
-            weight[k] = 1.0 / abs(x[k] ** 2 - 1j * x[k] * (x0 / q) - u)
+            weight[k] = 1.0 / math.sqrt((x[k] ** 2 - u) ** 2 + (x[k] * (x0 / q)) ** 2)      # 1 / |D|
             top = max(top, weight[k])
         for k in range(nf):
             weight[k] /= top
