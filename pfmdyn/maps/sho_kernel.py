@@ -40,7 +40,7 @@ def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: 
             threads: int = 1) -> dict[str, np.ndarray]:
     """Guess (Q within ``q_range``) and fit (``(log f0, log Q)`` within ``bounds``) an SHO to every
     spectrum ``(n, n_freq)`` over one sorted band, each divided by its norm, the spectra shared
-    among ``threads`` threads: ``norm``, ``total``
+    among ``threads`` threads (at least 64 each): ``norm``, ``total``
     (``sum |y/norm - mean|**2``), guess and fit parameters
     ``(log f0, log Q)``, complex amplitudes and residual sums of squares, ``spread`` (the
     standard deviation of ``log f0`` and ``log Q`` mapped through ``sinh``, as ``sho.fit_spectra``)
@@ -78,6 +78,7 @@ def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: 
 @_jit
 def _fit_all(y, f, x, centre, q_min, q_max, lower, upper, iterations, tolerance, estimate_scales, norm, total, guess_p,
              guess_c, guess_cost, p_out, c_out, cost_out, spread, sigma):
+    """:func:`fit_sho` on the rows of ``y``, into the output arrays after ``estimate_scales``."""
     nf = f.size
     yn = np.empty(nf, np.complex128)
     weight = np.empty(nf)
@@ -114,10 +115,8 @@ def _fit_all(y, f, x, centre, q_min, q_max, lower, upper, iterations, tolerance,
         x0, q = _guess(x, yn, q_min, q_max, weight, normal, rhs, scale)
         p[0], p[1] = math.log(x0 * centre), math.log(q)
         guess_p[i, 0], guess_p[i, 1] = p[0], p[1]
-        c, cost = _evaluate(f, yn, p, False, now, moments)
-        guess_c[i], guess_cost[i] = c, cost
-
         c, cost = _evaluate(f, yn, p, True, now, moments)
+        guess_c[i], guess_cost[i] = c, cost
         lam = 1e-3
         for _ in range(iterations):
             a00, a01, a11, b0, b1 = moments[0], moments[1], moments[2], moments[3], moments[4]
