@@ -11,7 +11,8 @@ with its damping, bounds and stopping rules, then the covariance of
 rotations).  The SHO and its partials are the generated formulas
 (:mod:`pfmdyn.generated.formulas`) compiled as they are.  Work arrays are made once per call,
 the kernel runs without the GIL (threads may fit blocks side by side), and numba caches the
-machine code on disk (the first call of a fresh install compiles it, a few seconds).
+machine code on disk (the first call of a fresh install compiles it, 10-20 s; later processes
+load it in about a second).
 """
 from __future__ import annotations
 
