@@ -142,3 +142,45 @@ def test_map_and_discrepancy_give_one_gap():
     result = FitResult(Model(meta), np.zeros(2), np.zeros((2, 2)), y - prediction, sigma, 6)
     assert result.gap == pytest.approx(float(out["gap"][0]), rel=1e-6)
     assert 0.8 < result.gap < 1.25 and out["explained"][0] == 1.0
+
+
+def _reference_noise(f, v, y):
+    """The module's estimate written out point by point: differences of orders 2-6 along sorted
+    frequency at each bias, the straight line in bias at each frequency with three biases or more,
+    the smallest refined estimate held within 0.7 of the second differences'."""
+    from scipy.special import gammaincinv
+    estimates = []
+    for m in (2, 3, 4, 5, 6):
+        d = np.concatenate([np.diff(y[v == b][np.argsort(f[v == b])], m) for b in np.unique(v)])
+        estimates.append(math.sqrt(np.median(np.abs(d) ** 2) / (math.comb(2 * m, m) * math.log(2))))
+    refined = min(estimates[1:])
+    if len(np.unique(v)) >= 3:
+        lines = []
+        for x in np.unique(f):
+            at = f == x
+            design = np.stack([np.ones(at.sum()), v[at]], axis=1)
+            residual = y[at] - design @ np.linalg.lstsq(design, y[at], rcond=None)[0]
+            lines.append(np.sum(np.abs(residual) ** 2) / gammaincinv(at.sum() - 2, 0.5))
+        refined = min(refined, math.sqrt(np.median(lines)))
+    return min(estimates[0], max(refined, 0.7 * estimates[0]))
+
+
+@pytest.mark.parametrize("n_bias", [1, 2, 5])
+def test_noise_of_many_spectra_is_each_spectrum_s(n_bias):
+    """:func:`noise_sigmas` (all spectra of a block at once) equals :func:`noise_sigma` of each
+    spectrum and the estimate written out point by point, to 1e-12: resonances on a shuffled
+    frequency grid, with and without biases, noise from none to dominant."""
+    from pfmdyn.fitting.noise import noise_sigmas
+    rng = np.random.default_rng(40 + n_bias)
+    f = rng.permutation(np.linspace(2.9e5, 3.1e5, 96))
+    bias = np.linspace(-4.0, 6.0, n_bias) if n_bias > 1 else None
+    v = np.repeat(np.zeros(1) if bias is None else bias, f.size)
+    f0, q = rng.uniform(2.95e5, 3.05e5, 12), np.exp(rng.uniform(np.log(5), np.log(500), 12))
+    clean = f0[:, None, None]**2 / (f**2 - 1j * f * f0[:, None, None] / q[:, None, None] - f0[:, None, None]**2)
+    clean = clean * (1.0 + 0.3 * (np.zeros(1) if bias is None else bias)[None, :, None])
+    y = clean + np.r_[0.0, np.geomspace(1e-6, 10.0, 11)][:, None, None] * _complex(rng, 12, n_bias, f.size)
+    sigmas = noise_sigmas(f, bias, y)
+    for s, spectrum in zip(sigmas, y.reshape(12, -1)):
+        assert s == pytest.approx(noise_sigma(np.tile(f, n_bias), v, spectrum), rel=1e-12)
+        assert s == pytest.approx(max(_reference_noise(np.tile(f, n_bias), v, spectrum),
+                                      1e-15 * np.linalg.norm(spectrum)), rel=1e-12)

@@ -203,3 +203,38 @@ def test_usid_inplace_needs_usid_input_and_the_copy_never_replaces_the_input(usi
     assert main(["map", str(path), "--model", "sho", "--out", str(tmp_path), "--no-progress"]) == 2
     assert "--out is the input's folder" in capsys.readouterr().err
     assert path.read_bytes() == before and not (tmp_path / "maps.zarr").exists()
+
+
+@pytest.mark.parametrize("bins", [64, 128])
+def test_compiled_sho_fit_is_the_numpy_fit(bins):
+    """The compiled fit (:mod:`pfmdyn.maps.sho_kernel`, the default) and its NumPy reference (the
+    batched Levenberg-Marquardt of :mod:`pfmdyn.fitting.batched`) on the same spectra: guess and
+    fit f0 and Q to 1e-9, amplitude, phase and R2 to 1e-9, noise and gap to 1e-12 (noisy spectra;
+    without noise, the residual is rounding).  Q 5-500, resonances across the band and beyond its
+    edges, half the spectra noise-free."""
+    from pfmdyn.maps.sho import fit_spectra
+    rng = np.random.default_rng(90 + bins)
+    n = 200
+    f = np.linspace(290e3, 310e3, bins)
+    p = sho_pixels(rng, f, (5, 500), n, spread=1.3)
+    clean = bglib_sho(f, p["amplitude"][:, None], p["phase"][:, None], p["f0"][:, None], p["q"][:, None])
+    noisy_rows = np.arange(n) % 2 == 0
+    y = np.where(noisy_rows[:, None], noisy(rng, clean, 0.02), clean)
+    compiled, reference = fit_spectra(f, y), fit_spectra(f, y, compiled=False)
+    assert compiled.keys() == reference.keys()
+    for name in ("resonance_frequency", "quality_factor", "amplitude", "r2", "guess_resonance_frequency",
+                 "guess_quality_factor", "guess_amplitude"):
+        np.testing.assert_allclose(compiled[name], reference[name], rtol=1e-9, err_msg=name)
+    for name in ("phase", "guess_phase"):
+        np.testing.assert_allclose(np.exp(1j * compiled[name]), np.exp(1j * reference[name]), atol=1e-9, err_msg=name)
+    for name, tolerance in (("gap", 1e-12), ("cost", 1e-9), ("resonance_frequency_stderr", 1e-9),
+                            ("quality_factor_stderr", 1e-9)):
+        np.testing.assert_allclose(compiled[name][noisy_rows], reference[name][noisy_rows], rtol=tolerance,
+                                   err_msg=name)
+    assert np.all(np.abs(compiled["resonance_frequency"] - p["f0"])[~noisy_rows] < 1e-9 * p["f0"][~noisy_rows])
+    # shared among threads: the same numbers; a spectrum of zeros, inf or NaN masked
+    y[:3] = np.array([0.0, np.inf, np.nan])[:, None]
+    threaded, alone = fit_spectra(f, y, threads=2), fit_spectra(f, y)
+    for name in compiled:
+        np.testing.assert_array_equal(threaded[name], alone[name], err_msg=name)
+        assert np.isnan(alone[name][:3]).all() and np.isfinite(alone[name][3:]).all(), name

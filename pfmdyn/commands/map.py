@@ -50,11 +50,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--usid-inplace", action="store_true",
                         help="USID input: write the results group into the input file (as BGlib does) instead of a "
                              "copy of it in --out")
-    parser.add_argument("--block", type=int, default=16, help="pixels per block side (default 16)")
+    parser.add_argument("--block", type=int, default=None,
+                        help="pixels per block side (default: an interrupted run's; else 16, and for --model sho "
+                             "as many pixels as hold about 16k spectra)")
     parser.add_argument("--scheduler", default=None,
                         help="'processes' (default: one worker process per core), 'threads', 'sync' (one core), "
                              "or tcp://HOST:PORT of a dask.distributed scheduler")
-    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--workers", type=int, default=None, help="local worker processes, or for --model sho threads (default: all cores)")
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
     parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")

@@ -22,7 +22,8 @@ class BiasLines:
     """The lines of :func:`bias_lines`, per frequency in the order they first appear: ``frequency_hz``,
     ``count`` (points), ``mean_bias``, ``spread`` (``sum (V - mean)**2``), ``intercept`` ``b`` and
     ``slope`` ``c`` (NaN at a frequency with one distinct bias); per point: ``group`` (its frequency's
-    index) and ``residual``."""
+    index) and ``residual``.  ``intercept``, ``slope`` and ``residual`` carry the leading axes of the
+    response (spectra on one set of points)."""
 
     frequency_hz: np.ndarray
     count: np.ndarray
@@ -34,26 +35,34 @@ class BiasLines:
     residual: np.ndarray
 
     def squared_residual(self) -> np.ndarray:
-        """``sum |residual|**2`` at each frequency."""
-        return np.bincount(self.group, np.abs(self.residual) ** 2, minlength=len(self.count))
+        """``sum |residual|**2`` at each frequency (``(..., n_frequencies)``)."""
+        return _sums(self.group, np.abs(self.residual) ** 2, len(self.count))
 
 
 def _sums(group, values, n) -> np.ndarray:
+    """Sums of ``values`` ``(..., points)`` over the points of each of ``n`` groups, ``(..., n)``: one
+    ``bincount`` over all leading rows (each row its own ``n`` bins), so a row sums in the order it
+    would alone."""
     values = np.asarray(values)
     if np.iscomplexobj(values):
-        return np.bincount(group, values.real, minlength=n) + 1j * np.bincount(group, values.imag, minlength=n)
-    return np.bincount(group, values, minlength=n)
+        return _sums(group, values.real, n) + 1j * _sums(group, values.imag, n)
+    rows = values.shape[:-1]
+    bins = (group + n * np.arange(int(np.prod(rows)))[:, None]).ravel()
+    return np.bincount(bins, values.ravel(), minlength=n * int(np.prod(rows))).reshape(*rows, n)
 
 
 def bias_lines(frequency_hz, bias_v, response) -> BiasLines:
     """Fit ``b + c V`` to ``response`` at each frequency (least squares; sums centred on each
-    frequency's mean bias, so a bias range far from zero keeps the fit conditioned).
+    frequency's mean bias, so a bias range far from zero keeps the fit conditioned).  ``response``
+    ``(..., points)`` may hold many spectra at the same points: the grouping is found once.
 
     >>> f = np.array([2.0, 1.0, 2.0, 1.0, 2.0])
     >>> v = np.array([0.0, 1.0, 1.0, 3.0, 2.0])
     >>> lines = bias_lines(f, v, (1 + 2j) + (3 - 1j) * v)
     >>> lines.frequency_hz.tolist(), lines.count.tolist(), lines.slope.round(12).tolist()
     ([2.0, 1.0], [3, 2], [(3-1j), (3-1j)])
+    >>> bias_lines(f, v, np.stack([v, 2 * v])).slope.round(12).tolist()       # two spectra at once
+    [[1.0, 1.0], [2.0, 2.0]]
     """
     frequency_hz = np.asarray(frequency_hz, float)
     bias_v = np.asarray(bias_v, float)
@@ -71,5 +80,5 @@ def bias_lines(frequency_hz, bias_v, response) -> BiasLines:
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(spread > 0, _sums(group, centred * response, n) / np.where(spread > 0, spread, 1.0), np.nan)
     intercept = _sums(group, response, n) / count - slope * mean_bias
-    residual = response - (intercept[group] + slope[group] * bias_v)
+    residual = response - (intercept[..., group] + slope[..., group] * bias_v)
     return BiasLines(frequency_hz[first[order]], count, mean_bias, spread, intercept, slope, group, residual)

@@ -89,12 +89,19 @@ def noise_sigma(frequency_hz, bias_v, response) -> float:
     >>> round(noise_sigma(f, v, y), 1)
     1.0
     """
-    estimates = [_difference_noise(frequency_hz, bias_v, response, m) for m in DIFFERENCE_ORDERS]
-    across = _bias_noise(frequency_hz, bias_v, response)
-    refined = min(estimates[1:] + ([across] if across is not None else []))
+    return float(_noise(frequency_hz, bias_v, np.asarray(response)[None])[0])
+
+
+def _noise(frequency_hz, bias_v, spectra) -> np.ndarray:
+    """:func:`noise_sigma` of each row of ``spectra`` ``(n, points)``, all at the same points: the
+    points' orderings and groupings are found once, the estimates are whole-array operations."""
+    frequency_hz, bias_v = np.asarray(frequency_hz, float), np.asarray(bias_v, float)
+    estimates = _difference_noise(frequency_hz, bias_v, spectra)
+    across = _bias_noise(frequency_hz, bias_v, spectra)
+    refined = np.min(estimates[1:] + ([across] if across is not None else []), axis=0)
     # Coarse sampling reads second differences at most about 1.3x high; a refined estimate far
     # below them means data without noise (a simulation), where the curvature is the floor.
-    return float(min(estimates[0], max(refined, MAX_REFINEMENT * estimates[0])))
+    return np.minimum(estimates[0], np.maximum(refined, MAX_REFINEMENT * estimates[0]))
 
 
 MAX_REFINEMENT = 0.7
@@ -108,25 +115,50 @@ noise up to 30 % high there; higher orders cancel more of a smooth signal and le
 noise, and the smallest estimate is kept."""
 
 
-def _difference_noise(frequency_hz, bias_v, response, order: int) -> float:
-    """Noise from ``order``-th differences along frequency at each bias: for white complex
-    noise of RMS sigma, ``median |d|**2 = C(2 order, order) sigma**2 ln 2``."""
-    d = []
-    for b in np.unique(bias_v):
-        sel = bias_v == b
-        order_f = np.argsort(frequency_hz[sel])
-        d.append(np.diff(response[sel][order_f], order))
-    d = np.concatenate(d)
-    if not d.size:
-        # No bias has enough frequencies (a bias that changes with every row): along
-        # frequency over all rows, an upper bound.
-        d = np.diff(response[np.argsort(frequency_hz, kind="stable")], order)
-    return math.sqrt(np.median(np.abs(d) ** 2) / (math.comb(2 * order, order) * math.log(2)))
+def _difference_noise(frequency_hz, bias_v, spectra) -> list[np.ndarray]:
+    """Noise from differences along frequency at each bias, one ``(n,)`` estimate per order of
+    :data:`DIFFERENCE_ORDERS`: for white complex noise of RMS sigma, ``median |d|**2 = C(2 m, m)
+    sigma**2 ln 2`` for ``m``-th differences.
+
+    The points are ordered by bias, then frequency, and the differences taken along that order;
+    those that straddle two biases are dropped.  An order no bias has enough frequencies for (a
+    bias that changes with every row) takes its differences along frequency over all rows, an
+    upper bound."""
+    biases = [np.flatnonzero(bias_v == b) for b in np.unique(bias_v)]
+    along_bias = np.concatenate([points[np.argsort(frequency_hz[points])] for points in biases])
+    run = np.repeat(np.arange(len(biases)), [len(points) for points in biases])
+    along_all = np.argsort(frequency_hz, kind="stable")
+    in_order = np.array_equal(along_bias, np.arange(along_bias.size))    # a sorted grid: no copy
+    within = dict(zip(DIFFERENCE_ORDERS, _differences(spectra if in_order else spectra[:, along_bias])))
+    overall = None
+    estimates = []
+    for order in DIFFERENCE_ORDERS:
+        one_bias = run[:-order] == run[order:]
+        if one_bias.all():
+            d = within[order]
+        elif one_bias.any():
+            d = within[order][:, one_bias]
+        else:
+            overall = overall or dict(zip(DIFFERENCE_ORDERS, _differences(spectra[:, along_all])))
+            d = overall[order]
+        scale = math.comb(2 * order, order) * math.log(2)
+        estimates.append(np.sqrt(np.median(np.abs(d) ** 2, axis=1) / scale))
+    return estimates
 
 
-def _bias_noise(frequency_hz, bias_v, response) -> float | None:
-    """Noise from the residual of a straight line in bias at each frequency (None with fewer
-    than three biases per frequency).
+def _differences(rows):
+    """The differences of :data:`DIFFERENCE_ORDERS` along the last axis, each the next's source
+    (as ``np.diff`` iterates its first differences)."""
+    d = rows
+    for order in range(1, DIFFERENCE_ORDERS[-1] + 1):
+        d = d[:, 1:] - d[:, :-1]
+        if order in DIFFERENCE_ORDERS:
+            yield d
+
+
+def _bias_noise(frequency_hz, bias_v, spectra) -> np.ndarray | None:
+    """Noise from the residual of a straight line in bias at each frequency, per spectrum (None
+    with fewer than three biases per frequency).
 
     The response is affine in the bias at every frequency (the model's drives, d1, d2 and
     ``f0``, ``q0`` proportional to ``V - V_surf``) whatever the peak shape or sampling, so the
@@ -136,13 +168,15 @@ def _bias_noise(frequency_hz, bias_v, response) -> float | None:
     # the Gamma law's median, gammaincinv(a, 1/2) (scipy.stats would cost a second to import)
     from scipy.special import gammaincinv
 
-    lines = bias_lines(frequency_hz, bias_v, response)
+    if np.sum(np.unique(frequency_hz, return_counts=True)[1] >= 3) < 10:      # too few biases: no lines to fit
+        return None
+    lines = bias_lines(frequency_hz, bias_v, spectra)
     s2 = lines.spread + lines.count * lines.mean_bias**2
     ok = (lines.count >= 3) & (lines.spread > 1e-12 * np.maximum(s2, 1e-300))
     if ok.sum() < 10:
         return None
     dof = lines.count[ok] - 2
-    return float(math.sqrt(np.median(lines.squared_residual()[ok] / gammaincinv(dof, 0.5))))
+    return np.sqrt(np.median(lines.squared_residual()[:, ok] / gammaincinv(dof, 0.5), axis=1))
 
 
 SPECTRUM_FLOOR = 1e-9
@@ -176,7 +210,7 @@ the pixel is all zero): a map's data without noise."""
 def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
     """:func:`noise_sigma` of each of ``spectra`` ``(n, n_bias, n_freq)`` (spectra on one grid:
     ``frequency_hz`` ``(n_freq,)``, ``bias_v`` ``(n_bias,)`` or None for one spectrum each), floored at
-    :data:`PIXEL_FLOOR` of each one's norm.
+    :data:`PIXEL_FLOOR` of each one's norm; all spectra at once.
 
     >>> rng = np.random.default_rng(2)
     >>> y = (rng.standard_normal((2, 1, 4000)) + 1j * rng.standard_normal((2, 1, 4000))) * np.array([[[1.0]], [[3.0]]])
@@ -190,4 +224,4 @@ def noise_sigmas(frequency_hz, bias_v, spectra) -> np.ndarray:
     flat = spectra.reshape(-1, n_bias * n_freq)
     norm = np.sqrt(np.sum(np.abs(flat) ** 2, axis=1))
     floor = PIXEL_FLOOR * np.where(norm == 0, 1.0, norm)
-    return np.maximum([noise_sigma(f, v, s) for s in flat], floor)
+    return np.maximum(_noise(f, v, flat), floor)

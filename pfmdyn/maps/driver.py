@@ -8,7 +8,10 @@ an interruption skips finished blocks.  Nothing holds the whole map in memory: a
 block of spectra, the driver only the ``(ny, nx)`` maps of its summary.
 
 The default local run uses a pool of worker *processes*, one per core, each limited to one BLAS
-thread: the fit is NumPy work on modest arrays, which threads sharing the GIL do not scale.
+thread: the beam fit is NumPy work on modest arrays, which threads sharing the GIL do not scale.
+The SHO fit is compiled and releases the GIL (:mod:`pfmdyn.maps.sho_kernel`): its default local
+run fits the blocks one after the other in this process, each block's spectra shared among
+threads, one per core (no process to start, nothing to pickle).
 """
 from __future__ import annotations
 
@@ -29,7 +32,7 @@ from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 from .result import MapResult
 from .sho import band_centres, fit_sho_block, is_sho
-from .store import create_map, open_group
+from .store import create_maps, open_group, set_attributes, write_regions
 
 __all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
@@ -79,10 +82,8 @@ def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: 
     response = read_block(source, ys, xs)
     fit = fit_sho_block if is_sho(source.model) else fit_block
     result = fit(source.model, response, **options)      # NaN or empty pixels come back masked
-    group = open_group(out, mode="r+")
-    for name in source.model.outputs:
-        group[name][ys, xs] = result[name]
-    group["done"][by, bx] = 1
+    write_regions(out, (ys, xs), {name: result[name] for name in source.model.outputs})
+    open_group(out, mode="r+")["done"][by, bx] = 1      # last: a block is done once all its maps are
     return response.shape[0] * response.shape[1]
 
 
@@ -108,27 +109,50 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
             if group.attrs.get(key, value) != value:
                 raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another output",
                                 quantity="out")
-    for name, (unit, text) in model.outputs.items():
-        if name not in group:
-            create_map(group, name, (ny, nx, *steps), (block, block, *steps), units=unit, description=text,
-                       dims=list(dims))
-    if "done" not in group:
-        create_map(group, "done", grid, (1, 1), fill_value=0, dtype="u1")
-    group.attrs.update(source=os.path.abspath(source.path), block=block, **settings)
+    maps = {name: {"shape": (ny, nx, *steps), "chunks": (block, block, *steps), "units": unit, "description": text,
+                   "dims": list(dims)} for name, (unit, text) in model.outputs.items()}
+    maps["done"] = {"shape": grid, "chunks": (1, 1), "fill_value": 0, "dtype": "u1"}
+    create_maps(out, {name: arguments for name, arguments in maps.items() if name not in group})
+    attrs = {"source": os.path.abspath(source.path), "block": block, **settings}
     if model.bias_v is not None:
-        group.attrs["bias_v"] = [float(v) for v in model.bias_v]
+        attrs["bias_v"] = [float(v) for v in model.bias_v]
     if selection is not None:
-        group.attrs["model_selection"] = selection
+        attrs["model_selection"] = selection
+    set_attributes(group, attrs)
     return group
 
 
-def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str | None = None,
+SPECTRA_PER_BLOCK = 16384
+"""An SHO map's blocks hold about this many spectra (pixels x bias steps x bands): each block costs
+a read and a write of every map, tens of milliseconds, and its fit about 0.3 s per core (32 MB of
+spectra of 128 bins)."""
+
+
+def default_block(model, shape) -> int:
+    """Pixels per block side: 16 for the beam model; for the SHO the largest power of two whose
+    square holds at most :data:`SPECTRA_PER_BLOCK` spectra, no larger than the map.
+
+    >>> from pfmdyn.maps.sho import SHOMapModel
+    >>> default_block(SHOMapModel(np.linspace(3e5, 3.2e5, 128)), (512, 512))
+    128
+    >>> default_block(SHOMapModel(np.linspace(3e5, 3.2e5, 128), np.linspace(-5, 5, 64)), (256, 256))
+    16
+    """
+    if not is_sho(model):
+        return 16
+    per_pixel = math.prod(model.step_shape)
+    side = 2 ** int(math.log2(math.sqrt(SPECTRA_PER_BLOCK / per_pixel))) if per_pixel <= SPECTRA_PER_BLOCK else 1
+    return min(side, max(shape))
+
+
+def run_map(source: MapInput, out_dir: str, *, block: int | None = None, scheduler: str | None = None,
             workers: int | None = None, max_blocks: int | None = None, progress=None,
             selection: list | None = None, **options) -> MapResult:
     """Fit every pixel of ``source`` and write ``out_dir/maps.zarr``; returns a summary.
 
     ``scheduler``: None or ``"processes"`` (local pool of ``workers`` processes, default one per
-    core, see :func:`_pool`), ``"threads"``,
+    core, see :func:`_pool`; None for an SHO model: the blocks in turn, each on ``workers``
+    threads), ``"threads"``,
     ``"sync"`` (one core, in this process), or ``tcp://HOST:PORT`` (a running
     ``dask.distributed`` scheduler).  Blocks flagged done in an existing output are skipped;
     ``max_blocks`` stops after that many (the next run continues).  ``selection`` (the rows
@@ -137,6 +161,8 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     ``progress``: None, or a callable ``progress(blocks_done, blocks_total, pixels_fitted)``
     called before the first block and after each (the command draws its bar from it).
 
+    ``block``: pixels per block side; None: an interrupted run's, else :func:`default_block`.
+
     Returns a :class:`pfmdyn.maps.result.MapResult`: blocks and pixels fitted, pixels per second,
     the model, the fraction of pixels explained and the median gap over the whole map.
     """
@@ -144,12 +170,14 @@ def run_map(source: MapInput, out_dir: str, *, block: int = 16, scheduler: str |
     import dask.delayed  # noqa: F401  (submodule import)
     out = os.path.join(out_dir, "maps.zarr")
     made = [path for path in (out_dir, out) if not os.path.exists(path)]
-    earlier_run(out)
+    block = block or earlier_run(out).get("block") or default_block(source.model, source.shape)
     try:
         os.makedirs(out_dir, exist_ok=True)
         group = _output(out, source, block, selection, options.get("surface_potential_v"))
         done = np.asarray(group["done"][...])
         todo = [b for b in _blocks(source.shape, block) if not done[b]][:max_blocks]
+        if scheduler is None and is_sho(source.model):
+            scheduler, options = "sync", {**options, "threads": workers or os.cpu_count() or 1}
         tasks = [dask.delayed(_process, pure=False)(source, out, by, bx, block, options,
                                                     dask_key_name=f"pfmdyn-block-{by}-{bx}") for by, bx in todo]
         start = time.perf_counter()

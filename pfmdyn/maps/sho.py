@@ -14,7 +14,11 @@ spectroscopic step on its own) is fitted in two stages, every spectrum of a bloc
    No start values, no grid: resonances anywhere in or near the band, any Q.
 2. *Fit*: the complex amplitude enters linearly and is projected out (variable projection);
    ``log w0`` and ``log Q`` follow the Levenberg-Marquardt iteration of the beam fit
-   (:func:`pfmdyn.fitting.batched.levenberg_marquardt`), which treats all spectra at once.
+   (:func:`pfmdyn.fitting.batched.levenberg_marquardt`).
+
+Both stages run compiled, one spectrum at a time (:mod:`pfmdyn.maps.sho_kernel`, the noise
+estimate of :mod:`pfmdyn.fitting.noise` with them); the NumPy path, all spectra of a block at once
+through the beam fit's Levenberg-Marquardt, is the reference it is tested against.
 
 Both stages report BGlib's ``R2 Criterion``, ``1 - sum|y - model|**2 / sum|y - mean(y)|**2``.
 """
@@ -150,36 +154,61 @@ def _guess(f, y, passes=3):
     return np.stack([np.log(x0 * centre), np.log(q)], axis=1)
 
 
-def _r2(y, residual_squares):
-    """BGlib's R2 criterion per spectrum (0 for a constant spectrum)."""
-    total = np.sum(np.abs(y - y.mean(axis=1, keepdims=True)) ** 2, axis=1)
+def _r2(total, residual_squares):
+    """BGlib's R2 criterion per spectrum from ``total``, ``sum |y - mean(y)|**2`` (0 for a constant
+    spectrum, NaN for a masked one)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(total > 0, 1 - residual_squares / total, 0.0)
+        return np.where(total == 0, 0.0, 1 - residual_squares / total)
 
 
-def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict[str, np.ndarray]:
+def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compiled=True,
+                threads=1) -> dict[str, np.ndarray]:
     """SHO guess and least-squares fit of every spectrum ``(n, n_freq)`` over one band.
 
     Returns ``(n,)`` arrays named as :attr:`SHOMapModel.outputs` (guess and fit), ``cost``
     (squared relative residual) and ``gap`` (the noise-normalised RMS residual,
-    :mod:`pfmdyn.fitting.noise`).
+    :mod:`pfmdyn.fitting.noise`).  ``compiled``: the kernel of :mod:`pfmdyn.maps.sho_kernel`
+    (one spectrum at a time, on ``threads`` threads), which masks a spectrum holding NaN or inf
+    or nothing but zeros (NaN for all its values); else NumPy on all spectra at once, the
+    reference, for finite spectra.
 
     >>> f = np.linspace(290e3, 310e3, 64)
     >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
-    >>> out = fit_spectra(f, y[None])
-    >>> round(float(out["resonance_frequency"][0]), 3), round(float(out["quality_factor"][0]), 6)
-    (301200.0, 150.0)
-    >>> round(float(out["amplitude"][0]), 9), round(float(out["phase"][0]), 9), round(float(out["r2"][0]), 9)
-    (0.002, 0.5, 1.0)
+    >>> for compiled in (True, False):
+    ...     out = fit_spectra(f, y[None], compiled=compiled)
+    ...     print(round(float(out["resonance_frequency"][0]), 3), round(float(out["quality_factor"][0]), 6),
+    ...           round(float(out["amplitude"][0]), 9), round(float(out["phase"][0]), 9), round(float(out["r2"][0]), 9))
+    301200.0 150.0 0.002 0.5 1.0
+    301200.0 150.0 0.002 0.5 1.0
     """
     f = np.asarray(frequency_hz, float)
     y = np.asarray(spectra, complex)
+    bounds = (np.log([f[0] / 2, _Q_RANGE[0]]), np.log([2 * f[-1], _Q_RANGE[1]]))
+    if compiled:
+        from .sho_kernel import fit_sho
+        fit = fit_sho(f, y, _Q_RANGE, bounds, iterations, tolerance, threads)
+    else:
+        fit = _fit_numpy(f, y, bounds, iterations, tolerance)
+    norm, out = fit["norm"], {}
+    for prefix, params, amp, squares in (("guess_", fit["guess_p"], fit["guess_c"], fit["guess_cost"]),
+                                         ("", fit["p"], fit["c"], fit["cost"])):
+        amplitude = amp * norm
+        out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}resonance_frequency": np.exp(params[:, 0]),
+                    f"{prefix}quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
+                    f"{prefix}r2": _r2(fit["total"], squares)})
+    out["resonance_frequency_stderr"] = out["resonance_frequency"] * fit["spread"][:, 0]
+    out["quality_factor_stderr"] = out["quality_factor"] * fit["spread"][:, 1]
+    out["cost"], out["gap"] = fit["cost"], gap(fit["cost"] * (norm / fit["sigma"]) ** 2, f.size)
+    return out
+
+
+def _fit_numpy(f, y, bounds, iterations, tolerance) -> dict[str, np.ndarray]:
+    """:func:`fit_spectra`'s guess and fit by NumPy on all spectra at once, named as
+    :func:`pfmdyn.maps.sho_kernel.fit_sho` names them."""
     norm = np.sqrt(np.sum(np.abs(y) ** 2, axis=1))
     norm[norm == 0] = 1.0
     yn = y / norm[:, None]
     model = _Oscillator(f)
-    bounds = (np.log([f[0] / 2, _Q_RANGE[0]]), np.log([2 * f[-1], _Q_RANGE[1]]))
-    out = {}
     p0 = _guess(f, yn)
     g0 = model.design(p0, jacobian=False)[0]
     c0, r0, _ = project_bands(g0, None, yn[:, None, :], model.bands)
@@ -187,22 +216,15 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3) -> dict
     cov = band_covariance(model, g, dg, c, cost / max(2 * f.size - 4, 1))
     with np.errstate(over="ignore"):
         spread = np.sinh(np.sqrt(np.abs(cov[:, [0, 1], [0, 1]])))
-    for prefix, params, amp, squares in (("guess_", p0, c0, np.sum(r0**2, axis=1)), ("", p, c, cost)):
-        amplitude = amp[:, 0, 0, 0] * norm
-        out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}resonance_frequency": np.exp(params[:, 0]),
-                    f"{prefix}quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
-                    f"{prefix}r2": _r2(yn, squares)})
-    out["resonance_frequency_stderr"] = out["resonance_frequency"] * spread[:, 0]
-    out["quality_factor_stderr"] = out["quality_factor"] * spread[:, 1]
-    sigma = noise_sigmas(f, None, y[:, None, :])
-    out["cost"], out["gap"] = cost, gap(cost * (norm / sigma) ** 2, f.size)
-    return out
+    return {"norm": norm, "total": np.sum(np.abs(yn - yn.mean(axis=1, keepdims=True)) ** 2, axis=1),
+            "guess_p": p0, "guess_c": c0[:, 0, 0, 0], "guess_cost": np.sum(r0**2, axis=1),
+            "p": p, "c": c[:, 0, 0, 0], "cost": cost, "spread": spread, "sigma": noise_sigmas(f, None, y[:, None, :])}
 
 
 def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iterations=40, tolerance=1e-3,
-                  chunk=1024) -> dict[str, np.ndarray]:
+                  threads=1) -> dict[str, np.ndarray]:
     """Fit every spectrum of ``response`` (``(..., n_freq)``, or ``(..., n_bias, n_freq)`` with
-    biases), ``chunk`` spectra at once; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.
+    biases) on ``threads`` threads; maps of the pixel shape plus :attr:`SHOMapModel.step_shape`.
 
     >>> f = np.concatenate([np.linspace(290e3, 310e3, 32), np.linspace(600e3, 640e3, 32)])
     >>> y = sho_response(f, 300e3, 80.0) * (f < 4e5) + 1j * sho_response(f, 620e3, 120.0) * (f > 4e5)
@@ -220,26 +242,13 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iter
     shape = y.shape[:y.ndim - 1]
     spectra = y.reshape(-1, tail[-1])
     f = np.asarray(model.frequency_hz, float)
-    per_band = []
-    for band in model.bands:
-        # a spectrum holding NaN or inf, or nothing but zeros, is masked: NaN maps, not explained
-        usable = np.all(np.isfinite(spectra[:, band]), axis=1) & np.any(spectra[:, band] != 0, axis=1)
-        good = spectra[usable][:, band]
-        parts = [fit_spectra(f[band], good[i:i + chunk], iterations=iterations, tolerance=tolerance)
-                 for i in range(0, len(good), chunk)] or [fit_spectra(f[band], np.ones((1, f[band].size)))]
-        fitted = {name: np.concatenate([part[name] for part in parts])[:len(good)] for name in parts[0]}
-        per_band.append({name: _unmask(value, usable) for name, value in fitted.items()})
-    stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in per_band[0]}
+    per_band = [fit_spectra(f[band], spectra[:, band], iterations=iterations, tolerance=tolerance, threads=threads)
+                for band in model.bands]
+    stacked = {name: np.stack([b[name] for b in per_band], axis=-1) for name in model.outputs if name in per_band[0]}
+    # a masked spectrum (NaN or inf, or nothing but zeros) has NaN maps and is not explained
     stacked["explained"] = np.where(np.isfinite(stacked["gap"]), stacked["gap"] < gap_threshold, 0.0)
     bands_shape = (len(model.bands),) if len(model.bands) > 1 else ()
-    return {name: value.reshape(shape + bands_shape) for name, value in stacked.items() if name in model.outputs}
-
-
-def _unmask(values, usable):
-    """``values`` of the usable spectra in place among all, NaN elsewhere."""
-    out = np.full(usable.shape, np.nan)
-    out[usable] = values
-    return out
+    return {name: value.reshape(shape + bands_shape) for name, value in stacked.items()}
 
 
 def band_centres(model: SHOMapModel) -> list[float]:
