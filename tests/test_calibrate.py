@@ -159,3 +159,22 @@ def test_truncated_nid_and_bad_flags_end_in_one_line(tmp_path, capsys):
     assert main(["calibrate", str(REAL / "thermal.nid"), "--width", "-1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and all(line.startswith("pfmdyn calibrate: error: ") for line in err)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_peak_search_is_scipy_find_peaks(seed):
+    """The tune's peaks and prominences are those of ``scipy.signal.find_peaks`` (height and prominence
+    thresholds), on random walks, on rounded noise (plateaus) and on median-smoothed noise."""
+    from scipy.signal import find_peaks
+
+    from pfmdyn.analysis.thermal import _peaks, _smooth
+
+    rng = np.random.default_rng(seed)
+    for signal in (rng.normal(size=2000).cumsum(), np.round(rng.normal(size=2000), 1),
+                   _smooth(rng.normal(size=2000), 5)):
+        minimum = rng.uniform(0.1, 1.5)
+        peaks, properties = find_peaks(signal, height=minimum, prominence=minimum)
+        found, prominence = _peaks(signal, minimum)
+        assert peaks.size > 0
+        np.testing.assert_array_equal(found, peaks)
+        np.testing.assert_array_equal(prominence, properties["prominences"])
