@@ -98,7 +98,7 @@ def deflection(beta, k, k1, L):
     >>> [f"{v:.8g}" for v in deflection(2.5, 2.0, 100.0, 0.0002)]
     ['1.0502606', '0.010502606']
     """
-    _h1, _h2 = _basis(beta)[[1, 2]]
+    _h1, _h2 = map(_basis(beta).__getitem__, [1, 2])
     beta = np.asarray(beta)
     _t0 = (3*L)*_h2
     _t1 = -k1*_t0

@@ -106,7 +106,7 @@ def slope(beta, k, kvv, kll, kvl, H, L):
     >>> [f"{v:.7g}" for v in slope(2.5, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002)]
     ['5225.992', '5628.819', '44.08618', '-0.03140777']
     """
-    _h1, _h3, _h4, _h5, _h6, _h7, _h8, _h10 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8, 10]]
+    _h1, _h3, _h4, _h5, _h6, _h7, _h8, _h10 = map(_basis(beta).__getitem__, [1, 3, 4, 5, 6, 7, 8, 10])
     beta = np.asarray(beta)
     _t0 = H*kvl
     _t1 = L*_h1*(beta*beta*beta*beta)

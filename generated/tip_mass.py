@@ -102,7 +102,7 @@ def slope(beta, k, k1, k2, H, L, mu):
     >>> [f"{v:.7g}" for v in slope(2.5, 2.0, 100.0, 50.0, 1e-05, 0.0002, 0.1)]
     ['5446.294', '5086.614', '54.46294', '-0.03070922']
     """
-    _h1, _h3, _h4, _h5, _h6, _h7, _h8 = _basis(beta)[[1, 3, 4, 5, 6, 7, 8]]
+    _h1, _h3, _h4, _h5, _h6, _h7, _h8 = map(_basis(beta).__getitem__, [1, 3, 4, 5, 6, 7, 8])
     beta = np.asarray(beta)
     _t0 = (beta*beta*beta*beta*beta*beta)
     _t1 = L**2

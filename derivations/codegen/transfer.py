@@ -122,9 +122,9 @@ def _unpack(vname: str, exprs, hsyms) -> str:
     used = sorted({s for e in exprs for s in e.free_symbols if s in hsyms}, key=lambda s: int(str(s)[2:]))
     if len(used) == len(hsyms):
         return f"{', '.join(map(str, used))} = _basis({vname})"
-    # Only part of the basis enters this function: pick its rows.
+    # Only part of the basis enters this function: pick its rows (views: indexing by a list would copy them).
     rows = [int(str(s)[2:]) for s in used]
-    return f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
+    return f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = map(_basis({vname}).__getitem__, {rows})"
 
 
 def _basis(fam: Family, exprs):
