@@ -11,6 +11,8 @@ the bias: ``PR = d + G (V_dc - V_surf)``.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import sympy as sp
 
 __all__ = ["responses", "amplitudes_squared", "amplitude_series", "tan_phase_difference", "phase_difference_series",
@@ -26,6 +28,7 @@ def responses() -> tuple[sp.Expr, sp.Expr]:
     return d_eff + field, -d_eff + field
 
 
+@lru_cache(maxsize=None)
 def amplitudes_squared() -> tuple[sp.Expr, sp.Expr]:
     """|PR+|**2 and |PR-|**2.
 

@@ -45,10 +45,14 @@ def _series(order: int) -> dict:
     return {f(beta): sp.series(f(beta), beta, 0, order).removeO() for f in (sp.cos, sp.sin, sp.cosh, sp.sinh)}
 
 
-def _taylor(expr: sp.Expr, order: int) -> sp.Expr:
-    series = _series(order)
-    e = sp.expand(expr.subs(series))
-    return sum(e.coeff(beta, n) * beta**n for n in range(order))
+def _taylor(expr: sp.Expr, order: int) -> dict[int, sp.Expr]:
+    """The coefficients of ``beta**n``, ``n < order``, of the series of ``expr`` (absent when zero)."""
+    terms: dict[int, list] = {}
+    for term in sp.Add.make_args(sp.expand(expr.subs(_series(order)))):
+        coeff, power = term.as_coeff_exponent(beta)
+        if power.is_Integer and 0 <= power < order and not coeff.has(beta):
+            terms.setdefault(int(power), []).append(coeff)
+    return {n: c for n, parts in terms.items() if (c := sp.Add(*parts)) != 0}
 
 
 def low_frequency(expr: sp.Expr, order: int = 14) -> sp.Expr:
@@ -59,15 +63,16 @@ def low_frequency(expr: sp.Expr, order: int = 14) -> sp.Expr:
     """
     num, den = sp.fraction(sp.together(expr))
     tn, td = _taylor(num, order), _taylor(den, order)
-    ln = min((n for n in range(order) if tn.coeff(beta, n) != 0), default=None)
-    ld = min((n for n in range(order) if sp.simplify(td.coeff(beta, n)) != 0), default=None)
+    ln = min(tn, default=None)
+    # an expanded polynomial in the parameters is zero only when it reads 0
+    ld = min((n for n, c in td.items() if c.is_polynomial() or sp.simplify(c) != 0), default=None)
     if ld is None:
         raise ValueError("denominator vanishes to the order used; raise `order`")
     if ln is None or ln > ld:
         return sp.S.Zero
     if ln < ld:
         return sp.zoo
-    return sp.factor(sp.cancel(tn.coeff(beta, ln) / td.coeff(beta, ld)))
+    return sp.factor(sp.cancel(tn[ln] / td[ld]))
 
 
 def envelope_exponent(expr: sp.Expr, values: dict, beta_lo=200.0, beta_hi=20000.0,

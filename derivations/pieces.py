@@ -95,7 +95,8 @@ def unit_state() -> sp.Matrix:
     u = sp.expand(u.subs(q0, 0).subs(x, L * s / beta))
     phi = sp.Matrix([[sp.diff(u, s, n).diff(c) for c in consts] for n in range(4)])
     F = phi * phi.subs(s, 0).inv()
-    return F.applyfunc(lambda e: sp.simplify(e.rewrite(sp.cos).rewrite(sp.cosh)))
+    # each entry is a sum of cos, sin, cosh, sinh over 2: expanding is its simplest form
+    return F.applyfunc(lambda e: sp.expand(e.rewrite(sp.cos).rewrite(sp.cosh)))
 
 
 @lru_cache(maxsize=None)

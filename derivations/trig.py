@@ -54,7 +54,7 @@ def to_atoms(expr: sp.Expr, arg: sp.Expr, at: Atoms = ATOMS) -> sp.Expr:
     >>> b = sp.Symbol("b"); to_atoms(sp.cos(b) * sp.sinh(b), b)
     _c*_sh
     """
-    return sp.sympify(expr).subs({f(arg): a for f, a in zip(_FUNCTIONS, at.functions)})
+    return sp.sympify(expr).xreplace({f(arg): a for f, a in zip(_FUNCTIONS, at.functions)})
 
 
 def from_atoms(expr: sp.Expr, arg: sp.Expr, at: Atoms = ATOMS) -> sp.Expr:
@@ -63,7 +63,7 @@ def from_atoms(expr: sp.Expr, arg: sp.Expr, at: Atoms = ATOMS) -> sp.Expr:
     >>> b = sp.Symbol("b"); from_atoms(ATOMS.c * ATOMS.ch + 1, b)
     cos(b)*cosh(b) + 1
     """
-    return sp.sympify(expr).subs({a: f(arg) for f, a in zip(_FUNCTIONS, at.functions)})
+    return sp.sympify(expr).xreplace({a: f(arg) for f, a in zip(_FUNCTIONS, at.functions)})
 
 
 def normal_form(expr: sp.Expr, *sets: Atoms) -> sp.Expr:

@@ -35,10 +35,10 @@ def _basis(beta):
     out = np.empty((3,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
-    _u4 = x**4
-    out[0, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
-    out[1, small] = x**3 * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12))))
-    out[2, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07))))
+    _u4 = (x*x*x*x)
+    out[0, ...][small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
+    out[1, ...][small] = (x*x*x) * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12))))
+    out[2, ...][small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07))))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -47,9 +47,9 @@ def _basis(beta):
     _e2 = _e * _e
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
-    out[0, large] = _s*_tanh
-    out[1, large] = _s*_sech - _tanh
-    out[2, large] = _c + _sech
+    out[0, ...][large] = _s*_tanh
+    out[1, ...][large] = _s*_sech - _tanh
+    out[2, ...][large] = _c + _sech
     return out
 
 
@@ -74,5 +74,5 @@ def slope(beta, k, L):
     """
     _h0, _h1, _h2 = _basis(beta)
     beta = np.asarray(beta)
-    _r = 1.0 / (L*_h2*beta**4*k)
-    return ((3*_h0*beta**2) * _r, (-3*L*_h1*beta) * _r)
+    _r = 1.0 / ((L*k)*_h2*(beta*beta*beta*beta))
+    return ((3*_h0*beta**2) * _r, (-(3*L)*_h1*beta) * _r)

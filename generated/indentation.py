@@ -35,10 +35,10 @@ def _basis(beta):
     out = np.empty((3,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
-    _u4 = x**4
-    out[0, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
-    out[1, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07))))
-    out[2, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10))))
+    _u4 = (x*x*x*x)
+    out[0, ...][small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
+    out[1, ...][small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07))))
+    out[2, ...][small] = (x*x*x) * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10))))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -47,9 +47,9 @@ def _basis(beta):
     _e2 = _e * _e
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
-    out[0, large] = _s*_tanh
-    out[1, large] = _c + _sech
-    out[2, large] = _c*_tanh - _s
+    out[0, ...][large] = _s*_tanh
+    out[1, ...][large] = _c + _sech
+    out[2, ...][large] = _c*_tanh - _s
     return out
 
 
@@ -75,8 +75,8 @@ def slope(beta, k, k1, L):
     _h0, _h1, _h2 = _basis(beta)
     beta = np.asarray(beta)
     _t0 = 3*_h0*beta
-    _r = 1.0 / (L*_h1*beta**3*k - 3*L*_h2*k1)
-    return ((_t0*k1) * _r, (_t0) * _r)
+    _r = 1.0 / ((L*k)*_h1*(beta*beta*beta) - (3*L*k1)*_h2)
+    return ((k1*_t0) * _r, (_t0) * _r)
 
 
 def deflection(beta, k, k1, L):
@@ -98,9 +98,9 @@ def deflection(beta, k, k1, L):
     >>> [f"{v:.8g}" for v in deflection(2.5, 2.0, 100.0, 0.0002)]
     ['1.0502606', '0.010502606']
     """
-    _h1, _h2 = _basis(beta)[[1, 2]]
+    _h1, _h2 = map(_basis(beta).__getitem__, [1, 2])
     beta = np.asarray(beta)
-    _t0 = 3*L*_h2
-    _t1 = -_t0*k1
-    _r = 1.0 / (L*_h1*beta**3*k + _t1)
+    _t0 = (3*L)*_h2
+    _t1 = -k1*_t0
+    _r = 1.0 / ((L*k)*_h1*(beta*beta*beta) + _t1)
     return ((_t1) * _r, (-_t0) * _r)

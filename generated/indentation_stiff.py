@@ -34,9 +34,9 @@ def _basis(beta):
     out = np.empty((2,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
-    _u4 = x**4
-    out[0, small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
-    out[1, small] = x**3 * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10))))
+    _u4 = (x*x*x*x)
+    out[0, ...][small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09))))
+    out[1, ...][small] = (x*x*x) * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10))))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -45,8 +45,8 @@ def _basis(beta):
     _e2 = _e * _e
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
-    out[0, large] = _s*_tanh
-    out[1, large] = _c*_tanh - _s
+    out[0, ...][large] = _s*_tanh
+    out[1, ...][large] = _c*_tanh - _s
     return out
 
 

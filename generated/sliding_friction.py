@@ -34,9 +34,9 @@ def _basis(beta):
     out = np.empty((2,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
-    _u4 = x**4
-    out[0, small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968)))
-    out[1, small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05)))
+    _u4 = (x*x*x*x)
+    out[0, ...][small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968)))
+    out[1, ...][small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05)))
     large = ~small
     x = beta[large]
     _c = np.cos(x)
@@ -45,8 +45,8 @@ def _basis(beta):
     _e2 = _e * _e
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
-    out[0, large] = _c + _sech
-    out[1, large] = _c*_tanh + _s
+    out[0, ...][large] = _c + _sech
+    out[1, ...][large] = _c*_tanh + _s
     return out
 
 
@@ -70,5 +70,5 @@ def slope(beta, k, H, L):
     """
     _h0, _h1 = _basis(beta)
     beta = np.asarray(beta)
-    _r = 1.0 / (L**2*_h0*beta**2*k)
-    return ((3*H*_h1*beta) * _r,)
+    _r = 1.0 / ((L**2*k)*_h0*beta**2)
+    return (((3*H)*_h1*beta) * _r,)

@@ -58,6 +58,6 @@ def twist(z, k2t, H, L):
     """
     _h0, _h1 = _basis(z)
     z = np.asarray(z)
-    _t0 = L*_h1*k2t
+    _t0 = (L*k2t)*_h1
     _r = 1.0 / (H*_t0 + _h0*z)
     return ((_t0) * _r,)

@@ -192,3 +192,22 @@ def test_the_shared_tunes_q_is_honest_about_its_window():
     q, u = c.peak.quality_factor, c.peak.quality_factor_uncertainty
     assert abs(q - 435) < 2 * u and abs(q - 442) < 2 * u and u < 0.2 * q
     assert c.thermal.sources["peak shape"] > 0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_peak_search_is_scipy_find_peaks(seed):
+    """The tune's peaks and prominences are those of ``scipy.signal.find_peaks`` (height and prominence
+    thresholds), on random walks, on rounded noise (plateaus) and on median-smoothed noise."""
+    from scipy.signal import find_peaks
+
+    from pfmdyn.analysis.thermal import _peaks, _smooth
+
+    rng = np.random.default_rng(seed)
+    for signal in (rng.normal(size=2000).cumsum(), np.round(rng.normal(size=2000), 1),
+                   _smooth(rng.normal(size=2000), 5)):
+        minimum = rng.uniform(0.1, 1.5)
+        peaks, properties = find_peaks(signal, height=minimum, prominence=minimum)
+        found, prominence = _peaks(signal, minimum)
+        assert peaks.size > 0
+        np.testing.assert_array_equal(found, peaks)
+        np.testing.assert_array_equal(prominence, properties["prominences"])

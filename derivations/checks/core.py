@@ -177,9 +177,9 @@ class Comparison:
 
     def is_(self, value) -> bool:
         """True when the ratio is exactly ``value`` (both exact and at every point)."""
-        exact_ok = self.exact_ratio is not None and sp.simplify(self.exact_ratio - value) == 0
+        # the 50-digit test first: when it fails, the costly exact simplification is not needed
         numeric_ok = all(abs(v - complex(value)) < mp.mpf(10) ** (-(DIGITS - 10)) for v in self.numeric_ratios)
-        return exact_ok and numeric_ok
+        return numeric_ok and self.exact_ratio is not None and sp.simplify(self.exact_ratio - value) == 0
 
     def sentence(self) -> Sentence:
         """The comparison in words and formulas: the exact ratio, then its 50-digit values (a ratio

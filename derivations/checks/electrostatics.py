@@ -1,6 +1,8 @@
 """Checks of the electrostatic analyses: Eq. 36, Figs. 6-7, domain contrast (Eqs. 37-40), Eq. 41."""
 from __future__ import annotations
 
+from functools import lru_cache
+
 import mpmath as mp
 import sympy as sp
 
@@ -15,12 +17,14 @@ from ..evidence import Evidence, Math, Tex, say
 tau = sp.Symbol("tau", real=True)
 
 
+@lru_cache(maxsize=None)
 def q0_first_harmonic() -> sp.Expr:
     """First-harmonic amplitude per unit length of the parallel-plate force eps0 S (dV + V_ac cos)^2/(2 H^2)."""
     force = P.eps0 * P.S_area * (P.dV + P.V_ac * sp.cos(tau)) ** 2 / (2 * H**2)
     return sp.simplify(sp.integrate(force * sp.cos(tau), (tau, 0, 2 * sp.pi)) / sp.pi / L)
 
 
+@lru_cache(maxsize=None)
 def nonlocal_height() -> sp.Expr:
     """A_nl = (2L/3) theta of the supported cantilever at low frequency, q0 from the capacitive force."""
     theta = low_frequency(pinned.solve().theta(q0)) * q0_first_harmonic()

@@ -52,12 +52,13 @@ def partials(exprs, wrt, rates) -> list[sp.Expr]:
 
 
 def and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
-                 value_exprs, partial_exprs, example) -> dict:
+                 value_exprs, partial_exprs, example, arrays=frozenset()) -> dict:
     """Template context of ``<name>_and_jacobian`` (``templates/jacobian.jinja``).
 
     ``value_exprs`` are ``[D, N_1, ..., N_n]`` and ``partial_exprs`` ``[D_p, N_1p, ...]`` for
     each ``p`` in ``wrt`` (SymPy, in the names the ``preamble`` lines define); each list is
-    printed with its own CSE.  ``T_p = (N_p - T D_p) / D``, with ``D_p / D`` computed once.
+    printed with its own CSE (``arrays``: the symbols that are arrays, :func:`.printing.code`).
+    ``T_p = (N_p - T D_p) / D``, with ``D_p / D`` computed once.
 
     >>> x, p = sp.symbols("x p")
     >>> j = and_jacobian("f", "x, p", "f", "    x = np.asarray(x)", [p], [x, p * x], [0, x], None)
@@ -65,11 +66,11 @@ def and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
     (['p*x'], ['(x) * _r - _v0 * _q'])
     """
     n_out = len(value_exprs) - 1
-    lines, reduced = cse_lines(value_exprs)
+    lines, reduced = cse_lines(value_exprs, arrays=arrays)
     blocks = []
     for i, p in enumerate(wrt):
         exprs = partial_exprs[i * (n_out + 1):(i + 1) * (n_out + 1)]
-        p_lines, p_reduced = cse_lines(exprs, "        ", prefix=f"_d{i}_")
+        p_lines, p_reduced = cse_lines(exprs, "        ", prefix=f"_d{i}_", arrays=arrays)
         columns = [f"-_v{m} * _q" if d == "0" else f"({d}) * _r - _v{m} * _q"
                    for m, d in enumerate(p_reduced[1:])]
         blocks.append({"name": str(p), "lines": p_lines, "den": p_reduced[0], "columns": columns})

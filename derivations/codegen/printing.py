@@ -11,15 +11,44 @@ import hashlib
 
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.precedence import precedence
 
 __all__ = ["code", "horner", "cse_lines", "source_hash", "header"]
 
 
 class _Printer(NumPyPrinter):
-    """NumPy printer writing ``np.<name>`` and rationals as float literals."""
+    """NumPy printer writing ``np.<name>`` and rationals as float literals.
 
-    def __init__(self):
+    ``arrays``: the symbols that stand for arrays (the rest are parameters, often scalars).  A
+    product then multiplies its parameters first and the arrays after (one array operation per
+    array factor), and an array's integer power is a product (``np.power`` is several times slower
+    than multiplying).
+    """
+
+    def __init__(self, arrays=frozenset()):
         super().__init__({"fully_qualified_modules": True})
+        self.arrays = frozenset(arrays)
+
+    def _is_array(self, expr) -> bool:
+        return bool(self.arrays & expr.free_symbols)
+
+    def _print_Pow(self, expr, rational=False):
+        base, exp = expr.args
+        if base in self.arrays and exp.is_Integer and 2 < exp <= 8:
+            return "(" + "*".join([self._print(base)] * int(exp)) + ")"
+        return super()._print_Pow(expr, rational)
+
+    def _print_Mul(self, expr):
+        if not self.arrays:
+            return super()._print_Mul(expr)
+        coeff, factors = expr.as_coeff_mul()
+        if coeff.is_negative:
+            return "-" + self._print(-expr)
+        params = [f for f in factors if not self._is_array(f)]
+        arrays = [f for f in factors if self._is_array(f)]
+        if not params or not arrays or any(f.is_Pow and f.exp.is_negative for f in factors):
+            return super()._print_Mul(expr)
+        return "*".join(self.parenthesize(f, precedence(expr)) for f in [sp.Mul(coeff, *params), *arrays])
 
     def _module_format(self, fqn, register=True):
         name = super()._module_format(fqn, register)
@@ -29,16 +58,20 @@ class _Printer(NumPyPrinter):
         return repr(float(expr))
 
 
-def code(expr: sp.Expr) -> str:
+def code(expr: sp.Expr, arrays=frozenset()) -> str:
     """Python source of ``expr`` (NumPy functions as ``np.``, rationals as float literals).
 
-    >>> x = sp.Symbol("x")
+    ``arrays``: the symbols that are arrays (see :class:`_Printer`).
+
+    >>> x, k = sp.symbols("x k")
     >>> code(sp.Rational(1, 2) * x)
     '(0.5)*x'
     >>> code(sp.cos(x)**2 + sp.sqrt(x))
     'np.sqrt(x) + np.cos(x)**2'
+    >>> code(-3 * x**4 * k**2, arrays={x})
+    '-(3*k**2)*(x*x*x*x)'
     """
-    return _Printer().doprint(expr)
+    return _Printer(arrays).doprint(expr)
 
 
 def horner(coeffs, u: str) -> str:
@@ -53,16 +86,23 @@ def horner(coeffs, u: str) -> str:
     return text
 
 
-def cse_lines(exprs, indent="    ", prefix="_t") -> tuple[list[str], list[str]]:
+def cse_lines(exprs, indent="    ", prefix="_t", arrays=frozenset()) -> tuple[list[str], list[str]]:
     """Common subexpressions as assignment lines (``_t0 = ...``) and the reduced expressions.
+
+    ``arrays``: the symbols that are arrays (:func:`code`); a subexpression of one is one too.
 
     >>> x = sp.Symbol("x")
     >>> cse_lines([(x + 1)**2, 2 * (x + 1)**2])
     (['    _t0 = (x + 1)**2'], ['_t0', '2*_t0'])
     """
     reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(prefix), order="canonical")
-    lines = [f"{indent}{sym} = {code(val)}" for sym, val in reps]
-    return lines, [code(e) for e in reduced]
+    arrays = set(arrays)
+    lines = []
+    for sym, val in reps:
+        lines.append(f"{indent}{sym} = {code(val, arrays)}")
+        if arrays & val.free_symbols:
+            arrays.add(sym)
+    return lines, [code(e, arrays) for e in reduced]
 
 
 def source_hash(exprs) -> str:

@@ -24,7 +24,7 @@ from ..trig import normal_form
 from . import examples, templates
 from .examples import Example
 from .jacobian import JACOBIANS, and_jacobian, partials
-from .printing import cse_lines, header, horner, source_hash
+from .printing import code, cse_lines, header, horner, source_hash
 from .stabilise import clipped_exp, series_branch, split, switch_point
 
 __all__ = ["Function", "Family", "families", "symbol", "render_family", "z"]
@@ -122,9 +122,9 @@ def _unpack(vname: str, exprs, hsyms) -> str:
     used = sorted({s for e in exprs for s in e.free_symbols if s in hsyms}, key=lambda s: int(str(s)[2:]))
     if len(used) == len(hsyms):
         return f"{', '.join(map(str, used))} = _basis({vname})"
-    # Only part of the basis enters this function: pick its rows.
+    # Only part of the basis enters this function: pick its rows (views: indexing by a list would copy them).
     rows = [int(str(s)[2:]) for s in used]
-    return f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = _basis({vname})[{rows}]"
+    return f"{', '.join(map(str, used))}{',' if len(used) == 1 else ''} = map(_basis({vname}).__getitem__, {rows})"
 
 
 def _basis(fam: Family, exprs):
@@ -179,10 +179,11 @@ def render_family(fam: Family) -> str:
     series = None
     if switch > 0:
         terms = [series_branch(h, var, switch) for h in basis]
-        series = {"powers": sorted({q for _, q, _ in terms}),
-                  "rows": [(f"x**{p} * " if p > 1 else ("x * " if p == 1 else ""), horner(coeffs, f"_u{q}"))
-                           for p, q, coeffs in terms]}
-    basis_lines, basis_code = cse_lines([scaled(h, {ATOMS: degree}) for h in basis])
+        x = sp.Symbol("x")
+        series = {"powers": {q: code(x**q, {x}) for q in sorted({q for _, q, _ in terms})},
+                  "rows": [(f"{code(x**p, {x})} * " if p else "", horner(coeffs, f"_u{q}")) for p, q, coeffs in terms]}
+    basis_lines, basis_code = cse_lines([scaled(h, {ATOMS: degree}) for h in basis],
+                                        arrays={ATOMS.c, ATOMS.s, ATOMS.tanh, ATOMS.sech})
     names = ", ".join(str(p) for p in fam.parameters)
     functions = []
     start = 1
@@ -192,13 +193,13 @@ def render_family(fam: Family) -> str:
         nums = combos[start:start + n]
         d_combos = [combos[n_src * (1 + j) + i] for j in range(len(wrt)) for i in [0, *range(start, start + n)]]
         start += n
-        lines, reduced = cse_lines([den, *nums])
+        lines, reduced = cse_lines([den, *nums], arrays={var, *hsyms})
         example, jac_example = _example(fam, fn, wrt)
         jacobian = None
         if wrt:
             preamble = f"    {_unpack(vname, [den, *nums, *d_combos], hsyms)}\n    {vname} = np.asarray({vname})"
             jacobian = and_jacobian(fn.name, f"{vname}, {names}", fn.summary, preamble, wrt,
-                                    [den, *nums], d_combos, jac_example)
+                                    [den, *nums], d_combos, jac_example, arrays={var, *hsyms})
         functions.append({"name": fn.name, "summary": fn.summary, "drives": [d for d, _ in fn.outputs],
                           "unpack": _unpack(vname, [den, *nums], hsyms), "lines": lines, "den": reduced[0],
                           "nums": reduced[1:], "example": example, "jacobian": jacobian})

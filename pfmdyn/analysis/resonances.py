@@ -38,7 +38,6 @@ from fractions import Fraction
 
 import flint
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ..cantilever import Cantilever, Contact
 from .. import composed, composed_balls
@@ -297,6 +296,8 @@ def _damped_modes(lever: Cantilever, contact: Contact | None, r0: list) -> tuple
 def _peak(lever: Cantilever, contact: Contact | None, rc: complex, rn: float) -> float:
     """``r`` of the slope magnitude's maximum near the mode (bounded search over half-widths);
     NaN when the window holds no maximum."""
+    from scipy.optimize import minimize_scalar     # here: an undamped probe never needs it (0.4 s to import)
+
     centre, width = rc.real, max(abs(rc.imag), 1e-9 * rn)
     lo, hi = max(centre - 4 * width, 0.5 * centre), centre + 4 * width
     grid = np.linspace(lo, hi, 81)
