@@ -41,20 +41,29 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = _Parser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+def parser(only: str | None = "") -> tuple[_Parser, dict[str, _Parser]]:
+    """The ``pfmdyn`` parser and its subcommands' parsers, with the arguments of the subcommand
+    ``only`` (all of them when None; none when ``""``: ``pfmdyn --help`` imports no command).
+
+    >>> top, commands = parser("roots")
+    >>> sorted(commands)[:3], commands["roots"].prog, any(a.dest == "digits" for a in commands["roots"]._actions)
+    (['book', 'branches', 'calibrate'], 'pfmdyn roots', True)
+    """
+    top = _Parser(prog="pfmdyn", description="Cantilever dynamics in PFM, derived and verified.")
+    sub = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
     parsers = {}
     for name, (module, help_text) in COMMANDS.items():
         p = parsers[name] = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(_module=module)
-        # Argument definitions are cheap; import only the chosen module's arguments lazily.
-        if argv is None and len(sys.argv) > 1 and sys.argv[1] != name:
-            continue
-        if argv is not None and (not argv or argv[0] != name):
-            continue
-        importlib.import_module(module).add_arguments(p)
-    args, extra = parser.parse_known_args(argv)
+        if only is None or only == name:
+            importlib.import_module(module).add_arguments(p)
+    return top, parsers
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    top, parsers = parser(argv[0] if argv else "")
+    args, extra = top.parse_known_args(argv)
     if extra:       # refused by the command's parser, so that the line names the command
         parsers[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
     try:

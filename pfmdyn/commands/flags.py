@@ -34,9 +34,10 @@ def add(parser, names, required=(), defaults=None) -> None:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
         value, why = defaults.get(name, (None, ""))
+        text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
+        # argparse %-formats help (``%(default)s``): a meaning's own "%" ("2 % of it") is literal
         parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
-                            required=name in required,
-                            help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
+                            required=name in required, help=text.replace("%", "%%"))
 
 
 def add_lever(parser, names=LEVER, required=(), defaults=None, medium: bool = True) -> None:
