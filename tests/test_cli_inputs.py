@@ -250,9 +250,9 @@ def test_argparse_refusal_is_one_line_in_every_command(capsys):
 
 def test_error_is_not_a_catch_all(monkeypatch):
     """A programming error still surfaces as an exception (only UserError becomes one line)."""
-    from pfmdyn.commands import resonances as command
+    from pfmdyn.analysis import resonances as analysis
 
-    monkeypatch.setattr(command, "resonances", lambda *a, **k: 1 / 0)
+    monkeypatch.setattr(analysis, "resonances", lambda *a, **k: 1 / 0)
     with pytest.raises(ZeroDivisionError):
         cli.main(["resonances", *LEVER])
 

@@ -4,21 +4,8 @@ from __future__ import annotations
 import argparse
 from contextlib import contextmanager
 
-import numpy as np
-from threadpoolctl import threadpool_limits
-
-from ..discrepancy.report import medium_comparison
-from ..discrepancy.resonances import analyse_resonances
-from ..discrepancy.select import TIME_BUDGET_S
-from ..discrepancy import spectrum
-from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
-from ..discrepancy.inputs import is_sweep, is_thermal_tune, read, read_sweep
-from ..io.results import check_writable, dumps, write_json
-from ..io.tables import SpectrumData
 from . import flags
-from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
-from ..plots.sweep import plot_sweep, plot_thermal
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -51,6 +38,11 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 
 
 def _analyse(data, args):
+    from ..discrepancy.resonances import analyse_resonances
+    from ..discrepancy.select import TIME_BUDGET_S
+    from ..discrepancy.spectrum import analyse
+    from ..io.tables import SpectrumData
+
     if isinstance(data, SpectrumData):
         return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
     return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
@@ -64,8 +56,10 @@ def _lever_in_medium(data, args):
 
 def _sweeps(args) -> int:
     """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
+    from ..discrepancy.inputs import is_sweep, read_sweep
     from ..discrepancy.reference import compare_sweeps
     from ..discrepancy.sweep import fit_sweep
+    from ..plots.sweep import plot_sweep
 
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
@@ -88,6 +82,7 @@ def _thermal(args) -> int:
     from ..discrepancy.thermal import fit_thermal
     from ..io.instruments import read_instrument
     from ..io.thermal_tune import read_thermal_tune
+    from ..plots.sweep import plot_thermal
 
     tune = read_thermal_tune(args.data)
     lever = read_instrument(args.data).fields       # what the file says of the lever; the flags win
@@ -106,6 +101,9 @@ def _thermal(args) -> int:
 def _fitting(where, check: str):
     """The fits run with one BLAS thread (they multiply tall, narrow matrices: threads only add overhead,
     about 1.5x on a shared machine); data that read correctly but defeat the numerics end in one line."""
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
     try:
         with threadpool_limits(1, user_api="blas"):
             yield
@@ -117,6 +115,8 @@ def _fitting(where, check: str):
 
 def _emit(args, result, figure) -> int:
     """Print a free lever's result, write its JSON and (``--plot``) the ``figure()`` it makes."""
+    from ..io.results import dumps, write_json
+
     print(result.report())
     if args.json == "-":
         print(dumps(result.to_dict()))
@@ -129,6 +129,12 @@ def _emit(args, result, figure) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
+    from ..discrepancy import spectrum
+    from ..discrepancy.inputs import is_sweep, is_thermal_tune, read
+    from ..discrepancy.report import medium_comparison
+    from ..io.results import check_writable, dumps, write_json
+    from ..io.tables import SpectrumData
+
     check_writable(args.json)
     check_writable(args.plot, figure=True)
     if is_sweep(args.data) or args.reference:
@@ -141,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
-        data, stride = thin(data)
+        data, stride = spectrum.thin(data)
     with _fitting(args.data, "the metadata (spring constant, length, tip height, free resonance)"):
         report = _analyse(data, args)
     if stride > 1:
@@ -163,6 +169,7 @@ def run(args: argparse.Namespace) -> int:
         write_json(args.json, report.to_dict())
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
+        from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         _save(plot(data, report), args.plot)
     return 0

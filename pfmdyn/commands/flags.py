@@ -14,7 +14,6 @@ from pathlib import Path
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..medium import Medium
-from ..io.record import MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
@@ -186,6 +185,7 @@ def option_hint(error: Exception, parser=None) -> str:
     flag is the option of ``parser`` (the command's) that sets the quantity, else the name's own
     (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint.
 
+    >>> from pfmdyn.io.record import MissingFieldError
     >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
     ': give --tip-height'
     >>> import argparse

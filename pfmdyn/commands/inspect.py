@@ -6,9 +6,10 @@ ones missing; ``--json PATH`` writes the same as JSON (numbers as numbers).  Exa
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 
-from ..io.instruments import FIELDS, InstrumentRecord, read_instrument
-from ..io.results import check_writable, write_json
+if TYPE_CHECKING:       # the readers are imported when the command runs, not for --help
+    from ..io.instruments import InstrumentRecord
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -34,6 +35,8 @@ def report(record: InstrumentRecord) -> str:
     >>> print(report(r).splitlines()[0])
     a.ibw: image (Asylum)
     """
+    from ..io.instruments import FIELDS
+
     lines = [f"{record.path}: {record.kind} ({record.instrument})", "channels:"]
     for c in record.channels:
         shape = " x ".join(str(n) for n in c.shape)
@@ -51,6 +54,9 @@ def report(record: InstrumentRecord) -> str:
 
 def run(args) -> int:
     """Read the file, print the report, write JSON if asked."""
+    from ..io.instruments import read_instrument
+    from ..io.results import check_writable, write_json
+
     check_writable(args.json)
     record = read_instrument(args.file)
     print(report(record))

@@ -7,9 +7,7 @@ nearer the sample than the clamp (the usual mounting).  See :mod:`pfmdyn.analysi
 """
 from __future__ import annotations
 
-from ..analysis.resonances import resonances
 from ..errors import UserError
-from ..io.results import check_writable, write_json
 from . import flags
 from .roots import positive_int
 
@@ -36,6 +34,9 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     """Compute, print the table, write JSON if asked; 1 when a proof fails."""
+    from ..analysis.resonances import resonances
+    from ..io.results import check_writable, write_json
+
     check_writable(args.json)
     modes = positive_int(args.modes, "--modes", 50)
     lever = flags.cantilever(args)

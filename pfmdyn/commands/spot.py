@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import math
 
-from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
 from ..names import LEVER
 from . import flags
@@ -58,6 +57,7 @@ def _lever(args):
 
 def run(args) -> int:
     """Analyse, print, write what was asked."""
+    from ..analysis.spot import spot_analysis
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
@@ -72,6 +72,7 @@ def run(args) -> int:
     if args.plot:
         import numpy as np
 
+        from ..analysis.spot import ratio_map
         from ..plots.spot import plot_spot
         fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)

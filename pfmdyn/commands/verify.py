@@ -10,8 +10,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .. import verify
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("--json", metavar="PATH", help="write the verdicts as JSON to PATH")
@@ -26,6 +24,8 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from .. import verify
+
     verdicts = verify.compute(args.only, progress=not args.quiet)
     shared = [] if args.only else verify.shared_claim_ids(verify.shared_claims_path(args.claims))
     if args.record:
