@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
+import threading
 
 from .errors import UserError
 
@@ -61,7 +64,33 @@ def parser(only: str | None = "") -> tuple[_Parser, dict[str, _Parser]]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; its exit status (2: a user error, printed as one line; 130: interrupted)."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, _ctrl_c(os.getpid())) if main_thread else None
+    try:
+        return _run(argv)
+    except KeyboardInterrupt:
+        return _interrupted(argv[0] if argv and argv[0] in COMMANDS else None)
+    finally:        # for a caller in Python (after an interruption the default stays: see _interrupted)
+        if previous is not None and signal.getsignal(signal.SIGINT) is not signal.SIG_DFL:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _ctrl_c(command: int):
+    """The SIGINT handler of the command's process ``command``: KeyboardInterrupt there; nothing in
+    the worker processes it forks (they inherit the handler, and a terminal's Ctrl-C reaches the
+    whole process group): the command reports the interruption once and its workers end with it.
+
+    >>> _ctrl_c(-1)(signal.SIGINT, None)       # as in a forked worker: ignored
+    """
+    def handler(signum, frame):
+        if os.getpid() == command:
+            raise KeyboardInterrupt
+    return handler
+
+
+def _run(argv: list[str]) -> int:
     top, parsers = parser(argv[0] if argv else "")
     args, extra = top.parse_known_args(argv)
     if extra:       # refused by the command's parser, so that the line names the command
@@ -79,6 +108,15 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.close()
         return 0
 
+
+def _interrupted(command: str | None) -> int:
+    """Ctrl-C: one line and the shell's status for SIGINT (128 + 2), no traceback.  The work done
+    is kept where a command keeps it (``map`` resumes); a second Ctrl-C while Python shuts down
+    (joining threads, closing files) ends the process at once, also without a traceback."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+    print(f"pfmdyn{' ' + command if command else ''}: interrupted", file=sys.stderr)
+    return 130
 
 if __name__ == "__main__":
     sys.exit(main())
