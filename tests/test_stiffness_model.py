@@ -156,3 +156,23 @@ def test_frequencies_outside_the_model_name_the_effect():
         analyse(lever, Contact(k2=0.0), [0.9 * 60e3])
     with pytest.raises(UserError, match="stiff limit"):
         analyse(lever, Contact(k2=0.0), [9 * 60e3])
+
+
+def test_k1s_uncertainty_covers_an_assumed_tip_height_and_k2_policy():
+    """The user states a datasheet's tip height (the true one within 10 %) and no k2 policy (Mindlin at 0.3
+    assumed, the sample's Poisson ratio drawn in 0.2-0.4): the stated 2-sigma interval of k1 holds the
+    exact beam's k1, each assumed input named with its share (benchmarks/stiffness_coverage.py: 40/40;
+    without the two shares, 7/40)."""
+    rng = np.random.default_rng(23)
+    for _ in range(4):
+        nu = rng.uniform(0.2, 0.4)
+        e = random_lever(rng, k2_over_k1=2 * (1 - nu) / (2 - nu))
+        fc = e.contact_resonances(1)
+        stated = lever_of(e, tip_position=e.tip_position, tip_height=e.tip_height * (1 + 0.1 * rng.standard_normal()))
+        s = analyse(stated, Contact(), fc, contact_uncertainty=1e-4 * fc[0]).solution
+        assert abs(s.k1 - e.k1) <= 2 * s.stderr["k1"], (e, s)
+        assert {"tip_height_uncertainty", "k2_policy_uncertainty"} <= set(s.sources)
+    stated_policy = analyse(stated, Contact(poisson=0.3), fc).solution
+    assert "k2_policy_uncertainty" not in stated_policy.sources and "tip_height_uncertainty" in stated_policy.sources
+    held = analyse(stated, Contact(), fc, tip_height_uncertainty=0.0).solution
+    assert "tip_height_uncertainty" not in held.sources and held.stderr["k1"] < s.stderr["k1"]

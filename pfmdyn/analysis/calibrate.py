@@ -16,8 +16,10 @@ Uncertainties (standard, 1 sigma) combine the fit's covariance with the stated i
 width (defaults 2 % and 5 % of the nominal values, a datasheet's usual spread), the temperature (1 K);
 the InvOLS carries none here (it is named when it could reconcile the two).  The two are *consistent*
 when they differ by less than twice their combined uncertainty; otherwise :attr:`Calibration.reconcile`
-lists each single input that would make them agree and the factor it would need.  They are never
-averaged.
+lists each single input that would make them agree and the factor it would need, when that factor is
+plausible for it (:func:`plausible_factors`); none may be.  They are never averaged.  The fitted peak's
+uncertainty includes its shape: how far its parameters move when the spectrum is weighted in power
+instead of in log (:class:`pfmdyn.analysis.thermal.ThermalPeak`), named ``peak shape``.
 """
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ from ..errors import UserError
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium, hydrodynamic_function, reynolds_number
-from .thermal import ThermalPeak, fit_thermal_peaks, oscillator_asd
+from .thermal import ThermalPeak, broad_mode, fit_thermal_peaks
 
 __all__ = ["BOLTZMANN", "Estimate", "Calibration", "thermal_factor", "thermal_spring_constant",
            "sader_spring_constant", "calibrate"]
@@ -105,6 +107,7 @@ class Calibration:
     assumptions: list
     inputs: dict
     instrument: dict
+    plausible: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         """The JSON document of ``pfmdyn calibrate`` (undetermined numbers are NaN, written null)."""
@@ -115,51 +118,42 @@ class Calibration:
                 "free_quality_factor": self.peak.quality_factor,
                 "free_quality_factor_stderr": self.peak.quality_factor_uncertainty,
                 "thermal": estimate(self.thermal), "sader": estimate(self.sader), "consistent": self.consistent,
-                "reconcile": [{"input": name, "factor": factor} for name, factor in self.reconcile],
+                "reconcile": [{"input": name, "factor": factor, "why": self.plausible[name][2]}
+                              for name, factor in self.reconcile],
                 "assumptions": list(self.assumptions), "inputs": dict(self.inputs), "instrument": dict(self.instrument)}
-
-
-def _broad_mode(f, y) -> ThermalPeak | None:
-    """The tallest peak as one oscillator over the whole band: a low-Q mode (in liquid) is wider than
-    the windows :func:`fit_thermal_peaks` searches and fits in."""
-    from scipy.optimize import curve_fit
-
-    start = max(3, int(0.01 * f.size))
-    i = start + int(np.argmax(y[start:]))
-    above = np.flatnonzero(y[start:] > y[i] / np.sqrt(2)) + start
-    q0 = max(f[i] / max(f[above[-1]] - f[above[0]], f[1] - f[0]), 0.5)
-    band = (f > f[start]) & (y > 0)
-    model = lambda x, a, b, c, d: np.log(oscillator_asd(x, a, abs(b), abs(c), abs(d)))   # noqa: E731
-    try:
-        popt, pcov = curve_fit(model, f[band], np.log(y[band]), p0=(f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])),
-                               maxfev=20000)
-    except (RuntimeError, ValueError):
-        return None
-    if not (f[band][0] < popt[0] < f[band][-1]) or not np.all(np.isfinite(pcov)):
-        return None
-    err = np.sqrt(np.clip(np.diag(pcov), 0, None))
-    return ThermalPeak(1, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
-                       float(err[0]), float(err[1]), tuple(map(tuple, pcov.tolist())))
 
 
 def _first_mode(tune: ThermalTune) -> ThermalPeak:
     peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
-        [p for p in (_broad_mode(tune.frequency_hz, tune.asd),) if p]
+        [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p]
     if not peaks:
         raise UserError(f"{tune.path}: no resonance peak found in the thermal spectrum")
     return peaks[0]
 
 
-def _relative_fit_error(peak: ThermalPeak, gradient) -> float:
-    """Relative standard error of a quantity whose log has ``gradient`` w.r.t. (f0, Q, A, w)."""
-    if peak.covariance is None:
-        return math.nan
-    g = np.asarray(gradient, dtype=float)
-    return float(np.sqrt(max(g @ np.asarray(peak.covariance) @ g, 0.0)))
-
-
 def _combine(value: float, sources: dict) -> Estimate:
     return Estimate(value, abs(value) * math.sqrt(sum(v**2 for v in sources.values())), sources)
+
+
+PLAUSIBLE_INVOLS = (0.5, 2.0)
+"""A static InvOLS can be off by this factor (taken on a soft surface, the spot moved since, another
+sensitivity used to convert the spectrum); beyond it, it is no reconciliation."""
+PLAUSIBLE_HEATING = 30.0
+"""K: a lever can be this much warmer or cooler than stated (the laser heats it, the room differs)."""
+
+
+def plausible_factors(length_tolerance: float, width_tolerance: float, temperature: float) -> dict:
+    """The factors each input could plausibly be off by (low, high, why): three standard uncertainties
+    of a length or width (relative ones given), :data:`PLAUSIBLE_INVOLS`, :data:`PLAUSIBLE_HEATING`.
+
+    >>> r = plausible_factors(0.02, 0.05, 300.0); r["length"][:2], r["temperature"][:2]
+    ((0.94, 1.06), (0.9, 1.1))
+    """
+    return {"invols": (*PLAUSIBLE_INVOLS, "the static InvOLS, or the sensitivity the spectrum was converted with"),
+            "length": (1 - 3 * length_tolerance, 1 + 3 * length_tolerance, "the length, within three standard uncertainties"),
+            "width": (1 - 3 * width_tolerance, 1 + 3 * width_tolerance, "the width, within three standard uncertainties"),
+            "temperature": (1 - PLAUSIBLE_HEATING / temperature, 1 + PLAUSIBLE_HEATING / temperature,
+                            f"the lever's temperature, within {PLAUSIBLE_HEATING:g} K (laser heating, the room)")}
 
 
 def _bisect(f, low: float, high: float):
@@ -211,9 +205,10 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
         assumptions.append("the spectrum in metres was converted by the instrument with a static InvOLS (optical "
                            "lever, tip pressed on a hard surface): the thermal factor assumes it")
     if tune.unit == "m" or invols is not None:
-        fit = _relative_fit_error(peak, (1 / f0, 1 / q, 2 / amp, 0.0))
+        log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
-                           {"fit": fit, "temperature": temperature_uncertainty / temperature})
+                           {"fit": peak.stderr(log_mean_square, "fit"), "peak shape": peak.stderr(log_mean_square, "shape"),
+                            "temperature": temperature_uncertainty / temperature})
     # Sader.
     rebuild = medium_factory or (lambda t: medium)
 
@@ -236,8 +231,10 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
         else:
             def rel(**change):          # relative change of k_s for a one-sigma change of one input
                 return abs(sader(**change) / k_s - 1)
-            sources = {"fit": math.hypot(rel(f=f0 + peak.frequency_uncertainty_hz),
-                                         rel(quality=q + peak.quality_factor_uncertainty)),
+            shape = peak.shape
+            sources = {"fit": math.hypot(rel(f=f0 + peak.stderr((1, 0, 0, 0), "fit")),
+                                         rel(quality=q + peak.stderr((0, 1, 0, 0), "fit"))),
+                       "peak shape": rel(f=f0 + shape[0], quality=q + shape[1]),
                        "length": rel(L=length + u_length), "width": rel(b=width + u_width)}
             if medium_factory is not None:
                 sources["temperature"] = rel(t=temperature + temperature_uncertainty)
@@ -251,24 +248,24 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
         consistent = bool(abs(thermal.value - sader_estimate.value) <= COVERAGE * combined)
         if not consistent:
             ratio = thermal.value / sader_estimate.value
-            reconcile.append(("invols", math.sqrt(ratio)))     # k_thermal ~ 1/InvOLS^2
-            reconcile.append(("length", ratio))                # k_Sader ~ L
-            width_factor = _bisect(lambda s: sader(b=width * s) - thermal.value, 0.2, 5.0)
-            if width_factor:
-                reconcile.append(("width", width_factor))
+            candidates = [("invols", math.sqrt(ratio)),         # k_thermal ~ 1/InvOLS^2
+                          ("length", ratio),                     # k_Sader ~ L
+                          ("width", _bisect(lambda s: sader(b=width * s) - thermal.value, 0.2, 5.0))]
             if medium_factory is not None:
                 def mismatch(s):        # NaN where the medium has no such temperature (water below 0 C)
                     try:
                         return thermal.value * s - sader(t=temperature * s)
                     except UserError:
                         return math.nan
-                t_factor = _bisect(mismatch, 0.5, 2.0)
-                if t_factor:
-                    reconcile.append(("temperature", t_factor))
-            reconcile.append(("medium", ratio))                # density and viscosity scaled alike: same Re
+                candidates.append(("temperature", _bisect(mismatch, 0.5, 2.0)))
+            ranges = plausible_factors(u_length / length, u_width / width, temperature)
+            reconcile = [(name, factor) for name, factor in candidates
+                         if factor and ranges[name][0] <= factor <= ranges[name][1]]
     instrument = dict(tune.instrument, **{k: v for k, v in tune.conditions.items()})
     if length is not None and width is not None and {"free_resonance", "free_quality_factor"} <= set(instrument):
         # the textbook formula on the instrument's own fit of the tune, beside ours on the data
         instrument["sader_spring_constant_of_its_fit"] = sader_spring_constant(
             medium, width, length, instrument["free_resonance"], instrument["free_quality_factor"], tip_position)
-    return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument)
+    return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
+                       plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
+                       else plausible_factors(u_length / length, u_width / width, temperature))

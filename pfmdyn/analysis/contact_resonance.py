@@ -44,7 +44,8 @@ from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
 __all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_candidates", "k1_at",
-           "k1_k2_at", "branch_limits", "spring_parts", "beta_shifts", "fit", "covariance", "require_tip_height"]
+           "k1_k2_at", "branch_limits", "spring_parts", "beta_shifts", "fit", "SOURCES", "covariance_by_source", "covariance",
+           "require_tip_height"]
 
 GRID_STEP = 0.02
 """Grid step in ``beta`` for counting roots: far below their spacing (about pi)."""
@@ -296,31 +297,49 @@ def fit(lever: Cantilever, contact: Contact, contact_hz, start: dict) -> tuple[d
     return values, float(np.sqrt(np.mean(sol.fun ** 2)))
 
 
-def covariance(lever: Cantilever, contact: Contact, contact_hz, values: dict, contact_stderr: float = 0.0,
-               free_stderr: float = 0.0, spring_constant_stderr: float = 0.0) -> np.ndarray:
-    """First-order covariance of ``values`` (their order) from the input standard uncertainties.
+SOURCES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty",
+           "tip_height_uncertainty", "k2_policy_uncertainty")
+"""The inputs whose standard uncertainties :func:`covariance_by_source` propagates: the contact
+resonances (Hz, each), the free resonance (Hz), the spring constant (N/m), the tip height (m) and the
+ratio ``k2/k1`` of a tied contact."""
+
+
+def covariance_by_source(lever: Cantilever, contact: Contact, contact_hz, values: dict, stderrs: dict) -> dict:
+    """First-order covariance of ``values`` (their order) contributed by each input of :data:`SOURCES`
+    whose standard uncertainty ``stderrs`` gives (missing or 0: none).
 
     The residuals vanish (or are least squares) at the solution; by the implicit-function
     theorem ``d values / d data = -pinv(J_values) J_data``, both Jacobians by central
-    differences of the residuals (relative step 1e-6).
+    differences of the residuals (relative step 1e-6).  The tip height acts only with a tip
+    height, the tie only when ``k2`` is tied to ``k1``.
 
-    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
-    >>> round(float(np.sqrt(cov[0, 0])), 3)   # N/m
-    0.393
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, tip_height=10e-6)
+    >>> parts = covariance_by_source(lever, Contact(poisson=0.3), [300e3], {"k1": 115.0},
+    ...     {"contact_uncertainty": 100.0, "tip_height_uncertainty": 1e-6, "k2_policy_uncertainty": 0.035})
+    >>> sorted(parts), all(float(c[0, 0]) > 0 for c in parts.values())
+    (['contact_uncertainty', 'k2_policy_uncertainty', 'tip_height_uncertainty'], True)
     """
     names = list(values)
     fc = np.asarray(contact_hz, dtype=float)
+    ratio = contact.ratio if contact.k2 is None else None
+    sigma = {"contact_uncertainty": np.full(len(fc), float(stderrs.get("contact_uncertainty") or 0.0))}
+    for name in SOURCES[1:]:
+        acts = {"tip_height_uncertainty": lever.tip_height is not None,
+                "k2_policy_uncertainty": ratio is not None and "k2" not in values}.get(name, True)
+        sigma[name] = np.array([float(stderrs.get(name) or 0.0) if acts else 0.0])
+    d0 = np.concatenate([fc, [lever.free_resonance, lever.spring_constant, lever.tip_height or 0.0, ratio or 0.0]])
 
     def residual(p, data):
-        lv = replace(lever, free_resonance=data[-2], spring_constant=data[-1])
-        return beta_shifts(lv, contact, data[:-2], dict(zip(names, p)))
+        lv = replace(lever, free_resonance=data[-4], spring_constant=data[-3],
+                     tip_height=data[-2] if lever.tip_height is not None else None)
+        tie = Contact(k2_over_k1=data[-1]) if ratio is not None else contact
+        return beta_shifts(lv, tie, data[:-4], dict(zip(names, p)))
 
     p0 = np.array([values[n] for n in names])
-    d0 = np.concatenate([fc, [lever.free_resonance, lever.spring_constant]])
 
-    def jacobian(fun, x0, limited=()):
+    def jacobian(fun, x0, columns, limited=()):
         cols = []
-        for i in range(len(x0)):
+        for i in columns:
             h = 1e-6 * max(abs(x0[i]), 1e-12)
             up, down = x0.copy(), x0.copy()
             up[i] += h
@@ -332,12 +351,30 @@ def covariance(lever: Cantilever, contact: Contact, contact_hz, values: dict, co
         return np.column_stack(cols)
 
     at_end = tuple(i for i, n in enumerate(names) if n == "tip_position")
+    spans = dict(zip(sigma, (range(len(fc)),) + tuple(range(len(fc) + i, len(fc) + i + 1) for i in range(4))))
+    out = {}
     with np.errstate(all="ignore"):
-        jp = jacobian(lambda p: residual(p, d0), p0, at_end)
-        jd = jacobian(lambda d: residual(p0, d), d0)
-    sensitivity = -np.linalg.pinv(jp) @ jd
-    sigma = np.concatenate([np.full(len(fc), float(contact_stderr)), [free_stderr, spring_constant_stderr]])
-    return (sensitivity * sigma ** 2) @ sensitivity.T
+        inverse = np.linalg.pinv(jacobian(lambda p: residual(p, d0), p0, range(len(p0)), at_end))
+        for name, s in sigma.items():
+            if np.any(s > 0):
+                sensitivity = -inverse @ jacobian(lambda d: residual(p0, d), d0, spans[name])
+                out[name] = (sensitivity * s**2) @ sensitivity.T
+    return out
+
+
+def covariance(lever: Cantilever, contact: Contact, contact_hz, values: dict, contact_stderr: float = 0.0,
+               free_stderr: float = 0.0, spring_constant_stderr: float = 0.0) -> np.ndarray:
+    """First-order covariance of ``values`` (their order) from the frequencies' and the spring
+    constant's standard uncertainties (:func:`covariance_by_source`, summed).
+
+    >>> cov = covariance(Cantilever(2.0, 75e3, 2e-4), Contact(), [300e3], {"k1": 109.7483}, contact_stderr=100.0)
+    >>> round(float(np.sqrt(cov[0, 0])), 3)   # N/m
+    0.393
+    """
+    parts = covariance_by_source(lever, contact, contact_hz, values, {
+        "contact_uncertainty": contact_stderr, "free_resonance_uncertainty": free_stderr,
+        "spring_constant_uncertainty": spring_constant_stderr})
+    return sum(parts.values(), np.zeros((len(values), len(values))))
 
 
 def require_tip_height(lever: Cantilever, why: str) -> None:

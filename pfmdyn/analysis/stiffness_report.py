@@ -34,10 +34,16 @@ from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "Solution", "StiffnessReport", "analyse"]
+__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
 """Lowest tip position (x_tip / L) searched when the tip position is fitted."""
+TIP_HEIGHT_TOLERANCE = 0.1
+"""Default standard uncertainty of a tip height, relative: no file records it, datasheets give it
+nominally (a tip height is a datasheet's value or a guess, and k1 can depend on it steeply)."""
+ASSUMED_POISSON = (0.2, 0.4)
+"""Poisson's ratios a sample may have when none is stated: the assumed Mindlin tie's ``k2/k1`` is
+uniform over what they give (its standard uncertainty: half the range over sqrt 3)."""
 _SAME = 1e-7           # relative difference below which two solutions are one
 
 
@@ -59,6 +65,9 @@ class Solution:
     k1_by_mode: tuple[float, ...] = ()
     reduced_modulus: float | None = None
     reduced_modulus_stderr: float | None = None
+    sources: dict = field(default_factory=dict)
+    """Input (:data:`pfmdyn.analysis.contact_resonance.SOURCES`) -> unknown -> its standard uncertainty
+    from that input alone."""
 
     def to_dict(self) -> dict:
         """Names -> values (SI), with ``<name>_stderr`` for each unknown.
@@ -68,6 +77,8 @@ class Solution:
         """
         out = {"k1": self.k1, "k2": self.k2, "tip_position": self.tip_position, "unknowns": list(self.unknowns)}
         out.update({f"{name}_stderr": self.stderr[name] for name in self.unknowns})
+        if self.sources:
+            out["stderr_sources"] = {source: dict(parts) for source, parts in self.sources.items()}
         out["residual_beta"] = self.residual
         if self.k1_by_mode:
             out["k1_by_mode"] = list(self.k1_by_mode)
@@ -84,9 +95,19 @@ class Solution:
         def pm(name):
             sigma = self.stderr.get(name, 0.0)
             return f" +/- {sigma:.2g}" if sigma > 0 else ""
-        out = [f"k1 = {self.k1:.6g}{pm('k1')} N/m  (k1/k = {self.k1 / spring_constant:.6g})"]
+
+        def value(name, v):         # the digits k1's (or name's) relative uncertainty leaves, two of it; else six
+            scale = abs(self.k1 if name == "k1" else v)
+            rel = self.stderr.get(name, 0.0) / scale if scale > 0 else 0.0
+            digits = 6 if not rel > 0 else max(2, min(6, int(math.floor(-math.log10(rel))) + 2))
+            return f"{v:.{digits}g}"
+        out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {value('k1', self.k1 / spring_constant)})"]
+        shares = {source: parts["k1"] / self.k1 for source, parts in self.sources.items() if parts.get("k1", 0) > 0}
+        if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty")):
+            out.append("  k1's uncertainty, input by input: " + ", ".join(
+                f"{_SOURCE_WORDS[name]} {share:.1%}" for name, share in sorted(shares.items(), key=lambda kv: -kv[1])))
         if self.k2 is not None:
-            out.append(f"k2 = {self.k2:.6g}{pm('k2')} N/m" + ("" if "k2" in self.unknowns else "  (by the k2 policy)"))
+            out.append(f"k2 = {value('k2' if 'k2' in self.unknowns else 'k1', self.k2)}{pm('k2')} N/m" + ("" if "k2" in self.unknowns else "  (by the k2 policy)"))
         out.append(f"tip_position = {self.tip_position:.6g}{pm('tip_position')}"
                    + ("" if "tip_position" in self.unknowns else "  (held)"))
         if self.k1_by_mode:
@@ -94,6 +115,11 @@ class Solution:
         if self.reduced_modulus is not None:
             out.append(f"E* = {self.reduced_modulus:.6g} +/- {self.reduced_modulus_stderr:.2g} Pa  (Hertz)")
         return out
+
+
+_SOURCE_WORDS = {"contact_uncertainty": "contact resonances", "free_resonance_uncertainty": "free resonance",
+                 "spring_constant_uncertainty": "spring constant", "tip_height_uncertainty": "tip height",
+                 "k2_policy_uncertainty": "k2 policy"}
 
 
 def _finite(value):
@@ -301,9 +327,11 @@ def _two_readings(lever, fc, modes, noise_beta: float):
 def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=None) -> Solution:
     gamma = values.get("tip_position", lever.tip_position)
     placed = replace(lever, tip_position=gamma)
-    cov = cr.covariance(placed, lateral, fc, values, stderrs["contact_uncertainty"],
-                        stderrs["free_resonance_uncertainty"], stderrs["spring_constant_uncertainty"])
+    parts = cr.covariance_by_source(placed, lateral, fc, values, stderrs)
+    cov = sum(parts.values(), np.zeros((len(values), len(values))))
     sigma = {n: float(math.sqrt(max(cov[i, i], 0.0))) for i, n in enumerate(values)}
+    sources = {source: {n: float(math.sqrt(max(c[i, i], 0.0))) for i, n in enumerate(values)}
+               for source, c in parts.items()}
     k1 = values["k1"]
     acts = lever.tip_height is not None or lever.tilt != 0.0
     k2 = values["k2"] if "k2" in values else (float(lateral.k2_of(k1)) if acts else None)
@@ -312,13 +340,14 @@ def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=Non
         radius, load = hertz
         e_star = float(reduced_modulus(k1, radius, load))
         e_sigma = float(reduced_modulus_uncertainty(k1, sigma["k1"], radius, load))
-    return Solution(k1, k2, gamma, tuple(values), sigma, rms, tuple(k1_by_mode), e_star, e_sigma)
+    return Solution(k1, k2, gamma, tuple(values), sigma, rms, tuple(k1_by_mode), e_star, e_sigma, sources)
 
 
 def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_tip_position: bool = False,
             tip_position_stated: bool = True, contact_uncertainty: float = 0.0,
             free_resonance_uncertainty: float = 0.0, spring_constant_uncertainty: float = 0.0,
-            hertz: tuple[float, float] | None = None, notes: tuple[str, ...] = ()) -> StiffnessReport:
+            tip_height_uncertainty: float | None = None, hertz: tuple[float, float] | None = None,
+            notes: tuple[str, ...] = ()) -> StiffnessReport:
     """Contact stiffness (and ``k2`` or the tip position) from contact resonances (Hz) of ``lever``.
 
     Parameters
@@ -331,6 +360,9 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         modes without a k2 policy are reported as not unique)
     contact_uncertainty, free_resonance_uncertainty, spring_constant_uncertainty :
         standard uncertainties (Hz, Hz, N/m), propagated to first order
+    tip_height_uncertainty : standard uncertainty of the tip height (m; default
+        :data:`TIP_HEIGHT_TOLERANCE` of it), propagated likewise; so is an assumed k2 policy's
+        (:data:`ASSUMED_POISSON`), each input's share stated
     hertz : ``(tip radius m, load N)`` to add the Hertz reduced modulus
     notes : sentences added to the report
 
@@ -344,6 +376,9 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     stderrs = {"contact_uncertainty": float(contact_uncertainty),
                "free_resonance_uncertainty": float(free_resonance_uncertainty),
                "spring_constant_uncertainty": float(spring_constant_uncertainty)}
+    if lever.tip_height is not None:
+        stderrs["tip_height_uncertainty"] = float(TIP_HEIGHT_TOLERANCE * lever.tip_height
+                                                  if tip_height_uncertainty is None else tip_height_uncertainty)
     fc, modes = _check_inputs(contact_hz, modes, stderrs)
     if lever.tilt != 0.0:
         cr.require_tip_height(lever, "a tilt")
@@ -362,6 +397,9 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     elif len(fc) == 1 or policy:
         lateral, words = _lateral(lever, contact, "tie")
         found, proof, k1_by_mode = _k1_only(lever, lateral, words, fc, modes)
+        if not policy and lateral.ratio is not None:       # the tie is assumed: so is its ratio
+            ties = [formulas.mindlin_k2_over_k1(nu) for nu in ASSUMED_POISSON]
+            stderrs["k2_policy_uncertainty"] = float(abs(ties[0] - ties[1]) / 2 / math.sqrt(3))
     elif tip_position_stated:
         found, proof = _k1_k2(lever, fc, modes, noise)
         lateral, words = Contact(), "k2 solved with k1 from the modes"

@@ -21,6 +21,7 @@ other peaks (electrical pick-up, torsion, the stage) are left out.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,22 +32,49 @@ from ..io.discrepancy_data import ResonanceData
 from ..io.instruments import read_instrument, resonance_table
 from ..io.tables import check_resonance_rows
 
-__all__ = ["ThermalPeak", "oscillator_asd", "fit_thermal_peaks", "instrument_resonances"]
+__all__ = ["ThermalPeak", "oscillator_asd", "fit_oscillator", "broad_mode", "fit_thermal_peaks", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
 class ThermalPeak:
-    """One fitted flexural mode (1-based): f0 (Hz), Q, peak amplitude A and white floor w (units of the ASD), 1-sigma errors;
-    ``covariance`` of (f0, Q, A, w) from the fit (None when the fit gave none)."""
+    """One fitted flexural mode (1-based): f0 (Hz), Q, peak amplitude A and white floor w (units of the ASD).
+
+    ``covariance`` of (f0, Q, A, w) from the fit's scatter; ``shape`` the same parameters' change when the
+    spectrum is weighted in power instead of in log (:func:`fit_oscillator`): a peak that is an oscillator
+    over a white floor gives the same parameters either way, one that is not (a fluid-loaded mode, a
+    drifting resonance, leakage of the FFT's window) does not, and that spread is part of each uncertainty.
+    A floor that the window does not reach is undetermined and carries no variance into the others."""
 
     mode: int
     frequency_hz: float
     quality_factor: float
     amplitude: float
     white: float
-    frequency_uncertainty_hz: float
-    quality_factor_uncertainty: float
-    covariance: tuple | None = None
+    covariance: tuple
+    shape: tuple = (0.0, 0.0, 0.0, 0.0)
+
+    def stderr(self, gradient, part: str = "total") -> float:
+        """Standard error of a quantity whose partials w.r.t. (f0, Q, A, w) are ``gradient``: from the
+        ``"fit"``'s scatter, the peak's ``"shape"``, or their ``"total"`` (in quadrature).
+
+        >>> p = ThermalPeak(1, 1e5, 100.0, 1.0, 0.0, ((4.0, 0, 0, 0), (0, 1.0, 0, 0), (0, 0, 0, 0), (0, 0, 0, 0)), (3.0, 0, 0, 0))
+        >>> p.stderr((1, 0, 0, 0)), p.stderr((1, 0, 0, 0), "fit"), p.frequency_uncertainty_hz
+        (3.605551275463989, 2.0, 3.605551275463989)
+        """
+        g = np.asarray(gradient, dtype=float)
+        scatter = float(g @ np.asarray(self.covariance) @ g) if part != "shape" else 0.0
+        shape = float(g @ np.asarray(self.shape)) ** 2 if part != "fit" else 0.0
+        return math.sqrt(max(scatter, 0.0) + shape)
+
+    @property
+    def frequency_uncertainty_hz(self) -> float:
+        """Standard error of the resonance (Hz), scatter and shape."""
+        return self.stderr((1, 0, 0, 0))
+
+    @property
+    def quality_factor_uncertainty(self) -> float:
+        """Standard error of Q, scatter and shape."""
+        return self.stderr((0, 1, 0, 0))
 
 
 def oscillator_asd(f, f0, q, amplitude, white):
@@ -63,6 +91,82 @@ def _smooth(y, width):
     padded = np.pad(y, pad, mode="edge")
     windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * pad + 1)
     return np.median(windows, axis=-1)
+
+
+def _log_fit(f, y, start, weight_in_power: bool):
+    """Least squares of one oscillator over a white floor in log parameters (all positive, no sign
+    folding), residuals in log ASD or, ``weight_in_power``, in power relative to the data's peak power."""
+    from scipy.optimize import least_squares
+
+    log_y, top = np.log(y), float(np.max(y)) ** 2
+
+    def residual(p):
+        with np.errstate(all="ignore"):      # a trial step far out: a large residual, not a warning
+            model = oscillator_asd(f, *np.exp(p))
+            r = (model**2 - y**2) / top if weight_in_power else np.log(model) - log_y
+        return np.where(np.isfinite(r), r, 1e30)
+
+    return least_squares(residual, np.log(start), method="trf", x_scale=1.0, max_nfev=2000)
+
+
+def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
+    """One mode of a thermal spectrum: :func:`oscillator_asd` fitted to ``y`` (ASD, positive) on ``f`` from
+    ``guess`` (f0, Q, A, w), in log ASD (an averaged spectrum's scatter is relative); None when the fit
+    leaves the window.
+
+    The covariance comes from the Jacobian, scaled by the residual's variance; a parameter the window
+    does not constrain (the floor, when the window stays above it) is held, its variance zero.  The fit
+    is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.
+
+    >>> f = np.linspace(9e4, 11e4, 400)
+    >>> p = fit_oscillator(f, oscillator_asd(f, 1e5, 200.0, 1e-12, 1e-13), (1.001e5, 150.0, 1.5e-12, 2e-13))
+    >>> round(p.frequency_hz, 3), round(p.quality_factor, 6), p.frequency_uncertainty_hz < 1e-6
+    (100000.0, 200.0, True)
+    >>> p = fit_oscillator(f[180:220], oscillator_asd(f[180:220], 1e5, 200.0, 1e-12, 1e-18), (1e5, 150.0, 1e-12, 1e-13))
+    >>> math.isfinite(p.quality_factor_uncertainty), p.covariance[3][3]   # the floor is far below the window
+    (True, 0.0)
+    """
+    f, y = np.asarray(f, dtype=float), np.asarray(y, dtype=float)
+    keep = np.isfinite(y) & (y > 0)
+    f, y = f[keep], y[keep]
+    if f.size < 6:
+        return None
+    first = _log_fit(f, y, np.maximum(np.abs(np.asarray(guess, dtype=float)), np.finfo(float).tiny), False)
+    values = np.exp(first.x)
+    if not (f[0] < values[0] < f[-1]):
+        return None
+    J = first.jac
+    norms = np.linalg.norm(J, axis=0)
+    held = norms <= 1e-6 * norms.max()
+    dof = max(f.size - int(np.sum(~held)), 1)
+    variance = float(np.sum(first.fun**2)) / dof
+    covariance = np.zeros((4, 4))
+    free = np.flatnonzero(~held)
+    covariance[np.ix_(free, free)] = np.linalg.pinv(J[:, free].T @ J[:, free]) * variance
+    covariance *= np.outer(values, values)          # d x = x d log x
+    second = _log_fit(f, y, values, True)
+    shape = np.where(held, 0.0, np.exp(second.x) - values)
+    if not np.all(np.isfinite(shape)):
+        shape = np.zeros(4)
+    return ThermalPeak(mode, *map(float, values), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)))
+
+
+def broad_mode(f, y) -> ThermalPeak | None:
+    """The tallest peak as one oscillator over the whole band (first mode): a low-Q mode (in liquid) is
+    wider than the windows :func:`fit_thermal_peaks` searches and fits in.
+
+    >>> f = np.linspace(0, 4e4, 2000)
+    >>> p = broad_mode(f, oscillator_asd(f, 1.2e4, 2.0, 1e-11, 1e-13))
+    >>> round(p.frequency_hz, 3), round(p.quality_factor, 6)
+    (12000.0, 2.0)
+    """
+    f, y = np.asarray(f, dtype=float), np.asarray(y, dtype=float)
+    start = max(3, int(0.01 * f.size))
+    i = start + int(np.argmax(y[start:]))
+    above = np.flatnonzero(y[start:] > y[i] / np.sqrt(2)) + start
+    q0 = max(f[i] / max(f[above[-1]] - f[above[0]], f[1] - f[0]), 0.5)
+    band = (f > f[start]) & (y > 0)
+    return fit_oscillator(f[band], y[band], (f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])))
 
 
 def _flexural_modes(candidates, max_modes):
@@ -83,7 +187,7 @@ def _flexural_modes(candidates, max_modes):
     return out
 
 
-def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_peaks: int = 5) -> list[ThermalPeak]:
+def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_peaks: int = 5) -> list[ThermalPeak]:
     """Resonances of a thermal spectrum, lowest first, each fitted with :func:`oscillator_asd`.
 
     Parameters
@@ -102,7 +206,6 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
     >>> p.mode, round(p.frequency_hz, -2), abs(p.quality_factor - 400) < 3 * p.quality_factor_uncertainty
     (1, 180000.0, True)
     """
-    from scipy.optimize import curve_fit
     from scipy.signal import find_peaks
 
     f, y = np.asarray(frequency_hz, dtype=float), np.asarray(asd, dtype=float)
@@ -114,9 +217,14 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
     # The lowest bins hold the DC offset and 1/f noise, never a flexural mode of interest.
     start = max(3, int(0.01 * f.size))
     logy = np.log10(np.maximum(y, np.finfo(float).tiny))
-    floor = _smooth(logy, max(11, f.size // 50))
-    peaks, props = find_peaks(_smooth(logy, 5)[start:] - floor[start:], prominence=np.log10(min_prominence),
-                              height=np.log10(min_prominence))
+    # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
+    # smoothing until a peak stands out.
+    for share in (50, 10, 4):
+        floor = _smooth(logy, max(11, f.size // share))
+        peaks, props = find_peaks(_smooth(logy, 5)[start:] - floor[start:], prominence=np.log10(min_prominence),
+                                  height=np.log10(min_prominence))
+        if peaks.size:
+            break
     order = np.argsort(props["prominences"])[::-1]
     modes = _flexural_modes(f[peaks[order] + start], max_peaks)
     out = []
@@ -132,20 +240,9 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 3.0, max_pea
         q0 = f0 / max((hi - lo + 1) * step, 2 * step)
         half = max(6 * f0 / q0, 20 * step)
         window = (f > f0 - half) & (f < f0 + half)
-        guess = (f0, q0, top / q0, base)
-        model = lambda x, a, b, c, d: np.log(oscillator_asd(x, a, abs(b), abs(c), abs(d)))   # noqa: E731
-        try:
-            popt, pcov = curve_fit(model, f[window], np.log(np.maximum(y[window], np.finfo(float).tiny)),
-                                   p0=guess, maxfev=5000)
-        except (RuntimeError, ValueError):
-            continue
-        finite = bool(np.all(np.isfinite(pcov)))
-        err = np.sqrt(np.clip(np.diag(pcov), 0, None)) if finite else np.full(4, np.nan)
-        if not (f[window][0] < popt[0] < f[window][-1]):
-            continue
-        out.append(ThermalPeak(mode, float(popt[0]), float(abs(popt[1])), float(abs(popt[2])), float(abs(popt[3])),
-                               float(err[0]), float(err[1]),
-                               tuple(map(tuple, pcov.tolist())) if finite else None))
+        peak = fit_oscillator(f[window], y[window], (f0, q0, top / q0, base), mode)
+        if peak is not None:
+            out.append(peak)
     return out
 
 

@@ -69,8 +69,9 @@ def report(result) -> str:
         lines.append("agreement: thermal and Sader agree within twice their combined uncertainty")
     else:
         lines.append("agreement: thermal and Sader DISAGREE beyond twice their combined uncertainty; "
-                     "either alone would reconcile them:")
-        lines += [f"  {r['input']} x {r['factor']:.4g}" for r in d["reconcile"]]
+                     + ("each alone, within its plausible range, would reconcile them:" if d["reconcile"] else
+                        "no single input within its plausible range reconciles them"))
+        lines += [f"  {r['input']} x {r['factor']:.4g} ({r['why']})" for r in d["reconcile"]]
     lines += [f"assumed: {a}" for a in d["assumptions"]]
     return "\n".join(lines)
 
