@@ -85,9 +85,9 @@ def run(args) -> int:
 
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    tune = read_thermal_tune(args.file)
     values = flags.given(args, ("length", "width", "temperature", "invols", "spot_position", "tip_position",
-                                "length_uncertainty", "width_uncertainty"))
+                                "length_uncertainty", "width_uncertainty"))      # a bad flag before the file
+    tune = read_thermal_tune(args.file)
     environment = tune.conditions.get("environment")
     if args.medium is None and environment not in (None, "air"):
         raise UserError(f"{args.file}: measured in {environment}: give {flags.NAMES['medium'].flag}")
