@@ -40,6 +40,8 @@ class Quantity:
     instrument measured: a contact resonance, a mode's Q, its drive settings)."""
     label: str = ""
     """What reports and messages call it in a few words (default: the name with spaces)."""
+    default: float | None = None
+    """The value assumed when neither a flag nor a file gives one (reports mark it assumed)."""
 
     def __post_init__(self):
         if not self.label:
@@ -104,7 +106,7 @@ QUANTITIES: tuple[Quantity, ...] = (
              "growing as sqrt(f)", 0.0, 100.0, open_low=False, option=False),
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
-             aliases=("temperature_k",)),
+             aliases=("temperature_k",), default=293.15),
     Quantity("medium", "medium", "1", "fluid around the lever: air, water (at the temperature) or DENSITY,VISCOSITY "
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",

@@ -135,6 +135,12 @@ REFUSED = [
     ("diagram", ["--medium="], "--medium"),                                    # was vacuum, silently
     ("discrepancy", ["--added-mass-position", "0.5"], "--added-mass-position"),  # was ignored for a spectrum
     ("discrepancy", ["--added-mass-position", "nan"], "--added-mass-position"),
+    # a temperature where the medium is not that phase; Celsius-looking values named so (was 25 K, accepted)
+    ("resonances", ["--medium", "air", "--width", "4e-5", "--temperature", "25"], "did you mean 298.15 K (25 C)?"),
+    ("spot", ["--temperature", "60"], "--temperature: air is a gas"),                # air: the default medium
+    ("diagram", ["--medium", "water", "--temperature", "0"], "did you mean 273.15 K (0 C)?"),
+    ("diagram", ["--medium", "water", "--temperature", "400"], "--temperature: water is liquid"),
+    ("stiffness", ["--temperature", "120"], "did you mean 393.15 K"),
 ]
 
 
@@ -342,6 +348,17 @@ def test_negative_values_reach_the_range_check(tmp_path, capsys):
             flag = action.option_strings[-1]
             assert _run(_override(base, [flag, "-225e-6"])) == 2, (command, flag)
             err = capsys.readouterr().err.strip().splitlines()
-            assert len(err) == 1 and flag in err[0] and "must be" in err[0], (command, flag, err)
+            assert len(err) == 1 and flag in err[0] and re.search(r"got -(225e-6|0\.000225)\b", err[0]), \
+                (command, flag, err)
             checked += 1
     assert checked > 50
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--temperature", "300"], "medium: air at 26.85 C; temperature 300 K (given)"),
+    ([], "medium: air at 20 C; temperature 293.15 K (assumed: give --temperature)"),
+])
+def test_the_temperature_used_is_printed(extra, words, capsys):
+    """Before, resonances printed "air at -248.15 C" for --temperature 25 and never the kelvin."""
+    assert _run(["resonances", *LEVER, "--width", "4e-5", "--medium", "air", *extra]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == words

@@ -92,7 +92,7 @@ def run(args) -> int:
     if args.medium is None and environment not in (None, "air"):
         raise UserError(f"{args.file}: measured in {environment}: give {flags.NAMES['medium'].flag}")
     medium = flags.medium_from_args(args, tune.conditions)
-    temperature = values.get("temperature", tune.conditions.get("temperature", 293.15))
+    temperature, source = flags.temperature(args, tune.conditions)
     word = (args.medium or environment or "air").strip().lower()
     factory = getattr(Medium, word) if word in ("air", "water") else None
     result = calibrate(tune, length=values.get("length"), width=values.get("width"), medium=medium,
@@ -100,10 +100,11 @@ def run(args) -> int:
                        spot_position=values.get("spot_position", 1.0), tip_position=values.get("tip_position", 1.0),
                        length_uncertainty=values.get("length_uncertainty"),
                        width_uncertainty=values.get("width_uncertainty"), medium_factory=factory)
-    if "temperature" not in values and "temperature" not in tune.conditions:
-        result.assumptions.append("temperature 293.15 K (give --temperature)")
+    if source.startswith("assumed"):
+        result.assumptions.append(f"temperature {temperature:g} K (give {flags.NAMES['temperature'].flag})")
     if args.medium is None and environment is None:
         result.assumptions.append(f"medium {medium.name} (give --medium)")
+    print(flags.medium_line(medium, args, tune.conditions, thermal=True))
     print(report(result))
     if args.json:
         from ..io.results import write_json

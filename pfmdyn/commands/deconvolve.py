@@ -168,6 +168,8 @@ def run(args) -> int:
                          ("error_map", plotting.plot_error_map(result, unit))):
         figure.savefig(args.out / f"{name}.png", dpi=120)
         written.append(args.out / f"{name}.png")
+    if probe is not None and probe[0].medium is not None:
+        print(flags.medium_line(probe[0].medium, args))
     print(f"{data.path}:")
     print(summary(result, unit))
     if surface is not None:

@@ -67,8 +67,9 @@ def _sweeps(args) -> int:
     flags.require(values, ("spring_constant", "length"), args.data)
     after = read_sweep(args.data)
     before = read_sweep(args.reference) if args.reference else None
-    medium = flags.medium_from_args(args, {"medium": (before or after).medium} if (before or after).medium else None,
-                                    default="water")
+    found = {"medium": (before or after).medium} if (before or after).medium else None
+    medium = flags.medium_from_args(args, found, default="water")
+    print(flags.medium_line(medium, args, found))
     with _fitting(args.data, "the spring constant and length"):
         fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
         result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
@@ -90,8 +91,10 @@ def _thermal(args) -> int:
               **flags.given(args, ("spring_constant", "length", "width"))}
     flags.require(values, ("spring_constant", "length"), args.data)
     found = {"medium": tune.conditions.get("environment"), "temperature": tune.conditions.get("temperature")}
-    medium = flags.medium_from_args(args, {k: v for k, v in found.items() if v is not None}, default="air")
-    temperature = flags.given(args, ("temperature",)).get("temperature", tune.conditions.get("temperature", 293.15))
+    found = {k: v for k, v in found.items() if v is not None}
+    medium = flags.medium_from_args(args, found, default="air")
+    temperature = flags.temperature(args, found)[0]
+    print(flags.medium_line(medium, args, found, thermal=True))
     with _fitting(args.data, "the spring constant and length"):
         fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
     return _emit(args, fit, lambda: plot_thermal(fit))
@@ -159,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
         m = report.to_dict()["medium"]
         fitted = "no free-mode damping fitted" if m["fitted_quality_factor"] is None else \
             f"the fitted damping gives Q {m['fitted_quality_factor']:.4g}"
-        print(f"medium: {m['medium']} predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
+        print(f"{flags.medium_line(flags.medium_from_args(args), args)}: predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")

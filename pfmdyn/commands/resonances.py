@@ -45,6 +45,8 @@ def run(args) -> int:
                                or contact.poisson is not None or contact.contact_loss):
         raise UserError("a contact needs --k1")
     result = resonances(lever, contact if contact.k1 is not None else None, modes)
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(result.report())
     if args.json:
         write_json(args.json, result.to_dict())

@@ -65,6 +65,8 @@ def run(args) -> int:
         raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
     lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(report(result))
     if args.json:
         from ..io.results import write_json

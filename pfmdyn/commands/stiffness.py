@@ -191,6 +191,8 @@ def run(args) -> int:
             raise
         # some of the numbers came from the file: the line names it
         raise UserError(f"{args.file}: {exc}", quantity=exc.quantity) from None
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(report.report())
     if args.json:
         document = report.to_dict()
