@@ -60,7 +60,8 @@ print(" ".join(sorted({{name.split(".")[0] for name in sys.modules}} & {set(HEAV
 def _help_in_a_new_process(command: str) -> tuple[float, str]:
     """Wall time of ``--help`` in a fresh interpreter (start-up included) and the heavy modules it imported."""
     started = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", _HELP, command, "--help"], capture_output=True, text=True, timeout=60)
+    done = subprocess.run([sys.executable, "-W", "error", "-c", _HELP, command, "--help"], capture_output=True,
+                          text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     return time.perf_counter() - started, done.stdout.strip()
 

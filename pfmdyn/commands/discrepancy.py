@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from contextlib import contextmanager
 
 from ..errors import UserError
@@ -38,14 +39,14 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 
 
 def _analyse(data, args):
+    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone)."""
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
     from ..io.tables import SpectrumData
 
-    if isinstance(data, SpectrumData):
-        return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
-    return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
+    analysis = analyse if isinstance(data, SpectrumData) else analyse_resonances
+    return analysis(data, vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
 
 
 def _lever_in_medium(data, args):
