@@ -1,12 +1,13 @@
 """What a user sees in the terminal (issue 41, item 8): Ctrl-C ends a command with one line and the
 exit status 130, and the interrupted map's workers end with it and the map resumes; no command
-prints a warning, a library's progress bar or ``nan``.
+prints a warning, a library's progress bar or ``nan``; ``--json -`` writes to standard output.
 
 Ctrl-C is sent as a terminal sends it: SIGINT to the command's whole process group (its own session
 here), workers included.
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
@@ -183,3 +184,29 @@ def test_a_command_prints_no_warning_progress_bar_or_nan(case, inputs, monkeypat
     assert status in (0, 1) and not err, err       # 1: roots/resonances not certified (a verdict, no error)
     assert not caught, [f"{w.category.__name__}: {w.message} ({w.filename}:{w.lineno})" for w in caught]
     assert not re.search(r"\bnan\b", out, re.IGNORECASE), out
+
+
+def _without_json(argv: list) -> list:
+    argv = list(argv)
+    if "--json" in argv:
+        del argv[argv.index("--json"):argv.index("--json") + 2]
+    return argv
+
+
+JSON_COMMANDS = sorted(command for command, parser in cli.parser(None)[1].items()
+                       if any(action.dest == "json" for action in parser._actions))
+
+
+@pytest.mark.parametrize("command", JSON_COMMANDS)
+def test_json_dash_is_standard_output(command, inputs, monkeypatch, capsys):
+    """``--json -`` in every command that has ``--json`` (the parser says which): the document on
+    standard output after the summary, the same as in a file, and no file named ``-`` (calibrate wrote one)."""
+    monkeypatch.chdir(inputs)
+    argv = ["verify", "--only", "eq6.Av", "--quiet"] if command == "verify" else \
+        _without_json(next(MAIN_PATHS[case] for case in sorted(MAIN_PATHS) if MAIN_PATHS[case][0] == command))
+    assert cli.main([*argv, "--json", "file.json"]) in (0, 1)
+    summary = capsys.readouterr().out
+    assert cli.main([*argv, "--json", "-"]) in (0, 1)
+    printed = capsys.readouterr().out
+    assert printed.startswith(summary) and json.loads(printed[len(summary):]) == json.loads(Path("file.json").read_text())
+    assert not Path("-").exists()

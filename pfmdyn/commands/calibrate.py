@@ -22,7 +22,7 @@ def add_arguments(parser) -> None:
     flags.add(parser, ("length",))
     flags.add_medium_arguments(parser)
     flags.add(parser, ("invols", "spot_position", "tip_position", "length_uncertainty", "width_uncertainty"))
-    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    flags.add_json(parser)
     parser.add_argument("--plot", metavar="PNG", help="write the spectrum with the fitted first mode")
 
 
@@ -106,9 +106,7 @@ def run(args) -> int:
         result.assumptions.append(f"medium {medium.name} (give --medium)")
     print(flags.medium_line(medium, args, tune.conditions, thermal=True))
     print(report(result))
-    if args.json:
-        from ..io.results import write_json
-        write_json(args.json, result.to_json())
+    flags.write_json(args.json, result.to_json())
     if args.plot:
         from ..plots.calibrate import plot_calibration
         fig = plot_calibration(tune, result)

@@ -18,8 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """
     parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
                         "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat/.nid, thermal tune)")
-    parser.add_argument("--json", metavar="PATH",
-                        help="write the full report as JSON here ('-': standard output, after the summary)")
+    flags.add_json(parser, "the full report")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
@@ -119,13 +118,8 @@ def _fitting(where, check: str):
 
 def _emit(args, result, figure) -> int:
     """Print a free lever's result, write its JSON and (``--plot``) the ``figure()`` it makes."""
-    from ..io.results import dumps, write_json
-
     print(result.report())
-    if args.json == "-":
-        print(dumps(result.to_dict()))
-    elif args.json:
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     if args.plot:
         _save(figure(), args.plot)
     return 0
@@ -136,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
     from ..discrepancy import spectrum
     from ..discrepancy.inputs import is_sweep, is_thermal_tune, read
     from ..discrepancy.report import medium_comparison
-    from ..io.results import check_writable, dumps, write_json
+    from ..io.results import check_writable
     from ..io.tables import SpectrumData
 
     check_writable(args.json)
@@ -167,10 +161,7 @@ def run(args: argparse.Namespace) -> int:
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    if args.json == "-":
-        print(dumps(report.to_dict()))
-    elif args.json:
-        write_json(args.json, report.to_dict())
+    flags.write_json(args.json, report.to_dict())
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report

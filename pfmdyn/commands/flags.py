@@ -17,7 +17,8 @@ from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "temperature", "medium_line", "given", "require", "cantilever", "contact", "option_hint"]
+           "temperature", "medium_line", "add_json", "write_json", "given", "require", "cantilever", "contact",
+           "option_hint"]
 
 
 def add(parser, names, required=(), defaults=None) -> None:
@@ -136,6 +137,36 @@ def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool =
         return f"medium: {medium.name}"
     kelvin, source = temperature(args, found)
     return f"medium: {medium.name}; temperature {kelvin:g} K ({source})"
+
+
+def add_json(parser, what: str = "the result") -> None:
+    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` on standard output after the
+    lines the command prints (:func:`write_json`).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_json(p)
+    >>> p.parse_args(["--json", "-"]).json
+    '-'
+    """
+    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': standard output, "
+                        "after the summary)")
+
+
+def write_json(path, document) -> None:
+    """``document`` as JSON to ``path`` (:func:`pfmdyn.io.results.write_json`), to standard output when
+    ``path`` is ``-``, nowhere when None.
+
+    >>> write_json("-", {"k1": 300.0})
+    {
+      "k1": 300.0
+    }
+    """
+    from ..io import results
+
+    if path == "-":
+        print(results.dumps(document))
+    elif path:
+        results.write_json(path, document)
 
 
 def given(args, names) -> dict[str, float]:

@@ -29,13 +29,13 @@ def add_arguments(parser) -> None:
     flags.add_contact(parser)
     flags.add_damping(parser)
     parser.add_argument("--modes", default="3", help="number of modes of each condition (default 3)")
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    flags.add_json(parser)
 
 
 def run(args) -> int:
     """Compute, print the table, write JSON if asked; 1 when a proof fails."""
     from ..analysis.resonances import resonances
-    from ..io.results import check_writable, write_json
+    from ..io.results import check_writable
 
     check_writable(args.json)
     modes = positive_int(args.modes, "--modes", 50)
@@ -48,6 +48,5 @@ def run(args) -> int:
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     print(result.report())
-    if args.json:
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     return 0 if result.certified else 1

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from ..errors import UserError
 from ..generated import characteristic, families
+from . import flags
 
 if TYPE_CHECKING:       # the certified root finder is imported when the command runs, not for --help
     from ..roots.core import RootResult
@@ -34,7 +35,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--digits", default="15", help="significant digits (default 15)")
     for name, option in OPTIONS.items():
         parser.add_argument(option, dest=name, default=None, help=families.PARAMETER_HELP[name])
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    flags.add_json(parser, "the roots")
 
 
 MAX_ROOTS, MAX_DIGITS = 1000, 4000
@@ -124,7 +125,7 @@ def run(args) -> int:
       1  1.5708  [1.5707963, 1.5707964]
     0
     """
-    from ..io.results import check_writable, write_json
+    from ..io.results import check_writable
     from ..roots.core import family_roots
 
     check_writable(args.json)
@@ -132,6 +133,5 @@ def run(args) -> int:
     n, digits = positive_int(args.n, "--n", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
-    if args.json:
-        write_json(args.json, result.to_json())
+    flags.write_json(args.json, result.to_json())
     return 0 if result.certified else 1

@@ -17,7 +17,7 @@ def add_arguments(parser) -> None:
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
     parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
-    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    flags.add_json(parser)
     parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
 
 
@@ -68,9 +68,7 @@ def run(args) -> int:
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     print(report(result))
-    if args.json:
-        from ..io.results import write_json
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     if args.plot:
         import numpy as np
 
