@@ -2,8 +2,9 @@
 
 Each subcommand module ``pfmdyn.commands.<name>`` (listed in :data:`COMMANDS`) defines
 ``add_arguments(parser)`` and ``run(args) -> int``.  Modules are imported lazily so that
-``pfmdyn --help`` stays fast and numeric commands never import SymPy.  User errors are
-raised as :class:`UserError` and printed as one line, never as a traceback.
+``pfmdyn --help`` stays fast and numeric commands never import SymPy (a command's parser
+imports only names and flags; its ``run`` imports the library).  User errors are raised as
+:class:`UserError` and printed as one line, never as a traceback; so is Ctrl-C (exit status 130).
 """
 from __future__ import annotations
 
@@ -124,6 +125,7 @@ def _interrupted(command: str | None) -> int:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
     print(f"pfmdyn{' ' + command if command else ''}: interrupted", file=sys.stderr)
     return 130
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -111,9 +111,9 @@ QUANTITIES: tuple[Quantity, ...] = (
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",
              1e-12, 1e-3, aliases=("invols_m_per_v",)),
-    Quantity("length_uncertainty", "u(L)", "m", "standard uncertainty of a nominal length (default 2 % of it)",
+    Quantity("length_uncertainty", "u(L)", "m", "standard uncertainty of a nominal length (default 2 per cent of it)",
              0.0, 1e-2, open_low=False),
-    Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 % of it)",
+    Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 per cent of it)",
              0.0, 1e-2, open_low=False),
     # What changed between two drive sweeps (``pfmdyn discrepancy AFTER --reference BEFORE``).
     Quantity("added_mass_position", "x_m/L", "1", "where a point mass added to the free lever sits "

@@ -35,7 +35,7 @@ def add(parser, names, required=(), defaults=None) -> None:
         unit = "" if q.unit == "1" else f", {q.unit}"
         value, why = defaults.get(name, (None, f"{q.default:g}{unit}, assumed" if q.default is not None else ""))
         text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
-        # argparse %-formats help (``%(default)s``): a meaning's own "%" ("2 % of it") is literal
+        # argparse %-formats help (``%(default)s``): a "%" of a meaning is literal
         parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
                             required=name in required, help=text.replace("%", "%%"))
 
