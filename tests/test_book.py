@@ -43,6 +43,22 @@ def test_build_succeeds(built):
         assert (html_dir / f"{page}.html").exists(), page
 
 
+def test_the_build_prints_progress_not_warnings(built):
+    """No kernel's start-up warning and no Python warning in what the build prints."""
+    proc, _, _ = built
+    text = proc.stdout + proc.stderr
+    assert "WARNING" not in text and "Warning:" not in text, [l for l in text.splitlines() if "arning" in l][:5]
+
+
+def test_tables_made_by_cells_render_as_tables(built):
+    """A cell's Markdown table (calibrating, instruments) becomes an HTML table, not pipe text."""
+    _, html_dir, _ = built
+    for page in ("calibrating", "instruments"):
+        text = (html_dir / f"{page}.html").read_text(encoding="utf-8")
+        assert not re.search(r"<p>\s*\|", text), f"{page}: a table left as pipe text"
+        assert "<table" in text, page
+
+
 def test_no_remote_resources(built):
     """No page loads a script, stylesheet, font or image from the network."""
     _, html_dir, _ = built

@@ -190,7 +190,7 @@ INNER_RANKS = {
                     ("quality", "select", "undamped_modes"),
                     ("peaks", "report", "resonance_fit"),
                     ("resonances", "spectrum")),                             # the two analyses
-    "maps": (("bias", "spec"), ("outputs", "sho"), ("beam",), ("fit", "readers"), ("select", "store"),
+    "maps": (("bias", "spec"), ("outputs", "sho"), ("beam", "resonance_start"), ("fit", "readers"), ("select", "store"),
              ("contact", "result", "usid"), ("driver",)),
     "book": (("records",), ("build", "display")),                            # the verdicts; their build, their display
 }

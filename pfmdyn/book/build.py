@@ -8,6 +8,11 @@ execution is forced, a cell that raises fails the build, and Sphinx warnings are
 """
 from __future__ import annotations
 
+import contextlib
+import json
+import os
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -27,6 +32,35 @@ def book_dir() -> Path:
     return here
 
 
+@contextlib.contextmanager
+def quiet_kernel():
+    """While it lasts, the pages' kernel (``python3``) is this Python's ipykernel logging errors only: a
+    kernel spec of our own first on ``JUPYTER_PATH`` (ipykernel 7 warns on every start that its local
+    TCP transport is unencrypted, which says nothing about the book).
+
+    >>> from jupyter_client.kernelspec import KernelSpecManager
+    >>> with quiet_kernel():
+    ...     KernelSpecManager().get_kernel_spec("python3").argv[-1]
+    '--IPKernelApp.log_level=ERROR'
+    """
+    before = os.environ.get("JUPYTER_PATH")
+    with tempfile.TemporaryDirectory() as folder:
+        spec = Path(folder) / "kernels" / "python3"
+        spec.mkdir(parents=True)
+        (spec / "kernel.json").write_text(json.dumps({
+            "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}",
+                     "--IPKernelApp.log_level=ERROR"],
+            "display_name": "Python 3", "language": "python"}))
+        os.environ["JUPYTER_PATH"] = os.pathsep.join([folder] + ([before] if before else []))
+        try:
+            yield
+        finally:
+            if before is None:
+                os.environ.pop("JUPYTER_PATH", None)
+            else:
+                os.environ["JUPYTER_PATH"] = before
+
+
 def build(out: Path, *, progress=None) -> int:
     """Build the book into ``out`` (HTML in ``out/html``); returns the Sphinx status (0 = success).
 
@@ -44,7 +78,7 @@ def build(out: Path, *, progress=None) -> int:
     write_verdicts(verdict_file)
     if progress is not None:
         progress(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}")
-    with verdicts_from(verdict_file):
+    with verdicts_from(verdict_file), quiet_kernel():
         result = build_sphinx(
             src, out / "html",
             doctreedir=out / ".doctrees",

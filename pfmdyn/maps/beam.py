@@ -145,7 +145,8 @@ class BeamMapModel:
 
     def _arguments(self, inv_q, g, k1, k2, x):
         """``(beta0, r, beta, k1 / k_factor, k2 / k_factor, k_factor, mu)``: the undamped ``beta``,
-        ``r = f / f1``, and the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`).
+        ``r = f / f1`` (its first value only when the damping does not depend on frequency), and
+        the damping substitution (:func:`pfmdyn.cantilever.damping_substitution`).
 
         Internal friction makes EI complex, ``k -> k (1 + i/Q)``; the transfer function depends
         on the springs only through ``k1 / k`` and ``k2 / k``, so ``k`` stays real and the
@@ -155,8 +156,10 @@ class BeamMapModel:
         """
         f = np.asarray(self.frequency_hz, float)
         f1 = self.lever.vacuum_resonance          # the lever's own (free_resonance without a medium)
-        r = f / f1
         beta0 = formulas.beta_from_frequency(f, f1, self.lever.free_root())
+        # internal friction alone damps every frequency alike: its factors once per pixel, not per frequency
+        alike = self.lever.medium is None and not {"viscous", "contact"} & set(self.mechanisms)
+        r = f[:1] / f1 if alike else f / f1
         # a medium's load is a drag of its own beside the fitted one (derivations/damping.py: fluid_as_drag)
         drag = g if self.lever.medium is None else g + 1j * r * self.lever.fluid_load(f)
         d = damping_substitution(r, beta0, 1.0, k1, self.lever.tip_mass_ratio, inv_q, drag, x)   # k = 1: d.k is the factor
@@ -237,12 +240,13 @@ class BeamMapModel:
             spring_loss = -dkf_inv_q / k_factor * (d_k1 * k1e + d_k2 * k2e)
             # a tied k2 (k2 = ratio k1) moves with k1; a held one does not
             tied = d_k2 * k2e if self.k2_mode == "tied" else 0.0
-            # log10 coordinates: d/d(log10 v) = ln(10) v d/dv
-            chain = {"k1": (d_k1 * k1e + tied) * LN10, "k2": d_k2 * k2e * LN10,
-                     "q": -inv_q * LN10 * (d_beta * beta0 * dbf_inv_q + spring_loss),
-                     "g": d_beta * beta0 * dbf_g + (0.0 if d_mu is None else d_mu * self.lever.tip_mass_ratio * dmf_g),
-                     "x": d_k1 * k1 * dk1f_x / k_factor}
+            # log10 coordinates: d/d(log10 v) = ln(10) v d/dv; only the fitted parameters' chains
+            chain = {"k1": lambda: (d_k1 * k1e + tied) * LN10, "k2": lambda: d_k2 * k2e * LN10,
+                     "q": lambda: -inv_q * LN10 * (d_beta * beta0 * dbf_inv_q + spring_loss),
+                     "g": lambda: d_beta * beta0 * dbf_g + (0.0 if d_mu is None else
+                                                           d_mu * self.lever.tip_mass_ratio * dmf_g),
+                     "x": lambda: d_k1 * k1 * dk1f_x / k_factor}
             for i, name in enumerate(self.names):
-                d[i, :, j] = chain[name]
+                d[i, :, j] = chain[name]()
         return np.stack([values[i] for i in self.drives], axis=1), d
 
