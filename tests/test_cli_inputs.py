@@ -101,6 +101,7 @@ REFUSED = [
     ("spot", ["--spot-position", "1.5"], "--spot-position"),
     ("spot", ["--plot", "{tmp}/out.xyz"], "cannot write"),                      # was a ValueError traceback
     ("spot", ["--plot", "{tmp}/data.csv/out.png"], "cannot write"),            # was written: the JSON
+    ("spot", ["--plot", "-"], "cannot write -"),                                 # '-' is for documents; was '-.png'
     ("stiffness", ["--contact", "0"], "--contact"),
     ("stiffness", ["--contact", "nan"], "--contact"),
     ("stiffness", ["--mode", "0"], "--mode"),

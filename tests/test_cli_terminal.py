@@ -210,3 +210,9 @@ def test_json_dash_is_standard_output(command, inputs, monkeypatch, capsys):
     printed = capsys.readouterr().out
     assert printed.startswith(summary) and json.loads(printed[len(summary):]) == json.loads(Path("file.json").read_text())
     assert not Path("-").exists()
+
+
+def test_errata_dash_is_standard_output(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["verify", "--only", "eq6.Av", "--quiet", "--errata", "-"]) == 0
+    assert "\n# Errata of " in capsys.readouterr().out and not Path("-").exists()

@@ -15,7 +15,8 @@ from . import flags
 
 def add_arguments(parser) -> None:
     flags.add_json(parser, "the verdicts")
-    parser.add_argument("--errata", metavar="PATH", help="write the errata (Markdown with LaTeX) to PATH")
+    parser.add_argument("--errata", metavar="PATH",
+                        help="write the errata (Markdown with LaTeX) to PATH ('-': standard output, after the summary)")
     parser.add_argument("--claims", metavar="PATH",
                         help="the shared claims file whose ids must all have verdicts "
                              "(default: $PFMDYN_CLAIMS or shared/claims.yaml beside the source tree)")
@@ -38,11 +39,13 @@ def run(args) -> int:
                     if i not in {v.id for v in verdicts}]
     else:
         problems = verify.gate(verdicts, verify.load_recorded(), shared)
-    if args.errata:
+    if args.errata and args.errata != "-":
         verify.write_errata(verdicts, Path(args.errata))
     if not args.quiet:
         print(verify.table(verdicts))
     print(verify.summary(verdicts))
+    if args.errata == "-":
+        print(verify.render_errata(verdicts), end="")
     flags.write_json(args.json, verify.to_json(verdicts))
     for p in problems:
         print(f"verdict gate: {p}", file=sys.stderr)
