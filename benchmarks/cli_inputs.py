@@ -10,8 +10,9 @@ Three parts:
 
 1. *Values.*  Every flag of every command that takes a number (the probe's quantities of
    :mod:`pfmdyn.names` and each command's own: ``--modes``, ``--frequency``, ``--n``,
-   ``--points``, ``--fmin``, ``--contact``, ...) set in turn to zero, a negative number, NaN,
-   infinity, text, an empty string and 1e30, on an otherwise valid command line.  A quantity's
+   ``--points``, ``--fmin``, ``--contact``, ...) set in turn to zero, negative numbers (``-1``,
+   ``-2.25e-4``, ``-inf``: argparse took the last two for options), NaN, infinity, text, an empty
+   string and 1e30, on an otherwise valid command line.  A quantity's
    value outside what :func:`pfmdyn.names.checked` allows must be refused; any other value may
    be refused or succeed.
 2. *Outputs.*  Every path a command writes (``--json``, ``--plot``, ``--out``, ``--csv``) set to
@@ -52,7 +53,7 @@ from pfmdyn.cantilever import Cantilever  # noqa: E402
 from pfmdyn.errors import UserError  # noqa: E402
 from pfmdyn.names import NAMES, checked  # noqa: E402
 
-VALUES = ("0", "-1", "nan", "inf", "abc", "", "1e30")
+VALUES = ("0", "-1", "-2.25e-4", "-inf", "nan", "inf", "abc", "", "1e30")
 BAD = ("nan", "inf", "abc", "")
 """Values no number flag may take."""
 LEVER = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"]

@@ -23,7 +23,6 @@ import numpy as np
 
 from .errors import UserError
 from .generated import formulas
-from .names import checked
 
 __all__ = ["Medium", "reynolds_number", "hydrodynamic_function", "load_ratio", "mass_per_length", "VALID_REYNOLDS"]
 
@@ -38,7 +37,9 @@ _SUTHERLAND = (1.716e-5, 273.15, 110.4)
 _TANAKA = (-3.983035, 301.797, 522528.9, 69.34881, 999.974950)
 # Water viscosity: Vogel's equation mu = A 10^(B/(T - C)) (A Pa s, B and C in K), within 2.5 % over 0-100 C.
 _VOGEL = (2.414e-5, 247.8, 140.0)
-_WATER_RANGE = (273.15, 373.15)
+# Where each is that phase at one atmosphere: air a gas well above its condensation (~80 K) and where
+# Sutherland's law holds; water liquid between its melting and boiling points.
+_PHASES = {"air": (150.0, 2000.0, "a gas"), "water": (273.15, 373.15, "liquid")}
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,8 @@ class Medium:
     density: float
     viscosity: float
     name: str = "fluid"
+    temperature: float | None = None
+    """K, for air and water (their properties follow it); None for a fluid given by its numbers."""
 
     def __post_init__(self):
         if not (math.isfinite(self.density) and math.isfinite(self.viscosity) and self.density > 0
@@ -70,10 +73,10 @@ class Medium:
         >>> m = Medium.air(313.15); round(m.density, 3), round(m.viscosity * 1e5, 3)
         (1.127, 1.907)
         """
-        t = checked("temperature", temperature)
+        t = _in_phase("air", temperature)
         mu0, t0, s = _SUTHERLAND
         return cls(_ATMOSPHERE * _AIR_MOLAR_MASS / (_GAS_CONSTANT * t), mu0 * (t / t0)**1.5 * (t0 + s) / (t + s),
-                   f"air at {t - 273.15:g} C")
+                   f"air at {t - 273.15:g} C", t)
 
     @classmethod
     def water(cls, temperature: float = 293.15) -> "Medium":
@@ -83,14 +86,12 @@ class Medium:
         >>> m = Medium.water(298.15); round(m.density, 2), round(m.viscosity * 1e3, 3)
         (997.05, 0.89)
         """
-        t = checked("temperature", temperature)
-        if not _WATER_RANGE[0] <= t <= _WATER_RANGE[1]:
-            raise UserError(f"liquid water needs a temperature in [273.15, 373.15] K, got {t:g} K")
+        t = _in_phase("water", temperature)
         a1, a2, a3, a4, a5 = _TANAKA
         c = t - 273.15
         density = a5 * (1 - (c + a1)**2 * (c + a2) / (a3 * (c + a4)))
         a, b, c0 = _VOGEL
-        return cls(density, a * 10**(b / (t - c0)), f"water at {c:g} C")
+        return cls(density, a * 10**(b / (t - c0)), f"water at {c:g} C", t)
 
     @classmethod
     def parse(cls, text: str, temperature: float = 293.15) -> "Medium":
@@ -112,6 +113,30 @@ class Medium:
         except ValueError:
             raise UserError(f"medium must be air, water or DENSITY,VISCOSITY (kg/m^3,Pa s), got {text!r}") from None
         return cls(density, viscosity, f"fluid of {density:g} kg/m^3, {viscosity:g} Pa s")
+
+
+def _in_phase(word: str, temperature) -> float:
+    """``temperature`` (K) checked against the phase of ``word`` (air, water) at one atmosphere; a value
+    that reads as degrees Celsius (its kelvin in the range) is named so.
+
+    >>> _in_phase("air", "313.15")
+    313.15
+    >>> _in_phase("air", 25)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: air is a gas at temperatures from 150 to 2000 K (one atmosphere), got 25 K: did you mean 298.15 K (25 C)?
+    """
+    low, high, phase = _PHASES[word]
+    try:
+        t = float(temperature)
+    except (TypeError, ValueError):
+        t = math.nan
+    if not low <= t <= high:
+        got = f"{t:g} K" if math.isfinite(t) else repr(temperature)
+        hint = f": did you mean {t + 273.15:g} K ({t:g} C)?" if low <= t + 273.15 <= high else ""
+        raise UserError(f"{word} is {phase} at temperatures from {low:g} to {high:g} K (one atmosphere), "
+                        f"got {got}{hint}", quantity="temperature")
+    return t
 
 
 def reynolds_number(medium: Medium, frequency_hz, width: float):

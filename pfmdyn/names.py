@@ -40,6 +40,8 @@ class Quantity:
     instrument measured: a contact resonance, a mode's Q, its drive settings)."""
     label: str = ""
     """What reports and messages call it in a few words (default: the name with spaces)."""
+    default: float | None = None
+    """The value assumed when neither a flag nor a file gives one (reports mark it assumed)."""
 
     def __post_init__(self):
         if not self.label:
@@ -104,14 +106,14 @@ QUANTITIES: tuple[Quantity, ...] = (
              "growing as sqrt(f)", 0.0, 100.0, open_low=False, option=False),
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
-             aliases=("temperature_k",)),
+             aliases=("temperature_k",), default=293.15),
     Quantity("medium", "medium", "1", "fluid around the lever: air, water (at the temperature) or DENSITY,VISCOSITY "
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",
              1e-12, 1e-3, aliases=("invols_m_per_v",)),
-    Quantity("length_uncertainty", "u(L)", "m", "standard uncertainty of a nominal length (default 2 % of it)",
+    Quantity("length_uncertainty", "u(L)", "m", "standard uncertainty of a nominal length (default 2 per cent of it)",
              0.0, 1e-2, open_low=False),
-    Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 % of it)",
+    Quantity("width_uncertainty", "u(w)", "m", "standard uncertainty of a nominal width (default 5 per cent of it)",
              0.0, 1e-2, open_low=False),
     # What changed between two drive sweeps (``pfmdyn discrepancy AFTER --reference BEFORE``).
     Quantity("added_mass_position", "x_m/L", "1", "where a point mass added to the free lever sits "

@@ -8,6 +8,7 @@ cannot determine.  The wide sweep is ``benchmarks/cli_inputs.py``; here the fail
 """
 from __future__ import annotations
 
+import argparse
 import cmath
 import json
 import math
@@ -19,6 +20,7 @@ import pytest
 from pfmdyn import cli
 from pfmdyn.analysis.resonances import resonances
 from pfmdyn.cantilever import Cantilever
+from pfmdyn.names import NAMES
 
 LEVER = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"]
 PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "100"]
@@ -50,6 +52,8 @@ def _argv(tmp: Path, command: str) -> dict:
         "branches": ["branches", "indentation", "--out", png, "--points", "20", "--modes", "1"],
         "inspect": ["inspect", str(data), "--json", json_out],
         "discrepancy": ["discrepancy", str(data), "--json", json_out],
+        "calibrate": ["calibrate", str(tmp / "tune.csv"), "--json", json_out],   # the flags are checked first
+        "map": ["map", str(tmp / "map.h5"), "--out", str(tmp / "sub")],
     }[command]
 
 
@@ -97,6 +101,7 @@ REFUSED = [
     ("spot", ["--spot-position", "1.5"], "--spot-position"),
     ("spot", ["--plot", "{tmp}/out.xyz"], "cannot write"),                      # was a ValueError traceback
     ("spot", ["--plot", "{tmp}/data.csv/out.png"], "cannot write"),            # was written: the JSON
+    ("spot", ["--plot", "-"], "cannot write -"),                                 # '-' is for documents; was '-.png'
     ("stiffness", ["--contact", "0"], "--contact"),
     ("stiffness", ["--contact", "nan"], "--contact"),
     ("stiffness", ["--mode", "0"], "--mode"),
@@ -131,6 +136,12 @@ REFUSED = [
     ("diagram", ["--medium="], "--medium"),                                    # was vacuum, silently
     ("discrepancy", ["--added-mass-position", "0.5"], "--added-mass-position"),  # was ignored for a spectrum
     ("discrepancy", ["--added-mass-position", "nan"], "--added-mass-position"),
+    # a temperature where the medium is not that phase; Celsius-looking values named so (was 25 K, accepted)
+    ("resonances", ["--medium", "air", "--width", "4e-5", "--temperature", "25"], "did you mean 298.15 K (25 C)?"),
+    ("spot", ["--temperature", "60"], "--temperature: air is a gas"),                # air: the default medium
+    ("diagram", ["--medium", "water", "--temperature", "0"], "did you mean 273.15 K (0 C)?"),
+    ("diagram", ["--medium", "water", "--temperature", "400"], "--temperature: water is liquid"),
+    ("stiffness", ["--temperature", "120"], "did you mean 393.15 K"),
 ]
 
 
@@ -250,9 +261,9 @@ def test_argparse_refusal_is_one_line_in_every_command(capsys):
 
 def test_error_is_not_a_catch_all(monkeypatch):
     """A programming error still surfaces as an exception (only UserError becomes one line)."""
-    from pfmdyn.commands import resonances as command
+    from pfmdyn.analysis import resonances as analysis
 
-    monkeypatch.setattr(command, "resonances", lambda *a, **k: 1 / 0)
+    monkeypatch.setattr(analysis, "resonances", lambda *a, **k: 1 / 0)
     with pytest.raises(ZeroDivisionError):
         cli.main(["resonances", *LEVER])
 
@@ -290,3 +301,65 @@ def test_a_mode_without_an_amplitude_peak_says_so():
     assert math.isnan(modes.peak_hz[2]) and "no amplitude peak" in modes.undetermined[2]
     assert math.isfinite(q) and 4 < q < 8
     assert all(math.isfinite(p) for p in modes.peak_hz[:2])
+
+
+def _takes_a_value(action) -> bool:
+    return bool(action.option_strings) and action.nargs is None and action.help != argparse.SUPPRESS
+
+
+def _required(parser) -> list[str]:
+    """Placeholder values for a parser's required arguments (positionals and required options)."""
+    argv = []
+    for action in parser._actions:
+        if not action.option_strings and action.nargs in (None, "?") and action.dest != "help":
+            argv.append("x" if action.choices is None else str(next(iter(action.choices))))
+        elif action.required:
+            argv += [action.option_strings[0], "1"]
+    return argv
+
+
+@pytest.mark.parametrize("value", ["-225e-6", "-0.5", "-.5", "-3", "-inf", "-1E+3"])
+def test_a_negative_value_is_a_value_of_every_flag(value, capsys):
+    """argparse takes ``-225e-6`` or ``-inf`` for an option (its rule knows only ``-3`` and ``-0.5``)
+    and refused ``--length -225e-6`` with "expected one argument"; every flag that takes a value, in
+    every command the parser holds, now receives it (a flag of a count or a choice may refuse it)."""
+    for command, parser in cli.parser(None)[1].items():
+        for action in filter(_takes_a_value, parser._actions):
+            flag = action.option_strings[-1]
+            try:
+                args = parser.parse_args([*_required(parser), flag, value])
+            except SystemExit:
+                err = capsys.readouterr().err
+                assert "expected one argument" not in err and (action.type or action.choices), (command, flag, err)
+                continue
+            got = getattr(args, action.dest)
+            assert got == [value] or str(got) == value or float(got) == float(value), (command, flag, got)
+
+
+def test_negative_values_reach_the_range_check(tmp_path, capsys):
+    """Every flag of a quantity that cannot be negative, in every command with a base command line
+    above: a one-line error naming the flag and the range (before: "expected one argument")."""
+    checked = 0
+    for command in ("resonances", "spot", "stiffness", "diagram", "deconvolve", "discrepancy", "calibrate", "map"):
+        base = _argv(tmp_path, command)
+        for action in filter(_takes_a_value, cli.parser(command)[1][command]._actions):
+            quantity = NAMES.get(action.dest)
+            if quantity is None or quantity.low < 0 or action.dest == "medium":
+                continue
+            flag = action.option_strings[-1]
+            assert _run(_override(base, [flag, "-225e-6"])) == 2, (command, flag)
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and flag in err[0] and re.search(r"got -(225e-6|0\.000225)\b", err[0]), \
+                (command, flag, err)
+            checked += 1
+    assert checked > 50
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--temperature", "300"], "medium: air at 26.85 C; temperature 300 K (given)"),
+    ([], "medium: air at 20 C; temperature 293.15 K (assumed: give --temperature)"),
+])
+def test_the_temperature_used_is_printed(extra, words, capsys):
+    """Before, resonances printed "air at -248.15 C" for --temperature 25 and never the kelvin."""
+    assert _run(["resonances", *LEVER, "--width", "4e-5", "--medium", "air", *extra]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == words

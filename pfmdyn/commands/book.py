@@ -5,8 +5,6 @@ import sys
 import time
 from pathlib import Path
 
-from ..book.build import book_dir, build
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("--out", metavar="DIR", default=None,
@@ -14,6 +12,8 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from ..book.build import book_dir, build
+
     out = Path(args.out) if args.out else book_dir() / "_build"
     t0 = time.perf_counter()
     status = build(out, progress=lambda line: print(line, file=sys.stderr))

@@ -3,25 +3,23 @@ from __future__ import annotations
 
 import csv
 
-import numpy as np
-
 from ..errors import UserError
-from ..io.results import check_writable
-from ..plots.branches import plot_branches
-from ..roots.branches import SWEPT, frequency_ratio, branch_limits, crossovers, sweep
-from ..derivations.certify import CertificationError
+from ..generated import families
 from .roots import parse_parameters, positive_int
 
 
-def write_csv(path: str, family: str, stiffness: np.ndarray, z: np.ndarray, z1: float) -> None:
+def write_csv(path: str, family: str, stiffness, z, z1: float) -> None:
     """One row per stiffness: the roots ``z_n`` and ``f_n/f_1(free)``.
 
-    >>> import io, tempfile, os
+    >>> import os, tempfile
+    >>> import numpy as np
     >>> d = tempfile.mkdtemp(); p = os.path.join(d, "b.csv")
     >>> write_csv(p, "indentation", np.array([1.0]), np.array([[2.0]]), 2.0)
     >>> open(p).read().splitlines()
     ['k1_over_k,z_1,f_1/f_free_1', '1,2,1']
     """
+    from ..roots.branches import SWEPT, frequency_ratio
+
     freq = frequency_ratio(family, z, z1)
     n = z.shape[1]
     with open(path, "w", newline="", encoding="utf-8") as fh:
@@ -39,7 +37,7 @@ def add_arguments(parser) -> None:
     >>> p.parse_args(["elastic", "--out", "b.png"]).points
     '400'
     """
-    parser.add_argument("family", help=f"one of: {', '.join(SWEPT)}")
+    parser.add_argument("family", help=f"one of: {', '.join(f.roots for f in families.FAMILIES if f.branch)}")
     parser.add_argument("--out", required=True, metavar="PATH.png", help="PNG file to write")
     parser.add_argument("--csv", default=None, metavar="PATH", help="also write the branches as CSV")
     parser.add_argument("--points", default="400", help="stiffness values on the log grid 1e-3..1e6 (default 400)")
@@ -59,6 +57,13 @@ def run(args) -> int:
     indentation: crossover of mode 2 at k1_over_k = 47.9 (beta = 5.881)
     0
     """
+    import numpy as np
+
+    from ..derivations.certify import CertificationError
+    from ..io.results import check_writable
+    from ..plots.branches import plot_branches
+    from ..roots.branches import SWEPT, branch_limits, crossovers, sweep
+
     check_writable(args.out, figure=True)
     check_writable(args.csv)
     if args.family not in SWEPT:

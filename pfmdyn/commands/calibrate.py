@@ -22,7 +22,7 @@ def add_arguments(parser) -> None:
     flags.add(parser, ("length",))
     flags.add_medium_arguments(parser)
     flags.add(parser, ("invols", "spot_position", "tip_position", "length_uncertainty", "width_uncertainty"))
-    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    flags.add_json(parser)
     parser.add_argument("--plot", metavar="PNG", help="write the spectrum with the fitted first mode")
 
 
@@ -85,14 +85,14 @@ def run(args) -> int:
 
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    tune = read_thermal_tune(args.file)
     values = flags.given(args, ("length", "width", "temperature", "invols", "spot_position", "tip_position",
-                                "length_uncertainty", "width_uncertainty"))
+                                "length_uncertainty", "width_uncertainty"))      # a bad flag before the file
+    tune = read_thermal_tune(args.file)
     environment = tune.conditions.get("environment")
     if args.medium is None and environment not in (None, "air"):
         raise UserError(f"{args.file}: measured in {environment}: give {flags.NAMES['medium'].flag}")
     medium = flags.medium_from_args(args, tune.conditions)
-    temperature = values.get("temperature", tune.conditions.get("temperature", 293.15))
+    temperature, source = flags.temperature(args, tune.conditions)
     word = (args.medium or environment or "air").strip().lower()
     factory = getattr(Medium, word) if word in ("air", "water") else None
     result = calibrate(tune, length=values.get("length"), width=values.get("width"), medium=medium,
@@ -100,14 +100,13 @@ def run(args) -> int:
                        spot_position=values.get("spot_position", 1.0), tip_position=values.get("tip_position", 1.0),
                        length_uncertainty=values.get("length_uncertainty"),
                        width_uncertainty=values.get("width_uncertainty"), medium_factory=factory)
-    if "temperature" not in values and "temperature" not in tune.conditions:
-        result.assumptions.append("temperature 293.15 K (give --temperature)")
+    if source.startswith("assumed"):
+        result.assumptions.append(f"temperature {temperature:g} K (give {flags.NAMES['temperature'].flag})")
     if args.medium is None and environment is None:
         result.assumptions.append(f"medium {medium.name} (give --medium)")
+    print(flags.medium_line(medium, args, tune.conditions, thermal=True))
     print(report(result))
-    if args.json:
-        from ..io.results import write_json
-        write_json(args.json, result.to_json())
+    flags.write_json(args.json, result.to_json())
     if args.plot:
         from ..plots.calibrate import plot_calibration
         fig = plot_calibration(tune, result)

@@ -3,16 +3,16 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..analysis.deconvolve import CONDITION_LIMIT, Deconvolution, SurfaceDisplacement, deconvolve, summary, \
-    surface_displacement
 from ..errors import UserError
-from ..io.results import check_directory
-from ..io.spectra import read_spectra
 from ..names import CONTACT, LEVER
 from . import flags
+
+if TYPE_CHECKING:       # the analysis is imported when the command runs, not for --help
+    from ..analysis.deconvolve import Deconvolution, SurfaceDisplacement
 
 
 def write_tables(result: Deconvolution, out_dir: Path, surface: SurfaceDisplacement | None = None,
@@ -41,6 +41,7 @@ def write_tables(result: Deconvolution, out_dir: Path, surface: SurfaceDisplacem
     Examples
     --------
     >>> import tempfile
+    >>> from pfmdyn.analysis.deconvolve import deconvolve
     >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     [p.name for p in write_tables(fit, Path(tmp))]
@@ -96,6 +97,8 @@ def _surface_columns(surface: SurfaceDisplacement) -> dict:
 
 def _surface_preamble(surface: SurfaceDisplacement, unit: str) -> list[str]:
     """Comment lines stating the spot, the units of the surface columns and where they are NaN."""
+    from ..analysis.deconvolve import CONDITION_LIMIT
+
     lines = [f"# spot_position: {surface.spot_position:.12g}",
              "# calibration_factor: measured over true surface displacement, InvOLS from a static force curve "
              "in this contact read at the same spot (1)",
@@ -129,8 +132,9 @@ def add_arguments(parser) -> None:
         "the free end): d_eff_surface = d_eff / C with C the calibration factor of 'pfmdyn spot' (data "
         "calibrated with an InvOLS from a static force curve in the same contact, at the same spot), "
         "g_elec_surface likewise, and with --width the d_eff error the distributed electrostatic load adds at "
-        f"the spot. Where |d ln C/d ln f| > {CONDITION_LIMIT:g} (around a contact resonance or a zero of the "
-        "spot's response) those columns are NaN and the preamble says why.")
+        "the spot. Where C changes too fast with frequency (|d ln C/d ln f| above the limit the preamble states: "
+        "around a contact resonance or a zero of the spot's response) those columns are NaN and the preamble "
+        "says why.")
     parser.add_argument("data", metavar="DATA.csv", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
     parser.add_argument("--surface-potential", metavar="V", type=float, required=True,
                         help="surface potential V_surf in volts, used for d_eff = b + c V_surf")
@@ -142,6 +146,10 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     """Read, fit, then write tables and plots; nothing is written if the input is bad."""
+    from ..analysis.deconvolve import deconvolve, summary, surface_displacement
+    from ..io.results import check_directory
+    from ..io.spectra import read_spectra
+
     if not np.isfinite(args.surface_potential):
         raise UserError("--surface-potential must be a finite number of volts")
     check_directory(args.out)
@@ -160,6 +168,8 @@ def run(args) -> int:
                          ("error_map", plotting.plot_error_map(result, unit))):
         figure.savefig(args.out / f"{name}.png", dpi=120)
         written.append(args.out / f"{name}.png")
+    if probe is not None and probe[0].medium is not None:
+        print(flags.medium_line(probe[0].medium, args))
     print(f"{data.path}:")
     print(summary(result, unit))
     if surface is not None:

@@ -92,7 +92,11 @@ def _cli_cantilever(args):
 
 def _in_medium(args, lever, width):
     """The lever (resonance from its geometry: in vacuum) in ``--medium``, or as it is."""
-    return lever.with_medium(flags.medium_from_args(args), width) if args.medium else lever
+    if not args.medium:
+        return lever
+    medium = flags.medium_from_args(args)
+    print(flags.medium_line(medium, args))
+    return lever.with_medium(medium, width)
 
 
 def _write_csv(path, response: ResponseMap) -> None:

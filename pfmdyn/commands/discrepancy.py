@@ -2,23 +2,11 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from contextlib import contextmanager
 
-import numpy as np
-from threadpoolctl import threadpool_limits
-
-from ..discrepancy.report import medium_comparison
-from ..discrepancy.resonances import analyse_resonances
-from ..discrepancy.select import TIME_BUDGET_S
-from ..discrepancy import spectrum
-from ..discrepancy.spectrum import analyse, thin
 from ..errors import UserError
-from ..discrepancy.inputs import is_sweep, is_thermal_tune, read, read_sweep
-from ..io.results import check_writable, dumps, write_json
-from ..io.tables import SpectrumData
 from . import flags
-from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
-from ..plots.sweep import plot_sweep, plot_thermal
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,8 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """
     parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
                         "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat/.nid, thermal tune)")
-    parser.add_argument("--json", metavar="PATH",
-                        help="write the full report as JSON here ('-': standard output, after the summary)")
+    flags.add_json(parser, "the full report")
     parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
@@ -51,9 +38,14 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 
 
 def _analyse(data, args):
-    if isinstance(data, SpectrumData):
-        return analyse(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
-    return analyse_resonances(data, vertical_only=args.vertical_only, progress=True, time_budget_s=TIME_BUDGET_S)
+    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone)."""
+    from ..discrepancy.resonances import analyse_resonances
+    from ..discrepancy.select import TIME_BUDGET_S
+    from ..discrepancy.spectrum import analyse
+    from ..io.tables import SpectrumData
+
+    analysis = analyse if isinstance(data, SpectrumData) else analyse_resonances
+    return analysis(data, vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
 
 
 def _lever_in_medium(data, args):
@@ -64,8 +56,10 @@ def _lever_in_medium(data, args):
 
 def _sweeps(args) -> int:
     """A drive sweep fitted as a spectrum, or explained from ``--reference`` (:mod:`pfmdyn.discrepancy.sweep`)."""
+    from ..discrepancy.inputs import is_sweep, read_sweep
     from ..discrepancy.reference import compare_sweeps
     from ..discrepancy.sweep import fit_sweep
+    from ..plots.sweep import plot_sweep
 
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
@@ -73,8 +67,9 @@ def _sweeps(args) -> int:
     flags.require(values, ("spring_constant", "length"), args.data)
     after = read_sweep(args.data)
     before = read_sweep(args.reference) if args.reference else None
-    medium = flags.medium_from_args(args, {"medium": (before or after).medium} if (before or after).medium else None,
-                                    default="water")
+    found = {"medium": (before or after).medium} if (before or after).medium else None
+    medium = flags.medium_from_args(args, found, default="water")
+    print(flags.medium_line(medium, args, found))
     with _fitting(args.data, "the spring constant and length"):
         fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
         result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
@@ -88,6 +83,7 @@ def _thermal(args) -> int:
     from ..discrepancy.thermal import fit_thermal
     from ..io.instruments import read_instrument
     from ..io.thermal_tune import read_thermal_tune
+    from ..plots.sweep import plot_thermal
 
     tune = read_thermal_tune(args.data)
     lever = read_instrument(args.data).fields       # what the file says of the lever; the flags win
@@ -95,8 +91,10 @@ def _thermal(args) -> int:
               **flags.given(args, ("spring_constant", "length", "width"))}
     flags.require(values, ("spring_constant", "length"), args.data)
     found = {"medium": tune.conditions.get("environment"), "temperature": tune.conditions.get("temperature")}
-    medium = flags.medium_from_args(args, {k: v for k, v in found.items() if v is not None}, default="air")
-    temperature = flags.given(args, ("temperature",)).get("temperature", tune.conditions.get("temperature", 293.15))
+    found = {k: v for k, v in found.items() if v is not None}
+    medium = flags.medium_from_args(args, found, default="air")
+    temperature = flags.temperature(args, found)[0]
+    print(flags.medium_line(medium, args, found, thermal=True))
     with _fitting(args.data, "the spring constant and length"):
         fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
     return _emit(args, fit, lambda: plot_thermal(fit))
@@ -106,6 +104,9 @@ def _thermal(args) -> int:
 def _fitting(where, check: str):
     """The fits run with one BLAS thread (they multiply tall, narrow matrices: threads only add overhead,
     about 1.5x on a shared machine); data that read correctly but defeat the numerics end in one line."""
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
     try:
         with threadpool_limits(1, user_api="blas"):
             yield
@@ -118,10 +119,7 @@ def _fitting(where, check: str):
 def _emit(args, result, figure) -> int:
     """Print a free lever's result, write its JSON and (``--plot``) the ``figure()`` it makes."""
     print(result.report())
-    if args.json == "-":
-        print(dumps(result.to_dict()))
-    elif args.json:
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     if args.plot:
         _save(figure(), args.plot)
     return 0
@@ -129,6 +127,12 @@ def _emit(args, result, figure) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``pfmdyn discrepancy``; returns the exit status."""
+    from ..discrepancy import spectrum
+    from ..discrepancy.inputs import is_sweep, is_thermal_tune, read
+    from ..discrepancy.report import medium_comparison
+    from ..io.results import check_writable
+    from ..io.tables import SpectrumData
+
     check_writable(args.json)
     check_writable(args.plot, figure=True)
     if is_sweep(args.data) or args.reference:
@@ -141,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
-        data, stride = thin(data)
+        data, stride = spectrum.thin(data)
     with _fitting(args.data, "the metadata (spring constant, length, tip height, free resonance)"):
         report = _analyse(data, args)
     if stride > 1:
@@ -153,16 +157,14 @@ def run(args: argparse.Namespace) -> int:
         m = report.to_dict()["medium"]
         fitted = "no free-mode damping fitted" if m["fitted_quality_factor"] is None else \
             f"the fitted damping gives Q {m['fitted_quality_factor']:.4g}"
-        print(f"medium: {m['medium']} predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
+        print(f"{flags.medium_line(flags.medium_from_args(args), args)}: predicts the first free mode's Q {m['predicted_quality_factor']:.4g} "
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    if args.json == "-":
-        print(dumps(report.to_dict()))
-    elif args.json:
-        write_json(args.json, report.to_dict())
+    flags.write_json(args.json, report.to_dict())
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
+        from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
         _save(plot(data, report), args.plot)
     return 0

@@ -14,11 +14,11 @@ from pathlib import Path
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..medium import Medium
-from ..io.record import MissingFieldError
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "given", "require", "cantilever", "contact", "option_hint"]
+           "temperature", "medium_line", "add_json", "write_json", "given", "require", "cantilever", "contact",
+           "option_hint"]
 
 
 def add(parser, names, required=(), defaults=None) -> None:
@@ -33,10 +33,11 @@ def add(parser, names, required=(), defaults=None) -> None:
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        value, why = defaults.get(name, (None, ""))
+        value, why = defaults.get(name, (None, f"{q.default:g}{unit}, assumed" if q.default is not None else ""))
+        text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
+        # argparse %-formats help (``%(default)s``): a "%" of a meaning is literal
         parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
-                            required=name in required,
-                            help=f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")"))
+                            required=name in required, help=text.replace("%", "%%"))
 
 
 def add_lever(parser, names=LEVER, required=(), defaults=None, medium: bool = True) -> None:
@@ -80,23 +81,92 @@ def add_medium_arguments(parser, width_required: bool = False) -> None:
 
 def medium_from_args(args, found: dict | None = None, default: str = "air") -> Medium:
     """The :class:`~pfmdyn.medium.Medium` of ``--medium`` at ``--temperature`` (K); ``found`` (values a
-    file holds: ``medium``, ``temperature``) fills what the flags leave out, then ``default`` at 293.15 K.
+    file holds: ``medium``, ``temperature``) fills what the flags leave out, then ``default`` at the
+    assumed temperature (:func:`temperature`).  Air and water only where they are that phase.
 
     >>> import argparse
     >>> medium_from_args(argparse.Namespace(medium=None, temperature="313.15")).name
     'air at 40 C'
     >>> medium_from_args(argparse.Namespace(medium="1000,1e-3", temperature=None)).viscosity
     0.001
+    >>> medium_from_args(argparse.Namespace(medium="water", temperature="20"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --temperature: water is liquid at temperatures from 273.15 to 373.15 K (one atmosphere), got 20 K: did you mean 293.15 K (20 C)?
     """
     found = found or {}
-    values = given(args, ("temperature",))
-    temperature = values.get("temperature", found.get("temperature", 293.15))
     given_medium = getattr(args, "medium", None)
     text = given_medium if given_medium is not None else found.get("medium") or default
-    try:
-        return Medium.parse(text, temperature)
+    flagged = getattr(args, "temperature", None)
+    try:        # a flag's text as it is: air's and water's check hints at Celsius (0 included)
+        return Medium.parse(text, flagged if flagged is not None else temperature(args, found)[0])
     except UserError as exc:
-        raise UserError(f"{NAMES['medium'].flag}: {exc}") from None
+        blamed = "temperature" if exc.quantity == "temperature" and flagged is not None else "medium"
+        raise UserError(f"{NAMES[blamed].flag}: {exc}") from None
+
+
+def temperature(args, found: dict | None = None) -> tuple[float, str]:
+    """The temperature (K) a command uses and where it came from: ``given`` (the flag), ``from the file``
+    (``found``) or ``assumed`` (the default of :mod:`pfmdyn.names`).
+
+    >>> import argparse
+    >>> temperature(argparse.Namespace(temperature="300")), temperature(argparse.Namespace(), {"temperature": 313.15})
+    ((300.0, 'given'), (313.15, 'from the file'))
+    >>> temperature(argparse.Namespace(temperature=None))
+    (293.15, 'assumed: give --temperature')
+    """
+    q = NAMES["temperature"]
+    if getattr(args, "temperature", None) is not None:
+        return checked("temperature", args.temperature, q.flag), "given"
+    if (found or {}).get("temperature") is not None:
+        return checked("temperature", found["temperature"]), "from the file"
+    return q.default, f"assumed: give {q.flag}"
+
+
+def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool = False) -> str:
+    """What a command prints of the fluid it used: its name and the temperature that sets its
+    properties (air, water) or the thermal noise (``thermal``), with where that came from.
+
+    >>> import argparse
+    >>> medium_line(Medium.air(300.0), argparse.Namespace(temperature="300"))
+    'medium: air at 26.85 C; temperature 300 K (given)'
+    >>> medium_line(Medium(1000.0, 1e-3, "oil"), argparse.Namespace(temperature=None))
+    'medium: oil'
+    """
+    if medium.temperature is None and not thermal:
+        return f"medium: {medium.name}"
+    kelvin, source = temperature(args, found)
+    return f"medium: {medium.name}; temperature {kelvin:g} K ({source})"
+
+
+def add_json(parser, what: str = "the result") -> None:
+    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` on standard output after the
+    lines the command prints (:func:`write_json`).
+
+    >>> import argparse
+    >>> p = argparse.ArgumentParser(); add_json(p)
+    >>> p.parse_args(["--json", "-"]).json
+    '-'
+    """
+    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': standard output, "
+                        "after the summary)")
+
+
+def write_json(path, document) -> None:
+    """``document`` as JSON to ``path`` (:func:`pfmdyn.io.results.write_json`), to standard output when
+    ``path`` is ``-``, nowhere when None.
+
+    >>> write_json("-", {"k1": 300.0})
+    {
+      "k1": 300.0
+    }
+    """
+    from ..io import results
+
+    if path == "-":
+        print(results.dumps(document))
+    elif path:
+        results.write_json(path, document)
 
 
 def given(args, names) -> dict[str, float]:
@@ -141,10 +211,11 @@ def check_medium(args) -> None:
     >>> check_medium(argparse.Namespace(medium=None, temperature="abc"))
     Traceback (most recent call last):
     ...
-    pfmdyn.errors.UserError: --temperature: temperature must be a number, got 'abc'
+    pfmdyn.errors.UserError: --temperature: air is a gas at temperatures from 150 to 2000 K (one atmosphere), got 'abc'
     """
     if getattr(args, "medium", None) is not None or getattr(args, "temperature", None) is not None:
         medium_from_args(args)
+        temperature(args)       # also where the medium's own numbers do not depend on it
 
 
 def cantilever(args, found: dict | None = None) -> Cantilever:
@@ -185,6 +256,7 @@ def option_hint(error: Exception, parser=None) -> str:
     flag is the option of ``parser`` (the command's) that sets the quantity, else the name's own
     (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint.
 
+    >>> from pfmdyn.io.record import MissingFieldError
     >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
     ': give --tip-height'
     >>> import argparse

@@ -6,9 +6,12 @@ ones missing; ``--json PATH`` writes the same as JSON (numbers as numbers).  Exa
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 
-from ..io.instruments import FIELDS, InstrumentRecord, read_instrument
-from ..io.results import check_writable, write_json
+from . import flags
+
+if TYPE_CHECKING:       # the readers are imported when the command runs, not for --help
+    from ..io.instruments import InstrumentRecord
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -22,7 +25,7 @@ def add_arguments(parser) -> None:
     'out.json'
     """
     parser.add_argument("file", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    flags.add_json(parser, "what was read")
 
 
 def report(record: InstrumentRecord) -> str:
@@ -34,6 +37,8 @@ def report(record: InstrumentRecord) -> str:
     >>> print(report(r).splitlines()[0])
     a.ibw: image (Asylum)
     """
+    from ..io.instruments import FIELDS
+
     lines = [f"{record.path}: {record.kind} ({record.instrument})", "channels:"]
     for c in record.channels:
         shape = " x ".join(str(n) for n in c.shape)
@@ -51,9 +56,11 @@ def report(record: InstrumentRecord) -> str:
 
 def run(args) -> int:
     """Read the file, print the report, write JSON if asked."""
+    from ..io.instruments import read_instrument
+    from ..io.results import check_writable
+
     check_writable(args.json)
     record = read_instrument(args.file)
     print(report(record))
-    if args.json:
-        write_json(args.json, record.to_json())
+    flags.write_json(args.json, record.to_json())
     return 0

@@ -141,6 +141,8 @@ def run(args) -> int:
                         "input; choose another --out, or --usid-inplace to write into the input")
     if args.surface_potential is not None and not math.isfinite(args.surface_potential):
         raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
+    if args.medium:
+        print(flags.medium_line(overrides["medium"], args))
     n_bands = len(source.model.bands)
     biases = source.model.bias_v
     if sho:

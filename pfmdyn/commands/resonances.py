@@ -7,9 +7,7 @@ nearer the sample than the clamp (the usual mounting).  See :mod:`pfmdyn.analysi
 """
 from __future__ import annotations
 
-from ..analysis.resonances import resonances
 from ..errors import UserError
-from ..io.results import check_writable, write_json
 from . import flags
 from .roots import positive_int
 
@@ -31,11 +29,14 @@ def add_arguments(parser) -> None:
     flags.add_contact(parser)
     flags.add_damping(parser)
     parser.add_argument("--modes", default="3", help="number of modes of each condition (default 3)")
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    flags.add_json(parser)
 
 
 def run(args) -> int:
     """Compute, print the table, write JSON if asked; 1 when a proof fails."""
+    from ..analysis.resonances import resonances
+    from ..io.results import check_writable
+
     check_writable(args.json)
     modes = positive_int(args.modes, "--modes", 50)
     lever = flags.cantilever(args)
@@ -44,7 +45,8 @@ def run(args) -> int:
                                or contact.poisson is not None or contact.contact_loss):
         raise UserError("a contact needs --k1")
     result = resonances(lever, contact if contact.k1 is not None else None, modes)
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(result.report())
-    if args.json:
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     return 0 if result.certified else 1

@@ -6,11 +6,14 @@ Parameter values are read as exact decimals (``1e6``, ``0.1``); see :mod:`pfmdyn
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from ..errors import UserError
-from ..generated import characteristic
-from ..io.results import check_writable, write_json
-from ..roots.core import FAMILIES, PARAMETER_HELP, RootResult, family_roots
+from ..generated import characteristic, families
+from . import flags
+
+if TYPE_CHECKING:       # the certified root finder is imported when the command runs, not for --help
+    from ..roots.core import RootResult
 
 __all__ = ["OPTIONS", "add_arguments", "parse_parameters", "positive_int", "run", "table"]
 
@@ -26,13 +29,13 @@ def add_arguments(parser) -> None:
     >>> p.parse_args(["free", "--n", "2"]).n
     '2'
     """
-    parser.add_argument("family", help=f"one of: {', '.join(FAMILIES)}")
+    parser.add_argument("family", help=f"one of: {', '.join(characteristic.FAMILIES)}")
     # Numbers are parsed in run() so that every bad value is reported as one line.
     parser.add_argument("--n", default="5", help="number of roots, counted from the lowest (default 5)")
     parser.add_argument("--digits", default="15", help="significant digits (default 15)")
     for name, option in OPTIONS.items():
-        parser.add_argument(option, dest=name, default=None, help=PARAMETER_HELP[name])
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+        parser.add_argument(option, dest=name, default=None, help=families.PARAMETER_HELP[name])
+    flags.add_json(parser, "the roots")
 
 
 MAX_ROOTS, MAX_DIGITS = 1000, 4000
@@ -67,8 +70,8 @@ def parse_parameters(family: str, given: dict) -> dict:
     >>> parse_parameters("frictionless", {"k1_over_k": "1e6", "k2_ratio": None, "k2t_HL": None})
     {'k1_over_k': '1e6'}
     """
-    if family not in FAMILIES:
-        raise UserError(f"unknown family {family!r}; choose from {', '.join(FAMILIES)}")
+    if family not in characteristic.FAMILIES:
+        raise UserError(f"unknown family {family!r}; choose from {', '.join(characteristic.FAMILIES)}")
     wanted = characteristic.PARAMETERS[family]
     extra = [OPTIONS[n] for n, v in given.items() if v is not None and n not in wanted]
     if extra:
@@ -77,7 +80,7 @@ def parse_parameters(family: str, given: dict) -> dict:
     for name in wanted:
         text = given.get(name)
         if text is None:
-            raise UserError(f"family {family!r} needs {OPTIONS[name]} ({PARAMETER_HELP[name]})")
+            raise UserError(f"family {family!r} needs {OPTIONS[name]} ({families.PARAMETER_HELP[name]})")
         try:
             value = Fraction(text)
         except (ValueError, ZeroDivisionError):
@@ -91,6 +94,7 @@ def parse_parameters(family: str, given: dict) -> dict:
 def table(result: RootResult) -> str:
     """A readable table of a :class:`~pfmdyn.roots.core.RootResult`.
 
+    >>> from pfmdyn.roots.core import family_roots
     >>> print(table(family_roots("pinned", 1, 6)))
     pinned: first 1 roots of the characteristic equation in beta, 6 significant digits
     certified: the list is complete on (0, 4.67699] and each interval holds exactly one simple root
@@ -121,11 +125,13 @@ def run(args) -> int:
       1  1.5708  [1.5707963, 1.5707964]
     0
     """
+    from ..io.results import check_writable
+    from ..roots.core import family_roots
+
     check_writable(args.json)
     params = parse_parameters(args.family, {name: getattr(args, name) for name in OPTIONS})
     n, digits = positive_int(args.n, "--n", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
-    if args.json:
-        write_json(args.json, result.to_json())
+    flags.write_json(args.json, result.to_json())
     return 0 if result.certified else 1

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import math
 
-from ..analysis.spot import ratio_map, spot_analysis
 from ..errors import UserError
 from ..names import LEVER
 from . import flags
@@ -18,7 +17,7 @@ def add_arguments(parser) -> None:
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
     parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
-    parser.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    flags.add_json(parser)
     parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
 
 
@@ -58,6 +57,7 @@ def _lever(args):
 
 def run(args) -> int:
     """Analyse, print, write what was asked."""
+    from ..analysis.spot import spot_analysis
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
@@ -65,13 +65,14 @@ def run(args) -> int:
         raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
     lever, contact = _lever(args), flags.contact(args)
     result = spot_analysis(lever, contact, args.frequency)
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(report(result))
-    if args.json:
-        from ..io.results import write_json
-        write_json(args.json, result.to_dict())
+    flags.write_json(args.json, result.to_dict())
     if args.plot:
         import numpy as np
 
+        from ..analysis.spot import ratio_map
         from ..plots.spot import plot_spot
         fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)

@@ -71,7 +71,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--reduced-modulus", action="store_true", help="also give E* from k1 (Hertz contact)")
     flags.add(parser, ("tip_radius", "normal_load"))
     parser.add_argument("--load", dest="normal_load", default=None, help=argparse.SUPPRESS)
-    parser.add_argument("--json", default=None, metavar="PATH", help="also write the result as JSON")
+    flags.add_json(parser)
     parser.add_argument("--out", default=None, metavar="DIR",
                         help="for a contact-frequency map (contact_frequency_hz): write DIR/maps.zarr with k1")
 
@@ -157,7 +157,7 @@ def _mode(text) -> int:
 def run(args) -> int:
     """Parse, analyse (:func:`pfmdyn.analysis.stiffness_report.analyse`), print, write JSON if asked."""
     from ..analysis.stiffness_report import analyse
-    from ..io.results import check_writable, write_json
+    from ..io.results import check_writable
 
     check_writable(args.json)
     if args.file and file_kind(args.file) in CONTACT_MAP_KINDS:
@@ -191,10 +191,12 @@ def run(args) -> int:
             raise
         # some of the numbers came from the file: the line names it
         raise UserError(f"{args.file}: {exc}", quantity=exc.quantity) from None
+    if lever.medium is not None:
+        print(flags.medium_line(lever.medium, args))
     print(report.report())
     if args.json:
         document = report.to_dict()
         if notes:
             document["inputs"]["length"] = None
-        write_json(args.json, document)
+        flags.write_json(args.json, document)
     return 0

@@ -10,12 +10,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .. import verify
+from . import flags
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--json", metavar="PATH", help="write the verdicts as JSON to PATH")
-    parser.add_argument("--errata", metavar="PATH", help="write the errata (Markdown with LaTeX) to PATH")
+    flags.add_json(parser, "the verdicts")
+    parser.add_argument("--errata", metavar="PATH",
+                        help="write the errata (Markdown with LaTeX) to PATH ('-': standard output, after the summary)")
     parser.add_argument("--claims", metavar="PATH",
                         help="the shared claims file whose ids must all have verdicts "
                              "(default: $PFMDYN_CLAIMS or shared/claims.yaml beside the source tree)")
@@ -26,6 +27,10 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from .. import verify
+    from ..io.results import check_writable
+
+    check_writable(args.json, args.errata)      # before the minutes of checks
     verdicts = verify.compute(args.only, progress=not args.quiet)
     shared = [] if args.only else verify.shared_claim_ids(verify.shared_claims_path(args.claims))
     if args.record:
@@ -34,13 +39,14 @@ def run(args) -> int:
                     if i not in {v.id for v in verdicts}]
     else:
         problems = verify.gate(verdicts, verify.load_recorded(), shared)
-    if args.errata:
+    if args.errata and args.errata != "-":
         verify.write_errata(verdicts, Path(args.errata))
-    if args.json:
-        verify.write_json(verdicts, Path(args.json))
     if not args.quiet:
         print(verify.table(verdicts))
     print(verify.summary(verdicts))
+    if args.errata == "-":
+        print(verify.render_errata(verdicts), end="")
+    flags.write_json(args.json, verify.to_json(verdicts))
     for p in problems:
         print(f"verdict gate: {p}", file=sys.stderr)
     return 1 if problems else 0

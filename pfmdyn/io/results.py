@@ -70,7 +70,8 @@ def check_writable(*paths, figure: bool = False) -> None:
     """A :class:`~pfmdyn.errors.UserError` naming the first of ``paths`` (None: skipped) that
     cannot be written as a file; checked before anything is computed, so that a command
     writing several outputs writes none when one of them would fail.  ``figure``: the paths
-    are figures, their suffix must be a format matplotlib writes.
+    are figures, their suffix must be a format matplotlib writes.  ``-`` (standard output) is
+    a path of a document, not of a figure.
 
     >>> check_writable(None, "/nonexistent/folder/out.json")
     Traceback (most recent call last):
@@ -78,7 +79,7 @@ def check_writable(*paths, figure: bool = False) -> None:
     pfmdyn.errors.UserError: cannot write /nonexistent/folder/out.json: no such directory /nonexistent/folder
     """
     for path in paths:
-        if path is None or str(path) == "-":
+        if path is None or (str(path) == "-" and not figure):
             continue
         path = Path(path)
         folder = path.parent if str(path.parent) else Path(".")

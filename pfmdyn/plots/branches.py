@@ -29,10 +29,12 @@ def plot_branches(family: str, stiffness: np.ndarray, z: np.ndarray, **fixed):
     fig = Figure(figsize=(8.4, 5.0), dpi=150, layout="constrained")
     ax = fig.add_subplot()
     colors = [f"C{i}" for i in range(modes)]
+    # beyond ten modes the colours repeat: one legend entry for all (a legend of 50 collapses the axes)
+    labels = [f"mode {n + 1}" for n in range(modes)] if modes <= 10 else [f"modes 1-{modes}"] + [None] * (modes - 1)
     for n in range(modes):
         ax.axhline(freq(soft[n]), color="0.55", ls="--", lw=0.9, label=soft_label if n == 0 else None)
         ax.axhline(freq(stiff[n]), color="0.15", ls="--", lw=0.9, label=stiff_label if n == 0 else None)
-        ax.plot(stiffness, freq(z[:, n]), color=colors[n], lw=2, label=f"mode {n + 1}")
+        ax.plot(stiffness, freq(z[:, n]), color=colors[n], lw=2, label=labels[n])
     inside = (s_cross >= stiffness[0]) & (s_cross <= stiffness[-1])
     ax.plot(s_cross[inside], freq(z_cross[inside]), "k:", lw=1.2)
     ax.plot(s_cross[inside], freq(z_cross[inside]), "o", mfc="white", mec="k", ms=6,
