@@ -91,6 +91,8 @@ QUANTITIES: tuple[Quantity, ...] = (
              open_low=False),
     Quantity("spring_constant_uncertainty", "u(k)", "N/m", "standard uncertainty of the spring constant", 0.0, 1e4,
              open_low=False),
+    Quantity("tip_height_uncertainty", "u(H)", "m", "standard uncertainty of the tip height (default 10 per cent of "
+             "it: no file records it)", 0.0, 1e-3, open_low=False),
     Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (for the reduced modulus E*)", 1e-10, 1e-3,
              aliases=("tip_radius_m",)),
     Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (for the reduced modulus E*)",

@@ -90,17 +90,15 @@ class Solution:
         """The solution as printed lines.
 
         >>> Solution(300.0, 0.0, 0.93, ("k1", "tip_position"), {"k1": 1.0, "tip_position": 1e-4}).lines(3.0)[0]
-        'k1 = 300 +/- 1 N/m  (k1/k = 100)'
+        'k1 = 300.0 +/- 1 N/m  (k1/k = 100.00)'
         """
         def pm(name):
             sigma = self.stderr.get(name, 0.0)
             return f" +/- {sigma:.2g}" if sigma > 0 else ""
 
-        def value(name, v):         # the digits k1's (or name's) relative uncertainty leaves, two of it; else six
-            scale = abs(self.k1 if name == "k1" else v)
-            rel = self.stderr.get(name, 0.0) / scale if scale > 0 else 0.0
-            digits = 6 if not rel > 0 else max(2, min(6, int(math.floor(-math.log10(rel))) + 2))
-            return f"{v:.{digits}g}"
+        def value(name, v):         # to the second significant digit of its uncertainty (k1's, relative), else six digits
+            rel = self.stderr.get(name, 0.0) / abs(self.k1 if name == "k1" else v) if v else 0.0
+            return _rounded(v, rel * abs(v))
         out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {value('k1', self.k1 / spring_constant)})"]
         shares = {source: parts["k1"] / self.k1 for source, parts in self.sources.items() if parts.get("k1", 0) > 0}
         if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty")):
@@ -115,6 +113,20 @@ class Solution:
         if self.reduced_modulus is not None:
             out.append(f"E* = {self.reduced_modulus:.6g} +/- {self.reduced_modulus_stderr:.2g} Pa  (Hertz)")
         return out
+
+
+def _rounded(value: float, sigma: float) -> str:
+    """``value`` to the second significant digit of its standard uncertainty ``sigma`` (six digits without one).
+
+    >>> _rounded(204.067, 23.0), _rounded(300.0, 1.0), _rounded(0.0012345, 2e-6), _rounded(2.5e8, 1e6), _rounded(3.14159, 0.0)
+    ('204', '300.0', '0.0012345', '2.500e+08', '3.14159')
+    """
+    if not (sigma > 0 and math.isfinite(sigma)) or value == 0:
+        return f"{value:.6g}"
+    place = math.floor(math.log10(sigma)) - 1
+    if 1e-4 <= abs(value) < 1e7:
+        return f"{round(value, -place):.{max(0, -place)}f}"
+    return f"{value:.{max(1, math.floor(math.log10(abs(value))) - place)}e}"
 
 
 _SOURCE_WORDS = {"contact_uncertainty": "contact resonances", "free_resonance_uncertainty": "free resonance",

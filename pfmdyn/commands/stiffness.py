@@ -37,7 +37,8 @@ from . import flags
 __all__ = ["add_arguments", "run"]
 
 _LEVER = tuple(n for n in LEVER if n not in ("tip_position", "spot_position"))
-_UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty")
+_UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty",
+                  "tip_height_uncertainty")
 _MAX_MODE = 1000
 """No instrument resolves a higher flexural mode (and the root counts would run for hours)."""
 _NOMINAL_LENGTH = 1e-4
@@ -180,7 +181,7 @@ def run(args) -> int:
     if args.reduced_modulus and len(hertz) < 2:
         raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
     hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
-    uncertainties = {name: 0.0 for name in _UNCERTAINTIES} | flags.given(args, _UNCERTAINTIES)
+    uncertainties = {name: 0.0 for name in _UNCERTAINTIES[:3]} | flags.given(args, _UNCERTAINTIES)
     try:
         report = analyse(
             lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
