@@ -543,8 +543,29 @@ class Contact:
             return f"k2 tied to k1 (k2 = {self.k2_over_k1:g} k1, given)"
         return "k2 free"
 
+    def policy(self, lever: "Cantilever") -> tuple["Contact", str]:
+        """The k2 law every command applies to ``lever`` and its words: a stated one as it is; none stated,
+        k2 left out where it cannot act (no tip height, no tilt), else tied to k1 by Mindlin at
+        :data:`DEFAULT_POISSON` (assumed, and said).  ``pfmdyn stiffness``, ``resonances``, ``spot`` and
+        ``map`` share it, so a k1 one of them finds gives back its resonance in another.
+
+        >>> lever = Cantilever(2.0, 75e3, 2e-4, tip_height=10e-6)
+        >>> tied, words = Contact(k1=300.0).policy(lever); round(tied.k2_of(300.0), 3), words.split(" (")[0]
+        (247.059, "k2 tied to k1 by Mindlin at Poisson's ratio 0.3")
+        >>> Contact(k1=300.0).policy(Cantilever(2.0, 75e3, 2e-4))[0].k2_of(300.0)
+        0.0
+        """
+        if self.k2 is not None or self.ratio is not None:
+            return self, self.describe_k2()
+        if lever.tip_height is None and lever.tilt == 0.0:
+            return self, "k2 left out: without a tip height the lateral spring does not act on the lever"
+        tied = replace(self, poisson=DEFAULT_POISSON)
+        return tied, (f"k2 tied to k1 by Mindlin at Poisson's ratio {DEFAULT_POISSON:g} (assumed: k2 = {tied.ratio:.3g} "
+                      "k1; give k2, k2_over_k1 or poisson)")
+
     def k2_of(self, k1) -> float:
-        """``k2`` at contact stiffness ``k1``: given, tied, or 0 when nothing is said."""
+        """``k2`` at contact stiffness ``k1``: given, tied, or 0 when nothing is said (:meth:`policy` says what
+        the commands assume)."""
         if self.k2 is not None:
             return float(self.k2)
         ratio = self.ratio

@@ -176,3 +176,31 @@ def test_k1s_uncertainty_covers_an_assumed_tip_height_and_k2_policy():
     assert "k2_policy_uncertainty" not in stated_policy.sources and "tip_height_uncertainty" in stated_policy.sources
     held = analyse(stated, Contact(), fc, tip_height_uncertainty=0.0).solution
     assert "tip_height_uncertainty" not in held.sources and held.stderr["k1"] < s.stderr["k1"]
+
+
+REAL_IMAGES = Path("/work/shared/realdata/asylum_pfm_images")
+
+
+@pytest.mark.skipif(not REAL_IMAGES.is_dir(), reason="shared real data absent")
+@pytest.mark.parametrize("name", ["IgorIBWReader_ImageStack_BTFO_DSO.ibw", "IgorIBWReader_P0089OP0027.ibw",
+                                  "PMN28Pt0000.h5", "PTO_Funakubo0001.h5"])
+def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_path, capsys, name):
+    """One k2 policy for every command: the k1 that ``stiffness`` finds in a file (tip height given, no
+    policy: Mindlin assumed by both), fed to ``resonances`` with the same lever, puts the first contact
+    resonance where the file says, to 1e-6."""
+    import json
+
+    from pfmdyn import cli
+    from pfmdyn.io.instruments import read_instrument
+
+    path = REAL_IMAGES / name
+    fields = read_instrument(path).fields
+    lever = ["--length", str(fields.get("length", 240e-6)), "--tip-height", "12e-6"]
+    out = tmp_path / "s.json"
+    assert cli.main(["stiffness", str(path), *lever, "--json", str(out)]) == 0
+    k1 = json.loads(out.read_text())["k1"]
+    assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
+                     repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["contact_hz"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
+    assert "Mindlin" in doc["k2_policy"] and "k2 policy: k2 tied to k1 by Mindlin" in capsys.readouterr().out

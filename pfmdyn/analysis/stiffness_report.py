@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..cantilever import DEFAULT_POISSON, Cantilever, Contact
+from ..cantilever import Cantilever, Contact
 from ..errors import UserError
 from ..generated import formulas
 from . import contact_resonance as cr
@@ -220,21 +220,16 @@ def _check_inputs(contact_hz, modes, stderrs):
 
 
 def _lateral(lever: Cantilever, contact: Contact, default: str) -> tuple[Contact, str]:
-    """The k2 law and its words: stated, else ``default`` ("tie": Mindlin; "zero": the L1/L method)."""
+    """The k2 law and its words: stated, else ``default`` ("tie": :meth:`Contact.policy`, the commands'
+    one; "zero": the L1/L method's k2 = 0)."""
     stated_nonzero = (contact.k2 or 0.0) > 0 or (contact.ratio or 0.0) > 0
     if stated_nonzero:
         cr.require_tip_height(lever, "a lateral contact stiffness k2")
-    if contact.k2 is not None or contact.ratio is not None:
-        return contact, contact.describe_k2()
-    if lever.tip_height is None and lever.tilt == 0.0:
-        return Contact(), ("k2 left out: without a tip height the lateral spring does not act "
-                           "on the lever")
-    if default == "zero":
+    if default == "zero" and contact.k2 is None and contact.ratio is None and not (
+            lever.tip_height is None and lever.tilt == 0.0):
         return Contact(), ("k2 = 0, the L1/L method's assumption (give k2, k2_over_k1 or poisson to "
                            "include it)")
-    tied = Contact(poisson=DEFAULT_POISSON)
-    return tied, (f"k2 tied to k1 by Mindlin at Poisson's ratio {DEFAULT_POISSON:g} (assumed: k2 = {tied.ratio:.3g} k1; "
-                  "give k2, k2_over_k1 or poisson)")
+    return Contact(k2=contact.k2, k2_over_k1=contact.k2_over_k1, poisson=contact.poisson).policy(lever)
 
 
 def _same(a: dict, b: dict) -> bool:

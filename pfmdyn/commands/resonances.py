@@ -24,7 +24,8 @@ def add_arguments(parser) -> None:
     '12'
     """
     parser.epilog = ("tilt: degrees, positive when the free end is nearer the sample than the clamp "
-                     "(the usual mounting, 10-15 deg). No k2 and no k2 policy: k2 = 0.")
+                     "(the usual mounting, 10-15 deg). No k2 and no k2 policy: k2 tied to k1 by Mindlin at Poisson's "
+                     "ratio 0.3 where it acts (a tip height or a tilt), as in pfmdyn stiffness and map.")
     flags.add_lever(parser, required=("spring_constant", "free_resonance", "length"))
     flags.add_contact(parser)
     flags.add_damping(parser)
@@ -44,9 +45,15 @@ def run(args) -> int:
     if contact.k1 is None and (contact.k2 is not None or contact.k2_over_k1 is not None
                                or contact.poisson is not None or contact.contact_loss):
         raise UserError("a contact needs --k1")
+    policy = {}
+    if contact.k1 is not None:
+        contact, words = contact.policy(lever)
+        policy = {"k2_policy": words}
     result = resonances(lever, contact if contact.k1 is not None else None, modes)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     print(result.report())
-    flags.write_json(args.json, result.to_dict())
+    if policy:
+        print(f"k2 policy: {policy['k2_policy']}")
+    flags.write_json(args.json, {**result.to_dict(), **policy})
     return 0 if result.certified else 1

@@ -63,12 +63,14 @@ def run(args) -> int:
     check_writable(args.plot, figure=True)
     if not (math.isfinite(args.frequency) and args.frequency > 0):
         raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
-    lever, contact = _lever(args), flags.contact(args)
+    lever = _lever(args)
+    contact, policy = flags.contact(args).policy(lever)
     result = spot_analysis(lever, contact, args.frequency)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     print(report(result))
-    flags.write_json(args.json, result.to_dict())
+    print(f"k2 policy: {policy}")
+    flags.write_json(args.json, {**result.to_dict(), "k2_policy": policy})
     if args.plot:
         import numpy as np
 
