@@ -305,3 +305,20 @@ def test_amplitude_of_a_response_with_feedthrough(tmp_path):
     out = compare_sweeps(after, before, 0.9)
     truth = 0.02 * mass_per_length(case["k"], case["L"], case["f_vac"]) * case["L"]
     assert out["effect"] == "added_mass" and out["parameters"]["added_mass"]["value"] == pytest.approx(truth, rel=0.03)
+
+
+def test_swapped_measurements_name_no_mass_and_say_so(tmp_path):
+    """The sweep with the mass given as the reference: the resonance rises, which no mass does.  No added
+    mass is named as determined (the no-mass twins of the mass candidates are there), and the report says
+    the files may be swapped."""
+    rng, case = lever_case(21)
+    case["g"] = 0.05
+    f, plain = sweep_of(rng, case)
+    rng2, _ = lever_case(21)
+    _, loaded = sweep_of(rng2, case, mass_ratio=0.01, x_m=1.0)
+    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, loaded, rng)), case["k"], case["L"],
+                       case["medium"], width=case["w"])
+    out = compare_sweeps(read_sweep_table(write_sweep(tmp_path / "a.txt", f, plain, rng)), before, None)
+    assert not (out["effect"] == "added_mass" and out["parameters"]["added_mass"]["determined"])
+    assert any("swapped" in note for note in out["notes"]) and "swapped" in out.report()
+    assert "damping+gain+background" in [row["effect"] for row in out["steps"]]

@@ -36,9 +36,11 @@ POSITION = Parameter("added_mass_position", "", 0.05, 1.0)
 
 CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
               ("gain+background", ("gain", "background")), ("added_mass", ("added_mass",)),
-              ("damping", ("damping",)), ("added_mass+gain+background", ("added_mass", "gain", "background")),
+              ("damping", ("damping",)), ("damping+gain+background", ("damping", "gain", "background")),
+              ("added_mass+gain+background", ("added_mass", "gain", "background")),
               ("added_mass+damping+gain+background", ("added_mass", "damping", "gain", "background")))
-"""The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted."""
+"""The explanations of an after-sweep tried by :func:`compare_sweeps`: a name and what is refitted.  Each
+mass candidate has its twin without the mass, so a mass is named only where the data need it."""
 
 
 POSITION_GRID = tuple(np.linspace(0.1, 1.0, 10))
@@ -122,8 +124,12 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
     ratio = parameter_entry(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
     parameters["added_mass_ratio"] = ratio
+    # A mass at its null bound, or within two standard errors of it, is no mass the data determine.
+    at_bound = not ratio["value"] > 2 * (ratio["stderr"] or 0.0) or ratio["value"] <= 1e-9
     parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
-                                "unit": "kg", "determined": named == "added_mass"}
+                                "unit": "kg", "determined": named == "added_mass" and not at_bound}
+    if at_bound:
+        parameters["added_mass"]["why"] = "at its bound (zero) or within two standard errors of it"
     if "damping" in best["refitted"]:
         i = len(params) - 1
         parameters["viscous_loss"] = {**parameter_entry(EXTRA_LOSS, fit.internal[i], fit.covariance[i, i]),
@@ -148,8 +154,23 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
               "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma,
-              "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma)}
+              "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma),
+              "notes": _order_notes(before, frequency, y, named, at_bound)}
     return SweepComparison(fields, lever=lever)
+
+
+def _order_notes(before: SweepFit, frequency, y, named: str, at_bound: bool) -> list[str]:
+    """A hint when the two measurements look swapped: the after-sweep's peak above the reference's (a
+    mass only lowers a resonance) while no mass explains it."""
+    f = np.asarray(frequency, float)
+    step = float(np.median(np.diff(np.sort(f)))) if f.size > 1 else 0.0
+    peak_after = float(f[np.argmax(np.abs(y))])
+    peak_before = float(f[np.argmax(np.abs(before.model(f)))])
+    if peak_after > peak_before + 2 * step and (named != "added_mass" or at_bound):
+        return [f"the peak rose from {peak_before:.6g} Hz (reference) to {peak_after:.6g} Hz: an added mass only "
+                "lowers a resonance; if a mass was added, the two files may be swapped (--reference takes the "
+                "measurement before)"]
+    return []
 
 
 def _free_reals(before: SweepFit, refit) -> list[tuple[int, bool]]:
@@ -260,7 +281,9 @@ class SweepComparison(Result):
                  f"  {'effect':<36} refitted  gap     BIC"]
         lines += [f"  {r['effect']:<36} {r['parameters']:>8}  {r['gap']:<7.3g} {r['bic']:.6g}" for r in d["steps"]]
         lines.append(f"  named: {d['effect']}" + (f" (nuisances: {', '.join(d['nuisances'])})" if d["nuisances"] else ""))
-        if d["effect"] == "added_mass":
+        if d["effect"] == "added_mass" and not p["added_mass"]["determined"]:
+            lines.append(f"  added_mass undetermined ({p['added_mass']['why']})")
+        elif d["effect"] == "added_mass":
             m = p["added_mass"]
             where = p["added_mass_position"]
             at = "undetermined (one mode); end-equivalent mass" if where.get("undetermined") else \
@@ -272,4 +295,5 @@ class SweepComparison(Result):
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
                      f"instrument: {instrument_text(d['reference_fit']['instrument_fit'])} -> {instrument_text(d['instrument_fit'])}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
+        lines += [f"  note: {text}" for text in d.get("notes", [])]
         return "\n".join(lines + unexplained_line(d.get("unexplained")))
