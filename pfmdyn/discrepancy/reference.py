@@ -168,7 +168,7 @@ def _order_notes(before: SweepFit, frequency, y, named: str, at_bound: bool) -> 
     peak_before = float(f[np.argmax(np.abs(before.model(f)))])
     if peak_after > peak_before + 2 * step and (named != "added_mass" or at_bound):
         return [f"the peak rose from {peak_before:.6g} Hz (reference) to {peak_after:.6g} Hz: an added mass only "
-                "lowers a resonance; if a mass was added, the two files may be swapped (--reference takes the "
+                "lowers a resonance; if a mass was added, the two files may be swapped (the reference is the "
                 "measurement before)"]
     return []
 
