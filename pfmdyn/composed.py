@@ -719,6 +719,58 @@ def _read_out(*args, drives=DRIVES) -> _WrittenOut:
     return lever
 
 
+KERNELS = True
+"""Whether read-outs without a probe run the compiled kernel (:mod:`pfmdyn.composed_kernels`); False:
+the NumPy forms (:class:`_WrittenOut`, :class:`_Lever`), the reference the tests hold it to."""
+
+
+class _Compiled:
+    """The read-out of :mod:`pfmdyn.composed_kernels` with :class:`_WrittenOut`'s interface: ``z`` and
+    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
+    values when ``names`` are given.
+
+    Examples
+    --------
+    >>> args = (2.5, 0.95, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_Compiled(*args).z, _WrittenOut(*args).z, rtol=1e-13, atol=0))
+    True
+    """
+
+    def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=DRIVES, names=()):
+        from . import composed_kernels as kernels
+
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        n = math.prod(self.shape)
+        flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
+        self.beta = np.ascontiguousarray(flat[0], complex)
+        self.k, self.L = flat[2], flat[7]
+        point = (self.beta, *flat[2:9], flat[10])
+        g = np.ascontiguousarray(np.real(flat[9]), float)
+        two = bool(np.any(g != 1.0)) or "gamma" in names
+        uc = np.ascontiguousarray(pieces.load_constant(self.beta, self.k, self.L) + 0 * self.beta, complex)
+        jump = _columns(pieces.point_jump(*point), n, complex)
+        at_tip = [p for p in names if p in _POINT]
+        partials = pieces.point_jump_partials(*point, wrt=at_tip)
+        djump = np.zeros((len(names), n, 12), complex)
+        for i, name in enumerate(names):
+            if name in partials:
+                djump[i] = _columns(partials[name], n, complex)
+        codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
+        kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
+        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
+        kernels.read_out(self.beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
+                         np.ascontiguousarray(self.k, complex), jump, djump, kinds, two, z, dz)
+        use = _drive_columns(drives, DRIVES)
+        self.z = z[:, :, use]
+        self._partials = {name: dz[:, i][:, :, use] for i, name in enumerate(names)}
+
+    def partials(self, names):
+        return {name: self._partials[name] for name in names}
+
+    out = _Lever.out
+
+
 def _written_out(names=(), probe=None) -> bool:
     """Whether a read-out is written out (:class:`_WrittenOut`, no assembly): all but a probe's and
     the partial w.r.t. ``gamma``, which the assembled system gives."""
@@ -739,7 +791,10 @@ def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_D
     >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
     [1.0]
     """
-    if _written_out(probe=probe):
+    if probe is None and KERNELS:
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        z = lever.z
+    elif _written_out(probe=probe):
         lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
         z = lever.z
     else:
@@ -791,7 +846,11 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     use = _drive_columns(drives, DRIVES)
-    if _written_out(names):
+    if KERNELS:      # every partial, gamma's too
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives, names=tuple(names))
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    elif _written_out(names):
         lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
