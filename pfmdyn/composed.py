@@ -743,12 +743,12 @@ class _Compiled:
         self.shape = np.broadcast_shapes(*(a.shape for a in args))
         n = math.prod(self.shape)
         flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
-        self.beta = np.ascontiguousarray(flat[0], complex)
-        self.k, self.L = flat[2], flat[7]
-        point = (self.beta, *flat[2:9], flat[10])
+        self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
+        beta = np.ascontiguousarray(flat[0], complex)
+        point = (beta, *flat[2:9], flat[10])
         g = np.ascontiguousarray(np.real(flat[9]), float)
         two = bool(np.any(g != 1.0)) or "gamma" in names
-        uc = np.ascontiguousarray(pieces.load_constant(self.beta, self.k, self.L) + 0 * self.beta, complex)
+        uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
         jump = _columns(pieces.point_jump(*point), n, complex)
         at_tip = [p for p in names if p in _POINT]
         partials = pieces.point_jump_partials(*point, wrt=at_tip)
@@ -759,11 +759,13 @@ class _Compiled:
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
-        kernels.read_out(self.beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
+        kernels.read_out(beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
                          np.ascontiguousarray(self.k, complex), jump, djump, kinds, two, z, dz)
         use = _drive_columns(drives, DRIVES)
-        self.z = z[:, :, use]
-        self._partials = {name: dz[:, i][:, :, use] for i, name in enumerate(names)}
+        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
+        self.z = z[:, :, use].real if real else z[:, :, use]
+        self._partials = {name: dz[:, i][:, :, use].real if real else dz[:, i][:, :, use]
+                          for i, name in enumerate(names)}
 
     def partials(self, names):
         return {name: self._partials[name] for name in names}
@@ -1021,7 +1023,37 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
     1.8751040687
     """
+    if KERNELS:
+        return _compiled_characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
     return _shaped(_transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g), gamma)
+
+
+def _compiled_characteristic(*args):
+    """:func:`characteristic` by the compiled kernel (:func:`pfmdyn.composed_kernels.characteristic`,
+    :func:`_transferred` step for step) for one lever or a column of levers against a row of ``beta``
+    (other shapes: :func:`_transferred`).
+
+    >>> args = (np.linspace(0.5, 30.0, 7), 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_compiled_characteristic(*args), _transferred(*args), rtol=1e-13, atol=0))
+    True
+    """
+    from . import composed_kernels as kernels
+
+    arrays = [np.asarray(a) for a in args]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    dtype = np.result_type(*arrays, float)
+    if all(a.ndim == 0 for a in arrays[1:]):        # one lever: its parameters once
+        params = np.array([[a.item() for a in arrays[1:]]], dtype)
+        beta = np.broadcast_to(arrays[0], shape).reshape(-1)
+    elif arrays[0].ndim == 1 and all(a.shape in ((), (a.size, 1)) for a in arrays[1:]):
+        # levers as a column against a row of beta (a start grid's)
+        params = np.stack([np.broadcast_to(a, shape[:1] + (1,))[:, 0] for a in arrays[1:]], -1).astype(dtype)
+        beta = arrays[0]
+    else:
+        return _shaped(_transferred(*args), args[8])
+    out = np.empty((len(params), beta.size), dtype)
+    kernels.characteristic(np.ascontiguousarray(beta, dtype), params, out)
+    return out.reshape(shape)
 
 
 def _tip_at_end(gamma) -> bool:

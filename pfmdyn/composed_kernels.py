@@ -30,28 +30,37 @@ _Q0, _Y0, _DRIVES = 4, 5, 6
 
 
 @numba.njit(cache=True)
+def _krylov_duncan(s):
+    """``(S, T, U, V)`` of ``|s| <= 1`` by their series (:func:`pfmdyn.generated.lever_pieces.krylov_duncan`)."""
+    u = s * s * s * s
+    h0 = h1 = h2 = h3 = s * 0.0
+    power = s * 0.0 + 1.0
+    for j in range(_SERIES.shape[1]):
+        h0, h1, h2, h3 = (h0 + _SERIES[0, j] * power, h1 + _SERIES[1, j] * power, h2 + _SERIES[2, j] * power,
+                          h3 + _SERIES[3, j] * power)
+        power = power * u
+    s2 = s * s
+    return s2 * s2 * h0 + 1.0, s * h1, s2 * h2, s2 * s * h3
+
+
+@numba.njit(cache=True)
 def _segment(beta, t, ell, uc, rows, load):
     """A segment of length ``ell`` read at ``t``: ``rows[n, j]`` the basis' ``d**n/ds**n`` (n = 0..4),
     ``load[n]`` the load's, per unit q0 (as :class:`pfmdyn.composed._Segment`).  Returns whether it
     is short (the Krylov-Duncan field matrix; else the bounded basis)."""
     s = beta * t
     if abs(beta * ell) <= _LIMIT:
-        u = s * s * s * s
-        h = np.zeros(4, np.complex128)
-        power = 1.0 + 0j
-        for j in range(_SERIES.shape[1]):
-            for i in range(4):
-                h[i] += _SERIES[i, j] * power
-            power = power * u
-        s2 = s * s
-        s_1, tt, uu, vv = s2 * s2 * h[0], s * h[1], s2 * h[2], s2 * s * h[3]
-        kd = (s_1 + 1.0, tt, uu, vv)
+        kd = _krylov_duncan(s)
+        s_1, tt, uu, vv = kd[0] - 1.0, kd[1], kd[2], kd[3]
         for m in range(5):
             for j in range(4):
                 rows[m, j] = kd[(j - m) % 4]
         load[0], load[1], load[2], load[3], load[4] = -uc * s_1, -uc * vv, -uc * uu, -uc * tt, -uc * kd[0]
         return True
-    c, si, e_minus, e_end = np.cos(s), np.sin(s), np.exp(-s), np.exp(s - beta * ell)
+    if t == 0.0:            # a segment's start: the same numbers, without their functions' cost
+        c, si, e_minus, e_end = 1.0 + 0.0 * s, 0.0 * s, 1.0 + 0.0 * s, np.exp(s - beta * ell)
+    else:
+        c, si, e_minus, e_end = np.cos(s), np.sin(s), np.exp(-s), np.exp(s - beta * ell)
     for m in range(5):
         rows[m, 3] = e_end
         rows[m, 2] = e_minus if m % 2 == 0 else -e_minus
@@ -220,6 +229,16 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
             moves_start[1], moves_start[3] = 1.0, -1.0
             moves_end[spot], moves_start[spot] = (1.0, 0.0) if before else (-1.0, -1.0)
         for b in range(batches):
+            same = -1              # a spot at the tip or the free end reads their evaluation
+            if b == spot:
+                for a in range(1, spot, 2):
+                    if t_at[a] == t_at[b] and ell_at[a] == ell_at[b]:
+                        same = a
+            if same >= 0:
+                short[b] = short[same]
+                rows[b], load[b] = rows[same], load[same]
+                E[b], P[b] = E[same], P[same]
+                continue
             short[b] = _segment(beta[i], t_at[b], ell_at[b], 1.0, rows[b], load[b])
             if two and short[b] and (b == 2 or b == 3 or (b == spot and not before)):
                 for m in range(5):      # beyond the tip: the moment and shear first (_REORDERED)
@@ -363,3 +382,74 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
                     for j in range(size):
                         v += spot_per_row[m, j] * q[j, d]
                     dz[i, p, m, d] = (dz[i, p, m, d] if moved else 0.0) + v
+
+
+_point_jump = numba.njit(cache=True)(pieces.point_jump)
+_BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
+_PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+
+
+@numba.njit(cache=True)
+def characteristic(beta, params, out):
+    """:func:`pfmdyn.composed.characteristic` of each lever ``params[r]`` (``k, kvv, kll, kvl, H, L, mu,
+    gamma, rho_g``) at each ``beta[i]``, ``out[r, i]`` (``_transferred`` step for step): the clamp's
+    segment per unit of its two unknowns ``R``, the tip's jump across, and with the tip set back the
+    free segment's minors; times the segments' factors."""
+    rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
+    R = np.empty((4, 2), out.dtype)
+    T = np.empty((4, 2), out.dtype)
+    E = np.empty((6, 4), out.dtype)
+    v = np.empty(6, out.dtype)
+    for n in range(out.size):
+        r, i = n // beta.shape[0], n % beta.shape[0]
+        p = params[r]
+        b, g = beta[i], p[7].real
+        s = b * g
+        if _segment(b, g, g, 1.0, rows, load):
+            for m in range(4):
+                for c in range(2):
+                    R[m, c] = rows[m, 2 + c]
+            factor = np.exp(-s)
+        else:
+            B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+            for m in range(4):
+                R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
+                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
+            factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
+        J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
+        for c in range(2):
+            T[0, c], T[1, c] = R[0, c], R[1, c]
+            T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
+            T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
+        if g == 1.0:
+            out[r, i] = (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+            continue
+        ell = 1.0 - g
+        s = b * ell
+        if abs(s) <= _LIMIT:
+            K = _krylov_duncan(s)
+            for q in range(6):
+                a, c = _PAIRS[q]
+                v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
+            beyond = np.exp(-s)
+        else:
+            _segment(b, 0.0, ell, 1.0, rows, load)
+            E[:4] = rows[:4]
+            _segment(b, ell, ell, 1.0, rows, load)
+            E[4:] = rows[2:4]
+            for kk in range(6):
+                r0, r1 = _PAIRS[5 - kk]
+                total = s * 0.0
+                for q in range(6):
+                    a, c = _PAIRS[q]
+                    gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
+                    c0, c1 = _PAIRS[5 - q]
+                    sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
+                    total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+                v[kk] = total
+            beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
+        total = s * 0.0
+        for q in range(6):
+            a, c = _PAIRS[q]
+            total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
+        out[r, i] = total * (factor * beyond)
