@@ -31,7 +31,8 @@ _Q0, _Y0, _DRIVES = 4, 5, 6
 
 @numba.njit(cache=True)
 def _krylov_duncan(s):
-    """``(S, T, U, V)`` of ``|s| <= 1`` by their series (:func:`pfmdyn.generated.lever_pieces.krylov_duncan`)."""
+    """``(S - 1, T, U, V)`` of ``|s| <= 1`` by their series (:func:`pfmdyn.generated.lever_pieces.krylov_duncan`:
+    ``S - 1`` free of cancellation)."""
     u = s * s * s * s
     h0 = h1 = h2 = h3 = s * 0.0
     power = s * 0.0 + 1.0
@@ -40,7 +41,7 @@ def _krylov_duncan(s):
                           h3 + _SERIES[3, j] * power)
         power = power * u
     s2 = s * s
-    return s2 * s2 * h0 + 1.0, s * h1, s2 * h2, s2 * s * h3
+    return s2 * s2 * h0, s * h1, s2 * h2, s2 * s * h3
 
 
 @numba.njit(cache=True)
@@ -50,8 +51,8 @@ def _segment(beta, t, ell, uc, rows, load):
     is short (the Krylov-Duncan field matrix; else the bounded basis)."""
     s = beta * t
     if abs(beta * ell) <= _LIMIT:
-        kd = _krylov_duncan(s)
-        s_1, tt, uu, vv = kd[0] - 1.0, kd[1], kd[2], kd[3]
+        s_1, tt, uu, vv = _krylov_duncan(s)
+        kd = (s_1 + 1.0, tt, uu, vv)
         for m in range(5):
             for j in range(4):
                 rows[m, j] = kd[(j - m) % 4]
@@ -427,7 +428,8 @@ def characteristic(beta, params, out):
         ell = 1.0 - g
         s = b * ell
         if abs(s) <= _LIMIT:
-            K = _krylov_duncan(s)
+            s_1, tt, uu, vv = _krylov_duncan(s)
+            K = (s_1 + 1.0, tt, uu, vv)
             for q in range(6):
                 a, c = _PAIRS[q]
                 v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
