@@ -18,7 +18,9 @@ Derivatives come from the same system (``dc = A^-1 (db - dA c)``), and the chara
 determinant, scaled to be continuous across the two bases: written out from the segments' values
 (the Schur complements of the clamp's rows and of the segment beyond the tip), not assembled, as
 are its partials with the tip at the end and the read-outs but a probe's and the ``gamma`` partial
-(:class:`_WrittenOut`).
+(:class:`_WrittenOut`).  The read-outs without a probe, the characteristic and its partials with
+the tip at the end run compiled (:mod:`pfmdyn.composed_kernels`, the same steps per member; :data:`KERNELS`),
+the NumPy forms here their reference.
 
 Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
 lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
@@ -1098,6 +1100,30 @@ def _tip_at_end_and_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
     return det * factor, partials
 
 
+def _compiled_tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
+    """:func:`_tip_at_end_and_partials` of one lever by the compiled kernel
+    (:func:`pfmdyn.composed_kernels.tip_at_end_and_partials`).
+
+    >>> args = (np.array([2.5, 7.0]), 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.05, ["beta", "kvv", "mu"])
+    >>> (det, d), (want, d_want) = _compiled_tip_at_end(*args), _tip_at_end_and_partials(*args)
+    >>> bool(np.allclose(det, want, rtol=1e-13, atol=0) and all(np.allclose(d[p], d_want[p], rtol=1e-12, atol=0) for p in d))
+    True
+    """
+    from . import composed_kernels as kernels
+
+    beta = np.asarray(beta)
+    dtype = np.result_type(beta, k, kvv, kll, kvl, mu, rho_g, float)
+    flat = np.ascontiguousarray(beta.reshape(-1), dtype)
+    point = (flat, k, kvv, kll, kvl, H, L, mu, rho_g)
+    jump = _columns(pieces.point_jump(*point), len(flat), dtype)
+    partials = pieces.point_jump_partials(*point, wrt=names)
+    djump = np.stack([_columns(partials[p], len(flat), dtype) for p in names]) if names \
+        else np.zeros((0, len(flat), 12), dtype)
+    out, d = np.empty(len(flat), dtype), np.empty((len(names), len(flat)), dtype)
+    kernels.tip_at_end_and_partials(flat, jump, djump, names.index("beta") if "beta" in names else -1, out, d)
+    return out.reshape(beta.shape), {p: d[i].reshape(beta.shape) for i, p in enumerate(names)}
+
+
 def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
     """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
@@ -1110,8 +1136,9 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, 
     -1.875104
     """
     if "gamma" not in wrt and _tip_at_end(gamma):
-        det, partials = _tip_at_end_and_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
-                                                 [p for p in JACOBIAN_PARAMETERS if p in wrt])
+        tip_at_end = _compiled_tip_at_end if KERNELS and all(np.ndim(a) == 0 for a in (k, kvv, kll, kvl, H, L, mu, rho_g)) \
+            else _tip_at_end_and_partials
+        det, partials = tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, [p for p in JACOBIAN_PARAMETERS if p in wrt])
         return _shaped(det, gamma), tuple(_shaped(partials[p], gamma) if p in partials else None
                                           for p in JACOBIAN_PARAMETERS)
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in wrt)

@@ -455,3 +455,46 @@ def characteristic(beta, params, out):
             a, c = _PAIRS[q]
             total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
         out[r, i] = total * (factor * beyond)
+
+
+@numba.njit(cache=True)
+def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
+    """``pfmdyn.composed._tip_at_end_and_partials`` per member, step for step: the clamp's segment per
+    unit of its two unknowns ``R`` and ``dR/ds``, the tip's jump ``jump[n]`` across, ``det T[2:]`` times
+    the factor (``out[n]``), and by the product rule its partials ``partials[p, n]`` from the jump's
+    ``djump[p, n]`` (``at_beta``: the row of ``beta``, which also moves the segment; -1: none)."""
+    rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
+    R, dR = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
+    T, moved = np.empty((2, 2), out.dtype), np.empty((2, 2), out.dtype)
+    for i in range(beta.shape[0]):
+        s = beta[i]
+        if _segment(s, 1.0, 1.0, 1.0, rows, load):
+            for m in range(4):
+                for c in range(2):
+                    R[m, c], dR[m, c] = rows[m, 2 + c], rows[m + 1, 2 + c]
+            factor, d_log = np.exp(-s), -1.0
+        else:
+            B01 = np.exp(0.0 - s)
+            for m in range(4):
+                R[m, 0] = rows[m, 2] - rows[m, 0] * 1.0 - rows[m, 1] * -1.0
+                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B01
+                d3 = rows[m + 1, 3] - rows[m, 3]
+                dR[m, 0] = rows[m + 1, 2] - rows[m + 1, 0] * 1.0 - rows[m + 1, 1] * -1.0
+                dR[m, 1] = d3 - rows[m + 1, 0] * B01 - rows[m + 1, 1] * B01
+                dR[m, 1] += rows[m, 0] * B01 + rows[m, 1] * B01
+            factor, d_log = 1.0 / _BOUNDED_AT_START + 0.0 * s, 0.0
+        J = jump[i]
+        for m in range(2):
+            for c in range(2):
+                T[m, c] = R[2 + m, c] - J[2 * m] * R[0, c] - J[2 * m + 1] * R[1, c]
+        det = T[0, 0] * T[1, 1] - T[0, 1] * T[1, 0]
+        out[i] = det * factor
+        for p in range(djump.shape[0]):
+            dJ = djump[p, i]
+            for m in range(2):
+                for c in range(2):
+                    moved[m, c] = 0.0 - dJ[2 * m] * R[0, c] - dJ[2 * m + 1] * R[1, c]
+                    if p == at_beta:
+                        moved[m, c] += dR[2 + m, c] - J[2 * m] * dR[0, c] - J[2 * m + 1] * dR[1, c]
+            d = moved[0, 0] * T[1, 1] + T[0, 0] * moved[1, 1] - moved[0, 1] * T[1, 0] - T[0, 1] * moved[1, 0]
+            partials[p, i] = (d + det * d_log if p == at_beta else d) * factor
