@@ -39,7 +39,7 @@ CASES = {
     "band_viscous 2": ("band_viscous", 2, None),
     "band_air_setback 0": ("band_air_setback", 0, None),
     "band_spot 0": ("band_spot", 0, None),
-    "band_spot 0, spot at the end": ("band_spot", 0, 1.0),
+    "band_spot 0 (spot at the end)": ("band_spot", 0, 1.0),
 }
 """Name -> (class, seed, spot) of :func:`fe_beam.acquisition_case`."""
 
