@@ -187,6 +187,16 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
     its partials (zero for ``sigma`` and ``gamma``), ``uc`` the load constant; ``two``: the tip's
     point between two segments (set back, or at the end with ``gamma`` among the partials: the second
     of zero length), else the tip at the free end (``gamma`` unused).  NaN where the system is singular.
+
+    Examples
+    --------
+    >>> beta, point = np.array([2.5 + 0j]), (2.5, 2.0, 98.0, 52.0, 9.0, 1e-5, 2e-4, 0.1, 0.05)
+    >>> jump, uc = np.array([pieces.point_jump(*point)], complex), np.array([pieces.load_constant(2.5, 2.0, 2e-4)], complex)
+    >>> z, dz = np.empty((1, 2, 6), complex), np.empty((1, 0, 2, 6), complex)
+    >>> read_out(beta, np.array([1.0]), np.array([1.0]), uc, np.array([2.0 + 0j]), jump, np.zeros((0, 1, 12), complex),
+    ...          np.zeros(0, np.int64), False, z, dz)
+    >>> f"{(2.5 / 2e-4 * z[0, 1, 0]).real:.8g}"       # the slope at the free end per unit d1
+    '5363.3808'
     """
     n, segments = beta.shape[0], 2 if two else 1
     batches = 2 * segments + 1                  # each segment's two ends, then the spot
@@ -395,7 +405,15 @@ def characteristic(beta, params, out):
     """:func:`pfmdyn.composed.characteristic` of each lever ``params[r]`` (``k, kvv, kll, kvl, H, L, mu,
     gamma, rho_g``) at each ``beta[i]``, ``out[r, i]`` (``_transferred`` step for step): the clamp's
     segment per unit of its two unknowns ``R``, the tip's jump across, and with the tip set back the
-    free segment's minors; times the segments' factors."""
+    free segment's minors; times the segments' factors.
+
+    Examples
+    --------
+    >>> out = np.empty((1, 1))
+    >>> characteristic(np.array([1.8751040687119611]), np.array([[2.0, 0, 0, 0, 1e-5, 2e-4, 0, 1.0, 0]]), out)
+    >>> bool(abs(out[0, 0]) < 1e-15)                  # the free lever's first root
+    True
+    """
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
     R = np.empty((4, 2), out.dtype)
     T = np.empty((4, 2), out.dtype)
@@ -462,7 +480,19 @@ def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
     """``pfmdyn.composed._tip_at_end_and_partials`` per member, step for step: the clamp's segment per
     unit of its two unknowns ``R`` and ``dR/ds``, the tip's jump ``jump[n]`` across, ``det T[2:]`` times
     the factor (``out[n]``), and by the product rule its partials ``partials[p, n]`` from the jump's
-    ``djump[p, n]`` (``at_beta``: the row of ``beta``, which also moves the segment; -1: none)."""
+    ``djump[p, n]`` (``at_beta``: the row of ``beta``, which also moves the segment; -1: none).
+
+    Examples
+    --------
+    >>> point = (1.8751040687119611, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 0.0)     # the free lever's first root
+    >>> jump = np.array([pieces.point_jump(*point)], float)
+    >>> djump = np.array([[pieces.point_jump_partials(*point, wrt=("beta",))["beta"],
+    ...                    pieces.point_jump_partials(*point, wrt=("mu",))["mu"]]], float).swapaxes(0, 1)
+    >>> out, partials = np.empty(1), np.empty((2, 1))
+    >>> tip_at_end_and_partials(np.array([point[0]]), jump, djump, 0, out, partials)
+    >>> round(float(-partials[1, 0] / partials[0, 0]), 6)      # d beta1 / d mu: -beta1
+    -1.875104
+    """
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
     R, dR = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
     T, moved = np.empty((2, 2), out.dtype), np.empty((2, 2), out.dtype)
