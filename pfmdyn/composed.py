@@ -18,7 +18,9 @@ Derivatives come from the same system (``dc = A^-1 (db - dA c)``), and the chara
 determinant, scaled to be continuous across the two bases: written out from the segments' values
 (the Schur complements of the clamp's rows and of the segment beyond the tip), not assembled, as
 are its partials with the tip at the end and the read-outs but a probe's and the ``gamma`` partial
-(:class:`_WrittenOut`).
+(:class:`_WrittenOut`).  The read-outs without a probe, the characteristic and its partials with
+the tip at the end run compiled (:mod:`pfmdyn.composed_kernels`, the same steps per member; :data:`KERNELS`),
+the NumPy forms here their reference.
 
 Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
 lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
@@ -719,6 +721,60 @@ def _read_out(*args, drives=DRIVES) -> _WrittenOut:
     return lever
 
 
+KERNELS = True
+"""Whether read-outs without a probe run the compiled kernel (:mod:`pfmdyn.composed_kernels`); False:
+the NumPy forms (:class:`_WrittenOut`, :class:`_Lever`), the reference the tests hold it to."""
+
+
+class _Compiled:
+    """The read-out of :mod:`pfmdyn.composed_kernels` with :class:`_WrittenOut`'s interface: ``z`` and
+    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
+    values when ``names`` are given.
+
+    Examples
+    --------
+    >>> args = (2.5, 0.95, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_Compiled(*args).z, _WrittenOut(*args).z, rtol=1e-13, atol=0))
+    True
+    """
+
+    def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=DRIVES, names=()):
+        from . import composed_kernels as kernels
+
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        n = math.prod(self.shape)
+        flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
+        self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
+        beta = np.ascontiguousarray(flat[0], complex)
+        point = (beta, *flat[2:9], flat[10])
+        g = np.ascontiguousarray(np.real(flat[9]), float)
+        two = bool(np.any(g != 1.0)) or "gamma" in names
+        uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
+        jump = _columns(pieces.point_jump(*point), n, complex)
+        at_tip = [p for p in names if p in _POINT]
+        partials = pieces.point_jump_partials(*point, wrt=at_tip)
+        djump = np.zeros((len(names), n, 12), complex)
+        for i, name in enumerate(names):
+            if name in partials:
+                djump[i] = _columns(partials[name], n, complex)
+        codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
+        kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
+        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
+        kernels.read_out(beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
+                         np.ascontiguousarray(self.k, complex), jump, djump, kinds, two, z, dz)
+        use = _drive_columns(drives, DRIVES)
+        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
+        self.z = z[:, :, use].real if real else z[:, :, use]
+        self._partials = {name: dz[:, i][:, :, use].real if real else dz[:, i][:, :, use]
+                          for i, name in enumerate(names)}
+
+    def partials(self, names):
+        return {name: self._partials[name] for name in names}
+
+    out = _Lever.out
+
+
 def _written_out(names=(), probe=None) -> bool:
     """Whether a read-out is written out (:class:`_WrittenOut`, no assembly): all but a probe's and
     the partial w.r.t. ``gamma``, which the assembled system gives."""
@@ -739,7 +795,10 @@ def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_D
     >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
     [1.0]
     """
-    if _written_out(probe=probe):
+    if probe is None and KERNELS:
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        z = lever.z
+    elif _written_out(probe=probe):
         lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
         z = lever.z
     else:
@@ -791,7 +850,11 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     use = _drive_columns(drives, DRIVES)
-    if _written_out(names):
+    if KERNELS:      # every partial, gamma's too
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives, names=tuple(names))
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    elif _written_out(names):
         lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
@@ -962,7 +1025,37 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
     1.8751040687
     """
+    if KERNELS:
+        return _compiled_characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
     return _shaped(_transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g), gamma)
+
+
+def _compiled_characteristic(*args):
+    """:func:`characteristic` by the compiled kernel (:func:`pfmdyn.composed_kernels.characteristic`,
+    :func:`_transferred` step for step) for one lever or a column of levers against a row of ``beta``
+    (other shapes: :func:`_transferred`).
+
+    >>> args = (np.linspace(0.5, 30.0, 7), 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_compiled_characteristic(*args), _transferred(*args), rtol=1e-13, atol=0))
+    True
+    """
+    from . import composed_kernels as kernels
+
+    arrays = [np.asarray(a) for a in args]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    dtype = np.result_type(*arrays, float)
+    if all(a.ndim == 0 for a in arrays[1:]):        # one lever: its parameters once
+        params = np.array([[a.item() for a in arrays[1:]]], dtype)
+        beta = np.broadcast_to(arrays[0], shape).reshape(-1)
+    elif arrays[0].ndim == 1 and all(a.shape in ((), (a.size, 1)) for a in arrays[1:]):
+        # levers as a column against a row of beta (a start grid's)
+        params = np.stack([np.broadcast_to(a, shape[:1] + (1,))[:, 0] for a in arrays[1:]], -1).astype(dtype)
+        beta = arrays[0]
+    else:
+        return _shaped(_transferred(*args), args[8])
+    out = np.empty((len(params), beta.size), dtype)
+    kernels.characteristic(np.ascontiguousarray(beta, dtype), params, out)
+    return out.reshape(shape)
 
 
 def _tip_at_end(gamma) -> bool:
@@ -1007,6 +1100,30 @@ def _tip_at_end_and_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
     return det * factor, partials
 
 
+def _compiled_tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
+    """:func:`_tip_at_end_and_partials` of one lever by the compiled kernel
+    (:func:`pfmdyn.composed_kernels.tip_at_end_and_partials`).
+
+    >>> args = (np.array([2.5, 7.0]), 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.05, ["beta", "kvv", "mu"])
+    >>> (det, d), (want, d_want) = _compiled_tip_at_end(*args), _tip_at_end_and_partials(*args)
+    >>> bool(np.allclose(det, want, rtol=1e-13, atol=0) and all(np.allclose(d[p], d_want[p], rtol=1e-12, atol=0) for p in d))
+    True
+    """
+    from . import composed_kernels as kernels
+
+    beta = np.asarray(beta)
+    dtype = np.result_type(beta, k, kvv, kll, kvl, mu, rho_g, float)
+    flat = np.ascontiguousarray(beta.reshape(-1), dtype)
+    point = (flat, k, kvv, kll, kvl, H, L, mu, rho_g)
+    jump = _columns(pieces.point_jump(*point), len(flat), dtype)
+    partials = pieces.point_jump_partials(*point, wrt=names)
+    djump = np.stack([_columns(partials[p], len(flat), dtype) for p in names]) if names \
+        else np.zeros((0, len(flat), 12), dtype)
+    out, d = np.empty(len(flat), dtype), np.empty((len(names), len(flat)), dtype)
+    kernels.tip_at_end_and_partials(flat, jump, djump, names.index("beta") if "beta" in names else -1, out, d)
+    return out.reshape(beta.shape), {p: d[i].reshape(beta.shape) for i, p in enumerate(names)}
+
+
 def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
     """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
@@ -1019,8 +1136,9 @@ def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, 
     -1.875104
     """
     if "gamma" not in wrt and _tip_at_end(gamma):
-        det, partials = _tip_at_end_and_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
-                                                 [p for p in JACOBIAN_PARAMETERS if p in wrt])
+        tip_at_end = _compiled_tip_at_end if KERNELS and all(np.ndim(a) == 0 for a in (k, kvv, kll, kvl, H, L, mu, rho_g)) \
+            else _tip_at_end_and_partials
+        det, partials = tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, [p for p in JACOBIAN_PARAMETERS if p in wrt])
         return _shaped(det, gamma), tuple(_shaped(partials[p], gamma) if p in partials else None
                                           for p in JACOBIAN_PARAMETERS)
     lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in wrt)

@@ -1,6 +1,7 @@
-"""The read-outs written out (``composed._WrittenOut``: the clamp and, beyond a set-back tip, the free
-end eliminated, the tip's 2 x 2 or 4 x 4 solved, no assembly), against the assembled system (the
-general path).
+"""The fast read-outs, compiled (``composed._Compiled``: the system assembled and solved per member in
+:mod:`pfmdyn.composed_kernels`) and written out (``composed._WrittenOut``: the clamp and, beyond a
+set-back tip, the free end eliminated, the tip's 2 x 2 or 4 x 4 solved, no assembly), against the
+assembled system in NumPy (the general path).
 
 Random levers as ``tests/test_fast_characteristic.py``'s (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4,
 tilt, tip mass, Q 5-500 with complex ``beta``), the tip at the end or set back to 0.7-1 L, the spot
@@ -46,12 +47,20 @@ def _case(seed):
 SEEDS = [*range(24), *range(100, 124)]
 
 
+@pytest.fixture(autouse=True, params=["compiled", "written out"])
+def fast(request, monkeypatch):
+    """Each test for both fast paths: the compiled kernel (:mod:`pfmdyn.composed_kernels`) and the
+    NumPy written-out forms."""
+    monkeypatch.setattr(composed, "KERNELS", request.param == "compiled")
+
+
 def _general(f, *args, **kwargs):
-    before, composed._written_out = composed._written_out, lambda *args, **kwargs: False
+    before = composed._written_out, composed.KERNELS
+    composed._written_out, composed.KERNELS = (lambda *args, **kwargs: False), False
     try:
         return f(*args, **kwargs)
     finally:
-        composed._written_out = before
+        composed._written_out, composed.KERNELS = before
 
 
 def _relative(got, want, scale=0.0):
@@ -104,6 +113,29 @@ def test_partials_match_the_assembled_system(seed):
                 scale = np.abs(want_values[i]) / np.where(at[name] == 0, 1.0, np.abs(at[name]))
                 exact = lambda m: _mp_partial(beta[m], sigma, p, name, drive)   # noqa: E731
                 _assert_close(jac[i][j], want_jac[i][j], scale, exact, exact_value, want_values[i])
+
+
+@pytest.mark.parametrize("seed", [0, 5, 100, 107, 113, 119])
+def test_tip_position_partial_matches_the_assembled_system(seed):
+    """The partial w.r.t. ``gamma`` (compiled: from the written-out form; the NumPy forms take it from
+    the assembled system, the tip at the end split into two segments), every drive, to TOLERANCE of
+    the larger of itself and ``|S / gamma|``."""
+    if not composed.KERNELS:
+        pytest.skip("the NumPy forms' gamma partial is the general path's")
+    p, beta, sigma = _case(seed)
+    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    values, jac = composed.slope_and_jacobian(*args, wrt=("gamma", "beta"), drives=composed.DRIVES)
+    want_values, want_jac = _general(composed.slope_and_jacobian, *args, wrt=("gamma", "beta"),
+                                     drives=composed.DRIVES)
+    j = composed.SPOT_JACOBIAN_PARAMETERS.index("gamma")
+    for i, drive in enumerate(composed.DRIVES):
+        got, want = jac[i][j], want_jac[i][j]
+        scale = np.maximum(np.abs(want), np.abs(want_values[i]) / p["gamma"])
+        # where they differ, both lose digits (the base drive beyond the tip at high beta): the compiled
+        # one within TOLERANCE plus four times the general one's error of the 70-digit partial
+        for m in np.flatnonzero(np.abs(got - want) > TOLERANCE * scale):
+            exact = _mp_partial(beta[m], sigma, p, "gamma", drive)
+            assert abs(got[m] - exact) <= TOLERANCE * scale[m] + 4 * abs(want[m] - exact), (drive, m)
 
 
 def _mp_partial(beta, sigma, p, name, drive):

@@ -27,7 +27,7 @@ from ..generated import formulas
 from .model import bounds
 from .undamped_modes import resonance_sensitivity, resonances, resonances_many
 
-__all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "match_starts"]
+__all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "match_starts"]
 
 
 def _summed(data):
@@ -227,6 +227,44 @@ def peak_match(roots, peaks, band, d_roots=None, unseen: bool = False):
     return out, jac
 
 
+def peak_scores(roots, peaks, band, unseen: bool = False) -> np.ndarray:
+    """``sum(peak_match(r, peaks, band, unseen=unseen) ** 2)`` for each resonance set ``r`` of ``roots``
+    at once (a start grid's: one set per grid point), the same numbers.
+
+    >>> roots = [np.array([100.0, 300.0]), np.array([]), np.array([90.0])]
+    >>> peaks, band = np.array([100.0]), (50.0, 400.0)
+    >>> want = [float(np.sum(peak_match(r, peaks, band) ** 2)) for r in roots]
+    >>> peak_scores(roots, peaks, band).tolist() == want
+    True
+    """
+    count = np.array([len(r) for r in roots], int)
+    out = np.full(len(roots), 10.0**2 * (len(peaks) + 1))
+    has = count > 0
+    if not has.any():
+        return out
+    R = np.full((int(has.sum()), int(count.max())), np.nan)
+    for row, r in enumerate(r for r in roots if len(r)):
+        R[row, :len(r)] = r
+    lp = np.log(peaks)
+    with np.errstate(invalid="ignore"):
+        lr = np.log(R)
+        there = np.min(np.where(np.isnan(R)[:, None, :], np.inf, np.abs(lr[:, None, :] - lp[None, :, None])), axis=2)
+        inside = (R > band[0]) & (R < band[1]) & (not unseen)
+        partner = np.argmin(np.abs(lp[None, None, :] - lr[:, :, None]), axis=2)
+        gaps = np.where(inside, lr - lp[partner], 0.0)
+    # summed in peak_match's order (the roots inside first, one after another; NumPy's pairwise
+    # sum from eight terms on), for the same bits
+    gaps = np.take_along_axis(gaps, np.argsort(~inside, axis=1, kind="stable"), 1) ** 2
+    total = np.zeros(len(gaps))
+    for column in gaps.T:
+        total = total + column
+    for row in np.flatnonzero(inside.sum(1) >= 8):
+        total[row] = np.sum(gaps[row, :inside[row].sum()])
+    back = np.sqrt(total)
+    out[has] = np.sum(np.concatenate([there, back[:, None]], axis=1) ** 2, axis=1)
+    return out
+
+
 def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):
     """Least-squares match of the model's resonances to the peaks from ``start``, moving the
     parameters where ``moving`` is True; the Jacobian comes from the resonances'
@@ -281,7 +319,7 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     for e in extra:
         grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
         roots = resonances_many(model, grid, True, band[1] * 1.3)
-        score = [float(np.sum(peak_match(r, peaks, band, unseen=unseen) ** 2)) for r in roots]
+        score = peak_scores(roots, peaks, band, unseen)
         best_k1 = {}
         for i in np.argsort(score):
             best_k1.setdefault(round(float(grid[i][0]), 6), i)

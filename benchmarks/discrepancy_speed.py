@@ -1,0 +1,141 @@
+"""Benchmark: ``pfmdyn discrepancy`` on band-limited spectra against the design of 478d53d.
+
+Issue 38's goal: one band-limited spectrum (200-600 points) at least 6x faster than at
+:data:`BASELINE`, every report unchanged.  The cases are fixed-seed spectra of
+:func:`fe_beam.acquisition_case` (:data:`CASES`: viscous damping, a set-back tip, the laser spot
+away from the end and at it).  The baseline is checked out into a temporary git worktree
+(:func:`compose._baseline_tree`); each case runs in a fresh interpreter per design, the designs
+alternating, the best of :data:`REPEAT` runs kept (spectrum generation and imports excluded,
+one BLAS thread as the command runs; the process's CPU seconds, which a shared machine's load
+changes less than the wall clock, and the wall clock beside them).  Every report's JSON is compared with the baseline's: the
+named effects, mechanisms and verdicts identical, every number within :data:`RTOL`.
+
+Run ``python benchmarks/discrepancy_speed.py [--repeat N] [--cases a,b]``; results:
+``benchmarks/results/discrepancy_speed.md``.  Ratios are baseline / current (above 1: faster
+now); the machine's load is printed beside them (the cores may be shared).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from compose import _baseline_tree
+from recording import recorded
+
+ROOT = Path(__file__).resolve().parent.parent
+BASELINE = "478d53d"
+REPEAT = 3
+RTOL, ATOL = 1e-6, 1e-12
+"""Tolerances of the reports' numbers: relative (the fits converge to the same point, not the same
+bits), and absolute for a value at zero (a tip mass at its null bound: 1e-14 or 1e-13 of rounding)."""
+CASES = {
+    "band_viscous 2": ("band_viscous", 2, None),
+    "band_air_setback 0": ("band_air_setback", 0, None),
+    "band_spot 0": ("band_spot", 0, None),
+    "band_spot 0 (spot at the end)": ("band_spot", 0, 1.0),
+}
+"""Name -> (class, seed, spot) of :func:`fe_beam.acquisition_case`."""
+
+# Run in a fresh interpreter in either tree: prints the seconds of the analysis, writes the report.
+WORKER = """
+import json, sys, tempfile, time
+from pathlib import Path
+sys.path.insert(0, {tests!r})
+from fe_beam import acquisition_case
+from threadpoolctl import threadpool_limits
+from pfmdyn.discrepancy.select import TIME_BUDGET_S
+from pfmdyn.discrepancy.spectrum import analyse
+from pfmdyn.io.tables import read
+text, _ = acquisition_case({seed}, {kind!r}, spot={spot!r})
+with tempfile.TemporaryDirectory() as tmp:
+    path = Path(tmp) / "s.csv"
+    path.write_text(text)
+    data = read(path)
+started, cpu = time.perf_counter(), time.process_time()
+with threadpool_limits(1, user_api="blas"):
+    report = analyse(data, time_budget_s=TIME_BUDGET_S)
+seconds, cpu = time.perf_counter() - started, time.process_time() - cpu
+Path({out!r}).write_text(json.dumps(report.to_dict(), default=str))
+print(seconds, cpu, len(data.frequency_hz))
+"""
+
+
+def run_case(case: str, cwd: Path, env: dict, out: Path) -> tuple[float, float, int]:
+    """Seconds (wall clock and the process's CPU) of one case's analysis in a fresh interpreter (its
+    report written to ``out``) and its rows."""
+    kind, seed, spot = CASES[case]
+    code = WORKER.format(tests=str(ROOT / "tests"), seed=seed, kind=kind, spot=spot, out=str(out))
+    done = subprocess.run([sys.executable, "-c", code], cwd=cwd, env=env, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{case} in {cwd} failed: {done.stderr[-2000:]}")
+    seconds, cpu, rows = done.stdout.split()[-3:]
+    return float(seconds), float(cpu), int(rows)
+
+
+def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
+    """Where two reports (parsed JSON) differ: strings and structure exactly, numbers beyond ``rtol``
+    (or :data:`ATOL` near zero).
+
+    >>> differences({"a": [1.0, "x"], "b": 2.0}, {"a": [1.0 + 1e-9, "x"], "b": 2.1})
+    ['b: 2.0 != 2.1']
+    """
+    if isinstance(new, dict) and isinstance(old, dict):
+        if new.keys() != old.keys():
+            return [f"{where}: keys {sorted(new.keys() ^ old.keys())}"]
+        return [d for k in new for d in differences(new[k], old[k], f"{where}.{k}".lstrip("."), rtol)]
+    if isinstance(new, list) and isinstance(old, list):
+        if len(new) != len(old):
+            return [f"{where}: {len(new)} != {len(old)} items"]
+        return [d for i, (a, b) in enumerate(zip(new, old)) for d in differences(a, b, f"{where}[{i}]", rtol)]
+    numbers = (int, float)
+    if isinstance(new, numbers) and isinstance(old, numbers) and not isinstance(new, bool):
+        same = (math.isnan(new) and math.isnan(old)) or math.isclose(new, old, rel_tol=rtol, abs_tol=ATOL)
+        return [] if same else [f"{where}: {new!r} != {old!r}"]
+    return [] if new == old else [f"{where}: {new!r} != {old!r}"]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", default=BASELINE, help="commit of the previous design")
+    parser.add_argument("--repeat", type=int, default=REPEAT, help="runs per case and design (the best kept)")
+    parser.add_argument("--cases", default=",".join(CASES), help="comma-separated names of CASES")
+    args = parser.parse_args()
+    print(f"machine load at start: {os.getloadavg()[0]:.2f} (2 cores; shared)")
+    with tempfile.TemporaryDirectory() as tmp:
+        base, base_env = _baseline_tree(args.baseline, Path(tmp))
+        now_env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        trees = {"current": (ROOT, now_env), "baseline": (base, base_env)}
+        try:
+            print("\n| case | rows | baseline CPU s (wall) | current CPU s (wall) | speed-up, CPU (wall) | load | report |"
+                  "\n|---|---|---|---|---|---|---|")
+            ratios = []
+            for case in args.cases.split(","):
+                times = {name: [math.inf, math.inf] for name in trees}
+                reports = {}
+                for _ in range(args.repeat):
+                    for name, (cwd, env) in trees.items():
+                        out = Path(tmp) / f"{name}.json"
+                        seconds, cpu, rows = run_case(case, cwd, env, out)
+                        times[name] = [min(times[name][0], cpu), min(times[name][1], seconds)]
+                        reports[name] = json.loads(out.read_text())
+                diff = differences(reports["current"], reports["baseline"])
+                (old, old_wall), (new, new_wall) = times["baseline"], times["current"]
+                ratios.append(old / new)
+                verdict = "unchanged" if not diff else f"CHANGED: {'; '.join(diff[:4])}"
+                print(f"| {case} | {rows} | {old:.1f} ({old_wall:.1f}) | {new:.1f} ({new_wall:.1f}) | {old / new:.2f} "
+                      f"({old_wall / new_wall:.2f}) | {os.getloadavg()[0]:.1f} | {verdict} |")
+            print(f"\nmedian speed-up (CPU) {statistics.median(ratios):.2f} (target >= 6)")
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT, check=False)
+
+
+if __name__ == "__main__":
+    with recorded("discrepancy_speed"):
+        main()

@@ -1,0 +1,530 @@
+"""Compiled kernels of the composed lever (:mod:`pfmdyn.composed`): the read-out per frequency.
+
+The written-out read-out of :class:`pfmdyn.composed._WrittenOut` (each segment's outer rows
+eliminated, the tip's 2 x 2 or 4 x 4 solved: well conditioned from the quasi-static ``beta`` up, where
+the assembled system is not), step for step per member in a compiled loop (numba), with its partials
+(those of ``gamma`` too, which the NumPy forms take from the assembled system): no NumPy call and no
+allocation per member.  The NumPy forms are the reference: ``tests/test_fast_readouts.py`` holds
+both fast paths to the assembled system and, where both lose digits alike, to the 70-digit beam.
+
+Imported lazily by :mod:`pfmdyn.composed` (numba's import and the on-disk cache's load stay out of
+the command line's start-up).
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .generated import lever_pieces as pieces
+
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out"]
+
+BETA, SIGMA, K, GAMMA, TIP = range(5)
+"""How a parameter enters (the codes of :func:`read_out`'s ``kinds``): ``beta`` moves every
+segment, the load and the tip; ``sigma`` the read point; ``k`` the load and the tip; ``gamma`` the
+segments' ends; any other of the tip's parameters its jump alone."""
+_SERIES = np.array(pieces.KD_SERIES)
+_LIMIT = pieces.KD_SERIES_LIMIT
+_Q0, _Y0, _DRIVES = 4, 5, 6
+"""The load's and the base's columns among the drives (``d1, d2, f0, m0, q0, y0``)."""
+
+
+@numba.njit(cache=True)
+def _krylov_duncan(s):
+    """``(S - 1, T, U, V)`` of ``|s| <= 1`` by their series (:func:`pfmdyn.generated.lever_pieces.krylov_duncan`:
+    ``S - 1`` free of cancellation)."""
+    u = s * s * s * s
+    h0 = h1 = h2 = h3 = s * 0.0
+    power = s * 0.0 + 1.0
+    for j in range(_SERIES.shape[1]):
+        h0, h1, h2, h3 = (h0 + _SERIES[0, j] * power, h1 + _SERIES[1, j] * power, h2 + _SERIES[2, j] * power,
+                          h3 + _SERIES[3, j] * power)
+        power = power * u
+    s2 = s * s
+    return s2 * s2 * h0, s * h1, s2 * h2, s2 * s * h3
+
+
+@numba.njit(cache=True)
+def _segment(beta, t, ell, uc, rows, load):
+    """A segment of length ``ell`` read at ``t``: ``rows[n, j]`` the basis' ``d**n/ds**n`` (n = 0..4),
+    ``load[n]`` the load's, per unit q0 (as :class:`pfmdyn.composed._Segment`).  Returns whether it
+    is short (the Krylov-Duncan field matrix; else the bounded basis)."""
+    s = beta * t
+    if abs(beta * ell) <= _LIMIT:
+        s_1, tt, uu, vv = _krylov_duncan(s)
+        kd = (s_1 + 1.0, tt, uu, vv)
+        for m in range(5):
+            for j in range(4):
+                rows[m, j] = kd[(j - m) % 4]
+        load[0], load[1], load[2], load[3], load[4] = -uc * s_1, -uc * vv, -uc * uu, -uc * tt, -uc * kd[0]
+        return True
+    if t == 0.0:            # a segment's start: the same numbers, without their functions' cost
+        c, si, e_minus, e_end = 1.0 + 0.0 * s, 0.0 * s, 1.0 + 0.0 * s, np.exp(s - beta * ell)
+    else:
+        c, si, e_minus, e_end = np.cos(s), np.sin(s), np.exp(-s), np.exp(s - beta * ell)
+    for m in range(5):
+        rows[m, 3] = e_end
+        rows[m, 2] = e_minus if m % 2 == 0 else -e_minus
+    for m, (a, b) in enumerate(((c, si), (-si, c), (-c, -si), (si, -c), (c, si))):
+        rows[m, 0], rows[m, 1] = a, b
+    load[0] = uc
+    for m in range(1, 5):
+        load[m] = 0.0
+    return False
+
+
+@numba.njit(cache=True)
+def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, k, short, rows, load, dE, dP):
+    """``(dE, dP)`` (rows 0..3) w.r.t. a parameter of ``kind`` (:meth:`pfmdyn.composed._Segment.derivative`,
+    and the load's ``-P/k``); ``moves_end``, ``moves_start``: ``d ell/d gamma``, ``d t/d gamma``."""
+    for m in range(4):
+        dP[m] = 0.0
+        for j in range(4):
+            dE[m, j] = 0.0
+    if kind == BETA:
+        for m in range(4):
+            for j in range(4):
+                dE[m, j] = t * rows[m + 1, j]
+            if not short:
+                dE[m, 3] += ell * -rows[m, 3]
+            dP[m] = t * load[m + 1] - 4 * load[m] / beta
+    elif kind == GAMMA:
+        ds = moves_start * beta
+        for m in range(4):
+            for j in range(4):
+                dE[m, j] = ds * rows[m + 1, j]
+            if not short:
+                dE[m, 3] += moves_end * beta * -rows[m, 3]
+            dP[m] = ds * load[m + 1]
+    elif kind == SIGMA:
+        for m in range(4):
+            for j in range(4):
+                dE[m, j] = beta * rows[m + 1, j]
+            dP[m] = beta * load[m + 1]
+    elif kind == K:
+        for m in range(4):
+            dP[m] = -load[m] / k
+
+
+@numba.njit(cache=True)
+def _inverse(M, out, work, pivots):
+    """``M^-1`` into ``out`` (2 x 2 by the adjugate, larger by LU with partial pivoting, as
+    :func:`pfmdyn.composed._small_inverse`); False where ``M`` is singular."""
+    n = M.shape[0]
+    if n == 2:
+        det = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
+        if det == 0:
+            return False
+        out[0, 0], out[0, 1], out[1, 0], out[1, 1] = M[1, 1] / det, -M[0, 1] / det, -M[1, 0] / det, M[0, 0] / det
+        return True
+    work[:, :] = M
+    for c in range(n):
+        p, size = c, abs(work[c, c])
+        for r in range(c + 1, n):
+            if abs(work[r, c]) > size:
+                p, size = r, abs(work[r, c])
+        if not (size > 0.0 and np.isfinite(size)):
+            return False
+        pivots[c] = p
+        if p != c:
+            for j in range(n):
+                work[c, j], work[p, j] = work[p, j], work[c, j]
+        for r in range(c + 1, n):
+            f = work[r, c] / work[c, c]
+            work[r, c] = f
+            for j in range(c + 1, n):
+                work[r, j] -= f * work[c, j]
+    out[:, :] = 0.0
+    for c in range(n):
+        out[c, c] = 1.0
+    for c in range(n):
+        p = pivots[c]
+        if p != c:
+            for j in range(n):
+                out[c, j], out[p, j] = out[p, j], out[c, j]
+    for j in range(n):
+        for r in range(n):
+            for i in range(r):
+                out[r, j] -= work[r, i] * out[i, j]
+        for r in range(n - 1, -1, -1):
+            for i in range(r + 1, n):
+                out[r, j] -= work[r, i] * out[i, j]
+            out[r, j] /= work[r, r]
+    return True
+
+
+@numba.njit(cache=True)
+def _product(A, B, out):
+    """``out = A @ B`` (small, no allocation)."""
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            v = 0j
+            for m in range(A.shape[1]):
+                v += A[i, m] * B[m, j]
+            out[i, j] = v
+
+
+@numba.njit(cache=True)
+def _across(V, J, two, out):
+    """What the tip's rows ask of a state ``V`` (4 x drives) left of it (:meth:`pfmdyn.composed._WrittenOut._across`):
+    the jump's ``V[2:] - J V[:2]``, after continuity's ``V[:2]`` when a segment lies beyond."""
+    first = 2 if two else 0
+    for d in range(V.shape[1]):
+        if two:
+            out[0, d], out[1, d] = V[0, d], V[1, d]
+        for r in range(2):
+            out[first + r, d] = V[2 + r, d] - J[r, 0] * V[0, d] - J[r, 1] * V[1, d]
+
+
+@numba.njit(cache=True)
+def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
+    """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, 6]``, and its partials
+    ``dz[n, p, 2, 6]`` w.r.t. parameters of ``kinds`` (:data:`BETA` ...), per member ``n``: the
+    written-out form of :class:`pfmdyn.composed._WrittenOut` (each segment's outer rows eliminated,
+    the tip's 2 x 2 or 4 x 4 solved), step for step.
+
+    ``jump[n, 12]`` the tip's point (:func:`pfmdyn.generated.lever_pieces.point_jump`), ``djump[p, n, 12]``
+    its partials (zero for ``sigma`` and ``gamma``), ``uc`` the load constant; ``two``: the tip's
+    point between two segments (set back, or at the end with ``gamma`` among the partials: the second
+    of zero length), else the tip at the free end (``gamma`` unused).  NaN where the system is singular.
+
+    Examples
+    --------
+    >>> beta, point = np.array([2.5 + 0j]), (2.5, 2.0, 98.0, 52.0, 9.0, 1e-5, 2e-4, 0.1, 0.05)
+    >>> jump, uc = np.array([pieces.point_jump(*point)], complex), np.array([pieces.load_constant(2.5, 2.0, 2e-4)], complex)
+    >>> z, dz = np.empty((1, 2, 6), complex), np.empty((1, 0, 2, 6), complex)
+    >>> read_out(beta, np.array([1.0]), np.array([1.0]), uc, np.array([2.0 + 0j]), jump, np.zeros((0, 1, 12), complex),
+    ...          np.zeros(0, np.int64), False, z, dz)
+    >>> f"{(2.5 / 2e-4 * z[0, 1, 0]).real:.8g}"       # the slope at the free end per unit d1
+    '5363.3808'
+    """
+    n, segments = beta.shape[0], 2 if two else 1
+    batches = 2 * segments + 1                  # each segment's two ends, then the spot
+    spot = batches - 1
+    size = 2 * segments
+    rows, load = np.empty((batches, 5, 4), np.complex128), np.empty((batches, 5), np.complex128)
+    E, P = np.empty((batches, 4, 4), np.complex128), np.empty((batches, 4), np.complex128)
+    short = np.empty(batches, np.bool_)
+    t_at, ell_at = np.empty(batches), np.empty(batches)
+    # how each read point moves with the tip: d ell / d gamma, d t / d gamma
+    moves_end, moves_start = np.zeros(batches), np.zeros(batches)
+    dE, dP = np.empty((4, 4), np.complex128), np.empty(4, np.complex128)
+    B = np.empty((segments, 2, 2), np.complex128)
+    b0 = np.zeros((segments, 2, _DRIVES), np.complex128)
+    Gp_inv = np.empty((segments, 2, 2), np.complex128)
+    R, w = np.empty((4, 2), np.complex128), np.empty((4, _DRIVES), np.complex128)
+    M, r = np.empty((size, size), np.complex128), np.empty((size, _DRIVES), np.complex128)
+    X = np.empty((size, 2), np.complex128)
+    inverse, work = np.empty((size, size), np.complex128), np.empty((size, size), np.complex128)
+    pivots = np.empty(size, np.int64)
+    u = np.empty((size, _DRIVES), np.complex128)
+    coef = np.empty((segments, 4, _DRIVES), np.complex128)
+    J = np.empty((2, 2), np.complex128)
+    z_tip = np.empty((2, _DRIVES), np.complex128)
+    e = np.empty((batches, 4, _DRIVES), np.complex128)
+    fixed = np.empty((segments, 2, _DRIVES), np.complex128)
+    share = np.empty((4, _DRIVES), np.complex128)
+    q, across = np.empty((size, _DRIVES), np.complex128), np.empty((size, _DRIVES), np.complex128)
+    spot_per_row = np.empty((2, size), np.complex128)
+    tmp2, tmp4 = np.empty((2, 2), np.complex128), np.empty((4, 2), np.complex128)
+    for i in range(n):
+        g = gamma[i] if two else 1.0
+        before = (sigma[i] <= g) if two else True
+        t_at[0], ell_at[0], t_at[1], ell_at[1] = 0.0, g, g, g
+        if two:
+            t_at[2], ell_at[2], t_at[3], ell_at[3] = 0.0, 1.0 - g, 1.0 - g, 1.0 - g
+        t_at[spot] = sigma[i] if before else sigma[i] - g
+        ell_at[spot] = g if before else 1.0 - g
+        if two:
+            moves_end[0], moves_end[1], moves_end[2], moves_end[3] = 1.0, 1.0, -1.0, -1.0
+            moves_start[1], moves_start[3] = 1.0, -1.0
+            moves_end[spot], moves_start[spot] = (1.0, 0.0) if before else (-1.0, -1.0)
+        for b in range(batches):
+            same = -1              # a spot at the tip or the free end reads their evaluation
+            if b == spot:
+                for a in range(1, spot, 2):
+                    if t_at[a] == t_at[b] and ell_at[a] == ell_at[b]:
+                        same = a
+            if same >= 0:
+                short[b] = short[same]
+                rows[b], load[b] = rows[same], load[same]
+                E[b], P[b] = E[same], P[same]
+                continue
+            short[b] = _segment(beta[i], t_at[b], ell_at[b], 1.0, rows[b], load[b])
+            if two and short[b] and (b == 2 or b == 3 or (b == spot and not before)):
+                for m in range(5):      # beyond the tip: the moment and shear first (_REORDERED)
+                    a0, a1, a2, a3 = rows[b, m, 0], rows[b, m, 1], rows[b, m, 2], rows[b, m, 3]
+                    rows[b, m, 0], rows[b, m, 1], rows[b, m, 2], rows[b, m, 3] = a2, a3, a0, a1
+            for m in range(4):
+                for j in range(4):
+                    E[b, m, j] = rows[b, m, j]
+                P[b, m] = uc[i] * load[b, m]
+        for rr in range(2):
+            for j in range(2):
+                J[rr, j] = jump[i, 2 * rr + j]
+        # the segments' outer rows eliminated: c = [b0 - B u, u]
+        for rr in range(2):
+            for j in range(2):
+                B[0, rr, j] = E[0, rr, 2 + j]
+            b0[0, rr, _Q0] = -P[0, rr]
+        b0[0, 0, _Y0] = 1.0
+        ok = True
+        if two:
+            for rr in range(2):
+                for j in range(2):
+                    tmp2[rr, j] = E[3, 2 + rr, j]
+            ok = _inverse(tmp2, Gp_inv[1], work, pivots)
+            for rr in range(2):
+                for j in range(2):
+                    B[1, rr, j] = Gp_inv[1, rr, 0] * E[3, 2, 2 + j] + Gp_inv[1, rr, 1] * E[3, 3, 2 + j]
+                b0[1, rr, _Q0] = -(Gp_inv[1, rr, 0] * P[3, 2] + Gp_inv[1, rr, 1] * P[3, 3])
+        # the tip's rows on the unknowns
+        for seg in range(segments):
+            at = 1 if seg == 0 else 2
+            for m in range(4):
+                for j in range(2):
+                    R[m, j] = E[at, m, 2 + j] - (E[at, m, 0] * B[seg, 0, j] + E[at, m, 1] * B[seg, 1, j])
+                for d in range(_DRIVES):
+                    w[m, d] = E[at, m, 0] * b0[seg, 0, d] + E[at, m, 1] * b0[seg, 1, d]
+                w[m, _Q0] += P[at, m]
+            if seg == 0:
+                _across(R, J, two, X)
+                _across(w, J, two, r)
+                for m in range(size):
+                    for j in range(2):
+                        M[m, j] = X[m, j]
+                    for d in range(_DRIVES):
+                        r[m, d] = -r[m, d]
+                for rr in range(2):
+                    for d in range(4):
+                        r[size - 2 + rr, d] += jump[i, 4 + 4 * rr + d]
+            else:
+                for m in range(4):
+                    M[m, 2], M[m, 3] = -R[m, 0], -R[m, 1]
+                    for d in range(_DRIVES):
+                        r[m, d] += w[m, d]
+        ok = ok and _inverse(M, inverse, work, pivots)
+        if not ok:
+            z[i] = np.nan
+            dz[i] = np.nan
+            continue
+        _product(inverse, r, u)
+        for seg in range(segments):
+            for m in range(2):
+                for d in range(_DRIVES):
+                    coef[seg, m, d] = b0[seg, m, d] - (B[seg, m, 0] * u[2 * seg, d] + B[seg, m, 1] * u[2 * seg + 1, d])
+                    coef[seg, 2 + m, d] = u[2 * seg + m, d]
+        on = 0 if before else 1
+        for m in range(2):
+            for d in range(_DRIVES):
+                z[i, m, d] = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
+                    E[spot, m, 2] * coef[on, 2, d] + E[spot, m, 3] * coef[on, 3, d]
+                z_tip[m, d] = E[1, m, 0] * coef[0, 0, d] + E[1, m, 1] * coef[0, 1, d] + \
+                    E[1, m, 2] * coef[0, 2, d] + E[1, m, 3] * coef[0, 3, d]
+            z[i, m, _Q0] += P[spot, m]
+            z_tip[m, _Q0] += P[1, m]
+        if kinds.shape[0] == 0:
+            continue
+        # the spot's state per unit of the tip's rows: R inverse (R of its segment)
+        for m in range(2):
+            for j in range(2):
+                tmp4[m, j] = E[spot, m, 2 + j] - (E[spot, m, 0] * B[on, 0, j] + E[spot, m, 1] * B[on, 1, j])
+        for m in range(2):
+            for j in range(size):
+                spot_per_row[m, j] = tmp4[m, 0] * inverse[2 * on, j] + tmp4[m, 1] * inverse[2 * on + 1, j]
+        for p in range(kinds.shape[0]):
+            kind = kinds[p]
+            q[:, :] = 0.0
+            for rr in range(2):             # the jump's change: dJ z_tip + dG d
+                row = size - 2 + rr
+                for d in range(_DRIVES):
+                    q[row, d] = djump[p, i, 2 * rr] * z_tip[0, d] + djump[p, i, 2 * rr + 1] * z_tip[1, d]
+                for d in range(4):
+                    q[row, d] += djump[p, i, 4 + 4 * rr + d]
+            moved = kind != TIP
+            if moved:
+                for b in range(batches):
+                    c_seg = on if b == spot else b // 2
+                    for m in range(4):
+                        for d in range(_DRIVES):
+                            e[b, m, d] = 0.0
+                    if kind == SIGMA and b != spot:
+                        continue
+                    _segment_derivative(kind, beta[i], t_at[b], ell_at[b], moves_end[b], moves_start[b], k[i], short[b],
+                                        rows[b], load[b], dE, dP)
+                    if kind == K:
+                        for m in range(4):
+                            e[b, m, _Q0] = -P[b, m] / k[i]
+                        continue
+                    for m in range(4):
+                        for d in range(_DRIVES):
+                            e[b, m, d] = dE[m, 0] * coef[c_seg, 0, d] + dE[m, 1] * coef[c_seg, 1, d] + \
+                                dE[m, 2] * coef[c_seg, 2, d] + dE[m, 3] * coef[c_seg, 3, d]
+                        e[b, m, _Q0] += uc[i] * dP[m]
+                # at fixed unknowns: less the eliminated rows' share
+                for m in range(2):
+                    for d in range(_DRIVES):
+                        fixed[0, m, d] = e[0, m, d]
+                        if two:
+                            fixed[1, m, d] = Gp_inv[1, m, 0] * e[3, 2, d] + Gp_inv[1, m, 1] * e[3, 3, d]
+                for role in range(3):       # the tip from the left, from the right, the spot
+                    if role == 1 and not two:
+                        continue
+                    b, seg = (1, 0) if role == 0 else (2, 1) if role == 1 else (spot, on)
+                    for m in range(4):
+                        for d in range(_DRIVES):
+                            share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] + E[b, m, 1] * fixed[seg, 1, d])
+                    if role == 0:
+                        _across(share, J, two, across)
+                        for m in range(size):
+                            for d in range(_DRIVES):
+                                q[m, d] -= across[m, d]
+                    elif role == 1:
+                        for m in range(4):
+                            for d in range(_DRIVES):
+                                q[m, d] += share[m, d]
+                    else:
+                        for m in range(2):
+                            for d in range(_DRIVES):
+                                dz[i, p, m, d] = share[m, d]
+            for m in range(2):
+                for d in range(_DRIVES):
+                    v = 0j
+                    for j in range(size):
+                        v += spot_per_row[m, j] * q[j, d]
+                    dz[i, p, m, d] = (dz[i, p, m, d] if moved else 0.0) + v
+
+
+_point_jump = numba.njit(cache=True)(pieces.point_jump)
+_BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
+_PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+
+
+@numba.njit(cache=True)
+def characteristic(beta, params, out):
+    """:func:`pfmdyn.composed.characteristic` of each lever ``params[r]`` (``k, kvv, kll, kvl, H, L, mu,
+    gamma, rho_g``) at each ``beta[i]``, ``out[r, i]`` (``_transferred`` step for step): the clamp's
+    segment per unit of its two unknowns ``R``, the tip's jump across, and with the tip set back the
+    free segment's minors; times the segments' factors.
+
+    Examples
+    --------
+    >>> out = np.empty((1, 1))
+    >>> characteristic(np.array([1.8751040687119611]), np.array([[2.0, 0, 0, 0, 1e-5, 2e-4, 0, 1.0, 0]]), out)
+    >>> bool(abs(out[0, 0]) < 1e-15)                  # the free lever's first root
+    True
+    """
+    rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
+    R = np.empty((4, 2), out.dtype)
+    T = np.empty((4, 2), out.dtype)
+    E = np.empty((6, 4), out.dtype)
+    v = np.empty(6, out.dtype)
+    for n in range(out.size):
+        r, i = n // beta.shape[0], n % beta.shape[0]
+        p = params[r]
+        b, g = beta[i], p[7].real
+        s = b * g
+        if _segment(b, g, g, 1.0, rows, load):
+            for m in range(4):
+                for c in range(2):
+                    R[m, c] = rows[m, 2 + c]
+            factor = np.exp(-s)
+        else:
+            B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+            for m in range(4):
+                R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
+                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
+            factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
+        J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
+        for c in range(2):
+            T[0, c], T[1, c] = R[0, c], R[1, c]
+            T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
+            T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
+        if g == 1.0:
+            out[r, i] = (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+            continue
+        ell = 1.0 - g
+        s = b * ell
+        if abs(s) <= _LIMIT:
+            s_1, tt, uu, vv = _krylov_duncan(s)
+            K = (s_1 + 1.0, tt, uu, vv)
+            for q in range(6):
+                a, c = _PAIRS[q]
+                v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
+            beyond = np.exp(-s)
+        else:
+            _segment(b, 0.0, ell, 1.0, rows, load)
+            E[:4] = rows[:4]
+            _segment(b, ell, ell, 1.0, rows, load)
+            E[4:] = rows[2:4]
+            for kk in range(6):
+                r0, r1 = _PAIRS[5 - kk]
+                total = s * 0.0
+                for q in range(6):
+                    a, c = _PAIRS[q]
+                    gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
+                    c0, c1 = _PAIRS[5 - q]
+                    sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
+                    total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+                v[kk] = total
+            beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
+        total = s * 0.0
+        for q in range(6):
+            a, c = _PAIRS[q]
+            total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
+        out[r, i] = total * (factor * beyond)
+
+
+@numba.njit(cache=True)
+def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
+    """``pfmdyn.composed._tip_at_end_and_partials`` per member, step for step: the clamp's segment per
+    unit of its two unknowns ``R`` and ``dR/ds``, the tip's jump ``jump[n]`` across, ``det T[2:]`` times
+    the factor (``out[n]``), and by the product rule its partials ``partials[p, n]`` from the jump's
+    ``djump[p, n]`` (``at_beta``: the row of ``beta``, which also moves the segment; -1: none).
+
+    Examples
+    --------
+    >>> point = (1.8751040687119611, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 0.0)     # the free lever's first root
+    >>> jump = np.array([pieces.point_jump(*point)], float)
+    >>> djump = np.array([[pieces.point_jump_partials(*point, wrt=("beta",))["beta"],
+    ...                    pieces.point_jump_partials(*point, wrt=("mu",))["mu"]]], float).swapaxes(0, 1)
+    >>> out, partials = np.empty(1), np.empty((2, 1))
+    >>> tip_at_end_and_partials(np.array([point[0]]), jump, djump, 0, out, partials)
+    >>> round(float(-partials[1, 0] / partials[0, 0]), 6)      # d beta1 / d mu: -beta1
+    -1.875104
+    """
+    rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
+    R, dR = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
+    T, moved = np.empty((2, 2), out.dtype), np.empty((2, 2), out.dtype)
+    for i in range(beta.shape[0]):
+        s = beta[i]
+        if _segment(s, 1.0, 1.0, 1.0, rows, load):
+            for m in range(4):
+                for c in range(2):
+                    R[m, c], dR[m, c] = rows[m, 2 + c], rows[m + 1, 2 + c]
+            factor, d_log = np.exp(-s), -1.0
+        else:
+            B01 = np.exp(0.0 - s)
+            for m in range(4):
+                R[m, 0] = rows[m, 2] - rows[m, 0] * 1.0 - rows[m, 1] * -1.0
+                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B01
+                d3 = rows[m + 1, 3] - rows[m, 3]
+                dR[m, 0] = rows[m + 1, 2] - rows[m + 1, 0] * 1.0 - rows[m + 1, 1] * -1.0
+                dR[m, 1] = d3 - rows[m + 1, 0] * B01 - rows[m + 1, 1] * B01
+                dR[m, 1] += rows[m, 0] * B01 + rows[m, 1] * B01
+            factor, d_log = 1.0 / _BOUNDED_AT_START + 0.0 * s, 0.0
+        J = jump[i]
+        for m in range(2):
+            for c in range(2):
+                T[m, c] = R[2 + m, c] - J[2 * m] * R[0, c] - J[2 * m + 1] * R[1, c]
+        det = T[0, 0] * T[1, 1] - T[0, 1] * T[1, 0]
+        out[i] = det * factor
+        for p in range(djump.shape[0]):
+            dJ = djump[p, i]
+            for m in range(2):
+                for c in range(2):
+                    moved[m, c] = 0.0 - dJ[2 * m] * R[0, c] - dJ[2 * m + 1] * R[1, c]
+                    if p == at_beta:
+                        moved[m, c] += dR[2 + m, c] - J[2 * m] * dR[0, c] - J[2 * m + 1] * dR[1, c]
+            d = moved[0, 0] * T[1, 1] + T[0, 0] * moved[1, 1] - moved[0, 1] * T[1, 0] - T[0, 1] * moved[1, 0]
+            partials[p, i] = (d + det * d_log if p == at_beta else d) * factor
