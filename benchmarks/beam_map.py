@@ -12,8 +12,8 @@ Three maps of ``side`` x ``side`` pixels, 128 frequencies:
 Each map is fitted by :func:`pfmdyn.maps.fit.fit_block` of the old and the new code
 alternately, ``--repeat`` times, the best rate of each kept; rates with the noise estimate (:func:`pfmdyn.fitting.noise.noise_sigmas`, the same
 in both) and without it (its values computed beforehand and looked up), since that estimate is
-being made fast elsewhere.  The old code is the commit's ``maps/fit.py``, ``maps/beam.py`` and
-``fitting/batched.py`` (the rest is today's).
+being made fast elsewhere.  The old code is the commit's ``maps/fit.py``, ``maps/beam.py``,
+``fitting/batched.py`` and ``generated/elastic_contact.py`` (the rest is today's).
 
 Then, end to end, the two FE maps of ``--run-map`` x ``--run-map`` pixels (0: skipped) written as
 USID files and fitted by :func:`pfmdyn.maps.driver.run_map` (scheduler ``sync``, one BLAS thread,
@@ -33,6 +33,7 @@ import argparse
 import dataclasses
 import importlib.util
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -53,16 +54,20 @@ from pfmdyn.fitting import noise  # noqa: E402
 from pfmdyn.maps import fit, sho  # noqa: E402
 from pfmdyn.maps.beam import BeamMapModel  # noqa: E402
 
-OLD = {"fitting/batched.py": "pfmdyn.fitting.batched_old", "maps/beam.py": "pfmdyn.maps.beam_old",
+OLD = {"generated/elastic_contact.py": "pfmdyn.generated.elastic_contact_old",
+       "fitting/batched.py": "pfmdyn.fitting.batched_old", "maps/beam.py": "pfmdyn.maps.beam_old",
        "maps/fit.py": "pfmdyn.maps.fit_old"}
 
 
 def old_modules(commit):
-    """The commit's fit, beam and batched modules, imported beside today's (``*_old``)."""
+    """The commit's fit, beam and batched modules and generated elastic contact, imported beside
+    today's (``*_old``)."""
     modules = {}
     for path, name in OLD.items():
-        source = subprocess.run(["git", "show", f"{commit}:pfmdyn/{path}"], cwd=HERE.parent, check=True,
+        where = path if path.startswith("generated/") else f"pfmdyn/{path}"
+        source = subprocess.run(["git", "show", f"{commit}:{where}"], cwd=HERE.parent, check=True,
                                 capture_output=True, text=True).stdout
+        source = re.sub(r"\belastic_contact\b", "elastic_contact_old", source) if "generated" not in path else source
         for other, other_name in OLD.items():       # the old modules import each other
             source = source.replace(f"from .{Path(other).stem} import", f"from .{other_name.rsplit('.', 1)[1]} import")
             source = source.replace(f"from ..fitting.{Path(other).stem} import",
@@ -114,8 +119,8 @@ def main():
     args = parser.parse_args()
     old = old_modules(args.commit)
     real = noise.noise_sigmas
-    print(f"old: {args.commit} (maps/fit.py, maps/beam.py, fitting/batched.py); new: this tree. One core "
-          f"(BLAS one thread), {args.side} x {args.side} pixels, best of {args.repeat} alternating runs.\n")
+    print(f"old: {args.commit} ({', '.join(OLD)}); new: this tree. One core (BLAS one thread), {args.side} x "
+          f"{args.side} pixels, best of {args.repeat} alternating runs.\n")
     print("| map | noise | old px/CPU s | new px/CPU s | new/old | k1 within 2 % old / new | k1 median error old / new |")
     print("|---|---|---:|---:|---:|---:|---:|")
     with threadpool_limits(1):
