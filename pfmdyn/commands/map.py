@@ -51,8 +51,8 @@ def add_arguments(parser) -> None:
                         help="USID input: write the results group into the input file (as BGlib does) instead of a "
                              "copy of it in --out")
     parser.add_argument("--block", type=int, default=None,
-                        help="pixels per block side (default: an interrupted run's; else 16, and for --model sho "
-                             "as many pixels as hold about 16k spectra)")
+                        help="pixels per block side (default: an interrupted run's; else as many pixels as hold about 4k "
+                             "spectra, 16k for --model sho)")
     parser.add_argument("--scheduler", default=None,
                         help="'processes' (default: one worker process per core), 'threads', 'sync' (one core), "
                              "or tcp://HOST:PORT of a dask.distributed scheduler")

@@ -167,8 +167,9 @@ class BeamMapModel:
 
     def _transfer(self, beta, k1e, k2e, mu, jacobian):
         """Slopes per drive and (with ``jacobian``) per drive the partials w.r.t. (beta, k1, k2,
-        mu), None where not needed: the generated elastic contact for the paper's probe, else the
-        generated composed model (set-back, heavy or tilted tip: springs rotated onto the beam
+        mu), None where not needed (as are the elastic contact's partials of drives not in
+        :attr:`drives`): the generated elastic contact for the paper's probe, else the generated
+        composed model (set-back, heavy or tilted tip: springs rotated onto the beam
         axes, so the partials w.r.t. k1 and k2 combine those w.r.t. kvv, kll, kvl)."""
         lever = self.lever
         height = lever.tip_height or 0.0        # no tip height: the lateral force has no lever arm
@@ -176,7 +177,8 @@ class BeamMapModel:
         if not self._composed:
             if not jacobian:
                 return elastic_contact.slope(beta, k, k1e, k2e, height, length), None
-            values, partials = elastic_contact.slope_and_jacobian(beta, k, k1e, k2e, height, length)
+            values, partials = elastic_contact.slope_and_jacobian(beta, k, k1e, k2e, height, length,
+                                                                  drives=self.drives)
             return values, [(*p, None) for p in partials]
         alpha = lever.alpha
         # read at the laser spot or, by default, at the free end

@@ -127,22 +127,41 @@ SPECTRA_PER_BLOCK = 16384
 a read and a write of every map, tens of milliseconds, and its fit about 0.3 s per core (32 MB of
 spectra of 128 bins)."""
 
+BEAM_SPECTRA_PER_BLOCK = 4096
+"""A beam map's blocks hold about this many spectra (pixels x bias steps): a block's read and
+write of ~25 maps cost tens of milliseconds, a third of the fit of 256 pixels (16 x 16 blocks ran
+at 2,800 pixels per CPU second on a 128 x 128 map, 64 x 64 at 4,300); a block of 4096 pixels fits
+in about a second per core."""
+
 
 def default_block(model, shape) -> int:
-    """Pixels per block side: 16 for the beam model; for the SHO the largest power of two whose
-    square holds at most :data:`SPECTRA_PER_BLOCK` spectra, no larger than the map.
+    """Pixels per block side: the largest power of two whose square holds at most
+    :data:`SPECTRA_PER_BLOCK` spectra for the SHO (no larger than the map),
+    :data:`BEAM_SPECTRA_PER_BLOCK` for the beam model (no more than half the map's larger side,
+    so that a pool of workers has four blocks or more to share).
 
     >>> from pfmdyn.maps.sho import SHOMapModel
     >>> default_block(SHOMapModel(np.linspace(3e5, 3.2e5, 128)), (512, 512))
     128
     >>> default_block(SHOMapModel(np.linspace(3e5, 3.2e5, 128), np.linspace(-5, 5, 64)), (256, 256))
     16
+    >>> from pfmdyn import Cantilever
+    >>> from pfmdyn.maps.beam import BeamMapModel
+    >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+    >>> default_block(BeamMapModel(lever, np.linspace(3e5, 4e5, 128)), (128, 128))
+    64
+    >>> default_block(BeamMapModel(lever, np.linspace(3e5, 4e5, 128), bias_v=np.linspace(-5, 5, 16)), (128, 128))
+    16
+    >>> default_block(BeamMapModel(lever, np.linspace(3e5, 4e5, 128)), (16, 16))
+    8
     """
-    if not is_sho(model):
-        return 16
-    per_pixel = math.prod(model.step_shape)
-    side = 2 ** int(math.log2(math.sqrt(SPECTRA_PER_BLOCK / per_pixel))) if per_pixel <= SPECTRA_PER_BLOCK else 1
-    return min(side, max(shape))
+    sho = is_sho(model)
+    per_pixel = math.prod(model.step_shape) if sho else len(model.bias_v) if model.bias_v is not None else 1
+    budget = SPECTRA_PER_BLOCK if sho else BEAM_SPECTRA_PER_BLOCK
+    side = 2 ** int(math.log2(math.sqrt(budget / per_pixel))) if per_pixel <= budget else 1
+    if sho:
+        return min(side, max(shape))
+    return min(side, 2 ** int(math.log2(max(max(shape) // 2, 1))))
 
 
 def run_map(source: MapInput, out_dir: str, *, block: int | None = None, scheduler: str | None = None,
