@@ -17,7 +17,7 @@ from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
 from ..names import canonical, checked
 from .readers import open_root, scalar
-from .store import open_group, write_array
+from .store import consolidate, open_group, write_array, write_coordinates
 
 __all__ = ["contact_map", "describe"]
 
@@ -63,7 +63,9 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
         group = open_group(out, "w")
         for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr)):
             write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
-                        description=f"{name} from the contact resonance", dims=["y", "x"])
+                        long_name=f"{name} from the contact resonance", dims=("y", "x"))
+        write_coordinates(group, dict(zip(("y", "x"), fc.shape)))
+        consolidate(out)
     except UserError:       # zarr not installed: already one line
         raise
     except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable

@@ -32,7 +32,7 @@ from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 from .result import MapResult
 from .sho import band_centres, fit_sho_block, is_sho
-from .store import create_maps, open_group, set_attributes, write_regions
+from .store import consolidate, create_maps, open_group, set_attributes, write_coordinates, write_regions
 
 __all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
@@ -109,9 +109,10 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
             if group.attrs.get(key, value) != value:
                 raise UserError(f"{out}: holds a map with {key} {group.attrs[key]}, not {value}; choose another output",
                                 quantity="out")
-    maps = {name: {"shape": (ny, nx, *steps), "chunks": (block, block, *steps), "units": unit, "description": text,
-                   "dims": list(dims)} for name, (unit, text) in model.outputs.items()}
-    maps["done"] = {"shape": grid, "chunks": (1, 1), "fill_value": 0, "dtype": "u1"}
+    maps = {name: {"shape": (ny, nx, *steps), "chunks": (block, block, *steps), "units": unit, "long_name": text,
+                   "dims": dims} for name, (unit, text) in model.outputs.items()}
+    maps["done"] = {"shape": grid, "chunks": (1, 1), "fill_value": 0, "dtype": "u1", "dims": ("block_y", "block_x"),
+                    "units": "1", "long_name": "1 where the block's maps are written (a rerun skips it)"}
     create_maps(out, {name: arguments for name, arguments in maps.items() if name not in group})
     attrs = {"source": os.path.abspath(source.path), "block": block, **settings}
     if model.bias_v is not None:
@@ -119,6 +120,9 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     if selection is not None:
         attrs["model_selection"] = selection
     set_attributes(group, attrs)
+    if not all(dim in group for dim in dims):
+        write_coordinates(group, dict(zip(dims, (ny, nx, *steps))), attrs.get("bias_v"), settings.get("band_hz"))
+    consolidate(out)        # last: the metadata xarray reads in one request
     return group
 
 

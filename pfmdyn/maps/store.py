@@ -2,8 +2,11 @@
 
 Output groups are written in Zarr's format 2 whichever Zarr is installed, so that a map written
 under Zarr 3 can be resumed, read or opened by an environment with Zarr 2 and the other way round;
-inputs are read in either format.  Every map carries its ``units``, ``description`` and ``dims``
-(``("y", "x")`` followed by the names of any trailing axes) in its attributes.
+inputs are read in either format.  The groups follow xarray's Zarr convention, so that
+``xarray.open_zarr`` opens them as a Dataset: every array names its dimensions in the attribute
+``_ARRAY_DIMENSIONS`` (``("y", "x")`` followed by any trailing axes) and carries CF ``units`` and
+``long_name``; a dimension's coordinate is the 1-D array of its name; the metadata is consolidated
+(``.zmetadata``) once a group's arrays and attributes are written.
 """
 from __future__ import annotations
 
@@ -11,7 +14,11 @@ import numpy as np
 
 from .readers import require
 
-__all__ = ["create_map", "create_maps", "open_group", "set_attributes", "write_array", "write_regions", "zarr_major"]
+__all__ = ["DIMENSIONS", "consolidate", "create_map", "create_maps", "map_names", "open_group", "set_attributes",
+           "write_array", "write_coordinates", "write_regions", "zarr_major"]
+
+DIMENSIONS = "_ARRAY_DIMENSIONS"
+"""The attribute naming an array's dimensions in xarray's convention for Zarr format 2."""
 
 
 def zarr_major() -> int:
@@ -36,14 +43,21 @@ def open_group(path: str, mode: str = "r"):
     return require("zarr").open_group(path, mode=mode, **options)
 
 
-def create_map(group, name: str, shape, chunks, fill_value=np.nan, dtype="f8", **attrs):
-    """An array ``name`` of ``shape`` filled with ``fill_value``, with ``attrs``.
+def _with_dims(attrs: dict, dims) -> dict:
+    return {**attrs, DIMENSIONS: list(dims)} if dims is not None else attrs
+
+
+def create_map(group, name: str, shape, chunks, fill_value=np.nan, dtype="f8", dims=None, **attrs):
+    """An array ``name`` of ``shape`` filled with ``fill_value``, with ``attrs`` (and ``dims``,
+    its dimension names, in :data:`DIMENSIONS`).
 
     >>> import tempfile
     >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
-    >>> create_map(group, "k1", (4, 6), (2, 2), units="N/m").shape
-    (4, 6)
+    >>> array = create_map(group, "k1", (4, 6), (2, 2), dims=("y", "x"), units="N/m")
+    >>> array.shape, array.attrs[DIMENSIONS]
+    ((4, 6), ['y', 'x'])
     """
+    attrs = _with_dims(attrs, dims)
     if zarr_major() >= 3:
         return group.create_array(name=name, shape=shape, chunks=chunks, dtype=dtype, fill_value=fill_value,
                                   attributes=attrs)
@@ -74,9 +88,9 @@ def create_maps(path: str, maps: dict) -> None:
     import zarr.api.asynchronous as zarr_async
     from zarr.core.sync import sync
 
-    def array(group, name, shape, chunks, fill_value=np.nan, dtype="f8", **attrs):
+    def array(group, name, shape, chunks, fill_value=np.nan, dtype="f8", dims=None, **attrs):
         return group.create_array(name=name, shape=shape, chunks=chunks, dtype=dtype, fill_value=fill_value,
-                                  attributes=attrs)
+                                  attributes=_with_dims(attrs, dims))
 
     async def create():
         group = await zarr_async.open_group(store=path, mode="r+")
@@ -102,7 +116,9 @@ def set_attributes(node, attrs: dict) -> None:
 
 
 def write_array(group, name: str, data, **attrs):
-    """An array ``name`` holding ``data`` (one chunk), with ``attrs``.
+    """An array ``name`` holding ``data`` (one chunk), with ``attrs`` (``dims`` as for
+    :func:`create_map`).  No fill value: every element is written, and xarray would read one
+    as a missing value.
 
     >>> import tempfile
     >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
@@ -110,7 +126,7 @@ def write_array(group, name: str, data, **attrs):
     'N/m'
     """
     data = np.asarray(data)
-    array = create_map(group, name, data.shape, data.shape or None, fill_value=0, dtype=data.dtype, **attrs)
+    array = create_map(group, name, data.shape, data.shape or None, fill_value=None, dtype=data.dtype, **attrs)
     array[...] = data
     return array
 
@@ -145,3 +161,51 @@ def write_regions(path: str, region: tuple, maps: dict) -> None:
         await asyncio.gather(*(array.setitem(region, values) for array, values in zip(arrays, maps.values())))
 
     sync(write())
+
+
+def write_coordinates(group, sizes: dict, bias_v=None, band_hz=None) -> None:
+    """The coordinate arrays of the dimensions ``sizes`` (name -> length) a group's maps have:
+    ``y`` and ``x`` (pixel indices), ``bias`` (the DC tip biases, V) and ``band`` (the bands'
+    centre frequencies, Hz).
+
+    >>> import tempfile
+    >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
+    >>> write_coordinates(group, {"y": 2, "x": 3, "bias": 2}, bias_v=[-1.0, 1.0])
+    >>> group["x"][...].tolist(), group["bias"].attrs["units"], group["bias"].attrs[DIMENSIONS]
+    ([0, 1, 2], 'V', ['bias'])
+    """
+    described = {"y": (np.arange(sizes.get("y", 0)), "1", "pixel row"),
+                 "x": (np.arange(sizes.get("x", 0)), "1", "pixel column"),
+                 "bias": (bias_v, "V", "DC tip bias"), "band": (band_hz, "Hz", "centre frequency of the band")}
+    for dim in sizes:
+        values, unit, text = described[dim]
+        write_array(group, dim, np.asarray(values), dims=(dim,), units=unit, long_name=text)
+
+
+def map_names(group) -> list[str]:
+    """The names of a group's maps, sorted: its arrays but the coordinates (an array named after
+    its one dimension) and the blocks' ``done`` flags.
+
+    >>> import tempfile
+    >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
+    >>> _ = write_array(group, "k1", np.ones((2, 3)), dims=("y", "x"))
+    >>> write_coordinates(group, {"y": 2, "x": 3})
+    >>> map_names(group)
+    ['k1']
+    """
+    return [name for name in sorted(group.array_keys())
+            if name != "done" and list(group[name].attrs.get(DIMENSIONS, ())) != [name]]
+
+
+def consolidate(path: str) -> None:
+    """Consolidate the metadata of the group at ``path`` into its ``.zmetadata`` (xarray reads
+    a group's arrays from it in one request, and warns when it is missing).
+
+    >>> import os, tempfile
+    >>> path = tempfile.mkdtemp() + "/m.zarr"
+    >>> _ = write_array(open_group(path, "w"), "k1", np.ones(2), dims=("x",))
+    >>> consolidate(path)
+    >>> ".zmetadata" in os.listdir(path)
+    True
+    """
+    require("zarr").consolidate_metadata(path)

@@ -36,7 +36,7 @@ from ..errors import UserError
 from ..io.record import attribute_texts
 from .readers import MapInput, require
 from .sho import FIELDS, band_centres, is_sho
-from .store import open_group
+from .store import map_names, open_group
 
 __all__ = ["write_usid"]
 
@@ -162,7 +162,7 @@ def _write_sho(results, main, source, group, done):
 
 
 def _write_beam(results, group, done):
-    names = [name for name in group.array_keys() if name != "done"]
+    names = map_names(group)
     n_pos = done.size
     dtype = np.dtype({"names": [f"{name} [{group[name].attrs.get('units', '')}]" for name in names],
                       "formats": [np.float64] * len(names)})
