@@ -62,12 +62,35 @@ def _sho_map(tmp_path):
     return path, ["--model", "sho"], {"bias": bias, "band": np.array([300e3, 920e3])}
 
 
+def _map(path, model, out, *options):
+    assert main(["map", str(path), *model, "--out", str(out), "--no-progress", "--scheduler", "sync",
+                 "--block", "4", *options]) == 0
+
+
 @pytest.mark.parametrize("make", [_beam_map, _sho_map], ids=["beam", "sho"])
 def test_xarray_opens_the_maps_with_dims_units_and_long_names(tmp_path, make):
     path, model, coordinates = make(tmp_path)
-    out = tmp_path / "o"
-    assert main(["map", str(path), *model, "--out", str(out), "--no-progress", "--scheduler", "sync",
-                 "--block", "4"]) == 0
+    _map(path, model, tmp_path / "o")
+    _assert_xarray_opens(tmp_path / "o", model, coordinates)
+
+
+def test_a_map_begun_before_the_convention_resumes_into_it(tmp_path):
+    path, model, coordinates = _sho_map(tmp_path)
+    _map(path, model, tmp_path / "o", "--max-blocks", "1")
+    store = tmp_path / "o" / "maps.zarr"
+    # the store as it was written before: no dimension names, coordinates or consolidated metadata
+    (store / ".zmetadata").unlink()
+    group = zarr.open_group(str(store), mode="r+")
+    for name in list(group.array_keys()):
+        if name in ("y", "x", *coordinates):
+            del group[name]
+        else:
+            del group[name].attrs["_ARRAY_DIMENSIONS"]
+    _map(path, model, tmp_path / "o")
+    _assert_xarray_opens(tmp_path / "o", model, coordinates)
+
+
+def _assert_xarray_opens(out, model, coordinates):
     store = out / "maps.zarr"
     expected = open_result(out)
     dims = ("y", "x", *coordinates)

@@ -32,7 +32,7 @@ from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 from .result import MapResult
 from .sho import band_centres, fit_sho_block, is_sho
-from .store import consolidate, create_maps, open_group, set_attributes, write_coordinates, write_regions
+from .store import DIMENSIONS, consolidate, create_maps, open_group, set_attributes, write_coordinates, write_regions
 
 __all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
@@ -114,6 +114,10 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     maps["done"] = {"shape": grid, "chunks": (1, 1), "fill_value": 0, "dtype": "u1", "dims": ("block_y", "block_x"),
                     "units": "1", "long_name": "1 where the block's maps are written (a rerun skips it)"}
     create_maps(out, {name: arguments for name, arguments in maps.items() if name not in group})
+    if DIMENSIONS not in group["done"].attrs:       # a map begun before the store named its dimensions
+        for name, arguments in maps.items():
+            set_attributes(group[name], {DIMENSIONS: list(arguments["dims"]), "units": arguments["units"],
+                                         "long_name": arguments["long_name"]})
     attrs = {"source": os.path.abspath(source.path), "block": block, **settings}
     if model.bias_v is not None:
         attrs["bias_v"] = [float(v) for v in model.bias_v]
