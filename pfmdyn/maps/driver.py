@@ -124,8 +124,8 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
     if selection is not None:
         attrs["model_selection"] = selection
     set_attributes(group, attrs)
-    if not all(dim in group for dim in dims):
-        write_coordinates(group, dict(zip(dims, (ny, nx, *steps))), attrs.get("bias_v"), settings.get("band_hz"))
+    write_coordinates(group, {dim: size for dim, size in zip(dims, (ny, nx, *steps)) if dim not in group},
+                      attrs.get("bias_v"), settings.get("band_hz"))
     consolidate(out)        # last: the metadata xarray reads in one request
     return group
 

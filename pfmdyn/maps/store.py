@@ -117,8 +117,8 @@ def set_attributes(node, attrs: dict) -> None:
 
 def write_array(group, name: str, data, **attrs):
     """An array ``name`` holding ``data`` (one chunk), with ``attrs`` (``dims`` as for
-    :func:`create_map`).  No fill value: every element is written, and xarray would read one
-    as a missing value.
+    :func:`create_map`).  No fill value, every element being written: xarray reads an array's
+    fill value as its missing value (a 0 among pixel indices would become NaN).
 
     >>> import tempfile
     >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
