@@ -94,7 +94,11 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     fit = json.loads(out.read_text())
     assert fit["temperature"] == pytest.approx(313.15) and fit["medium"].startswith("air")
     assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
-    assert fit["points"] > 5000 and "instrument: 179 800 Hz, Q 442, k 27.13 N/m" in text
+    assert fit["points"] > 5000 and "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
+    # what came from the file, the tune's own resonance and Q beside ours
+    assert set(fit["from_file"]) >= {"free_resonance", "free_quality_factor", "spring_constant", "medium", "temperature"}
+    assert {c["name"] for c in fit["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert "from the file: " in text
     assert fit["gap"] < 3
 
 

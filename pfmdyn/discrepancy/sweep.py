@@ -374,7 +374,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
               "unexplained": unexplained_entry(frequency, y, residual, sigma),
               "instrument_comparison": comparison, "from_file": sorted(table.fields), "assumed": []}
     if not given:
-        fields["assumed"].append(f"width {width:g} m (L/10; give --width)")
+        fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
                     amplitude_only=amplitude_only, coherent=coherent, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
 

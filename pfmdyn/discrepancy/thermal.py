@@ -165,5 +165,5 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
                   "free_quality_factor": (q, None)},
                   float(np.median(np.diff(frequency))))}
     if not given:
-        fields["assumed"].append(f"width {width:g} m (L/10; give --width)")
+        fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted)
