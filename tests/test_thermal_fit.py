@@ -118,6 +118,11 @@ def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
     fit = json.loads(out.read_text())
     assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
     assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)
+    # a CSV says nothing of the lever or its medium: nothing from the file, the medium (air) marked assumed
+    text = capsys.readouterr().out
+    assert fit["from_file"] == [] and fit["instrument_comparison"] == []
+    assert [a.split(" (")[0] for a in fit["assumed"]] == [f"medium {Medium.air(case['temperature']).name}"]
+    assert "from the file: the measured points only" in text and "assumed: medium air" in text
 
 
 def test_an_asylum_tune_takes_the_lever_from_its_note(tmp_path):
