@@ -152,6 +152,9 @@ def test_added_mass_named_and_measured(seed, position, tmp_path):
     truth = 0.01 * mass_per_length(case["k"], case["L"], case["f_vac"]) * case["L"]
     assert m["value"] == pytest.approx(truth, rel=0.03) and m["unit"] == "kg"
     assert out["gap_after"] < 1.6 < out["gap_before"]
+    # the after-sweep's header (a peak and a Q) beside the after-model's peak and Q
+    assert {c["name"] for c in out["instrument_comparison"]} == {"amplitude_peak", "free_quality_factor"}
+    assert out["from_file"] == ["amplitude_peak", "free_quality_factor"] and "(ours " in out.report()
 
 
 def test_nothing_changed(tmp_path):
@@ -205,7 +208,7 @@ def test_real_pairs(pair, tmp_path):
     r = _cli(REAL / a, "--reference", REAL / b, "--spring-constant", 8, "--length", 100e-6,
              "--added-mass-position", x, "--json", out)
     assert r.returncode == 0, r.stderr
-    assert "instrument: " in r.stdout
+    assert "instrument: " in r.stdout and "from the file: " in r.stdout
     d = json.loads(out.read_text())
     before = d["reference_fit"]
     header = before["instrument_fit"]

@@ -146,6 +146,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
         parameters["added_mass_position"] = {"value": None, "stderr": None, "unit": "1", "undetermined": True,
                                              "why": "one mode in the sweep: the mass and its position move the "
                                                     "resonance together; the mass is the end-equivalent one (x/L = 1)"}
+    from ..analysis.resonances import resonances
+
     fields = {"kind": "drive sweep comparison", "path": after.path, "reference": before["path"],
               "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
               "parameters": parameters, "lever_mass": lever_mass,
@@ -159,7 +161,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "instrument_comparison": compare_with_instrument(after.fields, {
                   "amplitude_peak": (amplitude_peak(
                       lambda f: before.model(f, lever, amplitudes[0], tuple(amplitudes[1:])), frequency), None),
-                  "free_resonance": (lever.free_resonance, None)}, float(np.median(np.diff(frequency)))),
+                  "free_resonance": (lever.free_resonance, None),
+                  "free_quality_factor": (float(resonances(lever, None, modes=1).free.q[0]), None)},
+                  float(np.median(np.diff(frequency)))),
               "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
 
@@ -298,7 +302,7 @@ class SweepComparison(Result):
             lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
                          f"{plus_minus(p['viscous_loss'], '')}")
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
-                     f"instrument: {instrument_text(d['reference_fit']['instrument_fit'])} -> {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}")
+                     f"instrument: {instrument_text(d['reference_fit']['instrument_fit'], d['reference_fit'].get('instrument_comparison'))} -> {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
         lines += [f"  note: {text}" for text in d.get("notes", [])]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
