@@ -63,6 +63,16 @@ class SweepTable:
     notes: tuple = ()
 
     @property
+    def header_frequency(self) -> tuple[str, float] | None:
+        """The header's own frequency and what it is: ``free_resonance`` (Nanonis ``f_res``) or
+        ``amplitude_peak`` (Cytomass, Nanosurf); None when the header has neither.
+
+        >>> SweepTable("s.txt", np.array([1.0]), np.array([2.0]), "V", None, {"amplitude_peak": 7e4}, None, "x").header_frequency
+        ('amplitude_peak', 70000.0)
+        """
+        return next(((k, self.fields[k]) for k in ("free_resonance", "amplitude_peak") if k in self.fields), None)
+
+    @property
     def response(self) -> np.ndarray:
         """The complex response ``amplitude exp(i phase)`` (the amplitude itself without a phase).
 
