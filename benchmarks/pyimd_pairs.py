@@ -56,7 +56,7 @@ def pyimd(before, after, k, length, distance):
         fits.append((f0 * 1e3, params[0]))
     correction = calculate_position_correction(distance * 1e6, length * 1e6)
     mass = calculate_mass(k, fits[1][0] / 1e3, fits[0][0] / 1e3) * correction * 1e-12     # ng -> kg
-    header = calculate_mass(k, after.fields["free_resonance"] / 1e3, before.fields["free_resonance"] / 1e3)
+    header = calculate_mass(k, after.header_frequency[1] / 1e3, before.header_frequency[1] / 1e3)
     return fits, correction, mass, header * correction * 1e-12
 
 
@@ -72,8 +72,8 @@ def main() -> None:
         ((fb, qb), (fa, qa)), correction, m_pyimd, m_header = pyimd(before, after, k, length, distance)
         p = placed["parameters"]["added_mass"]
         rows.append(f"| {name} | {k:g}, {length * 1e6:g}, {distance * 1e6:g} | "
-                    f"{before.fields['free_resonance']:.0f} / {before.fields['free_quality_factor']:.2f} -> "
-                    f"{after.fields['free_resonance']:.0f} / {after.fields['free_quality_factor']:.2f} | "
+                    f"{before.header_frequency[1]:.0f} / {before.fields['free_quality_factor']:.2f} -> "
+                    f"{after.header_frequency[1]:.0f} / {after.fields['free_quality_factor']:.2f} | "
                     f"{fb:.0f} / {qb:.2f} -> {fa:.0f} / {qa:.2f} | "
                     f"{fit.lever.free_resonance:.0f} / {fit['quality_factor']:.2f} -> {placed['resonance_after']:.0f} | "
                     f"{fit['gap']:.2f}; {placed['gap_before']:.2f} -> {placed['gap_after']:.2f} | "
@@ -93,7 +93,7 @@ def main() -> None:
         "undetermined, the end-equivalent mass).  The gaps: before's fit; after with before's model as is -> the",
         "named explanation.",
         "",
-        "| pair | k, L, d | header f / Q (B -> A) | pyIMD phase fit f / Q | pfmdyn f in water / Q -> f after |"
+        "| pair | k, L, d | header f (Cytomass: amplitude peak; Nanonis: f_res) / Q (B -> A) | pyIMD phase fit f / Q | pfmdyn f in water / Q -> f after |"
         " gap B; A | pfmdyn names | pyIMD mass | pfmdyn mass at d | pfmdyn end-equivalent | s |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
         *rows,

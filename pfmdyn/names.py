@@ -125,6 +125,8 @@ QUANTITIES: tuple[Quantity, ...] = (
     # What an instrument measured and its settings (instrument files, ``pfmdyn inspect``).
     Quantity("free_quality_factor", "Q_free", "1", "measured Q of the first free resonance (thermal tune fit)",
              0.1, 1e9, option=False, label="free Q"),
+    Quantity("amplitude_peak", "f_peak", "Hz", "drive frequency of the largest response amplitude (a drive "
+             "sweep's peak; below the resonance when the damping is heavy)", 500.0, 1e8, option=False),
     Quantity("contact_resonance", "f_c", "Hz", "measured first contact resonance (tune fit)", 500.0, 1e9,
              aliases=("contact_resonance_hz",), option=False),
     Quantity("contact_quality_factor", "Q_c", "1", "measured Q of the first contact resonance (tune fit)",

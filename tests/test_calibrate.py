@@ -135,7 +135,12 @@ def test_sader_on_the_real_tune_is_the_textbook_formula(tmp_path, capsys):
     assert doc["instrument"]["spring_constant"] == 27.13 and doc["instrument"]["temperature"] == pytest.approx(313.15)
     fitted = _textbook_sader(air.density, air.viscosity, 40e-6, 225e-6, doc["free_resonance"], doc["free_quality_factor"])
     assert doc["sader"]["spring_constant"] == pytest.approx(fitted, rel=1e-3)
-    assert isinstance(doc["consistent"], bool) and "instrument: k = 27.13 N/m" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert isinstance(doc["consistent"], bool) and "instrument: k = 27.13 N/m" in text
+    # what the tune's header gave, and its resonance and Q set beside ours
+    assert doc["from_file"] == ["free_quality_factor", "free_resonance", "medium", "spring_constant", "temperature"]
+    assert {c["name"] for c in doc["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert "from the file: free_quality_factor, free_resonance, medium, spring_constant, temperature" in text
 
 
 @pytest.mark.parametrize("text, error", [
@@ -211,3 +216,16 @@ def test_the_peak_search_is_scipy_find_peaks(seed):
         assert peaks.size > 0
         np.testing.assert_array_equal(found, peaks)
         np.testing.assert_array_equal(prominence, properties["prominences"])
+
+
+def test_what_came_from_the_file_is_listed(tmp_path, capsys):
+    """A CSV tune holds no instrument fit and no conditions: nothing from the file, said in the JSON and the text."""
+    f = np.linspace(1e3, 4e5, 8000)
+    path = tmp_path / "tune.csv"
+    path.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(
+        f"{a:.9g},{b:.9g}\n" for a, b in zip(f, oscillator_asd(f, 1.8e5, 300.0, 1.03e-15, 3e-14))))
+    out = tmp_path / "c.json"
+    assert main(["calibrate", str(path), "--medium", "air", "--temperature", "300", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["from_file"] == [] and doc["instrument_comparison"] == []
+    assert "from the file: the spectrum only" in capsys.readouterr().out

@@ -88,8 +88,11 @@ def test_nid_sweep_is_fitted_as_a_spectrum(tmp_path, capsys, seed):
     assert cli.main(["discrepancy", str(path), "--spring-constant", f"{k:.6g}", "--length", f"{length:.6g}",
                      "--width", f"{width:.6g}", "--json", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "in air" in text and f"instrument: {float(f'{f0 / 1e3:.6g}') * 1e3:,.0f} Hz".replace(",", " ") in text
     fit = json.loads(out.read_text())
+    # the header's "Freq. peak" is a peak: beside our amplitude peak, not our resonance
+    assert "in air" in text and (f"instrument: amplitude peak {float(f'{f0 / 1e3:.6g}') * 1e3:,.0f} Hz "
+                                 f"(ours {fit['peak_hz']:,.0f} Hz)").replace(",", " ") in text
+    assert fit["from_file"] == ["amplitude_peak", "medium"] and fit["instrument_fit"].keys() == {"amplitude_peak"}
     # the amplitude of a base-driven oscillator peaks at f0 / sqrt(1 - 1 / (2 q**2))
     # (a broad peak is placed less sharply: the beam's fluid damping grows with frequency, an oscillator's does not)
     assert fit["peak_hz"] == pytest.approx(f0 / np.sqrt(1 - 0.5 / q**2), rel=max(2e-4, 0.05 / q))

@@ -152,6 +152,9 @@ def test_added_mass_named_and_measured(seed, position, tmp_path):
     truth = 0.01 * mass_per_length(case["k"], case["L"], case["f_vac"]) * case["L"]
     assert m["value"] == pytest.approx(truth, rel=0.03) and m["unit"] == "kg"
     assert out["gap_after"] < 1.6 < out["gap_before"]
+    # the after-sweep's header (a peak and a Q) beside the after-model's peak and Q
+    assert {c["name"] for c in out["instrument_comparison"]} == {"amplitude_peak", "free_quality_factor"}
+    assert out["from_file"] == ["amplitude_peak", "free_quality_factor"] and "(ours " in out.report()
 
 
 def test_nothing_changed(tmp_path):
@@ -205,11 +208,14 @@ def test_real_pairs(pair, tmp_path):
     r = _cli(REAL / a, "--reference", REAL / b, "--spring-constant", 8, "--length", 100e-6,
              "--added-mass-position", x, "--json", out)
     assert r.returncode == 0, r.stderr
-    assert "instrument: " in r.stdout
+    assert "instrument: " in r.stdout and "from the file: " in r.stdout
     d = json.loads(out.read_text())
     before = d["reference_fit"]
     header = before["instrument_fit"]
-    assert before["parameters"]["free_resonance"]["value"] == pytest.approx(header["free_resonance"], rel=0.05)
+    # like with like: the header's peak beside our peak, its resonance beside ours
+    for c in before["instrument_comparison"]:
+        assert c["ours"] == pytest.approx(header[c["name"]], rel=0.05), c
+    assert {c["name"] for c in before["instrument_comparison"]} == set(header)
     assert before["quality_factor"] == pytest.approx(header["free_quality_factor"], rel=0.2)
     assert before["gap"] < 2.0
     assert d["effect"] == "added_mass" and d["gap_after"] < d["gap_before"]
@@ -322,3 +328,73 @@ def test_swapped_measurements_name_no_mass_and_say_so(tmp_path):
     assert not (out["effect"] == "added_mass" and out["parameters"]["added_mass"]["determined"])
     assert any("swapped" in note for note in out["notes"]) and "swapped" in out.report()
     assert "damping+gain+background" in [row["effect"] for row in out["steps"]]
+
+
+def test_amplitude_peak_is_the_measured_amplitudes_and_the_header_is_compared_like_with_like(tmp_path):
+    """Heavy damping (Q near 3, as the pyIMD files) and a background as large as the peak's rise: the
+    amplitude peaks well away from the lever's own slope; the reported peak is where the measured
+    amplitude peaks, and the header's peak (70 kHz, far from it) is set beside it and flagged."""
+    rng, case = lever_case(3)
+    case.update(medium=Medium.water(), g=0.25)
+    f0, q = in_medium(case)
+    f = np.sort(rng.uniform(0.4 * f0, 1.6 * f0, 200))
+    scale = np.abs(beam_slope(f0, **case))[0]
+    truth = lambda f: 1.5j * beam_slope(f, **case) / scale + 0.9 * np.exp(0.7j)      # noqa: E731
+    y = truth(f) + 1e-3 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f)))
+    fit = fit_sweep(read_sweep_table(write_sweep(tmp_path / "s.txt", f, y, rng)), case["k"], case["L"],
+                    case["medium"], width=case["w"])
+    grid = np.linspace(f.min(), f.max(), 20001)
+    measured_peak = grid[np.argmax(np.abs(truth(grid)))]
+    slope_peak = grid[np.argmax(np.abs(beam_slope(grid, **case)))]
+    assert abs(measured_peak - slope_peak) > 0.02 * f0, (measured_peak, slope_peak)    # the two differ here
+    assert fit["peak_hz"] == pytest.approx(measured_peak, rel=2e-3)
+    peak = {c["name"]: c for c in fit["instrument_comparison"]}["amplitude_peak"]
+    assert peak["instrument"] == 70000.0 and peak["ours"] == fit["peak_hz"]
+    assert peak["disagrees"] is (abs(70000.0 - fit["peak_hz"]) > peak["tolerance"])
+    assert "free_resonance" not in fit["instrument_fit"]        # a peak is not the resonance
+    assert fit["from_file"] == ["amplitude_peak", "free_quality_factor"]
+    assert fit["assumed"] == []     # width given; the medium is the command's to mark
+    text = fit.report()
+    assert f"amplitude peak 70 000 Hz (ours {fit['peak_hz']:,.0f} Hz)".replace(",", " ") in text
+    assert "from the file: amplitude_peak, free_quality_factor" in text
+
+
+def test_header_far_from_the_fit_is_flagged_and_the_assumed_marked(tmp_path, capsys):
+    rng, case = lever_case(5)
+    case["medium"] = Medium.water()
+    f, y = sweep_of(rng, case)
+    sweep = write_sweep(tmp_path / "s.txt", f, y, rng)
+    text = sweep.read_text().replace("70000.0", f"{0.66 * in_medium(case)[0]:.1f}")
+    sweep.write_text(text)
+    out = tmp_path / "o.json"
+    assert cli.main(["discrepancy", str(sweep), "--spring-constant", str(case["k"]), "--length", str(case["L"]),
+                     "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    d = json.loads(out.read_text())
+    peak = {c["name"]: c for c in d["instrument_comparison"]}["amplitude_peak"]
+    assert peak["disagrees"] and "disagrees with the file: amplitude_peak" in printed
+    assert d["from_file"] == ["amplitude_peak", "free_quality_factor"]
+    assert any(a.startswith("medium water at 20 C") for a in d["assumed"])
+    assert any(a.startswith("width") for a in d["assumed"])
+    assert "assumed: width" in printed and "medium water at 20 C (none in the file" in printed
+
+
+def write_nanonis(path, f, y, calibration="1E+0"):
+    """A Nanonis oscillation-control sweep: its header's fit, input calibration, then ``[DATA]``."""
+    lines = ["Experiment\tExperiment\t", "f_res (Hz)\t88185.4831\t", "Q\t5.50\t",
+             f"Oscillation Control>Input Calibration (m/V)\t{calibration}\t", "", "[DATA]",
+             "OC M1 Freq. Shift (Hz)\tOC M1 Center Freq. (Hz)\tOC D1 Amplitude (m)\tOC D1 Phase (deg)"]
+    lines += [f"{fi - 88e3:.6E}\t88.0E+3\t{abs(yi):.8E}\t{np.degrees(np.angle(yi)):.6E}" for fi, yi in zip(f, y)]
+    Path(path).write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_nanonis_amplitude_follows_the_input_calibration(tmp_path):
+    f = np.linspace(80e3, 96e3, 40)
+    y = 5e-3 * np.exp(1j * f / 1e4)
+    volts = read_sweep_table(write_nanonis(tmp_path / "a.dat", f, y))
+    metres = read_sweep_table(write_nanonis(tmp_path / "b.dat", f, y, calibration="20E-9"))
+    assert volts.unit == "V" and "input calibration is 1E+0 m/V" in volts.notes[0]
+    assert metres.unit == "m" and not metres.notes
+    np.testing.assert_allclose(volts.amplitude, np.abs(y), rtol=1e-7)
+    assert volts.fields == {"free_resonance": 88185.4831, "free_quality_factor": 5.5}    # f_res is a resonance

@@ -94,7 +94,11 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     fit = json.loads(out.read_text())
     assert fit["temperature"] == pytest.approx(313.15) and fit["medium"].startswith("air")
     assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
-    assert fit["points"] > 5000 and "instrument: 179 800 Hz, Q 442, k 27.13 N/m" in text
+    assert fit["points"] > 5000 and "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
+    # what came from the file, the tune's own resonance and Q beside ours
+    assert set(fit["from_file"]) >= {"free_resonance", "free_quality_factor", "spring_constant", "medium", "temperature"}
+    assert {c["name"] for c in fit["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert "from the file: " in text
     assert fit["gap"] < 3
 
 
@@ -114,6 +118,11 @@ def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
     fit = json.loads(out.read_text())
     assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
     assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)
+    # a CSV says nothing of the lever or its medium: nothing from the file, the medium (air) marked assumed
+    text = capsys.readouterr().out
+    assert fit["from_file"] == [] and fit["instrument_comparison"] == []
+    assert [a.split(" (")[0] for a in fit["assumed"]] == [f"medium {Medium.air(case['temperature']).name}"]
+    assert "from the file: the measured points only" in text and "assumed: medium air" in text
 
 
 def test_an_asylum_tune_takes_the_lever_from_its_note(tmp_path):

@@ -76,9 +76,28 @@ def report(result) -> str:
     return "\n".join(lines)
 
 
+def _provenance(tune, result, args, temperature_source: str) -> dict:
+    """What came from the file (``from_file``: the instrument's fit, the medium and temperature it names and
+    no flag replaced) and its fit beside ours (``instrument_comparison``, tolerances from our uncertainties
+    and the spectrum's bin)."""
+    import numpy as np
+
+    from ..discrepancy.sweep import compare_with_instrument
+
+    p = result.peak
+    taken = [name for name in tune.instrument if name in flags.NAMES]
+    taken += ["medium"] if args.medium is None and tune.conditions.get("environment") else []
+    taken += ["temperature"] if temperature_source == "from the file" else []
+    ours = {"free_resonance": (p.frequency_hz, p.frequency_uncertainty_hz),
+            "free_quality_factor": (p.quality_factor, p.quality_factor_uncertainty)}
+    step = float(np.median(np.diff(np.sort(tune.frequency_hz))))
+    return {"from_file": sorted(set(taken)), "instrument_comparison": compare_with_instrument(tune.instrument, ours, step)}
+
+
 def run(args) -> int:
     """Read, calibrate, print, write what was asked."""
     from ..analysis.calibrate import calibrate
+    from ..discrepancy.sweep import disagreement_lines
     from ..io.results import check_writable
     from ..io.thermal_tune import read_thermal_tune
     from ..medium import Medium
@@ -106,7 +125,11 @@ def run(args) -> int:
         result.assumptions.append(f"medium {medium.name} (give --medium)")
     print(flags.medium_line(medium, args, tune.conditions, thermal=True))
     print(report(result))
-    flags.write_json(args.json, result.to_json())
+    document = {**result.to_json(), **_provenance(tune, result, args, source)}
+    for line in disagreement_lines(document["instrument_comparison"]):
+        print(line.strip())
+    print("from the file: " + (", ".join(document["from_file"]) or "the spectrum only"))
+    flags.write_json(args.json, document)
     if args.plot:
         from ..plots.calibrate import plot_calibration
         fig = plot_calibration(tune, result)

@@ -71,8 +71,10 @@ def _sweeps(args) -> int:
     medium = flags.medium_from_args(args, found, default="water")
     print(flags.medium_line(medium, args, found))
     with _fitting(args.data, "the spring constant and length"):
-        fit = fit_sweep(before or after, values["spring_constant"], values["length"], medium, values.get("width"))
-        result = compare_sweeps(after, fit, values.get("added_mass_position")) if before else fit
+        fit = _provenance(fit_sweep(before or after, values["spring_constant"], values["length"], medium,
+                                    values.get("width")), args, medium, found)
+        result = _provenance(compare_sweeps(after, fit, values.get("added_mass_position")), args, medium, found) \
+            if before else fit
     if before:
         print(fit.report())
     return _emit(args, result, lambda: plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after))
@@ -95,9 +97,31 @@ def _thermal(args) -> int:
     medium = flags.medium_from_args(args, found, default="air")
     temperature = flags.temperature(args, found)[0]
     print(flags.medium_line(medium, args, found, thermal=True))
+    taken = [k for k in ("spring_constant", "length", "width") if k in lever and k not in flags.given(args, OVERRIDES)]
     with _fitting(args.data, "the spring constant and length"):
-        fit = fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature, values.get("width"))
+        fit = _provenance(fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature,
+                                      values.get("width")), args, medium, found, taken)
     return _emit(args, fit, lambda: plot_thermal(fit))
+
+
+def _provenance(result, args, medium, found: dict | None, taken=()):
+    """``result`` with what came from the file added to its ``from_file`` (the lever's ``taken`` values, the
+    medium and temperature ``found`` and not overridden) and the medium and temperature it assumed marked
+    ``assumed``."""
+    found = found or {}
+    from_file = [*result["from_file"], *taken]
+    assumed = list(result["assumed"])
+    if getattr(args, "medium", None) is None:
+        if found.get("medium"):
+            from_file.append("medium")
+        else:
+            assumed.append(f"medium {medium.name} (none in the file: give {flags.NAMES['medium'].flag})")
+    kelvin, source = flags.temperature(args, found)
+    if source == "from the file":
+        from_file.append("temperature")
+    elif source != "given" and (medium.temperature is not None or "temperature" in result):
+        assumed.append(f"temperature {kelvin:g} K ({source})")
+    return result.updated(from_file=sorted(set(from_file)), assumed=list(dict.fromkeys(assumed)))
 
 
 @contextmanager

@@ -22,8 +22,8 @@ from ..fitting.parameters import Parameter
 from ..fitting.projection import project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
-from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, base_driven_columns, instrument_text, noise_level, parameter_entry,
-                    penalty, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
+from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
+                    instrument_text, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
 __all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "CANDIDATES"]
 
@@ -146,6 +146,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
         parameters["added_mass_position"] = {"value": None, "stderr": None, "unit": "1", "undetermined": True,
                                              "why": "one mode in the sweep: the mass and its position move the "
                                                     "resonance together; the mass is the end-equivalent one (x/L = 1)"}
+    from ..analysis.resonances import resonances
+
     fields = {"kind": "drive sweep comparison", "path": after.path, "reference": before["path"],
               "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
               "parameters": parameters, "lever_mass": lever_mass,
@@ -155,7 +157,14 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
               "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma,
               "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma),
-              "notes": _order_notes(before, frequency, y, named, at_bound)}
+              "notes": _order_notes(before, frequency, y, named, at_bound),
+              "instrument_comparison": compare_with_instrument(after.fields, {
+                  "amplitude_peak": (amplitude_peak(
+                      lambda f: before.model(f, lever, amplitudes[0], tuple(amplitudes[1:])), frequency), None),
+                  "free_resonance": (lever.free_resonance, None),
+                  "free_quality_factor": (float(resonances(lever, None, modes=1).free.q[0]), None)},
+                  float(np.median(np.diff(frequency)))),
+              "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
 
 
@@ -293,7 +302,7 @@ class SweepComparison(Result):
             lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
                          f"{plus_minus(p['viscous_loss'], '')}")
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
-                     f"instrument: {instrument_text(d['reference_fit']['instrument_fit'])} -> {instrument_text(d['instrument_fit'])}")
+                     f"instrument: {instrument_text(d['reference_fit']['instrument_fit'], d['reference_fit'].get('instrument_comparison'))} -> {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
         lines += [f"  note: {text}" for text in d.get("notes", [])]
-        return "\n".join(lines + unexplained_line(d.get("unexplained")))
+        return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))

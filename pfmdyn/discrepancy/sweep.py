@@ -39,7 +39,8 @@ from ..io.sweeps import SweepTable
 from ..medium import Medium
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
-           "sweep_model", "plus_minus", "instrument_text", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
+           "sweep_model", "plus_minus", "instrument_text", "compare_with_instrument", "disagreement_lines",
+           "provenance_lines", "amplitude_peak", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
            "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
@@ -159,9 +160,9 @@ class SweepFit(Result):
                  f"Q {d['quality_factor']:.3g}, amplitude peak {d['peak_hz']:.6g} Hz",
                  f"  width {plus_minus(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(extra, '')}",
-                 f"  instrument: {instrument_text(d['instrument_fit'])}",
+                 f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}",
                  f"  gap {d['gap']:.3g} (1: fitted to the noise)"] + unexplained_line(d.get("unexplained"))
-        return "\n".join(lines)
+        return "\n".join(lines + provenance_lines(d))
 
 
 def plus_minus(entry: dict, unit: str) -> str:
@@ -170,11 +171,68 @@ def plus_minus(entry: dict, unit: str) -> str:
     return text + (f" {unit}" if unit else "")
 
 
-def instrument_text(fields: dict) -> str:
-    f, q = fields.get("free_resonance"), fields.get("free_quality_factor")
-    if f is None and q is None:
-        return "no fit in the header"
-    return ", ".join(([f"{f:,.0f} Hz".replace(",", " ")] if f else []) + ([f"Q {q:.3g}"] if q else []))
+def _hz(value: float) -> str:
+    return f"{value:,.0f} Hz".replace(",", " ")
+
+
+def instrument_text(fields: dict, comparison: list | None = None) -> str:
+    """The header's own fit, each value named and beside ours for the same quantity (``comparison``,
+    :func:`compare_with_instrument`).
+
+    >>> instrument_text({"amplitude_peak": 71789.1, "free_quality_factor": 3.18})
+    'amplitude peak 71 789 Hz, Q 3.18'
+    >>> instrument_text({"free_resonance": 8.8e4}, [{"name": "free_resonance", "ours": 8.79e4}])
+    'resonance 88 000 Hz (ours 87 900 Hz)'
+    """
+    ours = {c["name"]: c["ours"] for c in comparison or ()}
+    shown = []
+    for name, label in (("amplitude_peak", "amplitude peak "), ("free_resonance", "resonance "),
+                        ("free_quality_factor", "Q ")):
+        if fields.get(name):
+            text = _hz if name != "free_quality_factor" else "{:.3g}".format
+            shown.append(label + text(fields[name]) + (f" (ours {text(ours[name])})" if name in ours else ""))
+    return ", ".join(shown) or "no fit in the header"
+
+
+def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[dict]:
+    """The header's numbers beside ours for the same quantity (``ours``: name -> ``(value, stderr)``), each
+    with the tolerance beyond which they disagree: three times our standard error and the sweep's
+    ``step_hz`` (a peak read off measured points is known to a step; a Q through its linewidth ``f/Q``,
+    to ``Q**2 step / f``), combined; the header's own numbers carry more digits than either.
+
+    >>> c = compare_with_instrument({"amplitude_peak": 51.0e3}, {"amplitude_peak": (77.3e3, None)}, 150.0)
+    >>> c[0]["disagrees"], round(c[0]["relative_difference"], 2), c[0]["tolerance"]
+    (True, -0.34, 450.0)
+    """
+    frequency = ours.get("free_resonance", ours.get("amplitude_peak", (None, None)))[0]
+    out = []
+    for name, (value, stderr) in ours.items():
+        if not fields.get(name) or value is None:
+            continue
+        step = step_hz if name != "free_quality_factor" else value**2 * step_hz / frequency
+        tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
+        out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
+                    "relative_difference": (fields[name] - value) / value,
+                    "disagrees": bool(abs(fields[name] - value) > tolerance)})
+    return out
+
+
+def disagreement_lines(comparison: list | None) -> list[str]:
+    """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`)."""
+    return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g} in the header, {c['ours']:.6g} here "
+            f"({c['relative_difference']:+.1%}; tolerance {c['tolerance']:.3g}: 3x our uncertainty and the sweep's step)"
+            for c in comparison or () if c["disagrees"]]
+
+
+def provenance_lines(d: dict) -> list[str]:
+    """What a report took from the file (``from_file``) and what it assumed (``assumed``), one line each,
+    after the disagreements with the file."""
+    lines = disagreement_lines(d.get("instrument_comparison"))
+    if d.get("from_file") is not None:
+        lines.append("  from the file: " + (", ".join(d["from_file"]) or "the measured points only"))
+    if d.get("assumed"):
+        lines.append("  assumed: " + "; ".join(d["assumed"]))
+    return lines
 
 
 def unexplained_entry(frequency, y, residual, sigma) -> dict | None:
@@ -204,9 +262,18 @@ def stacked(r) -> np.ndarray:
     return np.concatenate([r.real, r.imag]) if np.iscomplexobj(r) else r
 
 
-def _peak(lever: Cantilever, frequency) -> float:
-    grid = np.linspace(frequency.min(), frequency.max(), 2001)
-    return float(grid[np.argmax(np.abs(lever.base_driven(grid).slope))])
+def amplitude_peak(model, frequency) -> float:
+    """Where ``|model(f)|``, a fitted model of the measured response (gain and background included), peaks
+    within the sweep's ``frequency``: the quantity an instrument's peak-amplitude frequency is (the lever's
+    own slope peaks elsewhere when the background is comparable with the resonance's rise).
+
+    >>> round(amplitude_peak(lambda f: 1 / (1 - (f / 7e4) ** 2 + 0.3j * f / 7e4), np.array([4e4, 1e5])), -1)
+    68410.0
+    >>> round(7e4 * (1 - 0.3**2 / 2) ** 0.5)       # the oscillator's own peak, to the grid's 15 Hz
+    68407
+    """
+    grid = np.linspace(frequency.min(), frequency.max(), 4001)
+    return float(grid[np.argmax(np.abs(model(grid)))])
 
 
 def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: Medium,
@@ -289,17 +356,25 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     from ..analysis.resonances import resonances
 
     modes = resonances(lever, None, modes=1).free
+    peak = amplitude_peak(lambda f: sweep_model(base_driven_columns(lever, f, centre), amplitudes, amplitude_only,
+                                                coherent), frequency)
+    comparison = compare_with_instrument(table.fields, {
+        "amplitude_peak": (peak, None), "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
+        "free_quality_factor": (float(modes.q[0]), None)}, float(np.median(np.diff(frequency))))
     fields = {"kind": "drive sweep", "path": table.path, "instrument": table.instrument, "points": len(frequency),
               "medium": medium.name, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(modes.q[0]),
-              "peak_hz": _peak(lever, frequency), "parameters": parameters,
+              "peak_hz": peak, "parameters": parameters,
               "gain": {"value": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
                        "unit": f"{table.unit or '1'}/rad"},
               "background": {"value": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
                              "unit": table.unit or "1", "adds_to": "response" if coherent else "amplitude"},
               "amplitude_only": amplitude_only, "phase_reversed": conjugate,
               "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y))),
-              "unexplained": unexplained_entry(frequency, y, residual, sigma)}
+              "unexplained": unexplained_entry(frequency, y, residual, sigma),
+              "instrument_comparison": comparison, "from_file": sorted(table.fields), "assumed": []}
+    if not given:
+        fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
                     amplitude_only=amplitude_only, coherent=coherent, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
 

@@ -29,8 +29,9 @@ from ..fitting.result import Result
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
-from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, instrument_text, noise_level,
-                    parameter_entry, plus_minus, solve_from_starts, unexplained_entry, unexplained_line)
+from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
+                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
+                    unexplained_entry, unexplained_line)
 
 __all__ = ["ThermalFit", "fit_thermal", "BAND"]
 
@@ -59,11 +60,11 @@ class ThermalFit(Result):
                  f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "
                  f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
                  f"{d['white_floor']:.3g} {d['unit']}",
-                 f"  instrument: {instrument_text(d['instrument_fit'])}"
+                 f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
                     else ""),
                  f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
-        return "\n".join(lines + unexplained_line(d.get("unexplained")))
+        return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
 
 def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
@@ -145,6 +146,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
+    q = float(resonances(lever, None, modes=1).free.q[0])
     r = np.log(fitted) - log_asd
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
@@ -153,9 +155,15 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     fields = {"kind": "thermal tune", "path": tune.path, "points": len(frequency),
               "band_hz": [float(frequency.min()), float(frequency.max())], "medium": medium.name,
               "temperature": temperature, "spring_constant": spring_constant, "length": length,
-              "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(resonances(lever, None, modes=1).free.q[0]),
+              "vacuum_resonance": lever.vacuum_resonance, "quality_factor": q,
               "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
               "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
-              "unexplained": unexplained}
+              "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
+              "instrument_comparison": compare_with_instrument(tune.instrument, {
+                  "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
+                  "free_quality_factor": (q, None)},
+                  float(np.median(np.diff(frequency))))}
+    if not given:
+        fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted)

@@ -287,5 +287,7 @@ def read_sweep_table(path) -> SweepTable:
     medium = "air" if environment == "air" else None
     notes = list(record.notes) + ([f"measured in {environment}; which liquid is not written"]
                                   if environment and medium is None else [])
-    return SweepTable(str(path), frequency, amplitude, unit, None, dict(record.fields), medium,
+    # the software's "Freq. peak" is where the swept amplitude peaks: a peak, set beside our peak
+    fields = {("amplitude_peak" if k == "free_resonance" else k): v for k, v in record.fields.items()}
+    return SweepTable(str(path), frequency, amplitude, unit, None, fields, medium,
                       "Nanosurf frequency sweep", tuple(notes))

@@ -36,6 +36,11 @@ __all__ = ["read_sweep", "read_sweep_table", "SweepTable", "split_unit"]
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
 _KEYS = {"Peak amplitude frequency": "free_resonance", "Q factor": "free_quality_factor",
          "f_res": "free_resonance", "Q": "free_quality_factor"}
+# Cytomass's peak-amplitude frequency is where the measured amplitude peaks, not the resonance: a drive
+# sweep's table reports it as ``amplitude_peak`` (the instrument record keeps it as its resonance field).
+_PEAK_KEY = "Peak amplitude frequency"
+# Nanonis's input calibration: the amplitude column is in metres only through it; 1 m/V means volts as read.
+_CALIBRATION_KEY = "Oscillation Control>Input Calibration"
 # Header keys naming the fluid around the lever (``air``, ``water`` or ``DENSITY,VISCOSITY``).
 _MEDIUM_KEYS = ("Medium", "Environment")
 
@@ -56,6 +61,16 @@ class SweepTable:
     medium: str | None
     instrument: str
     notes: tuple = ()
+
+    @property
+    def header_frequency(self) -> tuple[str, float] | None:
+        """The header's own frequency and what it is: ``free_resonance`` (Nanonis ``f_res``) or
+        ``amplitude_peak`` (Cytomass, Nanosurf); None when the header has neither.
+
+        >>> SweepTable("s.txt", np.array([1.0]), np.array([2.0]), "V", None, {"amplitude_peak": 7e4}, None, "x").header_frequency
+        ('amplitude_peak', 70000.0)
+        """
+        return next(((k, self.fields[k]) for k in ("free_resonance", "amplitude_peak") if k in self.fields), None)
 
     @property
     def response(self) -> np.ndarray:
@@ -173,5 +188,11 @@ def read_sweep_table(path) -> SweepTable:
         raise UserError(f"{path}: the sweep repeats a drive frequency")
     medium = next((header[k] for k in _MEDIUM_KEYS if header.get(k)), None)
     phase = table[order, phases[0]] if phases else None
+    if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
+        found["amplitude_peak"] = found.pop("free_resonance")
+    calibration = next((v for k, v in header.items() if split_unit(k)[0] == _CALIBRATION_KEY), None)
+    if unit == "m" and calibration is not None and si_value(calibration, "") == 1.0:
+        unit = "V"
+        notes.append(f"amplitude in V: the header's input calibration is {calibration} m/V (none applied)")
     return SweepTable(str(path), frequency[order], amplitude[order], unit, phase, found, medium, instrument,
                       tuple(notes))
