@@ -30,8 +30,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from recording import recorded, tally  # noqa: E402
-from test_sweeps_fit import B1, SILICON  # noqa: E402
-from test_thermal_fit import end_slope_psd  # noqa: E402
+from test_thermal_fit import end_slope_psd, silicon_lever  # noqa: E402
 
 from pfmdyn.analysis.calibrate import calibrate  # noqa: E402
 from pfmdyn.io.thermal_tune import ThermalTune  # noqa: E402
@@ -44,14 +43,7 @@ REGIMES = {"air": (Medium.air, (-3.5, -2), 0.05), "water": (Medium.water, (-3.5,
 def draw(seed: int, regime: str):
     """A tune of ``regime``: (the lever, its first resonance in the medium, the tune)."""
     rng = np.random.default_rng(seed)
-    E, rho = SILICON
-    while True:
-        k, L = 10 ** rng.uniform(math.log10(0.05), math.log10(50)), rng.uniform(100e-6, 500e-6)
-        w = rng.uniform(20e-6, 60e-6)
-        t = (4 * k * L**3 / (E * w)) ** (1 / 3)
-        f_vac = B1**2 / (2 * math.pi * L**2) * t * math.sqrt(E / (12 * rho))
-        if 2e3 < f_vac < 4e5:
-            break
+    k, L, w, f_vac = silicon_lever(rng, lowest=2e3)
     temperature = rng.uniform(290, 320)
     make, loss, _ = REGIMES[regime]
     case = dict(k=k, L=L, w=w, f_vac=f_vac, g=10 ** rng.uniform(*loss), medium=make(temperature),

@@ -47,16 +47,22 @@ def end_slope_psd(f, *, k, L, w, f_vac, g, medium, temperature):
     return -4 * KB * temperature * np.imag(np.array(chi)) / (2 * np.pi * f)
 
 
-def tune_case(seed, points=6000):
-    rng = np.random.default_rng(seed)
+def silicon_lever(rng, lowest: float = 0.0):
+    """A silicon lever of drawn k (0.05-50 N/m, log-uniform), L (100-500 um) and width (20-60 um), its
+    vacuum resonance between ``lowest`` and 400 kHz: ``(k, L, w, f_vac)``."""
     E, rho = SILICON
     while True:
         k, L = 10 ** rng.uniform(math.log10(0.05), math.log10(50)), rng.uniform(100e-6, 500e-6)
         w = rng.uniform(20e-6, 60e-6)
         t = (4 * k * L**3 / (E * w)) ** (1 / 3)
         f_vac = B1**2 / (2 * math.pi * L**2) * t * math.sqrt(E / (12 * rho))
-        if f_vac < 4e5:
-            break
+        if lowest < f_vac < 4e5:
+            return k, L, w, f_vac
+
+
+def tune_case(seed, points=6000):
+    rng = np.random.default_rng(seed)
+    k, L, w, f_vac = silicon_lever(rng)
     case = dict(k=k, L=L, w=w, f_vac=f_vac, g=10 ** rng.uniform(-3.5, -2), medium=Medium.air(),
                 temperature=rng.uniform(290, 320))
     f = np.linspace(0, 2.5 * f_vac, points)[1:]
