@@ -29,6 +29,9 @@ _Q0, _Y0, _DRIVES = 4, 5, 6
 """The load's and the base's columns among the drives (``d1, d2, f0, m0, q0, y0``)."""
 
 
+_bounded_basis = numba.njit(cache=True)(pieces.bounded_basis)
+
+
 @numba.njit(cache=True)
 def _krylov_duncan(s):
     """``(S - 1, T, U, V)`` of ``|s| <= 1`` by their series (:func:`pfmdyn.generated.lever_pieces.krylov_duncan`:
@@ -58,15 +61,10 @@ def _segment(beta, t, ell, uc, rows, load):
                 rows[m, j] = kd[(j - m) % 4]
         load[0], load[1], load[2], load[3], load[4] = -uc * s_1, -uc * vv, -uc * uu, -uc * tt, -uc * kd[0]
         return True
-    if t == 0.0:            # a segment's start: the same numbers, without their functions' cost
-        c, si, e_minus, e_end = 1.0 + 0.0 * s, 0.0 * s, 1.0 + 0.0 * s, np.exp(s - beta * ell)
-    else:
-        c, si, e_minus, e_end = np.cos(s), np.sin(s), np.exp(-s), np.exp(s - beta * ell)
+    basis = _bounded_basis(s, beta * ell)      # the generated piece, compiled: nothing typed here
     for m in range(5):
-        rows[m, 3] = e_end
-        rows[m, 2] = e_minus if m % 2 == 0 else -e_minus
-    for m, (a, b) in enumerate(((c, si), (-si, c), (-c, -si), (si, -c), (c, si))):
-        rows[m, 0], rows[m, 1] = a, b
+        for j in range(4):
+            rows[m, j] = basis[4 * m + j]
     load[0] = uc
     for m in range(1, 5):
         load[m] = 0.0
