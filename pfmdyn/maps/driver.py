@@ -283,16 +283,15 @@ def _pool(workers: int):
     # tqdm's monitor thread (left by an earlier bar) only sleeps; workers never touch its lock
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.name != "tqdm_monitor"]
     method = "fork" if not others and "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    # Ctrl-C is the parent's (one line; the workers exit with it): each worker starts now with SIGINT
-    # blocked, a mask that survives spawn's exec, so that an interrupt while it imports prints no
-    # traceback; blocked, not ignored, so that one arriving meanwhile waits for the parent, not lost
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    # Ctrl-C is the parent's (one line; the workers exit with it): each worker starts now ignoring SIGINT,
+    # a disposition that survives spawn's exec, so that an interrupt while it imports prints no traceback
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_worker_start,
                                    initargs=(os.getpid(),))
         started = [pool.submit(int) for _ in range(workers)]      # spawn starts one worker per waiting task
     finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        signal.signal(signal.SIGINT, previous)
     for worker in started:
         worker.result()
     return pool
