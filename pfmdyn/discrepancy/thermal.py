@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from ..analysis.thermal import tallest_peak
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..fitting.projection import jacobian_covariance
@@ -77,11 +78,7 @@ def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
     f, asd = tune.frequency_hz[ok][order], tune.asd[ok][order]
     if len(f) < 5 * MIN_POINTS:
         raise UserError(f"{tune.path}: {len(f)} usable points; a thermal fit needs at least {5 * MIN_POINTS}")
-    # the tallest of the log spectrum smoothed over 5 bins (no single-bin spike), above the lowest
-    # bins (the offset and 1/f noise)
-    smooth = np.convolve(np.log(asd), np.ones(5) / 5, mode="same")
-    skip = max(3, len(f) // 100)
-    peak = f[skip + int(np.argmax(smooth[skip:-2]))]
+    peak = f[tallest_peak(asd)]
     inside = (f >= BAND[0] * peak) & (f <= BAND[1] * peak)
     if inside.sum() < MIN_POINTS:
         raise UserError(f"{tune.path}: {inside.sum()} points around the peak; a thermal fit needs at least {MIN_POINTS}")
