@@ -271,8 +271,8 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
                            "lever, tip pressed on a hard surface): the thermal factor assumes it")
     if lever and (tune.unit == "m" or invols is not None):
         thermal = _combine(lever.spring_constant, dict(lever.sources))
-        assumptions.append("first mode: the fluid-loaded whole lever (Sader's hydrodynamic function, every mode; "
-                           "an oscillator is biased where the fluid's load changes across the peak)")
+        assumptions.append("the lever's plan (length, width) and the fluid's properties set the load that the whole "
+                           "lever's first mode and k follow (Sader's hydrodynamic function)")
     elif tune.unit == "m" or invols is not None:
         log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
