@@ -126,6 +126,8 @@ class Calibration:
     plausible: dict = field(default_factory=dict)
     model: str = "damped oscillator"
     """The first mode's fit (:func:`first_mode_model`)."""
+    lever_fit: object = field(default=None, repr=False)
+    """The whole-lever fit (:class:`pfmdyn.discrepancy.thermal.ThermalFit`) when ``model`` is the lever's."""
 
     def to_json(self) -> dict:
         """The JSON document of ``pfmdyn calibrate`` (undetermined numbers are NaN, written null)."""
@@ -337,4 +339,4 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
                        plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
                        else plausible_factors(u_length / length, u_width / width, temperature),
-                       "fluid-loaded lever" if lever else "damped oscillator")
+                       "fluid-loaded lever" if lever else "damped oscillator", lever.fit if lever else None)
