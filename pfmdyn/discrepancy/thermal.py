@@ -37,7 +37,7 @@ from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE
                     instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
                     unexplained_entry, unexplained_line)
 
-__all__ = ["ThermalFit", "fit_thermal", "quality_factor", "lever_mode", "calibrate_tune", "BAND"]
+__all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
 
 BAND = (0.3, 3.0)
 """The band fitted, as multiples of the tallest peak's frequency (clipped to the measured span)."""
@@ -95,13 +95,13 @@ def _floor_and_scale(slope_psd, power, frequency) -> np.ndarray:
     return nnls(design / norms, np.ones(len(power)))[0] / norms
 
 
-def quality_factor(lever: Cantilever) -> float:
+def quality_factor_in_medium(lever: Cantilever) -> float:
     """The first mode's Q in the medium, the damped oscillator's at the resonance ``f`` (the real root of
     ``r**2 (1 + Re load) = 1``, ``r = f / f_vac``): ``1/Q = (-Im load + g / r) / (1 + Re load) + 1/Q_int``
     (``derivations/damping.py``: drag ``g + i r load``); finite at any damping, where a complex root
     may not exist.
 
-    >>> round(quality_factor(Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))))
+    >>> round(quality_factor_in_medium(Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))))
     474
     """
     load = lever.fluid_load(lever.free_resonance) if lever.medium is not None else 0j
@@ -166,7 +166,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
-    q = quality_factor(lever)
+    q = quality_factor_in_medium(lever)
     r = np.log(fitted) - log_asd
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
