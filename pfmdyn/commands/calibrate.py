@@ -45,8 +45,8 @@ def report(result) -> str:
     """
     d, p = result.to_json(), result.peak
     inst = result.instrument
-    lines = [f"first mode ({result.model}): f = {p.frequency_hz:.6g} +- {p.frequency_uncertainty_hz:.2g} Hz, "
-             f"Q = {p.quality_factor:.4g} +- {p.quality_factor_uncertainty:.2g}"
+    lines = [f"first mode ({result.model}): f = {p.frequency_hz:.6g} +- {_number(p.frequency_uncertainty_hz, 'Hz', 2)}, "
+             f"Q = {p.quality_factor:.4g} +- {_number(p.quality_factor_uncertainty, '', 2).strip()}"
              + (f"  (instrument: {inst['free_resonance']:.6g} Hz, Q {inst['free_quality_factor']:.4g})"
                 if "free_resonance" in inst and "free_quality_factor" in inst else "")]
     for name, label in (("thermal", "thermal"), ("sader", "Sader")):
