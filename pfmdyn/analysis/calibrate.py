@@ -158,7 +158,7 @@ def first_mode(tune: ThermalTune) -> ThermalPeak:
     return peaks[0]
 
 
-def first_mode_model(medium: Medium, peak: ThermalPeak, length: float | None, width: float | None, unit: str,
+def first_mode_model(medium: Medium, peak: ThermalPeak | None, length: float | None, width: float | None, unit: str,
                      invols: float | None) -> str:
     """Which fit gives ``pfmdyn calibrate`` its first mode: ``"damped oscillator"`` or ``"fluid-loaded lever"``.
 
@@ -170,13 +170,14 @@ def first_mode_model(medium: Medium, peak: ThermalPeak, length: float | None, wi
     ``benchmarks/thermal_regimes.py``).  Elsewhere it fits the damped oscillator (Hutter & Bechhoefer):
     the same numbers to a fraction of a per cent when Q is high, needs neither the lever's plan nor its k
     (the whole lever does: it iterates k), is the model the instrument's own fit uses (like beside like),
-    and takes milliseconds.  The whole lever also needs the spectrum in metres (or the InvOLS).
+    and takes milliseconds.  The whole lever also needs the spectrum in metres (or the InvOLS).  ``peak``
+    None: no oscillator was found.
 
     >>> peak = ThermalPeak(1, 2e4, 3.0, 1.0, 0.0, ((0,) * 4,) * 4)
     >>> first_mode_model(Medium.water(), peak, 2e-4, 3e-5, "m", None), first_mode_model(Medium.water(), peak, None, None, "m", None)
     ('fluid-loaded lever', 'damped oscillator')
     """
-    loaded = medium.density > LIQUID_DENSITY or peak.quality_factor < LOW_Q
+    loaded = medium.density > LIQUID_DENSITY or (peak is not None and peak.quality_factor < LOW_Q)
     converted = unit == "m" or invols is not None
     return "fluid-loaded lever" if loaded and length is not None and width is not None and converted \
         else "damped oscillator"

@@ -160,16 +160,22 @@ def _low_bins(size: int) -> int:
 def tallest_peak(y) -> int:
     """Index of the tallest peak of a spectrum ``y`` (positive, equally spaced from near 0): the maximum of
     its logarithm median-smoothed over 5 bins (no single-bin spike), above :func:`_low_bins`, at its highest
-    bin.  Every thermal fit (the oscillator's, the whole lever's) starts from it.
+    bin; where that is the low edge (a 1/f rise above a low peak), the most prominent peak.  Every thermal fit (the oscillator's, the whole lever's) starts from it.
 
     >>> f = np.linspace(0, 4e4, 2000); y = oscillator_asd(f, 1.2e4, 20.0, 1e-11, 1e-13)
     >>> spiked = y.copy(); spiked[900] = 1.0
     >>> int(tallest_peak(spiked)), int(np.argmax(y))
     (599, 599)
+    >>> abs(tallest_peak(y + 2e-9 * f[20] / f.clip(1.0)) - 599) < 5      # on a 1/f rise taller than the peak
+    True
     """
     y = np.asarray(y, dtype=float)
     start = _low_bins(y.size)
-    j = start + int(np.argmax(_smooth(np.log(np.maximum(y, np.finfo(float).tiny)), 5)[start:]))
+    smooth = _smooth(np.log(np.maximum(y, np.finfo(float).tiny)), 5)[start:]
+    j = start + int(np.argmax(smooth))
+    if j <= start + 2:          # still falling at the low edge: a 1/f rise, the peak the most prominent
+        tops, prominence = _peaks(smooth - smooth.min(), 0.0)
+        j = start + int(tops[np.argmax(prominence)]) if tops.size else j
     near = slice(max(j - 2, start), j + 3)        # the median's plateau: its highest bin
     return near.start + int(np.argmax(y[near]))
 

@@ -231,27 +231,35 @@ def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, t
     from ..analysis.thermal import ThermalPeak
     from ..constants import BOLTZMANN
 
-    k, start, last = spring_constant, None, None
-    for _ in range(16):
+    k, start, last, soft, fit = spring_constant, None, None, 0.0, None      # soft: the stiffest k too soft
+    for _ in range(24):
         try:
-            fit = fit_thermal(tune, k, length, medium, temperature, width, start=start)
-        except UserError:       # too soft to carry the fluid at the peak: a stiffer (heavier) start
-            k, start, last = 1.5 * k, None, None
+            trial = fit_thermal(tune, k, length, medium, temperature, width, start=start)
+        except UserError:       # too soft to carry the fluid at the peak: back towards the last that did
+            soft = max(soft, k)
+            if last is not None and np.log(np.exp(last[0]) / k) < 1e-4:
+                break           # the data ask for a lever at the edge of floating: the last that did
+            k = 2.0 * k if last is None else float(np.sqrt(k * np.exp(last[0])))
             continue
+        fit = trial
         # log scale**2 against log k: slope 1 but for the mass ratio's share; secant steps to its root
         u, h = np.log(k), 2 * np.log(fit["detection_scale"])
         slope = (h - last[1]) / (u - last[0]) if last is not None and u != last[0] else 1.0
         k, start, last = np.exp(u - h / (slope if 0.3 < slope < 3 else 1.0)), fit.internal, (u, h)
+        if k <= soft:           # never below a lever known to sink
+            k = float(np.sqrt(soft * np.exp(u)))
         if abs(h) < 1e-5:
             break
-    else:
+    if fit is None or abs(last[1]) > 0.01:
         raise UserError(f"{tune.path}: no lever of this length and width in {medium.name} explains the tune "
                         "(check them)")
+    fitted_k = float(np.exp(last[0]))
+    k = fitted_k / fit["detection_scale"] ** 2
 
     def moved(**change) -> float:        # k's relative change for one input one sigma lower (less load: a lever that floats)
         other = dict(dict(length=length, width=width), **change)
-        refit = fit_thermal(tune, k, other["length"], medium, temperature, other["width"], start=fit.internal)
-        return abs(refit["detection_scale"] ** -2 - 1)
+        refit = fit_thermal(tune, fitted_k, other["length"], medium, temperature, other["width"], start=fit.internal)
+        return abs(refit["detection_scale"] ** -2 / fit["detection_scale"] ** -2 - 1)
 
     sources = {"fit": fit.scale_stderr, "length": moved(length=length - length_uncertainty),
                "width": moved(width=width - width_uncertainty), "temperature": temperature_uncertainty / temperature}
@@ -285,19 +293,26 @@ def calibrate_tune(tune: ThermalTune, *, medium: Medium, temperature: float, len
     ('damped oscillator', 26.8)
     """
     from ..analysis.calibrate import (TEMPERATURE_UNCERTAINTY, calibrate, first_mode, first_mode_model,
-                                      stated_uncertainties, thermal_factor, thermal_spring_constant)
+                                      stated_uncertainties, thermal_spring_constant)
 
-    peak = first_mode(tune)
+    try:
+        peak = first_mode(tune)
+    except UserError:           # no oscillator stands out (a low hump on a 1/f rise): the whole lever may
+        peak = None
     mode = peak
     if first_mode_model(medium, peak, length, width, tune.unit, invols) == "fluid-loaded lever":
         metres = tune if tune.unit == "m" else ThermalTune(tune.path, tune.frequency_hz, tune.asd * invols, "m",
                                                             tune.instrument, tune.conditions)
         u_length, u_width = stated_uncertainties(length, width, options.get("length_uncertainty"),
                                                  options.get("width_uncertainty"))
-        sho_k = thermal_spring_constant(float(formulas.oscillator_mean_square(
-            peak.frequency_hz, peak.quality_factor, peak.amplitude * (invols or 1.0))), temperature)
-        mode = lever_mode(metres, length, width, medium, temperature, sho_k, length_uncertainty=u_length,
-                          width_uncertainty=u_width,
+        if peak is not None:
+            mean_square = float(formulas.oscillator_mean_square(peak.frequency_hz, peak.quality_factor,
+                                                                peak.amplitude * (invols or 1.0)))
+        else:                   # the band's power above its lowest level: a start, not an estimate
+            frequency, asd, _ = _band(metres)
+            mean_square = float(np.sum(asd**2 - np.min(asd) ** 2) * np.median(np.diff(frequency)))
+        mode = lever_mode(metres, length, width, medium, temperature, thermal_spring_constant(mean_square, temperature),
+                          length_uncertainty=u_length, width_uncertainty=u_width,
                           temperature_uncertainty=options.get("temperature_uncertainty", TEMPERATURE_UNCERTAINTY),
                           tip_position=options.get("tip_position", 1.0), spot_position=options.get("spot_position", 1.0))
     return calibrate(tune, length=length, width=width, medium=medium, temperature=temperature, invols=invols,
