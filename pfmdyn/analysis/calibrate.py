@@ -259,6 +259,10 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     f0, q, amp = peak.frequency_hz, peak.quality_factor, peak.amplitude
     assumptions, inputs = [], {"temperature": temperature, "medium": medium.name, "spot_position": spot_position,
                                "tip_position": tip_position}
+    if not lever and (medium.density > LIQUID_DENSITY or q < LOW_Q):
+        assumptions.append("the first mode as an oscillator, though the fluid's load changes across the peak (its "
+                           "resonance reads 1-6 % high, k up to 25 % off): give the length and width (and the InvOLS "
+                           "of a spectrum in volts) for the fluid-loaded whole lever")
     # Thermal.
     mean_square = float(formulas.oscillator_mean_square(f0, q, amp))
     if tune.unit == "V":
@@ -277,10 +281,6 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
         assumptions.append("the lever's plan (length, width) and the fluid's properties set the load that the whole "
                            "lever's first mode and k follow (Sader's hydrodynamic function)")
     elif tune.unit == "m" or invols is not None:
-        if medium.density > LIQUID_DENSITY or q < LOW_Q:
-            assumptions.append("the first mode as an oscillator, though the fluid's load changes across the peak (its "
-                               "resonance reads 1-6 % high, k up to 25 % off): give the length and width for the "
-                               "fluid-loaded whole lever")
         log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
                            {"fit": peak.stderr(log_mean_square, "fit"), "peak shape": peak.stderr(log_mean_square, "shape"),
