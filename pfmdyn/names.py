@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .errors import UserError
 
-__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "canonical", "flag",
+__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "GROUPS", "canonical", "flag",
            "checked", "markdown_table"]
 
 
@@ -51,6 +51,11 @@ class Quantity:
     def flag(self) -> str:
         """The command-line flag: ``--`` and the name with dashes."""
         return "--" + self.name.replace("_", "-")
+
+
+def _report(name, symbol, unit, meaning) -> Quantity:
+    """A quantity reports hold and no command takes (no range to check: any finite value)."""
+    return Quantity(name, symbol, unit, meaning, -math.inf, math.inf, open_low=False, option=False)
 
 
 QUANTITIES: tuple[Quantity, ...] = (
@@ -135,6 +140,67 @@ QUANTITIES: tuple[Quantity, ...] = (
              aliases=("drive_frequency_hz",), option=False),
     Quantity("tip_bias", "V_tip", "V", "DC bias on the tip", -1e4, 1e4, open_low=False,
              aliases=("tip_bias_v",), option=False),
+    # What the reports hold besides the lever and the contact (keys of the JSON documents, pfmdyn.io.results).
+    *(_report(name, symbol, unit, meaning) for name, symbol, unit, meaning in (
+        # spectra and resonances
+        ("resonance", "f_n", "Hz", "a resonance frequency (one per mode: dims mode or row)"),
+        ("measured_resonance", "f_meas", "Hz", "a resonance frequency as measured (a table's row, a fit to data)"),
+        ("predicted_resonance", "f_model", "Hz", "a resonance frequency of the final model"),
+        ("predicted_quality_factor", "Q_model", "1", "a mode's Q the model predicts (all damping together)"),
+        ("baseline_resonance", "f_base", "Hz", "a resonance frequency of the paper's model fitted before any effect"),
+        ("resonance_uncertainty", "u(f)", "Hz", "standard uncertainty of a measured resonance frequency"),
+        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit): "
+         "the half-power width over the frequency, all damping together"),
+        ("quality_factor_uncertainty", "u(Q)/Q", "1", "relative standard uncertainty of a measured Q"),
+        ("resonance_interval", "[f_lo, f_hi]", "Hz", "certified enclosure of a resonance frequency"),
+        ("complete_below", "f_complete", "Hz", "every resonance below this frequency is listed (certified)"),
+        ("condition", "condition", "1", "free or contact: the boundary condition of a mode"),
+        ("mode", "n", "1", "mode number (1: the first)"),
+        ("certified", "certified", "1", "true when interval arithmetic proves the values"),
+        ("vacuum_resonance", "f_vac", "Hz", "first free resonance the lever would have in vacuum"),
+        ("viscous_width", "Delta f", "Hz", "half-power width viscous drag gives every peak"),
+        ("contact_damping", "eta", "N s/m", "contact dashpot beside k1"),
+        ("lever_mass", "m_lever", "kg", "the lever's mass rho S L"),
+        ("added_mass_ratio", "m_add/m_lever", "1", "added mass over the lever's mass"),
+        ("band", "[f_lo, f_hi]", "Hz", "frequency band of the data analysed (or of a misfit)"),
+        ("points", "N", "1", "number of data values (complex values count twice)"),
+        ("frequency_stride", "stride", "1", "one frequency in this many analysed (a long file thinned)"),
+        ("instrument_value", "instrument", "1", "what the instrument's own fit recorded in the file (unit of the "
+         "quantity compared)"),
+        ("relative_difference", "(ours - instrument)/instrument", "1", "our value against the instrument's"),
+        ("disagrees", "disagrees", "1", "true when the difference exceeds three of our standard uncertainties"),
+        # drive sweeps and thermal tunes
+        ("gain", "G", "V/rad", "detector gain: signal per lever slope (in phase, quadrature)"),
+        ("background", "b", "V", "additive background of a sweep (real, imaginary part per coefficient)"),
+        ("amplitude_only", "amplitude only", "1", "true when the sweep holds no phase"),
+        ("phase_reversed", "phase reversed", "1", "true when the instrument's phase runs the other way"),
+        ("detection_scale", "s_det", "1", "measured over predicted thermal spectrum: the detection's calibration"),
+        ("white_floor", "S_white", "m/sqrt(Hz)", "white noise floor of a thermal spectrum"),
+        # calibration
+        ("thermal_spring_constant", "k_th", "N/m", "spring constant from the thermal tune (equipartition)"),
+        ("sader_spring_constant", "k_Sader", "N/m", "spring constant from Sader's hydrodynamic method"),
+        ("relative_uncertainty", "u_r", "1", "a relative standard uncertainty (a budget's share)"),
+        ("consistent", "consistent", "1", "true when the two spring constants agree within their uncertainties"),
+        ("correction_factor", "factor", "1", "the factor an input would need for the methods to agree"),
+        # the discrepancy model's fit
+        ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
+        ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),
+        ("gap_after", "gap_1", "1", "gap of the final model"),
+        ("gap_without", "gap_-e", "1", "gap of the final model with one effect left out"),
+        ("explained_share", "share", "1", "share of the baseline's misfit the named effects explain"),
+        ("effect_share", "share_e", "1", "share of the explained misfit that an effect's own removal loses"),
+        ("share_of_rest", "share_e|rest", "1", "share of the misfit an effect explains after the others"),
+        ("chi_square", "chi2", "1", "sum of squared residuals over their noise"),
+        ("bic", "BIC", "1", "Bayesian information criterion, chi2 + k ln n (noise known)"),
+        ("delta_bic", "Delta BIC", "1", "BIC gained by adding an effect"),
+        ("fitted_parameters", "k", "1", "number of parameters fitted"),
+        ("degrees_of_freedom", "dof", "1", "data values less fitted parameters"),
+        ("noise", "sigma", "data", "noise of the data in the data's own unit (RMS, estimated from the data)"),
+        ("largest_residual", "max |r|", "1", "the largest residual over the largest measured value"),
+        ("effect", "effect", "1", "an effect's name (missing_effects' vocabulary)"),
+        ("damping_mechanisms", "damping", "1", "the damping mechanisms the final model holds"),
+        ("equivalent_damping_mechanisms", "damping'", "1", "other damping mechanisms that fit the data as well"),
+    )),
 )
 
 NAMES: dict[str, Quantity] = {q.name: q for q in QUANTITIES}
@@ -152,6 +218,24 @@ MEASURED = ("free_quality_factor", "contact_resonance", "contact_quality_factor"
 """What an instrument file may hold besides the lever: measured resonances, their Q, the drive settings."""
 
 _ALIASES = {alias.lower(): q.name for q in QUANTITIES for alias in (q.name, *q.aliases)}
+
+
+GROUPS = {
+    "baseline": "the paper's model fitted before any effect (its parameters and fit)",
+    "steps": "the effects added (or removed) one at a time, in order: what each changed",
+    "reference": "the fit of the reference measurement (the sweep before the change)",
+    "instrument": "what the instrument's own fit recorded in the file, beside our value",
+    "medium": "the first free mode's Q the fluid predicts beside the fitted damping",
+    "unexplained": "what the final model leaves: the band holding most of the misfit",
+    "thermal": "the spring constant from the thermal tune, with its uncertainty budget",
+    "sader": "the spring constant from Sader's method, with its uncertainty budget",
+    "budget": "relative standard uncertainties by source",
+    "reconcile": "what would make the two methods agree: the input and its factor",
+    "solutions": "every solution of the inverse problem (the first is the result)",
+    "free": "free modes (the lever not in contact)",
+    "contact": "contact modes (the tip on the sample)",
+}
+"""The names of groups of records in the JSON documents (every other key is a quantity's name)."""
 
 
 def canonical(key: str) -> str | None:

@@ -10,7 +10,7 @@ import jsonschema
 import referencing
 
 from pfmdyn.io.results import ENVELOPE
-from pfmdyn.names import NAMES
+from pfmdyn.names import GROUPS, NAMES
 
 SCHEMAS = Path(__file__).resolve().parent.parent / "pfmdyn" / "schemas"
 RECORD = {"value", "stderr", "unit", "status", "why", "dims"}
@@ -45,5 +45,5 @@ def _names(entry, where):
         if "status" in entry and set(entry) <= RECORD:
             return
         for key, value in entry.items():
-            assert key in NAMES, f"{where}: key {key!r} is not a name of pfmdyn.names"
+            assert key in NAMES or key in GROUPS, f"{where}: key {key!r} is not a name of pfmdyn.names"
             _names(value, f"{where}.{key}")

@@ -160,18 +160,21 @@ def to_dataset(doc: dict):
     except ImportError:
         raise UserError("to_dataset needs xarray (pip install 'pfmdyn[maps]')") from None
 
-    variables = {}
+    variables, coords, labels = {}, {}, {}
     for group in ("lever", "results", "fit"):
-        for name, record in (doc.get(group) or {}).items():
-            if not (isinstance(record, dict) and "status" in record):
-                continue
+        for name, record in _flat(doc.get(group) or {}):
+            name = f"{group}.{name}" if name in variables or name in coords else name
             dims = tuple(record.get("dims", ()))
+            value = _number(record["value"])
+            if value.dtype.kind not in "fcbiu":     # a name (a medium, an effect): a label, not a number
+                if dims:
+                    coords[name] = xarray.Variable(dims, value)
+                else:
+                    labels[name] = str(record["value"])
+                continue
             attrs = {"units": record["unit"], "status": record["status"], "group": group}
             if "why" in record:
                 attrs["why"] = record["why"]
-            value = _number(record["value"])
-            if isinstance(value, np.ndarray) and value.dtype.kind not in "fc":
-                continue  # a name or a flag, not a number
             if record.get("stderr") is not None:
                 attrs["ancillary_variables"] = f"{name}_stderr"
                 variables[f"{name}_stderr"] = xarray.Variable(
@@ -181,7 +184,17 @@ def to_dataset(doc: dict):
              "source": json.dumps(doc.get("source") or {}), "notes": "\n".join(doc.get("notes") or ())}
     if "missing_effects" in doc:
         attrs["missing_effects"] = ", ".join(doc["missing_effects"])
-    return xarray.Dataset(variables, attrs=attrs)
+    return xarray.Dataset(variables, coords=coords, attrs={**attrs, **labels})
+
+
+def _flat(records: dict, prefix: str = ""):
+    """``(name, record)`` of a group of records and of the groups inside it (``GROUP.NAME``; lists of
+    groups, such as a fit's steps, are left to the JSON)."""
+    for key, entry in records.items():
+        if isinstance(entry, dict) and "status" in entry:
+            yield prefix + key, entry
+        elif isinstance(entry, dict):
+            yield from _flat(entry, f"{prefix}{key}.")
 
 
 def _number(value):

@@ -1,0 +1,324 @@
+"""The JSON document of each command, built from the result it computed (:mod:`pfmdyn.io.results`).
+
+The library's results stay what they are (dicts its tests and plots read); here each becomes the one
+envelope with one record per number, under the names of :mod:`pfmdyn.names` and its ``GROUPS``.  One
+function per document kind; the kinds' schemas are ``pfmdyn/schemas/COMMAND.KIND.json``.
+"""
+from __future__ import annotations
+
+from ..names import NAMES
+from .results import document, quantity
+
+__all__ = ["record", "lever_records", "discrepancy_report", "sweep_fit", "sweep_comparison", "thermal_fit"]
+
+RENAMED = {"viscous_width_hz": "viscous_width", "eta": "contact_damping"}
+"""A discrepancy parameter's old key -> its name (the old keys held a unit or a symbol)."""
+
+DERIVED = {"viscous_width", "contact_damping", "added_mass"}
+"""Parameters computed from fitted ones (their stderr propagated, or none)."""
+
+
+def record(name: str, entry: dict, status: str = "fitted") -> dict:
+    """A library parameter entry (``{value, stderr, unit}`` with ``determined``, ``given``, ``undetermined``,
+    ``note`` or ``why``) as the record of ``name``: a value whose uncertainty exceeds it is undetermined,
+    one held with a ``note`` is ``held``, a width not given is ``assumed``.
+
+    >>> record("k2", {"value": 3.0, "stderr": 9.0, "unit": "N/m", "determined": False})["why"]
+    'the data do not determine it: 3 +/- 9 N/m'
+    >>> record("width", {"value": 1e-5, "stderr": None, "unit": "m", "given": False, "why": "assumed L/10"})["status"]
+    'assumed'
+    """
+    value, stderr, why = entry.get("value"), entry.get("stderr"), entry.get("why")
+    if entry.get("undetermined") or entry.get("determined") is False or value is None:
+        shown = "" if value is None else f": {value:.3g} +/- {stderr:.3g} {NAMES[name].unit}".replace(" 1", "") \
+            if stderr is not None else f": {value:.3g}"
+        return quantity(name, None, status="undetermined",
+                        why=why or entry.get("note") or f"the data do not determine it{shown}")
+    if entry.get("note"):
+        return quantity(name, value, stderr, status="held", why=entry["note"])
+    if "given" in entry:
+        return quantity(name, value, stderr, status="given") if entry["given"] else \
+            quantity(name, value, stderr, status="assumed", why=why or "not given")
+    return quantity(name, value, stderr, status="derived" if name in DERIVED else status)
+
+
+def records_of(parameters: dict) -> dict:
+    """Every parameter entry of a fit as its record, under its name.
+
+    >>> sorted(records_of({"eta": {"value": 1e-6, "stderr": None, "unit": "N s/m"}}))
+    ['contact_damping']
+    """
+    return {RENAMED.get(key, key): record(RENAMED.get(key, key), entry) for key, entry in parameters.items()}
+
+
+def lever_records(values: dict, given=(), from_file=(), assumed: dict | None = None) -> dict:
+    """The lever's records: ``values`` (name -> number; None skipped) ``given`` on the command line, read
+    ``from_file`` or ``assumed`` (name -> why); any other value is ``derived``.
+
+    >>> lever_records({"spring_constant": 2.0, "width": 3e-5}, given=["spring_constant"],
+    ...               assumed={"width": "L/10"})["width"]["status"]
+    'assumed'
+    """
+    assumed = assumed or {}
+    out = {}
+    for name, value in values.items():
+        if value is None or name not in NAMES:
+            continue
+        if name in given:
+            out[name] = quantity(name, value, status="given")
+        elif name in assumed:
+            out[name] = quantity(name, value, status="assumed", why=assumed[name])
+        elif name in from_file:
+            out[name] = quantity(name, value, status="file", why="read from the input file")
+        else:
+            out[name] = quantity(name, value, status="derived")
+    return out
+
+
+def _statistics(report: dict) -> dict:
+    return {"points": quantity("points", report["data_values"], status="derived"),
+            "fitted_parameters": quantity("fitted_parameters", report["fitted_parameters"], status="derived"),
+            "degrees_of_freedom": quantity("degrees_of_freedom", report["dof"], status="derived")}
+
+
+def _unexplained(entry: dict | None) -> dict | None:
+    if not entry:
+        return None
+    return {"gap": quantity("gap", entry["gap"], status="derived"),
+            "band": quantity("band", list(entry["where"]), status="derived", dims=["bound"]),
+            "largest_residual": quantity("largest_residual", entry["largest_residual"], status="derived")}
+
+
+def _step(step: dict) -> dict:
+    """One step of the effect-by-effect search (added or removed effect, gaps, BIC gained, parameters)."""
+    out = {}
+    if step.get("effect"):
+        out["effect"] = quantity("effect", step["effect"], status="derived")
+    for key in ("gap_before", "gap_after"):
+        if step.get(key) is not None:
+            out[key] = quantity(key, step[key], status="derived")
+    if step.get("criterion_gain") is not None:
+        out["delta_bic"] = quantity("delta_bic", step["criterion_gain"], status="derived")
+    out.update(records_of(step.get("parameters") or {}))
+    return out
+
+
+def _step_note(i: int, step: dict) -> str:
+    what = f"added {step['effect']}" if step.get("effect") else f"removed {step.get('removed') or 'nothing'}"
+    located = step.get("located") or {}
+    where = f" ({located['signature']})" if located.get("signature") else ""
+    return f"step {i}: {what}{where}" + (f", gap {step['gap_before']:.4g} -> {step['gap_after']:.4g}"
+                                         if step.get("gap_after") is not None else "")
+
+
+def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=None) -> dict:
+    """The document of ``pfmdyn discrepancy`` on a spectrum (``kind`` ``spectrum``) or a resonance table
+    (``resonances``, its ``rows`` the table's ``(condition, mode)``): the final model's parameters and what
+    each effect explains in ``results``, the baseline and the steps in ``fit``.
+
+    >>> doc = discrepancy_report({"missing_effects": [], "gap_before": 1.0, "gap_after": 1.0,
+    ...     "explained_share": 0.0, "effect_shares": {}, "data_values": 9, "fitted_parameters": 2, "dof": 7,
+    ...     "baseline_fitted_parameters": 2, "damping_mechanisms": [], "unexplained": None, "criterion": "BIC",
+    ...     "steps": [], "parameters": {"k1": {"value": 0.3, "stderr": 1e-4, "unit": "N/m", "determined": True}},
+    ...     "baseline_parameters": {}, "fit_report": "[[Model]] baseline"}, "resonances", {"path": "t.csv"}, {})
+    >>> doc["missing_effects"], doc["results"]["k1"]["status"], doc["fit"]["gap_after"]["value"]
+    ([], 'fitted', 1.0)
+    """
+    results = records_of(report["parameters"])
+    results["explained_share"] = quantity("explained_share", report["explained_share"], status="derived")
+    shares = report.get("effect_shares") or {}
+    if shares:
+        effects = list(shares)
+        results["effect"] = quantity("effect", effects, status="derived", dims=["effect"])
+        for key, name in (("share", "effect_share"), ("gap_without", "gap_without"), ("share_of_rest", "share_of_rest")):
+            results[name] = quantity(name, [shares[e].get(key) for e in effects], status="derived", dims=["effect"])
+    results["damping_mechanisms"] = quantity("damping_mechanisms", list(report.get("damping_mechanisms") or []),
+                                             status="derived")
+    if report.get("damping_mechanisms_indistinguishable_from"):
+        results["equivalent_damping_mechanisms"] = quantity(
+            "equivalent_damping_mechanisms", list(report["damping_mechanisms_indistinguishable_from"]), status="derived")
+    if rows is not None:
+        results["condition"] = quantity("condition", [c for c, _ in rows], status="file", why="the table's rows",
+                                        dims=["row"])
+        results["mode"] = quantity("mode", [m for _, m in rows], status="file", why="the table's rows", dims=["row"])
+        results["measured_resonance"] = quantity("measured_resonance", report["measured_hz"], status="file",
+                                                 why="the table's rows", dims=["row"])
+        results["resonance_uncertainty"] = quantity("resonance_uncertainty", report["frequency_uncertainty_hz"],
+                                                    status="file", why="the table's metadata or its default",
+                                                    dims=["row"])
+        results["predicted_resonance"] = quantity("predicted_resonance", report["predicted_hz"], status="derived",
+                                                  dims=["row"])
+        results["baseline_resonance"] = quantity("baseline_resonance", report["baseline_hz"], status="derived",
+                                                 dims=["row"])
+        if "measured_quality_factor" in report:
+            results["measured_quality_factor"] = quantity(
+                "measured_quality_factor", report["measured_quality_factor"], status="file",
+                why="the table's quality_factor column", dims=["row_with_q"])
+            results["predicted_quality_factor"] = quantity(
+                "predicted_quality_factor", report["predicted_quality_factor"], status="derived", dims=["row_with_q"])
+            results["quality_factor_uncertainty"] = quantity(
+                "quality_factor_uncertainty", report["quality_factor_relative_uncertainty"], status="assumed",
+                why="no uncertainty of Q in the table")
+    medium = report.get("medium")
+    if medium:
+        results["medium"] = {
+            "medium": quantity("medium", medium["medium"], status="given"),
+            "width": quantity("width", medium["width"], status="given"),
+            "predicted_quality_factor": quantity("predicted_quality_factor", medium["predicted_quality_factor"],
+                                                 status="derived"),
+            "measured_quality_factor": quantity("measured_quality_factor", medium["fitted_quality_factor"],
+                                                status="derived")
+            if medium.get("fitted_quality_factor") is not None else
+            quantity("measured_quality_factor", None, why="no free-mode damping fitted")}
+    fit = {"gap_before": quantity("gap_before", report["gap_before"], status="derived"),
+           "gap_after": quantity("gap_after", report["gap_after"], status="derived"),
+           **_statistics(report),
+           "baseline": {"fitted_parameters": quantity("fitted_parameters", report["baseline_fitted_parameters"],
+                                                      status="derived"),
+                        **records_of(report.get("baseline_parameters") or {})},
+           "steps": [_step(s) for s in report.get("steps") or []]}
+    if report.get("noise_sigma") is not None:
+        fit["noise"] = quantity("noise", report["noise_sigma"], status="derived")
+    if report.get("frequency_stride"):
+        fit["frequency_stride"] = quantity("frequency_stride", report["frequency_stride"], status="derived")
+    unexplained = _unexplained(report.get("unexplained"))
+    if unexplained:
+        fit["unexplained"] = unexplained
+    notes = [f"criterion: {report['criterion']}"]
+    if report.get("gap_definition"):
+        notes.append(f"gap: {report['gap_definition']}")
+    notes += [_step_note(i, s) for i, s in enumerate(report.get("steps") or [], 1)]
+    notes += [f"{name}: {why}" for name, why in (report.get("spring_rule") or {}).items()]
+    notes += [f"{name}: {why}" for name, why in (report.get("untestable_effects") or {}).items()]
+    notes.append(report["fit_report"])
+    return document("discrepancy", kind, source, lever, results, fit, notes,
+                    missing_effects=report["missing_effects"])
+
+
+def _instrument(fit: dict) -> tuple[dict, list[str]]:
+    """What the instrument's fit recorded (records of status ``file``) and one note per comparison."""
+    recorded = {name: quantity(name, value, status="file", why="the instrument's own fit, recorded in the file")
+                for name, value in (fit.get("instrument_fit") or {}).items() if name in NAMES}
+    notes = []
+    for c in fit.get("instrument_comparison") or []:
+        unit = NAMES[c["name"]].unit
+        unit = "" if unit == "1" else f" {unit}"
+        notes.append(f"{c['name']}: ours {c['ours']:.6g}{unit}, the instrument's {c['instrument']:.6g}{unit} "
+                     f"(relative difference {c['relative_difference']:+.2g}; "
+                     f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})")
+    return recorded, notes
+
+
+def _assumed(fit: dict) -> dict:
+    """The lever's values a sweep or tune fit assumed, name -> why (from its ``assumed`` sentences)."""
+    out = {}
+    for sentence in fit.get("assumed") or []:
+        name = sentence.split(" ", 1)[0]
+        if name in NAMES:
+            out[name] = sentence
+    return out
+
+
+def _free_lever(fit: dict, given) -> dict:
+    """The lever of a sweep or tune fit: spring constant, length, medium, temperature (when used)."""
+    values = {name: fit.get(name) for name in ("spring_constant", "length", "medium", "temperature")}
+    return lever_records(values, given=given, from_file=fit.get("from_file") or (), assumed=_assumed(fit))
+
+
+def _fit_records(fit: dict) -> dict:
+    """A sweep's or a tune's own fit: its gap, points, noise, band, what it leaves unexplained."""
+    out = {"gap": quantity("gap", fit["gap"], status="derived"),
+           "points": quantity("points", fit["points"], status="file", why="the data's frequencies")}
+    if fit.get("band_hz"):
+        out["band"] = quantity("band", list(fit["band_hz"]), status="derived", dims=["bound"])
+    unexplained = _unexplained(fit.get("unexplained"))
+    if unexplained:
+        out["unexplained"] = unexplained
+    return out
+
+
+def _sweep_results(fit: dict) -> dict:
+    """The lever a sweep or tune fit found: its parameters, vacuum resonance and the Q it predicts."""
+    results = records_of(fit["parameters"])
+    results["vacuum_resonance"] = quantity("vacuum_resonance", fit["vacuum_resonance"], status="derived")
+    results["free_quality_factor"] = quantity("free_quality_factor", fit["quality_factor"], status="derived")
+    return results
+
+
+def sweep_fit(fit: dict, given=()) -> dict:
+    """The document of ``pfmdyn discrepancy`` on one drive sweep (kind ``sweep``): the lever in its fluid,
+    the detector's gain and background, against what the instrument's own fit recorded."""
+    results = _sweep_results(fit)
+    results["amplitude_peak"] = quantity("amplitude_peak", fit["peak_hz"], status="derived")
+    results["gain"] = quantity("gain", _complex(fit["gain"]["value"]), status="fitted")
+    results["background"] = quantity("background", _complex(fit["background"]["value"]), status="fitted",
+                                     dims=["coefficient"])
+    results["amplitude_only"] = quantity("amplitude_only", bool(fit["amplitude_only"]), status="file",
+                                         why="the columns of the file")
+    results["phase_reversed"] = quantity("phase_reversed", bool(fit["phase_reversed"]), status="derived")
+    recorded, notes = _instrument(fit)
+    out = _fit_records(fit)
+    out["noise"] = quantity("noise", fit["noise"], status="derived")
+    out["instrument"] = recorded
+    notes.append(f"gain in {fit['gain']['unit']}, background in {fit['background']['unit']}, added to the "
+                 f"{fit['background'].get('adds_to', 'response')}")
+    return document("discrepancy", "sweep", {"path": str(fit["path"]), "instrument": fit.get("instrument")},
+                    _free_lever(fit, given), results, out, notes, missing_effects=[])
+
+
+def _complex(pairs):
+    """``[re, im]`` (or a list of them) as a complex number (or list)."""
+    if pairs and isinstance(pairs[0], (list, tuple)):
+        return [complex(*p) for p in pairs]
+    return complex(*pairs)
+
+
+def sweep_comparison(out: dict, given=()) -> dict:
+    """The document of ``pfmdyn discrepancy AFTER --reference BEFORE`` (kind ``comparison``): what changed
+    between two drive sweeps under ``missing_effects`` (``added_mass``, or none), the reference's own fit
+    under ``fit.reference``."""
+    results = records_of(out["parameters"])
+    results["lever_mass"] = quantity("lever_mass", out["lever_mass"], status="derived")
+    results["free_resonance"] = quantity("free_resonance", [out["resonance_before"], out["resonance_after"]],
+                                         status="fitted", dims=["sweep"])
+    results["gain"] = quantity("gain", _complex(out["gain_after"]), status="fitted")
+    results["background"] = quantity("background", _complex(out["background_after"]), status="fitted",
+                                     dims=["coefficient"])
+    recorded, notes = _instrument(out)
+    fit = {"gap_before": quantity("gap_before", out["gap_before"], status="derived"),
+           "gap_after": quantity("gap_after", out["gap_after"], status="derived"),
+           "noise": quantity("noise", out["noise"], status="derived"),
+           "instrument": recorded,
+           "steps": [{"effect": quantity("effect", s["effect"], status="derived"),
+                      "fitted_parameters": quantity("fitted_parameters", s["parameters"], status="derived"),
+                      "chi_square": quantity("chi_square", s["chi2"], status="derived"),
+                      "bic": quantity("bic", s["bic"], status="derived"),
+                      "gap": quantity("gap", s["gap"], status="derived")} for s in out["steps"]],
+           "reference": sweep_fit(out["reference_fit"], given)["results"]}
+    unexplained = _unexplained(out.get("unexplained"))
+    if unexplained:
+        fit["unexplained"] = unexplained
+    notes = [*out.get("notes", []), *notes, "free_resonance: the first free resonance in the reference and in the data (dims sweep)"]
+    if out.get("nuisances"):
+        notes.append("refitted besides the named effect: " + ", ".join(out["nuisances"]))
+    effect = out["effect"]
+    missing = [] if effect == "nothing" else [effect]
+    lever = _free_lever(out["reference_fit"], given)
+    return document("discrepancy", "comparison", {"path": str(out["path"]), "reference": str(out["reference"])},
+                    lever, results, fit, notes, missing_effects=missing)
+
+
+def thermal_fit(fit: dict, given=()) -> dict:
+    """The document of ``pfmdyn discrepancy`` on a thermal tune (kind ``thermal``): the lever in its fluid at
+    its temperature, the detection's scale against the equipartition theorem."""
+    results = _sweep_results(fit)
+    results["detection_scale"] = quantity("detection_scale", fit["detection_scale"], status="derived")
+    results["white_floor"] = quantity("white_floor", fit["white_floor"], status="derived")
+    recorded, notes = _instrument(fit)
+    out = _fit_records(fit)
+    out["noise"] = quantity("noise", fit["noise"], status="derived")
+    out["instrument"] = recorded
+    notes.append(f"the spectrum in {fit['unit']}; the fit's residual and noise are of its logarithm")
+    return document("discrepancy", "thermal", {"path": str(fit["path"])}, _free_lever(fit, given), results, out,
+                    notes, missing_effects=[])
+
