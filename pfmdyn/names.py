@@ -165,10 +165,8 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("band", "[f_lo, f_hi]", "Hz", "frequency band of the data analysed (or of a misfit)"),
         ("points", "N", "1", "number of data values (complex values count twice)"),
         ("frequency_stride", "stride", "1", "one frequency in this many analysed (a long file thinned)"),
-        ("instrument_value", "instrument", "1", "what the instrument's own fit recorded in the file (unit of the "
-         "quantity compared)"),
-        ("relative_difference", "(ours - instrument)/instrument", "1", "our value against the instrument's"),
-        ("disagrees", "disagrees", "1", "true when the difference exceeds three of our standard uncertainties"),
+        ("disagrees", "disagrees", "1", "the quantities whose value differs from the instrument's by more than three of "
+         "our standard uncertainties"),
         # drive sweeps and thermal tunes
         ("gain", "G", "V/rad", "detector gain: signal per lever slope (in phase, quadrature)"),
         ("background", "b", "V", "additive background of a sweep (real, imaginary part per coefficient)"),

@@ -206,6 +206,9 @@ def _instrument(fit: dict) -> tuple[dict, list[str]]:
         notes.append(f"{c['name']}: ours {c['ours']:.6g}{unit}, the instrument's {c['instrument']:.6g}{unit} "
                      f"(relative difference {c['relative_difference']:+.2g}; "
                      f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})")
+    disagree = [c["name"] for c in fit.get("instrument_comparison") or [] if c["disagrees"]]
+    if fit.get("instrument_comparison"):
+        recorded["disagrees"] = quantity("disagrees", disagree, status="derived")
     return recorded, notes
 
 
@@ -240,6 +243,8 @@ def _fit_records(fit: dict) -> dict:
 def _sweep_results(fit: dict) -> dict:
     """The lever a sweep or tune fit found: its parameters, vacuum resonance and the Q it predicts."""
     results = records_of(fit["parameters"])
+    if "width" in (fit.get("from_file") or ()) and results["width"]["status"] == "given":
+        results["width"] = quantity("width", results["width"]["value"], status="file", why="read from the input file")
     results["vacuum_resonance"] = quantity("vacuum_resonance", fit["vacuum_resonance"], status="derived")
     results["free_quality_factor"] = quantity("free_quality_factor", fit["quality_factor"], status="derived")
     return results
@@ -285,6 +290,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
     results["background"] = quantity("background", _complex(out["background_after"]), status="fitted",
                                      dims=["coefficient"])
     recorded, notes = _instrument(out)
+    reference = sweep_fit(out["reference_fit"], given)
     fit = {"gap_before": quantity("gap_before", out["gap_before"], status="derived"),
            "gap_after": quantity("gap_after", out["gap_after"], status="derived"),
            "noise": quantity("noise", out["noise"], status="derived"),
@@ -294,7 +300,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
                       "chi_square": quantity("chi_square", s["chi2"], status="derived"),
                       "bic": quantity("bic", s["bic"], status="derived"),
                       "gap": quantity("gap", s["gap"], status="derived")} for s in out["steps"]],
-           "reference": sweep_fit(out["reference_fit"], given)["results"]}
+           "reference": {**reference["results"], **reference["fit"]}}
     unexplained = _unexplained(out.get("unexplained"))
     if unexplained:
         fit["unexplained"] = unexplained
