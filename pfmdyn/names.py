@@ -178,6 +178,8 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("thermal_spring_constant", "k_th", "N/m", "spring constant from the thermal tune (equipartition)"),
         ("sader_spring_constant", "k_Sader", "N/m", "spring constant from Sader's hydrodynamic method"),
         ("relative_uncertainty", "u_r", "1", "a relative standard uncertainty (a budget's share)"),
+        ("uncertainty_source", "source", "1", "what a share of an uncertainty budget comes from"),
+        ("input_name", "input", "1", "an input of a calculation, by its name"),
         ("consistent", "consistent", "1", "true when the two spring constants agree within their uncertainties"),
         ("correction_factor", "factor", "1", "the factor an input would need for the methods to agree"),
         # the discrepancy model's fit

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 from ..errors import UserError
+from ..io import documents
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -129,7 +130,8 @@ def run(args) -> int:
     for line in disagreement_lines(document["instrument_comparison"]):
         print(line.strip())
     print("from the file: " + (", ".join(document["from_file"]) or "the spectrum only"))
-    flags.write_json(args.json, document)
+    given = flags.given_names(args, ("medium", "temperature", "length", "width", "spot_position", "tip_position"))
+    flags.write_json(args.json, documents.calibration(document, args.file, given))
     if args.plot:
         from ..plots.calibrate import plot_calibration
         fig = plot_calibration(tune, result)

@@ -78,7 +78,7 @@ def _sweeps(args) -> int:
             if before else fit
     if before:
         print(fit.report())
-    given = flags.given(args, (*OVERRIDES, "medium", "temperature"))
+    given = flags.given_names(args, (*OVERRIDES, "medium", "temperature"))
     doc = documents.sweep_comparison(result.to_dict(), given) if before else documents.sweep_fit(result.to_dict(), given)
     return _emit(args, result, doc, lambda: plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after))
 
@@ -104,7 +104,7 @@ def _thermal(args) -> int:
     with _fitting(args.data, "the spring constant and length"):
         fit = _provenance(fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature,
                                       values.get("width")), args, medium, found, taken)
-    doc = documents.thermal_fit(fit.to_dict(), flags.given(args, (*OVERRIDES, "medium", "temperature")))
+    doc = documents.thermal_fit(fit.to_dict(), flags.given_names(args, (*OVERRIDES, "medium", "temperature")))
     return _emit(args, fit, doc, lambda: plot_thermal(fit))
 
 
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    given = flags.given(args, OVERRIDES)
+    given = flags.given_names(args, OVERRIDES)
     lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
                                     from_file=OVERRIDES)
     rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]

@@ -188,6 +188,16 @@ def given(args, names) -> dict[str, float]:
     return out
 
 
+def given_names(args, names) -> list[str]:
+    """The names among ``names`` whose flag was given (their records' status ``given``).
+
+    >>> import argparse
+    >>> given_names(argparse.Namespace(medium="water", length=None), ("medium", "length", "width"))
+    ['medium']
+    """
+    return [name for name in names if getattr(args, name, None) is not None]
+
+
 def require(values: dict, names, file=None) -> None:
     """A one-line error for the first of ``names`` with no value: what is missing, where, which flag.
 

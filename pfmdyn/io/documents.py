@@ -6,10 +6,13 @@ function per document kind; the kinds' schemas are ``pfmdyn/schemas/COMMAND.KIND
 """
 from __future__ import annotations
 
+import math
+
 from ..names import NAMES
 from .results import document, quantity
 
-__all__ = ["record", "lever_records", "discrepancy_report", "sweep_fit", "sweep_comparison", "thermal_fit"]
+__all__ = ["record", "records_of", "lever_records", "discrepancy_report", "sweep_fit", "sweep_comparison", "thermal_fit",
+           "calibration"]
 
 RENAMED = {"viscous_width_hz": "viscous_width", "eta": "contact_damping"}
 """A discrepancy parameter's old key -> its name (the old keys held a unit or a symbol)."""
@@ -328,3 +331,65 @@ def thermal_fit(fit: dict, given=()) -> dict:
     return document("discrepancy", "thermal", {"path": str(fit["path"])}, _free_lever(fit, given), results, out,
                     notes, missing_effects=[])
 
+
+
+def _budget(estimate: dict, name: str, dim: str) -> dict:
+    """A spring constant (``name``) and its relative uncertainty budget by source, or why it is undetermined."""
+    value = estimate["spring_constant"]
+    if value is None or not math.isfinite(value):
+        return {name: quantity(name, None, why=estimate["reason"] or "not determined")}
+    sources = estimate["sources"]
+    return {name: quantity(name, value, estimate["spring_constant_stderr"], status="derived"),
+            "budget": {"uncertainty_source": quantity("uncertainty_source", list(sources), status="derived",
+                                                      dims=[dim]),
+                       "relative_uncertainty": quantity("relative_uncertainty", list(sources.values()),
+                                                        status="derived", dims=[dim])}}
+
+
+def calibration(doc: dict, path, given=()) -> dict:
+    """The document of ``pfmdyn calibrate`` (kind ``thermal_tune``): the first mode fitted on the tune, the
+    spring constant by the thermal method and by Sader's, each with its budget, whether they agree.
+
+    >>> nan = float("nan")
+    >>> d = calibration({"free_resonance": 1.8e5, "free_resonance_stderr": 9.0, "free_quality_factor": 440.0,
+    ...     "free_quality_factor_stderr": 20.0, "thermal": {"spring_constant": 2.0, "spring_constant_stderr": 0.1,
+    ...     "sources": {"fit": 0.05}, "reason": ""}, "sader": {"spring_constant": nan, "spring_constant_stderr": nan,
+    ...     "sources": {}, "reason": "needs the lever's length and width"}, "consistent": None, "reconcile": [],
+    ...     "assumptions": [], "inputs": {"temperature": 300.0, "medium": "air at 27 C"}, "instrument": {},
+    ...     "from_file": [], "instrument_comparison": []}, "t.csv", given=["temperature"])
+    >>> d["results"]["sader_spring_constant"]["status"], d["fit"]["thermal"]["budget"]["relative_uncertainty"]["value"]
+    ('undetermined', [0.05])
+    """
+    results = {"free_resonance": quantity("free_resonance", doc["free_resonance"], doc["free_resonance_stderr"]),
+               "free_quality_factor": quantity("free_quality_factor", doc["free_quality_factor"],
+                                               doc["free_quality_factor_stderr"])}
+    fit = {}
+    for method, name in (("thermal", "thermal_spring_constant"), ("sader", "sader_spring_constant")):
+        records = _budget(doc[method], name, f"{method}_budget")
+        results[name] = records.pop(name)
+        fit[method] = records
+    results["consistent"] = quantity("consistent", doc["consistent"], status="derived") \
+        if doc["consistent"] is not None else quantity("consistent", None, why="one estimate is undetermined")
+    if doc["reconcile"]:
+        fit["reconcile"] = {
+            "input_name": quantity("input_name", [r["input"] for r in doc["reconcile"]], status="derived",
+                                   dims=["input_name"]),
+            "correction_factor": quantity("correction_factor", [r["factor"] for r in doc["reconcile"]],
+                                          status="derived", dims=["input_name"])}
+    instrument = dict(doc["instrument"])
+    if "environment" in instrument:
+        instrument["medium"] = instrument.pop("environment")
+    recorded, notes = _instrument({"instrument_fit": instrument,
+                                   "instrument_comparison": doc["instrument_comparison"]})
+    if "sader_spring_constant_of_its_fit" in instrument:
+        recorded["sader_spring_constant"] = quantity("sader_spring_constant",
+                                                     instrument["sader_spring_constant_of_its_fit"], status="derived")
+    fit["instrument"] = recorded
+    assumed = {a.split(" ", 1)[0]: a for a in doc["assumptions"] if a.split(" ", 1)[0] in NAMES}
+    lever = lever_records(doc["inputs"], given=given, from_file=doc["from_file"],
+                          assumed={name: assumed.get(name, "the default") for name in doc["inputs"]
+                                   if name not in given and name not in doc["from_file"]})
+    notes += [f"reconciled by {r['input']} x {r['factor']:.4g}: {r['why']}"
+              for r in doc["reconcile"]]
+    notes += [f"assumed: {a}" for a in doc["assumptions"]]
+    return document("calibrate", "thermal_tune", {"path": str(path)}, lever, results, fit, notes)
