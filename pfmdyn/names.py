@@ -182,6 +182,12 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("input_name", "input", "1", "an input of a calculation, by its name"),
         ("consistent", "consistent", "1", "true when the two spring constants agree within their uncertainties"),
         ("correction_factor", "factor", "1", "the factor an input would need for the methods to agree"),
+        # contact stiffness from contact resonances (pfmdyn stiffness)
+        ("k1_over_k", "k1/k", "1", "contact stiffness over the lever's spring constant"),
+        ("k1_by_mode", "k1_n", "N/m", "k1 from each contact mode alone (dims mode)"),
+        ("reduced_modulus", "E*", "Pa", "reduced modulus of a Hertz contact from k1"),
+        ("residual_beta", "r_beta", "1", "largest residual of the characteristic equations at the solution"),
+        ("unique", "unique", "1", "true when exactly one solution explains the resonances under what was stated"),
         # the discrepancy model's fit
         ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
         ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),

@@ -196,8 +196,12 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     print(report.report())
     if args.json:
+        from ..io import documents
+
         document = report.to_dict()
         if notes:
             document["inputs"]["length"] = None
-        flags.write_json(args.json, document)
+        given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
+        taken = [*found, *(["contact_resonance"] if args.file and not args.contact else [])]
+        flags.write_json(args.json, documents.stiffness(document, args.file, given, taken))
     return 0

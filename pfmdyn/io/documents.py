@@ -56,7 +56,7 @@ def records_of(parameters: dict) -> dict:
 
 def lever_records(values: dict, given=(), from_file=(), assumed: dict | None = None) -> dict:
     """The lever's records: ``values`` (name -> number; None skipped) ``given`` on the command line, read
-    ``from_file`` or ``assumed`` (name -> why); any other value is ``derived``.
+    ``from_file`` or ``assumed`` (name -> why); any other value is the default, ``assumed``.
 
     >>> lever_records({"spring_constant": 2.0, "width": 3e-5}, given=["spring_constant"],
     ...               assumed={"width": "L/10"})["width"]["status"]
@@ -74,7 +74,7 @@ def lever_records(values: dict, given=(), from_file=(), assumed: dict | None = N
         elif name in from_file:
             out[name] = quantity(name, value, status="file", why="read from the input file")
         else:
-            out[name] = quantity(name, value, status="derived")
+            out[name] = quantity(name, value, status="assumed", why="the default: no flag, not in the file")
     return out
 
 
@@ -393,3 +393,72 @@ def calibration(doc: dict, path, given=()) -> dict:
               for r in doc["reconcile"]]
     notes += [f"assumed: {a}" for a in doc["assumptions"]]
     return document("calibrate", "thermal_tune", {"path": str(path)}, lever, results, fit, notes)
+
+
+def _solution(s: dict, lever: dict, k2_policy: str) -> dict:
+    """One solution of the inverse problem: the unknowns solved (stderr propagated), the rest held or tied."""
+    unknowns = s["unknowns"]
+    out = {"k1": quantity("k1", s["k1"], s.get("k1_stderr"), status="derived")}
+    if "k2" in unknowns:
+        out["k2"] = quantity("k2", s["k2"], s.get("k2_stderr"), status="derived")
+    elif s["k2"] is not None:
+        out["k2"] = quantity("k2", s["k2"], status="tied", why=k2_policy)
+    else:
+        out["k2"] = quantity("k2", None, why=k2_policy)
+    out["tip_position"] = quantity("tip_position", s["tip_position"], s.get("tip_position_stderr"), status="derived") \
+        if "tip_position" in unknowns else quantity("tip_position", s["tip_position"], status="held",
+                                                    why="the lever's tip position, not solved for")
+    out["residual_beta"] = quantity("residual_beta", s["residual_beta"], status="derived")
+    if s.get("k1_by_mode"):
+        out["k1_by_mode"] = quantity("k1_by_mode", s["k1_by_mode"], status="derived", dims=["mode"])
+    if s.get("reduced_modulus") is not None:
+        out["reduced_modulus"] = quantity("reduced_modulus", s["reduced_modulus"], s["reduced_modulus_stderr"],
+                                          status="derived")
+    return out
+
+
+def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
+    """The document of ``pfmdyn stiffness`` (kind ``contact_resonance``): k1 (with k2 or the tip position)
+    solved from the contact resonances, each uncertainty's budget, every solution when not unique.
+
+    >>> d = stiffness({"k1": 109.7, "k1_stderr": 0.0, "k2": None, "tip_position": 1.0, "unknowns": ["k1"],
+    ...     "residual_beta": 0.0, "k1_over_k": 54.9, "unique": True, "k2_policy": "k2 left out", "proof": [],
+    ...     "notes": [], "solutions": [{"k1": 109.7, "k2": None, "tip_position": 1.0, "unknowns": ["k1"],
+    ...     "k1_stderr": 0.0, "residual_beta": 0.0}], "inputs": {"spring_constant": 2.0, "free_resonance": 7.5e4,
+    ...     "contact_hz": [3e5], "modes": [1], "contact_uncertainty": 0.0}}, given=["spring_constant"])
+    >>> d["results"]["k1"]["value"], d["results"]["k2"]["status"], d["results"]["contact_resonance"]["dims"]
+    (109.7, 'undetermined', ['mode'])
+    """
+    inputs = dict(doc["inputs"])
+    contact, modes = inputs.pop("contact_hz"), inputs.pop("modes")
+    lever = lever_records({k: v for k, v in inputs.items() if not isinstance(v, str)}, given=given,
+                          from_file=from_file, assumed={name: "the default" for name in inputs
+                                                        if name.endswith("_uncertainty") and name not in given})
+    if isinstance(inputs.get("medium"), str):
+        lever["medium"] = quantity("medium", inputs["medium"], status="given" if "medium" in given else "assumed",
+                                   **({} if "medium" in given else {"why": "the default"}))
+    status = "file" if "contact_resonance" in from_file else "given"
+    why = {"why": "read from the input file"} if status == "file" else {}
+    results = {"contact_resonance": quantity("contact_resonance", contact, status=status, dims=["mode"], **why),
+               "mode": quantity("mode", modes, status=status, dims=["mode"], **why)}
+    solutions = [_solution(s, lever, doc["k2_policy"]) for s in doc["solutions"]]
+    if doc["unique"]:
+        results.update(solutions[0])
+        results["k1_over_k"] = quantity("k1_over_k", doc["k1_over_k"], status="derived")
+        budget = (doc["solutions"][0].get("stderr_sources") or {})
+        k1 = doc["k1"]
+        shares = {source: parts["k1"] / k1 for source, parts in budget.items() if parts.get("k1", 0) > 0}
+    else:
+        why_not = f"not unique: {len(solutions)} solution(s) explain the resonances (fit.solutions)"
+        results.update({name: quantity(name, None, why=why_not) for name in ("k1", "k2", "tip_position")})
+        shares = {}
+    results["unique"] = quantity("unique", bool(doc["unique"]), status="derived")
+    fit = {"solutions": solutions}
+    if shares:
+        fit["budget"] = {"uncertainty_source": quantity("uncertainty_source", list(shares), status="derived",
+                                                        dims=["uncertainty_source"]),
+                         "relative_uncertainty": quantity("relative_uncertainty", list(shares.values()),
+                                                          status="derived", dims=["uncertainty_source"])}
+    notes = [f"k2 policy: {doc['k2_policy']}", *(f"why: {p}" for p in doc["proof"]), *doc["notes"]]
+    return document("stiffness", "contact_resonance", {"path": None if path is None else str(path)}, lever,
+                    results, fit, notes)
