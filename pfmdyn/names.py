@@ -188,6 +188,18 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("reduced_modulus", "E*", "Pa", "reduced modulus of a Hertz contact from k1"),
         ("residual_beta", "r_beta", "1", "largest residual of the characteristic equations at the solution"),
         ("unique", "unique", "1", "true when exactly one solution explains the resonances under what was stated"),
+        # maps (pfmdyn map, pfmdyn stiffness on a contact-frequency map)
+        ("pixels", "ny, nx", "1", "the map's size in pixels (dims axis: y, x)"),
+        ("explained_fraction", "explained", "1", "fraction of pixels the model explains (gap at or below the threshold)"),
+        ("at_bound_fraction", "at bound", "1", "fraction of pixels with a parameter at a bound (left unexplained)"),
+        ("median_gap", "median gap", "1", "median of the map's gap"),
+        ("median_k1", "median k1", "N/m", "median of the map's k1"),
+        ("median_nulling_bias", "median V_null", "V", "median of the map's nulling bias"),
+        ("blocks_run", "blocks run", "1", "blocks fitted by this run"),
+        ("blocks_done", "blocks done", "1", "blocks done, this run and earlier ones"),
+        ("blocks_total", "blocks", "1", "blocks of the map"),
+        ("pixels_fitted", "pixels fitted", "1", "pixels fitted by this run"),
+        ("pixels_per_second", "pixels/s", "1/s", "pixels fitted per second of this run"),
         # the discrepancy model's fit
         ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
         ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),

@@ -69,6 +69,7 @@ def add_arguments(parser) -> None:
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
+    flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
 
@@ -113,7 +114,9 @@ def _progress_bar(enabled: bool):
 def run(args) -> int:
     """Fit the map and print a summary line."""
     import os
+    from ..io.results import check_writable
     from ..maps.driver import check_scheduler, open_map, run_map
+    check_writable(args.json)
     checked("quality_factor", args.quality_factor, "--quality-factor")
     for name in ("block", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
@@ -129,7 +132,9 @@ def run(args) -> int:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
-        print(describe(contact_map(args.data, args.out, overrides)))
+        summary = contact_map(args.data, args.out, overrides)
+        print(describe(summary))
+        _write_json(args, summary, overrides)
         return 0
     sho = args.model == "sho"
     source = open_map(args.data, overrides, sho=sho)
@@ -175,4 +180,16 @@ def run(args) -> int:
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
+    _write_json(args, s.to_dict(), overrides, s.shape)
     return 0
+
+
+def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
+    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`)."""
+    if args.json:
+        from ..io import documents
+        from ..maps import open_result
+
+        shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
+        given = {name: value for name, value in overrides.items() if name != "medium"}
+        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))

@@ -462,3 +462,27 @@ def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
     notes = [f"k2 policy: {doc['k2_policy']}", *(f"why: {p}" for p in doc["proof"]), *doc["notes"]]
     return document("stiffness", "contact_resonance", {"path": None if path is None else str(path)}, lever,
                     results, fit, notes)
+
+
+MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_k1", "median_nulling_bias")
+"""What a map's summary says of its pixels (:func:`map_summary`)."""
+
+
+def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
+    """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
+    are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line.
+
+    >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
+    >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
+    ('o/maps.zarr', 'N/m', [4, 5])
+    """
+    results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
+    results.update({name: quantity(name, summary[name], status="derived") for name in MAP_RESULTS if name in summary})
+    fit = {name: quantity(name, summary[name], status="derived")
+           for name in ("blocks_run", "blocks_done", "blocks_total", "pixels_fitted") if name in summary}
+    if "pixels_per_s" in summary:
+        fit["pixels_per_second"] = quantity("pixels_per_second", summary["pixels_per_s"], status="derived")
+    notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
+    lever = lever_records(given or {}, given=list(given or {}))
+    return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
