@@ -200,6 +200,21 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("blocks_total", "blocks", "1", "blocks of the map"),
         ("pixels_fitted", "pixels fitted", "1", "pixels fitted by this run"),
         ("pixels_per_second", "pixels/s", "1/s", "pixels fitted per second of this run"),
+        # modes, spot, roots (pfmdyn resonances, spot, roots)
+        ("frequency", "f", "Hz", "the frequency analysed"),
+        ("damped_resonance", "f_d", "Hz", "a damped mode's frequency (the real part of its complex root)"),
+        ("beta", "beta", "1", "dimensionless wavenumber of the lever at a frequency (beta^4 ~ f)"),
+        ("blind_spot", "x_blind/L", "1", "spot positions where the vertical signal vanishes"),
+        ("blind_spot_interval", "[x_lo, x_hi]/L", "1", "certified enclosure of a blind spot"),
+        ("slope_ratio", "theta_q0/theta_d1", "m^2/N", "slope per surface charge over slope per d1 along the lever"),
+        ("free_sensitivity", "S_free", "1", "optical-lever sensitivity of the free lever at the spot (per tip height)"),
+        ("contact_sensitivity", "S_contact", "1", "optical-lever sensitivity in contact at the spot (per tip height)"),
+        ("calibration_factor", "C", "1", "contact over free sensitivity: the factor a free-lever calibration misses"),
+        ("paper_calibration_factor", "C_paper", "1", "the calibration factor of the paper's lever (spot at the end)"),
+        ("d_eff_error_per_volt", "delta d_eff", "m/V^2", "error of d_eff per volt of V_dc - V_surf from the "
+         "distributed electrostatic load"),
+        ("root", "z_n", "1", "a root of a characteristic equation (decimal string, digits as asked)"),
+        ("root_interval", "[z_lo, z_hi]", "1", "certified enclosure of a root (decimal strings)"),
         # the discrepancy model's fit
         ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
         ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),

@@ -212,11 +212,12 @@ def test_resonances_json_over_real_ranges(k, length, f1, k1_over_k, tmp_path, ca
     assert _run(["resonances", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", str(length),
                  "--k1", str(k * k1_over_k), "--tip-height", "1e-5", "--k2-over-k1", "0.8", "--tilt", "12",
                  "--tip-position", "0.9", "--json", str(out)]) == 0
-    document = json.loads(out.read_text())
-    for key in ("free_hz", "contact_hz", "free_complete_below_hz", "contact_complete_below_hz"):
-        assert None not in _numbers(document[key]), key
+    modes = json.loads(out.read_text())["results"]
+    for condition in ("free", "contact"):
+        for key in ("resonance", "complete_below"):
+            assert None not in _numbers(modes[condition][key]["value"]), (condition, key)
     # contact modes lie above the free ones of the same order (k1 only stiffens)
-    assert all(c > f for c, f in zip(document["contact_hz"], document["free_hz"]))
+    assert all(c > f for c, f in zip(modes["contact"]["resonance"]["value"], modes["free"]["resonance"]["value"]))
     capsys.readouterr()
 
 
@@ -240,8 +241,10 @@ def test_viscous_drag_overdamped_modes_are_undetermined(g, tmp_path, capsys):
     out = tmp_path / "r.json"
     assert _run(["resonances", *LEVER, "--viscous-loss", str(g), "--json", str(out)]) == 0
     document = json.loads(out.read_text())
-    for hz, damped_hz, q, why in zip(document["free_hz"], document["free_damped_hz"], document["free_q"],
-                                     document["free_undetermined"]):
+    free = {key: record["value"] for key, record in document["results"]["free"].items()}
+    for n, (hz, damped_hz, q) in enumerate(zip(free["resonance"], free["damped_resonance"],
+                                               free["predicted_quality_factor"]), 1):
+        why = " ".join(note for note in document["notes"] if note.startswith(f"free mode {n}: "))
         rn = hz / 7e4
         if g < 1.9 * rn:
             exact = (1j * g + cmath.sqrt(4 * rn ** 2 - g ** 2)) / 2

@@ -108,8 +108,9 @@ def test_inspect_exits_0_on_every_real_file_and_writes_numbers(tmp_path):
         out = tmp_path / (path.name + ".json")
         assert cli.main(["inspect", str(path), "--json", str(out)]) == 0, path
         doc = json.loads(out.read_text())
-        assert all(isinstance(v["value"], float) for v in doc["fields"].values())
-        assert set(doc["missing"]).isdisjoint(doc["fields"])
+        assert all(isinstance(v["value"], float) and v["status"] == "file" for v in doc["results"].values())
+        missing = [n for n in doc["notes"] if n.startswith("not in the file: ")]
+        assert not missing or set(missing[0][len("not in the file: "):].split(", ")).isdisjoint(doc["results"])
 
 
 def write_nsid(path, metadata: dict, group="Measurement_000/Channel_000"):

@@ -61,7 +61,7 @@ def test_easyscan2_sweep_is_read_from_its_layout(tmp_path):
     np.testing.assert_allclose(values, a, atol=RANGE_V / 2**16)
     out = tmp_path / "inspect.json"
     assert cli.main(["inspect", str(path), "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["fields"]["free_resonance"]["value"] == 179405.0
+    assert json.loads(out.read_text())["results"]["free_resonance"]["value"] == 179405.0
 
 
 def silicon_lever(rng):

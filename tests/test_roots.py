@@ -120,10 +120,11 @@ def test_cli_json_schema(tmp_path, capsys):
     assert cli.main(["roots", "elastic", "--n", "3", "--digits", "12", "--k1-over-k", "1e3",
                      "--k2-ratio", "0.5", "--json", str(path)]) == 0
     doc = json.loads(path.read_text())
-    assert set(doc) == {"family", "parameters", "roots", "intervals", "certified"}
-    assert doc["family"] == "elastic" and doc["certified"] is True
-    assert doc["parameters"] == {"k1_over_k": "1e3", "k2_ratio": "0.5"}
-    assert len(doc["roots"]) == 3 and all(len(r.replace(".", "")) == 12 for r in doc["roots"])
+    assert set(doc["results"]) == {"root", "root_interval", "certified"}
+    assert "family: elastic" in doc["notes"] and doc["results"]["certified"]["value"] is True
+    assert {"parameter k1_over_k = 1e3", "parameter k2_ratio = 0.5"} <= set(doc["notes"])
+    roots = doc["results"]["root"]["value"]
+    assert len(roots) == 3 and all(len(r.replace(".", "")) == 12 for r in roots)
     # the 12-digit strings are the correctly rounded values of the 15-digit interval ends
     assert all(len(i) == 2 and abs(mp.mpf(i[0]) - mp.mpf(r)) < 1e-10 and mp.mpf(i[0]) <= mp.mpf(i[1])
                for i, r in zip(doc["intervals"], doc["roots"]))

@@ -62,5 +62,8 @@ def run(args) -> int:
     check_writable(args.json)
     record = read_instrument(args.file)
     print(report(record))
-    flags.write_json(args.json, record.to_json())
+    if args.json:
+        from ..io import documents
+
+        flags.write_json(args.json, documents.inspection(record.to_json()))
     return 0

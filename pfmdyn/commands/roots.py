@@ -133,5 +133,8 @@ def run(args) -> int:
     n, digits = positive_int(args.n, "--n", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
-    flags.write_json(args.json, result.to_json())
+    if args.json:
+        from ..io import documents
+
+        flags.write_json(args.json, documents.roots(result.to_json()))
     return 0 if result.certified else 1

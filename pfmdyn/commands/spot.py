@@ -70,7 +70,14 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     print(report(result))
     print(f"k2 policy: {policy}")
-    flags.write_json(args.json, {**result.to_dict(), "k2_policy": policy})
+    if args.json:
+        from ..io import documents
+
+        from ..io.instruments import read_instrument
+
+        taken = [key for key in read_instrument(args.file).fields if key in LEVER] if args.file else ()
+        flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy},
+                                                   flags.given_names(args, (*flags.NAMES,)), taken, args.file))
     if args.plot:
         import numpy as np
 

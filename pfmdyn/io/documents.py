@@ -136,10 +136,11 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         for key, name in (("share", "effect_share"), ("gap_without", "gap_without"), ("share_of_rest", "share_of_rest")):
             results[name] = quantity(name, [shares[e].get(key) for e in effects], status="derived", dims=["effect"])
     results["damping_mechanisms"] = quantity("damping_mechanisms", list(report.get("damping_mechanisms") or []),
-                                             status="derived")
+                                             status="derived", dims=["damping_mechanisms"])
     if report.get("damping_mechanisms_indistinguishable_from"):
         results["equivalent_damping_mechanisms"] = quantity(
-            "equivalent_damping_mechanisms", list(report["damping_mechanisms_indistinguishable_from"]), status="derived")
+            "equivalent_damping_mechanisms", list(report["damping_mechanisms_indistinguishable_from"]), status="derived",
+            dims=["equivalent_damping_mechanisms"])
     if rows is not None:
         results["condition"] = quantity("condition", [c for c, _ in rows], status="file", why="the table's rows",
                                         dims=["row"])
@@ -211,7 +212,7 @@ def _instrument(fit: dict) -> tuple[dict, list[str]]:
                      f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})")
     disagree = [c["name"] for c in fit.get("instrument_comparison") or [] if c["disagrees"]]
     if fit.get("instrument_comparison"):
-        recorded["disagrees"] = quantity("disagrees", disagree, status="derived")
+        recorded["disagrees"] = quantity("disagrees", disagree, status="derived", dims=["disagrees"])
     return recorded, notes
 
 
@@ -486,3 +487,104 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
     lever = lever_records(given or {}, given=list(given or {}))
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
+
+
+def _probe(values: dict, given=(), from_file=()) -> dict:
+    """The lever (and contact) a computation took: given, from a file, or the defaults."""
+    return lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
+                         given=given, from_file=from_file)
+
+
+def _mode_records(d: dict, prefix: str) -> dict:
+    """The modes of one condition (``free`` or ``contact``) of :meth:`Resonances.to_dict`."""
+    modes = {"resonance": quantity("resonance", d[f"{prefix}_hz"], status="derived", dims=["mode"]),
+             "resonance_interval": quantity("resonance_interval", d[f"{prefix}_intervals_hz"], status="derived",
+                                            dims=["mode", "bound"])}
+    if d.get(f"{prefix}_complete_below_hz") is not None:
+        modes["complete_below"] = quantity("complete_below", d[f"{prefix}_complete_below_hz"], status="derived")
+    if f"{prefix}_q" in d:
+        modes["predicted_quality_factor"] = quantity("predicted_quality_factor", d[f"{prefix}_q"], status="derived",
+                                                     dims=["mode"])
+        modes["damped_resonance"] = quantity("damped_resonance", d[f"{prefix}_damped_hz"], status="derived",
+                                             dims=["mode"])
+        modes["amplitude_peak"] = quantity("amplitude_peak", d[f"{prefix}_peak_hz"], status="derived", dims=["mode"])
+    return modes
+
+
+def resonances(d: dict, given=()) -> dict:
+    """The document of ``pfmdyn resonances`` (kind ``modes``): each condition's modes under ``free`` and
+    ``contact`` (dims mode), certified or not; an undamped mode's Q is infinite (``"inf"`` in the list).
+
+    >>> doc = resonances({"spring_constant": 2.0, "free_resonance": 7e4, "length": 2e-4, "certified": True,
+    ...     "free_hz": [7e4], "free_intervals_hz": [[6.9e4, 7.1e4]], "free_complete_below_hz": 7.2e4,
+    ...     "contact_hz": [], "contact_intervals_hz": [], "contact_complete_below_hz": None}, ["spring_constant"])
+    >>> doc["results"]["free"]["resonance"]["value"], doc["lever"]["length"]["status"]
+    ([70000.0], 'assumed')
+    """
+    results = {"certified": quantity("certified", bool(d["certified"]), status="derived")}
+    notes = [] if d["certified"] else [f"not certified: {d['reason']}"]
+    if d["certified"]:
+        for prefix in ("free", "contact"):
+            results[prefix] = _mode_records(d, prefix)
+            for i, why in enumerate(d.get(f"{prefix}_undetermined") or [], 1):
+                if why:
+                    notes.append(f"{prefix} mode {i}: {why}")
+    if d.get("k2_policy"):
+        notes.append(f"k2 policy: {d['k2_policy']}")
+    return document("resonances", "modes", {}, _probe(d, given), results, None, notes)
+
+
+def _complex_record(name: str, z: dict | None, why: str) -> dict:
+    return quantity(name, complex(z["re"], z["im"]), status="derived") if z else quantity(name, None, why=why)
+
+
+def spot(d: dict, given=(), from_file=(), path=None) -> dict:
+    """The document of ``pfmdyn spot`` (kind ``spot``): blind spots, the slope ratio along the lever
+    (dims spot_position), the sensitivities and calibration factors (complex) at the lever's spot."""
+    ratio = d["q0_to_d1_slope_ratio"]
+    results = {
+        "frequency": quantity("frequency", d["frequency"], status="given"),
+        "beta": quantity("beta", d["beta"], status="derived"),
+        "blind_spot": quantity("blind_spot", d["blind_spot"], status="derived", dims=["blind_spot"]),
+        "blind_spot_interval": quantity("blind_spot_interval", d["blind_spot_intervals"], status="derived",
+                                        dims=["blind_spot", "bound"]),
+        "certified": quantity("certified", bool(d["certified"]), status="derived"),
+        "spot_position": quantity("spot_position", ratio["spot_position"], status="derived", dims=["position"]),
+        "slope_ratio": quantity("slope_ratio", [complex(a, b) for a, b in zip(ratio["re"], ratio["im"])],
+                                status="derived", dims=["position"]),
+        "free_sensitivity": quantity("free_sensitivity", d["free_sensitivity"], status="derived"),
+        "contact_sensitivity": quantity("contact_sensitivity", d["contact_sensitivity"], status="derived"),
+        "calibration_factor": _complex_record("calibration_factor", d["calibration_factor"], "undetermined"),
+        "paper_calibration_factor": _complex_record("paper_calibration_factor", d["paper_calibration_factor"],
+                                                    "undetermined"),
+        "d_eff_error_per_volt": _complex_record("d_eff_error_per_volt", d["d_eff_error_per_volt"],
+                                                d.get("d_eff_error_per_volt_undetermined", "undetermined"))}
+    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file)
+    notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
+    notes += [f"not certified: {d['reason']}"] if not d["certified"] else []
+    return document("spot", "spot", {"path": None if path is None else str(path)}, lever, results, None, notes)
+
+
+def roots(d: dict) -> dict:
+    """The document of ``pfmdyn roots`` (kind ``roots``): the family's roots as decimal strings (exact
+    digits), certified enclosures, the family's parameters (exact decimal strings)."""
+    results = {"root": quantity("root", d["roots"], status="derived", dims=["root"]),
+               "root_interval": quantity("root_interval", d["intervals"], status="derived", dims=["root", "bound"]),
+               "certified": quantity("certified", bool(d["certified"]), status="derived")}
+    notes = [f"family: {d['family']}"] + [f"parameter {k} = {v}" for k, v in d["parameters"].items()]
+    notes += [] if d["certified"] else [f"not certified: {d['reason']}"]
+    return document("roots", "roots", {}, None, results, None, notes)
+
+
+def inspection(d: dict) -> dict:
+    """The document of ``pfmdyn inspect`` (kind ``file``): what an instrument file holds, each value a
+    record of status ``file``; its channels and what it lacks as notes."""
+    results = {name: quantity(name, r["value"], status="file", why="read from the input file")
+               for name, r in d["fields"].items()}
+    notes = [f"channel {c['name']}: {c.get('unit') or 'no unit'}, shape {tuple(c.get('shape') or ())}"
+             + (f", stored values x {c['scale']:g}" if c.get("scale", 1) != 1 else "") for c in d.get("channels") or []]
+    if d.get("missing"):
+        notes.append("not in the file: " + ", ".join(d["missing"]))
+    notes += list(d.get("notes") or [])
+    return document("inspect", "file", {"path": str(d["path"]), "instrument": d.get("instrument"),
+                                        "file_kind": d.get("kind")}, None, results, None, notes)

@@ -61,6 +61,10 @@ def _plain(value):
     array = np.asarray(value)
     if np.iscomplexobj(array):
         return {"real": _plain(array.real), "imag": _plain(array.imag)}
+    if array.dtype.kind == "f" and array.ndim and np.isinf(array).any():
+        return [_plain(v) for v in array]      # infinity is "inf" in a list too (JSON has none)
+    if array.dtype.kind == "f" and not array.ndim and np.isinf(array):
+        return "inf" if array > 0 else "-inf"
     if array.dtype.kind in "fiub":
         return array.tolist()
     return value
@@ -91,6 +95,8 @@ def quantity(name: str, value, stderr=None, status: str = "fitted", why: str | N
             value, stderr, status = None, None, "undetermined"
         elif math.isinf(value):
             value, stderr, status = ("inf" if value > 0 else "-inf"), None, "unbounded"
+    if dims is None and np.ndim(np.asarray(value, dtype=object)) > 0:
+        raise ValueError(f"{name}: an array needs its dims")
     if status not in STATUSES:
         raise ValueError(f"{name}: status {status!r} is none of {', '.join(STATUSES)}")
     if (why is not None) != (status in EXPLAINED):
@@ -205,8 +211,9 @@ def _number(value):
         return np.array(np.nan)
     if isinstance(value, str):
         return np.array(float(value) if value in ("inf", "-inf") else value)
-    array = np.asarray(value)
-    return array.astype(float) if array.dtype == object else array
+    if isinstance(value, list) and any(v is None or v in ("inf", "-inf") for v in np.ravel(np.asarray(value, object))):
+        return np.array([_number(v) for v in value], dtype=float)
+    return np.asarray(value)
 
 
 def json_ready(obj):
