@@ -46,10 +46,10 @@ def _argv(tmp: Path, command: str) -> dict:
         "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", json_out, "--plot", png],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--json", json_out],
-        "diagram": ["diagram", "--out", png, "--frequency-points", "20", "--bias-points", "5"],
+        "diagram": ["diagram", "--plot", png, "--frequency-points", "20", "--bias-points", "5"],
         "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp / "dec")],
-        "roots": ["roots", "free", "--n", "2", "--json", json_out],
-        "branches": ["branches", "indentation", "--out", png, "--points", "20", "--modes", "1"],
+        "roots": ["roots", "free", "--modes", "2", "--json", json_out],
+        "branches": ["branches", "indentation", "--plot", png, "--points", "20", "--modes", "1"],
         "inspect": ["inspect", str(data), "--json", json_out],
         "discrepancy": ["discrepancy", str(data), "--json", json_out],
         "calibrate": ["calibrate", str(tmp / "tune.csv"), "--json", json_out],   # the flags are checked first
@@ -118,15 +118,15 @@ REFUSED = [
     ("spot", ["--frequency", "nan"], "--frequency"),
     ("diagram", ["--fmin", "0"], "--fmin"),
     ("diagram", ["--frequency-points", "100000000"], "--frequency-points"),   # was a MemoryError or a swap
-    ("diagram", ["--out", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
+    ("diagram", ["--plot", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
     ("diagram", ["--csv", "{tmp}/data.csv/out.csv"], "cannot write"),
     ("deconvolve", ["--out", "{tmp}/data.csv/sub"], "not a directory"),        # was a NotADirectoryError
     ("deconvolve", ["--surface-potential", "nan"], "--surface-potential"),
     ("deconvolve", [*PROBE, "--spot-position", "0"], "--spot-position"),
     ("deconvolve", ["--spring-constant", "2"], "--free-resonance"),
     ("roots", ["--digits", "5000"], "--digits"),                                 # was a ValueError traceback
-    ("roots", ["--n", "0"], "--n"),
-    ("roots", ["--n", "100000"], "--n"),                                         # was a run of hours
+    ("roots", ["--modes", "0"], "--modes"),
+    ("roots", ["--modes", "100000"], "--modes"),                                         # was a run of hours
     ("branches", ["--points", "1"], "--points"),
     ("branches", ["--modes", "51"], "--modes"),
     ("branches", ["--out", "{tmp}/out.xyz"], "cannot write"),
@@ -190,8 +190,8 @@ def test_valid_extremes_succeed(tmp_path, capsys):
     assert _run(["spot", *PROBE, "--frequency", "1e5", "--spot-position", "1", "--k1", "2e4"]) == 0
     assert _run(["resonances", "--spring-constant", "0.05", "--free-resonance", "1.3e4", "--length", "5e-4",
                  "--k1", "500", "--tip-height", "1e-5", "--tilt", "15", "--poisson", "0.3", "--json", str(out)]) == 0
-    document = json.loads(out.read_text())
-    assert all(f is not None and f > 0 for f in document["free_hz"] + document["contact_hz"])
+    modes = json.loads(out.read_text())["results"]
+    assert all(f is not None and f > 0 for f in modes["free"]["resonance"]["value"] + modes["contact"]["resonance"]["value"])
     capsys.readouterr()
 
 

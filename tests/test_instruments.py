@@ -174,7 +174,8 @@ def test_image_without_spring_constant(tmp_path, capsys):
     # Given on the command line, the same file is fine (ratio 5.83 needs a lateral spring: Mindlin's by default).
     assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--length", "2e-4", "--tip-height", "1e-5",
                      "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["inputs"]["spring_constant"] == 2.0
+    assert json.loads(out.read_text())["lever"]["spring_constant"] == {"value": 2.0, "stderr": None, "unit": "N/m",
+                                                                      "status": "given"}
 
 
 def test_usid_band_excitation_is_a_spectrum(tmp_path):

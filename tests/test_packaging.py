@@ -111,7 +111,7 @@ def test_each_subcommand_runs_from_the_wheel(fresh):
                 "--json", "s.json")
     assert done.returncode == 0, done.stderr
     assert json.loads((cwd / "s.json").read_text())["results"]["k1"]["value"] == pytest.approx(200, rel=1e-9)
-    for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--n", "2", "--digits", "20"],
+    for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--modes", "2", "--digits", "20"],
                  ["verify"]):
         done = _run(fresh, *argv)
         assert done.returncode == 0, (argv, done.stdout[-2000:], done.stderr[-2000:])

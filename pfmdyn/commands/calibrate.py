@@ -18,13 +18,13 @@ def add_arguments(parser) -> None:
     >>> a = p.parse_args(["t.nid", "--length", "225e-6", "--width", "40e-6"]); a.file, a.medium, a.spot_position
     ('t.nid', None, None)
     """
-    parser.add_argument("file", help="thermal tune: Nanosurf .nid, or a CSV of frequency_hz and an ASD column "
+    parser.add_argument("file", metavar="INPUT", help="thermal tune: Nanosurf .nid, or a CSV of frequency_hz and an ASD column "
                         "ending in _m_per_sqrthz or _v_per_sqrthz")
     flags.add(parser, ("length",))
-    flags.add_medium_arguments(parser)
+    flags.add_medium_arguments(parser, medium="the file's, else air")
     flags.add(parser, ("invols", "spot_position", "tip_position", "length_uncertainty", "width_uncertainty"))
     flags.add_json(parser)
-    parser.add_argument("--plot", metavar="PNG", help="write the spectrum with the fitted first mode")
+    parser.add_argument("--plot", metavar="PATH", help="write the spectrum with the fitted first mode (.png, .pdf, .svg)")
 
 
 def _number(value, unit="N/m", digits=4) -> str:

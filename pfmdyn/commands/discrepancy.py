@@ -17,13 +17,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     >>> p.parse_args(["d.csv", "--json", "o.json"]).json
     'o.json'
     """
-    parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
+    parser.add_argument("data", metavar="INPUT", help="CSV (metadata lines, then a spectrum or resonances table) or an "
                         "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat/.nid, thermal tune)")
     flags.add_json(parser, "the full report")
-    parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
+    parser.add_argument("--plot", metavar="PATH", help="write the figure (.png, .pdf, .svg): data, baseline, final model, "
+                        "residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
-    flags.add(group, ("medium", "temperature"))
+    flags.add(group, ("medium", "temperature"), defaults={"medium": (
+        None, "the file's; else water for a drive sweep, air for a thermal tune, none (vacuum) for a spectrum or a "
+              "resonance table")})
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
     sweeps = parser.add_argument_group("drive sweeps (.txt/.dat/.nid) and thermal tunes: the free lever in a fluid, "

@@ -24,7 +24,7 @@ def add_arguments(parser) -> None:
     >>> p.parse_args(["scan.ibw", "--json", "out.json"]).json
     'out.json'
     """
-    parser.add_argument("file", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
+    parser.add_argument("file", metavar="INPUT", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
     flags.add_json(parser, "what was read")
 
 

@@ -12,13 +12,13 @@ __all__ = ["add_arguments", "run", "report"]
 
 def add_arguments(parser) -> None:
     """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""
-    parser.add_argument("file", nargs="?", help="instrument file supplying what it holds of the lever "
+    parser.add_argument("file", nargs="?", metavar="INPUT", help="instrument file supplying what it holds of the lever "
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
     parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
     flags.add_json(parser)
-    parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
+    parser.add_argument("--plot", metavar="PATH", help="write the figure (ratio along the lever and over frequency)")
 
 
 def report(result) -> str:

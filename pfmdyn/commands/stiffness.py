@@ -54,7 +54,7 @@ def add_arguments(parser) -> None:
     >>> a.contact, a.free_resonance
     (['3e5', '9e5'], '7e4')
     """
-    parser.add_argument("file", nargs="?", default=None,
+    parser.add_argument("file", nargs="?", default=None, metavar="INPUT",
                         help="instrument file (.ibw, .h5, .nid) or resonance table (.csv); optional")
     parser.add_argument("--contact", action="append", default=None, metavar="HZ",
                         help="contact resonance (Hz); repeat for several modes")
