@@ -320,6 +320,6 @@ def markdown_table() -> str:
     '| `spring_constant` | `--spring-constant` | N/m | lever spring constant 3 EI / L^3 |'
     """
     rows = ["| name (Python, JSON, file, Zarr) | flag | unit | meaning |", "|---|---|---|---|"]
-    rows += [f"| `{q.name}` | {f'`{q.flag}`' if q.option else '(files)'} | {q.unit} | {q.meaning} |"
-             for q in QUANTITIES]
+    rows += [f"| `{q.name}` | {f'`{q.flag}`' if q.option else '(files)' if q.low > -math.inf else '(reports)'} | "
+             f"{q.unit} | {q.meaning} |" for q in QUANTITIES]
     return "\n".join(rows)
