@@ -478,12 +478,18 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
+    def statistic(name, value):
+        if value is None or not math.isfinite(value):
+            return quantity(name, None, why="no pixel of the map determines it (none fitted by this run, or none "
+                                            "explained)")
+        return quantity(name, value, status="derived")
+
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
-    results.update({name: quantity(name, summary[name], status="derived") for name in MAP_RESULTS if name in summary})
-    fit = {name: quantity(name, summary[name], status="derived")
+    results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})
+    fit = {name: statistic(name, summary[name])
            for name in ("blocks_run", "blocks_done", "blocks_total", "pixels_fitted") if name in summary}
     if "pixels_per_s" in summary:
-        fit["pixels_per_second"] = quantity("pixels_per_second", summary["pixels_per_s"], status="derived")
+        fit["pixels_per_second"] = statistic("pixels_per_second", summary["pixels_per_s"])
     notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
     lever = lever_records(given or {}, given=list(given or {}))
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
