@@ -33,8 +33,9 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     """
     value, stderr, why = entry.get("value"), entry.get("stderr"), entry.get("why")
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
-        shown = "" if value is None else f": {value:.3g} +/- {stderr:.3g} {NAMES[name].unit}".replace(" 1", "") \
-            if stderr is not None else f": {value:.3g}"
+        # the estimate the data leave undetermined is said, not lost
+        unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
+        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
