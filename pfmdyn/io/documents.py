@@ -496,10 +496,14 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
 
 
-def _probe(values: dict, given=(), from_file=()) -> dict:
-    """The lever (and contact) a computation took: given, from a file, or the defaults."""
-    return lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
-                         given=given, from_file=from_file)
+def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None) -> dict:
+    """The lever (and contact) a computation took: given, from a file, or the defaults; k2, when not given,
+    tied to k1 by ``k2_policy``."""
+    out = lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
+                        given=given, from_file=from_file)
+    if k2_policy and "k2" in out and "k2" not in given:
+        out["k2"] = quantity("k2", out["k2"]["value"], status="tied", why=k2_policy)
+    return out
 
 
 def _mode_records(d: dict, prefix: str) -> dict:
@@ -538,7 +542,7 @@ def resonances(d: dict, given=()) -> dict:
                     notes.append(f"{prefix} mode {i}: {why}")
     if d.get("k2_policy"):
         notes.append(f"k2 policy: {d['k2_policy']}")
-    return document("resonances", "modes", {}, _probe(d, given), results, None, notes)
+    return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
 
 
 def _complex_record(name: str, z: dict | None, why: str) -> dict:
@@ -566,7 +570,7 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
                                                     "undetermined"),
         "d_eff_error_per_volt": _complex_record("d_eff_error_per_volt", d["d_eff_error_per_volt"],
                                                 d.get("d_eff_error_per_volt_undetermined", "undetermined"))}
-    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file)
+    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"))
     notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
     notes += [f"not certified: {d['reason']}"] if not d["certified"] else []
     return document("spot", "spot", {"path": None if path is None else str(path)}, lever, results, None, notes)
