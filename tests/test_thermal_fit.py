@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from schema_check import validate  # noqa: E402
 from test_sweeps_fit import B1, SILICON  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -98,14 +99,17 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert cli.main(["discrepancy", str(REAL), "--length", "225e-6", "--width", "40e-6", "--json", str(out)]) == 0
     text = capsys.readouterr().out
     fit = json.loads(out.read_text())
-    assert fit["temperature"] == pytest.approx(313.15) and fit["medium"].startswith("air")
-    assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
-    assert fit["points"] > 5000 and "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
+    validate(fit)
+    lever = fit["lever"]
+    assert lever["temperature"]["value"] == pytest.approx(313.15) and lever["medium"]["value"].startswith("air")
+    assert fit["results"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
+    assert fit["fit"]["points"]["value"] > 5000
+    assert "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
     # what came from the file, the tune's own resonance and Q beside ours
-    assert set(fit["from_file"]) >= {"free_resonance", "free_quality_factor", "spring_constant", "medium", "temperature"}
-    assert {c["name"] for c in fit["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert all(lever[name]["status"] == "file" for name in ("spring_constant", "medium", "temperature"))
+    assert set(fit["fit"]["instrument"]) >= {"free_resonance", "free_quality_factor"}
     assert "from the file: " in text
-    assert fit["gap"] < 3
+    assert fit["fit"]["gap"]["value"] < 3
 
 
 def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
@@ -122,12 +126,13 @@ def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
     out = tmp_path / "t.json"
     assert cli.main(base + ["--spring-constant", f"{case['k']:.17g}", "--json", str(out)]) == 0
     fit = json.loads(out.read_text())
-    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
-    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)
+    assert fit["results"]["vacuum_resonance"]["value"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["results"]["detection_scale"]["value"] == pytest.approx(1.0, abs=0.03)
     # a CSV says nothing of the lever or its medium: nothing from the file, the medium (air) marked assumed
     text = capsys.readouterr().out
-    assert fit["from_file"] == [] and fit["instrument_comparison"] == []
-    assert [a.split(" (")[0] for a in fit["assumed"]] == [f"medium {Medium.air(case['temperature']).name}"]
+    assert not any(r["status"] == "file" for r in fit["lever"].values()) and fit["fit"]["instrument"] == {}
+    assert [name for name, r in fit["lever"].items() if r["status"] == "assumed"] == ["medium"]
+    assert fit["lever"]["medium"]["value"] == Medium.air(case["temperature"]).name
     assert "from the file: the measured points only" in text and "assumed: medium air" in text
 
 
@@ -145,9 +150,9 @@ def test_an_asylum_tune_takes_the_lever_from_its_note(tmp_path):
                      "pm/sqrt(Hz)", note=note)
     out = tmp_path / "t.json"
     assert cli.main(["discrepancy", str(path), "--temperature", f"{case['temperature']:.17g}", "--json", str(out)]) == 0
-    fit = json.loads(out.read_text())
-    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
-    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03) and fit["parameters"]["width"]["given"]
+    fit = json.loads(out.read_text())["results"]
+    assert fit["vacuum_resonance"]["value"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["detection_scale"]["value"] == pytest.approx(1.0, abs=0.03) and fit["width"]["status"] == "file"
 
 
 def test_calibrate_in_water_takes_the_fluid_loaded_lever(tmp_path, capsys):
@@ -179,11 +184,11 @@ def test_calibrate_in_water_takes_the_fluid_loaded_lever(tmp_path, capsys):
         assert cli.main(["calibrate", str(path), "--medium", "water", "--temperature", "298.15", "--length",
                          f"{L:.17g}", "--width", f"{w:.17g}", "--json", str(out)]) == 0
     assert "first mode (fluid-loaded lever): " in capsys.readouterr().out
-    doc = json.loads(out.read_text())
-    thermal = doc["thermal"]
-    assert thermal["spring_constant"] == pytest.approx(k, rel=0.08)
-    assert abs(thermal["spring_constant"] - k) < 3 * thermal["spring_constant_stderr"]
-    assert doc["free_resonance"] == pytest.approx(resonance, rel=5e-3)
-    assert 1 < doc["free_quality_factor"] < 4
+    results = json.loads(out.read_text())["results"]
+    thermal = results["thermal_spring_constant"]
+    assert thermal["value"] == pytest.approx(k, rel=0.08)
+    assert abs(thermal["value"] - k) < 3 * thermal["stderr"]
+    assert results["free_resonance"]["value"] == pytest.approx(resonance, rel=5e-3)
+    assert 1 < results["free_quality_factor"]["value"] < 4
     oscillator = calibrate(ThermalTune("t", f, asd, "m", {}, {}), medium=case["medium"], temperature=298.15)
     assert abs(oscillator.peak.frequency_hz / resonance - 1) > 5e-3

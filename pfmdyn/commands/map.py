@@ -17,6 +17,8 @@ in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
 from __future__ import annotations
 
+import argparse
+
 import dataclasses
 import math
 
@@ -35,9 +37,9 @@ _CONTACT = ("k2", "k2_over_k1", "poisson")
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
-    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
+    parser.add_argument("data", metavar="INPUT", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
                                      "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx)")
-    parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory (gets maps.zarr)")
     parser.add_argument("--model", default="auto",
                         help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
                              "per band, and k2 when the frequencies hold two or more contact-mode bands) plus damping "
@@ -59,7 +61,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=int, default=None, help="local worker processes, or for --model sho threads (default: all cores)")
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
-    parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
+    parser.add_argument("--start-quality-factor", type=float, default=100.0, metavar="Q",
+                        help="the fit's starting Q of the contact mode, not a lever's internal friction (default 100)")
+    parser.add_argument("--quality-factor", dest="start_quality_factor", type=float, help=argparse.SUPPRESS)   # old
     parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
                         help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
                              f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
@@ -68,7 +72,9 @@ def add_arguments(parser) -> None:
                              "this bias (default: fitted with +distributed, else 0, the intercept); the "
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
+    parser.add_argument("--plot", metavar="DIR", help="also write DIR/NAME.png for each map")
+    parser.add_argument("--png", action="store_true", help=argparse.SUPPRESS)   # the old spelling: --plot OUT
+    flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
 
@@ -113,8 +119,10 @@ def _progress_bar(enabled: bool):
 def run(args) -> int:
     """Fit the map and print a summary line."""
     import os
+    from ..io.results import check_writable
     from ..maps.driver import check_scheduler, open_map, run_map
-    checked("quality_factor", args.quality_factor, "--quality-factor")
+    check_writable(args.json)
+    checked("quality_factor", args.start_quality_factor, "--start-quality-factor")
     for name in ("block", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
@@ -129,7 +137,9 @@ def run(args) -> int:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
-        print(describe(contact_map(args.data, args.out, overrides)))
+        summary = contact_map(args.data, args.out, overrides)
+        print(describe(summary))
+        _write_json(args, summary, overrides)
         return 0
     sho = args.model == "sho"
     source = open_map(args.data, overrides, sho=sho)
@@ -150,7 +160,7 @@ def run(args) -> int:
         print(f"fitting: an SHO per spectrum and band ({n_bands} band{'s' if n_bands > 1 else ''}"
               + (f", {len(biases)} biases" if biases is not None else "") + ")")
     else:
-        fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
+        fit_options = {"q0": args.start_quality_factor, "gap_threshold": args.gap_threshold,
                        "surface_potential_v": args.surface_potential}
         mechanisms, rows = _mechanisms(args, source, fit_options)
         source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
@@ -158,21 +168,35 @@ def run(args) -> int:
               f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
               + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
                  if biases is not None else ""))
-    progress, close = _progress_bar(not args.no_progress)
+    progress, close = _progress_bar(not (args.no_progress or args.quiet))
     try:
         s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    if args.png:
+    folder = args.plot or (args.out if args.png else None)
+    if folder:
         from ..maps import open_result
         from ..plots.maps import plot_maps
+        os.makedirs(folder, exist_ok=True)
         for name, figure in plot_maps(open_result(args.out)).items():
-            figure.savefig(os.path.join(args.out, f"{name}.png"), dpi=100)
+            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
     written = ""
     if source.layout == "usid":
         from ..maps.usid import write_usid
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
+    _write_json(args, s.to_dict(), overrides, s.shape)
     return 0
+
+
+def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
+    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`)."""
+    if args.json:
+        from ..io import documents
+        from ..maps import open_result
+
+        shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
+        given = {name: value for name, value in overrides.items() if name != "medium"}
+        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))
