@@ -22,6 +22,7 @@ from ..fitting.parameters import Parameter
 from ..fitting.projection import project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
+from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
                     instrument_text, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
@@ -157,6 +158,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
               "instrument_fit": dict(after.fields), "reference_fit": before.to_dict(), "noise": sigma,
               "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma),
+              "worst_region": worst_region(frequency, np.abs(fits[best["effect"]][4] / sigma) ** 2,
+                                           lever_resonances(lever)),
               "notes": _order_notes(before, frequency, y, named, at_bound),
               "instrument_comparison": compare_with_instrument(after.fields, {
                   "amplitude_peak": (amplitude_peak(
@@ -303,6 +306,7 @@ class SweepComparison(Result):
                          f"{plus_minus(p['viscous_loss'], '')}")
         lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
                      f"instrument: {instrument_text(d['reference_fit']['instrument_fit'], d['reference_fit'].get('instrument_comparison'))} -> {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}")
-        lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> {d['gap_after']:.3g}")
+        lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> "
+                     + gap_text(d["gap_after"], d.get("worst_region"))[4:])
         lines += [f"  note: {text}" for text in d.get("notes", [])]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
