@@ -4,8 +4,8 @@ The gap (:func:`pfmdyn.fitting.noise.gap`) is an RMS over every data value, so a
 a resonance's few bins hides under a long floor fitted to the noise (the shared Nanosurf tune: gap
 1.35 overall while the residual is about 10 noise levels at the resonance).  The regions
 (:func:`regions`) are each resonance's half-power region (its centre +- half its half-power width,
-at least :data:`MIN_POINTS` frequencies: the nearest) and, when the data come in bands (band
-excitation around each resonance, two windows of one sweep), each band.  A report gives the worst
+at least :data:`MIN_POINTS` frequencies: the nearest), the rest of the spectrum and, when the data
+come in bands (band excitation around each resonance, two windows of one sweep), each band.  A report gives the worst
 region and its gap (:func:`worst_region`) and says "fitted to the noise" only when neither the
 overall gap nor any region's is above :data:`~pfmdyn.fitting.noise.GAP_LIMIT` (:func:`gap_text`).
 """
@@ -31,13 +31,17 @@ def _kilohertz(low: float, high: float) -> str:
 
 def regions(frequency_hz, resonances=()) -> list[dict]:
     """The regions of a spectrum measured at ``frequency_hz`` (one value per entry, repeats allowed:
-    the biases of a spectrum): each resonance ``(centre_hz, half_power_width_hz)`` inside the span,
-    then each band when there are several.  Each is ``{"region", "band_hz", "mask"}`` (``mask``
-    selects the values).
+    the biases of a spectrum): each resonance ``(centre_hz, half_power_width_hz)`` inside the span and
+    the rest away from them, then each band when there are several.  Each is ``{"region", "band_hz",
+    "mask"}`` (``mask`` selects the values).
 
     >>> f = np.r_[np.linspace(90.0, 110.0, 41), np.linspace(290.0, 310.0, 41)]
-    >>> [r["region"] for r in regions(f, [(100.0, 2.0)])]
-    ['resonance at 0.1 kHz (half-power: 0.099-0.101 kHz)', 'band 0.09-0.11 kHz', 'band 0.29-0.31 kHz']
+    >>> for r in regions(f, [(100.0, 2.0)]):
+    ...     print(r["region"])
+    resonance at 0.1 kHz (half-power: 0.099-0.101 kHz)
+    rest of the spectrum (away from the resonances)
+    band 0.09-0.11 kHz
+    band 0.29-0.31 kHz
     >>> int(regions(f, [(100.0, 2.0)])[0]["mask"].sum())         # 99-101 Hz, at 0.5 Hz steps
     5
     """
@@ -53,6 +57,11 @@ def regions(frequency_hz, resonances=()) -> list[dict]:
         out.append({"region": f"resonance at {centre / 1e3:.6g} kHz (half-power: {_kilohertz(low, high)})",
                     "band_hz": [float(low), float(high)],
                     "mask": (f >= low) & (f <= high)})
+    if out:
+        rest = ~np.any([r["mask"] for r in out], axis=0)
+        if rest.any():
+            out.append({"region": "rest of the spectrum (away from the resonances)",
+                        "band_hz": [float(f[rest].min()), float(f[rest].max())], "mask": rest})
     if len(unique) > 2:
         steps = np.diff(unique)
         breaks = np.flatnonzero(steps > BAND_BREAK * np.median(steps))
