@@ -166,44 +166,15 @@ class BeamMapModel:
             out[ok] = k1[ok] * np.interp(np.log(k1[ok]), grid, share)
         return out
 
-    @functools.cached_property
+    @property
     def _policy_shares(self):
-        """``(log k1, relative share)`` at :data:`POLICY_GRID` values across the fit's bounds of ``k1``, once
-        per model; None when no assumed tie acts."""
+        """``(log k1, relative share)`` at :data:`POLICY_GRID` values across the fit's bounds of ``k1``; None
+        when no assumed tie acts.  Cached per process (a map's workers get the model anew for each task)."""
         if (self.k2_mode != "tied" or self.contact.ratio is not None
                 or (self.lever.tip_height is None and self.lever.alpha == 0.0)):
             return None
         lo, hi = self.k1_span
-        grid = np.geomspace(lo / 10, hi * 10, POLICY_GRID)
-        return np.log(grid), np.array([self._policy_share(k) for k in grid])
-
-    def _policy_share(self, k1: float) -> float:
-        """The assumed tie's relative standard error of ``k1``: at the contact root ``beta`` nearest the
-        band (Newton from its middle), the measured ``beta`` held, ``d k1 / d ratio = -k1 F_k2 / (F_k1 +
-        ratio F_k2)`` of the characteristic ``F(beta, k1, k2)`` (central differences)."""
-        from ..analysis.contact_resonance import betas, characteristic
-        from ..analysis.stiffness_report import assumed_tie_uncertainty
-
-        ratio, gamma = self.contact.tie(), self.lever.tip_position
-
-        def F(b, a, c):
-            return float(np.real(characteristic(b, self.lever, a, c, gamma)))
-
-        b = float(betas(self.lever, np.median(self.frequency_hz)))
-        with np.errstate(all="ignore"):
-            for _ in range(50):
-                h = 1e-7 * b
-                step = -F(b, k1, ratio * k1) * 2 * h / (F(b + h, k1, ratio * k1) - F(b - h, k1, ratio * k1))
-                if not math.isfinite(step):
-                    return 0.0
-                b += step
-                if abs(step) < 1e-12 * b:
-                    break
-            e = 1e-6 * k1
-            d_k1 = (F(b, k1 + e, ratio * k1) - F(b, k1 - e, ratio * k1)) / (2 * e)
-            d_k2 = (F(b, k1, ratio * k1 + e) - F(b, k1, ratio * k1 - e)) / (2 * e)
-            share = abs(d_k2 / (d_k1 + ratio * d_k2)) * assumed_tie_uncertainty()
-        return float(share) if math.isfinite(share) else 0.0
+        return _policy_shares(self.lever, self.contact.tie(), float(np.median(self.frequency_hz)), lo / 10, hi * 10)
 
     @property
     def _composed(self) -> bool:
@@ -320,3 +291,35 @@ class BeamMapModel:
                 d[i, :, j] = chain[name]()
         return np.stack([values[i] for i in self.drives], axis=1), d
 
+
+@functools.lru_cache(maxsize=32)
+def _policy_shares(lever: Cantilever, ratio: float, middle_hz: float, low: float, high: float):
+    grid = np.geomspace(low, high, POLICY_GRID)
+    return np.log(grid), np.array([_policy_share(lever, ratio, middle_hz, k) for k in grid])
+
+
+def _policy_share(lever: Cantilever, ratio: float, middle_hz: float, k1: float) -> float:
+    """The assumed tie's relative standard error of ``k1``: at the contact root ``beta`` nearest
+    ``middle_hz`` (Newton from there), the measured ``beta`` held, ``d k1 / d ratio = -k1 F_k2 / (F_k1 +
+    ratio F_k2)`` of the characteristic ``F(beta, k1, k2)`` (central differences)."""
+    from ..analysis.contact_resonance import betas, characteristic
+    from ..analysis.stiffness_report import assumed_tie_uncertainty
+
+    def F(b, a, c):
+        return float(np.real(characteristic(b, lever, a, c, lever.tip_position)))
+
+    b = float(betas(lever, middle_hz))
+    with np.errstate(all="ignore"):
+        for _ in range(50):
+            h = 1e-7 * b
+            step = -F(b, k1, ratio * k1) * 2 * h / (F(b + h, k1, ratio * k1) - F(b - h, k1, ratio * k1))
+            if not math.isfinite(step):
+                return 0.0
+            b += step
+            if abs(step) < 1e-12 * b:
+                break
+        e = 1e-6 * k1
+        d_k1 = (F(b, k1 + e, ratio * k1) - F(b, k1 - e, ratio * k1)) / (2 * e)
+        d_k2 = (F(b, k1, ratio * k1 + e) - F(b, k1, ratio * k1 - e)) / (2 * e)
+        share = abs(d_k2 / (d_k1 + ratio * d_k2)) * assumed_tie_uncertainty()
+    return float(share) if math.isfinite(share) else 0.0
