@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import cli
+from pfmdyn.discrepancy import reference
 from pfmdyn.discrepancy.reference import compare_sweeps
 from pfmdyn.discrepancy.sweep import fit_sweep
 from pfmdyn.errors import UserError
@@ -174,6 +175,25 @@ def test_a_misfit_left_unexplained_leaves_the_mass_unsettled(tmp_path):
     assert out["effect"] == "added_mass" and out["gap_after"] > 3, out["gap_after"]
     assert m["determined"] is False and "leaves gap" in m["why"] and "undetermined" in out.report()
     assert "over the" in out.report()       # the worst region beside the overall gap
+
+
+def test_the_mass_is_started_where_the_peak_moved(tmp_path):
+    """A sharp peak moved by many widths: the start of the mass at each position is the mass that moves
+    the first mode as far as the measured peak moved (the other starts, decades apart, can all lie
+    outside the narrow basin of the true minimum); nearer the clamp the same shift needs more mass."""
+    rng = np.random.default_rng(3)
+    case = dict(k=3.0, L=200e-6, w=40e-6, f_vac=60e3, g=2e-5, medium=Medium.air())
+    f0, q = in_medium(case)
+    f = np.sort(rng.uniform(0.95, 1.01, 150) * f0)
+    gain = 3.0 / np.abs(beam_slope(f0, **case))[0]
+    y0, y1 = (gain * beam_slope(f, **case, **mass) + 0.2 for mass in ({}, dict(mass_ratio=0.012, x_m=1.0)))
+    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y0, rng)), 3.0, 200e-6, case["medium"],
+                       width=40e-6)
+    shift = (f[np.argmax(np.abs(y0))] - f[np.argmax(np.abs(y1))]) / f0
+    assert shift * q > 5                # the peak moved by 2.4 %, seven widths
+    at_end, inside = (reference._shift_seed(before, f, y1, x) for x in (1.0, 0.6))
+    assert at_end == pytest.approx(0.012, rel=0.05) and inside > 2 * at_end
+    assert reference._shift_seed(before, f, y0, 1.0) is None       # the peak did not fall
 
 
 def test_nothing_changed(tmp_path):
