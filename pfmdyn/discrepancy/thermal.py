@@ -33,6 +33,7 @@ from ..fitting.result import Result
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
+from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
                     instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
                     unexplained_entry, unexplained_line)
@@ -67,7 +68,7 @@ class ThermalFit(Result):
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
                     else ""),
-                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
+                 f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
 
@@ -179,6 +180,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
               "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
+              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
               "instrument_comparison": compare_with_instrument(tune.instrument, {
                   "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
