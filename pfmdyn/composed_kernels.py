@@ -16,8 +16,9 @@ import numba
 import numpy as np
 
 from .generated import lever_pieces as pieces
+from .roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out"]
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "characteristic", "characteristic_roots"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
 """How a parameter enters (the codes of :func:`read_out`'s ``kinds``): ``beta`` moves every
@@ -526,3 +527,133 @@ def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
                         moved[m, c] += dR[2 + m, c] - J[2 * m] * dR[0, c] - J[2 * m + 1] * dR[1, c]
             d = moved[0, 0] * T[1, 1] + T[0, 0] * moved[1, 1] - moved[0, 1] * T[1, 0] - T[0, 1] * moved[1, 0]
             partials[p, i] = (d + det * d_log if p == at_beta else d) * factor
+
+
+def _sign(x):
+    """``np.sign``: NaN for NaN."""
+    return 1.0 if x > 0 else -1.0 if x < 0 else 0.0 if x == 0 else x
+
+
+_sign = numba.njit(cache=True)(_sign)
+
+
+@numba.njit(cache=True)
+def _characteristic_at(beta, params, at, out):
+    """:func:`characteristic` of the lever ``params`` at the points ``beta`` into ``out`` (1-d)."""
+    characteristic(beta, params, at)
+    out[:] = at[0]
+
+
+@numba.njit(cache=True)
+def characteristic_roots(grid, params, refine_roots, rtol):
+    """Real roots of :func:`characteristic` of one lever (``params``, 1 x 9, real) bracketed by sign
+    changes on ``grid``: :func:`pfmdyn.roots.bracket.grid_roots` step for step (the degree-7 Chebyshev
+    interpolant's root by Newton, confirmed ``rtol`` wide, else Illinois regula falsi from the better
+    side), every bracket in one compiled loop.
+
+    Examples
+    --------
+    >>> roots = characteristic_roots(np.linspace(0.3, 10.0, 150), np.array([[2.0, 0, 0, 0, 1e-5, 2e-4, 0, 1.0, 0]]),
+    ...                              True, 1e-13)
+    >>> roots.round(10).tolist()       # the free lever's first three roots
+    [1.8751040687, 4.6940911329, 7.8547574382]
+    """
+    vals = np.empty(len(grid))
+    at = np.empty((1, len(grid)))
+    _characteristic_at(grid, params, at, vals)
+    count = 0
+    for i in range(len(grid) - 1):
+        if _sign(vals[i]) * _sign(vals[i + 1]) < 0:
+            count += 1
+    lo, hi, flo, fhi = np.empty(count), np.empty(count), np.empty(count), np.empty(count)
+    j = 0
+    for i in range(len(grid) - 1):
+        if _sign(vals[i]) * _sign(vals[i + 1]) < 0:
+            lo[j], hi[j], flo[j], fhi[j] = grid[i], grid[i + 1], vals[i], vals[i + 1]
+            j += 1
+    if not refine_roots or count == 0:
+        return hi - fhi * (hi - lo) / (fhi - flo)
+    # interpolated_roots: the interpolant's coefficients, its derivative's, Newton from the secant root
+    nodes = _LOBATTO.shape[0]
+    mid, half = (lo + hi) / 2, (hi - lo) / 2
+    inner = np.empty((count, nodes - 2))
+    for b in range(count):
+        for q in range(nodes - 2):
+            inner[b, q] = mid[b] + half[b] * _LOBATTO[q + 1]
+    flat = inner.reshape(-1)
+    inner_vals = np.empty(flat.shape[0])
+    _characteristic_at(flat, params, np.empty((1, flat.shape[0])), inner_vals)
+    coef = np.zeros((nodes, count))
+    slope = np.empty((nodes - 1, count))
+    node_vals = np.empty(nodes)
+    for b in range(count):
+        node_vals[0], node_vals[nodes - 1] = fhi[b], flo[b]
+        node_vals[1:nodes - 1] = inner_vals[b * (nodes - 2):(b + 1) * (nodes - 2)]
+        for q in range(nodes):
+            for m in range(nodes):
+                coef[q, b] += _TO_CHEBYSHEV[q, m] * node_vals[m]
+        c = coef[:, b].copy()
+        n = nodes - 1
+        for m in range(n, 2, -1):
+            slope[m - 1, b] = (2 * m) * c[m]
+            c[m - 2] += (m * c[m]) / (m - 2)
+        slope[1, b] = 4 * c[2]
+        slope[0, b] = c[1]
+    t = np.empty(count)
+    for b in range(count):
+        t[b] = min(max(1 - 2 * fhi[b] / (fhi[b] - flo[b]), -1.0), 1.0)
+    for _ in range(12):
+        converged = True
+        for b in range(count):
+            step = _chebval(t[b], coef[:, b]) / _chebval(t[b], slope[:, b])
+            moved = t[b] - step
+            t[b] = -1.0 if moved < -1.0 else 1.0 if moved > 1.0 else moved
+            converged = converged and abs(step) < 1e-15
+        if converged:
+            break
+    c = mid + half * t
+    # the sub-bracket holding the root: around c when confirmed, else the side whose sign differs
+    half = 0.45 * rtol * np.abs(c)
+    near = np.empty(2 * count)
+    _characteristic_at(np.concatenate((c - half, c + half)), params, np.empty((1, 2 * count)), near)
+    a, fa, bb, fb = np.empty(count), np.empty(count), np.empty(count), np.empty(count)
+    for b in range(count):
+        left = _sign(flo[b]) * _sign(near[b]) <= 0
+        around = not left and _sign(near[b]) * _sign(near[count + b]) <= 0
+        a[b] = lo[b] if left else c[b] - half[b] if around else c[b] + half[b]
+        bb[b] = c[b] - half[b] if left else c[b] + half[b] if around else hi[b]
+        fa[b] = flo[b] if left else near[b] if around else near[count + b]
+        fb[b] = near[b] if left else near[count + b] if around else fhi[b]
+    # refine: Illinois regula falsi, each bracket on its own (as the vectorised form, where a
+    # bracket once done no longer moves)
+    point, value, one = np.empty(1), np.empty(1), np.empty((1, 1))
+    unbracketed = False
+    for b in range(count):
+        for _ in range(60):
+            if abs(bb[b] - a[b]) <= rtol * abs(bb[b]) or fb[b] == 0 or _sign(fa[b]) * _sign(fb[b]) > 0:
+                break
+            point[0] = bb[b] - fb[b] * (bb[b] - a[b]) / (fb[b] - fa[b])
+            _characteristic_at(point, params, one, value)
+            if _sign(value[0]) * _sign(fb[b]) < 0:
+                a[b], fa[b] = bb[b], fb[b]
+            else:
+                fa[b] = fa[b] / 2
+            bb[b], fb[b] = point[0], value[0]
+        unbracketed = unbracketed or _sign(fa[b]) * _sign(fb[b]) > 0
+    if unbracketed:
+        for b in range(count):
+            if abs(fa[b]) < abs(fb[b]):
+                bb[b] = a[b]
+    return bb
+
+
+@numba.njit(cache=True)
+def _chebval(x, c):
+    """``numpy.polynomial.chebyshev.chebval`` at a point (Clenshaw), ``len(c) >= 3``."""
+    x2 = 2 * x
+    c0, c1 = c[-2], c[-1]
+    for i in range(3, len(c) + 1):
+        tmp = c0
+        c0 = c[-i] - c1
+        c1 = tmp + c1 * x2
+    return c0 + c1 * x

@@ -37,7 +37,11 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     args = (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
-    roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
+    if composed.KERNELS:       # the same steps compiled (one call, not one per iteration)
+        from ..composed_kernels import characteristic_roots
+        roots = characteristic_roots(grid, np.array([args], float), refine_roots, 1e-13)
+    else:
+        roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.free_resonance, b1)
 
 
