@@ -18,7 +18,8 @@ import numpy as np
 from .generated import lever_pieces as pieces
 from .roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "characteristic", "characteristic_roots"]
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "characteristic", "characteristic_roots",
+           "characteristic_partials"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
 """How a parameter enters (the codes of :func:`read_out`'s ``kinds``): ``beta`` moves every
@@ -414,64 +415,67 @@ def characteristic(beta, params, out):
     True
     """
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
-    R = np.empty((4, 2), out.dtype)
-    T = np.empty((4, 2), out.dtype)
-    E = np.empty((6, 4), out.dtype)
-    v = np.empty(6, out.dtype)
+    R, T = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
+    E, v = np.empty((6, 4), out.dtype), np.empty(6, out.dtype)
     for n in range(out.size):
         r, i = n // beta.shape[0], n % beta.shape[0]
         p = params[r]
-        b, g = beta[i], p[7].real
-        s = b * g
-        if _segment(b, g, g, 1.0, rows, load):
-            for m in range(4):
-                for c in range(2):
-                    R[m, c] = rows[m, 2 + c]
-            factor = np.exp(-s)
-        else:
-            B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
-            for m in range(4):
-                R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
-                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
-            factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
-        J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
-        for c in range(2):
-            T[0, c], T[1, c] = R[0, c], R[1, c]
-            T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
-            T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
-        if g == 1.0:
-            out[r, i] = (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
-            continue
-        ell = 1.0 - g
-        s = b * ell
-        if abs(s) <= _LIMIT:
-            s_1, tt, uu, vv = _krylov_duncan(s)
-            K = (s_1 + 1.0, tt, uu, vv)
-            for q in range(6):
-                a, c = _PAIRS[q]
-                v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
-            beyond = np.exp(-s)
-        else:
-            _segment(b, 0.0, ell, 1.0, rows, load)
-            E[:4] = rows[:4]
-            _segment(b, ell, ell, 1.0, rows, load)
-            E[4:] = rows[2:4]
-            for kk in range(6):
-                r0, r1 = _PAIRS[5 - kk]
-                total = s * 0.0
-                for q in range(6):
-                    a, c = _PAIRS[q]
-                    gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
-                    c0, c1 = _PAIRS[5 - q]
-                    sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
-                    total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
-                v[kk] = total
-            beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
-        total = s * 0.0
+        out[r, i] = _characteristic_one(beta[i], p, p[7].real, rows, load, R, T, E, v)
+
+
+@numba.njit(cache=True)
+def _characteristic_one(b, p, g, rows, load, R, T, E, v):
+    """:func:`characteristic` of the lever ``p`` at ``b``, its tip at ``g`` (real, or complex for a
+    complex step in ``gamma``); the other arguments are work arrays."""
+    s = b * g
+    if _segment(b, g, g, 1.0, rows, load):
+        for m in range(4):
+            for c in range(2):
+                R[m, c] = rows[m, 2 + c]
+        factor = np.exp(-s)
+    else:
+        B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+        for m in range(4):
+            R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
+            R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
+        factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
+    J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
+    for c in range(2):
+        T[0, c], T[1, c] = R[0, c], R[1, c]
+        T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
+        T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
+    if g == 1.0:
+        return (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+    ell = 1.0 - g
+    s = b * ell
+    if abs(s) <= _LIMIT:
+        s_1, tt, uu, vv = _krylov_duncan(s)
+        K = (s_1 + 1.0, tt, uu, vv)
         for q in range(6):
             a, c = _PAIRS[q]
-            total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
-        out[r, i] = total * (factor * beyond)
+            v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
+        beyond = np.exp(-s)
+    else:
+        _segment(b, 0.0, ell, 1.0, rows, load)
+        E[:4] = rows[:4]
+        _segment(b, ell, ell, 1.0, rows, load)
+        E[4:] = rows[2:4]
+        for kk in range(6):
+            r0, r1 = _PAIRS[5 - kk]
+            total = s * 0.0
+            for q in range(6):
+                a, c = _PAIRS[q]
+                gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
+                c0, c1 = _PAIRS[5 - q]
+                sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
+                total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+            v[kk] = total
+        beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
+    total = s * 0.0
+    for q in range(6):
+        a, c = _PAIRS[q]
+        total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
+    return total * (factor * beyond)
 
 
 @numba.njit(cache=True)
@@ -555,8 +559,8 @@ def characteristic_roots(grid, params, refine_roots, rtol):
     --------
     >>> roots = characteristic_roots(np.linspace(0.3, 10.0, 150), np.array([[2.0, 0, 0, 0, 1e-5, 2e-4, 0, 1.0, 0]]),
     ...                              True, 1e-13)
-    >>> roots.round(10).tolist()       # the free lever's first three roots
-    [1.8751040687, 4.6940911329, 7.8547574382]
+    >>> roots.round(8).tolist()       # the free lever's first three roots
+    [1.87510407, 4.69409113, 7.85475744]
     """
     vals = np.empty(len(grid))
     at = np.empty((1, len(grid)))
@@ -657,3 +661,42 @@ def _chebval(x, c):
         c0 = c[-i] - c1
         c1 = tmp + c1 * x2
     return c0 + c1 * x
+
+
+@numba.njit(cache=True)
+def characteristic_partials(beta, params, wrt, partials):
+    """Partials ``partials[j, i]`` of :func:`characteristic` of one undamped lever ``params`` (9, real)
+    at real ``beta[i]`` w.r.t. the parameter ``wrt[j]`` (its index in ``params``; -1: ``beta``) by a
+    complex step: the characteristic is analytic in each (``H`` and ``L`` excepted: read as real), so
+    ``Im F(x + ih) / h`` is its derivative free of cancellation; ``gamma`` too, with the tip set back
+    by ``ih`` where it stands at the end (the one-segment form is the two-segment one's limit).
+
+    Examples
+    --------
+    >>> p = np.array([2.0, 0, 0, 0, 1e-5, 2e-4, 0.0, 1.0, 0])
+    >>> d = np.empty((2, 1))
+    >>> characteristic_partials(np.array([1.8751040687119611]), p, np.array([-1, 6]), d)
+    >>> round(float(-d[1, 0] / d[0, 0]), 6)      # d beta1 / d mu of a free lever: -beta1
+    -1.875104
+    """
+    rows, load = np.empty((5, 4), np.complex128), np.empty(5, np.complex128)
+    R, T = np.empty((4, 2), np.complex128), np.empty((4, 2), np.complex128)
+    E, v = np.empty((6, 4), np.complex128), np.empty(6, np.complex128)
+    stepped = params.astype(np.complex128)
+    for i in range(beta.shape[0]):
+        for j in range(wrt.shape[0]):
+            w = wrt[j]
+            b = beta[i] + 0j
+            if w < 0:
+                h = 1e-20 * max(abs(beta[i]), 1.0)
+                b = complex(beta[i], h)
+            else:
+                h = 1e-20 * max(abs(params[w]), 1.0)
+                stepped[w] = complex(params[w], h)
+            if w == 7:
+                value = _characteristic_one(b, stepped, stepped[7], rows, load, R, T, E, v)
+            else:
+                value = _characteristic_one(b, stepped, params[7] + 0j, rows, load, R, T, E, v)
+            partials[j, i] = value.imag / h
+            if w >= 0:
+                stepped[w] = params[w]

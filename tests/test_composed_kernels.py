@@ -104,3 +104,22 @@ def test_resonances_agree_with_the_numpy_root_search():
             want = grid_roots(lambda b: composed.characteristic(b, *lever[0]), grid, refine)
             got = characteristic_roots(grid, lever, refine, 1e-13)
             assert len(got) == len(want) > 0 and np.max(np.abs(got / want - 1)) <= 1e-14
+
+
+def test_characteristic_partials_by_complex_steps_agree_with_the_assembled_system():
+    """The complex steps of :func:`pfmdyn.composed_kernels.characteristic_partials` against the
+    assembled system's adjugate (the set-back tip's partials, ``gamma``'s at the end too) where the
+    resonances are (``beta`` > 0.3): 1e-9 (the adjugate from the SVD loses a few digits; below, in the
+    quasi-static range, many: there central differences side with the complex steps)."""
+    from pfmdyn.discrepancy.model import characteristic_partials
+
+    wrt = ("beta", "kvv", "kll", "kvl", "mu", "gamma")
+    for args in _levers(4, 8):
+        lever = tuple(np.real(args[2:10])) + (0.0,)
+        beta = np.real(args[0])
+        beta = beta[beta > 0.3][:6]
+        got = characteristic_partials(beta, lever, wrt)
+        _, want = _both(lambda: composed.characteristic_and_jacobian(beta, *lever, wrt=wrt))[1]
+        for name, d in zip(wrt, got):
+            w = want[composed.JACOBIAN_PARAMETERS.index(name)]
+            assert np.max(np.abs(d - w) / np.abs(w)) <= 1e-9, name

@@ -14,7 +14,7 @@ from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import grid_roots
-from .model import Model, free_root_and_jacobian
+from .model import Model, characteristic_partials, free_root_and_jacobian
 
 __all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
 
@@ -93,8 +93,8 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
 
     Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
     ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
-    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from the assembled
-    system (:func:`pfmdyn.composed.characteristic_and_jacobian`, one call for the contact roots and
+    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from
+    :func:`pfmdyn.discrepancy.model.characteristic_partials` (one call for the contact roots and
     one for the free root); the model's parameters are algebraic functions of the internal ones.
 
     >>> from types import SimpleNamespace
@@ -124,9 +124,8 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
     wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
-        _, d = composed.characteristic_and_jacobian(beta, *a0, wrt=wrt)
-        names = composed.JACOBIAN_PARAMETERS
-        ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
+        d = characteristic_partials(beta, tuple(a0), wrt)
+        ratio = np.array([d[1 + n] / d[0] for n in range(len(rows))]).reshape(len(rows), len(f))
         d_beta = -(ratio.T @ per_unit[rows])
         d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
         out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
