@@ -405,7 +405,8 @@ def characteristic(beta, params, out):
     """:func:`pfmdyn.composed.characteristic` of each lever ``params[r]`` (``k, kvv, kll, kvl, H, L, mu,
     gamma, rho_g``) at each ``beta[i]``, ``out[r, i]`` (``_transferred`` step for step): the clamp's
     segment per unit of its two unknowns ``R``, the tip's jump across, and with the tip set back the
-    free segment's minors; times the segments' factors.
+    free segment's minors; times the segments' factors.  The segments depend on ``beta`` and ``gamma``
+    alone: with one ``gamma`` for all levers (a start grid's), once per ``beta``.
 
     Examples
     --------
@@ -417,35 +418,50 @@ def characteristic(beta, params, out):
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
     R, T = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
     E, v = np.empty((6, 4), out.dtype), np.empty(6, out.dtype)
-    for n in range(out.size):
-        r, i = n // beta.shape[0], n % beta.shape[0]
-        p = params[r]
-        out[r, i] = _characteristic_one(beta[i], p, p[7].real, rows, load, R, T, E, v)
+    g = params[0, 7].real
+    shared = True
+    for r in range(params.shape[0]):
+        shared = shared and params[r, 7].real == g
+    if not shared:
+        for n in range(out.size):
+            r, i = n // beta.shape[0], n % beta.shape[0]
+            out[r, i] = _characteristic_one(beta[i], params[r], params[r, 7].real, rows, load, R, T, E, v)
+        return
+    for i in range(beta.shape[0]):
+        factor = _from_clamp(beta[i], g, rows, load, R)
+        beyond = factor if g == 1.0 else _to_free_end(beta[i], g, rows, load, E, v)
+        for r in range(params.shape[0]):
+            out[r, i] = _joined(beta[i], params[r], g, R, T, v, factor, beyond)
 
 
 @numba.njit(cache=True)
 def _characteristic_one(b, p, g, rows, load, R, T, E, v):
     """:func:`characteristic` of the lever ``p`` at ``b``, its tip at ``g`` (real, or complex for a
     complex step in ``gamma``); the other arguments are work arrays."""
+    factor = _from_clamp(b, g, rows, load, R)
+    beyond = factor if g == 1.0 else _to_free_end(b, g, rows, load, E, v)
+    return _joined(b, p, g, R, T, v, factor, beyond)
+
+
+@numba.njit(cache=True)
+def _from_clamp(b, g, rows, load, R):
+    """The clamp's segment (to the tip at ``g``) per unit of its two unknowns into ``R``; its factor."""
     s = b * g
     if _segment(b, g, g, 1.0, rows, load):
         for m in range(4):
             for c in range(2):
                 R[m, c] = rows[m, 2 + c]
-        factor = np.exp(-s)
-    else:
-        B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
-        for m in range(4):
-            R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
-            R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
-        factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
-    J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
-    for c in range(2):
-        T[0, c], T[1, c] = R[0, c], R[1, c]
-        T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
-        T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
-    if g == 1.0:
-        return (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+        return np.exp(-s)
+    B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+    for m in range(4):
+        R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
+        R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
+    return 1.0 / _BOUNDED_AT_START + 0.0 * s
+
+
+@numba.njit(cache=True)
+def _to_free_end(b, g, rows, load, E, v):
+    """The segment beyond a set-back tip: the weights ``v`` of the minors of the tip's state; its factor."""
     ell = 1.0 - g
     s = b * ell
     if abs(s) <= _LIMIT:
@@ -454,24 +470,36 @@ def _characteristic_one(b, p, g, rows, load, R, T, E, v):
         for q in range(6):
             a, c = _PAIRS[q]
             v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
-        beyond = np.exp(-s)
-    else:
-        _segment(b, 0.0, ell, 1.0, rows, load)
-        E[:4] = rows[:4]
-        _segment(b, ell, ell, 1.0, rows, load)
-        E[4:] = rows[2:4]
-        for kk in range(6):
-            r0, r1 = _PAIRS[5 - kk]
-            total = s * 0.0
-            for q in range(6):
-                a, c = _PAIRS[q]
-                gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
-                c0, c1 = _PAIRS[5 - q]
-                sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
-                total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
-            v[kk] = total
-        beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
-    total = s * 0.0
+        return np.exp(-s)
+    _segment(b, 0.0, ell, 1.0, rows, load)
+    E[:4] = rows[:4]
+    _segment(b, ell, ell, 1.0, rows, load)
+    E[4:] = rows[2:4]
+    for kk in range(6):
+        r0, r1 = _PAIRS[5 - kk]
+        total = s * 0.0
+        for q in range(6):
+            a, c = _PAIRS[q]
+            gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
+            c0, c1 = _PAIRS[5 - q]
+            sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
+            total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+        v[kk] = total
+    return 1.0 / _BOUNDED_AT_START + 0.0 * s
+
+
+@numba.njit(cache=True)
+def _joined(b, p, g, R, T, v, factor, beyond):
+    """The tip's jump across ``R`` (``T``), then ``det T[2:]`` (the tip at the end) or the free segment's
+    minors weighted by ``v``; times the factors."""
+    J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
+    for c in range(2):
+        T[0, c], T[1, c] = R[0, c], R[1, c]
+        T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
+        T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
+    if g == 1.0:
+        return (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+    total = b * 0.0 * (1.0 - g)
     for q in range(6):
         a, c = _PAIRS[q]
         total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])

@@ -14,6 +14,7 @@ from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import grid_roots
+from .effects import spring_parameters
 from .model import Model, characteristic_partials, free_root_and_jacobian
 
 __all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
@@ -56,7 +57,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     [[1.0, 6.267], [1.0, 6.267]]
     """
     m = model.meta
-    args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    args = _characteristic_args_many(model, np.asarray(internals, float), contact)
     b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, a[6], a[7]) for a in args])
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
@@ -65,11 +66,35 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
             vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
-        change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
-        for row, i in enumerate(rows):
-            idx = np.flatnonzero(change[row])
-            lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
-            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
+        row, idx = np.nonzero(np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0)
+        lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
+        with np.errstate(all="ignore"):
+            roots = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
+        for i, part in zip(rows, np.split(roots, np.cumsum(np.bincount(row, minlength=len(rows)))[:-1])):
+            out[i] = part
+    return out
+
+
+def _characteristic_args_many(model: Model, internals: np.ndarray, contact: bool) -> np.ndarray:
+    """:func:`characteristic_args` of each row of ``internals`` (rows x parameters); a start grid's
+    rows, alike but for the springs, at once (the same numbers: the springs' coordinates one by one,
+    their rotation elementwise).
+
+    >>> from types import SimpleNamespace
+    >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4), ("tilt",))
+    >>> rows = np.array([[2.0, 1.0, 0.1], [2.5, 1.5, 0.1]])
+    >>> bool((_characteristic_args_many(model, rows, True) == [characteristic_args(model, x, True) for x in rows]).all())
+    True
+    """
+    springs = len(model.springs)
+    if not contact or not len(internals) or np.any(internals[:, springs:] != internals[0, springs:]):
+        return np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    c = model.coords(internals[0])
+    k1, k2 = ([p.value(v) for v in internals[:, j]] if j < springs else [c[p.name]] * len(internals)
+              for j, p in enumerate(spring_parameters(model.meta, False)))
+    kvv, kll, kvl = np.broadcast_arrays(*rotated(np.array(k1), np.array(k2), c["alpha"]))
+    out = np.array([characteristic_args(model, internals[0], contact)] * len(internals), dtype=float)
+    out[:, 1], out[:, 2], out[:, 3] = kvv, kll, kvl
     return out
 
 
