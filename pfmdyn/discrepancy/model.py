@@ -234,13 +234,13 @@ def free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, floa
     return b1, (-float(d_mu / d_beta), -float(d_gamma / d_beta))
 
 
-def characteristic_partials(beta, args, wrt) -> list[np.ndarray]:
+def characteristic_partials(beta, args, wrt) -> np.ndarray:
     """Partials of :func:`pfmdyn.composed.characteristic` of an undamped lever (``args``: its parameters
     after ``beta``) at real ``beta`` w.r.t. the names ``wrt`` (of :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`),
-    one array each.  The tip at the end and ``gamma`` fixed: :func:`pfmdyn.composed.characteristic_and_jacobian`
+    one row each.  The tip at the end and ``gamma`` fixed: :func:`pfmdyn.composed.characteristic_and_jacobian`
     (compiled, the product rule); otherwise compiled complex steps
     (:func:`pfmdyn.composed_kernels.characteristic_partials`, 100x the assembled system's adjugate, which
-    is the reference with :data:`pfmdyn.composed.KERNELS` off: both agree to 1e-10).
+    is the reference with :data:`pfmdyn.composed.KERNELS` off: both agree to 1e-9).
 
     >>> args = (1.0, 0.0, 0.0, 0.0, 1e-5, 1e-4, 0.0, 0.9, 0.0)
     >>> d_beta, d_mu = characteristic_partials(np.array([1.9]), args, ("beta", "mu"))
@@ -258,9 +258,9 @@ def characteristic_partials(beta, args, wrt) -> list[np.ndarray]:
         at = np.array([-1 if p == "beta" else composed.PARAMETERS.index(p) for p in wrt], np.int64)
         out = np.empty((len(wrt), beta.size))
         compiled(beta.reshape(-1), np.array(args, float), at, out)
-        return [row.reshape(beta.shape) for row in out]
+        return out.reshape((len(wrt),) + beta.shape)
     d = composed.characteristic_and_jacobian(beta, *args, wrt=wrt)[1]
-    return [d[names.index(p)] for p in wrt]
+    return np.array([d[names.index(p)] for p in wrt])
 
 
 @dataclass

@@ -146,11 +146,11 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
         xs[j] += h
         per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
     # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
-    rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
+    rows = np.flatnonzero(per_unit.any(axis=1))
     wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
         d = characteristic_partials(beta, tuple(a0), wrt)
-        ratio = np.array([d[1 + n] / d[0] for n in range(len(rows))]).reshape(len(rows), len(f))
+        ratio = (d[1:] / d[0]).reshape(len(rows), len(f))
         d_beta = -(ratio.T @ per_unit[rows])
         d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
         out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
