@@ -16,8 +16,10 @@ import numba
 import numpy as np
 
 from .generated import lever_pieces as pieces
+from .roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out"]
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "characteristic", "characteristic_roots",
+           "characteristic_partials"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
 """How a parameter enters (the codes of :func:`read_out`'s ``kinds``): ``beta`` moves every
@@ -403,7 +405,8 @@ def characteristic(beta, params, out):
     """:func:`pfmdyn.composed.characteristic` of each lever ``params[r]`` (``k, kvv, kll, kvl, H, L, mu,
     gamma, rho_g``) at each ``beta[i]``, ``out[r, i]`` (``_transferred`` step for step): the clamp's
     segment per unit of its two unknowns ``R``, the tip's jump across, and with the tip set back the
-    free segment's minors; times the segments' factors.
+    free segment's minors; times the segments' factors.  The segments depend on ``beta`` and ``gamma``
+    alone: with one ``gamma`` for all levers (a start grid's), once per ``beta``.
 
     Examples
     --------
@@ -413,64 +416,94 @@ def characteristic(beta, params, out):
     True
     """
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
-    R = np.empty((4, 2), out.dtype)
-    T = np.empty((4, 2), out.dtype)
-    E = np.empty((6, 4), out.dtype)
-    v = np.empty(6, out.dtype)
-    for n in range(out.size):
-        r, i = n // beta.shape[0], n % beta.shape[0]
-        p = params[r]
-        b, g = beta[i], p[7].real
-        s = b * g
-        if _segment(b, g, g, 1.0, rows, load):
-            for m in range(4):
-                for c in range(2):
-                    R[m, c] = rows[m, 2 + c]
-            factor = np.exp(-s)
-        else:
-            B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
-            for m in range(4):
-                R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
-                R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
-            factor = 1.0 / _BOUNDED_AT_START + 0.0 * s
-        J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
-        for c in range(2):
-            T[0, c], T[1, c] = R[0, c], R[1, c]
-            T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
-            T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
-        if g == 1.0:
-            out[r, i] = (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
-            continue
-        ell = 1.0 - g
-        s = b * ell
-        if abs(s) <= _LIMIT:
-            s_1, tt, uu, vv = _krylov_duncan(s)
-            K = (s_1 + 1.0, tt, uu, vv)
-            for q in range(6):
-                a, c = _PAIRS[q]
-                v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
-            beyond = np.exp(-s)
-        else:
-            _segment(b, 0.0, ell, 1.0, rows, load)
-            E[:4] = rows[:4]
-            _segment(b, ell, ell, 1.0, rows, load)
-            E[4:] = rows[2:4]
-            for kk in range(6):
-                r0, r1 = _PAIRS[5 - kk]
-                total = s * 0.0
-                for q in range(6):
-                    a, c = _PAIRS[q]
-                    gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
-                    c0, c1 = _PAIRS[5 - q]
-                    sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
-                    total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
-                v[kk] = total
-            beyond = 1.0 / _BOUNDED_AT_START + 0.0 * s
+    R, T = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
+    E, v = np.empty((6, 4), out.dtype), np.empty(6, out.dtype)
+    g = params[0, 7].real
+    shared = True
+    for r in range(params.shape[0]):
+        shared = shared and params[r, 7].real == g
+    if not shared:
+        for n in range(out.size):
+            r, i = n // beta.shape[0], n % beta.shape[0]
+            out[r, i] = _characteristic_one(beta[i], params[r], params[r, 7].real, rows, load, R, T, E, v)
+        return
+    for i in range(beta.shape[0]):
+        factor = _from_clamp(beta[i], g, rows, load, R)
+        beyond = factor if g == 1.0 else _to_free_end(beta[i], g, rows, load, E, v)
+        for r in range(params.shape[0]):
+            out[r, i] = _joined(beta[i], params[r], g, R, T, v, factor, beyond)
+
+
+@numba.njit(cache=True)
+def _characteristic_one(b, p, g, rows, load, R, T, E, v):
+    """:func:`characteristic` of the lever ``p`` at ``b``, its tip at ``g`` (real, or complex for a
+    complex step in ``gamma``); the other arguments are work arrays."""
+    factor = _from_clamp(b, g, rows, load, R)
+    beyond = factor if g == 1.0 else _to_free_end(b, g, rows, load, E, v)
+    return _joined(b, p, g, R, T, v, factor, beyond)
+
+
+@numba.njit(cache=True)
+def _from_clamp(b, g, rows, load, R):
+    """The clamp's segment (to the tip at ``g``) per unit of its two unknowns into ``R``; its factor."""
+    s = b * g
+    if _segment(b, g, g, 1.0, rows, load):
+        for m in range(4):
+            for c in range(2):
+                R[m, c] = rows[m, 2 + c]
+        return np.exp(-s)
+    B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+    for m in range(4):
+        R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
+        R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
+    return 1.0 / _BOUNDED_AT_START + 0.0 * s
+
+
+@numba.njit(cache=True)
+def _to_free_end(b, g, rows, load, E, v):
+    """The segment beyond a set-back tip: the weights ``v`` of the minors of the tip's state; its factor."""
+    ell = 1.0 - g
+    s = b * ell
+    if abs(s) <= _LIMIT:
+        s_1, tt, uu, vv = _krylov_duncan(s)
+        K = (s_1 + 1.0, tt, uu, vv)
+        for q in range(6):
+            a, c = _PAIRS[q]
+            v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
+        return np.exp(-s)
+    _segment(b, 0.0, ell, 1.0, rows, load)
+    E[:4] = rows[:4]
+    _segment(b, ell, ell, 1.0, rows, load)
+    E[4:] = rows[2:4]
+    for kk in range(6):
+        r0, r1 = _PAIRS[5 - kk]
         total = s * 0.0
         for q in range(6):
             a, c = _PAIRS[q]
-            total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
-        out[r, i] = total * (factor * beyond)
+            gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
+            c0, c1 = _PAIRS[5 - q]
+            sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
+            total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+        v[kk] = total
+    return 1.0 / _BOUNDED_AT_START + 0.0 * s
+
+
+@numba.njit(cache=True)
+def _joined(b, p, g, R, T, v, factor, beyond):
+    """The tip's jump across ``R`` (``T``), then ``det T[2:]`` (the tip at the end) or the free segment's
+    minors weighted by ``v``; times the factors."""
+    J = _point_jump(b, p[0], p[1], p[2], p[3], p[4].real, p[5].real, p[6], p[8])
+    for c in range(2):
+        T[0, c], T[1, c] = R[0, c], R[1, c]
+        T[2, c] = R[2, c] - J[0] * R[0, c] - J[1] * R[1, c]
+        T[3, c] = R[3, c] - J[2] * R[0, c] - J[3] * R[1, c]
+    if g == 1.0:
+        return (T[2, 0] * T[3, 1] - T[2, 1] * T[3, 0]) * factor
+    total = b * 0.0 * (1.0 - g)
+    for q in range(6):
+        a, c = _PAIRS[q]
+        total += v[q] * (T[a, 0] * T[c, 1] - T[a, 1] * T[c, 0])
+    return total * (factor * beyond)
 
 
 @numba.njit(cache=True)
@@ -526,3 +559,172 @@ def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
                         moved[m, c] += dR[2 + m, c] - J[2 * m] * dR[0, c] - J[2 * m + 1] * dR[1, c]
             d = moved[0, 0] * T[1, 1] + T[0, 0] * moved[1, 1] - moved[0, 1] * T[1, 0] - T[0, 1] * moved[1, 0]
             partials[p, i] = (d + det * d_log if p == at_beta else d) * factor
+
+
+def _sign(x):
+    """``np.sign``: NaN for NaN."""
+    return 1.0 if x > 0 else -1.0 if x < 0 else 0.0 if x == 0 else x
+
+
+_sign = numba.njit(cache=True)(_sign)
+
+
+@numba.njit(cache=True)
+def _characteristic_at(beta, params, at, out):
+    """:func:`characteristic` of the lever ``params`` at the points ``beta`` into ``out`` (1-d)."""
+    characteristic(beta, params, at)
+    out[:] = at[0]
+
+
+@numba.njit(cache=True)
+def characteristic_roots(grid, params, refine_roots, rtol):
+    """Real roots of :func:`characteristic` of one lever (``params``, 1 x 9, real) bracketed by sign
+    changes on ``grid``: :func:`pfmdyn.roots.bracket.grid_roots` step for step (the degree-7 Chebyshev
+    interpolant's root by Newton, confirmed ``rtol`` wide, else Illinois regula falsi from the better
+    side), every bracket in one compiled loop.
+
+    Examples
+    --------
+    >>> roots = characteristic_roots(np.linspace(0.3, 10.0, 150), np.array([[2.0, 0, 0, 0, 1e-5, 2e-4, 0, 1.0, 0]]),
+    ...                              True, 1e-13)
+    >>> roots.round(8).tolist()       # the free lever's first three roots
+    [1.87510407, 4.69409113, 7.85475744]
+    """
+    vals = np.empty(len(grid))
+    at = np.empty((1, len(grid)))
+    _characteristic_at(grid, params, at, vals)
+    count = 0
+    for i in range(len(grid) - 1):
+        if _sign(vals[i]) * _sign(vals[i + 1]) < 0:
+            count += 1
+    lo, hi, flo, fhi = np.empty(count), np.empty(count), np.empty(count), np.empty(count)
+    j = 0
+    for i in range(len(grid) - 1):
+        if _sign(vals[i]) * _sign(vals[i + 1]) < 0:
+            lo[j], hi[j], flo[j], fhi[j] = grid[i], grid[i + 1], vals[i], vals[i + 1]
+            j += 1
+    if not refine_roots or count == 0:
+        return hi - fhi * (hi - lo) / (fhi - flo)
+    # interpolated_roots: the interpolant's coefficients, its derivative's, Newton from the secant root
+    nodes = _LOBATTO.shape[0]
+    mid, half = (lo + hi) / 2, (hi - lo) / 2
+    inner = np.empty((count, nodes - 2))
+    for b in range(count):
+        for q in range(nodes - 2):
+            inner[b, q] = mid[b] + half[b] * _LOBATTO[q + 1]
+    flat = inner.reshape(-1)
+    inner_vals = np.empty(flat.shape[0])
+    _characteristic_at(flat, params, np.empty((1, flat.shape[0])), inner_vals)
+    coef = np.zeros((nodes, count))
+    slope = np.empty((nodes - 1, count))
+    node_vals = np.empty(nodes)
+    for b in range(count):
+        node_vals[0], node_vals[nodes - 1] = fhi[b], flo[b]
+        node_vals[1:nodes - 1] = inner_vals[b * (nodes - 2):(b + 1) * (nodes - 2)]
+        for q in range(nodes):
+            for m in range(nodes):
+                coef[q, b] += _TO_CHEBYSHEV[q, m] * node_vals[m]
+        c = coef[:, b].copy()
+        n = nodes - 1
+        for m in range(n, 2, -1):
+            slope[m - 1, b] = (2 * m) * c[m]
+            c[m - 2] += (m * c[m]) / (m - 2)
+        slope[1, b] = 4 * c[2]
+        slope[0, b] = c[1]
+    t = np.empty(count)
+    for b in range(count):
+        t[b] = min(max(1 - 2 * fhi[b] / (fhi[b] - flo[b]), -1.0), 1.0)
+    for _ in range(12):
+        converged = True
+        for b in range(count):
+            step = _chebval(t[b], coef[:, b]) / _chebval(t[b], slope[:, b])
+            moved = t[b] - step
+            t[b] = -1.0 if moved < -1.0 else 1.0 if moved > 1.0 else moved
+            converged = converged and abs(step) < 1e-15
+        if converged:
+            break
+    c = mid + half * t
+    # the sub-bracket holding the root: around c when confirmed, else the side whose sign differs
+    half = 0.45 * rtol * np.abs(c)
+    near = np.empty(2 * count)
+    _characteristic_at(np.concatenate((c - half, c + half)), params, np.empty((1, 2 * count)), near)
+    a, fa, bb, fb = np.empty(count), np.empty(count), np.empty(count), np.empty(count)
+    for b in range(count):
+        left = _sign(flo[b]) * _sign(near[b]) <= 0
+        around = not left and _sign(near[b]) * _sign(near[count + b]) <= 0
+        a[b] = lo[b] if left else c[b] - half[b] if around else c[b] + half[b]
+        bb[b] = c[b] - half[b] if left else c[b] + half[b] if around else hi[b]
+        fa[b] = flo[b] if left else near[b] if around else near[count + b]
+        fb[b] = near[b] if left else near[count + b] if around else fhi[b]
+    # refine: Illinois regula falsi, each bracket on its own (as the vectorised form, where a
+    # bracket once done no longer moves)
+    point, value, one = np.empty(1), np.empty(1), np.empty((1, 1))
+    unbracketed = False
+    for b in range(count):
+        for _ in range(60):
+            if abs(bb[b] - a[b]) <= rtol * abs(bb[b]) or fb[b] == 0 or _sign(fa[b]) * _sign(fb[b]) > 0:
+                break
+            point[0] = bb[b] - fb[b] * (bb[b] - a[b]) / (fb[b] - fa[b])
+            _characteristic_at(point, params, one, value)
+            if _sign(value[0]) * _sign(fb[b]) < 0:
+                a[b], fa[b] = bb[b], fb[b]
+            else:
+                fa[b] = fa[b] / 2
+            bb[b], fb[b] = point[0], value[0]
+        unbracketed = unbracketed or _sign(fa[b]) * _sign(fb[b]) > 0
+    if unbracketed:
+        for b in range(count):
+            if abs(fa[b]) < abs(fb[b]):
+                bb[b] = a[b]
+    return bb
+
+
+@numba.njit(cache=True)
+def _chebval(x, c):
+    """``numpy.polynomial.chebyshev.chebval`` at a point (Clenshaw), ``len(c) >= 3``."""
+    x2 = 2 * x
+    c0, c1 = c[-2], c[-1]
+    for i in range(3, len(c) + 1):
+        tmp = c0
+        c0 = c[-i] - c1
+        c1 = tmp + c1 * x2
+    return c0 + c1 * x
+
+
+@numba.njit(cache=True)
+def characteristic_partials(beta, params, wrt, partials):
+    """Partials ``partials[j, i]`` of :func:`characteristic` of one undamped lever ``params`` (9, real)
+    at real ``beta[i]`` w.r.t. the parameter ``wrt[j]`` (its index in ``params``; -1: ``beta``) by a
+    complex step: the characteristic is analytic in each (``H`` and ``L`` excepted: read as real), so
+    ``Im F(x + ih) / h`` is its derivative free of cancellation; ``gamma`` too, with the tip set back
+    by ``ih`` where it stands at the end (the one-segment form is the two-segment one's limit).
+
+    Examples
+    --------
+    >>> p = np.array([2.0, 0, 0, 0, 1e-5, 2e-4, 0.0, 1.0, 0])
+    >>> d = np.empty((2, 1))
+    >>> characteristic_partials(np.array([1.8751040687119611]), p, np.array([-1, 6]), d)
+    >>> round(float(-d[1, 0] / d[0, 0]), 6)      # d beta1 / d mu of a free lever: -beta1
+    -1.875104
+    """
+    rows, load = np.empty((5, 4), np.complex128), np.empty(5, np.complex128)
+    R, T = np.empty((4, 2), np.complex128), np.empty((4, 2), np.complex128)
+    E, v = np.empty((6, 4), np.complex128), np.empty(6, np.complex128)
+    stepped = params.astype(np.complex128)
+    for i in range(beta.shape[0]):
+        for j in range(wrt.shape[0]):
+            w = wrt[j]
+            b = beta[i] + 0j
+            if w < 0:
+                h = 1e-20 * max(abs(beta[i]), 1.0)
+                b = complex(beta[i], h)
+            else:
+                h = 1e-20 * max(abs(params[w]), 1.0)
+                stepped[w] = complex(params[w], h)
+            if w == 7:
+                value = _characteristic_one(b, stepped, stepped[7], rows, load, R, T, E, v)
+            else:
+                value = _characteristic_one(b, stepped, params[7] + 0j, rows, load, R, T, E, v)
+            partials[j, i] = value.imag / h
+            if w >= 0:
+                stepped[w] = params[w]

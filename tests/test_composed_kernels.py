@@ -88,3 +88,38 @@ def test_characteristic_partials_with_the_tip_at_the_end_agree_with_numpy():
         for name, d, w in zip(composed.JACOBIAN_PARAMETERS, partials, want_partials):
             if name in wrt:
                 assert np.max(np.abs(d - w) / np.maximum(np.abs(w), np.abs(want))) <= 1e-12, name
+
+
+def test_resonances_agree_with_the_numpy_root_search():
+    """The compiled root search (:func:`pfmdyn.composed_kernels.characteristic_roots`) takes
+    :func:`pfmdyn.roots.bracket.grid_roots`' steps: the same roots to an ulp or two (the Chebyshev
+    coefficients summed in another order), refined or interpolated, the tip at the end or set back."""
+    from pfmdyn.composed_kernels import characteristic_roots
+    from pfmdyn.roots.bracket import grid_roots
+
+    for args in _levers(3, 8):
+        lever = np.real(np.array([args[2:9] + (args[9], 0.0)]))      # undamped, no gyration: the model's roots
+        grid = np.linspace(0.3, 12.0 + 20.0 * args[8], 200)
+        for refine in (True, False):
+            want = grid_roots(lambda b: composed.characteristic(b, *lever[0]), grid, refine)
+            got = characteristic_roots(grid, lever, refine, 1e-13)
+            assert len(got) == len(want) > 0 and np.max(np.abs(got / want - 1)) <= 1e-14
+
+
+def test_characteristic_partials_by_complex_steps_agree_with_the_assembled_system():
+    """The complex steps of :func:`pfmdyn.composed_kernels.characteristic_partials` against the
+    assembled system's adjugate (the set-back tip's partials, ``gamma``'s at the end too) where the
+    resonances are (``beta`` > 0.3): 1e-9 (the adjugate from the SVD loses a few digits; below, in the
+    quasi-static range, many: there central differences side with the complex steps)."""
+    from pfmdyn.discrepancy.model import characteristic_partials
+
+    wrt = ("beta", "kvv", "kll", "kvl", "mu", "gamma")
+    for args in _levers(4, 8):
+        lever = tuple(np.real(args[2:10])) + (0.0,)
+        beta = np.real(args[0])
+        beta = beta[beta > 0.3][:6]
+        got = characteristic_partials(beta, lever, wrt)
+        _, want = _both(lambda: composed.characteristic_and_jacobian(beta, *lever, wrt=wrt))[1]
+        for name, d in zip(wrt, got):
+            w = want[composed.JACOBIAN_PARAMETERS.index(name)]
+            assert np.max(np.abs(d - w) / np.abs(w)) <= 1e-9, name

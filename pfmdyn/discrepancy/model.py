@@ -43,7 +43,7 @@ from ..generated import damping, formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from .effects import EFFECTS, Chain, Effect, drag, public_name, spring_parameters
 
-__all__ = ["Model", "FitResult", "fit", "free_root", "free_root_and_jacobian"]
+__all__ = ["Model", "FitResult", "fit", "free_root", "free_root_and_jacobian", "characteristic_partials"]
 
 @dataclass(frozen=True)
 class Model:
@@ -229,10 +229,38 @@ def free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, floa
     (1.875104, True)
     """
     b1 = free_root(k, H, L, mu, gamma)
-    _, d = composed.characteristic_and_jacobian(b1, k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0,
-                                                wrt=("beta", "mu", "gamma"))
+    d_beta, d_mu, d_gamma = characteristic_partials(b1, (k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0),
+                                                    ("beta", "mu", "gamma"))
+    return b1, (-float(d_mu / d_beta), -float(d_gamma / d_beta))
+
+
+def characteristic_partials(beta, args, wrt) -> np.ndarray:
+    """Partials of :func:`pfmdyn.composed.characteristic` of an undamped lever (``args``: its parameters
+    after ``beta``) at real ``beta`` w.r.t. the names ``wrt`` (of :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`),
+    one row each.  The tip at the end and ``gamma`` fixed: :func:`pfmdyn.composed.characteristic_and_jacobian`
+    (compiled, the product rule); otherwise compiled complex steps
+    (:func:`pfmdyn.composed_kernels.characteristic_partials`, 100x the assembled system's adjugate, which
+    is the reference with :data:`pfmdyn.composed.KERNELS` off: both agree to 1e-9).
+
+    >>> args = (1.0, 0.0, 0.0, 0.0, 1e-5, 1e-4, 0.0, 0.9, 0.0)
+    >>> d_beta, d_mu = characteristic_partials(np.array([1.9]), args, ("beta", "mu"))
+    >>> composed.KERNELS = False
+    >>> want = composed.characteristic_and_jacobian(np.array([1.9]), *args, wrt=("beta", "mu"))[1]
+    >>> composed.KERNELS = True
+    >>> bool(np.allclose([d_beta, d_mu], [want[0], want[5]], rtol=1e-10, atol=0))
+    True
+    """
     names = composed.JACOBIAN_PARAMETERS
-    return b1, tuple(-float(d[names.index(p)] / d[0]) for p in ("mu", "gamma"))
+    if composed.KERNELS and ("gamma" in wrt or args[7] != 1.0):
+        from ..composed_kernels import characteristic_partials as compiled
+
+        beta = np.asarray(beta, float)
+        at = np.array([-1 if p == "beta" else composed.PARAMETERS.index(p) for p in wrt], np.int64)
+        out = np.empty((len(wrt), beta.size))
+        compiled(beta.reshape(-1), np.array(args, float), at, out)
+        return out.reshape((len(wrt),) + beta.shape)
+    d = composed.characteristic_and_jacobian(beta, *args, wrt=wrt)[1]
+    return np.array([d[names.index(p)] for p in wrt])
 
 
 @dataclass

@@ -14,7 +14,8 @@ from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated
 from ..roots.bracket import grid_roots
-from .model import Model, free_root_and_jacobian
+from .effects import spring_parameters
+from .model import Model, characteristic_partials, free_root_and_jacobian
 
 __all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
 
@@ -37,7 +38,11 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     args = (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
-    roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
+    if composed.KERNELS:       # the same steps compiled (one call, not one per iteration)
+        from ..composed_kernels import characteristic_roots
+        roots = characteristic_roots(grid, np.array([args], float), refine_roots, 1e-13)
+    else:
+        roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.free_resonance, b1)
 
 
@@ -52,7 +57,7 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     [[1.0, 6.267], [1.0, 6.267]]
     """
     m = model.meta
-    args = np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    args = _characteristic_args_many(model, np.asarray(internals, float), contact)
     b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, a[6], a[7]) for a in args])
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
@@ -61,11 +66,35 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
             vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
-        change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0
-        for row, i in enumerate(rows):
-            idx = np.flatnonzero(change[row])
-            lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
-            out[i] = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
+        row, idx = np.nonzero(np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0)
+        lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
+        with np.errstate(all="ignore"):
+            roots = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
+        for i, part in zip(rows, np.split(roots, np.cumsum(np.bincount(row, minlength=len(rows)))[:-1])):
+            out[i] = part
+    return out
+
+
+def _characteristic_args_many(model: Model, internals: np.ndarray, contact: bool) -> np.ndarray:
+    """:func:`characteristic_args` of each row of ``internals`` (rows x parameters); a start grid's
+    rows, alike but for the springs, at once (the same numbers: the springs' coordinates one by one,
+    their rotation elementwise).
+
+    >>> from types import SimpleNamespace
+    >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4), ("tilt",))
+    >>> rows = np.array([[2.0, 1.0, 0.1], [2.5, 1.5, 0.1]])
+    >>> bool((_characteristic_args_many(model, rows, True) == [characteristic_args(model, x, True) for x in rows]).all())
+    True
+    """
+    springs = len(model.springs)
+    if not contact or not len(internals) or np.any(internals[:, springs:] != internals[0, springs:]):
+        return np.array([characteristic_args(model, x, contact) for x in internals], dtype=float)
+    c = model.coords(internals[0])
+    k1, k2 = ([p.value(v) for v in internals[:, j]] if j < springs else [c[p.name]] * len(internals)
+              for j, p in enumerate(spring_parameters(model.meta, False)))
+    kvv, kll, kvl = np.broadcast_arrays(*rotated(np.array(k1), np.array(k2), c["alpha"]))
+    out = np.array([characteristic_args(model, internals[0], contact)] * len(internals), dtype=float)
+    out[:, 1], out[:, 2], out[:, 3] = kvv, kll, kvl
     return out
 
 
@@ -89,8 +118,8 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
 
     Implicit differentiation of the characteristic ``F(beta_n; p) = 0``:
     ``d beta_n / dp = -F_p / F_beta``; ``f_n = f1 (beta_n / beta_1)**2`` also moves with
-    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from the assembled
-    system (:func:`pfmdyn.composed.characteristic_and_jacobian`, one call for the contact roots and
+    the free root ``beta_1`` (tip mass, set-back).  The partials ``F_p`` come from
+    :func:`pfmdyn.discrepancy.model.characteristic_partials` (one call for the contact roots and
     one for the free root); the model's parameters are algebraic functions of the internal ones.
 
     >>> from types import SimpleNamespace
@@ -117,12 +146,11 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
         xs[j] += h
         per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
     # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
-    rows = [i for i, p in enumerate(moved) if np.any(per_unit[i])]
+    rows = np.flatnonzero(per_unit.any(axis=1))
     wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
-        _, d = composed.characteristic_and_jacobian(beta, *a0, wrt=wrt)
-        names = composed.JACOBIAN_PARAMETERS
-        ratio = np.array([d[names.index(moved[i])] / d[0] for i in rows]).reshape(len(rows), len(f))
+        d = characteristic_partials(beta, tuple(a0), wrt)
+        ratio = (d[1:] / d[0]).reshape(len(rows), len(f))
         d_beta = -(ratio.T @ per_unit[rows])
         d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
         out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
