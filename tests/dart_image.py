@@ -65,7 +65,7 @@ def dart_case(seed: int, ny: int = 16, nx: int = 16, *, spot: float = 1.0, k2_ov
     q_lever = rng.uniform(150, 600)
     sigma = rng.uniform(*noise)
     drive_v = rng.uniform(0.5, 3.0)
-    free = FEBeam(k, L, f_bare, H, n_elements=n_elements).free_resonances(1)[0]
+    free = float(FEBeam(k, L, f_bare, H, n_elements=n_elements).free_resonances(1)[0])
     # grains: a Voronoi tessellation of the image
     centres = rng.uniform(0, 1, (grains, 2)) * (ny, nx)
     yy, xx = np.mgrid[0:ny, 0:nx]

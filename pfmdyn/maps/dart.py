@@ -43,7 +43,7 @@ from .store import write_maps
 
 __all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "deflection_signal",
            "lever_inversion", "point_mass_k1", "start_k1",
-           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart"]
+           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "record", "document"]
 
 _NEWTON_STEPS = 30
 _STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
@@ -209,7 +209,8 @@ def _log_ratio(lever, contact, f1, f2, k1, loss):
     t = deflection_signal(lever, contact, np.concatenate([f1, f2]), np.concatenate([k1, k1]),
                           np.concatenate([loss, loss]))
     n = len(f1)
-    return np.log(t[n:] / t[:n]), t[:n]
+    with np.errstate(all="ignore"):
+        return np.log(t[n:] / t[:n]), t[:n]
 
 
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
@@ -246,7 +247,7 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
                         np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
         jacobian[i] = jac
         with np.errstate(all="ignore"):
-            step = np.linalg.solve(jac, -np.stack([r.real, r.imag], -1)[..., None])[..., 0]
+            step = -np.einsum("...ij,...j->...i", _inverse(jac), np.stack([r.real, r.imag], -1))
         bad = ~np.all(np.isfinite(step), -1)
         step[bad] = 0.0
         active[i[bad]] = False
@@ -259,7 +260,7 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
     with np.errstate(all="ignore"):
         drive = s1 / (t1 * drive_amplitude)
         # d(log k1, loss) = J^-1 d(log s2/s1); d log(s2/s1) = e2 - e1: variance sigma**2 in each part
-        inverse = np.linalg.inv(np.where(np.isfinite(jacobian), jacobian, 0.0))
+        inverse = _inverse(jacobian)
         covariance = inverse @ np.swapaxes(inverse, -1, -2)
         # log d = log s1 - log T1(k1, loss): e1 enters directly and through k1, loss
         dt1 = _t1_partials(lever, contact, f1, k1, loss, t1)
@@ -268,6 +269,13 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
     nan = lambda v: np.where(ok, v, np.nan)      # noqa: E731
     return LeverFit(nan(k1), nan(loss), nan(drive), nan(np.sqrt(covariance[:, 0, 0])),
                     nan(np.sqrt(covariance[:, 1, 1])), nan(np.sqrt(drive_variance)), ok)
+
+
+def _inverse(m):
+    """Inverses of 2 x 2 matrices ``(..., 2, 2)``, NaN where singular."""
+    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+    adjugate = np.stack([np.stack([m[..., 1, 1], -m[..., 0, 1]], -1), np.stack([-m[..., 1, 0], m[..., 0, 0]], -1)], -2)
+    return adjugate / det[..., None, None]
 
 
 def _t1_partials(lever, contact, f1, k1, loss, t1):
@@ -372,3 +380,54 @@ def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:
             text = NAMES[base].meaning if base == name else f"standard uncertainty of {NAMES[base].label}"
         described[name] = (values, unit, text)
     write_maps(path, described, attrs)
+
+
+def record(value, stderr=None, unit: str = "1", status: str = "derived", why: str | None = None) -> dict:
+    """One number as a record ``{value, stderr, unit, status[, why]}`` (issue 39's form); a value that
+    is not finite is ``null`` and ``undetermined``.
+
+    >>> record(float("nan"), why="no pixel determined")
+    {'value': None, 'stderr': None, 'unit': '1', 'status': 'undetermined', 'why': 'no pixel determined'}
+    """
+    finite = value is not None and math.isfinite(value)
+    out = {"value": float(value) if finite else None,
+           "stderr": float(stderr) if finite and stderr is not None and math.isfinite(stderr) else None,
+           "unit": unit, "status": status if finite else "undetermined"}
+    if why is not None:
+        out["why"] = why
+    return out
+
+
+def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, k2_policy: str) -> dict:
+    """The JSON summary of a DART image: the lever and settings as records (``lever``, ``settings``:
+    name -> ``(value, status[, why])``), the maps' medians over the determined pixels (each
+    ``stderr`` the median pixel's), the noise, and the pixel counts.
+
+    >>> maps = {"k1": np.array([[100.0, np.nan]]), "k1_stderr": np.array([[2.0, np.nan]]),
+    ...         "determined": np.array([[1, 0]], np.uint8)}
+    >>> doc = document(maps, 0.01, {"spring_constant": (2.0, "file")}, {}, "a.ibw", "k2 left out")
+    >>> doc["results"]["k1"], doc["fit"]["pixels_determined"]
+    ({'value': 100.0, 'stderr': 2.0, 'unit': 'N/m', 'status': 'derived'}, 1)
+    """
+    ok = maps["determined"].astype(bool)
+
+    def median(name):
+        values = maps[name][ok]
+        values = values[np.isfinite(values)]
+        return float(np.median(values)) if values.size else math.nan
+
+    results = {}
+    for name in (*MAPS, *OSCILLATOR_MAPS):
+        if name in maps:
+            results[name] = record(median(name), median(name + "_stderr") if name + "_stderr" in maps else None,
+                                   NAMES[name].unit, "derived",
+                                   None if ok.any() else "no pixel determined")
+    results["channel_noise"] = record(sigma, None, "1", "derived", None if math.isfinite(sigma) else
+                                      "too few neighbouring pixels determined")
+    as_records = lambda given: {name: record(entry[0], None, NAMES[name].unit, *entry[1:])   # noqa: E731
+                                for name, entry in given.items()}
+    return {"schema": "pfmdyn.map.dart/1", "command": "map", "kind": "dart", "source": source,
+            "lever": as_records(lever), "results": results,
+            "fit": {"settings": as_records(settings), "pixels": int(ok.size), "pixels_determined": int(ok.sum()),
+                    "statistic": "median over the determined pixels; stderr the median pixel's"},
+            "notes": [k2_policy]}
