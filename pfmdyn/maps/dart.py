@@ -190,9 +190,11 @@ class LeverFit(NamedTuple):
     converged: np.ndarray
 
 
-def start_k1(lever: Cantilever, contact: Contact, resonance):
+def start_k1(lever: Cantilever, contact: Contact, resonance, points: int = 96):
     """The undamped lever's ``k1`` whose first contact resonance is ``resonance`` (Hz; NaN where
-    none is): :func:`pfmdyn.analysis.contact_resonance.k1_at`, Newton's start.
+    none is), Newton's start: :func:`pfmdyn.analysis.contact_resonance.k1_at` on ``points``
+    frequencies spanning the map's, interpolated in ``log k1`` over ``log f`` (the map's pixels
+    need not pay for the mode count each).
 
     >>> round(float(start_k1(Cantilever(2.0, 75e3, 2e-4), Contact(), 300e3)), 4)
     109.7483
@@ -200,17 +202,28 @@ def start_k1(lever: Cantilever, contact: Contact, resonance):
     resonance = np.asarray(resonance, float)
     ok = np.isfinite(resonance) & (resonance > lever.free_resonance)
     out = np.full(resonance.shape, np.nan)
-    if ok.any():
-        out[ok] = k1_at(betas(lever, resonance[ok]), 1, lever, contact, lever.tip_position)
+    if not ok.any():
+        return out
+    low, high = np.min(resonance[ok]), np.max(resonance[ok])
+    grid = np.geomspace(low, high, points) if high > low else np.array([low])
+    k1 = k1_at(betas(lever, grid), 1, lever, contact, lever.tip_position)
+    known = np.isfinite(k1) & (k1 > 0)
+    if known.sum() == 1:
+        out[ok] = np.where(np.isclose(resonance[ok], grid[known][0]), k1[known][0], np.nan)
+    elif known.any():
+        out[ok] = np.exp(np.interp(np.log(resonance[ok]), np.log(grid[known]), np.log(k1[known]),
+                                   left=np.nan, right=np.nan))
     return out
 
 
-def _log_ratio(lever, contact, f1, f2, k1, loss):
-    t = deflection_signal(lever, contact, np.concatenate([f1, f2]), np.concatenate([k1, k1]),
-                          np.concatenate([loss, loss]))
-    n = len(f1)
+def _log_ratios(lever, contact, f1, f2, points):
+    """``log(T(f2)/T(f1))`` and ``T(f1)`` at each ``(k1, loss)`` of ``points``, in one call of the lever."""
+    n, m = len(f1), len(points)
+    t = deflection_signal(lever, contact, np.tile(np.concatenate([f1, f2]), m),
+                          np.concatenate([np.concatenate([k1, k1]) for k1, _ in points]),
+                          np.concatenate([np.concatenate([loss, loss]) for _, loss in points])).reshape(m, 2, n)
     with np.errstate(all="ignore"):
-        return np.log(t[n:] / t[:n]), t[:n]
+        return [(np.log(t[j, 1] / t[j, 0]), t[j, 0]) for j in range(m)]
 
 
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
@@ -239,8 +252,9 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         i = np.flatnonzero(active & ~converged)
         if not i.size:
             break
-        g, gk, gx = (_log_ratio(lever, contact, f1[i], f2[i], np.exp(a), b)[0]
-                     for a, b in ((log_k1[i], loss[i]), (log_k1[i] + _STEP, loss[i]), (log_k1[i], loss[i] + _STEP)))
+        k1_i = np.exp(log_k1[i])
+        (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1[i], f2[i], [
+            (k1_i, loss[i]), (k1_i * math.exp(_STEP), loss[i]), (k1_i, loss[i] + _STEP)])
         r = g - target[i]
         r = r.real + 1j * np.angle(np.exp(1j * r.imag))         # the phase difference modulo 2 pi
         jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
@@ -256,7 +270,7 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         loss[i] += scale * step[:, 1]
         converged[i] = (np.abs(step[:, 0]) < 1e-10) & (np.abs(step[:, 1]) < 1e-10)
     k1 = np.exp(log_k1)
-    _, t1 = _log_ratio(lever, contact, f1, f2, k1, loss)
+    ((_, t1),) = _log_ratios(lever, contact, f1, f2, [(k1, loss)])
     with np.errstate(all="ignore"):
         drive = s1 / (t1 * drive_amplitude)
         # d(log k1, loss) = J^-1 d(log s2/s1); d log(s2/s1) = e2 - e1: variance sigma**2 in each part
