@@ -15,7 +15,12 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
   policy, tip position, tilt and spot): the ratio ``s2 / s1`` equals the lever's ``T(f2) / T(f1)``,
   which depends on the contact's ``k1`` and ``contact_loss`` only, one complex equation for two
   reals, solved by Newton steps on all pixels at once from the oscillator's start
-  (:func:`lever_inversion`); the drive then follows, ``d_eff = s1 / (T(f1) V)``.
+  (:func:`lever_inversion`, each step halved until it lowers the residual); the drive then follows,
+  ``d_eff = s1 / (T(f1) V)``.  Where the oscillator is undetermined (its Q would be negative: an
+  anti-resonance of the slope at the spot near the resonance) Newton starts from the tracked centre
+  and the resonance and Q reported are the lever's complex pole's (:func:`lever_pole`).  A pixel is
+  undetermined (NaN, ``determined`` 0) where Newton does not converge or the contact would supply
+  energy (its loss below zero by more than three standard errors).
 
 ``T`` is the deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the
 lever): the slope at the laser spot times ``2L/3``, as a static InvOLS reads it.  So ``d_eff > 0``
@@ -42,11 +47,12 @@ from ..names import NAMES
 from .store import write_maps
 
 __all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "deflection_signal",
-           "lever_inversion", "point_mass_k1", "start_k1",
+           "lever_inversion", "lever_pole", "point_mass_k1", "start_k1",
            "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "record", "document"]
 
 _NEWTON_STEPS = 30
 _STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
+_HALVINGS = 8         # a Newton step halved at most this often (then taken anyway)
 
 
 class Oscillator(NamedTuple):
@@ -176,6 +182,39 @@ def deflection_signal(lever: Cantilever, contact: Contact, frequency, k1, loss):
     return np.asarray(slope, complex).reshape(frequency.shape) * (2 * lever.length / 3)
 
 
+def lever_pole(lever: Cantilever, contact: Contact, k1, loss, start, steps: int = 40):
+    """The lever's damped first contact resonance near ``start`` (Hz) as an oscillator's resonance and Q:
+    the complex root ``r`` of the composed characteristic (Newton in complex frequency, all pixels at
+    once) gives ``|r|`` and ``|r| / (2 Im r)`` (an oscillator's own root gives back its ``f0`` and ``Q``).
+    Where the two-frequency oscillator is undetermined (an anti-resonance of the slope at the spot
+    near the resonance), :func:`invert` reports these.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4)           # lossless lever, contact with a dashpot
+    >>> f, q = lever_pole(lever, Contact(), np.array([109.7483]), np.array([0.01]), np.array([3e5]))
+    >>> round(float(f[0]) / 3e5, 3), 10 < float(q[0]) < 1e3
+    (1.0, True)
+    """
+    k1, loss, f = (np.asarray(v, float).ravel() for v in (k1, loss, start))
+    f = f.astype(complex)
+    height = lever.tip_height or 0.0
+
+    def characteristic(frequency):
+        damped, kvv, kll, kvl = _springs(lever, contact, k1, loss, frequency)
+        return composed.characteristic(damped.beta, damped.k, kvv, kll, kvl, height, lever.length, damped.mu,
+                                       lever.tip_position, lever.rho_g)
+
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            h = 1e-7 * f
+            value = characteristic(f)
+            step = value * h / (characteristic(f + h) - value)
+            step = np.where(np.isfinite(step), step, 0.0)
+            f = f - step
+            if np.all(np.abs(step) < 1e-12 * np.abs(f)):
+                break
+        return np.abs(f), np.abs(f) / (2 * f.imag)
+
+
 class LeverFit(NamedTuple):
     """The lever's inversion at each pixel: ``k1`` (N/m), ``contact_loss``, the drive ``d`` (complex,
     m/V), their standard deviations per unit ``sigma`` (``k1`` relative, ``contact_loss`` absolute,
@@ -265,9 +304,21 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         bad = ~np.all(np.isfinite(step), -1)
         step[bad] = 0.0
         active[i[bad]] = False
-        scale = np.minimum(1.0, 0.5 / np.maximum(np.abs(step[:, 0]), 1e-300))     # k1 changes at most e**0.5
-        log_k1[i] += scale * step[:, 0]
-        loss[i] += scale * step[:, 1]
+        # k1 changes at most e**0.5 a step, and a step is halved until it lowers the residual
+        step *= np.minimum(1.0, 0.5 / np.maximum(np.abs(step[:, 0]), 1e-300))[:, None]
+        norm, pending = np.abs(r), np.abs(step).max(-1) > 1e-8
+        for _ in range(_HALVINGS):
+            j = np.flatnonzero(pending)
+            if not j.size:
+                break
+            ((trial, _),) = _log_ratios(lever, contact, f1[i[j]], f2[i[j]],
+                                        [(k1_i[j] * np.exp(step[j, 0]), loss[i[j]] + step[j, 1])])
+            rt = trial - target[i[j]]
+            lower = np.abs(rt.real + 1j * np.angle(np.exp(1j * rt.imag))) < norm[j]
+            pending[j[lower]] = False
+            step[j[~lower]] /= 2
+        log_k1[i] += step[:, 0]
+        loss[i] += step[:, 1]
         converged[i] = (np.abs(step[:, 0]) < 1e-10) & (np.abs(step[:, 1]) < 1e-10)
     k1 = np.exp(log_k1)
     ((_, t1),) = _log_ratios(lever, contact, f1, f2, [(k1, loss)])
@@ -338,11 +389,12 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     f1, f2, s1, s2 = (np.broadcast_to(v, shape).ravel() for v in (f1, f2, s1, s2))
     sho = oscillator(f1, f2, s1, s2)
     spread = oscillator_sensitivity(f1, f2, s1, s2, sho)
-    k1_start = start_k1(lever, contact, sho.resonance)
+    # where the oscillator is undetermined Newton starts from the tracked centre
+    k1_start = start_k1(lever, contact, np.where(sho.determined, sho.resonance, (f1 + f2) / 2))
     # the contact's share of the loss: what the oscillator's 1/Q has beyond the lever's own, at fc
     with np.errstate(all="ignore"):
-        loss_start = np.clip(1 / sho.quality_factor - 1 / lever.quality_factor, 1e-4, None) * \
-            lever.free_resonance / sho.resonance
+        loss_start = np.where(sho.determined, np.clip(1 / sho.quality_factor - 1 / lever.quality_factor, 1e-4, None)
+                              * lever.free_resonance / sho.resonance, 0.01)
     fits = []
     for start in range(0, len(f1), block):
         part = slice(start, start + block)
@@ -357,19 +409,29 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
                                (fit.contact_loss.reshape(shape), fit.loss_sensitivity.reshape(shape)),
                                (np.log(np.abs(fit.drive)).reshape(shape), fit.drive_sensitivity.reshape(shape))])
     u = 0.0 if not math.isfinite(sigma) else sigma
+    # a contact that would supply energy (its loss below zero by more than three standard errors) explains
+    # nothing: phases the lever's resonance cannot give (an upper drive leading the lower one)
+    passive = fit.contact_loss + 3 * u * fit.loss_sensitivity >= 0
+    fit = LeverFit(*(np.where(passive, v, np.nan) for v in fit[:6]), fit.converged & passive)
     d_eff = _signed(fit.drive)
     with np.errstate(all="ignore"):
         k1_pm = point_mass_k1(sho.resonance, lever)
         # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
         d_pm = _signed(sho.drive / drive_amplitude * (lever.spring_constant + k1_pm) / k1_pm)
-        maps = {"contact_resonance": sho.resonance, "contact_resonance_stderr": u * spread.resonance,
-                "contact_quality_factor": sho.quality_factor, "contact_quality_factor_stderr": u * spread.quality_factor,
+        # where the oscillator is undetermined, the lever's own pole (no stderr: the pole is not propagated)
+        pole = ~sho.determined & fit.converged
+        resonance, quality = np.where(fit.converged, sho.resonance, np.nan), np.where(fit.converged, sho.quality_factor, np.nan)
+        if pole.any():
+            resonance[pole], quality[pole] = lever_pole(lever, contact, fit.k1[pole], fit.contact_loss[pole],
+                                                        (f1[pole] + f2[pole]) / 2)
+        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance,
+                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor,
                 "k1": fit.k1, "k1_stderr": u * fit.k1 * fit.k1_sensitivity,
                 "contact_loss": fit.contact_loss, "contact_loss_stderr": u * fit.loss_sensitivity,
                 "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
                 "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / fit.k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
-                "determined": (sho.determined & fit.converged).astype(np.uint8)}
+                "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
 
 
