@@ -140,7 +140,7 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("frequency_width", "df", "Hz", "DART: spacing f2 - f1 of the two drive frequencies about the tracked "
              "centre (DFRTFrequencyWidth)", 0.0, 1e9),
     Quantity("d_eff", "d_eff", "m/V", "effective piezoelectric coefficient: surface displacement along k1 per tip "
-             "volt, signed (> 0: toward the lever in phase with the bias)", -1.0, 1.0, option=False),
+             "volt, signed (> 0: toward the lever in phase with the bias)", -1.0, 1.0, open_low=False),
     Quantity("channel_noise", "sigma", "1", "relative noise of each lock-in signal (circular, complex), estimated "
              "from the image", 0.0, 100.0, open_low=False, option=False),
     Quantity("oscillator_k1", "k1_pm", "N/m", "point-mass contact stiffness k ((f_c/f1)^2 - 1) of the oscillator's "

@@ -131,10 +131,14 @@ def run(args) -> int:
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
     overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
+    dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
         overrides["medium"] = flags.medium_from_args(args)
     from ..io.kinds import CONTACT_MAP_KINDS, file_kind
     from ..maps.contact import contact_map, describe
+    if (args.plot or args.json) and file_kind(args.data) != "asylum":
+        raise UserError("--plot and --json are written for DART images (.ibw); for this map use --png and the "
+                        "summary line")
     if file_kind(args.data) in CONTACT_MAP_KINDS:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
@@ -142,7 +146,10 @@ def run(args) -> int:
         print(describe(contact_map(args.data, args.out, overrides)))
         return 0
     if file_kind(args.data) == "asylum":
-        return _dart(args, overrides)
+        if args.medium:
+            raise UserError(f"{args.data}: a DART image is inverted on the lever in vacuum (or air); a medium's load "
+                            "is not in this inversion")
+        return _dart(args, overrides, dart_settings)
     sho = args.model == "sho"
     source = open_map(args.data, overrides, sho=sho)
     if args.usid_inplace and source.layout != "usid":
@@ -190,7 +197,7 @@ def run(args) -> int:
     return 0
 
 
-def _dart(args, overrides: dict) -> int:
+def _dart(args, overrides: dict, given: dict) -> int:
     """A DART image: the lever from the note and the flags, every pixel inverted both ways, the maps
     written (and drawn, and summarised in JSON)."""
     import os
@@ -207,7 +214,7 @@ def _dart(args, overrides: dict) -> int:
     else:
         found["quality_factor"] = (math.inf, "assumed", "no ThermalQ in the note: the lever lossless")
     settings = {name: (value, "file", "the note") for name, value in image.settings.items() if name in _DART}
-    settings.update({name: (value, "given") for name, value in flags.given(args, _DART).items()})
+    settings.update({name: (value, "given") for name, value in given.items()})
     values = {name: entry[0] for name, entry in found.items()}
     flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
     flags.require({name: entry[0] for name, entry in settings.items()}, _DART, args.data)
