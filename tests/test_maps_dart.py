@@ -57,7 +57,8 @@ def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options)
 
 def test_store_and_json_in_the_shared_conventions(tmp_path):
     case = dart_case(14, 6, 8)
-    _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "dart.png"))
+    _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "dart.png"), "--png")
+    assert (tmp_path / "out" / "d_eff.png").exists() and (tmp_path / "out" / "contact_resonance.png").exists()
     dataset = xarray.open_zarr(tmp_path / "out" / "maps.zarr")
     for name in TOLERANCES:
         for variable in (name, name + "_stderr"):

@@ -237,10 +237,14 @@ def _dart(args, overrides: dict, given: dict) -> int:
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
     summary = document(maps, sigma, found, settings, str(args.data), k2_policy)
-    if args.plot:
+    if args.plot or args.png:
         from ..maps import open_result
-        from ..plots.maps import plot_dart
-        plot_dart(open_result(args.out)).savefig(args.plot, dpi=100)
+        from ..plots.maps import plot_dart, plot_maps
+        result = open_result(args.out)
+        if args.plot:
+            plot_dart(result).savefig(args.plot, dpi=100)
+        for name, figure in (plot_maps(result).items() if args.png else ()):
+            figure.savefig(os.path.join(args.out, f"{name}.png"), dpi=100)
     r = summary["results"]
     value = lambda name: r[name]["value"] if r[name]["value"] is not None else math.nan    # noqa: E731
     print(f"DART: {summary['fit']['pixels_determined']}/{summary['fit']['pixels']} pixels determined, noise "
