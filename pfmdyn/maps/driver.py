@@ -44,6 +44,7 @@ def _blocks(shape, block):
 def _worker_start(parent: int):
     """Worker initialiser: exit with the process that started the pool, and one BLAS thread per
     process (the processes are the parallelism)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)     # Ctrl-C is the parent's (:func:`_pool`)
     exit_with_parent(parent)
     from threadpoolctl import threadpool_limits
     threadpool_limits(1)
@@ -283,15 +284,21 @@ def _pool(workers: int):
     # tqdm's monitor thread (left by an earlier bar) only sleeps; workers never touch its lock
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.name != "tqdm_monitor"]
     method = "fork" if not others and "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    # Ctrl-C is the parent's (one line; the workers exit with it): each worker starts now ignoring SIGINT,
-    # a disposition that survives spawn's exec, so that an interrupt while it imports prints no traceback
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C is the parent's (one line; the workers exit with it), and no worker prints a traceback for it.
+    # Forked workers inherit a handler that only takes note until their initialiser ignores SIGINT; the
+    # parent raises the noted interrupt once its pool exists (ignoring SIGINT here lost it: the map ran on
+    # to exit 0).  Spawned workers must start ignoring it (a disposition that survives exec, where a
+    # handler does not) since they import pfmdyn before their initialiser runs.
+    noted = []
+    previous = signal.signal(signal.SIGINT, (lambda *_: noted.append(1)) if method == "fork" else signal.SIG_IGN)
     try:
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_worker_start,
                                    initargs=(os.getpid(),))
         started = [pool.submit(int) for _ in range(workers)]      # spawn starts one worker per waiting task
     finally:
         signal.signal(signal.SIGINT, previous)
+    if noted:
+        raise KeyboardInterrupt
     for worker in started:
         worker.result()
     return pool
