@@ -9,7 +9,9 @@ imports only names and flags; its ``run`` imports the library).  User errors are
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import io
 import os
 import re
 import signal
@@ -68,6 +70,9 @@ def parser(only: str | None = "") -> tuple[_Parser, dict[str, _Parser]]:
         p.set_defaults(_module=module)
         if only is None or only == name:
             importlib.import_module(module).add_arguments(p)
+            if "--quiet" not in p._option_string_actions:
+                p.add_argument("--quiet", action="store_true", help="print nothing but errors (a document asked "
+                               "with --json - still goes to standard output)")
     return top, parsers
 
 
@@ -104,9 +109,16 @@ def _run(argv: list[str]) -> int:
     if extra:       # refused by the command's parser, so that the line names the command
         parsers[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
     try:
-        from .commands.flags import check_medium
-        check_medium(args)
-        return int(importlib.import_module(args._module).run(args) or 0)
+        from .commands import flags
+        flags.check_medium(args)
+        if args.command == "verify" or not getattr(args, "quiet", False):
+            return int(importlib.import_module(args._module).run(args) or 0)
+        flags.DOCUMENTS.append(sys.stdout)      # --json - still prints its document
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):
+                return int(importlib.import_module(args._module).run(args) or 0)
+        finally:
+            flags.DOCUMENTS.pop()
     except UserError as exc:
         from .commands.flags import option_hint
         print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc, parsers[args.command])}", file=sys.stderr)

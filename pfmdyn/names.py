@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .errors import UserError
 
-__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "canonical", "flag",
+__all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "GROUPS", "canonical", "flag",
            "checked", "markdown_table"]
 
 
@@ -51,6 +51,11 @@ class Quantity:
     def flag(self) -> str:
         """The command-line flag: ``--`` and the name with dashes."""
         return "--" + self.name.replace("_", "-")
+
+
+def _report(name, symbol, unit, meaning) -> Quantity:
+    """A quantity reports hold and no command takes (no range to check: any finite value)."""
+    return Quantity(name, symbol, unit, meaning, -math.inf, math.inf, open_low=False, option=False)
 
 
 QUANTITIES: tuple[Quantity, ...] = (
@@ -152,6 +157,101 @@ QUANTITIES: tuple[Quantity, ...] = (
              label="oscillator d_eff"),
     Quantity("oscillator_d_eff_error", "d_eff,osc/d_eff - 1", "1", "relative difference of the oscillator's d_eff "
              "from the lever's (-2: the sign flipped)", -1e9, 1e9, option=False, label="oscillator d_eff error"),
+    _report("determined_fraction", "determined", "1", "fraction of a DART image's pixels both inversions determine"),
+    # What the reports hold besides the lever and the contact (keys of the JSON documents, pfmdyn.io.results).
+    *(_report(name, symbol, unit, meaning) for name, symbol, unit, meaning in (
+        # spectra and resonances
+        ("resonance", "f_n", "Hz", "a resonance frequency (one per mode: dims mode or row)"),
+        ("measured_resonance", "f_meas", "Hz", "a resonance frequency as measured (a table's row, a fit to data)"),
+        ("predicted_resonance", "f_model", "Hz", "a resonance frequency of the final model"),
+        ("predicted_quality_factor", "Q_model", "1", "a mode's Q the model predicts (all damping together)"),
+        ("baseline_resonance", "f_base", "Hz", "a resonance frequency of the paper's model fitted before any effect"),
+        ("resonance_uncertainty", "u(f)", "Hz", "standard uncertainty of a measured resonance frequency"),
+        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit): "
+         "the half-power width over the frequency, all damping together"),
+        ("quality_factor_uncertainty", "u(Q)/Q", "1", "relative standard uncertainty of a measured Q"),
+        ("resonance_interval", "[f_lo, f_hi]", "Hz", "certified enclosure of a resonance frequency"),
+        ("complete_below", "f_complete", "Hz", "every resonance below this frequency is listed (certified)"),
+        ("condition", "condition", "1", "free or contact: the boundary condition of a mode"),
+        ("mode", "n", "1", "mode number (1: the first)"),
+        ("certified", "certified", "1", "true when interval arithmetic proves the values"),
+        ("vacuum_resonance", "f_vac", "Hz", "first free resonance the lever would have in vacuum"),
+        ("viscous_width", "Delta f", "Hz", "half-power width viscous drag gives every peak"),
+        ("contact_damping", "eta", "N s/m", "contact dashpot beside k1"),
+        ("lever_mass", "m_lever", "kg", "the lever's mass rho S L"),
+        ("added_mass_ratio", "m_add/m_lever", "1", "added mass over the lever's mass"),
+        ("band", "[f_lo, f_hi]", "Hz", "frequency band of the data analysed (or of a misfit)"),
+        ("points", "N", "1", "number of data values (complex values count twice)"),
+        ("frequency_stride", "stride", "1", "one frequency in this many analysed (a long file thinned)"),
+        ("disagrees", "disagrees", "1", "the quantities whose value differs from the instrument's by more than three of "
+         "our standard uncertainties"),
+        # drive sweeps and thermal tunes
+        ("gain", "G", "V/rad", "detector gain: signal per lever slope (in phase, quadrature)"),
+        ("background", "b", "V", "additive background of a sweep (real, imaginary part per coefficient)"),
+        ("amplitude_only", "amplitude only", "1", "true when the sweep holds no phase"),
+        ("phase_reversed", "phase reversed", "1", "true when the instrument's phase runs the other way"),
+        ("detection_scale", "s_det", "1", "measured over predicted thermal spectrum: the detection's calibration"),
+        ("white_floor", "S_white", "m/sqrt(Hz)", "white noise floor of a thermal spectrum"),
+        # calibration
+        ("thermal_spring_constant", "k_th", "N/m", "spring constant from the thermal tune (equipartition)"),
+        ("sader_spring_constant", "k_Sader", "N/m", "spring constant from Sader's hydrodynamic method"),
+        ("relative_uncertainty", "u_r", "1", "a relative standard uncertainty (a budget's share)"),
+        ("uncertainty_source", "source", "1", "what a share of an uncertainty budget comes from"),
+        ("input_name", "input", "1", "an input of a calculation, by its name"),
+        ("consistent", "consistent", "1", "true when the two spring constants agree within their uncertainties"),
+        ("correction_factor", "factor", "1", "the factor an input would need for the methods to agree"),
+        # contact stiffness from contact resonances (pfmdyn stiffness)
+        ("k1_over_k", "k1/k", "1", "contact stiffness over the lever's spring constant"),
+        ("k1_by_mode", "k1_n", "N/m", "k1 from each contact mode alone (dims mode)"),
+        ("reduced_modulus", "E*", "Pa", "reduced modulus of a Hertz contact from k1"),
+        ("residual_beta", "r_beta", "1", "largest residual of the characteristic equations at the solution"),
+        ("unique", "unique", "1", "true when exactly one solution explains the resonances under what was stated"),
+        # maps (pfmdyn map, pfmdyn stiffness on a contact-frequency map)
+        ("pixels", "ny, nx", "1", "the map's size in pixels (dims axis: y, x)"),
+        ("explained_fraction", "explained", "1", "fraction of pixels the model explains (gap at or below the threshold)"),
+        ("at_bound_fraction", "at bound", "1", "fraction of pixels with a parameter at a bound (left unexplained)"),
+        ("median_gap", "median gap", "1", "median of the map's gap"),
+        ("median_k1", "median k1", "N/m", "median of the map's k1"),
+        ("median_nulling_bias", "median V_null", "V", "median of the map's nulling bias"),
+        ("blocks_run", "blocks run", "1", "blocks fitted by this run"),
+        ("blocks_done", "blocks done", "1", "blocks done, this run and earlier ones"),
+        ("blocks_total", "blocks", "1", "blocks of the map"),
+        ("pixels_fitted", "pixels fitted", "1", "pixels fitted by this run"),
+        ("pixels_per_second", "pixels/s", "1/s", "pixels fitted per second of this run"),
+        # modes, spot, roots (pfmdyn resonances, spot, roots)
+        ("frequency", "f", "Hz", "the frequency analysed"),
+        ("damped_resonance", "f_d", "Hz", "a damped mode's frequency (the real part of its complex root)"),
+        ("beta", "beta", "1", "dimensionless wavenumber of the lever at a frequency (beta^4 ~ f)"),
+        ("blind_spot", "x_blind/L", "1", "spot positions where the vertical signal vanishes"),
+        ("blind_spot_interval", "[x_lo, x_hi]/L", "1", "certified enclosure of a blind spot"),
+        ("slope_ratio", "theta_q0/theta_d1", "m^2/N", "slope per surface charge over slope per d1 along the lever"),
+        ("free_sensitivity", "S_free", "1", "optical-lever sensitivity of the free lever at the spot (per tip height)"),
+        ("contact_sensitivity", "S_contact", "1", "optical-lever sensitivity in contact at the spot (per tip height)"),
+        ("calibration_factor", "C", "1", "contact over free sensitivity: the factor a free-lever calibration misses"),
+        ("paper_calibration_factor", "C_paper", "1", "the calibration factor of the paper's lever (spot at the end)"),
+        ("d_eff_error_per_volt", "delta d_eff", "m/V^2", "error of d_eff per volt of V_dc - V_surf from the "
+         "distributed electrostatic load"),
+        ("root", "z_n", "1", "a root of a characteristic equation (decimal string, digits as asked)"),
+        ("root_interval", "[z_lo, z_hi]", "1", "certified enclosure of a root (decimal strings)"),
+        # the discrepancy model's fit
+        ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
+        ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),
+        ("gap_after", "gap_1", "1", "gap of the final model"),
+        ("gap_without", "gap_-e", "1", "gap of the final model with one effect left out"),
+        ("explained_share", "share", "1", "share of the baseline's misfit the named effects explain"),
+        ("effect_share", "share_e", "1", "share of the explained misfit that an effect's own removal loses"),
+        ("share_of_rest", "share_e|rest", "1", "share of the misfit an effect explains after the others"),
+        ("chi_square", "chi2", "1", "sum of squared residuals over their noise"),
+        ("bic", "BIC", "1", "Bayesian information criterion, chi2 + k ln n (noise known)"),
+        ("delta_bic", "Delta BIC", "1", "BIC gained by adding an effect"),
+        ("fitted_parameters", "k", "1", "number of parameters fitted"),
+        ("degrees_of_freedom", "dof", "1", "data values less fitted parameters"),
+        ("noise", "sigma", "data", "noise of the data in the data's own unit (RMS, estimated from the data)"),
+        ("largest_residual", "max |r|", "1", "the largest residual over the largest measured value"),
+        ("effect", "effect", "1", "an effect's name (missing_effects' vocabulary)"),
+        ("damping_mechanisms", "damping", "1", "the damping mechanisms the final model holds"),
+        ("equivalent_damping_mechanisms", "damping'", "1", "other damping mechanisms that fit the data as well"),
+    )),
 )
 
 NAMES: dict[str, Quantity] = {q.name: q for q in QUANTITIES}
@@ -169,6 +269,24 @@ MEASURED = ("free_quality_factor", "contact_resonance", "contact_quality_factor"
 """What an instrument file may hold besides the lever: measured resonances, their Q, the drive settings."""
 
 _ALIASES = {alias.lower(): q.name for q in QUANTITIES for alias in (q.name, *q.aliases)}
+
+
+GROUPS = {
+    "baseline": "the paper's model fitted before any effect (its parameters and fit)",
+    "steps": "the effects added (or removed) one at a time, in order: what each changed",
+    "reference": "the fit of the reference measurement (the sweep before the change)",
+    "instrument": "what the instrument's own fit recorded in the file, beside our value",
+    "medium": "the first free mode's Q the fluid predicts beside the fitted damping",
+    "unexplained": "what the final model leaves: the band holding most of the misfit",
+    "thermal": "the spring constant from the thermal tune, with its uncertainty budget",
+    "sader": "the spring constant from Sader's method, with its uncertainty budget",
+    "budget": "relative standard uncertainties by source",
+    "reconcile": "what would make the two methods agree: the input and its factor",
+    "solutions": "every solution of the inverse problem (the first is the result)",
+    "free": "free modes (the lever not in contact)",
+    "contact": "contact modes (the tip on the sample)",
+}
+"""The names of groups of records in the JSON documents (every other key is a quantity's name)."""
 
 
 def canonical(key: str) -> str | None:
@@ -220,6 +338,6 @@ def markdown_table() -> str:
     '| `spring_constant` | `--spring-constant` | N/m | lever spring constant 3 EI / L^3 |'
     """
     rows = ["| name (Python, JSON, file, Zarr) | flag | unit | meaning |", "|---|---|---|---|"]
-    rows += [f"| `{q.name}` | {f'`{q.flag}`' if q.option else '(files)'} | {q.unit} | {q.meaning} |"
-             for q in QUANTITIES]
+    rows += [f"| `{q.name}` | {f'`{q.flag}`' if q.option else '(files)' if q.low > -math.inf else '(reports)'} | "
+             f"{q.unit} | {q.meaning} |" for q in QUANTITIES]
     return "\n".join(rows)

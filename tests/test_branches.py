@@ -52,7 +52,7 @@ def test_crossover_is_midway_and_moves_up_with_mode():
 
 def test_cli_writes_png_and_csv(tmp_path, capsys):
     png, table = tmp_path / "b.png", tmp_path / "b.csv"
-    assert cli.main(["branches", "torsion-elastic", "--out", str(png), "--csv", str(table), "--points", "40"]) == 0
+    assert cli.main(["branches", "torsion-elastic", "--plot", str(png), "--csv", str(table), "--points", "40"]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     rows = list(csv.reader(table.open()))
     assert rows[0][0] == "k2t_HL" and len(rows) == 41 and len(rows[0]) == 11

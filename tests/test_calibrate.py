@@ -132,14 +132,17 @@ def test_sader_on_the_real_tune_is_the_textbook_formula(tmp_path, capsys):
     assert main(["calibrate", str(REAL / "thermal.nid"), "--length", "225e-6", "--width", "40e-6",
                  "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["instrument"]["spring_constant"] == 27.13 and doc["instrument"]["temperature"] == pytest.approx(313.15)
-    fitted = _textbook_sader(air.density, air.viscosity, 40e-6, 225e-6, doc["free_resonance"], doc["free_quality_factor"])
-    assert doc["sader"]["spring_constant"] == pytest.approx(fitted, rel=1e-3)
+    instrument = doc["fit"]["instrument"]
+    assert instrument["spring_constant"]["value"] == 27.13 and instrument["temperature"]["value"] == pytest.approx(313.15)
+    results = doc["results"]
+    fitted = _textbook_sader(air.density, air.viscosity, 40e-6, 225e-6, results["free_resonance"]["value"],
+                             results["free_quality_factor"]["value"])
+    assert results["sader_spring_constant"]["value"] == pytest.approx(fitted, rel=1e-3)
     text = capsys.readouterr().out
-    assert isinstance(doc["consistent"], bool) and "instrument: k = 27.13 N/m" in text
+    assert isinstance(results["consistent"]["value"], bool) and "instrument: k = 27.13 N/m" in text
     # what the tune's header gave, and its resonance and Q set beside ours
-    assert doc["from_file"] == ["free_quality_factor", "free_resonance", "medium", "spring_constant", "temperature"]
-    assert {c["name"] for c in doc["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert [name for name, r in doc["lever"].items() if r["status"] == "file"] == ["temperature", "medium"]
+    assert {"free_resonance", "free_quality_factor", "spring_constant"} <= set(instrument)
     assert "from the file: free_quality_factor, free_resonance, medium, spring_constant, temperature" in text
 
 
@@ -227,5 +230,5 @@ def test_what_came_from_the_file_is_listed(tmp_path, capsys):
     out = tmp_path / "c.json"
     assert main(["calibrate", str(path), "--medium", "air", "--temperature", "300", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["from_file"] == [] and doc["instrument_comparison"] == []
+    assert not any(r["status"] == "file" for r in doc["lever"].values()) and doc["fit"]["instrument"] == {}
     assert "from the file: the spectrum only" in capsys.readouterr().out

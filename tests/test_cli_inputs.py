@@ -46,10 +46,10 @@ def _argv(tmp: Path, command: str) -> dict:
         "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", json_out, "--plot", png],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--json", json_out],
-        "diagram": ["diagram", "--out", png, "--frequency-points", "20", "--bias-points", "5"],
+        "diagram": ["diagram", "--plot", png, "--frequency-points", "20", "--bias-points", "5"],
         "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp / "dec")],
-        "roots": ["roots", "free", "--n", "2", "--json", json_out],
-        "branches": ["branches", "indentation", "--out", png, "--points", "20", "--modes", "1"],
+        "roots": ["roots", "free", "--modes", "2", "--json", json_out],
+        "branches": ["branches", "indentation", "--plot", png, "--points", "20", "--modes", "1"],
         "inspect": ["inspect", str(data), "--json", json_out],
         "discrepancy": ["discrepancy", str(data), "--json", json_out],
         "calibrate": ["calibrate", str(tmp / "tune.csv"), "--json", json_out],   # the flags are checked first
@@ -118,15 +118,15 @@ REFUSED = [
     ("spot", ["--frequency", "nan"], "--frequency"),
     ("diagram", ["--fmin", "0"], "--fmin"),
     ("diagram", ["--frequency-points", "100000000"], "--frequency-points"),   # was a MemoryError or a swap
-    ("diagram", ["--out", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
+    ("diagram", ["--plot", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
     ("diagram", ["--csv", "{tmp}/data.csv/out.csv"], "cannot write"),
     ("deconvolve", ["--out", "{tmp}/data.csv/sub"], "not a directory"),        # was a NotADirectoryError
     ("deconvolve", ["--surface-potential", "nan"], "--surface-potential"),
     ("deconvolve", [*PROBE, "--spot-position", "0"], "--spot-position"),
     ("deconvolve", ["--spring-constant", "2"], "--free-resonance"),
     ("roots", ["--digits", "5000"], "--digits"),                                 # was a ValueError traceback
-    ("roots", ["--n", "0"], "--n"),
-    ("roots", ["--n", "100000"], "--n"),                                         # was a run of hours
+    ("roots", ["--modes", "0"], "--modes"),
+    ("roots", ["--modes", "100000"], "--modes"),                                         # was a run of hours
     ("branches", ["--points", "1"], "--points"),
     ("branches", ["--modes", "51"], "--modes"),
     ("branches", ["--out", "{tmp}/out.xyz"], "cannot write"),
@@ -190,8 +190,8 @@ def test_valid_extremes_succeed(tmp_path, capsys):
     assert _run(["spot", *PROBE, "--frequency", "1e5", "--spot-position", "1", "--k1", "2e4"]) == 0
     assert _run(["resonances", "--spring-constant", "0.05", "--free-resonance", "1.3e4", "--length", "5e-4",
                  "--k1", "500", "--tip-height", "1e-5", "--tilt", "15", "--poisson", "0.3", "--json", str(out)]) == 0
-    document = json.loads(out.read_text())
-    assert all(f is not None and f > 0 for f in document["free_hz"] + document["contact_hz"])
+    modes = json.loads(out.read_text())["results"]
+    assert all(f is not None and f > 0 for f in modes["free"]["resonance"]["value"] + modes["contact"]["resonance"]["value"])
     capsys.readouterr()
 
 
@@ -212,11 +212,12 @@ def test_resonances_json_over_real_ranges(k, length, f1, k1_over_k, tmp_path, ca
     assert _run(["resonances", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", str(length),
                  "--k1", str(k * k1_over_k), "--tip-height", "1e-5", "--k2-over-k1", "0.8", "--tilt", "12",
                  "--tip-position", "0.9", "--json", str(out)]) == 0
-    document = json.loads(out.read_text())
-    for key in ("free_hz", "contact_hz", "free_complete_below_hz", "contact_complete_below_hz"):
-        assert None not in _numbers(document[key]), key
+    modes = json.loads(out.read_text())["results"]
+    for condition in ("free", "contact"):
+        for key in ("resonance", "complete_below"):
+            assert None not in _numbers(modes[condition][key]["value"]), (condition, key)
     # contact modes lie above the free ones of the same order (k1 only stiffens)
-    assert all(c > f for c, f in zip(document["contact_hz"], document["free_hz"]))
+    assert all(c > f for c, f in zip(modes["contact"]["resonance"]["value"], modes["free"]["resonance"]["value"]))
     capsys.readouterr()
 
 
@@ -240,8 +241,10 @@ def test_viscous_drag_overdamped_modes_are_undetermined(g, tmp_path, capsys):
     out = tmp_path / "r.json"
     assert _run(["resonances", *LEVER, "--viscous-loss", str(g), "--json", str(out)]) == 0
     document = json.loads(out.read_text())
-    for hz, damped_hz, q, why in zip(document["free_hz"], document["free_damped_hz"], document["free_q"],
-                                     document["free_undetermined"]):
+    free = {key: record["value"] for key, record in document["results"]["free"].items()}
+    for n, (hz, damped_hz, q) in enumerate(zip(free["resonance"], free["damped_resonance"],
+                                               free["predicted_quality_factor"]), 1):
+        why = " ".join(note for note in document["notes"] if note.startswith(f"free mode {n}: "))
         rn = hz / 7e4
         if g < 1.9 * rn:
             exact = (1j * g + cmath.sqrt(4 * rn ** 2 - g ** 2)) / 2

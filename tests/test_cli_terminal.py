@@ -161,7 +161,7 @@ MAIN_PATHS = {
                   "9e5", "--mode", "1", "--mode", "2", "--tip-position", "fit", "--contact-uncertainty", "100"],
     "diagram": ["diagram", "--out", "d.png", "--frequency-points", "40", "--bias-points", "9", "--csv", "d.csv"],
     "deconvolve": ["deconvolve", "bias.csv", "--surface-potential", "0", "--out", "dec", *PROBE],
-    "roots": ["roots", "elastic", "--n", "3", "--k1-over-k", "10", "--k2-ratio", "0.1"],
+    "roots": ["roots", "elastic", "--modes", "3", "--k1-over-k", "10", "--k2-ratio", "0.1"],
     "branches 50 modes": ["branches", "indentation", "--out", "b.png", "--points", "20", "--modes", "50"],
     "inspect": ["inspect", "before.txt"],
     "discrepancy resonances": ["discrepancy", "modes.csv"],
@@ -171,7 +171,7 @@ MAIN_PATHS = {
     "calibrate stiff lever": ["calibrate", "stiff_tune.csv", "--length", "225e-6", "--width", "40e-6",
                               "--temperature", "300", "--plot", "c.png"],
     "calibrate soft lever": ["calibrate", "soft_tune.csv", "--length", "2e-4", "--width", "3e-5"],
-    "map": ["map", "be.h5", "--out", "beam", "--scheduler", "sync", "--no-progress", "--png"],
+    "map": ["map", "be.h5", "--out", "beam", "--scheduler", "sync", "--no-progress", "--plot", "beam"],
     "map sho": ["map", "be.h5", "--out", "sho", "--model", "sho", "--scheduler", "sync", "--no-progress"],
 }
 

@@ -145,7 +145,7 @@ def test_cli_writes_png_and_csv(tmp_path):
     code = cli.main(["diagram", "--cantilever", "custom", "--spring-constant", "3", "--length", "225e-6",
                      "--width", "30e-6", "--thickness", "3e-6", "--kind", "rgb", "--local-force", "14e-9",
                      "--log-frequency",
-                     "--frequency-points", "30", "--bias-points", "11", "--out", str(png), "--csv", str(table)])
+                     "--frequency-points", "30", "--bias-points", "11", "--plot", str(png), "--csv", str(table)])
     assert code == 0 and png.stat().st_size > 0
     with open(table) as handle:
         rows = list(csv.DictReader(handle))
@@ -154,7 +154,7 @@ def test_cli_writes_png_and_csv(tmp_path):
                              "local_share", "nonlocal_share", "piezo_share"]
     for kind in ["amplitude", "phase", "dominance"]:
         assert cli.main(["diagram", "--kind", kind, "--frequency-points", "20", "--bias-points", "9",
-                         "--out", str(tmp_path / f"{kind}.png")]) == 0
+                         "--plot", str(tmp_path / f"{kind}.png")]) == 0
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -173,14 +173,14 @@ def test_cli_writes_png_and_csv(tmp_path):
     (["--k1", "-5"], "k1"),
 ])
 def test_cli_errors_are_one_line(tmp_path, capsys, argv, message):
-    assert cli.main(["diagram", *argv, "--out", str(tmp_path / "x.png")]) == 2
+    assert cli.main(["diagram", *argv, "--plot", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
     assert not (tmp_path / "x.png").exists()
 
 
 def test_cli_rejects_non_png_output(tmp_path, capsys):
-    assert cli.main(["diagram", "--out", str(tmp_path / "x.jpg")]) == 2
+    assert cli.main(["diagram", "--plot", str(tmp_path / "x.jpg")]) == 2
     assert ".png" in capsys.readouterr().err
 
 
@@ -245,7 +245,7 @@ def test_spot_at_the_end_is_the_paper_diagram(tmp_path):
     tables = []
     for extra in ([], ["--spot-position", "1"], ["--spot-position", "0.6"]):
         table = tmp_path / f"d{len(tables)}.csv"
-        assert cli.main([*common, *extra, "--out", str(tmp_path / "d.png"), "--csv", str(table)]) == 0
+        assert cli.main([*common, *extra, "--plot", str(tmp_path / "d.png"), "--csv", str(table)]) == 0
         tables.append(table.read_text())
     assert tables[0] == tables[1] and tables[0] != tables[2]
     lever = table1_cantilever("B")
@@ -267,8 +267,8 @@ def test_spot_at_quasi_static_frequencies_matches_the_static_beam(tmp_path, caps
         assert abs(got[0] / ref - 1) < 1e-9, (drive, got[0], ref)
     with pytest.raises(ValueError, match="paper's probe"):
         low_frequency_crossover_bias(lever, width=WIDTH)
-    assert cli.main(["diagram", "--spot-position", "0.7", "--fmin", "10", "--out", str(tmp_path / "x.png")]) == 0
-    assert cli.main(["diagram", "--spot-position", "1.5", "--out", str(tmp_path / "x.png")]) == 2
+    assert cli.main(["diagram", "--spot-position", "0.7", "--fmin", "10", "--plot", str(tmp_path / "x.png")]) == 0
+    assert cli.main(["diagram", "--spot-position", "1.5", "--plot", str(tmp_path / "x.png")]) == 2
     assert "--spot-position: spot_position must be in" in capsys.readouterr().err
 
 

@@ -111,9 +111,9 @@ def test_cli_hidden_background(tmp_path):
     assert cli.main(["discrepancy", str(data), "--json", str(out), "--plot", str(png)]) == 0
     report = json.loads(out.read_text())
     assert report["missing_effects"] == ["background"]
-    assert report["gap_before"] > 5 and report["gap_after"] < 1.3
-    step = report["steps"][0]
-    assert step["criterion_gain"] > 10 and set(step["parameters"]) == {"k1", "k2"}
+    assert report["fit"]["gap_before"]["value"] > 5 and report["fit"]["gap_after"]["value"] < 1.3
+    step = report["fit"]["steps"][0]
+    assert step["delta_bic"]["value"] > 10 and set(step) - {"effect", "gap_before", "gap_after", "delta_bic"} == {"k1", "k2"}
     assert png.stat().st_size > 1000
 
 
@@ -219,11 +219,12 @@ def test_cli_free_modes_only(tmp_path, capsys):
     out, png = tmp_path / "o.json", tmp_path / "o.png"
     assert cli.main(["discrepancy", str(data), "--json", str(out), "--plot", str(png)]) == 0
     report = json.loads(out.read_text())
-    assert report["missing_effects"] == ["tip_mass"] and report["gap_after"] < 1.0
+    assert report["missing_effects"] == ["tip_mass"] and report["fit"]["gap_after"]["value"] < 1.0
     for spring in ("k1", "k2"):
-        assert report["parameters"][spring] == {"value": None, "stderr": None, "unit": "N/m", "determined": False,
-                                                "note": report["spring_rule"][spring]}
-    assert 0.02 < report["parameters"]["tip_mass_ratio"]["value"] < 0.1
+        record = report["results"][spring]
+        assert record == {"value": None, "stderr": None, "unit": "N/m", "status": "undetermined", "why": record["why"]}
+        assert f"{spring}: {record['why']}" in report["notes"]
+    assert 0.02 < report["results"]["tip_mass_ratio"]["value"] < 0.1
     assert "k1 not determined" in capsys.readouterr().out and png.stat().st_size > 1000
 
 
@@ -247,8 +248,8 @@ def test_stiff_long_lever_table(tmp_path, capsys):
     path.write_text(_noisy_resonances(beam, 3, sigma=5.0))
     assert cli.main(["discrepancy", str(path), "--json", str(tmp_path / "o.json")]) == 0
     report = json.loads((tmp_path / "o.json").read_text())
-    assert report["missing_effects"] == [] and report["gap_after"] < 1.5
-    assert abs(report["parameters"]["k1"]["value"] / 7800 - 1) < 0.01
+    assert report["missing_effects"] == [] and report["fit"]["gap_after"]["value"] < 1.5
+    assert abs(report["results"]["k1"]["value"] / 7800 - 1) < 0.01
 
 
 def test_overrides_order_and_quality_factors(tmp_path):

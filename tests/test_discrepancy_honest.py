@@ -48,15 +48,16 @@ def test_real_files_state_dof_and_name_no_untestable_mechanism(tmp_path, capsys,
     PMN28Pt0000 records no width, and none is asked for."""
     report = _run(tmp_path, path, "--tip-height", "1e-5", "--length", "2.4e-4")
     summary = capsys.readouterr().out
-    n_q = sum(q is not None for q in report.get("measured_quality_factor", []))
-    assert report["dof"] == report["data_values"] - report["fitted_parameters"] >= 0
-    assert f"{report['data_values']} data values, {report['fitted_parameters']} fitted parameters" in summary
+    results, fit = report["results"], {k: v["value"] for k, v in report["fit"].items() if "value" in v}
+    n_q = sum(q is not None for q in results.get("measured_quality_factor", {}).get("value", []))
+    assert fit["degrees_of_freedom"] == fit["points"] - fit["fitted_parameters"] >= 0
+    assert f"{fit['points']} data values, {fit['fitted_parameters']} fitted parameters" in summary
     # One mechanism is tested by the undamped baseline (1/Q = 0); a second needs a Q left over.
-    assert len(report["damping_mechanisms"]) <= max(n_q - 1, 1)
+    assert len(results["damping_mechanisms"]["value"]) <= max(n_q - 1, 1)
     named = report["missing_effects"]
-    assert report["dof"] >= 1 or named in ([], ["damping"]), (named, report["dof"])
+    assert fit["degrees_of_freedom"] >= 1 or named in ([], ["damping"]), (named, fit["degrees_of_freedom"])
     if n_q == 2:
-        assert "a second damping mechanism" in report["untestable_effects"]["damping"]
+        assert any(n.startswith("damping: ") and "a second damping mechanism" in n for n in report["notes"])
 
 
 def test_second_mechanism_untestable_from_two_q_values(tmp_path):
@@ -69,10 +70,10 @@ def test_second_mechanism_untestable_from_two_q_values(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text(text)        # no width: not needed
     report = _run(tmp_path, path)
-    assert report["data_values"] == 3 and len(report["damping_mechanisms"]) == 1
-    assert report["missing_effects"] == ["damping"] and report["unexplained"] is not None
-    assert "not testable with these data" in report["untestable_effects"]["damping"]
-    assert "tip_setback" in report["untestable_effects"]
+    assert report["fit"]["points"]["value"] == 3 and len(report["results"]["damping_mechanisms"]["value"]) == 1
+    assert report["missing_effects"] == ["damping"] and "unexplained" in report["fit"]
+    assert any(n.startswith("damping: not testable with these data") for n in report["notes"])
+    assert any(n.startswith("tip_setback: ") for n in report["notes"])
 
 
 def test_implausible_effects_are_not_findings():

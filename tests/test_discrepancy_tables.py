@@ -111,7 +111,8 @@ def test_asylum_image_through_read_and_cli(tmp_path, capsys):
     out = tmp_path / "o.json"
     assert cli.main(["discrepancy", str(path), "--json", str(out), "--tip-height", "1e-5"]) == 0
     report = json.loads(out.read_text())
-    assert report["parameters"]["k1"]["determined"] and report["parameters"]["k2"]["value"] is None
+    assert report["results"]["k1"]["status"] == "fitted" and report["results"]["k2"]["value"] is None
+    assert report["results"]["k2"]["why"].startswith("tied to k1")
     summary = capsys.readouterr().out
     assert "k2 not determined by these data: tied to k1" in summary
     # Without --json the summary alone; with '--json -' the report follows it on stdout.

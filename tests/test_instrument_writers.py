@@ -303,8 +303,9 @@ def test_nsid_images_with_asylum_metadata(tmp_path):
     out = tmp_path / "r.json"
     assert cli.main(["inspect", str(path), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["fields"]["contact_resonance"] == {"value": 331250.0, "unit": "Hz"}
-    assert doc["channels"][0]["scale"] == 1e-9
+    assert doc["results"]["contact_resonance"] == {"value": 331250.0, "stderr": None, "unit": "Hz", "status": "file",
+                                                   "why": "read from the input file"}
+    assert any(n.startswith("channel ") and "stored values x 1e-09" in n for n in doc["notes"])
 
 
 def test_nsid_spectrum_in_khz_and_pm(tmp_path):

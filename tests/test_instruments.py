@@ -108,8 +108,9 @@ def test_inspect_exits_0_on_every_real_file_and_writes_numbers(tmp_path):
         out = tmp_path / (path.name + ".json")
         assert cli.main(["inspect", str(path), "--json", str(out)]) == 0, path
         doc = json.loads(out.read_text())
-        assert all(isinstance(v["value"], float) for v in doc["fields"].values())
-        assert set(doc["missing"]).isdisjoint(doc["fields"])
+        assert all(isinstance(v["value"], float) and v["status"] == "file" for v in doc["results"].values())
+        missing = [n for n in doc["notes"] if n.startswith("not in the file: ")]
+        assert not missing or set(missing[0][len("not in the file: "):].split(", ")).isdisjoint(doc["results"])
 
 
 def write_nsid(path, metadata: dict, group="Measurement_000/Channel_000"):
@@ -173,7 +174,8 @@ def test_image_without_spring_constant(tmp_path, capsys):
     # Given on the command line, the same file is fine (ratio 5.83 needs a lateral spring: Mindlin's by default).
     assert cli.main(["stiffness", str(path), "--spring-constant", "2", "--length", "2e-4", "--tip-height", "1e-5",
                      "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["inputs"]["spring_constant"] == 2.0
+    assert json.loads(out.read_text())["lever"]["spring_constant"] == {"value": 2.0, "stderr": None, "unit": "N/m",
+                                                                      "status": "given"}
 
 
 def test_usid_band_excitation_is_a_spectrum(tmp_path):

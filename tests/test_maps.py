@@ -65,7 +65,7 @@ def _maps(out):
 def local_run(synthetic, tmp_path_factory):
     path, _ = synthetic
     out = tmp_path_factory.mktemp("local")
-    assert main(["map", str(path), "--out", str(out), "--no-progress", "--png"]) == 0
+    assert main(["map", str(path), "--out", str(out), "--no-progress", "--plot", str(out)]) == 0
     assert (out / "k1.png").stat().st_size > 1000
     return out
 

@@ -20,11 +20,11 @@ from dart_image import dart_case, write_ibw  # noqa: E402
 from igor_files import asylum_note, igor_wave  # noqa: E402
 from pfmdyn.cli import main  # noqa: E402
 from pfmdyn.maps import open_result  # noqa: E402
+from schema_check import validate  # noqa: E402
 
 TOLERANCES = {"contact_resonance": 2e-4, "contact_quality_factor": 0.05, "k1": 0.03, "d_eff": 0.05,
               "contact_loss": 0.10}
 """Relative error allowed on 95 % of the pixels (issue 40)."""
-STATUSES = {"fitted", "derived", "given", "file", "assumed", "held", "tied", "undetermined", "unbounded"}
 
 
 def _map(case, tmp_path, *extra, order=None):
@@ -47,7 +47,7 @@ def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options)
         assert np.mean(error < tolerance) >= 0.95, (name, np.nanmax(error))
     assert np.mean(np.sign(maps["d_eff"].values) == np.sign(case.truth["d_eff"])) >= 0.99
     # the noise the image shows is the noise put in (within the scatter of a 12 x 16 estimate)
-    assert doc["results"]["channel_noise"]["value"] == pytest.approx(case.settings["noise"], rel=0.3)
+    assert doc["fit"]["channel_noise"]["value"] == pytest.approx(case.settings["noise"], rel=0.3)
     # the standard errors say how far the maps are from the truth
     for name in ("k1", "contact_loss", "d_eff", "contact_quality_factor"):
         z = (maps[name].values - case.truth[name]) / maps[name + "_stderr"].values
@@ -57,19 +57,17 @@ def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options)
 
 def test_store_and_json_in_the_shared_conventions(tmp_path):
     case = dart_case(14, 6, 8)
-    _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "dart.png"), "--png")
-    assert (tmp_path / "out" / "d_eff.png").exists() and (tmp_path / "out" / "contact_resonance.png").exists()
+    _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "figures"))
+    for name in ("dart", "d_eff", "contact_resonance", "k1"):
+        assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 1000, name
     dataset = xarray.open_zarr(tmp_path / "out" / "maps.zarr")
     for name in TOLERANCES:
         for variable in (name, name + "_stderr"):
             assert dataset[variable].dims == ("y", "x") and dataset[variable].attrs["units"], variable
             assert dataset[variable].attrs["long_name"] != variable
     assert dataset["k1"].attrs["units"] == "N/m" and dataset["d_eff"].attrs["units"] == "m/V"
-    assert (tmp_path / "dart.png").stat().st_size > 1000
-    records = [*doc["lever"].values(), *doc["results"].values(), *doc["fit"]["settings"].values()]
-    for entry in records:
-        assert set(entry) >= {"value", "stderr", "unit", "status"} and entry["status"] in STATUSES
-        assert ("why" in entry) == (entry["status"] not in ("fitted", "derived", "given")), entry
+    validate(doc)
+    assert doc["fit"]["frequency_width"]["status"] == "file" and doc["fit"]["determined_fraction"]["value"] == 1.0
     assert doc["lever"]["spring_constant"]["status"] == "file" and doc["lever"]["tip_height"]["status"] == "given"
     assert doc["lever"]["quality_factor"]["value"] == pytest.approx(case.lever["quality_factor"])
 
@@ -103,7 +101,7 @@ def test_undetermined_pixels_are_flagged_not_guessed(tmp_path):
     case.channels["Phase2Retrace"][1, 2] = case.channels["Phase1Retrace"][1, 2] - 40.0
     maps, doc = _map(case, tmp_path)
     assert maps["determined"].values[1, 2] == 0 and np.isnan(maps["k1"].values[1, 2])
-    assert maps["determined"].values.sum() == 23 and doc["fit"]["pixels_determined"] == 23
+    assert maps["determined"].values.sum() == 23 and doc["fit"]["determined_fraction"]["value"] == 23 / 24
 
 
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):

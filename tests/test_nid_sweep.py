@@ -61,7 +61,7 @@ def test_easyscan2_sweep_is_read_from_its_layout(tmp_path):
     np.testing.assert_allclose(values, a, atol=RANGE_V / 2**16)
     out = tmp_path / "inspect.json"
     assert cli.main(["inspect", str(path), "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["fields"]["free_resonance"]["value"] == 179405.0
+    assert json.loads(out.read_text())["results"]["free_resonance"]["value"] == 179405.0
 
 
 def silicon_lever(rng):
@@ -91,13 +91,14 @@ def test_nid_sweep_is_fitted_as_a_spectrum(tmp_path, capsys, seed):
     fit = json.loads(out.read_text())
     # the header's "Freq. peak" is a peak: beside our amplitude peak, not our resonance
     assert "in air" in text and (f"instrument: amplitude peak {float(f'{f0 / 1e3:.6g}') * 1e3:,.0f} Hz "
-                                 f"(ours {fit['peak_hz']:,.0f} Hz)").replace(",", " ") in text
-    assert fit["from_file"] == ["amplitude_peak", "medium"] and fit["instrument_fit"].keys() == {"amplitude_peak"}
+                                 f"(ours {fit['results']['amplitude_peak']['value']:,.0f} Hz)").replace(",", " ") in text
+    assert fit["lever"]["medium"]["status"] == "file" and set(fit["fit"]["instrument"]) == {"amplitude_peak", "disagrees"}
     # the amplitude of a base-driven oscillator peaks at f0 / sqrt(1 - 1 / (2 q**2))
     # (a broad peak is placed less sharply: the beam's fluid damping grows with frequency, an oscillator's does not)
-    assert fit["peak_hz"] == pytest.approx(f0 / np.sqrt(1 - 0.5 / q**2), rel=max(2e-4, 0.05 / q))
-    assert fit["quality_factor"] == pytest.approx(q, rel=0.1)
-    assert fit["gap"] < 2 and fit["unexplained"] is None
+    results = fit["results"]
+    assert results["amplitude_peak"]["value"] == pytest.approx(f0 / np.sqrt(1 - 0.5 / q**2), rel=max(2e-4, 0.05 / q))
+    assert results["free_quality_factor"]["value"] == pytest.approx(q, rel=0.1)
+    assert fit["fit"]["gap"]["value"] < 2 and "unexplained" not in fit["fit"]
 
 
 @pytest.mark.parametrize("change, problem", [
@@ -139,5 +140,6 @@ def test_nid_sweeps_compared_with_a_figure(tmp_path, capsys):
                      "--json", str(out)]) == 0
     assert figure.read_bytes()[:4] == b"\x89PNG"
     result = json.loads(out.read_text())
-    assert result["effect"] == "added_mass" and result["parameters"]["added_mass"]["value"] > 0
-    assert result["resonance_after"] / result["resonance_before"] == pytest.approx(0.997, abs=3e-4)
+    assert result["missing_effects"] == ["added_mass"] and result["results"]["added_mass"]["value"] > 0
+    before_hz, after_hz = result["results"]["free_resonance"]["value"]
+    assert after_hz / before_hz == pytest.approx(0.997, abs=3e-4)

@@ -95,22 +95,23 @@ def test_each_subcommand_runs_from_the_wheel(fresh):
     done = _run(fresh, "resonances", *PROBE, "--json", "r.json")
     assert done.returncode == 0, done.stderr
     found = json.loads((cwd / "r.json").read_text())
-    rows = [f"free,{i + 1},{f}" for i, f in enumerate(found["free_hz"][:3])]
-    rows += [f"contact,{i + 1},{f}" for i, f in enumerate(found["contact_hz"][:3])]
+    free, contact_hz = (found["results"][c]["resonance"]["value"] for c in ("free", "contact"))
+    rows = [f"free,{i + 1},{f}" for i, f in enumerate(free[:3])]
+    rows += [f"contact,{i + 1},{f}" for i, f in enumerate(contact_hz[:3])]
     (cwd / "table.csv").write_text("# spring_constant_n_per_m: 2\n# length_m: 2e-4\n# tip_height_m: 1e-5\n"
                                    "# free_resonance_hz: 6e4\n"
                                    "condition,mode,frequency_hz\n" + "\n".join(rows) + "\n")
     done = _run(fresh, "discrepancy", "table.csv", "--json", "d.json")
     assert done.returncode == 0, done.stderr
     report = json.loads((cwd / "d.json").read_text())
-    assert report["missing_effects"] == [] and report["parameters"]["k1"]["value"] == pytest.approx(200, rel=1e-3)
-    contact = found["contact_hz"][0]
+    assert report["missing_effects"] == [] and report["results"]["k1"]["value"] == pytest.approx(200, rel=1e-3)
+    contact = contact_hz[0]
     # no k2 policy given to either: both tie k2 to k1 alike (Mindlin), so k1 comes back
     done = _run(fresh, "stiffness", *LEVER, "--tip-height", "1e-5", "--contact", str(contact),
                 "--json", "s.json")
     assert done.returncode == 0, done.stderr
-    assert json.loads((cwd / "s.json").read_text())["k1"] == pytest.approx(200, rel=1e-9)
-    for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--n", "2", "--digits", "20"],
+    assert json.loads((cwd / "s.json").read_text())["results"]["k1"]["value"] == pytest.approx(200, rel=1e-9)
+    for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--modes", "2", "--digits", "20"],
                  ["verify"]):
         done = _run(fresh, *argv)
         assert done.returncode == 0, (argv, done.stdout[-2000:], done.stderr[-2000:])

@@ -105,12 +105,15 @@ def test_command_writes_the_named_keys(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "contact" in printed and "certified" in printed
     doc = json.loads(out.read_text())
-    assert len(doc["free_hz"]) == len(doc["contact_hz"]) == 2
-    assert doc["free_hz"][0] == pytest.approx(5e4, rel=1e-12)
-    assert doc["free_hz"][1] < doc["contact_hz"][1] and doc["contact_hz"][0] > 5e4
-    for key in ("free_q", "free_damped_hz", "free_peak_hz", "contact_q", "contact_damped_hz", "contact_peak_hz"):
-        assert len(doc[key]) == 2
-    assert doc["tilt"] == 11.5 and doc["tip_gyration_radius"] == 2.5e-6
+    free, contact = (doc["results"][c]["resonance"]["value"] for c in ("free", "contact"))
+    assert len(free) == len(contact) == 2
+    assert free[0] == pytest.approx(5e4, rel=1e-12)
+    assert free[1] < contact[1] and contact[0] > 5e4
+    for condition in ("free", "contact"):
+        for key in ("predicted_quality_factor", "damped_resonance", "amplitude_peak"):
+            assert len(doc["results"][condition][key]["value"]) == 2
+    assert doc["lever"]["tilt"] == {"value": 11.5, "stderr": None, "unit": "deg", "status": "given"}
+    assert doc["lever"]["tip_gyration_radius"]["value"] == 2.5e-6
 
 
 def test_bad_input_is_one_line(capsys):

@@ -105,9 +105,9 @@ def test_uncertified_result_has_reason_and_no_numbers():
 
 
 @pytest.mark.parametrize("argv, text", [
-    (["roots", "nosuch"], "unknown family"), (["roots", "free", "--n", "0"], "--n"),
+    (["roots", "nosuch"], "unknown family"), (["roots", "free", "--modes", "0"], "--modes"),
     (["roots", "free", "--digits", "0"], "--digits"), (["roots", "elastic", "--k1-over-k", "1"], "needs --k2-ratio"),
-    (["roots", "indentation", "--k1-over-k", "-2"], "non-negative"), (["roots", "free", "--n", "two"], "integer"),
+    (["roots", "indentation", "--k1-over-k", "-2"], "non-negative"), (["roots", "free", "--modes", "two"], "integer"),
     (["roots", "free", "--k2t-hl", "1"], "takes no")])
 def test_cli_errors_are_one_line(argv, text, capsys):
     assert cli.main(argv) == 2
@@ -117,14 +117,15 @@ def test_cli_errors_are_one_line(argv, text, capsys):
 
 def test_cli_json_schema(tmp_path, capsys):
     path = tmp_path / "r.json"
-    assert cli.main(["roots", "elastic", "--n", "3", "--digits", "12", "--k1-over-k", "1e3",
+    assert cli.main(["roots", "elastic", "--modes", "3", "--digits", "12", "--k1-over-k", "1e3",
                      "--k2-ratio", "0.5", "--json", str(path)]) == 0
     doc = json.loads(path.read_text())
-    assert set(doc) == {"family", "parameters", "roots", "intervals", "certified"}
-    assert doc["family"] == "elastic" and doc["certified"] is True
-    assert doc["parameters"] == {"k1_over_k": "1e3", "k2_ratio": "0.5"}
-    assert len(doc["roots"]) == 3 and all(len(r.replace(".", "")) == 12 for r in doc["roots"])
+    assert set(doc["results"]) == {"root", "root_interval", "certified"}
+    assert "family: elastic" in doc["notes"] and doc["results"]["certified"]["value"] is True
+    assert {"parameter k1_over_k = 1e3", "parameter k2_ratio = 0.5"} <= set(doc["notes"])
+    roots = doc["results"]["root"]["value"]
+    assert len(roots) == 3 and all(len(r.replace(".", "")) == 12 for r in roots)
     # the 12-digit strings are the correctly rounded values of the 15-digit interval ends
     assert all(len(i) == 2 and abs(mp.mpf(i[0]) - mp.mpf(r)) < 1e-10 and mp.mpf(i[0]) <= mp.mpf(i[1])
-               for i, r in zip(doc["intervals"], doc["roots"]))
+               for i, r in zip(doc["results"]["root_interval"]["value"], roots))
     assert "certified" in capsys.readouterr().out

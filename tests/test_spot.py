@@ -90,7 +90,7 @@ def test_pfmdyn_spot_matches_held_out_blind_spots(k1_over_k, beta, tmp_path):
     assert main(["spot", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", "225e-6",
                  "--tip-height", "15e-6", "--k1", str(contact.k1), "--k2", str(contact.k2),
                  "--frequency", repr(frequency), "--json", str(out)]) == 0
-    found = json.loads(out.read_text())["blind_spot"]
+    found = json.loads(out.read_text())["results"]["blind_spot"]["value"]
     assert len(found) == len(expected) >= 1
     np.testing.assert_allclose(found, expected, atol=5e-5)
 

@@ -116,9 +116,11 @@ def test_cli_numbers_json_and_reduced_modulus(tmp_path, capsys):
                      "--load", "1e-7", "--json", str(out)])
     assert code == 0
     doc = json.loads(out.read_text())
-    assert abs(doc["k1"] / 80 - 1) < 1e-9 and isinstance(doc["k1_stderr"], float) and doc["k1_stderr"] > 0
-    assert doc["reduced_modulus"] > 0 and doc["unique"] and "one k1" in doc["proof"][0]
-    assert doc["inputs"]["length"] is None and "k2 left out" in doc["k2_policy"]
+    k1, results = doc["results"]["k1"], doc["results"]
+    assert abs(k1["value"] / 80 - 1) < 1e-9 and isinstance(k1["stderr"], float) and k1["stderr"] > 0
+    assert results["reduced_modulus"]["value"] > 0 and results["unique"]["value"]
+    assert "one k1" in [n for n in doc["notes"] if n.startswith("why: ")][0]
+    assert "length" not in doc["lever"] and doc["notes"][0].startswith("k2 policy: k2 left out")
     assert "k1 = 80" in capsys.readouterr().out
 
 
@@ -133,12 +135,14 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     assert cli.main(["stiffness", str(table), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     k2_true = 0.04 * 4 * 4e-8 / 1e-10
-    assert not doc["unique"] and doc["k1"] is None and "three unknowns" in doc["proof"][0]
-    pair = [s for s in doc["solutions"] if s["unknowns"] == ["k1", "k2"]][0]
-    assert abs(pair["k1"] / 100 - 1) < 1e-8 and abs(pair["k2"] / k2_true - 1) < 1e-8
+    assert not doc["results"]["unique"]["value"] and doc["results"]["k1"]["value"] is None
+    assert "three unknowns" in [n for n in doc["notes"] if n.startswith("why: ")][0]
+    pair = [s for s in doc["fit"]["solutions"] if s["k2"]["status"] == "derived"][0]
+    assert abs(pair["k1"]["value"] / 100 - 1) < 1e-8 and abs(pair["k2"]["value"] / k2_true - 1) < 1e-8
     assert cli.main(["stiffness", str(table), "--tip-position", "1", "--json", str(out)]) == 0
-    doc = json.loads(out.read_text())
-    assert doc["unique"] and abs(doc["k1"] / 100 - 1) < 1e-8 and abs(doc["k2"] / k2_true - 1) < 1e-8
+    doc = json.loads(out.read_text())["results"]
+    assert doc["unique"]["value"] and abs(doc["k1"]["value"] / 100 - 1) < 1e-8
+    assert abs(doc["k2"]["value"] / k2_true - 1) < 1e-8
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -180,8 +184,9 @@ def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
     assert one_line == 2 and "give --tip-height" in capsys.readouterr().err
     out = tmp_path / "k.json"
     assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
-    doc = json.loads(out.read_text())
-    assert doc["k1"] > 0 and doc["k2"] == pytest.approx(1.4 / 1.7 * doc["k1"])   # 2(1-nu)/(2-nu)
+    doc = json.loads(out.read_text())["results"]
+    assert doc["k1"]["value"] > 0 and doc["k2"]["value"] == pytest.approx(1.4 / 1.7 * doc["k1"]["value"])   # 2(1-nu)/(2-nu)
+    assert doc["k2"]["status"] == "tied"
 
 
 def test_cli_contact_frequency_map_takes_the_lever_flags_and_refuses_the_rest(tmp_path, capsys):
@@ -230,6 +235,6 @@ def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
     for flag in ("--normal-load", "--load"):
         out = tmp_path / f"{flag}.json"
         assert cli.main(base + [flag, "1e-7", "--json", str(out)]) == 0
-        docs.append(json.loads(out.read_text()))
+        docs.append({k: v["value"] for k, v in json.loads(out.read_text())["results"].items()})
     assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
     assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)

@@ -58,17 +58,21 @@ def test_issue_example_two_modes_alone_are_not_unique(example_hz, tmp_path, caps
             "--tip-height", "15e-6"] + [a for f in example_hz for a in ("--contact", repr(f))]
     assert cli.main(base + ["--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert not doc["unique"] and doc["k1"] is None and "not unique" in capsys.readouterr().out
-    readings = {tuple(s["unknowns"]): s for s in doc["solutions"]}
-    assert abs(readings[("k1", "k2")]["k1"] / 300 - 1) > 0.1            # the old answer, k1 = 253
-    tip = readings[("k1", "tip_position")]
+    assert not doc["results"]["unique"]["value"] and doc["results"]["k1"]["value"] is None
+    assert "not unique" in capsys.readouterr().out
+    readings = {"k2" if s["k2"]["status"] == "derived" else "tip_position": {k: v["value"] for k, v in s.items()}
+                for s in doc["fit"]["solutions"]}
+    assert abs(readings["k2"]["k1"] / 300 - 1) > 0.1            # the old answer, k1 = 253
+    tip = readings["tip_position"]
     assert abs(tip["k1"] / 300 - 1) < 1e-6 and abs(tip["tip_position"] - 0.93) < 1e-6
     # --tip-position fit: the L1/L method, unique in the searched box, with uncertainties.
     assert cli.main(base + ["--tip-position", "fit", "--contact-uncertainty", "20", "--json", str(out)]) == 0
-    doc = json.loads(out.read_text())
-    assert doc["unique"] and abs(doc["k1"] / 300 - 1) < 1e-6 and abs(doc["tip_position"] - 0.93) < 1e-6
-    assert doc["k2"] == 0.0 and doc["k1_stderr"] > 0 and doc["tip_position_stderr"] > 0
-    assert "L1/L" in doc["k2_policy"] and "cross 1 time" in doc["proof"][0]
+    notes = json.loads(out.read_text())["notes"]
+    doc = json.loads(out.read_text())["results"]
+    assert doc["unique"]["value"] and abs(doc["k1"]["value"] / 300 - 1) < 1e-6
+    assert abs(doc["tip_position"]["value"] - 0.93) < 1e-6
+    assert doc["k2"]["value"] == 0.0 and doc["k1"]["stderr"] > 0 and doc["tip_position"]["stderr"] > 0
+    assert "L1/L" in notes[0] and "cross 1 time" in notes[1]
 
 
 def test_k1_and_tip_position_from_two_exact_modes_over_real_levers():
@@ -198,7 +202,7 @@ def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_pa
     lever = ["--length", str(fields.get("length", 240e-6)), "--tip-height", "12e-6"]
     out = tmp_path / "s.json"
     assert cli.main(["stiffness", str(path), *lever, "--json", str(out)]) == 0
-    k1 = json.loads(out.read_text())["k1"]
+    k1 = json.loads(out.read_text())["results"]["k1"]["value"]
     assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
                      repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())

@@ -210,18 +210,18 @@ def test_real_pairs(pair, tmp_path):
     assert r.returncode == 0, r.stderr
     assert "instrument: " in r.stdout and "from the file: " in r.stdout
     d = json.loads(out.read_text())
-    before = d["reference_fit"]
-    header = before["instrument_fit"]
+    before = d["fit"]["reference"]
+    header = {name: r["value"] for name, r in before["instrument"].items() if name != "disagrees"}
     # like with like: the header's peak beside our peak, its resonance beside ours
-    for c in before["instrument_comparison"]:
-        assert c["ours"] == pytest.approx(header[c["name"]], rel=0.05), c
-    assert {c["name"] for c in before["instrument_comparison"]} == set(header)
-    assert before["quality_factor"] == pytest.approx(header["free_quality_factor"], rel=0.2)
-    assert before["gap"] < 2.0
-    assert d["effect"] == "added_mass" and d["gap_after"] < d["gap_before"]
-    m = d["parameters"]["added_mass"]
+    for name, value in header.items():
+        assert before[name]["value"] == pytest.approx(value, rel=0.05), name
+        assert before["instrument"][name]["status"] == "file"
+    assert before["free_quality_factor"]["value"] == pytest.approx(header["free_quality_factor"], rel=0.2)
+    assert before["gap"]["value"] < 2.0
+    assert d["missing_effects"] == ["added_mass"] and d["fit"]["gap_after"]["value"] < d["fit"]["gap_before"]["value"]
+    m = d["results"]["added_mass"]
     assert 5e-14 < m["value"] < 5e-12 and 0 < m["stderr"] < m["value"]
-    assert d["parameters"]["added_mass_position"] == {"value": x, "stderr": 0.0, "unit": "1", "given": True}
+    assert d["results"]["added_mass_position"] == {"value": x, "stderr": 0.0, "unit": "1", "status": "given"}
 
 
 def test_damping_is_a_nuisance_and_one_mode_leaves_the_position_undetermined(tmp_path):
@@ -282,9 +282,10 @@ def test_the_medium_comes_from_the_header_unless_given(tmp_path, capsys, word, e
     out = tmp_path / "fit.json"
     args = ["discrepancy", str(path), "--spring-constant", f"{case['k']:.6g}", "--length", f"{case['L']:.6g}",
             "--width", f"{case['w']:.6g}", "--json", str(out)]
-    assert cli.main(args) == 0 and json.loads(out.read_text())["medium"] == expected
+    assert cli.main(args) == 0 and json.loads(out.read_text())["lever"]["medium"]["value"] == expected
     assert cli.main(args + ["--medium", "1.2,1.8e-5"]) == 0
-    assert json.loads(out.read_text())["medium"].startswith("fluid of 1.2 kg/m^3")
+    medium = json.loads(out.read_text())["lever"]["medium"]
+    assert medium["value"].startswith("fluid of 1.2 kg/m^3") and medium["status"] == "given"
 
 
 def test_amplitude_of_a_response_with_feedthrough(tmp_path):
@@ -371,11 +372,11 @@ def test_header_far_from_the_fit_is_flagged_and_the_assumed_marked(tmp_path, cap
                      "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     d = json.loads(out.read_text())
-    peak = {c["name"]: c for c in d["instrument_comparison"]}["amplitude_peak"]
-    assert peak["disagrees"] and "disagrees with the file: amplitude_peak" in printed
-    assert d["from_file"] == ["amplitude_peak", "free_quality_factor"]
-    assert any(a.startswith("medium water at 20 C") for a in d["assumed"])
-    assert any(a.startswith("width") for a in d["assumed"])
+    instrument = d["fit"]["instrument"]
+    assert "amplitude_peak" in instrument["disagrees"]["value"] and "disagrees with the file: amplitude_peak" in printed
+    assert sorted(set(instrument) - {"disagrees"}) == ["amplitude_peak", "free_quality_factor"]
+    assert d["lever"]["medium"]["status"] == "assumed" and d["lever"]["medium"]["why"].startswith("medium water at 20 C")
+    assert d["results"]["width"]["status"] == "assumed"
     assert "assumed: width" in printed and "medium water at 20 C (none in the file" in printed
 
 

@@ -98,14 +98,16 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert cli.main(["discrepancy", str(REAL), "--length", "225e-6", "--width", "40e-6", "--json", str(out)]) == 0
     text = capsys.readouterr().out
     fit = json.loads(out.read_text())
-    assert fit["temperature"] == pytest.approx(313.15) and fit["medium"].startswith("air")
-    assert fit["parameters"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
-    assert fit["points"] > 5000 and "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
+    lever = fit["lever"]
+    assert lever["temperature"]["value"] == pytest.approx(313.15) and lever["medium"]["value"].startswith("air")
+    assert fit["results"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
+    assert fit["fit"]["points"]["value"] > 5000
+    assert "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
     # what came from the file, the tune's own resonance and Q beside ours
-    assert set(fit["from_file"]) >= {"free_resonance", "free_quality_factor", "spring_constant", "medium", "temperature"}
-    assert {c["name"] for c in fit["instrument_comparison"]} == {"free_resonance", "free_quality_factor"}
+    assert all(lever[name]["status"] == "file" for name in ("spring_constant", "medium", "temperature"))
+    assert set(fit["fit"]["instrument"]) >= {"free_resonance", "free_quality_factor"}
     assert "from the file: " in text
-    assert fit["gap"] < 3
+    assert fit["fit"]["gap"]["value"] < 3
 
 
 def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
@@ -122,12 +124,13 @@ def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):
     out = tmp_path / "t.json"
     assert cli.main(base + ["--spring-constant", f"{case['k']:.17g}", "--json", str(out)]) == 0
     fit = json.loads(out.read_text())
-    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
-    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03)
+    assert fit["results"]["vacuum_resonance"]["value"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["results"]["detection_scale"]["value"] == pytest.approx(1.0, abs=0.03)
     # a CSV says nothing of the lever or its medium: nothing from the file, the medium (air) marked assumed
     text = capsys.readouterr().out
-    assert fit["from_file"] == [] and fit["instrument_comparison"] == []
-    assert [a.split(" (")[0] for a in fit["assumed"]] == [f"medium {Medium.air(case['temperature']).name}"]
+    assert not any(r["status"] == "file" for r in fit["lever"].values()) and fit["fit"]["instrument"] == {}
+    assert [name for name, r in fit["lever"].items() if r["status"] == "assumed"] == ["medium"]
+    assert fit["lever"]["medium"]["value"] == Medium.air(case["temperature"]).name
     assert "from the file: the measured points only" in text and "assumed: medium air" in text
 
 
@@ -145,6 +148,6 @@ def test_an_asylum_tune_takes_the_lever_from_its_note(tmp_path):
                      "pm/sqrt(Hz)", note=note)
     out = tmp_path / "t.json"
     assert cli.main(["discrepancy", str(path), "--temperature", f"{case['temperature']:.17g}", "--json", str(out)]) == 0
-    fit = json.loads(out.read_text())
-    assert fit["vacuum_resonance"] == pytest.approx(case["f_vac"], rel=2e-3)
-    assert fit["detection_scale"] == pytest.approx(1.0, abs=0.03) and fit["parameters"]["width"]["given"]
+    fit = json.loads(out.read_text())["results"]
+    assert fit["vacuum_resonance"]["value"] == pytest.approx(case["f_vac"], rel=2e-3)
+    assert fit["detection_scale"]["value"] == pytest.approx(1.0, abs=0.03) and fit["width"]["status"] == "file"

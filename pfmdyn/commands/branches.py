@@ -1,6 +1,8 @@
 """``pfmdyn branches``: resonance branches against contact stiffness, as PNG (and CSV)."""
 from __future__ import annotations
 
+import argparse
+
 import csv
 
 from ..errors import UserError
@@ -34,11 +36,12 @@ def add_arguments(parser) -> None:
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_arguments(p)
-    >>> p.parse_args(["elastic", "--out", "b.png"]).points
+    >>> p.parse_args(["elastic", "--plot", "b.png"]).points
     '400'
     """
     parser.add_argument("family", help=f"one of: {', '.join(f.roots for f in families.FAMILIES if f.branch)}")
-    parser.add_argument("--out", required=True, metavar="PATH.png", help="PNG file to write")
+    parser.add_argument("--plot", metavar="PATH", help="the figure to write (.png, .pdf, .svg); required")
+    parser.add_argument("--out", dest="plot", help=argparse.SUPPRESS)      # the old spelling, one release
     parser.add_argument("--csv", default=None, metavar="PATH", help="also write the branches as CSV")
     parser.add_argument("--points", default="400", help="stiffness values on the log grid 1e-3..1e6 (default 400)")
     parser.add_argument("--modes", default="5", help="number of branches (default 5)")
@@ -51,7 +54,7 @@ def run(args) -> int:
 
     >>> import argparse, tempfile, os
     >>> d = tempfile.mkdtemp()
-    >>> run(argparse.Namespace(family="indentation", out=os.path.join(d, "b.png"), csv=None,
+    >>> run(argparse.Namespace(family="indentation", plot=os.path.join(d, "b.png"), csv=None,
     ...                        points="50", modes="2", k1_over_k=None))
     indentation: crossover of mode 1 at k1_over_k = 5.82 (beta = 2.901)
     indentation: crossover of mode 2 at k1_over_k = 47.9 (beta = 5.881)
@@ -64,7 +67,9 @@ def run(args) -> int:
     from ..plots.branches import plot_branches
     from ..roots.branches import SWEPT, branch_limits, crossovers, sweep
 
-    check_writable(args.out, figure=True)
+    if not args.plot:
+        raise UserError("give --plot PATH (the figure to write)")
+    check_writable(args.plot, figure=True)
     check_writable(args.csv)
     if args.family not in SWEPT:
         raise UserError(f"no branches for {args.family!r}; choose from {', '.join(SWEPT)}")
@@ -87,7 +92,7 @@ def run(args) -> int:
     for n, (s, zc) in enumerate(zip(s_cross, z_cross), 1):
         print(f"{args.family}: crossover of mode {n} at {SWEPT[args.family]} = {s:.3g} ({var} = {zc:.4g})")
     try:
-        plot_branches(args.family, stiffness, z, **fixed).savefig(args.out)
+        plot_branches(args.family, stiffness, z, **fixed).savefig(args.plot)
         if args.csv:
             write_csv(args.csv, args.family, stiffness, z, branch_limits(args.family, 1, **fixed)[0][0])
     except OSError as exc:

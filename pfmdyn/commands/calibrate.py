@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 from ..errors import UserError
+from ..io import documents
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -17,13 +18,13 @@ def add_arguments(parser) -> None:
     >>> a = p.parse_args(["t.nid", "--length", "225e-6", "--width", "40e-6"]); a.file, a.medium, a.spot_position
     ('t.nid', None, None)
     """
-    parser.add_argument("file", help="thermal tune: Nanosurf .nid, or a CSV of frequency_hz and an ASD column "
+    parser.add_argument("file", metavar="INPUT", help="thermal tune: Nanosurf .nid, or a CSV of frequency_hz and an ASD column "
                         "ending in _m_per_sqrthz or _v_per_sqrthz")
     flags.add(parser, ("length",))
-    flags.add_medium_arguments(parser)
+    flags.add_medium_arguments(parser, medium="the file's, else air")
     flags.add(parser, ("invols", "spot_position", "tip_position", "length_uncertainty", "width_uncertainty"))
     flags.add_json(parser)
-    parser.add_argument("--plot", metavar="PNG", help="write the spectrum with the fitted first mode")
+    parser.add_argument("--plot", metavar="PATH", help="write the spectrum with the fitted first mode (.png, .pdf, .svg)")
 
 
 def _number(value, unit="N/m", digits=4) -> str:
@@ -129,7 +130,8 @@ def run(args) -> int:
     for line in disagreement_lines(document["instrument_comparison"]):
         print(line.strip())
     print("from the file: " + (", ".join(document["from_file"]) or "the spectrum only"))
-    flags.write_json(args.json, document)
+    given = flags.given_names(args, ("medium", "temperature", "length", "width", "spot_position", "tip_position"))
+    flags.write_json(args.json, documents.calibration(document, args.file, given))
     if args.plot:
         from ..plots.calibrate import plot_calibration
         fig = plot_calibration(tune, result)

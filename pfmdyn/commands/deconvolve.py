@@ -135,7 +135,7 @@ def add_arguments(parser) -> None:
         "the spot. Where C changes too fast with frequency (|d ln C/d ln f| above the limit the preamble states: "
         "around a contact resonance or a zero of the spot's response) those columns are NaN and the preamble "
         "says why.")
-    parser.add_argument("data", metavar="DATA.csv", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
+    parser.add_argument("data", metavar="INPUT", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
     parser.add_argument("--surface-potential", metavar="V", type=float, required=True,
                         help="surface potential V_surf in volts, used for d_eff = b + c V_surf")
     parser.add_argument("--out", metavar="DIR", type=Path, required=True,

@@ -1,6 +1,8 @@
 """``pfmdyn diagram``: draw a frequency-bias response diagram (Figs. 6-7) of a Table 1 or custom lever."""
 from __future__ import annotations
 
+import argparse
+
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -21,7 +23,7 @@ def add_arguments(parser) -> None:
     """Options of ``pfmdyn diagram``."""
     parser.add_argument("--cantilever", default="A", metavar="A|B|C|custom",
                         help="Table 1 cantilever, or 'custom' with --spring-constant --length --width --thickness "
-                             "(SI: N/m, m)")
+                             "(SI: N/m, m; default A)")
     flags.add_lever(parser, _CUSTOM)
     flags.add_lever(parser, ("spot_position",), medium=False)
     # The paper's values where the diagram needs a number (Figs. 6-7); the lossless lever as in the paper.
@@ -31,20 +33,21 @@ def add_arguments(parser) -> None:
     flags.add(parser, ("d_eff",), defaults={"d_eff": (PAPER_D_EFF, f"{PAPER_D_EFF:g}, the paper's")})
     parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
                         help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
-    parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V")
+    parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V (default 0)")
     parser.add_argument("--electrostatic-sign", type=int, choices=(-1, 1), default=-1,
                         help="-1: attractive capacitive force (default, the project's convention); "
                              "+1: the drives as the paper prints them")
     parser.add_argument("--kind", choices=KINDS,
                         default="amplitude", help="what to draw (default amplitude)")
-    parser.add_argument("--fmin", type=float, default=1e3, help="lowest frequency, Hz (1e3)")
-    parser.add_argument("--fmax", type=float, default=3e6, help="highest frequency, Hz (3e6)")
+    parser.add_argument("--fmin", type=float, default=1e3, help="lowest frequency, Hz (default 1e3)")
+    parser.add_argument("--fmax", type=float, default=3e6, help="highest frequency, Hz (default 3e6)")
     parser.add_argument("--log-frequency", action="store_true", help="log-spaced frequency axis")
     parser.add_argument("--vmin", type=float, default=-10.0, help="lowest V_dc, V (-10)")
     parser.add_argument("--vmax", type=float, default=10.0, help="highest V_dc, V (10)")
-    parser.add_argument("--frequency-points", type=int, default=1000)
-    parser.add_argument("--bias-points", type=int, default=401)
-    parser.add_argument("--out", required=True, type=Path, help="PNG file to write")
+    parser.add_argument("--frequency-points", type=int, default=1000, help="frequencies of the grid (default 1000)")
+    parser.add_argument("--bias-points", type=int, default=401, help="DC biases of the grid (default 401)")
+    parser.add_argument("--plot", type=Path, metavar="PATH", help="the PNG file to write; required")
+    parser.add_argument("--out", dest="plot", type=Path, help=argparse.SUPPRESS)    # the old spelling, one release
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
 
 
@@ -130,9 +133,11 @@ def run(args) -> int:
     if args.frequency_points * args.bias_points > MAX_POINTS:
         raise UserError(f"--frequency-points x --bias-points must be at most {MAX_POINTS:g} (a diagram of "
                         f"{args.frequency_points * args.bias_points:g} points would not fit in memory)")
-    if args.out.suffix.lower() != ".png":
-        raise UserError(f"--out must name a .png file, got {str(args.out)!r}")
-    check_writable(args.out, figure=True)
+    if args.plot is None:
+        raise UserError("give --plot PATH (the PNG file to write)")
+    if args.plot.suffix.lower() != ".png":
+        raise UserError(f"--plot must name a .png file, got {str(args.plot)!r}")
+    check_writable(args.plot, figure=True)
     check_writable(args.csv)
     spacing = np.geomspace if args.log_frequency else np.linspace
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
@@ -152,8 +157,8 @@ def run(args) -> int:
              f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
              f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
              + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
-    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.out, dpi=130)
-    print(f"wrote {args.out}")
+    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.plot, dpi=130)
+    print(f"wrote {args.plot}")
     if args.csv is not None:
         _write_csv(args.csv, response)
         print(f"wrote {args.csv}")

@@ -6,6 +6,7 @@ import sys
 from contextlib import contextmanager
 
 from ..errors import UserError
+from ..io import documents
 from . import flags
 
 
@@ -16,13 +17,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     >>> p.parse_args(["d.csv", "--json", "o.json"]).json
     'o.json'
     """
-    parser.add_argument("data", help="CSV (metadata lines, then a spectrum or resonances table) or an "
+    parser.add_argument("data", metavar="INPUT", help="CSV (metadata lines, then a spectrum or resonances table) or an "
                         "instrument file (.ibw, .nid, .h5/.hdf5, drive sweep .txt/.dat/.nid, thermal tune)")
     flags.add_json(parser, "the full report")
-    parser.add_argument("--plot", help="write a PNG: data, baseline, final model, residuals")
+    parser.add_argument("--plot", metavar="PATH", help="write the figure (.png, .pdf, .svg): data, baseline, final model, "
+                        "residuals")
     group = parser.add_argument_group("the lever (each overrides the file's metadata)")
     flags.add(group, OVERRIDES)
-    flags.add(group, ("medium", "temperature"))
+    flags.add(group, ("medium", "temperature"), defaults={"medium": (
+        None, "the file's; else water for a drive sweep, air for a thermal tune, none (vacuum) for a spectrum or a "
+              "resonance table")})
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
     sweeps = parser.add_argument_group("drive sweeps (.txt/.dat/.nid) and thermal tunes: the free lever in a fluid, "
@@ -77,7 +81,9 @@ def _sweeps(args) -> int:
             if before else fit
     if before:
         print(fit.report())
-    return _emit(args, result, lambda: plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after))
+    given = flags.given_names(args, (*OVERRIDES, "medium", "temperature"))
+    doc = documents.sweep_comparison(result.to_dict(), given) if before else documents.sweep_fit(result.to_dict(), given)
+    return _emit(args, result, doc, lambda: plot_sweep(fit, before, result, after) if before else plot_sweep(fit, after))
 
 
 def _thermal(args) -> int:
@@ -101,7 +107,8 @@ def _thermal(args) -> int:
     with _fitting(args.data, "the spring constant and length"):
         fit = _provenance(fit_thermal(tune, values["spring_constant"], values["length"], medium, temperature,
                                       values.get("width")), args, medium, found, taken)
-    return _emit(args, fit, lambda: plot_thermal(fit))
+    doc = documents.thermal_fit(fit.to_dict(), flags.given_names(args, (*OVERRIDES, "medium", "temperature")))
+    return _emit(args, fit, doc, lambda: plot_thermal(fit))
 
 
 def _provenance(result, args, medium, found: dict | None, taken=()):
@@ -140,10 +147,10 @@ def _fitting(where, check: str):
         raise UserError(f"{where}: the fit failed ({type(exc).__name__}: {exc}); check {check}") from None
 
 
-def _emit(args, result, figure) -> int:
-    """Print a free lever's result, write its JSON and (``--plot``) the ``figure()`` it makes."""
+def _emit(args, result, doc, figure) -> int:
+    """Print a free lever's result, write its JSON ``doc`` and (``--plot``) the ``figure()`` it makes."""
     print(result.report())
-    flags.write_json(args.json, result.to_dict())
+    flags.write_json(args.json, doc)
     if args.plot:
         _save(figure(), args.plot)
     return 0
@@ -185,7 +192,12 @@ def run(args: argparse.Namespace) -> int:
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    flags.write_json(args.json, report.to_dict())
+    given = flags.given_names(args, OVERRIDES)
+    lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
+                                    from_file=OVERRIDES)
+    rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]
+    flags.write_json(args.json, documents.discrepancy_report(
+        report.to_dict(), "spectrum" if rows is None else "resonances", {"path": str(args.data)}, lever, rows))
     if args.plot:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
@@ -33,7 +34,9 @@ def add(parser, names, required=(), defaults=None) -> None:
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        value, why = defaults.get(name, (None, f"{q.default:g}{unit}, assumed" if q.default is not None else ""))
+        assumed = f"{q.default:g} {q.unit}, assumed" if q.default is not None else \
+            "none: the lever in vacuum" if name == "medium" else ""
+        value, why = defaults.get(name, (None, assumed))
         text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
         # argparse %-formats help (``%(default)s``): a "%" of a meaning is literal
         parser.add_argument(q.flag, dest=name, default=value, metavar=q.symbol.upper() if q.unit == "1" else q.unit,
@@ -68,15 +71,17 @@ def add_damping(parser, names=DAMPING, defaults=None) -> None:
     add(parser, names, defaults=defaults)
 
 
-def add_medium_arguments(parser, width_required: bool = False) -> None:
-    """``--medium --width --temperature``: the fluid around the lever and the width it acts on.
+def add_medium_arguments(parser, width_required: bool = False, medium: str = "") -> None:
+    """``--medium --width --temperature``: the fluid around the lever and the width it acts on; ``medium``:
+    how ``--help`` states its default (none: the lever in vacuum).
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_medium_arguments(p)
     >>> p.parse_args(["--medium", "water", "--temperature", "298.15"]).medium
     'water'
     """
-    add(parser, ("medium", "width", "temperature"), required=("width",) if width_required else ())
+    add(parser, ("medium", "width", "temperature"), required=("width",) if width_required else (),
+        defaults={"medium": (None, medium)} if medium else None)
 
 
 def medium_from_args(args, found: dict | None = None, default: str = "air") -> Medium:
@@ -164,9 +169,13 @@ def write_json(path, document) -> None:
     from ..io import results
 
     if path == "-":
-        print(results.dumps(document))
+        print(results.dumps(document), file=DOCUMENTS[-1] if DOCUMENTS else sys.stdout)
     elif path:
         results.write_json(path, document)
+
+
+DOCUMENTS: list = []
+"""Where ``--json -`` prints when the command's other output is silenced (``--quiet``; set by the CLI)."""
 
 
 def given(args, names) -> dict[str, float]:
@@ -186,6 +195,16 @@ def given(args, names) -> dict[str, float]:
         if value is not None:
             out[name] = checked(name, value, NAMES[name].flag)
     return out
+
+
+def given_names(args, names) -> list[str]:
+    """The names among ``names`` whose flag was given (their records' status ``given``).
+
+    >>> import argparse
+    >>> given_names(argparse.Namespace(medium="water", length=None), ("medium", "length", "width"))
+    ['medium']
+    """
+    return [name for name in names if getattr(args, name, None) is not None]
 
 
 def require(values: dict, names, file=None) -> None:

@@ -24,7 +24,7 @@ def add_arguments(parser) -> None:
     >>> p.parse_args(["scan.ibw", "--json", "out.json"]).json
     'out.json'
     """
-    parser.add_argument("file", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
+    parser.add_argument("file", metavar="INPUT", help="instrument file: .ibw, .h5/.hdf5, .nid, .txt/.dat sweep or .csv")
     flags.add_json(parser, "what was read")
 
 
@@ -62,5 +62,8 @@ def run(args) -> int:
     check_writable(args.json)
     record = read_instrument(args.file)
     print(report(record))
-    flags.write_json(args.json, record.to_json())
+    if args.json:
+        from ..io import documents
+
+        flags.write_json(args.json, documents.inspection(record.to_json()))
     return 0

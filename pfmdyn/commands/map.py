@@ -6,7 +6,7 @@
     pfmdyn map scan.h5 --out result/ --scheduler tcp://host:8786
     pfmdyn map be_usid.h5 --out result/ --spring-constant 2 --length 225e-6   # pycroscopy USID
     pfmdyn map be_usid.h5 --out result/ --model sho        # BGlib's SHO, result/be_usid.h5 in BGlib's layout
-    pfmdyn map dart.ibw --out result/ --tip-height 12e-6 --plot dart.png --json -     # an Asylum DART image
+    pfmdyn map dart.ibw --out result/ --tip-height 12e-6 --plot figures/ --json -     # an Asylum DART image
 
 The input holds ``response`` (ny, nx, n_freq, complex; or (ny, nx, n_bias, n_freq) with
 ``bias_v``, which adds maps of the electrostatic term and the nulling bias), ``frequency_hz`` and
@@ -20,6 +20,8 @@ A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a
 in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
 from __future__ import annotations
+
+import argparse
 
 import dataclasses
 import math
@@ -41,7 +43,7 @@ _DART = ("drive_amplitude", "frequency_width")
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
-    parser.add_argument("data", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
+    parser.add_argument("data", metavar="INPUT", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
                                      "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx); "
                                      "or an Asylum DART image (.ibw, dual AC resonance tracking)")
     parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
@@ -66,7 +68,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=int, default=None, help="local worker processes, or for --model sho threads (default: all cores)")
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
-    parser.add_argument("--quality-factor", type=float, default=100.0, help="starting Q (default 100)")
+    parser.add_argument("--start-quality-factor", type=float, default=100.0,
+                        help="the fit's starting Q of the contact mode, not a lever's internal friction (default 100)")
+    parser.add_argument("--quality-factor", dest="start_quality_factor", type=float, help=argparse.SUPPRESS)   # old
     parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
                         help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
                              f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
@@ -75,9 +79,9 @@ def add_arguments(parser) -> None:
                              "this bias (default: fitted with +distributed, else 0, the intercept); the "
                              "electrostatic term and the nulling bias do not depend on it")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.add_argument("--png", action="store_true", help="also write OUT/NAME.png for each map")
-    parser.add_argument("--plot", metavar="PNG", help="DART image: write one figure of its maps")
-    flags.add_json(parser, "a DART image's summary (records of the lever and the maps' medians)")
+    parser.add_argument("--plot", metavar="DIR", help="also write DIR/NAME.png for each map")
+    parser.add_argument("--png", action="store_true", help=argparse.SUPPRESS)   # the old spelling: --plot OUT
+    flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
     flags.add(parser, _DART)
@@ -123,8 +127,10 @@ def _progress_bar(enabled: bool, unit: str = "block"):
 def run(args) -> int:
     """Fit the map and print a summary line."""
     import os
+    from ..io.results import check_writable
     from ..maps.driver import check_scheduler, open_map, run_map
-    checked("quality_factor", args.quality_factor, "--quality-factor")
+    check_writable(args.json)
+    checked("quality_factor", args.start_quality_factor, "--start-quality-factor")
     for name in ("block", "gap_threshold", "workers", "max_blocks"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
@@ -136,14 +142,13 @@ def run(args) -> int:
         overrides["medium"] = flags.medium_from_args(args)
     from ..io.kinds import CONTACT_MAP_KINDS, file_kind
     from ..maps.contact import contact_map, describe
-    if (args.plot or args.json) and file_kind(args.data) != "asylum":
-        raise UserError("--plot and --json are written for DART images (.ibw); for this map use --png and the "
-                        "summary line")
     if file_kind(args.data) in CONTACT_MAP_KINDS:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
-        print(describe(contact_map(args.data, args.out, overrides)))
+        summary = contact_map(args.data, args.out, overrides)
+        print(describe(summary))
+        _write_json(args, summary, overrides)
         return 0
     if file_kind(args.data) == "asylum":
         if args.medium:
@@ -169,7 +174,7 @@ def run(args) -> int:
         print(f"fitting: an SHO per spectrum and band ({n_bands} band{'s' if n_bands > 1 else ''}"
               + (f", {len(biases)} biases" if biases is not None else "") + ")")
     else:
-        fit_options = {"q0": args.quality_factor, "gap_threshold": args.gap_threshold,
+        fit_options = {"q0": args.start_quality_factor, "gap_threshold": args.gap_threshold,
                        "surface_potential_v": args.surface_potential}
         mechanisms, rows = _mechanisms(args, source, fit_options)
         source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
@@ -177,30 +182,46 @@ def run(args) -> int:
               f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
               + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
                  if biases is not None else ""))
-    progress, close = _progress_bar(not args.no_progress)
+    progress, close = _progress_bar(not (args.no_progress or args.quiet))
     try:
         s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    if args.png:
+    folder = args.plot or (args.out if args.png else None)
+    if folder:
         from ..maps import open_result
         from ..plots.maps import plot_maps
+        os.makedirs(folder, exist_ok=True)
         for name, figure in plot_maps(open_result(args.out)).items():
-            figure.savefig(os.path.join(args.out, f"{name}.png"), dpi=100)
+            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
     written = ""
     if source.layout == "usid":
         from ..maps.usid import write_usid
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
+    _write_json(args, s.to_dict(), overrides, s.shape)
     return 0
+
+
+def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
+    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`)."""
+    if args.json:
+        from ..io import documents
+        from ..maps import open_result
+
+        shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
+        given = {name: value for name, value in overrides.items() if name != "medium"}
+        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))
 
 
 def _dart(args, overrides: dict, given: dict) -> int:
     """A DART image: the lever from the note and the flags, every pixel inverted both ways, the maps
     written (and drawn, and summarised in JSON)."""
     import os
+
+    import numpy as np
     from .. import Cantilever, Contact
     from ..io.dart import read_dart
     from ..maps.dart import document, invert, write_dart
@@ -228,7 +249,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
         print(note)
     f1, f2 = image.frequencies(settings["frequency_width"][0])
     s1, s2 = image.signals
-    report, close = _progress_bar(not args.no_progress, unit="pixel")
+    report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
         maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0],
                              progress=None if report is None else lambda done, total: report(done, total, done))
@@ -236,22 +257,22 @@ def _dart(args, overrides: dict, given: dict) -> int:
         close()
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
-    summary = document(maps, sigma, found, settings, str(args.data), k2_policy)
-    if args.plot or args.png:
+    folder = args.plot or (args.out if args.png else None)
+    if folder:
         from ..maps import open_result
         from ..plots.maps import plot_dart, plot_maps
+        os.makedirs(folder, exist_ok=True)
         result = open_result(args.out)
-        if args.plot:
-            plot_dart(result).savefig(args.plot, dpi=100)
-        for name, figure in (plot_maps(result).items() if args.png else ()):
-            figure.savefig(os.path.join(args.out, f"{name}.png"), dpi=100)
-    r = summary["results"]
-    value = lambda name: r[name]["value"] if r[name]["value"] is not None else math.nan    # noqa: E731
-    print(f"DART: {summary['fit']['pixels_determined']}/{summary['fit']['pixels']} pixels determined, noise "
-          f"{100 * value('channel_noise'):.2g} %; medians: contact resonance {value('contact_resonance'):.6g} Hz, "
-          f"Q {value('contact_quality_factor'):.3g}, k1 {value('k1'):.4g} N/m, contact loss "
-          f"{value('contact_loss'):.3g}, d_eff {1e12 * value('d_eff'):.3g} pm/V; the oscillator's point-mass k1 "
-          f"{100 * value('oscillator_k1_error'):+.1f} %, its d_eff {100 * value('oscillator_d_eff_error'):+.1f} %; "
-          f"maps in {out}")
-    flags.write_json(args.json, summary)
+        for name, figure in {**plot_maps(result), "dart": plot_dart(result)}.items():
+            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    with np.errstate(all="ignore"):
+        ok = maps["determined"].astype(bool)
+        median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
+                  if ok.any() else math.nan for name in maps}
+    print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians: contact resonance "
+          f"{median['contact_resonance']:.6g} Hz, Q {median['contact_quality_factor']:.3g}, k1 {median['k1']:.4g} N/m, "
+          f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
+          f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
+          f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
+    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy))
     return 0

@@ -55,5 +55,9 @@ def run(args) -> int:
     print(result.report())
     if policy:
         print(f"k2 policy: {policy['k2_policy']}")
-    flags.write_json(args.json, {**result.to_dict(), **policy})
+    if args.json:
+        from ..io import documents
+
+        given = flags.given_names(args, (*flags.NAMES,))
+        flags.write_json(args.json, documents.resonances({**result.to_dict(), **policy}, given))
     return 0 if result.certified else 1

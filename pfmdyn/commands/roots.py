@@ -5,6 +5,8 @@ Parameter values are read as exact decimals (``1e6``, ``0.1``); see :mod:`pfmdyn
 """
 from __future__ import annotations
 
+import argparse
+
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
@@ -26,12 +28,13 @@ def add_arguments(parser) -> None:
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_arguments(p)
-    >>> p.parse_args(["free", "--n", "2"]).n
+    >>> p.parse_args(["free", "--modes", "2"]).modes
     '2'
     """
     parser.add_argument("family", help=f"one of: {', '.join(characteristic.FAMILIES)}")
     # Numbers are parsed in run() so that every bad value is reported as one line.
-    parser.add_argument("--n", default="5", help="number of roots, counted from the lowest (default 5)")
+    parser.add_argument("--modes", default="5", help="number of roots, counted from the lowest (default 5)")
+    parser.add_argument("--n", dest="modes", help=argparse.SUPPRESS)        # the old spelling, one release
     parser.add_argument("--digits", default="15", help="significant digits (default 15)")
     for name, option in OPTIONS.items():
         parser.add_argument(option, dest=name, default=None, help=families.PARAMETER_HELP[name])
@@ -117,7 +120,7 @@ def run(args) -> int:
     """Compute, print and optionally write the roots; exit status 1 when not certified.
 
     >>> import argparse
-    >>> run(argparse.Namespace(family="torsion-force", n="1", digits="5", k1_over_k=None,
+    >>> run(argparse.Namespace(family="torsion-force", modes="1", digits="5", k1_over_k=None,
     ...                        k2_ratio=None, k2t_HL=None, json=None))
     torsion-force: first 1 roots of the characteristic equation in xi L, 5 significant digits
     certified: the list is complete on (0, 2.32079] and each interval holds exactly one simple root
@@ -130,8 +133,11 @@ def run(args) -> int:
 
     check_writable(args.json)
     params = parse_parameters(args.family, {name: getattr(args, name) for name in OPTIONS})
-    n, digits = positive_int(args.n, "--n", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
+    n, digits = positive_int(args.modes, "--modes", MAX_ROOTS), positive_int(args.digits, "--digits", MAX_DIGITS)
     result = family_roots(args.family, n, digits, **params)
     print(table(result))
-    flags.write_json(args.json, result.to_json())
+    if args.json:
+        from ..io import documents
+
+        flags.write_json(args.json, documents.roots(result.to_json()))
     return 0 if result.certified else 1

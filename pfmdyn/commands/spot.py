@@ -12,13 +12,13 @@ __all__ = ["add_arguments", "run", "report"]
 
 def add_arguments(parser) -> None:
     """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""
-    parser.add_argument("file", nargs="?", help="instrument file supplying what it holds of the lever "
+    parser.add_argument("file", nargs="?", metavar="INPUT", help="instrument file supplying what it holds of the lever "
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
     parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
     flags.add_json(parser)
-    parser.add_argument("--plot", metavar="PNG", help="write the figure (ratio along the lever and over frequency)")
+    parser.add_argument("--plot", metavar="PATH", help="write the figure (ratio along the lever and over frequency)")
 
 
 def report(result) -> str:
@@ -70,7 +70,14 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     print(report(result))
     print(f"k2 policy: {policy}")
-    flags.write_json(args.json, {**result.to_dict(), "k2_policy": policy})
+    if args.json:
+        from ..io import documents
+
+        from ..io.instruments import read_instrument
+
+        taken = [key for key in read_instrument(args.file).fields if key in LEVER] if args.file else ()
+        flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy},
+                                                   flags.given_names(args, (*flags.NAMES,)), taken, args.file))
     if args.plot:
         import numpy as np
 

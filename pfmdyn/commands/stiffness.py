@@ -54,7 +54,7 @@ def add_arguments(parser) -> None:
     >>> a.contact, a.free_resonance
     (['3e5', '9e5'], '7e4')
     """
-    parser.add_argument("file", nargs="?", default=None,
+    parser.add_argument("file", nargs="?", default=None, metavar="INPUT",
                         help="instrument file (.ibw, .h5, .nid) or resonance table (.csv); optional")
     parser.add_argument("--contact", action="append", default=None, metavar="HZ",
                         help="contact resonance (Hz); repeat for several modes")
@@ -196,8 +196,12 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     print(report.report())
     if args.json:
+        from ..io import documents
+
         document = report.to_dict()
         if notes:
             document["inputs"]["length"] = None
-        flags.write_json(args.json, document)
+        given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
+        taken = [*found, *(["contact_resonance"] if args.file and not args.contact else [])]
+        flags.write_json(args.json, documents.stiffness(document, args.file, given, taken))
     return 0

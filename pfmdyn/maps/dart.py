@@ -43,12 +43,14 @@ from ..analysis.contact_resonance import betas, k1_at
 from ..cantilever import Cantilever, Contact
 from .. import composed
 from ..generated.tilt_rotation import rotated
+from ..io.results import document as envelope
+from ..io.results import quantity
 from ..names import NAMES
 from .store import write_maps
 
 __all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "deflection_signal",
            "lever_inversion", "lever_pole", "point_mass_k1", "start_k1",
-           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "record", "document"]
+           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
 _STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
@@ -458,52 +460,38 @@ def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:
     write_maps(path, described, attrs)
 
 
-def record(value, stderr=None, unit: str = "1", status: str = "derived", why: str | None = None) -> dict:
-    """One number as a record ``{value, stderr, unit, status[, why]}`` (issue 39's form); a value that
-    is not finite is ``null`` and ``undetermined``.
-
-    >>> record(float("nan"), why="no pixel determined")
-    {'value': None, 'stderr': None, 'unit': '1', 'status': 'undetermined', 'why': 'no pixel determined'}
-    """
-    finite = value is not None and math.isfinite(value)
-    out = {"value": float(value) if finite else None,
-           "stderr": float(stderr) if finite and stderr is not None and math.isfinite(stderr) else None,
-           "unit": unit, "status": status if finite else "undetermined"}
-    if why is not None:
-        out["why"] = why
-    return out
-
-
-def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, k2_policy: str) -> dict:
-    """The JSON summary of a DART image: the lever and settings as records (``lever``, ``settings``:
-    name -> ``(value, status[, why])``), the maps' medians over the determined pixels (each
-    ``stderr`` the median pixel's), the noise, and the pixel counts.
+def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, store: str, k2_policy: str) -> dict:
+    """The JSON document of a DART image (:func:`pfmdyn.io.results.document`, kind ``dart``): the lever
+    and the settings as records (``lever``, ``settings``: name -> ``(value, status[, why])``), the
+    maps' medians over the determined pixels (each ``stderr`` the median pixel's), the noise and the
+    pixel counts.
 
     >>> maps = {"k1": np.array([[100.0, np.nan]]), "k1_stderr": np.array([[2.0, np.nan]]),
     ...         "determined": np.array([[1, 0]], np.uint8)}
-    >>> doc = document(maps, 0.01, {"spring_constant": (2.0, "file")}, {}, "a.ibw", "k2 left out")
-    >>> doc["results"]["k1"], doc["fit"]["pixels_determined"]
-    ({'value': 100.0, 'stderr': 2.0, 'unit': 'N/m', 'status': 'derived'}, 1)
+    >>> doc = document(maps, 0.01, {"spring_constant": (2.0, "given")}, {}, "a.ibw", "o/maps.zarr", "k2 left out")
+    >>> doc["results"]["k1"], doc["fit"]["determined_fraction"]["value"]
+    ({'value': 100.0, 'stderr': 2.0, 'unit': 'N/m', 'status': 'derived'}, 0.5)
     """
     ok = maps["determined"].astype(bool)
 
-    def median(name):
-        values = maps[name][ok]
+    def median(name):       # of d_eff's magnitude: the domains' signs would cancel
+        values = maps[name][ok] if name in maps else np.empty(0)
+        values = np.abs(values) if "d_eff" in name else values
         values = values[np.isfinite(values)]
         return float(np.median(values)) if values.size else math.nan
 
-    results = {}
-    for name in (*MAPS, *OSCILLATOR_MAPS):
-        if name in maps:
-            results[name] = record(median(name), median(name + "_stderr") if name + "_stderr" in maps else None,
-                                   NAMES[name].unit, "derived",
-                                   None if ok.any() else "no pixel determined")
-    results["channel_noise"] = record(sigma, None, "1", "derived", None if math.isfinite(sigma) else
-                                      "too few neighbouring pixels determined")
-    as_records = lambda given: {name: record(entry[0], None, NAMES[name].unit, *entry[1:])   # noqa: E731
+    results = {name: quantity(name, median(name), median(name + "_stderr") if name + "_stderr" in maps else None,
+                              status="derived", why=None if ok.any() else "no pixel determined")
+               for name in (*MAPS, *OSCILLATOR_MAPS) if name in maps}
+    as_records = lambda given: {name: quantity(name, entry[0], status=entry[1],       # noqa: E731
+                                               why=entry[2] if len(entry) > 2 else None)
                                 for name, entry in given.items()}
-    return {"schema": "pfmdyn.map.dart/1", "command": "map", "kind": "dart", "source": source,
-            "lever": as_records(lever), "results": results,
-            "fit": {"settings": as_records(settings), "pixels": int(ok.size), "pixels_determined": int(ok.sum()),
-                    "statistic": "median over the determined pixels; stderr the median pixel's"},
-            "notes": [k2_policy]}
+    fit = {"pixels": quantity("pixels", list(ok.shape), status="file", why="the image's shape", dims=["axis"]),
+           "determined_fraction": quantity("determined_fraction", float(ok.mean()) if ok.size else math.nan,
+                                           status="derived", why=None if ok.size else "an empty image"),
+           "channel_noise": quantity("channel_noise", sigma, status="derived",
+                                     why=None if math.isfinite(sigma) else "too few neighbouring pixels determined"),
+           **as_records(settings)}
+    return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
+                    [k2_policy, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
+                     "each stderr the median pixel's"])

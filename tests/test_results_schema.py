@@ -1,0 +1,103 @@
+"""Every command's JSON document on small inputs, validated against its kind's schema (issue 39, item 1).
+
+Each document is one envelope (``pfmdyn.io.results``) with one record per number; its schema is the
+package's ``pfmdyn/schemas/COMMAND.KIND.json``, every key outside the envelope and the record a name
+of ``pfmdyn.names`` (``tests/schema_check.py``), and ``to_dataset`` reads it as an xarray Dataset.
+The inputs are the smallest that give each kind (a few seconds in all); the physics of each command
+is tested in its own file.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from schema_check import SCHEMAS, validate  # noqa: E402
+
+from pfmdyn import cli  # noqa: E402
+from pfmdyn.io.results import quantity, to_dataset  # noqa: E402
+
+LEVER = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"]
+PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "100"]
+TABLE = ("# spring_constant: 2\n# length: 2e-4\n# tip_height: 1e-5\n# free_resonance: 7e4\n"
+         "mode,condition,frequency_hz\n1,free,70000\n2,free,438683\n1,contact,277474\n")
+
+
+def _tune_csv(path: Path) -> Path:
+    """A thermal tune: a lever's first mode (180 kHz, Q 300) over a white floor, as CSV in m/sqrt(Hz)."""
+    from pfmdyn.generated.formulas import oscillator_asd
+
+    f = np.linspace(1e3, 4e5, 1000)
+    asd = oscillator_asd(f, 1.8e5, 300.0, 1.03e-15, 3e-14)
+    path.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(f"{a:.9g},{b:.9g}\n" for a, b in zip(f, asd)))
+    return path
+
+
+def _contact_map(path: Path) -> Path:
+    h5py = pytest.importorskip("h5py")
+    pytest.importorskip("zarr")
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), 3e5)
+        h.attrs.update(spring_constant=2.0, free_resonance=7e4)
+    return path
+
+
+CASES = {
+    "resonances": lambda tmp: ["resonances", *PROBE, "--quality-factor", "50", "--modes", "2"],
+    "spot": lambda tmp: ["spot", *PROBE, "--frequency", "1e5"],
+    "roots": lambda tmp: ["roots", "elastic", "--modes", "2", "--k1-over-k", "50", "--k2-ratio", "0.5"],
+    "stiffness": lambda tmp: ["stiffness", *LEVER[:4], "--contact", "3e5", "--contact-uncertainty", "100"],
+    "inspect": lambda tmp: ["inspect", str(_write(tmp / "t.csv", TABLE))],
+    "calibrate": lambda tmp: ["calibrate", str(_tune_csv(tmp / "tune.csv")), "--medium", "air", "--length",
+                              "225e-6", "--width", "40e-6"],
+    "discrepancy": lambda tmp: ["discrepancy", str(_write(tmp / "t.csv", TABLE))],
+    "map": lambda tmp: ["map", str(_contact_map(tmp / "cr.h5")), "--out", str(tmp / "out")],
+}
+"""Command -> its argument list on small inputs (``--json`` added)."""
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("command", sorted(CASES))
+def test_every_command_writes_its_kind(command, tmp_path, capsys):
+    """The document validates, has only names for keys, reads as a Dataset, and ``--json -`` prints the same."""
+    out = tmp_path / "o.json"
+    assert cli.main([*CASES[command](tmp_path), "--json", str(out)]) in (0, 1)
+    doc = json.loads(out.read_text())
+    assert doc["command"] == command
+    validate(doc)
+    dataset = to_dataset(doc)
+    for name, variable in dataset.data_vars.items():
+        assert variable.attrs.get("units") and variable.attrs.get("status") or name.endswith("_stderr"), name
+    capsys.readouterr()
+
+
+def test_the_discrepancy_kinds_and_the_map_summary_validate(tmp_path):
+    """The kinds the walk above does not reach in seconds (a spectrum, a sweep, two sweeps, a tune, a beam
+    map) are tested where their commands are (test_discrepancy*, test_sweeps_fit, test_thermal_fit): here
+    each has a schema, and a schema rejects a record that breaks the rules."""
+    kinds = {p.stem for p in SCHEMAS.glob("*.*.json")}
+    assert {"discrepancy.spectrum", "discrepancy.resonances", "discrepancy.sweep", "discrepancy.comparison",
+            "discrepancy.thermal", "calibrate.thermal_tune", "stiffness.contact_resonance", "map.map"} <= kinds
+    from pfmdyn.io.results import document
+
+    good = document("stiffness", "contact_resonance", {"path": None}, None,
+                    {name: quantity(name, 1.0, status="derived") for name in ("k1", "k2", "tip_position")}
+                    | {"unique": quantity("unique", True, status="derived"),
+                       "contact_resonance": quantity("contact_resonance", [3e5], status="given", dims=["mode"]),
+                       "mode": quantity("mode", [1], status="given", dims=["mode"])}, {"solutions": []})
+    validate(good)
+    for broken in ({"value": None, "stderr": None, "unit": "N/m", "status": "fitted"},     # null, not undetermined
+                   {"value": 1.0, "stderr": None, "unit": "N/m", "status": "assumed"},    # no why
+                   {"value": 1.0, "stderr": None, "unit": "N/m", "status": "guessed"}):   # not a status
+        with pytest.raises(Exception):
+            validate({**good, "results": {**good["results"], "k1": broken}})
+    with pytest.raises(AssertionError, match="not a name"):
+        validate({**good, "results": {**good["results"], "k1_hz": quantity("k1", 1.0)}})
