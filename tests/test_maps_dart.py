@@ -49,7 +49,7 @@ def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options)
     # the noise the image shows is the noise put in (within the scatter of a 12 x 16 estimate)
     assert doc["fit"]["channel_noise"]["value"] == pytest.approx(case.settings["noise"], rel=0.3)
     # the standard errors say how far the maps are from the truth
-    for name in ("k1", "contact_loss", "d_eff", "contact_quality_factor"):
+    for name in ("k1", "contact_loss", "d_eff", "contact_quality_factor", "contact_resonance"):
         z = (maps[name].values - case.truth[name]) / maps[name + "_stderr"].values
         assert 0.8 < np.mean(np.abs(z) < 2) <= 1.0, name
         assert np.mean(np.abs(z) < 0.5) < 0.6, name         # not inflated

@@ -269,8 +269,8 @@ def _log_ratios(lever, contact, f1, f2, points):
 
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
                     steps: int = _NEWTON_STEPS) -> LeverFit:
-    """``k1``, ``contact_loss`` and ``d_eff`` explaining the signals ``s1``, ``s2`` (m per volt of
-    drive... times ``drive_amplitude`` volts) at ``f1``, ``f2`` on ``lever``, from the start ``k1``,
+    """``k1``, ``contact_loss`` and ``d_eff`` explaining the deflection signals ``s1``, ``s2`` (m, complex,
+    driven by ``drive_amplitude`` volts) at ``f1``, ``f2`` on ``lever``, from the start ``k1``,
     ``loss`` (flat arrays).  Newton on ``log(T(f2)/T(f1)) = log(s2/s1)`` in ``(log k1, loss)``, its
     Jacobian by forward differences, all pixels at once; a pixel stops when its step is below
     1e-10 (relative in k1, absolute in the loss).
