@@ -21,7 +21,7 @@ from ..errors import UserError
 from . import asylum, ibw
 from .record import decode_text
 
-__all__ = ["DART_CHANNELS", "DART_KEYS", "DartImage", "is_dart", "read_dart"]
+__all__ = ["DART_CHANNELS", "DART_KEYS", "DartImage", "read_dart"]
 
 DART_CHANNELS = ("Amplitude1", "Amplitude2", "Phase1", "Phase2", "Frequency")
 """The layers a DART image needs (their names without ``Trace``/``Retrace``)."""
@@ -50,38 +50,38 @@ class DartImage:
     @property
     def signals(self) -> tuple[np.ndarray, np.ndarray]:
         """The deflection signals at ``f1`` and ``f2`` as complex numbers ``A exp(-i phi)`` (m, through the
-        static InvOLS: the amplitudes times ``InvOLS / AmpInvOLS`` when the note has both)."""
+        static InvOLS: the amplitudes times ``InvOLS / AmpInvOLS`` when the note has both).
+
+        >>> one = np.ones((1, 1))
+        >>> image = DartImage("a.ibw", 1.1e-9 * one, 1.1e-9 * one, 0 * one, 90 * one, 3e5 * one,
+        ...                   {"invols": 60e-9, "amp_invols": 66e-9}, {})
+        >>> [complex(np.round(s[0, 0] * 1e9, 12)) for s in image.signals]      # nm: a lag of 90 deg is -i
+        [(1+0j), -1j]
+        """
         scale = self.settings.get("invols", 1.0) / self.settings.get("amp_invols", self.settings.get("invols", 1.0))
         return tuple(scale * a * np.exp(-1j * np.radians(p))
                      for a, p in ((self.amplitude1, self.phase1), (self.amplitude2, self.phase2)))
 
     def frequencies(self, width: float) -> tuple[np.ndarray, np.ndarray]:
-        """``f1 = fc - width/2`` and ``f2 = fc + width/2`` at each pixel (Hz)."""
+        """``f1 = fc - width/2`` and ``f2 = fc + width/2`` at each pixel (Hz).
+
+        >>> one = np.ones((1, 1))
+        >>> image = DartImage("a.ibw", one, one, one, one, 3e5 * one, {}, {})
+        >>> [float(f[0, 0]) for f in image.frequencies(4e3)]
+        [298000.0, 302000.0]
+        """
         return self.centre - width / 2, self.centre + width / 2
 
 
-def _layers(path: Path) -> tuple[dict, dict, list]:
-    """The wave's layers by label, its note and the notes of what was read."""
+def _layers(path: Path) -> tuple[dict, dict]:
+    """The wave's layers by label and its note."""
     wave = ibw._load(path)
     data = np.asarray(wave["wData"])
     if data.ndim != 3:
         raise UserError(f"{path}: not a DART image (a wave of {data.ndim} dimensions, not points x lines x layers)")
     labels = ibw._labels(path, wave, 2, data.shape[2]) or []
     note = asylum.parse_note(decode_text(wave.get("note", b"")))
-    return {label: data[:, :, i] for i, label in enumerate(labels)}, note, []
-
-
-def is_dart(path) -> bool:
-    """Whether ``path`` is an ``.ibw`` image holding DART's layers (never raises).
-
-    >>> is_dart("missing.ibw")
-    False
-    """
-    try:
-        layers, _, _ = _layers(Path(path))
-    except (UserError, OSError):
-        return False
-    return any(_pick(layers, name) is not None for name in DART_CHANNELS[:2])
+    return {label: data[:, :, i] for i, label in enumerate(labels)}, note
 
 
 def _pick(layers: dict, name: str):
@@ -110,7 +110,8 @@ def read_dart(path) -> DartImage:
     path = Path(path)
     if not path.is_file():
         raise UserError(f"{path}: no such file")
-    layers, note, notes = _layers(path)
+    layers, note = _layers(path)
+    notes = []
     picked = {name: _pick(layers, name) for name in DART_CHANNELS}
     missing = [name for name, found in picked.items() if found is None]
     if missing:
