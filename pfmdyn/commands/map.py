@@ -241,6 +241,9 @@ def _dart(args, overrides: dict, given: dict) -> int:
     flags.require({name: entry[0] for name, entry in settings.items()}, _DART, args.data)
     lever = Cantilever.from_values(values)
     contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
+    if contact.k2_of(1.0) or lever.tilt:
+        from ..analysis.contact_resonance import require_tip_height
+        require_tip_height(lever, "k2 or a tilt")
     ny, nx = image.centre.shape
     print(f"DART image: {ny} lines x {nx} points ({image.direction}); lever k {lever.spring_constant:.4g} N/m, "
           f"f1 {lever.free_resonance:.6g} Hz, Q {lever.quality_factor:.4g}; drive {settings['drive_amplitude'][0]:g} V, "
