@@ -65,7 +65,7 @@ OWN = {   # each command's own number flags (besides the probe's quantities)
     "stiffness": ("--contact", "--mode", "--free-resonance-uncertainty", "--spring-constant-uncertainty"),
     "diagram": ("--d-eff", "--local-force", "--surface-potential", "--fmin", "--fmax", "--vmin", "--vmax",
                 "--frequency-points", "--bias-points"),
-    "deconvolve": ("--surface-potential",), "roots": ("--n", "--digits", "--k1-over-k"),
+    "deconvolve": ("--surface-potential",), "roots": ("--modes", "--digits", "--k1-over-k"),
     "branches": ("--points", "--modes"), "discrepancy": (),
     "map": ("--block", "--workers", "--max-blocks", "--gap-threshold", "--surface-potential"),
 }
@@ -86,12 +86,12 @@ def base_lines(tmp: Path) -> dict:
         "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", f"{out}/s.json", "--plot", f"{out}/s.png"],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--length", "2e-4", "--json", f"{out}/k.json"],
-        "diagram": ["diagram", "--out", f"{out}/d.png", "--csv", f"{out}/d.csv", "--frequency-points", "20",
+        "diagram": ["diagram", "--plot", f"{out}/d.png", "--csv", f"{out}/d.csv", "--frequency-points", "20",
                     "--bias-points", "5"],
         "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", f"{out}/dec", *PROBE],
-        "roots": ["roots", "elastic", "--n", "2", "--k1-over-k", "10", "--k2-ratio", "0.1", "--k2t-hl", "0",
+        "roots": ["roots", "elastic", "--modes", "2", "--k1-over-k", "10", "--k2-ratio", "0.1", "--k2t-hl", "0",
                   "--json", f"{out}/r.json"],
-        "branches": ["branches", "elastic", "--out", f"{out}/b.png", "--csv", f"{out}/b.csv", "--points", "20",
+        "branches": ["branches", "elastic", "--plot", f"{out}/b.png", "--csv", f"{out}/b.csv", "--points", "20",
                      "--modes", "1", "--k1-over-k", "1"],
         "discrepancy": ["discrepancy", str(table), "--json", f"{out}/q.json", "--plot", f"{out}/q.png"],
         "inspect": ["inspect", str(table), "--json", f"{out}/i.json"],
@@ -251,14 +251,15 @@ def probe_cases():
 
 
 def _unexplained_nulls(document: dict) -> list[str]:
-    """Keys holding null where a number is promised and no reason is given."""
-    missing = [key for key in ("free_hz", "contact_hz") if None in document.get(key, [None])]
-    for prefix in ("free", "contact"):
-        reasons = document.get(f"{prefix}_undetermined", [])
-        for key in (f"{prefix}_damped_hz", f"{prefix}_peak_hz", f"{prefix}_q"):
-            for i, value in enumerate(document.get(key, [])):
-                if value is None and not (i < len(reasons) and reasons[i]):
-                    missing.append(f"{key}[{i}]")
+    """Records holding null where a number is promised and no reason is given (a mode's is a note)."""
+    results = document.get("results", {})
+    missing = [f"{c}.resonance" for c in ("free", "contact") if None in results.get(c, {}).get("resonance", {})
+               .get("value", [None])]
+    for condition in ("free", "contact"):
+        for key in ("damped_resonance", "amplitude_peak", "predicted_quality_factor"):
+            for i, value in enumerate(results.get(condition, {}).get(key, {}).get("value", [])):
+                if value is None and not any(n.startswith(f"{condition} mode {i + 1}: ") for n in document["notes"]):
+                    missing.append(f"{condition}.{key}[{i}]")
     return missing
 
 

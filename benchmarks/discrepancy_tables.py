@@ -75,11 +75,13 @@ def main() -> int:
         if status != 0:
             ok, line = False, f"exit {status}: {str(out)[-200:]}"
         else:
-            ok = sorted(out["missing_effects"]) == want and out["gap_after"] <= GAP_PASS and elapsed <= LIMIT_S
+            gaps = {key: out["fit"][key]["value"] for key in ("gap_before", "gap_after")}
+            mechanisms = out["results"]["damping_mechanisms"]["value"]
+            ok = sorted(out["missing_effects"]) == want and gaps["gap_after"] <= GAP_PASS and elapsed <= LIMIT_S
             if mech:
-                ok = ok and out["damping_mechanisms"] == [mech]
-            line = (f"named {'+'.join(out['missing_effects']) or 'none'} {out['damping_mechanisms'] or ''}, "
-                    f"gap {out['gap_before']:.3g} -> {out['gap_after']:.2f}")
+                ok = ok and mechanisms == [mech]
+            line = (f"named {'+'.join(out['missing_effects']) or 'none'} {mechanisms or ''}, "
+                    f"gap {gaps['gap_before']:.3g} -> {gaps['gap_after']:.2f}")
         passed += ok
         label = "+".join(((mech,) if mech else ()) + hidden) or "none"
         print(f"{kind} {label} seed {seed}: {line}, {elapsed:.1f} s {'ok' if ok else 'FAIL'}", flush=True)

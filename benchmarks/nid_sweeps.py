@@ -41,7 +41,9 @@ def main(cases: int = 100) -> None:
             if code:
                 failures.append(f"seed {1000 + seed}: exit {code}: {err.getvalue().strip()}")
                 continue
-            fit = json.loads(out.read_text())
+            doc = json.loads(out.read_text())
+            fit = {"peak_hz": doc["results"]["amplitude_peak"]["value"],
+                   "quality_factor": doc["results"]["free_quality_factor"]["value"], "gap": doc["fit"]["gap"]["value"]}
             peak = f0 / np.sqrt(1 - 0.5 / q**2)
             ok = (abs(fit["peak_hz"] / peak - 1) < max(2e-4, 0.05 / q) and abs(fit["quality_factor"] / q - 1) < 0.1
                   and fit["gap"] < 2)

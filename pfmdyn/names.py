@@ -186,8 +186,9 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("disagrees", "disagrees", "1", "the quantities whose value differs from the instrument's by more than three of "
          "our standard uncertainties"),
         # drive sweeps and thermal tunes
-        ("gain", "G", "V/rad", "detector gain: signal per lever slope (in phase, quadrature)"),
-        ("background", "b", "V", "additive background of a sweep (real, imaginary part per coefficient)"),
+        ("gain", "G", "data/rad", "detector gain: signal (in the data's unit, the notes say which) per lever slope"),
+        ("background", "b", "data", "additive background of a sweep, in the data's unit (constant and linear "
+         "coefficients)"),
         ("amplitude_only", "amplitude only", "1", "true when the sweep holds no phase"),
         ("phase_reversed", "phase reversed", "1", "true when the instrument's phase runs the other way"),
         ("detection_scale", "s_det", "1", "measured over predicted thermal spectrum: the detection's calibration"),

@@ -129,7 +129,7 @@ REFUSED = [
     ("roots", ["--modes", "100000"], "--modes"),                                         # was a run of hours
     ("branches", ["--points", "1"], "--points"),
     ("branches", ["--modes", "51"], "--modes"),
-    ("branches", ["--out", "{tmp}/out.xyz"], "cannot write"),
+    ("branches", ["--plot", "{tmp}/out.xyz"], "cannot write"),
     ("inspect", ["--json", "{tmp}"], "cannot write"),
     ("resonances", ["--temperature", "abc"], "--temperature"),                  # was ignored in vacuum
     ("stiffness", ["--temperature", "0"], "--temperature"),
@@ -158,7 +158,7 @@ def test_bad_input_is_one_line_and_writes_nothing(command, extra, words, tmp_pat
 
 
 @pytest.mark.parametrize("command, missing", [("resonances", "--length"), ("spot", "--frequency"),
-                                              ("deconvolve", "--surface-potential"), ("branches", "--out")])
+                                              ("deconvolve", "--surface-potential"), ("branches", "--plot")])
 def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys):
     argv = _argv(tmp_path, command)
     i = argv.index(missing)

@@ -14,6 +14,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import FEBeam, random_case, resonances, spectrum  # noqa: E402
 from paper_resonances import paper_tables  # noqa: E402
+from schema_check import validate  # noqa: E402
 from pfmdyn import cli
 from pfmdyn.discrepancy.spectrum import analyse
 from pfmdyn.plots.discrepancy import plot_spectrum_report
@@ -110,6 +111,7 @@ def test_cli_hidden_background(tmp_path):
     out, png = tmp_path / "o.json", tmp_path / "o.png"
     assert cli.main(["discrepancy", str(data), "--json", str(out), "--plot", str(png)]) == 0
     report = json.loads(out.read_text())
+    validate(report)
     assert report["missing_effects"] == ["background"]
     assert report["fit"]["gap_before"]["value"] > 5 and report["fit"]["gap_after"]["value"] < 1.3
     step = report["fit"]["steps"][0]

@@ -7,12 +7,17 @@ beam pfmdyn fits), quantised to 16 bits, with noise; expected numbers are the on
 """
 import importlib.util
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from pfmdyn import cli
-from pfmdyn.io.instruments import read_instrument
+sys.path.insert(0, str(Path(__file__).parent))
+from schema_check import validate  # noqa: E402
+
+from pfmdyn import cli  # noqa: E402
+from pfmdyn.io.instruments import read_instrument  # noqa: E402
 
 RANGE_V = 20.0
 
@@ -89,6 +94,7 @@ def test_nid_sweep_is_fitted_as_a_spectrum(tmp_path, capsys, seed):
                      "--width", f"{width:.6g}", "--json", str(out)]) == 0
     text = capsys.readouterr().out
     fit = json.loads(out.read_text())
+    validate(fit)
     # the header's "Freq. peak" is a peak: beside our amplitude peak, not our resonance
     assert "in air" in text and (f"instrument: amplitude peak {float(f'{f0 / 1e3:.6g}') * 1e3:,.0f} Hz "
                                  f"(ours {fit['results']['amplitude_peak']['value']:,.0f} Hz)").replace(",", " ") in text
@@ -140,6 +146,7 @@ def test_nid_sweeps_compared_with_a_figure(tmp_path, capsys):
                      "--json", str(out)]) == 0
     assert figure.read_bytes()[:4] == b"\x89PNG"
     result = json.loads(out.read_text())
+    validate(result)
     assert result["missing_effects"] == ["added_mass"] and result["results"]["added_mass"]["value"] > 0
     before_hz, after_hz = result["results"]["free_resonance"]["value"]
     assert after_hz / before_hz == pytest.approx(0.997, abs=3e-4)

@@ -108,7 +108,7 @@ def test_every_quantity_flag_comes_from_the_shared_helpers():
     """A quantity's flag is made by pfmdyn.commands.flags (its help states the quantity's meaning
     and unit from pfmdyn.names), so a command cannot give it another meaning or unit."""
     plain = {(c, o) for c, o, dest, shown in _options()
-             if dest in NAMES and shown and o.startswith("--") and not _help(c, o).startswith(NAMES[dest].meaning)}
+             if dest in NAMES and NAMES[dest].option and shown and o.startswith("--") and not _help(c, o).startswith(NAMES[dest].meaning)}
     assert plain == NOT_SHARED
 
 

@@ -101,3 +101,11 @@ def test_the_discrepancy_kinds_and_the_map_summary_validate(tmp_path):
             validate({**good, "results": {**good["results"], "k1": broken}})
     with pytest.raises(AssertionError, match="not a name"):
         validate({**good, "results": {**good["results"], "k1_hz": quantity("k1", 1.0)}})
+
+
+def test_quiet_prints_only_a_document_asked_on_standard_output(capsys):
+    """``--quiet`` (every command): nothing but errors; ``--json -`` still prints the document, alone."""
+    assert cli.main(["roots", "free", "--modes", "1", "--quiet"]) == 0
+    assert capsys.readouterr().out == ""
+    assert cli.main(["roots", "free", "--modes", "1", "--digits", "5", "--quiet", "--json", "-"]) == 0
+    assert json.loads(capsys.readouterr().out)["results"]["root"]["value"] == ["1.8751"]

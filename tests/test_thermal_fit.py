@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from schema_check import validate  # noqa: E402
 from test_sweeps_fit import B1, SILICON  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -98,6 +99,7 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert cli.main(["discrepancy", str(REAL), "--length", "225e-6", "--width", "40e-6", "--json", str(out)]) == 0
     text = capsys.readouterr().out
     fit = json.loads(out.read_text())
+    validate(fit)
     lever = fit["lever"]
     assert lever["temperature"]["value"] == pytest.approx(313.15) and lever["medium"]["value"].startswith("air")
     assert fit["results"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)

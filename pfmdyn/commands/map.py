@@ -46,7 +46,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("data", metavar="INPUT", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
                                      "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx); "
                                      "or an Asylum DART image (.ibw, dual AC resonance tracking)")
-    parser.add_argument("--out", required=True, help="output directory (gets maps.zarr)")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory (gets maps.zarr)")
     parser.add_argument("--model", default="auto",
                         help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
                              "per band, and k2 when the frequencies hold two or more contact-mode bands) plus damping "
@@ -68,7 +68,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=int, default=None, help="local worker processes, or for --model sho threads (default: all cores)")
     parser.add_argument("--max-blocks", type=int, default=None,
                         help="stop after this many blocks (rerun the same command to continue)")
-    parser.add_argument("--start-quality-factor", type=float, default=100.0,
+    parser.add_argument("--start-quality-factor", type=float, default=100.0, metavar="Q",
                         help="the fit's starting Q of the contact mode, not a lever's internal friction (default 100)")
     parser.add_argument("--quality-factor", dest="start_quality_factor", type=float, help=argparse.SUPPRESS)   # old
     parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,

@@ -33,8 +33,9 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     """
     value, stderr, why = entry.get("value"), entry.get("stderr"), entry.get("why")
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
-        shown = "" if value is None else f": {value:.3g} +/- {stderr:.3g} {NAMES[name].unit}".replace(" 1", "") \
-            if stderr is not None else f": {value:.3g}"
+        # the estimate the data leave undetermined is said, not lost
+        unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
+        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
@@ -256,7 +257,19 @@ def _sweep_results(fit: dict) -> dict:
 
 def sweep_fit(fit: dict, given=()) -> dict:
     """The document of ``pfmdyn discrepancy`` on one drive sweep (kind ``sweep``): the lever in its fluid,
-    the detector's gain and background, against what the instrument's own fit recorded."""
+    the detector's gain and background, against what the instrument's own fit recorded.
+
+    >>> fit = {"path": "s.txt", "instrument": "Cytomass", "points": 160, "medium": "water at 20 C",
+    ...        "spring_constant": 8.0, "length": 1e-4, "vacuum_resonance": 7.5e4, "quality_factor": 6.8,
+    ...        "peak_hz": 7.1e4, "gap": 1.05, "noise": 1e-4, "unexplained": None, "from_file": ["amplitude_peak"],
+    ...        "assumed": ["medium water at 20 C (none in the file)"], "amplitude_only": False, "phase_reversed": False,
+    ...        "parameters": {"free_resonance": {"value": 7.2e4, "stderr": 16.7, "unit": "Hz"}},
+    ...        "gain": {"value": [1e-9, 9e-8], "unit": "V/rad"}, "background": {"value": [[1e-3, 2e-3]], "unit": "V"},
+    ...        "instrument_fit": {"amplitude_peak": 7.1e4}, "instrument_comparison": []}
+    >>> doc = sweep_fit(fit, given=["spring_constant", "length"])
+    >>> doc["results"]["gain"]["value"], doc["lever"]["medium"]["status"], doc["missing_effects"]
+    ({'real': 1e-09, 'imag': 9e-08}, 'assumed', [])
+    """
     results = _sweep_results(fit)
     results["amplitude_peak"] = quantity("amplitude_peak", fit["peak_hz"], status="derived")
     results["gain"] = quantity("gain", _complex(fit["gain"]["value"]), status="fitted")
@@ -285,7 +298,18 @@ def _complex(pairs):
 def sweep_comparison(out: dict, given=()) -> dict:
     """The document of ``pfmdyn discrepancy AFTER --reference BEFORE`` (kind ``comparison``): what changed
     between two drive sweeps under ``missing_effects`` (``added_mass``, or none), the reference's own fit
-    under ``fit.reference``."""
+    under ``fit.reference``.
+
+    >>> reference = {"path": "b.txt", "points": 10, "spring_constant": 8.0, "length": 1e-4, "vacuum_resonance": 7.5e4,
+    ...     "quality_factor": 6.8, "peak_hz": 7.1e4, "gap": 1.0, "noise": 1e-4, "amplitude_only": False,
+    ...     "phase_reversed": False, "parameters": {}, "gain": {"value": [1.0, 0.0], "unit": "V/rad"},
+    ...     "background": {"value": [[0.0, 0.0]], "unit": "V"}}
+    >>> out = {"path": "a.txt", "reference": "b.txt", "effect": "nothing", "parameters": {}, "lever_mass": 1e-10,
+    ...        "resonance_before": 7.2e4, "resonance_after": 7.2e4, "gap_before": 1.0, "gap_after": 1.0, "noise": 1e-4,
+    ...        "gain_after": [1.0, 0.0], "background_after": [[0.0, 0.0]], "steps": [], "reference_fit": reference}
+    >>> sweep_comparison(out)["missing_effects"]
+    []
+    """
     results = records_of(out["parameters"])
     results["lever_mass"] = quantity("lever_mass", out["lever_mass"], status="derived")
     results["free_resonance"] = quantity("free_resonance", [out["resonance_before"], out["resonance_after"]],
@@ -320,7 +344,16 @@ def sweep_comparison(out: dict, given=()) -> dict:
 
 def thermal_fit(fit: dict, given=()) -> dict:
     """The document of ``pfmdyn discrepancy`` on a thermal tune (kind ``thermal``): the lever in its fluid at
-    its temperature, the detection's scale against the equipartition theorem."""
+    its temperature, the detection's scale against the equipartition theorem.
+
+    >>> fit = {"path": "t.nid", "points": 6955, "band_hz": [5e4, 3e5], "medium": "air at 40 C", "temperature": 313.15,
+    ...        "spring_constant": 27.1, "length": 2.25e-4, "vacuum_resonance": 1.8e5, "quality_factor": 398.0,
+    ...        "parameters": {}, "detection_scale": 1.7, "white_floor": 1e-13, "unit": "m/sqrt(Hz)", "noise": 0.016,
+    ...        "gap": 1.35, "from_file": ["medium", "temperature"], "assumed": []}
+    >>> doc = thermal_fit(fit, given=["length"])
+    >>> doc["lever"]["temperature"]["status"], doc["results"]["free_quality_factor"]["value"]
+    ('file', 398.0)
+    """
     results = _sweep_results(fit)
     results["detection_scale"] = quantity("detection_scale", fit["detection_scale"], status="derived")
     results["white_floor"] = quantity("white_floor", fit["white_floor"], status="derived")
@@ -478,21 +511,31 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
+    def statistic(name, value):
+        if value is None or not math.isfinite(value):
+            return quantity(name, None, why="no pixel of the map determines it (none fitted by this run, or none "
+                                            "explained)")
+        return quantity(name, value, status="derived")
+
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
-    results.update({name: quantity(name, summary[name], status="derived") for name in MAP_RESULTS if name in summary})
-    fit = {name: quantity(name, summary[name], status="derived")
+    results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})
+    fit = {name: statistic(name, summary[name])
            for name in ("blocks_run", "blocks_done", "blocks_total", "pixels_fitted") if name in summary}
     if "pixels_per_s" in summary:
-        fit["pixels_per_second"] = quantity("pixels_per_second", summary["pixels_per_s"], status="derived")
+        fit["pixels_per_second"] = statistic("pixels_per_second", summary["pixels_per_s"])
     notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
     lever = lever_records(given or {}, given=list(given or {}))
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
 
 
-def _probe(values: dict, given=(), from_file=()) -> dict:
-    """The lever (and contact) a computation took: given, from a file, or the defaults."""
-    return lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
-                         given=given, from_file=from_file)
+def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None) -> dict:
+    """The lever (and contact) a computation took: given, from a file, or the defaults; k2, when not given,
+    tied to k1 by ``k2_policy``."""
+    out = lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
+                        given=given, from_file=from_file)
+    if k2_policy and "k2" in out and "k2" not in given:
+        out["k2"] = quantity("k2", out["k2"]["value"], status="tied", why=k2_policy)
+    return out
 
 
 def _mode_records(d: dict, prefix: str) -> dict:
@@ -531,7 +574,7 @@ def resonances(d: dict, given=()) -> dict:
                     notes.append(f"{prefix} mode {i}: {why}")
     if d.get("k2_policy"):
         notes.append(f"k2 policy: {d['k2_policy']}")
-    return document("resonances", "modes", {}, _probe(d, given), results, None, notes)
+    return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
 
 
 def _complex_record(name: str, z: dict | None, why: str) -> dict:
@@ -540,7 +583,18 @@ def _complex_record(name: str, z: dict | None, why: str) -> dict:
 
 def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     """The document of ``pfmdyn spot`` (kind ``spot``): blind spots, the slope ratio along the lever
-    (dims spot_position), the sensitivities and calibration factors (complex) at the lever's spot."""
+    (dims position), the sensitivities and calibration factors (complex) at the lever's spot.
+
+    >>> d = {"frequency": 1e5, "beta": 2.24, "blind_spot": [0.62], "blind_spot_intervals": [[0.61, 0.63]],
+    ...      "certified": True, "q0_to_d1_slope_ratio": {"spot_position": [0.5, 1.0], "re": [1e-5, 2e-5], "im": [0, 0]},
+    ...      "free_sensitivity": 0.67, "contact_sensitivity": 0.74, "calibration_factor": {"re": 0.86, "im": 0.0},
+    ...      "paper_calibration_factor": {"re": 0.78, "im": 0.0}, "d_eff_error_per_volt": None,
+    ...      "d_eff_error_per_volt_undetermined": "needs the lever width", "lever": {"spring_constant": 2.0},
+    ...      "k1": 100.0, "k2": 82.4}
+    >>> doc = spot(d, given=["spring_constant", "k1"])
+    >>> doc["results"]["d_eff_error_per_volt"]["why"], doc["results"]["calibration_factor"]["value"]
+    ('needs the lever width', {'real': 0.86, 'imag': 0.0})
+    """
     ratio = d["q0_to_d1_slope_ratio"]
     results = {
         "frequency": quantity("frequency", d["frequency"], status="given"),
@@ -559,7 +613,7 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
                                                     "undetermined"),
         "d_eff_error_per_volt": _complex_record("d_eff_error_per_volt", d["d_eff_error_per_volt"],
                                                 d.get("d_eff_error_per_volt_undetermined", "undetermined"))}
-    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file)
+    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"))
     notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
     notes += [f"not certified: {d['reason']}"] if not d["certified"] else []
     return document("spot", "spot", {"path": None if path is None else str(path)}, lever, results, None, notes)
@@ -567,7 +621,12 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
 
 def roots(d: dict) -> dict:
     """The document of ``pfmdyn roots`` (kind ``roots``): the family's roots as decimal strings (exact
-    digits), certified enclosures, the family's parameters (exact decimal strings)."""
+    digits), certified enclosures, the family's parameters (exact decimal strings).
+
+    >>> roots({"family": "free", "parameters": {}, "roots": ["1.8751"], "intervals": [["1.87510", "1.87511"]],
+    ...        "certified": True})["results"]["root"]["value"]
+    ['1.8751']
+    """
     results = {"root": quantity("root", d["roots"], status="derived", dims=["root"]),
                "root_interval": quantity("root_interval", d["intervals"], status="derived", dims=["root", "bound"]),
                "certified": quantity("certified", bool(d["certified"]), status="derived")}
@@ -578,7 +637,13 @@ def roots(d: dict) -> dict:
 
 def inspection(d: dict) -> dict:
     """The document of ``pfmdyn inspect`` (kind ``file``): what an instrument file holds, each value a
-    record of status ``file``; its channels and what it lacks as notes."""
+    record of status ``file``; its channels and what it lacks as notes.
+
+    >>> doc = inspection({"path": "t.nid", "kind": "thermal spectrum", "instrument": "Nanosurf (NID)", "channels": [],
+    ...                   "fields": {"free_resonance": {"value": 1.8e5, "unit": "Hz"}}, "missing": ["length"], "notes": []})
+    >>> doc["results"]["free_resonance"]["status"], doc["notes"]
+    ('file', ['not in the file: length'])
+    """
     results = {name: quantity(name, r["value"], status="file", why="read from the input file")
                for name, r in d["fields"].items()}
     notes = [f"channel {c['name']}: {c.get('unit') or 'no unit'}, shape {tuple(c.get('shape') or ())}"
