@@ -252,8 +252,9 @@ def start_k1(lever: Cantilever, contact: Contact, resonance, points: int = 96):
     if known.sum() == 1:
         out[ok] = np.where(np.isclose(resonance[ok], grid[known][0]), k1[known][0], np.nan)
     elif known.any():
-        out[ok] = np.exp(np.interp(np.log(resonance[ok]), np.log(grid[known]), np.log(k1[known]),
-                                   left=np.nan, right=np.nan))
+        # beyond the known ends (a resonance above the pinned lever's, an oscillator pulled by an
+        # anti-resonance near the peak) the nearest end: a start, which Newton moves
+        out[ok] = np.exp(np.interp(np.log(resonance[ok]), np.log(grid[known]), np.log(k1[known])))
     return out
 
 
@@ -406,6 +407,23 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
             progress(min(start + block, len(f1)), len(f1))
     fit = LeverFit(*(np.concatenate(parts) for parts in zip(*fits))) if fits else \
         LeverFit(*([np.empty(0)] * 6 + [np.empty(0, bool)]))
+    # where Newton found nothing from the oscillator's start (pulled by an anti-resonance near the peak, a
+    # tracking far off), again from the tracked centre, then from a few stiffer and softer contacts
+    centre_k1 = start_k1(lever, contact, (f1 + f2) / 2)
+    for scale, loss in ((None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
+        again = np.flatnonzero(~fit.converged)
+        if not again.size:
+            break
+        k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
+                                                                            k1_start[again], centre_k1[again])
+        retry = lever_inversion(lever, contact, f1[again], f2[again], s1[again], s2[again], k1_again,
+                                np.full(again.size, loss), drive_amplitude)
+        fields = []
+        for whole, part in zip(fit, retry):
+            whole = whole.copy()
+            whole[again] = np.where(retry.converged, part, whole[again])
+            fields.append(whole)
+        fit = LeverFit(*fields)
     with np.errstate(all="ignore"):
         sigma = channel_noise([(np.log(fit.k1).reshape(shape), fit.k1_sensitivity.reshape(shape)),
                                (fit.contact_loss.reshape(shape), fit.loss_sensitivity.reshape(shape)),
