@@ -141,6 +141,24 @@ QUANTITIES: tuple[Quantity, ...] = (
              aliases=("drive_frequency_hz",), option=False),
     Quantity("tip_bias", "V_tip", "V", "DC bias on the tip", -1e4, 1e4, open_low=False,
              aliases=("tip_bias_v",), option=False),
+    # Dual AC resonance tracking (DART) images: the drive, and the maps ``pfmdyn map`` makes of them.
+    Quantity("drive_amplitude", "V_ac", "V", "AC drive on the tip, zero-to-peak (DART: DriveAmplitude)", 0.0, 1e3),
+    Quantity("frequency_width", "df", "Hz", "DART: spacing f2 - f1 of the two drive frequencies about the tracked "
+             "centre (DFRTFrequencyWidth)", 0.0, 1e9),
+    Quantity("d_eff", "d_eff", "m/V", "effective piezoelectric coefficient: surface displacement along k1 per tip "
+             "volt, signed (> 0: toward the lever in phase with the bias)", -1.0, 1.0, open_low=False),
+    Quantity("channel_noise", "sigma", "1", "relative noise of each lock-in signal (circular, complex), estimated "
+             "from the image", 0.0, 100.0, open_low=False, option=False),
+    Quantity("oscillator_k1", "k1_pm", "N/m", "point-mass contact stiffness k ((f_c/f1)^2 - 1) of the oscillator's "
+             "resonance", -1e9, 1e9, option=False, label="point-mass k1"),
+    Quantity("oscillator_k1_error", "k1_pm/k1 - 1", "1", "relative difference of the point-mass k1 from the lever's",
+             -1e9, 1e9, option=False, label="point-mass k1 error"),
+    Quantity("oscillator_d_eff", "d_eff,osc", "m/V", "d_eff read through the oscillator: its static gain as the "
+             "point-mass lever's k1/(k + k1), signed by its drive phase", -1.0, 1.0, option=False,
+             label="oscillator d_eff"),
+    Quantity("oscillator_d_eff_error", "d_eff,osc/d_eff - 1", "1", "relative difference of the oscillator's d_eff "
+             "from the lever's (-2: the sign flipped)", -1e9, 1e9, option=False, label="oscillator d_eff error"),
+    _report("determined_fraction", "determined", "1", "fraction of a DART image's pixels both inversions determine"),
     # What the reports hold besides the lever and the contact (keys of the JSON documents, pfmdyn.io.results).
     *(_report(name, symbol, unit, meaning) for name, symbol, unit, meaning in (
         # spectra and resonances

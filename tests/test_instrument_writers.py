@@ -10,6 +10,7 @@ SI) or a one-line error naming what is missing.  Expected numbers are the ones w
 """
 import importlib.util
 import json
+import sys
 import warnings
 from pathlib import Path
 
@@ -21,6 +22,9 @@ from pfmdyn.errors import UserError
 from pfmdyn.analysis.thermal import instrument_resonances
 from pfmdyn.io.instruments import read_instrument
 from pfmdyn.io.record import si_unit
+
+sys.path.insert(0, str(Path(__file__).parent))
+from igor_files import asylum_note, igor_wave  # noqa: E402
 
 # The writers' own deprecation notices are not the readers' concern.
 pytestmark = [pytest.mark.filterwarnings("ignore::UserWarning:pyUSID"),
@@ -38,30 +42,6 @@ ASYLUM = {"SpringConstant": ("2.7193", "spring_constant", 2.7193),
           "CustomLeverWidth": ("4e-5", "width", 4e-5)}
 LAYERS = {"HeightRetrace": "m", "AmplitudeRetrace": "m", "PhaseRetrace": "deg", "UserIn0Retrace": "V"}
 TIP = {"tip_height": 1.4e-5}
-
-
-def asylum_note(values: dict, end="\r") -> str:
-    """A note as Asylum writes it: settings first, then the lever, one ``Key: value`` per line."""
-    lines = ["ScanSize: 2e-06", "FastScanSize: 2e-06", "SlowScanSize: 1.5e-06", "ScanRate: 1.0016", "ScanPoints: 16", "ScanLines: 12",
-             "ImagingMode:PFM Mode", "Date: 2019-03-07", "Time: 11:42:09 AM"]
-    return end.join(lines + [f"{k}: {v}" for k, v in values.items()] + ["UserName: Müller µ°", ""])
-
-
-def igor_wave(path, data, name="wave0", scales=(), data_unit=None, labels=None, note=None, unicode=True):
-    """Write ``data`` as igorwriter does for Igor; ``scales`` = (start, step, unit) per dimension."""
-    igorwriter = pytest.importorskip("igorwriter")
-    wave = igorwriter.IgorWave(data, name=name, unicode=unicode)
-    for dim, (start, step, unit) in zip("xyzt", scales):
-        wave.set_dimscale(dim, start, step, unit)
-    if data_unit is not None:
-        wave.set_datascale(data_unit)
-    for dim, names in (labels or {}).items():
-        for i, label in enumerate(names):
-            wave.set_dimlabel(dim, i, label)
-    if note is not None:
-        wave.set_note(note)
-    wave.save(str(path))
-    return path
 
 
 def image_scales(unit="m", step=1e-7):

@@ -194,7 +194,7 @@ INNER_RANKS = {
                     ("peaks", "report", "resonance_fit"),
                     ("resonances", "spectrum")),                             # the two analyses
     "maps": (("bias", "spec", "sho_kernel"), ("outputs", "sho"), ("beam", "resonance_start"), ("fit", "readers"), ("select", "store"),
-             ("contact", "result", "usid"), ("driver",)),
+             ("contact", "dart", "result", "usid"), ("driver",)),
     "book": (("records",), ("build", "display")),                            # the verdicts; their build, their display
 }
 """Layers of each package's modules, lowest first."""

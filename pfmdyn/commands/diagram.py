@@ -30,7 +30,7 @@ def add_arguments(parser) -> None:
     flags.add_damping(parser, ("quality_factor",), defaults={"quality_factor": (None, "lossless, as in the paper")})
     flags.add_contact(parser, ("k1",), defaults={"k1": (PAPER_K1, f"{PAPER_K1:g}, the paper's")})
     flags.add_lever(parser, ("tip_height",), medium=False, defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
-    parser.add_argument("--d-eff", type=float, default=PAPER_D_EFF, help=f"d_eff, m/V ({PAPER_D_EFF:g})")
+    flags.add(parser, ("d_eff",), defaults={"d_eff": (PAPER_D_EFF, f"{PAPER_D_EFF:g}, the paper's")})
     parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
                         help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
     parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V (default 0)")
@@ -117,9 +117,10 @@ def run(args) -> int:
     lever, width = _cli_cantilever(args)
     lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
     contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
+    args.d_eff = flags.given(args, ("d_eff",))["d_eff"]
     if not contact["k1"] > 0:
         raise UserError(f"--k1 must be > 0 N/m: the diagram is of the lever in contact, got {contact['k1']:g}")
-    for option, value in (("--d-eff", args.d_eff), ("--local-force", args.local_force),
+    for option, value in (("--local-force", args.local_force),
                           ("--surface-potential", args.surface_potential)):
         if not math.isfinite(value):
             raise UserError(f"{option} must be a finite number, got {value}")

@@ -6,12 +6,16 @@
     pfmdyn map scan.h5 --out result/ --scheduler tcp://host:8786
     pfmdyn map be_usid.h5 --out result/ --spring-constant 2 --length 225e-6   # pycroscopy USID
     pfmdyn map be_usid.h5 --out result/ --model sho        # BGlib's SHO, result/be_usid.h5 in BGlib's layout
+    pfmdyn map dart.ibw --out result/ --tip-height 12e-6 --plot figures/ --json -     # an Asylum DART image
 
 The input holds ``response`` (ny, nx, n_freq, complex; or (ny, nx, n_bias, n_freq) with
 ``bias_v``, which adds maps of the electrostatic term and the nulling bias), ``frequency_hz`` and
 the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, nx) array per quantity with its
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
-becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  Rerunning an interrupted command resumes where it stopped.
+becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  An Asylum DART
+image (``.ibw``, :mod:`pfmdyn.io.dart`) becomes maps of the contact resonance and Q (the
+two-frequency oscillator), k1, the contact loss and the signed d_eff (the lever), and of how far
+the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
 A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a copy of the input
 in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
@@ -33,12 +37,15 @@ _LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_posi
           "tip_gyration_radius", "tilt", "spot_position")
 _CONTACT = ("k2", "k2_over_k1", "poisson")
 """The probe's flags (:mod:`pfmdyn.commands.flags`): they override the file's metadata."""
+_DART = ("drive_amplitude", "frequency_width")
+"""A DART image's settings, over its note's."""
 
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn map``."""
     parser.add_argument("data", metavar="INPUT", help="map file: HDF5 (.h5) or Zarr directory with response (ny, nx[, n_bias], n_freq), "
-                                     "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx)")
+                                     "frequency_hz[, bias_v]; or USID BE/BEPS HDF5; or contact_frequency_hz (ny, nx); "
+                                     "or an Asylum DART image (.ibw, dual AC resonance tracking)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory (gets maps.zarr)")
     parser.add_argument("--model", default="auto",
                         help="per-pixel model: 'elastic' (elastic contact, k1, internal friction 1/Q, complex d_eff "
@@ -77,6 +84,7 @@ def add_arguments(parser) -> None:
     flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
+    flags.add(parser, _DART)
 
 
 def _mechanisms(args, source, fit_options):
@@ -97,8 +105,8 @@ def _mechanisms(args, source, fit_options):
     return mechanisms, rows
 
 
-def _progress_bar(enabled: bool):
-    """A tqdm bar of blocks done (of the whole map) with pixels per second, as a
+def _progress_bar(enabled: bool, unit: str = "block"):
+    """A tqdm bar of blocks (or ``unit``) done (of the whole map) with pixels per second, as a
     :func:`pfmdyn.maps.driver.run_map` progress callback (None when disabled) and its closer."""
     if not enabled:
         return None, lambda: None
@@ -107,7 +115,7 @@ def _progress_bar(enabled: bool):
 
     def report(done, total, pixels):
         if "bar" not in state:
-            state["bar"] = tqdm(total=total, initial=done, unit="block")
+            state["bar"] = tqdm(total=total, initial=done, unit=unit)
             return
         bar = state["bar"]
         bar.update(done - bar.n)
@@ -129,6 +137,7 @@ def run(args) -> int:
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
     overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
+    dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
         overrides["medium"] = flags.medium_from_args(args)
     from ..io.kinds import CONTACT_MAP_KINDS, file_kind
@@ -141,6 +150,11 @@ def run(args) -> int:
         print(describe(summary))
         _write_json(args, summary, overrides)
         return 0
+    if file_kind(args.data) == "asylum":
+        if args.medium:
+            raise UserError(f"{args.data}: a DART image is inverted on the lever in vacuum (or air); a medium's load "
+                            "is not in this inversion")
+        return _dart(args, overrides, dart_settings)
     sho = args.model == "sho"
     source = open_map(args.data, overrides, sho=sho)
     if args.usid_inplace and source.layout != "usid":
@@ -200,3 +214,68 @@ def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
         shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
         given = {name: value for name, value in overrides.items() if name != "medium"}
         flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))
+
+
+def _dart(args, overrides: dict, given: dict) -> int:
+    """A DART image: the lever from the note and the flags, every pixel inverted both ways, the maps
+    written (and drawn, and summarised in JSON)."""
+    import os
+
+    import numpy as np
+    from .. import Cantilever, Contact
+    from ..io.dart import read_dart
+    from ..maps.dart import document, invert, write_dart
+    image = read_dart(args.data)
+    found = {name: (value, "file", f"the note of {os.path.basename(args.data)}")
+             for name, value in image.fields.items() if name in _LEVER}
+    found.update({name: (value, "given") for name, value in overrides.items() if name in _LEVER})
+    if "free_quality_factor" in image.fields:
+        found["quality_factor"] = (image.fields["free_quality_factor"], "file",
+                                   "the free lever's ThermalQ, taken as its internal friction")
+    else:
+        found["quality_factor"] = (math.inf, "assumed", "no ThermalQ in the note: the lever lossless")
+    settings = {name: (value, "file", "the note") for name, value in image.settings.items() if name in _DART}
+    settings.update({name: (value, "given") for name, value in given.items()})
+    values = {name: entry[0] for name, entry in found.items()}
+    flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
+    flags.require({name: entry[0] for name, entry in settings.items()}, _DART, args.data)
+    lever = Cantilever.from_values(values)
+    contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
+    if contact.k2_of(1.0) or lever.tilt:
+        from ..analysis.contact_resonance import require_tip_height
+        require_tip_height(lever, "k2 or a tilt")
+    ny, nx = image.centre.shape
+    print(f"DART image: {ny} lines x {nx} points ({image.direction}); lever k {lever.spring_constant:.4g} N/m, "
+          f"f1 {lever.free_resonance:.6g} Hz, Q {lever.quality_factor:.4g}; drive {settings['drive_amplitude'][0]:g} V, "
+          f"df {settings['frequency_width'][0]:.6g} Hz; {k2_policy}")
+    for note in image.notes:
+        print(note)
+    f1, f2 = image.frequencies(settings["frequency_width"][0])
+    s1, s2 = image.signals
+    report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
+    try:
+        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0],
+                             progress=None if report is None else lambda done, total: report(done, total, done))
+    finally:
+        close()
+    out = os.path.join(args.out, "maps.zarr")
+    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
+    folder = args.plot or (args.out if args.png else None)
+    if folder:
+        from ..maps import open_result
+        from ..plots.maps import plot_dart, plot_maps
+        os.makedirs(folder, exist_ok=True)
+        result = open_result(args.out)
+        for name, figure in {**plot_maps(result), "dart": plot_dart(result)}.items():
+            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    with np.errstate(all="ignore"):
+        ok = maps["determined"].astype(bool)
+        median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
+                  if ok.any() else math.nan for name in maps}
+    print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians: contact resonance "
+          f"{median['contact_resonance']:.6g} Hz, Q {median['contact_quality_factor']:.3g}, k1 {median['k1']:.4g} N/m, "
+          f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
+          f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
+          f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
+    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy))
+    return 0

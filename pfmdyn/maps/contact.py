@@ -17,7 +17,7 @@ from ..analysis.stiffness import contact_stiffness
 from ..errors import UserError
 from ..names import canonical, checked
 from .readers import open_root, scalar
-from .store import consolidate, open_group, write_array, write_coordinates
+from .store import write_maps
 
 __all__ = ["contact_map", "describe"]
 
@@ -59,17 +59,9 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty=sigma,
                                out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
-    try:        # a new map each time (nothing to resume): whatever was at out is replaced
-        group = open_group(out, "w")
-        for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr)):
-            write_array(group, name, np.broadcast_to(value, fc.shape).astype(float), units="N/m",
-                        long_name=f"{name} from the contact resonance", dims=("y", "x"))
-        write_coordinates(group, dict(zip(("y", "x"), fc.shape)))
-        consolidate(out)
-    except UserError:       # zarr not installed: already one line
-        raise
-    except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
-        raise UserError(f"cannot write {out}: {' '.join(str(exc).split())[:120]}") from None
+    # a new map each time (nothing to resume): whatever was at out is replaced
+    write_maps(out, {name: (np.broadcast_to(value, fc.shape).astype(float), "N/m", f"{name} from the contact resonance")
+                     for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr))})
     k1 = np.asarray(result.k1)
     median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
     return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}

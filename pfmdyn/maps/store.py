@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import UserError
 from .readers import require
 
 __all__ = ["DIMENSIONS", "consolidate", "create_map", "create_maps", "map_names", "open_group", "set_attributes",
-           "write_array", "write_coordinates", "write_regions", "zarr_major"]
+           "write_array", "write_coordinates", "write_maps", "write_regions", "zarr_major"]
 
 DIMENSIONS = "_ARRAY_DIMENSIONS"
 """The attribute naming an array's dimensions in xarray's convention for Zarr format 2."""
@@ -180,6 +181,36 @@ def write_coordinates(group, sizes: dict, bias_v=None, band_hz=None) -> None:
     for dim in sizes:
         values, unit, text = described[dim]
         write_array(group, dim, np.asarray(values), dims=(dim,), units=unit, long_name=text)
+
+
+def write_maps(path: str, maps: dict, attrs: dict | None = None) -> None:
+    """A new group at ``path`` (whatever was there replaced) holding ``maps`` (name -> ``(values, units,
+    long_name)``, ``(y, x)`` arrays of one shape), their coordinates and ``attrs``, consolidated.
+
+    >>> import tempfile
+    >>> path = tempfile.mkdtemp() + "/m.zarr"
+    >>> write_maps(path, {"k1": (np.ones((2, 3)), "N/m", "contact stiffness")}, {"source": "scan.ibw"})
+    >>> group = open_group(path)
+    >>> map_names(group), group["k1"].attrs[DIMENSIONS], group.attrs["source"]
+    (['k1'], ['y', 'x'], 'scan.ibw')
+    >>> write_maps("/dev/null/m.zarr", {})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: cannot write /dev/null/m.zarr: ...
+    """
+    try:
+        group = open_group(path, "w")
+        shape = None
+        for name, (values, units, long_name) in maps.items():
+            shape = np.shape(values)
+            write_array(group, name, values, units=units, long_name=long_name, dims=("y", "x"))
+        if shape is not None:
+            write_coordinates(group, dict(zip(("y", "x"), shape)))
+        if attrs:
+            set_attributes(group, attrs)
+        consolidate(path)
+    except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
+        raise UserError(f"cannot write {path}: {' '.join(str(exc).split())[:120]}") from None
 
 
 def map_names(group) -> list[str]:

@@ -8,10 +8,11 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["plot_maps"]
+__all__ = ["plot_maps", "plot_dart"]
 
 _SHOWN = ("k1", "k1_stderr", "k2", "quality_factor", "viscous_loss", "contact_loss", "amplitude", "phase",
-          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "r2", "gap")
+          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "r2", "gap",
+          "contact_resonance", "contact_quality_factor", "d_eff", "oscillator_k1_error", "oscillator_d_eff_error")
 
 
 def plot_maps(result) -> dict[str, Figure]:
@@ -42,3 +43,35 @@ def plot_maps(result) -> dict[str, Figure]:
                                    for dim in extra), fontsize=9)
         figures[name] = fig
     return figures
+
+
+_DART = ("contact_resonance", "contact_quality_factor", "k1", "contact_loss", "d_eff", "oscillator_k1_error",
+         "oscillator_d_eff_error", "determined")
+
+
+def plot_dart(result) -> Figure:
+    """One figure of a DART image's maps (:func:`pfmdyn.maps.dart.invert`, read by
+    :func:`pfmdyn.maps.open_result`): the oscillator's resonance and Q, the lever's k1, contact loss
+    and d_eff (a diverging scale: the domains' sign), and how far the oscillator is from the lever.
+
+    >>> import xarray
+    >>> ds = xarray.Dataset({"d_eff": (("y", "x"), np.array([[1e-12, -1e-12]]), {"units": "m/V"})})
+    >>> len(plot_dart(ds).axes)      # the panel and its colour bar
+    2
+    """
+    names = [name for name in _DART if name in result]
+    columns = min(4, max(len(names), 1))
+    rows = -(-len(names) // columns)
+    fig = Figure(figsize=(3.4 * columns, 2.9 * rows), layout="constrained")
+    for i, name in enumerate(names):
+        ax = fig.add_subplot(rows, columns, i + 1)
+        values = result[name].transpose("y", "x").values
+        limit = np.nanmax(np.abs(values)) if np.isfinite(values).any() else 1.0
+        signed = name == "d_eff" or name.endswith("_error")
+        image = ax.imshow(values, origin="lower", cmap="RdBu_r" if signed else "viridis",
+                          **({"vmin": -limit, "vmax": limit} if signed else {}))
+        fig.colorbar(image, ax=ax, label=result[name].attrs.get("units", ""))
+        ax.set_title(name, fontsize=9)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    return fig

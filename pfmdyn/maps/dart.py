@@ -1,0 +1,515 @@
+"""DART images (dual AC resonance tracking) to maps: the two-frequency oscillator, then the lever.
+
+At each pixel the tip's AC bias holds two frequencies ``f1 = fc - df/2`` and ``f2 = fc + df/2``
+about the tracked centre ``fc``; two lock-ins give the deflection signal's amplitude and lag at
+each, i.e. two complex signals ``s_j = A_j exp(-i phi_j)`` per volt of drive (``exp(i omega t)``
+convention: a lag is a negative argument).  Four reals per pixel fix four unknowns, twice:
+
+* **the oscillator** (Gannepalli, Yablon, Proksch and Kalinin, Nanotechnology 22, 355705
+  (2011)): ``s(f) = D f0**2 / (f0**2 - f**2 + i f f0 / Q)``.  Written as ``c / s_j = f0**2 - f_j**2
+  + i f_j f0/Q`` with ``c = D f0**2`` it is linear in ``(Re c, Im c, f0**2, f0/Q)``: the paper's
+  closed form, solved here as a 2 x 2 system (:func:`oscillator`).  It is undetermined where that
+  system is singular or gives ``f0**2 <= 0`` or ``Q <= 0`` (both points far on one side of the
+  peak, phases that do not straddle it);
+* **the lever** (:class:`pfmdyn.Cantilever` with its internal loss ``quality_factor``, the k2
+  policy, tip position, tilt and spot): the ratio ``s2 / s1`` equals the lever's ``T(f2) / T(f1)``,
+  which depends on the contact's ``k1`` and ``contact_loss`` only, one complex equation for two
+  reals, solved by Newton steps on all pixels at once from the oscillator's start
+  (:func:`lever_inversion`, each step halved until it lowers the residual); the drive then follows,
+  ``d_eff = s1 / (T(f1) V)``.  Where the oscillator is undetermined (its Q would be negative: an
+  anti-resonance of the slope at the spot near the resonance) Newton starts from the tracked centre
+  and the resonance and Q reported are the lever's complex pole's (:func:`lever_pole`).  A pixel is
+  undetermined (NaN, ``determined`` 0) where Newton does not converge or the contact would supply
+  energy (its loss below zero by more than three standard errors).
+
+``T`` is the deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the
+lever): the slope at the laser spot times ``2L/3``, as a static InvOLS reads it.  So ``d_eff > 0``
+when the surface moves toward the lever in phase with the bias, whatever side of a resonance or
+anti-resonance the drive is on (the oscillator's drive phase flips above the slope's
+anti-resonance; the lever's ``d_eff`` does not).
+
+Uncertainties: the lock-in noise is taken as circular complex noise of relative size ``sigma``
+on both signals (each ``s_j (1 + e_j)``, ``E|e_j|**2 = sigma**2``), propagated to first order;
+``sigma`` is estimated from the image itself (:func:`channel_noise`).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..analysis.contact_resonance import betas, k1_at
+from ..cantilever import Cantilever, Contact
+from .. import composed
+from ..generated.tilt_rotation import rotated
+from ..io.results import document as envelope
+from ..io.results import quantity
+from ..names import NAMES
+from .store import write_maps
+
+__all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "deflection_signal",
+           "lever_inversion", "lever_pole", "point_mass_k1", "start_k1",
+           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
+
+_NEWTON_STEPS = 30
+_STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
+_HALVINGS = 8         # a Newton step halved at most this often (then taken anyway)
+
+
+class Oscillator(NamedTuple):
+    """The two-frequency oscillator at each pixel: resonance (Hz), Q, drive ``D`` (complex, the
+    static signal per volt) and whether the closed form determines them."""
+
+    resonance: np.ndarray
+    quality_factor: np.ndarray
+    drive: np.ndarray
+    determined: np.ndarray
+
+
+def oscillator(f1, f2, s1, s2) -> Oscillator:
+    """The damped harmonic oscillator through two complex signals ``s1``, ``s2`` at ``f1``, ``f2`` (Hz).
+
+    Closed form (the module's 2 x 2 system), vectorised; undetermined pixels are NaN.
+
+    >>> f0, q, d = 3e5, 80.0, 2e-11 * np.exp(0.3j)
+    >>> s = lambda f: d * f0**2 / (f0**2 - f**2 + 1j * f * f0 / q)
+    >>> o = oscillator(2.97e5, 3.05e5, s(2.97e5), s(3.05e5))
+    >>> round(float(o.resonance)), round(float(o.quality_factor), 9), bool(np.isclose(o.drive, d)), bool(o.determined)
+    (300000, 80.0, True, True)
+    """
+    f1, f2, s1, s2 = np.broadcast_arrays(*(np.asarray(v) for v in (f1, f2, s1, s2)))
+    with np.errstate(all="ignore"):
+        z1, z2 = 1 / s1, 1 / s2
+        # Im(c z_j) = f_j f0/Q for both j; Re(c (z1 - z2)) = f2**2 - f1**2
+        a11, a12 = z1.imag / f1 - z2.imag / f2, z1.real / f1 - z2.real / f2
+        a21, a22 = (z1 - z2).real, -(z1 - z2).imag
+        det = a11 * a22 - a12 * a21
+        rhs = f2**2 - f1**2
+        c = (-a12 * rhs + 1j * a11 * rhs) / det
+        f0_squared = (c * z1).real + f1**2
+        width = (c * z1).imag / f1          # f0 / Q
+        determined = np.isfinite(det) & (f0_squared > 0) & (width > 0)
+        resonance = np.where(determined, np.sqrt(np.abs(f0_squared)), np.nan)
+        return Oscillator(resonance, np.where(determined, resonance / width, np.nan),
+                          np.where(determined, c / f0_squared, np.nan), determined)
+
+
+def oscillator_sensitivity(f1, f2, s1, s2, base: Oscillator | None = None) -> Oscillator:
+    """Standard deviations of :func:`oscillator`'s outputs per unit ``sigma`` (module: relative
+    circular noise on both signals), by finite differences in the four noise directions; ``drive``
+    holds that of ``log |D|`` (real) and ``determined`` that of D's phase (rad).
+
+    >>> s = lambda f: 1e-11 * 3e5**2 / (3e5**2 - f**2 + 1j * f * 3e5 / 80)
+    >>> u = oscillator_sensitivity(2.97e5, 3.05e5, s(2.97e5), s(3.05e5))
+    >>> 1e3 < float(u.resonance) < 1e5, 10 < float(u.quality_factor) < 1e3
+    (True, True)
+    """
+    base = oscillator(f1, f2, s1, s2) if base is None else base
+    h = 1e-7
+    squares = [0.0, 0.0, 0.0, 0.0]
+    for e1, e2 in ((h, 0), (1j * h, 0), (0, h), (0, 1j * h)):
+        moved = oscillator(f1, f2, s1 * (1 + e1), s2 * (1 + e2))
+        with np.errstate(all="ignore"):
+            ratio = moved.drive / base.drive
+            changes = ((moved.resonance - base.resonance) / h, (moved.quality_factor - base.quality_factor) / h,
+                       np.log(np.abs(ratio)) / h, np.angle(ratio) / h)
+        squares = [s + d**2 / 2 for s, d in zip(squares, changes)]        # each direction carries sigma**2 / 2
+    return Oscillator(*(np.sqrt(s) for s in squares))
+
+
+def channel_noise(pairs) -> float:
+    """``sigma`` from an image: the pixel-to-pixel scatter along the fast scan of maps that the
+    tracking does not move (the lever's ``k1``, contact loss, drive) over what ``sigma = 1`` would make.
+
+    ``pairs``: ``(values, sensitivity)`` of such maps, ``(y, x)`` each.  Differences of neighbours,
+    each over the root-sum-square of the two pixels' sensitivities, have standard deviation
+    ``sigma``; their median absolute value (times 1.4826), pooled over the maps, is robust to the
+    few that straddle a grain or domain boundary.
+
+    >>> rng = np.random.default_rng(0)
+    >>> g = np.full((64, 64), 3.0)
+    >>> round(channel_noise([(5.0 + 0.02 * g * rng.standard_normal(g.shape), g)]), 2)
+    0.02
+    """
+    pooled = []
+    for values, sensitivity in pairs:
+        values, sensitivity = np.asarray(values, float), np.asarray(sensitivity, float)
+        with np.errstate(all="ignore"):
+            pooled.append(np.ravel(np.diff(values, axis=-1) / np.hypot(sensitivity[..., 1:], sensitivity[..., :-1])))
+    z = np.concatenate(pooled) if pooled else np.empty(0)
+    z = z[np.isfinite(z)]
+    return float(1.4826 * np.median(np.abs(z))) if z.size else math.nan
+
+
+def point_mass_k1(resonance, lever: Cantilever):
+    """The point-mass (oscillator) contact stiffness ``k ((fc / f0)**2 - 1)`` of a resonance ``fc``.
+
+    >>> round(float(point_mass_k1(3e5, Cantilever(2.0, 7.5e4, 2e-4))), 6)
+    30.0
+    """
+    return lever.spring_constant * ((np.asarray(resonance) / lever.free_resonance) ** 2 - 1)
+
+
+def _springs(lever: Cantilever, contact: Contact, k1, loss, frequency):
+    """The composed model's arguments at ``frequency`` for arrays of ``k1`` and ``contact_loss``:
+    :meth:`Cantilever._damped` (the one damping substitution) and the contact's k2 law, rotated."""
+    damped = lever._damped(frequency, _PixelContact(k1, loss))
+    kvv, kll, kvl = rotated(damped.k1, contact.k2_of(k1), lever.alpha)
+    return damped, kvv, kll, kvl
+
+
+class _PixelContact(NamedTuple):
+    """``k1`` and ``contact_loss`` per pixel, as :meth:`Cantilever._damped` reads a contact."""
+
+    k1: np.ndarray
+    contact_loss: np.ndarray
+
+
+def deflection_signal(lever: Cantilever, contact: Contact, frequency, k1, loss):
+    """The deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the lever):
+    the slope at the spot times ``2L/3`` (a static InvOLS), broadcast over the arguments.
+
+    >>> lever = Cantilever(2.0, 7.5e4, 2e-4, quality_factor=300.0)
+    >>> t = deflection_signal(lever, Contact(), [1e3, 3e6], 100.0, 0.01)
+    >>> round(float(t[0].real), 4), bool(t[1].real < 0)    # k1 / (k + k1) well below resonance; in antiphase far above
+    (0.9804, True)
+    """
+    frequency, k1, loss = np.broadcast_arrays(*(np.asarray(v, float) for v in (frequency, k1, loss)))
+    damped, kvv, kll, kvl = _springs(lever, contact, k1, loss, frequency)
+    height = lever.tip_height or 0.0
+    with np.errstate(all="ignore"):
+        (slope,) = composed.slope(damped.beta, lever.spot_position, damped.k, kvv, kll, kvl, height, lever.length,
+                                  damped.mu, lever.tip_position, lever.rho_g, drives=("d1",))
+    return np.asarray(slope, complex).reshape(frequency.shape) * (2 * lever.length / 3)
+
+
+def lever_pole(lever: Cantilever, contact: Contact, k1, loss, start, steps: int = 40):
+    """The lever's damped first contact resonance near ``start`` (Hz) as an oscillator's resonance and Q:
+    the complex root ``r`` of the composed characteristic (Newton in complex frequency, all pixels at
+    once) gives ``|r|`` and ``|r| / (2 Im r)`` (an oscillator's own root gives back its ``f0`` and ``Q``).
+    Where the two-frequency oscillator is undetermined (an anti-resonance of the slope at the spot
+    near the resonance), :func:`invert` reports these.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4)           # lossless lever, contact with a dashpot
+    >>> f, q = lever_pole(lever, Contact(), np.array([109.7483]), np.array([0.01]), np.array([3e5]))
+    >>> round(float(f[0]) / 3e5, 3), 10 < float(q[0]) < 1e3
+    (1.0, True)
+    """
+    k1, loss, f = (np.asarray(v, float).ravel() for v in (k1, loss, start))
+    f = f.astype(complex)
+    height = lever.tip_height or 0.0
+
+    def characteristic(frequency):
+        damped, kvv, kll, kvl = _springs(lever, contact, k1, loss, frequency)
+        return composed.characteristic(damped.beta, damped.k, kvv, kll, kvl, height, lever.length, damped.mu,
+                                       lever.tip_position, lever.rho_g)
+
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            h = 1e-7 * f
+            value = characteristic(f)
+            step = value * h / (characteristic(f + h) - value)
+            step = np.where(np.isfinite(step), step, 0.0)
+            f = f - step
+            if np.all(np.abs(step) < 1e-12 * np.abs(f)):
+                break
+        return np.abs(f), np.abs(f) / (2 * f.imag)
+
+
+class LeverFit(NamedTuple):
+    """The lever's inversion at each pixel: ``k1`` (N/m), ``contact_loss``, the drive ``d`` (complex,
+    m/V), their standard deviations per unit ``sigma`` (``k1`` relative, ``contact_loss`` absolute,
+    ``log |d|``), and whether Newton's steps converged."""
+
+    k1: np.ndarray
+    contact_loss: np.ndarray
+    drive: np.ndarray
+    k1_sensitivity: np.ndarray
+    loss_sensitivity: np.ndarray
+    drive_sensitivity: np.ndarray
+    converged: np.ndarray
+
+
+def start_k1(lever: Cantilever, contact: Contact, resonance, points: int = 96):
+    """The undamped lever's ``k1`` whose first contact resonance is ``resonance`` (Hz; NaN where
+    none is), Newton's start: :func:`pfmdyn.analysis.contact_resonance.k1_at` on ``points``
+    frequencies spanning the map's, interpolated in ``log k1`` over ``log f`` (the map's pixels
+    need not pay for the mode count each).
+
+    >>> round(float(start_k1(Cantilever(2.0, 75e3, 2e-4), Contact(), 300e3)), 4)
+    109.7483
+    """
+    resonance = np.asarray(resonance, float)
+    ok = np.isfinite(resonance) & (resonance > lever.free_resonance)
+    out = np.full(resonance.shape, np.nan)
+    if not ok.any():
+        return out
+    low, high = np.min(resonance[ok]), np.max(resonance[ok])
+    grid = np.geomspace(low, high, points) if high > low else np.array([low])
+    k1 = k1_at(betas(lever, grid), 1, lever, contact, lever.tip_position)
+    known = np.isfinite(k1) & (k1 > 0)
+    if known.sum() == 1:
+        out[ok] = np.where(np.isclose(resonance[ok], grid[known][0]), k1[known][0], np.nan)
+    elif known.any():
+        # beyond the known ends (a resonance above the pinned lever's, an oscillator pulled by an
+        # anti-resonance near the peak) the nearest end: a start, which Newton moves
+        out[ok] = np.exp(np.interp(np.log(resonance[ok]), np.log(grid[known]), np.log(k1[known])))
+    return out
+
+
+def _log_ratios(lever, contact, f1, f2, points):
+    """``log(T(f2)/T(f1))`` and ``T(f1)`` at each ``(k1, loss)`` of ``points``, in one call of the lever."""
+    n, m = len(f1), len(points)
+    t = deflection_signal(lever, contact, np.tile(np.concatenate([f1, f2]), m),
+                          np.concatenate([np.concatenate([k1, k1]) for k1, _ in points]),
+                          np.concatenate([np.concatenate([loss, loss]) for _, loss in points])).reshape(m, 2, n)
+    with np.errstate(all="ignore"):
+        return [(np.log(t[j, 1] / t[j, 0]), t[j, 0]) for j in range(m)]
+
+
+def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
+                    steps: int = _NEWTON_STEPS) -> LeverFit:
+    """``k1``, ``contact_loss`` and ``d_eff`` explaining the deflection signals ``s1``, ``s2`` (m, complex,
+    driven by ``drive_amplitude`` volts) at ``f1``, ``f2`` on ``lever``, from the start ``k1``,
+    ``loss`` (flat arrays).  Newton on ``log(T(f2)/T(f1)) = log(s2/s1)`` in ``(log k1, loss)``, its
+    Jacobian by forward differences, all pixels at once; a pixel stops when its step is below
+    1e-10 (relative in k1, absolute in the loss).
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    >>> f = np.array([3.10e5, 3.16e5])
+    >>> t = deflection_signal(lever, Contact(), f, 120.0, 0.02)
+    >>> fit = lever_inversion(lever, Contact(), f[:1], f[1:], -3e-12 * t[:1], -3e-12 * t[1:], np.array([100.0]),
+    ...                       np.array([0.01]), 1.0)
+    >>> round(float(fit.k1[0]), 6), round(float(fit.contact_loss[0]), 9), round(float(fit.drive[0].real * 1e12), 9)
+    (120.0, 0.02, -3.0)
+    """
+    f1, f2, s1, s2 = (np.asarray(v).ravel() for v in (f1, f2, s1, s2))
+    log_k1, loss = np.log(np.asarray(k1, float).ravel()), np.asarray(loss, float).ravel().copy()
+    target = np.log(s2 / s1)
+    active = np.isfinite(log_k1) & np.isfinite(loss) & np.isfinite(target)
+    converged = np.zeros(len(f1), bool)
+    jacobian = np.full((len(f1), 2, 2), np.nan)
+    for _ in range(steps):
+        i = np.flatnonzero(active & ~converged)
+        if not i.size:
+            break
+        k1_i = np.exp(log_k1[i])
+        (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1[i], f2[i], [
+            (k1_i, loss[i]), (k1_i * math.exp(_STEP), loss[i]), (k1_i, loss[i] + _STEP)])
+        r = g - target[i]
+        r = r.real + 1j * np.angle(np.exp(1j * r.imag))         # the phase difference modulo 2 pi
+        jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
+                        np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+        jacobian[i] = jac
+        with np.errstate(all="ignore"):
+            step = -np.einsum("...ij,...j->...i", _inverse(jac), np.stack([r.real, r.imag], -1))
+        bad = ~np.all(np.isfinite(step), -1)
+        step[bad] = 0.0
+        active[i[bad]] = False
+        # k1 changes at most e**0.5 a step, and a step is halved until it lowers the residual
+        step *= np.minimum(1.0, 0.5 / np.maximum(np.abs(step[:, 0]), 1e-300))[:, None]
+        norm, pending = np.abs(r), np.abs(step).max(-1) > 1e-8
+        for _ in range(_HALVINGS):
+            j = np.flatnonzero(pending)
+            if not j.size:
+                break
+            ((trial, _),) = _log_ratios(lever, contact, f1[i[j]], f2[i[j]],
+                                        [(k1_i[j] * np.exp(step[j, 0]), loss[i[j]] + step[j, 1])])
+            rt = trial - target[i[j]]
+            lower = np.abs(rt.real + 1j * np.angle(np.exp(1j * rt.imag))) < norm[j]
+            pending[j[lower]] = False
+            step[j[~lower]] /= 2
+        log_k1[i] += step[:, 0]
+        loss[i] += step[:, 1]
+        converged[i] = (np.abs(step[:, 0]) < 1e-10) & (np.abs(step[:, 1]) < 1e-10)
+    k1 = np.exp(log_k1)
+    ((_, t1),) = _log_ratios(lever, contact, f1, f2, [(k1, loss)])
+    with np.errstate(all="ignore"):
+        drive = s1 / (t1 * drive_amplitude)
+        # d(log k1, loss) = J^-1 d(log s2/s1); d log(s2/s1) = e2 - e1: variance sigma**2 in each part
+        inverse = _inverse(jacobian)
+        covariance = inverse @ np.swapaxes(inverse, -1, -2)
+        # log d = log s1 - log T1(k1, loss): e1 enters directly and through k1, loss
+        dt1 = _t1_partials(lever, contact, f1, k1, loss, t1)
+        drive_variance = _drive_variance(inverse, dt1)
+    ok = converged & np.all(np.isfinite(jacobian), axis=(-1, -2))
+    nan = lambda v: np.where(ok, v, np.nan)      # noqa: E731
+    return LeverFit(nan(k1), nan(loss), nan(drive), nan(np.sqrt(covariance[:, 0, 0])),
+                    nan(np.sqrt(covariance[:, 1, 1])), nan(np.sqrt(drive_variance)), ok)
+
+
+def _inverse(m):
+    """Inverses of 2 x 2 matrices ``(..., 2, 2)``, NaN where singular."""
+    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+    adjugate = np.stack([np.stack([m[..., 1, 1], -m[..., 0, 1]], -1), np.stack([-m[..., 1, 0], m[..., 0, 0]], -1)], -2)
+    return adjugate / det[..., None, None]
+
+
+def _t1_partials(lever, contact, f1, k1, loss, t1):
+    """``d log|T(f1)| / d(log k1, loss)`` (real parts of the complex log's partials)."""
+    tk = deflection_signal(lever, contact, f1, k1 * math.exp(_STEP), loss)
+    tx = deflection_signal(lever, contact, f1, k1, loss + _STEP)
+    return np.stack([np.log(tk / t1).real, np.log(tx / t1).real], -1) / _STEP
+
+
+def _drive_variance(inverse, dt1):
+    """Variance of ``log|d|`` per ``sigma**2``: ``log|d| = log|s1| - log|T1|``, with ``(log k1, loss)
+    = J^-1 (Re, Im)(e2 - e1)``; ``e1``'s real and imaginary parts and ``e2``'s each carry
+    ``sigma**2 / 2``."""
+    g = np.einsum("...i,...ij->...j", dt1, inverse)      # d log|T1| per unit (Re, Im) of e2 - e1
+    # per unit Re e1: 1 + g_re; Im e1: g_im; Re e2: -g_re; Im e2: -g_im
+    return ((1 + g[..., 0]) ** 2 + g[..., 1] ** 2 + g[..., 0] ** 2 + g[..., 1] ** 2) / 2
+
+
+MAPS = ("contact_resonance", "contact_quality_factor", "k1", "contact_loss", "d_eff")
+"""The maps with a ``_stderr`` each (:func:`invert`); then the oscillator's readings of the same pixels."""
+OSCILLATOR_MAPS = ("oscillator_k1", "oscillator_k1_error", "oscillator_d_eff", "oscillator_d_eff_error")
+
+
+def _signed(drive):
+    """A complex drive as a signed real: its modulus, negative where it is nearer antiphase."""
+    return np.abs(drive) * np.where(np.cos(np.angle(drive)) < 0, -1.0, 1.0)
+
+
+def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, block: int = 4096,
+           progress=None) -> tuple[dict, float]:
+    """Every pixel of a DART image both ways: maps (name -> array of the signals' shape; :data:`MAPS`
+    with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``determined``) and ``sigma`` (:func:`channel_noise`).
+
+    ``s1``, ``s2``: the deflection signals (m, complex, ``A exp(-i phi)``) at ``f1``, ``f2`` (Hz);
+    ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``progress(done, total)`` is called
+    after each ``block`` of pixels.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    >>> f1, f2 = np.array([[3.10e5, 3.11e5]]), np.array([[3.16e5, 3.17e5]])
+    >>> s1, s2 = (2e-12 * deflection_signal(lever, Contact(), f, 120.0, 0.02) for f in (f1, f2))
+    >>> maps, sigma = invert(f1, f2, s1, s2, lever, Contact(), 1.0)
+    >>> np.round(maps["k1"], 6).tolist(), np.round(maps["d_eff"] * 1e12, 9).tolist()
+    ([[120.0, 120.0]], [[2.0, 2.0]])
+    """
+    shape = np.shape(s1)
+    f1, f2, s1, s2 = (np.broadcast_to(v, shape).ravel() for v in (f1, f2, s1, s2))
+    sho = oscillator(f1, f2, s1, s2)
+    spread = oscillator_sensitivity(f1, f2, s1, s2, sho)
+    # where the oscillator is undetermined Newton starts from the tracked centre
+    k1_start = start_k1(lever, contact, np.where(sho.determined, sho.resonance, (f1 + f2) / 2))
+    # the contact's share of the loss: what the oscillator's 1/Q has beyond the lever's own, at fc
+    with np.errstate(all="ignore"):
+        loss_start = np.where(sho.determined, np.clip(1 / sho.quality_factor - 1 / lever.quality_factor, 1e-4, None)
+                              * lever.free_resonance / sho.resonance, 0.01)
+    fits = []
+    for start in range(0, len(f1), block):
+        part = slice(start, start + block)
+        fits.append(lever_inversion(lever, contact, f1[part], f2[part], s1[part], s2[part], k1_start[part],
+                                    loss_start[part], drive_amplitude))
+        if progress is not None:
+            progress(min(start + block, len(f1)), len(f1))
+    fit = LeverFit(*(np.concatenate(parts) for parts in zip(*fits))) if fits else \
+        LeverFit(*([np.empty(0)] * 6 + [np.empty(0, bool)]))
+    # where Newton found nothing from the oscillator's start (pulled by an anti-resonance near the peak, a
+    # tracking far off), again from the tracked centre, then from a few stiffer and softer contacts
+    centre_k1 = start_k1(lever, contact, (f1 + f2) / 2)
+    for scale, loss in ((None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
+        again = np.flatnonzero(~fit.converged)
+        if not again.size:
+            break
+        k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
+                                                                            k1_start[again], centre_k1[again])
+        retry = lever_inversion(lever, contact, f1[again], f2[again], s1[again], s2[again], k1_again,
+                                np.full(again.size, loss), drive_amplitude)
+        fields = []
+        for whole, part in zip(fit, retry):
+            whole = whole.copy()
+            whole[again] = np.where(retry.converged, part, whole[again])
+            fields.append(whole)
+        fit = LeverFit(*fields)
+    with np.errstate(all="ignore"):
+        sigma = channel_noise([(np.log(fit.k1).reshape(shape), fit.k1_sensitivity.reshape(shape)),
+                               (fit.contact_loss.reshape(shape), fit.loss_sensitivity.reshape(shape)),
+                               (np.log(np.abs(fit.drive)).reshape(shape), fit.drive_sensitivity.reshape(shape))])
+    u = 0.0 if not math.isfinite(sigma) else sigma
+    # a contact that would supply energy (its loss below zero by more than three standard errors) explains
+    # nothing: phases the lever's resonance cannot give (an upper drive leading the lower one)
+    passive = fit.contact_loss + 3 * u * fit.loss_sensitivity >= 0
+    fit = LeverFit(*(np.where(passive, v, np.nan) for v in fit[:6]), fit.converged & passive)
+    d_eff = _signed(fit.drive)
+    with np.errstate(all="ignore"):
+        k1_pm = point_mass_k1(sho.resonance, lever)
+        # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
+        d_pm = _signed(sho.drive / drive_amplitude * (lever.spring_constant + k1_pm) / k1_pm)
+        # where the oscillator is undetermined, the lever's own pole (no stderr: the pole is not propagated)
+        pole = ~sho.determined & fit.converged
+        resonance, quality = np.where(fit.converged, sho.resonance, np.nan), np.where(fit.converged, sho.quality_factor, np.nan)
+        if pole.any():
+            resonance[pole], quality[pole] = lever_pole(lever, contact, fit.k1[pole], fit.contact_loss[pole],
+                                                        (f1[pole] + f2[pole]) / 2)
+        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance,
+                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor,
+                "k1": fit.k1, "k1_stderr": u * fit.k1 * fit.k1_sensitivity,
+                "contact_loss": fit.contact_loss, "contact_loss_stderr": u * fit.loss_sensitivity,
+                "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
+                "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / fit.k1 - 1,
+                "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
+                "determined": fit.converged.astype(np.uint8)}
+    return {name: value.reshape(shape) for name, value in maps.items()}, sigma
+
+
+def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:
+    """:func:`invert`'s maps into a new Zarr group at ``path`` (xarray's convention,
+    :func:`pfmdyn.maps.store.write_maps`), units and long names from :mod:`pfmdyn.names`.
+
+    >>> import tempfile
+    >>> path = tempfile.mkdtemp() + "/maps.zarr"
+    >>> write_dart(path, {"k1": np.ones((2, 2)), "k1_stderr": np.ones((2, 2)), "determined": np.ones((2, 2), np.uint8)})
+    >>> from pfmdyn.maps.store import open_group
+    >>> open_group(path)["k1_stderr"].attrs["long_name"]
+    'standard uncertainty of k1'
+    """
+    described = {}
+    for name, values in maps.items():
+        base = name.removesuffix("_stderr")
+        if name == "determined":
+            unit, text = "1", "1 where the oscillator and the lever both determine the pixel, else 0"
+        else:
+            unit = NAMES[base].unit
+            text = NAMES[base].meaning if base == name else f"standard uncertainty of {NAMES[base].label}"
+        described[name] = (values, unit, text)
+    write_maps(path, described, attrs)
+
+
+def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, store: str, k2_policy: str) -> dict:
+    """The JSON document of a DART image (:func:`pfmdyn.io.results.document`, kind ``dart``): the lever
+    and the settings as records (``lever``, ``settings``: name -> ``(value, status[, why])``), the
+    maps' medians over the determined pixels (each ``stderr`` the median pixel's), the noise and the
+    pixel counts.
+
+    >>> maps = {"k1": np.array([[100.0, np.nan]]), "k1_stderr": np.array([[2.0, np.nan]]),
+    ...         "determined": np.array([[1, 0]], np.uint8)}
+    >>> doc = document(maps, 0.01, {"spring_constant": (2.0, "given")}, {}, "a.ibw", "o/maps.zarr", "k2 left out")
+    >>> doc["results"]["k1"], doc["fit"]["determined_fraction"]["value"]
+    ({'value': 100.0, 'stderr': 2.0, 'unit': 'N/m', 'status': 'derived'}, 0.5)
+    """
+    ok = maps["determined"].astype(bool)
+
+    def median(name):       # of d_eff's magnitude: the domains' signs would cancel
+        values = maps[name][ok] if name in maps else np.empty(0)
+        values = np.abs(values) if "d_eff" in name else values
+        values = values[np.isfinite(values)]
+        return float(np.median(values)) if values.size else math.nan
+
+    results = {name: quantity(name, median(name), median(name + "_stderr") if name + "_stderr" in maps else None,
+                              status="derived", why=None if ok.any() else "no pixel determined")
+               for name in (*MAPS, *OSCILLATOR_MAPS) if name in maps}
+    as_records = lambda given: {name: quantity(name, entry[0], status=entry[1],       # noqa: E731
+                                               why=entry[2] if len(entry) > 2 else None)
+                                for name, entry in given.items()}
+    fit = {"pixels": quantity("pixels", list(ok.shape), status="file", why="the image's shape", dims=["axis"]),
+           "determined_fraction": quantity("determined_fraction", float(ok.mean()) if ok.size else math.nan,
+                                           status="derived", why=None if ok.size else "an empty image"),
+           "channel_noise": quantity("channel_noise", sigma, status="derived",
+                                     why=None if math.isfinite(sigma) else "too few neighbouring pixels determined"),
+           **as_records(settings)}
+    return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
+                    [k2_policy, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
+                     "each stderr the median pixel's"])

@@ -1,0 +1,129 @@
+"""DART images (dual AC resonance tracking) through ``pfmdyn map``: Asylum ``.ibw`` files written by
+igorwriter from an independent lever (:mod:`dart_image`: the finite-element beam of :mod:`fe_beam` in
+contact, with internal friction, a contact dashpot, k2, the laser spot; noisy lock-ins, imperfect
+tracking), read back as maps of the contact resonance and Q, k1, contact loss and the signed d_eff."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("igorwriter")
+pytest.importorskip("zarr")
+xarray = pytest.importorskip("xarray")
+sys.path.insert(0, str(Path(__file__).parent))
+
+from dart_image import dart_case, write_ibw  # noqa: E402
+from igor_files import asylum_note, igor_wave  # noqa: E402
+from pfmdyn.cli import main  # noqa: E402
+from pfmdyn.maps import open_result  # noqa: E402
+from schema_check import validate  # noqa: E402
+
+TOLERANCES = {"contact_resonance": 2e-4, "contact_quality_factor": 0.05, "k1": 0.03, "d_eff": 0.05,
+              "contact_loss": 0.10}
+"""Relative error allowed on 95 % of the pixels (issue 40)."""
+
+
+def _map(case, tmp_path, *extra, order=None):
+    path = write_ibw(case, tmp_path / "dart.ibw", order)
+    out = tmp_path / "out"
+    assert main(["map", str(path), "--out", str(out), "--no-progress", "--tip-height", repr(case.lever["tip_height"]),
+                 "--spot-position", repr(case.lever["spot_position"]), "--k2-over-k1", repr(case.lever["k2_over_k1"]),
+                 "--json", str(tmp_path / "dart.json"), *extra]) == 0
+    return open_result(out), json.loads((tmp_path / "dart.json").read_text())
+
+
+@pytest.mark.parametrize("seed, options", [(11, {}), (12, {"spot": 0.73}), (13, {"lossy": True})],
+                         ids=["k2-half", "spot-0.73", "lossy"])
+def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options):
+    case = dart_case(seed, 12, 16, noise=(0.005, 0.01), **options)
+    maps, doc = _map(case, tmp_path)
+    assert maps["k1"].dims == ("y", "x") and maps["k1"].shape == (12, 16)
+    for name, tolerance in TOLERANCES.items():
+        error = np.abs(maps[name].values / case.truth[name] - 1)
+        assert np.mean(error < tolerance) >= 0.95, (name, np.nanmax(error))
+    assert np.mean(np.sign(maps["d_eff"].values) == np.sign(case.truth["d_eff"])) >= 0.99
+    # the noise the image shows is the noise put in (within the scatter of a 12 x 16 estimate)
+    assert doc["fit"]["channel_noise"]["value"] == pytest.approx(case.settings["noise"], rel=0.3)
+    # the standard errors say how far the maps are from the truth
+    for name in ("k1", "contact_loss", "d_eff", "contact_quality_factor", "contact_resonance"):
+        z = (maps[name].values - case.truth[name]) / maps[name + "_stderr"].values
+        assert 0.8 < np.mean(np.abs(z) < 2) <= 1.0, name
+        assert np.mean(np.abs(z) < 0.5) < 0.6, name         # not inflated
+
+
+def test_store_and_json_in_the_shared_conventions(tmp_path):
+    case = dart_case(14, 6, 8)
+    _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "figures"))
+    for name in ("dart", "d_eff", "contact_resonance", "k1"):
+        assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 1000, name
+    dataset = xarray.open_zarr(tmp_path / "out" / "maps.zarr")
+    for name in TOLERANCES:
+        for variable in (name, name + "_stderr"):
+            assert dataset[variable].dims == ("y", "x") and dataset[variable].attrs["units"], variable
+            assert dataset[variable].attrs["long_name"] != variable
+    assert dataset["k1"].attrs["units"] == "N/m" and dataset["d_eff"].attrs["units"] == "m/V"
+    validate(doc)
+    assert doc["fit"]["frequency_width"]["status"] == "file" and doc["fit"]["determined_fraction"]["value"] == 1.0
+    assert doc["lever"]["spring_constant"]["status"] == "file" and doc["lever"]["tip_height"]["status"] == "given"
+    assert doc["lever"]["quality_factor"]["value"] == pytest.approx(case.lever["quality_factor"])
+
+
+def test_axes_in_the_stored_order_and_layers_in_any_order(tmp_path):
+    """y is the wave's second dimension (lines), x its first (points); the layers found by their labels."""
+    case = dart_case(15, 5, 9)
+    order = ["HeightRetrace", "Phase2Retrace", "FrequencyRetrace", "Amplitude1Retrace", "Phase1Retrace",
+             "Amplitude2Retrace"]
+    maps, _ = _map(case, tmp_path, order=order)
+    assert maps["k1"].shape == (5, 9)
+    np.testing.assert_allclose(maps["k1"].values, case.truth["k1"], rtol=0.05)
+
+
+def test_above_the_slopes_antiresonance_the_oscillator_flips_d_eff_and_the_lever_does_not(tmp_path):
+    """A stiff contact on a soft lever read at its end: the first contact resonance lies above the slope's
+    anti-resonance, where the oscillator's drive phase is pi off; the lever's d_eff keeps the domains' sign."""
+    case = dart_case(3, 8, 8, grains=1, noise=(0.005, 0.006))
+    assert case.truth["k1"][0, 0] / case.lever["spring_constant"] > 100
+    maps, _ = _map(case, tmp_path)
+    truth = np.sign(case.truth["d_eff"])
+    assert np.all(np.sign(maps["d_eff"].values) == truth)
+    assert np.all(np.sign(maps["oscillator_d_eff"].values) == -truth)
+    assert np.all(np.abs(maps["oscillator_d_eff_error"].values + 2) < 0.5)
+
+
+def test_undetermined_pixels_are_flagged_not_guessed(tmp_path):
+    """A pixel whose two phases do not straddle the resonance the way an oscillator's can (the upper
+    drive leading the lower) has no oscillator: NaN in every map, 0 in ``determined``."""
+    case = dart_case(16, 4, 6)
+    case.channels["Phase2Retrace"][1, 2] = case.channels["Phase1Retrace"][1, 2] - 40.0
+    maps, doc = _map(case, tmp_path)
+    assert maps["determined"].values[1, 2] == 0 and np.isnan(maps["k1"].values[1, 2])
+    assert maps["determined"].values.sum() == 23 and doc["fit"]["determined_fraction"]["value"] == 23 / 24
+
+
+def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):
+    path = igor_wave(tmp_path / "pfm.ibw", np.ones((8, 8, 2), "f4"), "pfm", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
+                     {2: ["HeightRetrace", "PhaseRetrace"]}, asylum_note({"SpringConstant": "2"}))
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a DART image: no Amplitude1Retrace" in err[0]
+
+
+def test_k2_without_a_tip_height_is_one_line(tmp_path, capsys):
+    path = write_ibw(dart_case(17, 3, 4), tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress", "--k2-over-k1", "0.5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "needs the tip height" in err[0] and "--tip-height" in err[0]
+
+
+def test_the_library_is_quiet(capsys):
+    from pfmdyn import Cantilever, Contact
+    from pfmdyn.maps.dart import deflection_signal, invert
+    lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    f1, f2 = np.full((3, 3), 3.10e5), np.full((3, 3), 3.16e5)
+    s1, s2 = (1e-12 * deflection_signal(lever, Contact(), f, 120.0, 0.02) for f in (f1, f2))
+    invert(f1, f2, s1, s2, lever, Contact(), 1.0)
+    assert capsys.readouterr() == ("", "")
