@@ -32,7 +32,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 from recording import recorded, tally  # noqa: E402
 from test_thermal_fit import end_slope_psd, silicon_lever  # noqa: E402
 
-from pfmdyn.analysis.calibrate import calibrate  # noqa: E402
+from pfmdyn.discrepancy.thermal import calibrate_tune  # noqa: E402
 from pfmdyn.io.thermal_tune import ThermalTune  # noqa: E402
 from pfmdyn.medium import Medium, load_ratio, mass_per_length  # noqa: E402
 
@@ -68,7 +68,7 @@ def main():
             case, resonance, tune = draw(seed, regime)
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                c = calibrate(tune, length=case["L"], width=case["w"], medium=case["medium"],
+                c = calibrate_tune(tune, length=case["L"], width=case["w"], medium=case["medium"],
                               temperature=case["temperature"])
             error = c.thermal.value / case["k"] - 1
             z = error * case["k"] / c.thermal.stderr

@@ -35,6 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import composed, transfer
+from .constants import BOLTZMANN
 from .errors import UserError
 from .medium import Medium, load_ratio, mass_per_length
 from .generated import damping, families, formulas
@@ -411,8 +412,6 @@ class Cantilever:
         return transfer.ThermalNoise(scale * np.imag(per_couple), scale * np.imag(per_force))
 
 
-BOLTZMANN = 1.380649e-23
-"""J/K (exact in the SI since 2019)."""
 
 
 def _positive(frequency) -> np.ndarray:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .constants import ROOM_TEMPERATURE
 from .errors import UserError
 from .generated import formulas
 
@@ -67,7 +68,7 @@ class Medium:
         return self.viscosity / self.density
 
     @classmethod
-    def air(cls, temperature: float = 293.15) -> "Medium":
+    def air(cls, temperature: float = ROOM_TEMPERATURE) -> "Medium":
         """Dry air at one atmosphere and ``temperature`` (K): ideal gas, Sutherland's viscosity.
 
         >>> m = Medium.air(313.15); round(m.density, 3), round(m.viscosity * 1e5, 3)
@@ -79,7 +80,7 @@ class Medium:
                    f"air at {t - 273.15:g} C", t)
 
     @classmethod
-    def water(cls, temperature: float = 293.15) -> "Medium":
+    def water(cls, temperature: float = ROOM_TEMPERATURE) -> "Medium":
         """Pure water at ``temperature`` (K, 273.15-373.15): Tanaka's density (fitted 0-40 C, used to 100 C),
         Vogel's viscosity.
 
@@ -94,7 +95,7 @@ class Medium:
         return cls(density, a * 10**(b / (t - c0)), f"water at {c:g} C", t)
 
     @classmethod
-    def parse(cls, text: str, temperature: float = 293.15) -> "Medium":
+    def parse(cls, text: str, temperature: float = ROOM_TEMPERATURE) -> "Medium":
         """``air``, ``water`` (at ``temperature``, K) or ``DENSITY,VISCOSITY`` (kg/m^3, Pa s).
 
         >>> Medium.parse("1.2,1.8e-5").density, Medium.parse("Water").name

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .constants import ROOM_TEMPERATURE
 from .errors import UserError
 
 __all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "GROUPS", "canonical", "flag",
@@ -113,7 +114,7 @@ QUANTITIES: tuple[Quantity, ...] = (
              "growing as sqrt(f)", 0.0, 100.0, open_low=False, option=False),
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
-             aliases=("temperature_k",), default=293.15),
+             aliases=("temperature_k",), default=ROOM_TEMPERATURE),
     Quantity("medium", "medium", "1", "fluid around the lever: air, water (at the temperature) or DENSITY,VISCOSITY "
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",

@@ -234,19 +234,20 @@ def correction(v):
     return e.correction or join([(m,) for m in e.correct], ", ")
 
 
-def erratum(v) -> dict:
+def erratum(v, width: int = LINE_WIDTH) -> dict:
     """What an erratum shows, from its :class:`~derivations.checks.core.Verdict`.
 
     ``printed``: the claim as printed (a sentence; its long formulas become display blocks);
     ``correct``: display LaTeX of the correct forms, named like the printed ones when there are
     as many; ``correction``, ``proof``: sentences; ``decisive``: the exact ratio printed/derived
-    as LaTeX (or None); ``sign``: whether the sign convention matters.
+    as LaTeX (or None); ``sign``: whether the sign convention matters.  Display lines are at most
+    ``width`` characters wide.
     """
     e = v.proof
     correct = list(e.correct)
     printed_lhs = [p.lhs for p in v.printed if isinstance(p, Math)]
     if len(correct) == len(printed_lhs):       # name the correct forms like the printed ones
         correct = [Math(c.expr, lhs if lhs is not None else c.lhs, c.relation) for c, lhs in zip(correct, printed_lhs)]
-    return {"printed": v.printed, "correct": [display(m) for m in correct], "correction": e.correction,
+    return {"printed": v.printed, "correct": [display(m, width) for m in correct], "correction": e.correction,
             "proof": e.proof, "decisive": decisive(e.ratio),
             "sign": e.sign_convention or str(v.verdict) == "holds_up_to_sign_convention"}

@@ -69,7 +69,8 @@ def test_baseline_exact_names_nothing(tmp_path):
 
 
 @pytest.mark.parametrize("hidden,name,polar", [
-    ({"Q": 100.0}, "damping", False),
+    # damping is named on band-limited spectra in CI (test_discrepancy_honest); these two in the slow set
+    pytest.param({"Q": 100.0}, "damping", False, marks=pytest.mark.slow),
     pytest.param({"viscous_hz": 1500.0}, "damping", True, marks=pytest.mark.slow),
     ({"mu": 0.2}, "tip_mass", True),
     pytest.param({"alpha": 0.3}, "tilt", True, marks=pytest.mark.slow),

@@ -187,7 +187,8 @@ INNER_RANKS = {
     "analysis": (("contact_resonance", "diagram", "domains", "resonances", "spot", "thermal"),
                  ("calibrate", "deconvolve", "stiffness", "tip_position"),
                  ("stiffness_report",)),
-    "discrepancy": (("effects", "inputs", "sweep"),                        # the model's pieces, the inputs
+    "discrepancy": (("regions",),                                          # where a misfit sits
+                    ("effects", "inputs", "sweep"),                        # the model's pieces, the inputs
                     ("model", "plausible", "reference", "thermal"),          # a model; the free lever's fits
                     ("quality", "select", "undamped_modes"),
                     ("peaks", "report", "resonance_fit"),

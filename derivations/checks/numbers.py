@@ -207,8 +207,10 @@ def _depth(load):
 
 
 @claim("contact.piezo_indentation_depth", "III.1",
-       Tex(r"C_1^* = 403\ \mathrm{GPa},\ C_3^* = 15.4\ \mathrm{N/(V m)},\ R = 50\ \mathrm{nm},\ P = 100\ \mathrm{nN}:\ w_0 = 3.01\ \mathrm{\AA}",
-           "C1* = 403 GPa, C3* = 15.4 N/(V m), R = 50 nm, P = 100 nN: w0 = 3.01 A"), chapter="elastic_contact")
+       # in parts, so that the words between them wrap on a narrow page
+       say(Tex(r"C_1^* = 403\ \mathrm{GPa}", "C1* = 403 GPa"), ", ", Tex(r"C_3^* = 15.4\ \mathrm{N/(V m)}", "C3* = 15.4 N/(V m)"),
+           ", ", Tex(r"R = 50\ \mathrm{nm}", "R = 50 nm"), ", ", Tex(r"P = 100\ \mathrm{nN}", "P = 100 nN"), ": ",
+           Tex(r"w_0 = 3.01\ \mathrm{\AA}", "w0 = 3.01 A")), chapter="elastic_contact")
 def _piezo_depth():
     load = sp.Rational(P.PIEZO_INDENTATION["P"])
     w = _depth(load)

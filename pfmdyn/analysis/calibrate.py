@@ -28,17 +28,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..constants import BOLTZMANN
 from ..errors import UserError
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium, hydrodynamic_function, reynolds_number
 from .thermal import ThermalPeak, broad_mode, fit_thermal_peaks
 
-__all__ = ["BOLTZMANN", "Estimate", "Calibration", "thermal_factor", "thermal_spring_constant",
-           "sader_spring_constant", "calibrate"]
+LIQUID_DENSITY = 100.0
+"""kg/m^3: a fluid denser than this is a liquid (air 1.2, water 1000), whose load the oscillator misses."""
+LOW_Q = 30.0
+"""Below this Q of the oscillator's fit the fluid's load changes across the peak: the whole lever instead."""
 
-BOLTZMANN = 1.380649e-23
-"""J/K (exact, SI 2019)."""
+__all__ = ["Estimate", "LeverMode", "Calibration", "thermal_factor", "thermal_spring_constant",
+           "sader_spring_constant", "first_mode", "first_mode_model", "stated_uncertainties", "calibrate"]
 LENGTH_TOLERANCE, WIDTH_TOLERANCE, TEMPERATURE_UNCERTAINTY = 0.02, 0.05, 1.0
 """Default standard uncertainties: relative for a nominal length and width, K for the temperature."""
 COVERAGE = 2.0
@@ -58,6 +61,19 @@ class Estimate:
     @property
     def determined(self) -> bool:
         return math.isfinite(self.value)
+
+
+@dataclass(frozen=True)
+class LeverMode:
+    """The first mode from the fluid-loaded whole lever (:func:`pfmdyn.discrepancy.thermal.lever_mode`):
+    ``peak`` its resonance and Q in the medium (the oscillator of the same mean square, for the figure),
+    ``spring_constant`` its thermal k at the tip (N/m), ``sources`` the relative share of each uncertainty,
+    ``fit`` the whole-lever fit."""
+
+    peak: ThermalPeak
+    spring_constant: float
+    sources: dict
+    fit: object = field(default=None, repr=False)
 
 
 def thermal_factor(spot_position: float = 1.0, tip_position: float = 1.0) -> float:
@@ -108,6 +124,10 @@ class Calibration:
     inputs: dict
     instrument: dict
     plausible: dict = field(default_factory=dict)
+    model: str = "damped oscillator"
+    """The first mode's fit (:func:`first_mode_model`)."""
+    lever_fit: object = field(default=None, repr=False)
+    """The whole-lever fit (:class:`pfmdyn.discrepancy.thermal.ThermalFit`) when ``model`` is the lever's."""
 
     def to_json(self) -> dict:
         """The JSON document of ``pfmdyn calibrate`` (undetermined numbers are NaN, written null)."""
@@ -123,12 +143,57 @@ class Calibration:
                 "assumptions": list(self.assumptions), "inputs": dict(self.inputs), "instrument": dict(self.instrument)}
 
 
-def _first_mode(tune: ThermalTune) -> ThermalPeak:
+def first_mode(tune: ThermalTune) -> ThermalPeak:
+    """The first mode as a damped oscillator over a white floor (:func:`~pfmdyn.analysis.thermal.fit_thermal_peaks`,
+    or one over the whole band for a mode too wide for their windows).
+
+    >>> f = np.linspace(0, 4e5, 8001)
+    >>> round(first_mode(ThermalTune("t", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1e-15, 3e-14), "m", {}, {})).quality_factor)
+    440
+    """
     peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
         [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p]
     if not peaks:
         raise UserError(f"{tune.path}: no resonance peak found in the thermal spectrum")
     return peaks[0]
+
+
+def first_mode_model(medium: Medium, peak: ThermalPeak | None, length: float | None, width: float | None, unit: str,
+                     invols: float | None) -> str:
+    """Which fit gives ``pfmdyn calibrate`` its first mode: ``"damped oscillator"`` or ``"fluid-loaded lever"``.
+
+    This is the one place where the two thermal fits of a tune part.  ``pfmdyn discrepancy`` explains a tune
+    with the whole lever in its fluid (:func:`pfmdyn.discrepancy.thermal.fit_thermal`: every mode, Sader's
+    hydrodynamic load); ``calibrate`` takes the same fit where the fluid matters: in a liquid (denser than
+    :data:`LIQUID_DENSITY`) or at a Q below :data:`LOW_Q`, the load changes across the peak, and an
+    oscillator's f, Q and area are biased (resonance 1-6 % high, k up to 25 % off in water;
+    ``benchmarks/thermal_regimes.py``).  Elsewhere it fits the damped oscillator (Hutter & Bechhoefer):
+    the same numbers to a fraction of a per cent when Q is high, needs neither the lever's plan nor its k
+    (the whole lever does: it iterates k), is the model the instrument's own fit uses (like beside like),
+    and takes milliseconds.  The whole lever also needs the spectrum in metres (or the InvOLS).  ``peak``
+    None: no oscillator was found.
+
+    >>> peak = ThermalPeak(1, 2e4, 3.0, 1.0, 0.0, ((0,) * 4,) * 4)
+    >>> first_mode_model(Medium.water(), peak, 2e-4, 3e-5, "m", None), first_mode_model(Medium.water(), peak, None, None, "m", None)
+    ('fluid-loaded lever', 'damped oscillator')
+    """
+    loaded = medium.density > LIQUID_DENSITY or (peak is not None and peak.quality_factor < LOW_Q)
+    converted = unit == "m" or invols is not None
+    return "fluid-loaded lever" if loaded and length is not None and width is not None and converted \
+        else "damped oscillator"
+
+
+def stated_uncertainties(length: float | None, width: float | None, length_uncertainty: float | None,
+                         width_uncertainty: float | None) -> tuple:
+    """Standard uncertainties (m) of the length and width: the given ones, else :data:`LENGTH_TOLERANCE`
+    and :data:`WIDTH_TOLERANCE` of the nominal values (None without the value).
+
+    >>> stated_uncertainties(2.5e-4, 4e-5, None, 1e-6)
+    (5e-06, 1e-06)
+    """
+    u_length = None if length is None else LENGTH_TOLERANCE * length if length_uncertainty is None else length_uncertainty
+    u_width = None if width is None else WIDTH_TOLERANCE * width if width_uncertainty is None else width_uncertainty
+    return u_length, u_width
 
 
 def _combine(value: float, sources: dict) -> Estimate:
@@ -173,11 +238,13 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
               temperature: float, invols: float | None = None, spot_position: float = 1.0,
               tip_position: float = 1.0, length_uncertainty: float | None = None,
               width_uncertainty: float | None = None, temperature_uncertainty: float = TEMPERATURE_UNCERTAINTY,
-              medium_factory=None) -> Calibration:
+              medium_factory=None, mode: ThermalPeak | LeverMode | None = None) -> Calibration:
     """Both spring constants of the lever whose thermal tune is ``tune``.
 
     ``medium_factory(temperature)`` rebuilds the medium at another temperature (how the temperature's
     uncertainty and a reconciling temperature reach Sader's estimate); None keeps ``medium`` fixed.
+    ``mode``: the first mode already fitted (a :class:`LeverMode` gives the thermal k too); None: the
+    damped oscillator (:func:`first_mode`; which to use: :func:`first_mode_model`).
 
     Examples
     --------
@@ -187,10 +254,15 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     >>> round(c.thermal.value, 1), round(c.sader.value, 1), c.consistent
     (26.8, 25.1, True)
     """
-    peak = _first_mode(tune)
+    lever = mode if isinstance(mode, LeverMode) else None
+    peak = lever.peak if lever else mode or first_mode(tune)
     f0, q, amp = peak.frequency_hz, peak.quality_factor, peak.amplitude
     assumptions, inputs = [], {"temperature": temperature, "medium": medium.name, "spot_position": spot_position,
                                "tip_position": tip_position}
+    if not lever and (medium.density > LIQUID_DENSITY or q < LOW_Q):
+        assumptions.append("the first mode as an oscillator, though the fluid's load changes across the peak (its "
+                           "resonance reads 1-6 % high, k up to 25 % off): give the length and width (and the InvOLS "
+                           "of a spectrum in volts) for the fluid-loaded whole lever")
     # Thermal.
     mean_square = float(formulas.oscillator_mean_square(f0, q, amp))
     if tune.unit == "V":
@@ -204,7 +276,11 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
             raise UserError(f"{tune.path}: the spectrum is already in metres; an InvOLS applies to a spectrum in volts")
         assumptions.append("the spectrum in metres was converted by the instrument with a static InvOLS (optical "
                            "lever, tip pressed on a hard surface): the thermal factor assumes it")
-    if tune.unit == "m" or invols is not None:
+    if lever and (tune.unit == "m" or invols is not None):
+        thermal = _combine(lever.spring_constant, dict(lever.sources))
+        assumptions.append("the lever's plan (length, width) and the fluid's properties set the load that the whole "
+                           "lever's first mode and k follow (Sader's hydrodynamic function)")
+    elif tune.unit == "m" or invols is not None:
         log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
                            {"fit": peak.stderr(log_mean_square, "fit"), "peak shape": peak.stderr(log_mean_square, "shape"),
@@ -221,8 +297,7 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
         sader_estimate = Estimate(math.nan, math.nan, reason="needs the lever's length and width")
     else:
         inputs.update(length=length, width=width)
-        u_length = LENGTH_TOLERANCE * length if length_uncertainty is None else length_uncertainty
-        u_width = WIDTH_TOLERANCE * width if width_uncertainty is None else width_uncertainty
+        u_length, u_width = stated_uncertainties(length, width, length_uncertainty, width_uncertainty)
         k_s = sader()
         if not math.isfinite(k_s):
             re = float(reynolds_number(medium, f0, width))
@@ -268,4 +343,5 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
             medium, width, length, instrument["free_resonance"], instrument["free_quality_factor"], tip_position)
     return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
                        plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
-                       else plausible_factors(u_length / length, u_width / width, temperature))
+                       else plausible_factors(u_length / length, u_width / width, temperature),
+                       "fluid-loaded lever" if lever else "damped oscillator", lever.fit if lever else None)

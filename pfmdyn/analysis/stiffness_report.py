@@ -34,7 +34,7 @@ from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "Solution", "StiffnessReport", "analyse"]
+__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
 """Lowest tip position (x_tip / L) searched when the tip position is fitted."""
@@ -44,6 +44,17 @@ nominally (a tip height is a datasheet's value or a guess, and k1 can depend on 
 ASSUMED_POISSON = (0.2, 0.4)
 """Poisson's ratios a sample may have when none is stated: the assumed Mindlin tie's ``k2/k1`` is
 uniform over what they give (its standard uncertainty: half the range over sqrt 3)."""
+
+
+def assumed_tie_uncertainty() -> float:
+    """Standard uncertainty of an assumed Mindlin tie's ``k2/k1``: uniform over what the Poisson's ratios
+    of :data:`ASSUMED_POISSON` give.
+
+    >>> round(assumed_tie_uncertainty(), 4)
+    0.0401
+    """
+    ties = [formulas.mindlin_k2_over_k1(nu) for nu in ASSUMED_POISSON]
+    return float(abs(ties[0] - ties[1]) / 2 / math.sqrt(3))
 _SAME = 1e-7           # relative difference below which two solutions are one
 
 
@@ -405,8 +416,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
         lateral, words = _lateral(lever, contact, "tie")
         found, proof, k1_by_mode = _k1_only(lever, lateral, words, fc, modes)
         if not policy and lateral.ratio is not None:       # the tie is assumed: so is its ratio
-            ties = [formulas.mindlin_k2_over_k1(nu) for nu in ASSUMED_POISSON]
-            stderrs["k2_policy_uncertainty"] = float(abs(ties[0] - ties[1]) / 2 / math.sqrt(3))
+            stderrs["k2_policy_uncertainty"] = assumed_tie_uncertainty()
     elif tip_position_stated:
         found, proof = _k1_k2(lever, fc, modes, noise)
         lateral, words = Contact(), "k2 solved with k1 from the modes"

@@ -32,7 +32,8 @@ from ..io.discrepancy_data import ResonanceData
 from ..io.instruments import read_instrument, resonance_table
 from ..io.tables import check_resonance_rows
 
-__all__ = ["ThermalPeak", "oscillator_asd", "fit_oscillator", "broad_mode", "fit_thermal_peaks", "instrument_resonances"]
+__all__ = ["ThermalPeak", "oscillator_asd", "fit_oscillator", "tallest_peak", "half_power_run", "broad_mode",
+           "fit_thermal_peaks", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
@@ -151,6 +152,53 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
     return ThermalPeak(mode, *map(float, values), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)))
 
 
+def _low_bins(size: int) -> int:
+    """The lowest bins of a spectrum from (near) 0 hold the offset and 1/f noise, never a flexural mode."""
+    return max(3, size // 100)
+
+
+def tallest_peak(y) -> int:
+    """Index of the tallest peak of a spectrum ``y`` (positive, equally spaced from near 0): the maximum of
+    its logarithm median-smoothed over 5 bins (no single-bin spike), above :func:`_low_bins`, at its highest
+    bin; where that is the low edge (a 1/f rise above a low peak), the most prominent peak.  Every thermal fit (the oscillator's, the whole lever's) starts from it.
+
+    >>> f = np.linspace(0, 4e4, 2000); y = oscillator_asd(f, 1.2e4, 20.0, 1e-11, 1e-13)
+    >>> spiked = y.copy(); spiked[900] = 1.0
+    >>> int(tallest_peak(spiked)), int(np.argmax(y))
+    (599, 599)
+    >>> abs(tallest_peak(y + 2e-9 * f[20] / f.clip(1.0)) - 599) < 5      # on a 1/f rise taller than the peak
+    True
+    """
+    y = np.asarray(y, dtype=float)
+    start = _low_bins(y.size)
+    smooth = _smooth(np.log(np.maximum(y, np.finfo(float).tiny)), 5)[start:]
+    j = start + int(np.argmax(smooth))
+    if j <= start + 2:          # still falling at the low edge: a 1/f rise, the peak the most prominent
+        tops, prominence = _peaks(smooth - smooth.min(), 0.0)
+        j = start + int(tops[np.argmax(prominence)]) if tops.size else j
+    near = slice(max(j - 2, start), j + 3)        # the median's plateau: its highest bin
+    return near.start + int(np.argmax(y[near]))
+
+
+def half_power_run(y, i: int) -> tuple[int, int]:
+    """First and last index of the contiguous run around the peak ``i`` where ``y`` (an ASD) stays above
+    ``y[i] / sqrt(2)``: the half-power width is ``(last - first + 1)`` bins.
+
+    >>> half_power_run(np.array([0.1, 0.8, 0.9, 1.0, 0.75, 0.2, 0.9]), 3)
+    (1, 4)
+    """
+    below = np.asarray(y) <= y[i] / np.sqrt(2)
+    left, right = np.flatnonzero(below[:i]), np.flatnonzero(below[i + 1:])
+    return (int(left[-1]) + 1 if left.size else 0), (i + int(right[0]) if right.size else len(below) - 1)
+
+
+def _quality_start(f, y, i: int) -> float:
+    """A starting Q from the half-power run (at least two bins wide)."""
+    lo, hi = half_power_run(y, i)
+    step = f[1] - f[0]
+    return f[i] / max((hi - lo + 1) * step, 2 * step)
+
+
 def broad_mode(f, y) -> ThermalPeak | None:
     """The tallest peak as one oscillator over the whole band (first mode): a low-Q mode (in liquid) is
     wider than the windows :func:`fit_thermal_peaks` searches and fits in.
@@ -161,11 +209,9 @@ def broad_mode(f, y) -> ThermalPeak | None:
     (12000.0, 2.0)
     """
     f, y = np.asarray(f, dtype=float), np.asarray(y, dtype=float)
-    start = max(3, int(0.01 * f.size))
-    i = start + int(np.argmax(y[start:]))
-    above = np.flatnonzero(y[start:] > y[i] / np.sqrt(2)) + start
-    q0 = max(f[i] / max(f[above[-1]] - f[above[0]], f[1] - f[0]), 0.5)
-    band = (f > f[start]) & (y > 0)
+    i = tallest_peak(y)
+    q0 = max(_quality_start(f, y, i), 0.5)
+    band = (f > f[_low_bins(f.size)]) & (y > 0)
     return fit_oscillator(f[band], y[band], (f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])))
 
 
@@ -244,8 +290,7 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_pea
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(y)) and np.all(np.diff(f) > 0)):
         raise UserError("a thermal spectrum needs finite values and increasing frequencies")
     step = f[1] - f[0]
-    # The lowest bins hold the DC offset and 1/f noise, never a flexural mode of interest.
-    start = max(3, int(0.01 * f.size))
+    start = _low_bins(f.size)
     logy = np.log10(np.maximum(y, np.finfo(float).tiny))
     # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
     # smoothing until a peak stands out.
@@ -259,14 +304,7 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_pea
     out = []
     for mode, i in sorted((m, peaks[j] + start) for m, j in zip(modes, order) if m):
         f0, top, base = f[i], y[i], 10 ** floor[i]
-        above = np.flatnonzero(y > top / np.sqrt(2))
-        # Half-power width from the contiguous run around the peak (at least two bins).
-        lo, hi = i, i
-        while lo - 1 in above:
-            lo -= 1
-        while hi + 1 in above:
-            hi += 1
-        q0 = f0 / max((hi - lo + 1) * step, 2 * step)
+        q0 = _quality_start(f, y, i)
         half = max(6 * f0 / q0, 20 * step)
         window = (f > f0 - half) & (f < f0 + half)
         peak = fit_oscillator(f[window], y[window], (f0, q0, top / q0, base), mode)

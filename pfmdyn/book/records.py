@@ -32,6 +32,10 @@ def chapter_of(claim_id: str) -> str | None:
     return (check.chapter or None) if check else None
 
 
+ERRATUM_WIDTH = 46
+"""Characters per line of the errata page's equations (:data:`pfmdyn.typeset.LINE_WIDTH` elsewhere)."""
+
+
 def record(v) -> dict:
     """One verdict for the book: the plain fields of ``pfmdyn verify``'s JSON and, under ``html``,
     the claim's place, printed form, evidence and correction typeset for a table cell; errata also
@@ -41,8 +45,10 @@ def record(v) -> dict:
     out["html"] = {"where": typeset.html(v.where), "printed": typeset.html(v.printed),
                    "evidence": typeset.html(v.proof.proof), "correct": typeset.html(typeset.correction(v))}
     if str(v.verdict) in ("erratum", "holds_up_to_sign_convention"):
-        f = typeset.erratum(v)
-        width = typeset.LINE_WIDTH
+        # the errata page sets its equations in result boxes beside the page's contents, narrower
+        # than a chapter's text: lines of ERRATUM_WIDTH characters (about 500 px) fit a laptop's browser
+        width = ERRATUM_WIDTH
+        f = typeset.erratum(v, width)
         out["erratum"] = {"printed": typeset.html(f["printed"], width), "correct": f["correct"],
                           "correction": typeset.html(f["correction"], width), "proof": typeset.html(f["proof"], width),
                           "decisive": f["decisive"], "sign": f["sign"]}

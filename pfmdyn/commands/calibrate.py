@@ -46,8 +46,8 @@ def report(result) -> str:
     """
     d, p = result.to_json(), result.peak
     inst = result.instrument
-    lines = [f"first mode: f = {p.frequency_hz:.6g} +- {p.frequency_uncertainty_hz:.2g} Hz, "
-             f"Q = {p.quality_factor:.4g} +- {p.quality_factor_uncertainty:.2g}"
+    lines = [f"first mode ({result.model}): f = {p.frequency_hz:.6g} +- {_number(p.frequency_uncertainty_hz, 'Hz', 2)}, "
+             f"Q = {p.quality_factor:.4g} +- {_number(p.quality_factor_uncertainty, '', 2).strip()}"
              + (f"  (instrument: {inst['free_resonance']:.6g} Hz, Q {inst['free_quality_factor']:.4g})"
                 if "free_resonance" in inst and "free_quality_factor" in inst else "")]
     for name, label in (("thermal", "thermal"), ("sader", "Sader")):
@@ -97,8 +97,8 @@ def _provenance(tune, result, args, temperature_source: str) -> dict:
 
 def run(args) -> int:
     """Read, calibrate, print, write what was asked."""
-    from ..analysis.calibrate import calibrate
     from ..discrepancy.sweep import disagreement_lines
+    from ..discrepancy.thermal import calibrate_tune
     from ..io.results import check_writable
     from ..io.thermal_tune import read_thermal_tune
     from ..medium import Medium
@@ -115,11 +115,12 @@ def run(args) -> int:
     temperature, source = flags.temperature(args, tune.conditions)
     word = (args.medium or environment or "air").strip().lower()
     factory = getattr(Medium, word) if word in ("air", "water") else None
-    result = calibrate(tune, length=values.get("length"), width=values.get("width"), medium=medium,
-                       temperature=temperature, invols=values.get("invols"),
-                       spot_position=values.get("spot_position", 1.0), tip_position=values.get("tip_position", 1.0),
-                       length_uncertainty=values.get("length_uncertainty"),
-                       width_uncertainty=values.get("width_uncertainty"), medium_factory=factory)
+    result = calibrate_tune(tune, length=values.get("length"), width=values.get("width"), medium=medium,
+                            temperature=temperature, invols=values.get("invols"),
+                            spot_position=values.get("spot_position", 1.0),
+                            tip_position=values.get("tip_position", 1.0),
+                            length_uncertainty=values.get("length_uncertainty"),
+                            width_uncertainty=values.get("width_uncertainty"), medium_factory=factory)
     if source.startswith("assumed"):
         result.assumptions.append(f"temperature {temperature:g} K (give {flags.NAMES['temperature'].flag})")
     if args.medium is None and environment is None:

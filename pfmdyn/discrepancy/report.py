@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..fitting.result import Result
 from . import select
 from .effects import public_name
 from .plausible import describe
+from .regions import gap_text, worst_region
 
 __all__ = ["DiscrepancyReport", "degrees", "parameters", "report", "summary", "medium_comparison"]
 
@@ -58,9 +61,13 @@ def parameters(fit) -> dict:
     return out
 
 
-def report(result: dict, **extra) -> DiscrepancyReport:
-    """The report of a loop result (both data kinds), with its baseline and final fits."""
+def report(result: dict, frequency_hz=None, resonances=(), **extra) -> DiscrepancyReport:
+    """The report of a loop result (both data kinds), with its baseline and final fits; with the
+    spectrum's ``frequency_hz`` (one per residual) also the final fit's ``worst_region`` among
+    its bands and ``resonances`` (:func:`pfmdyn.discrepancy.regions.worst_region`)."""
     baseline, final = result["baseline"], result["final"]
+    if frequency_hz is not None:
+        extra["worst_region"] = worst_region(frequency_hz, np.abs(final.residual / final.sigma) ** 2, resonances)
     steps = [dict(s, effect=public_name(s["effect"]) if s["effect"] else None) for s in result["steps"]]
     out = {"missing_effects": final.model.public_effects, "gap_before": baseline.gap, "gap_after": final.gap,
            "explained_share": select.share(baseline.gap, baseline.gap, final.gap), "effect_shares": result["shares"],
@@ -84,6 +91,8 @@ def summary(report) -> str:
              f"(1 = noise level); missing effects: {', '.join(named) or 'none'}",
              f"{report['data_values']} data values, {report['fitted_parameters']} fitted parameters: "
              f"{report['dof']} degree(s) of freedom left"]
+    if report.get("worst_region"):
+        lines.insert(1, "final " + gap_text(report["gap_after"], report["worst_region"]))
     for i, s in enumerate(report["steps"], 1):
         if "removed" in s:
             lines.append(f"step {i}: {s['decision']}")

@@ -412,7 +412,8 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     """
     problem = SpectrumProblem(data, vertical_only)
     result = select.run(problem, progress, time_budget_s)
-    return report(result, gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
+    return report(result, problem.data.frequency_hz, list(zip(*problem.widths)),
+                  gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
                   "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)
 
 

@@ -37,6 +37,7 @@ from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from ..medium import Medium
+from .regions import gap_text, lever_resonances, worst_region
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
            "sweep_model", "plus_minus", "instrument_text", "compare_with_instrument", "disagreement_lines",
@@ -161,7 +162,7 @@ class SweepFit(Result):
                  f"  width {plus_minus(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(extra, '')}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}",
-                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"] + unexplained_line(d.get("unexplained"))
+                 f"  {gap_text(d['gap'], d.get('worst_region'))}"] + unexplained_line(d.get("unexplained"))
         return "\n".join(lines + provenance_lines(d))
 
 
@@ -371,6 +372,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
                              "unit": table.unit or "1", "adds_to": "response" if coherent else "amplitude"},
               "amplitude_only": amplitude_only, "phase_reversed": conjugate,
               "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y))),
+              "worst_region": worst_region(frequency, np.abs(residual / sigma) ** 2, lever_resonances(lever)),
               "unexplained": unexplained_entry(frequency, y, residual, sigma),
               "instrument_comparison": comparison, "from_file": sorted(table.fields), "assumed": []}
     if not given:

@@ -21,19 +21,24 @@ The instrument's own fit in the header is reported beside, never used instead of
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ..analysis.thermal import tallest_peak
 from ..cantilever import Cantilever
 from ..errors import UserError
+from ..fitting.projection import jacobian_covariance
 from ..fitting.result import Result
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
+from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
                     instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
                     unexplained_entry, unexplained_line)
 
-__all__ = ["ThermalFit", "fit_thermal", "BAND"]
+__all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
 
 BAND = (0.3, 3.0)
 """The band fitted, as multiples of the tallest peak's frequency (clipped to the measured span)."""
@@ -63,7 +68,7 @@ class ThermalFit(Result):
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
                     else ""),
-                 f"  gap {d['gap']:.3g} (1: fitted to the noise)"]
+                 f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
 
@@ -74,31 +79,44 @@ def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
     f, asd = tune.frequency_hz[ok][order], tune.asd[ok][order]
     if len(f) < 5 * MIN_POINTS:
         raise UserError(f"{tune.path}: {len(f)} usable points; a thermal fit needs at least {5 * MIN_POINTS}")
-    # the tallest of the log spectrum smoothed over 5 bins (no single-bin spike), above the lowest
-    # bins (the offset and 1/f noise)
-    smooth = np.convolve(np.log(asd), np.ones(5) / 5, mode="same")
-    skip = max(3, len(f) // 100)
-    peak = f[skip + int(np.argmax(smooth[skip:-2]))]
+    peak = f[tallest_peak(asd)]
     inside = (f >= BAND[0] * peak) & (f <= BAND[1] * peak)
     if inside.sum() < MIN_POINTS:
         raise UserError(f"{tune.path}: {inside.sum()} points around the peak; a thermal fit needs at least {MIN_POINTS}")
     return f[inside], asd[inside], peak
 
 
-def _floor_and_scale(slope_psd, power) -> tuple[float, float]:
-    """``(g**2, w**2)``, both >= 0, minimising ``sum ((g**2 S + w**2) / P - 1)**2``."""
-    design = np.stack([slope_psd / power, 1.0 / power], axis=-1)
-    norms = np.linalg.norm(design, axis=0)       # the two columns differ by many decades
-    solution = np.linalg.lstsq(design / norms, np.ones(len(power)), rcond=None)[0] / norms
-    if np.all(solution >= 0):
-        return float(solution[0]), float(solution[1])
-    return max(float(np.sum(design[:, 0]) / norms[0] ** 2), 0.0), 0.0
+def _floor_and_scale(slope_psd, power, frequency) -> np.ndarray:
+    """``(g**2, w**2, p**2)``, all >= 0, minimising ``sum ((g**2 S + w**2 + p**2 f0/f) / P - 1)**2``
+    (``f0`` the band's lowest frequency: ``p`` the 1/f floor there)."""
+    from scipy.optimize import nnls
+
+    design = np.stack([slope_psd, np.ones(len(power)), frequency[0] / frequency], axis=-1) / power[:, None]
+    norms = np.linalg.norm(design, axis=0)       # the columns differ by many decades
+    return nnls(design / norms, np.ones(len(power)))[0] / norms
+
+
+def quality_factor_in_medium(lever: Cantilever) -> float:
+    """The first mode's Q in the medium, the damped oscillator's at the resonance ``f`` (the real root of
+    ``r**2 (1 + Re load) = 1``, ``r = f / f_vac``): ``1/Q = (-Im load + g / r) / (1 + Re load) + 1/Q_int``
+    (``derivations/damping.py``: drag ``g + i r load``); finite at any damping, where a complex root
+    may not exist.
+
+    >>> round(quality_factor_in_medium(Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))))
+    474
+    """
+    load = lever.fluid_load(lever.free_resonance) if lever.medium is not None else 0j
+    r = lever.free_resonance / lever.vacuum_resonance
+    loss = (lever.viscous_loss / r - load.imag) / (1 + load.real) + 1 / lever.quality_factor
+    return float(1 / loss) if loss > 0 else math.inf
 
 
 def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium: Medium, temperature: float,
-                width: float | None = None) -> ThermalFit:
+                width: float | None = None, *, start=None) -> ThermalFit:
     """Fit a thermal tune over the band around its tallest peak (see the module): the lever's resonance in
-    ``medium`` at ``temperature`` (K) and a damping beyond the fluid's; ``width`` None: assumed.
+    ``medium`` at ``temperature`` (K) and a damping beyond the fluid's; ``width`` None: assumed; ``start``
+    (the ``internal`` of an earlier fit) the only start.  Attribute ``scale_stderr``: the relative standard
+    error of ``g**2``, the fit's scatter with the resonance and damping free.
 
     >>> lever = Cantilever(2.0, 7e4, 2e-4, width=3e-5, medium=Medium.air())
     >>> f = np.linspace(100.0, 2e5, 4000)
@@ -107,7 +125,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     >>> round(fit["parameters"]["free_resonance"]["value"]), round(fit["detection_scale"], 4)
     (70000, 1.0)
     """
-    frequency, asd, start = _band(tune)
+    frequency, asd, peak = _band(tune)
     given = width is not None
     width = width if given else ASSUMED_WIDTH * length
     power = asd**2
@@ -119,10 +137,13 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     def lever_of(x) -> Cantilever:
         return Cantilever(spring_constant, 10.0**x[0], length, width=width, medium=medium, viscous_loss=x[1])
 
-    def model(x) -> tuple[np.ndarray, float, float]:
-        slope_psd = lever_of(x).thermal_noise(frequency, temperature).slope
-        a, b = _floor_and_scale(slope_psd, power)
-        return np.sqrt(a * slope_psd + b), a, b
+    def slope_psd(x) -> np.ndarray:
+        return lever_of(x).thermal_noise(frequency, temperature).slope
+
+    def model(x) -> tuple[np.ndarray, np.ndarray]:
+        psd = slope_psd(x)
+        coefficients = _floor_and_scale(psd, power, frequency)
+        return np.sqrt(coefficients[0] * psd + coefficients[1] + coefficients[2] * frequency[0] / frequency), coefficients
 
     def residual(x) -> np.ndarray:
         try:
@@ -132,21 +153,21 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
         with np.errstate(divide="ignore"):
             return np.nan_to_num((np.log(fitted) - log_asd) / sigma, nan=1e6, posinf=1e6, neginf=1e6)
 
-    grid = [np.array([np.log10(start * s), loss]) for s in (0.999, 1.0, 1.001) for loss in EXTRA_LOSS.seeds]
-    fit = solve_from_starts(residual, grid, lower, upper)
+    grid = [np.asarray(start, dtype=float)] if start is not None else \
+        [np.array([np.log10(peak * s), loss]) for s in (0.999, 1.0, 1.001) for loss in EXTRA_LOSS.seeds]
+    fit = solve_from_starts(residual, grid, lower, upper, keep=1 if start is not None else 3)
     try:
         lever = lever_of(fit.internal)
-        fitted, a, b = model(fit.internal)
+        fitted, (a, b, c) = model(fit.internal)
+        scale_stderr = _scale_stderr(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
     except UserError:
         raise UserError(f"{tune.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the peak (check them)") from None
-    from ..analysis.resonances import resonances
-
     parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
-    q = float(resonances(lever, None, modes=1).free.q[0])
+    q = quality_factor_in_medium(lever)
     r = np.log(fitted) - log_asd
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
@@ -159,6 +180,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
               "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
+              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
               "instrument_comparison": compare_with_instrument(tune.instrument, {
                   "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
@@ -166,4 +188,134 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
                   float(np.median(np.diff(frequency))))}
     if not given:
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
-    return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted)
+    return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted, internal=fit.internal,
+                      one_over_f_floor=float(np.sqrt(c)), scale_stderr=scale_stderr)
+
+
+def _scale_stderr(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> float:
+    """Relative standard error of ``g**2`` with the resonance, the damping and the floors free: the
+    Jacobian of the log residual in (x, log g**2, log w**2, log p**2) (a floor that adds next to nothing
+    held), scaled by the reduced chi2 when above 1."""
+    psd = slope_psd(x)
+    columns = []
+    for i in range(2):       # the resonance (log10 Hz) and the extra damping
+        moved = np.array(x, dtype=float)
+        moved[i] += 1e-6
+        columns.append(coefficients[0] * (slope_psd(moved) - psd) / 1e-6)
+    floors = [value * shape for value, shape in zip(coefficients[1:], (np.ones_like(psd), frequency[0] / frequency))]
+    columns += [coefficients[0] * psd] + [floor for floor in floors if np.max(floor / fitted**2) > 1e-3]
+    J = np.stack(columns, axis=-1) / (2 * fitted[:, None] ** 2 * sigma)
+    r = (np.log(fitted) - log_asd) / sigma
+    covariance = jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
+    return float(np.sqrt(covariance[2, 2]))
+
+
+def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, temperature: float,
+               spring_constant: float, *, length_uncertainty: float, width_uncertainty: float,
+               temperature_uncertainty: float, tip_position: float = 1.0, spot_position: float = 1.0):
+    """The first mode and thermal spring constant of the fluid-loaded whole lever (:func:`fit_thermal`) of a
+    tune in metres (converted with a static InvOLS, the thermal method's assumption): the ``k`` at which the
+    slope-to-deflection factor is the static ``2L/3`` (``detection_scale`` 1), found by ``k -> k / scale**2``
+    from ``spring_constant`` (the spectrum's shape depends on ``k`` only through the fluid's mass ratio: a
+    few steps).  ``k`` at a set-back tip or spot: times the oscillator's factor ratio (:func:`~pfmdyn.analysis.
+    calibrate.thermal_factor`).  Each stated uncertainty's share of ``k`` is one refit (length, width) or
+    exact (temperature: ``k ~ T``).
+
+    >>> lever = Cantilever(2.0, 7.9e4, 2e-4, width=3e-5, viscous_loss=0.02).with_medium(Medium.water(298.15))
+    >>> f = np.linspace(100.0, 1e5, 1000)
+    >>> asd = np.sqrt((2 * 2e-4 / 3) ** 2 * lever.thermal_noise(f, 298.15).slope + 1e-26)
+    >>> mode = lever_mode(ThermalTune("t", f, asd, "m", {}, {}), 2e-4, 3e-5, Medium.water(298.15), 298.15, 1.5,
+    ...                   length_uncertainty=4e-6, width_uncertainty=1.5e-6, temperature_uncertainty=1.0)
+    >>> round(mode.spring_constant, 4), round(mode.peak.frequency_hz), round(mode.peak.quality_factor, 3)
+    (2.0, 29560, 3.813)
+    """
+    from ..analysis.calibrate import LeverMode, thermal_factor
+    from ..analysis.thermal import ThermalPeak
+    from ..constants import BOLTZMANN
+
+    k, start, last, soft, fit = spring_constant, None, None, 0.0, None      # soft: the stiffest k too soft
+    for _ in range(24):
+        try:
+            trial = fit_thermal(tune, k, length, medium, temperature, width, start=start)
+        except UserError:       # too soft to carry the fluid at the peak: back towards the last that did
+            soft = max(soft, k)
+            if last is not None and np.log(np.exp(last[0]) / k) < 1e-4:
+                break           # the data ask for a lever at the edge of floating: the last that did
+            k = 2.0 * k if last is None else float(np.sqrt(k * np.exp(last[0])))
+            continue
+        fit = trial
+        # log scale**2 against log k: slope 1 but for the mass ratio's share; secant steps to its root
+        u, h = np.log(k), 2 * np.log(fit["detection_scale"])
+        slope = (h - last[1]) / (u - last[0]) if last is not None and u != last[0] else 1.0
+        k, start, last = np.exp(u - h / (slope if 0.3 < slope < 3 else 1.0)), fit.internal, (u, h)
+        if k <= soft:           # never below a lever known to sink
+            k = float(np.sqrt(soft * np.exp(u)))
+        if abs(h) < 1e-5:
+            break
+    if fit is None or abs(last[1]) > 0.01:
+        raise UserError(f"{tune.path}: no lever of this length and width in {medium.name} explains the tune "
+                        "(check them)")
+    fitted_k = float(np.exp(last[0]))
+    k = fitted_k / fit["detection_scale"] ** 2
+
+    def moved(**change) -> float:        # k's relative change for one input one sigma lower (less load: a lever that floats)
+        other = dict(dict(length=length, width=width), **change)
+        refit = fit_thermal(tune, fitted_k, other["length"], medium, temperature, other["width"], start=fit.internal)
+        return abs(refit["detection_scale"] ** -2 / fit["detection_scale"] ** -2 - 1)
+
+    sources = {"fit": fit.scale_stderr, "length": moved(length=length - length_uncertainty),
+               "width": moved(width=width - width_uncertainty), "temperature": temperature_uncertainty / temperature}
+    lever, p = fit.lever, fit["parameters"]
+    q = fit["quality_factor"]
+    r = lever.free_resonance / lever.vacuum_resonance
+    # dQ/dg = Q**2 / (r (1 + Re load)): the extra damping's scatter in Q
+    load = lever.fluid_load(lever.free_resonance).real if lever.medium is not None else 0.0
+    q_stderr = q**2 * p["viscous_loss"]["stderr"] / (r * (1 + load)) if np.isfinite(q) else np.inf
+    k_tip = float(k) * thermal_factor(spot_position, tip_position) / thermal_factor()
+    # the oscillator with this mode's f, Q and mean square (chi kB T / k at the end: the plot's and the report's)
+    mean_square = thermal_factor() * BOLTZMANN * temperature / k
+    f0 = float(lever.free_resonance)
+    amplitude = float(np.sqrt(mean_square / formulas.oscillator_mean_square(f0, q, 1.0)))
+    variance = np.diag([p["free_resonance"]["stderr"] ** 2, q_stderr**2, 0.0, 0.0])
+    peak = ThermalPeak(1, f0, q, amplitude, fit["white_floor"], tuple(map(tuple, variance.tolist())))
+    return LeverMode(peak, k_tip, sources, fit)
+
+
+def calibrate_tune(tune: ThermalTune, *, medium: Medium, temperature: float, length: float | None = None,
+                   width: float | None = None, invols: float | None = None, **options):
+    """``pfmdyn calibrate``: :func:`pfmdyn.analysis.calibrate.calibrate` with its first mode from the
+    damped oscillator or, where that is biased and the plan is given, the fluid-loaded whole lever
+    (:func:`lever_mode`; why and when: :func:`pfmdyn.analysis.calibrate.first_mode_model`).  ``options``:
+    :func:`~pfmdyn.analysis.calibrate.calibrate`'s.
+
+    >>> f = np.linspace(0, 4e5, 8001)
+    >>> tune = ThermalTune("t", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1.03e-15, 3e-14), "m", {}, {})
+    >>> c = calibrate_tune(tune, length=225e-6, width=40e-6, medium=Medium.air(313.15), temperature=313.15)
+    >>> c.model, round(c.thermal.value, 1)
+    ('damped oscillator', 26.8)
+    """
+    from ..analysis.calibrate import (TEMPERATURE_UNCERTAINTY, calibrate, first_mode, first_mode_model,
+                                      stated_uncertainties, thermal_spring_constant)
+
+    try:
+        peak = first_mode(tune)
+    except UserError:           # no oscillator stands out (a low hump on a 1/f rise): the whole lever may
+        peak = None
+    mode = peak
+    if first_mode_model(medium, peak, length, width, tune.unit, invols) == "fluid-loaded lever":
+        metres = tune if tune.unit == "m" else ThermalTune(tune.path, tune.frequency_hz, tune.asd * invols, "m",
+                                                            tune.instrument, tune.conditions)
+        u_length, u_width = stated_uncertainties(length, width, options.get("length_uncertainty"),
+                                                 options.get("width_uncertainty"))
+        if peak is not None:
+            mean_square = float(formulas.oscillator_mean_square(peak.frequency_hz, peak.quality_factor,
+                                                                peak.amplitude * (invols or 1.0)))
+        else:                   # the band's power above its lowest level: a start, not an estimate
+            frequency, asd, _ = _band(metres)
+            mean_square = float(np.sum(asd**2 - np.min(asd) ** 2) * np.median(np.diff(frequency)))
+        mode = lever_mode(metres, length, width, medium, temperature, thermal_spring_constant(mean_square, temperature),
+                          length_uncertainty=u_length, width_uncertainty=u_width,
+                          temperature_uncertainty=options.get("temperature_uncertainty", TEMPERATURE_UNCERTAINTY),
+                          tip_position=options.get("tip_position", 1.0), spot_position=options.get("spot_position", 1.0))
+    return calibrate(tune, length=length, width=width, medium=medium, temperature=temperature, invols=invols,
+                     mode=mode, **options)

@@ -35,7 +35,11 @@ from ..generated.tilt_rotation import rotated
 from .outputs import quantities
 from .spec import bands
 
-__all__ = ["BeamMapModel"]
+__all__ = ["BeamMapModel", "POLICY_GRID"]
+
+POLICY_GRID = 60
+"""Values of ``k1`` (log-spaced over the fit's bounds: six decades) at which an assumed k2 tie's share of its standard error is
+computed (:meth:`BeamMapModel.k1_policy_stderr`); it varies slowly with ``k1``."""
 
 
 @dataclass(frozen=True)
@@ -136,6 +140,41 @@ class BeamMapModel:
         if mode == "fixed":
             return np.full_like(np.asarray(k1, float), self.contact.k2)
         return self.contact.tie() * np.asarray(k1, float)
+
+    def k1_policy_stderr(self, k1) -> np.ndarray:
+        """The share of an assumed k2 tie in the standard error of ``k1`` (N/m, each pixel): with one band
+        and no k2 policy stated, ``k2`` is tied by Mindlin at an assumed Poisson's ratio, whose spread
+        (:func:`pfmdyn.analysis.stiffness_report.assumed_tie_uncertainty`) moves the ``k1`` that puts
+        the contact resonance where it was measured, as ``pfmdyn stiffness`` states it
+        (:func:`pfmdyn.analysis.contact_resonance.covariance_by_source`); 0 where k2 is held, fitted,
+        tied at a stated ratio or cannot act (no tip height, no tilt).  The share at
+        :data:`POLICY_GRID` values of ``k1`` across the fit's bounds, interpolated in ``log k1``.
+
+        >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+        >>> m = BeamMapModel(lever, np.linspace(3e5, 4e5, 8))
+        >>> sd = m.k1_policy_stderr(np.array([150.0, np.nan]))
+        >>> bool(0.005 < sd[0] / 150.0 < 0.02), float(sd[1])        # under 1 %: one contact mode near 4 f1
+        (True, 0.0)
+        >>> float(BeamMapModel(lever, np.linspace(3e5, 4e5, 8), contact=Contact(poisson=0.3)).k1_policy_stderr(150.0))
+        0.0
+        """
+        k1 = np.asarray(k1, float)
+        out = np.zeros(k1.shape)
+        ok = np.isfinite(k1) & (k1 > 0)
+        if self._policy_shares is not None and ok.any():
+            grid, share = self._policy_shares
+            out[ok] = k1[ok] * np.interp(np.log(k1[ok]), grid, share)
+        return out
+
+    @property
+    def _policy_shares(self):
+        """``(log k1, relative share)`` at :data:`POLICY_GRID` values across the fit's bounds of ``k1``; None
+        when no assumed tie acts.  Cached per process (a map's workers get the model anew for each task)."""
+        if (self.k2_mode != "tied" or self.contact.ratio is not None
+                or (self.lever.tip_height is None and self.lever.alpha == 0.0)):
+            return None
+        lo, hi = self.k1_span
+        return _policy_shares(self.lever, self.contact.tie(), float(np.median(self.frequency_hz)), lo / 10, hi * 10)
 
     @property
     def _composed(self) -> bool:
@@ -252,3 +291,35 @@ class BeamMapModel:
                 d[i, :, j] = chain[name]()
         return np.stack([values[i] for i in self.drives], axis=1), d
 
+
+@functools.lru_cache(maxsize=32)
+def _policy_shares(lever: Cantilever, ratio: float, middle_hz: float, low: float, high: float):
+    grid = np.geomspace(low, high, POLICY_GRID)
+    return np.log(grid), np.array([_policy_share(lever, ratio, middle_hz, k) for k in grid])
+
+
+def _policy_share(lever: Cantilever, ratio: float, middle_hz: float, k1: float) -> float:
+    """The assumed tie's relative standard error of ``k1``: at the contact root ``beta`` nearest
+    ``middle_hz`` (Newton from there), the measured ``beta`` held, ``d k1 / d ratio = -k1 F_k2 / (F_k1 +
+    ratio F_k2)`` of the characteristic ``F(beta, k1, k2)`` (central differences)."""
+    from ..analysis.contact_resonance import betas, characteristic
+    from ..analysis.stiffness_report import assumed_tie_uncertainty
+
+    def F(b, a, c):
+        return float(np.real(characteristic(b, lever, a, c, lever.tip_position)))
+
+    b = float(betas(lever, middle_hz))
+    with np.errstate(all="ignore"):
+        for _ in range(50):
+            h = 1e-7 * b
+            step = -F(b, k1, ratio * k1) * 2 * h / (F(b + h, k1, ratio * k1) - F(b - h, k1, ratio * k1))
+            if not math.isfinite(step):
+                return 0.0
+            b += step
+            if abs(step) < 1e-12 * b:
+                break
+        e = 1e-6 * k1
+        d_k1 = (F(b, k1 + e, ratio * k1) - F(b, k1 - e, ratio * k1)) / (2 * e)
+        d_k2 = (F(b, k1, ratio * k1 + e) - F(b, k1, ratio * k1 - e)) / (2 * e)
+        share = abs(d_k2 / (d_k1 + ratio * d_k2)) * assumed_tie_uncertainty()
+    return float(share) if math.isfinite(share) else 0.0

@@ -267,7 +267,9 @@ def _fit_pixels(model, y, q0, k1_range, iterations, gap_threshold, tolerance, bi
     band = model.bands[0]
     linear = bias_axis.linear_maps(c[:, :, 0], cov[:, first[:, None], first], bias, surface_potential_v,
                                    g[..., band])
-    out = {"k1": k1, "k1_stderr": k1 * spread["k1"], "k2": k2, "k2_stderr": k2_sd,
+    # the fit's error and an assumed k2 tie's share (as pfmdyn stiffness states it)
+    k1_sd = np.hypot(k1 * spread["k1"], model.k1_policy_stderr(k1))
+    out = {"k1": k1, "k1_stderr": k1_sd, "k2": k2, "k2_stderr": k2_sd,
            "quality_factor": 10.0**col["q"], "quality_factor_stderr": 10.0**col["q"] * spread["q"],
            "viscous_loss": col.get("g"), "viscous_loss_stderr": sd.get("g"),
            "contact_loss": col.get("x"), "contact_loss_stderr": sd.get("x"),

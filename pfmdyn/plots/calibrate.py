@@ -1,5 +1,6 @@
-"""Figure of ``pfmdyn calibrate``: the thermal spectrum, the fitted first mode (data = fit + residual),
-and the oscillator the instrument's own f and Q imply when the file holds them."""
+"""Figure of ``pfmdyn calibrate``: the thermal spectrum, the fitted first mode (data = fit + residual: the
+oscillator, or the whole lever in a liquid), and the oscillator the instrument's own f and Q imply when the
+file holds them."""
 from __future__ import annotations
 
 import numpy as np
@@ -28,14 +29,18 @@ def plot_calibration(tune: ThermalTune, result: Calibration):
     import matplotlib.pyplot as plt
 
     p = result.peak
-    half = max(30 * p.frequency_hz / p.quality_factor, 20 * (tune.frequency_hz[1] - tune.frequency_hz[0]))
-    window = (tune.frequency_hz > p.frequency_hz - half) & (tune.frequency_hz < p.frequency_hz + half)
-    f, y = tune.frequency_hz[window], tune.asd[window]
-    fit = oscillator_asd(f, p.frequency_hz, p.quality_factor, p.amplitude, p.white)
+    if result.lever_fit is not None:        # the whole lever in its fluid, over the band it was fitted on
+        lever = result.lever_fit
+        f, y, fit = lever.frequency_hz, lever.asd, lever.model_asd
+    else:
+        half = max(30 * p.frequency_hz / p.quality_factor, 20 * (tune.frequency_hz[1] - tune.frequency_hz[0]))
+        window = (tune.frequency_hz > p.frequency_hz - half) & (tune.frequency_hz < p.frequency_hz + half)
+        f, y = tune.frequency_hz[window], tune.asd[window]
+        fit = oscillator_asd(f, p.frequency_hz, p.quality_factor, p.amplitude, p.white)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
     unit = f"{tune.unit}/√Hz"
     top.semilogy(f / 1e3, y, ".", ms=2, color="0.5", label="data")
-    top.semilogy(f / 1e3, fit, "C0", label=f"fit: f {p.frequency_hz / 1e3:.2f} kHz, Q {p.quality_factor:.0f}")
+    top.semilogy(f / 1e3, fit, "C0", label=f"fit ({result.model}): f {p.frequency_hz / 1e3:.2f} kHz, Q {p.quality_factor:.3g}")
     inst = result.instrument
     if "free_resonance" in inst and "free_quality_factor" in inst:
         q = inst["free_quality_factor"]
