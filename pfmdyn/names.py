@@ -250,6 +250,7 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("degrees_of_freedom", "dof", "1", "data values less fitted parameters"),
         ("noise", "sigma", "data", "noise of the data in the data's own unit (RMS, estimated from the data)"),
         ("largest_residual", "max |r|", "1", "the largest residual over the largest measured value"),
+        ("unexplained_share", "share_left", "1", "share of the baseline's misfit the final model leaves"),
         ("effect", "effect", "1", "an effect's name (missing_effects' vocabulary)"),
         ("damping_mechanisms", "damping", "1", "the damping mechanisms the final model holds"),
         ("equivalent_damping_mechanisms", "damping'", "1", "other damping mechanisms that fit the data as well"),

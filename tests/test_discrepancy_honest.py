@@ -20,6 +20,7 @@ from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
 from fe_beam import FEBeam, acquisition_case, silicon_lever, spectrum  # noqa: E402
+from schema_check import validate  # noqa: E402
 from test_instruments import ASYLUM, THERMAL  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -36,7 +37,9 @@ REAL = [ASYLUM / name for name in ("PTO_Funakubo0001.h5", "PMN28Pt0000.h5", "Igo
 def _run(tmp_path, path, *flags) -> dict:
     out = tmp_path / "r.json"
     assert cli.main(["discrepancy", str(path), "--json", str(out), *flags]) == 0
-    return json.loads(out.read_text())
+    document = json.loads(out.read_text())
+    validate(document)
+    return document
 
 
 @pytest.mark.skipif(not ASYLUM.is_dir(), reason="real data absent")

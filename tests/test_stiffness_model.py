@@ -206,5 +206,6 @@ def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_pa
     assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
                      repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["contact_hz"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
-    assert "Mindlin" in doc["k2_policy"] and "k2 policy: k2 tied to k1 by Mindlin" in capsys.readouterr().out
+    assert doc["results"]["contact"]["resonance"]["value"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
+    assert doc["lever"]["k2"]["status"] == "tied" and "Mindlin" in doc["lever"]["k2"]["why"]
+    assert "k2 policy: k2 tied to k1 by Mindlin" in capsys.readouterr().out

@@ -85,12 +85,31 @@ def _statistics(report: dict) -> dict:
             "degrees_of_freedom": quantity("degrees_of_freedom", report["dof"], status="derived")}
 
 
-def _unexplained(entry: dict | None) -> dict | None:
+def _unexplained(entry: dict | None) -> tuple[dict | None, list[str]]:
+    """What a fit leaves unexplained: its gap, the band holding most of the misfit (or where it is, as a note),
+    the largest residual, the share of the baseline's misfit; what was not named, as notes.
+
+    >>> records, notes = _unexplained({"gap": 4.9, "share": 0.12, "where": "Q of free mode 1"})
+    >>> sorted(records), notes
+    (['gap', 'unexplained_share'], ['unexplained: the misfit is at Q of free mode 1'])
+    """
     if not entry:
-        return None
-    return {"gap": quantity("gap", entry["gap"], status="derived"),
-            "band": quantity("band", list(entry["where"]), status="derived", dims=["bound"]),
-            "largest_residual": quantity("largest_residual", entry["largest_residual"], status="derived")}
+        return None, []
+    out, notes = {"gap": quantity("gap", entry["gap"], status="derived")}, []
+    where = entry.get("where")
+    if isinstance(where, (list, tuple)):
+        out["band"] = quantity("band", list(where), status="derived", dims=["bound"])
+    elif where:
+        notes.append(f"unexplained: the misfit is at {where}")
+    for key, name in (("largest_residual", "largest_residual"), ("share", "unexplained_share")):
+        if entry.get(key) is not None:
+            out[name] = quantity(name, entry[key], status="derived")
+    if entry.get("implausible"):
+        notes.append(f"unexplained: implausible values of the effects that would explain it: {entry['implausible']}")
+    if entry.get("small_share"):
+        notes.append("unexplained: not named, each under the share the others leave: " + ", ".join(
+            f"{e} ({v:.1%})" for e, v in entry["small_share"].items()))
+    return out, notes
 
 
 def _step(step: dict) -> dict:
@@ -186,10 +205,10 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         fit["noise"] = quantity("noise", report["noise_sigma"], status="derived")
     if report.get("frequency_stride"):
         fit["frequency_stride"] = quantity("frequency_stride", report["frequency_stride"], status="derived")
-    unexplained = _unexplained(report.get("unexplained"))
+    unexplained, notes = _unexplained(report.get("unexplained"))
     if unexplained:
         fit["unexplained"] = unexplained
-    notes = [f"criterion: {report['criterion']}"]
+    notes.insert(0, f"criterion: {report['criterion']}")
     if report.get("gap_definition"):
         notes.append(f"gap: {report['gap_definition']}")
     notes += [_step_note(i, s) for i, s in enumerate(report.get("steps") or [], 1)]
@@ -239,7 +258,7 @@ def _fit_records(fit: dict) -> dict:
            "points": quantity("points", fit["points"], status="file", why="the data's frequencies")}
     if fit.get("band_hz"):
         out["band"] = quantity("band", list(fit["band_hz"]), status="derived", dims=["bound"])
-    unexplained = _unexplained(fit.get("unexplained"))
+    unexplained, _ = _unexplained(fit.get("unexplained"))      # a sweep's or tune's misfit is a band
     if unexplained:
         out["unexplained"] = unexplained
     return out
@@ -329,7 +348,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
                       "bic": quantity("bic", s["bic"], status="derived"),
                       "gap": quantity("gap", s["gap"], status="derived")} for s in out["steps"]],
            "reference": {**reference["results"], **reference["fit"]}}
-    unexplained = _unexplained(out.get("unexplained"))
+    unexplained, _ = _unexplained(out.get("unexplained"))
     if unexplained:
         fit["unexplained"] = unexplained
     notes = [*out.get("notes", []), *notes, "free_resonance: the first free resonance in the reference and in the data (dims sweep)"]
