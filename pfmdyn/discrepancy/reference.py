@@ -362,12 +362,13 @@ class SweepComparison(Result):
         elif d["effect"] == "added_mass":
             m = p["added_mass"]
             where = p["added_mass_position"]
-            at = f"at x/L {plus_minus(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
             if where.get("solutions"):
                 others = ", ".join(f"{v['added_mass_position']:.3g}" for v in where["solutions"][1:])
                 at = f"at x/L {where['value']:.3g} or {others} ({where['why']})"
             elif where.get("undetermined"):
                 at = "undetermined (one mode); end-equivalent mass"
+            else:
+                at = f"at x/L {plus_minus(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
             lines.append(f"  added_mass {plus_minus(m, 'kg')} ({m['value'] * 1e15:.4g} pg), {at}")
         if "viscous_loss" in p:
             lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
