@@ -237,6 +237,7 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("root_interval", "[z_lo, z_hi]", "1", "certified enclosure of a root (decimal strings)"),
         # the discrepancy model's fit
         ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
+        ("region", "region", "1", "a region of the data by name: a resonance's half-power band, a band, the rest"),
         ("gap_before", "gap_0", "1", "gap of the model without the named effects (the paper's, or the reference's)"),
         ("gap_after", "gap_1", "1", "gap of the final model"),
         ("gap_without", "gap_-e", "1", "gap of the final model with one effect left out"),
@@ -281,6 +282,7 @@ GROUPS = {
     "instrument": "what the instrument's own fit recorded in the file, beside our value",
     "medium": "the first free mode's Q the fluid predicts beside the fitted damping",
     "unexplained": "what the final model leaves: the band holding most of the misfit",
+    "worst_region": "the region of the data where the final model's gap is largest, and that gap",
     "thermal": "the spring constant from the thermal tune, with its uncertainty budget",
     "sader": "the spring constant from Sader's method, with its uncertainty budget",
     "budget": "relative standard uncertainties by source",

@@ -112,6 +112,31 @@ def _unexplained(entry: dict | None) -> tuple[dict | None, list[str]]:
     return out, notes
 
 
+def _worst_region(entry: dict | None) -> dict | None:
+    """Where the final fit's gap is largest (:func:`pfmdyn.discrepancy.regions.worst_region`) as records.
+
+    >>> r = _worst_region({"region": "band 1-2 kHz", "band_hz": [1e3, 2e3], "values": 40, "gap": 3.2})
+    >>> r["region"]["value"], r["gap"]["value"], r["band"]["dims"]
+    ('band 1-2 kHz', 3.2, ['bound'])
+    """
+    if not entry:
+        return None
+    return {"region": quantity("region", entry["region"], status="derived"),
+            "band": quantity("band", [float(b) for b in entry["band_hz"]], status="derived", dims=["bound"]),
+            "points": quantity("points", entry["values"], status="derived"),
+            "gap": quantity("gap", entry["gap"], status="derived")}
+
+
+def _mass_solutions(parameters: dict) -> list[dict]:
+    """Each position of an added mass that explains the shifts as well, with its own mass and gap (the first
+    is the result), when the modes cannot tell them apart (e.g. mirror positions about a node)."""
+    found = next((p["solutions"] for p in (parameters.get("added_mass_position") or {}, parameters.get("added_mass") or {})
+                  if p.get("solutions")), [])
+    return [{"added_mass_position": quantity("added_mass_position", s["added_mass_position"], status="derived"),
+             "added_mass": quantity("added_mass", s["added_mass"], status="derived"),
+             "gap": quantity("gap", s["gap"], status="derived")} for s in found]
+
+
 def _step(step: dict) -> dict:
     """One step of the effect-by-effect search (added or removed effect, gaps, BIC gained, parameters)."""
     out = {}
@@ -208,6 +233,8 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
     unexplained, notes = _unexplained(report.get("unexplained"))
     if unexplained:
         fit["unexplained"] = unexplained
+    if report.get("worst_region"):
+        fit["worst_region"] = _worst_region(report["worst_region"])
     notes.insert(0, f"criterion: {report['criterion']}")
     if report.get("gap_definition"):
         notes.append(f"gap: {report['gap_definition']}")
@@ -261,6 +288,8 @@ def _fit_records(fit: dict) -> dict:
     unexplained, _ = _unexplained(fit.get("unexplained"))      # a sweep's or tune's misfit is a band
     if unexplained:
         out["unexplained"] = unexplained
+    if fit.get("worst_region"):
+        out["worst_region"] = _worst_region(fit["worst_region"])
     return out
 
 
@@ -351,6 +380,11 @@ def sweep_comparison(out: dict, given=()) -> dict:
     unexplained, _ = _unexplained(out.get("unexplained"))
     if unexplained:
         fit["unexplained"] = unexplained
+    if out.get("worst_region"):
+        fit["worst_region"] = _worst_region(out["worst_region"])
+    solutions = _mass_solutions(out["parameters"])
+    if solutions:
+        fit["solutions"] = solutions
     notes = [*out.get("notes", []), *notes, "free_resonance: the first free resonance in the reference and in the data (dims sweep)"]
     if out.get("nuisances"):
         notes.append("refitted besides the named effect: " + ", ".join(out["nuisances"]))
