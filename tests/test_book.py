@@ -131,8 +131,8 @@ function pfmMeasure() {
     var right = col.getBoundingClientRect().right;
     var widths = Array.from(document.querySelectorAll('mjx-container mjx-math')).map(function (m) {
       return m.getBoundingClientRect().width; });
-    var beyond = Array.from(document.querySelectorAll('mjx-container mjx-math')).map(function (m) {
-      return m.getBoundingClientRect().right - right; });
+    var beyond = Array.from(document.querySelectorAll('mjx-container mjx-math')).filter(function (m) {
+      return !m.closest('table'); }).map(function (m) { return m.getBoundingClientRect().right - right; });
     var tables = Array.from(document.querySelectorAll('table')).map(function (t) {
       return t.getBoundingClientRect().width; });
     pfmReport({column: col.getBoundingClientRect().width, widths: widths, beyond: beyond, tables: tables});
@@ -181,7 +181,7 @@ def test_equations_typeset_and_fit_the_column(built, tmp_path, page):
     too_wide = [round(w) for w in sizes["widths"] if w > sizes["column"] + 1]
     assert not too_wide, f"{page}.html: equations {too_wide} px wide in a {sizes['column']:.0f} px column"
     cut = [round(b) for b in sizes["beyond"] if b > 1]
-    assert not cut, f"{page}.html: equations ending {cut} px beyond the column's right edge"
+    assert not cut, f"{page}.html: equations ending {cut} px beyond the column's right edge (tables scroll)"
     if page == "errata":    # set in result boxes: a reader's browser found six of 545-693 px too wide there
         assert max(sizes["widths"]) <= 560, sorted(round(w) for w in sizes["widths"])[-6:]
     wide_tables = [round(w) for w in sizes["tables"] if w > sizes["column"] + 1]

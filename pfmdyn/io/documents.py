@@ -344,7 +344,7 @@ def _complex(pairs):
 
 
 def sweep_comparison(out: dict, given=()) -> dict:
-    """The document of ``pfmdyn discrepancy AFTER --reference BEFORE`` (kind ``comparison``): what changed
+    """The document of ``pfmdyn discrepancy`` on a drive sweep and its reference (kind ``comparison``): what changed
     between two drive sweeps under ``missing_effects`` (``added_mass``, or none), the reference's own fit
     under ``fit.reference``.
 
