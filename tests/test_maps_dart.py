@@ -60,7 +60,11 @@ def test_store_and_json_in_the_shared_conventions(tmp_path):
     _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "figures"))
     for name in ("dart", "d_eff", "contact_resonance", "k1"):
         assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 1000, name
-    dataset = xarray.open_zarr(tmp_path / "out" / "maps.zarr")
+    import zarr
+    from pfmdyn.maps import open_result
+    # recent xarray opens Zarr stores only with Zarr 3 (CI runs the maps tests once more with Zarr 2)
+    dataset = xarray.open_zarr(tmp_path / "out" / "maps.zarr") if int(zarr.__version__.split(".")[0]) >= 3 \
+        else open_result(tmp_path / "out")
     for name in TOLERANCES:
         for variable in (name, name + "_stderr"):
             assert dataset[variable].dims == ("y", "x") and dataset[variable].attrs["units"], variable

@@ -209,7 +209,8 @@ def write_maps(path: str, maps: dict, attrs: dict | None = None) -> None:
         if attrs:
             set_attributes(group, attrs)
         consolidate(path)
-    except (OSError, ValueError) as exc:      # zarr: a file in the way, a directory not writable
+    except (OSError, ValueError, KeyError) as exc:   # a file in the way, a directory not writable (Zarr 2: KeyError)
+        exc = exc.__cause__ or exc
         raise UserError(f"cannot write {path}: {' '.join(str(exc).split())[:120]}") from None
 
 
