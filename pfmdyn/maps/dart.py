@@ -18,9 +18,10 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
   (:func:`lever_inversion`, each step halved until it lowers the residual); the drive then follows,
   ``d_eff = s1 / (T(f1) V)``.  Where the oscillator is undetermined (its Q would be negative: an
   anti-resonance of the slope at the spot near the resonance) Newton starts from the tracked centre
-  and the resonance and Q reported are the lever's complex pole's (:func:`lever_pole`).  A pixel is
-  undetermined (NaN, ``determined`` 0) where Newton does not converge or the contact would supply
-  energy (its loss below zero by more than three standard errors).
+  and the resonance and Q reported are the lever's complex pole's (:func:`lever_pole`).  The lever's
+  maps of a pixel are undetermined (NaN, ``determined`` 0) where Newton does not converge or the
+  contact would supply energy (its loss below zero by more than three standard errors); the
+  oscillator's resonance and Q, which need no lever, stay.
 
 ``T`` is the deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the
 lever): the slope at the laser spot times ``2L/3``, as a static InvOLS reads it.  So ``d_eff > 0``
@@ -440,7 +441,8 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         d_pm = _signed(sho.drive / drive_amplitude * (lever.spring_constant + k1_pm) / k1_pm)
         # where the oscillator is undetermined, the lever's own pole (no stderr: the pole is not propagated)
         pole = ~sho.determined & fit.converged
-        resonance, quality = np.where(fit.converged, sho.resonance, np.nan), np.where(fit.converged, sho.quality_factor, np.nan)
+        # the oscillator's resonance and Q need no lever: they stay where the lever's inversion fails
+        resonance, quality = sho.resonance.copy(), sho.quality_factor.copy()
         if pole.any():
             resonance[pole], quality[pole] = lever_pole(lever, contact, fit.k1[pole], fit.contact_loss[pole],
                                                         (f1[pole] + f2[pole]) / 2)
