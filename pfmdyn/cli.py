@@ -111,14 +111,16 @@ def _run(argv: list[str]) -> int:
     try:
         from .commands import flags
         flags.check_medium(args)
-        if args.command == "verify" or not getattr(args, "quiet", False):
-            return int(importlib.import_module(args._module).run(args) or 0)
-        flags.DOCUMENTS.append(sys.stdout)      # --json - still prints its document
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):
-                return int(importlib.import_module(args._module).run(args) or 0)
-        finally:
-            flags.DOCUMENTS.pop()
+        module = importlib.import_module(args._module)
+        with flags.lever_forms(getattr(module, "ONE_LEVER", False)):
+            if args.command == "verify" or not getattr(args, "quiet", False):
+                return int(module.run(args) or 0)
+            flags.DOCUMENTS.append(sys.stdout)      # --json - still prints its document
+            try:
+                with contextlib.redirect_stdout(io.StringIO()):
+                    return int(module.run(args) or 0)
+            finally:
+                flags.DOCUMENTS.pop()
     except UserError as exc:
         from .commands.flags import option_hint
         print(f"pfmdyn {args.command}: error: {exc}{option_hint(exc, parsers[args.command])}", file=sys.stderr)

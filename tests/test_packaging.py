@@ -125,7 +125,7 @@ def fresh(wheel, tmp_path_factory) -> dict:
 
 def _run(fresh, *argv, compiled: bool = False) -> subprocess.CompletedProcess:
     """A command from the wheel; its numba kernels run as Python unless ``compiled`` (a fresh install
-    compiles them on first use, 10-20 s a command: one command shows that they compile from the wheel)."""
+    compiles them on first use, 10-20 s: one command, a fit, shows that they compile from the wheel)."""
     env = fresh["env"] if compiled else {**fresh["env"], "NUMBA_DISABLE_JIT": "1"}
     return subprocess.run([str(fresh["pfmdyn"]), *argv], cwd=fresh["cwd"], env=env,
                           capture_output=True, text=True, timeout=900)
@@ -157,14 +157,14 @@ def test_each_subcommand_runs_from_the_wheel(fresh):
     (cwd / "table.csv").write_text("# spring_constant_n_per_m: 2\n# length_m: 2e-4\n# tip_height_m: 1e-5\n"
                                    "# free_resonance_hz: 6e4\n"
                                    "condition,mode,frequency_hz\n" + "\n".join(rows) + "\n")
-    done = _run(fresh, "discrepancy", "table.csv", "--json", "d.json")
+    done = _run(fresh, "discrepancy", "table.csv", "--json", "d.json", compiled=True)
     assert done.returncode == 0, done.stderr
     report = json.loads((cwd / "d.json").read_text())
     assert report["missing_effects"] == [] and report["results"]["k1"]["value"] == pytest.approx(200, rel=1e-3)
     contact = contact_hz[0]
     # no k2 policy given to either: both tie k2 to k1 alike (Mindlin), so k1 comes back
     done = _run(fresh, "stiffness", *LEVER, "--tip-height", "1e-5", "--contact", str(contact),
-                "--json", "s.json", compiled=True)
+                "--json", "s.json")
     assert done.returncode == 0, done.stderr
     assert json.loads((cwd / "s.json").read_text())["results"]["k1"]["value"] == pytest.approx(200, rel=1e-9)
     for argv in (["spot", *PROBE, "--frequency", "1e5"], ["roots", "free", "--modes", "2", "--digits", "20"],

@@ -8,6 +8,7 @@ have, and a bad one is a one-line error naming the flag.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from pathlib import Path
@@ -20,6 +21,30 @@ from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
            "temperature", "medium_line", "add_json", "write_json", "given", "require", "cantilever", "contact",
            "option_hint"]
+
+
+@contextlib.contextmanager
+def lever_forms(one_lever: bool):
+    """While a command runs: for one that evaluates one lever at a few points (``ONE_LEVER`` in its
+    module: ``resonances``, ``stiffness``, ``spot``) the composed lever's NumPy forms
+    (:data:`pfmdyn.composed.KERNELS` off), restored after.  The compiled kernels pay off in fits over
+    many spectra; there a fresh install would first compile them (14-19 s) for an answer the NumPy
+    forms give in under a second (the same numbers: the tests hold the kernels to them).
+
+    >>> from pfmdyn import composed
+    >>> with lever_forms(True):
+    ...     composed.KERNELS
+    False
+    >>> composed.KERNELS
+    True
+    """
+    from .. import composed
+    kept = composed.KERNELS
+    composed.KERNELS = kept and not one_lever
+    try:
+        yield
+    finally:
+        composed.KERNELS = kept
 
 
 def add(parser, names, required=(), defaults=None) -> None:

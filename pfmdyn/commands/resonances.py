@@ -13,6 +13,9 @@ from .roots import positive_int
 
 __all__ = ["add_arguments", "run"]
 
+ONE_LEVER = True
+"""One lever at a few points: the NumPy forms of the lever (:func:`pfmdyn.commands.flags.lever_forms`)."""
+
 
 def add_arguments(parser) -> None:
     """Arguments of ``pfmdyn resonances``: the probe's flags, ``--modes``, ``--json``.

@@ -9,6 +9,9 @@ from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
 
+ONE_LEVER = True
+"""One lever at a few points: the NumPy forms of the lever (:func:`pfmdyn.commands.flags.lever_forms`)."""
+
 
 def add_arguments(parser) -> None:
     """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""

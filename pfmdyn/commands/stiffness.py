@@ -36,6 +36,9 @@ from . import flags
 
 __all__ = ["add_arguments", "run"]
 
+ONE_LEVER = True
+"""One lever at a few points: the NumPy forms of the lever (:func:`pfmdyn.commands.flags.lever_forms`)."""
+
 _LEVER = tuple(n for n in LEVER if n not in ("tip_position", "spot_position"))
 _UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty",
                   "tip_height_uncertainty")
