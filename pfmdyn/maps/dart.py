@@ -73,8 +73,11 @@ def oscillator(f1, f2, s1, s2) -> Oscillator:
 
     Closed form (the module's 2 x 2 system), vectorised; undetermined pixels are NaN.
 
+    The oscillator is the derived SHO (``generated/formulas.py``; BGlib's sign there, hence the minus):
+
+    >>> from pfmdyn.generated.formulas import sho_response
     >>> f0, q, d = 3e5, 80.0, 2e-11 * np.exp(0.3j)
-    >>> s = lambda f: d * f0**2 / (f0**2 - f**2 + 1j * f * f0 / q)
+    >>> s = lambda f: -d * sho_response(f, f0, q)
     >>> o = oscillator(2.97e5, 3.05e5, s(2.97e5), s(3.05e5))
     >>> round(float(o.resonance)), round(float(o.quality_factor), 9), bool(np.isclose(o.drive, d)), bool(o.determined)
     (300000, 80.0, True, True)
