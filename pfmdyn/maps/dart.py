@@ -8,7 +8,8 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
 * **the oscillator** (Gannepalli, Yablon, Proksch and Kalinin, Nanotechnology 22, 355705
   (2011)): ``s(f) = D f0**2 / (f0**2 - f**2 + i f f0 / Q)``.  Written as ``c / s_j = f0**2 - f_j**2
   + i f_j f0/Q`` with ``c = D f0**2`` it is linear in ``(Re c, Im c, f0**2, f0/Q)``: the paper's
-  closed form, solved here as a 2 x 2 system (:func:`oscillator`).  It is undetermined where that
+  closed form, derived in ``derivations/formulas.py`` (``generated/formulas.py``:
+  ``two_frequency_*``; :func:`oscillator`).  It is undetermined where that
   system is singular or gives ``f0**2 <= 0`` or ``Q <= 0`` (both points far on one side of the
   peak, phases that do not straddle it);
 * **the lever** (:class:`pfmdyn.Cantilever` with its internal loss ``quality_factor``, the k2
@@ -43,6 +44,8 @@ import numpy as np
 from ..analysis.contact_resonance import betas, k1_at
 from ..cantilever import Cantilever, Contact
 from .. import composed
+from ..generated.formulas import (point_mass_contact_stiffness, point_mass_static_gain, two_frequency_drive,
+                                  two_frequency_resonance_squared, two_frequency_width)
 from ..generated.tilt_rotation import rotated
 from ..io.results import document as envelope
 from ..io.results import quantity
@@ -84,19 +87,15 @@ def oscillator(f1, f2, s1, s2) -> Oscillator:
     """
     f1, f2, s1, s2 = np.broadcast_arrays(*(np.asarray(v) for v in (f1, f2, s1, s2)))
     with np.errstate(all="ignore"):
-        z1, z2 = 1 / s1, 1 / s2
-        # Im(c z_j) = f_j f0/Q for both j; Re(c (z1 - z2)) = f2**2 - f1**2
-        a11, a12 = z1.imag / f1 - z2.imag / f2, z1.real / f1 - z2.real / f2
-        a21, a22 = (z1 - z2).real, -(z1 - z2).imag
-        det = a11 * a22 - a12 * a21
-        rhs = f2**2 - f1**2
-        c = (-a12 * rhs + 1j * a11 * rhs) / det
-        f0_squared = (c * z1).real + f1**2
-        width = (c * z1).imag / f1          # f0 / Q
-        determined = np.isfinite(det) & (f0_squared > 0) & (width > 0)
+        # the forms are homogeneous in the signals: scaled to |s1| = 1 (no overflow in z**2 f**3)
+        scale = np.abs(s1)
+        z1, z2 = scale / s1, scale / s2
+        parts = (f1, f2, z1.real, z1.imag, z2.real, z2.imag)
+        f0_squared, width = two_frequency_resonance_squared(*parts), two_frequency_width(*parts)
+        determined = np.isfinite(f0_squared) & np.isfinite(width) & (f0_squared > 0) & (width > 0)
         resonance = np.where(determined, np.sqrt(np.abs(f0_squared)), np.nan)
         return Oscillator(resonance, np.where(determined, resonance / width, np.nan),
-                          np.where(determined, c / f0_squared, np.nan), determined)
+                          np.where(determined, scale * two_frequency_drive(*parts), np.nan), determined)
 
 
 def oscillator_sensitivity(f1, f2, s1, s2, base: Oscillator | None = None) -> Oscillator:
@@ -147,12 +146,13 @@ def channel_noise(pairs) -> float:
 
 
 def point_mass_k1(resonance, lever: Cantilever):
-    """The point-mass (oscillator) contact stiffness ``k ((fc / f0)**2 - 1)`` of a resonance ``fc``.
+    """The point-mass (oscillator) contact stiffness ``k ((fc / f0)**2 - 1)`` of a resonance ``fc``
+    (``generated/formulas.py``: ``point_mass_contact_stiffness``).
 
     >>> round(float(point_mass_k1(3e5, Cantilever(2.0, 7.5e4, 2e-4))), 6)
     30.0
     """
-    return lever.spring_constant * ((np.asarray(resonance) / lever.free_resonance) ** 2 - 1)
+    return point_mass_contact_stiffness(np.asarray(resonance), lever.free_resonance, lever.spring_constant)
 
 
 def _springs(lever: Cantilever, contact: Contact, k1, loss, frequency):
@@ -441,7 +441,7 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     with np.errstate(all="ignore"):
         k1_pm = point_mass_k1(sho.resonance, lever)
         # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
-        d_pm = _signed(sho.drive / drive_amplitude * (lever.spring_constant + k1_pm) / k1_pm)
+        d_pm = _signed(sho.drive / drive_amplitude / point_mass_static_gain(lever.spring_constant, k1_pm))
         # where the oscillator is undetermined, the lever's own pole (no stderr: the pole is not propagated)
         pole = ~sho.determined & fit.converged
         # the oscillator's resonance and Q need no lever: they stay where the lever's inversion fails
