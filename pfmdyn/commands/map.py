@@ -78,6 +78,10 @@ def add_arguments(parser) -> None:
                         help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
                              "this bias (default: fitted with +distributed, else 0, the intercept); the "
                              "electrostatic term and the nulling bias do not depend on it")
+    parser.add_argument("--pool", type=int, default=3, metavar="R",
+                        help="DART images: fit each pixel's contact (k1, contact loss, hence the contact resonance and "
+                             "Q) to its own and its alike neighbours' signals within R pixels (default 3; 0: each "
+                             "pixel alone)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--plot", metavar="DIR", help="also write DIR/NAME.png for each map")
     parser.add_argument("--png", action="store_true", help=argparse.SUPPRESS)   # the old spelling: --plot OUT
@@ -254,12 +258,13 @@ def _dart(args, overrides: dict, given: dict) -> int:
     s1, s2 = image.signals
     report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
-        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0],
+        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
                              progress=None if report is None else lambda done, total: report(done, total, done))
     finally:
         close()
     out = os.path.join(args.out, "maps.zarr")
-    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
+    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
+                           "pool_radius": args.pool})
     folder = args.plot or (args.out if args.png else None)
     if folder:
         from ..maps import open_result
@@ -277,5 +282,5 @@ def _dart(args, overrides: dict, given: dict) -> int:
           f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
           f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
           f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
-    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy))
+    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool))
     return 0
