@@ -375,7 +375,9 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         # log d = log s1 - log T1(k1, loss): e1 enters directly and through k1, loss
         dt1 = _t1_partials(lever, contact, f1, k1, loss, t1)
         drive_variance = _drive_variance(inverse, dt1)
-    ok = converged & np.all(np.isfinite(jacobian), axis=(-1, -2))
+    # a contact the signals do not fix (an infinite spread: a dashpot pinning it) is not found
+    ok = converged & np.all(np.isfinite(jacobian), axis=(-1, -2)) & np.isfinite(covariance[:, 0, 0] + covariance[:, 1, 1]
+                                                                           + drive_variance)
     nan = lambda v: np.where(ok, v, np.nan)      # noqa: E731
     return LeverFit(nan(k1), nan(loss), nan(drive), nan(np.sqrt(covariance[:, 0, 0])),
                     nan(np.sqrt(covariance[:, 1, 1])), nan(np.sqrt(drive_variance)), ok)
@@ -433,6 +435,16 @@ def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: Lev
         covariance = _inverse(information)
         k1_sd = np.sqrt(covariance[:, 0, 0])
         return np.exp(theta[0]), theta[1], k1_sd, np.sqrt(covariance[:, 1, 1]), k1_sd / fit.k1_sensitivity
+
+
+def _neighbours_contact(fit: LeverFit, shape, radius: int = 2):
+    """The mean contact (``k1``, ``contact_loss``) of the pixels found within ``radius`` of each pixel."""
+    grid = tuple(shape) if len(shape) == 2 else (1, len(fit.k1))
+    found = fit.converged.astype(float)
+    with np.errstate(all="ignore"):
+        parts = np.nan_to_num(np.stack([found, found * np.log(fit.k1), found * fit.contact_loss]))
+        sums = alike_sums(np.zeros((1, *grid)), np.ones((1, *grid)), parts.reshape(3, *grid), radius).reshape(3, -1)
+        return np.exp(sums[1] / sums[0]), sums[2] / sums[0]
 
 
 def _inverse(m):
@@ -509,16 +521,21 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     fit = LeverFit(*(np.concatenate(parts) for parts in zip(*fits))) if fits else \
         LeverFit(*([np.empty(0)] * 6 + [np.empty(0, bool)]))
     # where Newton found nothing from the oscillator's start (pulled by an anti-resonance near the peak, a
-    # tracking far off), again from the tracked centre, then from a few stiffer and softer contacts
+    # tracking far off, noise on a contact the signals hardly fix), again from the contact of the neighbours
+    # found, from the tracked centre, then from a few stiffer and softer contacts
     centre_k1 = start_k1(lever, contact, (f1 + f2) / 2)
-    for scale, loss in ((None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
+    for scale, loss in (("neighbours", None), (None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
         again = np.flatnonzero(~fit.converged)
         if not again.size:
             break
-        k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
-                                                                            k1_start[again], centre_k1[again])
+        if scale == "neighbours":
+            k1_again, loss_again = (v[again] for v in _neighbours_contact(fit, shape))
+        else:
+            k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
+                                                                                k1_start[again], centre_k1[again])
+            loss_again = np.full(again.size, loss)
         retry = lever_inversion(lever, contact, f1[again], f2[again], s1[again], s2[again], k1_again,
-                                np.full(again.size, loss), drive_amplitude)
+                                loss_again, drive_amplitude)
         fields = []
         for whole, part in zip(fit, retry):
             whole = whole.copy()
