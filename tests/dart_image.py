@@ -28,12 +28,15 @@ INVOLS, AMP_INVOLS = 60e-9, 66e-9       # m/V: the amplitude channels are read t
 
 @dataclass
 class DartCase:
-    """A drawn case: the lever, the settings, the channels ``(y, x)`` and the truth maps."""
+    """A drawn case: the lever, the settings, the channels ``(y, x)``, the truth maps and the exact
+    (noise-free) drives and signals with the FE beam's damped pole (``f1``, ``f2``, ``s1``, ``s2``,
+    ``pole_resonance``, ``pole_quality_factor``, each ``(y, x)``)."""
 
     lever: dict
     settings: dict
     channels: dict
     truth: dict
+    exact: dict
 
 
 def _sho_through(f1, f2, s1, s2):
@@ -138,7 +141,8 @@ def dart_case(seed: int, ny: int = 16, nx: int = 16, *, spot: float = 1.0, k2_ov
     settings = dict(frequency_width=df, drive_amplitude=drive_v, noise=sigma)
     truth = dict(k1=np.array(k1s)[grain], contact_loss=losses[grain], d_eff=d_eff,
                  contact_resonance=exact[:, 0].reshape(ny, nx), contact_quality_factor=exact[:, 1].reshape(ny, nx))
-    return DartCase(lever, settings, channels, truth)
+    exact = dict(f1=f1, f2=f2, s1=s1, s2=s2, pole_resonance=poles[grain, 0], pole_quality_factor=poles[grain, 1])
+    return DartCase(lever, settings, channels, truth, exact)
 
 
 def write_ibw(case: DartCase, path, order=None) -> Path:
