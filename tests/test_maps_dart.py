@@ -76,6 +76,23 @@ def test_pooling_a_grains_pixels_beats_one_pixels_noise_and_keeps_the_boundary(t
     assert any("within 3 pixels" in note for note in doc["notes"])
 
 
+@pytest.mark.parametrize("offset, given, signs_right", [(40.0, 0.0, True), (130.0, 0.0, False), (130.0, 130.0, True)])
+def test_a_lock_in_phase_offset_is_reported_and_taken_off_by_the_flag(tmp_path, offset, given, signs_right):
+    """An instrument's offset on both phases leaves k1 (the ratio of the signals) alone; the run reports it
+    modulo 180 degrees from the domains' drives, and d_eff's sign is right while what is left is within 90."""
+    case = dart_case(22, 6, 8)
+    for name in ("Phase1Retrace", "Phase2Retrace"):
+        case.channels[name] = case.channels[name] + offset
+    maps, doc = _map(case, tmp_path, "--phase-offset", repr(given))
+    np.testing.assert_allclose(maps["k1"].values, case.truth["k1"], rtol=0.03)
+    right = np.mean(np.sign(maps["d_eff"].values) == np.sign(case.truth["d_eff"]))
+    assert right == (1.0 if signs_right else 0.0)
+    note = next(n for n in doc["notes"] if n.startswith("phases:"))
+    left = (offset - given + 90) % 180 - 90
+    assert float(note.split("domains' drives: ")[1].split(" deg")[0]) == pytest.approx(left, abs=2.0), note
+    assert ("may be flipped" in note) == (abs(left) > 45)
+
+
 def test_store_and_json_in_the_shared_conventions(tmp_path):
     case = dart_case(14, 6, 8)
     _, doc = _map(case, tmp_path, "--plot", str(tmp_path / "figures"))

@@ -62,7 +62,7 @@ from ..names import NAMES
 from .store import write_maps
 
 __all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "alike_sums", "deflection_signal",
-           "lever_inversion", "pooled_contact", "lever_pole", "point_mass_k1", "start_k1",
+           "lever_inversion", "pooled_contact", "lever_pole", "point_mass_k1", "start_k1", "drive_axis",
            "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
@@ -470,6 +470,25 @@ def _drive_variance(inverse, dt1):
     return ((1 + g[..., 0]) ** 2 + g[..., 1] ** 2 + g[..., 0] ** 2 + g[..., 1] ** 2) / 2
 
 
+def drive_axis(lever: Cantilever, contact: Contact, f1, s1, k1, loss) -> float:
+    """The axis (degrees, in ``(-90, 90]``) about which the pixels' drives ``s1 / T(f1)`` cluster, their
+    sign aside (half the argument of the mean of ``(d/|d|)**2``).  The domains' drive is in phase or in
+    antiphase with the bias, so the axis is the lock-ins' phase offset modulo 180 degrees; ``d_eff``'s
+    sign reads a drive within 90 degrees of zero as positive, right while the offset is within 90.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    >>> f1 = np.full(4, 3.1e5)
+    >>> s1 = deflection_signal(lever, Contact(), f1, 120.0, 0.02) * np.array([1, -1, 1, -1]) * np.exp(-0.5j)
+    >>> round(drive_axis(lever, Contact(), f1, s1, np.full(4, 120.0), np.full(4, 0.02)), 6)      # a 0.5 rad lag
+    -28.64789
+    """
+    with np.errstate(all="ignore"):
+        drive = np.ravel(np.asarray(s1) / deflection_signal(lever, contact, f1, k1, loss))
+        drive = drive[np.isfinite(drive) & (drive != 0)]
+        axis = math.degrees(np.angle(np.mean((drive / np.abs(drive)) ** 2))) / 2 if drive.size else math.nan
+    return 90.0 if axis == -90.0 else axis
+
+
 MAPS = ("contact_resonance", "contact_quality_factor", "k1", "contact_loss", "d_eff")
 """The maps with a ``_stderr`` each (:func:`invert`); then the oscillator's readings of the same pixels."""
 OSCILLATOR_MAPS = ("oscillator_k1", "oscillator_k1_error", "oscillator_d_eff", "oscillator_d_eff_error")
@@ -609,11 +628,11 @@ def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:
 
 
 def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, store: str, k2_policy: str,
-             pool: int = POOL) -> dict:
+             pool: int = POOL, phases: str = "phases as read") -> dict:
     """The JSON document of a DART image (:func:`pfmdyn.io.results.document`, kind ``dart``): the lever
     and the settings as records (``lever``, ``settings``: name -> ``(value, status[, why])``), the
     maps' medians over the determined pixels (each ``stderr`` the median pixel's), the noise, the
-    pixel counts and the pooling radius (:func:`invert`) in the notes.
+    pixel counts; the pooling radius (:func:`invert`) and how the phases were read (``phases``) in the notes.
 
     >>> maps = {"k1": np.array([[100.0, np.nan]]), "k1_stderr": np.array([[2.0, np.nan]]),
     ...         "determined": np.array([[1, 0]], np.uint8)}
@@ -644,5 +663,5 @@ def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str,
     pooling = (f"contact (k1, contact_loss, contact resonance and Q): each pixel's fitted to its and its alike "
                f"neighbours' signals within {pool} pixels" if pool > 0 else "contact: each pixel's alone")
     return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
-                    [k2_policy, pooling, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
+                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
                      "each stderr the median pixel's"])
