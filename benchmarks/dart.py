@@ -116,7 +116,7 @@ def accuracy(per_class: int) -> None:
         print(f"| {label} | " + " | ".join(f"{images[n]}/{per_class} images, {100 * np.mean(pixels[n]):.1f} % pixels"
                                           for n in images) + " |")
     print("\ncontact_resonance pixel by pixel (--pool 0) against the one-pixel Cramér-Rao bound")
-    print("| class | images' median contact Q | median |pole / truth - 1| | --pool 0: within 2e-4 | "
+    print("| class | images' median contact Q | median abs(pole / truth - 1) | --pool 0: within 2e-4 | "
           "Cramér-Rao bound: expected within 2e-4 |")
     print("|---|---|---|---|---|")
     for label, row in alone.items():

@@ -14,8 +14,9 @@ the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, n
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
 becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  An Asylum DART
 image (``.ibw``, :mod:`pfmdyn.io.dart`) becomes maps of the contact resonance and Q (the
-two-frequency oscillator), k1, the contact loss and the signed d_eff (the lever), and of how far
-the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
+two-frequency oscillator's through the lever's response at each pixel's drives), k1, the contact loss
+(each pixel's contact fitted with its alike neighbours', ``--pool``) and the signed d_eff (the lever),
+and of how far the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
 A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a copy of the input
 in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
