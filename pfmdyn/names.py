@@ -173,8 +173,8 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("predicted_quality_factor", "Q_model", "1", "a mode's Q the model predicts (all damping together)"),
         ("baseline_resonance", "f_base", "Hz", "a resonance frequency of the paper's model fitted before any effect"),
         ("resonance_uncertainty", "u(f)", "Hz", "standard uncertainty of a measured resonance frequency"),
-        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit): "
-         "the half-power width over the frequency, all damping together"),
+        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit, an "
+         "SHO map): the half-power width over the frequency, all damping together"),
         ("quality_factor_uncertainty", "u(Q)/Q", "1", "relative standard uncertainty of a measured Q"),
         ("resonance_interval", "[f_lo, f_hi]", "Hz", "certified enclosure of a resonance frequency"),
         ("complete_below", "f_complete", "Hz", "every resonance below this frequency is listed (certified)"),
