@@ -163,9 +163,5 @@ def run(args) -> int:
     flags.write_json(args.json, documents.calibration(document, args.file, given))
     if args.plot:
         from ..plots.calibrate import plot_calibration
-        fig = plot_calibration(tune, result)
-        try:
-            fig.savefig(args.plot, dpi=120)
-        except OSError as exc:
-            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+        flags.save_figure(plot_calibration(tune, result), args.plot)
     return 0

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import argparse
-
+import contextlib
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -69,28 +69,32 @@ def _cli_cantilever(args):
         missing = [flag(name) for name in _CUSTOM[:4] if name not in custom]
         if missing:
             raise UserError(f"--cantilever custom needs {' '.join(missing)}")
-        try:
+        with _one_line():
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
                 thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
                 quality_factor=_quality_factor(args))
-        except UserError:       # a ValueError, already one line: as it is
-            raise
-        except ValueError as exc:
-            raise UserError(str(exc)) from None
         return _in_medium(args, lever, custom["width"]), custom["width"]
     if args.cantilever not in TABLE1:
         raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
     given = [flag(name) for name in custom]
     if given:
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
-    try:
+    with _one_line():
         lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
-    except UserError:       # a ValueError, already one line: as it is
+    return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
+
+
+@contextlib.contextmanager
+def _one_line():
+    """A ValueError of the analysis (a lever its sizes do not allow, a grid it cannot compute) as the
+    user's one line; a :class:`UserError` (a ValueError already one line) as it is."""
+    try:
+        yield
+    except UserError:
         raise
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
 
 
 def _in_medium(args, lever, width):
@@ -138,22 +142,19 @@ def run(args) -> int:
     spacing = np.geomspace if args.log_frequency else np.linspace
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)
-    try:
+    with _one_line():
         response = response_map(lever, frequency, bias, width=width, k1=contact["k1"],
                                 H=contact["tip_height"], d_eff=drive["d_eff"], local_force=drive["local_force"],
                                 surface_potential_v=drive["surface_potential"],
                                 electrostatic_sign=args.electrostatic_sign)
-    except UserError:       # a ValueError, already one line: as it is
-        raise
-    except ValueError as exc:
-        raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
              f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {contact['k1']:g} N/m\n"
              f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {drive['d_eff'] * 1e12:g} pm/V, "
              f"$F_{{loc}}$ = {drive['local_force'] * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
              + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
-    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.plot, dpi=130)
+    flags.save_figure(plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency), args.plot,
+                      dpi=130)
     print(f"wrote {args.plot}")
     if args.csv is not None:
         _write_csv(args.csv, response)

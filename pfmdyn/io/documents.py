@@ -128,6 +128,21 @@ def _worst_region(entry: dict | None) -> dict | None:
             "gap": quantity("gap", entry["gap"], status="derived")}
 
 
+def _misfit(report: dict) -> tuple[dict, list[str]]:
+    """What a fit leaves unexplained (:func:`_unexplained`) and where its gap is largest (:func:`_worst_region`):
+    the records of its ``fit``, and notes.
+
+    >>> records, notes = _misfit({"worst_region": {"region": "rest", "band_hz": [1, 2], "values": 9, "gap": 1.1}})
+    >>> list(records), notes
+    (['worst_region'], [])
+    """
+    unexplained, notes = _unexplained(report.get("unexplained"))
+    out = {"unexplained": unexplained} if unexplained else {}
+    if report.get("worst_region"):
+        out["worst_region"] = _worst_region(report["worst_region"])
+    return out, notes
+
+
 def _mass_solutions(parameters: dict) -> list[dict]:
     """Each position of an added mass that explains the shifts as well, with its own mass and gap (the first
     is the result), when the modes cannot tell them apart (e.g. mirror positions about a node)."""
@@ -231,11 +246,8 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         fit["noise"] = quantity("noise", report["noise_sigma"], status="derived")
     if report.get("frequency_stride"):
         fit["frequency_stride"] = quantity("frequency_stride", report["frequency_stride"], status="derived")
-    unexplained, notes = _unexplained(report.get("unexplained"))
-    if unexplained:
-        fit["unexplained"] = unexplained
-    if report.get("worst_region"):
-        fit["worst_region"] = _worst_region(report["worst_region"])
+    misfit, notes = _misfit(report)
+    fit.update(misfit)
     notes.insert(0, f"criterion: {report['criterion']}")
     if report.get("gap_definition"):
         notes.append(f"gap: {report['gap_definition']}")
@@ -281,18 +293,17 @@ def _free_lever(fit: dict, given) -> dict:
     return lever_records(values, given=given, from_file=fit.get("from_file") or (), assumed=_assumed(fit))
 
 
-def _fit_records(fit: dict) -> dict:
-    """A sweep's or a tune's own fit: its gap, points, noise, band, what it leaves unexplained."""
+def _fit_records(fit: dict) -> tuple[dict, list[str]]:
+    """A sweep's or a tune's own fit: its gap, points, band, what it leaves unexplained, its noise, what the
+    instrument's own fit recorded; and notes comparing the two."""
     out = {"gap": quantity("gap", fit["gap"], status="derived"),
            "points": quantity("points", fit["points"], status="file", why="the data's frequencies")}
     if fit.get("band_hz"):
         out["band"] = quantity("band", list(fit["band_hz"]), status="derived", dims=["bound"])
-    unexplained, _ = _unexplained(fit.get("unexplained"))      # a sweep's or tune's misfit is a band
-    if unexplained:
-        out["unexplained"] = unexplained
-    if fit.get("worst_region"):
-        out["worst_region"] = _worst_region(fit["worst_region"])
-    return out
+    out.update(_misfit(fit)[0])      # a sweep's or tune's misfit is a band: no note
+    out["noise"] = quantity("noise", fit["noise"], status="derived")
+    out["instrument"], notes = _instrument(fit)
+    return out, notes
 
 
 def _sweep_results(fit: dict) -> dict:
@@ -328,10 +339,7 @@ def sweep_fit(fit: dict, given=()) -> dict:
     results["amplitude_only"] = quantity("amplitude_only", bool(fit["amplitude_only"]), status="file",
                                          why="the columns of the file")
     results["phase_reversed"] = quantity("phase_reversed", bool(fit["phase_reversed"]), status="derived")
-    recorded, notes = _instrument(fit)
-    out = _fit_records(fit)
-    out["noise"] = quantity("noise", fit["noise"], status="derived")
-    out["instrument"] = recorded
+    out, notes = _fit_records(fit)
     notes.append(f"gain in {fit['gain']['unit']}, background in {fit['background']['unit']}, added to the "
                  f"{fit['background'].get('adds_to', 'response')}")
     return document("discrepancy", "sweep", {"path": str(fit["path"]), "instrument": fit.get("instrument")},
@@ -379,11 +387,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
                       "bic": quantity("bic", s["bic"], status="derived"),
                       "gap": quantity("gap", s["gap"], status="derived")} for s in out["steps"]],
            "reference": {**reference["results"], **reference["fit"]}}
-    unexplained, _ = _unexplained(out.get("unexplained"))
-    if unexplained:
-        fit["unexplained"] = unexplained
-    if out.get("worst_region"):
-        fit["worst_region"] = _worst_region(out["worst_region"])
+    fit.update(_misfit(out)[0])
     solutions = _mass_solutions(out["parameters"])
     if solutions:
         fit["solutions"] = solutions
@@ -412,10 +416,7 @@ def thermal_fit(fit: dict, given=()) -> dict:
     results = _sweep_results(fit)
     results["detection_scale"] = quantity("detection_scale", fit["detection_scale"], status="derived")
     results["white_floor"] = quantity("white_floor", fit["white_floor"], status="derived")
-    recorded, notes = _instrument(fit)
-    out = _fit_records(fit)
-    out["noise"] = quantity("noise", fit["noise"], status="derived")
-    out["instrument"] = recorded
+    out, notes = _fit_records(fit)
     notes.append(f"the spectrum in {fit['unit']}; the fit's residual and noise are of its logarithm")
     return document("discrepancy", "thermal", {"path": str(fit["path"])}, _free_lever(fit, given), results, out,
                     notes, missing_effects=[])
