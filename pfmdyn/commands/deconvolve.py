@@ -146,7 +146,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     """Read, fit, then write tables and plots; nothing is written if the input is bad."""
-    from ..analysis.deconvolve import deconvolve, summary, surface_displacement
+    from ..analysis.deconvolve import deconvolve, summary, surface_displacement, tip_quality
     from ..io.results import check_directory, check_writable
     from ..io.spectra import read_spectra
 
@@ -179,8 +179,9 @@ def run(args) -> int:
         from ..io import documents
 
         values = flags.given(args, LEVER + CONTACT)
-        flags.write_json(args.json, documents.deconvolution(result, data.path, surface, unit, values, list(values),
-                                                            args.out))
+        quality = tip_quality(result.v_null, result.v_null_se)
+        flags.write_json(args.json, documents.deconvolution(result, quality, data.path, surface, unit, values,
+                                                            list(values), args.out))
     return 0
 
 

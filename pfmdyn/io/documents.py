@@ -772,23 +772,21 @@ def diagram(response, lever: dict, given=(), assumed: dict | None = None, notes=
                     notes)
 
 
-def deconvolution(result, path, surface=None, unit: str = "a.u.", lever: dict | None = None, given=(),
+def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever: dict | None = None, given=(),
                   out=None) -> dict:
     """The document of ``pfmdyn deconvolve`` (kind ``deconvolution``): the straight line in the bias fitted
     at each frequency (Eq. 41; dims frequency, in the data's ``unit``), its nulling bias and the tip-quality
-    indicator; with a lever (``surface``) the true surface displacement at the spot, undetermined ranges
-    as notes.  The per-point residuals stay in ``error_map.csv`` (``source.out``).
+    indicator (``quality``: :func:`pfmdyn.analysis.deconvolve.tip_quality`); with a lever (``surface``) the
+    true surface displacement at the spot, undetermined ranges as notes.  The per-point residuals stay in
+    ``error_map.csv`` (``source.out``).
 
-    >>> from pfmdyn.analysis.deconvolve import deconvolve
+    >>> from pfmdyn.analysis.deconvolve import deconvolve, tip_quality
     >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
-    >>> doc = deconvolution(fit, "d.csv", unit="pm")
+    >>> doc = deconvolution(fit, tip_quality(fit.v_null, fit.v_null_se), "d.csv", unit="pm")
     >>> doc["results"]["measured_d_eff"]["value"], doc["results"]["electrostatic_slope"]["dims"], doc["notes"][0]
     ({'real': [2.0], 'imag': [0.0]}, ['frequency'], 'data in pm')
     """
-    from ..analysis.deconvolve import tip_quality
-
     per = {"status": "fitted", "dims": ["frequency"]}
-    quality = tip_quality(result.v_null, result.v_null_se)
     results = {"frequency": quantity("frequency", result.frequency_hz, status="file", why="the data's frequencies",
                                      dims=["frequency"]),
                "biases": quantity("biases", result.n_bias, status="file", why="the data's biases",
