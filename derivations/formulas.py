@@ -114,6 +114,7 @@ def _calibration() -> tuple[Formula, ...]:
     """The free lever's calibration (:mod:`derivations.calibration`, :mod:`derivations.hydrodynamics`)."""
     source = "derivations/calibration.py"
     f0, q, a = sp.symbols("f0 q amplitude", positive=True)
+    reynolds = sp.Symbol("reynolds")        # complex at a damped mode's frequency
     return (
         *(Formula(f"thermal_factor_{detection}{'' if region == 'beyond' else '_inside'}", (cal.sigma, cal.gamma),
                   cal.thermal_factor(detection, region),
@@ -133,6 +134,10 @@ def _calibration() -> tuple[Formula, ...]:
         Formula("oscillator_mean_square", (f0, q, a), cal.oscillator_mean_square(),
                 "mean square of the oscillator whose ASD is A f0**2/|f0**2 - f**2 + i f f0/q| (area under its PSD)",
                 f"{source}: oscillator_mean_square()"),
+        Formula("circular_hydrodynamic_function", (reynolds,), hyd.circular(conjugate=True, re=reynolds),
+                "Sader's hydrodynamic function of a circular cylinder in pfmdyn's exp(+i omega t) convention: "
+                "conj(Gamma_circ) at a real Reynolds number, analytic at a complex one",
+                "derivations/hydrodynamics.py: circular(conjugate=True)"),
         Formula("rectangular_correction_real", (hyd.tau,), hyd.rectangular_correction("real"),
                 "real part of Sader's fitted correction Omega(tau), tau = log10 Re (valid 1e-6 <= Re <= 1e4)",
                 "derivations/hydrodynamics.py: OMEGA (Sader 1998, Eq. 21)"),

@@ -46,10 +46,10 @@ def _argv(tmp: Path, command: str) -> dict:
         "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", json_out, "--plot", png],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--json", json_out],
-        "diagram": ["diagram", "--plot", png, "--frequency-points", "20", "--bias-points", "5"],
-        "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp / "dec")],
+        "diagram": ["diagram", "--plot", png, "--frequency-points", "20", "--bias-points", "5", "--json", json_out],
+        "deconvolve": ["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp / "dec"), "--json", json_out],
         "roots": ["roots", "free", "--modes", "2", "--json", json_out],
-        "branches": ["branches", "indentation", "--plot", png, "--points", "20", "--modes", "1"],
+        "branches": ["branches", "indentation", "--plot", png, "--points", "20", "--modes", "1", "--json", json_out],
         "inspect": ["inspect", str(data), "--json", json_out],
         "discrepancy": ["discrepancy", str(data), "--json", json_out],
         "calibrate": ["calibrate", str(tmp / "tune.csv"), "--json", json_out],   # the flags are checked first

@@ -51,6 +51,8 @@ POINT = {
     "resonance_frequency": 2.99e5, "quality_factor": 50.0,
     # Two-frequency oscillator: drives (Hz) about 3e5 and inverse signals of an SHO there (Q 80, D 1).
     "f1": 2.97e5, "f2": 3.05e5, "z1_re": 0.0199, "z1_im": 0.0124, "z2_re": -0.0336, "z2_im": 0.0127,
+    # A fluid's Reynolds number rho omega b^2/(4 eta): a lever in water near 10 kHz.
+    "reynolds": 1.0,
 }
 """Argument name -> its value in the examples (``beta1``: the first free root, derived)."""
 

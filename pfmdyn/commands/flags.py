@@ -19,7 +19,7 @@ from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "temperature", "medium_line", "add_json", "write_json", "given", "require", "cantilever", "contact",
+           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "cantilever", "contact",
            "option_hint"]
 
 
@@ -197,6 +197,22 @@ def write_json(path, document) -> None:
         print(results.dumps(document), file=DOCUMENTS[-1] if DOCUMENTS else sys.stdout)
     elif path:
         results.write_json(path, document)
+
+
+def save_figure(figure, path, dpi: int = 120) -> None:
+    """Save ``figure`` to ``path`` (checked before the analysis); what matplotlib then cannot save is one
+    line.
+
+    >>> from matplotlib.figure import Figure
+    >>> save_figure(Figure(), "/nonexistent/folder/f.png")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: cannot write /nonexistent/folder/f.png: No such file or directory
+    """
+    try:
+        figure.savefig(path, dpi=dpi)
+    except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
+        raise UserError(f"cannot write {path}: {getattr(exc, 'strerror', None) or exc}") from None
 
 
 DOCUMENTS: list = []

@@ -75,10 +75,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
                         help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
                              f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
-    parser.add_argument("--surface-potential", type=float, default=None,
-                        help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
-                             "this bias (default: fitted with +distributed, else 0, the intercept); the "
-                             "electrostatic term and the nulling bias do not depend on it")
+    flags.add(parser, ("surface_potential",), defaults={"surface_potential": (
+        None, "fitted with +distributed, else 0, the intercept; for maps with a bias axis d_eff is the response at "
+              "this bias, the electrostatic term and the nulling bias do not depend on it")})
     parser.add_argument("--pool", type=int, default=3, metavar="R",
                         help="DART images: fit each pixel's contact (k1, contact loss, hence the contact resonance and "
                              "Q) to its own and its alike neighbours' signals within R pixels (default 3; 0: each "
@@ -171,8 +170,7 @@ def run(args) -> int:
     if source.layout == "usid" and not args.usid_inplace and os.path.exists(copy) and os.path.samefile(copy, args.data):
         raise UserError(f"{args.data}: --out is the input's folder, where the copy with the fit would replace the "
                         "input; choose another --out, or --usid-inplace to write into the input")
-    if args.surface_potential is not None and not math.isfinite(args.surface_potential):
-        raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
+    surface_potential = flags.given(args, ("surface_potential",)).get("surface_potential")
     if args.medium:
         print(flags.medium_line(overrides["medium"], args))
     n_bands = len(source.model.bands)
@@ -183,7 +181,7 @@ def run(args) -> int:
               + (f", {len(biases)} biases" if biases is not None else "") + ")")
     else:
         fit_options = {"q0": args.start_quality_factor, "gap_threshold": args.gap_threshold,
-                       "surface_potential_v": args.surface_potential}
+                       "surface_potential_v": surface_potential}
         mechanisms, rows = _mechanisms(args, source, fit_options)
         source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
         print(f"fitting: k1 ({source.model.describe_k2()}), "

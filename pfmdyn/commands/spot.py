@@ -88,9 +88,6 @@ def run(args) -> int:
         from ..plots.spot import plot_spot
         fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)
-        fig = plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions))
-        try:
-            fig.savefig(args.plot, dpi=120)
-        except OSError as exc:
-            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+        flags.save_figure(plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions)),
+                          args.plot)
     return 0
