@@ -310,6 +310,17 @@ def _log_ratios(lever, contact, f1, f2, points):
         return [(np.log(t[j, 1] / t[j, 0]), t[j, 0]) for j in range(m)]
 
 
+def _linearised(lever, contact, f1, f2, target, k1, loss):
+    """The residual ``log(T(f2)/T(f1)) - target`` as ``(re, im)`` (the phase modulo 2 pi) and its Jacobian
+    in ``(log k1, loss)`` by forward differences, ``(n, 2)`` and ``(n, 2, 2)``."""
+    (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1, f2, [
+        (k1, loss), (k1 * math.exp(_STEP), loss), (k1, loss + _STEP)])
+    r = g - target
+    jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
+                    np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+    return np.stack([r.real, np.angle(np.exp(1j * r.imag))], -1), jac
+
+
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
                     steps: int = _NEWTON_STEPS) -> LeverFit:
     """``k1``, ``contact_loss`` and ``d_eff`` explaining the deflection signals ``s1``, ``s2`` (m, complex,
@@ -337,21 +348,16 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         if not i.size:
             break
         k1_i = np.exp(log_k1[i])
-        (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1[i], f2[i], [
-            (k1_i, loss[i]), (k1_i * math.exp(_STEP), loss[i]), (k1_i, loss[i] + _STEP)])
-        r = g - target[i]
-        r = r.real + 1j * np.angle(np.exp(1j * r.imag))         # the phase difference modulo 2 pi
-        jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
-                        np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+        r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], k1_i, loss[i])
         jacobian[i] = jac
         with np.errstate(all="ignore"):
-            step = -np.einsum("...ij,...j->...i", _inverse(jac), np.stack([r.real, r.imag], -1))
+            step = -np.einsum("...ij,...j->...i", _inverse(jac), r)
         bad = ~np.all(np.isfinite(step), -1)
         step[bad] = 0.0
         active[i[bad]] = False
         # k1 changes at most e**0.5 a step, and a step is halved until it lowers the residual
         step *= np.minimum(1.0, 0.5 / np.maximum(np.abs(step[:, 0]), 1e-300))[:, None]
-        norm, pending = np.abs(r), np.abs(step).max(-1) > 1e-8
+        norm, pending = np.hypot(r[:, 0], r[:, 1]), np.abs(step).max(-1) > 1e-8
         for _ in range(_HALVINGS):
             j = np.flatnonzero(pending)
             if not j.size:
@@ -415,13 +421,7 @@ def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: Lev
         information = np.full((len(f1), 2, 2), np.nan)
         for _ in range(steps):
             i = np.flatnonzero(np.all(np.isfinite(theta), 0))
-            k1_i = np.exp(theta[0, i])
-            (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1[i], f2[i], [
-                (k1_i, theta[1, i]), (k1_i * math.exp(_STEP), theta[1, i]), (k1_i, theta[1, i] + _STEP)])
-            r = g - target[i]
-            r = np.stack([r.real, np.angle(np.exp(1j * r.imag))], -1)
-            jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
-                            np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+            r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], np.exp(theta[0, i]), theta[1, i])
             own = np.einsum("nki,nkj->nij", jac, jac)
             # each pixel's normal equations J^T J (theta - theta_own) = -J^T r, summed over its alike neighbours
             rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, r)
