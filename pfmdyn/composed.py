@@ -746,9 +746,10 @@ class _Compiled:
         n = math.prod(self.shape)
         flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
         self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
-        beta = np.ascontiguousarray(flat[0], complex)
+        # writable copies: a read-only view (a broadcast) would be another specialisation to compile
+        beta = np.array(flat[0], complex)
         point = (beta, *flat[2:9], flat[10])
-        g = np.ascontiguousarray(np.real(flat[9]), float)
+        g = np.array(np.real(flat[9]), float)
         two = bool(np.any(g != 1.0)) or "gamma" in names
         uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
         jump = _columns(pieces.point_jump(*point), n, complex)
@@ -761,9 +762,9 @@ class _Compiled:
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
-        kernels.read_out(beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
-                         np.ascontiguousarray(self.k, complex), jump, djump, kinds, two, z, dz)
         use = _drive_columns(drives, DRIVES)
+        kernels.read_out(beta, np.array(np.real(flat[1]), float), g, uc, np.array(self.k, complex), jump, djump,
+                         kinds, two, np.array(use, np.int64), z, dz)
         real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
         self.z = z[:, :, use].real if real else z[:, :, use]
         self._partials = {name: dz[:, i][:, :, use].real if real else dz[:, i][:, :, use]
