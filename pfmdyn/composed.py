@@ -1055,7 +1055,7 @@ def _compiled_characteristic(*args):
     else:
         return _shaped(_transferred(*args), args[8])
     out = np.empty((len(params), beta.size), dtype)
-    kernels.characteristic(np.ascontiguousarray(beta, dtype), params, out)
+    kernels.characteristic(np.array(beta, dtype), params, out)     # writable: a read-only view compiles again
     return out.reshape(shape)
 
 
@@ -1114,11 +1114,11 @@ def _compiled_tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
 
     beta = np.asarray(beta)
     dtype = np.result_type(beta, k, kvv, kll, kvl, mu, rho_g, float)
-    flat = np.ascontiguousarray(beta.reshape(-1), dtype)
+    flat = np.array(beta.reshape(-1), dtype)       # writable and C-ordered: one specialisation to compile
     point = (flat, k, kvv, kll, kvl, H, L, mu, rho_g)
     jump = _columns(pieces.point_jump(*point), len(flat), dtype)
     partials = pieces.point_jump_partials(*point, wrt=names)
-    djump = np.stack([_columns(partials[p], len(flat), dtype) for p in names]) if names \
+    djump = np.ascontiguousarray(np.stack([_columns(partials[p], len(flat), dtype) for p in names])) if names \
         else np.zeros((0, len(flat), 12), dtype)
     out, d = np.empty(len(flat), dtype), np.empty((len(names), len(flat)), dtype)
     kernels.tip_at_end_and_partials(flat, jump, djump, names.index("beta") if "beta" in names else -1, out, d)
