@@ -199,18 +199,22 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
     """The header's numbers beside ours for the same quantity (``ours``: name -> ``(value, stderr)``), each
     with the tolerance beyond which they disagree: three times our standard error and the sweep's
     ``step_hz`` (a peak read off measured points is known to a step; a Q through its linewidth ``f/Q``,
-    to ``Q**2 step / f``), combined; the header's own numbers carry more digits than either.
+    to ``Q**2 step / f``; any other quantity, our error alone), combined; the header's own numbers carry
+    more digits than either.
 
     >>> c = compare_with_instrument({"amplitude_peak": 51.0e3}, {"amplitude_peak": (77.3e3, None)}, 150.0)
     >>> c[0]["disagrees"], round(c[0]["relative_difference"], 2), c[0]["tolerance"]
     (True, -0.34, 450.0)
+    >>> round(compare_with_instrument({"spring_constant": 27.1}, {"spring_constant": (9.05, 0.29)}, 48.0)[0]["tolerance"], 6)
+    0.87
     """
     frequency = ours.get("free_resonance", ours.get("amplitude_peak", (None, None)))[0]
     out = []
     for name, (value, stderr) in ours.items():
         if not fields.get(name) or value is None:
             continue
-        step = step_hz if name != "free_quality_factor" else value**2 * step_hz / frequency
+        step = {"free_quality_factor": value**2 * step_hz / frequency if frequency else 0.0,
+                "free_resonance": step_hz, "amplitude_peak": step_hz}.get(name, 0.0)
         tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
         out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
                     "relative_difference": (fields[name] - value) / value,
@@ -222,6 +226,7 @@ def disagreement_lines(comparison: list | None) -> list[str]:
     """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`)."""
     return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g} in the header, {c['ours']:.6g} here "
             f"({c['relative_difference']:+.1%}; tolerance {c['tolerance']:.3g}: 3x our uncertainty and the sweep's step)"
+            + (f"; {c['why']}" if c.get("why") else "")
             for c in comparison or () if c["disagrees"]]
 
 

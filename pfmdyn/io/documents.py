@@ -256,7 +256,8 @@ def _instrument(fit: dict) -> tuple[dict, list[str]]:
         unit = "" if unit == "1" else f" {unit}"
         notes.append(f"{c['name']}: ours {c['ours']:.6g}{unit}, the instrument's {c['instrument']:.6g}{unit} "
                      f"(relative difference {c['relative_difference']:+.2g}; "
-                     f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})")
+                     f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})"
+                     + (f": {c['why']}" if c.get("why") else ""))
     disagree = [c["name"] for c in fit.get("instrument_comparison") or [] if c["disagrees"]]
     if fit.get("instrument_comparison"):
         recorded["disagrees"] = quantity("disagrees", disagree, status="derived", dims=["disagrees"])
