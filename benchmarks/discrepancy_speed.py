@@ -89,15 +89,18 @@ def run_case(case: str, cwd: Path, env: dict, out: Path) -> tuple[float, float, 
 
 def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
     """Where two reports (parsed JSON) differ: strings and structure exactly, numbers beyond ``rtol``
-    (or :data:`ATOL` near zero).
+    (or :data:`ATOL` near zero); a field only the new report has is an addition (:func:`additions`),
+    not a difference.
 
-    >>> differences({"a": [1.0, "x"], "b": 2.0}, {"a": [1.0 + 1e-9, "x"], "b": 2.1})
+    >>> differences({"a": [1.0, "x"], "b": 2.0, "c": 1}, {"a": [1.0 + 1e-9, "x"], "b": 2.1})
     ['b: 2.0 != 2.1']
+    >>> differences({"a": 1.0}, {"a": 1.0, "b": 2.0})
+    [": keys ['b'] missing"]
     """
     if isinstance(new, dict) and isinstance(old, dict):
-        if new.keys() != old.keys():
-            return [f"{where}: keys {sorted(new.keys() ^ old.keys())}"]
-        return [d for k in new for d in differences(new[k], old[k], f"{where}.{k}".lstrip("."), rtol)]
+        if old.keys() - new.keys():
+            return [f"{where}: keys {sorted(old.keys() - new.keys())} missing"]
+        return [d for k in old for d in differences(new[k], old[k], f"{where}.{k}".lstrip("."), rtol)]
     if isinstance(new, list) and isinstance(old, list):
         if len(new) != len(old):
             return [f"{where}: {len(new)} != {len(old)} items"]
@@ -109,6 +112,19 @@ def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
     return [] if new == old else [f"{where}: {new!r} != {old!r}"]
 
 
+def additions(new, old) -> set[str]:
+    """The names of the fields the new report has and the old one has not (anywhere in it).
+
+    >>> sorted(additions({"a": [{"x": 1, "y": 2}], "b": 1}, {"a": [{"x": 1}]}))
+    ['b', 'y']
+    """
+    if isinstance(new, dict) and isinstance(old, dict):
+        return set(new.keys() - old.keys()).union(*(additions(new[k], old[k]) for k in new.keys() & old.keys()))
+    if isinstance(new, list) and isinstance(old, list):
+        return set().union(*(additions(a, b) for a, b in zip(new, old)))
+    return set()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", default=BASELINE, help="commit of the previous design")
@@ -118,7 +134,8 @@ def main() -> None:
     print(f"machine load at start: {os.getloadavg()[0]:.2f} (2 cores; shared)")
     print(f"reports compared: names, selections and structure exactly; numbers within {RTOL:g} relative "
           f"({RTOL / FIT_TOLERANCE:g} x the fits' tolerance {FIT_TOLERANCE:g}) or {ATOL:g} absolute; "
-          "'to the bit' when every number is equal")
+          "'to the bit' when every number is equal (or within 1e-12 at zero); fields the baseline's reports lack "
+          "are listed, not compared")
     with tempfile.TemporaryDirectory() as tmp:
         base, base_env = _baseline_tree(args.baseline, Path(tmp))
         now_env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
@@ -137,11 +154,13 @@ def main() -> None:
                         times[name] = [min(times[name][0], cpu), min(times[name][1], seconds)]
                         reports[name] = json.loads(out.read_text())
                 diff = differences(reports["current"], reports["baseline"])
-                exact = json.dumps(reports["current"], sort_keys=True) == json.dumps(reports["baseline"], sort_keys=True)
+                added = additions(reports["current"], reports["baseline"])
+                exact = not differences(reports["current"], reports["baseline"], rtol=0.0)
                 (old, old_wall), (new, new_wall) = times["baseline"], times["current"]
                 ratios.append(old / new)
                 verdict = ("unchanged to the bit" if exact else f"unchanged within {RTOL:g}" if not diff
                            else f"CHANGED beyond {RTOL:g}: {'; '.join(diff[:4])}")
+                verdict += f" (fields added since: {', '.join(sorted(added))})" if added else ""
                 print(f"| {case} | {rows} | {old:.1f} ({old_wall:.1f}) | {new:.1f} ({new_wall:.1f}) | {old / new:.2f} "
                       f"({old_wall / new_wall:.2f}) | {os.getloadavg()[0]:.1f} | {verdict} |")
             print(f"\nmedian speed-up (CPU) {statistics.median(ratios):.2f} (target >= 6)")
