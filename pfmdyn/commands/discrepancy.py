@@ -161,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
     from ..discrepancy import spectrum
     from ..discrepancy.inputs import is_sweep, is_thermal_tune, read
     from ..discrepancy.report import medium_comparison
+    from ..io.record import MissingFieldError
     from ..io.results import check_writable
     from ..io.tables import SpectrumData
 
@@ -172,7 +173,16 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--added-mass-position is for a drive sweep compared with --reference")
     if is_thermal_tune(args.data):
         return _thermal(args)
-    data = read(args.data, flags.given(args, OVERRIDES))
+    overrides, assumed = flags.given(args, OVERRIDES), {}
+    try:
+        data = read(args.data, overrides)
+    except MissingFieldError as exc:        # no instrument file records a tip height: the default, as every command
+        if exc.field != "tip_height":
+            raise
+        assumed = flags.fill_defaults(overrides, ("tip_height",))
+        data = read(args.data, overrides)
+    if assumed:
+        print(flags.assumed_line(assumed, data.metadata))
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
@@ -194,7 +204,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     given = flags.given_names(args, OVERRIDES)
     lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
-                                    from_file=OVERRIDES)
+                                    from_file=OVERRIDES, assumed=assumed)
     rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]
     flags.write_json(args.json, documents.discrepancy_report(
         report.to_dict(), "spectrum" if rows is None else "resonances", {"path": str(args.data)}, lever, rows))

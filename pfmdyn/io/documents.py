@@ -75,7 +75,8 @@ def lever_records(values: dict, given=(), from_file=(), assumed: dict | None = N
         elif name in from_file:
             out[name] = quantity(name, value, status="file", why="read from the input file")
         else:
-            out[name] = quantity(name, value, status="assumed", why="the default: no flag, not in the file")
+            out[name] = quantity(name, value, status="assumed", why="the default: " + (
+                NAMES[name].default_why or "no flag, not in the file"))
     return out
 
 
@@ -504,7 +505,7 @@ def _solution(s: dict, lever: dict, k2_policy: str) -> dict:
     return out
 
 
-def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
+def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None = None) -> dict:
     """The document of ``pfmdyn stiffness`` (kind ``contact_resonance``): k1 (with k2 or the tip position)
     solved from the contact resonances, each uncertainty's budget, every solution when not unique.
 
@@ -519,8 +520,9 @@ def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
     inputs = dict(doc["inputs"])
     contact, modes = inputs.pop("contact_hz"), inputs.pop("modes")
     lever = lever_records({k: v for k, v in inputs.items() if not isinstance(v, str)}, given=given,
-                          from_file=from_file, assumed={name: "the default" for name in inputs
-                                                        if name.endswith("_uncertainty") and name not in given})
+                          from_file=from_file, assumed={**{name: "the default" for name in inputs
+                                                           if name.endswith("_uncertainty") and name not in given},
+                                                        **(assumed or {})})
     if isinstance(inputs.get("medium"), str):
         lever["medium"] = quantity("medium", inputs["medium"], status="given" if "medium" in given else "assumed",
                                    **({} if "medium" in given else {"why": "the default"}))
