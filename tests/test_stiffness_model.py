@@ -221,3 +221,27 @@ def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_pa
     assert doc["lever"]["k2"]["status"] == "tied" and "Mindlin" in doc["lever"]["k2"]["why"]
     assert doc["lever"]["tip_height"]["status"] == ("assumed" if tip_height is None else "given")
     assert "k2 policy: k2 tied to k1 by Mindlin" in capsys.readouterr().out
+
+
+@pytest.mark.skipif(not REAL_IMAGES.is_dir(), reason="shared real data absent")
+def test_discrepancy_states_every_assumed_input_of_k1_as_stiffness_does(tmp_path, capsys):
+    """``discrepancy`` on the shared BTFO image with default flags: the tip height assumed as by every command,
+    k1's uncertainty input by input (the tip height, the k2 policy, the table's frequency and Q uncertainties it
+    assumed, marked assumed) and the same k1 and uncertainty as ``stiffness`` (within 5 %)."""
+    path = REAL_IMAGES / "IgorIBWReader_ImageStack_BTFO_DSO.ibw"
+    out = tmp_path / "d.json"
+    assert cli.main(["discrepancy", str(path), "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "assumed: tip height" in text and "k1's uncertainty, input by input: tip height" in text
+    doc = json.loads(out.read_text())
+    assert doc["lever"]["tip_height"]["status"] == "assumed"
+    assert doc["results"]["resonance_uncertainty"]["status"] == "assumed"
+    assert doc["results"]["quality_factor_uncertainty"]["status"] == "assumed"
+    budget = doc["fit"]["budget"]
+    assert set(budget["uncertainty_source"]["value"]) == {"resonance_frequencies", "quality_factors", "tip_height",
+                                                        "k2_policy"}
+    k1 = doc["results"]["k1"]
+    assert cli.main(["stiffness", str(path), "--json", str(out)]) == 0
+    reference = json.loads(out.read_text())["results"]["k1"]
+    assert k1["value"] == pytest.approx(reference["value"], rel=1e-3)
+    assert k1["stderr"] == pytest.approx(reference["stderr"], rel=0.05)

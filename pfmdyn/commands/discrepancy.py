@@ -41,15 +41,21 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 """The lever's quantities a file's metadata may hold and the command line may override."""
 
 
-def _analyse(data, args):
-    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone)."""
+def _analyse(data, args, assumed: dict):
+    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone); a resonance
+    table's with the tip height's uncertainty in each parameter's (the assumed one's spread, else 10 %)."""
+    from ..analysis.stiffness_report import TIP_HEIGHT_TOLERANCE
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
     from ..io.tables import SpectrumData
 
-    analysis = analyse if isinstance(data, SpectrumData) else analyse_resonances
-    return analysis(data, vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    options = dict(vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    if isinstance(data, SpectrumData):
+        return analyse(data, **options)
+    spread = flags.NAMES["tip_height_uncertainty"].default if "tip_height" in assumed else \
+        TIP_HEIGHT_TOLERANCE * data.metadata.tip_height
+    return analyse_resonances(data, tip_height_uncertainty=spread, **options)
 
 
 def _lever_in_medium(data, args):
@@ -188,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
         rows = len(data.frequency_hz)
         data, stride = spectrum.thin(data)
     with _fitting(args.data, "the metadata (spring constant, length, tip height, free resonance)"):
-        report = _analyse(data, args)
+        report = _analyse(data, args, assumed)
     if stride > 1:
         report = report.updated(frequency_stride=stride)
     if args.medium:

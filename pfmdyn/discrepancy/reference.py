@@ -33,7 +33,7 @@ from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
                     instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
-__all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "CANDIDATES"]
+__all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "mode2_node", "CANDIDATES"]
 
 ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
                        description="point mass over the lever's mass")
@@ -143,7 +143,12 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     at_bound = not ratio["value"] > 2 * (ratio["stderr"] or 0.0) or ratio["value"] <= 1e-9
     parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
                                 "unit": "kg", "determined": named == "added_mass" and not at_bound}
-    if at_bound:
+    if at_bound and fit_position:
+        # no mass the data need, and no bound either: near the clamp a mass moves neither mode
+        parameters["added_mass"].update(stderr=None, why=(
+            "at its bound (zero) or within two standard errors of it, its position free: a mass near the clamp "
+            "moves neither mode, so the data bound no mass; give --added-mass-position for a bound at a place"))
+    elif at_bound:
         parameters["added_mass"]["why"] = "at its bound (zero) or within two standard errors of it"
     elif named == "added_mass" and best["gap"] > UNSETTLED:
         # a misfit the candidates leave: the minimum found need not be the lever's (its curvature, the
@@ -165,8 +170,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             parameters["added_mass_position"].update(
                 undetermined=True, solutions=solutions,
                 why="the modes' shifts agree as well at x/L " + ", ".join(f"{x[1]:.3g}" for x, _ in rivals))
-            if any(abs(s["added_mass"] - parameters["added_mass"]["value"]) > 2 * parameters["added_mass"]["stderr"]
-                   for s in solutions[1:]) and parameters["added_mass"]["determined"]:
+            if parameters["added_mass"]["determined"] and any(
+                    abs(s["added_mass"] - parameters["added_mass"]["value"]) > 2 * parameters["added_mass"]["stderr"]
+                    for s in solutions[1:]):
                 parameters["added_mass"].update(determined=False, solutions=solutions, why=(
                     "each position that explains the shifts as well needs its own mass (see solutions)"))
     elif position is not None:
@@ -331,8 +337,30 @@ def _position_profile(before, refit, frequency, y, sigma, shifted):
     solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma)
     bounds = _bounds(before, refit, params)
     refined = sorted((solve_from_starts(residual, [profile[i][1]], *bounds, keep=1) for i in minima), key=lambda f: f.chi2)
+    # The mirror of the best position about mode 2's node moves both modes alike: a minimum the grid, a
+    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82).
+    mirror = 2 * mode2_node() - refined[0].internal[1]
+    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > 0.01:
+        start = refined[0].internal.copy()
+        start[1] = mirror
+        refined = sorted([*refined, solve_from_starts(residual, [start], *bounds, keep=1)], key=lambda f: f.chi2)
     best = replace(refined[0], others=tuple((f.internal, f.chi2) for f in refined[1:]))
     return best, solve, lever_of, params
+
+
+def mode2_node() -> float:
+    """x/L of the node of the second free mode of a uniform clamped-free beam (where a point mass moves mode 1
+    alone), from the mode's root ``1 + cos(b) cosh(b) = 0`` and its shape.
+
+    >>> round(mode2_node(), 4)
+    0.7834
+    """
+    from scipy.optimize import brentq
+
+    b = brentq(lambda v: 1 + math.cos(v) * math.cosh(v), 4.0, 5.0, xtol=1e-14)
+    ratio = (math.cosh(b) + math.cos(b)) / (math.sinh(b) + math.sin(b))
+    shape = lambda x: math.cosh(b * x) - math.cos(b * x) - ratio * (math.sinh(b * x) - math.sin(b * x))  # noqa: E731
+    return float(brentq(shape, 0.5, 0.95, xtol=1e-14))
 
 
 def _rivals(fit: StartsFit, count: int) -> list:
