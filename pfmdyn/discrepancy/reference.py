@@ -147,7 +147,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
         # no mass the data need, and no bound either: near the clamp a mass moves neither mode
         parameters["added_mass"].update(stderr=None, why=(
             "at its bound (zero) or within two standard errors of it, its position free: a mass near the clamp "
-            "moves neither mode, so the data bound no mass; give --added-mass-position for a bound at a place"))
+            "moves neither mode, so the data bound no mass; a position given bounds it there"))
     elif at_bound:
         parameters["added_mass"]["why"] = "at its bound (zero) or within two standard errors of it"
     elif named == "added_mass" and best["gap"] > UNSETTLED:
