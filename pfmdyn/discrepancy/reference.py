@@ -474,7 +474,11 @@ def _rivals(fit: StartsFit, count: int) -> list:
     """Other minima ``(internal, chi2)`` of ``fit`` at another position (x/L more than 0.05 away) within 4
     reduced-chi2 units."""
     scale = max(fit.chi2 / count, 1.0)
-    return [(x, chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
+    out = []
+    for x, chi2 in sorted(fit.others, key=lambda other: other[1]):      # one per place: starts may meet
+        if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > 0.05 for kept in [fit.internal, *(o for o, _ in out)]):
+            out.append((x, chi2))
+    return out
 
 
 class SweepComparison(Result):
