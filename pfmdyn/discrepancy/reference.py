@@ -86,6 +86,9 @@ def _modes_in(lever: Cantilever, frequency) -> int:
     from ..analysis.resonances import resonances
 
     wet = resonances(lever, None, modes=3).free.peak_hz
+    # a mode whose damped root a heavy fluid hides: where the vacuum ratio puts it above the first (a fluid
+    # loads higher modes less, so it sits at or above that)
+    wet = [f if math.isfinite(f) else wet[0] * ratio for f, ratio in zip(wet, mode_ratios())]
     return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
 
 
@@ -330,7 +333,7 @@ def _shift_seed(before: SweepFit, frequency, y, position: float) -> float | None
 def _peak_ratios(before: SweepFit, frequency, y) -> tuple[float, float] | None:
     """How far each of the first two modes' peaks moved: the tallest measured point of each mode's window
     (split at the geometric middles of modes 1, 2 and 3) over where ``before``'s model peaks there; None
-    when a window holds under three points or a peak did not fall."""
+    when a window holds under three points, mode 1's peak did not fall or mode 2's rose."""
     f = np.asarray(frequency, float)
     ratios, edges = mode_ratios(), [0.0]
     edges += [math.sqrt(ratios[0] * ratios[1]), math.sqrt(ratios[1] * ratios[2])]
@@ -341,7 +344,7 @@ def _peak_ratios(before: SweepFit, frequency, y) -> tuple[float, float] | None:
             return None
         fw = f[window]
         moved = fw[np.argmax(np.abs(y[window]))] / fw[np.argmax(np.abs(before.model(fw)))]
-        if not moved < 1.0:
+        if not (moved < 1.0 or out and moved <= 1.0):      # mode 2 may stay: a mass at its node
             return None
         out.append(float(moved))
     return out[0], out[1]
@@ -471,12 +474,14 @@ def mode2_node() -> float:
 
 
 def _rivals(fit: StartsFit, count: int) -> list:
-    """Other minima ``(internal, chi2)`` of ``fit`` at another position (x/L more than 0.05 away) within 4
-    reduced-chi2 units."""
+    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: more than
+    three of its standard errors (and 0.005) from the best and from each other (a sharp mode's mirror about
+    the node of mode 2 can sit 0.01 away with a mass 3 % apart)."""
     scale = max(fit.chi2 / count, 1.0)
+    apart = max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), 0.005)
     out = []
     for x, chi2 in sorted(fit.others, key=lambda other: other[1]):      # one per place: starts may meet
-        if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > 0.05 for kept in [fit.internal, *(o for o, _ in out)]):
+        if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > apart for kept in [fit.internal, *(o for o, _ in out)]):
             out.append((x, chi2))
     return out
 
