@@ -168,10 +168,11 @@ def test_bad_input_is_one_line(argv, message, capsys, tmp_path):
 
 
 def test_missing_lever_value_names_its_flag(capsys):
-    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100",
-            "--frequency", "1e4"]
+    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--k1", "100", "--frequency", "1e4"]
     assert main(args) == 2
-    assert "give --tip-height" in capsys.readouterr().err
+    assert "give --length" in capsys.readouterr().err
+    assert main([*args, "--length", "2e-4"]) == 0      # no tip height: the typical PFM probe's, said
+    assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
 
 
 def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():

@@ -19,7 +19,8 @@ from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "cantilever", "contact",
+           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
+           "assumed_line", "cantilever", "contact",
            "option_hint"]
 
 
@@ -59,7 +60,8 @@ def add(parser, names, required=(), defaults=None) -> None:
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        assumed = f"{q.default:g} {q.unit}, assumed" if q.default is not None else \
+        assumed = f"{q.default:g} {q.unit}, assumed" + (f": {q.default_why}" if q.default_why else "") \
+            if q.default is not None else \
             "none: the lever in vacuum" if name == "medium" else ""
         value, why = defaults.get(name, (None, assumed))
         text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
@@ -278,17 +280,50 @@ def check_medium(args) -> None:
         temperature(args)       # also where the medium's own numbers do not depend on it
 
 
-def cantilever(args, found: dict | None = None) -> Cantilever:
-    """The lever from values ``found`` in a file (names -> SI) with the flags over them.
+def fill_defaults(values: dict, names=LEVER) -> dict[str, str]:
+    """Put into ``values`` (name -> SI) the default (:attr:`pfmdyn.names.Quantity.default`) of each of
+    ``names`` that neither a flag nor the file gave; returns name -> why, what reports say of each.
+    Every command that builds a lever takes its defaults here, so one k1 means one contact in all.
+
+    >>> values = {"length": 2e-4}
+    >>> why = fill_defaults(values); values["tip_height"], why["tip_height"].split(",")[0]
+    (1.3e-05, "a typical PFM probe's")
+    """
+    out = {}
+    for name in names:
+        q = NAMES[name]
+        if values.get(name) is None and q.default is not None:
+            values[name] = q.default
+            out[name] = q.default_why
+    return out
+
+
+def assumed_line(assumed: dict, lever: Cantilever) -> str:
+    """The line a command prints of the values of ``lever`` it assumed (name -> why: :func:`fill_defaults`),
+    "" for none.
+
+    >>> assumed_line({"tip_height": "a typical PFM probe's"}, Cantilever(2.0, 7e4, 2e-4, tip_height=13e-6))
+    "assumed: tip height 1.3e-05 m (a typical PFM probe's; give --tip-height)"
+    """
+    return "; ".join(f"assumed: {NAMES[name].label} {getattr(lever, name):g} {NAMES[name].unit} ({why}; give "
+                     f"{NAMES[name].flag})" for name, why in assumed.items() if name in LEVER)
+
+
+def cantilever(args, found: dict | None = None, assumed: dict | None = None, defaults: bool = True) -> Cantilever:
+    """The lever from values ``found`` in a file (names -> SI) with the flags over them, and (``defaults``)
+    those of :func:`fill_defaults` for what neither gives (into ``assumed``, when a dict, name -> why).
 
     >>> import argparse
     >>> ns = argparse.Namespace(spring_constant="2", free_resonance="7e4", length=None, tilt="12")
-    >>> lever = cantilever(ns, {"length": 2e-4, "spring_constant": 1.0})
-    >>> lever.spring_constant, lever.length, lever.tilt
-    (2.0, 0.0002, 12.0)
+    >>> lever = cantilever(ns, {"length": 2e-4, "spring_constant": 1.0}, assumed := {})
+    >>> lever.spring_constant, lever.length, lever.tilt, lever.tip_height, list(assumed)
+    (2.0, 0.0002, 12.0, 1.3e-05, ['tip_height'])
     """
     values = {k: v for k, v in (found or {}).items() if k in LEVER or k in ("quality_factor", "viscous_loss")}
     values.update(given(args, LEVER + ("quality_factor", "viscous_loss")))
+    filled = fill_defaults(values) if defaults else {}
+    if assumed is not None:
+        assumed.update(filled)
     if values.get("quality_factor") is None:
         values["quality_factor"] = math.inf
     if getattr(args, "medium", None) or (found or {}).get("medium"):      # else vacuum, the paper's case

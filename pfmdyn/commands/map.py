@@ -245,6 +245,9 @@ def _dart(args, overrides: dict, given: dict) -> int:
     values = {name: entry[0] for name, entry in found.items()}
     flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
     flags.require({name: entry[0] for name, entry in settings.items()}, _DART, args.data)
+    for name, why in flags.fill_defaults(values, _LEVER).items():
+        found[name] = (values[name], "assumed", why)
+        print(flags.assumed_line({name: why}, Cantilever.from_values(values)))
     lever = Cantilever.from_values(values)
     contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
     if contact.k2_of(1.0) or lever.tilt:

@@ -46,16 +46,17 @@ def report(result) -> str:
     return "\n".join(lines)
 
 
-def _lever(args):
-    """The lever from the instrument file (when given) with the flags over it."""
+def _lever(args, assumed: dict):
+    """The lever from the instrument file (when given) with the flags over it; the defaults it took into
+    ``assumed`` (name -> why)."""
     found = {}
     if args.file:
         from ..io.instruments import read_instrument
         record = read_instrument(args.file)
         found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
-    flags.require(given, ("spring_constant", "free_resonance", "length", "tip_height"), args.file)
-    return flags.cantilever(args, found)
+    flags.require(given, ("spring_constant", "free_resonance", "length"), args.file)
+    return flags.cantilever(args, found, assumed)
 
 
 def run(args) -> int:
@@ -66,11 +67,14 @@ def run(args) -> int:
     check_writable(args.plot, figure=True)
     if not (math.isfinite(args.frequency) and args.frequency > 0):
         raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
-    lever = _lever(args)
+    assumed = {}
+    lever = _lever(args, assumed)
     contact, policy = flags.contact(args).policy(lever)
     result = spot_analysis(lever, contact, args.frequency)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
+    if assumed:
+        print(flags.assumed_line(assumed, lever))
     print(report(result))
     print(f"k2 policy: {policy}")
     if args.json:

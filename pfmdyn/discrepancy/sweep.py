@@ -22,7 +22,7 @@ parameter entries of the JSON, the report's lines and what a fit leaves unexplai
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -355,6 +355,15 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
             lever = lever_of(fit.internal)
             columns = base_driven_columns(lever, frequency, centre)
     residual = y - sweep_model(columns, amplitudes, amplitude_only, coherent)
+    # Differences along frequency read a peak sampled by a few points per width as noise too (up to
+    # several times high); where the fit leaves less than that, its residual, less the degrees of freedom
+    # it took, is the honest noise level, and the parameters' uncertainties follow it.
+    values = residual.size * (1 if np.isrealobj(residual) else 2)
+    taken = len(params) + 2 * amplitudes.size      # at most: a complex gain and background each
+    reduced = fit.chi2 / max(values - taken, 1)
+    if reduced < 1.0:
+        sigma = sigma * math.sqrt(reduced)
+        fit = replace(fit, covariance=fit.covariance * reduced, chi2=fit.chi2 / reduced)
     parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
