@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..names import canonical, checked
 from .columns import read_table
 from .kinds import CSV_KINDS, NANOSURF_KINDS, file_kind
@@ -159,6 +159,10 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
     >>> table = resonance_table(r, {"tip_height": 1e-5})
     >>> table.condition.tolist(), table.frequency_hz.tolist()
     (['free', 'contact'], [60000.0, 300000.0])
+    >>> resonance_table(make_record("b.h5", "image", "test", (), {"free_resonance": 6e4}), {"length": 2e-4})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.io.record.MissingFieldError: spring constant and tip height not in b.h5
     """
     from .discrepancy_data import Metadata, ResonanceData
 
@@ -182,8 +186,11 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
         else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
             modes, conditions = np.array([1]), np.array(["free"])
             freqs, qs = np.array([f_free]), np.array([q_free])
-    lever = {key: required_field(record, key, overrides)
-             for key in ("spring_constant", "length", "tip_height", "free_resonance")}
+    needed = ("spring_constant", "length", "tip_height", "free_resonance")
+    missing = tuple(key for key in needed if overrides.get(key) is None and key not in record.fields)
+    if len(missing) > 1:        # all at once: the user gives them in one run
+        raise MissingFieldError(f"{listed(FIELDS[key][0] for key in missing)} not in {name}", missing)
+    lever = {key: required_field(record, key, overrides) for key in needed}
     # No resonance depends on the width: taken when known, never asked for.
     width = required_field(record, "width", overrides) if ("width" in record.fields or
                                                              overrides.get("width") is not None) else None
