@@ -26,9 +26,9 @@ import argparse
 import dataclasses
 import math
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..fitting.noise import GAP_LIMIT
-from ..names import checked
+from ..names import checked, flag
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -145,6 +145,10 @@ def run(args) -> int:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
+        unused = [flag(name) for name in overrides if name not in ("spring_constant", "free_resonance")]
+        if unused:      # a value given is a value meant: not dropped in silence
+            raise UserError(f"{args.data}: a contact-frequency map is read on the paper's lever with k2 = 0 (the "
+                            f"tip at the free end), which {listed(unused)} would not enter: drop them")
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
         _write_json(args, summary, overrides)

@@ -29,7 +29,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
 from . import flags
@@ -126,9 +126,11 @@ def _contact_map(args) -> int:
         raise UserError(f"{args.file}: a contact-frequency map needs --out DIR (gets maps.zarr with k1)")
     others = [NAMES[n].flag for n in _LEVER + ("tip_position", "k2", "k2_over_k1", "poisson")
               if n not in ("spring_constant", "free_resonance") and getattr(args, n, None) is not None]
-    if args.contact or args.reduced_modulus or others:
-        raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
-                        "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
+    others = ["--contact"] * bool(args.contact) + ["--reduced-modulus"] * bool(args.reduced_modulus) + others
+    if others:
+        raise UserError(f"{args.file}: a contact-frequency map is read on the paper's lever with k2 = 0 (the tip at "
+                        f"the free end), its frequencies from the file, which {listed(others)} would not enter: "
+                        "drop them")
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
     overrides.update(flags.given(args, ("contact_uncertainty",)))
     if args.mode:

@@ -572,14 +572,16 @@ MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_
 def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
     """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
     are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
-    (sentences, kept as notes).  ``given``: the lever's values given on the command line.
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``summary["why"]``,
+    when there, says why a statistic no pixel determines is undetermined.
 
     >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
     def statistic(name, value):
-        return _derived(name, value, "no pixel of the map determines it (none fitted by this run, or none explained)")
+        return _derived(name, value, summary.get("why")
+                        or "no pixel of the map determines it (none fitted by this run, or none explained)")
 
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
     results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})
