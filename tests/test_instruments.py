@@ -214,6 +214,19 @@ def test_empty_and_unknown_files(tmp_path):
         read_instrument(tmp_path / "absent.ibw")
 
 
+@pytest.mark.parametrize("text, words", [
+    ("# c\nfrequency_hz,asd_m_per_sqrthz,fit_m_per_sqrthz\n1000,1e-13,1e-13\n1038,1.1e", "line 4: 2 values"),
+    ("frequency_hz,asd_m_per_sqrthz\n1000,1e-13\n1038,1.1e\n", "line 3: column 'asd_m_per_sqrthz'"),
+    ("frequency_hz,asd_m_per_sqrthz\n", "line 1: header but no data rows"),
+])
+def test_inspect_of_a_truncated_or_empty_csv_says_so(text, words, tmp_path):
+    """As calibrate and discrepancy say of the same file: a truncated row is no data point."""
+    path = tmp_path / "tune.csv"
+    path.write_text(text)
+    with pytest.raises(UserError, match=words):
+        read_instrument(path)
+
+
 _NSFOPEN = importlib.util.find_spec("NSFopen")
 NSFOPEN_EXAMPLES = sorted(Path(_NSFOPEN.origin).parent.glob("example/*/*.nid")) if _NSFOPEN else []
 

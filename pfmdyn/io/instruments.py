@@ -69,11 +69,23 @@ _CSV_UNITS = {"_hz": "Hz", "_m_per_sqrthz": "m/sqrt(Hz)", "_n_per_m": "N/m", "_d
 
 def _read_csv(path: Path) -> InstrumentRecord:
     """A CSV table (:func:`pfmdyn.io.columns.read_table`): columns with the units their names
-    end in, ``# key: value`` metadata."""
+    end in, ``# key: value`` metadata; every row as long as the header, a number under each unit."""
     table = read_table(path)
     if not table.header:
         raise UserError(f"{path}: no header line")
     units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in table.header]
+    if not table.rows:
+        raise UserError(f"{path}, line {table.header_line}: header but no data rows")
+    for number, cells in table.rows:        # a truncated or damaged row is said, not counted as data
+        cells = cells[:len(table.header)] if not any(cells[len(table.header):]) else cells
+        if len(cells) != len(table.header):
+            raise UserError(f"{path}, line {number}: {len(cells)} values for {len(table.header)} columns (truncated?)")
+        for name, unit, cell in zip(table.header, units, cells):
+            try:
+                if unit:
+                    float(cell)
+            except ValueError:
+                raise UserError(f"{path}, line {number}: column '{name}': '{cell}' is not a number") from None
     found = {}
     for key, value in table.metadata.items():     # any spelling of a field (``length_m`` is ``length``)
         if canonical(key) in FIELDS:
