@@ -170,16 +170,16 @@ def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool =
 
 
 def add_json(parser, what: str = "the result") -> None:
-    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` on standard output after the
-    lines the command prints (:func:`write_json`).
+    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` alone on standard output, the
+    lines the command prints going to standard error (:func:`write_json`).
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_json(p)
     >>> p.parse_args(["--json", "-"]).json
     '-'
     """
-    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': standard output, "
-                        "after the summary)")
+    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': the document alone "
+                        "on standard output, the report on standard error)")
 
 
 def write_json(path, document) -> None:
