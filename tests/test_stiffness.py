@@ -143,6 +143,11 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     doc = json.loads(out.read_text())["results"]
     assert doc["unique"]["value"] and abs(doc["k1"]["value"] / 100 - 1) < 1e-8
     assert abs(doc["k2"]["value"] / k2_true - 1) < 1e-8
+    # the same table under a .txt name: read as discrepancy reads it, not refused as "not a drive sweep"
+    text = tmp_path / "res.txt"
+    text.write_text(table.read_text())
+    assert cli.main(["stiffness", str(text), "--tip-position", "1", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"] == doc
 
 
 @pytest.mark.parametrize("argv, words", [

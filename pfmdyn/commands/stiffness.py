@@ -84,7 +84,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
     """Lever values (names -> SI), contact resonances and their modes from an instrument file or table."""
     from ..io.instruments import read_instrument
 
-    if file_kind(path) in CSV_KINDS:
+    # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
+    if file_kind(path) in CSV_KINDS | {"text table"}:
         from ..io.tables import ResonanceData, read
         data = read(path)
         if not isinstance(data, ResonanceData):
