@@ -171,6 +171,7 @@ def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys)
     (["spot", "--k1", "100", "--frequency", "1e5", "--spring-constant", "2"],
      ["--free-resonance", "--length", "--tip-height"]),
     (["stiffness", "--contact", "3e5"], ["--free-resonance", "--spring-constant"]),
+    (["roots", "elastic"], ["--k1-over-k", "--k2-ratio"]),
 ])
 def test_every_missing_lever_flag_is_named_in_one_run(argv, flags_named, capsys):
     """A user gives what is missing in one run, not one flag per run."""
