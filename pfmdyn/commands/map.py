@@ -14,8 +14,9 @@ the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, n
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
 becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  An Asylum DART
 image (``.ibw``, :mod:`pfmdyn.io.dart`) becomes maps of the contact resonance and Q (the
-two-frequency oscillator), k1, the contact loss and the signed d_eff (the lever), and of how far
-the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
+two-frequency oscillator's through the lever's response at each pixel's drives), k1, the contact loss
+(each pixel's contact fitted with its alike neighbours', ``--pool``) and the signed d_eff (the lever),
+and of how far the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
 A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a copy of the input
 in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
@@ -77,6 +78,13 @@ def add_arguments(parser) -> None:
     flags.add(parser, ("surface_potential",), defaults={"surface_potential": (
         None, "fitted with +distributed, else 0, the intercept; for maps with a bias axis d_eff is the response at "
               "this bias, the electrostatic term and the nulling bias do not depend on it")})
+    parser.add_argument("--pool", type=int, default=3, metavar="R",
+                        help="DART images: fit each pixel's contact (k1, contact loss, hence the contact resonance and "
+                             "Q) to its own and its alike neighbours' signals within R pixels (default 3; 0: each "
+                             "pixel alone)")
+    parser.add_argument("--phase-offset", type=float, default=0.0, metavar="DEG",
+                        help="DART images: the lock-ins' phase offset (degrees), taken off Phase1 and Phase2 (default "
+                             "0); the run reports the offset the image's drives show, modulo 180 degrees")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--plot", metavar="DIR", help="also write DIR/NAME.png for each map")
     parser.add_argument("--png", action="store_true", help=argparse.SUPPRESS)   # the old spelling: --plot OUT
@@ -226,7 +234,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     import numpy as np
     from .. import Cantilever, Contact
     from ..io.dart import read_dart
-    from ..maps.dart import document, invert, write_dart
+    from ..maps.dart import document, drive_axis, invert, write_dart
     image = read_dart(args.data)
     found = {name: (value, "file", f"the note of {os.path.basename(args.data)}")
              for name, value in image.fields.items() if name in _LEVER}
@@ -253,15 +261,23 @@ def _dart(args, overrides: dict, given: dict) -> int:
     for note in image.notes:
         print(note)
     f1, f2 = image.frequencies(settings["frequency_width"][0])
-    s1, s2 = image.signals
+    # a lag less by the offset: s = A exp(-i (phi - offset))
+    s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
     report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
-        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0],
+        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
                              progress=None if report is None else lambda done, total: report(done, total, done))
     finally:
         close()
+    axis = drive_axis(lever, contact, f1, s1, maps["k1"], maps["contact_loss"])
+    left = 90.0 if axis == -90.0 else -axis         # a drive's argument -a is a lag a, as the phases
+    phases = (f"phases: {args.phase_offset:g} deg taken off both (--phase-offset); the offset left, from the "
+              f"domains' drives: {left:+.1f} deg (mod 180)" + ("; beyond 45 deg d_eff's sign may be flipped: set "
+                                                               "--phase-offset" if abs(left) > 45 else ""))
+    print(phases)
     out = os.path.join(args.out, "maps.zarr")
-    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
+    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
+                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset, "phase_offset_left_deg": left})
     folder = args.plot or (args.out if args.png else None)
     if folder:
         from ..maps import open_result
@@ -279,5 +295,6 @@ def _dart(args, overrides: dict, given: dict) -> int:
           f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
           f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
           f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
-    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy))
+    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,
+                                         phases))
     return 0
