@@ -7,6 +7,7 @@ whole lever model (set-back, heavy, tilted tips) is ``tests/test_stiffness_model
 """
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -243,3 +244,11 @@ def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
         docs.append({k: v["value"] for k, v in json.loads(out.read_text())["results"].items()})
     assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
     assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)
+
+
+def test_uncertainty_is_written_as_the_other_commands_write_it(capsys):
+    """'k1 = ... +- ... N/m', as calibrate and discrepancy print a value and its standard uncertainty."""
+    assert cli.main(["stiffness", "--spring-constant", "2", "--free-resonance", "70e3", "--length", "225e-6",
+                     "--tip-height", "10e-6", "--contact", "300e3"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^k1 = [\d.]+ \+- [\d.e+]+ N/m", out, re.M) and "+/-" not in out, out

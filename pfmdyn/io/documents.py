@@ -28,7 +28,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     one held with a ``note`` is ``held``, a width not given is ``assumed``.
 
     >>> record("k2", {"value": 3.0, "stderr": 9.0, "unit": "N/m", "determined": False})["why"]
-    'the data do not determine it: 3 +/- 9 N/m'
+    'the data do not determine it: 3 +- 9 N/m'
     >>> record("width", {"value": 1e-5, "stderr": None, "unit": "m", "given": False, "why": "assumed L/10"})["status"]
     'assumed'
     """
@@ -36,7 +36,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
         # the estimate the data leave undetermined is said, not lost
         unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
-        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
+        shown = "" if value is None else f": {value:.3g}" + (f" +- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
