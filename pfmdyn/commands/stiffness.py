@@ -131,7 +131,7 @@ def _contact_map(args) -> int:
     if others:
         raise UserError(f"{args.file}: a contact-frequency map is read on the paper's lever with k2 = 0 (the tip at "
                         f"the free end), its frequencies from the file, which {listed(others)} would not enter: "
-                        "drop them")
+                        "drop " + ("it" if len(others) == 1 else "them"))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
     overrides.update(flags.given(args, ("contact_uncertainty",)))
     if args.mode:

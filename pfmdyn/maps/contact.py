@@ -14,8 +14,8 @@ import os
 import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
-from ..errors import UserError
-from ..names import canonical, checked
+from ..errors import UserError, listed
+from ..names import NAMES, canonical, checked
 from .readers import open_root, scalar
 from .store import write_maps
 
@@ -40,7 +40,8 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     attrs.update(given)
     missing = [key for key in ("spring_constant", "free_resonance") if key not in attrs]
     if missing:
-        raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
+        raise UserError(f"{path}: no {listed((NAMES[key].label for key in missing), 'or')} in its root attributes",
+                        quantity=tuple(missing))
     if fc.ndim != 2 or not np.issubdtype(fc.dtype, np.number) or np.iscomplexobj(fc):
         raise UserError(f"{path}: contact_frequency_hz must be a (ny, nx) array of real numbers, got shape "
                         f"{fc.shape} of {fc.dtype}")
