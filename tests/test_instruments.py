@@ -87,6 +87,10 @@ def test_drive_sweeps_header_fit(name):
     assert record.fields["free_quality_factor"] == pytest.approx(q, abs=6e-4)
     assert record.fields["free_resonance"] == pytest.approx(f, abs=6e-3)
     assert [c.unit for c in record.channels][1] == "deg"
+    # the amplitude in the unit the sweep reader of discrepancy gives: Nanonis's 'm' through its default
+    # input calibration of 1 m/V are the detector's volts (README table 2)
+    assert [c.unit for c in record.channels][0] == "V"
+    assert any("input calibration is 1E+0 m/V" in n for n in record.notes) == name.endswith(".dat")
 
 
 def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():
