@@ -91,6 +91,8 @@ def test_drive_sweeps_header_fit(name):
     # input calibration of 1 m/V are the detector's volts (README table 2)
     assert [c.unit for c in record.channels][0] == "V"
     assert any("input calibration is 1E+0 m/V" in n for n in record.notes) == name.endswith(".dat")
+    # a Cytomass header's peak-amplitude frequency is said to be one, not the resonance
+    assert any("'Peak amplitude frequency'" in n for n in record.notes) == name.endswith(".txt")
 
 
 def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():

@@ -181,6 +181,9 @@ def read_sweep(path) -> InstrumentRecord:
     if others:          # the amplitude: the first column after the frequencies
         units[0] = _uncalibrated(header, units[0], notes)
     channels = [make_channel(names[i][0], unit, (len(table),)) for i, unit in zip(others, units)]
+    if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
+        notes.append(f"free resonance: the header's '{_PEAK_KEY}', where the amplitude peaks, not the resonance "
+                     "(at a Q of a few they differ by per cents); pfmdyn discrepancy fits the resonance")
     spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], units[0]) if others else None
     return make_record(path, "spectrum", instrument, channels, found, notes, spectrum)
 
