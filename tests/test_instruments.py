@@ -233,6 +233,20 @@ def test_inspect_of_a_truncated_or_empty_csv_says_so(text, words, tmp_path):
         read_instrument(path)
 
 
+def test_a_table_under_a_text_name_a_directory_and_text_without_a_table(tmp_path):
+    """inspect reads pfmdyn's table under a .txt name as discrepancy and stiffness do; a directory and
+    text with no frequency column are named as what they are."""
+    table = tmp_path / "res.txt"
+    table.write_text("# spring_constant: 2\nmode,condition,frequency_hz\n1,free,60000\n1,contact,300000\n")
+    record = read_instrument(table)
+    assert record.kind == "resonance metadata" and record.fields["spring_constant"] == 2.0
+    with pytest.raises(UserError, match="a directory, not an instrument file"):
+        read_instrument(tmp_path)
+    (tmp_path / "notes.txt").write_text("hello\nworld\n")
+    with pytest.raises(UserError, match="no frequency column"):
+        read_instrument(tmp_path / "notes.txt")
+
+
 _NSFOPEN = importlib.util.find_spec("NSFopen")
 NSFOPEN_EXAMPLES = sorted(Path(_NSFOPEN.origin).parent.glob("example/*/*.nid")) if _NSFOPEN else []
 

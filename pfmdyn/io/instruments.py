@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import UserError, listed
 from ..names import canonical, checked
-from .columns import read_table
+from .columns import column, read_table
 from .kinds import CSV_KINDS, NANOSURF_KINDS, file_kind
 from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
 
@@ -41,8 +41,10 @@ __all__ = ["FIELDS", "Channel", "InstrumentRecord", "MissingFieldError", "read_i
 
 
 def _reader(path: Path):
-    """The reader of the file's kind (:func:`pfmdyn.io.kinds.file_kind`); a text file is read as a
-    sweep whatever it holds, so that a table saved as .txt is told it is not one."""
+    """The reader of the file's kind (:func:`pfmdyn.io.kinds.file_kind`); pfmdyn's table under a .txt or
+    .dat name is read as a table, as discrepancy and stiffness read it."""
+    if path.is_dir():
+        raise UserError(f"{path}: a directory, not an instrument file (a Zarr map is read by pfmdyn map)")
     kind = file_kind(path)
     if kind == "asylum":
         from .ibw import read_ibw
@@ -53,10 +55,10 @@ def _reader(path: Path):
     if kind in NANOSURF_KINDS:
         from .nid import read_nid
         return read_nid
-    if kind in ("text sweep", "text table"):
+    if kind == "text sweep":
         from .sweeps import read_sweep
         return read_sweep
-    if kind in CSV_KINDS:
+    if kind in CSV_KINDS | {"text table"}:
         return _read_csv
     raise UserError(f"{path}: unknown instrument file type '{path.suffix.lower()}'; pfmdyn reads .ibw (Asylum), "
                     ".h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv")
@@ -94,6 +96,9 @@ def _read_csv(path: Path) -> InstrumentRecord:
             except ValueError:
                 pass
     kind = "resonance metadata" if {"mode", "condition"} <= set(table.header) else "spectrum"
+    if not any(unit == "Hz" or (column(c) or ("",))[0] == "frequency_hz" for c, unit in zip(table.header, units)):
+        raise UserError(f"{path}: not a table pfmdyn reads: no frequency column (frequency_hz; a drive sweep "
+                        "has a 'Sweep data' or '[DATA]' line before its table)")
     channels = [Channel(c, u, (len(table.rows),)) for c, u in zip(table.header, units)]
     return make_record(path, kind, "CSV table", channels, found)
 
