@@ -12,7 +12,7 @@ import numpy as np
 from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON_DENSITY, TABLE1,
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io.results import check_writable
 from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
@@ -68,7 +68,7 @@ def _cli_cantilever(args):
     if args.cantilever == "custom":
         missing = [flag(name) for name in _CUSTOM[:4] if name not in custom]
         if missing:
-            raise UserError(f"--cantilever custom needs {' '.join(missing)}")
+            raise UserError(f"--cantilever custom needs {listed(missing)}")
         with _one_line():
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
