@@ -27,8 +27,8 @@ KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
 class MissingFieldError(UserError):
     """A cantilever field that neither the file nor the caller gives; ``field`` names it (a key
-    of :data:`FIELDS`; a tuple of keys when several are missing) and is the error's :attr:`~pfmdyn.errors.UserError.quantity`, so that a
-    command can say which option supplies it.
+    of :data:`FIELDS`; a tuple of keys when several are missing) and is the error's
+    :attr:`~pfmdyn.errors.UserError.quantity`, so that a command can say which option supplies it.
 
     >>> MissingFieldError("tip height not in a.ibw", "tip_height").quantity
     'tip_height'
