@@ -28,7 +28,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     one held with a ``note`` is ``held``, a width not given is ``assumed``.
 
     >>> record("k2", {"value": 3.0, "stderr": 9.0, "unit": "N/m", "determined": False})["why"]
-    'the data do not determine it: 3 +/- 9 N/m'
+    'the data do not determine it: 3 +- 9 N/m'
     >>> record("width", {"value": 1e-5, "stderr": None, "unit": "m", "given": False, "why": "assumed L/10"})["status"]
     'assumed'
     """
@@ -36,7 +36,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
         # the estimate the data leave undetermined is said, not lost
         unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
-        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
+        shown = "" if value is None else f": {value:.3g}" + (f" +- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
@@ -587,14 +587,16 @@ MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_
 def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
     """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
     are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
-    (sentences, kept as notes).  ``given``: the lever's values given on the command line.
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``summary["why"]``,
+    when there, says why a statistic no pixel determines is undetermined.
 
     >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
     def statistic(name, value):
-        return _derived(name, value, "no pixel of the map determines it (none fitted by this run, or none explained)")
+        return _derived(name, value, summary.get("why")
+                        or "no pixel of the map determines it (none fitted by this run, or none explained)")
 
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
     results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})
