@@ -5,6 +5,7 @@ tracking), read back as maps of the contact resonance and Q, k1, contact loss an
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -144,6 +145,17 @@ def test_undetermined_pixels_are_flagged_not_guessed(tmp_path):
     maps, doc = _map(case, tmp_path)
     assert maps["determined"].values[1, 2] == 0 and np.isnan(maps["k1"].values[1, 2])
     assert maps["determined"].values.sum() == 23 and doc["fit"]["determined_fraction"]["value"] == 23 / 24
+
+
+def test_an_image_with_no_pixel_determined_says_so_without_nan(tmp_path, capsys):
+    """Every pixel's upper drive leading the lower: no contact anywhere, said in words, not medians of NaN."""
+    case = dart_case(16, 2, 3)
+    case.channels["Phase2Retrace"][...] = case.channels["Phase1Retrace"] - 40.0
+    maps, doc = _map(case, tmp_path)
+    out = capsys.readouterr().out
+    assert maps["determined"].values.sum() == 0 and "no pixel determined (of 6" in out \
+        and not re.search(r"\bnan\b", out, re.I)
+    validate(doc)
 
 
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):

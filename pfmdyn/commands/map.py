@@ -279,9 +279,12 @@ def _dart(args, overrides: dict, given: dict) -> int:
         close()
     axis = drive_axis(lever, contact, f1, s1, maps["k1"], maps["contact_loss"])
     left = 90.0 if axis == -90.0 else -axis         # a drive's argument -a is a lag a, as the phases
-    phases = (f"phases: {args.phase_offset:g} deg taken off both (--phase-offset); the offset left, from the "
-              f"domains' drives: {left:+.1f} deg (mod 180)" + ("; beyond 45 deg d_eff's sign may be flipped: set "
-                                                               "--phase-offset" if abs(left) > 45 else ""))
+    phases = f"phases: {args.phase_offset:g} deg taken off both (--phase-offset); the offset left, from the domains' drives: "
+    if math.isfinite(left):
+        phases += f"{left:+.1f} deg (mod 180)" + ("; beyond 45 deg d_eff's sign may be flipped: set --phase-offset"
+                                                  if abs(left) > 45 else "")
+    else:
+        phases, left = phases + "undetermined (no pixel determined)", None
     print(phases)
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
@@ -298,11 +301,16 @@ def _dart(args, overrides: dict, given: dict) -> int:
         ok = maps["determined"].astype(bool)
         median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
                   if ok.any() else math.nan for name in maps}
-    print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians: contact resonance "
-          f"{median['contact_resonance']:.6g} Hz, Q {median['contact_quality_factor']:.3g}, k1 {median['k1']:.4g} N/m, "
-          f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
-          f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
-          f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
+    if ok.any():
+        print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians: contact resonance "
+              f"{median['contact_resonance']:.6g} Hz, Q {median['contact_quality_factor']:.3g}, k1 {median['k1']:.4g} N/m, "
+              f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
+              f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
+              f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
+    else:
+        print(f"DART: no pixel determined (of {ok.size}; noise {100 * sigma:.2g} %): the two drives' amplitudes and "
+              f"phases fix no contact anywhere (both drives on one side of the peak, or no resonance between them); "
+              f"maps (undetermined) in {out}")
     flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,
                                          phases))
     return 0
