@@ -414,6 +414,9 @@ def test_header_far_from_the_fit_is_flagged_and_the_assumed_marked(tmp_path, cap
     instrument = d["fit"]["instrument"]
     assert "amplitude_peak" in instrument["disagrees"]["value"] and "disagrees with the file: amplitude_peak" in printed
     assert sorted(set(instrument) - {"disagrees"}) == ["amplitude_peak", "free_quality_factor"]
+    # the reason the points show: their own maximum is far from the header's peak too
+    assert "the measured points' own amplitude maximum is at" in printed and "not read off these points" in printed
+    assert any(n.startswith("amplitude_peak: ours") and "not read off these points" in n for n in d["notes"])
     assert d["lever"]["medium"]["status"] == "assumed" and d["lever"]["medium"]["why"].startswith("medium water at 20 C")
     assert d["results"]["width"]["status"] == "assumed"
     assert "assumed: width" in printed and "medium water at 20 C (none in the file" in printed

@@ -31,7 +31,7 @@ from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
-                    instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
+                    explain_header, instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
 __all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "mode2_node", "CANDIDATES"]
 
@@ -204,12 +204,12 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "worst_region": worst_region(frequency, np.abs(fits[best["effect"]][4] / sigma) ** 2,
                                            lever_resonances(lever)),
               "notes": _order_notes(before, frequency, y, named, at_bound),
-              "instrument_comparison": compare_with_instrument(after.fields, {
+              "instrument_comparison": explain_header(compare_with_instrument(after.fields, {
                   "amplitude_peak": (amplitude_peak(
                       lambda f: before.model(f, lever, amplitudes[0], tuple(amplitudes[1:])), frequency), None),
                   "free_resonance": (lever.free_resonance, None),
                   "free_quality_factor": (float(resonances(lever, None, modes=1).free.q[0]), None)},
-                  float(np.median(np.diff(frequency)))),
+                  float(np.median(np.diff(frequency)))), frequency, np.abs(y)),
               "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
 

@@ -41,7 +41,7 @@ from ..names import NAMES
 from .regions import gap_text, lever_resonances, worst_region
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
-           "sweep_model", "plus_minus", "instrument_text", "compare_with_instrument", "disagreement_lines",
+           "sweep_model", "plus_minus", "instrument_text", "compare_with_instrument", "explain_header", "disagreement_lines",
            "provenance_lines", "amplitude_peak", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
            "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios"]
 
@@ -223,6 +223,34 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
     return out
 
 
+def explain_header(comparison: list, frequency, amplitude) -> list:
+    """Give each disagreeing header number of a sweep (:func:`compare_with_instrument`) the reason the data
+    show: a header peak away from the measured points' own maximum too was not read off these points; one
+    at that maximum differs from ours because ours is the fitted model's peak (lever, gain, background);
+    a header Q is its own model's, ours the lever's first mode in the medium.  ``comparison`` is changed
+    in place (a ``why`` per disagreement) and returned.
+
+    >>> f = np.linspace(60e3, 90e3, 31); a = 1 / (1 + ((f - 76e3) / 4e3) ** 2)
+    >>> c = compare_with_instrument({"amplitude_peak": 51.0e3}, {"amplitude_peak": (76.3e3, None)}, 1e3)
+    >>> explain_header(c, f, a)[0]["why"][:62]
+    "the measured points' own amplitude maximum is at 76000 Hz, als"
+    """
+    top = float(frequency[int(np.argmax(amplitude))])
+    for c in comparison:
+        if not c["disagrees"]:
+            continue
+        if c["name"] == "amplitude_peak":
+            c["why"] = (f"the measured points' own amplitude maximum is at {top:.6g} Hz, also away from the header's: "
+                        "the header's peak was not read off these points (the instrument's fit of another model, or "
+                        "a header of another sweep)" if abs(c["instrument"] - top) > c["tolerance"] else
+                        f"the header's peak is the measured points' own maximum ({top:.6g} Hz); ours is the peak of "
+                        "the fitted model (lever, gain and background), which the background moves")
+        elif c["name"] == "free_quality_factor":
+            c["why"] = ("the header's Q is its own model's (an oscillator, without the background); ours is the "
+                        "first mode of the lever in the medium")
+    return comparison
+
+
 def disagreement_lines(comparison: list | None) -> list[str]:
     """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`), in
     its unit, the header's difference from ours relative to ours, the tolerance to two digits.
@@ -391,6 +419,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     comparison = compare_with_instrument(table.fields, {
         "amplitude_peak": (peak, None), "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
         "free_quality_factor": (float(modes.q[0]), None)}, float(np.median(np.diff(frequency))))
+    explain_header(comparison, frequency, np.abs(y))
     fields = {"kind": "drive sweep", "path": table.path, "instrument": table.instrument, "points": len(frequency),
               "medium": medium.name, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(modes.q[0]),
