@@ -217,7 +217,8 @@ class Model:
             if moved is not None:
                 fixed = fixed if moved[0] is None else fixed + moved[0]
                 per_volt = per_volt if moved[1] is None else per_volt + moved[1]
-        return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
+        # gathered row-wise: the (rows, parameters) result contiguous, as the projection reads it
+        return fixed.T[inverse] + bias[:, None] * per_volt.T[inverse]
 
     def _columns(self, slopes, freq_unique, inverse, bias):
         """Design columns from the slopes at the unique frequencies (order: see module)."""
