@@ -768,7 +768,7 @@ class _Compiled:
         # fresh (writable) arrays: a read-only view (a broadcast) would be another specialisation to compile
         beta = _flat(args[0], self.shape, complex)
         g = _flat(np.real(args[9]), self.shape, float)
-        two = bool(np.any(g != 1.0)) or "gamma" in names
+        two = bool(np.any(np.real(args[9]) != 1.0)) or "gamma" in names
         # the tip's pieces on the arguments as given: a scalar stays one number, not n equal ones
         point = (args[0].astype(complex), *args[2:9], args[10])
         uc = _flat(pieces.load_constant(point[0], args[2], args[7]), self.shape, complex)

@@ -401,7 +401,8 @@ class _Problem:
         A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
-        return np.where(np.isfinite(r), r, 1e6)
+        r[~np.isfinite(r)] = 1e6
+        return r
 
     def jacobian(self, x):
         A, c, projection, dT = self._at(x)
