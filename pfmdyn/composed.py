@@ -726,6 +726,24 @@ KERNELS = True
 the NumPy forms (:class:`_WrittenOut`, :class:`_Lever`), the reference the tests hold it to."""
 
 
+def _flat(a, shape, dtype) -> np.ndarray:
+    """``a`` broadcast to ``shape``, flat, in a fresh array of ``dtype``."""
+    out = np.empty(shape, dtype)
+    out[...] = a
+    return out.reshape(-1)
+
+
+def _point_columns(values, shape, out=None) -> np.ndarray:
+    """The tip's 12 pieces (:func:`pfmdyn.generated.lever_pieces.point_jump`, arrays or numbers
+    broadcasting to ``shape``) as the rows of ``out`` ``(12, *shape)`` flattened to ``(12, n)``
+    (zeros where a piece is the literal 0)."""
+    out = np.zeros((12,) + shape, complex) if out is None else out
+    for i, v in enumerate(values):
+        if not (isinstance(v, int) and v == 0):
+            out[i] = v
+    return out.reshape(12, -1)
+
+
 class _Compiled:
     """The read-out of :mod:`pfmdyn.composed_kernels` with :class:`_WrittenOut`'s interface: ``z`` and
     :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
@@ -742,33 +760,36 @@ class _Compiled:
         from . import composed_kernels as kernels
 
         args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
-        self.shape = np.broadcast_shapes(*(a.shape for a in args))
+        self.shape = np.broadcast(*args).shape
         n = math.prod(self.shape)
-        flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
-        self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
-        # writable copies: a read-only view (a broadcast) would be another specialisation to compile
-        beta = np.array(flat[0], complex)
-        point = (beta, *flat[2:9], flat[10])
-        g = np.array(np.real(flat[9]), float)
-        two = bool(np.any(g != 1.0)) or "gamma" in names
-        uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
-        jump = _columns(pieces.point_jump(*point), n, complex)
+        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
+        self.beta = _flat(args[0], self.shape, np.result_type(args[0], float))
+        self.k, self.L = _flat(args[2], self.shape, args[2].dtype), _flat(args[7], self.shape, args[7].dtype)
+        # fresh (writable) arrays: a read-only view (a broadcast) would be another specialisation to compile
+        beta = _flat(args[0], self.shape, complex)
+        g = _flat(np.real(args[9]), self.shape, float)
+        two = bool(np.any(np.real(args[9]) != 1.0)) or "gamma" in names
+        # the tip's pieces on the arguments as given: a scalar stays one number, not n equal ones
+        point = (args[0].astype(complex), *args[2:9], args[10])
+        uc = _flat(pieces.load_constant(point[0], args[2], args[7]), self.shape, complex)
+        jump = _point_columns(pieces.point_jump(*point), self.shape).T
         at_tip = [p for p in names if p in _POINT]
         partials = pieces.point_jump_partials(*point, wrt=at_tip)
-        djump = np.zeros((len(names), n, 12), complex)
+        djump = np.zeros((len(names), 12) + self.shape, complex)
         for i, name in enumerate(names):
             if name in partials:
-                djump[i] = _columns(partials[name], n, complex)
+                _point_columns(partials[name], self.shape, djump[i])
+        djump = np.ascontiguousarray(djump.reshape(len(names), 12, n).transpose(0, 2, 1))
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
         use = _drive_columns(drives, DRIVES)
-        kernels.read_out(beta, np.array(np.real(flat[1]), float), g, uc, np.array(self.k, complex), jump, djump,
-                         kinds, two, np.array(use, np.int64), z, dz)
-        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
-        self.z = z[:, :, use].real if real else z[:, :, use]
-        self._partials = {name: dz[:, i][:, :, use].real if real else dz[:, i][:, :, use]
-                          for i, name in enumerate(names)}
+        kernels.read_out(beta, _flat(np.real(args[1]), self.shape, float), g, uc, _flat(args[2], self.shape, complex),
+                         jump, djump, kinds, two, np.array(use, np.int64), z, dz)
+        z, dz = z[..., use], dz[..., use]
+        self.z = z.real if real else z
+        dz = dz.real if real else dz
+        self._partials = {name: dz[:, i] for i, name in enumerate(names)}
 
     def partials(self, names):
         return {name: self._partials[name] for name in names}

@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..fitting.parameters import CONTACT_LOSS, FLUID_LOSS, INTERNAL_LOSS, VISCOUS_LOSS, Parameter
 from .. import composed
-from ..generated import formulas
+from ..generated import damping, formulas
 
 __all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters", "drag",
            "fluid_law"]
@@ -66,8 +67,8 @@ class Chain:
     (0 where not computed); ``rotation``: d slopes / d (k1 in beam axes, k2, alpha) through the
     rotated spring tensor; ``coords``: :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
     the undamped ``beta`` at each frequency, ``b1`` and ``d_b1`` the free root and its derivatives
-    w.r.t. ``(mu, gamma)``; ``factors`` and ``d_factors`` the generated damping factors
-    (:mod:`pfmdyn.generated.damping`) and their derivatives; ``spring`` the damped ``k1``.
+    w.r.t. ``(mu, gamma)``; ``factors`` the generated damping factors (:mod:`pfmdyn.generated.damping`)
+    at ``r = f / f1`` and the losses ``loss`` ``(inv_q, g, x)``; ``spring`` the damped ``k1``.
     """
 
     part: dict
@@ -78,8 +79,15 @@ class Chain:
     b1: float
     d_b1: tuple
     factors: tuple
-    d_factors: tuple
+    r: object
+    loss: tuple
     spring: object
+
+    @cached_property
+    def d_factors(self) -> tuple:
+        """The damping factors' derivatives w.r.t. the losses (:func:`pfmdyn.generated.damping.d_factors`),
+        formed when a damping component asks (a model without one never does)."""
+        return damping.d_factors(self.r, *self.loss)
 
 
 @dataclass(frozen=True)

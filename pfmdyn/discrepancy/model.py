@@ -39,7 +39,7 @@ from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import jacobian_covariance, project
 from .. import composed
-from ..generated import damping, formulas
+from ..generated import formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
 from .effects import EFFECTS, Chain, Effect, drag, public_name, spring_parameters
 
@@ -138,7 +138,6 @@ class Model:
             loss = (c["inv_q"], drag(c, r), c["x"])
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
             d = damping_substitution(r, root_r, m.spring_constant, c["k1"], c["mu"], *loss)
-            d_f = damping.d_factors(r, *loss)
             spring = d.k1
             kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
@@ -151,7 +150,7 @@ class Model:
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
             j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
-            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, d.factors, d_f, spring)
+            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
             terms += [t for e in self.components for t in e.jacobian(chain)]
@@ -217,7 +216,8 @@ class Model:
             if moved is not None:
                 fixed = fixed if moved[0] is None else fixed + moved[0]
                 per_volt = per_volt if moved[1] is None else per_volt + moved[1]
-        return (fixed[:, inverse] + bias * per_volt[:, inverse]).T
+        # gathered row-wise: the (rows, parameters) result contiguous, as the projection reads it
+        return fixed.T[inverse] + bias[:, None] * per_volt.T[inverse]
 
     def _columns(self, slopes, freq_unique, inverse, bias):
         """Design columns from the slopes at the unique frequencies (order: see module)."""
@@ -400,7 +400,8 @@ class _Problem:
         A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
-        return np.where(np.isfinite(r), r, 1e6)
+        r[~np.isfinite(r)] = 1e6
+        return r
 
     def jacobian(self, x):
         A, c, projection, dT = self._at(x)
