@@ -104,6 +104,8 @@ def formulas() -> tuple[Formula, ...]:
         *_domain_contrast(),
         *_domain_contrast_printed(),
         *_band_excitation_sho(),
+        *_two_frequency_oscillator(),
+        *_point_mass(),
         *_calibration(),
     )
 
@@ -112,6 +114,7 @@ def _calibration() -> tuple[Formula, ...]:
     """The free lever's calibration (:mod:`derivations.calibration`, :mod:`derivations.hydrodynamics`)."""
     source = "derivations/calibration.py"
     f0, q, a = sp.symbols("f0 q amplitude", positive=True)
+    reynolds = sp.Symbol("reynolds")        # complex at a damped mode's frequency
     return (
         *(Formula(f"thermal_factor_{detection}{'' if region == 'beyond' else '_inside'}", (cal.sigma, cal.gamma),
                   cal.thermal_factor(detection, region),
@@ -131,6 +134,10 @@ def _calibration() -> tuple[Formula, ...]:
         Formula("oscillator_mean_square", (f0, q, a), cal.oscillator_mean_square(),
                 "mean square of the oscillator whose ASD is A f0**2/|f0**2 - f**2 + i f f0/q| (area under its PSD)",
                 f"{source}: oscillator_mean_square()"),
+        Formula("circular_hydrodynamic_function", (reynolds,), hyd.circular(conjugate=True, re=reynolds),
+                "Sader's hydrodynamic function of a circular cylinder in pfmdyn's exp(+i omega t) convention: "
+                "conj(Gamma_circ) at a real Reynolds number, analytic at a complex one",
+                "derivations/hydrodynamics.py: circular(conjugate=True)"),
         Formula("rectangular_correction_real", (hyd.tau,), hyd.rectangular_correction("real"),
                 "real part of Sader's fitted correction Omega(tau), tau = log10 Re (valid 1e-6 <= Re <= 1e4)",
                 "derivations/hydrodynamics.py: OMEGA (Sader 1998, Eq. 21)"),
@@ -163,6 +170,60 @@ def _band_excitation_sho() -> tuple[Formula, ...]:
                 "partial of sho_response w.r.t. log(resonance_frequency)", source),
         Formula("sho_response_d_log_quality", (f, f0, q), sp.factor(q * sp.diff(bglib, q)),
                 "partial of sho_response w.r.t. log(quality_factor)", source),
+    )
+
+
+def _two_frequency_oscillator() -> tuple[Formula, ...]:
+    """The oscillator through two complex signals (DART: Gannepalli, Yablon, Proksch and Kalinin,
+    Nanotechnology 22, 355705 (2011)), from the SHO's response ``s = D w0**2 / (w0**2 - w**2 + i w w0/Q)``
+    (the motion of :func:`_band_excitation_sho`, in the usual sign).
+
+    With ``z_j = 1/s_j`` at ``f_j`` and ``c = D f0**2``: ``c z_j = f0**2 - f_j**2 + i f_j f0/Q``, linear in
+    ``(Re c, Im c, f0**2, f0/Q)``; the two signals' four real parts fix them.
+    """
+    f, f0, q = sp.symbols("frequency resonance_frequency quality_factor", positive=True)
+    w, w0, x = sp.symbols("omega omega_0 X")
+    f1, f2 = sp.symbols("f1 f2", positive=True)
+    z = sp.symbols("z1_re z1_im z2_re z2_im", real=True)
+    c_re_, c_im_, f0_squared, width_ = sp.symbols("c_re c_im resonance_squared width", real=True)
+    usual = _only(sp.solve(-w**2 * x + sp.I * w * (w0 / q) * x + w0**2 * x - w0**2, x)).subs(
+        {w: 2 * sp.pi * f, w0: 2 * sp.pi * f0})
+    equations = []
+    for f_j, z_re, z_im in ((f1, *z[:2]), (f2, *z[2:])):
+        # s_j = D usual(f_j), so c z_j = D f0**2 / s_j = f0**2 / usual(f_j)
+        residual = (c_re_ + sp.I * c_im_) * (z_re + sp.I * z_im) - sp.expand(f0**2 / usual).subs(
+            {f: f_j, q: f0 / width_}).subs(f0, sp.sqrt(f0_squared))
+        equations += sp.expand(residual).as_real_imag()
+    matrix, rhs = sp.linear_eq_to_matrix(equations, [c_re_, c_im_, f0_squared, width_])
+    c_re, c_im, resonance_squared, width = (sp.factor(v) for v in matrix.LUsolve(rhs))
+    arguments = (f1, f2, *z)
+    source = "derivations/formulas.py: SHO through two points, c z_j = f0**2 - f_j**2 + i f_j f0/Q"
+    what = "of the oscillator through the signals s1 = 1/z1 at f1 and s2 = 1/z2 at f2 (Hz)"
+    return (
+        Formula("two_frequency_resonance_squared", arguments, resonance_squared,
+                f"squared resonance f0**2 (Hz**2) {what}", source),
+        Formula("two_frequency_width", arguments, width, f"half-power width f0/Q (Hz) {what}", source),
+        Formula("two_frequency_drive", arguments, sp.factor((c_re + sp.I * c_im) / resonance_squared),
+                f"static response D (complex, the signals' unit) {what}", source),
+    )
+
+
+def _point_mass() -> tuple[Formula, ...]:
+    """The lever as a point mass ``m`` on its spring ``k``, the contact a spring ``k1`` to a surface moving
+    ``d``: ``m x'' + k x + k1 (x - d) = 0``.  Free, it rings at ``(2 pi f0)**2 = k/m``; in contact at
+    ``(2 pi fc)**2 = (k + k1)/m``; statically ``x = d k1 / (k + k1)``."""
+    m, fc, x, d = sp.symbols("m frequency x d", positive=True)
+    f0_ = sp.Symbol("free_resonance", positive=True)
+    mass = _only(sp.solve(sp.Eq((2 * sp.pi * f0_)**2 * m, k), m))
+    source = "derivations/formulas.py: point mass m x'' + k x + k1 (x - d) = 0"
+    return (
+        Formula("point_mass_contact_stiffness", (fc, f0_, k),
+                _only(sp.solve(sp.Eq((2 * sp.pi * fc)**2 * mass, k + k1), k1)),
+                "contact stiffness k1 (N/m) of a point-mass lever (k, free resonance f0) in contact at fc (Hz)",
+                source),
+        Formula("point_mass_static_gain", (k, k1), _only(sp.solve(k * x + k1 * (x - d), x)) / d,
+                "static deflection per surface displacement of a point-mass lever on a contact spring k1",
+                source),
     )
 
 

@@ -38,14 +38,19 @@ OMEGA = {
 """Sader (1998) Eq. 21 as printed: (numerator, denominator) coefficients in ascending powers of tau."""
 
 
-def circular() -> sp.Expr:
-    """``Gamma_circ(Re)`` of the module docstring (Sader's convention, ``exp(-i omega t)``).
+def circular(conjugate: bool = False, re: sp.Symbol = Re) -> sp.Expr:
+    """``Gamma_circ(re)`` of the module docstring (Sader's convention, ``exp(-i omega t)``); ``conjugate``:
+    pfmdyn's ``exp(+i omega t)`` form, ``i`` turned to ``-i``: the conjugate on real ``re``, analytic in it
+    (a damped mode's complex Reynolds number; ``re`` then a symbol without assumptions).
 
     >>> sp.N(circular().subs(Re, 1), 8)
     3.9680148 + 4.5665706*I
+    >>> z = sp.Symbol("z"); sp.N(circular(True, z).subs(z, 1), 8)
+    3.9680148 - 4.5665706*I
     """
-    z = -sp.I * sp.sqrt(sp.I * Re)
-    return 1 + 4 * sp.I * sp.besselk(1, z) / (sp.sqrt(sp.I * Re) * sp.besselk(0, z))
+    unit = -sp.I if conjugate else sp.I
+    root = sp.sqrt(unit * re)
+    return 1 + 4 * unit * sp.besselk(1, -unit * root) / (root * sp.besselk(0, -unit * root))
 
 
 def rectangular_correction(part: str) -> sp.Expr:

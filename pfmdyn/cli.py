@@ -113,11 +113,14 @@ def _run(argv: list[str]) -> int:
         flags.check_medium(args)
         module = importlib.import_module(args._module)
         with flags.lever_forms(getattr(module, "ONE_LEVER", False)):
-            if args.command == "verify" or not getattr(args, "quiet", False):
+            quiet = getattr(args, "quiet", False) and args.command != "verify"
+            if not quiet and getattr(args, "json", None) != "-":
                 return int(module.run(args) or 0)
-            flags.DOCUMENTS.append(sys.stdout)      # --json - still prints its document
+            # The document alone on standard output (a pipe into jq reads JSON only); the report goes
+            # to standard error, or nowhere with --quiet.
+            flags.DOCUMENTS.append(sys.stdout)
             try:
-                with contextlib.redirect_stdout(io.StringIO()):
+                with contextlib.redirect_stdout(io.StringIO() if quiet else sys.stderr):
                     return int(module.run(args) or 0)
             finally:
                 flags.DOCUMENTS.pop()

@@ -2,10 +2,10 @@
 
 The load per unit length is Sader's ``(pi/4) rho omega**2 b**2 Gamma(Re)``, ``Re = rho omega b**2/(4 eta)``
 (Sader 1998, J. Appl. Phys. 84, 64; derived and checked in ``derivations/hydrodynamics.py``, claims
-``calibrate.*``).  ``Gamma = Omega(log10 Re) Gamma_circ(Re)``: the exact circular-cylinder function
-times Sader's *fitted* rectangular correction (generated ``formulas.rectangular_correction_*``), which
-he states accurate to 0.1 % for ``1e-6 <= Re <= 1e4``; outside that range :func:`hydrodynamic_function`
-is NaN (undetermined), never extrapolated.
+``calibrate.*``).  ``Gamma = Omega(log10 Re) Gamma_circ(Re)``: the exact circular-cylinder function (generated
+``formulas.circular_hydrodynamic_function``) times Sader's *fitted* rectangular correction (generated
+``formulas.rectangular_correction_*``), which he states accurate to 0.1 % for ``1e-6 <= Re <= 1e4``;
+outside that range :func:`hydrodynamic_function` is NaN (undetermined), never extrapolated.
 
 Sign convention.  :func:`hydrodynamic_function` is Sader's (time ``exp(-i omega t)``, loss ``Gamma_i > 0``),
 so its numbers are the published ones.  pfmdyn's time dependence is ``exp(+i omega t)``
@@ -180,14 +180,11 @@ def load_ratio(medium: Medium, frequency_hz, width: float, mass_per_length: floa
 def _conjugate_function(reynolds):
     """``conj(Gamma(Re))`` for real ``Re``, continued analytically to complex ``Re`` (a damped mode's
     frequency): ``i`` turned to ``-i`` in the circular function, the correction's real coefficients
-    kept.  NaN where ``Re.real`` is outside :data:`VALID_REYNOLDS`."""
-    from scipy.special import kv
-
+    kept (both generated).  NaN where ``Re.real`` is outside :data:`VALID_REYNOLDS`."""
     re = np.asarray(reynolds, dtype=complex)
     inside = (re.real >= VALID_REYNOLDS[0]) & (re.real <= VALID_REYNOLDS[1])
     safe = np.where(inside, re, 1.0)
-    root = np.sqrt(-1j * safe)
-    circular = 1 - 4j * kv(1, 1j * root) / (root * kv(0, 1j * root))
+    circular = formulas.circular_hydrodynamic_function(safe)
     tau = np.log10(safe)
     omega = formulas.rectangular_correction_real(tau) - 1j * formulas.rectangular_correction_imag(tau)
     return np.where(inside, omega * circular, np.nan + 1j * np.nan)

@@ -164,6 +164,11 @@ QUANTITIES: tuple[Quantity, ...] = (
              label="oscillator d_eff"),
     Quantity("oscillator_d_eff_error", "d_eff,osc/d_eff - 1", "1", "relative difference of the oscillator's d_eff "
              "from the lever's (-2: the sign flipped)", -1e9, 1e9, option=False, label="oscillator d_eff error"),
+    # The electrostatic drive of vertical PFM (``pfmdyn diagram``, ``deconvolve``, ``map``).
+    Quantity("surface_potential", "V_surf", "V", "surface potential of the sample: the electrostatic drives scale "
+             "with V_dc - V_surf", -1e3, 1e3, open_low=False),
+    Quantity("local_force", "F_loc", "N/V", "local electrostatic force on the tip per volt of V_ac per volt of "
+             "V_dc - V_surf (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)", -1.0, 1.0, open_low=False),
     _report("determined_fraction", "determined", "1", "fraction of a DART image's pixels both inversions determine"),
     # What the reports hold besides the lever and the contact (keys of the JSON documents, pfmdyn.io.results).
     *(_report(name, symbol, unit, meaning) for name, symbol, unit, meaning in (
@@ -174,8 +179,8 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("predicted_quality_factor", "Q_model", "1", "a mode's Q the model predicts (all damping together)"),
         ("baseline_resonance", "f_base", "Hz", "a resonance frequency of the paper's model fitted before any effect"),
         ("resonance_uncertainty", "u(f)", "Hz", "standard uncertainty of a measured resonance frequency"),
-        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit): "
-         "the half-power width over the frequency, all damping together"),
+        ("measured_quality_factor", "Q_meas", "1", "a mode's Q as measured (a table's row, a tune or sweep fit, an "
+         "SHO map): the half-power width over the frequency, all damping together"),
         ("quality_factor_uncertainty", "u(Q)/Q", "1", "relative standard uncertainty of a measured Q"),
         ("resonance_interval", "[f_lo, f_hi]", "Hz", "certified enclosure of a resonance frequency"),
         ("complete_below", "f_complete", "Hz", "every resonance below this frequency is listed (certified)"),
@@ -239,8 +244,35 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("paper_calibration_factor", "C_paper", "1", "the calibration factor of the paper's lever (spot at the end)"),
         ("d_eff_error_per_volt", "delta d_eff", "m/V^2", "error of d_eff per volt of V_dc - V_surf from the "
          "distributed electrostatic load"),
-        ("root", "z_n", "1", "a root of a characteristic equation (decimal string, digits as asked)"),
+        ("root", "z_n", "1", "a root of a characteristic equation (decimal strings where digits are asked: roots)"),
         ("root_interval", "[z_lo, z_hi]", "1", "certified enclosure of a root (decimal strings)"),
+        # resonance branches against contact stiffness (pfmdyn branches)
+        ("k2_ratio", "k2 H^2/(k L^2)", "1", "normalised longitudinal contact stiffness"),
+        ("lateral_k2_ratio", "H^2 k2 L/c_T", "1", "normalised lateral contact stiffness (torsion)"),
+        ("frequency_ratio", "f_n/f_1", "1", "a resonance frequency over the first free one"),
+        ("crossover", "s_n", "1", "normalised stiffness where a branch passes midway between its soft and stiff "
+         "limits"),
+        ("crossover_root", "z_n,mid", "1", "the root midway between a branch's soft and stiff limits"),
+        # frequency-bias diagrams and their deconvolution (pfmdyn diagram, deconvolve)
+        ("piezo_response", "A_piezo", "m/V", "electromechanical response per volt of V_ac (bias independent)"),
+        ("local_electrostatic_response", "A_el/dV", "m/V^2", "response to the local electrostatic force per volt "
+         "of V_ac per volt of V_dc - V_surf"),
+        ("nonlocal_electrostatic_response", "A_nl/dV", "m/V^2", "response to the distributed (non-local) "
+         "electrostatic load per volt of V_ac per volt of V_dc - V_surf"),
+        ("biases", "n_V", "1", "number of DC biases measured at a frequency"),
+        ("measured_d_eff", "d_eff,meas", "data", "d_eff of the signal as measured: the fitted line b + c V at "
+         "V_surf (Eq. 41), in the data's unit"),
+        ("electrostatic_slope", "G_elec", "data/V", "electrostatic part of the signal per volt of DC bias: the "
+         "slope c of Eq. 41, in the data's unit"),
+        ("intercept", "b", "data", "the fitted line of Eq. 41 at zero DC bias, in the data's unit"),
+        ("nulling_bias", "V_null", "V", "DC bias at which the fitted response is smallest"),
+        ("mean_nulling_bias", "mean V_null", "V", "weighted mean of the nulling bias over frequency"),
+        ("nulling_bias_spread", "spread V_null", "V", "spread of the nulling bias over frequency: the tip-quality "
+         "indicator (near 0 with V_null ~ V_surf: electrostatic-dominated or worn tip)"),
+        ("surface_d_eff", "d_eff/C", "data", "measured d_eff as the true surface displacement at the spot (over "
+         "the calibration factor)"),
+        ("surface_electrostatic_slope", "G_elec/C", "data/V", "G_elec as the true surface displacement at the "
+         "spot (over the calibration factor)"),
         # the discrepancy model's fit
         ("gap", "gap", "1", "sqrt(mean |residual / noise|^2): 1 when the residual is noise"),
         ("region", "region", "1", "a region of the data by name: a resonance's half-power band, a band, the rest"),

@@ -28,12 +28,15 @@ INVOLS, AMP_INVOLS = 60e-9, 66e-9       # m/V: the amplitude channels are read t
 
 @dataclass
 class DartCase:
-    """A drawn case: the lever, the settings, the channels ``(y, x)`` and the truth maps."""
+    """A drawn case: the lever, the settings, the channels ``(y, x)``, the truth maps and the exact
+    (noise-free) drives and signals with the FE beam's damped pole (``f1``, ``f2``, ``s1``, ``s2``,
+    ``pole_resonance``, ``pole_quality_factor``, each ``(y, x)``)."""
 
     lever: dict
     settings: dict
     channels: dict
     truth: dict
+    exact: dict
 
 
 def _sho_through(f1, f2, s1, s2):
@@ -49,6 +52,14 @@ def _sho_through(f1, f2, s1, s2):
         c_re, c_im, a, w = np.linalg.solve(np.array(rows), np.array(rhs))
         out[i] = math.sqrt(a), math.sqrt(a) / w
     return out
+
+
+def _peak(beam: FEBeam) -> tuple[float, float]:
+    """The oscillator through the exact response 0.1 % either side of the undamped contact resonance."""
+    f0 = beam.contact_resonances(1)[0]
+    f_pair = np.array([0.999 * f0, 1.001 * f0])
+    s = beam.slope(f_pair)[:, 0]
+    return tuple(_sho_through(f_pair[:1], f_pair[1:], s[:1], s[1:])[0])
 
 
 def _pole(beam: FEBeam) -> tuple[float, float]:
@@ -69,7 +80,7 @@ def dart_case(seed: int, ny: int = 16, nx: int = 16, *, spot: float = 1.0, k2_ov
               noise=(0.005, 0.02), lossy: bool = False, grains: int = 4, n_elements: int = 40) -> DartCase:
     """A DART image over real ranges (module docstring): a lever of k 1-40 N/m, L 120-300 um, H 5-15 um,
     f1 from its thickness (silicon), internal Q 150-600; grains of k1 50-1500 N/m and contact loss
-    0.004-0.045 (``lossy``: the contact loss giving a contact Q about 25); d_eff 2-20 pm/V, signed by
+    0.004-0.045 (``lossy``: the contact loss giving a contact Q of 25 +- 15 %, the oscillator's at the peak, where a loss up to 0.1 gives it); d_eff 2-20 pm/V, signed by
     stripes; df 0.7-1.5 contact widths; tracking off by 0-30 % of a width; noise drawn in ``noise``."""
     rng = np.random.default_rng(seed)
     E, rho = 169e9, 2330.0
@@ -86,21 +97,20 @@ def dart_case(seed: int, ny: int = 16, nx: int = 16, *, spot: float = 1.0, k2_ov
     grain = np.argmin((yy[..., None] - centres[:, 0]) ** 2 + (xx[..., None] - centres[:, 1]) ** 2, axis=-1)
     k1s = 10 ** rng.uniform(math.log10(50), math.log10(1500), grains)
     losses = rng.uniform(0.004, 0.045, grains)
+    beam = lambda k1, loss: FEBeam(k, L, f_bare, H, k1=k1, k2=k2_over_k1 * k1, Q=q_lever,  # noqa: E731
+                                   eta=loss * k1 / (2 * math.pi * free), spot=spot, n_elements=n_elements)
     beams = []
     for k1, loss in zip(k1s, losses):
-        if lossy:       # a contact Q of about 25: the dashpot's loss tangent at fc near 1/25
-            fc = FEBeam(k, L, f_bare, H, k1=k1, k2=k2_over_k1 * k1, n_elements=n_elements).contact_resonances(1)[0]
-            loss = (1 / 25 - 1 / q_lever) * free / fc * rng.uniform(1.2, 1.8)
-        beams.append(FEBeam(k, L, f_bare, H, k1=k1, k2=k2_over_k1 * k1, Q=q_lever, eta=loss * k1 / (2 * math.pi * free),
-                            spot=spot, n_elements=n_elements))
+        if lossy:       # a contact Q of 25 +- 15 %: the oscillator's 1/Q at the peak is linear in the dashpot
+            target, trial = 1 / (25 * rng.uniform(0.85, 1.15)), 0.03
+            lever_only, with_trial = (1 / _peak(beam(k1, x))[1] for x in (0.0, trial))
+            loss = min(trial * (target - lever_only) / (with_trial - lever_only), 0.1)     # stiff grains: Q above
+        beams.append(beam(k1, loss))
     losses = np.array([b.eta * 2 * math.pi * free / b.k1 for b in beams])
     # the contact resonance and its width, from the exact response's oscillator near the peak
     resonance, width = np.empty(grains), np.empty(grains)
-    for g, beam in enumerate(beams):
-        f0 = beam.contact_resonances(1)[0]
-        f_pair = np.array([0.999 * f0, 1.001 * f0])
-        s = beam.slope(f_pair)[:, 0]
-        resonance[g], q = _sho_through(f_pair[:1], f_pair[1:], s[:1], s[1:])[0]
+    for g, b in enumerate(beams):
+        resonance[g], q = _peak(b)
         width[g] = resonance[g] / q
     df = float(np.median(width) * rng.uniform(0.7, 1.5))
     d_abs = rng.uniform(2e-12, 20e-12)
@@ -131,7 +141,8 @@ def dart_case(seed: int, ny: int = 16, nx: int = 16, *, spot: float = 1.0, k2_ov
     settings = dict(frequency_width=df, drive_amplitude=drive_v, noise=sigma)
     truth = dict(k1=np.array(k1s)[grain], contact_loss=losses[grain], d_eff=d_eff,
                  contact_resonance=exact[:, 0].reshape(ny, nx), contact_quality_factor=exact[:, 1].reshape(ny, nx))
-    return DartCase(lever, settings, channels, truth)
+    exact = dict(f1=f1, f2=f2, s1=s1, s2=s2, pole_resonance=poles[grain, 0], pole_quality_factor=poles[grain, 1])
+    return DartCase(lever, settings, channels, truth, exact)
 
 
 def write_ibw(case: DartCase, path, order=None) -> Path:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -144,6 +145,12 @@ def test_sader_on_the_real_tune_is_the_textbook_formula(tmp_path, capsys):
     assert [name for name, r in doc["lever"].items() if r["status"] == "file"] == ["temperature", "medium"]
     assert {"free_resonance", "free_quality_factor", "spring_constant"} <= set(instrument)
     assert "from the file: free_quality_factor, free_resonance, medium, spring_constant, temperature" in text
+    # the file's k (27.13) is three times our thermal one: flagged, with what could explain it
+    [line] = [line for line in text.splitlines() if "disagrees with the file: spring_constant" in line]
+    assert "InvOLS x 0.57" in line and "Sader's formula on the instrument's own fit (25.15 N/m)" in line
+    # each number with its unit, the tolerance to two digits
+    assert re.search(r"27\.13 N/m in the header, 9\.04\d* N/m here .*tolerance 0\.\d\d N/m", line), line
+    assert any(n.startswith("spring_constant: ours") and "disagrees" in n for n in doc["notes"])
 
 
 @pytest.mark.parametrize("text, error", [

@@ -212,8 +212,9 @@ JSON_COMMANDS = sorted(command for command, parser in cli.parser(None)[1].items(
 
 @pytest.mark.parametrize("command", JSON_COMMANDS)
 def test_json_dash_is_standard_output(command, inputs, monkeypatch, capsys):
-    """``--json -`` in every command that has ``--json`` (the parser says which): the document on
-    standard output after the summary, the same as in a file, and no file named ``-`` (calibrate wrote one)."""
+    """``--json -`` in every command that has ``--json`` (the parser says which): the document alone on
+    standard output (the same as in a file), the summary on standard error, and no file named ``-``
+    (calibrate wrote one)."""
     monkeypatch.chdir(inputs)
     argv = ["verify", "--only", "eq6.Av", "--quiet"] if command == "verify" else \
         _without_json(next(MAIN_PATHS[case] for case in sorted(MAIN_PATHS) if MAIN_PATHS[case][0] == command))
@@ -222,13 +223,12 @@ def test_json_dash_is_standard_output(command, inputs, monkeypatch, capsys):
     if command == "map":        # a second run into the same folder resumes it: another folder, another summary
         argv = [a if a != "beam" else "beam again" for a in argv]
     assert cli.main([*argv, "--json", "-"]) in (0, 1)
-    printed = capsys.readouterr().out
-    written = json.loads(Path("file.json").read_text())
+    printed = capsys.readouterr()
+    document, written = json.loads(printed.out), json.loads(Path("file.json").read_text())
     if command == "map":
-        document = json.loads(printed[printed.index("\n{") + 1:])
         assert document.keys() == written.keys() and document["results"].keys() == written["results"].keys()
     else:
-        assert printed.startswith(summary) and json.loads(printed[len(summary):]) == written
+        assert document == written and printed.err.startswith(summary)
     assert not Path("-").exists()
 
 

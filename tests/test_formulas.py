@@ -304,7 +304,8 @@ def test_no_module_under_pfmdyn_redefines_a_generated_formula():
 @pytest.mark.parametrize("text", ["2 * cantilever.length / 3", "np.sqrt(k1**3 / (6 * r * p))",
                                   "3 * youngs_modulus * inertia / length**3",
                                   "np.real(piezo * np.conj(g))", "np.real(intercept * np.conj(slope))",
-                                  "EPSILON_0 * width / H**2", "2 * v_null * part(slope)"])
+                                  "EPSILON_0 * width / H**2", "2 * v_null * part(slope)",
+                                  "(lever.spring_constant + k1_pm) / k1_pm", "/ lever.free_resonance) ** 2 - 1)"])
 def test_hand_typed_versions_are_gone(text):
     hits = [p.name for p in PACKAGE.rglob("*.py") if text in p.read_text(encoding="utf-8")]
     assert not hits, hits
@@ -323,3 +324,29 @@ def test_sho_response_is_bglibs_and_its_log_partials_are_derivatives():
         up = formulas.sho_response(f, f0 * scale[0], q * scale[1])
         down = formulas.sho_response(f, f0 / scale[0], q / scale[1])
         np.testing.assert_allclose(partial(f, f0, q), (up - down) / (2 * h), rtol=1e-6, atol=1e-6 * np.abs(up).max())
+
+
+def test_two_frequency_oscillator_gives_back_the_oscillator_through_its_two_points():
+    """An oscillator typed here, D f0**2 / (f0**2 - f**2 + i f f0/Q) over f0 10 kHz-3 MHz, Q 5-500, any
+    complex D; DART's two drives 0.3-3 widths apart about a centre up to a width off the peak."""
+    n = 200
+    f0, q = np.exp(RNG.uniform(np.log(1e4), np.log(3e6), n)), np.exp(RNG.uniform(np.log(5), np.log(500), n))
+    d = np.exp(RNG.uniform(np.log(1e-13), np.log(1e-9), n) + 1j * RNG.uniform(-np.pi, np.pi, n))
+    centre = f0 * (1 + RNG.uniform(-1, 1, n) / q)
+    df = f0 / q * RNG.uniform(0.3, 3, n)
+    f1, f2 = centre - df / 2, centre + df / 2
+    z1, z2 = ((f0**2 - f**2 + 1j * f * f0 / q) / (d * f0**2) for f in (f1, f2))
+    parts = (f1, f2, z1.real, z1.imag, z2.real, z2.imag)
+    np.testing.assert_allclose(np.sqrt(formulas.two_frequency_resonance_squared(*parts)), f0, rtol=1e-9)
+    np.testing.assert_allclose(formulas.two_frequency_width(*parts), f0 / q, rtol=1e-7)
+    np.testing.assert_allclose(formulas.two_frequency_drive(*parts), d, rtol=1e-7)
+
+
+def test_point_mass_contact_stiffness_and_gain_of_a_mass_on_two_springs():
+    """A mass on springs k and k1 (k1 to a surface moving d): its resonance from the stiffness over the mass,
+    the static deflection by solving the force balance numerically."""
+    k, k1, m = np.exp(RNG.uniform(np.log(0.05), np.log(50), 20)), np.exp(RNG.uniform(np.log(0.05), np.log(5e4), 20)), 1e-11
+    f_free, f_contact = np.sqrt(k / m) / (2 * np.pi), np.sqrt((k + k1) / m) / (2 * np.pi)
+    np.testing.assert_allclose(formulas.point_mass_contact_stiffness(f_contact, f_free, k), k1, rtol=1e-9)
+    gain = [brentq(lambda x: kk * x + kk1 * (x - 1.0), -1, 2, xtol=1e-15) for kk, kk1 in zip(k, k1)]
+    np.testing.assert_allclose(formulas.point_mass_static_gain(k, k1), gain, rtol=1e-12)

@@ -159,7 +159,7 @@ def test_beps_bias_steps_and_two_bands(usid, tmp_path):
     np.testing.assert_allclose(fit["Frequency [Hz]"], f0.reshape(NY * NX, 6), rtol=2e-4)
     np.testing.assert_allclose(fit["Quality Factor"], q.reshape(NY * NX, 6), rtol=0.05)
     result = open_result(tmp_path / "o")
-    assert result["quality_factor"].dims == ("y", "x", "bias", "band")
+    assert result["measured_quality_factor"].dims == ("y", "x", "bias", "band")
     assert result["band"].attrs["units"] == "Hz" and result["bias"].values.tolist() == bias.tolist()
     assert result["resonance_frequency"].attrs == {"units": "Hz", "long_name": "SHO resonance frequency w0"}
 
@@ -222,13 +222,13 @@ def test_compiled_sho_fit_is_the_numpy_fit(bins):
     y = np.where(noisy_rows[:, None], noisy(rng, clean, 0.02), clean)
     compiled, reference = fit_spectra(f, y), fit_spectra(f, y, compiled=False)
     assert compiled.keys() == reference.keys()
-    for name in ("resonance_frequency", "quality_factor", "amplitude", "r2", "guess_resonance_frequency",
-                 "guess_quality_factor", "guess_amplitude"):
+    for name in ("resonance_frequency", "measured_quality_factor", "amplitude", "r2", "guess_resonance_frequency",
+                 "guess_measured_quality_factor", "guess_amplitude"):
         np.testing.assert_allclose(compiled[name], reference[name], rtol=1e-9, err_msg=name)
     for name in ("phase", "guess_phase"):
         np.testing.assert_allclose(np.exp(1j * compiled[name]), np.exp(1j * reference[name]), atol=1e-9, err_msg=name)
     for name, tolerance in (("gap", 1e-12), ("cost", 1e-9), ("resonance_frequency_stderr", 1e-9),
-                            ("quality_factor_stderr", 1e-9)):
+                            ("measured_quality_factor_stderr", 1e-9)):
         np.testing.assert_allclose(compiled[name][noisy_rows], reference[name][noisy_rows], rtol=tolerance,
                                    err_msg=name)
     assert np.all(np.abs(compiled["resonance_frequency"] - p["f0"])[~noisy_rows] < 1e-9 * p["f0"][~noisy_rows])
@@ -238,3 +238,38 @@ def test_compiled_sho_fit_is_the_numpy_fit(bins):
     for name in compiled:
         np.testing.assert_array_equal(threaded[name], alone[name], err_msg=name)
         assert np.isnan(alone[name][:3]).all() and np.isfinite(alone[name][3:]).all(), name
+
+
+def test_a_store_begun_under_the_old_names_resumes_under_the_new(usid, tmp_path):
+    """The SHO's Q was ``quality_factor`` in stores written before schema 1 (where everywhere else it is the
+    lever's internal friction): a run resuming such a store renames the maps (``measured_quality_factor``,
+    its stderr and guess), keeps the blocks done, fits the rest; ``open_result`` and the USID write-back
+    read the one map."""
+    from pfmdyn.maps.sho import RENAMED
+    from pfmdyn.maps.store import consolidate, open_group, rename_map
+
+    rng = np.random.default_rng(23)
+    f = np.linspace(295e3, 305e3, 48)
+    p = sho_pixels(rng, f, (40, 80), NY * NX)
+    path = write_be(usid, tmp_path / "be.h5", bglib_sho(f, *(p[k][:, None] for k in ("amplitude", "phase", "f0", "q"))),
+                    f)
+    args = ["map", str(path), "--model", "sho", "--out", str(tmp_path / "o"), "--no-progress", "--scheduler", "sync",
+            "--block", "8"]
+    assert main([*args, "--max-blocks", "1"]) == 0
+    store = open_group(str(tmp_path / "o" / "maps.zarr"), mode="a")
+    first = np.asarray(store["measured_quality_factor"][...])
+    for old, new in RENAMED.items():        # as the earlier version wrote it
+        rename_map(store, new, old)
+    consolidate(str(tmp_path / "o" / "maps.zarr"))
+    assert set(RENAMED) <= set(open_result(tmp_path / "o").data_vars)
+    assert main(args) == 0
+    result = open_result(tmp_path / "o")
+    assert not set(RENAMED) & set(result.data_vars) and set(RENAMED.values()) <= set(result.data_vars)
+    q = result["measured_quality_factor"].values
+    done = np.isfinite(first)
+    assert done.any() and not done.all()
+    np.testing.assert_array_equal(q[done], first[done])
+    np.testing.assert_allclose(q.ravel(), p["q"], rtol=1e-4)      # noise-free spectra: each its own Q
+    with h5py.File(tmp_path / "o" / "be.h5", "r") as h5:
+        fit = h5["Measurement_000/Channel_000/Raw_Data-SHO_Fit_000"]["Fit"][()]
+    np.testing.assert_array_equal(fit["Quality Factor"][:, 0], q.ravel())

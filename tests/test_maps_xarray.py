@@ -95,7 +95,7 @@ def _assert_xarray_opens(out, model, coordinates):
     expected = open_result(out)
     dims = ("y", "x", *coordinates)
     maps = [name for name in expected.data_vars]
-    assert {"k1", "gap"} <= set(maps) if "elastic" in model else {"resonance_frequency", "quality_factor"} <= set(maps)
+    assert {"k1", "gap"} <= set(maps) if "elastic" in model else {"resonance_frequency", "measured_quality_factor"} <= set(maps)
     # the convention as stored: every array names its dimensions, one per axis, and says what it holds
     metadata = json.loads((store / ".zmetadata").read_text())["metadata"]
     for name in [*maps, *dims]:

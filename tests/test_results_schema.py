@@ -27,6 +27,11 @@ TABLE = ("# spring_constant: 2\n# length: 2e-4\n# tip_height: 1e-5\n# free_reson
          "mode,condition,frequency_hz\n1,free,70000\n2,free,438683\n1,contact,277474\n")
 
 
+FREQUENCY_BIAS = "frequency_hz,bias_v,x,y\n" + "".join(f"{f},{v},{1 + 0.1 * v},{0.1 * v}\n"
+                                                     for f in (1e5, 2e5, 3e5) for v in (-1, 0, 1))
+"""Frequency-bias data: at each of three frequencies a line 1 + (0.1 + 0.1i) V."""
+
+
 def _tune_csv(path: Path) -> Path:
     """A thermal tune: a lever's first mode (180 kHz, Q 300) over a white floor, as CSV in m/sqrt(Hz)."""
     from pfmdyn.generated.formulas import oscillator_asd
@@ -56,6 +61,11 @@ CASES = {
                               "225e-6", "--width", "40e-6"],
     "discrepancy": lambda tmp: ["discrepancy", str(_write(tmp / "t.csv", TABLE))],
     "map": lambda tmp: ["map", str(_contact_map(tmp / "cr.h5")), "--out", str(tmp / "out")],
+    "branches": lambda tmp: ["branches", "elastic", "--plot", str(tmp / "b.png"), "--points", "5", "--modes", "2"],
+    "diagram": lambda tmp: ["diagram", "--plot", str(tmp / "d.png"), "--frequency-points", "6", "--bias-points", "3",
+                            "--quality-factor", "30"],
+    "deconvolve": lambda tmp: ["deconvolve", str(_write(tmp / "fv.csv", FREQUENCY_BIAS)), "--surface-potential",
+                               "0.2", "--out", str(tmp / "out"), *PROBE],
 }
 """Command -> its argument list on small inputs (``--json`` added)."""
 
@@ -109,3 +119,40 @@ def test_quiet_prints_only_a_document_asked_on_standard_output(capsys):
     assert capsys.readouterr().out == ""
     assert cli.main(["roots", "free", "--modes", "1", "--digits", "5", "--quiet", "--json", "-"]) == 0
     assert json.loads(capsys.readouterr().out)["results"]["root"]["value"] == ["1.8751"]
+
+
+def test_the_walk_covers_every_command_with_a_result():
+    """Every command of ``pfmdyn --help`` writes its document in the walk above, but those with no result
+    of their own: ``codegen`` and ``book`` write files, ``verify --json`` the claims' verdicts (their own
+    format, read by the book)."""
+    from pfmdyn.cli import COMMANDS
+
+    assert set(COMMANDS) - {"codegen", "book", "verify"} == set(CASES)
+
+
+def test_the_new_documents_hold_their_results(tmp_path, capsys):
+    """diagram: the map follows from the parts per frequency; deconvolve: the line 1 + (0.1 + 0.1i) V of
+    the data at V_surf 0.2; branches: each crossover between the roots swept around it."""
+    from pfmdyn.analysis.diagram import response_map, table1_cantilever
+
+    docs = {}
+    for command in ("diagram", "deconvolve", "branches"):
+        out = tmp_path / f"{command}.json"
+        assert cli.main([*CASES[command](tmp_path), "--json", str(out), "--quiet"]) == 0
+        docs[command] = to_dataset(json.loads(out.read_text()))
+    d = docs["diagram"]
+    lever = table1_cantilever("A", quality_factor=30.0)
+    expected = response_map(lever, d["frequency"].values, d["tip_bias"].values, width=float(d["width"]),
+                            k1=float(d["k1"]), H=float(d["tip_height"]), d_eff=float(d["d_eff"]))
+    total = d["piezo_response"] + (d["local_electrostatic_response"] + d["nonlocal_electrostatic_response"]) * (
+        d["tip_bias"] - float(d["surface_potential"]))
+    np.testing.assert_allclose(total.values, expected.total, rtol=1e-12)
+    v = docs["deconvolve"]
+    np.testing.assert_allclose(v["measured_d_eff"].values, 1 + (0.1 + 0.1j) * 0.2, rtol=1e-12)
+    np.testing.assert_allclose(v["electrostatic_slope"].values, 0.1 + 0.1j, rtol=1e-12)
+    assert v["calibration_factor"].attrs["status"] == "derived"
+    b = docs["branches"]
+    for n in (0, 1):
+        root = b["root"].isel(mode=n).values
+        assert root.min() < float(b["crossover_root"][n]) < root.max()
+        assert b["frequency_ratio"].isel(mode=n).values == pytest.approx((root / 1.8751040687)**2, rel=1e-9)

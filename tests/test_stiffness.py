@@ -7,6 +7,7 @@ whole lever model (set-back, heavy, tilted tips) is ``tests/test_stiffness_model
 """
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -145,6 +146,11 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     doc = json.loads(out.read_text())["results"]
     assert doc["unique"]["value"] and abs(doc["k1"]["value"] / 100 - 1) < 1e-8
     assert abs(doc["k2"]["value"] / k2_true - 1) < 1e-8
+    # the same table under a .txt name: read as discrepancy reads it, not refused as "not a drive sweep"
+    text = tmp_path / "res.txt"
+    text.write_text(table.read_text())
+    assert cli.main(["stiffness", str(text), "--tip-position", "1", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"] == doc
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -241,3 +247,11 @@ def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
         docs.append({k: v["value"] for k, v in json.loads(out.read_text())["results"].items()})
     assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
     assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)
+
+
+def test_uncertainty_is_written_as_the_other_commands_write_it(capsys):
+    """'k1 = ... +- ... N/m', as calibrate and discrepancy print a value and its standard uncertainty."""
+    assert cli.main(["stiffness", "--spring-constant", "2", "--free-resonance", "70e3", "--length", "225e-6",
+                     "--tip-height", "10e-6", "--contact", "300e3"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^k1 = [\d.]+ \+- [\d.e+]+ N/m", out, re.M) and "+/-" not in out, out

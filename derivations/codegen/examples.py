@@ -49,6 +49,10 @@ POINT = {
     "f": 7.2e4, "f0": 7e4, "q": 150.0, "amplitude": 1e-12, "white": 1e-14, "root_re": 1.0, "root_im": 0.005,
     # The SHO of band-excitation tools (Hz): a resonance just below that frequency.
     "resonance_frequency": 2.99e5, "quality_factor": 50.0,
+    # Two-frequency oscillator: drives (Hz) about 3e5 and inverse signals of an SHO there (Q 80, D 1).
+    "f1": 2.97e5, "f2": 3.05e5, "z1_re": 0.0199, "z1_im": 0.0124, "z2_re": -0.0336, "z2_im": 0.0127,
+    # A fluid's Reynolds number rho omega b^2/(4 eta): a lever in water near 10 kHz.
+    "reynolds": 1.0,
 }
 """Argument name -> its value in the examples (``beta1``: the first free root, derived)."""
 

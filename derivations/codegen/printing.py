@@ -13,7 +13,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.precedence import precedence
 
-__all__ = ["code", "horner", "cse_lines", "source_hash", "header"]
+__all__ = ["IMPORTS", "imports", "code", "horner", "cse_lines", "source_hash", "header"]
 
 
 class _Printer(NumPyPrinter):
@@ -56,6 +56,25 @@ class _Printer(NumPyPrinter):
 
     def _print_Rational(self, expr):
         return repr(float(expr))
+
+    def _print_besselk(self, expr):
+        # SciPy's modified Bessel function of the second kind, complex arguments too (see IMPORTS)
+        return f"kv({self._print(expr.args[0])}, {self._print(expr.args[1])})"
+
+
+IMPORTS = {sp.besselk: "from scipy.special import kv"}
+"""The import a printed function needs, made inside the function: SciPy is slow to import and few
+generated functions need it (:func:`imports`)."""
+
+
+def imports(expr: sp.Expr) -> list[str]:
+    """The import lines a function computing ``expr`` needs (:data:`IMPORTS`).
+
+    >>> x = sp.Symbol("x")
+    >>> imports(sp.besselk(0, x) + sp.cos(x)), imports(sp.cos(x))
+    (['from scipy.special import kv'], [])
+    """
+    return sorted({line for function, line in IMPORTS.items() if expr.atoms(function)})
 
 
 def code(expr: sp.Expr, arrays=frozenset()) -> str:

@@ -7,6 +7,7 @@ import csv
 
 from ..errors import UserError
 from ..generated import families
+from . import flags
 from .roots import parse_parameters, positive_int
 
 
@@ -47,6 +48,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--modes", default="5", help="number of branches (default 5)")
     parser.add_argument("--k1-over-k", dest="k1_over_k", default=None,
                         help="elastic only: vertical stiffness k1/k held fixed (default 0)")
+    flags.add_json(parser, "the branches and crossovers")
 
 
 def run(args) -> int:
@@ -55,7 +57,7 @@ def run(args) -> int:
     >>> import argparse, tempfile, os
     >>> d = tempfile.mkdtemp()
     >>> run(argparse.Namespace(family="indentation", plot=os.path.join(d, "b.png"), csv=None,
-    ...                        points="50", modes="2", k1_over_k=None))
+    ...                        points="50", modes="2", k1_over_k=None, json=None))
     indentation: crossover of mode 1 at k1_over_k = 5.82 (beta = 2.901)
     indentation: crossover of mode 2 at k1_over_k = 47.9 (beta = 5.881)
     0
@@ -65,12 +67,12 @@ def run(args) -> int:
     from ..derivations.certify import CertificationError
     from ..io.results import check_writable
     from ..plots.branches import plot_branches
-    from ..roots.branches import SWEPT, branch_limits, crossovers, sweep
+    from ..roots.branches import SWEPT, branch_limits, crossovers, frequency_ratio, sweep
 
     if not args.plot:
         raise UserError("give --plot PATH (the figure to write)")
     check_writable(args.plot, figure=True)
-    check_writable(args.csv)
+    check_writable(args.csv, args.json)
     if args.family not in SWEPT:
         raise UserError(f"no branches for {args.family!r}; choose from {', '.join(SWEPT)}")
     points, modes = positive_int(args.points, "--points", 100_000), positive_int(args.modes, "--modes", 50)
@@ -91,10 +93,17 @@ def run(args) -> int:
     var = "xi L" if args.family.startswith("torsion") else "beta"
     for n, (s, zc) in enumerate(zip(s_cross, z_cross), 1):
         print(f"{args.family}: crossover of mode {n} at {SWEPT[args.family]} = {s:.3g} ({var} = {zc:.4g})")
+    z1 = branch_limits(args.family, 1, **fixed)[0][0]
     try:
         plot_branches(args.family, stiffness, z, **fixed).savefig(args.plot)
         if args.csv:
-            write_csv(args.csv, args.family, stiffness, z, branch_limits(args.family, 1, **fixed)[0][0])
+            write_csv(args.csv, args.family, stiffness, z, z1)
     except OSError as exc:
         raise UserError(f"cannot write output: {exc.strerror or exc}") from None
+    if args.json:
+        from ..io import documents
+
+        flags.write_json(args.json, documents.branches(args.family, SWEPT[args.family], stiffness, z,
+                                                       frequency_ratio(args.family, z, z1), (s_cross, z_cross), fixed,
+                                                       given=["k1_over_k"] if args.k1_over_k is not None else []))
     return 0

@@ -91,8 +91,36 @@ def _provenance(tune, result, args, temperature_source: str) -> dict:
     taken += ["temperature"] if temperature_source == "from the file" else []
     ours = {"free_resonance": (p.frequency_hz, p.frequency_uncertainty_hz),
             "free_quality_factor": (p.quality_factor, p.quality_factor_uncertainty)}
+    if result.thermal.determined:
+        ours["spring_constant"] = (result.thermal.value, result.thermal.stderr)
     step = float(np.median(np.diff(np.sort(tune.frequency_hz))))
-    return {"from_file": sorted(set(taken)), "instrument_comparison": compare_with_instrument(tune.instrument, ours, step)}
+    comparison = compare_with_instrument(tune.instrument, ours, step)
+    for c in comparison:
+        if c["name"] == "spring_constant" and c["disagrees"]:
+            c["why"] = spring_constant_difference(result, c["instrument"])
+    return {"from_file": sorted(set(taken)), "instrument_comparison": comparison}
+
+
+def spring_constant_difference(result, stated: float) -> str:
+    """What could make the file's spring constant ``stated`` differ from our thermal one: the sensitivity the
+    spectrum was converted with (k goes as its inverse square), or another method behind the file's number
+    (Sader's formula on the instrument's own fit, when the lever's plan lets us compute it).
+
+    >>> from types import SimpleNamespace as NS
+    >>> r = NS(thermal=NS(value=9.05), instrument={"sader_spring_constant_of_its_fit": 25.15})
+    >>> print(spring_constant_difference(r, 27.13))
+    the file's k matches ours with the spectrum's InvOLS x 0.5776; it lies near Sader's formula on the instrument's own fit (25.15 N/m), so it may be a Sader calibration, not a thermal one
+    """
+    factor = math.sqrt(result.thermal.value / stated)
+    text = f"the file's k matches ours with the spectrum's InvOLS x {factor:.4g}"
+    sader = result.instrument.get("sader_spring_constant_of_its_fit")
+    if sader is None:
+        return text + f"; or it came from another method (give {flags.NAMES['length'].flag} and " \
+                      f"{flags.NAMES['width'].flag} to compare with Sader's formula on the instrument's own fit)"
+    if abs(sader - stated) < abs(result.thermal.value - stated):
+        return text + f"; it lies near Sader's formula on the instrument's own fit ({sader:.4g} N/m), so it may be " \
+                      "a Sader calibration, not a thermal one"
+    return text
 
 
 def run(args) -> int:
@@ -135,9 +163,5 @@ def run(args) -> int:
     flags.write_json(args.json, documents.calibration(document, args.file, given))
     if args.plot:
         from ..plots.calibrate import plot_calibration
-        fig = plot_calibration(tune, result)
-        try:
-            fig.savefig(args.plot, dpi=120)
-        except OSError as exc:
-            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+        flags.save_figure(plot_calibration(tune, result), args.plot)
     return 0

@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import UserError
 from ..names import CONTACT, LEVER
 from . import flags
 
@@ -121,10 +120,11 @@ def add_arguments(parser) -> None:
     >>> parser = argparse.ArgumentParser()
     >>> add_arguments(parser)
     >>> parser.parse_args(["d.csv", "--surface-potential", "0.5", "--out", "res"]).surface_potential
-    0.5
+    '0.5'
     """
     parser.epilog = (
-        "At each frequency the response is fitted as a straight line in the bias (Eq. 41); d_eff and G_elec "
+        "At each frequency the response is fitted as a straight line b + c V in the bias (Eq. 41), d_eff = "
+        "b + c V_surf at --surface-potential and G_elec = c; they "
         "are those of the signal as measured, in its units, and without lever flags no lever model enters. "
         "With the lever and contact (--spring-constant --free-resonance --length --tip-height --k1, optionally "
         "--k2/--k2-over-k1/--poisson, --tip-position, --tip-mass-ratio, --tilt, --width) deconvolution.csv "
@@ -136,26 +136,26 @@ def add_arguments(parser) -> None:
         "around a contact resonance or a zero of the spot's response) those columns are NaN and the preamble "
         "says why.")
     parser.add_argument("data", metavar="INPUT", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
-    parser.add_argument("--surface-potential", metavar="V", type=float, required=True,
-                        help="surface potential V_surf in volts, used for d_eff = b + c V_surf")
+    flags.add(parser, ("surface_potential",), required=("surface_potential",))
     parser.add_argument("--out", metavar="DIR", type=Path, required=True,
                         help="directory for the CSV tables and PNG plots (created if missing)")
     flags.add_lever(parser)
     flags.add_contact(parser)
+    flags.add_json(parser, "the fitted lines per frequency (and the surface displacement)")
 
 
 def run(args) -> int:
     """Read, fit, then write tables and plots; nothing is written if the input is bad."""
-    from ..analysis.deconvolve import deconvolve, summary, surface_displacement
-    from ..io.results import check_directory
+    from ..analysis.deconvolve import deconvolve, summary, surface_displacement, tip_quality
+    from ..io.results import check_directory, check_writable
     from ..io.spectra import read_spectra
 
-    if not np.isfinite(args.surface_potential):
-        raise UserError("--surface-potential must be a finite number of volts")
+    surface_potential = flags.given(args, ("surface_potential",))["surface_potential"]
     check_directory(args.out)
+    check_writable(args.json)
     probe = _probe(args)
     data = read_spectra(args.data)
-    result = deconvolve(data.frequency_hz, data.bias_v, data.response, args.surface_potential)
+    result = deconvolve(data.frequency_hz, data.bias_v, data.response, surface_potential)
     unit = data.metadata.get("response_unit", "a.u.")
     surface = None if probe is None else surface_displacement(result, *probe)
 
@@ -175,6 +175,13 @@ def run(args) -> int:
     if surface is not None:
         print(_surface_summary(surface, unit))
     print("wrote " + ", ".join(str(path) for path in written))
+    if args.json:
+        from ..io import documents
+
+        values = flags.given(args, LEVER + CONTACT)
+        quality = tip_quality(result.v_null, result.v_null_se)
+        flags.write_json(args.json, documents.deconvolution(result, quality, data.path, surface, unit, values,
+                                                            list(values), args.out))
     return 0
 
 

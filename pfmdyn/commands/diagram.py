@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import argparse
-
+import contextlib
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -12,7 +12,7 @@ import numpy as np
 from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON_DENSITY, TABLE1,
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io.results import check_writable
 from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
@@ -31,9 +31,8 @@ def add_arguments(parser) -> None:
     flags.add_contact(parser, ("k1",), defaults={"k1": (PAPER_K1, f"{PAPER_K1:g}, the paper's")})
     flags.add_lever(parser, ("tip_height",), medium=False, defaults={"tip_height": (PAPER_TIP_HEIGHT, f"{PAPER_TIP_HEIGHT:g}, the paper's")})
     flags.add(parser, ("d_eff",), defaults={"d_eff": (PAPER_D_EFF, f"{PAPER_D_EFF:g}, the paper's")})
-    parser.add_argument("--local-force", type=float, default=0.0, metavar="N/V",
-                        help="F_loc, N/V (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)")
-    parser.add_argument("--surface-potential", type=float, default=0.0, help="V_surf, V (default 0)")
+    flags.add(parser, ("local_force", "surface_potential"),
+              defaults={"local_force": (0.0, "0"), "surface_potential": (0.0, "0")})
     parser.add_argument("--electrostatic-sign", type=int, choices=(-1, 1), default=-1,
                         help="-1: attractive capacitive force (default, the project's convention); "
                              "+1: the drives as the paper prints them")
@@ -46,9 +45,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--vmax", type=float, default=10.0, help="highest V_dc, V (10)")
     parser.add_argument("--frequency-points", type=int, default=1000, help="frequencies of the grid (default 1000)")
     parser.add_argument("--bias-points", type=int, default=401, help="DC biases of the grid (default 401)")
-    parser.add_argument("--plot", type=Path, metavar="PATH", help="the PNG file to write; required")
+    parser.add_argument("--plot", type=Path, metavar="PATH", help="the figure to write (.png, .pdf, .svg); required")
     parser.add_argument("--out", dest="plot", type=Path, help=argparse.SUPPRESS)    # the old spelling, one release
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
+    flags.add_json(parser, "the response's parts per frequency (the map follows from them)")
 
 
 MAX_POINTS = 2e7
@@ -68,29 +68,33 @@ def _cli_cantilever(args):
     if args.cantilever == "custom":
         missing = [flag(name) for name in _CUSTOM[:4] if name not in custom]
         if missing:
-            raise UserError(f"--cantilever custom needs {' '.join(missing)}")
-        try:
+            raise UserError(f"--cantilever custom needs {listed(missing)}")
+        with _one_line():
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
                 thickness=custom["thickness"], density=custom.get("density", SILICON_DENSITY),
                 quality_factor=_quality_factor(args))
-        except UserError:       # a ValueError, already one line: as it is
-            raise
-        except ValueError as exc:
-            raise UserError(str(exc)) from None
         return _in_medium(args, lever, custom["width"]), custom["width"]
     if args.cantilever not in TABLE1:
         raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
     given = [flag(name) for name in custom]
     if given:
         raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
-    try:
+    with _one_line():
         lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
-    except UserError:       # a ValueError, already one line: as it is
+    return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
+
+
+@contextlib.contextmanager
+def _one_line():
+    """A ValueError of the analysis (a lever its sizes do not allow, a grid it cannot compute) as the
+    user's one line; a :class:`UserError` (a ValueError already one line) as it is."""
+    try:
+        yield
+    except UserError:
         raise
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]
 
 
 def _in_medium(args, lever, width):
@@ -113,17 +117,13 @@ def _write_csv(path, response: ResponseMap) -> None:
 
 
 def run(args) -> int:
-    """Compute the diagram, write the PNG (and CSV)."""
+    """Compute the diagram, write the figure (and CSV)."""
     lever, width = _cli_cantilever(args)
     lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
     contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
-    args.d_eff = flags.given(args, ("d_eff",))["d_eff"]
+    drive = flags.given(args, ("d_eff", "local_force", "surface_potential"))
     if not contact["k1"] > 0:
         raise UserError(f"--k1 must be > 0 N/m: the diagram is of the lever in contact, got {contact['k1']:g}")
-    for option, value in (("--local-force", args.local_force),
-                          ("--surface-potential", args.surface_potential)):
-        if not math.isfinite(value):
-            raise UserError(f"{option} must be a finite number, got {value}")
     if not args.fmin > 0 or not args.fmin < args.fmax or not np.isfinite(args.fmax):
         raise UserError(f"need 0 < --fmin < --fmax (finite), got {args.fmin:g} and {args.fmax:g} Hz")
     if not args.vmin < args.vmax or not np.isfinite(args.vmin + args.vmax):
@@ -134,32 +134,48 @@ def run(args) -> int:
         raise UserError(f"--frequency-points x --bias-points must be at most {MAX_POINTS:g} (a diagram of "
                         f"{args.frequency_points * args.bias_points:g} points would not fit in memory)")
     if args.plot is None:
-        raise UserError("give --plot PATH (the PNG file to write)")
-    if args.plot.suffix.lower() != ".png":
-        raise UserError(f"--plot must name a .png file, got {str(args.plot)!r}")
+        raise UserError("give --plot PATH (the figure to write)")
     check_writable(args.plot, figure=True)
-    check_writable(args.csv)
+    check_writable(args.csv, args.json)
     spacing = np.geomspace if args.log_frequency else np.linspace
     frequency = spacing(args.fmin, args.fmax, args.frequency_points)
     bias = np.linspace(args.vmin, args.vmax, args.bias_points)
-    try:
+    with _one_line():
         response = response_map(lever, frequency, bias, width=width, k1=contact["k1"],
-                                H=contact["tip_height"], d_eff=args.d_eff, local_force=args.local_force,
-                                surface_potential_v=args.surface_potential,
+                                H=contact["tip_height"], d_eff=drive["d_eff"], local_force=drive["local_force"],
+                                surface_potential_v=drive["surface_potential"],
                                 electrostatic_sign=args.electrostatic_sign)
-    except UserError:       # a ValueError, already one line: as it is
-        raise
-    except ValueError as exc:
-        raise UserError(str(exc)) from None
     name = args.cantilever if args.cantilever != "custom" else "custom"
     title = (f"cantilever {name}: k = {lever.spring_constant:.3g} N/m, "
              f"$f_1$ = {lever.free_resonance / 1e3:.1f} kHz, $k_1$ = {contact['k1']:g} N/m\n"
-             f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {args.d_eff * 1e12:g} pm/V, "
-             f"$F_{{loc}}$ = {args.local_force * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
+             f"H = {contact['tip_height'] * 1e6:g} µm, $d_{{eff}}$ = {drive['d_eff'] * 1e12:g} pm/V, "
+             f"$F_{{loc}}$ = {drive['local_force'] * 1e9:g} nN/V, Q = {lever.quality_factor:g}"
              + (f", spot at {lever.spot_position:g} L" if lever.spot_position != 1.0 else ""))
-    plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency).savefig(args.plot, dpi=130)
+    flags.save_figure(plot_diagram(response, args.kind, title=title, log_frequency=args.log_frequency), args.plot,
+                      dpi=130)
     print(f"wrote {args.plot}")
     if args.csv is not None:
         _write_csv(args.csv, response)
         print(f"wrote {args.csv}")
+    if args.json:
+        flags.write_json(args.json, _document(args, lever, width, {**contact, **drive}, response))
     return 0
+
+
+def _document(args, lever, width, values, response) -> dict:
+    """The ``--json`` document: the lever and the drive as given, else Table 1's, the paper's or the defaults."""
+    from ..io import documents
+
+    values = {"spring_constant": lever.spring_constant, "free_resonance": lever.free_resonance,
+              "length": lever.length, "width": width, "quality_factor": lever.quality_factor,
+              "spot_position": lever.spot_position, **values}
+    given = [name for name in values if isinstance(getattr(args, name, None), str)]    # a flag's text, not a default
+    why = {name: f"Table 1, cantilever {args.cantilever}" for name in ("spring_constant", "length", "width")}
+    why |= {"free_resonance": "from the geometry", "quality_factor": "lossless, as in the paper",
+            "spot_position": "the free end, the default", "local_force": "the default",
+            "surface_potential": "the default"} | {name: "the paper's" for name in ("k1", "tip_height", "d_eff")}
+    notes = [f"electrostatic sign {args.electrostatic_sign:+d}"]
+    if args.medium:
+        notes.append(flags.medium_line(lever.medium, args))
+    return documents.diagram(response, values, given=given,
+                             assumed={name: text for name, text in why.items() if name not in given}, notes=notes)

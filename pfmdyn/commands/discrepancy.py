@@ -158,7 +158,7 @@ def _emit(args, result, doc, figure) -> int:
     print(result.report())
     flags.write_json(args.json, doc)
     if args.plot:
-        _save(figure(), args.plot)
+        flags.save_figure(figure(), args.plot)
     return 0
 
 
@@ -218,13 +218,5 @@ def run(args: argparse.Namespace) -> int:
         # The path was checked before the analysis; a figure matplotlib then cannot save is one line.
         from ..plots.discrepancy import plot_resonance_report, plot_spectrum_report
         plot = plot_spectrum_report if isinstance(data, SpectrumData) else plot_resonance_report
-        _save(plot(data, report), args.plot)
+        flags.save_figure(plot(data, report), args.plot)
     return 0
-
-
-def _save(figure, path) -> None:
-    """Save a figure to a path checked before the analysis; what matplotlib then cannot save is one line."""
-    try:
-        figure.savefig(path, dpi=120)
-    except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
-        raise UserError(f"cannot write {path}: {getattr(exc, 'strerror', None) or exc}") from None

@@ -14,13 +14,13 @@ import sys
 from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "temperature", "medium_line", "add_json", "write_json", "given", "require", "fill_defaults", "assumed_line",
-           "cantilever", "contact",
+           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
+           "assumed_line", "cantilever", "contact",
            "option_hint"]
 
 
@@ -172,16 +172,16 @@ def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool =
 
 
 def add_json(parser, what: str = "the result") -> None:
-    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` on standard output after the
-    lines the command prints (:func:`write_json`).
+    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` alone on standard output, the
+    lines the command prints going to standard error (:func:`write_json`).
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_json(p)
     >>> p.parse_args(["--json", "-"]).json
     '-'
     """
-    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': standard output, "
-                        "after the summary)")
+    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': the document alone "
+                        "on standard output, the report on standard error)")
 
 
 def write_json(path, document) -> None:
@@ -199,6 +199,22 @@ def write_json(path, document) -> None:
         print(results.dumps(document), file=DOCUMENTS[-1] if DOCUMENTS else sys.stdout)
     elif path:
         results.write_json(path, document)
+
+
+def save_figure(figure, path, dpi: int = 120) -> None:
+    """Save ``figure`` to ``path`` (checked before the analysis); what matplotlib then cannot save is one
+    line.
+
+    >>> from matplotlib.figure import Figure
+    >>> save_figure(Figure(), "/nonexistent/folder/f.png")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: cannot write /nonexistent/folder/f.png: No such file or directory
+    """
+    try:
+        figure.savefig(path, dpi=dpi)
+    except (OSError, ValueError) as exc:     # no such folder; a format matplotlib lacks
+        raise UserError(f"cannot write {path}: {getattr(exc, 'strerror', None) or exc}") from None
 
 
 DOCUMENTS: list = []
@@ -235,18 +251,23 @@ def given_names(args, names) -> list[str]:
 
 
 def require(values: dict, names, file=None) -> None:
-    """A one-line error for the first of ``names`` with no value: what is missing, where, which flag.
+    """A one-line error naming every one of ``names`` with no value: what is missing, where, which
+    flags (all at once: a user gives them in one run, not one per run).
 
     >>> require({"length": 2e-4}, ("length", "tip_height"), "scan.ibw")
     Traceback (most recent call last):
     ...
     pfmdyn.errors.UserError: no tip height in scan.ibw: give --tip-height
+    >>> require({}, ("spring_constant", "length"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: no spring constant or lever length: give --spring-constant and --length
     """
-    for name in names:
-        if values.get(name) is None:
-            what = NAMES[name].label
-            where = f" in {Path(file).name}" if file else ""
-            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
+    missing = [name for name in names if values.get(name) is None]
+    if missing:
+        where = f" in {Path(file).name}" if file else ""
+        raise UserError(f"no {listed((NAMES[name].label for name in missing), 'or')}{where}: "
+                        f"give {listed(NAMES[name].flag for name in missing)}")
 
 
 def check_medium(args) -> None:
@@ -333,7 +354,7 @@ def option_hint(error: Exception, parser=None) -> str:
     The library names the quantity (:attr:`pfmdyn.errors.UserError.quantity`; a field missing
     from a file: :class:`pfmdyn.io.record.MissingFieldError`); only the commands know flags.  The
     flag is the option of ``parser`` (the command's) that sets the quantity, else the name's own
-    (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint.
+    (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint; several quantities (a tuple), each its flag.
 
     >>> from pfmdyn.io.record import MissingFieldError
     >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
@@ -344,12 +365,19 @@ def option_hint(error: Exception, parser=None) -> str:
     ': give --out'
     >>> option_hint(MissingFieldError("no contact resonance in a.ibw", "contact_resonance")), option_hint(ValueError("x"))
     ('', '')
+    >>> option_hint(MissingFieldError("lever length and tip height not in a.h5", ("length", "tip_height")))
+    ': give --length and --tip-height'
     """
-    name = getattr(error, "quantity", None)
-    if name is None:
-        return ""
+    quantity = getattr(error, "quantity", None)
+    hints = [hint for hint in (_flag_of(name, parser) for name in
+                               (quantity if isinstance(quantity, tuple) else (quantity,)) if name) if hint]
+    return f": give {listed(hints)}" if hints else ""
+
+
+def _flag_of(name: str, parser) -> str | None:
+    """The option of ``parser`` that sets ``name``, else the name's own flag, else None."""
     options = [option for action in getattr(parser, "_actions", ()) if action.dest == name
                and action.help != argparse.SUPPRESS for option in action.option_strings if option.startswith("--")]
     if options:
-        return f": give {options[0]}"
-    return f": give {NAMES[name].flag}" if name in NAMES and NAMES[name].option else ""
+        return options[0]
+    return NAMES[name].flag if name in NAMES and NAMES[name].option else None

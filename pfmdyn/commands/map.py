@@ -14,8 +14,9 @@ the cantilever metadata as root attributes; ``result/maps.zarr`` gets one (ny, n
 units in the attributes.  A contact-resonance frequency map (``contact_frequency_hz``, (ny, nx))
 becomes a k1 map through :func:`pfmdyn.analysis.stiffness.contact_stiffness`.  An Asylum DART
 image (``.ibw``, :mod:`pfmdyn.io.dart`) becomes maps of the contact resonance and Q (the
-two-frequency oscillator), k1, the contact loss and the signed d_eff (the lever), and of how far
-the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
+two-frequency oscillator's through the lever's response at each pixel's drives), k1, the contact loss
+(each pixel's contact fitted with its alike neighbours', ``--pool``) and the signed d_eff (the lever),
+and of how far the oscillator is from the lever (:mod:`pfmdyn.maps.dart`).  Rerunning an interrupted command resumes where it stopped.
 A USID input also gets its fit in BGlib's layout (:mod:`pfmdyn.maps.usid`): in a copy of the input
 in ``result/`` (default) or, with ``--usid-inplace``, in the input file itself.
 """
@@ -26,9 +27,9 @@ import argparse
 import dataclasses
 import math
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..fitting.noise import GAP_LIMIT
-from ..names import checked
+from ..names import checked, flag
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -74,10 +75,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gap-threshold", type=float, default=GAP_LIMIT,
                         help="noise-normalised RMS residual (1 = fitted to the noise, as in pfmdyn discrepancy) above "
                              f"which a pixel is marked unexplained (default {GAP_LIMIT:g})")
-    parser.add_argument("--surface-potential", type=float, default=None,
-                        help="V_surf (V) for maps with a bias axis: d_eff (amplitude, phase) is the response at "
-                             "this bias (default: fitted with +distributed, else 0, the intercept); the "
-                             "electrostatic term and the nulling bias do not depend on it")
+    flags.add(parser, ("surface_potential",), defaults={"surface_potential": (
+        None, "fitted with +distributed, else 0, the intercept; for maps with a bias axis d_eff is the response at "
+              "this bias, the electrostatic term and the nulling bias do not depend on it")})
+    parser.add_argument("--pool", type=int, default=3, metavar="R",
+                        help="DART images: fit each pixel's contact (k1, contact loss, hence the contact resonance and "
+                             "Q) to its own and its alike neighbours' signals within R pixels (default 3; 0: each "
+                             "pixel alone)")
+    parser.add_argument("--phase-offset", type=float, default=0.0, metavar="DEG",
+                        help="DART images: the lock-ins' phase offset (degrees), taken off Phase1 and Phase2 (default "
+                             "0); the run reports the offset the image's drives show, modulo 180 degrees")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--plot", metavar="DIR", help="also write DIR/NAME.png for each map")
     parser.add_argument("--png", action="store_true", help=argparse.SUPPRESS)   # the old spelling: --plot OUT
@@ -136,6 +143,9 @@ def run(args) -> int:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
+    if args.model not in ("auto", "sho"):
+        from ..maps.spec import parse_model
+        parse_model(args.model)         # checked whatever the input, as every flag
     overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
     dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
@@ -146,6 +156,12 @@ def run(args) -> int:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
+        unused = [flag(name) for name in overrides if name not in ("spring_constant", "free_resonance")]
+        unused += ["--model"] * (args.model != "auto")
+        if unused:      # a value given is a value meant: not dropped in silence
+            raise UserError(f"{args.data}: a contact-frequency map is read on the paper's lever with k2 = 0 (the "
+                            f"tip at the free end), which {listed(unused)} would not enter: drop "
+                            + ("it" if len(unused) == 1 else "them"))
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
         _write_json(args, summary, overrides)
@@ -163,8 +179,7 @@ def run(args) -> int:
     if source.layout == "usid" and not args.usid_inplace and os.path.exists(copy) and os.path.samefile(copy, args.data):
         raise UserError(f"{args.data}: --out is the input's folder, where the copy with the fit would replace the "
                         "input; choose another --out, or --usid-inplace to write into the input")
-    if args.surface_potential is not None and not math.isfinite(args.surface_potential):
-        raise UserError(f"--surface-potential must be finite, got {args.surface_potential}")
+    surface_potential = flags.given(args, ("surface_potential",)).get("surface_potential")
     if args.medium:
         print(flags.medium_line(overrides["medium"], args))
     n_bands = len(source.model.bands)
@@ -175,7 +190,7 @@ def run(args) -> int:
               + (f", {len(biases)} biases" if biases is not None else "") + ")")
     else:
         fit_options = {"q0": args.start_quality_factor, "gap_threshold": args.gap_threshold,
-                       "surface_potential_v": args.surface_potential}
+                       "surface_potential_v": surface_potential}
         mechanisms, rows = _mechanisms(args, source, fit_options)
         source = dataclasses.replace(source, model=dataclasses.replace(source.model, mechanisms=mechanisms))
         print(f"fitting: k1 ({source.model.describe_k2()}), "
@@ -224,7 +239,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     import numpy as np
     from .. import Cantilever, Contact
     from ..io.dart import read_dart
-    from ..maps.dart import document, invert, write_dart
+    from ..maps.dart import document, drive_axis, invert, write_dart
     image = read_dart(args.data)
     found = {name: (value, "file", f"the note of {os.path.basename(args.data)}")
              for name, value in image.fields.items() if name in _LEVER}
@@ -254,15 +269,23 @@ def _dart(args, overrides: dict, given: dict) -> int:
     for note in image.notes:
         print(note)
     f1, f2 = image.frequencies(settings["frequency_width"][0])
-    s1, s2 = image.signals
+    # a lag less by the offset: s = A exp(-i (phi - offset))
+    s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
     report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
-        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0],
+        maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
                              progress=None if report is None else lambda done, total: report(done, total, done))
     finally:
         close()
+    axis = drive_axis(lever, contact, f1, s1, maps["k1"], maps["contact_loss"])
+    left = 90.0 if axis == -90.0 else -axis         # a drive's argument -a is a lag a, as the phases
+    phases = (f"phases: {args.phase_offset:g} deg taken off both (--phase-offset); the offset left, from the "
+              f"domains' drives: {left:+.1f} deg (mod 180)" + ("; beyond 45 deg d_eff's sign may be flipped: set "
+                                                               "--phase-offset" if abs(left) > 45 else ""))
+    print(phases)
     out = os.path.join(args.out, "maps.zarr")
-    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy})
+    write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
+                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset, "phase_offset_left_deg": left})
     folder = args.plot or (args.out if args.png else None)
     if folder:
         from ..maps import open_result
@@ -280,5 +303,6 @@ def _dart(args, overrides: dict, given: dict) -> int:
           f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
           f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
           f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
-    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy))
+    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,
+                                         phases))
     return 0

@@ -38,12 +38,21 @@ def report(result) -> str:
     lines.append(f"at x_s/L = {d['spot_position']:g}: static sensitivity u_tip/(L theta) "
                  f"free {d['free_sensitivity']:.6g}, in contact {d['contact_sensitivity']:.6g} (paper: 2/3)")
     c, p = d["calibration_factor"], d["paper_calibration_factor"]
-    lines.append(f"  measured/true d_eff: {c['re']:+.6g}{c['im']:+.3g}j (InvOLS from a static force curve "
-                 f"on this contact), {p['re']:+.6g}{p['im']:+.3g}j (A = 2 theta L/3)")
+    lines.append(f"  measured/true d_eff: {_signed(c)} (InvOLS from a static force curve "
+                 f"on this contact), {_signed(p)} (A = 2 theta L/3)")
     e = d["d_eff_error_per_volt"]
     lines.append("  d_eff error from the distributed load: "
                  + (f"{e['re'] * 1e12:+.4g} pm/V per volt of V_dc - V_surf" if e else "undetermined (needs --width)"))
     return "\n".join(lines)
+
+
+def _signed(z: dict) -> str:
+    """A complex ratio ``{re, im}`` signed, real when it is (a lossless lever's): ``+3.729``, ``-1.2+0.03j``.
+
+    >>> _signed({"re": 3.72892, "im": 0.0}), _signed({"re": -1.2, "im": 0.0312})
+    ('+3.72892', '-1.2+0.0312j')
+    """
+    return f"{z['re']:+.6g}" + (f"{z['im']:+.3g}j" if z["im"] else "")
 
 
 def _lever(args, assumed: dict):
@@ -92,9 +101,6 @@ def run(args) -> int:
         from ..plots.spot import plot_spot
         fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)
-        fig = plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions))
-        try:
-            fig.savefig(args.plot, dpi=120)
-        except OSError as exc:
-            raise UserError(f"cannot write {args.plot}: {exc.strerror or exc}") from None
+        flags.save_figure(plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions)),
+                          args.plot)
     return 0

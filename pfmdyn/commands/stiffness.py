@@ -30,7 +30,7 @@ import math
 from pathlib import Path
 
 from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
 from . import flags
@@ -85,7 +85,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
     """Lever values (names -> SI), contact resonances and their modes from an instrument file or table."""
     from ..io.instruments import read_instrument
 
-    if file_kind(path) in CSV_KINDS:
+    # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
+    if file_kind(path) in CSV_KINDS | {"text table"}:
         from ..io.tables import ResonanceData, read
         data = read(path)
         if not isinstance(data, ResonanceData):
@@ -150,9 +151,11 @@ def _contact_map(args) -> int:
         raise UserError(f"{args.file}: a contact-frequency map needs --out DIR (gets maps.zarr with k1)")
     others = [NAMES[n].flag for n in _LEVER + ("tip_position", "k2", "k2_over_k1", "poisson")
               if n not in ("spring_constant", "free_resonance") and getattr(args, n, None) is not None]
-    if args.contact or args.reduced_modulus or others:
-        raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
-                        "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
+    others = ["--contact"] * bool(args.contact) + ["--reduced-modulus"] * bool(args.reduced_modulus) + others
+    if others:
+        raise UserError(f"{args.file}: a contact-frequency map is read on the paper's lever with k2 = 0 (the tip at "
+                        f"the free end), its frequencies from the file, which {listed(others)} would not enter: "
+                        "drop " + ("it" if len(others) == 1 else "them"))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
     overrides.update(flags.given(args, ("contact_uncertainty",)))
     if args.mode:

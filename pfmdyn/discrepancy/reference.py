@@ -510,7 +510,7 @@ class SweepComparison(Result):
                 others = ", ".join(f"{v['added_mass_position']:.3g}" for v in where["solutions"][1:])
                 at = f"at x/L {where['value']:.3g} or {others} ({where['why']})"
             elif where.get("undetermined"):
-                at = "undetermined (one mode); end-equivalent mass"
+                at = "the end-equivalent mass (one mode cannot place it: position undetermined)"
             else:
                 at = f"at x/L {plus_minus(where, '')}" + (" (given)" if where.get("given") else " (fitted)")
             lines.append(f"  added_mass {plus_minus(m, 'kg')} ({m['value'] * 1e15:.4g} pg), {at}")

@@ -37,6 +37,7 @@ from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from ..medium import Medium
+from ..names import NAMES
 from .regions import gap_text, lever_resonances, worst_region
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
@@ -199,18 +200,22 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
     """The header's numbers beside ours for the same quantity (``ours``: name -> ``(value, stderr)``), each
     with the tolerance beyond which they disagree: three times our standard error and the sweep's
     ``step_hz`` (a peak read off measured points is known to a step; a Q through its linewidth ``f/Q``,
-    to ``Q**2 step / f``), combined; the header's own numbers carry more digits than either.
+    to ``Q**2 step / f``; any other quantity, our error alone), combined; the header's own numbers carry
+    more digits than either.
 
     >>> c = compare_with_instrument({"amplitude_peak": 51.0e3}, {"amplitude_peak": (77.3e3, None)}, 150.0)
     >>> c[0]["disagrees"], round(c[0]["relative_difference"], 2), c[0]["tolerance"]
     (True, -0.34, 450.0)
+    >>> round(compare_with_instrument({"spring_constant": 27.1}, {"spring_constant": (9.05, 0.29)}, 48.0)[0]["tolerance"], 6)
+    0.87
     """
     frequency = ours.get("free_resonance", ours.get("amplitude_peak", (None, None)))[0]
     out = []
     for name, (value, stderr) in ours.items():
         if not fields.get(name) or value is None:
             continue
-        step = step_hz if name != "free_quality_factor" else value**2 * step_hz / frequency
+        step = {"free_quality_factor": value**2 * step_hz / frequency if frequency else 0.0,
+                "free_resonance": step_hz, "amplitude_peak": step_hz}.get(name, 0.0)
         tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
         out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
                     "relative_difference": (fields[name] - value) / value,
@@ -219,9 +224,24 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
 
 
 def disagreement_lines(comparison: list | None) -> list[str]:
-    """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`)."""
-    return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g} in the header, {c['ours']:.6g} here "
-            f"({c['relative_difference']:+.1%}; tolerance {c['tolerance']:.3g}: 3x our uncertainty and the sweep's step)"
+    """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`), in
+    its unit, the header's difference from ours relative to ours, the tolerance to two digits.
+
+    >>> print(*disagreement_lines(compare_with_instrument({"spring_constant": 27.13}, {"spring_constant": (9.047, 0.29)}, 38.0)))
+      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty and the sweep's step)
+    >>> print(*disagreement_lines(compare_with_instrument({"amplitude_peak": 50965.1}, {"amplitude_peak": (76282.6, 81.0)}, 100.0)))
+      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the sweep's step)
+    """
+    def unit(name):
+        return "" if name not in NAMES or NAMES[name].unit == "1" else f" {NAMES[name].unit}"
+
+    def two_digits(x):          # 460, 0.88: no exponent
+        return f"{float(f'{x:.2g}'):g}"
+
+    return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g}{unit(c['name'])} in the header, "
+            f"{c['ours']:.6g}{unit(c['name'])} here (header {c['relative_difference']:+.1%}; tolerance "
+            f"{two_digits(c['tolerance'])}{unit(c['name'])}: 3x our uncertainty and the sweep's step)"
+            + (f"; {c['why']}" if c.get("why") else "")
             for c in comparison or () if c["disagrees"]]
 
 

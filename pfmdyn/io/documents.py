@@ -12,7 +12,8 @@ from ..names import NAMES
 from .results import document, quantity
 
 __all__ = ["record", "records_of", "lever_records", "discrepancy_report", "sweep_fit", "sweep_comparison", "thermal_fit",
-           "calibration"]
+           "calibration", "stiffness", "map_summary", "resonances", "spot", "roots", "inspection", "branches",
+           "diagram", "deconvolution"]
 
 RENAMED = {"viscous_width_hz": "viscous_width", "eta": "contact_damping"}
 """A discrepancy parameter's old key -> its name (the old keys held a unit or a symbol)."""
@@ -27,7 +28,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     one held with a ``note`` is ``held``, a width not given is ``assumed``.
 
     >>> record("k2", {"value": 3.0, "stderr": 9.0, "unit": "N/m", "determined": False})["why"]
-    'the data do not determine it: 3 +/- 9 N/m'
+    'the data do not determine it: 3 +- 9 N/m'
     >>> record("width", {"value": 1e-5, "stderr": None, "unit": "m", "given": False, "why": "assumed L/10"})["status"]
     'assumed'
     """
@@ -35,7 +36,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
         # the estimate the data leave undetermined is said, not lost
         unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
-        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
+        shown = "" if value is None else f": {value:.3g}" + (f" +- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
@@ -126,6 +127,21 @@ def _worst_region(entry: dict | None) -> dict | None:
             "band": quantity("band", [float(b) for b in entry["band_hz"]], status="derived", dims=["bound"]),
             "points": quantity("points", entry["values"], status="derived"),
             "gap": quantity("gap", entry["gap"], status="derived")}
+
+
+def _misfit(report: dict) -> tuple[dict, list[str]]:
+    """What a fit leaves unexplained (:func:`_unexplained`) and where its gap is largest (:func:`_worst_region`):
+    the records of its ``fit``, and notes.
+
+    >>> records, notes = _misfit({"worst_region": {"region": "rest", "band_hz": [1, 2], "values": 9, "gap": 1.1}})
+    >>> list(records), notes
+    (['worst_region'], [])
+    """
+    unexplained, notes = _unexplained(report.get("unexplained"))
+    out = {"unexplained": unexplained} if unexplained else {}
+    if report.get("worst_region"):
+        out["worst_region"] = _worst_region(report["worst_region"])
+    return out, notes
 
 
 def _mass_solutions(parameters: dict) -> list[dict]:
@@ -233,11 +249,8 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         fit["noise"] = quantity("noise", report["noise_sigma"], status="derived")
     if report.get("frequency_stride"):
         fit["frequency_stride"] = quantity("frequency_stride", report["frequency_stride"], status="derived")
-    unexplained, notes = _unexplained(report.get("unexplained"))
-    if unexplained:
-        fit["unexplained"] = unexplained
-    if report.get("worst_region"):
-        fit["worst_region"] = _worst_region(report["worst_region"])
+    misfit, notes = _misfit(report)
+    fit.update(misfit)
     notes.insert(0, f"criterion: {report['criterion']}")
     if report.get("gap_definition"):
         notes.append(f"gap: {report['gap_definition']}")
@@ -270,7 +283,8 @@ def _instrument(fit: dict) -> tuple[dict, list[str]]:
         unit = "" if unit == "1" else f" {unit}"
         notes.append(f"{c['name']}: ours {c['ours']:.6g}{unit}, the instrument's {c['instrument']:.6g}{unit} "
                      f"(relative difference {c['relative_difference']:+.2g}; "
-                     f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})")
+                     f"{'disagrees' if c['disagrees'] else 'agrees'} within {c['tolerance']:.3g}{unit})"
+                     + (f": {c['why']}" if c.get("why") else ""))
     disagree = [c["name"] for c in fit.get("instrument_comparison") or [] if c["disagrees"]]
     if fit.get("instrument_comparison"):
         recorded["disagrees"] = quantity("disagrees", disagree, status="derived", dims=["disagrees"])
@@ -293,18 +307,17 @@ def _free_lever(fit: dict, given) -> dict:
     return lever_records(values, given=given, from_file=fit.get("from_file") or (), assumed=_assumed(fit))
 
 
-def _fit_records(fit: dict) -> dict:
-    """A sweep's or a tune's own fit: its gap, points, noise, band, what it leaves unexplained."""
+def _fit_records(fit: dict) -> tuple[dict, list[str]]:
+    """A sweep's or a tune's own fit: its gap, points, band, what it leaves unexplained, its noise, what the
+    instrument's own fit recorded; and notes comparing the two."""
     out = {"gap": quantity("gap", fit["gap"], status="derived"),
            "points": quantity("points", fit["points"], status="file", why="the data's frequencies")}
     if fit.get("band_hz"):
         out["band"] = quantity("band", list(fit["band_hz"]), status="derived", dims=["bound"])
-    unexplained, _ = _unexplained(fit.get("unexplained"))      # a sweep's or tune's misfit is a band
-    if unexplained:
-        out["unexplained"] = unexplained
-    if fit.get("worst_region"):
-        out["worst_region"] = _worst_region(fit["worst_region"])
-    return out
+    out.update(_misfit(fit)[0])      # a sweep's or tune's misfit is a band: no note
+    out["noise"] = quantity("noise", fit["noise"], status="derived")
+    out["instrument"], notes = _instrument(fit)
+    return out, notes
 
 
 def _sweep_results(fit: dict) -> dict:
@@ -340,10 +353,7 @@ def sweep_fit(fit: dict, given=()) -> dict:
     results["amplitude_only"] = quantity("amplitude_only", bool(fit["amplitude_only"]), status="file",
                                          why="the columns of the file")
     results["phase_reversed"] = quantity("phase_reversed", bool(fit["phase_reversed"]), status="derived")
-    recorded, notes = _instrument(fit)
-    out = _fit_records(fit)
-    out["noise"] = quantity("noise", fit["noise"], status="derived")
-    out["instrument"] = recorded
+    out, notes = _fit_records(fit)
     notes.append(f"gain in {fit['gain']['unit']}, background in {fit['background']['unit']}, added to the "
                  f"{fit['background'].get('adds_to', 'response')}")
     return document("discrepancy", "sweep", {"path": str(fit["path"]), "instrument": fit.get("instrument")},
@@ -391,11 +401,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
                       "bic": quantity("bic", s["bic"], status="derived"),
                       "gap": quantity("gap", s["gap"], status="derived")} for s in out["steps"]],
            "reference": {**reference["results"], **reference["fit"]}}
-    unexplained, _ = _unexplained(out.get("unexplained"))
-    if unexplained:
-        fit["unexplained"] = unexplained
-    if out.get("worst_region"):
-        fit["worst_region"] = _worst_region(out["worst_region"])
+    fit.update(_misfit(out)[0])
     solutions = _mass_solutions(out["parameters"])
     if solutions:
         fit["solutions"] = solutions
@@ -424,10 +430,7 @@ def thermal_fit(fit: dict, given=()) -> dict:
     results = _sweep_results(fit)
     results["detection_scale"] = quantity("detection_scale", fit["detection_scale"], status="derived")
     results["white_floor"] = quantity("white_floor", fit["white_floor"], status="derived")
-    recorded, notes = _instrument(fit)
-    out = _fit_records(fit)
-    out["noise"] = quantity("noise", fit["noise"], status="derived")
-    out["instrument"] = recorded
+    out, notes = _fit_records(fit)
     notes.append(f"the spectrum in {fit['unit']}; the fit's residual and noise are of its logarithm")
     return document("discrepancy", "thermal", {"path": str(fit["path"])}, _free_lever(fit, given), results, out,
                     notes, missing_effects=[])
@@ -566,6 +569,17 @@ def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None
                     results, fit, notes)
 
 
+def _derived(name: str, value, why: str) -> dict:
+    """A number derived from others, or undetermined (``why``) when it is None or not finite.
+
+    >>> _derived("median_k1", float("nan"), "no pixel")["status"]
+    'undetermined'
+    """
+    if value is None or not math.isfinite(value):
+        return quantity(name, None, why=why)
+    return quantity(name, value, status="derived")
+
+
 MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_k1", "median_nulling_bias")
 """What a map's summary says of its pixels (:func:`map_summary`)."""
 
@@ -573,17 +587,16 @@ MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_
 def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
     """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
     are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
-    (sentences, kept as notes).  ``given``: the lever's values given on the command line.
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``summary["why"]``,
+    when there, says why a statistic no pixel determines is undetermined.
 
     >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
     def statistic(name, value):
-        if value is None or not math.isfinite(value):
-            return quantity(name, None, why="no pixel of the map determines it (none fitted by this run, or none "
-                                            "explained)")
-        return quantity(name, value, status="derived")
+        return _derived(name, value, summary.get("why")
+                        or "no pixel of the map determines it (none fitted by this run, or none explained)")
 
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
     results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})
@@ -721,3 +734,98 @@ def inspection(d: dict) -> dict:
     notes += list(d.get("notes") or [])
     return document("inspect", "file", {"path": str(d["path"]), "instrument": d.get("instrument"),
                                         "file_kind": d.get("kind")}, None, results, None, notes)
+
+
+BRANCH_NAMES = {"k1_over_k": "k1_over_k", "k2_ratio": "k2_ratio", "k2t_HL": "lateral_k2_ratio"}
+"""A family's swept parameter (:data:`pfmdyn.roots.branches.SWEPT`) -> its name."""
+
+
+def branches(family: str, swept: str, stiffness, roots, ratio, crossovers, fixed: dict, given=()) -> dict:
+    """The document of ``pfmdyn branches`` (kind ``branches``): each mode's root and frequency ratio along
+    the swept stiffness (dims: the swept name, mode), where each branch crosses over; ``fixed``: the
+    family's parameters held, those not ``given`` by their default.
+
+    >>> doc = branches("indentation", "k1_over_k", [1.0, 10.0], [[2.0], [3.0]], [[1.1], [2.6]],
+    ...                ([5.8], [2.9]), {})
+    >>> doc["results"]["root"]["dims"], doc["results"]["crossover"]["value"], doc["notes"]
+    (['k1_over_k', 'mode'], [5.8], ['family: indentation'])
+    """
+    name = BRANCH_NAMES[swept]
+    modes = list(range(1, len(crossovers[0]) + 1))
+    results = {name: quantity(name, list(stiffness), status="given", dims=[name]),
+               "mode": quantity("mode", modes, status="given", dims=["mode"]),
+               "root": quantity("root", roots, status="derived", dims=[name, "mode"]),
+               "frequency_ratio": quantity("frequency_ratio", ratio, status="derived", dims=[name, "mode"]),
+               "crossover": quantity("crossover", list(crossovers[0]), status="derived", dims=["mode"]),
+               "crossover_root": quantity("crossover_root", list(crossovers[1]), status="derived", dims=["mode"])}
+    results.update(lever_records({BRANCH_NAMES[key]: float(value) for key, value in fixed.items()},
+                                 given=[BRANCH_NAMES[key] for key in given]))
+    return document("branches", "branches", {}, None, results, None, [f"family: {family}"])
+
+
+def diagram(response, lever: dict, given=(), assumed: dict | None = None, notes=()) -> dict:
+    """The document of ``pfmdyn diagram`` (kind ``diagram``): the response's three parts per frequency
+    (dims frequency), from which the whole frequency-bias map follows,
+    ``A = piezo_response + (local + nonlocal_electrostatic_response) (V_dc - V_surf)``, on the biases
+    ``tip_bias`` (dims bias); ``lever``: name -> value, ``given`` or ``assumed`` (name -> why).
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> r = SimpleNamespace(frequency_hz=np.array([1e5]), bias_v=np.array([-1.0, 1.0]), surface_potential_v=0.0,
+    ...                     piezo_coefficient=np.array([1e-12 + 0j]), local_coefficient=np.array([2e-12j]),
+    ...                     nonlocal_coefficient=np.array([-3e-12 + 0j]))
+    >>> doc = diagram(r, {"k1": 100.0, "quality_factor": float("inf")}, given=["k1"],
+    ...               assumed={"quality_factor": "lossless, as in the paper"})
+    >>> doc["results"]["piezo_response"]["value"], doc["lever"]["quality_factor"]["status"]
+    ({'real': [1e-12], 'imag': [0.0]}, 'unbounded')
+    """
+    per = {"status": "derived", "dims": ["frequency"]}
+    results = {"frequency": quantity("frequency", response.frequency_hz, status="given", dims=["frequency"]),
+               "tip_bias": quantity("tip_bias", response.bias_v, status="given", dims=["bias"]),
+               **{name: quantity(name, getattr(response, part), **per) for name, part in (
+                   ("piezo_response", "piezo_coefficient"), ("local_electrostatic_response", "local_coefficient"),
+                   ("nonlocal_electrostatic_response", "nonlocal_coefficient"))}}
+    return document("diagram", "diagram", {}, lever_records(lever, given=given, assumed=assumed), results, None,
+                    notes)
+
+
+def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever: dict | None = None, given=(),
+                  out=None) -> dict:
+    """The document of ``pfmdyn deconvolve`` (kind ``deconvolution``): the straight line in the bias fitted
+    at each frequency (Eq. 41; dims frequency, in the data's ``unit``), its nulling bias and the tip-quality
+    indicator (``quality``: :func:`pfmdyn.analysis.deconvolve.tip_quality`); with a lever (``surface``) the
+    true surface displacement at the spot, undetermined ranges as notes.  The per-point residuals stay in
+    ``error_map.csv`` (``source.out``).
+
+    >>> from pfmdyn.analysis.deconvolve import deconvolve, tip_quality
+    >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
+    >>> doc = deconvolution(fit, tip_quality(fit.v_null, fit.v_null_se), "d.csv", unit="pm")
+    >>> doc["results"]["measured_d_eff"]["value"], doc["results"]["electrostatic_slope"]["dims"], doc["notes"][0]
+    ({'real': [2.0], 'imag': [0.0]}, ['frequency'], 'data in pm')
+    """
+    per = {"status": "fitted", "dims": ["frequency"]}
+    results = {"frequency": quantity("frequency", result.frequency_hz, status="file", why="the data's frequencies",
+                                     dims=["frequency"]),
+               "biases": quantity("biases", result.n_bias, status="file", why="the data's biases",
+                                  dims=["frequency"]),
+               "electrostatic_slope": quantity("electrostatic_slope", result.g_elec, result.g_elec_se, **per),
+               "intercept": quantity("intercept", result.intercept, **per),
+               "measured_d_eff": quantity("measured_d_eff", result.d_eff, result.d_eff_se, **per),
+               "nulling_bias": quantity("nulling_bias", result.v_null, result.v_null_se, **per),
+               **{name: _derived(name, value, "no frequency determines the nulling bias")
+                  for name, value in (("mean_nulling_bias", quality.mean_v), ("nulling_bias_spread", quality.spread_v))}}
+    notes = [f"data in {unit}"]
+    if surface is not None:
+        derived = {"status": "derived", "dims": ["frequency"]}
+        results.update({
+            "calibration_factor": quantity("calibration_factor", surface.calibration_factor, **derived),
+            "surface_d_eff": quantity("surface_d_eff", surface.d_eff, surface.d_eff_se, **derived),
+            "surface_electrostatic_slope": quantity("surface_electrostatic_slope", surface.g_elec, **derived)})
+        if surface.d_eff_error_per_volt is not None:
+            results["d_eff_error_per_volt"] = quantity("d_eff_error_per_volt", surface.d_eff_error_per_volt,
+                                                       **derived)
+        notes += [f"undetermined {low:.6g}-{high:.6g} Hz: {why}" for low, high, why in surface.undetermined]
+    lever = lever_records({"surface_potential": result.surface_potential_v, **(lever or {})},
+                          given=["surface_potential", *given])
+    return document("deconvolve", "deconvolution", {"path": str(path), "out": None if out is None else str(out)},
+                    lever, results, None, notes)

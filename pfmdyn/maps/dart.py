@@ -8,7 +8,8 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
 * **the oscillator** (Gannepalli, Yablon, Proksch and Kalinin, Nanotechnology 22, 355705
   (2011)): ``s(f) = D f0**2 / (f0**2 - f**2 + i f f0 / Q)``.  Written as ``c / s_j = f0**2 - f_j**2
   + i f_j f0/Q`` with ``c = D f0**2`` it is linear in ``(Re c, Im c, f0**2, f0/Q)``: the paper's
-  closed form, solved here as a 2 x 2 system (:func:`oscillator`).  It is undetermined where that
+  closed form, derived in ``derivations/formulas.py`` (``generated/formulas.py``:
+  ``two_frequency_*``; :func:`oscillator`).  It is undetermined where that
   system is singular or gives ``f0**2 <= 0`` or ``Q <= 0`` (both points far on one side of the
   peak, phases that do not straddle it);
 * **the lever** (:class:`pfmdyn.Cantilever` with its internal loss ``quality_factor``, the k2
@@ -16,12 +17,21 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
   which depends on the contact's ``k1`` and ``contact_loss`` only, one complex equation for two
   reals, solved by Newton steps on all pixels at once from the oscillator's start
   (:func:`lever_inversion`, each step halved until it lowers the residual); the drive then follows,
-  ``d_eff = s1 / (T(f1) V)``.  Where the oscillator is undetermined (its Q would be negative: an
-  anti-resonance of the slope at the spot near the resonance) Newton starts from the tracked centre
-  and the resonance and Q reported are the lever's complex pole's (:func:`lever_pole`).  The lever's
-  maps of a pixel are undetermined (NaN, ``determined`` 0) where Newton does not converge or the
-  contact would supply energy (its loss below zero by more than three standard errors); the
-  oscillator's resonance and Q, which need no lever, stay.
+  ``d_eff = s1 / (T(f1) V)``.  The lever's maps of a pixel are undetermined (NaN, ``determined`` 0)
+  where Newton does not converge or the contact would supply energy (its loss below zero by more
+  than three standard errors).
+
+**The contact resonance and Q** reported are the two-frequency oscillator's through the lever's response
+at the pixel's own drives (for the contact found), or where no oscillator goes through it (a negative Q:
+an anti-resonance of the slope at the spot near the peak) the lever's damped complex pole
+(:func:`lever_pole`).  For a pixel alone that is the oscillator through its measured signals: both
+inversions explain the same four numbers, so one pixel's lock-in noise reaches the resonance alike
+(``sigma / 2Q`` relative, the Cramér-Rao bound of four numbers for four unknowns).  The contact,
+though, is a grain's, alike at its pixels: :func:`pooled_contact` fits each pixel's ``k1`` and contact
+loss to its own and its alike neighbours' signals (within ``pool`` pixels, a grain boundary parting
+them; each neighbour read at its own drives), and the resonance and Q follow from that contact at the
+pixel's drives, as far from the noise as the pool is large.  The oscillator's resonance and Q through
+the measured signals, which need no lever, stand where the lever's inversion fails.
 
 ``T`` is the deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the
 lever): the slope at the laser spot times ``2L/3``, as a static InvOLS reads it.  So ``d_eff > 0``
@@ -43,14 +53,16 @@ import numpy as np
 from ..analysis.contact_resonance import betas, k1_at
 from ..cantilever import Cantilever, Contact
 from .. import composed
+from ..generated.formulas import (point_mass_contact_stiffness, point_mass_static_gain, two_frequency_drive,
+                                  two_frequency_resonance_squared, two_frequency_width)
 from ..generated.tilt_rotation import rotated
 from ..io.results import document as envelope
 from ..io.results import quantity
 from ..names import NAMES
 from .store import write_maps
 
-__all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "deflection_signal",
-           "lever_inversion", "lever_pole", "point_mass_k1", "start_k1",
+__all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "alike_sums", "deflection_signal",
+           "lever_inversion", "pooled_contact", "lever_pole", "point_mass_k1", "start_k1", "drive_axis",
            "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
@@ -84,19 +96,15 @@ def oscillator(f1, f2, s1, s2) -> Oscillator:
     """
     f1, f2, s1, s2 = np.broadcast_arrays(*(np.asarray(v) for v in (f1, f2, s1, s2)))
     with np.errstate(all="ignore"):
-        z1, z2 = 1 / s1, 1 / s2
-        # Im(c z_j) = f_j f0/Q for both j; Re(c (z1 - z2)) = f2**2 - f1**2
-        a11, a12 = z1.imag / f1 - z2.imag / f2, z1.real / f1 - z2.real / f2
-        a21, a22 = (z1 - z2).real, -(z1 - z2).imag
-        det = a11 * a22 - a12 * a21
-        rhs = f2**2 - f1**2
-        c = (-a12 * rhs + 1j * a11 * rhs) / det
-        f0_squared = (c * z1).real + f1**2
-        width = (c * z1).imag / f1          # f0 / Q
-        determined = np.isfinite(det) & (f0_squared > 0) & (width > 0)
+        # the forms are homogeneous in the signals: scaled to |s1| = 1 (no overflow in z**2 f**3)
+        scale = np.abs(s1)
+        z1, z2 = scale / s1, scale / s2
+        parts = (f1, f2, z1.real, z1.imag, z2.real, z2.imag)
+        f0_squared, width = two_frequency_resonance_squared(*parts), two_frequency_width(*parts)
+        determined = np.isfinite(f0_squared) & np.isfinite(width) & (f0_squared > 0) & (width > 0)
         resonance = np.where(determined, np.sqrt(np.abs(f0_squared)), np.nan)
         return Oscillator(resonance, np.where(determined, resonance / width, np.nan),
-                          np.where(determined, c / f0_squared, np.nan), determined)
+                          np.where(determined, scale * two_frequency_drive(*parts), np.nan), determined)
 
 
 def oscillator_sensitivity(f1, f2, s1, s2, base: Oscillator | None = None) -> Oscillator:
@@ -146,13 +154,43 @@ def channel_noise(pairs) -> float:
     return float(1.4826 * np.median(np.abs(z))) if z.size else math.nan
 
 
+def alike_sums(values, variances, quantities, radius: int, gate: float = 3.0, centre=None):
+    """Sums of ``quantities`` (``(m, y, x)``) over each pixel's alike neighbours: those within ``radius``
+    pixels (a square, the pixel included) whose ``values`` (``(n, y, x)``, with ``variances``) all
+    agree with the pixel's to ``gate`` standard deviations of their difference, or with ``centre``
+    (``(n, y, x)``, exact: a pooled estimate) to ``gate`` of their own.  A grain's contact is
+    alike at its pixels, which the lock-in noise scatters independently; a grain boundary parts them.
+    Pixels with a value not finite are nobody's neighbours (their own sums are NaN).
+
+    >>> values = np.where(np.arange(6) < 3, 1.0, 2.0)[None, None, :] * np.ones((1, 4, 6))
+    >>> alike_sums(values, np.full(values.shape, 1e-4), np.ones((1, 4, 6)), 1)[0, 0].tolist()   # the two grains apart
+    [4.0, 6.0, 4.0, 4.0, 6.0, 4.0]
+    """
+    values, variances, quantities = (np.asarray(v, float) for v in (values, variances, quantities))
+    ny, nx = values.shape[-2:]
+    usable = np.all(np.isfinite(values) & np.isfinite(variances), axis=0) & np.all(np.isfinite(quantities), axis=0)
+    pad = lambda a: np.pad(a, ((0, 0), (radius, radius), (radius, radius)), constant_values=np.nan)  # noqa: E731
+    v, var, q = pad(np.where(usable, values, np.nan)), pad(np.where(usable, variances, np.nan)), \
+        pad(np.where(usable, quantities, 0.0))
+    sums = np.zeros(quantities.shape)
+    reference, spread = (values, variances) if centre is None else (np.asarray(centre, float), 0.0)
+    with np.errstate(invalid="ignore"):
+        for dy in range(2 * radius + 1):
+            for dx in range(2 * radius + 1):
+                window = (slice(None), slice(dy, dy + ny), slice(dx, dx + nx))
+                alike = np.all(np.abs(v[window] - reference) <= gate * np.sqrt(spread + var[window]), axis=0)
+                sums += np.where(alike, np.nan_to_num(q[window]), 0.0)
+    return np.where(usable, sums, np.nan)
+
+
 def point_mass_k1(resonance, lever: Cantilever):
-    """The point-mass (oscillator) contact stiffness ``k ((fc / f0)**2 - 1)`` of a resonance ``fc``.
+    """The point-mass (oscillator) contact stiffness ``k ((fc / f0)**2 - 1)`` of a resonance ``fc``
+    (``generated/formulas.py``: ``point_mass_contact_stiffness``).
 
     >>> round(float(point_mass_k1(3e5, Cantilever(2.0, 7.5e4, 2e-4))), 6)
     30.0
     """
-    return lever.spring_constant * ((np.asarray(resonance) / lever.free_resonance) ** 2 - 1)
+    return point_mass_contact_stiffness(np.asarray(resonance), lever.free_resonance, lever.spring_constant)
 
 
 def _springs(lever: Cantilever, contact: Contact, k1, loss, frequency):
@@ -272,6 +310,17 @@ def _log_ratios(lever, contact, f1, f2, points):
         return [(np.log(t[j, 1] / t[j, 0]), t[j, 0]) for j in range(m)]
 
 
+def _linearised(lever, contact, f1, f2, target, k1, loss):
+    """The residual ``log(T(f2)/T(f1)) - target`` as ``(re, im)`` (the phase modulo 2 pi) and its Jacobian
+    in ``(log k1, loss)`` by forward differences, ``(n, 2)`` and ``(n, 2, 2)``."""
+    (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1, f2, [
+        (k1, loss), (k1 * math.exp(_STEP), loss), (k1, loss + _STEP)])
+    r = g - target
+    jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
+                    np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+    return np.stack([r.real, np.angle(np.exp(1j * r.imag))], -1), jac
+
+
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
                     steps: int = _NEWTON_STEPS) -> LeverFit:
     """``k1``, ``contact_loss`` and ``d_eff`` explaining the deflection signals ``s1``, ``s2`` (m, complex,
@@ -299,21 +348,16 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         if not i.size:
             break
         k1_i = np.exp(log_k1[i])
-        (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1[i], f2[i], [
-            (k1_i, loss[i]), (k1_i * math.exp(_STEP), loss[i]), (k1_i, loss[i] + _STEP)])
-        r = g - target[i]
-        r = r.real + 1j * np.angle(np.exp(1j * r.imag))         # the phase difference modulo 2 pi
-        jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
-                        np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
+        r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], k1_i, loss[i])
         jacobian[i] = jac
         with np.errstate(all="ignore"):
-            step = -np.einsum("...ij,...j->...i", _inverse(jac), np.stack([r.real, r.imag], -1))
+            step = -np.einsum("...ij,...j->...i", _inverse(jac), r)
         bad = ~np.all(np.isfinite(step), -1)
         step[bad] = 0.0
         active[i[bad]] = False
         # k1 changes at most e**0.5 a step, and a step is halved until it lowers the residual
         step *= np.minimum(1.0, 0.5 / np.maximum(np.abs(step[:, 0]), 1e-300))[:, None]
-        norm, pending = np.abs(r), np.abs(step).max(-1) > 1e-8
+        norm, pending = np.hypot(r[:, 0], r[:, 1]), np.abs(step).max(-1) > 1e-8
         for _ in range(_HALVINGS):
             j = np.flatnonzero(pending)
             if not j.size:
@@ -337,10 +381,70 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
         # log d = log s1 - log T1(k1, loss): e1 enters directly and through k1, loss
         dt1 = _t1_partials(lever, contact, f1, k1, loss, t1)
         drive_variance = _drive_variance(inverse, dt1)
-    ok = converged & np.all(np.isfinite(jacobian), axis=(-1, -2))
+    # a contact the signals do not fix (an infinite spread: a dashpot pinning it) is not found
+    ok = converged & np.all(np.isfinite(jacobian), axis=(-1, -2)) & np.isfinite(covariance[:, 0, 0] + covariance[:, 1, 1]
+                                                                           + drive_variance)
     nan = lambda v: np.where(ok, v, np.nan)      # noqa: E731
     return LeverFit(nan(k1), nan(loss), nan(drive), nan(np.sqrt(covariance[:, 0, 0])),
                     nan(np.sqrt(covariance[:, 1, 1])), nan(np.sqrt(drive_variance)), ok)
+
+
+def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: LeverFit, sigma: float, shape,
+                   radius: int, steps: int = 1):
+    """Each pixel's contact (``k1``, ``contact_loss``) fitted to its own and its alike neighbours' signals
+    (:func:`alike_sums` within ``radius``, alike by :func:`lever_inversion`'s ``fit`` and its spread at
+    noise ``sigma``): least squares on ``log(s2/s1)``, whose noise is the same at every pixel (relative
+    lock-in noise), each neighbour read at its own drives.  Gauss-Newton from the inverse-variance mean of
+    the pixels' own contacts; a pixel's own Newton step is linear from there, so the nonlinear inversion's
+    bias at each pixel does not add up in the pool.  Returns ``k1``, ``contact_loss``, their standard
+    deviations per unit ``sigma`` (relative in ``k1``) and the ratio of the pooled ``k1``'s to the pixel's own.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    >>> rng = np.random.default_rng(3)
+    >>> f1 = 3.10e5 + 2e3 * rng.uniform(size=(6, 6)); f2 = f1 + 6e3
+    >>> noise = lambda s: s * (1 + 0.01 * (rng.standard_normal(s.shape) + 1j * rng.standard_normal(s.shape)) / 2**0.5)
+    >>> s1, s2 = (noise(deflection_signal(lever, Contact(), f, 120.0, 0.02)) for f in (f1, f2))
+    >>> fit = lever_inversion(lever, Contact(), f1, f2, s1, s2, np.full(36, 120.0), np.full(36, 0.02), 1.0)
+    >>> k1, loss, k1_sd, loss_sd, narrowed = pooled_contact(lever, Contact(), f1.ravel(), f2.ravel(), s1.ravel(),
+    ...                                                     s2.ravel(), fit, 0.01, (6, 6), 2)
+    >>> bool(np.std(k1 / 120 - 1) < np.std(fit.k1 / 120 - 1) / 2), bool(np.all(narrowed < 0.6))
+    (True, True)
+    """
+    grid = tuple(shape) if len(shape) == 2 else (1, len(f1))
+    gate_values = np.stack([np.log(fit.k1), fit.contact_loss]).reshape(2, *grid)
+    gate_variances = (sigma * np.stack([fit.k1_sensitivity, fit.loss_sensitivity])).reshape(2, *grid) ** 2
+    with np.errstate(all="ignore"):
+        weights = 1 / gate_variances
+        sums = alike_sums(gate_values, gate_variances, np.concatenate([weights, weights * gate_values]), radius)
+        theta = (sums[2:] / sums[:2]).reshape(2, -1)
+        target = np.log(s2 / s1)
+        information = np.full((len(f1), 2, 2), np.nan)
+        for _ in range(steps):
+            i = np.flatnonzero(np.all(np.isfinite(theta), 0))
+            r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], np.exp(theta[0, i]), theta[1, i])
+            own = np.einsum("nki,nkj->nij", jac, jac)
+            # each pixel's normal equations J^T J (theta - theta_own) = -J^T r, summed over its alike neighbours
+            rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, r)
+            parts = np.full((5, len(f1)), np.nan)
+            parts[:, i] = np.stack([own[:, 0, 0], own[:, 0, 1], own[:, 1, 1], rhs[:, 0], rhs[:, 1]])
+            # alike now means: near the pool's estimate, not the pixel's own noisy one
+            pooled = alike_sums(gate_values, gate_variances, parts.reshape(5, *grid), radius,
+                                centre=theta.reshape(2, *grid)).reshape(5, -1)
+            information = np.stack([np.stack([pooled[0], pooled[1]], -1), np.stack([pooled[1], pooled[2]], -1)], -2)
+            theta = np.einsum("nij,jn->in", _inverse(information), pooled[3:])
+        covariance = _inverse(information)
+        k1_sd = np.sqrt(covariance[:, 0, 0])
+        return np.exp(theta[0]), theta[1], k1_sd, np.sqrt(covariance[:, 1, 1]), k1_sd / fit.k1_sensitivity
+
+
+def _neighbours_contact(fit: LeverFit, shape, radius: int = 2):
+    """The mean contact (``k1``, ``contact_loss``) of the pixels found within ``radius`` of each pixel."""
+    grid = tuple(shape) if len(shape) == 2 else (1, len(fit.k1))
+    found = fit.converged.astype(float)
+    with np.errstate(all="ignore"):
+        parts = np.nan_to_num(np.stack([found, found * np.log(fit.k1), found * fit.contact_loss]))
+        sums = alike_sums(np.zeros((1, *grid)), np.ones((1, *grid)), parts.reshape(3, *grid), radius).reshape(3, -1)
+        return np.exp(sums[1] / sums[0]), sums[2] / sums[0]
 
 
 def _inverse(m):
@@ -366,6 +470,25 @@ def _drive_variance(inverse, dt1):
     return ((1 + g[..., 0]) ** 2 + g[..., 1] ** 2 + g[..., 0] ** 2 + g[..., 1] ** 2) / 2
 
 
+def drive_axis(lever: Cantilever, contact: Contact, f1, s1, k1, loss) -> float:
+    """The axis (degrees, in ``(-90, 90]``) about which the pixels' drives ``s1 / T(f1)`` cluster, their
+    sign aside (half the argument of the mean of ``(d/|d|)**2``).  The domains' drive is in phase or in
+    antiphase with the bias, so the axis is the lock-ins' phase offset modulo 180 degrees; ``d_eff``'s
+    sign reads a drive within 90 degrees of zero as positive, right while the offset is within 90.
+
+    >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
+    >>> f1 = np.full(4, 3.1e5)
+    >>> s1 = deflection_signal(lever, Contact(), f1, 120.0, 0.02) * np.array([1, -1, 1, -1]) * np.exp(-0.5j)
+    >>> round(drive_axis(lever, Contact(), f1, s1, np.full(4, 120.0), np.full(4, 0.02)), 6)      # a 0.5 rad lag
+    -28.64789
+    """
+    with np.errstate(all="ignore"):
+        drive = np.ravel(np.asarray(s1) / deflection_signal(lever, contact, f1, k1, loss))
+        drive = drive[np.isfinite(drive) & (drive != 0)]
+        axis = math.degrees(np.angle(np.mean((drive / np.abs(drive)) ** 2))) / 2 if drive.size else math.nan
+    return 90.0 if axis == -90.0 else axis
+
+
 MAPS = ("contact_resonance", "contact_quality_factor", "k1", "contact_loss", "d_eff")
 """The maps with a ``_stderr`` each (:func:`invert`); then the oscillator's readings of the same pixels."""
 OSCILLATOR_MAPS = ("oscillator_k1", "oscillator_k1_error", "oscillator_d_eff", "oscillator_d_eff_error")
@@ -376,14 +499,19 @@ def _signed(drive):
     return np.abs(drive) * np.where(np.cos(np.angle(drive)) < 0, -1.0, 1.0)
 
 
-def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, block: int = 4096,
-           progress=None) -> tuple[dict, float]:
+POOL = 3
+"""Radius (pixels) over which :func:`invert` pools a pixel's contact with its alike neighbours."""
+
+
+def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, pool: int = POOL,
+           block: int = 4096, progress=None) -> tuple[dict, float]:
     """Every pixel of a DART image both ways: maps (name -> array of the signals' shape; :data:`MAPS`
     with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``determined``) and ``sigma`` (:func:`channel_noise`).
 
     ``s1``, ``s2``: the deflection signals (m, complex, ``A exp(-i phi)``) at ``f1``, ``f2`` (Hz);
-    ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``progress(done, total)`` is called
-    after each ``block`` of pixels.
+    ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``pool``: the radius (pixels) of
+    :func:`pooled_contact` (0: each pixel's contact alone; ``d_eff`` is each pixel's own always);
+    ``progress(done, total)`` is called after each ``block`` of pixels.
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
     >>> f1, f2 = np.array([[3.10e5, 3.11e5]]), np.array([[3.16e5, 3.17e5]])
@@ -412,16 +540,21 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     fit = LeverFit(*(np.concatenate(parts) for parts in zip(*fits))) if fits else \
         LeverFit(*([np.empty(0)] * 6 + [np.empty(0, bool)]))
     # where Newton found nothing from the oscillator's start (pulled by an anti-resonance near the peak, a
-    # tracking far off), again from the tracked centre, then from a few stiffer and softer contacts
+    # tracking far off, noise on a contact the signals hardly fix), again from the contact of the neighbours
+    # found, from the tracked centre, then from a few stiffer and softer contacts
     centre_k1 = start_k1(lever, contact, (f1 + f2) / 2)
-    for scale, loss in ((None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
+    for scale, loss in (("neighbours", None), (None, 0.01), (0.5, 0.01), (2.0, 0.01), (0.7, 0.03), (1.4, 0.03)):
         again = np.flatnonzero(~fit.converged)
         if not again.size:
             break
-        k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
-                                                                            k1_start[again], centre_k1[again])
+        if scale == "neighbours":
+            k1_again, loss_again = (v[again] for v in _neighbours_contact(fit, shape))
+        else:
+            k1_again = centre_k1[again] if scale is None else scale * np.where(np.isfinite(k1_start[again]),
+                                                                                k1_start[again], centre_k1[again])
+            loss_again = np.full(again.size, loss)
         retry = lever_inversion(lever, contact, f1[again], f2[again], s1[again], s2[again], k1_again,
-                                np.full(again.size, loss), drive_amplitude)
+                                loss_again, drive_amplitude)
         fields = []
         for whole, part in zip(fit, retry):
             whole = whole.copy()
@@ -441,20 +574,31 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     with np.errstate(all="ignore"):
         k1_pm = point_mass_k1(sho.resonance, lever)
         # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
-        d_pm = _signed(sho.drive / drive_amplitude * (lever.spring_constant + k1_pm) / k1_pm)
-        # where the oscillator is undetermined, the lever's own pole (no stderr: the pole is not propagated)
-        pole = ~sho.determined & fit.converged
-        # the oscillator's resonance and Q need no lever: they stay where the lever's inversion fails
-        resonance, quality = sho.resonance.copy(), sho.quality_factor.copy()
+        d_pm = _signed(sho.drive / drive_amplitude / point_mass_static_gain(lever.spring_constant, k1_pm))
+        if pool > 0 and u > 0:
+            # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives
+            k1, loss, k1_sd, loss_sd, narrowed = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool)
+            k1_sd, loss_sd = u * k1_sd, u * loss_sd
+        else:
+            k1, loss, k1_sd, loss_sd = fit.k1, fit.contact_loss, u * fit.k1_sensitivity, u * fit.loss_sensitivity
+            narrowed = np.ones(len(f1))
+        # the contact resonance and Q: the oscillator through the lever's response at the pixel's drives (the
+        # measured signals' own where the contact is the pixel's alone), or the lever's pole where none goes
+        # through it (an anti-resonance of the slope at the spot near the peak); the oscillator through the
+        # measured signals where the lever's inversion fails
+        lever_sho = oscillator(f1, f2, deflection_signal(lever, contact, f1, k1, loss),
+                               deflection_signal(lever, contact, f2, k1, loss))
+        resonance = np.where(fit.converged, lever_sho.resonance, sho.resonance)
+        quality = np.where(fit.converged, lever_sho.quality_factor, sho.quality_factor)
+        pole = fit.converged & ~lever_sho.determined
         if pole.any():
-            resonance[pole], quality[pole] = lever_pole(lever, contact, fit.k1[pole], fit.contact_loss[pole],
-                                                        (f1[pole] + f2[pole]) / 2)
-        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance,
-                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor,
-                "k1": fit.k1, "k1_stderr": u * fit.k1 * fit.k1_sensitivity,
-                "contact_loss": fit.contact_loss, "contact_loss_stderr": u * fit.loss_sensitivity,
+            resonance[pole], quality[pole] = lever_pole(lever, contact, k1[pole], loss[pole], (f1[pole] + f2[pole]) / 2)
+        narrowed = np.where(fit.converged, narrowed, 1.0)
+        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance * narrowed,
+                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor * narrowed,
+                "k1": k1, "k1_stderr": k1 * k1_sd, "contact_loss": loss, "contact_loss_stderr": loss_sd,
                 "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
-                "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / fit.k1 - 1,
+                "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
                 "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
@@ -483,11 +627,12 @@ def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:
     write_maps(path, described, attrs)
 
 
-def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, store: str, k2_policy: str) -> dict:
+def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str, store: str, k2_policy: str,
+             pool: int = POOL, phases: str = "phases as read") -> dict:
     """The JSON document of a DART image (:func:`pfmdyn.io.results.document`, kind ``dart``): the lever
     and the settings as records (``lever``, ``settings``: name -> ``(value, status[, why])``), the
-    maps' medians over the determined pixels (each ``stderr`` the median pixel's), the noise and the
-    pixel counts.
+    maps' medians over the determined pixels (each ``stderr`` the median pixel's), the noise, the
+    pixel counts; the pooling radius (:func:`invert`) and how the phases were read (``phases``) in the notes.
 
     >>> maps = {"k1": np.array([[100.0, np.nan]]), "k1_stderr": np.array([[2.0, np.nan]]),
     ...         "determined": np.array([[1, 0]], np.uint8)}
@@ -515,6 +660,8 @@ def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str,
            "channel_noise": quantity("channel_noise", sigma, status="derived",
                                      why=None if math.isfinite(sigma) else "too few neighbouring pixels determined"),
            **as_records(settings)}
+    pooling = (f"contact (k1, contact_loss, contact resonance and Q): each pixel's fitted to its and its alike "
+               f"neighbours' signals within {pool} pixels" if pool > 0 else "contact: each pixel's alone")
     return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
-                    [k2_policy, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
+                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
                      "each stderr the median pixel's"])

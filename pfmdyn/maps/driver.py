@@ -31,8 +31,9 @@ from .spec import MECHANISMS, model_name
 from .readers import MapInput, open_map, read_block
 from .readers import require as _require
 from .result import MapResult
-from .sho import band_centres, fit_sho_block, is_sho
-from .store import DIMENSIONS, consolidate, create_maps, open_group, set_attributes, write_coordinates, write_regions
+from .sho import RENAMED, band_centres, fit_sho_block, is_sho
+from .store import (DIMENSIONS, consolidate, create_maps, open_group, rename_map, set_attributes, write_coordinates,
+                    write_regions)
 
 __all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "open_map", "run_map"]
 
@@ -112,6 +113,11 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
                                 quantity="out")
     maps = {name: {"shape": (ny, nx, *steps), "chunks": (block, block, *steps), "units": unit, "long_name": text,
                    "dims": dims} for name, (unit, text) in model.outputs.items()}
+    if sho and any(old in group for old in RENAMED):       # an SHO map begun before its Q was renamed
+        for old, new in RENAMED.items():
+            rename_map(group, old, new, long_name=maps[new]["long_name"])
+        consolidate(out)
+        group = open_group(out, mode="a")       # its listing as it now is
     maps["done"] = {"shape": grid, "chunks": (1, 1), "fill_value": 0, "dtype": "u1", "dims": ("block_y", "block_x"),
                     "units": "1", "long_name": "1 where the block's maps are written (a rerun skips it)"}
     create_maps(out, {name: arguments for name, arguments in maps.items() if name not in group})

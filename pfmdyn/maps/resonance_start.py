@@ -59,7 +59,7 @@ def resonance_start(model, y, *, iterations=40, tolerance=1e-3):
         f0 = sho["resonance_frequency"]
         inside = (f0 > f[b][0]) & (f0 < f[b][-1])
         beta.append(np.where(inside, betas(lever, np.where(inside, f0, f[b][0])), np.nan))
-        q_mode.append(sho["quality_factor"])
+        q_mode.append(sho["measured_quality_factor"])
     candidates = _free(model, beta) if model.k2_mode == "free" else _tied(model, beta)
     lower, upper = parameter_bounds(model.parameters)
     with np.errstate(all="ignore"):

@@ -35,18 +35,24 @@ from ..generated.formulas import sho_response, sho_response_d_log_quality, sho_r
 from ..fitting.batched import band_covariance, levenberg_marquardt, project_bands
 from .spec import bands
 
-__all__ = ["FIELDS", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
+__all__ = ["FIELDS", "RENAMED", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
 
-FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "resonance_frequency", "Quality Factor": "quality_factor",
-          "Phase [rad]": "phase", "R2 Criterion": "r2"}
-"""BGlib's compound fields -> pfmdyn's map names (``guess_`` + name for the guess)."""
+FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "resonance_frequency",
+          "Quality Factor": "measured_quality_factor", "Phase [rad]": "phase", "R2 Criterion": "r2"}
+"""BGlib's compound fields -> pfmdyn's map names (``guess_`` + name for the guess).  The SHO's Q is the
+measured one of each mode (:mod:`pfmdyn.names`' ``measured_quality_factor``: all damping together), not
+the lever's internal friction ``quality_factor`` of the beam maps."""
+
+RENAMED = {"quality_factor": "measured_quality_factor", "quality_factor_stderr": "measured_quality_factor_stderr",
+           "guess_quality_factor": "guess_measured_quality_factor"}
+"""The SHO maps' names before schema 1 -> now (a store begun before is renamed when a run resumes it)."""
 
 _FIT = {
     "amplitude": ("response units", "SHO amplitude A (|response| far below resonance; at the peak A Q)"),
     "resonance_frequency": ("Hz", "SHO resonance frequency w0"),
     "resonance_frequency_stderr": ("Hz", "standard error of resonance_frequency"),
-    "quality_factor": ("1", "SHO quality factor Q"),
-    "quality_factor_stderr": ("1", "standard error of quality_factor"),
+    "measured_quality_factor": ("1", "SHO quality factor Q: the mode's measured Q, all damping together"),
+    "measured_quality_factor_stderr": ("1", "standard error of measured_quality_factor"),
     "phase": ("rad", "SHO phase phi (BGlib's convention: the usual phase + pi)"),
     "r2": ("1", "R2 criterion 1 - sum|y - model|^2 / sum|y - mean(y)|^2"),
 }
@@ -176,7 +182,7 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compile
     >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
     >>> for compiled in (True, False):
     ...     out = fit_spectra(f, y[None], compiled=compiled)
-    ...     print(round(float(out["resonance_frequency"][0]), 3), round(float(out["quality_factor"][0]), 6),
+    ...     print(round(float(out["resonance_frequency"][0]), 3), round(float(out["measured_quality_factor"][0]), 6),
     ...           round(float(out["amplitude"][0]), 9), round(float(out["phase"][0]), 9), round(float(out["r2"][0]), 9))
     301200.0 150.0 0.002 0.5 1.0
     301200.0 150.0 0.002 0.5 1.0
@@ -194,10 +200,10 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compile
                                          ("", fit["p"], fit["c"], fit["cost"])):
         amplitude = amp * norm
         out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}resonance_frequency": np.exp(params[:, 0]),
-                    f"{prefix}quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
+                    f"{prefix}measured_quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
                     f"{prefix}r2": _r2(fit["total"], squares)})
     out["resonance_frequency_stderr"] = out["resonance_frequency"] * fit["spread"][:, 0]
-    out["quality_factor_stderr"] = out["quality_factor"] * fit["spread"][:, 1]
+    out["measured_quality_factor_stderr"] = out["measured_quality_factor"] * fit["spread"][:, 1]
     out["cost"], out["gap"] = fit["cost"], gap(fit["cost"] * (norm / fit["sigma"]) ** 2, f.size)
     return out
 
@@ -229,7 +235,7 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iter
     >>> f = np.concatenate([np.linspace(290e3, 310e3, 32), np.linspace(600e3, 640e3, 32)])
     >>> y = sho_response(f, 300e3, 80.0) * (f < 4e5) + 1j * sho_response(f, 620e3, 120.0) * (f > 4e5)
     >>> out = fit_sho_block(SHOMapModel(f), np.broadcast_to(y, (2, 3, f.size)))
-    >>> out["resonance_frequency"].shape, np.round(out["quality_factor"][0, 0], 6).tolist()
+    >>> out["resonance_frequency"].shape, np.round(out["measured_quality_factor"][0, 0], 6).tolist()
     ((2, 3, 2), [80.0, 120.0])
     >>> masked = fit_sho_block(SHOMapModel(f), np.stack([y, np.full(f.size, np.nan)]))
     >>> np.isnan(masked["resonance_frequency"][1]).tolist(), masked["explained"][:, 0].tolist()

@@ -67,6 +67,27 @@ def create_map(group, name: str, shape, chunks, fill_value=np.nan, dtype="f8", d
     return array
 
 
+def rename_map(group, old: str, new: str, **attrs):
+    """Give the map ``old`` the name ``new`` (its values, chunks and attributes kept, ``attrs`` over
+    them): a store begun under an earlier name, resumed.
+
+    >>> import tempfile
+    >>> group = open_group(tempfile.mkdtemp() + "/m.zarr", "w")
+    >>> _ = create_map(group, "q", (2, 2), (1, 1), dims=("y", "x"), units="1")
+    >>> group["q"][0, 0] = 7.0
+    >>> array = rename_map(group, "q", "measured_q", long_name="a Q")
+    >>> float(array[0, 0]), array.attrs["units"], array.attrs[DIMENSIONS], "q" in group
+    (7.0, '1', ['y', 'x'], False)
+    """
+    array = group[old]
+    values, chunks, fill = array[...], array.chunks, array.fill_value
+    kept = {**array.attrs, **attrs}
+    del group[old]
+    renamed = create_map(group, new, values.shape, chunks, fill_value=fill, dtype=values.dtype, **kept)
+    renamed[...] = values
+    return renamed
+
+
 def create_maps(path: str, maps: dict) -> None:
     """The arrays ``maps`` (name -> :func:`create_map`'s arguments after the name, as a dict) in
     the group at ``path``; under Zarr 3 created concurrently, in one trip to Zarr's event loop.

@@ -11,8 +11,9 @@ from matplotlib.figure import Figure
 __all__ = ["plot_maps", "plot_dart"]
 
 _SHOWN = ("k1", "k1_stderr", "k2", "quality_factor", "viscous_loss", "contact_loss", "amplitude", "phase",
-          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "r2", "gap",
-          "contact_resonance", "contact_quality_factor", "d_eff", "oscillator_k1_error", "oscillator_d_eff_error")
+          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "measured_quality_factor",
+          "r2", "gap", "contact_resonance", "contact_quality_factor", "d_eff", "oscillator_k1_error",
+          "oscillator_d_eff_error")
 
 
 def plot_maps(result) -> dict[str, Figure]:
