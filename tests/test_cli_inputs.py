@@ -168,7 +168,7 @@ def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys)
 
 
 @pytest.mark.parametrize("argv, flags_named", [
-    (["spot", "--k1", "100", "--frequency", "1e5", "--spring-constant", "2"],
+    (["spot", "--k1", "100", "--frequency", "1e5", "--spring-constant", "2"],     # the tip height: assumed
      ["--free-resonance", "--length"]),
     (["stiffness", "--contact", "3e5"], ["--free-resonance", "--spring-constant"]),
     (["roots", "elastic"], ["--k1-over-k", "--k2-ratio"]),
