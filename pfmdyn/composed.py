@@ -746,12 +746,14 @@ class _Compiled:
         n = math.prod(self.shape)
         flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
         self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
-        beta = np.ascontiguousarray(flat[0], complex)
+        # writable C-ordered arrays only: numba compiles read_out anew (8 s) for each read-only view or
+        # Fortran-ordered array it meets
+        beta = np.require(flat[0], complex, ["C", "W"])
         point = (beta, *flat[2:9], flat[10])
-        g = np.ascontiguousarray(np.real(flat[9]), float)
+        g = np.require(np.real(flat[9]), float, ["C", "W"])
         two = bool(np.any(g != 1.0)) or "gamma" in names
         uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
-        jump = _columns(pieces.point_jump(*point), n, complex)
+        jump = np.require(_columns(pieces.point_jump(*point), n, complex), requirements=["C", "W"])
         at_tip = [p for p in names if p in _POINT]
         partials = pieces.point_jump_partials(*point, wrt=at_tip)
         djump = np.zeros((len(names), n, 12), complex)
@@ -761,8 +763,8 @@ class _Compiled:
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
-        kernels.read_out(beta, np.ascontiguousarray(np.real(flat[1]), float), g, uc,
-                         np.ascontiguousarray(self.k, complex), jump, djump, kinds, two, z, dz)
+        kernels.read_out(beta, np.require(np.real(flat[1]), float, ["C", "W"]), g, uc,
+                         np.require(self.k, complex, ["C", "W"]), jump, djump, kinds, two, z, dz)
         use = _drive_columns(drives, DRIVES)
         real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
         self.z = z[:, :, use].real if real else z[:, :, use]
