@@ -8,7 +8,8 @@ away from the end and at it).  The baseline is checked out into a temporary git 
 alternating, the best of :data:`REPEAT` runs kept (spectrum generation and imports excluded,
 one BLAS thread as the command runs; the process's CPU seconds, which a shared machine's load
 changes less than the wall clock, and the wall clock beside them).  Every report's JSON is compared with the baseline's: the
-named effects, mechanisms and verdicts identical, every number within :data:`RTOL`.
+named effects, mechanisms and verdicts identical, every number within :data:`RTOL` (the fits' tolerance,
+:data:`FIT_TOLERANCE`, times a hundred), or equal to the bit.
 
 Run ``python benchmarks/discrepancy_speed.py [--repeat N] [--cases a,b]``; results:
 ``benchmarks/results/discrepancy_speed.md``.  Ratios are baseline / current (above 1: faster
@@ -32,9 +33,16 @@ from recording import recorded
 ROOT = Path(__file__).resolve().parent.parent
 BASELINE = "478d53d"
 REPEAT = 3
-RTOL, ATOL = 1e-6, 1e-12
-"""Tolerances of the reports' numbers: relative (the fits converge to the same point, not the same
-bits), and absolute for a value at zero (a tip mass at its null bound: 1e-14 or 1e-13 of rounding)."""
+FIT_TOLERANCE = 1e-8
+"""The fits' own tolerance: ``scipy.optimize.least_squares`` stops when a step changes the cost by less
+than this fraction (its ``ftol``, and ``xtol`` for the parameters), so two runs of one design that
+differ in rounding may stop a step apart."""
+RTOL, ATOL = 100 * FIT_TOLERANCE, 1e-12
+"""Tolerances of the reports' numbers: relative, a hundred times :data:`FIT_TOLERANCE` (the fits converge to
+the same point within it, not to the same bits; a number derived from several fits, a gap or a BIC
+difference, adds theirs), and absolute for a value at zero (a tip mass at its null bound: 1e-14 or 1e-13
+of rounding).  Strings (the effects named, the candidate selected at each step, verdicts) and the
+reports' structure are compared exactly."""
 CASES = {
     "band_viscous 2": ("band_viscous", 2, None),
     "band_air_setback 0": ("band_air_setback", 0, None),
@@ -81,15 +89,18 @@ def run_case(case: str, cwd: Path, env: dict, out: Path) -> tuple[float, float, 
 
 def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
     """Where two reports (parsed JSON) differ: strings and structure exactly, numbers beyond ``rtol``
-    (or :data:`ATOL` near zero).
+    (or :data:`ATOL` near zero); a field only the new report has is an addition (:func:`additions`),
+    not a difference.
 
-    >>> differences({"a": [1.0, "x"], "b": 2.0}, {"a": [1.0 + 1e-9, "x"], "b": 2.1})
+    >>> differences({"a": [1.0, "x"], "b": 2.0, "c": 1}, {"a": [1.0 + 1e-9, "x"], "b": 2.1})
     ['b: 2.0 != 2.1']
+    >>> differences({"a": 1.0}, {"a": 1.0, "b": 2.0})
+    [": keys ['b'] missing"]
     """
     if isinstance(new, dict) and isinstance(old, dict):
-        if new.keys() != old.keys():
-            return [f"{where}: keys {sorted(new.keys() ^ old.keys())}"]
-        return [d for k in new for d in differences(new[k], old[k], f"{where}.{k}".lstrip("."), rtol)]
+        if old.keys() - new.keys():
+            return [f"{where}: keys {sorted(old.keys() - new.keys())} missing"]
+        return [d for k in old for d in differences(new[k], old[k], f"{where}.{k}".lstrip("."), rtol)]
     if isinstance(new, list) and isinstance(old, list):
         if len(new) != len(old):
             return [f"{where}: {len(new)} != {len(old)} items"]
@@ -101,6 +112,19 @@ def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
     return [] if new == old else [f"{where}: {new!r} != {old!r}"]
 
 
+def additions(new, old) -> set[str]:
+    """The names of the fields the new report has and the old one has not (anywhere in it).
+
+    >>> sorted(additions({"a": [{"x": 1, "y": 2}], "b": 1}, {"a": [{"x": 1}]}))
+    ['b', 'y']
+    """
+    if isinstance(new, dict) and isinstance(old, dict):
+        return set(new.keys() - old.keys()).union(*(additions(new[k], old[k]) for k in new.keys() & old.keys()))
+    if isinstance(new, list) and isinstance(old, list):
+        return set().union(*(additions(a, b) for a, b in zip(new, old)))
+    return set()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", default=BASELINE, help="commit of the previous design")
@@ -108,6 +132,10 @@ def main() -> None:
     parser.add_argument("--cases", default=",".join(CASES), help="comma-separated names of CASES")
     args = parser.parse_args()
     print(f"machine load at start: {os.getloadavg()[0]:.2f} (2 cores; shared)")
+    print(f"reports compared: names, selections and structure exactly; numbers within {RTOL:g} relative "
+          f"({RTOL / FIT_TOLERANCE:g} x the fits' tolerance {FIT_TOLERANCE:g}) or {ATOL:g} absolute; "
+          "'to the bit' when every number is equal (or within 1e-12 at zero); fields the baseline's reports lack "
+          "are listed, not compared")
     with tempfile.TemporaryDirectory() as tmp:
         base, base_env = _baseline_tree(args.baseline, Path(tmp))
         now_env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
@@ -126,9 +154,13 @@ def main() -> None:
                         times[name] = [min(times[name][0], cpu), min(times[name][1], seconds)]
                         reports[name] = json.loads(out.read_text())
                 diff = differences(reports["current"], reports["baseline"])
+                added = additions(reports["current"], reports["baseline"])
+                exact = not differences(reports["current"], reports["baseline"], rtol=0.0)
                 (old, old_wall), (new, new_wall) = times["baseline"], times["current"]
                 ratios.append(old / new)
-                verdict = "unchanged" if not diff else f"CHANGED: {'; '.join(diff[:4])}"
+                verdict = ("unchanged to the bit" if exact else f"unchanged within {RTOL:g}" if not diff
+                           else f"CHANGED beyond {RTOL:g}: {'; '.join(diff[:4])}")
+                verdict += f" (fields added since: {', '.join(sorted(added))})" if added else ""
                 print(f"| {case} | {rows} | {old:.1f} ({old_wall:.1f}) | {new:.1f} ({new_wall:.1f}) | {old / new:.2f} "
                       f"({old_wall / new_wall:.2f}) | {os.getloadavg()[0]:.1f} | {verdict} |")
             print(f"\nmedian speed-up (CPU) {statistics.median(ratios):.2f} (target >= 6)")

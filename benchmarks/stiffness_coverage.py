@@ -5,12 +5,15 @@ um, k1/k 1-1e4, tip set back, heavy and tilted) in contact with a sample of Pois
 0.2-0.4 (k2 the Mindlin ratio of it).  Its first contact resonance comes from the independent exact
 beam (mpmath, ``tests/segment_beam.py``), measured with a relative scatter of 1e-4 (stated as the
 contact uncertainty).  The user states the lever's tip height as a datasheet would, the true one
-within a 10 % standard deviation, and no k2 policy (pfmdyn assumes Mindlin at 0.3).  A case is covered
-when k1's 2-sigma interval holds the true k1; the uncertainty should cover at least 90 % of the cases.
+within a 10 % standard deviation, and no k2 policy (pfmdyn assumes Mindlin at 0.3).  With
+``--assumed-tip-height`` the user states no tip height: the lever's true one is a PFM probe's, drawn
+uniform in the datasheets' 10-17 um, and pfmdyn assumes its default (``pfmdyn.constants.TIP_HEIGHT``
++/- ``TIP_HEIGHT_SPREAD``), as the command does with default flags.  A case is covered when k1's 2-sigma
+interval holds the true k1; the uncertainty should cover at least 90 % of the cases.
 
-    python benchmarks/stiffness_coverage.py [--cases 60]
+    python benchmarks/stiffness_coverage.py [--cases 60] [--assumed-tip-height]
 
-Results: ``benchmarks/results/stiffness_coverage.md``.
+Results: ``benchmarks/results/stiffness_coverage.md`` (``..._assumed_tip_height.md``).
 """
 from __future__ import annotations
 
@@ -29,6 +32,7 @@ from recording import recorded, tally  # noqa: E402
 
 from pfmdyn import Cantilever, Contact  # noqa: E402
 from pfmdyn.analysis.stiffness_report import analyse  # noqa: E402
+from pfmdyn.constants import TIP_HEIGHT, TIP_HEIGHT_SPREAD  # noqa: E402
 
 
 def mindlin(nu: float) -> float:
@@ -39,18 +43,23 @@ def mindlin(nu: float) -> float:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=60)
+    parser.add_argument("--assumed-tip-height", action="store_true",
+                        help="no tip height stated: a PFM probe's (10-17 um) against pfmdyn's default")
     args = parser.parse_args()
     rng = np.random.default_rng(11)
     covered, failures, z = 0, [], []
     for case in range(args.cases):
         nu = rng.uniform(0.2, 0.4)
         truth = random_lever(rng, k2_over_k1=mindlin(nu))
+        if args.assumed_tip_height:
+            truth = replace(truth, tip_height=rng.uniform(10e-6, 17e-6))
         fc = truth.contact_resonances(1)[0] * (1 + 1e-4 * rng.standard_normal())
-        nominal = truth.tip_height * (1 + 0.1 * rng.standard_normal())
+        nominal = TIP_HEIGHT if args.assumed_tip_height else truth.tip_height * (1 + 0.1 * rng.standard_normal())
+        stated = {"tip_height_uncertainty": TIP_HEIGHT_SPREAD} if args.assumed_tip_height else {}
         lever = Cantilever(truth.spring_constant, truth.free_resonance, truth.length, tip_height=nominal,
                            tip_position=truth.tip_position, tip_mass_ratio=truth.tip_mass_ratio, tilt=truth.tilt)
         try:
-            s = analyse(lever, Contact(), [fc], contact_uncertainty=1e-4 * fc).solution
+            s = analyse(lever, Contact(), [fc], contact_uncertainty=1e-4 * fc, **stated).solution
         except Exception as error:          # a resonance the stated lever cannot reach: counted as missed
             failures.append(f"case {case}: {error}")
             continue
@@ -66,5 +75,5 @@ def main():
 
 
 if __name__ == "__main__":
-    with recorded("stiffness_coverage"):
+    with recorded("stiffness_coverage" + ("_assumed_tip_height" if "--assumed-tip-height" in sys.argv else "")):
         main()

@@ -746,14 +746,14 @@ class _Compiled:
         n = math.prod(self.shape)
         flat = [np.broadcast_to(a, self.shape).reshape(-1) for a in args]
         self.beta, self.k, self.L = flat[0].astype(np.result_type(flat[0], float)), flat[2], flat[7]
-        # writable C-ordered arrays only: numba compiles read_out anew (8 s) for each read-only view or
-        # Fortran-ordered array it meets
-        beta = np.require(flat[0], complex, ["C", "W"])
+        # writable copies: a read-only view (a broadcast) would be another specialisation to compile
+        beta = np.array(flat[0], complex)
         point = (beta, *flat[2:9], flat[10])
-        g = np.require(np.real(flat[9]), float, ["C", "W"])
+        g = np.array(np.real(flat[9]), float)
         two = bool(np.any(g != 1.0)) or "gamma" in names
         uc = np.ascontiguousarray(pieces.load_constant(beta, self.k, self.L) + 0 * beta, complex)
-        jump = np.require(_columns(pieces.point_jump(*point), n, complex), requirements=["C", "W"])
+        # C order (a Fortran-ordered jump would be another specialisation, 8 s to compile)
+        jump = np.ascontiguousarray(_columns(pieces.point_jump(*point), n, complex))
         at_tip = [p for p in names if p in _POINT]
         partials = pieces.point_jump_partials(*point, wrt=at_tip)
         djump = np.zeros((len(names), n, 12), complex)
@@ -763,9 +763,9 @@ class _Compiled:
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
-        kernels.read_out(beta, np.require(np.real(flat[1]), float, ["C", "W"]), g, uc,
-                         np.require(self.k, complex, ["C", "W"]), jump, djump, kinds, two, z, dz)
         use = _drive_columns(drives, DRIVES)
+        kernels.read_out(beta, np.array(np.real(flat[1]), float), g, uc, np.array(self.k, complex), jump, djump,
+                         kinds, two, np.array(use, np.int64), z, dz)
         real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
         self.z = z[:, :, use].real if real else z[:, :, use]
         self._partials = {name: dz[:, i][:, :, use].real if real else dz[:, i][:, :, use]
@@ -1056,7 +1056,7 @@ def _compiled_characteristic(*args):
     else:
         return _shaped(_transferred(*args), args[8])
     out = np.empty((len(params), beta.size), dtype)
-    kernels.characteristic(np.ascontiguousarray(beta, dtype), params, out)
+    kernels.characteristic(np.array(beta, dtype), params, out)     # writable: a read-only view compiles again
     return out.reshape(shape)
 
 
@@ -1115,11 +1115,11 @@ def _compiled_tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
 
     beta = np.asarray(beta)
     dtype = np.result_type(beta, k, kvv, kll, kvl, mu, rho_g, float)
-    flat = np.ascontiguousarray(beta.reshape(-1), dtype)
+    flat = np.array(beta.reshape(-1), dtype)       # writable and C-ordered: one specialisation to compile
     point = (flat, k, kvv, kll, kvl, H, L, mu, rho_g)
     jump = _columns(pieces.point_jump(*point), len(flat), dtype)
     partials = pieces.point_jump_partials(*point, wrt=names)
-    djump = np.stack([_columns(partials[p], len(flat), dtype) for p in names]) if names \
+    djump = np.ascontiguousarray(np.stack([_columns(partials[p], len(flat), dtype) for p in names])) if names \
         else np.zeros((0, len(flat), 12), dtype)
     out, d = np.empty(len(flat), dtype), np.empty((len(names), len(flat)), dtype)
     kernels.tip_at_end_and_partials(flat, jump, djump, names.index("beta") if "beta" in names else -1, out, d)

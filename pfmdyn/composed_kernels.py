@@ -177,9 +177,11 @@ def _across(V, J, two, out):
 
 
 @numba.njit(cache=True)
-def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
+def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
     """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, 6]``, and its partials
-    ``dz[n, p, 2, 6]`` w.r.t. parameters of ``kinds`` (:data:`BETA` ...), per member ``n``: the
+    ``dz[n, p, 2, 6]`` w.r.t. parameters of ``kinds`` (:data:`BETA` ...), per member ``n``, of the drives
+    ``drives`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns are solved alone, so the others
+    are neither formed nor written): the
     written-out form of :class:`pfmdyn.composed._WrittenOut` (each segment's outer rows eliminated,
     the tip's 2 x 2 or 4 x 4 solved), step for step.
 
@@ -194,7 +196,7 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
     >>> jump, uc = np.array([pieces.point_jump(*point)], complex), np.array([pieces.load_constant(2.5, 2.0, 2e-4)], complex)
     >>> z, dz = np.empty((1, 2, 6), complex), np.empty((1, 0, 2, 6), complex)
     >>> read_out(beta, np.array([1.0]), np.array([1.0]), uc, np.array([2.0 + 0j]), jump, np.zeros((0, 1, 12), complex),
-    ...          np.zeros(0, np.int64), False, z, dz)
+    ...          np.zeros(0, np.int64), False, np.arange(6), z, dz)
     >>> f"{(2.5 / 2e-4 * z[0, 1, 0]).real:.8g}"       # the slope at the free end per unit d1
     '5363.3808'
     """
@@ -212,19 +214,19 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
     B = np.empty((segments, 2, 2), np.complex128)
     b0 = np.zeros((segments, 2, _DRIVES), np.complex128)
     Gp_inv = np.empty((segments, 2, 2), np.complex128)
-    R, w = np.empty((4, 2), np.complex128), np.empty((4, _DRIVES), np.complex128)
-    M, r = np.empty((size, size), np.complex128), np.empty((size, _DRIVES), np.complex128)
+    R, w = np.empty((4, 2), np.complex128), np.zeros((4, _DRIVES), np.complex128)
+    M, r = np.empty((size, size), np.complex128), np.zeros((size, _DRIVES), np.complex128)
     X = np.empty((size, 2), np.complex128)
     inverse, work = np.empty((size, size), np.complex128), np.empty((size, size), np.complex128)
     pivots = np.empty(size, np.int64)
-    u = np.empty((size, _DRIVES), np.complex128)
-    coef = np.empty((segments, 4, _DRIVES), np.complex128)
+    u = np.zeros((size, _DRIVES), np.complex128)
+    coef = np.zeros((segments, 4, _DRIVES), np.complex128)
     J = np.empty((2, 2), np.complex128)
-    z_tip = np.empty((2, _DRIVES), np.complex128)
-    e = np.empty((batches, 4, _DRIVES), np.complex128)
-    fixed = np.empty((segments, 2, _DRIVES), np.complex128)
-    share = np.empty((4, _DRIVES), np.complex128)
-    q, across = np.empty((size, _DRIVES), np.complex128), np.empty((size, _DRIVES), np.complex128)
+    z_tip = np.zeros((2, _DRIVES), np.complex128)
+    e = np.zeros((batches, 4, _DRIVES), np.complex128)
+    fixed = np.zeros((segments, 2, _DRIVES), np.complex128)
+    share = np.zeros((4, _DRIVES), np.complex128)
+    q, across = np.zeros((size, _DRIVES), np.complex128), np.zeros((size, _DRIVES), np.complex128)
     spot_per_row = np.empty((2, size), np.complex128)
     tmp2, tmp4 = np.empty((2, 2), np.complex128), np.empty((4, 2), np.complex128)
     for i in range(n):
@@ -284,7 +286,7 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
             for m in range(4):
                 for j in range(2):
                     R[m, j] = E[at, m, 2 + j] - (E[at, m, 0] * B[seg, 0, j] + E[at, m, 1] * B[seg, 1, j])
-                for d in range(_DRIVES):
+                for d in drives:
                     w[m, d] = E[at, m, 0] * b0[seg, 0, d] + E[at, m, 1] * b0[seg, 1, d]
                 w[m, _Q0] += P[at, m]
             if seg == 0:
@@ -293,15 +295,16 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
                 for m in range(size):
                     for j in range(2):
                         M[m, j] = X[m, j]
-                    for d in range(_DRIVES):
+                    for d in drives:
                         r[m, d] = -r[m, d]
                 for rr in range(2):
-                    for d in range(4):
-                        r[size - 2 + rr, d] += jump[i, 4 + 4 * rr + d]
+                    for d in drives:
+                        if d < 4:       # the jump drives d1, d2, f0, m0
+                            r[size - 2 + rr, d] += jump[i, 4 + 4 * rr + d]
             else:
                 for m in range(4):
                     M[m, 2], M[m, 3] = -R[m, 0], -R[m, 1]
-                    for d in range(_DRIVES):
+                    for d in drives:
                         r[m, d] += w[m, d]
         ok = ok and _inverse(M, inverse, work, pivots)
         if not ok:
@@ -311,12 +314,12 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
         _product(inverse, r, u)
         for seg in range(segments):
             for m in range(2):
-                for d in range(_DRIVES):
+                for d in drives:
                     coef[seg, m, d] = b0[seg, m, d] - (B[seg, m, 0] * u[2 * seg, d] + B[seg, m, 1] * u[2 * seg + 1, d])
                     coef[seg, 2 + m, d] = u[2 * seg + m, d]
         on = 0 if before else 1
         for m in range(2):
-            for d in range(_DRIVES):
+            for d in drives:
                 z[i, m, d] = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
                     E[spot, m, 2] * coef[on, 2, d] + E[spot, m, 3] * coef[on, 3, d]
                 z_tip[m, d] = E[1, m, 0] * coef[0, 0, d] + E[1, m, 1] * coef[0, 1, d] + \
@@ -337,16 +340,17 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
             q[:, :] = 0.0
             for rr in range(2):             # the jump's change: dJ z_tip + dG d
                 row = size - 2 + rr
-                for d in range(_DRIVES):
+                for d in drives:
                     q[row, d] = djump[p, i, 2 * rr] * z_tip[0, d] + djump[p, i, 2 * rr + 1] * z_tip[1, d]
-                for d in range(4):
-                    q[row, d] += djump[p, i, 4 + 4 * rr + d]
+                for d in drives:
+                    if d < 4:
+                        q[row, d] += djump[p, i, 4 + 4 * rr + d]
             moved = kind != TIP
             if moved:
                 for b in range(batches):
                     c_seg = on if b == spot else b // 2
                     for m in range(4):
-                        for d in range(_DRIVES):
+                        for d in drives:
                             e[b, m, d] = 0.0
                     if kind == SIGMA and b != spot:
                         continue
@@ -357,13 +361,13 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
                             e[b, m, _Q0] = -P[b, m] / k[i]
                         continue
                     for m in range(4):
-                        for d in range(_DRIVES):
+                        for d in drives:
                             e[b, m, d] = dE[m, 0] * coef[c_seg, 0, d] + dE[m, 1] * coef[c_seg, 1, d] + \
                                 dE[m, 2] * coef[c_seg, 2, d] + dE[m, 3] * coef[c_seg, 3, d]
                         e[b, m, _Q0] += uc[i] * dP[m]
                 # at fixed unknowns: less the eliminated rows' share
                 for m in range(2):
-                    for d in range(_DRIVES):
+                    for d in drives:
                         fixed[0, m, d] = e[0, m, d]
                         if two:
                             fixed[1, m, d] = Gp_inv[1, m, 0] * e[3, 2, d] + Gp_inv[1, m, 1] * e[3, 3, d]
@@ -372,23 +376,23 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, z, dz):
                         continue
                     b, seg = (1, 0) if role == 0 else (2, 1) if role == 1 else (spot, on)
                     for m in range(4):
-                        for d in range(_DRIVES):
+                        for d in drives:
                             share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] + E[b, m, 1] * fixed[seg, 1, d])
                     if role == 0:
                         _across(share, J, two, across)
                         for m in range(size):
-                            for d in range(_DRIVES):
+                            for d in drives:
                                 q[m, d] -= across[m, d]
                     elif role == 1:
                         for m in range(4):
-                            for d in range(_DRIVES):
+                            for d in drives:
                                 q[m, d] += share[m, d]
                     else:
                         for m in range(2):
-                            for d in range(_DRIVES):
+                            for d in drives:
                                 dz[i, p, m, d] = share[m, d]
             for m in range(2):
-                for d in range(_DRIVES):
+                for d in drives:
                     v = 0j
                     for j in range(size):
                         v += spot_per_row[m, j] * q[j, d]

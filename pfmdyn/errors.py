@@ -23,13 +23,14 @@ class UserError(ValueError):
 
     ``quantity`` names the value to give or to fix: a name of :mod:`pfmdyn.names`, or, for what
     a command takes under an option of its own (``out``, ``model``, a contact resonance's
-    ``contact``, the spot's drive ``frequency``), that option's name; None when no value is at fault.
+    ``contact``, the spot's drive ``frequency``), that option's name; a tuple of them when several
+    values are missing; None when no value is at fault.
 
     >>> UserError("the contact needs k1", quantity="k1").quantity
     'k1'
     """
 
-    def __init__(self, message: str, quantity: str | None = None):
+    def __init__(self, message: str, quantity: str | tuple[str, ...] | None = None):
         super().__init__(message)
         self.quantity = quantity
 
@@ -40,3 +41,13 @@ class MissingExtraError(UserError):
     def __init__(self, module: str, extra: str):
         super().__init__(f"{module} is not installed: pip install 'pfmdyn[{extra}]'")
         self.module, self.extra = module, extra
+
+
+def listed(items, last: str = "and") -> str:
+    """Items as a sentence lists them: ``a``, ``a and b``, ``a, b and c`` (``last``: the final word).
+
+    >>> listed(["a"]), listed(["a", "b"], "or"), listed(["a", "b", "c"])
+    ('a', 'a or b', 'a, b and c')
+    """
+    items = list(items)
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} {last} {items[-1]}"

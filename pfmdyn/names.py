@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .constants import ROOM_TEMPERATURE
+from .constants import ROOM_TEMPERATURE, TIP_HEIGHT, TIP_HEIGHT_SPREAD
 from .errors import UserError
 
 __all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "GROUPS", "canonical", "flag",
@@ -43,6 +43,8 @@ class Quantity:
     """What reports and messages call it in a few words (default: the name with spaces)."""
     default: float | None = None
     """The value assumed when neither a flag nor a file gives one (reports mark it assumed)."""
+    default_why: str = ""
+    """Why :attr:`default` is what it is, in a few words (reports say it beside the assumed value)."""
 
     def __post_init__(self):
         if not self.label:
@@ -71,7 +73,9 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("thickness", "t", "m", "lever thickness (geometry input)", 1e-8, 1e-3, aliases=("thickness_m",)),
     Quantity("density", "rho", "kg/m^3", "lever material density (geometry input)", 100.0, 3e4),
     Quantity("tip_height", "H", "m", "tip height, the lever arm of the lateral contact force", 1e-8, 1e-3,
-             aliases=("tip_height_m",)),
+             aliases=("tip_height_m",), default=TIP_HEIGHT,
+             default_why=f"a typical PFM probe's, {TIP_HEIGHT * 1e6:g} +/- {TIP_HEIGHT_SPREAD * 1e6:g} um: datasheets "
+             "give 10-17 um, no file records it"),
     Quantity("tip_position", "x_tip/L", "1", "where the tip sits along the lever (1: at the free end)",
              0.0, 1.0, aliases=("gamma",)),
     Quantity("tip_mass_ratio", "m_tip/(rho S L)", "1", "tip mass over the lever's mass", 0.0, 100.0,
@@ -98,7 +102,8 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("spring_constant_uncertainty", "u(k)", "N/m", "standard uncertainty of the spring constant", 0.0, 1e4,
              open_low=False),
     Quantity("tip_height_uncertainty", "u(H)", "m", "standard uncertainty of the tip height (default 10 per cent of "
-             "it: no file records it)", 0.0, 1e-3, open_low=False),
+             "a given one, the spread of PFM probes' datasheets for the assumed one)", 0.0, 1e-3, open_low=False,
+             default=TIP_HEIGHT_SPREAD, default_why="of the assumed tip height, the spread of PFM probes' datasheets"),
     Quantity("tip_radius", "R", "m", "tip apex radius of the Hertz contact (for the reduced modulus E*)", 1e-10, 1e-3,
              aliases=("tip_radius_m",)),
     Quantity("normal_load", "P", "N", "normal load on the tip of the Hertz contact (for the reduced modulus E*)",
@@ -114,7 +119,8 @@ QUANTITIES: tuple[Quantity, ...] = (
              "growing as sqrt(f)", 0.0, 100.0, open_low=False, option=False),
     # Calibration of the free lever (``pfmdyn calibrate``): the fluid, the detector, nominal sizes' tolerances.
     Quantity("temperature", "T", "K", "temperature of the lever and the fluid around it", 1.0, 2000.0,
-             aliases=("temperature_k",), default=ROOM_TEMPERATURE),
+             aliases=("temperature_k",), default=ROOM_TEMPERATURE,
+             default_why="room temperature"),
     Quantity("medium", "medium", "1", "fluid around the lever: air, water (at the temperature) or DENSITY,VISCOSITY "
              "(kg/m^3,Pa s)", 0.0, 0.0),
     Quantity("invols", "InvOLS", "m/V", "inverse optical lever sensitivity: static deflection per detector volt",

@@ -33,6 +33,18 @@ def test_help_formats(command, capsys):
     assert all(option in text for action in shown for option in action.option_strings)
 
 
+def test_json_help_says_the_document_is_alone_on_standard_output(capsys):
+    """What ``--json -`` does (README): the document alone on standard output, the report on standard
+    error; the help said 'after the summary', as before that change."""
+    helps = [action.help for command in COMMANDS for action in cli.parser(command)[1][command]._actions
+             if action.dest in ("json", "errata")]
+    assert len(helps) >= len(COMMANDS) - 2
+    assert all("alone on standard output" in text and "after the summary" not in text for text in helps), helps
+    assert cli.main(["roots", "free", "--modes", "1", "--digits", "5", "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.lstrip().startswith("{") and captured.out.rstrip().endswith("}") and captured.err
+
+
 def test_top_level_help_lists_every_command(capsys):
     with pytest.raises(SystemExit) as stopped:
         cli.main(["--help"])

@@ -167,6 +167,29 @@ def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys)
     assert len(err) == 1 and err[0].startswith(f"pfmdyn {command}: error: ") and missing in err[0], err
 
 
+@pytest.mark.parametrize("argv, flags_named", [
+    (["spot", "--k1", "100", "--frequency", "1e5", "--spring-constant", "2"],
+     ["--free-resonance", "--length", "--tip-height"]),
+    (["stiffness", "--contact", "3e5"], ["--free-resonance", "--spring-constant"]),
+    (["roots", "elastic"], ["--k1-over-k", "--k2-ratio"]),
+])
+def test_every_missing_lever_flag_is_named_in_one_run(argv, flags_named, capsys):
+    """A user gives what is missing in one run, not one flag per run."""
+    assert _run(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and all(flag in err[0] for flag in flags_named), err
+
+
+def test_every_lever_field_missing_from_an_instrument_file_is_named():
+    from pfmdyn.commands.flags import option_hint
+    from pfmdyn.io.instruments import resonance_table
+    from pfmdyn.io.record import MissingFieldError, make_record
+    record = make_record("scan.h5", "image", "test", (), {"free_resonance": 6e4, "spring_constant": 1.0})
+    with pytest.raises(MissingFieldError, match="^lever length and tip height not in scan.h5$") as caught:
+        resonance_table(record)
+    assert option_hint(caught.value) == ": give --length and --tip-height"
+
+
 @pytest.mark.parametrize("name, text, words", [
     ("empty", "", "empty"),
     ("one_bias", "frequency_hz,bias_v,x,y\n100000,0,1,0\n200000,0,1,0\n", "one bias"),

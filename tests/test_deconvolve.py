@@ -319,3 +319,21 @@ def test_calibration_is_that_of_pfmdyn_spot():
     assert mine.calibration_factor[0] == pytest.approx(spot.calibration_factor.real, rel=1e-12)
     assert mine.d_eff_error_per_volt[0] == pytest.approx(spot.d_eff_error_per_volt.real, rel=1e-12)
     assert abs(mine.calibration_factor[0] - 1) > 1e-3        # the frequency matters at all
+
+
+def test_a_response_the_bias_does_not_change_leaves_the_nulling_bias_undetermined(tmp_path, capsys):
+    """A pure piezoresponse (G_elec = 0 at every frequency): no 'nan' printed, no RuntimeWarning, the
+    nulling bias and its spread undetermined with why, in print and in JSON."""
+    import json
+    import warnings
+
+    data = tmp_path / "flat.csv"
+    data.write_text("frequency_hz,bias_v,x,y\n" + "".join(f"{f},{v},2.5,-0.5\n" for f in (1e5, 2e5) for v in (-1, 1)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert cli.main(["deconvolve", str(data), "--surface-potential", "0", "--out", str(tmp_path / "o"),
+                         "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out and "nulling bias: undetermined at every frequency" in out
+    results = json.loads((tmp_path / "d.json").read_text())["results"]
+    assert results["mean_nulling_bias"]["status"] == results["nulling_bias_spread"]["status"] == "undetermined"

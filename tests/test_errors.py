@@ -79,8 +79,8 @@ def test_errors_name_the_quantity_not_the_flag():
 
 @pytest.mark.parametrize("argv, flag", [
     # a quantity missing from the lever
-    (["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100",
-      "--frequency", "1e4"], "--tip-height"),
+    (["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--tip-height", "1e-5", "--k1", "100",
+      "--frequency", "1e4"], "--length"),
     # a bad value found by the analysis, not by the flag's check
     (["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--tip-height", "1e-5",
       "--k1", "0", "--frequency", "1e4"], "--k1"),
@@ -89,8 +89,8 @@ def test_errors_name_the_quantity_not_the_flag():
       "--k1", "100", "--frequency", "1e10"], "--frequency"),
     (["stiffness", "--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position",
       "fit"], "--contact"),
-    (["stiffness", "--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--length", "2e-4",
-      "--tilt", "12"], "--tip-height"),
+    (["stiffness", "--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tilt", "12"],
+     "--length"),
 ])
 def test_the_command_line_names_the_flag_in_one_line(argv, flag, capsys):
     assert cli.main(argv) == 2

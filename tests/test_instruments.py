@@ -87,6 +87,12 @@ def test_drive_sweeps_header_fit(name):
     assert record.fields["free_quality_factor"] == pytest.approx(q, abs=6e-4)
     assert record.fields["free_resonance"] == pytest.approx(f, abs=6e-3)
     assert [c.unit for c in record.channels][1] == "deg"
+    # the amplitude in the unit the sweep reader of discrepancy gives: Nanonis's 'm' through its default
+    # input calibration of 1 m/V are the detector's volts (README table 2)
+    assert [c.unit for c in record.channels][0] == "V"
+    assert any("input calibration is 1E+0 m/V" in n for n in record.notes) == name.endswith(".dat")
+    # a Cytomass header's peak-amplitude frequency is said to be one, not the resonance
+    assert any("'Peak amplitude frequency'" in n for n in record.notes) == name.endswith(".txt")
 
 
 def test_image_gives_free_and_contact_mode_with_q_and_asks_for_tip_height():
@@ -212,6 +218,33 @@ def test_empty_and_unknown_files(tmp_path):
         read_instrument(tmp_path / "scan.spm")
     with pytest.raises(UserError, match="no such file"):
         read_instrument(tmp_path / "absent.ibw")
+
+
+@pytest.mark.parametrize("text, words", [
+    ("# c\nfrequency_hz,asd_m_per_sqrthz,fit_m_per_sqrthz\n1000,1e-13,1e-13\n1038,1.1e", "line 4: 2 values"),
+    ("frequency_hz,asd_m_per_sqrthz\n1000,1e-13\n1038,1.1e\n", "line 3: column 'asd_m_per_sqrthz'"),
+    ("frequency_hz,asd_m_per_sqrthz\n", "line 1: header but no data rows"),
+])
+def test_inspect_of_a_truncated_or_empty_csv_says_so(text, words, tmp_path):
+    """As calibrate and discrepancy say of the same file: a truncated row is no data point."""
+    path = tmp_path / "tune.csv"
+    path.write_text(text)
+    with pytest.raises(UserError, match=words):
+        read_instrument(path)
+
+
+def test_a_table_under_a_text_name_a_directory_and_text_without_a_table(tmp_path):
+    """inspect reads pfmdyn's table under a .txt name as discrepancy and stiffness do; a directory and
+    text with no frequency column are named as what they are."""
+    table = tmp_path / "res.txt"
+    table.write_text("# spring_constant: 2\nmode,condition,frequency_hz\n1,free,60000\n1,contact,300000\n")
+    record = read_instrument(table)
+    assert record.kind == "resonance metadata" and record.fields["spring_constant"] == 2.0
+    with pytest.raises(UserError, match="a directory, not an instrument file"):
+        read_instrument(tmp_path)
+    (tmp_path / "notes.txt").write_text("hello\nworld\n")
+    with pytest.raises(UserError, match="no frequency column"):
+        read_instrument(tmp_path / "notes.txt")
 
 
 _NSFOPEN = importlib.util.find_spec("NSFopen")

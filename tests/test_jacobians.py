@@ -149,7 +149,8 @@ def test_design_derivative_times_coefficients():
     inverse = np.repeat(np.arange(200), 3)
     bias = np.tile([-2.0, 0.5, 3.0], 200)
     coef = rng.normal(size=model.n_linear) + 1j * rng.normal(size=model.n_linear)
-    v = model.design_derivative_times(freq_u, inverse, bias, x, coef)
+    A, dT = model.design_and_partials(freq_u, inverse, bias, x)
+    v = model.design_derivative_times(inverse, bias, dT, coef)
     for j in range(len(x)):
         h = 1e-6 * max(1.0, abs(x[j]))
         up, down = x.copy(), x.copy()
@@ -157,6 +158,7 @@ def test_design_derivative_times_coefficients():
         down[j] -= h
         fd = (model.design(freq_u, inverse, bias, up) - model.design(freq_u, inverse, bias, down)) @ coef / (2 * h)
         np.testing.assert_allclose(v[:, j], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())
+    assert np.array_equal(A, model.design(freq_u, inverse, bias, x))      # the values of the same read-out
 
 
 @pytest.mark.parametrize("contact", [False, True])

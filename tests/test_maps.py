@@ -197,6 +197,41 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
     np.testing.assert_array_equal(_maps(tmp_path / "s")["k1"], _maps(tmp_path)["k1"])
 
 
+def test_contact_frequency_map_no_pixel_explains_is_undetermined_with_why(tmp_path, capsys):
+    """Ratios above the stiff limit of the lever without k2 (4.385): no 'nan' printed, the summary and
+    the JSON say k1 is undetermined and why; lever flags the inversion would not use are refused."""
+    import json
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), 5.0 * F1)
+        h.attrs.update(spring_constant=K, free_resonance=F1)
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--json", str(tmp_path / "m.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out and "undetermined at every pixel" in out and "4.385" in out
+    record = json.loads((tmp_path / "m.json").read_text())["results"]["median_k1"]
+    assert record["status"] == "undetermined" and "4.385" in record["why"]
+    for command in ("map", "stiffness"):
+        assert main([command, str(path), "--out", str(tmp_path / command), "--tip-height", "1e-5"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--tip-height" in err[0] and "--contact" not in err[0], err
+        assert not (tmp_path / command).exists()
+
+
+def test_contact_frequency_map_checks_model_and_names_missing_flags(tmp_path, capsys):
+    """--model is checked whatever the input (a typo was ignored on a contact map); a contact map
+    without the lever's metadata names the flags that give it, as every command does."""
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), 3.0 * F1)
+    lever = ["--spring-constant", str(K), "--free-resonance", str(F1)]
+    for argv, words in ((["--model", "elastc"], "unknown model 'elastc'"), (["--model", "sho"], "--model"),
+                        ([], "give --spring-constant and --free-resonance")):
+        assert main(["map", str(path), "--out", str(tmp_path / "o"), *(lever if argv else []), *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 def test_zarr_group_input_with_frequencies_in_any_order(synthetic, local_run, tmp_path):
     """A Zarr group whose frequencies are shuffled (a set: the spectra follow them)."""
     path, _ = synthetic

@@ -154,11 +154,14 @@ def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):
     assert len(err) == 1 and "not a DART image: no Amplitude1Retrace" in err[0]
 
 
-def test_k2_without_a_tip_height_is_one_line(tmp_path, capsys):
+def test_k2_without_a_tip_height_assumes_the_typical_one(tmp_path, capsys):
+    """No note records a tip height: the typical PFM probe's, as every command takes it, said and marked assumed."""
     path = write_ibw(dart_case(17, 3, 4), tmp_path / "dart.ibw")
-    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress", "--k2-over-k1", "0.5"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "needs the tip height" in err[0] and "--tip-height" in err[0]
+    out = tmp_path / "d.json"
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress", "--k2-over-k1", "0.5",
+                 "--json", str(out)]) == 0
+    assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
+    assert json.loads(out.read_text())["lever"]["tip_height"]["status"] == "assumed"
 
 
 def test_the_library_is_quiet(capsys):

@@ -132,6 +132,10 @@ SPELLINGS = {
                        lambda f, v, x, y: (f, v, abs(x + 1j * y), np.angle(x + 1j * y))),
     "polar, degrees, trailing comma": ("frequency_hz,dc,amp,theta_deg,", ",",
                                        lambda f, v, x, y: (f, v, abs(x + 1j * y), np.degrees(np.angle(x + 1j * y)), "")),
+    # what pfmdyn diagram --csv writes: the response per volt of drive
+    "per volt, as pfmdyn diagram writes": ("frequency_hz,bias_v,amplitude_m_per_v,phase_deg,piezo_share", ",",
+                                           lambda f, v, x, y: (f, v, abs(x + 1j * y),
+                                                               np.degrees(np.angle(x + 1j * y)), 0.5)),
 }
 
 

@@ -168,10 +168,11 @@ def test_bad_input_is_one_line(argv, message, capsys, tmp_path):
 
 
 def test_missing_lever_value_names_its_flag(capsys):
-    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100",
-            "--frequency", "1e4"]
+    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--k1", "100", "--frequency", "1e4"]
     assert main(args) == 2
-    assert "give --tip-height" in capsys.readouterr().err
+    assert "give --length" in capsys.readouterr().err
+    assert main([*args, "--length", "2e-4"]) == 0      # no tip height: the typical PFM probe's, said
+    assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
 
 
 def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
@@ -204,3 +205,11 @@ def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
     truth = k * np.array([30.0, 300.0])
     out = fit_block(model, 1e-3 * model.shape_functions(truth, np.array([80.0, 150.0])))
     np.testing.assert_allclose(out["k1"], truth, rtol=1e-6)
+
+
+def test_a_real_calibration_factor_is_printed_as_a_real_number(capsys):
+    """The lossless lever's factors are real: '+3.7', not '+3.7+0j'."""
+    assert main(["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4",
+                 "--tip-height", "1e-5", "--k1", "100", "--frequency", "3e5"]) == 0
+    [line] = [line for line in capsys.readouterr().out.splitlines() if "measured/true d_eff" in line]
+    assert "j " not in line and "0j" not in line, line

@@ -7,6 +7,7 @@ whole lever model (set-back, heavy, tilted tips) is ``tests/test_stiffness_model
 """
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -113,14 +114,16 @@ def test_cli_numbers_json_and_reduced_modulus(tmp_path, capsys):
     out = tmp_path / "k1.json"
     code = cli.main(["stiffness", "--free-resonance", "75e3", "--contact", repr(fc), "--spring-constant", "2",
                      "--contact-uncertainty", "50", "--reduced-modulus", "--tip-radius", "20e-9",
-                     "--load", "1e-7", "--json", str(out)])
+                     "--load", "1e-7", "--k2", "0", "--json", str(out)])
     assert code == 0
     doc = json.loads(out.read_text())
     k1, results = doc["results"]["k1"], doc["results"]
     assert abs(k1["value"] / 80 - 1) < 1e-9 and isinstance(k1["stderr"], float) and k1["stderr"] > 0
     assert results["reduced_modulus"]["value"] > 0 and results["unique"]["value"]
     assert "one k1" in [n for n in doc["notes"] if n.startswith("why: ")][0]
-    assert "length" not in doc["lever"] and doc["notes"][0].startswith("k2 policy: k2 left out")
+    # k2 = 0 stated: no lateral spring, so neither a tip height nor a length is needed or assumed
+    assert "length" not in doc["lever"] and "tip_height" not in doc["lever"]
+    assert doc["notes"][0].startswith("k2 policy: k2 = 0")
     assert "k1 = 80" in capsys.readouterr().out
 
 
@@ -143,6 +146,11 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     doc = json.loads(out.read_text())["results"]
     assert doc["unique"]["value"] and abs(doc["k1"]["value"] / 100 - 1) < 1e-8
     assert abs(doc["k2"]["value"] / k2_true - 1) < 1e-8
+    # the same table under a .txt name: read as discrepancy reads it, not refused as "not a drive sweep"
+    text = tmp_path / "res.txt"
+    text.write_text(table.read_text())
+    assert cli.main(["stiffness", str(text), "--tip-position", "1", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"] == doc
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -151,8 +159,7 @@ def test_cli_two_modes_from_a_resonance_table(tmp_path):
     (["--free", "-1", "--contact", "2e5", "--spring-constant", "2"], "--free-resonance"),
     (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--reduced-modulus"], "--tip-radius"),
     (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position", "fit"], "two or more"),
-    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--length", "2e-4", "--tilt", "12"],
-     "--tip-height"),
+    (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tilt", "12"], "--length"),
     (["--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position", "1.3"],
      "--tip-position"),
 ])
@@ -178,11 +185,13 @@ def test_k1_recovered_when_k2_follows_k1_mindlin():
         coupled_contact_stiffness(6.5 * 60e3, 60e3, 1.0, k2_over_k1=c, length=2e-4, tip_height=1e-5)
 
 
-def test_cli_mindlin_coupling_needs_length_and_tip_height(tmp_path, capsys):
+def test_cli_mindlin_coupling_assumes_a_typical_tip_height_unless_given(tmp_path, capsys):
     base = ["stiffness", "--free-resonance", "60e3", "--contact", "300e3", "--spring-constant", "1", "--poisson", "0.3"]
-    one_line = cli.main(base + ["--length", "2.4e-4"])
-    assert one_line == 2 and "give --tip-height" in capsys.readouterr().err
     out = tmp_path / "k.json"
+    assert cli.main(base + ["--length", "2.4e-4", "--json", str(out)]) == 0
+    assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
+    lever = json.loads(out.read_text())["lever"]
+    assert lever["tip_height"]["status"] == "assumed" and lever["tip_height_uncertainty"]["value"] == 2.5e-6
     assert cli.main(base + ["--length", "2.4e-4", "--tip-height", "1.5e-5", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())["results"]
     assert doc["k1"]["value"] > 0 and doc["k2"]["value"] == pytest.approx(1.4 / 1.7 * doc["k1"]["value"])   # 2(1-nu)/(2-nu)
@@ -238,3 +247,11 @@ def test_reduced_modulus_takes_the_normal_load_and_its_old_flag(tmp_path):
         docs.append({k: v["value"] for k, v in json.loads(out.read_text())["results"].items()})
     assert docs[0]["reduced_modulus"] == docs[1]["reduced_modulus"]
     assert docs[0]["reduced_modulus"] == pytest.approx(float(reduced_modulus(docs[0]["k1"], 20e-9, 1e-7)), rel=1e-12)
+
+
+def test_uncertainty_is_written_as_the_other_commands_write_it(capsys):
+    """'k1 = ... +- ... N/m', as calibrate and discrepancy print a value and its standard uncertainty."""
+    assert cli.main(["stiffness", "--spring-constant", "2", "--free-resonance", "70e3", "--length", "225e-6",
+                     "--tip-height", "10e-6", "--contact", "300e3"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^k1 = [\d.]+ \+- [\d.e+]+ N/m", out, re.M) and "+/-" not in out, out

@@ -188,24 +188,60 @@ REAL_IMAGES = Path("/work/shared/realdata/asylum_pfm_images")
 @pytest.mark.skipif(not REAL_IMAGES.is_dir(), reason="shared real data absent")
 @pytest.mark.parametrize("name", ["IgorIBWReader_ImageStack_BTFO_DSO.ibw", "IgorIBWReader_P0089OP0027.ibw",
                                   "PMN28Pt0000.h5", "PTO_Funakubo0001.h5"])
-def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_path, capsys, name):
-    """One k2 policy for every command: the k1 that ``stiffness`` finds in a file (tip height given, no
-    policy: Mindlin assumed by both), fed to ``resonances`` with the same lever, puts the first contact
-    resonance where the file says, to 1e-6."""
-    import json
-
-    from pfmdyn import cli
+@pytest.mark.parametrize("tip_height", [None, "12e-6"])
+def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_path, capsys, name, tip_height):
+    """One k2 policy and one tip height for every command: the k1 that ``stiffness`` finds in a file (no
+    policy: Mindlin assumed by both; the tip height given, or with default flags the typical PFM probe's
+    both assume), fed to ``resonances`` with the same lever, puts the first contact resonance where the
+    file says, to 1e-6; an assumed tip height is said, marked assumed and has its share of k1's uncertainty."""
+    from pfmdyn.constants import LEVER_LENGTH
     from pfmdyn.io.instruments import read_instrument
 
     path = REAL_IMAGES / name
     fields = read_instrument(path).fields
-    lever = ["--length", str(fields.get("length", 240e-6)), "--tip-height", "12e-6"]
+    height = [] if tip_height is None else ["--tip-height", tip_height]
+    # a file without the length: a tip height given needs it; the assumed one stands on a typical lever, and says so
+    length = ["--length", repr(fields.get("length", LEVER_LENGTH))]
     out = tmp_path / "s.json"
-    assert cli.main(["stiffness", str(path), *lever, "--json", str(out)]) == 0
-    k1 = json.loads(out.read_text())["results"]["k1"]["value"]
+    assert cli.main(["stiffness", str(path), *height, *(length if height else []), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    k1 = doc["results"]["k1"]["value"]
+    if tip_height is None:
+        assert doc["lever"]["tip_height"]["status"] == "assumed" and "PFM probe" in doc["lever"]["tip_height"]["why"]
+        budget = doc["fit"]["budget"]
+        share = dict(zip(budget["uncertainty_source"]["value"], budget["relative_uncertainty"]["value"]))
+        assert share["tip_height_uncertainty"] > 0.1 and doc["results"]["k1"]["stderr"] >= share[
+            "tip_height_uncertainty"] * k1
+        assert "assumed: tip height" in capsys.readouterr().out
+    lever = [*length, *height]
     assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
                      repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["results"]["contact"]["resonance"]["value"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
     assert doc["lever"]["k2"]["status"] == "tied" and "Mindlin" in doc["lever"]["k2"]["why"]
+    assert doc["lever"]["tip_height"]["status"] == ("assumed" if tip_height is None else "given")
     assert "k2 policy: k2 tied to k1 by Mindlin" in capsys.readouterr().out
+
+
+@pytest.mark.skipif(not REAL_IMAGES.is_dir(), reason="shared real data absent")
+def test_discrepancy_states_every_assumed_input_of_k1_as_stiffness_does(tmp_path, capsys):
+    """``discrepancy`` on the shared BTFO image with default flags: the tip height assumed as by every command,
+    k1's uncertainty input by input (the tip height, the k2 policy, the table's frequency and Q uncertainties it
+    assumed, marked assumed) and the same k1 and uncertainty as ``stiffness`` (within 5 %)."""
+    path = REAL_IMAGES / "IgorIBWReader_ImageStack_BTFO_DSO.ibw"
+    out = tmp_path / "d.json"
+    assert cli.main(["discrepancy", str(path), "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "assumed: tip height" in text and "k1's uncertainty, input by input: tip height" in text
+    doc = json.loads(out.read_text())
+    assert doc["lever"]["tip_height"]["status"] == "assumed"
+    assert doc["results"]["resonance_uncertainty"]["status"] == "assumed"
+    assert doc["results"]["quality_factor_uncertainty"]["status"] == "assumed"
+    budget = doc["fit"]["budget"]
+    assert set(budget["uncertainty_source"]["value"]) == {"resonance_frequencies", "quality_factors", "tip_height",
+                                                        "k2_policy"}
+    k1 = doc["results"]["k1"]
+    assert cli.main(["stiffness", str(path), "--json", str(out)]) == 0
+    reference = json.loads(out.read_text())["results"]["k1"]
+    assert k1["value"] == pytest.approx(reference["value"], rel=1e-3)
+    assert k1["stderr"] == pytest.approx(reference["stderr"], rel=0.05)

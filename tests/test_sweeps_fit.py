@@ -438,3 +438,31 @@ def test_nanonis_amplitude_follows_the_input_calibration(tmp_path):
     assert metres.unit == "m" and not metres.notes
     np.testing.assert_allclose(volts.amplitude, np.abs(y), rtol=1e-7)
     assert volts.fields == {"free_resonance": 88185.4831, "free_quality_factor": 5.5}    # f_res is a resonance
+
+
+@pytest.mark.parametrize("x_m, ratio", [(0.76, 0.08), (0.05, 0.002)])
+def test_a_mass_beside_the_node_of_mode_2_or_at_the_clamp_is_stated_as_the_data_allow(tmp_path, x_m, ratio):
+    """Two modes, the position free: a mass beside mode 2's node is found there or among the solutions (its
+    mirror about the node moves both modes alike), its mass within two stated sigma; a small one near the clamp
+    moves neither mode: no mass named, and none bounded (benchmarks/mass_anywhere_pairs.py)."""
+    rng = np.random.default_rng(52)
+    case = dict(k=2.0, L=200e-6, w=40e-6, f_vac=60e3, g=0.01, medium=Medium.air())
+    bare = dict(mass_ratio=0.0, x_m=0.5)
+    f = np.sort(np.concatenate([rng.uniform(0.85, 1.1, 120) * 60e3, rng.uniform(0.85, 1.1, 120) * 6.27 * 60e3]))
+    gain = 3.0 / np.abs(beam_slope(60e3, **case, **bare))[0]
+    noise = lambda: 3e-2 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f))) / math.sqrt(2)  # noqa: E731
+    y0 = gain * beam_slope(f, **case, **bare) + 0.2 + noise()
+    y1 = gain * beam_slope(f, **case, mass_ratio=ratio, x_m=x_m) + 0.2 + noise()
+    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y0, rng)), 2.0, 200e-6,
+                       case["medium"], width=40e-6)
+    out = compare_sweeps(read_sweep_table(write_sweep(tmp_path / "a.txt", f, y1, rng)), before, None)
+    m, where = out["parameters"]["added_mass_ratio"], out["parameters"]["added_mass_position"]
+    if x_m < 0.5:
+        assert out["effect"] != "added_mass" and out["parameters"]["added_mass"]["stderr"] is None
+        return
+    mass = out["parameters"]["added_mass"]
+    truth = ratio * mass["value"] / m["value"]
+    assert out["effect"] == "added_mass"
+    found = [(where["value"], mass["value"])] + [(s["added_mass_position"], s["added_mass"])
+                                                 for s in where.get("solutions", [])[1:]]
+    assert any(abs(x - x_m) <= 0.03 and abs(value - truth) <= 2 * mass["stderr"] for x, value in found), (found, truth)

@@ -26,6 +26,7 @@ Jesse, Baddorf, Kalinin (2006), Sections VI.2-VI.4, Eq. 41.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -165,6 +166,8 @@ def tip_quality(v_null, v_null_se=None) -> TipQuality:
     --------
     >>> tip_quality([1.0, 3.0, 2.0, 2.0])
     TipQuality(mean_v=2.0, spread_v=0.7071067811865476)
+    >>> tip_quality([float("nan")] * 2)        # G_elec = 0 everywhere: undetermined (NaN), no warning
+    TipQuality(mean_v=nan, spread_v=nan)
     """
     v_null = np.asarray(v_null, dtype=float)
     with np.errstate(divide="ignore"):
@@ -173,6 +176,8 @@ def tip_quality(v_null, v_null_se=None) -> TipQuality:
     if not np.all(np.isfinite(weights[keep])):
         weights = np.ones_like(v_null)
     v_null, weights = v_null[keep], weights[keep]
+    if not v_null.size:         # no frequency's response changes with the bias: none nulls it
+        return TipQuality(math.nan, math.nan)
     mean = np.sum(weights * v_null) / np.sum(weights)
     spread = np.sqrt(np.sum(weights * (v_null - mean) ** 2) / np.sum(weights))
     return TipQuality(float(mean), float(spread))
@@ -365,6 +370,8 @@ def summary(result: Deconvolution, unit: str) -> str:
     >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
     >>> print(summary(fit, "pm").splitlines()[0])
     frequencies: 1 (100 kHz to 100 kHz); biases per frequency: 3
+    >>> print(summary(deconvolve([1e5] * 2, [0.0, 1.0], [2, 2], surface_potential_v=0.0), "pm").splitlines()[-1])
+    nulling bias: undetermined at every frequency (G_elec = 0: the response does not change with the bias, so no bias nulls it); tip-quality indicator likewise
     """
     quality = tip_quality(result.v_null, result.v_null_se)
     low, high = result.frequency_hz[[0, -1]] / 1e3
@@ -376,5 +383,8 @@ def summary(result: Deconvolution, unit: str) -> str:
         f"median |d_eff|: {np.median(np.abs(result.d_eff)):.4g} {unit} (V_surf = {result.surface_potential_v:g} V);"
         f" median |G_elec|: {np.median(np.abs(result.g_elec)):.4g} {unit}/V",
         f"nulling bias: weighted mean {quality.mean_v:.4g} V; tip-quality indicator (its spread over frequency):"
-        f" {quality.spread_v:.3g} V (near 0 with V_null ~ V_surf: electrostatic-dominated or worn tip)",
+        f" {quality.spread_v:.3g} V (near 0 with V_null ~ V_surf: electrostatic-dominated or worn tip)"
+        if math.isfinite(quality.mean_v) else
+        "nulling bias: undetermined at every frequency (G_elec = 0: the response does not change with the bias, "
+        "so no bias nulls it); tip-quality indicator likewise",
     ])

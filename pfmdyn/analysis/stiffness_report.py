@@ -101,11 +101,11 @@ class Solution:
         """The solution as printed lines.
 
         >>> Solution(300.0, 0.0, 0.93, ("k1", "tip_position"), {"k1": 1.0, "tip_position": 1e-4}).lines(3.0)[0]
-        'k1 = 300.0 +/- 1 N/m  (k1/k = 100.00)'
+        'k1 = 300.0 +- 1 N/m  (k1/k = 100.00)'
         """
         def pm(name):
             sigma = self.stderr.get(name, 0.0)
-            return f" +/- {sigma:.2g}" if sigma > 0 else ""
+            return f" +- {sigma:.2g}" if sigma > 0 else ""
 
         def value(name, v):         # to the second significant digit of its uncertainty (k1's, relative), else six digits
             rel = self.stderr.get(name, 0.0) / abs(self.k1 if name == "k1" else v) if v else 0.0
@@ -122,7 +122,7 @@ class Solution:
         if self.k1_by_mode:
             out.append("k1 from each mode alone: " + ", ".join(f"{v:.6g}" for v in self.k1_by_mode) + " N/m")
         if self.reduced_modulus is not None:
-            out.append(f"E* = {self.reduced_modulus:.6g} +/- {self.reduced_modulus_stderr:.2g} Pa  (Hertz)")
+            out.append(f"E* = {self.reduced_modulus:.6g} +- {self.reduced_modulus_stderr:.2g} Pa  (Hertz)")
         return out
 
 

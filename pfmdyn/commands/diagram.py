@@ -12,7 +12,7 @@ import numpy as np
 from ..analysis.diagram import (PAPER_D_EFF, PAPER_K1, PAPER_TIP_HEIGHT, SILICON_DENSITY, TABLE1,
                                 ResponseMap, cantilever_from_spring_constant, response_map,
                                 table1_cantilever)
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io.results import check_writable
 from ..names import flag
 from ..plots.diagram import KINDS, plot_diagram
@@ -45,7 +45,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--vmax", type=float, default=10.0, help="highest V_dc, V (10)")
     parser.add_argument("--frequency-points", type=int, default=1000, help="frequencies of the grid (default 1000)")
     parser.add_argument("--bias-points", type=int, default=401, help="DC biases of the grid (default 401)")
-    parser.add_argument("--plot", type=Path, metavar="PATH", help="the PNG file to write; required")
+    parser.add_argument("--plot", type=Path, metavar="PATH", help="the figure to write (.png, .pdf, .svg); required")
     parser.add_argument("--out", dest="plot", type=Path, help=argparse.SUPPRESS)    # the old spelling, one release
     parser.add_argument("--csv", type=Path, help="also write the map as long-format CSV")
     flags.add_json(parser, "the response's parts per frequency (the map follows from them)")
@@ -68,7 +68,7 @@ def _cli_cantilever(args):
     if args.cantilever == "custom":
         missing = [flag(name) for name in _CUSTOM[:4] if name not in custom]
         if missing:
-            raise UserError(f"--cantilever custom needs {' '.join(missing)}")
+            raise UserError(f"--cantilever custom needs {listed(missing)}")
         with _one_line():
             lever = cantilever_from_spring_constant(
                 spring_constant=custom["spring_constant"], length=custom["length"], width=custom["width"],
@@ -117,7 +117,7 @@ def _write_csv(path, response: ResponseMap) -> None:
 
 
 def run(args) -> int:
-    """Compute the diagram, write the PNG (and CSV)."""
+    """Compute the diagram, write the figure (and CSV)."""
     lever, width = _cli_cantilever(args)
     lever = replace(lever, **flags.given(args, ("spot_position",)))   # read at the laser spot (1: free end)
     contact = flags.given(args, ("k1", "tip_height"))                  # the paper's unless given
@@ -134,9 +134,7 @@ def run(args) -> int:
         raise UserError(f"--frequency-points x --bias-points must be at most {MAX_POINTS:g} (a diagram of "
                         f"{args.frequency_points * args.bias_points:g} points would not fit in memory)")
     if args.plot is None:
-        raise UserError("give --plot PATH (the PNG file to write)")
-    if args.plot.suffix.lower() != ".png":
-        raise UserError(f"--plot must name a .png file, got {str(args.plot)!r}")
+        raise UserError("give --plot PATH (the figure to write)")
     check_writable(args.plot, figure=True)
     check_writable(args.csv, args.json)
     spacing = np.geomspace if args.log_frequency else np.linspace

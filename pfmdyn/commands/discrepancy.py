@@ -41,15 +41,21 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 """The lever's quantities a file's metadata may hold and the command line may override."""
 
 
-def _analyse(data, args):
-    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone)."""
+def _analyse(data, args, assumed: dict):
+    """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone); a resonance
+    table's with the tip height's uncertainty in each parameter's (the assumed one's spread, else 10 %)."""
+    from ..analysis.stiffness_report import TIP_HEIGHT_TOLERANCE
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
     from ..io.tables import SpectrumData
 
-    analysis = analyse if isinstance(data, SpectrumData) else analyse_resonances
-    return analysis(data, vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    options = dict(vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    if isinstance(data, SpectrumData):
+        return analyse(data, **options)
+    spread = flags.NAMES["tip_height_uncertainty"].default if "tip_height" in assumed else \
+        TIP_HEIGHT_TOLERANCE * data.metadata.tip_height
+    return analyse_resonances(data, tip_height_uncertainty=spread, **options)
 
 
 def _lever_in_medium(data, args):
@@ -161,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
     from ..discrepancy import spectrum
     from ..discrepancy.inputs import is_sweep, is_thermal_tune, read
     from ..discrepancy.report import medium_comparison
+    from ..io.record import MissingFieldError
     from ..io.results import check_writable
     from ..io.tables import SpectrumData
 
@@ -172,13 +179,22 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--added-mass-position is for a drive sweep compared with --reference")
     if is_thermal_tune(args.data):
         return _thermal(args)
-    data = read(args.data, flags.given(args, OVERRIDES))
+    overrides, assumed = flags.given(args, OVERRIDES), {}
+    try:
+        data = read(args.data, overrides)
+    except MissingFieldError as exc:        # no instrument file records a tip height: the default, as every command
+        if exc.field != "tip_height":
+            raise
+        assumed = flags.fill_defaults(overrides, ("tip_height",))
+        data = read(args.data, overrides)
+    if assumed:
+        print(flags.assumed_line(assumed, data.metadata))
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
         data, stride = spectrum.thin(data)
     with _fitting(args.data, "the metadata (spring constant, length, tip height, free resonance)"):
-        report = _analyse(data, args)
+        report = _analyse(data, args, assumed)
     if stride > 1:
         report = report.updated(frequency_stride=stride)
     if args.medium:
@@ -194,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
     given = flags.given_names(args, OVERRIDES)
     lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
-                                    from_file=OVERRIDES)
+                                    from_file=OVERRIDES, assumed=assumed)
     rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]
     flags.write_json(args.json, documents.discrepancy_report(
         report.to_dict(), "spectrum" if rows is None else "resonances", {"path": str(args.data)}, lever, rows))

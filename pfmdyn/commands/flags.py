@@ -14,12 +14,13 @@ import sys
 from pathlib import Path
 
 from ..cantilever import Cantilever, Contact
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
-           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "cantilever", "contact",
+           "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
+           "assumed_line", "cantilever", "contact",
            "option_hint"]
 
 
@@ -59,7 +60,8 @@ def add(parser, names, required=(), defaults=None) -> None:
     for name in names:
         q = NAMES[name]
         unit = "" if q.unit == "1" else f", {q.unit}"
-        assumed = f"{q.default:g} {q.unit}, assumed" if q.default is not None else \
+        assumed = f"{q.default:g} {q.unit}, assumed" + (f": {q.default_why}" if q.default_why else "") \
+            if q.default is not None else \
             "none: the lever in vacuum" if name == "medium" else ""
         value, why = defaults.get(name, (None, assumed))
         text = f"{q.meaning} ({q.symbol}{unit}" + (f"; default {why})" if why else ")")
@@ -170,16 +172,16 @@ def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool =
 
 
 def add_json(parser, what: str = "the result") -> None:
-    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` on standard output after the
-    lines the command prints (:func:`write_json`).
+    """``--json PATH``: ``what`` as a JSON document in PATH, or with ``-`` alone on standard output, the
+    lines the command prints going to standard error (:func:`write_json`).
 
     >>> import argparse
     >>> p = argparse.ArgumentParser(); add_json(p)
     >>> p.parse_args(["--json", "-"]).json
     '-'
     """
-    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': standard output, "
-                        "after the summary)")
+    parser.add_argument("--json", metavar="PATH", help=f"write {what} as JSON to PATH ('-': the document alone "
+                        "on standard output, the report on standard error)")
 
 
 def write_json(path, document) -> None:
@@ -249,18 +251,23 @@ def given_names(args, names) -> list[str]:
 
 
 def require(values: dict, names, file=None) -> None:
-    """A one-line error for the first of ``names`` with no value: what is missing, where, which flag.
+    """A one-line error naming every one of ``names`` with no value: what is missing, where, which
+    flags (all at once: a user gives them in one run, not one per run).
 
     >>> require({"length": 2e-4}, ("length", "tip_height"), "scan.ibw")
     Traceback (most recent call last):
     ...
     pfmdyn.errors.UserError: no tip height in scan.ibw: give --tip-height
+    >>> require({}, ("spring_constant", "length"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: no spring constant or lever length: give --spring-constant and --length
     """
-    for name in names:
-        if values.get(name) is None:
-            what = NAMES[name].label
-            where = f" in {Path(file).name}" if file else ""
-            raise UserError(f"no {what}{where}: give {NAMES[name].flag}")
+    missing = [name for name in names if values.get(name) is None]
+    if missing:
+        where = f" in {Path(file).name}" if file else ""
+        raise UserError(f"no {listed((NAMES[name].label for name in missing), 'or')}{where}: "
+                        f"give {listed(NAMES[name].flag for name in missing)}")
 
 
 def check_medium(args) -> None:
@@ -278,17 +285,50 @@ def check_medium(args) -> None:
         temperature(args)       # also where the medium's own numbers do not depend on it
 
 
-def cantilever(args, found: dict | None = None) -> Cantilever:
-    """The lever from values ``found`` in a file (names -> SI) with the flags over them.
+def fill_defaults(values: dict, names=LEVER) -> dict[str, str]:
+    """Put into ``values`` (name -> SI) the default (:attr:`pfmdyn.names.Quantity.default`) of each of
+    ``names`` that neither a flag nor the file gave; returns name -> why, what reports say of each.
+    Every command that builds a lever takes its defaults here, so one k1 means one contact in all.
+
+    >>> values = {"length": 2e-4}
+    >>> why = fill_defaults(values); values["tip_height"], why["tip_height"].split(",")[0]
+    (1.3e-05, "a typical PFM probe's")
+    """
+    out = {}
+    for name in names:
+        q = NAMES[name]
+        if values.get(name) is None and q.default is not None:
+            values[name] = q.default
+            out[name] = q.default_why
+    return out
+
+
+def assumed_line(assumed: dict, lever: Cantilever) -> str:
+    """The line a command prints of the values of ``lever`` it assumed (name -> why: :func:`fill_defaults`),
+    "" for none.
+
+    >>> assumed_line({"tip_height": "a typical PFM probe's"}, Cantilever(2.0, 7e4, 2e-4, tip_height=13e-6))
+    "assumed: tip height 1.3e-05 m (a typical PFM probe's; give --tip-height)"
+    """
+    return "; ".join(f"assumed: {NAMES[name].label} {getattr(lever, name):g} {NAMES[name].unit} ({why}; give "
+                     f"{NAMES[name].flag})" for name, why in assumed.items() if name in LEVER)
+
+
+def cantilever(args, found: dict | None = None, assumed: dict | None = None, defaults: bool = True) -> Cantilever:
+    """The lever from values ``found`` in a file (names -> SI) with the flags over them, and (``defaults``)
+    those of :func:`fill_defaults` for what neither gives (into ``assumed``, when a dict, name -> why).
 
     >>> import argparse
     >>> ns = argparse.Namespace(spring_constant="2", free_resonance="7e4", length=None, tilt="12")
-    >>> lever = cantilever(ns, {"length": 2e-4, "spring_constant": 1.0})
-    >>> lever.spring_constant, lever.length, lever.tilt
-    (2.0, 0.0002, 12.0)
+    >>> lever = cantilever(ns, {"length": 2e-4, "spring_constant": 1.0}, assumed := {})
+    >>> lever.spring_constant, lever.length, lever.tilt, lever.tip_height, list(assumed)
+    (2.0, 0.0002, 12.0, 1.3e-05, ['tip_height'])
     """
     values = {k: v for k, v in (found or {}).items() if k in LEVER or k in ("quality_factor", "viscous_loss")}
     values.update(given(args, LEVER + ("quality_factor", "viscous_loss")))
+    filled = fill_defaults(values) if defaults else {}
+    if assumed is not None:
+        assumed.update(filled)
     if values.get("quality_factor") is None:
         values["quality_factor"] = math.inf
     if getattr(args, "medium", None) or (found or {}).get("medium"):      # else vacuum, the paper's case
@@ -314,7 +354,7 @@ def option_hint(error: Exception, parser=None) -> str:
     The library names the quantity (:attr:`pfmdyn.errors.UserError.quantity`; a field missing
     from a file: :class:`pfmdyn.io.record.MissingFieldError`); only the commands know flags.  The
     flag is the option of ``parser`` (the command's) that sets the quantity, else the name's own
-    (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint.
+    (:mod:`pfmdyn.names`); a quantity no flag sets gives no hint; several quantities (a tuple), each its flag.
 
     >>> from pfmdyn.io.record import MissingFieldError
     >>> option_hint(MissingFieldError("tip height not in a.ibw", "tip_height"))
@@ -325,12 +365,19 @@ def option_hint(error: Exception, parser=None) -> str:
     ': give --out'
     >>> option_hint(MissingFieldError("no contact resonance in a.ibw", "contact_resonance")), option_hint(ValueError("x"))
     ('', '')
+    >>> option_hint(MissingFieldError("lever length and tip height not in a.h5", ("length", "tip_height")))
+    ': give --length and --tip-height'
     """
-    name = getattr(error, "quantity", None)
-    if name is None:
-        return ""
+    quantity = getattr(error, "quantity", None)
+    hints = [hint for hint in (_flag_of(name, parser) for name in
+                               (quantity if isinstance(quantity, tuple) else (quantity,)) if name) if hint]
+    return f": give {listed(hints)}" if hints else ""
+
+
+def _flag_of(name: str, parser) -> str | None:
+    """The option of ``parser`` that sets ``name``, else the name's own flag, else None."""
     options = [option for action in getattr(parser, "_actions", ()) if action.dest == name
                and action.help != argparse.SUPPRESS for option in action.option_strings if option.startswith("--")]
     if options:
-        return f": give {options[0]}"
-    return f": give {NAMES[name].flag}" if name in NAMES and NAMES[name].option else ""
+        return options[0]
+    return NAMES[name].flag if name in NAMES and NAMES[name].option else None

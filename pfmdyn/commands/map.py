@@ -27,9 +27,9 @@ import argparse
 import dataclasses
 import math
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..fitting.noise import GAP_LIMIT
-from ..names import checked
+from ..names import checked, flag
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -143,6 +143,9 @@ def run(args) -> int:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UserError(f"--{name.replace('_', '-')} must be positive, got {value}")
     check_scheduler(args.scheduler)
+    if args.model not in ("auto", "sho"):
+        from ..maps.spec import parse_model
+        parse_model(args.model)         # checked whatever the input, as every flag
     overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
     dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
@@ -153,6 +156,12 @@ def run(args) -> int:
         if args.medium:
             raise UserError(f"{args.data}: a map of contact resonances is inverted by the paper's lever in vacuum; "
                             "for a lever in a medium use pfmdyn stiffness")
+        unused = [flag(name) for name in overrides if name not in ("spring_constant", "free_resonance")]
+        unused += ["--model"] * (args.model != "auto")
+        if unused:      # a value given is a value meant: not dropped in silence
+            raise UserError(f"{args.data}: a contact-frequency map is read on the paper's lever with k2 = 0 (the "
+                            f"tip at the free end), which {listed(unused)} would not enter: drop "
+                            + ("it" if len(unused) == 1 else "them"))
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
         _write_json(args, summary, overrides)
@@ -245,6 +254,9 @@ def _dart(args, overrides: dict, given: dict) -> int:
     values = {name: entry[0] for name, entry in found.items()}
     flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
     flags.require({name: entry[0] for name, entry in settings.items()}, _DART, args.data)
+    for name, why in flags.fill_defaults(values, _LEVER).items():
+        found[name] = (values[name], "assumed", why)
+        print(flags.assumed_line({name: why}, Cantilever.from_values(values)))
     lever = Cantilever.from_values(values)
     contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
     if contact.k2_of(1.0) or lever.tilt:

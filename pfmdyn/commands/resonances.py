@@ -28,7 +28,8 @@ def add_arguments(parser) -> None:
     """
     parser.epilog = ("tilt: degrees, positive when the free end is nearer the sample than the clamp "
                      "(the usual mounting, 10-15 deg). No k2 and no k2 policy: k2 tied to k1 by Mindlin at Poisson's "
-                     "ratio 0.3 where it acts (a tip height or a tilt), as in pfmdyn stiffness and map.")
+                     "ratio 0.3, as in pfmdyn stiffness, spot and map. No --tip-height: a typical PFM probe's, "
+                     "13 um, as those commands assume.")
     flags.add_lever(parser, required=("spring_constant", "free_resonance", "length"))
     flags.add_contact(parser)
     flags.add_damping(parser)
@@ -43,7 +44,8 @@ def run(args) -> int:
 
     check_writable(args.json)
     modes = positive_int(args.modes, "--modes", 50)
-    lever = flags.cantilever(args)
+    assumed = {}
+    lever = flags.cantilever(args, assumed=assumed)
     contact = flags.contact(args)
     if contact.k1 is None and (contact.k2 is not None or contact.k2_over_k1 is not None
                                or contact.poisson is not None or contact.contact_loss):
@@ -55,6 +57,8 @@ def run(args) -> int:
     result = resonances(lever, contact if contact.k1 is not None else None, modes)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
+    if assumed and contact.k1 is not None:
+        print(flags.assumed_line(assumed, lever))
     print(result.report())
     if policy:
         print(f"k2 policy: {policy['k2_policy']}")

@@ -10,7 +10,7 @@ import argparse
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..generated import characteristic, families
 from . import flags
 
@@ -72,6 +72,10 @@ def parse_parameters(family: str, given: dict) -> dict:
 
     >>> parse_parameters("frictionless", {"k1_over_k": "1e6", "k2_ratio": None, "k2t_HL": None})
     {'k1_over_k': '1e6'}
+    >>> parse_parameters("elastic", {"k1_over_k": None, "k2_ratio": None})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: family 'elastic' needs --k1-over-k (k1/k: vertical contact stiffness over the cantilever spring constant) and --k2-ratio (k2 H^2/(k L^2): longitudinal contact stiffness seen through the lever arm H)
     """
     if family not in characteristic.FAMILIES:
         raise UserError(f"unknown family {family!r}; choose from {', '.join(characteristic.FAMILIES)}")
@@ -79,11 +83,13 @@ def parse_parameters(family: str, given: dict) -> dict:
     extra = [OPTIONS[n] for n, v in given.items() if v is not None and n not in wanted]
     if extra:
         raise UserError(f"family {family!r} takes no {', '.join(extra)}")
+    missing = [name for name in wanted if given.get(name) is None]
+    if missing:         # every one at once: the user gives them in one run
+        raise UserError(f"family {family!r} needs " + listed(
+            f"{OPTIONS[name]} ({families.PARAMETER_HELP[name]})" for name in missing))
     out = {}
     for name in wanted:
-        text = given.get(name)
-        if text is None:
-            raise UserError(f"family {family!r} needs {OPTIONS[name]} ({families.PARAMETER_HELP[name]})")
+        text = given[name]
         try:
             value = Fraction(text)
         except (ValueError, ZeroDivisionError):

@@ -38,24 +38,34 @@ def report(result) -> str:
     lines.append(f"at x_s/L = {d['spot_position']:g}: static sensitivity u_tip/(L theta) "
                  f"free {d['free_sensitivity']:.6g}, in contact {d['contact_sensitivity']:.6g} (paper: 2/3)")
     c, p = d["calibration_factor"], d["paper_calibration_factor"]
-    lines.append(f"  measured/true d_eff: {c['re']:+.6g}{c['im']:+.3g}j (InvOLS from a static force curve "
-                 f"on this contact), {p['re']:+.6g}{p['im']:+.3g}j (A = 2 theta L/3)")
+    lines.append(f"  measured/true d_eff: {_signed(c)} (InvOLS from a static force curve "
+                 f"on this contact), {_signed(p)} (A = 2 theta L/3)")
     e = d["d_eff_error_per_volt"]
     lines.append("  d_eff error from the distributed load: "
                  + (f"{e['re'] * 1e12:+.4g} pm/V per volt of V_dc - V_surf" if e else "undetermined (needs --width)"))
     return "\n".join(lines)
 
 
-def _lever(args):
-    """The lever from the instrument file (when given) with the flags over it."""
+def _signed(z: dict) -> str:
+    """A complex ratio ``{re, im}`` signed, real when it is (a lossless lever's): ``+3.729``, ``-1.2+0.03j``.
+
+    >>> _signed({"re": 3.72892, "im": 0.0}), _signed({"re": -1.2, "im": 0.0312})
+    ('+3.72892', '-1.2+0.0312j')
+    """
+    return f"{z['re']:+.6g}" + (f"{z['im']:+.3g}j" if z["im"] else "")
+
+
+def _lever(args, assumed: dict):
+    """The lever from the instrument file (when given) with the flags over it; the defaults it took into
+    ``assumed`` (name -> why)."""
     found = {}
     if args.file:
         from ..io.instruments import read_instrument
         record = read_instrument(args.file)
         found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
-    flags.require(given, ("spring_constant", "free_resonance", "length", "tip_height"), args.file)
-    return flags.cantilever(args, found)
+    flags.require(given, ("spring_constant", "free_resonance", "length"), args.file)
+    return flags.cantilever(args, found, assumed)
 
 
 def run(args) -> int:
@@ -66,11 +76,14 @@ def run(args) -> int:
     check_writable(args.plot, figure=True)
     if not (math.isfinite(args.frequency) and args.frequency > 0):
         raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
-    lever = _lever(args)
+    assumed = {}
+    lever = _lever(args, assumed)
     contact, policy = flags.contact(args).policy(lever)
     result = spot_analysis(lever, contact, args.frequency)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
+    if assumed:
+        print(flags.assumed_line(assumed, lever))
     print(report(result))
     print(f"k2 policy: {policy}")
     if args.json:

@@ -29,7 +29,8 @@ import argparse
 import math
 from pathlib import Path
 
-from ..errors import UserError
+from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD
+from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
 from . import flags
@@ -42,11 +43,11 @@ ONE_LEVER = True
 _LEVER = tuple(n for n in LEVER if n not in ("tip_position", "spot_position"))
 _UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty",
                   "tip_height_uncertainty")
+_NOMINAL_LENGTH = 1e-4
+"""Length used when none is given and none is needed (no lateral spring, no tilt: the resonance ratios do
+not depend on it); reported as not given."""
 _MAX_MODE = 1000
 """No instrument resolves a higher flexural mode (and the root counts would run for hours)."""
-_NOMINAL_LENGTH = 1e-4
-"""Length used when none is given and none is needed (no tip height, no tilt: the resonance
-ratios do not depend on it); reported as not given."""
 
 
 def add_arguments(parser) -> None:
@@ -84,7 +85,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
     """Lever values (names -> SI), contact resonances and their modes from an instrument file or table."""
     from ..io.instruments import read_instrument
 
-    if file_kind(path) in CSV_KINDS:
+    # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
+    if file_kind(path) in CSV_KINDS | {"text table"}:
         from ..io.tables import ResonanceData, read
         data = read(path)
         if not isinstance(data, ResonanceData):
@@ -104,19 +106,42 @@ def _from_file(path: str) -> tuple[dict, list, list]:
 
 
 def _lever(args, found: dict):
-    """The lever from the file's values and the flags; the length may be left out when nothing needs it."""
+    """The lever from the file's values and the flags, the defaults of :func:`pfmdyn.commands.flags.fill_defaults`
+    for the rest; the notes and what was assumed (name -> why).  Without a length, only the ratio of the tip height
+    to it acts: an assumed tip height is then taken on a typical PFM lever (:data:`pfmdyn.constants.LEVER_LENGTH`)."""
     values = {**found, **flags.given(args, _LEVER)}
     flags.require(values, ("free_resonance", "spring_constant"), args.file)
+    contact = flags.contact(args)
+    lateral = values.get("tilt") or (contact.k2 if contact.k2 is not None else contact.ratio) != 0.0
+    assumed = flags.fill_defaults(values, _LEVER) if lateral else {}
     notes = []
-    if values.get("length") is None:
-        if values.get("tip_height") is not None or values.get("tilt"):
-            raise UserError("the tip height and the tilt act through the lever length: give --length")
+    if values.get("length") is None and not (lateral or values.get("tip_height") is not None):
         values["length"] = _NOMINAL_LENGTH
-        notes.append("length not given and not needed (no tip height, no tilt)")
+        notes.append("length not given and not needed (no lateral spring, no tilt)")
+    elif values.get("length") is None:
+        if "tip_height" not in assumed or values.get("tilt"):
+            raise UserError("the tip height and the tilt act through the lever length: give --length")
+        values["length"] = LEVER_LENGTH
+        assumed["length"] = (f"a typical PFM lever's, {LEVER_LENGTH * 1e6:g} um +/- {LEVER_LENGTH_SPREAD:.0%}: only "
+                             "the assumed tip height over it acts")
+        notes.append(f"length not given: the assumed tip height acts as a ratio to a typical PFM lever's length "
+                     f"({values['tip_height'] / LEVER_LENGTH:.3g}), its uncertainty with the length's")
     if args.tip_position is not None:
         values["tip_position"] = checked("tip_position", args.tip_position, "--tip-position")
     medium = argparse.Namespace(medium=args.medium, temperature=args.temperature)
-    return flags.cantilever(medium, values), notes
+    return flags.cantilever(medium, values, defaults=False), notes, assumed
+
+
+def _tip_height_uncertainty(args, lever, assumed: dict) -> dict:
+    """``tip_height_uncertainty`` for :func:`pfmdyn.analysis.stiffness_report.analyse`: given, else the spread of an
+    assumed tip height (with an assumed length's, relative, when only their ratio acts), else its own default (10 %
+    of a given tip height)."""
+    if args.tip_height_uncertainty is not None or "tip_height" not in assumed:
+        return {}
+    relative = NAMES["tip_height_uncertainty"].default / lever.tip_height
+    if "length" in assumed:
+        relative = math.hypot(relative, LEVER_LENGTH_SPREAD)
+    return {"tip_height_uncertainty": relative * lever.tip_height}
 
 
 def _contact_map(args) -> int:
@@ -126,9 +151,11 @@ def _contact_map(args) -> int:
         raise UserError(f"{args.file}: a contact-frequency map needs --out DIR (gets maps.zarr with k1)")
     others = [NAMES[n].flag for n in _LEVER + ("tip_position", "k2", "k2_over_k1", "poisson")
               if n not in ("spring_constant", "free_resonance") and getattr(args, n, None) is not None]
-    if args.contact or args.reduced_modulus or others:
-        raise UserError("a contact-frequency map is read on the paper's lever with k2 = 0, its frequencies from the "
-                        "file: drop --contact, --reduced-modulus" + "".join(f", {o}" for o in others))
+    others = ["--contact"] * bool(args.contact) + ["--reduced-modulus"] * bool(args.reduced_modulus) + others
+    if others:
+        raise UserError(f"{args.file}: a contact-frequency map is read on the paper's lever with k2 = 0 (the tip at "
+                        f"the free end), its frequencies from the file, which {listed(others)} would not enter: "
+                        "drop " + ("it" if len(others) == 1 else "them"))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
     overrides.update(flags.given(args, ("contact_uncertainty",)))
     if args.mode:
@@ -179,12 +206,13 @@ def run(args) -> int:
     if not contacts:
         where = f" in {Path(args.file).name}" if args.file else ""
         raise UserError(f"no contact resonance{where}: give --contact HZ")
-    lever, notes = _lever(args, found)
+    lever, notes, assumed = _lever(args, found)
     hertz = flags.given(args, ("tip_radius", "normal_load"))     # checked even when not used
     if args.reduced_modulus and len(hertz) < 2:
         raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
     hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
-    uncertainties = {name: 0.0 for name in _UNCERTAINTIES[:3]} | flags.given(args, _UNCERTAINTIES)
+    uncertainties = ({name: 0.0 for name in _UNCERTAINTIES[:3]} | flags.given(args, _UNCERTAINTIES)
+                     | _tip_height_uncertainty(args, lever, assumed))
     try:
         report = analyse(
             lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
@@ -197,14 +225,19 @@ def run(args) -> int:
         raise UserError(f"{args.file}: {exc}", quantity=exc.quantity) from None
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
+    if assumed:
+        print(flags.assumed_line(assumed, lever))
     print(report.report())
     if args.json:
         from ..io import documents
 
-        document = report.to_dict()
-        if notes:
-            document["inputs"]["length"] = None
         given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
         taken = [*found, *(["contact_resonance"] if args.file and not args.contact else [])]
-        flags.write_json(args.json, documents.stiffness(document, args.file, given, taken))
+        if "tip_height" in assumed and "tip_height_uncertainty" not in given:
+            assumed["tip_height_uncertainty"] = NAMES["tip_height_uncertainty"].default_why + (
+                " and of PFM levers' lengths" if "length" in assumed else "")
+        document = report.to_dict()
+        if "length" not in (*found, *assumed, *given):         # the nominal one: not given, not needed
+            document["inputs"]["length"] = None
+        flags.write_json(args.json, documents.stiffness(document, args.file, given, taken, assumed))
     return 0

@@ -16,7 +16,8 @@ from . import flags
 def add_arguments(parser) -> None:
     flags.add_json(parser, "the verdicts")
     parser.add_argument("--errata", metavar="PATH",
-                        help="write the errata (Markdown with LaTeX) to PATH ('-': standard output, after the summary)")
+                        help="write the errata (Markdown with LaTeX) to PATH ('-': the errata alone on standard "
+                             "output, the report on standard error)")
     parser.add_argument("--claims", metavar="PATH",
                         help="the shared claims file whose ids must all have verdicts "
                              "(default: $PFMDYN_CLAIMS or shared/claims.yaml beside the source tree)")

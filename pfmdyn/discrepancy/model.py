@@ -186,13 +186,27 @@ class Model:
         """Complex design matrix (rows, columns) of the linear coefficients."""
         return self._columns(self.slopes(freq_unique, internal), freq_unique, inverse, bias)
 
-    def design_derivative_times(self, freq_unique, inverse, bias, internal, coef) -> np.ndarray:
+    def design_and_partials(self, freq_unique, inverse, bias, internal) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`design` and the slopes' partials ``dT`` (:meth:`slopes_and_jacobian`) from one read-out:
+        a least-squares fit asks for the Jacobian at most points where it evaluates the residual.
+
+        >>> from types import SimpleNamespace
+        >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
+        >>> model, f, x = Model(meta, ("damping_internal",)), np.array([0.5e4, 2e4]), np.array([1.0, 0.5, 0.01])
+        >>> A, dT = model.design_and_partials(f, np.arange(2), np.zeros(2), x)
+        >>> bool(np.array_equal(A, model.design(f, np.arange(2), np.zeros(2), x))), dT.shape
+        (True, (4, 3, 2))
+        """
+        T, dT = self.slopes_and_jacobian(freq_unique, internal)
+        return self._columns(T, freq_unique, inverse, bias), dT
+
+    def design_derivative_times(self, inverse, bias, dT, coef) -> np.ndarray:
         """``(d design / d internal_j) @ coef`` for every parameter ``j``: (rows, parameters).
 
-        From the generated partials (:meth:`slopes_and_jacobian`), combined per unique
-        frequency before expanding to rows (the background ramp does not depend on them).
+        From the generated partials ``dT`` (:meth:`slopes_and_jacobian` at the unique
+        frequencies), combined per unique frequency before expanding to rows (the background
+        ramp does not depend on them).
         """
-        _, dT = self.slopes_and_jacobian(freq_unique, internal)
         d_d1, d_d2, d_f, d_q = dT
         fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
         per_volt = d_f * coef[3] + d_q * coef[4]
@@ -368,12 +382,18 @@ class _Problem:
         self._key, self._state = None, None
 
     def _at(self, x):
-        """Design matrix, amplitudes and projection (:func:`pfmdyn.fitting.projection.project`)."""
+        """Design matrix, amplitudes, projection (:func:`pfmdyn.fitting.projection.project`) and, for
+        the analytic Jacobian, the slopes' partials (one read-out with the values: the solver asks for
+        the Jacobian at most points it evaluates)."""
         key = tuple(np.asarray(x, float))
         if key != self._key:
-            A = self.model.design(self.freq_u, self.inverse, self.bias, np.asarray(x, float))
+            x = np.asarray(x, float)
+            if JACOBIAN == "analytic":
+                A, dT = self.model.design_and_partials(self.freq_u, self.inverse, self.bias, x)
+            else:
+                A, dT = self.model.design(self.freq_u, self.inverse, self.bias, x), None
             projection = project(A[None], self.y[None, :, None])
-            self._key, self._state = key, (A, projection.amplitudes[0, :, 0], projection)
+            self._key, self._state = key, (A, projection.amplitudes[0, :, 0], projection, dT)
         return self._state
 
     def residual(self, x):
@@ -383,10 +403,10 @@ class _Problem:
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, x):
-        A, c, projection = self._at(x)
+        A, c, projection, dT = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
-            v = self.model.design_derivative_times(self.freq_u, self.inverse, self.bias, x, c)
+            v = self.model.design_derivative_times(self.inverse, self.bias, dT, c)
         else:
             upper = bounds(self.model)[1]
             v = np.empty((len(self.y), len(x)), complex)

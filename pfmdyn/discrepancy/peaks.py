@@ -25,9 +25,9 @@ from scipy.signal import peak_prominences
 
 from ..generated import formulas
 from .model import bounds
-from .undamped_modes import resonance_sensitivity, resonances, resonances_many
+from .undamped_modes import _characteristic_args_many, resonance_sensitivity, resonances, resonances_many
 
-__all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "match_starts"]
+__all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "Matches", "match_starts"]
 
 
 def _summed(data):
@@ -294,8 +294,53 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
     return full(res.x), 2 * res.cost
 
 
+class Matches:
+    """What :func:`match_starts` found, kept for one analysis: a start grid's undamped resonances, and
+    the springs matched to the peaks from a grid point, by what decides them (the characteristic's
+    arguments; the springs, the tilt and the tip's mass and position).  A spectrum's steps try the
+    same effects from the same grids and seeds in models that differ in damping, background and
+    spot, which move no undamped resonance: the same numbers, found once (a third of an analysis).
+
+    >>> from types import SimpleNamespace
+    >>> from .model import Model
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
+    >>> plain, damped = Model(meta), Model(meta, ("damping_internal",))
+    >>> matches = Matches()
+    >>> a = matches.roots(plain, [[2.0, 2.0]], 7e4)
+    >>> a is matches.roots(damped, [[2.0, 2.0, 0.01]], 7e4), a is matches.roots(plain, [[2.1, 2.0]], 7e4)
+    (True, False)
+    """
+
+    def __init__(self):
+        self._roots, self._springs = {}, {}
+
+    def roots(self, model, grid, f_max: float) -> list[np.ndarray]:
+        """:func:`pfmdyn.discrepancy.undamped_modes.resonances_many` of the grid's rows (contact modes)."""
+        key = (_characteristic_args_many(model, np.asarray(grid, float), True).tobytes(), f_max)
+        if key not in self._roots:
+            self._roots[key] = resonances_many(model, grid, True, f_max)
+        return self._roots[key]
+
+    def peak_fit(self, model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):
+        """:func:`_peak_fit`; a match of the springs alone once per what decides it."""
+        n = len(model.springs)
+        if not (moving[:n].all() and not moving[n:].any()):
+            return _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen)
+        c = model.coords(start)
+        key = (tuple(p.name for p in model.springs), start[:n].tobytes(), lower[:n].tobytes(), upper[:n].tobytes(),
+               c["alpha"], c["mu"], c["gamma"], np.asarray(peaks).tobytes(), tuple(band), max_nfev, unseen)
+        if key not in self._springs:
+            x, ss = _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen)
+            self._springs[key] = (x[:n].copy(), ss)
+        springs, ss = self._springs[key]
+        x = start.copy()
+        x[:n] = springs
+        return x, ss
+
+
 def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
-                 per_value: int = 3, joint: int = 6, sharp: bool = False, unseen: bool = False) -> list[np.ndarray]:
+                 per_value: int = 3, joint: int = 6, sharp: bool = False, unseen: bool = False,
+                 matches: Matches | None = None) -> list[np.ndarray]:
     """Starts whose resonances match ``peaks``, best first by ``cost`` (the full misfit).
 
     ``extra``: values of the parameters after the springs (one vector per profile point).
@@ -304,10 +349,12 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     ``joint`` of all those are refined over every parameter; the ``count`` best by ``cost``
     are returned; with ``sharp`` (peaks narrower than half a frequency step: an undamped
     spectrum) each is first moved along its curve of matches to the least misfit.  With
-    ``unseen`` a resonance may lie where no peak is (:func:`peak_match`).
+    ``unseen`` a resonance may lie where no peak is (:func:`peak_match`).  ``matches``: what earlier
+    calls of the analysis found (:class:`Matches`).
     """
     if not len(peaks):
         return []
+    matches = matches or Matches()
     lower, upper = bounds(model)
     n_springs = 1 if model.vertical_only else 2
     k1_grid, k2_grid = spring_grids
@@ -318,13 +365,13 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     matched = []
     for e in extra:
         grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
-        roots = resonances_many(model, grid, True, band[1] * 1.3)
+        roots = matches.roots(model, grid, band[1] * 1.3)
         score = peak_scores(roots, peaks, band, unseen)
         best_k1 = {}
         for i in np.argsort(score):
             best_k1.setdefault(round(float(grid[i][0]), 6), i)
         for i in list(best_k1.values())[:per_value]:
-            x, ss = _peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15, unseen)
+            x, ss = matches.peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15, unseen)
             matched.append((ss, x))
     # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
     exact = sorted((x for r, x in matched if r < 1e-6), key=cost)
@@ -338,12 +385,12 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
             starts.append(x)
     best = sorted(starts, key=cost)[:count]
     if sharp and len(lower) > n_springs:
-        best = sorted((_along_matches(model, x, peaks, band, cost, n_springs, lower, upper) for x in best),
+        best = sorted((_along_matches(model, x, peaks, band, cost, n_springs, lower, upper, matches) for x in best),
                       key=cost)
     return best
 
 
-def _along_matches(model, x, peaks, band, cost, n_springs, lower, upper) -> np.ndarray:
+def _along_matches(model, x, peaks, band, cost, n_springs, lower, upper, matches) -> np.ndarray:
     """Minimise ``cost`` over the last parameter with the springs re-matched to the peaks at
     every value: along the curve of matches the misfit is smooth, while across it (a peak
     moved by a fraction of its width) an undamped spectrum's misfit is a needle.
@@ -355,7 +402,7 @@ def _along_matches(model, x, peaks, band, cost, n_springs, lower, upper) -> np.n
         y = x.copy()
         y[j] = v
         y[:n_springs] = seen[min(seen, key=lambda u: abs(u - v))]
-        y = _peak_fit(model, y, np.arange(len(y)) < n_springs, peaks, band, lower, upper, 20)[0]
+        y = matches.peak_fit(model, y, np.arange(len(y)) < n_springs, peaks, band, lower, upper, 20)[0]
         seen[float(v)] = y[:n_springs]
         return y
 

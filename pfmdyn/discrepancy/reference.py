@@ -33,7 +33,7 @@ from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
                     instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
-__all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "CANDIDATES"]
+__all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "mode2_node", "CANDIDATES"]
 
 ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
                        description="point mass over the lever's mass")
@@ -86,6 +86,9 @@ def _modes_in(lever: Cantilever, frequency) -> int:
     from ..analysis.resonances import resonances
 
     wet = resonances(lever, None, modes=3).free.peak_hz
+    # a mode whose damped root a heavy fluid hides: where the vacuum ratio puts it above the first (a fluid
+    # loads higher modes less, so it sits at or above that)
+    wet = [f if math.isfinite(f) else wet[0] * ratio for f, ratio in zip(wet, mode_ratios())]
     return int(sum(frequency.min() <= f <= frequency.max() for f in wet if math.isfinite(f)))
 
 
@@ -119,10 +122,11 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     rows, fits = [], {}
     # the mass that moves the first mode as far as the peak moved, at each position tried
     shifted = {x: _shift_seed(before, frequency, y, x) for x in (POSITION_GRID if fit_position else (x_mass,))}
+    seeds = _position_seeds(before, frequency, y) if fit_position else []
     for name, refit in CANDIDATES:
         mass = "added_mass" in refit
         if mass and fit_position:
-            fit, solve, lever_of, params = _position_profile(before, refit, frequency, y, sigma, shifted)
+            fit, solve, lever_of, params = _position_profile(before, refit, frequency, y, sigma, shifted, seeds)
         else:
             solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma, x_mass)
             fit = solve_from_starts(residual, _starts(before, refit, shifted[x_mass]), *_bounds(before, refit, params))
@@ -138,12 +142,22 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     parameters = {}
     mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
     ratio = parameter_entry(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
+    if fit_position and ratio["stderr"] is not None and math.isfinite(ratio["stderr"]):
+        # the masses that move mode 1 alike one standard error of the position away: near the clamp a mass
+        # acts as m x**4, a curve the covariance's straight line follows only over a short way
+        along = _valley_spread(before.lever, *mass_fit.internal[:2], math.sqrt(max(mass_fit.covariance[1, 1], 0.0)))
+        ratio = dict(ratio, stderr=max(ratio["stderr"], along))
     parameters["added_mass_ratio"] = ratio
     # A mass at its null bound, or within two standard errors of it, is no mass the data determine.
     at_bound = not ratio["value"] > 2 * (ratio["stderr"] or 0.0) or ratio["value"] <= 1e-9
     parameters["added_mass"] = {"value": ratio["value"] * lever_mass, "stderr": ratio["stderr"] * lever_mass,
                                 "unit": "kg", "determined": named == "added_mass" and not at_bound}
-    if at_bound:
+    if at_bound and fit_position:
+        # no mass the data need, and no bound either: near the clamp a mass moves neither mode
+        parameters["added_mass"].update(stderr=None, why=(
+            "at its bound (zero) or within two standard errors of it, its position free: a mass near the clamp "
+            "moves neither mode, so the data bound no mass; a position given bounds it there"))
+    elif at_bound:
         parameters["added_mass"]["why"] = "at its bound (zero) or within two standard errors of it"
     elif named == "added_mass" and best["gap"] > UNSETTLED:
         # a misfit the candidates leave: the minimum found need not be the lever's (its curvature, the
@@ -165,8 +179,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             parameters["added_mass_position"].update(
                 undetermined=True, solutions=solutions,
                 why="the modes' shifts agree as well at x/L " + ", ".join(f"{x[1]:.3g}" for x, _ in rivals))
-            if any(abs(s["added_mass"] - parameters["added_mass"]["value"]) > 2 * parameters["added_mass"]["stderr"]
-                   for s in solutions[1:]) and parameters["added_mass"]["determined"]:
+            if parameters["added_mass"]["determined"] and any(
+                    abs(s["added_mass"] - parameters["added_mass"]["value"]) > 2 * parameters["added_mass"]["stderr"]
+                    for s in solutions[1:]):
                 parameters["added_mass"].update(determined=False, solutions=solutions, why=(
                     "each position that explains the shifts as well needs its own mass (see solutions)"))
     elif position is not None:
@@ -315,12 +330,107 @@ def _shift_seed(before: SweepFit, frequency, y, position: float) -> float | None
     return float(10.0 ** brentq(excess, low, high, xtol=1e-4))
 
 
-def _position_profile(before, refit, frequency, y, sigma, shifted):
+def _peak_ratios(before: SweepFit, frequency, y) -> tuple[float, float] | None:
+    """How far each of the first two modes' peaks moved: the tallest measured point of each mode's window
+    (split at the geometric middles of modes 1, 2 and 3) over where ``before``'s model peaks there; None
+    when a window holds under three points, mode 1's peak did not fall or mode 2's rose."""
+    f = np.asarray(frequency, float)
+    ratios, edges = mode_ratios(), [0.0]
+    edges += [math.sqrt(ratios[0] * ratios[1]), math.sqrt(ratios[1] * ratios[2])]
+    out = []
+    for low, high in zip(edges[:-1], edges[1:]):
+        window = (f >= low * before.lever.free_resonance) & (f < high * before.lever.free_resonance)
+        if window.sum() < 3:
+            return None
+        fw = f[window]
+        moved = fw[np.argmax(np.abs(y[window]))] / fw[np.argmax(np.abs(before.model(fw)))]
+        if not (moved < 1.0 or out and moved <= 1.0):      # mode 2 may stay: a mass at its node
+            return None
+        out.append(float(moved))
+    return out[0], out[1]
+
+
+def _two_free_roots(lever: Cantilever, ratio: float, position: float) -> np.ndarray:
+    """The first two free roots ``beta`` of the lever in vacuum with a point mass ``ratio`` at ``position``
+    (the composed model's characteristic, bracketed on a grid and refined)."""
+    from .. import composed
+    from ..roots.bracket import refine
+
+    def char(b):
+        return composed.characteristic(b, lever.spring_constant, 0.0, 0.0, 0.0, lever.tip_height or 0.0,
+                                       lever.length, ratio, position, 0.0)
+    grid = np.linspace(0.3, 5.0, 95)
+    with np.errstate(all="ignore"):
+        values = char(grid)
+    change = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)[:2]
+    if len(change) < 2:
+        return np.full(2, np.nan)
+    return refine(char, grid[change], grid[change + 1], values[change], values[change + 1], rtol=1e-12)
+
+
+def _valley_spread(lever: Cantilever, ratio: float, position: float, position_stderr: float) -> float:
+    """Half the difference of the masses that move the first free mode (in vacuum) as ``ratio`` at
+    ``position`` does from one ``position_stderr`` either side: the mass's spread along its valley with
+    the position (0 where no such mass is within the bounds)."""
+    if not (ratio > 0 and position_stderr > 0):
+        return 0.0
+    from scipy.optimize import brentq
+
+    target = _two_free_roots(lever, ratio, position)[0]
+    masses = []
+    for x in (position - position_stderr, position + position_stderr):
+        x = min(max(x, POSITION.lower), POSITION.upper)
+
+        def excess(log_ratio, x=x):
+            return _two_free_roots(lever, 10.0**log_ratio, x)[0] - target
+        low, high = -6.0, math.log10(ADDED_MASS.upper)
+        if not excess(low) > 0 > excess(high):
+            masses.append(ADDED_MASS.upper if x < position else 0.0)
+            continue
+        masses.append(10.0 ** brentq(excess, low, high, xtol=1e-6))
+    return abs(masses[0] - masses[1]) / 2
+
+
+POSITION_SCAN = tuple(np.linspace(0.05, 1.0, 96))
+"""Positions (x/L) scanned for the masses that move the first two modes as the peaks moved."""
+
+
+def _position_seeds(before: SweepFit, frequency, y) -> list[tuple[float, float]]:
+    """Starts ``(mass ratio, x/L)`` where a mass moves both of the first two modes as far as their peaks
+    moved (:func:`_peak_ratios`), the lever taken in vacuum: at each position of :data:`POSITION_SCAN` the
+    mass that moves mode 1 so, then where mode 2's move crosses the measured one (a position and its
+    mirror about the node of mode 2 both), else where it comes nearest.  A sharp mode has a valley in
+    (mass, position) narrower than the position profile's steps; these start inside it."""
+    moved = _peak_ratios(before, frequency, y)
+    if moved is None:
+        return []
+    bare = _two_free_roots(before.lever, 0.0, 1.0)
+    from scipy.optimize import brentq
+
+    scan = []
+    for x in POSITION_SCAN:
+        def excess(log_ratio, x=x):
+            return (_two_free_roots(before.lever, 10.0**log_ratio, x)[0] / bare[0]) ** 2 - moved[0]
+        low, high = -6.0, math.log10(ADDED_MASS.upper)
+        if not excess(low) > 0 > excess(high):
+            continue
+        ratio = 10.0 ** brentq(excess, low, high, xtol=1e-6)
+        scan.append((x, ratio, (_two_free_roots(before.lever, ratio, x)[1] / bare[1]) ** 2 - moved[1]))
+    if not scan:
+        return []
+    miss = np.array([s[2] for s in scan])
+    seeds = [(scan[i][1], scan[i][0]) for i in np.flatnonzero(np.sign(miss[:-1]) * np.sign(miss[1:]) <= 0)]
+    nearest = scan[int(np.nanargmin(np.abs(miss)))]
+    return seeds + [(nearest[1], nearest[0])]
+
+
+def _position_profile(before, refit, frequency, y, sigma, shifted, seeds=()):
     """The mass and its position fitted: the mass at each position of :data:`POSITION_GRID` (a profile
     of chi2 along the lever; ``shifted``: position -> the start of :func:`_shift_seed`), then both
-    refined from the profile's local minima, the best kept and the
-    others kept as its ``others`` (:func:`_rivals`: the shifts of two modes can agree on both sides
-    of a node)."""
+    refined from the profile's local minima, from ``seeds`` (:func:`_position_seeds`: ``(mass, x/L)`` that
+    move both modes as the peaks moved) and from the best's mirror about mode 2's node, the best kept
+    and the others kept as its ``others`` (:func:`_rivals`: the shifts of two modes can agree on both
+    sides of a node)."""
     profile = []
     for x in POSITION_GRID:
         _, _, residual, params = _candidate(before, refit, frequency, y, sigma, x)
@@ -330,16 +440,50 @@ def _position_profile(before, refit, frequency, y, sigma, shifted):
     minima = [i for i in range(len(chi2)) if chi2[i] <= chi2[max(i - 1, 0)] and chi2[i] <= chi2[min(i + 1, len(chi2) - 1)]]
     solve, lever_of, residual, params = _candidate(before, refit, frequency, y, sigma)
     bounds = _bounds(before, refit, params)
-    refined = sorted((solve_from_starts(residual, [profile[i][1]], *bounds, keep=1) for i in minima), key=lambda f: f.chi2)
+    starts = [profile[i][1] for i in minima]
+    template = profile[0][1]
+    for ratio, x in seeds:
+        start = template.copy()
+        start[:2] = ratio, x
+        starts.append(start)
+    refined = sorted((solve_from_starts(residual, [s], *bounds, keep=1) for s in starts), key=lambda f: f.chi2)
+    # The mirror of the best position about mode 2's node moves both modes alike: a minimum the grid, a
+    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82).
+    mirror = 2 * mode2_node() - refined[0].internal[1]
+    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > 0.01:
+        start = refined[0].internal.copy()
+        start[1] = mirror
+        refined = sorted([*refined, solve_from_starts(residual, [start], *bounds, keep=1)], key=lambda f: f.chi2)
     best = replace(refined[0], others=tuple((f.internal, f.chi2) for f in refined[1:]))
     return best, solve, lever_of, params
 
 
+def mode2_node() -> float:
+    """x/L of the node of the second free mode of a uniform clamped-free beam (where a point mass moves mode 1
+    alone), from the mode's root ``1 + cos(b) cosh(b) = 0`` and its shape.
+
+    >>> round(mode2_node(), 4)
+    0.7834
+    """
+    from scipy.optimize import brentq
+
+    b = brentq(lambda v: 1 + math.cos(v) * math.cosh(v), 4.0, 5.0, xtol=1e-14)
+    ratio = (math.cosh(b) + math.cos(b)) / (math.sinh(b) + math.sin(b))
+    shape = lambda x: math.cosh(b * x) - math.cos(b * x) - ratio * (math.sinh(b * x) - math.sin(b * x))  # noqa: E731
+    return float(brentq(shape, 0.5, 0.95, xtol=1e-14))
+
+
 def _rivals(fit: StartsFit, count: int) -> list:
-    """Other minima ``(internal, chi2)`` of ``fit`` at another position (x/L more than 0.05 away) within 4
-    reduced-chi2 units."""
+    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: more than
+    three of its standard errors (and 0.005) from the best and from each other (a sharp mode's mirror about
+    the node of mode 2 can sit 0.01 away with a mass 3 % apart)."""
     scale = max(fit.chi2 / count, 1.0)
-    return [(x, chi2) for x, chi2 in fit.others if chi2 - fit.chi2 < 4.0 * scale and abs(x[1] - fit.internal[1]) > 0.05]
+    apart = max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), 0.005)
+    out = []
+    for x, chi2 in sorted(fit.others, key=lambda other: other[1]):      # one per place: starts may meet
+        if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > apart for kept in [fit.internal, *(o for o, _ in out)]):
+            out.append((x, chi2))
+    return out
 
 
 class SweepComparison(Result):

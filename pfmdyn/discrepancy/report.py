@@ -128,6 +128,11 @@ def summary(report) -> str:
             err = "" if p["stderr"] is None else f" +- {p['stderr']:.2g}"
             note = "" if p.get("determined", True) else " (not determined by these data)"
             lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
+            if p.get("budget") and p["value"]:
+                words = report.get("uncertainty_inputs") or {}
+                lines.append(f"    {name}'s uncertainty, input by input: " + ", ".join(
+                    f"{words.get(source, {}).get('words', source)} {100 * v / abs(p['value']):.2g}%"
+                    for source, v in sorted(p["budget"].items(), key=lambda kv: -kv[1])))
     return "\n".join(lines)
 
 

@@ -28,15 +28,18 @@ mechanism a Q value left over.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 import numpy as np
 
-from ..io.tables import ResonanceData
+from ..io.tables import Q_RELATIVE_UNCERTAINTY, ResonanceData
 from . import select
 from .report import degrees, report
 from .effects import DAMPING, EFFECTS
 from .model import FitResult, Model
-from .resonance_fit import (SPRINGS, contact_modes, damping_seeds, fit_resonances, frequency_sigma, held_springs,
-                            rows_with_q)
+from .resonance_fit import (K2_OVER_K1, SPRINGS, _jacobian, _residual, contact_modes, damping_seeds, fit_resonances,
+                            frequency_sigma, held_springs, rows_with_q)
 
 __all__ = ["CANDIDATES", "ResonanceProblem", "analyse_resonances", "candidate_rule"]
 
@@ -280,9 +283,62 @@ def candidate_rule(data: ResonanceData, vertical_only: bool) -> list[str]:
     return library
 
 
+def uncertainty_budget(final: FitResult, data: ResonanceData, tip_height_uncertainty: float = 0.0) -> dict:
+    """Each fitted parameter's standard uncertainty, input by input: the table's resonance frequencies and
+    its Q values (their shares of the fit's covariance, by the rows of each: ``(J^T J)^-1 = A A^T`` with
+    ``A = pinv(J)``), and the tip height, which no file records (first order: ``-A dr/dH u(H)``, the residual's
+    change with the metadata's tip height at the fitted parameters).  Name -> source -> stderr (the
+    parameter's unit); the sources' squares add up to the total.
+
+    >>> from pfmdyn.io.tables import Metadata
+    >>> meta = Metadata(spring_constant=2.0, length=240e-6, width=3e-5, tip_height=13e-6, free_resonance=7e4)
+    >>> data = ResonanceData(meta, np.array([1, 1]), np.array(["free", "contact"]), np.array([7e4, 3.5e5]))
+    >>> fit = fit_resonances(Model(meta), data)
+    >>> parts = uncertainty_budget(fit, data, 2.5e-6)["k1"]
+    >>> sorted(parts), parts["tip_height"] > parts["resonance_frequencies"]
+    (['k2_policy', 'resonance_frequencies', 'tip_height'], True)
+    """
+    model, x = final.model, np.asarray(final.internal, float)
+    params = model.parameters
+    fitted = final.fitted if final.fitted is not None else np.ones(len(params), bool)
+    names = [p.name for p in params]
+    jac = _jacobian(model, x, data)
+    held = held_springs(model, data)
+    tied = "k2" in held and "k1" not in held
+    lateral = jac[:, names.index("k2")].copy() if tied else None
+    if tied:        # one contact mode: k2 follows k1 (fit_resonances' tie)
+        jac[:, names.index("k1")] += lateral
+    inverse = np.linalg.pinv(jac[:, fitted])
+    n = len(data.frequency_hz)
+    rows = {"resonance_frequencies": slice(0, n), "quality_factors": slice(n, None)}
+    parts = {source: np.sqrt(np.sum(inverse[:, span] ** 2, axis=1)) for source, span in rows.items()
+             if inverse[:, span].size}
+    scale = np.sqrt(np.maximum(np.diag(final.covariance), 0.0)) / np.sqrt(sum(v**2 for v in parts.values()))
+    parts = {source: v * np.where(np.isfinite(scale), scale, 1.0) for source, v in parts.items()}
+    if tip_height_uncertainty:
+        height = data.metadata.tip_height
+        step = 1e-6 * height
+        meta = replace(data.metadata, tip_height=height + step)
+        moved = _residual(replace(model, meta=meta), x, replace(data, metadata=meta)) - _residual(model, x, data)
+        parts["tip_height"] = np.abs(inverse @ (moved / step)) * tip_height_uncertainty
+    if tied:        # the tie's ratio assumed (Mindlin at an assumed Poisson's ratio): d log10 k2 = d ratio / (ratio ln 10)
+        from ..analysis.stiffness_report import assumed_tie_uncertainty
+
+        parts["k2_policy"] = np.abs(inverse @ lateral) * assumed_tie_uncertainty() / (K2_OVER_K1 * math.log(10))
+    out = {}
+    for j, i in enumerate(np.flatnonzero(fitted)):
+        p = params[i]
+        out[p.key] = {source: float(p.stderr(x[i], float(v[j]))) for source, v in parts.items() if v[j] > 0}
+    return out
+
+
 def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progress: bool = False,
-                       time_budget_s: float | None = None) -> dict:
+                       time_budget_s: float | None = None, tip_height_uncertainty: float | None = None) -> dict:
     """Discrepancy loop on a resonances table; same report keys as the spectrum loop.
+
+    Each fitted parameter's uncertainty is given input by input (:func:`uncertainty_budget`): the
+    resonance frequencies (0.1 % each unless the table says, assumed), the Q values (5 %, assumed) and,
+    with ``tip_height_uncertainty`` (m), the tip height, added to the fit's.
 
     Examples
     --------
@@ -302,10 +358,42 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
                      predicted_quality_factor=[1 / v if v > 0 else None for v in 1 / measured + final.residual[n:]],
                      quality_factor_relative_uncertainty=float(final.sigma[n] / max(1 / measured[0], 1e-4)))
         gap_definition += " and of (1/Q_model - 1/Q_measured) / its uncertainty"
-    return report(result, gap_definition=gap_definition,
+    budget = uncertainty_budget(final, data, tip_height_uncertainty or 0.0)
+    parameters = _with_budget(result, budget)
+    assumed = {"resonance_frequencies": data.metadata.frequency_uncertainty_hz is None,
+               "quality_factors": data.metadata.quality_factor_uncertainty is None}
+    return report(result, gap_definition=gap_definition, parameters=parameters,
+                  uncertainty_inputs={source: {"assumed": assumed.get(source, True), "words": _INPUT_WORDS[source](data)}
+                                      for source in {s for parts in budget.values() for s in parts}},
                   measured_hz=data.frequency_hz.tolist(),
                   baseline_hz=(data.frequency_hz + base.residual[:n]).tolist(),
                   predicted_hz=(data.frequency_hz + final.residual[:n]).tolist(),
                   frequency_uncertainty_hz=sigma.tolist(), spring_rule=held_springs(final.model, data),
                   untestable_effects=problem.untestable(final),
                   **extra)
+
+
+_INPUT_WORDS = {
+    "resonance_frequencies": lambda data: "resonance frequencies" + (
+        f" ({data.metadata.frequency_uncertainty_hz:g} Hz)" if data.metadata.frequency_uncertainty_hz is not None
+        else " (0.1 % each, assumed: the table gives none)"),
+    "quality_factors": lambda data: "Q values" + (
+        f" ({data.metadata.quality_factor_uncertainty:.3g} relative)" if data.metadata.quality_factor_uncertainty
+        is not None else f" ({Q_RELATIVE_UNCERTAINTY:.0%} each, assumed: the table gives none)"),
+    "tip_height": lambda data: f"tip height ({data.metadata.tip_height * 1e6:.3g} um)",
+    "k2_policy": lambda data: "k2 policy (Mindlin, Poisson's ratio 0.2-0.4 assumed)",
+}
+"""How the report names each input of :func:`uncertainty_budget`, with the uncertainty it took."""
+
+
+def _with_budget(result: dict, budget: dict) -> dict:
+    """The final fit's parameters (:func:`pfmdyn.discrepancy.report.parameters`), each stderr the sum in
+    quadrature of its ``budget`` (the fit's and the tip height's), the budget kept beside it."""
+    from .report import parameters
+
+    out = parameters(result["final"])
+    for name, parts in budget.items():
+        if name in out and out[name].get("value") is not None and parts:
+            total = math.sqrt(sum(v**2 for v in parts.values()))
+            out[name] = dict(out[name], stderr=total, budget=parts)
+    return out

@@ -28,7 +28,7 @@ from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
 from .model import FitResult, Model, bounds, fit
-from .peaks import data_peaks, match_starts, peak_widths
+from .peaks import Matches, data_peaks, match_starts, peak_widths
 from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
@@ -130,6 +130,7 @@ class SpectrumProblem:
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
+        self.matches = Matches()
 
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
@@ -137,7 +138,7 @@ class SpectrumProblem:
         # Damped peaks leave a smooth misfit: one match per profile value is enough there.
         return match_starts(model, extra, self.peaks, self.band, (self.k1_grid, self.k2_grid),
                             lambda x: self.cost(model, x), count, per_value=3 if self.sharp else 1,
-                            joint=6 if self.sharp else 4, sharp=self.sharp)
+                            joint=6 if self.sharp else 4, sharp=self.sharp, matches=self.matches)
 
     def spot_trial(self, current: FitResult, count: int = 3) -> FitResult:
         """Best fit of the current model plus the laser spot (``spot_position``).
@@ -167,7 +168,7 @@ class SpectrumProblem:
         matched = {tuple(np.round(x[:springs], 3)): x[:springs] for unseen in (False, True) for x in match_starts(
             models[0], [others], self.widths[0], self.band, (self.k1_grid, self.k2_grid),
             lambda x: self.cost(models[0], x), 3, per_value=4 if unseen else (3 if self.sharp else 1), joint=6,
-            sharp=self.sharp, unseen=unseen)}
+            sharp=self.sharp, unseen=unseen, matches=self.matches)}
         # The best model and damping per set of springs, at a few spot positions (so that the
         # current springs do not crowd out the re-matched ones), then its best spot seed.
         coarse = {}

@@ -22,7 +22,7 @@ parameter entries of the JSON, the report's lines and what a fit leaves unexplai
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -37,6 +37,7 @@ from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from ..medium import Medium
+from ..names import NAMES
 from .regions import gap_text, lever_resonances, worst_region
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
@@ -223,9 +224,23 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
 
 
 def disagreement_lines(comparison: list | None) -> list[str]:
-    """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`)."""
-    return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g} in the header, {c['ours']:.6g} here "
-            f"({c['relative_difference']:+.1%}; tolerance {c['tolerance']:.3g}: 3x our uncertainty and the sweep's step)"
+    """A line for each header number beyond its tolerance from ours (:func:`compare_with_instrument`), in
+    its unit, the header's difference from ours relative to ours, the tolerance to two digits.
+
+    >>> print(*disagreement_lines(compare_with_instrument({"spring_constant": 27.13}, {"spring_constant": (9.047, 0.29)}, 38.0)))
+      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty and the sweep's step)
+    >>> print(*disagreement_lines(compare_with_instrument({"amplitude_peak": 50965.1}, {"amplitude_peak": (76282.6, 81.0)}, 100.0)))
+      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the sweep's step)
+    """
+    def unit(name):
+        return "" if name not in NAMES or NAMES[name].unit == "1" else f" {NAMES[name].unit}"
+
+    def two_digits(x):          # 460, 0.88: no exponent
+        return f"{float(f'{x:.2g}'):g}"
+
+    return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g}{unit(c['name'])} in the header, "
+            f"{c['ours']:.6g}{unit(c['name'])} here (header {c['relative_difference']:+.1%}; tolerance "
+            f"{two_digits(c['tolerance'])}{unit(c['name'])}: 3x our uncertainty and the sweep's step)"
             + (f"; {c['why']}" if c.get("why") else "")
             for c in comparison or () if c["disagrees"]]
 
@@ -355,6 +370,15 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
             lever = lever_of(fit.internal)
             columns = base_driven_columns(lever, frequency, centre)
     residual = y - sweep_model(columns, amplitudes, amplitude_only, coherent)
+    # Differences along frequency read a peak sampled by a few points per width as noise too (up to
+    # several times high); where the fit leaves less than that, its residual, less the degrees of freedom
+    # it took, is the honest noise level, and the parameters' uncertainties follow it.
+    values = residual.size * (1 if np.isrealobj(residual) else 2)
+    taken = len(params) + 2 * amplitudes.size      # at most: a complex gain and background each
+    reduced = fit.chi2 / max(values - taken, 1)
+    if reduced < 1.0:
+        sigma = sigma * math.sqrt(reduced)
+        fit = replace(fit, covariance=fit.covariance * reduced, chi2=fit.chi2 / reduced)
     parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:

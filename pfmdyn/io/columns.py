@@ -205,6 +205,8 @@ def column(name: str) -> tuple[str, float, str] | None:
     (('frequency_hz', 1000.0, 'khz'), ('bias_v', 0.001, 'mv'), 'x', None)
     >>> column("Frequency / MHz"), column("Tip bias [V]"), column("Phase / rad")[1] == 180 / math.pi
     (('frequency_hz', 1000000.0, 'mhz'), ('bias_v', 1.0, 'v'), True)
+    >>> column("amplitude_m_per_v"), column("x_pm_per_v")
+    (('amplitude', 1.0, 'm'), ('x', 1.0, 'pm'))
     """
     text = name.strip().strip('"').strip().lower()
     unit = None
@@ -218,6 +220,8 @@ def column(name: str) -> tuple[str, float, str] | None:
         if key == canonical and unit is None:
             return canonical, 1.0, canonical.rpartition("_")[2] if units else ""
         stem, _, suffix = key.rpartition("_")
+        if units is None and key.endswith("_per_v"):    # a response per volt of drive (pfmdyn diagram --csv)
+            stem, _, suffix = key.removesuffix("_per_v").rpartition("_")
         if unit is None and key not in names and stem in names and suffix in (units or _RESPONSE_UNITS):
             key, unit = stem, suffix
         if key not in names:

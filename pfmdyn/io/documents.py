@@ -28,7 +28,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     one held with a ``note`` is ``held``, a width not given is ``assumed``.
 
     >>> record("k2", {"value": 3.0, "stderr": 9.0, "unit": "N/m", "determined": False})["why"]
-    'the data do not determine it: 3 +/- 9 N/m'
+    'the data do not determine it: 3 +- 9 N/m'
     >>> record("width", {"value": 1e-5, "stderr": None, "unit": "m", "given": False, "why": "assumed L/10"})["status"]
     'assumed'
     """
@@ -36,7 +36,7 @@ def record(name: str, entry: dict, status: str = "fitted") -> dict:
     if entry.get("undetermined") or entry.get("determined") is False or value is None:
         # the estimate the data leave undetermined is said, not lost
         unit = "" if NAMES[name].unit == "1" else f" {NAMES[name].unit}"
-        shown = "" if value is None else f": {value:.3g}" + (f" +/- {stderr:.3g}" if stderr is not None else "") + unit
+        shown = "" if value is None else f": {value:.3g}" + (f" +- {stderr:.3g}" if stderr is not None else "") + unit
         return quantity(name, None, status="undetermined",
                         why=why or entry.get("note") or f"the data do not determine it{shown}")
     if entry.get("note"):
@@ -76,7 +76,8 @@ def lever_records(values: dict, given=(), from_file=(), assumed: dict | None = N
         elif name in from_file:
             out[name] = quantity(name, value, status="file", why="read from the input file")
         else:
-            out[name] = quantity(name, value, status="assumed", why="the default: no flag, not in the file")
+            out[name] = quantity(name, value, status="assumed", why="the default: " + (
+                NAMES[name].default_why or "no flag, not in the file"))
     return out
 
 
@@ -208,9 +209,11 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         results["mode"] = quantity("mode", [m for _, m in rows], status="file", why="the table's rows", dims=["row"])
         results["measured_resonance"] = quantity("measured_resonance", report["measured_hz"], status="file",
                                                  why="the table's rows", dims=["row"])
-        results["resonance_uncertainty"] = quantity("resonance_uncertainty", report["frequency_uncertainty_hz"],
-                                                    status="file", why="the table's metadata or its default",
-                                                    dims=["row"])
+        inputs = report.get("uncertainty_inputs") or {}
+        assumed = inputs.get("resonance_frequencies", {}).get("assumed")
+        results["resonance_uncertainty"] = quantity(
+            "resonance_uncertainty", report["frequency_uncertainty_hz"], status="assumed" if assumed else "file",
+            why="0.1 % of each frequency: the table gives none" if assumed else "the table's metadata", dims=["row"])
         results["predicted_resonance"] = quantity("predicted_resonance", report["predicted_hz"], status="derived",
                                                   dims=["row"])
         results["baseline_resonance"] = quantity("baseline_resonance", report["baseline_hz"], status="derived",
@@ -254,6 +257,17 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
     notes += [_step_note(i, s) for i, s in enumerate(report.get("steps") or [], 1)]
     notes += [f"{name}: {why}" for name, why in (report.get("spring_rule") or {}).items()]
     notes += [f"{name}: {why}" for name, why in (report.get("untestable_effects") or {}).items()]
+    budget = (report["parameters"].get("k1") or {}).get("budget")
+    if budget and report["parameters"]["k1"].get("value"):
+        k1 = abs(report["parameters"]["k1"]["value"])
+        fit["budget"] = {"uncertainty_source": quantity("uncertainty_source", list(budget), status="derived",
+                                                        dims=["uncertainty_source"]),
+                         "relative_uncertainty": quantity("relative_uncertainty", [v / k1 for v in budget.values()],
+                                                          status="derived", dims=["uncertainty_source"])}
+    words = {source: entry["words"] for source, entry in (report.get("uncertainty_inputs") or {}).items()}
+    notes += [f"{name}'s uncertainty by input: " + ", ".join(f"{words.get(s, s)} {v:.3g} {p['unit']}" for s, v in
+                                                                p["budget"].items())
+              for name, p in report["parameters"].items() if p.get("budget")]
     notes.append(report["fit_report"])
     return document("discrepancy", kind, source, lever, results, fit, notes,
                     missing_effects=report["missing_effects"])
@@ -507,7 +521,7 @@ def _solution(s: dict, lever: dict, k2_policy: str) -> dict:
     return out
 
 
-def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
+def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None = None) -> dict:
     """The document of ``pfmdyn stiffness`` (kind ``contact_resonance``): k1 (with k2 or the tip position)
     solved from the contact resonances, each uncertainty's budget, every solution when not unique.
 
@@ -522,8 +536,9 @@ def stiffness(doc: dict, path=None, given=(), from_file=()) -> dict:
     inputs = dict(doc["inputs"])
     contact, modes = inputs.pop("contact_hz"), inputs.pop("modes")
     lever = lever_records({k: v for k, v in inputs.items() if not isinstance(v, str)}, given=given,
-                          from_file=from_file, assumed={name: "the default" for name in inputs
-                                                        if name.endswith("_uncertainty") and name not in given})
+                          from_file=from_file, assumed={**{name: "the default" for name in inputs
+                                                           if name.endswith("_uncertainty") and name not in given},
+                                                        **(assumed or {})})
     if isinstance(inputs.get("medium"), str):
         lever["medium"] = quantity("medium", inputs["medium"], status="given" if "medium" in given else "assumed",
                                    **({} if "medium" in given else {"why": "the default"}))
@@ -572,14 +587,16 @@ MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_
 def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
     """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
     are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
-    (sentences, kept as notes).  ``given``: the lever's values given on the command line.
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``summary["why"]``,
+    when there, says why a statistic no pixel determines is undetermined.
 
     >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
     """
     def statistic(name, value):
-        return _derived(name, value, "no pixel of the map determines it (none fitted by this run, or none explained)")
+        return _derived(name, value, summary.get("why")
+                        or "no pixel of the map determines it (none fitted by this run, or none explained)")
 
     results = {"pixels": quantity("pixels", list(shape), status="file", why="the map's shape", dims=["axis"])}
     results.update({name: statistic(name, summary[name]) for name in MAP_RESULTS if name in summary})

@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..names import canonical, checked
-from .columns import read_table
+from .columns import column, read_table
 from .kinds import CSV_KINDS, NANOSURF_KINDS, file_kind
 from .record import FIELDS, Channel, InstrumentRecord, MissingFieldError, make_record
 
@@ -41,8 +41,10 @@ __all__ = ["FIELDS", "Channel", "InstrumentRecord", "MissingFieldError", "read_i
 
 
 def _reader(path: Path):
-    """The reader of the file's kind (:func:`pfmdyn.io.kinds.file_kind`); a text file is read as a
-    sweep whatever it holds, so that a table saved as .txt is told it is not one."""
+    """The reader of the file's kind (:func:`pfmdyn.io.kinds.file_kind`); pfmdyn's table under a .txt or
+    .dat name is read as a table, as discrepancy and stiffness read it."""
+    if path.is_dir():
+        raise UserError(f"{path}: a directory, not an instrument file (a Zarr map is read by pfmdyn map)")
     kind = file_kind(path)
     if kind == "asylum":
         from .ibw import read_ibw
@@ -53,10 +55,10 @@ def _reader(path: Path):
     if kind in NANOSURF_KINDS:
         from .nid import read_nid
         return read_nid
-    if kind in ("text sweep", "text table"):
+    if kind == "text sweep":
         from .sweeps import read_sweep
         return read_sweep
-    if kind in CSV_KINDS:
+    if kind in CSV_KINDS | {"text table"}:
         return _read_csv
     raise UserError(f"{path}: unknown instrument file type '{path.suffix.lower()}'; pfmdyn reads .ibw (Asylum), "
                     ".h5/.hdf5 (pycroscopy NSID/USID), .nid (Nanosurf), .txt/.dat (drive sweeps), .csv")
@@ -69,11 +71,23 @@ _CSV_UNITS = {"_hz": "Hz", "_m_per_sqrthz": "m/sqrt(Hz)", "_n_per_m": "N/m", "_d
 
 def _read_csv(path: Path) -> InstrumentRecord:
     """A CSV table (:func:`pfmdyn.io.columns.read_table`): columns with the units their names
-    end in, ``# key: value`` metadata."""
+    end in, ``# key: value`` metadata; every row as long as the header, a number under each unit."""
     table = read_table(path)
     if not table.header:
         raise UserError(f"{path}: no header line")
     units = [next((u for s, u in _CSV_UNITS.items() if c.lower().endswith(s)), "") for c in table.header]
+    if not table.rows:
+        raise UserError(f"{path}, line {table.header_line}: header but no data rows")
+    for number, cells in table.rows:        # a truncated or damaged row is said, not counted as data
+        cells = cells[:len(table.header)] if not any(cells[len(table.header):]) else cells
+        if len(cells) != len(table.header):
+            raise UserError(f"{path}, line {number}: {len(cells)} values for {len(table.header)} columns (truncated?)")
+        for name, unit, cell in zip(table.header, units, cells):
+            try:
+                if unit:
+                    float(cell)
+            except ValueError:
+                raise UserError(f"{path}, line {number}: column '{name}': '{cell}' is not a number") from None
     found = {}
     for key, value in table.metadata.items():     # any spelling of a field (``length_m`` is ``length``)
         if canonical(key) in FIELDS:
@@ -82,6 +96,9 @@ def _read_csv(path: Path) -> InstrumentRecord:
             except ValueError:
                 pass
     kind = "resonance metadata" if {"mode", "condition"} <= set(table.header) else "spectrum"
+    if not any(unit == "Hz" or (column(c) or ("",))[0] == "frequency_hz" for c, unit in zip(table.header, units)):
+        raise UserError(f"{path}: not a table pfmdyn reads: no frequency column (frequency_hz; a drive sweep "
+                        "has a 'Sweep data' or '[DATA]' line before its table)")
     channels = [Channel(c, u, (len(table.rows),)) for c, u in zip(table.header, units)]
     return make_record(path, kind, "CSV table", channels, found)
 
@@ -159,6 +176,10 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
     >>> table = resonance_table(r, {"tip_height": 1e-5})
     >>> table.condition.tolist(), table.frequency_hz.tolist()
     (['free', 'contact'], [60000.0, 300000.0])
+    >>> resonance_table(make_record("b.h5", "image", "test", (), {"free_resonance": 6e4}), {"length": 2e-4})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.io.record.MissingFieldError: spring constant and tip height not in b.h5
     """
     from .discrepancy_data import Metadata, ResonanceData
 
@@ -182,8 +203,11 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
         else:       # e.g. a drive sweep of the free lever: its fitted resonance alone
             modes, conditions = np.array([1]), np.array(["free"])
             freqs, qs = np.array([f_free]), np.array([q_free])
-    lever = {key: required_field(record, key, overrides)
-             for key in ("spring_constant", "length", "tip_height", "free_resonance")}
+    needed = ("spring_constant", "length", "tip_height", "free_resonance")
+    missing = tuple(key for key in needed if overrides.get(key) is None and key not in record.fields)
+    if len(missing) > 1:        # all at once: the user gives them in one run
+        raise MissingFieldError(f"{listed(FIELDS[key][0] for key in missing)} not in {name}", missing)
+    lever = {key: required_field(record, key, overrides) for key in needed}
     # No resonance depends on the width: taken when known, never asked for.
     width = required_field(record, "width", overrides) if ("width" in record.fields or
                                                              overrides.get("width") is not None) else None

@@ -27,19 +27,19 @@ KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
 class MissingFieldError(UserError):
     """A cantilever field that neither the file nor the caller gives; ``field`` names it (a key
-    of :data:`FIELDS`) and is the error's :attr:`~pfmdyn.errors.UserError.quantity`, so that a
-    command can say which option supplies it.
+    of :data:`FIELDS`; a tuple of keys when several are missing) and is the error's
+    :attr:`~pfmdyn.errors.UserError.quantity`, so that a command can say which option supplies it.
 
     >>> MissingFieldError("tip height not in a.ibw", "tip_height").quantity
     'tip_height'
     """
 
-    def __init__(self, message: str, field: str):
+    def __init__(self, message: str, field: str | tuple[str, ...]):
         super().__init__(message, quantity=field)
 
     @property
-    def field(self) -> str:
-        """The missing field's name (the quantity)."""
+    def field(self) -> str | tuple[str, ...]:
+        """The missing field's name (the quantity), or the names when several are missing."""
         return self.quantity
 
 

@@ -152,12 +152,39 @@ def _parse(path: Path):
     return header, found, notes, names, table, frequency, others, instrument
 
 
+def _uncalibrated(header: dict, unit: str, notes: list) -> str:
+    """The amplitude's unit: V where the column says metres through Nanonis's default input calibration
+    of 1 m/V (none applied: the detector's volts), with a note; else ``unit``."""
+    calibration = next((v for k, v in header.items() if split_unit(k)[0] == _CALIBRATION_KEY), None)
+    if unit == "m" and calibration is not None and si_value(calibration, "") == 1.0:
+        notes.append(f"amplitude in V: the header's input calibration is {calibration} m/V (none applied)")
+        return "V"
+    return unit
+
+
 def read_sweep(path) -> InstrumentRecord:
-    """Read a Cytomass ``.txt`` or Nanonis ``.dat`` drive sweep: channels and the resonance fit."""
+    """Read a Cytomass ``.txt`` or Nanonis ``.dat`` drive sweep: channels and the resonance fit (the
+    amplitude's unit as :func:`read_sweep_table` gives it).
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "s.dat")
+    ...     _ = open(name, "w").write("f_res (Hz)\\t7e4\\nOscillation Control>Input Calibration (m/V)\\t1E+0\\n[DATA]\\n"
+    ...                               "OC M1 Freq. Shift (Hz)\\tOC D1 Amplitude (m)\\n1e4\\t4\\n2e4\\t5\\n")
+    ...     r = read_sweep(name)
+    >>> [c.unit for c in r.channels], r.notes
+    (['V'], ("amplitude in V: the header's input calibration is 1E+0 m/V (none applied)",))
+    """
     path = Path(path)
-    _, found, notes, names, table, frequency, others, instrument = _parse(path)
-    channels = [make_channel(names[i][0], names[i][1], (len(table),)) for i in others]
-    spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], names[others[0]][1]) if others else None
+    header, found, notes, names, table, frequency, others, instrument = _parse(path)
+    units = [names[i][1] for i in others]
+    if others:          # the amplitude: the first column after the frequencies
+        units[0] = _uncalibrated(header, units[0], notes)
+    channels = [make_channel(names[i][0], unit, (len(table),)) for i, unit in zip(others, units)]
+    if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
+        notes.append(f"free resonance: the header's '{_PEAK_KEY}', where the amplitude peaks, not the resonance "
+                     "(at a Q of a few they differ by per cents); pfmdyn discrepancy fits the resonance")
+    spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], units[0]) if others else None
     return make_record(path, "spectrum", instrument, channels, found, notes, spectrum)
 
 
@@ -190,9 +217,6 @@ def read_sweep_table(path) -> SweepTable:
     phase = table[order, phases[0]] if phases else None
     if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
         found["amplitude_peak"] = found.pop("free_resonance")
-    calibration = next((v for k, v in header.items() if split_unit(k)[0] == _CALIBRATION_KEY), None)
-    if unit == "m" and calibration is not None and si_value(calibration, "") == 1.0:
-        unit = "V"
-        notes.append(f"amplitude in V: the header's input calibration is {calibration} m/V (none applied)")
+    unit = _uncalibrated(header, unit, notes)
     return SweepTable(str(path), frequency[order], amplitude[order], unit, phase, found, medium, instrument,
                       tuple(notes))

@@ -14,8 +14,8 @@ import os
 import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
-from ..errors import UserError
-from ..names import canonical, checked
+from ..errors import UserError, listed
+from ..names import NAMES, canonical, checked
 from .readers import open_root, scalar
 from .store import write_maps
 
@@ -40,7 +40,8 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     attrs.update(given)
     missing = [key for key in ("spring_constant", "free_resonance") if key not in attrs]
     if missing:
-        raise UserError(f"{path}: missing metadata {', '.join(missing)} (root attributes or command-line options)")
+        raise UserError(f"{path}: no {listed((NAMES[key].label for key in missing), 'or')} in its root attributes",
+                        quantity=tuple(missing))
     if fc.ndim != 2 or not np.issubdtype(fc.dtype, np.number) or np.iscomplexobj(fc):
         raise UserError(f"{path}: contact_frequency_hz must be a (ny, nx) array of real numbers, got shape "
                         f"{fc.shape} of {fc.dtype}")
@@ -63,8 +64,17 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     write_maps(out, {name: (np.broadcast_to(value, fc.shape).astype(float), "N/m", f"{name} from the contact resonance")
                      for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr))})
     k1 = np.asarray(result.k1)
-    median = float(np.nanmedian(k1)) if np.isfinite(k1).any() else math.nan
-    return {"explained_fraction": float(np.mean(np.isfinite(k1))), "median_k1": median, "out": out}
+    summary = {"explained_fraction": float(np.mean(np.isfinite(k1))), "out": out}
+    if np.isfinite(k1).any():
+        return summary | {"median_k1": float(np.nanmedian(k1))}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = fc / f1
+    ratio = ratio[np.isfinite(ratio)]
+    seen = f"{ratio.min():.4g} to {ratio.max():.4g}" if ratio.size else "none finite"
+    return summary | {"median_k1": None, "why": (
+        f"no pixel's contact/free ratio ({seen}) lies between mode {int(mode)}'s limits "
+        f"{result.proof.soft_ratio:.4g} (k1 = 0) and {result.proof.stiff_ratio:.4g} (k1 -> inf) of the "
+        "paper's lever (tip at the free end, no k2)")}
 
 
 def describe(summary: dict) -> str:
@@ -72,6 +82,10 @@ def describe(summary: dict) -> str:
 
     >>> describe({"explained_fraction": 1.0, "median_k1": 109.75, "out": "o/maps.zarr"})
     'contact-frequency map: k1 at 100.0 % of pixels, median k1 109.8 N/m; maps in o/maps.zarr'
+    >>> describe({"explained_fraction": 0.0, "median_k1": None, "why": "no ratio fits", "out": "o/maps.zarr"})
+    'contact-frequency map: k1 undetermined at every pixel: no ratio fits; maps in o/maps.zarr'
     """
+    if summary["median_k1"] is None:
+        return f"contact-frequency map: k1 undetermined at every pixel: {summary['why']}; maps in {summary['out']}"
     return (f"contact-frequency map: k1 at {100 * summary['explained_fraction']:.1f} % of pixels, "
             f"median k1 {summary['median_k1']:.4g} N/m; maps in {summary['out']}")

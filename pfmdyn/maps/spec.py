@@ -25,7 +25,7 @@ def parse_model(spec: str) -> tuple[str, ...]:
     names = spec.split("+")
     unknown = [n for n in names[1:] if n not in MECHANISMS[1:]]
     if names[0] != "elastic" or unknown:
-        raise UserError(f"unknown model {spec!r}: use 'auto' or elastic[+viscous][+contact][+distributed]")
+        raise UserError(f"unknown model {spec!r}: use 'auto', 'sho' or elastic[+viscous][+contact][+distributed]")
     return ("internal",) + tuple(m for m in MECHANISMS[1:] if m in names)
 
 

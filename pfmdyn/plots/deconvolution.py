@@ -54,7 +54,8 @@ def plot_spectra(result: Deconvolution, unit: str = "a.u.", surface: SurfaceDisp
         # The lower edge is floored so that a band wider than the value stays on the log axis.
         ax.fill_between(khz, np.maximum(magnitude - band, magnitude * 1e-3), magnitude + band,
                         color=colour, alpha=0.25, lw=0, label="±1 standard error")
-        ax.set_yscale("log")
+        if (magnitude > 0).any():       # a slope that is zero everywhere (no bias dependence) stays linear
+            ax.set_yscale("log")
         ax.set_ylabel(label)
         ax.set_title(title, fontsize="medium")
         ax.grid(True, which="both", alpha=0.3)
