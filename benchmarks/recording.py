@@ -66,8 +66,9 @@ def _header(name: str, argv: list[str], started: float, elapsed: float) -> str:
 
 
 @contextlib.contextmanager
-def recorded(name: str, argv: list[str] | None = None, folder: Path = RESULTS):
-    """Print to the terminal and, when the block completes, write ``folder/<name>.md``.
+def recorded(name: str, argv: list[str] | None = None, folder: Path = RESULTS, variant: str = ""):
+    """Print to the terminal and, when the block completes, write ``folder/<name>.md`` (a ``variant`` of
+    the script's run, e.g. one of its options: ``folder/<name>_<variant>.md``).
 
     ``argv``: the script's arguments (default ``sys.argv[1:]``), quoted in the header.
 
@@ -88,7 +89,7 @@ def recorded(name: str, argv: list[str] | None = None, folder: Path = RESULTS):
     text = _header(name, argv, started, time.perf_counter() - clock) + "```text\n" + captured.getvalue()
     text += ("" if text.endswith("\n") else "\n") + "```\n"
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / f"{name}.md").write_text(text, encoding="utf-8")
+    (folder / f"{name}{'_' + variant if variant else ''}.md").write_text(text, encoding="utf-8")
 
 
 def tally(passed: int, cases: int, failures: list[str], label: str = "") -> None:

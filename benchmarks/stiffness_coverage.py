@@ -75,5 +75,5 @@ def main():
 
 
 if __name__ == "__main__":
-    with recorded("stiffness_coverage" + ("_assumed_tip_height" if "--assumed-tip-height" in sys.argv else "")):
+    with recorded("stiffness_coverage", variant="assumed_tip_height" if "--assumed-tip-height" in sys.argv else ""):
         main()
