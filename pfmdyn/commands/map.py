@@ -38,6 +38,8 @@ _LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_posi
           "tip_gyration_radius", "tilt", "spot_position")
 _CONTACT = ("k2", "k2_over_k1", "poisson")
 """The probe's flags (:mod:`pfmdyn.commands.flags`): they override the file's metadata."""
+_SPREAD = ("tip_height_uncertainty",)
+"""The assumed inputs' spreads k1's standard error takes (flags over the defaults)."""
 _DART = ("drive_amplitude", "frequency_width")
 """A DART image's settings, over its note's."""
 
@@ -91,6 +93,7 @@ def add_arguments(parser) -> None:
     flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
+    flags.add(parser, _SPREAD)
     flags.add(parser, _DART)
 
 
@@ -146,7 +149,7 @@ def run(args) -> int:
     if args.model not in ("auto", "sho"):
         from ..maps.spec import parse_model
         parse_model(args.model)         # checked whatever the input, as every flag
-    overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
+    overrides = flags.given(args, _LEVER + _CONTACT + _SPREAD + ("width",))
     dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
         overrides["medium"] = flags.medium_from_args(args)
@@ -182,6 +185,8 @@ def run(args) -> int:
     surface_potential = flags.given(args, ("surface_potential",)).get("surface_potential")
     if args.medium:
         print(flags.medium_line(overrides["medium"], args))
+    if source.assumed:
+        print(flags.assumed_line(source.assumed, source.model.lever))
     n_bands = len(source.model.bands)
     biases = source.model.bias_v
     if sho:
@@ -216,19 +221,21 @@ def run(args) -> int:
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
-    _write_json(args, s.to_dict(), overrides, s.shape)
+    assumed = {name: (getattr(source.model.lever, name), why) for name, why in source.assumed.items()}
+    _write_json(args, s.to_dict(), overrides, s.shape, assumed)
     return 0
 
 
-def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
-    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`)."""
+def _write_json(args, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
+    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`); ``assumed``: name ->
+    (value, why) of the lever's defaults taken."""
     if args.json:
         from ..io import documents
         from ..maps import open_result
 
         shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
         given = {name: value for name, value in overrides.items() if name != "medium"}
-        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))
+        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given, assumed=assumed))
 
 
 def _dart(args, overrides: dict, given: dict) -> int:
