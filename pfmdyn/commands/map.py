@@ -29,7 +29,7 @@ import math
 
 from ..errors import UserError, listed
 from ..fitting.noise import GAP_LIMIT
-from ..names import checked, flag
+from ..names import NAMES, checked, flag
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -265,6 +265,14 @@ def _dart(args, overrides: dict, given: dict) -> int:
         found[name] = (values[name], "assumed", why)
         print(flags.assumed_line({name: why}, Cantilever.from_values(values)))
     lever = Cantilever.from_values(values)
+    if "tip_height_uncertainty" in overrides:
+        found["tip_height_uncertainty"] = (overrides["tip_height_uncertainty"], "given")
+    else:
+        from ..analysis.stiffness_report import tip_height_spread
+        assumed = found["tip_height"][1] == "assumed"
+        found["tip_height_uncertainty"] = (tip_height_spread(lever.tip_height, assumed), "assumed", (
+            NAMES["tip_height_uncertainty"].default_why if assumed else "10 % of the tip height, the datasheets' "
+            "tolerance") + ": its share is in k1_stderr")
     contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
     if contact.k2_of(1.0) or lever.tilt:
         from ..analysis.contact_resonance import require_tip_height
@@ -281,7 +289,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
     report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
         maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
-                             progress=None if report is None else lambda done, total: report(done, total, done))
+                             progress=None if report is None else lambda done, total: report(done, total, done),
+                             tip_height_uncertainty=found["tip_height_uncertainty"][0])
     finally:
         close()
     axis = drive_axis(lever, contact, f1, s1, maps["k1"], maps["contact_loss"])
@@ -295,7 +304,9 @@ def _dart(args, overrides: dict, given: dict) -> int:
     print(phases)
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
-                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset, "phase_offset_left_deg": left})
+                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset,
+                           "phase_offset_left_deg": left, "tip_height": lever.tip_height, "tip_height_uncertainty": found["tip_height_uncertainty"][0],
+                           "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
     folder = args.plot or (args.out if args.png else None)
     if folder:
         from ..maps import open_result

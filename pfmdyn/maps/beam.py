@@ -35,7 +35,7 @@ from ..generated.tilt_rotation import rotated
 from .outputs import quantities
 from .spec import bands
 
-__all__ = ["BeamMapModel", "POLICY_GRID"]
+__all__ = ["BeamMapModel", "POLICY_GRID", "k1_input_share"]
 
 POLICY_GRID = 60
 """Values of ``k1`` (log-spaced over the fit's bounds: six decades) at which an assumed k2 tie's share of its standard error is
@@ -308,16 +308,21 @@ class BeamMapModel:
 def _policy_shares(lever: Cantilever, ratio: float | None, held: float | None, middle_hz: float, low: float,
                    high: float, tie_stderr: float, height_stderr: float):
     grid = np.geomspace(low, high, POLICY_GRID)
-    return np.log(grid), np.array([_policy_share(lever, ratio, held, middle_hz, k, tie_stderr, height_stderr)
+    return np.log(grid), np.array([k1_input_share(lever, ratio, held, middle_hz, k, tie_stderr, height_stderr)
                                    for k in grid])
 
 
-def _policy_share(lever: Cantilever, ratio: float | None, held: float | None, middle_hz: float, k1: float,
-                  tie_stderr: float, height_stderr: float) -> float:
+def k1_input_share(lever: Cantilever, ratio: float | None, held: float | None, middle_hz: float, k1: float,
+                   tie_stderr: float, height_stderr: float) -> float:
     """The relative standard error of ``k1`` from the tie's ratio (``tie_stderr``) and the tip height
     (``height_stderr``, m), ``k2 = ratio k1`` or ``held``: at the contact root ``beta`` nearest ``middle_hz``
     (Newton from there), the measured ``beta`` held, ``d k1 / d p = -F_p / (F_k1 + ratio F_k2)`` of the
-    characteristic ``F(beta, k1, k2; H)`` (central differences), the two in quadrature."""
+    characteristic ``F(beta, k1, k2; H)`` (central differences), the two in quadrature.
+
+    >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+    >>> round(k1_input_share(lever, 0.8, None, 3.5e5, 150.0, 0.0, 1e-6), 4)    # 10 % of H: k2 H^2 by 20 %
+    0.0336
+    """
     from ..analysis.contact_resonance import betas, characteristic
 
     def F(b, a, c, lv=lever):

@@ -504,14 +504,16 @@ POOL = 3
 
 
 def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, pool: int = POOL,
-           block: int = 4096, progress=None) -> tuple[dict, float]:
+           block: int = 4096, progress=None, tip_height_uncertainty: float = 0.0) -> tuple[dict, float]:
     """Every pixel of a DART image both ways: maps (name -> array of the signals' shape; :data:`MAPS`
     with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``determined``) and ``sigma`` (:func:`channel_noise`).
 
     ``s1``, ``s2``: the deflection signals (m, complex, ``A exp(-i phi)``) at ``f1``, ``f2`` (Hz);
     ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``pool``: the radius (pixels) of
     :func:`pooled_contact` (0: each pixel's contact alone; ``d_eff`` is each pixel's own always);
-    ``progress(done, total)`` is called after each ``block`` of pixels.
+    ``progress(done, total)`` is called after each ``block`` of pixels.  ``tip_height_uncertainty`` (m):
+    its share in ``k1_stderr``, the contact resonance held (:meth:`pfmdyn.maps.beam.BeamMapModel.k1_policy_stderr`,
+    as a band-excitation map and ``pfmdyn stiffness`` take it).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
     >>> f1, f2 = np.array([[3.10e5, 3.11e5]]), np.array([[3.16e5, 3.17e5]])
@@ -596,12 +598,37 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         narrowed = np.where(fit.converged, narrowed, 1.0)
         maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance * narrowed,
                 "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor * narrowed,
-                "k1": k1, "k1_stderr": k1 * k1_sd, "contact_loss": loss, "contact_loss_stderr": loss_sd,
+                "k1": k1, "k1_stderr": np.hypot(k1 * k1_sd, _height_share(lever, contact, resonance, k1,
+                                                                         tip_height_uncertainty)),
+                "contact_loss": loss, "contact_loss_stderr": loss_sd,
                 "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
                 "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
                 "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
+
+
+def _height_share(lever: Cantilever, contact: Contact, resonance, k1, tip_height_uncertainty: float,
+                  points: int = 24):
+    """The tip height's share in the standard error of each pixel's ``k1`` (N/m), its contact resonance held
+    (:func:`pfmdyn.maps.beam.k1_input_share`): at ``points`` resonances spanning the image's, interpolated in
+    ``log k1`` (0 without a tip height, its uncertainty or a lateral spring)."""
+    from .beam import k1_input_share
+    out = np.zeros(np.shape(k1))
+    ok = np.isfinite(resonance) & (resonance > lever.free_resonance) & np.isfinite(k1) & (k1 > 0)
+    if not (tip_height_uncertainty and lever.tip_height is not None and ok.any()
+            and (contact.ratio is not None or contact.k2 is not None)):
+        return out
+    grid = np.geomspace(resonance[ok].min(), resonance[ok].max(), points)
+    grid_k1 = start_k1(lever, contact, grid)
+    ratio = contact.ratio if contact.k2 is None else None
+    share = np.array([k1_input_share(lever, ratio, contact.k2, f, k, 0.0, tip_height_uncertainty)
+                      if np.isfinite(k) else np.nan for f, k in zip(grid, grid_k1)])
+    known = np.isfinite(share)
+    if known.any():
+        order = np.argsort(grid_k1[known])
+        out[ok] = k1[ok] * np.interp(np.log(k1[ok]), np.log(grid_k1[known][order]), share[known][order])
+    return out
 
 
 def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:

@@ -23,7 +23,7 @@ from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.hdf5 import is_usid_main
 from ..io.record import attribute_texts, si_unit
-from ..names import CONTACT, LEVER, NAMES, canonical, checked, fill_defaults
+from ..names import CONTACT, LEVER, canonical, checked, fill_defaults
 from .bias import basis
 from .beam import BeamMapModel
 from .spec import bands as fit_bands
@@ -285,11 +285,9 @@ def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> Map
                              if name in attrs and name != "k1"})
     except (TypeError, ValueError) as exc:      # UserError among them: named after the file, quantity kept
         raise UserError(f"{path}: {exc}", getattr(exc, "quantity", None)) from None
-    from ..analysis.stiffness_report import TIP_HEIGHT_TOLERANCE
-    spread = NAMES["tip_height_uncertainty"].default if "tip_height" in assumed else \
-        TIP_HEIGHT_TOLERANCE * lever.tip_height
-    model = BeamMapModel(lever, f, bias_v=bias, contact=contact,
-                         tip_height_uncertainty=attrs.get("tip_height_uncertainty", spread))
+    from ..analysis.stiffness_report import tip_height_spread
+    spread = attrs.get("tip_height_uncertainty", tip_height_spread(lever.tip_height, "tip_height" in assumed))
+    model = BeamMapModel(lever, f, bias_v=bias, contact=contact, tip_height_uncertainty=spread)
     return MapInput(path, model, tuple(grid), usid or "response", "usid" if usid else "plain", columns, assumed)
 
 
