@@ -305,7 +305,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
                            "pool_radius": args.pool, "phase_offset_deg": args.phase_offset,
-                           "phase_offset_left_deg": left, "tip_height": lever.tip_height, "tip_height_uncertainty": found["tip_height_uncertainty"][0],
+                           "phase_offset_left_deg": left, "tip_height": lever.tip_height,
+                           "tip_height_uncertainty": found["tip_height_uncertainty"][0],
                            "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
     folder = args.plot or (args.out if args.png else None)
     if folder:
