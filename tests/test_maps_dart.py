@@ -180,8 +180,8 @@ def test_k2_without_a_tip_height_assumes_the_typical_one(tmp_path, capsys):
 
 def test_an_assumed_tip_height_has_its_share_in_k1s_standard_error(tmp_path):
     """The assumed tip height's spread (2.5 um) moves the k1 that puts each pixel's contact resonance where it is
-    measured: its share in ``k1_stderr`` is the one ``pfmdyn stiffness`` states for that resonance, stored and
-    written as assumed; a tip height given exactly adds none."""
+    measured: its share in ``k1_stderr`` is the one ``pfmdyn stiffness`` states for that resonance (and it is
+    in ``contact_loss_stderr``), stored and written as assumed; a tip height given exactly adds none."""
     from pfmdyn import Cantilever, Contact
     from pfmdyn.analysis.stiffness_report import analyse
     case = dart_case(17, 3, 4)
@@ -205,6 +205,8 @@ def test_an_assumed_tip_height_has_its_share_in_k1s_standard_error(tmp_path):
         solution = analyse(lever, Contact(k2_over_k1=0.5), [fc], tip_height_uncertainty=2.5e-6).solution
         stated.append(solution.sources["tip_height_uncertainty"]["k1"] / solution.k1)
     assert np.all(share > 5e-4) and np.allclose(share, stated, rtol=0.05), (share.tolist(), stated)
+    # the contact loss that gives each pixel's drives' ratio moves with the tip height too
+    assert np.all(assumed["contact_loss_stderr"].values[ok] > exact["contact_loss_stderr"].values[ok])
 
 
 def test_the_library_is_quiet(capsys):
