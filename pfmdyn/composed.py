@@ -772,7 +772,8 @@ class _Compiled:
         # the tip's pieces on the arguments as given: a scalar stays one number, not n equal ones
         point = (args[0].astype(complex), *args[2:9], args[10])
         uc = _flat(pieces.load_constant(point[0], args[2], args[7]), self.shape, complex)
-        jump = _point_columns(pieces.point_jump(*point), self.shape).T
+        # C order (a Fortran-ordered jump would be another specialisation, 8 s to compile)
+        jump = np.ascontiguousarray(_point_columns(pieces.point_jump(*point), self.shape).T)
         at_tip = [p for p in names if p in _POINT]
         partials = pieces.point_jump_partials(*point, wrt=at_tip)
         djump = np.zeros((len(names), 12) + self.shape, complex)

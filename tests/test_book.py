@@ -23,10 +23,14 @@ CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/ch
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
+def built(tmp_path_factory, all_verdicts):
+    """The book, built from the verdicts tests/test_verify.py checks (computed once per test run)."""
+    from pfmdyn.book.records import VERDICTS_ENV, write_verdicts
     out = tmp_path_factory.mktemp("book")
+    write_verdicts(out / "verdicts.json", all_verdicts)
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "pfmdyn.cli", "book", "--out", str(out)],
+                          env={**os.environ, VERDICTS_ENV: str(out / "verdicts.json")},
                           capture_output=True, text=True, timeout=900)
     elapsed = time.perf_counter() - t0
     print(f"book build: {elapsed:.0f} s")

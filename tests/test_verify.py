@@ -25,11 +25,6 @@ def _verdict(claim_id):
     return core.run_check(core.REGISTRY[claim_id]).verdict
 
 
-@pytest.fixture(scope="module")
-def all_verdicts():
-    return verify.compute(progress=False)
-
-
 def test_every_registered_claim_has_a_recorded_verdict_equal_to_the_computed_one(all_verdicts):
     recorded = verify.load_recorded()
     if PAPER is None:

@@ -1,7 +1,8 @@
 """``pfmdyn book``'s build: the verified book with jupyter-book 1.x, every page executed.
 
 The verdicts are computed once, before Sphinx starts, into ``<out>/verdicts.json``
-(:func:`pfmdyn.book.records.write_verdicts`); Sphinx runs in this process and starts a kernel per
+(:func:`pfmdyn.book.records.write_verdicts`), unless :data:`~pfmdyn.book.records.VERDICTS_ENV` already
+names a file of them (the tests compute them once for ``pfmdyn verify``'s tests and the book); Sphinx runs in this process and starts a kernel per
 page, each of which finds the file through :data:`~pfmdyn.book.records.VERDICTS_ENV`, set only
 while Sphinx runs (:func:`~pfmdyn.book.records.verdicts_from`).  The build is strict: notebook
 execution is forced, a cell that raises fails the build, and Sphinx warnings are errors (``-W -n``).
@@ -11,13 +12,14 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from ..errors import UserError
-from .records import verdicts_from, write_verdicts
+from .records import VERDICTS_ENV, verdicts_from, write_verdicts
 
 
 def book_dir() -> Path:
@@ -75,9 +77,14 @@ def build(out: Path, *, progress=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     verdict_file = out / "verdicts.json"
-    write_verdicts(verdict_file)
+    given = os.environ.get(VERDICTS_ENV)
+    if given and Path(given).resolve() != verdict_file:
+        shutil.copyfile(given, verdict_file)
+    elif not given:
+        write_verdicts(verdict_file)
     if progress is not None:
-        progress(f"pfmdyn book: verdicts computed in {time.perf_counter() - t0:.1f} s -> {verdict_file}")
+        done = f"taken from {given}" if given else f"computed in {time.perf_counter() - t0:.1f} s"
+        progress(f"pfmdyn book: verdicts {done} -> {verdict_file}")
     with verdicts_from(verdict_file), quiet_kernel():
         result = build_sphinx(
             src, out / "html",

@@ -61,9 +61,10 @@ def compute_verdicts() -> list[dict]:
     return [record(v) for v in compute(progress=False)]
 
 
-def write_verdicts(path: Path) -> list[dict]:
-    """Compute the verdicts and write them to ``path`` (JSON)."""
-    data = compute_verdicts()
+def write_verdicts(path: Path, computed: list | None = None) -> list[dict]:
+    """Write the verdicts to ``path`` (JSON): ``computed`` (:func:`pfmdyn.verify.compute`'s), or
+    computed now when None."""
+    data = compute_verdicts() if computed is None else [record(v) for v in computed]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"claims": data}, indent=1))
     return data

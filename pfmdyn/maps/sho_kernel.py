@@ -55,7 +55,8 @@ def fit_sho(frequency_hz, spectra, q_range, bounds, iterations: int, tolerance: 
     ([301200.0, 150.0], 0.002)
     """
     f = np.ascontiguousarray(frequency_hz, float)
-    y = np.asarray(spectra, complex)      # rows may be strided (a band of wider spectra)
+    # a band of wider spectra (strided rows) is copied: numba compiles _fit_all once per layout (3 s)
+    y = np.ascontiguousarray(spectra, complex)
     n = len(y)
     out = {"norm": np.empty(n), "total": np.empty(n), "guess_p": np.empty((n, 2)), "guess_c": np.empty(n, complex),
            "guess_cost": np.empty(n), "p": np.empty((n, 2)), "c": np.empty(n, complex), "cost": np.empty(n),
