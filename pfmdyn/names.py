@@ -17,7 +17,7 @@ from .constants import ROOM_TEMPERATURE, TIP_HEIGHT, TIP_HEIGHT_SPREAD
 from .errors import UserError
 
 __all__ = ["Quantity", "QUANTITIES", "NAMES", "LEVER", "CONTACT", "DAMPING", "MEASURED", "CALIBRATION", "GROUPS", "canonical", "flag",
-           "checked", "markdown_table"]
+           "checked", "fill_defaults", "markdown_table"]
 
 
 @dataclass(frozen=True)
@@ -372,6 +372,24 @@ def checked(name: str, value, where: str = "") -> float:
         unit = "" if q.unit == "1" else f" {q.unit}"
         raise UserError(f"{prefix}{name} must be in {interval}{unit}, got {value}")
     return number
+
+
+def fill_defaults(values: dict, names=LEVER) -> dict[str, str]:
+    """Put into ``values`` (name -> SI) the default (:attr:`Quantity.default`) of each of
+    ``names`` that neither a flag nor the file gave; returns name -> why, what reports say of each.
+    Every command that builds a lever takes its defaults here, so one k1 means one contact in all.
+
+    >>> values = {"length": 2e-4}
+    >>> why = fill_defaults(values); values["tip_height"], why["tip_height"].split(",")[0]
+    (1.3e-05, "a typical PFM probe's")
+    """
+    out = {}
+    for name in names:
+        q = NAMES[name]
+        if values.get(name) is None and q.default is not None:
+            values[name] = q.default
+            out[name] = q.default_why
+    return out
 
 
 def markdown_table() -> str:

@@ -298,12 +298,35 @@ def test_surface_displacement_over_real_levers(seed, ends):
     np.testing.assert_allclose(fit.g_elec.real, error, rtol=1e-6, atol=1e-6 * np.max(np.abs(error)))
 
 
-def test_a_lever_missing_its_tip_height_is_one_line_and_writes_nothing(tmp_path, capsys):
+def test_a_lever_missing_its_k1_is_one_line_and_writes_nothing(tmp_path, capsys):
     data_file = write_csv(tmp_path / "data.csv", *synthetic())
     status = cli.main(["deconvolve", str(data_file), "--surface-potential", "0", "--out", str(tmp_path / "o"),
-                       "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--k1", "100"])
+                       "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4"])
     err = capsys.readouterr().err.strip()
-    assert status == 2 and "give --tip-height" in err and "\n" not in err and not (tmp_path / "o").exists()
+    assert status == 2 and "give --k1" in err and "tip" not in err and "\n" not in err and not (tmp_path / "o").exists()
+
+
+def test_a_lever_without_its_tip_height_takes_the_typical_one(tmp_path, capsys):
+    """No --tip-height: the typical PFM probe's (13 um), as every command takes it, said and marked assumed;
+    the surface displacement is the reference's on a lever of that tip height (k2 = 0.5 k1 acts through it)."""
+    import json
+    k, f1, L, k1 = 2.0, 7e4, 2.25e-4, 300.0
+    p = dict(k=k, L=L, H=13e-6, kvv=k1, kll=0.5 * k1)
+    freqs = np.linspace(0.05, 3.0, 24) * f1
+    (f, v, r), _ = _beam_data(p, f1, 1.0, freqs, 12.5, 0.02, 0.0, np.random.default_rng(2))
+    data_file = write_csv(tmp_path / "data.csv", f, v, r)
+    args = _lever_args(k, f1, L, 13e-6, k1, 0.5 * k1, None)
+    del args[args.index("--tip-height"):args.index("--tip-height") + 2]
+    assert cli.main(["deconvolve", str(data_file), "--surface-potential", str(V_SURF), "--out", str(tmp_path / "o"),
+                     "--json", str(tmp_path / "d.json"), *args]) == 0
+    assert "assumed: tip height 1.3e-05 m (a typical PFM probe's" in capsys.readouterr().out
+    assert json.loads((tmp_path / "d.json").read_text())["lever"]["tip_height"]["status"] == "assumed"
+    with open(tmp_path / "o" / "deconvolution.csv") as handle:
+        rows = list(csv.DictReader(line for line in handle if not line.startswith("#")))
+    got = np.array([complex(float(x["d_eff_surface_x"]), float(x["d_eff_surface_y"])) for x in rows])
+    determined = np.isfinite(got)
+    assert determined.sum() > 0.5 * got.size
+    np.testing.assert_allclose(got[determined], 12.5, rtol=1e-6)
 
 
 def test_calibration_is_that_of_pfmdyn_spot():

@@ -369,3 +369,44 @@ def test_single_band_usid_map_ties_k2_and_names_nothing_false(tmp_path, monkeypa
     assert np.mean(np.abs(found - k1) <= 2 * stderr) >= 0.9, (found - k1) / stderr
     assert not np.any(np.asarray(group["at_bound"][...])) and group.attrs["model"] == "elastic"
     assert "Mindlin" in group.attrs["k2_policy"]
+
+
+def test_a_map_without_a_tip_height_assumes_the_typical_one_and_states_its_share(tmp_path, capsys):
+    """A band-excitation file that records no tip height (most do not): the map takes the default of every
+    command (13 +- 2.5 um), prints it as assumed, stores and writes it so, and k1's standard error carries
+    its share as ``pfmdyn stiffness`` states it for the same contact resonance (one band, k2 tied by
+    the assumed Mindlin ratio: FE data with k2 = 0.8 k1)."""
+    import json
+
+    from pfmdyn import Cantilever, Contact
+    from pfmdyn.analysis.stiffness_report import analyse
+    height = 13e-6
+    k1 = np.array([120.0, 200.0, 320.0])
+    beams = [FEBeam(K, L, F1, height, k1=v, k2=0.8 * v, Q=Q, n_elements=40) for v in k1]
+    fc = np.array([b.contact_resonances(1)[0] for b in beams])
+    f = np.linspace(0.9 * fc.min(), 1.1 * fc.max(), 96)
+    y = np.stack([2e-3 * b.slope(f)[:, 0] for b in beams])[None]
+    y = y + 0.002 * np.abs(y).max() * np.random.default_rng(3).standard_normal(y.shape)
+    free = float(FEBeam(K, L, F1, height, n_elements=40).free_resonances(1)[0])
+    path = tmp_path / "be.h5"
+    with h5py.File(path, "w") as h:
+        h["response"], h["frequency_hz"] = y, f
+        h.attrs.update(spring_constant_n_per_m=K, length_m=L, free_resonance_hz=free)
+    common = ["--no-progress", "--scheduler", "sync", "--model", "elastic"]
+    assert main(["map", str(path), "--out", str(tmp_path / "a"), "--json", str(tmp_path / "a.json"), *common]) == 0
+    assert "assumed: tip height 1.3e-05 m (a typical PFM probe's" in capsys.readouterr().out
+    assert json.loads((tmp_path / "a.json").read_text())["lever"]["tip_height"]["status"] == "assumed"
+    group = zarr.open_group(str(tmp_path / "a" / "maps.zarr"), mode="r")
+    assert "tip_height" in group.attrs["assumed"] and group.attrs["tip_height_uncertainty"] == 2.5e-6
+    assumed = np.asarray(group["k1_stderr"][...]).ravel()
+    # the same map with the tip height given exactly: the fit's and the tie's shares alone
+    assert main(["map", str(path), "--out", str(tmp_path / "b"), "--tip-height", "13e-6",
+                 "--tip-height-uncertainty", "0", *common]) == 0
+    exact = np.asarray(zarr.open_group(str(tmp_path / "b" / "maps.zarr"), mode="r")["k1_stderr"][...]).ravel()
+    found = np.asarray(group["k1"][...]).ravel()
+    assert np.all(np.abs(found / k1 - 1) < 0.1), found / k1
+    share = np.sqrt(assumed**2 - exact**2) / found
+    lever = Cantilever(K, free, L, tip_height=height)
+    stated = [analyse(lever, Contact(), [c], tip_height_uncertainty=2.5e-6).solution.sources["tip_height_uncertainty"]
+              ["k1"] / analyse(lever, Contact(), [c]).solution.k1 for c in fc]
+    assert np.all(share > 0.01) and np.allclose(share, stated, rtol=0.05), (share, stated)

@@ -31,7 +31,9 @@ TOLERANCES = {"contact_resonance": 2e-4, "contact_quality_factor": 0.05, "k1": 0
 def _map(case, tmp_path, *extra, order=None):
     path = write_ibw(case, tmp_path / "dart.ibw", order)
     out = tmp_path / "out"
+    # the FE lever's tip height, known exactly: no share of its uncertainty in k1's
     assert main(["map", str(path), "--out", str(out), "--no-progress", "--tip-height", repr(case.lever["tip_height"]),
+                 "--tip-height-uncertainty", "0",
                  "--spot-position", repr(case.lever["spot_position"]), "--k2-over-k1", repr(case.lever["k2_over_k1"]),
                  "--json", str(tmp_path / "dart.json"), *extra]) == 0
     return open_result(out), json.loads((tmp_path / "dart.json").read_text())
@@ -174,6 +176,37 @@ def test_k2_without_a_tip_height_assumes_the_typical_one(tmp_path, capsys):
                  "--json", str(out)]) == 0
     assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
     assert json.loads(out.read_text())["lever"]["tip_height"]["status"] == "assumed"
+
+
+def test_an_assumed_tip_height_has_its_share_in_k1s_standard_error(tmp_path):
+    """The assumed tip height's spread (2.5 um) moves the k1 that puts each pixel's contact resonance where it is
+    measured: its share in ``k1_stderr`` is the one ``pfmdyn stiffness`` states for that resonance (and it is
+    in ``contact_loss_stderr``), stored and written as assumed; a tip height given exactly adds none."""
+    from pfmdyn import Cantilever, Contact
+    from pfmdyn.analysis.stiffness_report import analyse
+    case = dart_case(17, 3, 4)
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    common = ["--no-progress", "--k2-over-k1", "0.5", "--pool", "0"]
+    assert main(["map", str(path), "--out", str(tmp_path / "a"), "--json", str(tmp_path / "a.json"), *common]) == 0
+    assert main(["map", str(path), "--out", str(tmp_path / "b"), "--tip-height", "13e-6",
+                 "--tip-height-uncertainty", "0", *common]) == 0
+    assumed, exact = open_result(tmp_path / "a"), open_result(tmp_path / "b")
+    assert assumed.attrs["tip_height_uncertainty"] == 2.5e-6 and "tip_height" in assumed.attrs["assumed"]
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert doc["lever"]["tip_height_uncertainty"]["status"] == "assumed"
+    ok = assumed["determined"].values.astype(bool)
+    k1 = assumed["k1"].values[ok]
+    assert ok.sum() >= 6 and np.allclose(k1, exact["k1"].values[ok], rtol=1e-9)
+    share = np.sqrt(assumed["k1_stderr"].values[ok] ** 2 - exact["k1_stderr"].values[ok] ** 2) / k1
+    lever = Cantilever(case.lever["spring_constant"], case.lever["free_resonance"], case.lever["length"],
+                       tip_height=13e-6)
+    stated = []
+    for fc in assumed["contact_resonance"].values[ok]:
+        solution = analyse(lever, Contact(k2_over_k1=0.5), [fc], tip_height_uncertainty=2.5e-6).solution
+        stated.append(solution.sources["tip_height_uncertainty"]["k1"] / solution.k1)
+    assert np.all(share > 5e-4) and np.allclose(share, stated, rtol=0.05), (share.tolist(), stated)
+    # the contact loss that gives each pixel's drives' ratio moves with the tip height too
+    assert np.all(assumed["contact_loss_stderr"].values[ok] > exact["contact_loss_stderr"].values[ok])
 
 
 def test_the_library_is_quiet(capsys):

@@ -28,13 +28,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..cantilever import Cantilever, Contact
+from ..constants import TIP_HEIGHT_SPREAD
 from ..errors import UserError
 from ..generated import formulas
 from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "Solution", "StiffnessReport", "analyse"]
+__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
+           "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
 """Lowest tip position (x_tip / L) searched when the tip position is fitted."""
@@ -55,6 +57,16 @@ def assumed_tie_uncertainty() -> float:
     """
     ties = [formulas.mindlin_k2_over_k1(nu) for nu in ASSUMED_POISSON]
     return float(abs(ties[0] - ties[1]) / 2 / math.sqrt(3))
+def tip_height_spread(tip_height: float, assumed: bool) -> float:
+    """Standard uncertainty (m) every command takes for a tip height whose own is not given: the assumed one's
+    spread (:data:`pfmdyn.constants.TIP_HEIGHT_SPREAD`), else :data:`TIP_HEIGHT_TOLERANCE` of a given one.
+
+    >>> tip_height_spread(13e-6, True), round(tip_height_spread(20e-6, False), 12)
+    (2.5e-06, 2e-06)
+    """
+    return TIP_HEIGHT_SPREAD if assumed else TIP_HEIGHT_TOLERANCE * tip_height
+
+
 _SAME = 1e-7           # relative difference below which two solutions are one
 
 

@@ -126,8 +126,9 @@ def add_arguments(parser) -> None:
         "At each frequency the response is fitted as a straight line b + c V in the bias (Eq. 41), d_eff = "
         "b + c V_surf at --surface-potential and G_elec = c; they "
         "are those of the signal as measured, in its units, and without lever flags no lever model enters. "
-        "With the lever and contact (--spring-constant --free-resonance --length --tip-height --k1, optionally "
-        "--k2/--k2-over-k1/--poisson, --tip-position, --tip-mass-ratio, --tilt, --width) deconvolution.csv "
+        "With the lever and contact (--spring-constant --free-resonance --length --k1, optionally "
+        "--tip-height (default: a typical PFM probe's), --k2/--k2-over-k1/--poisson, --tip-position, "
+        "--tip-mass-ratio, --tilt, --width) deconvolution.csv "
         "gains, per frequency, the true surface displacement at the laser spot (--spot-position, default 1: "
         "the free end): d_eff_surface = d_eff / C with C the calibration factor of 'pfmdyn spot' (data "
         "calibrated with an InvOLS from a static force curve in the same contact, at the same spot), "
@@ -153,7 +154,8 @@ def run(args) -> int:
     surface_potential = flags.given(args, ("surface_potential",))["surface_potential"]
     check_directory(args.out)
     check_writable(args.json)
-    probe = _probe(args)
+    assumed = {}
+    probe = _probe(args, assumed)
     data = read_spectra(args.data)
     result = deconvolve(data.frequency_hz, data.bias_v, data.response, surface_potential)
     unit = data.metadata.get("response_unit", "a.u.")
@@ -170,6 +172,8 @@ def run(args) -> int:
         written.append(args.out / f"{name}.png")
     if probe is not None and probe[0].medium is not None:
         print(flags.medium_line(probe[0].medium, args))
+    if assumed:
+        print(flags.assumed_line(assumed, probe[0]))
     print(f"{data.path}:")
     print(summary(result, unit))
     if surface is not None:
@@ -180,18 +184,20 @@ def run(args) -> int:
 
         values = flags.given(args, LEVER + CONTACT)
         quality = tip_quality(result.v_null, result.v_null_se)
-        flags.write_json(args.json, documents.deconvolution(result, quality, data.path, surface, unit, values,
+        taken = {**values, **{name: getattr(probe[0], name) for name in assumed}}     # the assumed: their default
+        flags.write_json(args.json, documents.deconvolution(result, quality, data.path, surface, unit, taken,
                                                             list(values), args.out))
     return 0
 
 
-def _probe(args):
-    """``(lever, contact)`` when any probe flag is given (all of the lever's essentials then), else None."""
+def _probe(args, assumed: dict):
+    """``(lever, contact)`` when any probe flag is given (all of the lever's essentials then; a tip height not
+    given, the default of every command, into ``assumed``), else None."""
     values = flags.given(args, LEVER + CONTACT)
     if not values:
         return None
-    flags.require(values, ("spring_constant", "free_resonance", "length", "tip_height", "k1"))
-    return flags.cantilever(args), flags.contact(args)
+    flags.require(values, ("spring_constant", "free_resonance", "length", "k1"))
+    return flags.cantilever(args, assumed=assumed), flags.contact(args)
 
 
 def _surface_summary(surface: SurfaceDisplacement, unit: str) -> str:

@@ -44,7 +44,7 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 def _analyse(data, args, assumed: dict):
     """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone); a resonance
     table's with the tip height's uncertainty in each parameter's (the assumed one's spread, else 10 %)."""
-    from ..analysis.stiffness_report import TIP_HEIGHT_TOLERANCE
+    from ..analysis.stiffness_report import tip_height_spread
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
@@ -53,8 +53,7 @@ def _analyse(data, args, assumed: dict):
     options = dict(vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
         return analyse(data, **options)
-    spread = flags.NAMES["tip_height_uncertainty"].default if "tip_height" in assumed else \
-        TIP_HEIGHT_TOLERANCE * data.metadata.tip_height
+    spread = tip_height_spread(data.metadata.tip_height, "tip_height" in assumed)
     return analyse_resonances(data, tip_height_uncertainty=spread, **options)
 
 

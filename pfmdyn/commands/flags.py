@@ -16,7 +16,7 @@ from pathlib import Path
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError, listed
 from ..medium import Medium
-from ..names import CONTACT, DAMPING, LEVER, NAMES, checked
+from ..names import CONTACT, DAMPING, LEVER, NAMES, checked, fill_defaults
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
            "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
@@ -283,24 +283,6 @@ def check_medium(args) -> None:
     if getattr(args, "medium", None) is not None or getattr(args, "temperature", None) is not None:
         medium_from_args(args)
         temperature(args)       # also where the medium's own numbers do not depend on it
-
-
-def fill_defaults(values: dict, names=LEVER) -> dict[str, str]:
-    """Put into ``values`` (name -> SI) the default (:attr:`pfmdyn.names.Quantity.default`) of each of
-    ``names`` that neither a flag nor the file gave; returns name -> why, what reports say of each.
-    Every command that builds a lever takes its defaults here, so one k1 means one contact in all.
-
-    >>> values = {"length": 2e-4}
-    >>> why = fill_defaults(values); values["tip_height"], why["tip_height"].split(",")[0]
-    (1.3e-05, "a typical PFM probe's")
-    """
-    out = {}
-    for name in names:
-        q = NAMES[name]
-        if values.get(name) is None and q.default is not None:
-            values[name] = q.default
-            out[name] = q.default_why
-    return out
 
 
 def assumed_line(assumed: dict, lever: Cantilever) -> str:

@@ -29,7 +29,7 @@ import math
 
 from ..errors import UserError, listed
 from ..fitting.noise import GAP_LIMIT
-from ..names import checked, flag
+from ..names import NAMES, checked, flag
 from . import flags
 
 __all__ = ["add_arguments", "run"]
@@ -38,6 +38,8 @@ _LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_posi
           "tip_gyration_radius", "tilt", "spot_position")
 _CONTACT = ("k2", "k2_over_k1", "poisson")
 """The probe's flags (:mod:`pfmdyn.commands.flags`): they override the file's metadata."""
+_SPREAD = ("tip_height_uncertainty",)
+"""The assumed inputs' spreads k1's standard error takes (flags over the defaults)."""
 _DART = ("drive_amplitude", "frequency_width")
 """A DART image's settings, over its note's."""
 
@@ -91,6 +93,7 @@ def add_arguments(parser) -> None:
     flags.add_json(parser, "the run's summary")
     flags.add_lever(parser, _LEVER)
     flags.add_contact(parser, _CONTACT)
+    flags.add(parser, _SPREAD)
     flags.add(parser, _DART)
 
 
@@ -146,7 +149,7 @@ def run(args) -> int:
     if args.model not in ("auto", "sho"):
         from ..maps.spec import parse_model
         parse_model(args.model)         # checked whatever the input, as every flag
-    overrides = flags.given(args, _LEVER + _CONTACT + ("width",))
+    overrides = flags.given(args, _LEVER + _CONTACT + _SPREAD + ("width",))
     dart_settings = flags.given(args, _DART)        # checked whatever the input, as every flag
     if args.medium:             # the fluid around the lever: its load enters the beam model
         overrides["medium"] = flags.medium_from_args(args)
@@ -182,6 +185,8 @@ def run(args) -> int:
     surface_potential = flags.given(args, ("surface_potential",)).get("surface_potential")
     if args.medium:
         print(flags.medium_line(overrides["medium"], args))
+    if source.assumed:
+        print(flags.assumed_line(source.assumed, source.model.lever))
     n_bands = len(source.model.bands)
     biases = source.model.bias_v
     if sho:
@@ -216,19 +221,21 @@ def run(args) -> int:
         target = args.data if args.usid_inplace else copy
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
-    _write_json(args, s.to_dict(), overrides, s.shape)
+    assumed = {name: (getattr(source.model.lever, name), why) for name, why in source.assumed.items()}
+    _write_json(args, s.to_dict(), overrides, s.shape, assumed)
     return 0
 
 
-def _write_json(args, summary: dict, overrides: dict, shape=None) -> None:
-    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`)."""
+def _write_json(args, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
+    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`); ``assumed``: name ->
+    (value, why) of the lever's defaults taken."""
     if args.json:
         from ..io import documents
         from ..maps import open_result
 
         shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
         given = {name: value for name, value in overrides.items() if name != "medium"}
-        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given))
+        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given, assumed=assumed))
 
 
 def _dart(args, overrides: dict, given: dict) -> int:
@@ -258,6 +265,14 @@ def _dart(args, overrides: dict, given: dict) -> int:
         found[name] = (values[name], "assumed", why)
         print(flags.assumed_line({name: why}, Cantilever.from_values(values)))
     lever = Cantilever.from_values(values)
+    if "tip_height_uncertainty" in overrides:
+        found["tip_height_uncertainty"] = (overrides["tip_height_uncertainty"], "given")
+    else:
+        from ..analysis.stiffness_report import tip_height_spread
+        assumed = found["tip_height"][1] == "assumed"
+        found["tip_height_uncertainty"] = (tip_height_spread(lever.tip_height, assumed), "assumed", (
+            NAMES["tip_height_uncertainty"].default_why if assumed else "10 % of the tip height, the datasheets' "
+            "tolerance") + ": its share is in k1_stderr")
     contact, k2_policy = Contact(**{name: overrides[name] for name in _CONTACT if name in overrides}).policy(lever)
     if contact.k2_of(1.0) or lever.tilt:
         from ..analysis.contact_resonance import require_tip_height
@@ -274,7 +289,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
     report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
     try:
         maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
-                             progress=None if report is None else lambda done, total: report(done, total, done))
+                             progress=None if report is None else lambda done, total: report(done, total, done),
+                             tip_height_uncertainty=found["tip_height_uncertainty"][0])
     finally:
         close()
     axis = drive_axis(lever, contact, f1, s1, maps["k1"], maps["contact_loss"])
@@ -288,7 +304,10 @@ def _dart(args, overrides: dict, given: dict) -> int:
     print(phases)
     out = os.path.join(args.out, "maps.zarr")
     write_dart(out, maps, {"model": "dart", "source": str(args.data), "channel_noise": sigma, "k2_policy": k2_policy,
-                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset, "phase_offset_left_deg": left})
+                           "pool_radius": args.pool, "phase_offset_deg": args.phase_offset,
+                           "phase_offset_left_deg": left, "tip_height": lever.tip_height,
+                           "tip_height_uncertainty": found["tip_height_uncertainty"][0],
+                           "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
     folder = args.plot or (args.out if args.png else None)
     if folder:
         from ..maps import open_result

@@ -584,15 +584,19 @@ MAP_RESULTS = ("explained_fraction", "at_bound_fraction", "median_gap", "median_
 """What a map's summary says of its pixels (:func:`map_summary`)."""
 
 
-def map_summary(summary: dict, path, shape, given: dict | None = None, settings=()) -> dict:
+def map_summary(summary: dict, path, shape, given: dict | None = None, settings=(), assumed: dict | None = None) -> dict:
     """The document of ``pfmdyn map`` (kind ``map``: the model fitted pixel by pixel; the maps themselves
     are in ``source.store``, Zarr in xarray's convention): the run's statistics, its ``settings``
-    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``summary["why"]``,
-    when there, says why a statistic no pixel determines is undetermined.
+    (sentences, kept as notes).  ``given``: the lever's values given on the command line; ``assumed``: name ->
+    (value, why) of those it took by default; ``summary["why"]``, when there, says why a statistic no pixel
+    determines is undetermined.
 
-    >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5))
+    >>> d = map_summary({"explained_fraction": 1.0, "median_k1": 109.8, "out": "o/maps.zarr"}, "cr.h5", (4, 5),
+    ...                 assumed={"tip_height": (13e-6, "a typical PFM probe's")})
     >>> d["source"]["store"], d["results"]["median_k1"]["unit"], d["results"]["pixels"]["value"]
     ('o/maps.zarr', 'N/m', [4, 5])
+    >>> d["lever"]["tip_height"]["status"]
+    'assumed'
     """
     def statistic(name, value):
         return _derived(name, value, summary.get("why")
@@ -605,7 +609,9 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     if "pixels_per_s" in summary:
         fit["pixels_per_second"] = statistic("pixels_per_second", summary["pixels_per_s"])
     notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
-    lever = lever_records(given or {}, given=list(given or {}))
+    assumed = assumed or {}
+    lever = lever_records({**{name: value for name, (value, _) in assumed.items()}, **(given or {})},
+                          given=list(given or {}), assumed={name: why for name, (_, why) in assumed.items()})
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
 
 

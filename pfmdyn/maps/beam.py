@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from ..generated.tilt_rotation import rotated
 from .outputs import quantities
 from .spec import bands
 
-__all__ = ["BeamMapModel", "POLICY_GRID"]
+__all__ = ["BeamMapModel", "POLICY_GRID", "k1_input_share"]
 
 POLICY_GRID = 60
 """Values of ``k1`` (log-spaced over the fit's bounds: six decades) at which an assumed k2 tie's share of its standard error is
@@ -71,6 +71,8 @@ class BeamMapModel:
     k1_range: tuple[float, float] | None = None
     """k1 (N/m) the start grid covers (None: the lever's spring constant to 1e4 times it); the
     fit's bounds are a decade wider."""
+    tip_height_uncertainty: float = 0.0
+    """Standard uncertainty of the lever's tip height (m), whose share :meth:`k1_policy_stderr` adds."""
 
     @property
     def outputs(self) -> dict[str, tuple[str, str]]:
@@ -142,13 +144,14 @@ class BeamMapModel:
         return self.contact.tie() * np.asarray(k1, float)
 
     def k1_policy_stderr(self, k1) -> np.ndarray:
-        """The share of an assumed k2 tie in the standard error of ``k1`` (N/m, each pixel): with one band
-        and no k2 policy stated, ``k2`` is tied by Mindlin at an assumed Poisson's ratio, whose spread
-        (:func:`pfmdyn.analysis.stiffness_report.assumed_tie_uncertainty`) moves the ``k1`` that puts
-        the contact resonance where it was measured, as ``pfmdyn stiffness`` states it
-        (:func:`pfmdyn.analysis.contact_resonance.covariance_by_source`); 0 where k2 is held, fitted,
-        tied at a stated ratio or cannot act (no tip height, no tilt).  The share at
-        :data:`POLICY_GRID` values of ``k1`` across the fit's bounds, interpolated in ``log k1``.
+        """The share of the assumed inputs in the standard error of ``k1`` (N/m, each pixel), as ``pfmdyn
+        stiffness`` states them (:func:`pfmdyn.analysis.contact_resonance.covariance_by_source`): with one
+        band and no k2 policy stated, ``k2`` is tied by Mindlin at an assumed Poisson's ratio, whose spread
+        (:func:`pfmdyn.analysis.stiffness_report.assumed_tie_uncertainty`) moves the ``k1`` that puts the
+        contact resonance where it was measured; so does the tip height (:attr:`tip_height_uncertainty`)
+        where ``k2`` is tied or held.  0 where neither acts: k2 fitted (then ``k2 H^2`` takes up the tip
+        height), or held at 0 on an untilted lever.  The share at :data:`POLICY_GRID` values of ``k1``
+        across the fit's bounds, interpolated in ``log k1``.
 
         >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
         >>> m = BeamMapModel(lever, np.linspace(3e5, 4e5, 8))
@@ -157,6 +160,9 @@ class BeamMapModel:
         (True, 0.0)
         >>> float(BeamMapModel(lever, np.linspace(3e5, 4e5, 8), contact=Contact(poisson=0.3)).k1_policy_stderr(150.0))
         0.0
+        >>> held = BeamMapModel(lever, np.linspace(3e5, 4e5, 8), contact=Contact(k2=100.0), tip_height_uncertainty=1e-6)
+        >>> bool(held.k1_policy_stderr(150.0) > 0.01 * 150.0)       # 10 % of the tip height: k2 H^2 by 20 %
+        True
         """
         k1 = np.asarray(k1, float)
         out = np.zeros(k1.shape)
@@ -169,12 +175,18 @@ class BeamMapModel:
     @property
     def _policy_shares(self):
         """``(log k1, relative share)`` at :data:`POLICY_GRID` values across the fit's bounds of ``k1``; None
-        when no assumed tie acts.  Cached per process (a map's workers get the model anew for each task)."""
-        if (self.k2_mode != "tied" or self.contact.ratio is not None
-                or (self.lever.tip_height is None and self.lever.alpha == 0.0)):
+        when no assumed input acts.  Cached per process (a map's workers get the model anew for each task)."""
+        from ..analysis.stiffness_report import assumed_tie_uncertainty
+        lateral = self.lever.tip_height is not None or self.lever.alpha != 0.0
+        tie = assumed_tie_uncertainty() if self.k2_mode == "tied" and self.contact.ratio is None else 0.0
+        height = self.tip_height_uncertainty if self.lever.tip_height is not None and (
+            self.k2_mode == "tied" or self.k2_mode == "fixed" and (self.contact.k2 or self.lever.alpha)) else 0.0
+        if not lateral or not (tie or height):
             return None
         lo, hi = self.k1_span
-        return _policy_shares(self.lever, self.contact.tie(), float(np.median(self.frequency_hz)), lo / 10, hi * 10)
+        held = self.contact.k2 if self.k2_mode == "fixed" else None
+        return _policy_shares(self.lever, self.contact.tie() if held is None else None, held,
+                              float(np.median(self.frequency_hz)), lo / 10, hi * 10, tie, height)
 
     @property
     def _composed(self) -> bool:
@@ -293,33 +305,50 @@ class BeamMapModel:
 
 
 @functools.lru_cache(maxsize=32)
-def _policy_shares(lever: Cantilever, ratio: float, middle_hz: float, low: float, high: float):
+def _policy_shares(lever: Cantilever, ratio: float | None, held: float | None, middle_hz: float, low: float,
+                   high: float, tie_stderr: float, height_stderr: float):
     grid = np.geomspace(low, high, POLICY_GRID)
-    return np.log(grid), np.array([_policy_share(lever, ratio, middle_hz, k) for k in grid])
+    return np.log(grid), np.array([k1_input_share(lever, ratio, held, middle_hz, k, tie_stderr, height_stderr)
+                                   for k in grid])
 
 
-def _policy_share(lever: Cantilever, ratio: float, middle_hz: float, k1: float) -> float:
-    """The assumed tie's relative standard error of ``k1``: at the contact root ``beta`` nearest
-    ``middle_hz`` (Newton from there), the measured ``beta`` held, ``d k1 / d ratio = -k1 F_k2 / (F_k1 +
-    ratio F_k2)`` of the characteristic ``F(beta, k1, k2)`` (central differences)."""
+def k1_input_share(lever: Cantilever, ratio: float | None, held: float | None, middle_hz: float, k1: float,
+                   tie_stderr: float, height_stderr: float) -> float:
+    """The relative standard error of ``k1`` from the tie's ratio (``tie_stderr``) and the tip height
+    (``height_stderr``, m), ``k2 = ratio k1`` or ``held``: at the contact root ``beta`` nearest ``middle_hz``
+    (Newton from there), the measured ``beta`` held, ``d k1 / d p = -F_p / (F_k1 + ratio F_k2)`` of the
+    characteristic ``F(beta, k1, k2; H)`` (central differences), the two in quadrature.
+
+    >>> lever = Cantilever(2.0, 75e3, 225e-6, tip_height=10e-6)
+    >>> round(k1_input_share(lever, 0.8, None, 3.5e5, 150.0, 0.0, 1e-6), 4)    # 10 % of H: k2 H^2 by 20 %
+    0.0336
+    """
     from ..analysis.contact_resonance import betas, characteristic
-    from ..analysis.stiffness_report import assumed_tie_uncertainty
 
-    def F(b, a, c):
-        return float(np.real(characteristic(b, lever, a, c, lever.tip_position)))
+    def F(b, a, c, lv=lever):
+        return float(np.real(characteristic(b, lv, a, c, lv.tip_position)))
+
+    def k2(a):
+        return held if ratio is None else ratio * a
 
     b = float(betas(lever, middle_hz))
     with np.errstate(all="ignore"):
         for _ in range(50):
             h = 1e-7 * b
-            step = -F(b, k1, ratio * k1) * 2 * h / (F(b + h, k1, ratio * k1) - F(b - h, k1, ratio * k1))
+            step = -F(b, k1, k2(k1)) * 2 * h / (F(b + h, k1, k2(k1)) - F(b - h, k1, k2(k1)))
             if not math.isfinite(step):
                 return 0.0
             b += step
             if abs(step) < 1e-12 * b:
                 break
         e = 1e-6 * k1
-        d_k1 = (F(b, k1 + e, ratio * k1) - F(b, k1 - e, ratio * k1)) / (2 * e)
-        d_k2 = (F(b, k1, ratio * k1 + e) - F(b, k1, ratio * k1 - e)) / (2 * e)
-        share = abs(d_k2 / (d_k1 + ratio * d_k2)) * assumed_tie_uncertainty()
+        d_k1 = (F(b, k1 + e, k2(k1)) - F(b, k1 - e, k2(k1))) / (2 * e)
+        d_k2 = (F(b, k1, k2(k1) + e) - F(b, k1, k2(k1) - e)) / (2 * e)
+        slope = d_k1 + (ratio or 0.0) * d_k2
+        shares = [d_k2 * tie_stderr]          # F_ratio = k1 F_k2: relative to k1, F_k2
+        if height_stderr:
+            eh = 1e-6 * lever.tip_height
+            up, down = (replace(lever, tip_height=lever.tip_height + s) for s in (eh, -eh))
+            shares.append((F(b, k1, k2(k1), up) - F(b, k1, k2(k1), down)) / (2 * eh) * height_stderr / k1)
+        share = math.hypot(*shares) / abs(slope)
     return float(share) if math.isfinite(share) else 0.0

@@ -46,6 +46,7 @@ on both signals (each ``s_j (1 + e_j)``, ``E|e_j|**2 = sigma**2``), propagated t
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -504,14 +505,16 @@ POOL = 3
 
 
 def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, pool: int = POOL,
-           block: int = 4096, progress=None) -> tuple[dict, float]:
+           block: int = 4096, progress=None, tip_height_uncertainty: float = 0.0) -> tuple[dict, float]:
     """Every pixel of a DART image both ways: maps (name -> array of the signals' shape; :data:`MAPS`
     with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``determined``) and ``sigma`` (:func:`channel_noise`).
 
     ``s1``, ``s2``: the deflection signals (m, complex, ``A exp(-i phi)``) at ``f1``, ``f2`` (Hz);
     ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``pool``: the radius (pixels) of
     :func:`pooled_contact` (0: each pixel's contact alone; ``d_eff`` is each pixel's own always);
-    ``progress(done, total)`` is called after each ``block`` of pixels.
+    ``progress(done, total)`` is called after each ``block`` of pixels.  ``tip_height_uncertainty`` (m):
+    its shares in ``k1_stderr`` and ``contact_loss_stderr``, each pixel's drives' ratio held (as a
+    band-excitation map and ``pfmdyn stiffness`` hold the contact resonance).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
     >>> f1, f2 = np.array([[3.10e5, 3.11e5]]), np.array([[3.16e5, 3.17e5]])
@@ -594,14 +597,36 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         if pole.any():
             resonance[pole], quality[pole] = lever_pole(lever, contact, k1[pole], loss[pole], (f1[pole] + f2[pole]) / 2)
         narrowed = np.where(fit.converged, narrowed, 1.0)
+        height_k1, height_loss = _height_shares(lever, contact, f1, f2, k1, loss, tip_height_uncertainty)
         maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance * narrowed,
                 "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor * narrowed,
-                "k1": k1, "k1_stderr": k1 * k1_sd, "contact_loss": loss, "contact_loss_stderr": loss_sd,
+                "k1": k1, "k1_stderr": np.hypot(k1 * k1_sd, height_k1), "contact_loss": loss,
+                "contact_loss_stderr": np.hypot(loss_sd, height_loss),
                 "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
                 "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
                 "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
+
+
+def _height_shares(lever: Cantilever, contact: Contact, f1, f2, k1, loss, tip_height_uncertainty: float):
+    """The tip height's shares in the standard errors of each pixel's ``k1`` (N/m) and ``contact_loss``: the
+    ratio of its responses at its drives held, ``d(log k1, loss)/dH = -J^-1 d log(T2/T1)/dH`` (:func:`_linearised`'s
+    Jacobian; the tip height's derivative by a forward difference), times ``tip_height_uncertainty`` (m); 0
+    without a tip height or its uncertainty, or where the Jacobian is singular."""
+    zero = np.zeros(len(f1))
+    if not tip_height_uncertainty or lever.tip_height is None:
+        return zero, zero
+    h = _STEP * lever.tip_height
+    ((g, _),) = _log_ratios(lever, contact, f1, f2, [(k1, loss)])
+    ((g_h, _),) = _log_ratios(replace(lever, tip_height=lever.tip_height + h), contact, f1, f2, [(k1, loss)])
+    _, jac = _linearised(lever, contact, f1, f2, g, k1, loss)
+    moved = (g_h - g) / h
+    with np.errstate(all="ignore"):
+        slope = -np.einsum("...ij,...j->...i", _inverse(jac), np.stack([moved.real, moved.imag], -1))
+        shares = np.abs(slope) * tip_height_uncertainty * np.stack([k1, np.ones_like(k1)], -1)
+    shares = np.where(np.isfinite(shares), shares, 0.0)
+    return shares[:, 0], shares[:, 1]
 
 
 def write_dart(path: str, maps: dict, attrs: dict | None = None) -> None:

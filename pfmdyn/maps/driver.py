@@ -102,6 +102,7 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
                                                                  "tip_height", "tip_position", "tip_mass_ratio",
                                                                  "tip_gyration_radius", "tilt")}
         settings = {"model": model_name(model.mechanisms), **geometry, "k2_policy": model.describe_k2(),
+                    "tip_height_uncertainty": model.tip_height_uncertainty, "assumed": source.assumed,
                     "surface_potential_v": surface_potential_v}
     steps, dims = (model.step_shape, model.dims) if sho else ((), ("y", "x"))
     if "done" in group:     # an interrupted run: only the same map of the same model may continue it

@@ -10,8 +10,9 @@ __all__ = ["ALWAYS", "SCALED", "quantities"]
 # name -> (unit, description) of the per-pixel output arrays
 _QUANTITIES = {
     "k1": ("N/m", "vertical contact stiffness"),
-    "k1_stderr": ("N/m", "standard error of k1: the fit's and, with k2 tied by an assumed Poisson's ratio, "
-                  "the tie's share (Poisson 0.2-0.4, as pfmdyn stiffness states it)"),
+    "k1_stderr": ("N/m", "standard error of k1: the fit's and, as pfmdyn stiffness states them, the tip "
+                  "height's share (k2 tied or held; attribute tip_height_uncertainty) and, with k2 tied by an "
+                  "assumed Poisson's ratio, the tie's (Poisson 0.2-0.4)"),
     "k2": ("N/m", "longitudinal contact stiffness (two or more bands; else NaN)"),
     "k2_stderr": ("N/m", "standard error of k2"),
     "quality_factor": ("1", "quality factor Q of the beam loss 1/Q (internal friction)"),

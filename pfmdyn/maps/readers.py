@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from ..errors import MissingExtraError, UserError
 from ..io.asylum import cantilever_fields
 from ..io.hdf5 import is_usid_main
 from ..io.record import attribute_texts, si_unit
-from ..names import CONTACT, LEVER, canonical, checked
+from ..names import CONTACT, LEVER, canonical, checked, fill_defaults
 from .bias import basis
 from .beam import BeamMapModel
 from .spec import bands as fit_bands
@@ -31,9 +31,10 @@ from .sho import SHOMapModel
 
 __all__ = ["MapInput", "open_map", "read_block", "require", "scalar"]
 
-REQUIRED = ("spring_constant", "free_resonance", "length", "tip_height")
+REQUIRED = ("spring_constant", "free_resonance", "length")
 """Lever metadata every map needs (names of :mod:`pfmdyn.names`); the tip geometry, tilt and the
-contact's k2 policy are optional (:data:`pfmdyn.names.LEVER`, :data:`pfmdyn.names.CONTACT`)."""
+contact's k2 policy are optional (:data:`pfmdyn.names.LEVER`, :data:`pfmdyn.names.CONTACT`), a tip
+height not given the default of every command (:func:`pfmdyn.names.fill_defaults`)."""
 
 
 def require(module: str):
@@ -56,6 +57,8 @@ class MapInput:
     columns: np.ndarray | None = None
     """USID: the spectral columns in (bias, frequency) order, one row per bias step; plain: the
     order of ``frequency_hz`` that sorts it (None when already increasing)."""
+    assumed: dict = field(default_factory=dict)
+    """The lever's values neither the file nor the command line gave, name -> why (the defaults)."""
 
 
 _READ_ERRORS = (OSError, KeyError, ValueError, TypeError, IndexError, AttributeError, RuntimeError)
@@ -239,6 +242,9 @@ def scalar(raw):
 def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> MapInput:
     """Read the map's layout, frequencies, biases and metadata (``overrides`` win over the file's);
     ``sho``: for the SHO fit (:class:`pfmdyn.maps.sho.SHOMapModel`), which needs no lever metadata.
+    A tip height neither gives is the default (:attr:`MapInput.assumed`); its standard uncertainty
+    (``overrides["tip_height_uncertainty"]``, else the assumed one's spread or 10 % of a given one, as
+    ``pfmdyn stiffness`` takes it) enters k1's standard error (:attr:`BeamMapModel.tip_height_uncertainty`).
 
     Everything a fit needs is checked here, before anything is written: a malformed file, an
     empty or non-finite axis, inconsistent shapes or non-physical metadata are one
@@ -253,8 +259,9 @@ def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> Map
     Traceback (most recent call last):
     ...
     pfmdyn.errors.UserError: .../be.h5: spring_constant must be in (0.0001, 10000] N/m, got -2.0
-    >>> open_map(path, {"spring_constant": 2.0}).shape
-    (2, 3)
+    >>> source = open_map(path, {"spring_constant": 2.0})
+    >>> source.shape, round(source.model.tip_height_uncertainty, 12), source.assumed
+    ((2, 3), 1e-06, {})
     """
     if not os.path.exists(path):
         raise UserError(f"{path}: no such file or directory")
@@ -272,13 +279,16 @@ def open_map(path: str, overrides: dict | None = None, sho: bool = False) -> Map
                         "usid" if usid else "plain", columns)
     try:
         values = {name: checked(name, scalar(attrs[name])) for name in LEVER if name in attrs}
+        assumed = fill_defaults(values)
         lever = Cantilever.from_values({**values, "medium": attrs.get("medium")})
         contact = Contact(**{name: checked(name, scalar(attrs[name])) for name in CONTACT
                              if name in attrs and name != "k1"})
     except (TypeError, ValueError) as exc:      # UserError among them: named after the file, quantity kept
         raise UserError(f"{path}: {exc}", getattr(exc, "quantity", None)) from None
-    return MapInput(path, BeamMapModel(lever, f, bias_v=bias, contact=contact), tuple(grid),
-                    usid or "response", "usid" if usid else "plain", columns)
+    from ..analysis.stiffness_report import tip_height_spread
+    spread = attrs.get("tip_height_uncertainty", tip_height_spread(lever.tip_height, "tip_height" in assumed))
+    model = BeamMapModel(lever, f, bias_v=bias, contact=contact, tip_height_uncertainty=spread)
+    return MapInput(path, model, tuple(grid), usid or "response", "usid" if usid else "plain", columns, assumed)
 
 
 def _check_axes(path, grid, f, bias):
