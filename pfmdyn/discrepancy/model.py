@@ -367,8 +367,8 @@ def bounds(model: Model):
 
 COMPILED = True
 """Whether a fit with the analytic Jacobian evaluates its residual and Jacobian compiled
-(:func:`pfmdyn.discrepancy.fit_kernel.evaluate`); False: the NumPy steps of :class:`_Problem`, the
-reference the tests hold it to."""
+(:mod:`pfmdyn.discrepancy.fit_kernel`); False: the NumPy steps of :class:`_Problem`, the reference the
+tests hold it to."""
 
 
 class _Problem:
@@ -381,23 +381,28 @@ class _Problem:
         self._key, self._state = None, None
         self.compiled = COMPILED and JACOBIAN == "analytic"
         if self.compiled:
-            # what every evaluation of this fit shares: the columns, the ramp, the design's buffer
+            # what every evaluation of this fit shares: the columns, the ramp, the projection's buffers
+            rows, m = len(self.y), model.n_linear
+            self._columns = (np.array([c[0] for c in model.columns], np.int64),
+                             np.array([c[1] for c in model.columns], np.bool_))
             self._ramp = self.freq_u[self.inverse] / self.freq_u.max()
-            self._source = np.array([c[0] for c in model.columns], np.int64)
-            self._per_volt = np.array([c[1] for c in model.columns], np.bool_)
-            self._design = np.empty((len(self.y), model.n_linear), complex)
+            self._buffers = (np.empty((rows, m), complex), np.empty((rows, m), complex), np.empty(m),
+                             np.empty((m, m), complex), np.empty(m, complex))
 
     def _evaluated(self, x):
-        """Design matrix, amplitudes, residual and Jacobian in one compiled call (:data:`COMPILED`); fresh
-        residual and Jacobian arrays (the solver keeps them)."""
-        from .fit_kernel import evaluate
+        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`); fresh residual
+        and Jacobian arrays (the solver keeps them)."""
+        from .fit_kernel import design_and_gram, residual_and_jacobian
 
         T, dT = self.model.slopes_and_jacobian(self.freq_u, x)
+        A, As, scale, G, Ay = self._buffers
+        design_and_gram(T, self.inverse, self.bias, self._ramp, *self._columns, self.y, A, As, scale, G, Ay)
+        w, V = np.linalg.eigh(G)
         rows, c = len(self.y), np.empty(self.model.n_linear, complex)
         r, J = np.empty(2 * rows), np.empty((2 * rows, len(x)))
-        evaluate(T, dT, self.inverse, self.bias, self._ramp, self._source, self._per_volt, self.y, float(self.sigma),
-                 CUTOFF, True, self._design, c, r, J)
-        return self._design, c, r, J
+        residual_and_jacobian(dT, self.inverse, self.bias, *self._columns, self.y, float(self.sigma), A, As, scale, Ay,
+                              w, V, CUTOFF, True, c, r, J)
+        return A, c, r, J
 
     def _at(self, x):
         """Design matrix, amplitudes, projection (:func:`pfmdyn.fitting.projection.project`) and, for
