@@ -358,19 +358,21 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     lower, upper = bounds(model)
     n_springs = 1 if model.vertical_only else 2
     k1_grid, k2_grid = spring_grids
-    springs = ([np.array([a]) for a in k1_grid] if n_springs == 1 else
-               [np.array([a, b]) for a in k1_grid for b in k2_grid])
+    springs = (np.asarray(k1_grid, float)[:, None] if n_springs == 1 else
+               np.stack(np.meshgrid(k1_grid, k2_grid, indexing="ij"), -1).reshape(-1, 2))
+    # the k1 rounded as ranking tells rows apart (a grid point's k1 is one of the grid's values)
+    k1_key = np.array([round(float(a), 6) for a in np.clip(springs[:, 0], lower[0], upper[0])])
 
     springs_only = np.arange(len(lower)) < n_springs
     matched = []
     for e in extra:
-        grid = [np.clip(np.concatenate([s, e]), lower, upper) for s in springs]
+        grid = np.clip(np.concatenate([springs, np.broadcast_to(np.asarray(e, float), (len(springs), len(e)))], axis=1), lower, upper)
         roots = matches.roots(model, grid, band[1] * 1.3)
         score = peak_scores(roots, peaks, band, unseen)
-        best_k1 = {}
-        for i in np.argsort(score):
-            best_k1.setdefault(round(float(grid[i][0]), 6), i)
-        for i in list(best_k1.values())[:per_value]:
+        # the best row of each distinct k1, in the order of their scores
+        order = np.argsort(score)
+        _, first = np.unique(k1_key[order], return_index=True)
+        for i in order[np.sort(first)][:per_value]:
             x, ss = matches.peak_fit(model, grid[i], springs_only, peaks, band, lower, upper, 15, unseen)
             matched.append((ss, x))
     # Matches within 0.1 % of every peak tie on the peaks: the misfit ranks them.
