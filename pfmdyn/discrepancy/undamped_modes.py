@@ -20,6 +20,10 @@ from .model import Model, characteristic_partials, free_root_and_jacobian
 __all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
 
 
+_CHARACTERISTIC = ("k1", "k2", "alpha", "mu", "gamma")
+"""The model's parameters :func:`characteristic_args` reads (the springs, the tilt, the tip's mass and position)."""
+
+
 def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots: bool = True) -> np.ndarray:
     """Undamped resonances (Hz) below ``f_max``: real zeros of the generated characteristic.
 
@@ -138,10 +142,13 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     at = [composed.PARAMETERS.index(p) for p in moved]
     a0 = np.array(characteristic_args(model, internal, contact), float)
     # the model's parameters are plain functions of the internal ones: their change per unit
-    # of each internal one, by forward differences (columns j)
+    # of each internal one, by forward differences (columns j; none for a parameter the
+    # characteristic does not take: a loss, the spot)
     steps = 1e-7 * np.maximum(1.0, np.abs(internal))
-    per_unit = np.empty((len(moved), len(internal)))
+    per_unit = np.zeros((len(moved), len(internal)))
     for j, h in enumerate(steps):
+        if model.parameters[j].name not in _CHARACTERISTIC:
+            continue
         xs = internal.copy()
         xs[j] += h
         per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
