@@ -23,7 +23,7 @@ lever and a soft short one are both well inside.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -71,15 +71,16 @@ class Chain:
     """What the chain rule composes at one parameter vector (:meth:`pfmdyn.discrepancy.model.Model.slopes_and_jacobian`).
 
     ``part``: the generated partials of the four slopes w.r.t. :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`
-    (0 where not computed); ``rotation``: d slopes / d (k1 in beam axes, k2, alpha) through the
-    rotated spring tensor; ``coords``: :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
+    (0 where not computed); ``rotation_partials``: the rotated spring tensor's partials
+    (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`, for :meth:`rotation`); ``coords``:
+    :meth:`~pfmdyn.discrepancy.model.Model.coords`; ``root_r``
     the undamped ``beta`` at each frequency, ``b1`` and ``d_b1`` the free root and its derivatives
     w.r.t. ``(mu, gamma)``; ``factors`` the generated damping factors (:mod:`pfmdyn.generated.damping`)
     at ``r = f / f1`` and the losses ``loss`` ``(inv_q, g, x)``; ``spring`` the damped ``k1``.
     """
 
     part: dict
-    rotation: list
+    rotation_partials: tuple
     coords: dict
     meta: object
     root_r: object
@@ -89,6 +90,15 @@ class Chain:
     r: object
     loss: tuple
     spring: object
+    _rotation: dict = field(default_factory=dict, repr=False)
+
+    def rotation(self, i: int):
+        """d slopes / d (k1 in beam axes, k2, alpha)[i] through the rotated spring tensor, formed when
+        asked (the tilt's, products with arrays, only with a tilt)."""
+        if i not in self._rotation:
+            part, rot = self.part, self.rotation_partials
+            self._rotation[i] = part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i]
+        return self._rotation[i]
 
     @cached_property
     def d_factors(self) -> tuple:
@@ -162,7 +172,7 @@ class Damping(Effect):
     def jacobian(self, chain: Chain) -> tuple:
         q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
         return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.spring_constant * d_f[1][q])
-                + chain.rotation[0] * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
+                + chain.rotation(0) * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
 
 
 @dataclass(frozen=True)
@@ -242,7 +252,7 @@ class Tilt(Effect):
         return {"kvl"}
 
     def jacobian(self, chain: Chain) -> tuple:
-        return (chain.rotation[2],)
+        return (chain.rotation(2),)
 
 
 @dataclass(frozen=True)

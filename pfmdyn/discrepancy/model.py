@@ -149,11 +149,9 @@ class Model:
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
-            # d T / d (k1 in beam axes, k2, alpha) through the rotated spring tensor.
-            j_rot = [part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i] for i in range(3)]
-            chain = Chain(part, j_rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
+            chain = Chain(part, rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
-            terms = [j_rot[0] * (spring * LN10), j_rot[1] * (c["k2"] * LN10)][:len(self.springs)]
+            terms = [chain.rotation(j) * (value * LN10) for j, value in enumerate((spring, c["k2"])[:len(self.springs)])]
             terms += [t for e in self.components for t in e.jacobian(chain)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
             for j, term in enumerate(terms):
