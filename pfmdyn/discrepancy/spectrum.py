@@ -131,6 +131,8 @@ class SpectrumProblem:
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
         self.matches = Matches()
+        self._unique = np.unique(data.frequency_hz, return_inverse=True)
+        self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
 
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
@@ -225,11 +227,15 @@ class SpectrumProblem:
 
     def cost(self, model, internal) -> float:
         """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
-        freq_u, inverse = np.unique(self.data.frequency_hz, return_inverse=True)
-        A = model.design(freq_u, inverse, self.data.bias_v, np.asarray(internal))
-        pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
-        r = np.abs(self.data.response - pred) ** 2
-        return float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
+        internal = np.asarray(internal)
+        key = (model, internal.dtype.str, internal.tobytes())
+        if key not in self._costs:
+            freq_u, inverse = self._unique
+            A = model.design(freq_u, inverse, self.data.bias_v, internal)
+            pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
+            r = np.abs(self.data.response - pred) ** 2
+            self._costs[key] = float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
+        return self._costs[key]
 
     def candidates(self, current: FitResult) -> list[str]:
         """Effects not yet in the model (damping while a mechanism is left; the laser spot
