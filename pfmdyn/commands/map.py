@@ -202,7 +202,7 @@ def run(args) -> int:
               f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
               + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
                  if biases is not None else ""))
-    progress, close = _progress_bar(not (args.no_progress or args.quiet))
+    progress, close = _progress_bar(flags.progress_shown(args))
     try:
         s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
@@ -286,7 +286,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     f1, f2 = image.frequencies(settings["frequency_width"][0])
     # a lag less by the offset: s = A exp(-i (phi - offset))
     s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
-    report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
+    report, close = _progress_bar(flags.progress_shown(args), unit="pixel")
     try:
         maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
                              progress=None if report is None else lambda done, total: report(done, total, done),
@@ -327,7 +327,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
               f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
               f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
     else:
-        print(f"DART: no pixel determined (of {ok.size}; noise {100 * sigma:.2g} %): the two drives' amplitudes and "
+        noise = f"noise {100 * sigma:.2g} %" if math.isfinite(sigma) else "noise undetermined"
+        print(f"DART: no pixel determined (of {ok.size}; {noise}): the two drives' amplitudes and "
               f"phases fix no contact anywhere (both drives on one side of the peak, or no resonance between them); "
               f"maps (undetermined) in {out}")
     flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,

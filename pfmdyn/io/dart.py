@@ -120,9 +120,19 @@ def read_dart(path) -> DartImage:
     directions = {found[0] for found in picked.values()}
     direction = "Retrace" if "Retrace" in directions else "Trace"
     channels = {name: np.asarray(found[1], float).T for name, found in picked.items()}     # (points, lines) -> (y, x)
+    blank = ~np.all([np.isfinite(channel) for channel in channels.values()], axis=0)
+    if blank.all():
+        raise UserError(f"{path}: no pixel of the DART image has a number in every channel "
+                        f"({', '.join(n + direction for n in DART_CHANNELS)})")
+    if blank.any():
+        # no signal there (undetermined downstream), read at the image's median centre
+        for name in DART_CHANNELS:
+            fill = np.median(channels[name][~blank]) if name == "Frequency" else np.nan if "Amplitude" in name else 0.0
+            channels[name] = np.where(blank, fill, channels[name])
+        notes.append(f"{blank.sum()} pixel{'s' if blank.sum() > 1 else ''} without a number in every channel: undetermined")
     settings = {name: value for name, key in DART_KEYS.items() if (value := _number(note, key)) is not None}
     centre = channels["Frequency"]
-    if "frequency_centre" in settings and np.nanmedian(np.abs(centre)) < 0.5 * settings["frequency_centre"]:
+    if "frequency_centre" in settings and np.median(np.abs(centre)) < 0.5 * settings["frequency_centre"]:
         centre = centre + settings["frequency_centre"]      # a frequency channel recorded as the shift
         notes.append("FrequencyRetrace read as the shift from DFRTFrequencyCenter")
     fields, problems = asylum.cantilever_fields(note)
