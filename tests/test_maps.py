@@ -284,8 +284,9 @@ def test_two_contact_bands_separate_k1_and_k2_and_auto_names_the_damping(tmp_pat
         assert np.all(np.abs(z) < 4), z
 
 
-def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, local_run, tmp_path, capsys):
+def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, local_run, tmp_path, capsys, monkeypatch):
     path, _ = synthetic
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)     # a bar is drawn on a terminal only
     args = ["map", str(path), "--out", str(tmp_path), "--max-blocks", "3", "--workers", "2"]
     assert main(args) == 0
     captured = capsys.readouterr()

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from contextlib import contextmanager
 
 from ..errors import UserError
@@ -50,7 +49,7 @@ def _analyse(data, args, assumed: dict):
     from ..discrepancy.spectrum import analyse
     from ..io.tables import SpectrumData
 
-    options = dict(vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    options = dict(vertical_only=args.vertical_only, progress=flags.progress_shown(args), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
         return analyse(data, **options)
     spread = tip_height_spread(data.metadata.tip_height, "tip_height" in assumed)
