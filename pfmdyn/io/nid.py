@@ -15,6 +15,7 @@ scaled onto ``Dim2Min + [0, Dim2Range]``.
 """
 from __future__ import annotations
 
+import gc
 import re
 import warnings
 from pathlib import Path
@@ -61,14 +62,16 @@ def _load(path: Path):
         from NSFopen.read import read
     except ImportError:
         raise MissingExtraError("nsfopen", "files") from None
-    try:
-        with warnings.catch_warnings():
-            # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
-            warnings.simplefilter("ignore")
+    with warnings.catch_warnings():
+        # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
+        warnings.simplefilter("ignore")
+        try:
             return read(str(path))
-    except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
-        reason = " ".join(str(exc).split()) or type(exc).__name__
-        raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}") from None
+        except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+        # a failed read leaves its file open: closed here, not at exit with a ResourceWarning on the terminal
+        gc.collect()
+    raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}")
 
 
 def _open(path: Path) -> tuple[dict, list[tuple]]:
