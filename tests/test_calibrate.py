@@ -149,7 +149,7 @@ def test_sader_on_the_real_tune_is_the_textbook_formula(tmp_path, capsys):
     [line] = [line for line in text.splitlines() if "disagrees with the file: spring_constant" in line]
     assert "InvOLS x 0.57" in line and "Sader's formula on the instrument's own fit (25.15 N/m)" in line
     # each number with its unit, the tolerance to two digits
-    assert re.search(r"27\.13 N/m in the header, 9\.04\d* N/m here .*tolerance 0\.\d\d N/m", line), line
+    assert re.search(r"27\.13 N/m in the header, 9\.04\d* N/m here .*tolerance 0\.\d\d N/m: 3x our uncertainty\)", line), line
     assert any(n.startswith("spring_constant: ours") and "disagrees" in n for n in doc["notes"])
 
 

@@ -218,6 +218,7 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
                 "free_resonance": step_hz, "amplitude_peak": step_hz}.get(name, 0.0)
         tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
         out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
+                    "basis": "3x our uncertainty" + (" and the frequency step" if step else ""),
                     "relative_difference": (fields[name] - value) / value,
                     "disagrees": bool(abs(fields[name] - value) > tolerance)})
     return out
@@ -256,9 +257,9 @@ def disagreement_lines(comparison: list | None) -> list[str]:
     its unit, the header's difference from ours relative to ours, the tolerance to two digits.
 
     >>> print(*disagreement_lines(compare_with_instrument({"spring_constant": 27.13}, {"spring_constant": (9.047, 0.29)}, 38.0)))
-      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty and the sweep's step)
+      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty)
     >>> print(*disagreement_lines(compare_with_instrument({"amplitude_peak": 50965.1}, {"amplitude_peak": (76282.6, 81.0)}, 100.0)))
-      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the sweep's step)
+      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the frequency step)
     """
     def unit(name):
         return "" if name not in NAMES or NAMES[name].unit == "1" else f" {NAMES[name].unit}"
@@ -268,7 +269,7 @@ def disagreement_lines(comparison: list | None) -> list[str]:
 
     return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g}{unit(c['name'])} in the header, "
             f"{c['ours']:.6g}{unit(c['name'])} here (header {c['relative_difference']:+.1%}; tolerance "
-            f"{two_digits(c['tolerance'])}{unit(c['name'])}: 3x our uncertainty and the sweep's step)"
+            f"{two_digits(c['tolerance'])}{unit(c['name'])}: {c['basis']})"
             + (f"; {c['why']}" if c.get("why") else "")
             for c in comparison or () if c["disagrees"]]
 
