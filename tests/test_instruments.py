@@ -67,6 +67,8 @@ def test_asylum_metadata_matches_the_readme(name):
 def test_thermal_tune_header_spectrum_and_fitted_mode():
     record = read_instrument(real(THERMAL))
     assert record.kind == "thermal spectrum"
+    # the conditions calibrate and discrepancy take from the header, shown by inspect (they were not)
+    assert "measured in air at 40 C (313.15 K)" in record.notes
     assert record.fields == pytest.approx({"spring_constant": 27.13, "free_resonance": 179.8e3,
                                            "free_quality_factor": 442.0})
     freq, asd, unit = record.spectrum

@@ -232,6 +232,12 @@ def read_nid(path) -> InstrumentRecord:
         lever = info.get("Cantilever type")
         if lever:
             notes.append(f"cantilever type {lever}: its length and width are not in the file")
+        conditions = _conditions(info)
+        if conditions:      # what calibrate and discrepancy take from the header
+            notes.append("measured " + " ".join(
+                ([f"in {conditions['environment']}"] if "environment" in conditions else [])
+                + ([f"at {conditions['temperature'] - 273.15:g} C ({conditions['temperature']:g} K)"]
+                   if "temperature" in conditions else [])))
     elif sweeps := [c for c in channels if _is_sweep_frame(c[3])]:
         kind = "spectrum"
         found = _fields(info, _SCAN_KEYS)
@@ -259,7 +265,10 @@ def thermal_conditions(path) -> dict:
     ...
     pfmdyn.errors.UserError: missing.nid: no such file
     """
-    info = _open(Path(path))[0].get("DataSet-Info", {}) or {}
+    return _conditions(_open(Path(path))[0].get("DataSet-Info", {}) or {})
+
+
+def _conditions(info: dict) -> dict:
     out = {}
     for key, value in info.items():
         key = str(key).strip().rstrip(":").lower()
