@@ -166,6 +166,18 @@ def _contact_map(args) -> int:
     return 0
 
 
+def _taken_line(found: dict, given: list, contacts) -> str:
+    """What the file gave and no flag replaced, with the contact resonances (and their modes) when they came
+    from it.
+
+    >>> print(_taken_line({"spring_constant": 0.46538, "length": 2.4e-4}, ["length"], ([368990.0], [1])))
+    from the file: contact_resonance 368990 Hz (mode 1), spring_constant 0.46538 N/m
+    """
+    parts = [f"contact_resonance {f:.6g} Hz (mode {m})" for f, m in zip(*contacts)] if contacts else []
+    parts += [f"{name} {value:.6g} {NAMES[name].unit}" for name, value in sorted(found.items()) if name not in given]
+    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
+
+
 def _mode(text) -> int:
     """A flexural mode number, 1 to :data:`_MAX_MODE` (a count, not a quantity of :mod:`pfmdyn.names`).
 
@@ -227,11 +239,13 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     if assumed:
         print(flags.assumed_line(assumed, lever))
+    given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
+    if args.file:
+        print(_taken_line(found, given, None if args.contact else (contacts, modes)))
     print(report.report())
     if args.json:
         from ..io import documents
 
-        given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
         taken = [*found, *(["contact_resonance"] if args.file and not args.contact else [])]
         if "tip_height" in assumed and "tip_height_uncertainty" not in given:
             assumed["tip_height_uncertainty"] = NAMES["tip_height_uncertainty"].default_why + (
