@@ -128,6 +128,10 @@ def test_bad_input_is_one_line_error(tmp_path, capsys):
         h["frequency_hz"] = [1.0]
     assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "missing dataset 'response'" in capsys.readouterr().err
+    with h5py.File(path, "w") as h:         # a single-frequency image as pycroscopy's NSID stores it
+        h.create_group("Measurement_000/Channel_000")["Channel_000"] = np.zeros((4, 4))
+    assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "without a spectrum per pixel (an image's channels" in capsys.readouterr().err
     for other in (tmp_path / "scan.ibw", tmp_path / "empty_dir"):     # not HDF5, not a Zarr group
         other.write_bytes(b"IGOR") if other.suffix else other.mkdir()
         assert main(["map", str(other), "--out", str(tmp_path / "o")]) == 2
