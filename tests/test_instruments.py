@@ -249,6 +249,20 @@ def test_a_table_under_a_text_name_a_directory_and_text_without_a_table(tmp_path
         read_instrument(tmp_path / "notes.txt")
 
 
+def test_inspect_reads_a_contact_frequency_map_that_map_and_stiffness_read(tmp_path):
+    """pfmdyn's own map of contact resonances (it said 'no pycroscopy dataset found')."""
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "fc.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((3, 4), 3e5)
+        h.attrs.update({"spring_constant_n_per_m": 2.0, "free_resonance_hz": 7.5e4})
+    record = read_instrument(path)
+    assert record.kind == "image" and [(c.name, c.unit, c.shape) for c in record.channels] == [
+        ("contact_frequency_hz", "Hz", (3, 4))]
+    assert record.fields == {"spring_constant": 2.0, "free_resonance": 7.5e4}
+    assert any("a map of contact resonances" in note for note in record.notes)
+
+
 _NSFOPEN = importlib.util.find_spec("NSFopen")
 NSFOPEN_EXAMPLES = sorted(Path(_NSFOPEN.origin).parent.glob("example/*/*.nid")) if _NSFOPEN else []
 
