@@ -217,6 +217,18 @@ def test_too_few_points_is_one_line(tmp_path):
         fit_sweep(table, case["k"], case["L"], case["medium"], width=case["w"])
 
 
+@pytest.mark.parametrize("cell, words", [("nan", "table row 4 holds a value that is not a finite number"),
+                                         ("-0.5", "table row 4 holds a negative amplitude")])
+def test_a_bad_point_of_a_sweep_is_named_by_its_row(cell, words, tmp_path):
+    """A lock-in's magnitude below zero was fitted as a point (now refused); a NaN was refused naming no row."""
+    path = tmp_path / "s.txt"
+    lines = ["Sweep data", "Frequency (Hz)\tAmplitude (V)\tPhase (deg)"] + [
+        f"{f:.1f}\t{a}\t10" for f, a in zip(np.linspace(6e4, 8e4, 20), ["1.0"] * 3 + [cell] + ["1.0"] * 16)]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(UserError, match=f"s.txt: {words}"):
+        read_sweep_table(path)
+
+
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "pfmdyn.cli", "discrepancy", *map(str, args)],
                           capture_output=True, text=True)

@@ -209,8 +209,13 @@ def read_sweep_table(path) -> SweepTable:
         raise UserError(f"{path}: no amplitude column in the sweep table")
     _, amplitude, unit = si_spectrum(path, frequency, "Hz", table[:, amplitudes[0]], names[amplitudes[0]][1])
     order = np.argsort(frequency, kind="stable")
-    if not (np.all(np.isfinite(frequency)) and np.all(np.isfinite(table[:, others])) and frequency.min() > 0):
-        raise UserError(f"{path}: the sweep table holds a non-finite value or a frequency <= 0")
+    finite = np.isfinite(frequency) & np.isfinite(table[:, others]).all(axis=1)
+    wrong = np.flatnonzero(~finite | (np.where(finite, frequency, 1.0) <= 0) | (np.where(finite, amplitude, 0.0) < 0))
+    if wrong.size:
+        row = wrong[0]
+        what = ("a value that is not a finite number" if not finite[row] else "a frequency <= 0" if frequency[row] <= 0
+                else "a negative amplitude (a lock-in's magnitude is >= 0)")
+        raise UserError(f"{path}: table row {row + 1} holds {what}")
     if np.unique(frequency).size < len(frequency):
         raise UserError(f"{path}: the sweep repeats a drive frequency")
     medium = next((header[k] for k in _MEDIUM_KEYS if header.get(k)), None)
