@@ -151,6 +151,29 @@ def _fitting(where, check: str):
         raise UserError(f"{where}: the fit failed ({type(exc).__name__}: {exc}); check {check}") from None
 
 
+def _check_something_to_compare(data, where) -> None:
+    """A resonance table of the first free resonance alone, without its Q, holds nothing the model could miss:
+    that resonance sets the lever's scale (the report said 'gap 0.00, missing effects: none').
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as NS
+    >>> _check_something_to_compare(NS(mode=np.array([1]), condition=np.array(["free"]), quality_factor=None), "t.csv")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: t.csv: only the first free resonance, which sets the lever's scale, and no Q: nothing to compare with the model (give contact resonances, higher free modes or a spectrum; a map is pfmdyn map's)
+    """
+    import numpy as np
+
+    if getattr(data, "kind", None) == "spectrum" or not hasattr(data, "mode"):
+        return
+    scale_only = np.all((data.mode == 1) & (data.condition == "free"))
+    q = data.quality_factor
+    if scale_only and (q is None or not np.isfinite(np.asarray(q, float)).any()):
+        raise UserError(f"{where}: only the first free resonance, which sets the lever's scale, and no Q: nothing to "
+                        "compare with the model (give contact resonances, higher free modes or a spectrum; a map is "
+                        "pfmdyn map's)")
+
+
 def _emit(args, result, doc, figure) -> int:
     """Print a free lever's result, write its JSON ``doc`` and (``--plot``) the ``figure()`` it makes."""
     print(result.report())
@@ -185,6 +208,7 @@ def run(args: argparse.Namespace) -> int:
             raise
         assumed = flags.fill_defaults(overrides, ("tip_height",))
         data = read(args.data, overrides)
+    _check_something_to_compare(data, args.data)
     if assumed:
         print(flags.assumed_line(assumed, data.metadata))
     stride = 1
