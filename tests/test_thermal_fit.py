@@ -104,7 +104,7 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert lever["temperature"]["value"] == pytest.approx(313.15) and lever["medium"]["value"].startswith("air")
     assert fit["results"]["free_resonance"]["value"] == pytest.approx(179.8e3, rel=2e-3)
     assert fit["fit"]["points"]["value"] > 5000
-    assert "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m" in text
+    assert "instrument: resonance 179 800 Hz (ours " in text and ", k 27.13 N/m (ours, where the detection" in text
     # what came from the file, the tune's own resonance and Q beside ours
     assert all(lever[name]["status"] == "file" for name in ("spring_constant", "medium", "temperature"))
     assert set(fit["fit"]["instrument"]) >= {"free_resonance", "free_quality_factor"}

@@ -66,8 +66,8 @@ class ThermalFit(Result):
                  f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
                  f"{d['white_floor']:.3g} {d['unit']}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
-                 + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
-                    else ""),
+                 + (f", k {d['instrument_fit']['spring_constant']:g} N/m (ours, where the detection factor is 1: "
+                    f"{d['spring_constant'] / scale**2:.4g} N/m)" if "spring_constant" in d["instrument_fit"] else ""),
                  f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
