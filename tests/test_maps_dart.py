@@ -186,6 +186,15 @@ def test_an_image_without_a_number_anywhere_is_one_line(tmp_path, capsys):
     assert capsys.readouterr().err.count("\n") == 1 and not (tmp_path / "o").exists()
 
 
+def test_a_value_of_the_note_no_lever_has_names_the_file_and_its_key(tmp_path, capsys):
+    case = dart_case(19, 2, 2)
+    case.lever["quality_factor"] = -5.0
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "dart.ibw, ThermalQ in the note: quality_factor must be in" in err
+
+
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):
     path = igor_wave(tmp_path / "pfm.ibw", np.ones((8, 8, 2), "f4"), "pfm", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
                      {2: ["HeightRetrace", "PhaseRetrace"]}, asylum_note({"SpringConstant": "2"}))

@@ -238,6 +238,24 @@ def _write_json(args, summary: dict, overrides: dict, shape=None, assumed: dict 
         flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given, assumed=assumed))
 
 
+def _check_note(path, entries: dict) -> None:
+    """Each value a DART image's note gave (name -> (value, status, ...)) within what a probe can have, a
+    bad one named by the file and its key (it said 'quality_factor must be in ...', naming neither).
+
+    >>> _check_note("d.ibw", {"quality_factor": (-5.0, "file", "ThermalQ"), "length": (2e-4, "given")})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: d.ibw, ThermalQ in the note: quality_factor must be in (0.1, 1e+09], got -5.0
+    """
+    from ..io.asylum import NOTE_KEYS
+    from ..io.dart import DART_KEYS
+
+    keys = {**NOTE_KEYS, **DART_KEYS, "quality_factor": NOTE_KEYS["free_quality_factor"]}
+    for name, (value, status, *_) in entries.items():
+        if status == "file" and name in NAMES:
+            checked(name, value, f"{path}, {keys.get(name, name)} in the note")
+
+
 def _dart(args, overrides: dict, given: dict) -> int:
     """A DART image: the lever from the note and the flags, every pixel inverted both ways, the maps
     written (and drawn, and summarised in JSON)."""
@@ -257,6 +275,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     else:
         found["quality_factor"] = (math.inf, "assumed", "no ThermalQ in the note: the lever lossless")
     settings = {name: (value, "file", "the note") for name, value in image.settings.items() if name in _DART}
+    _check_note(args.data, {**found, **settings})
     settings.update({name: (value, "given") for name, value in given.items()})
     values = {name: entry[0] for name, entry in found.items()}
     flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
