@@ -100,6 +100,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
             found["free_resonance"] = free[0]
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
     record = read_instrument(path)
+    for note in record.left_out():
+        print(f"note: {note}")
     found = {key: value for key, value in record.fields.items() if key in LEVER}
     contact = record.fields.get("contact_resonance")
     return found, [contact] if contact else [], [1] if contact else []
