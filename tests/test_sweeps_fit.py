@@ -229,6 +229,28 @@ def test_a_bad_point_of_a_sweep_is_named_by_its_row(cell, words, tmp_path):
         read_sweep_table(path)
 
 
+def test_a_header_value_no_lever_has_is_left_out_and_said(tmp_path, capsys):
+    """A header Q of -3 was printed as the instrument's, beside ours; the reader's notes (this one, Nanonis's
+    volts) never reached discrepancy's report."""
+    from pfmdyn.cli import main
+    rng, case = lever_case(1)
+    f, y = sweep_of(rng, case)
+    path = write_sweep(tmp_path / "s.txt", f, y, rng)
+    path.write_text(path.read_text().replace("Q factor:\t3.0", "Q factor:\t-3.0"))
+    table = read_sweep_table(path)
+    assert "free_quality_factor" not in table.fields and "amplitude_peak" in table.fields
+    lever = ["--spring-constant", repr(case["k"]), "--length", repr(case["L"])]
+    assert main(["discrepancy", str(path), *lever, "--width", repr(case["w"])]) == 0
+    out = capsys.readouterr().out
+    assert "header 'Q factor' = -3.0 left out: free_quality_factor must be in" in out and "Q -3" not in out
+    # without the width (L/10 assumed, twice this lever's) the fitted first mode is overdamped: its Q
+    # undetermined and why, in the text and the JSON (a ValueError and a traceback before)
+    assert main(["discrepancy", str(path), *lever, "--json", str(tmp_path / "s.json")]) == 0
+    assert "Q undetermined (the first mode in the medium is overdamped" in capsys.readouterr().out
+    q = json.loads((tmp_path / "s.json").read_text())["results"]["free_quality_factor"]
+    assert q["status"] == "undetermined" and "overdamped" in q["why"]
+
+
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "pfmdyn.cli", "discrepancy", *map(str, args)],
                           capture_output=True, text=True)

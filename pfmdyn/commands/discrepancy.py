@@ -78,6 +78,9 @@ def _sweeps(args) -> int:
     found = {"medium": (before or after).medium} if (before or after).medium else None
     medium = flags.medium_from_args(args, found, default="water")
     print(flags.medium_line(medium, args, found))
+    for table in filter(None, (before, after)):         # what the reader made of each file (units, left out)
+        for note in table.notes:
+            print(f"note: {table.path}: {note}")
     with _fitting(args.data, "the spring constant and length"):
         fit = _provenance(fit_sweep(before or after, values["spring_constant"], values["length"], medium,
                                     values.get("width")), args, medium, found)

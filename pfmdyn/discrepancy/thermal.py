@@ -35,7 +35,8 @@ from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
 from .regions import gap_text, lever_resonances, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
-                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
+                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, quality_text,
+                    solve_from_starts,
                     unexplained_entry, unexplained_line)
 
 __all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
@@ -59,7 +60,7 @@ class ThermalFit(Result):
                  f"thermally driven free lever in {d['medium']} "
                  f"(k {d['spring_constant']:g} N/m, L {d['length']:g} m, T {d['temperature']:.2f} K)",
                  f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {d['quality_factor']:.3g}",
+                 f"Q {quality_text(d['quality_factor'])}",
                  f"  width {plus_minus(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(p['viscous_loss'], '')}",
                  f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "

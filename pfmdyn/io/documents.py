@@ -320,13 +320,19 @@ def _fit_records(fit: dict) -> tuple[dict, list[str]]:
     return out, notes
 
 
+OVERDAMPED = "the first mode in the medium is overdamped: no damped resonance, no Q"
+"""Why a sweep's or a tune's lever has no first-mode Q."""
+
+
 def _sweep_results(fit: dict) -> dict:
     """The lever a sweep or tune fit found: its parameters, vacuum resonance and the Q it predicts."""
     results = records_of(fit["parameters"])
     if "width" in (fit.get("from_file") or ()) and results["width"]["status"] == "given":
         results["width"] = quantity("width", results["width"]["value"], status="file", why="read from the input file")
     results["vacuum_resonance"] = quantity("vacuum_resonance", fit["vacuum_resonance"], status="derived")
-    results["free_quality_factor"] = quantity("free_quality_factor", fit["quality_factor"], status="derived")
+    q = fit["quality_factor"]
+    results["free_quality_factor"] = quantity("free_quality_factor", q, status="derived") if math.isfinite(q) else \
+        quantity("free_quality_factor", None, status="undetermined", why=OVERDAMPED)
     return results
 
 

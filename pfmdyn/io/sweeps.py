@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..names import checked
 from .kinds import SWEEP_TABLE_STARTS
 from .record import (
     FIELDS,
@@ -139,7 +140,10 @@ def _parse(path: Path):
             if number is None and value.strip().lower() != "nan":
                 notes.append(f"header '{key}' = {value!r} not understood as {FIELDS[_KEYS[name]][1] or 'a number'}")
             elif number is not None:
-                found.setdefault(_KEYS[name], number)
+                try:        # a header value no lever has (a Q of -3) is no fit of the instrument's to compare with
+                    found.setdefault(_KEYS[name], checked(_KEYS[name], number))
+                except UserError as exc:
+                    notes.append(f"header '{key}' = {value.strip()} left out: {exc}")
     converted = [si_unit(unit) for _, unit in names]
     hz = [i for i, c in enumerate(converted) if c and c[0] == "Hz"]
     if not hz:
