@@ -6,6 +6,7 @@ and a stiff inclusion, a known Q and complex Gaussian noise.
 """
 from __future__ import annotations
 
+import json
 import shutil
 import sys
 from pathlib import Path
@@ -196,9 +197,12 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
         h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
     assert main(["map", str(path), "--out", str(tmp_path)]) == 0
     np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
-    # the same map through pfmdyn stiffness
-    assert main(["stiffness", str(path), "--out", str(tmp_path / "s")]) == 0
+    # the same map through pfmdyn stiffness, its --json the summary map writes (stiffness dropped it in silence)
+    assert main(["map", str(path), "--out", str(tmp_path / "m"), "--json", str(tmp_path / "m.json")]) == 0
+    assert main(["stiffness", str(path), "--out", str(tmp_path / "s"), "--json", str(tmp_path / "s.json")]) == 0
     np.testing.assert_array_equal(_maps(tmp_path / "s")["k1"], _maps(tmp_path)["k1"])
+    by_map, by_stiffness = (json.loads((tmp_path / name).read_text()) for name in ("m.json", "s.json"))
+    assert by_stiffness["results"] == by_map["results"] and by_stiffness["kind"] == "map"
 
 
 def test_contact_frequency_map_no_pixel_explains_is_undetermined_with_why(tmp_path, capsys):

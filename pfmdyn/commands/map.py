@@ -32,7 +32,7 @@ from ..fitting.noise import GAP_LIMIT
 from ..names import NAMES, checked, flag
 from . import flags
 
-__all__ = ["add_arguments", "run"]
+__all__ = ["add_arguments", "run", "write_summary"]
 
 _LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_position", "tip_mass_ratio",
           "tip_gyration_radius", "tilt", "spot_position")
@@ -167,7 +167,7 @@ def run(args) -> int:
                             + ("it" if len(unused) == 1 else "them"))
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
-        _write_json(args, summary, overrides)
+        write_summary(args.json, args.out, args.data, summary, overrides)
         return 0
     if file_kind(args.data) == "asylum":
         if args.medium:
@@ -222,20 +222,20 @@ def run(args) -> int:
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
     assumed = {name: (getattr(source.model.lever, name), why) for name, why in source.assumed.items()}
-    _write_json(args, s.to_dict(), overrides, s.shape, assumed)
+    write_summary(args.json, args.out, args.data, s.to_dict(), overrides, s.shape, assumed)
     return 0
 
 
-def _write_json(args, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
-    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`); ``assumed``: name ->
-    (value, why) of the lever's defaults taken."""
-    if args.json:
+def write_summary(json_path, out, data, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
+    """``--json``: the summary document (:func:`pfmdyn.io.documents.map_summary`) of a run on ``data`` into
+    ``out``; ``assumed``: name -> (value, why) of the lever's defaults taken."""
+    if json_path:
         from ..io import documents
         from ..maps import open_result
 
-        shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
+        shape = shape or tuple(open_result(out)[["k1"]]["k1"].shape)
         given = {name: value for name, value in overrides.items() if name != "medium"}
-        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given, assumed=assumed))
+        flags.write_json(json_path, documents.map_summary(summary, data, shape, given, assumed=assumed))
 
 
 def _check_note(path, entries: dict) -> None:

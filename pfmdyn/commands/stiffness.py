@@ -164,7 +164,10 @@ def _contact_map(args) -> int:
         if len(args.mode) != 1:
             raise UserError("a contact-frequency map has one mode: give --mode once")
         overrides["contact_mode"] = _mode(args.mode[0])
-    print(describe(contact_map(args.file, args.out, overrides)))
+    summary = contact_map(args.file, args.out, overrides)
+    print(describe(summary))
+    from .map import write_summary
+    write_summary(args.json, args.out, args.file, summary, overrides)       # the document map writes (it was lost)
     return 0
 
 
