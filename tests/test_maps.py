@@ -198,7 +198,9 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
     assert main(["map", str(path), "--out", str(tmp_path)]) == 0
     np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
     # the same map through pfmdyn stiffness, its --json the summary map writes (stiffness dropped it in silence)
-    assert main(["map", str(path), "--out", str(tmp_path / "m"), "--json", str(tmp_path / "m.json")]) == 0
+    assert main(["map", str(path), "--out", str(tmp_path / "m"), "--json", str(tmp_path / "m.json"),
+                 "--plot", str(tmp_path / "figures")]) == 0
+    assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == ["k1.png", "k1_stderr.png"]   # was ignored
     assert main(["stiffness", str(path), "--out", str(tmp_path / "s"), "--json", str(tmp_path / "s.json")]) == 0
     np.testing.assert_array_equal(_maps(tmp_path / "s")["k1"], _maps(tmp_path)["k1"])
     by_map, by_stiffness = (json.loads((tmp_path / name).read_text()) for name in ("m.json", "s.json"))

@@ -167,6 +167,7 @@ def run(args) -> int:
                             + ("it" if len(unused) == 1 else "them"))
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
+        _draw(args)         # a figure of k1 and its error (--plot was ignored here)
         write_summary(args.json, args.out, args.data, summary, overrides)
         return 0
     if file_kind(args.data) == "asylum":
@@ -208,13 +209,7 @@ def run(args) -> int:
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    folder = args.plot or (args.out if args.png else None)
-    if folder:
-        from ..maps import open_result
-        from ..plots.maps import plot_maps
-        os.makedirs(folder, exist_ok=True)
-        for name, figure in plot_maps(open_result(args.out)).items():
-            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    _draw(args)
     written = ""
     if source.layout == "usid":
         from ..maps.usid import write_usid
@@ -224,6 +219,21 @@ def run(args) -> int:
     assumed = {name: (getattr(source.model.lever, name), why) for name, why in source.assumed.items()}
     write_summary(args.json, args.out, args.data, s.to_dict(), overrides, s.shape, assumed)
     return 0
+
+
+def _draw(args, dart: bool = False) -> None:
+    """``--plot DIR`` (or the old ``--png``, into ``--out``): a PNG of each map in the store (with ``dart``, the
+    DART summary figure too)."""
+    import os
+    folder = args.plot or (args.out if args.png else None)
+    if not folder:
+        return
+    from ..maps import open_result
+    from ..plots.maps import plot_dart, plot_maps
+    os.makedirs(folder, exist_ok=True)
+    result = open_result(args.out)
+    for name, figure in {**plot_maps(result), **({"dart": plot_dart(result)} if dart else {})}.items():
+        figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
 
 
 def write_summary(json_path, out, data, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
@@ -327,14 +337,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
                            "phase_offset_left_deg": left, "tip_height": lever.tip_height,
                            "tip_height_uncertainty": found["tip_height_uncertainty"][0],
                            "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
-    folder = args.plot or (args.out if args.png else None)
-    if folder:
-        from ..maps import open_result
-        from ..plots.maps import plot_dart, plot_maps
-        os.makedirs(folder, exist_ok=True)
-        result = open_result(args.out)
-        for name, figure in {**plot_maps(result), "dart": plot_dart(result)}.items():
-            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    _draw(args, dart=True)
     with np.errstate(all="ignore"):
         ok = maps["determined"].astype(bool)
         median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
