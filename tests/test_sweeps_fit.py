@@ -251,6 +251,24 @@ def test_a_header_value_no_lever_has_is_left_out_and_said(tmp_path, capsys):
     assert q["status"] == "undetermined" and "overdamped" in q["why"]
 
 
+def test_flags_a_free_lever_fit_would_drop_are_refused(tmp_path, capsys):
+    """--tip-height, --free-resonance and --vertical-only on a drive sweep or a thermal tune were ignored in silence."""
+    from pfmdyn.cli import main
+    rng, case = lever_case(2)
+    f, y = sweep_of(rng, case)
+    path = write_sweep(tmp_path / "s.txt", f, y, rng)
+    tune = tmp_path / "t.csv"
+    tune.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(f"{a},1e-13\n" for a in np.linspace(1e3, 1e5, 100)))
+    lever = ["--spring-constant", "2", "--length", "2e-4"]
+    for data, extra, named in ((path, ["--tip-height", "1e-5"], "--tip-height would not enter"),
+                               (path, ["--free-resonance", "7e4", "--vertical-only"],
+                                "--free-resonance and --vertical-only would not enter"),
+                               (tune, ["--tip-height", "1e-5"], "a thermal tune is fitted as the free lever")):
+        assert main(["discrepancy", str(data), *lever, *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and named in err, err
+
+
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "pfmdyn.cli", "discrepancy", *map(str, args)],
                           capture_output=True, text=True)

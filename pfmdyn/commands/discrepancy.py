@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from contextlib import contextmanager
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io import documents
 from . import flags
 
@@ -71,6 +71,7 @@ def _sweeps(args) -> int:
 
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
+    _refuse_unused(args, "a drive sweep")
     values = flags.given(args, ("spring_constant", "length", "width", "added_mass_position"))
     flags.require(values, ("spring_constant", "length"), args.data)
     after = read_sweep(args.data)
@@ -100,6 +101,7 @@ def _thermal(args) -> int:
     from ..io.thermal_tune import read_thermal_tune
     from ..plots.sweep import plot_thermal
 
+    _refuse_unused(args, "a thermal tune")
     tune = read_thermal_tune(args.data)
     lever = read_instrument(args.data).fields       # what the file says of the lever; the flags win
     values = {**{k: lever[k] for k in ("spring_constant", "length", "width") if k in lever},
@@ -116,6 +118,23 @@ def _thermal(args) -> int:
                                       values.get("width")), args, medium, found, taken)
     doc = documents.thermal_fit(fit.to_dict(), flags.given_names(args, (*OVERRIDES, "medium", "temperature")))
     return _emit(args, fit, doc, lambda: plot_thermal(fit))
+
+
+def _refuse_unused(args, what: str) -> None:
+    """A free lever's spectrum (``what``) has no tip and no contact: a tip height, a free resonance (fitted) or
+    --vertical-only would be dropped in silence; a value given is a value meant.
+
+    >>> _refuse_unused(argparse.Namespace(data="s.txt", tip_height="1e-5", free_resonance=None, vertical_only=False),
+    ...                "a drive sweep")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: s.txt: a drive sweep is fitted as the free lever (its resonance fitted, no tip in contact), which --tip-height would not enter: drop it
+    """
+    unused = [flags.NAMES[name].flag for name in ("tip_height", "free_resonance") if getattr(args, name) is not None]
+    unused += ["--vertical-only"] * bool(args.vertical_only)
+    if unused:
+        raise UserError(f"{args.data}: {what} is fitted as the free lever (its resonance fitted, no tip in contact), "
+                        f"which {listed(unused)} would not enter: drop {'it' if len(unused) == 1 else 'them'}")
 
 
 def _provenance(result, args, medium, found: dict | None, taken=()):
