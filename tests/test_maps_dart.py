@@ -195,6 +195,15 @@ def test_a_value_of_the_note_no_lever_has_names_the_file_and_its_key(tmp_path, c
     assert err.count("\n") == 1 and "dart.ibw, ThermalQ in the note: quality_factor must be in" in err
 
 
+def test_inspect_names_a_dart_image_and_its_settings(tmp_path):
+    """inspect listed the layers as of any image: nothing said that map inverts it, nor what it takes from the note."""
+    from pfmdyn.io.instruments import read_instrument
+    case = dart_case(20, 2, 2)
+    record = read_instrument(write_ibw(case, tmp_path / "dart.ibw"))
+    [note] = [n for n in record.notes if n.startswith("a DART image (pfmdyn map inverts it)")]
+    assert f"DFRTFrequencyWidth {case.settings['frequency_width']:g} Hz" in note and "DriveAmplitude" in note
+
+
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):
     path = igor_wave(tmp_path / "pfm.ibw", np.ones((8, 8, 2), "f4"), "pfm", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
                      {2: ["HeightRetrace", "PhaseRetrace"]}, asylum_note({"SpringConstant": "2"}))

@@ -99,6 +99,26 @@ def _number(note: dict, key: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def dart_note(labels, note: dict) -> list[str]:
+    """What ``pfmdyn inspect`` says of an image whose layers are a DART image's: that ``pfmdyn map`` inverts it,
+    with the DART settings its note holds (none for any other image).
+
+    >>> dart_note(["HeightRetrace", "Amplitude1Retrace", "Amplitude2Retrace", "Phase1Retrace", "Phase2Retrace",
+    ...            "FrequencyRetrace"], {"DFRTFrequencyWidth": "2500", "DriveAmplitude": "1.5"})
+    ['a DART image (pfmdyn map inverts it); DART settings in the note: DFRTFrequencyWidth 2500 Hz, DriveAmplitude 1.5 V']
+    >>> dart_note(["HeightRetrace", "PhaseRetrace"], {})
+    []
+    """
+    layers = {label: None for label in labels}
+    if any(_pick(layers, name) is None for name in DART_CHANNELS):
+        return []
+    units = {"frequency_width": "Hz", "frequency_centre": "Hz", "drive_amplitude": "V", "invols": "m/V",
+             "amp_invols": "m/V"}
+    settings = [f"{key} {value:g} {units[name]}" for name, key in DART_KEYS.items()
+                if (value := _number(note, key)) is not None]
+    return ["a DART image (pfmdyn map inverts it); DART settings in the note: " + (", ".join(settings) or "none")]
+
+
 def read_dart(path) -> DartImage:
     """Read a DART image from an Asylum ``.ibw`` file (module docstring).
 
