@@ -11,7 +11,6 @@ line (the wave's second dimension), ``x`` the fast-scan point (its first), in th
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,15 +18,11 @@ import numpy as np
 
 from ..errors import UserError
 from . import asylum, ibw
+from .asylum import DART_CHANNELS, DART_KEYS
 from .record import decode_text
 
 __all__ = ["DART_CHANNELS", "DART_KEYS", "DartImage", "read_dart"]
 
-DART_CHANNELS = ("Amplitude1", "Amplitude2", "Phase1", "Phase2", "Frequency")
-"""The layers a DART image needs (their names without ``Trace``/``Retrace``)."""
-DART_KEYS = {"frequency_width": "DFRTFrequencyWidth", "frequency_centre": "DFRTFrequencyCenter",
-             "drive_amplitude": "DriveAmplitude", "invols": "InvOLS", "amp_invols": "AmpInvOLS"}
-"""What this module reads of the note besides the lever -> Asylum's key."""
 
 
 @dataclass(frozen=True)
@@ -91,34 +86,6 @@ def _pick(layers: dict, name: str):
     return None
 
 
-def _number(note: dict, key: str) -> float | None:
-    try:
-        value = float(str(note.get(key, "nan")).split()[0])
-    except (ValueError, IndexError):
-        return None
-    return value if math.isfinite(value) else None
-
-
-def dart_note(labels, note: dict) -> list[str]:
-    """What ``pfmdyn inspect`` says of an image whose layers are a DART image's: that ``pfmdyn map`` inverts it,
-    with the DART settings its note holds (none for any other image).
-
-    >>> dart_note(["HeightRetrace", "Amplitude1Retrace", "Amplitude2Retrace", "Phase1Retrace", "Phase2Retrace",
-    ...            "FrequencyRetrace"], {"DFRTFrequencyWidth": "2500", "DriveAmplitude": "1.5"})
-    ['a DART image (pfmdyn map inverts it); DART settings in the note: DFRTFrequencyWidth 2500 Hz, DriveAmplitude 1.5 V']
-    >>> dart_note(["HeightRetrace", "PhaseRetrace"], {})
-    []
-    """
-    layers = {label: None for label in labels}
-    if any(_pick(layers, name) is None for name in DART_CHANNELS):
-        return []
-    units = {"frequency_width": "Hz", "frequency_centre": "Hz", "drive_amplitude": "V", "invols": "m/V",
-             "amp_invols": "m/V"}
-    settings = [f"{key} {value:g} {units[name]}" for name, key in DART_KEYS.items()
-                if (value := _number(note, key)) is not None]
-    return ["a DART image (pfmdyn map inverts it); DART settings in the note: " + (", ".join(settings) or "none")]
-
-
 def read_dart(path) -> DartImage:
     """Read a DART image from an Asylum ``.ibw`` file (module docstring).
 
@@ -150,7 +117,7 @@ def read_dart(path) -> DartImage:
             fill = np.median(channels[name][~blank]) if name == "Frequency" else np.nan if "Amplitude" in name else 0.0
             channels[name] = np.where(blank, fill, channels[name])
         notes.append(f"{blank.sum()} pixel{'s' if blank.sum() > 1 else ''} without a number in every channel: undetermined")
-    settings = {name: value for name, key in DART_KEYS.items() if (value := _number(note, key)) is not None}
+    settings = {name: value for name, key in DART_KEYS.items() if (value := asylum.note_number(note, key)) is not None}
     centre = channels["Frequency"]
     if "frequency_centre" in settings and np.median(np.abs(centre)) < 0.5 * settings["frequency_centre"]:
         centre = centre + settings["frequency_centre"]      # a frequency channel recorded as the shift
