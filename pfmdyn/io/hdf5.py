@@ -164,8 +164,8 @@ def read_hdf5(path) -> InstrumentRecord:
                                  f"to {frequency.max():.6g} Hz)")
             elif name.endswith("contact_frequency_hz"):
                 kinds.add("image")
-                notes.append(f"{label}: a map of contact resonances (pfmdyn map, or stiffness --out, gives k1 at each "
-                             "pixel)")
+                notes.append(f"{label}: a map of contact resonances (pfmdyn map, or stiffness with an output folder, "
+                             "gives k1 at each pixel)")
             elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE"):
                 kinds.add("spectrum")
                 notes.append(f"{label}: its spectral dimension has no frequency unit")
