@@ -10,7 +10,7 @@ linear design columns it adds, whether it moves the undamped resonances, whether
 spectrum can show it (``spectrum_only``: background, the laser spot; damping shows in a
 table's Q values), and the derivation it comes from; and what it does to the model: each component is a subclass
 of :class:`Effect` that gives its chain-rule term of the Jacobian (:class:`Chain`), the
-generated partials that needs, its design columns and their derivatives, and the quantities
+generated partials that needs, its design columns (:data:`BASE_COLUMNS`), and the quantities
 derived from its parameters, so that adding an effect is adding one component (parameters:
 :class:`pfmdyn.fitting.parameters.Parameter`).  ``damping`` is one effect name with three mechanisms
 (components ``damping_internal``, ``damping_viscous``, ``damping_contact``,
@@ -32,8 +32,15 @@ from ..fitting.parameters import CONTACT_LOSS, FLUID_LOSS, INTERNAL_LOSS, VISCOU
 from .. import composed
 from ..generated import damping, formulas
 
-__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "public_name", "spring_parameters", "drag",
-           "fluid_law"]
+__all__ = ["Effect", "Chain", "EFFECTS", "NAMES", "DAMPING", "BASE_COLUMNS", "RAMP", "public_name",
+           "spring_parameters", "drag", "fluid_law"]
+
+RAMP = -1
+"""The column source of the background's ramp ``f / f_max`` (the others: a slope's index)."""
+BASE_COLUMNS = ((0, False), (1, False), (3, False), (2, True), (3, True))
+"""The baseline's design columns as ``(source, per volt)``: the slope per unit ``(d1, d2, f0, q0)`` of that
+index (or :data:`RAMP`), times the row's bias when per volt: ``T_d1, T_d2, T_q, V T_f, V T_q``; an effect's
+``columns`` follow in the library's order."""
 
 
 def fluid_law(r):
@@ -97,14 +104,13 @@ class Effect:
 
     * :meth:`jacobian`: d slopes / d each of its internal parameters, by the chain rule
       (:class:`Chain`), and :meth:`partials` the generated partials that needs;
-    * :meth:`design_columns` (``columns`` of them) and :meth:`design_derivative`: linear columns
-      it adds to the design and their parameter derivatives times their coefficients.
+    * ``columns``: the linear design columns it adds, as :data:`BASE_COLUMNS`'s.
     """
 
     name: str
     parameters: tuple[Parameter, ...]
     derivation: str
-    columns: int = 0
+    columns: tuple[tuple[int, bool], ...] = ()
     moves_resonances: bool = False
     spectrum_only: bool = False
 
@@ -135,15 +141,6 @@ class Effect:
     def jacobian(self, chain: Chain) -> tuple:
         """d slopes (4, n) / d each internal parameter, in order."""
         return ()
-
-    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
-        """Its linear design columns (rows) from the slopes per row ``(d1, d2, f0, q0)``."""
-        return []
-
-    def design_derivative(self, dT, coef):
-        """``(bias-independent, per-volt)`` parts of ``(d columns / d internal) @ coef`` from the
-        slope derivatives ``dT`` (4, p, n) and its own coefficients ``coef``, or None."""
-        return None
 
     def derived(self, values: dict, meta) -> dict:
         """Reported quantities that follow from its parameters' ``values`` (:meth:`FitResult.parameters`)."""
@@ -203,13 +200,7 @@ class ContactDamping(Damping):
     """A dashpot beside ``k1``: ``T_d1`` no longer carries the constant part of ``f0``, so ``T_f``
     is a column of its own (coefficient ``f0`` at zero bias); reports the dashpot ``eta``."""
 
-    columns: int = 1
-
-    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
-        return [slopes[2]]
-
-    def design_derivative(self, dT, coef):
-        return dT[2] * coef[0], None
+    columns: tuple[tuple[int, bool], ...] = ((2, False),)
 
     def derived(self, values: dict, meta) -> dict:
         if not values.get("k1", {}).get("value"):
@@ -268,11 +259,7 @@ class LateralStiffness(Effect):
 class Background(Effect):
     """Additive cross-talk, two linear columns ``(b0 + b1 V) f / f_max``."""
 
-    columns: int = 2
-
-    def design_columns(self, slopes, freq_unique, inverse, bias) -> list:
-        ramp = freq_unique[inverse] / freq_unique.max()
-        return [ramp, bias * ramp]
+    columns: tuple[tuple[int, bool], ...] = ((RAMP, False), (RAMP, True))
 
 
 @dataclass(frozen=True)

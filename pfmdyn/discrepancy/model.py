@@ -37,11 +37,11 @@ from scipy.optimize import least_squares
 from ..cantilever import damping_substitution, free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
-from ..fitting.projection import jacobian_covariance, project
+from ..fitting.projection import CUTOFF, jacobian_covariance, project
 from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
-from .effects import EFFECTS, Chain, Effect, drag, public_name, spring_parameters
+from .effects import BASE_COLUMNS, EFFECTS, RAMP, Chain, Effect, drag, public_name, spring_parameters
 
 __all__ = ["Model", "FitResult", "fit", "free_root", "free_root_and_jacobian", "characteristic_partials"]
 
@@ -76,9 +76,10 @@ class Model:
         return {p.name: _coordinate(p, p.null) for p in every if p.null is not None}
 
     @cached_property
-    def _column_components(self) -> tuple[Effect, ...]:
-        """The components that add design columns, in the library's order (their columns' order)."""
-        return tuple(e for e in EFFECTS.values() if e.columns and e.name in self.effects)
+    def columns(self) -> tuple[tuple[int, bool], ...]:
+        """The design columns as ``(source, per volt)`` (:data:`pfmdyn.discrepancy.effects.BASE_COLUMNS`), the
+        components' in the library's order after the baseline's."""
+        return BASE_COLUMNS + tuple(c for e in EFFECTS.values() if e.name in self.effects for c in e.columns)
 
     def with_effect(self, component: str) -> "Model":
         """This model plus one effect component."""
@@ -179,7 +180,7 @@ class Model:
     @property
     def n_linear(self) -> int:
         """Number of complex linear coefficients."""
-        return 5 + sum(e.columns for e in self.components)
+        return len(self.columns)
 
     def design(self, freq_unique, inverse, bias, internal) -> np.ndarray:
         """Complex design matrix (rows, columns) of the linear coefficients."""
@@ -206,26 +207,18 @@ class Model:
         frequencies), combined per unique frequency before expanding to rows (the background
         ramp does not depend on them).
         """
-        d_d1, d_d2, d_f, d_q = dT
-        fixed = d_d1 * coef[0] + d_d2 * coef[1] + d_q * coef[2]
-        per_volt = d_f * coef[3] + d_q * coef[4]
-        start = 5
-        for e in self._column_components:
-            moved = e.design_derivative(dT, coef[start:start + e.columns])
-            start += e.columns
-            if moved is not None:
-                fixed = fixed if moved[0] is None else fixed + moved[0]
-                per_volt = per_volt if moved[1] is None else per_volt + moved[1]
+        parts = {False: 0.0, True: 0.0}         # the bias-independent and the per-volt part
+        for (source, per_volt), c in zip(self.columns, coef):
+            if source != RAMP:                  # the background's ramp does not move
+                parts[per_volt] = parts[per_volt] + dT[source] * c
+        fixed, per_volt = parts[False], parts[True]
         # gathered row-wise: the (rows, parameters) result contiguous, as the projection reads it
         return fixed.T[inverse] + bias[:, None] * per_volt.T[inverse]
 
     def _columns(self, slopes, freq_unique, inverse, bias):
         """Design columns from the slopes at the unique frequencies (order: see module)."""
-        rows = t_d1, t_d2, t_f, t_q = tuple(t[inverse] for t in slopes)
-        cols = [t_d1, t_d2, t_q, bias * t_f, bias * t_q]
-        for e in self._column_components:
-            cols += e.design_columns(rows, freq_unique, inverse, bias)
-        return np.stack(cols, axis=1)
+        rows = tuple(t[inverse] for t in slopes) + (freq_unique[inverse] / freq_unique.max(),)
+        return np.stack([bias * rows[source] if per_volt else rows[source] for source, per_volt in self.columns], axis=1)
 
 
 def _coordinate(p: Parameter, internal) -> float:
@@ -372,6 +365,12 @@ def bounds(model: Model):
     return np.array([p.lower for p in params]), np.array([p.upper for p in params])
 
 
+COMPILED = True
+"""Whether a fit with the analytic Jacobian evaluates its residual and Jacobian compiled
+(:mod:`pfmdyn.discrepancy.fit_kernel`); False: the NumPy steps of :class:`_Problem`, the reference the
+tests hold it to."""
+
+
 class _Problem:
     """Residual and Jacobian of one model on one spectrum, with the last projection cached."""
 
@@ -380,14 +379,42 @@ class _Problem:
         self.freq_u, self.inverse = np.unique(data.frequency_hz, return_inverse=True)
         self.y, self.bias = data.response, data.bias_v
         self._key, self._state = None, None
+        self.compiled = COMPILED and JACOBIAN == "analytic"
+        if self.compiled:
+            # what every evaluation of this fit shares: the columns, the ramp, the projection's buffers
+            rows, m = len(self.y), model.n_linear
+            self._columns = (np.array([c[0] for c in model.columns], np.int64),
+                             np.array([c[1] for c in model.columns], np.bool_))
+            self._ramp = self.freq_u[self.inverse] / self.freq_u.max()
+            self._buffers = (np.empty((rows, m), complex), np.empty((rows, m), complex), np.empty(m),
+                             np.empty((m, m), complex), np.empty(m, complex))
+
+    def _evaluated(self, x):
+        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`); fresh residual
+        and Jacobian arrays (the solver keeps them)."""
+        from .fit_kernel import design_and_gram, residual_and_jacobian
+
+        T, dT = self.model.slopes_and_jacobian(self.freq_u, x)
+        A, As, scale, G, Ay = self._buffers
+        design_and_gram(T, self.inverse, self.bias, self._ramp, *self._columns, self.y, A, As, scale, G, Ay)
+        w, V = np.linalg.eigh(G)
+        rows, c = len(self.y), np.empty(self.model.n_linear, complex)
+        r, J = np.empty(2 * rows), np.empty((2 * rows, len(x)))
+        residual_and_jacobian(dT, self.inverse, self.bias, *self._columns, self.y, float(self.sigma), A, As, scale, Ay,
+                              w, V, CUTOFF, True, c, r, J)
+        return A, c, r, J
 
     def _at(self, x):
         """Design matrix, amplitudes, projection (:func:`pfmdyn.fitting.projection.project`) and, for
         the analytic Jacobian, the slopes' partials (one read-out with the values: the solver asks for
-        the Jacobian at most points it evaluates)."""
+        the Jacobian at most points it evaluates); compiled (:data:`COMPILED`): the design, the amplitudes,
+        the residual and the Jacobian."""
         key = tuple(np.asarray(x, float))
         if key != self._key:
             x = np.asarray(x, float)
+            if self.compiled:
+                self._key, self._state = key, self._evaluated(x)
+                return self._state
             if JACOBIAN == "analytic":
                 A, dT = self.model.design_and_partials(self.freq_u, self.inverse, self.bias, x)
             else:
@@ -397,6 +424,8 @@ class _Problem:
         return self._state
 
     def residual(self, x):
+        if self.compiled:
+            return self._at(x)[2]
         A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
@@ -404,6 +433,8 @@ class _Problem:
         return r
 
     def jacobian(self, x):
+        if self.compiled:
+            return self._at(x)[3]
         A, c, projection, dT = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
