@@ -807,7 +807,8 @@ def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever
     at each frequency (Eq. 41; dims frequency, in the data's ``unit``), its nulling bias and the tip-quality
     indicator (``quality``: :func:`pfmdyn.analysis.deconvolve.tip_quality`); with a lever (``surface``) the
     true surface displacement at the spot, undetermined ranges as notes.  The per-point residuals stay in
-    ``error_map.csv`` (``source.out``).
+    ``error_map.csv`` (``source.out``).  ``given``: the flags given (``surface_potential`` among them when it
+    was; else it is the default, assumed).
 
     >>> from pfmdyn.analysis.deconvolve import deconvolve, tip_quality
     >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
@@ -838,6 +839,6 @@ def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever
                                                        **derived)
         notes += [f"undetermined {low:.6g}-{high:.6g} Hz: {why}" for low, high, why in surface.undetermined]
     lever = lever_records({"surface_potential": result.surface_potential_v, **(lever or {})},
-                          given=["surface_potential", *given])
+                          given=given)
     return document("deconvolve", "deconvolution", {"path": str(path), "out": None if out is None else str(out)},
                     lever, results, None, notes)
