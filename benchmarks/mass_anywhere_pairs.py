@@ -88,7 +88,8 @@ def found(case, mass, out) -> tuple[bool, bool, str]:
         for s in solutions))
     x = where.get("value")
     text = (f"({case['medium'].name}, k {case['k']:.3g}, ratio {mass['mass_ratio']:.3g} at {mass['x_m']:.2f}): "
-            f"{out['effect']}, mass {m['value'] / truth - 1:+.1%} +- {sigma / truth:.1%}"
+            f"{out['effect']}, mass {m['value'] / truth - 1:+.1%} "
+            + ("unbounded" if m["stderr"] is None else f"+- {sigma / truth:.1%}")
             + (f", x/L {x:.3g}" if x is not None else "")
             + "".join(f" or {s['added_mass_position']:.3g} ({s['added_mass'] / truth - 1:+.1%})" for s in solutions[1:])
             + ("" if m.get("determined") else f" [mass undetermined: {m.get('why')}]")

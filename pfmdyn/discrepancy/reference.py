@@ -448,9 +448,10 @@ def _position_profile(before, refit, frequency, y, sigma, shifted, seeds=()):
         starts.append(start)
     refined = sorted((solve_from_starts(residual, [s], *bounds, keep=1) for s in starts), key=lambda f: f.chi2)
     # The mirror of the best position about mode 2's node moves both modes alike: a minimum the grid, a
-    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82).
+    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82; 0.779 and
+    # 0.788, their masses 3 % apart, for a sharp mode 2).
     mirror = 2 * mode2_node() - refined[0].internal[1]
-    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > 0.01:
+    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > _apart(refined[0]):
         start = refined[0].internal.copy()
         start[1] = mirror
         refined = sorted([*refined, solve_from_starts(residual, [start], *bounds, keep=1)], key=lambda f: f.chi2)
@@ -473,12 +474,22 @@ def mode2_node() -> float:
     return float(brentq(shape, 0.5, 0.95, xtol=1e-14))
 
 
+def _apart(fit: StartsFit) -> float:
+    """How far (x/L) another minimum's position must be from ``fit``'s to be another place: three of its
+    standard errors, at least :data:`MIN_APART`."""
+    return max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), MIN_APART)
+
+
+MIN_APART = 0.002
+"""The least separation (x/L) of two positions reported as two solutions (a sharp mode's mirror about the
+node of mode 2 can sit 0.008 away with a mass 3 % apart)."""
+
+
 def _rivals(fit: StartsFit, count: int) -> list:
-    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: more than
-    three of its standard errors (and 0.005) from the best and from each other (a sharp mode's mirror about
-    the node of mode 2 can sit 0.01 away with a mass 3 % apart)."""
+    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: farther
+    than :func:`_apart` from the best and from each other."""
     scale = max(fit.chi2 / count, 1.0)
-    apart = max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), 0.005)
+    apart = _apart(fit)
     out = []
     for x, chi2 in sorted(fit.others, key=lambda other: other[1]):      # one per place: starts may meet
         if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > apart for kept in [fit.internal, *(o for o, _ in out)]):
