@@ -99,6 +99,27 @@ def test_a_drifting_resonance_widens_its_stated_error():
     assert abs(resonance["value"] - in_medium(case)[0]) < 2 * resonance["stderr"]
 
 
+def test_no_damping_beyond_the_fluid_leaves_every_error_a_number():
+    """In water the fluid alone damps this lever: the extra damping sits at its bound (zero), where the
+    least-squares solver's Jacobian has no column for it.  The resonance, Q and Sader's k still carry their
+    errors (once "+- undetermined", Sader's "nan %", and thermal and Sader said to disagree)."""
+    from pfmdyn.discrepancy.thermal import calibrate_tune
+
+    rng = np.random.default_rng(3)
+    k, L, w = 1.7, 480e-6, 25.8e-6
+    t = (4 * k * L**3 / (SILICON[0] * w)) ** (1 / 3)
+    f_vac = B1**2 / (2 * math.pi * L**2) * t * math.sqrt(SILICON[0] / (12 * SILICON[1]))
+    case = dict(k=k, L=L, w=w, f_vac=f_vac, g=9.3e-4, medium=Medium.water(318.46), temperature=318.46)
+    f = np.linspace(0, 8 * f_vac, 6000)[1:]
+    psd = (2 * L / 3) ** 2 * end_slope_psd(f, **case)
+    asd = np.sqrt(psd + psd.max() / 900) * (1 + 0.016 * rng.standard_normal(len(f)))
+    c = calibrate_tune(ThermalTune("t", f, asd, "m", {}, {}), length=L, width=w, medium=case["medium"],
+                       temperature=318.46)
+    assert c.peak.frequency_uncertainty_hz < 1e-3 * c.peak.frequency_hz
+    assert c.peak.quality_factor_uncertainty < 0.1 * c.peak.quality_factor
+    assert c.sader.stderr < 0.1 * c.sader.value and c.consistent
+
+
 def test_a_wrong_spring_constant_shows_in_the_detection(tmp_path):
     """Told k twice too large, the spectrum needs a factor sqrt(2) more: the k that makes it 1 is the true one."""
     case, tune = tune_case(4)

@@ -160,13 +160,13 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     try:
         lever = lever_of(fit.internal)
         fitted, (a, b, c) = model(fit.internal)
-        scale_stderr = _scale_stderr(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
+        covariance = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
     except UserError:
         raise UserError(f"{tune.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the peak (check them)") from None
     r = np.log(fitted) - log_asd
     inflation = peak_misfit(frequency, r / sigma, lever) ** 2
-    parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i] * inflation)
+    parameters = {p.key: parameter_entry(p, x, covariance[i, i] * inflation)
                   for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
@@ -192,7 +192,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     if not given:
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted, internal=fit.internal,
-                      one_over_f_floor=float(np.sqrt(c)), scale_stderr=scale_stderr)
+                      one_over_f_floor=float(np.sqrt(c)), scale_stderr=float(np.sqrt(covariance[2, 2])))
 
 
 def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
@@ -218,10 +218,11 @@ def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
     return float(max(gap(np.sum(energy[mask]), mask.sum()) / max(gap(np.sum(energy), energy.size), 1.0), 1.0))
 
 
-def _scale_stderr(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> float:
-    """Relative standard error of ``g**2`` with the resonance, the damping and the floors free: the
-    Jacobian of the log residual in (x, log g**2, log w**2, log p**2) (a floor that adds next to nothing
-    held), scaled by the reduced chi2 when above 1."""
+def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> np.ndarray:
+    """Covariance of (x, log g**2, log w**2, log p**2), all free: the Jacobian of the log residual (a floor
+    that adds next to nothing held), scaled by the reduced chi2 when above 1.  Its own Jacobian, not the
+    least-squares solver's, which zeroes the column of a parameter at its bound (no damping beyond the
+    fluid's, as in water: its variance, and Q's with it, undetermined)."""
     psd = slope_psd(x)
     columns = []
     for i in range(2):       # the resonance (log10 Hz) and the extra damping
@@ -232,8 +233,7 @@ def _scale_stderr(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma)
     columns += [coefficients[0] * psd] + [floor for floor in floors if np.max(floor / fitted**2) > 1e-3]
     J = np.stack(columns, axis=-1) / (2 * fitted[:, None] ** 2 * sigma)
     r = (np.log(fitted) - log_asd) / sigma
-    covariance = jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
-    return float(np.sqrt(covariance[2, 2]))
+    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
 
 
 def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, temperature: float,
