@@ -13,7 +13,10 @@ position started also where it moves the first mode as far as the peak moved (:f
 sharp peak moved by many widths has a basin narrower than the decades between the other starts);
 positions that explain the shifts as well (a position and its mirror about a node of mode 2) are all
 reported, each with its mass.  A mass named while the explanation leaves a gap above
-:data:`UNSETTLED` is not stated as determined: the minimum found need not be the lever's.
+:data:`UNSETTLED` is not stated as determined: the minimum found need not be the lever's.  Where the
+reference lever's resonances, scaled by one factor (:data:`RISE`), explain the other sweep only raised
+(beyond :data:`SWAPPED` standard errors), no mass is named (a mass only lowers them) and a note says the
+files may be swapped.
 """
 from __future__ import annotations
 
