@@ -508,13 +508,17 @@ def test_a_mass_beside_the_node_of_mode_2_or_at_the_clamp_is_stated_as_the_data_
     noise = lambda: 3e-2 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f))) / math.sqrt(2)  # noqa: E731
     y0 = gain * beam_slope(f, **case, **bare) + 0.2 + noise()
     y1 = gain * beam_slope(f, **case, mass_ratio=ratio, x_m=x_m) + 0.2 + noise()
-    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y0, rng)), 2.0, 200e-6,
-                       case["medium"], width=40e-6)
-    out = compare_sweeps(read_sweep_table(write_sweep(tmp_path / "a.txt", f, y1, rng)), before, None)
+    tables = [read_sweep_table(write_sweep(tmp_path / name, f, y, rng)) for name, y in (("b.txt", y0), ("a.txt", y1))]
+    before = fit_sweep(tables[0], 2.0, 200e-6, case["medium"], width=40e-6)
+    out = compare_sweeps(tables[1], before, None)
     m, where = out["parameters"]["added_mass_ratio"], out["parameters"]["added_mass_position"]
     if x_m < 0.5:
         assert out["effect"] != "added_mass" and out["parameters"]["added_mass"]["stderr"] is None
         return
+    # swapped: mode 1 rose while mode 2, the taller peak, stayed; no mass named, and the files said swapped
+    swapped = compare_sweeps(tables[0], fit_sweep(tables[1], 2.0, 200e-6, case["medium"], width=40e-6), None)
+    assert swapped["effect"] != "added_mass" and any("swapped" in note for note in swapped["notes"])
+    assert not out["notes"]
     mass = out["parameters"]["added_mass"]
     truth = ratio * mass["value"] / m["value"]
     assert out["effect"] == "added_mass"
