@@ -6,7 +6,9 @@ N/m, L 50-500 um, Q 2-1000), never pfmdyn's model.  A mass of 1-30 % of the leve
 over 0.05-1 (near the clamp, at the node of mode 2, at the end alike); each sweep spans a window around
 each of the first two peaks of the exact beam before and after the mass (found on its own response), with
 the same gain and background and fresh noise.  The pair is compared with no position given
-(:func:`pfmdyn.discrepancy.reference.compare_sweeps`), as ``pfmdyn discrepancy AFTER --reference BEFORE``.
+(:func:`pfmdyn.discrepancy.reference.compare_sweeps`), as ``pfmdyn discrepancy AFTER --reference BEFORE``,
+and swapped, as ``pfmdyn discrepancy BEFORE --reference AFTER``: then no mass may be named, and the
+comparison should say that the files look swapped.
 
 A pair is found when ``added_mass`` is named and the stated 2-sigma interval of the mass holds the truth
 with the position found: the reported position within two of its standard errors (at least 0.02) of the
@@ -52,7 +54,8 @@ def peaks(case, mass) -> list[float]:
 
 
 def pair(tmp: Path, seed: int):
-    """``(case, mass, comparison)`` of one drawn pair."""
+    """``(case, mass, comparison, swapped)`` of one drawn pair: after explained from before, and before from
+    after."""
     rng, case = lever_case(seed)
     draw = np.random.default_rng(seed + 4242)
     mass = dict(mass_ratio=10 ** draw.uniform(math.log10(0.01), math.log10(0.3)), x_m=draw.uniform(0.05, 1.0))
@@ -68,9 +71,15 @@ def pair(tmp: Path, seed: int):
         return y + 3e-2 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f))) / math.sqrt(2)
     y0 = noisy(gain * beam_slope(f, **case, **bare) + background)
     y1 = noisy(gain * beam_slope(f, **case, **mass) + background)
-    before = fit_sweep(read_sweep_table(write_sweep(tmp / "b.txt", f, y0, rng)), case["k"], case["L"], case["medium"],
-                       width=case["w"])
-    return case, mass, compare_sweeps(read_sweep_table(write_sweep(tmp / "a.txt", f, y1, rng)), before, None)
+    tables = [read_sweep_table(write_sweep(tmp / name, f, y, rng)) for name, y in (("b.txt", y0), ("a.txt", y1))]
+    before, after = (fit_sweep(table, case["k"], case["L"], case["medium"], width=case["w"]) for table in tables)
+    return case, mass, compare_sweeps(tables[1], before, None), compare_sweeps(tables[0], after, None)
+
+
+def swapped_text(out) -> tuple[bool, bool, str]:
+    """Whether a swapped pair's comparison names no mass, whether it says the files look swapped, and a line."""
+    return out["effect"] != "added_mass", bool(out["notes"]), f"{out['effect']}, " + (
+        "named swapped" if out["notes"] else "not named swapped") + f", gap {out['gap_after']:.3g}"
 
 
 def found(case, mass, out) -> tuple[bool, bool, str]:
@@ -88,7 +97,8 @@ def found(case, mass, out) -> tuple[bool, bool, str]:
         for s in solutions))
     x = where.get("value")
     text = (f"({case['medium'].name}, k {case['k']:.3g}, ratio {mass['mass_ratio']:.3g} at {mass['x_m']:.2f}): "
-            f"{out['effect']}, mass {m['value'] / truth - 1:+.1%} +- {sigma / truth:.1%}"
+            f"{out['effect']}, mass {m['value'] / truth - 1:+.1%} "
+            + ("unbounded" if m["stderr"] is None else f"+- {sigma / truth:.1%}")
             + (f", x/L {x:.3g}" if x is not None else "")
             + "".join(f" or {s['added_mass_position']:.3g} ({s['added_mass'] / truth - 1:+.1%})" for s in solutions[1:])
             + ("" if m.get("determined") else f" [mass undetermined: {m.get('why')}]")
@@ -102,16 +112,25 @@ def main():
     parser.add_argument("--first", type=int, default=7000, help="the first seed (the levers: lever_case(seed))")
     args = parser.parse_args()
     passed, covered, failures, shown = 0, 0, [], []
+    no_mass, named, wrong = 0, 0, []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in range(args.first, args.first + args.cases):
-            ok, honest, text = found(*pair(Path(tmp), seed))
+            case, mass, out, swapped = pair(Path(tmp), seed)
+            ok, honest, text = found(case, mass, out)
             passed += ok
             covered += honest
-            shown.append(f"seed {seed} {text}")
+            physical, said, line = swapped_text(swapped)
+            no_mass += physical
+            named += said
+            shown.append(f"seed {seed} {text}; swapped: {line}" + ("; NOTE in the right order" if out["notes"] else ""))
             if not ok:
                 failures.append(f"seed {seed} {text}")
+            if not physical:
+                wrong.append(f"seed {seed} swapped: {line}")
     tally(passed, args.cases, failures, "mass and position found, 2 stated sigma: ")
     print(f"what is stated covers the truth (found, or no mass named and none bounded): {covered} of {args.cases}")
+    tally(no_mass, args.cases, wrong, "swapped (BEFORE --reference AFTER): no mass named: ")
+    print(f"swapped, the files named as looking swapped: {named} of {args.cases}")
     print("each pair:" + "".join(f"\n- {line}" for line in shown))
 
 

@@ -166,7 +166,8 @@ QUANTITIES: tuple[Quantity, ...] = (
              "from the lever's (-2: the sign flipped)", -1e9, 1e9, option=False, label="oscillator d_eff error"),
     # The electrostatic drive of vertical PFM (``pfmdyn diagram``, ``deconvolve``, ``map``).
     Quantity("surface_potential", "V_surf", "V", "surface potential of the sample: the electrostatic drives scale "
-             "with V_dc - V_surf", -1e3, 1e3, open_low=False),
+             "with V_dc - V_surf", -1e3, 1e3, open_low=False, default=0.0,
+             default_why="none measured: d_eff is then the response's part that does not scale with the DC bias"),
     Quantity("local_force", "F_loc", "N/V", "local electrostatic force on the tip per volt of V_ac per volt of "
              "V_dc - V_surf (0 as in Fig. 6; 1.4e-8 or 7e-10 as in Fig. 7)", -1.0, 1.0, open_low=False),
     _report("determined_fraction", "determined", "1", "fraction of a DART image's pixels both inversions determine"),

@@ -158,7 +158,7 @@ def test_bad_input_is_one_line_and_writes_nothing(command, extra, words, tmp_pat
 
 
 @pytest.mark.parametrize("command, missing", [("resonances", "--length"), ("spot", "--frequency"),
-                                              ("deconvolve", "--surface-potential"), ("branches", "--plot")])
+                                              ("deconvolve", "--out"), ("branches", "--plot")])
 def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys):
     argv = _argv(tmp_path, command)
     i = argv.index(missing)

@@ -199,6 +199,19 @@ def test_a_command_prints_no_warning_progress_bar_or_nan(case, inputs, monkeypat
     assert not re.search(r"\bnan\b", out, re.IGNORECASE), out
 
 
+@pytest.mark.parametrize("argv", [["map", "be.h5", "--out", "bar", "--scheduler", "sync", "--model", "elastic"],
+                                  ["verify", "--only", "eq6.Av"]])
+def test_no_progress_bar_off_a_terminal(argv, inputs, monkeypatch, capsys):
+    """Without ``--no-progress`` or ``--quiet``: on a pipe or in a log, no bar (``map`` and ``verify`` drew
+    tqdm's into it, as ``discrepancy`` did before); on a terminal, one."""
+    monkeypatch.chdir(inputs)
+    assert cli.main(argv) == 0
+    assert not capsys.readouterr().err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert cli.main([a if a != "bar" else "bar again" for a in argv]) == 0
+    assert "%|" in capsys.readouterr().err
+
+
 def _without_json(argv: list) -> list:
     argv = list(argv)
     if "--json" in argv:

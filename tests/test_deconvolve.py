@@ -160,6 +160,21 @@ def test_cli_writes_tables_and_plots(tmp_path, capsys):
     assert "median |d_eff|" in printed and "pm" in printed and "tip-quality indicator" in printed
 
 
+def test_surface_potential_not_given_is_zero_and_said_assumed(tmp_path, capsys):
+    """One default for every command (diagram's and map's 0 V): stated on the terminal, assumed in the JSON."""
+    import json
+
+    data_file = write_csv(tmp_path / "data.csv", *synthetic(0.05, seed=5))
+    for potential in (None, V_SURF):
+        given = [] if potential is None else ["--surface-potential", str(potential)]
+        assert cli.main(["deconvolve", str(data_file), *given, "--out", str(tmp_path / "o"),
+                         "--json", str(tmp_path / "d.json")]) == 0
+        printed = capsys.readouterr().out
+        record = json.loads((tmp_path / "d.json").read_text())["lever"]["surface_potential"]
+        assert ("assumed: surface potential 0 V" in printed) == (potential is None)
+        assert (record["value"], record["status"]) == ((0.0, "assumed") if potential is None else (V_SURF, "given"))
+
+
 def test_cli_rejects_an_output_path_that_is_a_file(tmp_path, capsys):
     data_file = write_csv(tmp_path / "data.csv", *synthetic())
     (tmp_path / "taken").write_text("")

@@ -167,7 +167,8 @@ def test_cli_writes_png_and_csv(tmp_path):
       "2e-6"], "--length: length must be in (1e-06, 0.01] m, got 200"),     # micrometres are not SI
     (["--quality-factor", "0"], "quality_factor"),
     (["--cantilever", "custom", "--spring-constant", "1"], "needs --length, --width and --thickness"),
-    (["--cantilever", "B", "--spring-constant", "1"], "apply only to --cantilever custom"),
+    (["--cantilever", "B", "--spring-constant", "1"], "--spring-constant applies only to --cantilever custom"),
+    (["--cantilever", "B", "--width", "3e-5", "--length", "2e-4"], "--length and --width apply only to"),
     (["--fmin", "2e6", "--fmax", "1e6"], "--fmin < --fmax"),
     (["--vmin", "1", "--vmax", "1"], "--vmin < --vmax"),
     (["--k1", "-5"], "k1"),

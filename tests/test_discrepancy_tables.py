@@ -121,3 +121,15 @@ def test_asylum_image_through_read_and_cli(tmp_path, capsys):
     assert cli.main(["discrepancy", str(path), "--json", "-", "--tip-height", "1e-5"]) == 0
     printed = capsys.readouterr()
     assert json.loads(printed.out) == report and printed.err.startswith(summary)
+
+
+def test_the_first_free_resonance_alone_is_nothing_to_compare(tmp_path, capsys):
+    """It sets the lever's scale: the report said 'gap 0.00 -> 0.00, missing effects: none' from 0 data values
+    (a one-row table, or a map file read as the resonance its attributes give)."""
+    path = tmp_path / "one.csv"
+    path.write_text(HEAD + "mode,condition,frequency_hz\n1,free,60000\n")
+    assert cli.main(["discrepancy", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "one.csv: only the first free resonance" in err
+    path.write_text(HEAD + "mode,condition,frequency_hz,quality_factor\n1,free,60000,300\n")
+    assert cli.main(["discrepancy", str(path)]) == 0       # its Q is a value to compare

@@ -67,6 +67,8 @@ def test_asylum_metadata_matches_the_readme(name):
 def test_thermal_tune_header_spectrum_and_fitted_mode():
     record = read_instrument(real(THERMAL))
     assert record.kind == "thermal spectrum"
+    # the conditions calibrate and discrepancy take from the header, shown by inspect (they were not)
+    assert "measured in air at 40 C (313.15 K)" in record.notes
     assert record.fields == pytest.approx({"spring_constant": 27.13, "free_resonance": 179.8e3,
                                            "free_quality_factor": 442.0})
     freq, asd, unit = record.spectrum
@@ -245,6 +247,44 @@ def test_a_table_under_a_text_name_a_directory_and_text_without_a_table(tmp_path
     (tmp_path / "notes.txt").write_text("hello\nworld\n")
     with pytest.raises(UserError, match="no frequency column"):
         read_instrument(tmp_path / "notes.txt")
+
+
+def test_a_value_no_probe_has_is_left_out_and_said(tmp_path, capsys):
+    """A negative spring constant was dropped in silence ('no spring constant in ...'), a length of 225 (um
+    written as m) taken: discrepancy fitted a 225 m lever.  Both are left out with a note that inspect shows and
+    every command that then lacks them repeats."""
+    pytest.importorskip("igorwriter")
+    sys.path.insert(0, str(Path(__file__).parent))
+    from igor_files import asylum_note, igor_wave
+    note = {"SpringConstant": "-2", "ThermalFrequency": "70000", "TuneFreqResult": "350000",
+            "CustomLeverLength": "225"}
+    path = igor_wave(tmp_path / "scan.ibw", np.ones((4, 4, 1), "f4"), "scan", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
+                     {2: ["HeightRetrace"]}, asylum_note(note))
+    record = read_instrument(path)
+    assert "spring_constant" not in record.fields and "length" not in record.fields
+    assert record.left_out() == [
+        "spring constant -2 N/m in the file left out: spring_constant must be in (0.0001, 10000] N/m, got -2.0",
+        "lever length 225 m in the file left out: length must be in (1e-06, 0.01] m, got 225.0"]
+    assert cli.main(["discrepancy", str(path), "--tip-height", "1e-5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(spring constant -2 N/m in the file left out" in err and "lever length 225 m" in err
+    assert cli.main(["stiffness", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert "note: spring constant -2 N/m in the file left out" in captured.out and captured.err.count("\n") == 1
+
+
+def test_inspect_reads_a_contact_frequency_map_that_map_and_stiffness_read(tmp_path):
+    """pfmdyn's own map of contact resonances (it said 'no pycroscopy dataset found')."""
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "fc.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((3, 4), 3e5)
+        h.attrs.update({"spring_constant_n_per_m": 2.0, "free_resonance_hz": 7.5e4})
+    record = read_instrument(path)
+    assert record.kind == "image" and [(c.name, c.unit, c.shape) for c in record.channels] == [
+        ("contact_frequency_hz", "Hz", (3, 4))]
+    assert record.fields == {"spring_constant": 2.0, "free_resonance": 7.5e4}
+    assert any("a map of contact resonances" in note for note in record.notes)
 
 
 _NSFOPEN = importlib.util.find_spec("NSFopen")

@@ -6,6 +6,7 @@ and a stiff inclusion, a known Q and complex Gaussian noise.
 """
 from __future__ import annotations
 
+import json
 import shutil
 import sys
 from pathlib import Path
@@ -128,6 +129,10 @@ def test_bad_input_is_one_line_error(tmp_path, capsys):
         h["frequency_hz"] = [1.0]
     assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "missing dataset 'response'" in capsys.readouterr().err
+    with h5py.File(path, "w") as h:         # a single-frequency image as pycroscopy's NSID stores it
+        h.create_group("Measurement_000/Channel_000")["Channel_000"] = np.zeros((4, 4))
+    assert main(["map", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "without a spectrum per pixel (an image's channels" in capsys.readouterr().err
     for other in (tmp_path / "scan.ibw", tmp_path / "empty_dir"):     # not HDF5, not a Zarr group
         other.write_bytes(b"IGOR") if other.suffix else other.mkdir()
         assert main(["map", str(other), "--out", str(tmp_path / "o")]) == 2
@@ -192,9 +197,14 @@ def test_contact_frequency_map_to_k1(synthetic, tmp_path):
         h.attrs.update(spring_constant_n_per_m=K, free_resonance_hz=free)
     assert main(["map", str(path), "--out", str(tmp_path)]) == 0
     np.testing.assert_allclose(_maps(tmp_path)["k1"], k1, rtol=1e-3)
-    # the same map through pfmdyn stiffness
-    assert main(["stiffness", str(path), "--out", str(tmp_path / "s")]) == 0
+    # the same map through pfmdyn stiffness, its --json the summary map writes (stiffness dropped it in silence)
+    assert main(["map", str(path), "--out", str(tmp_path / "m"), "--json", str(tmp_path / "m.json"),
+                 "--plot", str(tmp_path / "figures")]) == 0
+    assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == ["k1.png", "k1_stderr.png"]   # was ignored
+    assert main(["stiffness", str(path), "--out", str(tmp_path / "s"), "--json", str(tmp_path / "s.json")]) == 0
     np.testing.assert_array_equal(_maps(tmp_path / "s")["k1"], _maps(tmp_path)["k1"])
+    by_map, by_stiffness = (json.loads((tmp_path / name).read_text()) for name in ("m.json", "s.json"))
+    assert by_stiffness["results"] == by_map["results"] and by_stiffness["kind"] == "map"
 
 
 def test_contact_frequency_map_no_pixel_explains_is_undetermined_with_why(tmp_path, capsys):
@@ -284,8 +294,9 @@ def test_two_contact_bands_separate_k1_and_k2_and_auto_names_the_damping(tmp_pat
         assert np.all(np.abs(z) < 4), z
 
 
-def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, local_run, tmp_path, capsys):
+def test_max_blocks_then_rerun_gives_identical_maps_with_progress(synthetic, local_run, tmp_path, capsys, monkeypatch):
     path, _ = synthetic
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)     # a bar is drawn on a terminal only
     args = ["map", str(path), "--out", str(tmp_path), "--max-blocks", "3", "--workers", "2"]
     assert main(args) == 0
     captured = capsys.readouterr()

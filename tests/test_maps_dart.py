@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import re
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -158,6 +159,49 @@ def test_an_image_with_no_pixel_determined_says_so_without_nan(tmp_path, capsys)
     assert maps["determined"].values.sum() == 0 and "no pixel determined (of 6" in out \
         and not re.search(r"\bnan\b", out, re.I)
     validate(doc)
+
+
+def test_pixels_without_a_number_are_undetermined_without_a_warning(tmp_path, capsys):
+    """A NaN amplitude, an infinite phase, a NaN centre frequency and a pixel without signal: those pixels
+    undetermined, the others inverted (the first three raised RuntimeWarnings, a traceback under -W error)."""
+    case = dart_case(17, 3, 4)
+    case.channels["Amplitude1Retrace"][0, 1] = np.nan
+    case.channels["Phase2Retrace"][1, 2] = np.inf
+    case.channels["FrequencyRetrace"][2, 0] = np.nan
+    case.channels["Amplitude1Retrace"][2, 3] = case.channels["Amplitude2Retrace"][2, 3] = 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        maps, doc = _map(case, tmp_path)
+    determined = maps["determined"].values.astype(bool)
+    assert not determined[0, 1] and not determined[1, 2] and not determined[2, 0] and not determined[2, 3]
+    assert determined.sum() == determined.size - 4
+    assert "3 pixels without a number in every channel" in capsys.readouterr().out
+
+
+def test_an_image_without_a_number_anywhere_is_one_line(tmp_path, capsys):
+    case = dart_case(18, 2, 2)
+    case.channels["Amplitude2Retrace"][...] = np.nan
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1 and not (tmp_path / "o").exists()
+
+
+def test_a_value_of_the_note_no_lever_has_names_the_file_and_its_key(tmp_path, capsys):
+    case = dart_case(19, 2, 2)
+    case.lever["quality_factor"] = -5.0
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "dart.ibw, ThermalQ in the note: quality_factor must be in" in err
+
+
+def test_inspect_names_a_dart_image_and_its_settings(tmp_path):
+    """inspect listed the layers as of any image: nothing said that map inverts it, nor what it takes from the note."""
+    from pfmdyn.io.instruments import read_instrument
+    case = dart_case(20, 2, 2)
+    record = read_instrument(write_ibw(case, tmp_path / "dart.ibw"))
+    [note] = [n for n in record.notes if n.startswith("a DART image (pfmdyn map inverts it)")]
+    assert f"DFRTFrequencyWidth {case.settings['frequency_width']:g} Hz" in note and "DriveAmplitude" in note
 
 
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):

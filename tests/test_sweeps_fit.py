@@ -217,6 +217,58 @@ def test_too_few_points_is_one_line(tmp_path):
         fit_sweep(table, case["k"], case["L"], case["medium"], width=case["w"])
 
 
+@pytest.mark.parametrize("cell, words", [("nan", "table row 4 holds a value that is not a finite number"),
+                                         ("-0.5", "table row 4 holds a negative amplitude")])
+def test_a_bad_point_of_a_sweep_is_named_by_its_row(cell, words, tmp_path):
+    """A lock-in's magnitude below zero was fitted as a point (now refused); a NaN was refused naming no row."""
+    path = tmp_path / "s.txt"
+    lines = ["Sweep data", "Frequency (Hz)\tAmplitude (V)\tPhase (deg)"] + [
+        f"{f:.1f}\t{a}\t10" for f, a in zip(np.linspace(6e4, 8e4, 20), ["1.0"] * 3 + [cell] + ["1.0"] * 16)]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(UserError, match=f"s.txt: {words}"):
+        read_sweep_table(path)
+
+
+def test_a_header_value_no_lever_has_is_left_out_and_said(tmp_path, capsys):
+    """A header Q of -3 was printed as the instrument's, beside ours; the reader's notes (this one, Nanonis's
+    volts) never reached discrepancy's report."""
+    from pfmdyn.cli import main
+    rng, case = lever_case(1)
+    f, y = sweep_of(rng, case)
+    path = write_sweep(tmp_path / "s.txt", f, y, rng)
+    path.write_text(path.read_text().replace("Q factor:\t3.0", "Q factor:\t-3.0"))
+    table = read_sweep_table(path)
+    assert "free_quality_factor" not in table.fields and "amplitude_peak" in table.fields
+    lever = ["--spring-constant", repr(case["k"]), "--length", repr(case["L"])]
+    assert main(["discrepancy", str(path), *lever, "--width", repr(case["w"])]) == 0
+    out = capsys.readouterr().out
+    assert "header 'Q factor' = -3.0 left out: free_quality_factor must be in" in out and "Q -3" not in out
+    # without the width (L/10 assumed, twice this lever's) the fitted first mode is overdamped: its Q
+    # undetermined and why, in the text and the JSON (a ValueError and a traceback before)
+    assert main(["discrepancy", str(path), *lever, "--json", str(tmp_path / "s.json")]) == 0
+    assert "Q undetermined (the first mode in the medium is overdamped" in capsys.readouterr().out
+    q = json.loads((tmp_path / "s.json").read_text())["results"]["free_quality_factor"]
+    assert q["status"] == "undetermined" and "overdamped" in q["why"]
+
+
+def test_flags_a_free_lever_fit_would_drop_are_refused(tmp_path, capsys):
+    """--tip-height, --free-resonance and --vertical-only on a drive sweep or a thermal tune were ignored in silence."""
+    from pfmdyn.cli import main
+    rng, case = lever_case(2)
+    f, y = sweep_of(rng, case)
+    path = write_sweep(tmp_path / "s.txt", f, y, rng)
+    tune = tmp_path / "t.csv"
+    tune.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(f"{a},1e-13\n" for a in np.linspace(1e3, 1e5, 100)))
+    lever = ["--spring-constant", "2", "--length", "2e-4"]
+    for data, extra, named in ((path, ["--tip-height", "1e-5"], "--tip-height would not enter"),
+                               (path, ["--free-resonance", "7e4", "--vertical-only"],
+                                "--free-resonance and --vertical-only would not enter"),
+                               (tune, ["--tip-height", "1e-5"], "a thermal tune is fitted as the free lever")):
+        assert main(["discrepancy", str(data), *lever, *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and named in err, err
+
+
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "pfmdyn.cli", "discrepancy", *map(str, args)],
                           capture_output=True, text=True)
@@ -456,13 +508,17 @@ def test_a_mass_beside_the_node_of_mode_2_or_at_the_clamp_is_stated_as_the_data_
     noise = lambda: 3e-2 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f))) / math.sqrt(2)  # noqa: E731
     y0 = gain * beam_slope(f, **case, **bare) + 0.2 + noise()
     y1 = gain * beam_slope(f, **case, mass_ratio=ratio, x_m=x_m) + 0.2 + noise()
-    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y0, rng)), 2.0, 200e-6,
-                       case["medium"], width=40e-6)
-    out = compare_sweeps(read_sweep_table(write_sweep(tmp_path / "a.txt", f, y1, rng)), before, None)
+    tables = [read_sweep_table(write_sweep(tmp_path / name, f, y, rng)) for name, y in (("b.txt", y0), ("a.txt", y1))]
+    before = fit_sweep(tables[0], 2.0, 200e-6, case["medium"], width=40e-6)
+    out = compare_sweeps(tables[1], before, None)
     m, where = out["parameters"]["added_mass_ratio"], out["parameters"]["added_mass_position"]
     if x_m < 0.5:
         assert out["effect"] != "added_mass" and out["parameters"]["added_mass"]["stderr"] is None
         return
+    # swapped: mode 1 rose while mode 2, the taller peak, stayed; no mass named, and the files said swapped
+    swapped = compare_sweeps(tables[0], fit_sweep(tables[1], 2.0, 200e-6, case["medium"], width=40e-6), None)
+    assert swapped["effect"] != "added_mass" and any("swapped" in note for note in swapped["notes"])
+    assert not out["notes"]
     mass = out["parameters"]["added_mass"]
     truth = ratio * mass["value"] / m["value"]
     assert out["effect"] == "added_mass"

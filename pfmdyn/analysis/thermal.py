@@ -63,7 +63,8 @@ class ThermalPeak:
         (3.605551275463989, 2.0, 3.605551275463989)
         """
         g = np.asarray(gradient, dtype=float)
-        scatter = float(g @ np.asarray(self.covariance) @ g) if part != "shape" else 0.0
+        used = g != 0           # an undetermined (infinite) variance elsewhere does not reach this quantity
+        scatter = float(g[used] @ np.asarray(self.covariance)[np.ix_(used, used)] @ g[used]) if part != "shape" else 0.0
         shape = float(g @ np.asarray(self.shape)) ** 2 if part != "fit" else 0.0
         return math.sqrt(max(scatter, 0.0) + shape)
 

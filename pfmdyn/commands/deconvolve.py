@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..names import CONTACT, LEVER
+from ..names import CONTACT, LEVER, NAMES
 from . import flags
 
 if TYPE_CHECKING:       # the analysis is imported when the command runs, not for --help
@@ -137,7 +137,7 @@ def add_arguments(parser) -> None:
         "around a contact resonance or a zero of the spot's response) those columns are NaN and the preamble "
         "says why.")
     parser.add_argument("data", metavar="INPUT", help="frequency-bias CSV (see pfmdyn.io.spectra for the format)")
-    flags.add(parser, ("surface_potential",), required=("surface_potential",))
+    flags.add(parser, ("surface_potential",))
     parser.add_argument("--out", metavar="DIR", type=Path, required=True,
                         help="directory for the CSV tables and PNG plots (created if missing)")
     flags.add_lever(parser)
@@ -151,7 +151,10 @@ def run(args) -> int:
     from ..io.results import check_directory, check_writable
     from ..io.spectra import read_spectra
 
-    surface_potential = flags.given(args, ("surface_potential",))["surface_potential"]
+    surface_potential = flags.given(args, ("surface_potential",)).get("surface_potential")
+    potential_assumed = surface_potential is None
+    if potential_assumed:
+        surface_potential = NAMES["surface_potential"].default
     check_directory(args.out)
     check_writable(args.json)
     assumed = {}
@@ -174,6 +177,9 @@ def run(args) -> int:
         print(flags.medium_line(probe[0].medium, args))
     if assumed:
         print(flags.assumed_line(assumed, probe[0]))
+    if potential_assumed:
+        print(f"assumed: surface potential {surface_potential:g} V ({NAMES['surface_potential'].default_why}; give "
+              "--surface-potential)")
     print(f"{data.path}:")
     print(summary(result, unit))
     if surface is not None:
@@ -185,8 +191,9 @@ def run(args) -> int:
         values = flags.given(args, LEVER + CONTACT)
         quality = tip_quality(result.v_null, result.v_null_se)
         taken = {**values, **{name: getattr(probe[0], name) for name in assumed}}     # the assumed: their default
+        given = [*values, *([] if potential_assumed else ["surface_potential"])]
         flags.write_json(args.json, documents.deconvolution(result, quality, data.path, surface, unit, taken,
-                                                            list(values), args.out))
+                                                            given, args.out))
     return 0
 
 

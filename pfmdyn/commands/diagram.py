@@ -79,7 +79,7 @@ def _cli_cantilever(args):
         raise UserError(f"unknown cantilever {args.cantilever!r}: choose A, B, C or custom")
     given = [flag(name) for name in custom]
     if given:
-        raise UserError(f"{' '.join(given)} apply only to --cantilever custom")
+        raise UserError(f"{listed(given)} appl{'ies' if len(given) == 1 else 'y'} only to --cantilever custom")
     with _one_line():
         lever = table1_cantilever(args.cantilever, quality_factor=_quality_factor(args))
     return _in_medium(args, lever, TABLE1[args.cantilever][0]), TABLE1[args.cantilever][0]

@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from contextlib import contextmanager
 
-from ..errors import UserError
+from ..errors import UserError, listed
 from ..io import documents
 from . import flags
 
@@ -50,7 +49,7 @@ def _analyse(data, args, assumed: dict):
     from ..discrepancy.spectrum import analyse
     from ..io.tables import SpectrumData
 
-    options = dict(vertical_only=args.vertical_only, progress=sys.stderr.isatty(), time_budget_s=TIME_BUDGET_S)
+    options = dict(vertical_only=args.vertical_only, progress=flags.progress_shown(args), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
         return analyse(data, **options)
     spread = tip_height_spread(data.metadata.tip_height, "tip_height" in assumed)
@@ -72,6 +71,7 @@ def _sweeps(args) -> int:
 
     if args.reference and not is_sweep(args.reference):
         raise UserError(f"{args.reference}: --reference must be a drive sweep (.txt/.dat with a sweep table, .nid frequency sweep)")
+    _refuse_unused(args, "a drive sweep")
     values = flags.given(args, ("spring_constant", "length", "width", "added_mass_position"))
     flags.require(values, ("spring_constant", "length"), args.data)
     after = read_sweep(args.data)
@@ -79,6 +79,9 @@ def _sweeps(args) -> int:
     found = {"medium": (before or after).medium} if (before or after).medium else None
     medium = flags.medium_from_args(args, found, default="water")
     print(flags.medium_line(medium, args, found))
+    for table in filter(None, (before, after)):         # what the reader made of each file (units, left out)
+        for note in table.notes:
+            print(f"note: {table.path}: {note}")
     with _fitting(args.data, "the spring constant and length"):
         fit = _provenance(fit_sweep(before or after, values["spring_constant"], values["length"], medium,
                                     values.get("width")), args, medium, found)
@@ -98,6 +101,7 @@ def _thermal(args) -> int:
     from ..io.thermal_tune import read_thermal_tune
     from ..plots.sweep import plot_thermal
 
+    _refuse_unused(args, "a thermal tune")
     tune = read_thermal_tune(args.data)
     lever = read_instrument(args.data).fields       # what the file says of the lever; the flags win
     values = {**{k: lever[k] for k in ("spring_constant", "length", "width") if k in lever},
@@ -114,6 +118,23 @@ def _thermal(args) -> int:
                                       values.get("width")), args, medium, found, taken)
     doc = documents.thermal_fit(fit.to_dict(), flags.given_names(args, (*OVERRIDES, "medium", "temperature")))
     return _emit(args, fit, doc, lambda: plot_thermal(fit))
+
+
+def _refuse_unused(args, what: str) -> None:
+    """A free lever's spectrum (``what``) has no tip and no contact: a tip height, a free resonance (fitted) or
+    --vertical-only would be dropped in silence; a value given is a value meant.
+
+    >>> _refuse_unused(argparse.Namespace(data="s.txt", tip_height="1e-5", free_resonance=None, vertical_only=False),
+    ...                "a drive sweep")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: s.txt: a drive sweep is fitted as the free lever (its resonance fitted, no tip in contact), which --tip-height would not enter: drop it
+    """
+    unused = [flags.NAMES[name].flag for name in ("tip_height", "free_resonance") if getattr(args, name) is not None]
+    unused += ["--vertical-only"] * bool(args.vertical_only)
+    if unused:
+        raise UserError(f"{args.data}: {what} is fitted as the free lever (its resonance fitted, no tip in contact), "
+                        f"which {listed(unused)} would not enter: drop {'it' if len(unused) == 1 else 'them'}")
 
 
 def _provenance(result, args, medium, found: dict | None, taken=()):
@@ -152,6 +173,29 @@ def _fitting(where, check: str):
         raise UserError(f"{where}: the fit failed ({type(exc).__name__}: {exc}); check {check}") from None
 
 
+def _check_something_to_compare(data, where) -> None:
+    """A resonance table of the first free resonance alone, without its Q, holds nothing the model could miss:
+    that resonance sets the lever's scale (the report said 'gap 0.00, missing effects: none').
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace as NS
+    >>> _check_something_to_compare(NS(mode=np.array([1]), condition=np.array(["free"]), quality_factor=None), "t.csv")
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: t.csv: only the first free resonance, which sets the lever's scale, and no Q: nothing to compare with the model (give contact resonances, higher free modes or a spectrum; a map is pfmdyn map's)
+    """
+    import numpy as np
+
+    if getattr(data, "kind", None) == "spectrum" or not hasattr(data, "mode"):
+        return
+    scale_only = np.all((data.mode == 1) & (data.condition == "free"))
+    q = data.quality_factor
+    if scale_only and (q is None or not np.isfinite(np.asarray(q, float)).any()):
+        raise UserError(f"{where}: only the first free resonance, which sets the lever's scale, and no Q: nothing to "
+                        "compare with the model (give contact resonances, higher free modes or a spectrum; a map is "
+                        "pfmdyn map's)")
+
+
 def _emit(args, result, doc, figure) -> int:
     """Print a free lever's result, write its JSON ``doc`` and (``--plot``) the ``figure()`` it makes."""
     print(result.report())
@@ -186,6 +230,7 @@ def run(args: argparse.Namespace) -> int:
             raise
         assumed = flags.fill_defaults(overrides, ("tip_height",))
         data = read(args.data, overrides)
+    _check_something_to_compare(data, args.data)
     if assumed:
         print(flags.assumed_line(assumed, data.metadata))
     stride = 1

@@ -20,7 +20,7 @@ from ..names import CONTACT, DAMPING, LEVER, NAMES, checked, fill_defaults
 
 __all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
            "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
-           "assumed_line", "cantilever", "contact",
+           "assumed_line", "cantilever", "contact", "progress_shown",
            "option_hint"]
 
 
@@ -169,6 +169,16 @@ def medium_line(medium: Medium, args, found: dict | None = None, thermal: bool =
         return f"medium: {medium.name}"
     kelvin, source = temperature(args, found)
     return f"medium: {medium.name}; temperature {kelvin:g} K ({source})"
+
+
+def progress_shown(args) -> bool:
+    """Whether a command draws a progress bar: on a terminal only (a log or a pipe gets the report alone),
+    and not with ``--quiet`` or ``--no-progress``.
+
+    >>> progress_shown(argparse.Namespace(quiet=True))
+    False
+    """
+    return not (getattr(args, "quiet", False) or getattr(args, "no_progress", False)) and sys.stderr.isatty()
 
 
 def add_json(parser, what: str = "the result") -> None:

@@ -32,7 +32,7 @@ from ..fitting.noise import GAP_LIMIT
 from ..names import NAMES, checked, flag
 from . import flags
 
-__all__ = ["add_arguments", "run"]
+__all__ = ["add_arguments", "run", "write_summary"]
 
 _LEVER = ("spring_constant", "free_resonance", "length", "tip_height", "tip_position", "tip_mass_ratio",
           "tip_gyration_radius", "tilt", "spot_position")
@@ -167,7 +167,8 @@ def run(args) -> int:
                             + ("it" if len(unused) == 1 else "them"))
         summary = contact_map(args.data, args.out, overrides)
         print(describe(summary))
-        _write_json(args, summary, overrides)
+        _draw(args)         # a figure of k1 and its error (--plot was ignored here)
+        write_summary(args.json, args.out, args.data, summary, overrides)
         return 0
     if file_kind(args.data) == "asylum":
         if args.medium:
@@ -202,19 +203,13 @@ def run(args) -> int:
               f"complex d_eff per band ({n_bands} band{'s' if n_bands > 1 else ''})"
               + (f", electrostatic term and nulling bias ({len(biases)} biases, {min(biases):g} to {max(biases):g} V)"
                  if biases is not None else ""))
-    progress, close = _progress_bar(not (args.no_progress or args.quiet))
+    progress, close = _progress_bar(flags.progress_shown(args))
     try:
         s = run_map(source, args.out, block=args.block, scheduler=args.scheduler, workers=args.workers,
                     max_blocks=args.max_blocks, progress=progress, selection=rows, **fit_options)
     finally:
         close()
-    folder = args.plot or (args.out if args.png else None)
-    if folder:
-        from ..maps import open_result
-        from ..plots.maps import plot_maps
-        os.makedirs(folder, exist_ok=True)
-        for name, figure in plot_maps(open_result(args.out)).items():
-            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    _draw(args)
     written = ""
     if source.layout == "usid":
         from ..maps.usid import write_usid
@@ -222,20 +217,53 @@ def run(args) -> int:
         written = f"; {'SHO' if sho else 'beam'} fit in BGlib's layout: {target}:{write_usid(source, s['out'], target)}"
     print(s.report() + written)
     assumed = {name: (getattr(source.model.lever, name), why) for name, why in source.assumed.items()}
-    _write_json(args, s.to_dict(), overrides, s.shape, assumed)
+    write_summary(args.json, args.out, args.data, s.to_dict(), overrides, s.shape, assumed)
     return 0
 
 
-def _write_json(args, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
-    """``--json``: the run's summary document (:func:`pfmdyn.io.documents.map_summary`); ``assumed``: name ->
-    (value, why) of the lever's defaults taken."""
-    if args.json:
+def _draw(args, dart: bool = False) -> None:
+    """``--plot DIR`` (or the old ``--png``, into ``--out``): a PNG of each map in the store (with ``dart``, the
+    DART summary figure too)."""
+    import os
+    folder = args.plot or (args.out if args.png else None)
+    if not folder:
+        return
+    from ..maps import open_result
+    from ..plots.maps import plot_dart, plot_maps
+    os.makedirs(folder, exist_ok=True)
+    result = open_result(args.out)
+    for name, figure in {**plot_maps(result), **({"dart": plot_dart(result)} if dart else {})}.items():
+        figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+
+
+def write_summary(json_path, out, data, summary: dict, overrides: dict, shape=None, assumed: dict | None = None) -> None:
+    """``--json``: the summary document (:func:`pfmdyn.io.documents.map_summary`) of a run on ``data`` into
+    ``out``; ``assumed``: name -> (value, why) of the lever's defaults taken."""
+    if json_path:
         from ..io import documents
         from ..maps import open_result
 
-        shape = shape or tuple(open_result(args.out)[["k1"]]["k1"].shape)
+        shape = shape or tuple(open_result(out)[["k1"]]["k1"].shape)
         given = {name: value for name, value in overrides.items() if name != "medium"}
-        flags.write_json(args.json, documents.map_summary(summary, args.data, shape, given, assumed=assumed))
+        flags.write_json(json_path, documents.map_summary(summary, data, shape, given, assumed=assumed))
+
+
+def _check_note(path, entries: dict) -> None:
+    """Each value a DART image's note gave (name -> (value, status, ...)) within what a probe can have, a
+    bad one named by the file and its key (it said 'quality_factor must be in ...', naming neither).
+
+    >>> _check_note("d.ibw", {"quality_factor": (-5.0, "file", "ThermalQ"), "length": (2e-4, "given")})
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: d.ibw, ThermalQ in the note: quality_factor must be in (0.1, 1e+09], got -5.0
+    """
+    from ..io.asylum import NOTE_KEYS
+    from ..io.dart import DART_KEYS
+
+    keys = {**NOTE_KEYS, **DART_KEYS, "quality_factor": NOTE_KEYS["free_quality_factor"]}
+    for name, (value, status, *_) in entries.items():
+        if status == "file" and name in NAMES:
+            checked(name, value, f"{path}, {keys.get(name, name)} in the note")
 
 
 def _dart(args, overrides: dict, given: dict) -> int:
@@ -257,6 +285,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     else:
         found["quality_factor"] = (math.inf, "assumed", "no ThermalQ in the note: the lever lossless")
     settings = {name: (value, "file", "the note") for name, value in image.settings.items() if name in _DART}
+    _check_note(args.data, {**found, **settings})
     settings.update({name: (value, "given") for name, value in given.items()})
     values = {name: entry[0] for name, entry in found.items()}
     flags.require(values, ("spring_constant", "free_resonance", "length"), args.data)
@@ -286,7 +315,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
     f1, f2 = image.frequencies(settings["frequency_width"][0])
     # a lag less by the offset: s = A exp(-i (phi - offset))
     s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
-    report, close = _progress_bar(not (args.no_progress or args.quiet), unit="pixel")
+    report, close = _progress_bar(flags.progress_shown(args), unit="pixel")
     try:
         maps, sigma = invert(f1, f2, s1, s2, lever, contact, settings["drive_amplitude"][0], pool=args.pool,
                              progress=None if report is None else lambda done, total: report(done, total, done),
@@ -308,14 +337,7 @@ def _dart(args, overrides: dict, given: dict) -> int:
                            "phase_offset_left_deg": left, "tip_height": lever.tip_height,
                            "tip_height_uncertainty": found["tip_height_uncertainty"][0],
                            "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
-    folder = args.plot or (args.out if args.png else None)
-    if folder:
-        from ..maps import open_result
-        from ..plots.maps import plot_dart, plot_maps
-        os.makedirs(folder, exist_ok=True)
-        result = open_result(args.out)
-        for name, figure in {**plot_maps(result), "dart": plot_dart(result)}.items():
-            figure.savefig(os.path.join(folder, f"{name}.png"), dpi=100)
+    _draw(args, dart=True)
     with np.errstate(all="ignore"):
         ok = maps["determined"].astype(bool)
         median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
@@ -327,7 +349,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
               f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
               f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
     else:
-        print(f"DART: no pixel determined (of {ok.size}; noise {100 * sigma:.2g} %): the two drives' amplitudes and "
+        noise = f"noise {100 * sigma:.2g} %" if math.isfinite(sigma) else "noise undetermined"
+        print(f"DART: no pixel determined (of {ok.size}; {noise}): the two drives' amplitudes and "
               f"phases fix no contact anywhere (both drives on one side of the peak, or no resonance between them); "
               f"maps (undetermined) in {out}")
     flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,

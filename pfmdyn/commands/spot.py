@@ -62,6 +62,8 @@ def _lever(args, assumed: dict):
     if args.file:
         from ..io.instruments import read_instrument
         record = read_instrument(args.file)
+        for note in record.left_out():
+            print(f"note: {note}")
         found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
     flags.require(given, ("spring_constant", "free_resonance", "length"), args.file)

@@ -100,6 +100,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
             found["free_resonance"] = free[0]
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
     record = read_instrument(path)
+    for note in record.left_out():
+        print(f"note: {note}")
     found = {key: value for key, value in record.fields.items() if key in LEVER}
     contact = record.fields.get("contact_resonance")
     return found, [contact] if contact else [], [1] if contact else []
@@ -162,8 +164,23 @@ def _contact_map(args) -> int:
         if len(args.mode) != 1:
             raise UserError("a contact-frequency map has one mode: give --mode once")
         overrides["contact_mode"] = _mode(args.mode[0])
-    print(describe(contact_map(args.file, args.out, overrides)))
+    summary = contact_map(args.file, args.out, overrides)
+    print(describe(summary))
+    from .map import write_summary
+    write_summary(args.json, args.out, args.file, summary, overrides)       # the document map writes (it was lost)
     return 0
+
+
+def _taken_line(found: dict, given: list, contacts) -> str:
+    """What the file gave and no flag replaced, with the contact resonances (and their modes) when they came
+    from it.
+
+    >>> print(_taken_line({"spring_constant": 0.46538, "length": 2.4e-4}, ["length"], ([368990.0], [1])))
+    from the file: contact_resonance 368990 Hz (mode 1), spring_constant 0.46538 N/m
+    """
+    parts = [f"contact_resonance {f:.6g} Hz (mode {m})" for f, m in zip(*contacts)] if contacts else []
+    parts += [f"{name} {value:.6g} {NAMES[name].unit}" for name, value in sorted(found.items()) if name not in given]
+    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
 
 
 def _mode(text) -> int:
@@ -227,11 +244,13 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     if assumed:
         print(flags.assumed_line(assumed, lever))
+    given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
+    if args.file:
+        print(_taken_line(found, given, None if args.contact else (contacts, modes)))
     print(report.report())
     if args.json:
         from ..io import documents
 
-        given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
         taken = [*found, *(["contact_resonance"] if args.file and not args.contact else [])]
         if "tip_height" in assumed and "tip_height_uncertainty" not in given:
             assumed["tip_height_uncertainty"] = NAMES["tip_height_uncertainty"].default_why + (

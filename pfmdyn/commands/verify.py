@@ -32,7 +32,7 @@ def run(args) -> int:
     from ..io.results import check_writable
 
     check_writable(args.json, args.errata)      # before the minutes of checks
-    verdicts = verify.compute(args.only, progress=not args.quiet)
+    verdicts = verify.compute(args.only, progress=flags.progress_shown(args))
     shared = [] if args.only else verify.shared_claim_ids(verify.shared_claims_path(args.claims))
     if args.record:
         verify.record(verdicts, merge=bool(args.only))

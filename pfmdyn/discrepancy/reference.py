@@ -13,7 +13,10 @@ position started also where it moves the first mode as far as the peak moved (:f
 sharp peak moved by many widths has a basin narrower than the decades between the other starts);
 positions that explain the shifts as well (a position and its mirror about a node of mode 2) are all
 reported, each with its mass.  A mass named while the explanation leaves a gap above
-:data:`UNSETTLED` is not stated as determined: the minimum found need not be the lever's.
+:data:`UNSETTLED` is not stated as determined: the minimum found need not be the lever's.  Where the
+reference lever's resonances, scaled by one factor (:data:`RISE`), explain the other sweep only raised
+(beyond :data:`SWAPPED` standard errors), no mass is named (a mass only lowers them) and a note says the
+files may be swapped.
 """
 from __future__ import annotations
 
@@ -40,6 +43,12 @@ ADDED_MASS = Parameter("added_mass_ratio", "", 0.0, 100.0, null=0.0,
 
 
 POSITION = Parameter("added_mass_position", "", 0.05, 1.0)
+
+
+RISE = Parameter("resonance_factor", "", 0.5, 2.0, description="the lever's vacuum resonance over the reference's")
+"""The factor on the reference lever's resonances that explains the after-sweep best (gain and background
+refitted; :func:`_resonance_factor`): only a test of the order, never an explanation named (it would
+rival a mass wherever one mode is swept)."""
 
 
 CANDIDATES = (("nothing", ()), ("gain", ("gain",)), ("background", ("background",)),
@@ -73,12 +82,16 @@ def with_added_mass(lever: Cantilever, ratio: float, position: float = 1.0) -> C
     f_vac = lever.vacuum_resonance
     bare = replace(lever, free_resonance=f_vac, medium=None, tip_mass_ratio=0.0, tip_position=1.0)
     if ratio == 0.0:
-        loaded, f_loaded = bare, f_vac
-    else:
-        loaded = replace(bare, tip_mass_ratio=float(ratio), tip_position=float(position))
-        f_loaded = f_vac * (loaded.free_root() / BETA1_FREE)**2
-    loaded = replace(loaded, free_resonance=f_loaded, viscous_loss=lever.viscous_loss * f_vac / f_loaded)
-    return loaded if lever.medium is None else loaded.with_medium(lever.medium)
+        return _at_vacuum_resonance(lever, bare, f_vac)
+    loaded = replace(bare, tip_mass_ratio=float(ratio), tip_position=float(position))
+    return _at_vacuum_resonance(lever, loaded, f_vac * (loaded.free_root() / BETA1_FREE)**2)
+
+
+def _at_vacuum_resonance(lever: Cantilever, bare: Cantilever, f_vac: float) -> Cantilever:
+    """``bare`` (``lever`` in vacuum, changed) at the vacuum resonance ``f_vac``, ``lever``'s viscous drag per
+    length kept, back in ``lever``'s medium."""
+    moved = replace(bare, free_resonance=f_vac, viscous_loss=lever.viscous_loss * lever.vacuum_resonance / f_vac)
+    return moved if lever.medium is None else moved.with_medium(lever.medium)
 
 
 def _modes_in(lever: Cantilever, frequency) -> int:
@@ -135,7 +148,9 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
         fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual)
         rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
                      "bic": fit.chi2 + k * math.log(count), "gap": float(gap(fit.chi2, n))})
-    best = min(rows, key=lambda r: r["bic"])
+    rise = _resonance_factor(before, frequency, y, sigma)
+    # resonances that rose are no added mass's: then the best explanation without one
+    best = min((r for r in rows if not (_order_notes(rise) and "added_mass" in r["refitted"])), key=lambda r: r["bic"])
     fit, params, amplitudes, lever, _ = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
     lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
@@ -203,7 +218,7 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "unexplained": unexplained_entry(frequency, y, fits[best["effect"]][4], sigma),
               "worst_region": worst_region(frequency, np.abs(fits[best["effect"]][4] / sigma) ** 2,
                                            lever_resonances(lever)),
-              "notes": _order_notes(before, frequency, y, named, at_bound),
+              "notes": _order_notes(rise),
               "instrument_comparison": explain_header(compare_with_instrument(after.fields, {
                   "amplitude_peak": (amplitude_peak(
                       lambda f: before.model(f, lever, amplitudes[0], tuple(amplitudes[1:])), frequency), None),
@@ -214,17 +229,31 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     return SweepComparison(fields, lever=lever)
 
 
-def _order_notes(before: SweepFit, frequency, y, named: str, at_bound: bool) -> list[str]:
-    """A hint when the two measurements look swapped: the after-sweep's peak above the reference's (a
-    mass only lowers a resonance) while no mass explains it."""
-    f = np.asarray(frequency, float)
-    step = float(np.median(np.diff(np.sort(f)))) if f.size > 1 else 0.0
-    peak_after = float(f[np.argmax(np.abs(y))])
-    peak_before = float(f[np.argmax(np.abs(before.model(f)))])
-    if peak_after > peak_before + 2 * step and (named != "added_mass" or at_bound):
-        return [f"the peak rose from {peak_before:.6g} Hz (reference) to {peak_after:.6g} Hz: an added mass only "
-                "lowers a resonance; if a mass was added, the two files may be swapped (the reference is the "
-                "measurement before)"]
+SWAPPED = 3.0
+"""Standard errors by which the fitted :data:`RISE` must exceed 1 for the sweeps to look swapped."""
+
+
+def _resonance_factor(before: SweepFit, frequency, y, sigma) -> tuple[float, float]:
+    """The factor on the reference lever's resonances (:data:`RISE`) that explains the after-sweep best, gain
+    and background refitted, and its standard error: a scan over 0.7-1.4 (a sharp peak moved by many widths
+    has a narrow basin), refined from its best."""
+    refit = ("rise", "gain", "background")
+    solve, _, residual, params = _candidate(before, refit, frequency, y, sigma)
+    tail = _starts(before, refit)[0]
+    scan = [np.r_[factor, tail] for factor in np.geomspace(0.7, 1.4, 57)]
+    start = min(scan, key=lambda x: float(np.sum(residual(x) ** 2)))
+    fit = solve_from_starts(residual, [start], *_bounds(before, refit, params), keep=1)
+    return float(fit.internal[0]), float(math.sqrt(max(fit.covariance[0, 0], 0.0)))
+
+
+def _order_notes(rise: tuple[float, float]) -> list[str]:
+    """A hint when the two measurements look swapped: the reference lever's resonances raised explain the
+    after-sweep (``rise``: :func:`_resonance_factor`), which no added mass does (a mass only lowers them)."""
+    factor, stderr = rise
+    if factor - 1 > SWAPPED * stderr:
+        return [f"the resonances rose (the reference lever's, times {factor:.5g} +- {stderr:.2g}, explain it best): "
+                "an added mass only lowers them, so no mass is named; if a mass was added, the two files may be "
+                "swapped (the reference is the measurement before)"]
     return []
 
 
@@ -244,9 +273,9 @@ def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
     ``position`` is None, the damping), the rest of gain and background kept at ``before``'s.  A complex
     sweep's refitted amplitudes are solved out (linear); an amplitude's are parameters after those (its
     model is not linear in them, :func:`~pfmdyn.discrepancy.sweep.sweep_model`)."""
-    mass, damping = "added_mass" in refit, "damping" in refit
+    mass, damping, rise = "added_mass" in refit, "damping" in refit, "rise" in refit
     params = ((ADDED_MASS,) + ((POSITION,) if position is None else ()) if mass else ()) \
-        + ((EXTRA_LOSS,) if damping else ())
+        + ((RISE,) if rise else ()) + ((EXTRA_LOSS,) if damping else ())
     n = len(params)
     free = [i for i, key in enumerate(("gain", "background", "background")) if key in refit]
     fixed = [i for i in range(3) if i not in free]
@@ -255,6 +284,8 @@ def _candidate(before: SweepFit, refit, frequency, y, sigma, position=None):
 
     def lever_of(x):
         lever = replace(before.lever, viscous_loss=x[n - 1]) if damping else before.lever
+        if rise:
+            return _at_vacuum_resonance(lever, replace(lever, medium=None), lever.vacuum_resonance * x[0])
         return with_added_mass(lever, x[0], x[1] if position is None else position) if mass else lever
 
     def solve(x):
@@ -448,9 +479,10 @@ def _position_profile(before, refit, frequency, y, sigma, shifted, seeds=()):
         starts.append(start)
     refined = sorted((solve_from_starts(residual, [s], *bounds, keep=1) for s in starts), key=lambda f: f.chi2)
     # The mirror of the best position about mode 2's node moves both modes alike: a minimum the grid, a
-    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82).
+    # tenth of the lever apart, can miss when both sit in one of its steps (x/L 0.76 and 0.82; 0.779 and
+    # 0.788, their masses 3 % apart, for a sharp mode 2).
     mirror = 2 * mode2_node() - refined[0].internal[1]
-    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > 0.01:
+    if POSITION.lower <= mirror <= POSITION.upper and abs(mirror - refined[0].internal[1]) > _apart(refined[0]):
         start = refined[0].internal.copy()
         start[1] = mirror
         refined = sorted([*refined, solve_from_starts(residual, [start], *bounds, keep=1)], key=lambda f: f.chi2)
@@ -473,12 +505,22 @@ def mode2_node() -> float:
     return float(brentq(shape, 0.5, 0.95, xtol=1e-14))
 
 
+def _apart(fit: StartsFit) -> float:
+    """How far (x/L) another minimum's position must be from ``fit``'s to be another place: three of its
+    standard errors, at least :data:`MIN_APART`."""
+    return max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), MIN_APART)
+
+
+MIN_APART = 0.002
+"""The least separation (x/L) of two positions reported as two solutions (a sharp mode's mirror about the
+node of mode 2 can sit 0.008 away with a mass 3 % apart)."""
+
+
 def _rivals(fit: StartsFit, count: int) -> list:
-    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: more than
-    three of its standard errors (and 0.005) from the best and from each other (a sharp mode's mirror about
-    the node of mode 2 can sit 0.01 away with a mass 3 % apart)."""
+    """Other minima ``(internal, chi2)`` of ``fit`` within 4 reduced-chi2 units at another position: farther
+    than :func:`_apart` from the best and from each other."""
     scale = max(fit.chi2 / count, 1.0)
-    apart = max(3.0 * math.sqrt(max(fit.covariance[1, 1], 0.0)), 0.005)
+    apart = _apart(fit)
     out = []
     for x, chi2 in sorted(fit.others, key=lambda other: other[1]):      # one per place: starts may meet
         if chi2 - fit.chi2 < 4.0 * scale and all(abs(x[1] - kept[1]) > apart for kept in [fit.internal, *(o for o, _ in out)]):

@@ -35,6 +35,7 @@ from ..fitting.noise import spectrum_noise as noise_level
 from ..fitting.parameters import Parameter
 from ..fitting.projection import jacobian_covariance, project
 from ..fitting.result import Result
+from ..io.documents import OVERDAMPED
 from ..io.sweeps import SweepTable
 from ..medium import Medium
 from ..names import NAMES
@@ -159,12 +160,21 @@ class SweepFit(Result):
         lines = [f"sweep {d['path']}: {d['points']} measured points fitted as a base-driven free lever in "
                  f"{d['medium']} (k {d['spring_constant']:g} N/m, L {d['length']:g} m)",
                  f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {d['quality_factor']:.3g}, amplitude peak {d['peak_hz']:.6g} Hz",
+                 f"Q {quality_text(d['quality_factor'])}, amplitude peak {d['peak_hz']:.6g} Hz",
                  f"  width {plus_minus(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(extra, '')}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}",
                  f"  {gap_text(d['gap'], d.get('worst_region'))}"] + unexplained_line(d.get("unexplained"))
         return "\n".join(lines + provenance_lines(d))
+
+
+def quality_text(q: float) -> str:
+    """The first mode's Q as a report prints it: undetermined, with why, where the mode is overdamped.
+
+    >>> quality_text(3.1234), quality_text(float("nan"))
+    ('3.12', 'undetermined (the first mode in the medium is overdamped: no damped resonance, no Q)')
+    """
+    return f"{q:.3g}" if math.isfinite(q) else f"undetermined ({OVERDAMPED})"
 
 
 def plus_minus(entry: dict, unit: str) -> str:
@@ -212,12 +222,13 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
     frequency = ours.get("free_resonance", ours.get("amplitude_peak", (None, None)))[0]
     out = []
     for name, (value, stderr) in ours.items():
-        if not fields.get(name) or value is None:
+        if not fields.get(name) or value is None or not math.isfinite(value):     # ours undetermined: nothing beside
             continue
         step = {"free_quality_factor": value**2 * step_hz / frequency if frequency else 0.0,
                 "free_resonance": step_hz, "amplitude_peak": step_hz}.get(name, 0.0)
         tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
         out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
+                    "basis": "3x our uncertainty" + (" and the frequency step" if step else ""),
                     "relative_difference": (fields[name] - value) / value,
                     "disagrees": bool(abs(fields[name] - value) > tolerance)})
     return out
@@ -256,9 +267,9 @@ def disagreement_lines(comparison: list | None) -> list[str]:
     its unit, the header's difference from ours relative to ours, the tolerance to two digits.
 
     >>> print(*disagreement_lines(compare_with_instrument({"spring_constant": 27.13}, {"spring_constant": (9.047, 0.29)}, 38.0)))
-      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty and the sweep's step)
+      disagrees with the file: spring_constant 27.13 N/m in the header, 9.047 N/m here (header +199.9%; tolerance 0.87 N/m: 3x our uncertainty)
     >>> print(*disagreement_lines(compare_with_instrument({"amplitude_peak": 50965.1}, {"amplitude_peak": (76282.6, 81.0)}, 100.0)))
-      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the sweep's step)
+      disagrees with the file: amplitude_peak 50965.1 Hz in the header, 76282.6 Hz here (header -33.2%; tolerance 390 Hz: 3x our uncertainty and the frequency step)
     """
     def unit(name):
         return "" if name not in NAMES or NAMES[name].unit == "1" else f" {NAMES[name].unit}"
@@ -268,7 +279,7 @@ def disagreement_lines(comparison: list | None) -> list[str]:
 
     return [f"  disagrees with the file: {c['name']} {c['instrument']:.6g}{unit(c['name'])} in the header, "
             f"{c['ours']:.6g}{unit(c['name'])} here (header {c['relative_difference']:+.1%}; tolerance "
-            f"{two_digits(c['tolerance'])}{unit(c['name'])}: 3x our uncertainty and the sweep's step)"
+            f"{two_digits(c['tolerance'])}{unit(c['name'])}: {c['basis']})"
             + (f"; {c['why']}" if c.get("why") else "")
             for c in comparison or () if c["disagrees"]]
 

@@ -33,9 +33,11 @@ from ..fitting.result import Result
 from ..generated import formulas
 from ..io.thermal_tune import ThermalTune
 from ..medium import Medium
-from .regions import gap_text, lever_resonances, worst_region
+from ..fitting.noise import gap
+from .regions import gap_text, lever_resonances, regions, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
-                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, solve_from_starts,
+                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, quality_text,
+                    solve_from_starts,
                     unexplained_entry, unexplained_line)
 
 __all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
@@ -59,15 +61,15 @@ class ThermalFit(Result):
                  f"thermally driven free lever in {d['medium']} "
                  f"(k {d['spring_constant']:g} N/m, L {d['length']:g} m, T {d['temperature']:.2f} K)",
                  f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {d['quality_factor']:.3g}",
+                 f"Q {quality_text(d['quality_factor'])}",
                  f"  width {plus_minus(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(p['viscous_loss'], '')}",
                  f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "
                  f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
                  f"{d['white_floor']:.3g} {d['unit']}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
-                 + (f", k {d['instrument_fit']['spring_constant']:g} N/m" if "spring_constant" in d["instrument_fit"]
-                    else ""),
+                 + (f", k {d['instrument_fit']['spring_constant']:g} N/m (ours, where the detection factor is 1: "
+                    f"{d['spring_constant'] / scale**2:.4g} N/m)" if "spring_constant" in d["instrument_fit"] else ""),
                  f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
@@ -159,16 +161,18 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     try:
         lever = lever_of(fit.internal)
         fitted, (a, b, c) = model(fit.internal)
-        scale_stderr = _scale_stderr(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
+        covariance = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
     except UserError:
         raise UserError(f"{tune.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the peak (check them)") from None
-    parameters = {p.key: parameter_entry(p, x, fit.covariance[i, i]) for i, (p, x) in enumerate(zip(params, fit.internal))}
+    r = np.log(fitted) - log_asd
+    inflation = peak_misfit(frequency, r / sigma, lever) ** 2
+    parameters = {p.key: parameter_entry(p, x, covariance[i, i] * inflation)
+                  for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
     q = quality_factor_in_medium(lever)
-    r = np.log(fitted) - log_asd
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
         unexplained["largest_residual"] = float(np.expm1(np.max(np.abs(r))))
@@ -189,13 +193,37 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     if not given:
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted, internal=fit.internal,
-                      one_over_f_floor=float(np.sqrt(c)), scale_stderr=scale_stderr)
+                      one_over_f_floor=float(np.sqrt(c)), scale_stderr=float(np.sqrt(covariance[2, 2])))
 
 
-def _scale_stderr(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> float:
-    """Relative standard error of ``g**2`` with the resonance, the damping and the floors free: the
-    Jacobian of the log residual in (x, log g**2, log w**2, log p**2) (a floor that adds next to nothing
-    held), scaled by the reduced chi2 when above 1."""
+def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
+    """How much wider the resonance's and the damping's standard errors are than the fit's covariance says:
+    the gap over the first resonance's half-power band over the gap of the whole band (which scaled the
+    covariance), at least 1.  Those two rest on the peak: a misfit there (a resonance that drifted over the
+    averages, a peak no oscillator has) moves them, while the floor's many good values would hide it (the
+    shared tune: gap 1.26 overall, 5.6 over the peak; ten tunes in air whose resonance drifted by a linewidth
+    over the averages: the unscaled error held the resonance within 2 of it in 8, this one in 10, as
+    ``calibrate``'s oscillator did).
+
+    >>> f = np.linspace(1.7e5, 1.9e5, 1001)
+    >>> lever = Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+    >>> r = np.where(abs(f - lever.free_resonance) < 190.0, 10.0, 1.0)      # 10 noise levels over the peak only
+    >>> round(peak_misfit(f, r, lever), 2), peak_misfit(f, np.ones_like(f), lever)
+    (5.89, 1.0)
+    """
+    energy = np.asarray(normalised_residual, float) ** 2
+    band = regions(frequency, lever_resonances(lever, 1))
+    if not band or not band[0]["mask"].any():
+        return 1.0
+    mask = band[0]["mask"]
+    return float(max(gap(np.sum(energy[mask]), mask.sum()) / max(gap(np.sum(energy), energy.size), 1.0), 1.0))
+
+
+def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> np.ndarray:
+    """Covariance of (x, log g**2, log w**2, log p**2), all free: the Jacobian of the log residual (a floor
+    that adds next to nothing held), scaled by the reduced chi2 when above 1.  Its own Jacobian, not the
+    least-squares solver's, which zeroes the column of a parameter at its bound (no damping beyond the
+    fluid's, as in water: its variance, and Q's with it, undetermined)."""
     psd = slope_psd(x)
     columns = []
     for i in range(2):       # the resonance (log10 Hz) and the extra damping
@@ -206,8 +234,7 @@ def _scale_stderr(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma)
     columns += [coefficients[0] * psd] + [floor for floor in floors if np.max(floor / fitted**2) > 1e-3]
     J = np.stack(columns, axis=-1) / (2 * fitted[:, None] ** 2 * sigma)
     r = (np.log(fitted) - log_asd) / sigma
-    covariance = jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
-    return float(np.sqrt(covariance[2, 2]))
+    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
 
 
 def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, temperature: float,

@@ -18,7 +18,7 @@ import re
 
 from .record import FIELDS, decode_text, si_unit, si_value
 
-__all__ = ["NOTE_KEYS", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
+__all__ = ["NOTE_KEYS", "DART_CHANNELS", "DART_KEYS", "note_number", "dart_note", "parse_note", "cantilever_fields", "channel_name", "channel_unit", "layer_unit"]
 
 NOTE_KEYS = {
     "spring_constant": "SpringConstant",
@@ -40,6 +40,13 @@ _UNITS = {"Height": "m", "ZSensor": "m", "Amplitude": "m", "Amplitude1": "m", "A
           "Dissipation": "W",
           # force curves: raw and sensed piezo, deflection, amplitude, frequency
           "Raw": "m", "ZSnsr": "m", "LVDT": "m", "Defl": "m", "Amp": "m", "Freq": "Hz"}
+
+
+DART_CHANNELS = ("Amplitude1", "Amplitude2", "Phase1", "Phase2", "Frequency")
+"""The layers a DART image needs (their names without ``Trace``/``Retrace``)."""
+DART_KEYS = {"frequency_width": "DFRTFrequencyWidth", "frequency_centre": "DFRTFrequencyCenter",
+             "drive_amplitude": "DriveAmplitude", "invols": "InvOLS", "amp_invols": "AmpInvOLS"}
+"""What pfmdyn.io.dart reads of the note besides the lever -> Asylum's key."""
 
 
 def parse_note(text: str) -> dict:
@@ -65,6 +72,35 @@ def _number(value) -> float | None:
     except (TypeError, ValueError):
         return None
     return number if math.isfinite(number) else None
+
+
+def note_number(note: dict, key: str) -> float | None:
+    """The finite number leading the note's value of ``key`` (``'2500 Hz'``: 2500.0), else None.
+
+    >>> note_number({"DriveAmplitude": "1.5 V", "ThermalQ": "NaN"}, "DriveAmplitude"), note_number({}, "ThermalQ")
+    (1.5, None)
+    """
+    parts = str(note.get(key, "")).split()
+    return _number(parts[0]) if parts else None
+
+
+def dart_note(labels, note: dict) -> list[str]:
+    """What ``pfmdyn inspect`` says of an image whose layers are a DART image's: that ``pfmdyn map`` inverts it,
+    with the DART settings its note holds (none for any other image).
+
+    >>> dart_note(["HeightRetrace", "Amplitude1Retrace", "Amplitude2Retrace", "Phase1Retrace", "Phase2Retrace",
+    ...            "FrequencyRetrace"], {"DFRTFrequencyWidth": "2500", "DriveAmplitude": "1.5"})
+    ['a DART image (pfmdyn map inverts it); DART settings in the note: DFRTFrequencyWidth 2500 Hz, DriveAmplitude 1.5 V']
+    >>> dart_note(["HeightRetrace", "PhaseRetrace"], {})
+    []
+    """
+    if any(not {name + "Retrace", name + "Trace"} & set(labels) for name in DART_CHANNELS):
+        return []
+    units = {"frequency_width": "Hz", "frequency_centre": "Hz", "drive_amplitude": "V", "invols": "m/V",
+             "amp_invols": "m/V"}
+    settings = [f"{key} {value:g} {units[name]}" for name, key in DART_KEYS.items()
+                if (value := note_number(note, key)) is not None]
+    return ["a DART image (pfmdyn map inverts it); DART settings in the note: " + (", ".join(settings) or "none")]
 
 
 def cantilever_fields(note: dict, keys: dict = NOTE_KEYS) -> tuple[dict, list[str]]:

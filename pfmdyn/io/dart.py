@@ -11,7 +11,6 @@ line (the wave's second dimension), ``x`` the fast-scan point (its first), in th
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,15 +18,11 @@ import numpy as np
 
 from ..errors import UserError
 from . import asylum, ibw
+from .asylum import DART_CHANNELS, DART_KEYS
 from .record import decode_text
 
 __all__ = ["DART_CHANNELS", "DART_KEYS", "DartImage", "read_dart"]
 
-DART_CHANNELS = ("Amplitude1", "Amplitude2", "Phase1", "Phase2", "Frequency")
-"""The layers a DART image needs (their names without ``Trace``/``Retrace``)."""
-DART_KEYS = {"frequency_width": "DFRTFrequencyWidth", "frequency_centre": "DFRTFrequencyCenter",
-             "drive_amplitude": "DriveAmplitude", "invols": "InvOLS", "amp_invols": "AmpInvOLS"}
-"""What this module reads of the note besides the lever -> Asylum's key."""
 
 
 @dataclass(frozen=True)
@@ -91,14 +86,6 @@ def _pick(layers: dict, name: str):
     return None
 
 
-def _number(note: dict, key: str) -> float | None:
-    try:
-        value = float(str(note.get(key, "nan")).split()[0])
-    except (ValueError, IndexError):
-        return None
-    return value if math.isfinite(value) else None
-
-
 def read_dart(path) -> DartImage:
     """Read a DART image from an Asylum ``.ibw`` file (module docstring).
 
@@ -120,9 +107,19 @@ def read_dart(path) -> DartImage:
     directions = {found[0] for found in picked.values()}
     direction = "Retrace" if "Retrace" in directions else "Trace"
     channels = {name: np.asarray(found[1], float).T for name, found in picked.items()}     # (points, lines) -> (y, x)
-    settings = {name: value for name, key in DART_KEYS.items() if (value := _number(note, key)) is not None}
+    blank = ~np.all([np.isfinite(channel) for channel in channels.values()], axis=0)
+    if blank.all():
+        raise UserError(f"{path}: no pixel of the DART image has a number in every channel "
+                        f"({', '.join(n + direction for n in DART_CHANNELS)})")
+    if blank.any():
+        # no signal there (undetermined downstream), read at the image's median centre
+        for name in DART_CHANNELS:
+            fill = np.median(channels[name][~blank]) if name == "Frequency" else np.nan if "Amplitude" in name else 0.0
+            channels[name] = np.where(blank, fill, channels[name])
+        notes.append(f"{blank.sum()} pixel{'s' if blank.sum() > 1 else ''} without a number in every channel: undetermined")
+    settings = {name: value for name, key in DART_KEYS.items() if (value := asylum.note_number(note, key)) is not None}
     centre = channels["Frequency"]
-    if "frequency_centre" in settings and np.nanmedian(np.abs(centre)) < 0.5 * settings["frequency_centre"]:
+    if "frequency_centre" in settings and np.median(np.abs(centre)) < 0.5 * settings["frequency_centre"]:
         centre = centre + settings["frequency_centre"]      # a frequency channel recorded as the shift
         notes.append("FrequencyRetrace read as the shift from DFRTFrequencyCenter")
     fields, problems = asylum.cantilever_fields(note)

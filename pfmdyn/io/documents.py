@@ -320,13 +320,19 @@ def _fit_records(fit: dict) -> tuple[dict, list[str]]:
     return out, notes
 
 
+OVERDAMPED = "the first mode in the medium is overdamped: no damped resonance, no Q"
+"""Why a sweep's or a tune's lever has no first-mode Q."""
+
+
 def _sweep_results(fit: dict) -> dict:
     """The lever a sweep or tune fit found: its parameters, vacuum resonance and the Q it predicts."""
     results = records_of(fit["parameters"])
     if "width" in (fit.get("from_file") or ()) and results["width"]["status"] == "given":
         results["width"] = quantity("width", results["width"]["value"], status="file", why="read from the input file")
     results["vacuum_resonance"] = quantity("vacuum_resonance", fit["vacuum_resonance"], status="derived")
-    results["free_quality_factor"] = quantity("free_quality_factor", fit["quality_factor"], status="derived")
+    q = fit["quality_factor"]
+    results["free_quality_factor"] = quantity("free_quality_factor", q, status="derived") if math.isfinite(q) else \
+        quantity("free_quality_factor", None, status="undetermined", why=OVERDAMPED)
     return results
 
 
@@ -801,7 +807,8 @@ def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever
     at each frequency (Eq. 41; dims frequency, in the data's ``unit``), its nulling bias and the tip-quality
     indicator (``quality``: :func:`pfmdyn.analysis.deconvolve.tip_quality`); with a lever (``surface``) the
     true surface displacement at the spot, undetermined ranges as notes.  The per-point residuals stay in
-    ``error_map.csv`` (``source.out``).
+    ``error_map.csv`` (``source.out``).  ``given``: the flags given (``surface_potential`` among them when it
+    was; else it is the default, assumed).
 
     >>> from pfmdyn.analysis.deconvolve import deconvolve, tip_quality
     >>> fit = deconvolve([1e5] * 3, [-1.0, 0.0, 1.0], [1, 2, 3], surface_potential_v=0.0)
@@ -832,6 +839,6 @@ def deconvolution(result, quality, path, surface=None, unit: str = "a.u.", lever
                                                        **derived)
         notes += [f"undetermined {low:.6g}-{high:.6g} Hz: {why}" for low, high, why in surface.undetermined]
     lever = lever_records({"surface_potential": result.surface_potential_v, **(lever or {})},
-                          given=["surface_potential", *given])
+                          given=given)
     return document("deconvolve", "deconvolution", {"path": str(path), "out": None if out is None else str(out)},
                     lever, results, None, notes)

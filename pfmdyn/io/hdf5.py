@@ -76,8 +76,8 @@ def _is_main(base: str, dataset) -> bool:
         return False
     if base.startswith(("Position_", "Spectroscopic_")):
         return False
-    if base == "response" and "frequency_hz" in dataset.parent:     # pfmdyn's plain map layout
-        return True
+    if base == "response" and "frequency_hz" in dataset.parent or base == "contact_frequency_hz":
+        return True         # pfmdyn's plain map layout, its map of contact resonances
     return base == "Raw_Data" or is_usid_main(dataset) or ("quantity" in dataset.attrs and "units" in dataset.attrs)
 
 
@@ -146,10 +146,11 @@ def read_hdf5(path) -> InstrumentRecord:
         if not mains:
             raise UserError(f"{path}: no pycroscopy dataset found (expected NSID/USID groups "
                             "Measurement_*/Channel_* with datasets carrying 'quantity' and 'units', "
-                            "or pfmdyn's map layout: response, frequency_hz)")
+                            "or pfmdyn's map layouts: response, frequency_hz; contact_frequency_hz)")
         channels, kinds, notes, spectra = [], set(), [], []
         for label, (name, dataset) in zip(_names(mains), mains):
-            unit = asylum.layer_unit(_attribute(dataset.attrs.get("quantity", "")), _attribute(dataset.attrs.get("units", "")))
+            unit = "Hz" if name.endswith("contact_frequency_hz") else \
+                asylum.layer_unit(_attribute(dataset.attrs.get("quantity", "")), _attribute(dataset.attrs.get("units", "")))
             channels.append(make_channel(label, unit, dataset.shape))
             data_type = _attribute(dataset.attrs.get("data_type", "")).upper()
             frequency = _frequency_axis(h5, dataset)
@@ -161,6 +162,10 @@ def read_hdf5(path) -> InstrumentRecord:
                 else:
                     notes.append(f"{label}: {points} spectra of {len(frequency)} frequencies ({frequency.min():.6g} "
                                  f"to {frequency.max():.6g} Hz)")
+            elif name.endswith("contact_frequency_hz"):
+                kinds.add("image")
+                notes.append(f"{label}: a map of contact resonances (pfmdyn map, or stiffness with an output folder, "
+                             "gives k1 at each pixel)")
             elif data_type in ("SPECTRUM", "SPECTRAL_IMAGE"):
                 kinds.add("spectrum")
                 notes.append(f"{label}: its spectral dimension has no frequency unit")

@@ -208,6 +208,7 @@ def read_ibw(path) -> InstrumentRecord:
         kind = "image"
         if data.ndim > 2 and not labels:
             notes.append(f"a stack of {data.shape[2]} images along '{units[2] or 'index'}'")
+        notes += asylum.dart_note(names, note)
     elif in_hz[0]:
         kind = "spectrum"
         values = data if data.ndim == 1 else data.reshape(data.shape[0], -1)[:, 0]

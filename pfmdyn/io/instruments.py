@@ -152,7 +152,9 @@ def required_field(record: InstrumentRecord, name: str, overrides: dict | None =
         return checked(name, overrides[name])
     if name in record.fields:
         return record.fields[name]
-    raise MissingFieldError(f"{FIELDS[name][0]} not in {Path(record.path).name}", name)
+    left_out = record.left_out([name])
+    raise MissingFieldError(f"{FIELDS[name][0]} not in {Path(record.path).name}"
+                            + (f" ({left_out[0]})" if left_out else ""), name)
 
 
 def resonance_table(record: InstrumentRecord, overrides: dict | None = None, peaks=None):
@@ -206,7 +208,9 @@ def resonance_table(record: InstrumentRecord, overrides: dict | None = None, pea
     needed = ("spring_constant", "length", "tip_height", "free_resonance")
     missing = tuple(key for key in needed if overrides.get(key) is None and key not in record.fields)
     if len(missing) > 1:        # all at once: the user gives them in one run
-        raise MissingFieldError(f"{listed(FIELDS[key][0] for key in missing)} not in {name}", missing)
+        left_out = record.left_out(missing)
+        raise MissingFieldError(f"{listed(FIELDS[key][0] for key in missing)} not in {name}"
+                                + (f" ({'; '.join(left_out)})" if left_out else ""), missing)
     lever = {key: required_field(record, key, overrides) for key in needed}
     # No resonance depends on the width: taken when known, never asked for.
     width = required_field(record, "width", overrides) if ("width" in record.fields or

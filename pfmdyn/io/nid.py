@@ -15,6 +15,7 @@ scaled onto ``Dim2Min + [0, Dim2Range]``.
 """
 from __future__ import annotations
 
+import gc
 import re
 import warnings
 from pathlib import Path
@@ -61,14 +62,16 @@ def _load(path: Path):
         from NSFopen.read import read
     except ImportError:
         raise MissingExtraError("nsfopen", "files") from None
-    try:
-        with warnings.catch_warnings():
-            # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
-            warnings.simplefilter("ignore")
+    with warnings.catch_warnings():
+        # NSFopen calls pandas APIs that newer pandas deprecates; not the user's concern.
+        warnings.simplefilter("ignore")
+        try:
             return read(str(path))
-    except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
-        reason = " ".join(str(exc).split()) or type(exc).__name__
-        raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}") from None
+        except Exception as exc:    # NSFopen raises assorted errors on files it cannot parse
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+        # a failed read leaves its file open: closed here, not at exit with a ResourceWarning on the terminal
+        gc.collect()
+    raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}")
 
 
 def _open(path: Path) -> tuple[dict, list[tuple]]:
@@ -229,6 +232,12 @@ def read_nid(path) -> InstrumentRecord:
         lever = info.get("Cantilever type")
         if lever:
             notes.append(f"cantilever type {lever}: its length and width are not in the file")
+        conditions = _conditions(info)
+        if conditions:      # what calibrate and discrepancy take from the header
+            notes.append("measured " + " ".join(
+                ([f"in {conditions['environment']}"] if "environment" in conditions else [])
+                + ([f"at {conditions['temperature'] - 273.15:g} C ({conditions['temperature']:g} K)"]
+                   if "temperature" in conditions else [])))
     elif sweeps := [c for c in channels if _is_sweep_frame(c[3])]:
         kind = "spectrum"
         found = _fields(info, _SCAN_KEYS)
@@ -256,7 +265,10 @@ def thermal_conditions(path) -> dict:
     ...
     pfmdyn.errors.UserError: missing.nid: no such file
     """
-    info = _open(Path(path))[0].get("DataSet-Info", {}) or {}
+    return _conditions(_open(Path(path))[0].get("DataSet-Info", {}) or {})
+
+
+def _conditions(info: dict) -> dict:
     out = {}
     for key, value in info.items():
         key = str(key).strip().rstrip(":").lower()

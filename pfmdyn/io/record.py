@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..errors import UserError
-from ..names import NAMES, canonical
+from ..names import NAMES, canonical, checked
 
 __all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord", "make_record", "make_channel",
            "si_unit",
@@ -75,6 +75,15 @@ class InstrumentRecord:
     notes: tuple = ()
     spectrum: tuple | None = field(default=None, repr=False, compare=False)
 
+    def left_out(self, names=None) -> list[str]:
+        """The notes of values the file holds but no probe has (:func:`make_record`), of ``names`` (default: all).
+
+        >>> make_record("x.ibw", "image", "test", (), {"spring_constant": -2.0}).left_out()
+        ['spring constant -2 N/m in the file left out: spring_constant must be in (0.0001, 10000] N/m, got -2.0']
+        """
+        labels = [FIELDS[name][0] + " " for name in (names or FIELDS)]
+        return [note for note in self.notes if note.startswith(tuple(labels)) and " in the file left out: " in note]
+
     def to_json(self) -> dict:
         """The JSON document of ``pfmdyn inspect``: numbers stay numbers."""
         return {"path": self.path, "kind": self.kind, "instrument": self.instrument,
@@ -94,9 +103,14 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
 
     Keys of ``found`` may be any spelling :func:`pfmdyn.names.canonical` knows (``length_m``).
 
+    A value no probe has (a negative spring constant, a length of 225 m: micrometres written as metres)
+    is left out too, with a note saying so (it was dropped in silence, or taken).
+
     >>> r = make_record("x.ibw", "image", "test", (), {"spring_constant_n_per_m": 2.0, "length": float("nan")})
     >>> r.fields, "length" in r.missing
     ({'spring_constant': 2.0}, True)
+    >>> make_record("x.ibw", "image", "test", (), {"length": 225.0}).notes
+    ('lever length 225 m in the file left out: length must be in (1e-06, 0.01] m, got 225.0',)
     """
     assert kind in KINDS, kind
     if kind == "spectrum" and spectrum is not None and str(spectrum[2]).endswith("/sqrt(Hz)"):
@@ -109,8 +123,13 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
             continue
         value = float(value)
         # Tip bias may be zero or negative; every other field is a positive quantity.
-        if math.isfinite(value) and (value > 0 or (name == "tip_bias")):
-            fields[name] = value
+        if not math.isfinite(value) or (value == 0 and name != "tip_bias"):
+            continue            # never measured
+        try:
+            fields[name] = checked(name, value)
+        except UserError as exc:
+            notes = (*notes, f"{FIELDS[name][0]} {value:g}{' ' + FIELDS[name][1] if FIELDS[name][1] else ''} in the "
+                             f"file left out: {exc}")
     missing = tuple(name for name in FIELDS if name not in fields)
     # A unit pfmdyn cannot convert is kept as written; say so rather than let it pass as SI.
     notes = list(notes) + [f"{c.name}: unit '{c.unit}' is not an SI unit pfmdyn knows; values left as stored"

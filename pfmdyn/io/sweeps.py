@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
+from ..names import checked
 from .kinds import SWEEP_TABLE_STARTS
 from .record import (
     FIELDS,
@@ -139,7 +140,10 @@ def _parse(path: Path):
             if number is None and value.strip().lower() != "nan":
                 notes.append(f"header '{key}' = {value!r} not understood as {FIELDS[_KEYS[name]][1] or 'a number'}")
             elif number is not None:
-                found.setdefault(_KEYS[name], number)
+                try:        # a header value no lever has (a Q of -3) is no fit of the instrument's to compare with
+                    found.setdefault(_KEYS[name], checked(_KEYS[name], number))
+                except UserError as exc:
+                    notes.append(f"header '{key}' = {value.strip()} left out: {exc}")
     converted = [si_unit(unit) for _, unit in names]
     hz = [i for i, c in enumerate(converted) if c and c[0] == "Hz"]
     if not hz:
@@ -209,8 +213,13 @@ def read_sweep_table(path) -> SweepTable:
         raise UserError(f"{path}: no amplitude column in the sweep table")
     _, amplitude, unit = si_spectrum(path, frequency, "Hz", table[:, amplitudes[0]], names[amplitudes[0]][1])
     order = np.argsort(frequency, kind="stable")
-    if not (np.all(np.isfinite(frequency)) and np.all(np.isfinite(table[:, others])) and frequency.min() > 0):
-        raise UserError(f"{path}: the sweep table holds a non-finite value or a frequency <= 0")
+    finite = np.isfinite(frequency) & np.isfinite(table[:, others]).all(axis=1)
+    wrong = np.flatnonzero(~finite | (np.where(finite, frequency, 1.0) <= 0) | (np.where(finite, amplitude, 0.0) < 0))
+    if wrong.size:
+        row = wrong[0]
+        what = ("a value that is not a finite number" if not finite[row] else "a frequency <= 0" if frequency[row] <= 0
+                else "a negative amplitude (a lock-in's magnitude is >= 0)")
+        raise UserError(f"{path}: table row {row + 1} holds {what}")
     if np.unique(frequency).size < len(frequency):
         raise UserError(f"{path}: the sweep repeats a drive frequency")
     medium = next((header[k] for k in _MEDIUM_KEYS if header.get(k)), None)

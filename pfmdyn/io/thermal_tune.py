@@ -49,7 +49,40 @@ def _from_csv(path: Path) -> ThermalTune:
         except (ValueError, IndexError):
             raise UserError(f"{path}, line {number}: not a number in the frequency or ASD column") from None
     values = np.array(rows, dtype=float).reshape(-1, 2)
-    return ThermalTune(str(path), values[:, 0], values[:, 1], asd[1], {}, {})
+    lines = np.array([number for number, _ in table.rows])
+    return ThermalTune(str(path), *_checked_rows(str(path), values, lines), asd[1], {}, {})
+
+
+def _checked_rows(where: str, values: np.ndarray, lines: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency and ASD of a tune's rows, sorted by frequency (rows may come in any order); a value
+    that is not finite or is negative, or a frequency given twice with two ASDs, names its line.
+
+    >>> f, a = _checked_rows("t.csv", np.array([[2.0, 1.0], [1.0, 3.0], [2.0, 1.0]]), np.array([2, 3, 4]))
+    >>> f.tolist(), a.tolist()
+    ([1.0, 2.0], [3.0, 1.0])
+    >>> _checked_rows("t.csv", np.array([[1.0, -3.0]]), np.array([2]))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: t.csv, line 2: a negative frequency or ASD (-3); an amplitude spectral density is >= 0
+    """
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        raise UserError(f"{where}, line {lines[~finite][0]}: a frequency or ASD that is not a finite number")
+    negative = (values < 0).any(axis=1)
+    if negative.any():
+        row = np.flatnonzero(negative)[0]
+        raise UserError(f"{where}, line {lines[row]}: a negative frequency or ASD ({values[row].min():.6g}); "
+                        "an amplitude spectral density is >= 0")
+    order = np.argsort(values[:, 0], kind="stable")
+    values, lines = values[order], lines[order]
+    repeated = np.diff(values[:, 0]) == 0
+    clash = np.flatnonzero(repeated & (np.diff(values[:, 1]) != 0))
+    if clash.size:
+        row = clash[0] + 1
+        raise UserError(f"{where}, line {lines[row]}: frequency {values[row, 0]:.12g} Hz given twice (first at line "
+                        f"{lines[row - 1]}) with a different ASD")
+    values = values[np.concatenate(([True], ~repeated))]
+    return values[:, 0], values[:, 1]
 
 
 def read_thermal_tune(path) -> ThermalTune:

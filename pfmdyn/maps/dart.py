@@ -340,7 +340,8 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
     """
     f1, f2, s1, s2 = (np.asarray(v).ravel() for v in (f1, f2, s1, s2))
     log_k1, loss = np.log(np.asarray(k1, float).ravel()), np.asarray(loss, float).ravel().copy()
-    target = np.log(s2 / s1)
+    with np.errstate(invalid="ignore", divide="ignore"):     # a pixel without signal (NaN, 0) stays inactive
+        target = np.log(s2 / s1)
     active = np.isfinite(log_k1) & np.isfinite(loss) & np.isfinite(target)
     converged = np.zeros(len(f1), bool)
     jacobian = np.full((len(f1), 2, 2), np.nan)

@@ -204,6 +204,11 @@ MIN_BAND = 3
 
 def _plain_axes(root, path):
     """Frequencies, biases (or None), pixel grid and sorting order of the plain layout."""
+    if any(key.startswith("Measurement") for key in root.keys()) and "response" not in root:
+        # pycroscopy's groups without a USID main dataset: an image's channels (NSID), no frequency axis to fit
+        raise UserError(f"{path}: pycroscopy groups without a spectrum per pixel (an image's channels, as NSID holds a "
+                        "single-frequency scan: nothing to fit); map reads band-excitation maps (response and "
+                        "frequency_hz, or USID with a Frequency dimension), contact-frequency maps and DART .ibw images")
     for name in ("response", "frequency_hz"):
         if name not in root:
             raise UserError(f"{path}: missing dataset '{name}' (plain layout: response, frequency_hz;"
