@@ -151,7 +151,7 @@ class Model:
                     for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
             chain = Chain(part, rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
-            terms = [chain.rotation(j) * (value * LN10) for j, value in enumerate((spring, c["k2"])[:len(self.springs)])]
+            terms = [chain.rotation(j) * (v * LN10) for j, v in enumerate((spring, c["k2"])[:len(self.springs)])]
             terms += [t for e in self.components for t in e.jacobian(chain)]
             out = np.zeros((4, len(self.parameters), len(r)), dtype=complex)
             for j, term in enumerate(terms):

@@ -366,7 +366,8 @@ def match_starts(model, extra, peaks, band, spring_grids, cost, count: int = 2,
     springs_only = np.arange(len(lower)) < n_springs
     matched = []
     for e in extra:
-        grid = np.clip(np.concatenate([springs, np.broadcast_to(np.asarray(e, float), (len(springs), len(e)))], axis=1), lower, upper)
+        others = np.broadcast_to(np.asarray(e, float), (len(springs), len(e)))
+        grid = np.clip(np.concatenate([springs, others], axis=1), lower, upper)
         roots = matches.roots(model, grid, band[1] * 1.3)
         score = peak_scores(roots, peaks, band, unseen)
         # the best row of each distinct k1, in the order of their scores
