@@ -1065,19 +1065,18 @@ def _compiled_characteristic(*args):
     from . import composed_kernels as kernels
 
     arrays = [np.asarray(a) for a in args]
-    shape = np.broadcast_shapes(*(a.shape for a in arrays))
     dtype = np.result_type(*arrays, float)
     if all(a.ndim == 0 for a in arrays[1:]):        # one lever: its parameters once
-        params = np.array([[a.item() for a in arrays[1:]]], dtype)
-        beta = np.broadcast_to(arrays[0], shape).reshape(-1)
+        params, shape = np.array([[a.item() for a in arrays[1:]]], dtype), arrays[0].shape
     elif arrays[0].ndim == 1 and all(a.shape in ((), (a.size, 1)) for a in arrays[1:]):
         # levers as a column against a row of beta (a start grid's)
+        shape = np.broadcast_shapes(*(a.shape for a in arrays))
         params = np.stack([np.broadcast_to(a, shape[:1] + (1,))[:, 0] for a in arrays[1:]], -1).astype(dtype)
-        beta = arrays[0]
     else:
         return _shaped(_transferred(*args), args[8])
-    out = np.empty((len(params), beta.size), dtype)
-    kernels.characteristic(np.array(beta, dtype), params, out)     # writable: a read-only view compiles again
+    out = np.empty((len(params), arrays[0].size), dtype)
+    # beta copied: writable (a read-only view compiles again) and flat
+    kernels.characteristic(np.array(arrays[0], dtype).reshape(-1), params, out)
     return out.reshape(shape)
 
 
