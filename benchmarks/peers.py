@@ -244,7 +244,7 @@ def bench(name, two_bands, args, peers, tmp):
         rows.append(("sidpy SidpyFitterRefactor", sample, *rates(n_s, elapsed),
                      *sho_scores(params[:, 1], params[:, 2], best[:n_s], k1_true[:n_s], free)))
     elapsed, result = run_pfmdyn(paths["map"], tmp / f"{name}_sho", True, free, two_bands)
-    f0, q = (result[v].values.reshape(n, -1)[:, 0] for v in ("resonance_frequency", "measured_quality_factor"))
+    f0, q = (result[v].values.reshape(n, -1)[:, 0] for v in ("measured_resonance", "measured_quality_factor"))
     rows.append(("pfmdyn map --model sho", whole, *rates(n, elapsed), *sho_scores(f0, q, best, k1_true, free)))
     elapsed, result = run_pfmdyn(paths["map"], tmp / f"{name}_beam", False, free, two_bands, warm=paths["sample"])
     rows.append(("pfmdyn map (beam, elastic)", whole, *rates(n, elapsed), None,

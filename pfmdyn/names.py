@@ -174,7 +174,7 @@ QUANTITIES: tuple[Quantity, ...] = (
     *(_report(name, symbol, unit, meaning) for name, symbol, unit, meaning in (
         # spectra and resonances
         ("resonance", "f_n", "Hz", "a resonance frequency (one per mode: dims mode or row)"),
-        ("measured_resonance", "f_meas", "Hz", "a resonance frequency as measured (a table's row, a fit to data)"),
+        ("measured_resonance", "f_meas", "Hz", "a resonance frequency as measured (a table's row, a fit to data, an SHO map)"),
         ("predicted_resonance", "f_model", "Hz", "a resonance frequency of the final model"),
         ("predicted_quality_factor", "Q_model", "1", "a mode's Q the model predicts (all damping together)"),
         ("baseline_resonance", "f_base", "Hz", "a resonance frequency of the paper's model fitted before any effect"),

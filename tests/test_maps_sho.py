@@ -108,9 +108,9 @@ def test_sho_frequency_and_q_at_95_percent_of_pixels_in_bglib_layout(usid, tmp_p
     assert np.median(fit["R2 Criterion"]) > 0.99
     # the fit is calibrated: its standard errors describe its frequency errors
     result = open_result(out)
-    z = (result["resonance_frequency"].values.ravel() - p["f0"]) / result["resonance_frequency_stderr"].values.ravel()
+    z = (result["measured_resonance"].values.ravel() - p["f0"]) / result["measured_resonance_stderr"].values.ravel()
     assert 0.55 <= np.mean(np.abs(z) < 1) <= 0.8, np.mean(np.abs(z) < 1)
-    np.testing.assert_array_equal(result["resonance_frequency"].values.reshape(-1), fit["Frequency [Hz]"][:, 0])
+    np.testing.assert_array_equal(result["measured_resonance"].values.reshape(-1), fit["Frequency [Hz]"][:, 0])
 
 
 def test_pyusid_reads_guess_and_fit_as_main_datasets(usid, tmp_path):
@@ -161,7 +161,7 @@ def test_beps_bias_steps_and_two_bands(usid, tmp_path):
     result = open_result(tmp_path / "o")
     assert result["measured_quality_factor"].dims == ("y", "x", "bias", "band")
     assert result["band"].attrs["units"] == "Hz" and result["bias"].values.tolist() == bias.tolist()
-    assert result["resonance_frequency"].attrs == {"units": "Hz", "long_name": "SHO resonance frequency w0"}
+    assert result["measured_resonance"].attrs == {"units": "Hz", "long_name": "SHO resonance frequency w0, as measured"}
 
 
 def test_beam_fit_in_the_same_layout(usid, tmp_path):
@@ -222,16 +222,16 @@ def test_compiled_sho_fit_is_the_numpy_fit(bins):
     y = np.where(noisy_rows[:, None], noisy(rng, clean, 0.02), clean)
     compiled, reference = fit_spectra(f, y), fit_spectra(f, y, compiled=False)
     assert compiled.keys() == reference.keys()
-    for name in ("resonance_frequency", "measured_quality_factor", "amplitude", "r2", "guess_resonance_frequency",
+    for name in ("measured_resonance", "measured_quality_factor", "amplitude", "r2", "guess_measured_resonance",
                  "guess_measured_quality_factor", "guess_amplitude"):
         np.testing.assert_allclose(compiled[name], reference[name], rtol=1e-9, err_msg=name)
     for name in ("phase", "guess_phase"):
         np.testing.assert_allclose(np.exp(1j * compiled[name]), np.exp(1j * reference[name]), atol=1e-9, err_msg=name)
-    for name, tolerance in (("gap", 1e-12), ("cost", 1e-9), ("resonance_frequency_stderr", 1e-9),
+    for name, tolerance in (("gap", 1e-12), ("cost", 1e-9), ("measured_resonance_stderr", 1e-9),
                             ("measured_quality_factor_stderr", 1e-9)):
         np.testing.assert_allclose(compiled[name][noisy_rows], reference[name][noisy_rows], rtol=tolerance,
                                    err_msg=name)
-    assert np.all(np.abs(compiled["resonance_frequency"] - p["f0"])[~noisy_rows] < 1e-9 * p["f0"][~noisy_rows])
+    assert np.all(np.abs(compiled["measured_resonance"] - p["f0"])[~noisy_rows] < 1e-9 * p["f0"][~noisy_rows])
     # shared among threads: the same numbers; a spectrum of zeros, inf or NaN masked
     y[:3] = np.array([0.0, np.inf, np.nan])[:, None]
     threaded, alone = fit_spectra(f, y, threads=2), fit_spectra(f, y)

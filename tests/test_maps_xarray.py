@@ -95,7 +95,7 @@ def _assert_xarray_opens(out, model, coordinates):
     expected = open_result(out)
     dims = ("y", "x", *coordinates)
     maps = [name for name in expected.data_vars]
-    assert {"k1", "gap"} <= set(maps) if "elastic" in model else {"resonance_frequency", "measured_quality_factor"} <= set(maps)
+    assert {"k1", "gap"} <= set(maps) if "elastic" in model else {"measured_resonance", "measured_quality_factor"} <= set(maps)
     # the convention as stored: every array names its dimensions, one per axis, and says what it holds
     metadata = json.loads((store / ".zmetadata").read_text())["metadata"]
     for name in [*maps, *dims]:
@@ -118,6 +118,6 @@ def _assert_xarray_opens(out, model, coordinates):
         assert variable.dims == dims and variable.shape == tuple(sizes[d] for d in dims), name
         assert variable.attrs == expected[name].attrs and variable.attrs["long_name"] != name, name
         np.testing.assert_array_equal(variable.values, expected[name].values)
-    unit = dataset["k1"].attrs["units"] if "elastic" in model else dataset["resonance_frequency"].attrs["units"]
+    unit = dataset["k1"].attrs["units"] if "elastic" in model else dataset["measured_resonance"].attrs["units"]
     assert unit == ("N/m" if "elastic" in model else "Hz")
     assert np.isfinite(dataset[maps[0]].values).mean() > 0.9

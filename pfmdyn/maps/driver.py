@@ -114,8 +114,9 @@ def _output(out, source: MapInput, block: int, selection=None, surface_potential
                                 quantity="out")
     maps = {name: {"shape": (ny, nx, *steps), "chunks": (block, block, *steps), "units": unit, "long_name": text,
                    "dims": dims} for name, (unit, text) in model.outputs.items()}
-    if sho and any(old in group for old in RENAMED):       # an SHO map begun before its Q was renamed
-        for old, new in RENAMED.items():
+    renamed = {old: new for old, new in RENAMED.items() if old in group} if sho else {}
+    if renamed:       # an SHO map begun before its Q or resonance was renamed
+        for old, new in renamed.items():
             rename_map(group, old, new, long_name=maps[new]["long_name"])
         consolidate(out)
         group = open_group(out, mode="a")       # its listing as it now is

@@ -56,7 +56,7 @@ def resonance_start(model, y, *, iterations=40, tolerance=1e-3):
     beta, q_mode = [], []
     for b in model.bands:
         sho = fit_spectra(f[b], spectra[:, b], iterations=iterations, tolerance=tolerance)
-        f0 = sho["resonance_frequency"]
+        f0 = sho["measured_resonance"]
         inside = (f0 > f[b][0]) & (f0 < f[b][-1])
         beta.append(np.where(inside, betas(lever, np.where(inside, f0, f[b][0])), np.nan))
         q_mode.append(sho["measured_quality_factor"])

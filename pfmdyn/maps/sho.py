@@ -37,20 +37,22 @@ from .spec import bands
 
 __all__ = ["FIELDS", "RENAMED", "SHOMapModel", "fit_spectra", "fit_sho_block", "is_sho"]
 
-FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "resonance_frequency",
+FIELDS = {"Amplitude [V]": "amplitude", "Frequency [Hz]": "measured_resonance",
           "Quality Factor": "measured_quality_factor", "Phase [rad]": "phase", "R2 Criterion": "r2"}
 """BGlib's compound fields -> pfmdyn's map names (``guess_`` + name for the guess).  The SHO's Q is the
 measured one of each mode (:mod:`pfmdyn.names`' ``measured_quality_factor``: all damping together), not
 the lever's internal friction ``quality_factor`` of the beam maps."""
 
 RENAMED = {"quality_factor": "measured_quality_factor", "quality_factor_stderr": "measured_quality_factor_stderr",
-           "guess_quality_factor": "guess_measured_quality_factor"}
-"""The SHO maps' names before schema 1 -> now (a store begun before is renamed when a run resumes it)."""
+           "guess_quality_factor": "guess_measured_quality_factor",
+           "resonance_frequency": "measured_resonance", "resonance_frequency_stderr": "measured_resonance_stderr",
+           "guess_resonance_frequency": "guess_measured_resonance"}
+"""The SHO maps' names before (Q renamed in schema 1, the resonance after it) -> now (a store begun before is renamed when a run resumes it)."""
 
 _FIT = {
     "amplitude": ("response units", "SHO amplitude A (|response| far below resonance; at the peak A Q)"),
-    "resonance_frequency": ("Hz", "SHO resonance frequency w0"),
-    "resonance_frequency_stderr": ("Hz", "standard error of resonance_frequency"),
+    "measured_resonance": ("Hz", "SHO resonance frequency w0, as measured"),
+    "measured_resonance_stderr": ("Hz", "standard error of measured_resonance"),
     "measured_quality_factor": ("1", "SHO quality factor Q: the mode's measured Q, all damping together"),
     "measured_quality_factor_stderr": ("1", "standard error of measured_quality_factor"),
     "phase": ("rad", "SHO phase phi (BGlib's convention: the usual phase + pi)"),
@@ -73,7 +75,7 @@ class SHOMapModel:
 
     >>> m = SHOMapModel(np.linspace(3e5, 3.2e5, 8))
     >>> m.name, m.dims, list(m.outputs)[:2]
-    ('sho', ('y', 'x'), ['amplitude', 'resonance_frequency'])
+    ('sho', ('y', 'x'), ['amplitude', 'measured_resonance'])
     """
 
     frequency_hz: np.ndarray
@@ -182,7 +184,7 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compile
     >>> y = 2e-3 * np.exp(0.5j) * sho_response(f, 301.2e3, 150.0)
     >>> for compiled in (True, False):
     ...     out = fit_spectra(f, y[None], compiled=compiled)
-    ...     print(round(float(out["resonance_frequency"][0]), 3), round(float(out["measured_quality_factor"][0]), 6),
+    ...     print(round(float(out["measured_resonance"][0]), 3), round(float(out["measured_quality_factor"][0]), 6),
     ...           round(float(out["amplitude"][0]), 9), round(float(out["phase"][0]), 9), round(float(out["r2"][0]), 9))
     301200.0 150.0 0.002 0.5 1.0
     301200.0 150.0 0.002 0.5 1.0
@@ -199,10 +201,10 @@ def fit_spectra(frequency_hz, spectra, *, iterations=40, tolerance=1e-3, compile
     for prefix, params, amp, squares in (("guess_", fit["guess_p"], fit["guess_c"], fit["guess_cost"]),
                                          ("", fit["p"], fit["c"], fit["cost"])):
         amplitude = amp * norm
-        out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}resonance_frequency": np.exp(params[:, 0]),
+        out.update({f"{prefix}amplitude": np.abs(amplitude), f"{prefix}measured_resonance": np.exp(params[:, 0]),
                     f"{prefix}measured_quality_factor": np.exp(params[:, 1]), f"{prefix}phase": np.angle(amplitude),
                     f"{prefix}r2": _r2(fit["total"], squares)})
-    out["resonance_frequency_stderr"] = out["resonance_frequency"] * fit["spread"][:, 0]
+    out["measured_resonance_stderr"] = out["measured_resonance"] * fit["spread"][:, 0]
     out["measured_quality_factor_stderr"] = out["measured_quality_factor"] * fit["spread"][:, 1]
     out["cost"], out["gap"] = fit["cost"], gap(fit["cost"] * (norm / fit["sigma"]) ** 2, f.size)
     return out
@@ -235,10 +237,10 @@ def fit_sho_block(model: SHOMapModel, response, *, gap_threshold=GAP_LIMIT, iter
     >>> f = np.concatenate([np.linspace(290e3, 310e3, 32), np.linspace(600e3, 640e3, 32)])
     >>> y = sho_response(f, 300e3, 80.0) * (f < 4e5) + 1j * sho_response(f, 620e3, 120.0) * (f > 4e5)
     >>> out = fit_sho_block(SHOMapModel(f), np.broadcast_to(y, (2, 3, f.size)))
-    >>> out["resonance_frequency"].shape, np.round(out["measured_quality_factor"][0, 0], 6).tolist()
+    >>> out["measured_resonance"].shape, np.round(out["measured_quality_factor"][0, 0], 6).tolist()
     ((2, 3, 2), [80.0, 120.0])
     >>> masked = fit_sho_block(SHOMapModel(f), np.stack([y, np.full(f.size, np.nan)]))
-    >>> np.isnan(masked["resonance_frequency"][1]).tolist(), masked["explained"][:, 0].tolist()
+    >>> np.isnan(masked["measured_resonance"][1]).tolist(), masked["explained"][:, 0].tolist()
     ([True, True], [1.0, 0.0])
     """
     y = np.asarray(response, complex)

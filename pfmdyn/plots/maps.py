@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 __all__ = ["plot_maps", "plot_dart"]
 
 _SHOWN = ("k1", "k1_stderr", "k2", "quality_factor", "viscous_loss", "contact_loss", "amplitude", "phase",
-          "electrostatic", "electrostatic_phase", "nulling_bias", "resonance_frequency", "measured_quality_factor",
+          "electrostatic", "electrostatic_phase", "nulling_bias", "measured_resonance", "measured_quality_factor",
           "r2", "gap", "contact_resonance", "contact_quality_factor", "d_eff", "oscillator_k1_error",
           "oscillator_d_eff_error")
 
