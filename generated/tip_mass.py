@@ -10,16 +10,13 @@ complex, ``Re beta > 0``) and broadcasting over the parameters (k, k1, k2, H, L,
 
 Every numerator and the denominator are sums of parameter monomials times the basis
 
-    h0 = cos(beta)*cosh(beta)
-    h1 = sin(beta)*sinh(beta)
-    h2 = cos(beta) - cosh(beta)
-    h3 = sin(beta) - sinh(beta)
-    h4 = cos(beta)*cosh(beta) - 1
-    h5 = cos(beta)*cosh(beta) + 1
-    h6 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h7 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
-    h8 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
-    h9 = sin(beta)*cosh(beta) - sin(beta) + cos(beta)*sinh(beta) - sinh(beta)
+    h0 = sin(beta)*sinh(beta)
+    h1 = sin(beta) - sinh(beta)
+    h2 = cos(beta)*cosh(beta) - 1
+    h3 = cos(beta)*cosh(beta) + 1
+    h4 = -sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h5 = sin(beta)*cosh(beta) + cos(beta)*sinh(beta)
+    h6 = sin(beta)*sinh(beta) + cos(beta) - cosh(beta)
 
 each evaluated once per call: by its Taylor series for ``|beta| < SWITCH`` (where the
 closed form cancels), else in closed form divided by ``cosh(beta)**1`` with ``tanh`` and
@@ -28,10 +25,9 @@ beyond.
 """
 import numpy as np
 
-__all__ = ['DRIVES', 'JACOBIAN_PARAMETERS', 'PARAMETERS', 'SWITCH', 'slope', 'slope_and_jacobian']
+__all__ = ['DRIVES', 'PARAMETERS', 'SWITCH', 'slope']
 
 PARAMETERS = ('k', 'k1', 'k2', 'H', 'L', 'mu')
-JACOBIAN_PARAMETERS = ('beta', 'k1', 'k2', 'mu')
 DRIVES = ('d1', 'd2', 'f0', 'q0')
 SWITCH = 1.3
 """``|beta|`` below which the basis is evaluated by its series."""
@@ -40,20 +36,17 @@ SWITCH = 1.3
 def _basis(beta):
     """The basis functions h0... at ``beta`` (series or scaled closed form, see module)."""
     beta = np.asarray(beta)
-    out = np.empty((10,) + beta.shape, np.result_type(beta, float))
+    out = np.empty((7,) + beta.shape, np.result_type(beta, float))
     small = np.abs(beta) < SWITCH
     x = beta[small]
     _u4 = (x*x*x*x)
-    out[0, ...][small] = (1.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
-    out[1, ...][small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
-    out[2, ...][small] = x**2 * (-1.0 + _u4*(-0.002777777777777778 + _u4*(-5.511463844797178e-07 + _u4*(-2.294149119545945e-11 + _u4*(-3.123841393717245e-16)))))
-    out[3, ...][small] = (x*x*x) * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
-    out[4, ...][small] = (x*x*x*x) * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
-    out[5, ...][small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
-    out[6, ...][small] = (x*x*x) * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
-    out[7, ...][small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
-    out[8, ...][small] = (x*x*x*x*x*x) * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
-    out[9, ...][small] = (x*x*x*x*x) * (-0.08333333333333333 + _u4*(8.267195767195767e-05 + _u4*(-2.08767569878681e-08 + _u4*(1.4338431997162156e-12 + _u4*(-4.0124529179952086e-17)))))
+    out[0, ...][small] = x**2 * (1.0 + _u4*(-0.011111111111111112 + _u4*(8.818342151675484e-06 + _u4*(-1.4682554365094047e-09 + _u4*(7.997033967916147e-14 + _u4*(-1.8220628771738776e-18))))))
+    out[1, ...][small] = (x*x*x) * (-0.3333333333333333 + _u4*(-0.0003968253968253968 + _u4*(-5.010421677088344e-08 + _u4*(-1.5294327463639633e-12 + _u4*(-1.644127049324866e-17)))))
+    out[2, ...][small] = (x*x*x*x) * (-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16)))))
+    out[3, ...][small] = (2.0 + _u4*(-0.16666666666666666 + _u4*(0.0003968253968253968 + _u4*(-1.3361124472235584e-07 + _u4*(1.2235461970911706e-11 + _u4*(-4.208965246271657e-16))))))
+    out[4, ...][small] = (x*x*x) * (-0.6666666666666666 + _u4*(0.0031746031746031746 + _u4*(-1.60333493666827e-06 + _u4*(1.957673915345873e-10 + _u4*(-8.417930492543313e-15 + _u4*(1.5844025018903282e-19))))))
+    out[5, ...][small] = x * (2.0 + _u4*(-0.06666666666666667 + _u4*(8.818342151675486e-05 + _u4*(-2.0555576111131665e-08 + _u4*(1.4394661142249065e-12 + _u4*(-4.0085383297825306e-17))))))
+    out[6, ...][small] = (x*x*x*x*x*x) * (-0.013888888888888888 + _u4*(8.267195767195768e-06 + _u4*(-1.4911969277048643e-09 + _u4*(7.965795553978976e-14 + _u4*(-1.8238422354523677e-18)))))
     large = ~small
     x = beta[large]
     if np.iscomplexobj(x):      # from real functions of the parts: a third cheaper than complex cos, sin
@@ -66,21 +59,14 @@ def _basis(beta):
     _tanh = (1.0 - _e2) / (1.0 + _e2)
     _sech = 2.0 * _e / (1.0 + _e2)
     _t0 = _s*_tanh
-    _t1 = _c*_sech - 1
-    _t2 = -_tanh
-    _t3 = _s*_sech
-    _t4 = _c*_tanh
-    _t5 = _s + _t4
-    out[0, ...][large] = _c
-    out[1, ...][large] = _t0
-    out[2, ...][large] = _t1
-    out[3, ...][large] = _t2 + _t3
-    out[4, ...][large] = _c - _sech
-    out[5, ...][large] = _c + _sech
-    out[6, ...][large] = -_s + _t4
-    out[7, ...][large] = _t5
-    out[8, ...][large] = _t0 + _t1
-    out[9, ...][large] = _t2 - _t3 + _t5
+    _t1 = _c*_tanh
+    out[0, ...][large] = _t0
+    out[1, ...][large] = _s*_sech - _tanh
+    out[2, ...][large] = _c - _sech
+    out[3, ...][large] = _c + _sech
+    out[4, ...][large] = -_s + _t1
+    out[5, ...][large] = _s + _t1
+    out[6, ...][large] = _c*_sech + _t0 - 1
     return out
 
 
@@ -105,124 +91,21 @@ def slope(beta, k, k1, k2, H, L, mu):
     >>> [f"{v:.7g}" for v in slope(2.5, 2.0, 100.0, 50.0, 1e-05, 0.0002, 0.1)]
     ['5446.294', '5086.614', '54.46294', '-0.03070922']
     """
-    _h1, _h3, _h4, _h5, _h6, _h7, _h8 = map(_basis(beta).__getitem__, [1, 3, 4, 5, 6, 7, 8])
+    _h0, _h1, _h2, _h3, _h4, _h5, _h6 = _basis(beta)
     beta = np.asarray(beta)
     _t0 = (beta*beta*beta*beta*beta*beta)
     _t1 = L**2
     _t2 = _t1*k**2
     _t3 = H**2*k2
-    _t4 = _t3*_h4
+    _t4 = _t3*_h2
     _t5 = (9*k1)*beta**2
     _t6 = 3*k
-    _t7 = _t6*_h7*(beta*beta*beta*beta*beta)
+    _t7 = _t6*_h5*(beta*beta*beta*beta*beta)
     _t8 = (_t1*_t6)*(beta*beta*beta)
     _t9 = (_t6*mu)*_t0
     _t10 = _t6*(beta*beta*beta*beta)
-    _t11 = L*_h1*_t10
+    _t11 = L*_h0*_t10
     _t12 = H*k2
-    _t13 = _t12*_h4
-    _r = 1.0 / (_t2*_h5*_t0 + (_t2*mu)*_h6*(beta*beta*beta*beta*beta*beta*beta) - k1*_h6*_t8 + _t3*_t7 - _t4*_t5 + _t4*_t9)
-    return ((k1*_t11) * _r, (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r, (_t11) * _r, (-_h3*_t8 - (_t1*mu)*_h8*_t10 + (9*_t1*k1)*_h8) * _r)
-
-
-def slope_and_jacobian(beta, k, k1, k2, H, L, mu, wrt=JACOBIAN_PARAMETERS, drives=range(4)):
-    """Tip slope theta = u0'(L) per unit drive, and its partial derivatives w.r.t. (beta, k1, k2, mu).
-
-    Arguments as :func:`slope`; ``wrt``: the partials to compute (a subset of
-    ``JACOBIAN_PARAMETERS``), the others are returned as None, as are those of values not in
-    ``drives`` (indices of the values).
-
-    Returns
-    -------
-    values : tuple of ndarray
-        as :func:`slope`
-    jacobian : tuple of tuples of ndarray
-        ``jacobian[i][j]``: derivative of ``values[i]`` w.r.t. ``JACOBIAN_PARAMETERS[j]``
-
-    Examples
-    --------
-    >>> values, jacobian = slope_and_jacobian(2.5, 2.0, 100.0, 50.0, 1e-05, 0.0002, 0.1)
-    >>> [f"{v:.8g}" for v in jacobian[0]]
-    ['-3307.0399', '-4.260685', '-5.5406387', '1529.2611']
-    """
-    _h0, _h1, _h2, _h3, _h4, _h5, _h6, _h7, _h8, _h9 = _basis(beta)
-    beta = np.asarray(beta)
-    _t0 = (beta*beta*beta*beta*beta*beta)
-    _t1 = L**2
-    _t2 = _t1*k**2
-    _t3 = H**2*k2
-    _t4 = _t3*_h4
-    _t5 = (9*k1)*beta**2
-    _t6 = 3*k
-    _t7 = _t6*_h7*(beta*beta*beta*beta*beta)
-    _t8 = (_t1*_t6)*(beta*beta*beta)
-    _t9 = (_t6*mu)*_t0
-    _t10 = _t6*(beta*beta*beta*beta)
-    _t11 = L*_h1*_t10
-    _t12 = H*k2
-    _t13 = _t12*_h4
-    _r = 1.0 / (_t2*_h5*_t0 + (_t2*mu)*_h6*(beta*beta*beta*beta*beta*beta*beta) - k1*_h6*_t8 + _t3*_t7 - _t4*_t5 + _t4*_t9)
-    _v0 = (k1*_t11) * _r
-    _v1 = (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r
-    _v2 = (_t11) * _r
-    _v3 = (-_h3*_t8 - (_t1*mu)*_h8*_t10 + (9*_t1*k1)*_h8) * _r
-    _jac = dict.fromkeys(JACOBIAN_PARAMETERS)
-    if 'beta' in wrt:
-        _d0_0 = H**2*k2
-        _d0_1 = _d0_0*k1
-        _d0_2 = 18*_h4
-        _d0_3 = _d0_2*beta
-        _d0_4 = L**2
-        _d0_5 = _d0_4*k**2
-        _d0_6 = _h6*(beta*beta*beta*beta*beta*beta)
-        _d0_7 = _d0_5*_d0_6
-        _d0_8 = _d0_0*k
-        _d0_9 = (beta*beta*beta*beta*beta)
-        _d0_10 = 6*_d0_9
-        _d0_11 = _d0_10*_h0
-        _d0_12 = beta**2
-        _d0_13 = 9*_d0_12*_h6
-        _d0_14 = (beta*beta*beta*beta)
-        _d0_15 = _d0_14*_h7
-        _d0_16 = 15*_d0_15
-        _d0_17 = (beta*beta*beta)
-        _d0_18 = _d0_17*_h1
-        _d0_19 = _d0_4*k
-        _d0_20 = 9*_d0_4
-        _d0_21 = k*_d0_12
-        _d0_22 = mu*_d0_2*_d0_9
-        _d0_23 = 3*mu
-        _d0_24 = _d0_23*_d0_6
-        _d0_25 = L*k
-        _d0_26 = (12*_d0_25)*_d0_18
-        _d0_27 = (3*_d0_25)*_d0_15
-        _d0_28 = H*k2
-        _d0_29 = _d0_28*k1
-        _d0_30 = _d0_28*k
-        _d0_31 = _d0_19*_d0_17
-        _q = (-_d0_1*_d0_13 - _d0_1*_d0_3 + _d0_5*_d0_10*_h5 + _d0_8*_d0_11 + _d0_8*_d0_16 + (6*_d0_19*k1)*_d0_18 - (_d0_20*k1)*_d0_21*_h6 + _d0_8*_d0_22 + _d0_8*_d0_24 - (2*_d0_5*mu)*_h1*(beta*beta*beta*beta*beta*beta*beta) + (7*mu)*_d0_7 + _d0_7) * _r
-        _jac['beta'] = ((k1*_d0_26 + k1*_d0_27) * _r - _v0 * _q if 0 in drives else None, (_d0_30*_d0_11 - _d0_29*_d0_13 + _d0_30*_d0_16 + _d0_30*_d0_22 + _d0_30*_d0_24 - _d0_29*_d0_3) * _r - _v1 * _q if 1 in drives else None, (_d0_26 + _d0_27) * _r - _v2 * _q if 2 in drives else None, (-(_d0_19*_d0_23)*_d0_14*_h9 - _d0_20*_d0_21*_h3 - 3*_d0_31*_h2 - (12*mu)*_d0_31*_h8 + (9*_d0_4*k1)*_h9) * _r - _v3 * _q if 3 in drives else None)
-    if 'k1' in wrt:
-        _d1_0 = (9*k2)*_h4*beta**2
-        _d1_1 = L**2
-        _d1_2 = 3*k
-        _q = (-H**2*_d1_0 - (_d1_1*_d1_2)*_h6*(beta*beta*beta)) * _r
-        _jac['k1'] = (((L*_d1_2)*_h1*(beta*beta*beta*beta)) * _r - _v0 * _q if 0 in drives else None, (-H*_d1_0) * _r - _v1 * _q if 1 in drives else None, -_v2 * _q if 2 in drives else None, ((9*_d1_1)*_h8) * _r - _v3 * _q if 3 in drives else None)
-    if 'k2' in wrt:
-        _d2_0 = H**2
-        _d2_1 = _d2_0*_h4
-        _d2_2 = (9*k1)*beta**2
-        _d2_3 = 3*k
-        _d2_4 = _d2_3*_h7*(beta*beta*beta*beta*beta)
-        _d2_5 = (_d2_3*mu)*(beta*beta*beta*beta*beta*beta)
-        _d2_6 = H*_h4
-        _q = (_d2_0*_d2_4 - _d2_1*_d2_2 + _d2_1*_d2_5) * _r
-        _jac['k2'] = (-_v0 * _q if 0 in drives else None, (H*_d2_4 - _d2_2*_d2_6 + _d2_5*_d2_6) * _r - _v1 * _q if 1 in drives else None, -_v2 * _q if 2 in drives else None, -_v3 * _q if 3 in drives else None)
-    if 'mu' in wrt:
-        _d3_0 = L**2
-        _d3_1 = 3*k
-        _d3_2 = (_d3_1*k2)*_h4*(beta*beta*beta*beta*beta*beta)
-        _q = (H**2*_d3_2 + (_d3_0*k**2)*_h6*(beta*beta*beta*beta*beta*beta*beta)) * _r
-        _jac['mu'] = (-_v0 * _q if 0 in drives else None, (H*_d3_2) * _r - _v1 * _q if 1 in drives else None, -_v2 * _q if 2 in drives else None, (-(_d3_0*_d3_1)*_h8*(beta*beta*beta*beta)) * _r - _v3 * _q if 3 in drives else None)
-    _cols = list(_jac.values())
-    return (_v0, _v1, _v2, _v3), tuple(tuple(None if c is None else c[i] for c in _cols) for i in range(4))
+    _t13 = _t12*_h2
+    _r = 1.0 / (_t2*_h3*_t0 + (_t2*mu)*_h4*(beta*beta*beta*beta*beta*beta*beta) - k1*_h4*_t8 + _t3*_t7 - _t4*_t5 + _t4*_t9)
+    return ((k1*_t11) * _r, (_t12*_t7 - _t13*_t5 + _t13*_t9) * _r, (_t11) * _r, (-_h1*_t8 - (_t1*mu)*_h6*_t10 + (9*_t1*k1)*_h6) * _r)

@@ -328,12 +328,11 @@ class Cantilever:
         (0.0, 0.0, 0.0, 1e-05)
         """
         damped = self._damped(frequency, contact, fluid)
-        _, kvv, kll, kvl, height, length, _, gamma, rho_g = self.model_parameters(contact, k1=damped.k1)
-        return damped.beta, damped.k, kvv, kll, kvl, height, length, damped.mu, gamma, rho_g
+        return (damped.beta, *self.model_parameters(contact, k1=damped.k1)._replace(k=damped.k, mu=damped.mu))
 
-    def model_parameters(self, contact: "Contact | None" = None, *, k1=None) -> tuple:
-        """The composed model's parameters ``(k, kvv, kll, kvl, H, L, mu, gamma, rho_g)`` without
-        damping (:mod:`pfmdyn.composed`).
+    def model_parameters(self, contact: "Contact | None" = None, *, k1=None) -> composed.Parameters:
+        """The composed model's parameters (:class:`pfmdyn.composed.Parameters`: ``k, kvv, kll, kvl, H, L,
+        mu, gamma, rho_g``) without damping: the one place they are built from a probe.
 
         The contact springs in the lever's axes (the tilt rotates ``k1``, ``k2``; zeros when
         ``contact`` is None); ``k1``, when given, replaces the contact's before the rotation (the
@@ -349,8 +348,8 @@ class Cantilever:
         else:
             springs = rotated(contact.k1 if k1 is None else k1, contact.k2_of(contact.k1), self.alpha)
             height = self._tip_height(contact)
-        return (self.spring_constant, *springs, height, self.length, self.tip_mass_ratio, self.tip_position,
-                self.rho_g)
+        return composed.Parameters(self.spring_constant, *springs, height, self.length, self.tip_mass_ratio,
+                                   self.tip_position, self.rho_g)
 
     def response(self, frequency, contact: "Contact") -> transfer.ElasticTransfer:
         """Slope at the laser spot per unit ``d1, d2, f0, q0`` at ``frequency`` (Hz) of the composed model.

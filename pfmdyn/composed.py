@@ -34,15 +34,47 @@ from __future__ import annotations
 
 import math
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
 from .generated import lever_pieces as pieces
 
-__all__ = ["PARAMETERS", "JACOBIAN_PARAMETERS", "SPOT_JACOBIAN_PARAMETERS", "DRIVES", "slope", "deflection",
-           "response", "slope_and_jacobian", "characteristic", "characteristic_and_jacobian"]
+__all__ = ["Parameters", "PARAMETERS", "JACOBIAN_PARAMETERS", "SPOT_JACOBIAN_PARAMETERS", "DRIVES", "slope",
+           "deflection", "response", "slope_and_jacobian", "characteristic", "characteristic_and_jacobian"]
 
-PARAMETERS = ("k", "kvv", "kll", "kvl", "H", "L", "mu", "gamma", "rho_g")
+
+class Parameters(NamedTuple):
+    """The lever's parameters after ``beta`` (and the spot's ``sigma``) of every function here, typed and
+    named; a tuple, so ``f(beta, *parameters)`` is the positional call.  Built from a probe in one place,
+    :meth:`pfmdyn.cantilever.Cantilever.model_parameters`; each may be an array (broadcast with ``beta``).
+
+    >>> p = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> f"{characteristic(2.5, *p):.8g}" == f"{characteristic(2.5, 2.0, 98.0, 52.0, 9.0, 1e-5, 2e-4, 0.1, 0.9, 0.05):.8g}"
+    True
+    """
+
+    k: float
+    """The lever's spring constant (N/m)."""
+    kvv: float
+    """The contact's vertical spring in the lever's axes (N/m; complex with a contact dashpot)."""
+    kll: float
+    """Its longitudinal spring in the lever's axes (N/m)."""
+    kvl: float
+    """Their coupling (N/m; a tilt's)."""
+    H: float
+    """The tip height (m)."""
+    L: float
+    """The lever's length (m)."""
+    mu: float
+    """The tip's mass over the lever's."""
+    gamma: float
+    """The tip's position over the length, ``0 < gamma <= 1``."""
+    rho_g: float
+    """The tip's radius of gyration over the length."""
+
+
+PARAMETERS = Parameters._fields
 JACOBIAN_PARAMETERS = ("beta", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
 """The parameters of :func:`characteristic_and_jacobian`'s partials (and of the slope at the end)."""
 SPOT_JACOBIAN_PARAMETERS = ("beta", "sigma", "k", "kvv", "kll", "kvl", "mu", "gamma", "rho_g")
@@ -696,29 +728,37 @@ def _small_inverse(M):
     return np.array([[M[1, 1], -M[0, 1]], [-M[1, 0], M[0, 0]]]) / np.where(det == 0, np.nan, det)
 
 
-_LAST_READ = [None]
-"""The last :class:`_WrittenOut` with its arguments: a least-squares fit asks for the values at a
-point, then for their partials at the same point, which need the same solution."""
 _KEPT_SIZE = 1 << 14
 """Batches up to this size are kept (some megabytes; a map's block is not held after its fit)."""
 
 
-def _read_out(*args, drives=DRIVES) -> _WrittenOut:
-    """``_WrittenOut(*args, drives)``, the last one again when the arguments are the same to the bit.
+class _LastReadOut:
+    """``_WrittenOut(*args, drives)``, the last one again when the arguments are the same to the bit: a
+    least-squares fit asks for the values at a point, then for their partials at the same point, which
+    need the same solution.
 
     >>> args = (np.linspace(1, 3, 4), 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
-    >>> _read_out(*args) is _read_out(*args), _read_out(*args) is _read_out(args[0] + 1e-9, *args[1:])
+    >>> read = _LastReadOut()
+    >>> read(*args) is read(*args), read(*args) is read(args[0] + 1e-9, *args[1:])
     (True, False)
     """
-    arrays = [np.asarray(a) for a in args]
-    key = (tuple(drives),) + tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays)
-    last = _LAST_READ[0]
-    if last is not None and last[0] == key:
-        return last[1]
-    lever = _WrittenOut(*arrays, drives=tuple(drives))
-    if lever.beta.size <= _KEPT_SIZE:
-        _LAST_READ[0] = (key, lever)
-    return lever
+
+    def __init__(self):
+        self.key, self.lever = None, None
+
+    def __call__(self, *args, drives=DRIVES) -> _WrittenOut:
+        arrays = [np.asarray(a) for a in args]
+        key = (tuple(drives),) + tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays)
+        if self.lever is not None and self.key == key:
+            return self.lever
+        lever = _WrittenOut(*arrays, drives=tuple(drives))
+        if lever.beta.size <= _KEPT_SIZE:
+            self.key, self.lever = key, lever
+        return lever
+
+
+_read_out = _LastReadOut()
+"""The NumPy read-out of :func:`response` and :func:`slope_and_jacobian` (one kept, module-wide)."""
 
 
 KERNELS = True
@@ -1065,19 +1105,18 @@ def _compiled_characteristic(*args):
     from . import composed_kernels as kernels
 
     arrays = [np.asarray(a) for a in args]
-    shape = np.broadcast_shapes(*(a.shape for a in arrays))
     dtype = np.result_type(*arrays, float)
     if all(a.ndim == 0 for a in arrays[1:]):        # one lever: its parameters once
-        params = np.array([[a.item() for a in arrays[1:]]], dtype)
-        beta = np.broadcast_to(arrays[0], shape).reshape(-1)
+        params, shape = np.array([[a.item() for a in arrays[1:]]], dtype), arrays[0].shape
     elif arrays[0].ndim == 1 and all(a.shape in ((), (a.size, 1)) for a in arrays[1:]):
         # levers as a column against a row of beta (a start grid's)
+        shape = np.broadcast_shapes(*(a.shape for a in arrays))
         params = np.stack([np.broadcast_to(a, shape[:1] + (1,))[:, 0] for a in arrays[1:]], -1).astype(dtype)
-        beta = arrays[0]
     else:
         return _shaped(_transferred(*args), args[8])
-    out = np.empty((len(params), beta.size), dtype)
-    kernels.characteristic(np.array(beta, dtype), params, out)     # writable: a read-only view compiles again
+    out = np.empty((len(params), arrays[0].size), dtype)
+    # beta copied: writable (a read-only view compiles again) and flat
+    kernels.characteristic(np.array(arrays[0], dtype).reshape(-1), params, out)
     return out.reshape(shape)
 
 

@@ -402,6 +402,15 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
 _point_jump = numba.njit(cache=True)(pieces.point_jump)
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 _PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+_PAIR_ROWS = np.array(_PAIRS)
+_PAIR_SIGNS = (-1.0) ** (_PAIR_ROWS.sum(1)[:, None] + _PAIR_ROWS.sum(1)[None, :])
+"""The pairs as an array (indexed in a loop) and the sign of each pair of minors in Jacobi's expansion."""
+_START = np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)
+_START_MINORS = _PAIR_SIGNS * np.array([[_START[r0, c0] * _START[r1, c1] - _START[r0, c1] * _START[r1, c0]
+                                         for c0, c1 in _PAIRS[::-1]] for r0, r1 in _PAIRS[::-1]])
+"""A segment's rows at its start in the bounded basis but the growing column's ``exp(-s_end)`` (1 here),
+and their signed minors (row pairs :data:`_PAIRS` reversed, column pairs reversed): small integers, so a
+minor times ``exp(-s_end)`` is exactly the minor of the rows themselves."""
 
 
 @numba.njit(cache=True)
@@ -421,7 +430,7 @@ def characteristic(beta, params, out):
     """
     rows, load = np.empty((5, 4), out.dtype), np.empty(5, out.dtype)
     R, T = np.empty((4, 2), out.dtype), np.empty((4, 2), out.dtype)
-    E, v = np.empty((6, 4), out.dtype), np.empty(6, out.dtype)
+    v, g_free = np.empty(6, out.dtype), np.empty(6, out.dtype)
     g = params[0, 7].real
     shared = True
     for r in range(params.shape[0]):
@@ -429,21 +438,21 @@ def characteristic(beta, params, out):
     if not shared:
         for n in range(out.size):
             r, i = n // beta.shape[0], n % beta.shape[0]
-            out[r, i] = _characteristic_one(beta[i], params[r], params[r, 7].real, rows, load, R, T, E, v)
+            out[r, i] = _characteristic_one(beta[i], params[r], params[r, 7].real, rows, load, R, T, v, g_free)
         return
     for i in range(beta.shape[0]):
         factor = _from_clamp(beta[i], g, rows, load, R)
-        beyond = factor if g == 1.0 else _to_free_end(beta[i], g, rows, load, E, v)
+        beyond = factor if g == 1.0 else _to_free_end(beta[i], g, v, g_free)
         for r in range(params.shape[0]):
             out[r, i] = _joined(beta[i], params[r], g, R, T, v, factor, beyond)
 
 
 @numba.njit(cache=True)
-def _characteristic_one(b, p, g, rows, load, R, T, E, v):
+def _characteristic_one(b, p, g, rows, load, R, T, v, g_free):
     """:func:`characteristic` of the lever ``p`` at ``b``, its tip at ``g`` (real, or complex for a
     complex step in ``gamma``); the other arguments are work arrays."""
     factor = _from_clamp(b, g, rows, load, R)
-    beyond = factor if g == 1.0 else _to_free_end(b, g, rows, load, E, v)
+    beyond = factor if g == 1.0 else _to_free_end(b, g, v, g_free)
     return _joined(b, p, g, R, T, v, factor, beyond)
 
 
@@ -456,7 +465,8 @@ def _from_clamp(b, g, rows, load, R):
             for c in range(2):
                 R[m, c] = rows[m, 2 + c]
         return np.exp(-s)
-    B00, B01, B10, B11 = 1.0, np.exp(0.0 - s), -1.0, np.exp(0.0 - s)
+    # the clamp's rows: the growing column is exp(-s) there, the decaying one's value here
+    B00, B01, B10, B11 = 1.0, rows[0, 2], -1.0, rows[0, 2]
     for m in range(4):
         R[m, 0] = rows[m, 2] - rows[m, 0] * B00 - rows[m, 1] * B10
         R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B11
@@ -464,8 +474,9 @@ def _from_clamp(b, g, rows, load, R):
 
 
 @numba.njit(cache=True)
-def _to_free_end(b, g, rows, load, E, v):
-    """The segment beyond a set-back tip: the weights ``v`` of the minors of the tip's state; its factor."""
+def _to_free_end(b, g, v, g_free):
+    """The segment beyond a set-back tip: the weights ``v`` of the minors of the tip's state; its factor
+    (``g_free``: work, the minors of the free end's rows)."""
     ell = 1.0 - g
     s = b * ell
     if abs(s) <= _LIMIT:
@@ -475,19 +486,16 @@ def _to_free_end(b, g, rows, load, E, v):
             a, c = _PAIRS[q]
             v[q] = K[(a - 2) % 4] * K[(c - 3) % 4] - K[(c - 2) % 4] * K[(a - 3) % 4]
         return np.exp(-s)
-    _segment(b, 0.0, ell, 1.0, rows, load)
-    E[:4] = rows[:4]
-    _segment(b, ell, ell, 1.0, rows, load)
-    E[4:] = rows[2:4]
+    basis = _bounded_basis(s, s)        # the free end's rows: 2, 3
+    for q in range(6):
+        a, c = _PAIR_ROWS[q, 0], _PAIR_ROWS[q, 1]
+        g_free[q] = basis[8 + a] * basis[12 + c] - basis[8 + c] * basis[12 + a]
+    at_start = basis[2]                 # exp(-s): the growing column's value at the segment's start
     for kk in range(6):
-        r0, r1 = _PAIRS[5 - kk]
         total = s * 0.0
         for q in range(6):
-            a, c = _PAIRS[q]
-            gq = E[4, a] * E[5, c] - E[4, c] * E[5, a]
-            c0, c1 = _PAIRS[5 - q]
-            sign = 1.0 if (_PAIRS[kk][0] + _PAIRS[kk][1] + a + c) % 2 == 0 else -1.0
-            total += gq * (sign * (E[r0, c0] * E[r1, c1] - E[r0, c1] * E[r1, c0]))
+            total += g_free[q] * (_START_MINORS[kk, q] * at_start if _PAIR_ROWS[5 - q, 1] == 3 else
+                                  _START_MINORS[kk, q])
         v[kk] = total
     return 1.0 / _BOUNDED_AT_START + 0.0 * s
 
@@ -539,7 +547,7 @@ def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
                     R[m, c], dR[m, c] = rows[m, 2 + c], rows[m + 1, 2 + c]
             factor, d_log = np.exp(-s), -1.0
         else:
-            B01 = np.exp(0.0 - s)
+            B01 = rows[0, 2]        # exp(-s) at the clamp, as in _from_clamp
             for m in range(4):
                 R[m, 0] = rows[m, 2] - rows[m, 0] * 1.0 - rows[m, 1] * -1.0
                 R[m, 1] = rows[m, 3] - rows[m, 0] * B01 - rows[m, 1] * B01
@@ -713,7 +721,7 @@ def characteristic_partials(beta, params, wrt, partials):
     """
     rows, load = np.empty((5, 4), np.complex128), np.empty(5, np.complex128)
     R, T = np.empty((4, 2), np.complex128), np.empty((4, 2), np.complex128)
-    E, v = np.empty((6, 4), np.complex128), np.empty(6, np.complex128)
+    v, g_free = np.empty(6, np.complex128), np.empty(6, np.complex128)
     stepped = params.astype(np.complex128)
     for i in range(beta.shape[0]):
         for j in range(wrt.shape[0]):
@@ -726,9 +734,9 @@ def characteristic_partials(beta, params, wrt, partials):
                 h = 1e-20 * max(abs(params[w]), 1.0)
                 stepped[w] = complex(params[w], h)
             if w == 7:
-                value = _characteristic_one(b, stepped, stepped[7], rows, load, R, T, E, v)
+                value = _characteristic_one(b, stepped, stepped[7], rows, load, R, T, v, g_free)
             else:
-                value = _characteristic_one(b, stepped, params[7] + 0j, rows, load, R, T, E, v)
+                value = _characteristic_one(b, stepped, params[7] + 0j, rows, load, R, T, v, g_free)
             partials[j, i] = value.imag / h
             if w >= 0:
                 stepped[w] = params[w]

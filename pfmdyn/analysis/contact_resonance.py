@@ -67,9 +67,10 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     True
     """
     kvv, kll, kvl = rotated(k1, k2, lever.alpha)
+    # the free lever's parameters (its tip height, the tip's mass and inertia), the springs and tip here
+    parameters = lever.model_parameters(None)._replace(kvv=kvv, kll=kll, kvl=kvl, gamma=tip_position)
     with np.errstate(all="ignore"):
-        return composed.characteristic(beta, lever.spring_constant, kvv, kll, kvl, lever.tip_height or 0.0,
-                                          lever.length, lever.tip_mass_ratio, tip_position, lever.rho_g)
+        return composed.characteristic(beta, *parameters)
 
 
 def _free_root(lever: Cantilever, tip_position: float) -> float:

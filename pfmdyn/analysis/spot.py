@@ -58,7 +58,7 @@ def parameters(lever: Cantilever, contact: Contact) -> dict:
         raise UserError("the spot analysis needs the contact stiffness k1", quantity="k1")
     if lever.tip_height is None:
         raise UserError("the spot analysis needs the tip height", quantity="tip_height")
-    return {name: float(value) for name, value in zip(composed.PARAMETERS, lever.model_parameters(contact))}
+    return {name: float(value) for name, value in lever.model_parameters(contact)._asdict().items()}
 
 
 def dimensionless(lever: Cantilever, contact: Contact) -> dict:

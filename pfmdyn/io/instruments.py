@@ -103,8 +103,10 @@ def _read_csv(path: Path) -> InstrumentRecord:
     return make_record(path, kind, "CSV table", channels, found)
 
 
-def read_instrument(path) -> InstrumentRecord:
-    """Read an instrument file (type from its extension) into an :class:`InstrumentRecord`.
+def read_instrument(path, data_only: bool = False) -> InstrumentRecord:
+    """Read an instrument file (type from its extension) into an :class:`InstrumentRecord`; ``data_only``:
+    for a caller that needs the fields and the spectrum, not the channels' names (a Nanosurf thermal tune
+    is then read from its layout: :func:`pfmdyn.io.nid.read_nid`).
 
     Every problem with the file is one :class:`~pfmdyn.errors.UserError` line.
 
@@ -120,7 +122,7 @@ def read_instrument(path) -> InstrumentRecord:
     if path.stat().st_size == 0:
         raise UserError(f"{path}: the file is empty")
     try:
-        return reader(path)
+        return reader(path, tune_from_layout=True) if data_only and file_kind(path) in NANOSURF_KINDS else reader(path)
     except UserError:
         raise
     except (ValueError, KeyError, TypeError, IndexError, AttributeError, OSError, UnicodeError,

@@ -74,11 +74,21 @@ def _load(path: Path):
     raise UserError(f"{path}: not a readable Nanosurf NID file (truncated or damaged?): {reason}")
 
 
-def _open(path: Path) -> tuple[dict, list[tuple]]:
+def _open(path: Path, tune_from_layout: bool = False) -> tuple[dict, list[tuple]]:
     """The header's sections and the channels, (name, data, unit, header) in file order: by NSFopen,
-    or from the layout when NSFopen cannot read the file or finds no channel in it."""
+    or from the layout when NSFopen cannot read the file or finds no channel in it.
+    ``tune_from_layout``: a thermal tune from its layout when it can be read, for a caller that needs
+    the header and the spectra but not NSFopen's channel names (the same numbers, without importing
+    NSFopen's pandas: a fifth of a second of a command)."""
     if not path.is_file():
         raise UserError(f"{path}: no such file")
+    if tune_from_layout:
+        try:
+            sections, channels = _read_layout(path)
+        except UserError:
+            sections = {}
+        if _is_thermal(sections):
+            return sections, channels
     try:
         nid = _load(path)
     except MissingExtraError:
@@ -217,12 +227,18 @@ def _spectrum(path: Path, channel: tuple) -> tuple:
     return si_spectrum(path, frequency, _unit(str(header.get("Dim0Unit", ""))) or "Hz", data.reshape(-1, n)[0], unit)
 
 
-def read_nid(path) -> InstrumentRecord:
-    """Read a Nanosurf ``.nid`` file: channels with units; for a thermal tune, its fit and spectrum."""
+def _is_thermal(sections: dict) -> bool:
+    """Whether the header is a thermal tune's (its ``[DataSet-Info]`` lists "-- Thermal Tuning --")."""
+    return any("thermal tuning" in str(k).lower() for k in sections.get("DataSet-Info", {}) or {})
+
+
+def read_nid(path, tune_from_layout: bool = False) -> InstrumentRecord:
+    """Read a Nanosurf ``.nid`` file: channels with units; for a thermal tune, its fit and spectrum
+    (``tune_from_layout``: see :func:`_open`; the channels then have the layout's names)."""
     path = Path(path)
-    sections, channels = _open(path)
+    sections, channels = _open(path, tune_from_layout)
     info = sections.get("DataSet-Info", {}) or {}
-    thermal = any("thermal tuning" in str(k).lower() for k in info)
+    thermal = _is_thermal(sections)
     group = str(channels[0][0][0]).lower() if isinstance(channels[0][0], tuple) else ""
     found, notes, spectrum = {}, [], None
     if thermal:
@@ -265,7 +281,7 @@ def thermal_conditions(path) -> dict:
     ...
     pfmdyn.errors.UserError: missing.nid: no such file
     """
-    return _conditions(_open(Path(path))[0].get("DataSet-Info", {}) or {})
+    return _conditions(_open(Path(path), tune_from_layout=True)[0].get("DataSet-Info", {}) or {})
 
 
 def _conditions(info: dict) -> dict:

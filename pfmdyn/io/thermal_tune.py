@@ -96,7 +96,7 @@ def read_thermal_tune(path) -> ThermalTune:
     from .instruments import read_instrument
 
     path = Path(path)
-    record = read_instrument(path)          # checks the type, the file's existence and emptiness
+    record = read_instrument(path, data_only=True)   # checks the type, the file's existence and emptiness
     kind = file_kind(path)
     if kind in CSV_KINDS:
         return _from_csv(path)

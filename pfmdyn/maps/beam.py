@@ -235,7 +235,8 @@ class BeamMapModel:
         # read at the laser spot or, by default, at the free end
         spot = lever.spot_position
         module, at = (composed.at_end, ()) if spot == 1.0 else (composed.at_spot, (spot,))
-        args = (beta, *at, k, *rotated(k1e, k2e, alpha), height, length, mu, lever.tip_position, lever.rho_g)
+        kvv, kll, kvl = rotated(k1e, k2e, alpha)
+        args = (beta, *at, *lever.model_parameters(None)._replace(kvv=kvv, kll=kll, kvl=kvl, mu=mu))
         if not jacobian:
             return module.slope(*args), None
         wanted = ("beta", "kvv", "kll", "kvl", "mu")

@@ -194,12 +194,13 @@ def point_mass_k1(resonance, lever: Cantilever):
     return point_mass_contact_stiffness(np.asarray(resonance), lever.free_resonance, lever.spring_constant)
 
 
-def _springs(lever: Cantilever, contact: Contact, k1, loss, frequency):
-    """The composed model's arguments at ``frequency`` for arrays of ``k1`` and ``contact_loss``:
-    :meth:`Cantilever._damped` (the one damping substitution) and the contact's k2 law, rotated."""
+def _arguments(lever: Cantilever, contact: Contact, k1, loss, frequency):
+    """The composed model's ``beta`` and :class:`~pfmdyn.composed.Parameters` at ``frequency`` for arrays
+    of ``k1`` and ``contact_loss``: :meth:`Cantilever._damped` (the one damping substitution) and the
+    contact's k2 law, rotated, on the free lever's parameters."""
     damped = lever._damped(frequency, _PixelContact(k1, loss))
     kvv, kll, kvl = rotated(damped.k1, contact.k2_of(k1), lever.alpha)
-    return damped, kvv, kll, kvl
+    return damped.beta, lever.model_parameters(None)._replace(k=damped.k, kvv=kvv, kll=kll, kvl=kvl, mu=damped.mu)
 
 
 class _PixelContact(NamedTuple):
@@ -219,11 +220,9 @@ def deflection_signal(lever: Cantilever, contact: Contact, frequency, k1, loss):
     (0.9804, True)
     """
     frequency, k1, loss = np.broadcast_arrays(*(np.asarray(v, float) for v in (frequency, k1, loss)))
-    damped, kvv, kll, kvl = _springs(lever, contact, k1, loss, frequency)
-    height = lever.tip_height or 0.0
+    beta, parameters = _arguments(lever, contact, k1, loss, frequency)
     with np.errstate(all="ignore"):
-        (slope,) = composed.slope(damped.beta, lever.spot_position, damped.k, kvv, kll, kvl, height, lever.length,
-                                  damped.mu, lever.tip_position, lever.rho_g, drives=("d1",))
+        (slope,) = composed.slope(beta, lever.spot_position, *parameters, drives=("d1",))
     return np.asarray(slope, complex).reshape(frequency.shape) * (2 * lever.length / 3)
 
 
@@ -241,12 +240,10 @@ def lever_pole(lever: Cantilever, contact: Contact, k1, loss, start, steps: int 
     """
     k1, loss, f = (np.asarray(v, float).ravel() for v in (k1, loss, start))
     f = f.astype(complex)
-    height = lever.tip_height or 0.0
 
     def characteristic(frequency):
-        damped, kvv, kll, kvl = _springs(lever, contact, k1, loss, frequency)
-        return composed.characteristic(damped.beta, damped.k, kvv, kll, kvl, height, lever.length, damped.mu,
-                                       lever.tip_position, lever.rho_g)
+        beta, parameters = _arguments(lever, contact, k1, loss, frequency)
+        return composed.characteristic(beta, *parameters)
 
     with np.errstate(all="ignore"):
         for _ in range(steps):
