@@ -206,10 +206,20 @@ def test_inspect_names_a_dart_image_and_its_settings(tmp_path):
 
 def test_an_image_without_dart_layers_is_one_line(tmp_path, capsys):
     path = igor_wave(tmp_path / "pfm.ibw", np.ones((8, 8, 2), "f4"), "pfm", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
-                     {2: ["HeightRetrace", "PhaseRetrace"]}, asylum_note({"SpringConstant": "2"}))
+                     {2: ["HeightRetrace", "Amplitude2Retrace"]}, asylum_note({"SpringConstant": "2"}))
     assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not a DART image: no Amplitude1Retrace" in err[0]
+
+
+def test_a_single_frequency_image_is_named_as_such(tmp_path, capsys):
+    """Most .ibw files are ordinary PFM images: said so, not reported as a DART image missing layers."""
+    path = igor_wave(tmp_path / "pfm.ibw", np.ones((8, 8, 3), "f4"), "pfm", [(0, 1e-8, "m"), (0, 1e-8, "m")], "m",
+                     {2: ["HeightRetrace", "AmplitudeRetrace", "PhaseRetrace"]}, asylum_note({"SpringConstant": "2"}))
+    assert main(["map", str(path), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pfm.ibw: a single-frequency image (layers: HeightRetrace, AmplitudeRetrace" in err[0]
+    assert not (tmp_path / "o").exists()
 
 
 def test_k2_without_a_tip_height_assumes_the_typical_one(tmp_path, capsys):

@@ -101,6 +101,10 @@ def read_dart(path) -> DartImage:
     notes = []
     picked = {name: _pick(layers, name) for name in DART_CHANNELS}
     missing = [name for name, found in picked.items() if found is None]
+    if len(missing) == len(DART_CHANNELS) and layers:      # an ordinary image, as most .ibw files are
+        raise UserError(f"{path}: a single-frequency image (layers: {', '.join(layers)}), not a DART image: nothing "
+                        "to fit per pixel; map inverts DART images (Amplitude1, Amplitude2, Phase1, Phase2, Frequency "
+                        "layers), and 'pfmdyn stiffness FILE' the contact resonance an image's note records")
     if missing:
         raise UserError(f"{path}: not a DART image: no {', '.join(n + 'Retrace' for n in missing)} layer "
                         f"(layers: {', '.join(layers) or 'none labelled'})")
