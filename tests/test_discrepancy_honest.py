@@ -63,6 +63,15 @@ def test_real_files_state_dof_and_name_no_untestable_mechanism(tmp_path, capsys,
         assert any(n.startswith("damping: ") and "a second damping mechanism" in n for n in report["notes"])
 
 
+@pytest.mark.skipif(not ASYLUM.is_dir(), reason="real data absent")
+def test_a_file_without_length_asks_for_the_length_alone(capsys):
+    """The tip height has its default in every command: a file that records neither it nor the length
+    asks for the length only (it asked for both, though with the length alone the run goes through)."""
+    assert cli.main(["discrepancy", str(ASYLUM / "PMN28Pt0000.h5")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].endswith("lever length not in PMN28Pt0000.h5: give --length"), err
+
+
 def test_second_mechanism_untestable_from_two_q_values(tmp_path):
     """A two-row table (free 1, contact 1, each with Q) whose Q values no single mechanism
     explains: the second mechanism is not named (two parameters on two Q values test
