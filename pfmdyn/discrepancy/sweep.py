@@ -127,9 +127,19 @@ def solve_from_starts(residual, starts, lower, upper, keep: int = 3) -> StartsFi
 
 
 def parameter_entry(parameter: Parameter, internal: float, variance: float) -> dict:
+    """A fitted parameter's entry; one with a null (no such effect) that sits at it, or within two standard
+    errors of it, is not determined: the data do not tell it from none.
+
+    >>> parameter_entry(EXTRA_LOSS, 0.0, 1e-6)["determined"], parameter_entry(EXTRA_LOSS, 0.01, 1e-6)["stderr"]
+    (False, 0.001)
+    """
     sd = math.sqrt(variance) if math.isfinite(variance) else math.inf
-    return {"value": float(parameter.value(internal)), "stderr": parameter.stderr(internal, sd) if math.isfinite(sd)
-            else math.nan, "unit": parameter.unit or "1"}
+    entry = {"value": float(parameter.value(internal)), "stderr": parameter.stderr(internal, sd) if math.isfinite(sd)
+             else math.nan, "unit": parameter.unit or "1"}
+    if parameter.null is not None and not abs(internal - parameter.null) > 2 * sd:
+        entry.update(determined=False, why=f"at its bound ({parameter.value(parameter.null):g}) or within two "
+                                           "standard errors of it: the data do not tell it from none")
+    return entry
 
 
 class SweepFit(Result):
@@ -180,7 +190,7 @@ def quality_text(q: float) -> str:
 def plus_minus(entry: dict, unit: str) -> str:
     value, err = entry["value"], entry.get("stderr")
     text = f"{value:.6g}" + (f" +- {err:.2g}" if err is not None and math.isfinite(err) and err > 0 else "")
-    return text + (f" {unit}" if unit else "")
+    return text + (f" {unit}" if unit else "") + (" (not told from none)" if entry.get("determined") is False else "")
 
 
 def _hz(value: float) -> str:
