@@ -389,3 +389,23 @@ def test_the_temperature_used_is_printed(extra, words, capsys):
     """Before, resonances printed "air at -248.15 C" for --temperature 25 and never the kelvin."""
     assert _run(["resonances", *LEVER, "--width", "4e-5", "--medium", "air", *extra]) == 0
     assert capsys.readouterr().out.splitlines()[0] == words
+
+
+def test_a_resonance_table_without_metadata_takes_the_flags_and_its_free_row(tmp_path, capsys):
+    """stiffness refused a table whose lever came in flags ('missing metadata key(s) spring_constant, length, ...'),
+    and both commands asked for the free resonance the table's free mode 1 row holds."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    lever = ["--spring-constant", "0.46538", "--length", "240e-6", "--tip-height", "13e-6"]
+    assert _run(["stiffness", str(table), *lever, "--json", str(tmp_path / "file.json")]) == 0
+    assert _run(["stiffness", "--free-resonance", "72969", "--contact", "368990", *lever,
+                 "--json", str(tmp_path / "flags.json")]) == 0
+    k1 = [json.loads((tmp_path / f"{name}.json").read_text())["results"]["k1"] for name in ("file", "flags")]
+    assert k1[0]["value"] == pytest.approx(k1[1]["value"], rel=1e-12) and k1[0]["stderr"] > 0
+    assert _run(["discrepancy", str(table), *lever, "--json", str(tmp_path / "d.json")]) == 0
+    assert json.loads((tmp_path / "d.json").read_text())["lever"]["free_resonance"]["value"] == 72969.0
+    capsys.readouterr()
+    table.write_text("mode,condition,frequency_hz\n1,contact,368990\n")
+    assert _run(["discrepancy", str(table), *lever]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "table.csv" in err[0] and "--free-resonance" in err[0], err
