@@ -409,3 +409,23 @@ def test_a_resonance_table_without_metadata_takes_the_flags_and_its_free_row(tmp
     assert _run(["discrepancy", str(table), *lever]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "table.csv" in err[0] and "--free-resonance" in err[0], err
+
+
+def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monkeypatch):
+    """spot FILE required --frequency though the image's note records the drive (DriveFrequency)."""
+    import numpy as np
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    from igor_files import asylum_note, igor_wave
+
+    image = igor_wave(tmp_path / "scan.ibw", np.ones((8, 8, 2), "f4"), "scan", [(0.0, 1e-8, "m")] * 2, "m",
+                      {2: ["HeightRetrace", "AmplitudeRetrace"]},
+                      asylum_note({"SpringConstant": 2.0, "ThermalFrequency": 7e4, "CustomLeverLength": 2e-4,
+                                   "DriveFrequency": 3.1e5}))
+    out = tmp_path / "spot.json"
+    assert _run(["spot", str(image), "--k1", "100", "--json", str(out)]) == 0
+    frequency = json.loads(out.read_text())["results"]["frequency"]
+    assert frequency["value"] == 3.1e5 and frequency["status"] == "file"
+    assert "from the file: drive frequency 310000 Hz" in capsys.readouterr().out
+    assert _run(["spot", str(image), "--k1", "100", "--frequency", "2e5", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
+                                                                   "status": "given"}

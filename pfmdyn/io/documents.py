@@ -690,7 +690,8 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     """
     ratio = d["q0_to_d1_slope_ratio"]
     results = {
-        "frequency": quantity("frequency", d["frequency"], status="given"),
+        "frequency": (quantity("frequency", d["frequency"], status="file", why="the drive frequency the file records")
+                      if d.get("frequency_from_file") else quantity("frequency", d["frequency"], status="given")),
         "beta": quantity("beta", d["beta"], status="derived"),
         "blind_spot": quantity("blind_spot", d["blind_spot"], status="derived", dims=["blind_spot"]),
         "blind_spot_interval": quantity("blind_spot_interval", d["blind_spot_intervals"], status="derived",
