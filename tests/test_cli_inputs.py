@@ -429,3 +429,14 @@ def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monke
     assert _run(["spot", str(image), "--k1", "100", "--frequency", "2e5", "--json", str(out)]) == 0
     assert json.loads(out.read_text())["results"]["frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
                                                                    "status": "given"}
+
+
+@pytest.mark.parametrize("rows", [1, 30])
+def test_calibrate_names_the_file_of_a_spectrum_too_short(rows, tmp_path, capsys):
+    """The line named no file ('a thermal spectrum needs ... at least 50 points')."""
+    tune = tmp_path / "short tune.csv"
+    tune.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(f"{1e3 * (i + 1)},1e-12\n" for i in range(rows)))
+    assert _run(["calibrate", str(tune), "--json", str(tmp_path / "out.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"pfmdyn calibrate: error: {tune}: {rows} ASD values"), err
+    assert _outputs(tmp_path) == []

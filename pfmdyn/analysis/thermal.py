@@ -287,7 +287,8 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_pea
 
     f, y = np.asarray(frequency_hz, dtype=float), np.asarray(asd, dtype=float)
     if f.ndim != 1 or f.shape != y.shape or f.size < 50:
-        raise UserError("a thermal spectrum needs equal 1-D frequency and ASD arrays of at least 50 points")
+        raise UserError(f"{y.size} ASD values at {f.size} frequencies; a thermal spectrum needs equal 1-D frequency "
+                        "and ASD arrays of at least 50 points")
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(y)) and np.all(np.diff(f) > 0)):
         raise UserError("a thermal spectrum needs finite values and increasing frequencies")
     step = f[1] - f[0]
