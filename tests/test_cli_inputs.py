@@ -440,3 +440,20 @@ def test_calibrate_names_the_file_of_a_spectrum_too_short(rows, tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"pfmdyn calibrate: error: {tune}: {rows} ASD values"), err
     assert _outputs(tmp_path) == []
+
+
+def test_deconvolve_reads_the_unit_its_columns_name(tmp_path, capsys):
+    """diagram's own CSV (amplitude_m_per_v) was deconvolved in 'a.u.'; a column '(pm)' too."""
+    table = tmp_path / "diagram.csv"
+    assert _run(["diagram", "--plot", str(tmp_path / "d.png"), "--csv", str(table), "--frequency-points", "5",
+                 "--bias-points", "3"]) == 0
+    capsys.readouterr()
+    assert _run(["deconvolve", str(table), "--out", str(tmp_path / "dec"), "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out
+    assert " m/V (V_surf" in out and "a.u." not in out
+    assert "data in m/V" in json.loads((tmp_path / "d.json").read_text())["notes"]
+    pm = tmp_path / "pm.csv"
+    pm.write_text(CSV.replace("x,y", "X (pm),Y (pm)"))
+    assert _run(["deconvolve", str(pm), "--out", str(tmp_path / "dec2")]) == 0
+    out = capsys.readouterr().out
+    assert " pm " in out and "a.u." not in out
