@@ -555,7 +555,7 @@ def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None
     solutions = [_solution(s, lever, doc["k2_policy"]) for s in doc["solutions"]]
     if doc["unique"]:
         results.update(solutions[0])
-        results["k1_over_k"] = quantity("k1_over_k", doc["k1_over_k"], status="derived")
+        results["k1_over_k"] = quantity("k1_over_k", doc["k1_over_k"], doc.get("k1_over_k_stderr"), status="derived")
         budget = (doc["solutions"][0].get("stderr_sources") or {})
         k1 = doc["k1"]
         shares = {source: parts["k1"] / k1 for source, parts in budget.items() if parts.get("k1", 0) > 0}
