@@ -474,3 +474,22 @@ def test_stiffness_states_the_uncertainty_of_k1_over_k(tmp_path, capsys):
     results = json.loads(out.read_text())["results"]
     assert results["k1"]["stderr"] == pytest.approx(0.1 * results["k1"]["value"], rel=1e-6)
     assert results["k1_over_k"]["stderr"] == 0.0
+
+
+def test_discrepancy_prints_a_tables_rows_beside_the_model(tmp_path, capsys):
+    """The text gave the fitted parameters alone: the measured resonances and Qs (an instrument's fits) stood
+    beside the model's only in the JSON."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    assert _run(["discrepancy", str(table), "--spring-constant", "0.46538", "--length", "240e-6", "--tip-height",
+                 "13e-6", "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    results = json.loads((tmp_path / "d.json").read_text())["results"]
+    head = out.index(next(line for line in out if line.startswith("condition  mode")))
+    for line, c, f, p, q, qp in zip(out[head + 1:], results["condition"]["value"],
+                                     results["measured_resonance"]["value"], results["predicted_resonance"]["value"],
+                                     results["measured_quality_factor"]["value"],
+                                     results["predicted_quality_factor"]["value"]):
+        words = line.split()
+        assert words[0] == c and float(words[2]) == f and float(words[5]) == pytest.approx(p, rel=1e-5)
+        assert float(words[6]) == pytest.approx(q, rel=1e-3) and float(words[7]) == pytest.approx(qp, rel=1e-3)
