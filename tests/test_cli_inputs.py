@@ -493,3 +493,18 @@ def test_discrepancy_prints_a_tables_rows_beside_the_model(tmp_path, capsys):
         words = line.split()
         assert words[0] == c and float(words[2]) == f and float(words[5]) == pytest.approx(p, rel=1e-5)
         assert float(words[6]) == pytest.approx(q, rel=1e-3) and float(words[7]) == pytest.approx(qp, rel=1e-3)
+
+
+@pytest.mark.parametrize("tip_mass_ratio", [0.3, 1.0])
+def test_a_heavy_tip_in_water_keeps_its_measured_resonance(tip_mass_ratio, tmp_path):
+    """Sader's relation took the fluid's mass ratio over the beam alone, as though the fluid loaded the tip's mass
+    too: a heavy tip in water was refused ('the medium's load exceeds the lever's inertia'), a light one placed
+    the resonance in water 1 % off (tests/test_sweeps_fit.py: the exact massed beam)."""
+    lever = ["--spring-constant", "2", "--free-resonance", "2e4", "--length", "225e-6", "--width", "40e-6",
+             "--medium", "water", "--modes", "1", "--tip-height", "13e-6"]
+    damped = []
+    for extra in ([], ["--tip-mass-ratio", str(tip_mass_ratio)]):
+        out = tmp_path / "r.json"
+        assert _run(["resonances", *lever, *extra, "--json", str(out)]) == 0
+        damped.append(json.loads(out.read_text())["results"]["free"]["damped_resonance"]["value"][0])
+    assert damped[1] == pytest.approx(damped[0], rel=0.005) and damped[0] == pytest.approx(2e4, rel=0.03)

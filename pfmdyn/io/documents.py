@@ -391,7 +391,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
     results = records_of(out["parameters"])
     results["lever_mass"] = quantity("lever_mass", out["lever_mass"], status="derived")
     results["free_resonance"] = quantity("free_resonance", [out["resonance_before"], out["resonance_after"]],
-                                         status="fitted", dims=["sweep"])
+                                         out.get("resonance_stderr"), status="fitted", dims=["sweep"])
     results["gain"] = quantity("gain", _complex(out["gain_after"]), status="fitted")
     results["background"] = quantity("background", _complex(out["background_after"]), status="fitted",
                                      dims=["coefficient"])
