@@ -142,6 +142,12 @@ REFUSED = [
     ("diagram", ["--medium", "water", "--temperature", "0"], "did you mean 273.15 K (0 C)?"),
     ("diagram", ["--medium", "water", "--temperature", "400"], "--temperature: water is liquid"),
     ("stiffness", ["--temperature", "120"], "did you mean 393.15 K"),
+    # an output over an input or another output (the data were overwritten by the report, one output by the other)
+    ("deconvolve", ["--json", "{tmp}/data.csv"], "--json would overwrite INPUT"),
+    ("inspect", ["--json", "{tmp}/data.csv"], "--json would overwrite INPUT"),
+    ("spot", ["--json", "{tmp}/out.png"], "--json and --plot name the same file"),
+    ("diagram", ["--csv", "{tmp}/out.png"], "--plot and --csv name the same file"),
+    ("branches", ["--json", "{tmp}/./out.png"], "--json and --plot name the same file"),
 ]
 
 
