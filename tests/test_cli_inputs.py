@@ -514,3 +514,17 @@ def test_a_heavy_tip_in_water_keeps_its_measured_resonance(tip_mass_ratio, tmp_p
         assert _run(["resonances", *lever, *extra, "--json", str(out)]) == 0
         damped.append(json.loads(out.read_text())["results"]["free"]["damped_resonance"]["value"][0])
     assert damped[1] == pytest.approx(damped[0], rel=0.005) and damped[0] == pytest.approx(2e4, rel=0.03)
+
+
+def test_inspect_shows_the_resonances_a_tables_rows_hold(tmp_path):
+    """inspect said 'cantilever fields found: none' of a resonance table whose rows stiffness and discrepancy read."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor\n"
+                     "2,free,457000,\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    out = tmp_path / "i.json"
+    assert _run(["inspect", str(table), "--json", str(out)]) == 0
+    results = json.loads(out.read_text())["results"]
+    assert {name: r["value"] for name, r in results.items()} == {
+        "spring_constant": 0.46538, "free_resonance": 72969.0, "free_quality_factor": 138.63,
+        "contact_resonance": 368990.0, "contact_quality_factor": 213.46}
+    assert {r["status"] for r in results.values()} == {"file"}
