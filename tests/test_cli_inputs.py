@@ -528,3 +528,14 @@ def test_inspect_shows_the_resonances_a_tables_rows_hold(tmp_path):
         "spring_constant": 0.46538, "free_resonance": 72969.0, "free_quality_factor": 138.63,
         "contact_resonance": 368990.0, "contact_quality_factor": 213.46}
     assert {r["status"] for r in results.values()} == {"file"}
+
+
+def test_resonances_json_says_which_frequency_is_in_vacuum(tmp_path, capsys):
+    """In a medium the certified 'resonance' is the lever's in vacuum (above the measured one it was given); the text
+    said so, the JSON's results.free.resonance stood unexplained."""
+    out = tmp_path / "r.json"
+    assert _run(["resonances", *LEVER, "--medium", "air", "--width", "3e-5", "--modes", "1", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    line = next(line for line in capsys.readouterr().out.splitlines() if "undamped lever's in vacuum" in line)
+    assert line in doc["notes"] and doc["results"]["free"]["resonance"]["value"][0] > 7e4
+    assert doc["results"]["free"]["damped_resonance"]["value"][0] == pytest.approx(7e4, rel=1e-3)

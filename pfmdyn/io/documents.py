@@ -667,6 +667,8 @@ def resonances(d: dict, given=()) -> dict:
                     notes.append(f"{prefix} mode {i}: {why}")
     if d.get("k2_policy"):
         notes.append(f"k2 policy: {d['k2_policy']}")
+    if d.get("medium_note"):
+        notes.append(d["medium_note"])
     return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
 
 
