@@ -539,3 +539,16 @@ def test_resonances_json_says_which_frequency_is_in_vacuum(tmp_path, capsys):
     line = next(line for line in capsys.readouterr().out.splitlines() if "undamped lever's in vacuum" in line)
     assert line in doc["notes"] and doc["results"]["free"]["resonance"]["value"][0] > 7e4
     assert doc["results"]["free"]["damped_resonance"]["value"][0] == pytest.approx(7e4, rel=1e-3)
+
+
+def test_discrepancy_prints_values_to_the_digits_their_uncertainty_leaves(tmp_path, capsys):
+    """discrepancy printed 'k1 = 258.49 +- 85 N/m' where stiffness (and README) state 258 +- 85."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    assert _run(["discrepancy", str(table), "--spring-constant", "0.46538", "--length", "240e-6", "--tip-height",
+                 "13e-6"]) == 0
+    printed = re.findall(r"^  (\w+) = ([-\d.e+]+) \+- ([\d.e+-]+)", capsys.readouterr().out, re.MULTILINE)
+    assert {name for name, _, _ in printed} >= {"k1", "quality_factor"}, printed
+    for name, value, sigma in printed:
+        decimals = len(value.partition(".")[2])
+        assert 10 ** -decimals >= float(sigma) / 100, (name, value, sigma)     # no digit below u's second

@@ -35,7 +35,7 @@ from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
+__all__ = ["TIP_POSITION_LOW", "rounded", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
            "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
@@ -133,9 +133,9 @@ class Solution:
 
         def value(name, v):         # to the second significant digit of its uncertainty (k1's, relative), else six digits
             rel = self.stderr.get(name, 0.0) / abs(self.k1 if name == "k1" else v) if v else 0.0
-            return _rounded(v, rel * abs(v))
+            return rounded(v, rel * abs(v))
         ratio, ratio_stderr = self.k1 / spring_constant, self.k1_over_k_stderr(spring_constant)
-        out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {_rounded(ratio, ratio_stderr)}"
+        out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {rounded(ratio, ratio_stderr)}"
                + (f" +- {ratio_stderr:.2g})" if ratio_stderr > 0 else ")")]
         shares = {source: parts["k1"] / self.k1 for source, parts in self.sources.items() if parts.get("k1", 0) > 0}
         if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty")):
@@ -152,10 +152,10 @@ class Solution:
         return out
 
 
-def _rounded(value: float, sigma: float) -> str:
+def rounded(value: float, sigma: float) -> str:
     """``value`` to the second significant digit of its standard uncertainty ``sigma`` (six digits without one).
 
-    >>> _rounded(204.067, 23.0), _rounded(300.0, 1.0), _rounded(0.0012345, 2e-6), _rounded(2.5e8, 1e6), _rounded(3.14159, 0.0)
+    >>> rounded(204.067, 23.0), rounded(300.0, 1.0), rounded(0.0012345, 2e-6), rounded(2.5e8, 1e6), rounded(3.14159, 0.0)
     ('204', '300.0', '0.0012345', '2.500e+08', '3.14159')
     """
     if not (sigma > 0 and math.isfinite(sigma)) or value == 0:
