@@ -406,25 +406,27 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
 class PooledContact(NamedTuple):
     """:func:`pooled_contact`'s answer at each pixel: ``k1`` (N/m), ``contact_loss``, their covariance per
     unit ``sigma**2`` (``(n, 2, 2)`` in ``(log k1, contact_loss)``), the ratio of ``k1``'s standard deviation to
-    the pixel's own (:class:`LeverFit`) and the pixel's own misfit (the sum of its rows' squared residuals
-    per ``sigma**2``, linearised)."""
+    the pixel's own (:class:`LeverFit`), the pixel's own misfit (the sum of its rows' squared residuals
+    per ``sigma**2``, linearised) and whether its phase row was fitted (its drive taken as real)."""
 
     k1: np.ndarray
     contact_loss: np.ndarray
     covariance: np.ndarray
     narrowed: np.ndarray
     misfit: np.ndarray
+    real: np.ndarray
 
 
 def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: LeverFit, sigma: float, shape,
-                   radius: int, steps: int = 1, phase=None) -> PooledContact:
+                   radius: int, phase=None, misfit_limit: float = math.inf) -> PooledContact:
     """Each pixel's contact (``k1``, ``contact_loss``) fitted to its own and its alike neighbours' signals
     (:func:`alike_sums` within ``radius``, 0 for the pixel alone; alike by :func:`lever_inversion`'s ``fit``
-    and its spread at noise ``sigma``): least squares on ``log(s2/s1)`` and, with ``phase`` (:func:`real_drive_phase`;
-    NaN at a pixel: none there), on ``arg(s1 s2)`` too, the phase of a real drive's signals; each row's noise is
-    ``sigma`` at every pixel (relative lock-in noise), each neighbour read at its own drives.  Gauss-Newton from
-    the inverse-variance mean of the pixels' own contacts; a pixel's own Newton step is linear from there, so
-    the nonlinear inversion's bias at each pixel does not add up in the pool.
+    and its spread at noise ``sigma``): least squares on ``log(s2/s1)`` and, with ``phase`` (:func:`real_drive_phase`),
+    on ``arg(s1 s2)`` too, the phase of a real drive's signals, except at the pixels whose own rows misfit the
+    contact found by more than ``misfit_limit`` (fitted again without theirs, twice at most); each row's noise is
+    ``sigma`` at every pixel (relative lock-in noise), each neighbour read at its own drives.  One Gauss-Newton
+    step from the inverse-variance mean of the pixels' own contacts (a pixel's own Newton step is linear from
+    there, so the nonlinear inversion's bias at each pixel does not add up in the pool).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
     >>> rng = np.random.default_rng(3)
@@ -444,22 +446,22 @@ def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: Lev
     gate_values = np.stack([np.log(fit.k1), fit.contact_loss]).reshape(2, *grid)
     gate_variances = (sigma * np.stack([fit.k1_sensitivity, fit.loss_sensitivity])).reshape(2, *grid) ** 2
     misfit = np.full(len(f1), np.nan)
+    real = np.full(len(f1), phase is not None)
     with np.errstate(all="ignore"):
         weights = 1 / gate_variances
         sums = alike_sums(gate_values, gate_variances, np.concatenate([weights, weights * gate_values]), radius)
         theta = (sums[2:] / sums[:2]).reshape(2, -1)
-        target = np.log(s2 / s1)
-        information = np.full((len(f1), 2, 2), np.nan)
-        for _ in range(steps):
-            i = np.flatnonzero(np.all(np.isfinite(theta), 0))
-            r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], np.exp(theta[0, i]), theta[1, i],
-                                 None if phase is None else np.nan_to_num(phase[i]))
-            if phase is not None:       # a pixel whose drive is not taken as real gives no phase row
-                held = np.isfinite(phase[i])
-                r[~held, 2], jac[~held, 2] = 0.0, 0.0
-            own = np.einsum("nki,nkj->nij", jac, jac)
+        i = np.flatnonzero(np.all(np.isfinite(theta), 0))
+        r, jac = _linearised(lever, contact, f1[i], f2[i], np.log(s2[i] / s1[i]), np.exp(theta[0, i]), theta[1, i],
+                             None if phase is None else phase[i])
+        def solve(real):
+            """The pooled contact, its information and the pixels' rows' residuals there, the phase rows of the
+            pixels ``real`` in the fit."""
+            weight = np.ones(r.shape)
+            weight[~real[i], 2:] = 0.0        # a pixel whose drive is not taken as real gives no phase row to the fit
+            own = np.einsum("nki,nkj->nij", weight[..., None] * jac, jac)
             # each pixel's normal equations J^T J (theta - theta_own) = -J^T r, summed over its alike neighbours
-            rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, r)
+            rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, weight * r)
             parts = np.full((5, len(f1)), np.nan)
             parts[:, i] = np.stack([own[:, 0, 0], own[:, 0, 1], own[:, 1, 1], rhs[:, 0], rhs[:, 1]])
             # alike now means: near the pool's estimate, not the pixel's own noisy one
@@ -467,11 +469,18 @@ def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: Lev
                                 centre=theta.reshape(2, *grid)).reshape(5, -1)
             information = np.stack([np.stack([pooled[0], pooled[1]], -1), np.stack([pooled[1], pooled[2]], -1)], -2)
             moved = np.einsum("nij,jn->in", _inverse(information), pooled[3:])
-            misfit[i] = np.sum((r + np.einsum("nkj,jn->nk", jac, moved[:, i] - theta[:, i])) ** 2, -1) / sigma**2
-            theta = moved
+            return moved, information, r + np.einsum("nkj,jn->nk", jac, moved[:, i] - theta[:, i])
+
+        for attempt in range(3):    # the misfits' neighbours fit again once those are out of their pools
+            moved, information, residual = solve(real)
+            misfit[i] = np.sum(residual**2, -1) / sigma**2
+            fits = (phase is not None) & ~(misfit > misfit_limit)
+            if attempt == 2 or np.array_equal(fits, real):
+                break
+            real = fits
         covariance = _inverse(information)
-        return PooledContact(np.exp(theta[0]), theta[1], covariance,
-                             np.sqrt(covariance[:, 0, 0]) / fit.k1_sensitivity, misfit)
+        return PooledContact(np.exp(moved[0]), moved[1], covariance, np.sqrt(covariance[:, 0, 0]) / fit.k1_sensitivity,
+                             misfit, real)
 
 
 def real_drive_phase(s1, s2, axis: float):
@@ -535,11 +544,17 @@ def drive_axis(lever: Cantilever, contact: Contact, f1, s1, k1, loss) -> float:
 
 
 def _axis(drive) -> float:
-    """:func:`drive_axis` of the drives ``drive`` (complex)."""
+    """:func:`drive_axis` of the drives ``drive`` (complex): the mean's axis, then moved by the median of the
+    drives' angles from it (modulo 180 degrees): a patch whose drive is not real does not turn the image's."""
     with np.errstate(all="ignore"):
         drive = np.ravel(drive)
         drive = drive[np.isfinite(drive) & (drive != 0)]
-        axis = math.degrees(np.angle(np.mean((drive / np.abs(drive)) ** 2))) / 2 if drive.size else math.nan
+        if not drive.size:
+            return math.nan
+        squared = (drive / np.abs(drive)) ** 2
+        axis = np.angle(np.mean(squared)) / 2
+        axis = math.degrees(axis + np.median(np.angle(squared * np.exp(-2j * axis))) / 2)
+    axis = (axis + 90.0) % 180.0 - 90.0
     return 90.0 if axis == -90.0 else axis
 
 
@@ -553,7 +568,7 @@ def _signed(drive):
     return np.abs(drive) * np.where(np.cos(np.angle(drive)) < 0, -1.0, 1.0)
 
 
-POOL = 3
+POOL = 5
 MISFIT = 25.0
 """A pixel's misfit (:class:`PooledContact`) above which its drive is not taken as real: five standard deviations."""
 """Radius (pixels) over which :func:`invert` pools a pixel's contact with its alike neighbours."""
@@ -633,20 +648,16 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
         d_pm = _signed(sho.drive / drive_amplitude / point_mass_static_gain(lever.spring_constant, k1_pm))
         axis = math.radians(_axis(fit.drive)) if fit.converged.any() else 0.0
-        real = np.ones(len(f1), bool)
         if u > 0:
             # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives,
             # its drive real; again without the phases of the pixels that drive misfits (the ratio's contact there)
-            phase = real_drive_phase(s1, s2, axis)
-            pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool, phase=phase)
-            real = ~(pooled.misfit > MISFIT)
-            if not real.all():
-                pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool,
-                                        phase=np.where(real, phase, np.nan))
+            pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool,
+                                    phase=real_drive_phase(s1, s2, axis), misfit_limit=MISFIT)
         else:
             covariance = np.zeros((len(f1), 2, 2))
             covariance[:, 0, 0], covariance[:, 1, 1] = fit.k1_sensitivity**2, fit.loss_sensitivity**2
-            pooled = PooledContact(fit.k1, fit.contact_loss, covariance, np.ones(len(f1)), np.zeros(len(f1)))
+            pooled = PooledContact(fit.k1, fit.contact_loss, covariance, np.ones(len(f1)), np.zeros(len(f1)),
+                                   np.ones(len(f1), bool))
         k1, loss, covariance = pooled.k1, pooled.contact_loss, pooled.covariance
         # the lever's response at the pixel's drives, and moved by each of the contact's two numbers
         responses = [(t1, t1 * np.exp(g)) for g, t1 in _log_ratios(lever, contact, f1, f2, [
@@ -683,7 +694,7 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
                 "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * drive_sd,
                 "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
-                "real_drive": (real & fit.converged).astype(np.uint8),
+                "real_drive": (pooled.real & fit.converged).astype(np.uint8),
                 "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
 
