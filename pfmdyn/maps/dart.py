@@ -70,9 +70,9 @@ from ..io.results import quantity
 from ..names import NAMES
 from .store import write_maps
 
-__all__ = ["Oscillator", "LeverFit", "PooledContact", "oscillator", "oscillator_sensitivity", "channel_noise", "alike_sums", "deflection_signal",
-           "lever_inversion", "pooled_contact", "real_drive_phase", "lever_pole", "point_mass_k1", "start_k1", "drive_axis",
-           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
+__all__ = ["Oscillator", "LeverFit", "PooledContact", "oscillator", "oscillator_sensitivity", "channel_noise",
+           "alike_sums", "deflection_signal", "lever_inversion", "pooled_contact", "real_drive_phase", "lever_pole",
+           "point_mass_k1", "start_k1", "drive_axis", "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
 _STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
@@ -319,7 +319,7 @@ def _log_ratios(lever, contact, f1, f2, points):
 def _linearised(lever, contact, f1, f2, target, k1, loss, phase=None):
     """The residual ``log(T(f2)/T(f1)) - target`` as ``(re, im)`` (the phase modulo 2 pi) and its Jacobian
     in ``(log k1, loss)`` by forward differences, ``(n, 2)`` and ``(n, 2, 2)``; with ``phase`` (the
-    signals' summed phase, a real drive's, :func:`_summed_phase`), a third row: ``arg(T(f1) T(f2)) - phase``
+    signals' summed phase, a real drive's, :func:`real_drive_phase`), a third row: ``arg(T(f1) T(f2)) - phase``
     (modulo 2 pi), ``(n, 3)`` and ``(n, 3, 2)``."""
     (g, t), (gk, tk), (gx, tx) = _log_ratios(lever, contact, f1, f2, [
         (k1, loss), (k1 * math.exp(_STEP), loss), (k1, loss + _STEP)])
@@ -330,7 +330,8 @@ def _linearised(lever, contact, f1, f2, target, k1, loss, phase=None):
     if phase is not None:
         with np.errstate(all="ignore"):     # arg(T1 T2) = 2 arg T1 + arg(T2 / T1)
             rows.append(np.angle(t * t * np.exp(1j * (g.imag - phase))))
-            jac.append(np.stack([2 * np.log(tk / t).imag / _STEP + dk.imag, 2 * np.log(tx / t).imag / _STEP + dx.imag], -1))
+            jac.append(np.stack([2 * np.log(tk / t).imag / _STEP + dk.imag,
+                                 2 * np.log(tx / t).imag / _STEP + dx.imag], -1))
     return np.stack(rows, -1), np.stack(jac, -2)
 
 
@@ -650,7 +651,7 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         axis = math.radians(_axis(fit.drive)) if fit.converged.any() else 0.0
         if u > 0:
             # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives,
-            # its drive real; again without the phases of the pixels that drive misfits (the ratio's contact there)
+            # its drive real (the ratio's contact alone where the phases misfit)
             pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool,
                                     phase=real_drive_phase(s1, s2, axis), misfit_limit=MISFIT)
         else:
@@ -674,9 +675,9 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         spreads = {}
         for name in ("resonance", "quality_factor"):
             gradient = np.stack([(getattr(m, name) - getattr(lever_sho, name)) / _STEP for m in moved], -1)
-            narrowed = np.sqrt(np.einsum("ni,nij,nj->n", gradient, covariance, gradient))
+            through = np.sqrt(np.einsum("ni,nij,nj->n", gradient, covariance, gradient))
             # the pole's (or the oscillator's where the lever fails) as one pixel's, narrowed as k1 is
-            spreads[name] = np.where(np.isfinite(narrowed) & lever_sho.determined, narrowed,
+            spreads[name] = np.where(np.isfinite(through) & lever_sho.determined, through,
                                      getattr(spread, name) * np.where(fit.converged, pooled.narrowed, 1.0))
         # the drive: the signals over the lever's responses (their geometric mean), signed by its side of the axis
         t1, t2 = responses[0]
@@ -777,6 +778,9 @@ def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str,
            **as_records(settings)}
     pooling = (f"contact (k1, contact_loss, contact resonance and Q): each pixel's fitted to its and its alike "
                f"neighbours' signals within {pool} pixels" if pool > 0 else "contact: each pixel's alone")
+    if "real_drive" in maps and ok.any():
+        pooling += (f"; the drive real (its phases' sum fitted with the contact) at {maps['real_drive'][ok].mean():.1%} "
+                    "of the determined pixels, the ratio's contact alone at the others (real_drive)")
     return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
-                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
-                     "each stderr the median pixel's"])
+                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: "
+                     "its sign is in the map), each stderr the median pixel's"])
