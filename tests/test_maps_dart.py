@@ -123,17 +123,20 @@ def test_a_real_drive_narrows_one_pixels_resonance_below_the_oscillators_bound(t
 
 
 def test_a_patch_whose_drive_is_not_real_keeps_the_ratios_contact_and_says_so(tmp_path):
-    """The drive is real (one lock-in offset per image, any); where a patch's drive is turned 20 degrees off
-    the image's axis its phases misfit the contact by far more than the noise: real_drive 0 there, its contact
-    the ratio's (and the neighbours'), and the rest of the image as if the patch drove in phase."""
+    """The domains drive at two phases (the lock-ins' offset, one per image, any; the two 172 degrees apart,
+    as a background makes them); where a patch's drive is turned 20 degrees off its domain's its phases
+    misfit the contact by far more than the noise: real_drive 0 there, its contact the ratio's (and the
+    neighbours'), and the rest of the image as if the patch drove in phase."""
     case = dart_case(24, 12, 12, noise=(0.01, 0.01))
-    turned = np.zeros((12, 12))
-    turned[2:6, 3:7] = 20.0
+    turned = np.where(case.truth["d_eff"] < 0, 8.0, 0.0)
+    turned[2:6, 3:7] += 20.0
     for name in ("Phase1Retrace", "Phase2Retrace"):
         case.channels[name] = case.channels[name] + 35.0 + turned
     maps, _ = _map(case, tmp_path)
     real = maps["real_drive"].values.astype(bool)
-    assert not real[2:6, 3:7].any() and real[turned == 0].mean() >= 0.95, real
+    outside = np.ones(real.shape, bool)
+    outside[2:6, 3:7] = False
+    assert not real[~outside].any() and real[outside].mean() >= 0.95, real
     for name in ("k1", "contact_loss", "contact_resonance"):
         error = np.abs(maps[name].values / case.truth[name] - 1)
         assert np.mean(error < TOLERANCES[name]) >= 0.95, name

@@ -24,8 +24,8 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
 The lever knows one thing more than the oscillator: ``d_eff`` is real, the domain's phase 0 or 180
 degrees, so a pixel's four numbers hold three unknowns (``k1``, ``contact_loss``, ``|d_eff|``), not four.
 The phases' sum ``arg(s1 s2)`` then fixes the contact too: it is ``arg(T(f1) T(f2))`` plus twice the
-lock-ins' phase offset, one per image (:func:`drive_axis`, from all the pixels' drives; the sign squares
-away).  :func:`pooled_contact` fits that row beside the ratio's two (:func:`real_drive_phase`), which narrows
+domain's phase, which the lock-ins' offset and a background (the electrostatic force's) move, one phase
+per image for each side of the drives' axis (:func:`domain_phases`, from all the pixels' drives).  :func:`pooled_contact` fits that row beside the ratio's two (:func:`real_drive_phase`), which narrows
 one pixel's contact resonance below the oscillator's Cramér-Rao bound (``sigma / 2Q`` relative: four
 numbers, four unknowns); where a pixel's rows misfit its contact by more than five standard deviations (a
 drive not real there: a background, a tilted domain), the ratio's contact stands alone (``real_drive`` 0).
@@ -71,7 +71,8 @@ from ..names import NAMES
 from .store import write_maps
 
 __all__ = ["Oscillator", "LeverFit", "PooledContact", "oscillator", "oscillator_sensitivity", "channel_noise",
-           "alike_sums", "deflection_signal", "lever_inversion", "pooled_contact", "real_drive_phase", "lever_pole",
+           "alike_sums", "deflection_signal", "lever_inversion", "pooled_contact", "real_drive_phase", "domain_phases",
+           "lever_pole",
            "point_mass_k1", "start_k1", "drive_axis", "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
@@ -484,9 +485,9 @@ def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: Lev
                              misfit, real)
 
 
-def real_drive_phase(s1, s2, axis: float):
-    """``arg(s1 s2)`` less twice the drives' ``axis`` (radians, :func:`drive_axis`): what ``arg(T(f1) T(f2))``
-    is where the drive is real (in phase or in antiphase with the bias, its sign squared away), the row
+def real_drive_phase(s1, s2, axis):
+    """``arg(s1 s2)`` less twice the drive's phase ``axis`` (radians; per pixel, :func:`domain_phases`): what
+    ``arg(T(f1) T(f2))`` is where the drive's phase is that (or that plus 180 degrees, squared away), the row
     :func:`pooled_contact` adds to the ratio's two.
 
     >>> round(float(real_drive_phase(-2j, 3 + 0j, 0.25)), 6)      # -90 deg less 2 x 0.25 rad
@@ -542,6 +543,29 @@ def drive_axis(lever: Cantilever, contact: Contact, f1, s1, k1, loss) -> float:
     """
     with np.errstate(all="ignore"):
         return _axis(np.asarray(s1) / deflection_signal(lever, contact, f1, k1, loss))
+
+
+def domain_phases(drive, axis: float, least: int = 16):
+    """Each pixel's domain phase (radians): the median argument of the drives ``drive`` (complex) on its side of
+    ``axis`` (radians, :func:`drive_axis`), that side's ``axis`` (or ``axis + pi``) where it has fewer than
+    ``least`` pixels.  The domains' drive is in phase or in antiphase with the bias, but for the lock-ins' offset
+    (one per image) and a background (the electrostatic force's, one per image): two phases, not always 180
+    degrees apart.
+
+    >>> drive = np.exp(1j * np.radians([10.0, 11.0, 12.0, 185.0, 186.0, 187.0]))
+    >>> np.round(np.degrees(domain_phases(drive, 0.0, least=3)), 6).tolist()
+    [11.0, 11.0, 11.0, -174.0, -174.0, -174.0]
+    """
+    drive = np.asarray(drive)
+    with np.errstate(all="ignore"):
+        turned = drive * np.exp(-1j * axis)
+        negative = turned.real < 0
+        phases = np.full(drive.shape, np.nan)
+        for side, flip in ((~negative, 1.0), (negative, -1.0)):
+            angles = np.angle(flip * turned[side & np.isfinite(drive)])
+            offset = np.median(angles) if angles.size >= least else 0.0
+            phases[side] = np.angle(np.exp(1j * (axis + offset + (0.0 if flip > 0 else math.pi))))
+    return phases
 
 
 def _axis(drive) -> float:
@@ -651,9 +675,10 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         axis = math.radians(_axis(fit.drive)) if fit.converged.any() else 0.0
         if u > 0:
             # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives,
-            # its drive real (the ratio's contact alone where the phases misfit)
+            # its drive at its domain's phase (the ratio's contact alone where the phases misfit)
             pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool,
-                                    phase=real_drive_phase(s1, s2, axis), misfit_limit=MISFIT)
+                                    phase=real_drive_phase(s1, s2, domain_phases(fit.drive, axis)),
+                                    misfit_limit=MISFIT)
         else:
             covariance = np.zeros((len(f1), 2, 2))
             covariance[:, 0, 0], covariance[:, 1, 1] = fit.k1_sensitivity**2, fit.loss_sensitivity**2
