@@ -552,3 +552,17 @@ def test_discrepancy_prints_values_to_the_digits_their_uncertainty_leaves(tmp_pa
     for name, value, sigma in printed:
         decimals = len(value.partition(".")[2])
         assert 10 ** -decimals >= float(sigma) / 100, (name, value, sigma)     # no digit below u's second
+
+
+def test_a_contact_map_says_why_some_pixels_have_no_k1(tmp_path, capsys):
+    """stiffness FILE --out on a contact-frequency map said 'k1 at 35.0 % of pixels' and nothing of the rest (it
+    said why only when no pixel had a k1)."""
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = [[3.0e5, 3.05e5], [3.1e5, 3.2e5]]      # f1 70 kHz: the pinned limit 4.385 f1
+        h.attrs.update(spring_constant=2.0, free_resonance=7e4)
+    assert _run(["stiffness", str(path), "--out", str(tmp_path / "o"), "--json", str(tmp_path / "s.json")]) == 0
+    line = "k1 undetermined at 2 of 4 pixels: their contact/free ratio (4.429 to 4.571) lies outside mode 1's limits"
+    assert line in capsys.readouterr().out
+    assert any(note.startswith(line) for note in json.loads((tmp_path / "s.json").read_text())["notes"])
