@@ -255,3 +255,21 @@ def test_uncertainty_is_written_as_the_other_commands_write_it(capsys):
                      "--tip-height", "10e-6", "--contact", "300e3"]) == 0
     out = capsys.readouterr().out
     assert re.search(r"^k1 = [\d.]+ \+- [\d.e+]+ N/m", out, re.M) and "+/-" not in out, out
+
+
+def test_two_modes_without_a_k2_policy_give_each_reading_and_no_noise_as_uncertainty(capsys):
+    """Two modes, k1 and k2 free: the (k1, k2) reading's k1 does not move with the tip height (which only rescales
+    k2), so its uncertainty from it is none, not the differences' noise, and k1 is not printed to 12 digits."""
+    from pfmdyn import Cantilever, Contact
+    from pfmdyn.analysis.stiffness_report import analyse
+
+    lever = Cantilever(2.0, 7e4, 225e-6, tip_height=13e-6)
+    report = analyse(lever, Contact(), [3e5, 8e5], [1, 2], tip_position_stated=False)
+    assert not report.unique and len(report.solutions) == 2
+    for s in report.solutions:
+        assert s.sources.get("tip_height_uncertainty", {}).get("k1", 0.0) == 0.0
+    pair = next(s for s in report.solutions if "k2" in s.unknowns)
+    assert pair.stderr["k2"] > 0.1 * pair.k2          # k2 = k2 H^2 / H^2: the tip height's share is real
+    text = report.report()
+    assert "reproduce the resonances (k1 from 180.442 to 180.594 N/m)" in text
+    assert not re.search(r"k1 = \d+\.\d{7}", text)

@@ -44,7 +44,7 @@ from ..generated.tilt_rotation import rotated
 from ..roots.bracket import refine
 
 __all__ = ["GRID_STEP", "BETA_MIN", "characteristic", "betas", "mode_numbers", "k1_candidates", "k1_at",
-           "k1_k2_at", "branch_limits", "spring_parts", "beta_shifts", "fit", "SOURCES", "covariance_by_source", "covariance",
+           "k1_k2_at", "branch_limits", "spring_parts", "beta_shifts", "fit", "SOURCES", "RESOLUTION", "covariance_by_source", "covariance",
            "require_tip_height"]
 
 GRID_STEP = 0.02
@@ -305,6 +305,12 @@ resonances (Hz, each), the free resonance (Hz), the spring constant (N/m), the t
 ratio ``k2/k1`` of a tied contact."""
 
 
+RESOLUTION = 1e-8
+"""Smallest relative sensitivity (d ln value / d ln input) that :func:`covariance_by_source` resolves: its
+central differences (relative step 1e-6) of Newton steps exact to ~1e-15 carry ~1e-9 of noise; a smaller one
+is taken as none (k1 of a (k1, k2) pair does not move with the tip height, which only rescales k2)."""
+
+
 def covariance_by_source(lever: Cantilever, contact: Contact, contact_hz, values: dict, stderrs: dict) -> dict:
     """First-order covariance of ``values`` (their order) contributed by each input of :data:`SOURCES`
     whose standard uncertainty ``stderrs`` gives (missing or 0: none).
@@ -353,12 +359,17 @@ def covariance_by_source(lever: Cantilever, contact: Contact, contact_hz, values
 
     at_end = tuple(i for i, n in enumerate(names) if n == "tip_position")
     spans = dict(zip(sigma, (range(len(fc)),) + tuple(range(len(fc) + i, len(fc) + i + 1) for i in range(4))))
+    scale = np.where(p0 != 0, np.abs(p0), 1e-3 * lever.spring_constant)
     out = {}
     with np.errstate(all="ignore"):
         inverse = np.linalg.pinv(jacobian(lambda p: residual(p, d0), p0, range(len(p0)), at_end))
         for name, s in sigma.items():
             if np.any(s > 0):
-                sensitivity = -inverse @ jacobian(lambda d: residual(p0, d), d0, spans[name])
+                span = list(spans[name])
+                sensitivity = -inverse @ jacobian(lambda d: residual(p0, d), d0, span)
+                # an elasticity below the differences' resolution is no dependence (a tiny stderr is noise)
+                elasticity = sensitivity * np.abs(d0[span]) / scale[:, None]
+                sensitivity = np.where(np.abs(elasticity) < RESOLUTION, 0.0, sensitivity)
                 out[name] = (sensitivity * s**2) @ sensitivity.T
     return out
 

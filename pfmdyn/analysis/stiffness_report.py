@@ -227,8 +227,10 @@ class StiffnessReport:
         if self.unique:
             lines = self.solution.lines(k)
         else:
-            lines = ["not unique: " + (f"{len(self.solutions)} solution(s) shown, see why" if self.solutions
-                                       else "no solution found")]
+            k1s = sorted(s.k1 for s in self.solutions)
+            spread = f" (k1 from {k1s[0]:.6g} to {k1s[-1]:.6g} N/m)" if len(k1s) > 1 else ""
+            lines = ["not unique: " + (f"{len(self.solutions)} solution(s) reproduce the resonances{spread}, see why"
+                                       if self.solutions else "no solution found")]
             for i, s in enumerate(self.solutions, 1):
                 lines += [f"solution {i}:"] + ["  " + line for line in s.lines(k)]
         if not any(s.stderr.get("k1", 0.0) > 0 for s in self.solutions):
