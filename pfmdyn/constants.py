@@ -1,7 +1,8 @@
 """Physical constants and the conditions assumed when none are given, each typed once."""
 from __future__ import annotations
 
-__all__ = ["BOLTZMANN", "ROOM_TEMPERATURE", "TIP_HEIGHT", "TIP_HEIGHT_SPREAD", "LEVER_LENGTH", "LEVER_LENGTH_SPREAD"]
+__all__ = ["BOLTZMANN", "ROOM_TEMPERATURE", "TIP_HEIGHT", "TIP_HEIGHT_SPREAD", "LEVER_LENGTH", "LEVER_LENGTH_SPREAD",
+           "RESONANCE_RELATIVE_UNCERTAINTY", "Q_RELATIVE_UNCERTAINTY"]
 
 BOLTZMANN = 1.380649e-23
 """J/K (exact in the SI since 2019)."""
@@ -21,3 +22,10 @@ LEVER_LENGTH = 225e-6
 ratio of the assumed tip height to the length acts and no length is known."""
 LEVER_LENGTH_SPREAD = 0.1
 """Relative standard uncertainty of the assumed :data:`LEVER_LENGTH` (levers of 180-270 um)."""
+RESONANCE_RELATIVE_UNCERTAINTY = 1e-3
+"""Relative standard uncertainty of a resonance frequency (free or contact) when neither a flag nor the file
+gives one: a resonance found by a tune, a thermal fit or contact-resonance tracking moves by about 0.1 %
+between repeats (drift of the lever's temperature, the load, a peak's fitted centre at Q 50-500).  Every
+command that takes resonances as numbers (``discrepancy`` on a table, ``stiffness``) assumes it, and says so."""
+Q_RELATIVE_UNCERTAINTY = 0.05
+"""Relative standard uncertainty of a Q value when the file gives none (instrument fits of a peak's width)."""

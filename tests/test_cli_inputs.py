@@ -468,6 +468,7 @@ def test_deconvolve_reads_the_unit_its_columns_name(tmp_path, capsys):
 def test_stiffness_states_the_uncertainty_of_k1_over_k(tmp_path, capsys):
     """k1/k was printed and written with no uncertainty; it has k1's from every input but the spring constant,
     which k1 scales with."""
+    from pfmdyn.analysis.stiffness_report import rounded
     out = tmp_path / "k1.json"
     base = ["stiffness", "--free-resonance", "7e4", "--contact", "3e5", "--spring-constant", "2", "--k2", "0",
             "--json", str(out)]
@@ -475,8 +476,9 @@ def test_stiffness_states_the_uncertainty_of_k1_over_k(tmp_path, capsys):
     results = json.loads(out.read_text())["results"]
     k1, ratio = results["k1"], results["k1_over_k"]
     assert k1["stderr"] > 0 and ratio["stderr"] == pytest.approx(k1["stderr"] / 2.0, rel=1e-12)
-    assert f"(k1/k = {round(ratio['value'], 1)} +- {ratio['stderr']:.2g})" in capsys.readouterr().out
-    assert _run([*base, "--spring-constant-uncertainty", "0.2"]) == 0
+    assert f"(k1/k = {rounded(ratio['value'], ratio['stderr'])} +- {ratio['stderr']:.2g})" in capsys.readouterr().out
+    assert _run([*base, "--spring-constant-uncertainty", "0.2", "--contact-uncertainty", "0",
+                 "--free-resonance-uncertainty", "0"]) == 0
     results = json.loads(out.read_text())["results"]
     assert results["k1"]["stderr"] == pytest.approx(0.1 * results["k1"]["value"], rel=1e-6)
     assert results["k1_over_k"]["stderr"] == 0.0

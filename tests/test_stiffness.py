@@ -273,3 +273,37 @@ def test_two_modes_without_a_k2_policy_give_each_reading_and_no_noise_as_uncerta
     text = report.report()
     assert "reproduce the resonances (k1 from 180.442 to 180.594 N/m)" in text
     assert not re.search(r"k1 = \d+\.\d{7}", text)
+
+
+def test_resonances_without_uncertainty_take_the_assumed_one_discrepancy_takes(tmp_path, capsys):
+    """stiffness took resonances given without uncertainty as exact (0 Hz) where discrepancy assumes 0.1 % of each:
+    both now take pfmdyn.constants.RESONANCE_RELATIVE_UNCERTAINTY, marked assumed, with its share of k1's; a table's
+    stated uncertainty (or a flag) wins."""
+    from pfmdyn.constants import RESONANCE_RELATIVE_UNCERTAINTY
+    from pfmdyn.discrepancy.resonance_fit import frequency_sigma
+    from pfmdyn.io.tables import read
+
+    rows = "mode,condition,frequency_hz\n1,free,72969\n1,contact,290000\n"
+    table = tmp_path / "t.csv"
+    table.write_text(rows)
+    assert frequency_sigma(read(str(table), required=())).tolist() == pytest.approx(
+        [RESONANCE_RELATIVE_UNCERTAINTY * 72969, RESONANCE_RELATIVE_UNCERTAINTY * 290000], rel=1e-12)
+    base = ["stiffness", "--spring-constant", "0.46538", "--k2", "0"]
+    out = tmp_path / "k1.json"
+    assert cli.main([*base, str(table), "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "contact resonances (assumed)" in text and "free resonance (assumed)" in text
+    doc = json.loads(out.read_text())
+    lever, budget = doc["lever"], doc["fit"]["budget"]
+    assert lever["contact_uncertainty"]["status"] == "assumed"
+    assert lever["contact_uncertainty"]["value"] == pytest.approx([RESONANCE_RELATIVE_UNCERTAINTY * 290000])
+    assert lever["free_resonance_uncertainty"]["value"] == pytest.approx(RESONANCE_RELATIVE_UNCERTAINTY * 72969)
+    shares = dict(zip(budget["uncertainty_source"]["value"], budget["relative_uncertainty"]["value"]))
+    assert shares["contact_uncertainty"] > 1e-3 and doc["results"]["k1"]["stderr"] > 0.01 * doc["results"]["k1"]["value"]
+    table.write_text("# frequency_uncertainty_hz: 50\n" + rows)          # the table's own wins
+    assert cli.main([*base, str(table), "--json", str(out)]) == 0
+    lever = json.loads(out.read_text())["lever"]
+    assert lever["contact_uncertainty"]["value"] == 50.0 and lever["contact_uncertainty"]["status"] == "file"
+    assert "(assumed)" not in capsys.readouterr().out
+    assert cli.main([*base, str(table), "--contact-uncertainty", "0", "--json", str(out)]) == 0     # a flag wins
+    assert json.loads(out.read_text())["lever"]["contact_uncertainty"]["status"] == "given"

@@ -313,7 +313,8 @@ is taken as none (k1 of a (k1, k2) pair does not move with the tip height, which
 
 def covariance_by_source(lever: Cantilever, contact: Contact, contact_hz, values: dict, stderrs: dict) -> dict:
     """First-order covariance of ``values`` (their order) contributed by each input of :data:`SOURCES`
-    whose standard uncertainty ``stderrs`` gives (missing or 0: none).
+    whose standard uncertainty ``stderrs`` gives (missing or 0: none; the contact resonances' one for all or
+    one per resonance).
 
     The residuals vanish (or are least squares) at the solution; by the implicit-function
     theorem ``d values / d data = -pinv(J_values) J_data``, both Jacobians by central
@@ -329,7 +330,8 @@ def covariance_by_source(lever: Cantilever, contact: Contact, contact_hz, values
     names = list(values)
     fc = np.asarray(contact_hz, dtype=float)
     ratio = contact.ratio if contact.k2 is None else None
-    sigma = {"contact_uncertainty": np.full(len(fc), float(stderrs.get("contact_uncertainty") or 0.0))}
+    sigma = {"contact_uncertainty": np.broadcast_to(np.asarray(stderrs.get("contact_uncertainty") or 0.0, dtype=float),
+                                                    fc.shape)}
     for name in SOURCES[1:]:
         acts = {"tip_height_uncertainty": lever.tip_height is not None,
                 "k2_policy_uncertainty": ratio is not None and "k2" not in values}.get(name, True)

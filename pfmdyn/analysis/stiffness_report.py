@@ -121,8 +121,8 @@ class Solution:
         return math.hypot(*(parts.get("k1", 0.0) for source, parts in self.sources.items()
                             if source != "spring_constant_uncertainty")) / spring_constant
 
-    def lines(self, spring_constant: float) -> list[str]:
-        """The solution as printed lines.
+    def lines(self, spring_constant: float, assumed=()) -> list[str]:
+        """The solution as printed lines, the inputs whose uncertainty was ``assumed`` marked so.
 
         >>> Solution(300.0, 0.0, 0.93, ("k1", "tip_position"), {"k1": 1.0, "tip_position": 1e-4}).lines(3.0)[0]
         'k1 = 300.0 +- 1 N/m  (k1/k = 100.00 +- 0.33)'
@@ -138,9 +138,10 @@ class Solution:
         out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {rounded(ratio, ratio_stderr)}"
                + (f" +- {ratio_stderr:.2g})" if ratio_stderr > 0 else ")")]
         shares = {source: parts["k1"] / self.k1 for source, parts in self.sources.items() if parts.get("k1", 0) > 0}
-        if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty")):
+        if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty",
+                                                              *assumed)):
             out.append("  k1's uncertainty, input by input: " + ", ".join(
-                f"{_SOURCE_WORDS[name]} {share:.1%}" for name, share in sorted(shares.items(), key=lambda kv: -kv[1])))
+                f"{_SOURCE_WORDS[name]}{' (assumed)' * (name in assumed)} {share:.1%}" for name, share in sorted(shares.items(), key=lambda kv: -kv[1])))
         if self.k2 is not None:
             out.append(f"k2 = {value('k2' if 'k2' in self.unknowns else 'k1', self.k2)}{pm('k2')} N/m" + ("" if "k2" in self.unknowns else "  (by the k2 policy)"))
         out.append(f"tip_position = {self.tip_position:.6g}{pm('tip_position')}"
@@ -192,6 +193,8 @@ class StiffnessReport:
     proof: tuple[str, ...]
     notes: tuple[str, ...] = ()
     uncertainties: dict = field(default_factory=dict)
+    assumed: tuple[str, ...] = ()
+    """The inputs (:data:`pfmdyn.analysis.contact_resonance.SOURCES`) whose uncertainty was assumed."""
 
     @property
     def solution(self) -> Solution | None:
@@ -225,14 +228,14 @@ class StiffnessReport:
         """
         k = self.lever.spring_constant
         if self.unique:
-            lines = self.solution.lines(k)
+            lines = self.solution.lines(k, self.assumed)
         else:
             k1s = sorted(s.k1 for s in self.solutions)
             spread = f" (k1 from {k1s[0]:.6g} to {k1s[-1]:.6g} N/m)" if len(k1s) > 1 else ""
             lines = ["not unique: " + (f"{len(self.solutions)} solution(s) reproduce the resonances{spread}, see why"
                                        if self.solutions else "no solution found")]
             for i, s in enumerate(self.solutions, 1):
-                lines += [f"solution {i}:"] + ["  " + line for line in s.lines(k)]
+                lines += [f"solution {i}:"] + ["  " + line for line in s.lines(k, self.assumed)]
         if not any(s.stderr.get("k1", 0.0) > 0 for s in self.solutions):
             lines.append("(no uncertainty given: contact_uncertainty, free_resonance_uncertainty, "
                          "spring_constant_uncertainty)")
@@ -254,7 +257,9 @@ def _check_inputs(contact_hz, modes, stderrs):
     if len(set(modes)) != len(modes) or min(modes) < 1:
         raise UserError(f"contact mode numbers must be distinct and >= 1, got {modes}")
     for name, value in stderrs.items():
-        if not (math.isfinite(value) and value >= 0):
+        if np.ndim(value) and np.shape(value) != fc.shape:
+            raise UserError(f"{len(fc)} contact resonances but {np.size(value)} values of {name}")
+        if not (np.all(np.isfinite(value)) and np.all(np.asarray(value) >= 0)):
             raise UserError(f"{name} must be non-negative and finite, got {value}")
     return fc, modes
 
@@ -391,10 +396,10 @@ def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=Non
 
 
 def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_tip_position: bool = False,
-            tip_position_stated: bool = True, contact_uncertainty: float = 0.0,
+            tip_position_stated: bool = True, contact_uncertainty=0.0,
             free_resonance_uncertainty: float = 0.0, spring_constant_uncertainty: float = 0.0,
             tip_height_uncertainty: float | None = None, hertz: tuple[float, float] | None = None,
-            notes: tuple[str, ...] = ()) -> StiffnessReport:
+            notes: tuple[str, ...] = (), assumed: tuple[str, ...] = ()) -> StiffnessReport:
     """Contact stiffness (and ``k2`` or the tip position) from contact resonances (Hz) of ``lever``.
 
     Parameters
@@ -406,7 +411,10 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     tip_position_stated : False when ``lever.tip_position`` is only the default (then two
         modes without a k2 policy are reported as not unique)
     contact_uncertainty, free_resonance_uncertainty, spring_constant_uncertainty :
-        standard uncertainties (Hz, Hz, N/m), propagated to first order
+        standard uncertainties (Hz, Hz, N/m), propagated to first order; the contact resonances' one for all, or
+        one per resonance
+    assumed : the inputs of :data:`pfmdyn.analysis.contact_resonance.SOURCES` whose uncertainty was assumed
+        (said so beside their share)
     tip_height_uncertainty : standard uncertainty of the tip height (m; default
         :data:`TIP_HEIGHT_TOLERANCE` of it), propagated likewise; so is an assumed k2 policy's
         (:data:`ASSUMED_POISSON`), each input's share stated
@@ -420,7 +428,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     >>> round(r.solution.k1, 4), round(r.solution.stderr["k1"], 4), r.unique
     (109.7483, 0.393, True)
     """
-    stderrs = {"contact_uncertainty": float(contact_uncertainty),
+    per_resonance = np.asarray(contact_uncertainty, dtype=float)
+    stderrs = {"contact_uncertainty": per_resonance.tolist() if per_resonance.ndim else float(per_resonance),
                "free_resonance_uncertainty": float(free_resonance_uncertainty),
                "spring_constant_uncertainty": float(spring_constant_uncertainty)}
     if lever.tip_height is not None:
@@ -434,7 +443,7 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     k1_by_mode, settled = (), True
     # The beta shift that the frequency uncertainties alone would make (mode by mode, RMS).
     noise = float(np.sqrt(np.mean((0.5 * cr.betas(lever, fc) * np.hypot(
-        stderrs["contact_uncertainty"] / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
+        per_resonance / fc, stderrs["free_resonance_uncertainty"] / lever.free_resonance)) ** 2)))
     if fit_tip_position:
         if len(fc) < 2:
             raise UserError("a fitted tip position needs two or more contact resonances, with their modes (or give "
@@ -464,4 +473,4 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
     solutions = tuple(_solution(lever, lateral, fc, v, rms, stderrs, k1_by_mode, hertz) for v, rms in found)
     unique = len(solutions) == 1 and settled
     return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, unique, tuple(proof),
-                           tuple(notes), stderrs)
+                           tuple(notes), stderrs, tuple(assumed))

@@ -29,7 +29,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD
+from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD, RESONANCE_RELATIVE_UNCERTAINTY
 from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
@@ -43,6 +43,7 @@ ONE_LEVER = True
 _LEVER = tuple(n for n in LEVER if n not in ("tip_position", "spot_position"))
 _UNCERTAINTIES = ("contact_uncertainty", "free_resonance_uncertainty", "spring_constant_uncertainty",
                   "tip_height_uncertainty")
+_RESONANCE_UNCERTAINTIES = _UNCERTAINTIES[:2]
 _NOMINAL_LENGTH = 1e-4
 """Length used when none is given and none is needed (no lateral spring, no tilt: the resonance ratios do
 not depend on it); reported as not given."""
@@ -96,6 +97,8 @@ def _from_file(path: str) -> tuple[dict, list, list]:
             raise UserError(f"{path}: no contact resonance in the table")
         free = [f for m, c, f in zip(data.mode, data.condition, data.frequency_hz) if c == "free" and m == 1]
         found = {name: value for name, value in vars(data.metadata).items() if name in LEVER and value is not None}
+        if data.metadata.frequency_uncertainty_hz is not None:        # the table's, for every frequency
+            found.update(dict.fromkeys(_RESONANCE_UNCERTAINTIES, data.metadata.frequency_uncertainty_hz))
         if free:
             found["free_resonance"] = free[0]
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()
@@ -144,6 +147,22 @@ def _tip_height_uncertainty(args, lever, assumed: dict) -> dict:
     if "length" in assumed:
         relative = math.hypot(relative, LEVER_LENGTH_SPREAD)
     return {"tip_height_uncertainty": relative * lever.tip_height}
+
+
+def _assumed_resonance_uncertainties(contacts, free_resonance: float, assumed: dict) -> dict:
+    """The resonances' standard uncertainties (Hz) when none is given: :data:`RESONANCE_RELATIVE_UNCERTAINTY` of
+    each frequency, their why added to ``assumed`` (the caller drops what a flag or the file gives).
+
+    >>> _assumed_resonance_uncertainties([3e5, 8e5], 7e4, why := {})
+    {'contact_uncertainty': [300.0, 800.0], 'free_resonance_uncertainty': 70.0}
+    >>> sorted(why)
+    ['contact_uncertainty', 'free_resonance_uncertainty']
+    """
+    why = (f"{RESONANCE_RELATIVE_UNCERTAINTY:.1%} of each frequency, assumed: neither a flag nor the input gives it "
+           "(pfmdyn.constants.RESONANCE_RELATIVE_UNCERTAINTY)")
+    assumed.update(dict.fromkeys(_RESONANCE_UNCERTAINTIES, why))
+    return {"contact_uncertainty": [RESONANCE_RELATIVE_UNCERTAINTY * f for f in contacts],
+            "free_resonance_uncertainty": RESONANCE_RELATIVE_UNCERTAINTY * free_resonance}
 
 
 def _contact_map(args) -> int:
@@ -228,13 +247,18 @@ def run(args) -> int:
     if args.reduced_modulus and len(hertz) < 2:
         raise UserError("--reduced-modulus needs --tip-radius (m) and --normal-load (N)")
     hertz = (hertz["tip_radius"], hertz["normal_load"]) if args.reduced_modulus else None
-    uncertainties = ({name: 0.0 for name in _UNCERTAINTIES[:3]} | flags.given(args, _UNCERTAINTIES)
-                     | _tip_height_uncertainty(args, lever, assumed))
+    uncertainties = ({"spring_constant_uncertainty": 0.0}
+                     | _assumed_resonance_uncertainties(contacts, lever.free_resonance, assumed)
+                     | {name: found[name] for name in _RESONANCE_UNCERTAINTIES if name in found}
+                     | flags.given(args, _UNCERTAINTIES) | _tip_height_uncertainty(args, lever, assumed))
+    for name in _RESONANCE_UNCERTAINTIES:
+        if name in found or getattr(args, name) is not None:
+            assumed.pop(name)
     try:
         report = analyse(
             lever, flags.contact(args), contacts, modes, fit_tip_position=fit,
             tip_position_stated=args.tip_position is not None or "tip_position" in found,
-            hertz=hertz, notes=tuple(notes), **uncertainties)
+            hertz=hertz, notes=tuple(notes), assumed=tuple(n for n in _UNCERTAINTIES if n in assumed), **uncertainties)
     except UserError as exc:
         if not args.file or str(exc).startswith(str(args.file)):
             raise
@@ -242,8 +266,13 @@ def run(args) -> int:
         raise UserError(f"{args.file}: {exc}", quantity=exc.quantity) from None
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
-    if assumed:
+    if any(name in LEVER for name in assumed):
         print(flags.assumed_line(assumed, lever))
+    if any(name in assumed for name in _RESONANCE_UNCERTAINTIES):
+        which = {"contact_uncertainty": "the contact resonances", "free_resonance_uncertainty": "the free resonance"}
+        print(f"assumed: standard uncertainty {RESONANCE_RELATIVE_UNCERTAINTY:.1%} of "
+              f"{listed(which[n] for n in _RESONANCE_UNCERTAINTIES if n in assumed)} (none given; give "
+              f"{listed((NAMES[n].flag for n in _RESONANCE_UNCERTAINTIES if n in assumed), 'or')})")
     given = flags.given_names(args, (*_LEVER, "tip_position", "medium", "temperature", *_UNCERTAINTIES))
     if args.file:
         print(_taken_line(found, given, None if args.contact else (contacts, modes)))

@@ -33,7 +33,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..io.tables import Q_RELATIVE_UNCERTAINTY, ResonanceData
+from ..constants import Q_RELATIVE_UNCERTAINTY, RESONANCE_RELATIVE_UNCERTAINTY
+from ..io.tables import ResonanceData
 from . import select
 from .report import degrees, report
 from .effects import DAMPING, EFFECTS
@@ -337,7 +338,8 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
     """Discrepancy loop on a resonances table; same report keys as the spectrum loop.
 
     Each fitted parameter's uncertainty is given input by input (:func:`uncertainty_budget`): the
-    resonance frequencies (0.1 % each unless the table says, assumed), the Q values (5 %, assumed) and,
+    resonance frequencies (:data:`pfmdyn.constants.RESONANCE_RELATIVE_UNCERTAINTY` each unless the table says,
+    assumed), the Q values (:data:`pfmdyn.constants.Q_RELATIVE_UNCERTAINTY`, assumed) and,
     with ``tip_height_uncertainty`` (m), the tip height, added to the fit's.
 
     Examples
@@ -376,7 +378,7 @@ def analyse_resonances(data: ResonanceData, vertical_only: bool = False, progres
 _INPUT_WORDS = {
     "resonance_frequencies": lambda data: "resonance frequencies" + (
         f" ({data.metadata.frequency_uncertainty_hz:g} Hz)" if data.metadata.frequency_uncertainty_hz is not None
-        else " (0.1 % each, assumed: the table gives none)"),
+        else f" ({RESONANCE_RELATIVE_UNCERTAINTY:.1%} each, assumed: the table gives none)"),
     "quality_factors": lambda data: "Q values" + (
         f" ({data.metadata.quality_factor_uncertainty:.3g} relative)" if data.metadata.quality_factor_uncertainty
         is not None else f" ({Q_RELATIVE_UNCERTAINTY:.0%} each, assumed: the table gives none)"),

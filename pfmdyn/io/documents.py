@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from ..constants import RESONANCE_RELATIVE_UNCERTAINTY
 from ..names import NAMES
 from .results import document, quantity
 
@@ -213,7 +214,7 @@ def discrepancy_report(report: dict, kind: str, source: dict, lever: dict, rows=
         assumed = inputs.get("resonance_frequencies", {}).get("assumed")
         results["resonance_uncertainty"] = quantity(
             "resonance_uncertainty", report["frequency_uncertainty_hz"], status="assumed" if assumed else "file",
-            why="0.1 % of each frequency: the table gives none" if assumed else "the table's metadata", dims=["row"])
+            why=f"{RESONANCE_RELATIVE_UNCERTAINTY:.1%} of each frequency: the table gives none" if assumed else "the table's metadata", dims=["row"])
         results["predicted_resonance"] = quantity("predicted_resonance", report["predicted_hz"], status="derived",
                                                   dims=["row"])
         results["baseline_resonance"] = quantity("baseline_resonance", report["baseline_hz"], status="derived",
@@ -541,10 +542,15 @@ def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None
     """
     inputs = dict(doc["inputs"])
     contact, modes = inputs.pop("contact_hz"), inputs.pop("modes")
+    assumed = {**{name: "the default" for name in inputs
+                  if name.endswith("_uncertainty") and name not in (*given, *from_file)},
+               **(assumed or {})}
+    per_mode = {name: inputs.pop(name) for name in list(inputs) if isinstance(inputs[name], list)}
     lever = lever_records({k: v for k, v in inputs.items() if not isinstance(v, str)}, given=given,
-                          from_file=from_file, assumed={**{name: "the default" for name in inputs
-                                                           if name.endswith("_uncertainty") and name not in given},
-                                                        **(assumed or {})})
+                          from_file=from_file, assumed=assumed)
+    for name, value in per_mode.items():          # one per contact resonance (an assumed relative one)
+        lever[name] = quantity(name, value, status="assumed" if name in assumed else "given",
+                               why=assumed.get(name), dims=["mode"])
     if isinstance(inputs.get("medium"), str):
         lever["medium"] = quantity("medium", inputs["medium"], status="given" if "medium" in given else "assumed",
                                    **({} if "medium" in given else {"why": "the default"}))

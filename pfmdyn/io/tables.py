@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constants import Q_RELATIVE_UNCERTAINTY  # noqa: F401  (its old home: resonance_fit reads it here)
 from ..errors import UserError
 from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
@@ -72,8 +73,6 @@ CONDITION_ALIASES = {"air": "free", "non_contact": "free", "noncontact": "free",
 SPECTRUM_BAND, TABLE_BAND = (0.05, 200.0), (0.3, 200.0)
 """Where measured frequencies lie, in units of the free resonance f1: a spectrum may stay below
 f1 (not 20x below); a table's modes are free mode 1 (f1) or above."""
-Q_RELATIVE_UNCERTAINTY = 0.05
-"""Default relative uncertainty of a table's Q values (instrument fits of a peak's width)."""
 MIN_SPECTRUM_ROWS = 20
 MIN_SPECTRUM_FREQUENCIES = 10
 MIN_RESONANCES = 1
