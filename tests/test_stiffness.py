@@ -226,7 +226,7 @@ def test_contact_map_uncertainty_under_its_name_and_its_old_spelling(tmp_path, c
         path = tmp_path / f"{name}.h5"
         with h5py.File(path, "w") as h:
             h["contact_frequency_hz"] = np.full((2, 3), fc)
-            h.attrs.update(spring_constant=2.0, free_resonance=75e3, **attrs)
+            h.attrs.update(spring_constant=2.0, free_resonance=75e3, free_resonance_uncertainty=0.0, **attrs)
         assert cli.main(["stiffness", str(path), "--out", str(tmp_path / name), *extra]) == 0
         stderr[name] = float(zarr.open_group(str(tmp_path / name / "maps.zarr"), mode="r")["k1_stderr"][0, 0])
     assert stderr["new"] > 0 and stderr["old"] == stderr["new"] == stderr["flag"]
@@ -307,3 +307,24 @@ def test_resonances_without_uncertainty_take_the_assumed_one_discrepancy_takes(t
     assert "(assumed)" not in capsys.readouterr().out
     assert cli.main([*base, str(table), "--contact-uncertainty", "0", "--json", str(out)]) == 0     # a flag wins
     assert json.loads(out.read_text())["lever"]["contact_uncertainty"]["status"] == "given"
+
+
+def test_contact_map_without_uncertainty_assumes_the_resonances_one(tmp_path, capsys):
+    """A contact-frequency map without contact_uncertainty wrote k1_stderr 0 at every pixel (the frequencies taken
+    as exact); it takes the assumed relative uncertainty, as stiffness on numbers does, and says so."""
+    h5py = pytest.importorskip("h5py")
+    zarr = pytest.importorskip("zarr")
+    from pfmdyn.constants import RESONANCE_RELATIVE_UNCERTAINTY
+
+    fc = certified_contact_hz(75e3, 1, k1_over_k="40", k2_ratio=0)
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = np.full((2, 3), fc)
+        h.attrs.update(spring_constant=2.0, free_resonance=75e3)
+    assert cli.main(["stiffness", str(path), "--out", str(tmp_path / "o"), "--json", str(tmp_path / "s.json")]) == 0
+    assert "assumed: standard uncertainty 0.1% of each pixel's frequency and the free resonance" in capsys.readouterr().out
+    stderr = float(zarr.open_group(str(tmp_path / "o" / "maps.zarr"), mode="r")["k1_stderr"][0, 0])
+    expected = contact_stiffness(fc, 75e3, 2.0, contact_uncertainty=RESONANCE_RELATIVE_UNCERTAINTY * fc,
+                                 free_resonance_uncertainty=RESONANCE_RELATIVE_UNCERTAINTY * 75e3).k1_stderr
+    assert stderr == pytest.approx(float(expected), rel=1e-12) and stderr > 0
+    assert any(n.startswith("assumed:") for n in json.loads((tmp_path / "s.json").read_text())["notes"])

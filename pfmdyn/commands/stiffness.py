@@ -178,7 +178,7 @@ def _contact_map(args) -> int:
                         f"the free end), its frequencies from the file, which {listed(others)} would not enter: "
                         "drop " + ("it" if len(others) == 1 else "them"))
     overrides = flags.given(args, ("free_resonance", "spring_constant"))
-    overrides.update(flags.given(args, ("contact_uncertainty",)))
+    overrides.update(flags.given(args, _RESONANCE_UNCERTAINTIES))
     if args.mode:
         if len(args.mode) != 1:
             raise UserError("a contact-frequency map has one mode: give --mode once")

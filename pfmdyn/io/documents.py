@@ -621,7 +621,7 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     if "pixels_per_s" in summary:
         fit["pixels_per_second"] = statistic("pixels_per_second", summary["pixels_per_s"])
     notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings) + (
-        [summary["left_out"]] if summary.get("left_out") else [])
+        [summary[key] for key in ("left_out", "assumed") if summary.get(key)])
     assumed = assumed or {}
     lever = lever_records({**{name: value for name, (value, _) in assumed.items()}, **(given or {})},
                           given=list(given or {}), assumed={name: why for name, (_, why) in assumed.items()})

@@ -3,7 +3,10 @@
 The input (:data:`pfmdyn.io.kinds.CONTACT_MAP_KINDS`) holds ``contact_frequency_hz`` (ny, nx) and no
 ``response``, and the root attributes
 ``spring_constant`` and ``free_resonance`` (:mod:`pfmdyn.names`; older spellings are read too; optionally ``contact_mode``, default 1,
-and ``contact_uncertainty`` in Hz, ``contact_uncertainty_hz`` read too).  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
+and ``contact_uncertainty`` and ``free_resonance_uncertainty`` in Hz, ``contact_uncertainty_hz`` read too).  A map that
+gives neither uncertainty (nor a flag) has no measured frequency noise: each pixel's frequency and the free resonance
+then take :data:`pfmdyn.constants.RESONANCE_RELATIVE_UNCERTAINTY`, as ``pfmdyn stiffness`` on numbers does, and the
+summary says so (``assumed``); a stated one is kept as it is.  The inversion is :func:`pfmdyn.analysis.stiffness.contact_stiffness`,
 vectorised over the whole map; pixels whose frequency no k1 explains become NaN.
 """
 from __future__ import annotations
@@ -14,6 +17,7 @@ import os
 import numpy as np
 
 from ..analysis.stiffness import contact_stiffness
+from ..constants import RESONANCE_RELATIVE_UNCERTAINTY
 from ..errors import UserError, listed
 from ..names import NAMES, canonical, checked
 from .readers import open_root, scalar
@@ -49,22 +53,35 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
         raise UserError(f"{path}: the map holds no pixels (shape {fc.shape})")
     k, f1 = (checked(key, scalar(attrs[key]), f"{path} (command line)" if key in given
                      else str(path)) for key in ("spring_constant", "free_resonance"))
+    uncertainties = ("contact_uncertainty", "free_resonance_uncertainty")
     try:
-        mode, sigma = (float(scalar(attrs.get(key, default))) for key, default in
-                       (("contact_mode", 1), ("contact_uncertainty", 0.0)))
+        mode, sigma, sigma_free = (float(scalar(attrs.get(key, default))) for key, default in
+                                   (("contact_mode", 1), *((name, 0.0) for name in uncertainties)))
     except (TypeError, ValueError):
-        mode = sigma = math.nan
-    if not (math.isfinite(mode) and mode == int(mode) and mode >= 1 and math.isfinite(sigma) and sigma >= 0):
-        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty a number "
-                        f"from 0, got {attrs.get('contact_mode', 1)!r} and {attrs.get('contact_uncertainty', 0.0)!r}")
+        mode = sigma = sigma_free = math.nan
+    if not (math.isfinite(mode) and mode == int(mode) and mode >= 1 and math.isfinite(sigma) and sigma >= 0
+            and math.isfinite(sigma_free) and sigma_free >= 0):
+        raise UserError(f"{path}: contact_mode must be a whole number from 1 and contact_uncertainty and "
+                        f"free_resonance_uncertainty numbers from 0, got {attrs.get('contact_mode', 1)!r}, "
+                        f"{attrs.get('contact_uncertainty', 0.0)!r} and {attrs.get('free_resonance_uncertainty', 0.0)!r}")
+    assumed = [name for name in uncertainties if name not in attrs]
+    if "contact_uncertainty" in assumed:
+        sigma = RESONANCE_RELATIVE_UNCERTAINTY * fc.astype(float)
+    if "free_resonance_uncertainty" in assumed:
+        sigma_free = RESONANCE_RELATIVE_UNCERTAINTY * f1
     result = contact_stiffness(fc.astype(float), f1, k, mode=int(mode), contact_uncertainty=sigma,
-                               out_of_range="nan")
+                               free_resonance_uncertainty=sigma_free, out_of_range="nan")
     out = os.path.join(out_dir, "maps.zarr")
     # a new map each time (nothing to resume): whatever was at out is replaced
     write_maps(out, {name: (np.broadcast_to(value, fc.shape).astype(float), "N/m", f"{name} from the contact resonance")
                      for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr))})
     k1 = np.broadcast_to(np.asarray(result.k1), fc.shape)
     summary = {"explained_fraction": float(np.mean(np.isfinite(k1))), "out": out}
+    if assumed:
+        which = {"contact_uncertainty": "each pixel's frequency", "free_resonance_uncertainty": "the free resonance"}
+        summary["assumed"] = (f"assumed: standard uncertainty {RESONANCE_RELATIVE_UNCERTAINTY:.1%} of "
+                              f"{listed(which[n] for n in assumed)} in k1_stderr (the map gives none; give "
+                              f"{listed((NAMES[n].flag for n in assumed), 'or')})")
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = fc / f1
     unexplained = ratio[~np.isfinite(k1) & np.isfinite(ratio)]
@@ -91,4 +108,4 @@ def describe(summary: dict) -> str:
         return f"contact-frequency map: k1 undetermined at every pixel: {summary['why']}; maps in {summary['out']}"
     return (f"contact-frequency map: k1 at {100 * summary['explained_fraction']:.1f} % of pixels, "
             f"median k1 {summary['median_k1']:.4g} N/m; maps in {summary['out']}"
-            + (f"\n{summary['left_out']}" if summary.get("left_out") else ""))
+            + "".join(f"\n{summary[key]}" for key in ("left_out", "assumed") if summary.get(key)))
