@@ -568,3 +568,12 @@ def test_a_contact_map_says_why_some_pixels_have_no_k1(tmp_path, capsys):
     line = "k1 undetermined at 2 of 4 pixels: their contact/free ratio (4.429 to 4.571) lies outside mode 1's limits"
     assert line in capsys.readouterr().out
     assert any(note.startswith(line) for note in json.loads((tmp_path / "s.json").read_text())["notes"])
+
+
+def test_diagram_json_writes_no_negative_zero(tmp_path):
+    """diagram --json wrote -0.0 in the electrostatic responses (the imaginary part of a real response)."""
+    out = tmp_path / "d.json"
+    assert _run(["diagram", "--plot", str(tmp_path / "d.png"), "--json", str(out), "--frequency-points", "12",
+                 "--bias-points", "5"]) == 0
+    text = out.read_text()
+    assert "-0.0," not in text and "-0.0]" not in text and json.loads(text)["results"]

@@ -57,7 +57,12 @@ ENVELOPE = ("schema", "command", "kind", "source", "lever", "results", "fit", "n
 
 
 def _plain(value):
-    """A value of a record as JSON holds it: arrays to lists, a complex number to ``{real, imag}``."""
+    """A value of a record as JSON holds it: arrays to lists, a complex number to ``{real, imag}``, -0.0 as 0.0
+    (a sign no reader needs: ``-0.0`` and ``0.0`` are one value).
+
+    >>> _plain(np.array([-0.0, 1.5])), _plain(complex(-0.0, -0.0)), _plain(-0.0)
+    ([0.0, 1.5], {'real': 0.0, 'imag': 0.0}, 0.0)
+    """
     array = np.asarray(value)
     if np.iscomplexobj(array):
         return {"real": _plain(array.real), "imag": _plain(array.imag)}
@@ -65,7 +70,9 @@ def _plain(value):
         return [_plain(v) for v in array]      # infinity is "inf" in a list too (JSON has none)
     if array.dtype.kind == "f" and not array.ndim and np.isinf(array):
         return "inf" if array > 0 else "-inf"
-    if array.dtype.kind in "fiub":
+    if array.dtype.kind == "f":
+        return (array + 0.0).tolist()          # -0.0 + 0.0 is 0.0
+    if array.dtype.kind in "iub":
         return array.tolist()
     return value
 
