@@ -144,7 +144,7 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("contact_quality_factor", "Q_c", "1", "measured Q of the first contact resonance (tune fit)",
              0.1, 1e9, option=False, label="contact Q"),
     Quantity("drive_frequency", "f_drive", "Hz", "frequency the instrument drove at", 0.0, 1e10,
-             aliases=("drive_frequency_hz",), option=False),
+             aliases=("drive_frequency_hz",)),
     Quantity("tip_bias", "V_tip", "V", "DC bias on the tip", -1e4, 1e4, open_low=False,
              aliases=("tip_bias_v",), option=False),
     # Dual AC resonance tracking (DART) images: the drive, and the maps ``pfmdyn map`` makes of them.

@@ -43,7 +43,7 @@ def _argv(tmp: Path, command: str) -> dict:
     json_out, png = str(tmp / "out.json"), str(tmp / "out.png")
     return {
         "resonances": ["resonances", *LEVER, "--json", json_out],
-        "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", json_out, "--plot", png],
+        "spot": ["spot", *PROBE, "--drive-frequency", "1e5", "--json", json_out, "--plot", png],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--json", json_out],
         "diagram": ["diagram", "--plot", png, "--frequency-points", "20", "--bias-points", "5", "--json", json_out],
@@ -94,9 +94,9 @@ REFUSED = [
     ("resonances", ["--k2", "5"], "--k1"),
     ("resonances", ["--json", "{tmp}"], "cannot write"),                       # a directory
     ("resonances", ["--json", "{tmp}/data.csv/out.json"], "cannot write"),     # a file among its parents
-    ("spot", ["--frequency", "0"], "frequency"),
-    ("spot", ["--frequency", "x"], "--frequency"),                              # argparse: one line too
-    ("spot", ["--frequency", "1e12"], "beyond what the beam model"),          # was a 40 s run
+    ("spot", ["--drive-frequency", "0"], "--drive-frequency"),
+    ("spot", ["--frequency", "x"], "--drive-frequency"),                            # argparse: one line too
+    ("spot", ["--drive-frequency", "1e9"], "beyond what the beam model"),          # was a 40 s run
     ("spot", ["--k1", "0"], "needs a contact"),                                 # was inf and NaN numbers
     ("spot", ["--spot-position", "1.5"], "--spot-position"),
     ("spot", ["--plot", "{tmp}/out.xyz"], "cannot write"),                      # was a ValueError traceback
@@ -115,7 +115,7 @@ REFUSED = [
     ("diagram", ["--k1", "0"], "--k1"),
     ("stiffness", ["--tip-radius", "-1"], "--tip-radius"),               # was accepted, unused
     ("stiffness", ["--mode", "1e30"], "--mode"),                         # was a ValueError traceback
-    ("spot", ["--frequency", "nan"], "--frequency"),
+    ("spot", ["--drive-frequency", "nan"], "--drive-frequency"),
     ("diagram", ["--fmin", "0"], "--fmin"),
     ("diagram", ["--frequency-points", "100000000"], "--frequency-points"),   # was a MemoryError or a swap
     ("diagram", ["--plot", "{tmp}/dir.png"], "cannot write"),                   # was an IsADirectoryError
@@ -163,7 +163,7 @@ def test_bad_input_is_one_line_and_writes_nothing(command, extra, words, tmp_pat
     assert _outputs(tmp_path) == []
 
 
-@pytest.mark.parametrize("command, missing", [("resonances", "--length"), ("spot", "--frequency"),
+@pytest.mark.parametrize("command, missing", [("resonances", "--length"), ("spot", "--drive-frequency"),
                                               ("deconvolve", "--out"), ("branches", "--plot")])
 def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys):
     argv = _argv(tmp_path, command)
@@ -429,11 +429,11 @@ def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monke
                                    "DriveFrequency": 3.1e5}))
     out = tmp_path / "spot.json"
     assert _run(["spot", str(image), "--k1", "100", "--json", str(out)]) == 0
-    frequency = json.loads(out.read_text())["results"]["frequency"]
+    frequency = json.loads(out.read_text())["results"]["drive_frequency"]
     assert frequency["value"] == 3.1e5 and frequency["status"] == "file"
     assert "from the file: drive frequency 310000 Hz" in capsys.readouterr().out
-    assert _run(["spot", str(image), "--k1", "100", "--frequency", "2e5", "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["results"]["frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
+    assert _run(["spot", str(image), "--k1", "100", "--drive-frequency", "2e5", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["drive_frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
                                                                    "status": "given"}
 
 

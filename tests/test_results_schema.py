@@ -53,7 +53,7 @@ def _contact_map(path: Path) -> Path:
 
 CASES = {
     "resonances": lambda tmp: ["resonances", *PROBE, "--quality-factor", "50", "--modes", "2"],
-    "spot": lambda tmp: ["spot", *PROBE, "--frequency", "1e5"],
+    "spot": lambda tmp: ["spot", *PROBE, "--drive-frequency", "1e5"],
     "roots": lambda tmp: ["roots", "elastic", "--modes", "2", "--k1-over-k", "50", "--k2-ratio", "0.5"],
     "stiffness": lambda tmp: ["stiffness", *LEVER[:4], "--contact", "3e5", "--contact-uncertainty", "100"],
     "inspect": lambda tmp: ["inspect", str(_write(tmp / "t.csv", TABLE))],

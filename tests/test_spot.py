@@ -89,7 +89,7 @@ def test_pfmdyn_spot_matches_held_out_blind_spots(k1_over_k, beta, tmp_path):
     out = tmp_path / "spot.json"
     assert main(["spot", "--spring-constant", str(k), "--free-resonance", str(f1), "--length", "225e-6",
                  "--tip-height", "15e-6", "--k1", str(contact.k1), "--k2", str(contact.k2),
-                 "--frequency", repr(frequency), "--json", str(out)]) == 0
+                 "--drive-frequency", repr(frequency), "--json", str(out)]) == 0
     found = json.loads(out.read_text())["results"]["blind_spot"]["value"]
     assert len(found) == len(expected) >= 1
     np.testing.assert_allclose(found, expected, atol=5e-5)
@@ -153,11 +153,11 @@ def test_calibration_factor_and_d_eff_error_at_the_spot():
     (["--k1", "-3"], "--k1"),
     (["--tip-position", "1.2"], "--tip-position"),
     (["--spot-position", "0"], "--spot-position"),
-    (["--frequency", "0"], "frequency must be a positive number"),
+    (["--drive-frequency", "0"], "--drive-frequency"),
 ])
 def test_bad_input_is_one_line(argv, message, capsys, tmp_path):
     base = {"--spring-constant": "2", "--free-resonance": "7e4", "--length": "2e-4", "--tip-height": "1e-5",
-            "--k1": "100", "--frequency": "1e4"}
+            "--k1": "100", "--drive-frequency": "1e4"}
     for flag, value in zip(argv[::2], argv[1::2]):
         base[flag] = value
     out = tmp_path / "x.json"
@@ -168,7 +168,7 @@ def test_bad_input_is_one_line(argv, message, capsys, tmp_path):
 
 
 def test_missing_lever_value_names_its_flag(capsys):
-    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--k1", "100", "--frequency", "1e4"]
+    args = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--k1", "100", "--drive-frequency", "1e4"]
     assert main(args) == 2
     assert "give --length" in capsys.readouterr().err
     assert main([*args, "--length", "2e-4"]) == 0      # no tip height: the typical PFM probe's, said
@@ -213,3 +213,18 @@ def test_a_real_calibration_factor_is_printed_as_a_real_number(capsys):
                  "--tip-height", "1e-5", "--k1", "100", "--frequency", "3e5"]) == 0
     [line] = [line for line in capsys.readouterr().out.splitlines() if "measured/true d_eff" in line]
     assert "j " not in line and "0j" not in line, line
+
+
+def test_drive_frequency_under_its_name_and_its_old_flag(tmp_path, capsys):
+    """spot called the drive frequency --frequency and JSON 'frequency', where files and inspect call it
+    drive_frequency: now --drive-frequency and results.drive_frequency, the old flag still read (hidden)."""
+    base = ["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--tip-height", "1e-5",
+            "--k1", "100"]
+    docs = {}
+    for flag in ("--drive-frequency", "--frequency"):
+        out = tmp_path / f"{flag}.json"
+        assert main([*base, flag, "3e4", "--json", str(out)]) == 0
+        docs[flag] = json.loads(out.read_text())["results"]
+    assert docs["--frequency"] == docs["--drive-frequency"] and "frequency" not in docs["--frequency"]
+    assert docs["--drive-frequency"]["drive_frequency"]["value"] == 3e4
+    assert "drive frequency 30000 Hz" in capsys.readouterr().out

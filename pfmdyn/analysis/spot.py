@@ -210,7 +210,7 @@ class SpotResult:
 
     lever: Cantilever
     contact: Contact
-    frequency: float
+    drive_frequency: float
     beta: float
     blind_spot: BlindSpots
     positions: np.ndarray = field(repr=False)
@@ -231,7 +231,7 @@ class SpotResult:
         """
         def cplx(z):
             return None if z is None else {"re": float(np.real(z)), "im": float(np.imag(z)), "abs": float(abs(z))}
-        out = {"frequency": self.frequency, "beta": self.beta,
+        out = {"drive_frequency": self.drive_frequency, "beta": self.beta,
                "blind_spot": list(self.blind_spot.positions),
                "blind_spot_intervals": [list(i) for i in self.blind_spot.intervals],
                "certified": self.blind_spot.certified,
@@ -289,7 +289,7 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
     sens = sensitivities(lever, contact, spot)
     at = slope_along(lever, contact, beta, spot)
     factor, error = calibration(lever, contact, frequency, sensitivity=sens["contact"])
-    return SpotResult(lever=lever, contact=contact, frequency=float(frequency), beta=beta,
+    return SpotResult(lever=lever, contact=contact, drive_frequency=float(frequency), beta=beta,
                       blind_spot=blind_spots(lever, contact, beta), positions=grid, ratio=theta[3] / theta[0],
                       spot_position=float(spot), free_sensitivity=float(sens["free"]),
                       contact_sensitivity=float(sens["contact"]), calibration_factor=complex(factor),

@@ -1,11 +1,11 @@
 """``pfmdyn spot``: where to put the laser spot (electrostatic blind spots, calibration, d_eff error)."""
 from __future__ import annotations
 
-import math
+import argparse
 from pathlib import Path
 
 from ..errors import UserError
-from ..names import LEVER
+from ..names import LEVER, checked
 from . import flags
 
 __all__ = ["add_arguments", "run", "report"]
@@ -15,13 +15,19 @@ ONE_LEVER = True
 
 
 def add_arguments(parser) -> None:
-    """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the frequency."""
+    """Options of ``pfmdyn spot``: the probe's flags (SI, :mod:`pfmdyn.names`) and the drive frequency
+    (``--frequency``, its old spelling, hidden, still read).
+
+    >>> p = argparse.ArgumentParser(); add_arguments(p)
+    >>> [p.parse_args([flag, "1e4", "--k1", "100"]).drive_frequency for flag in ("--drive-frequency", "--frequency")]
+    ['1e4', '1e4']
+    """
     parser.add_argument("file", nargs="?", metavar="INPUT", help="instrument file supplying what it holds of the lever "
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
-    parser.add_argument("--frequency", type=float, help="drive frequency, Hz (default: the drive frequency INPUT "
-                        "records)")
+    flags.add(parser, ("drive_frequency",), defaults={"drive_frequency": (None, "the one INPUT records")})
+    parser.add_argument("--frequency", dest="drive_frequency", default=None, help=argparse.SUPPRESS)
     flags.add_json(parser)
     parser.add_argument("--plot", metavar="PATH", help="write the figure (ratio along the lever and over frequency)")
 
@@ -29,7 +35,7 @@ def add_arguments(parser) -> None:
 def report(result) -> str:
     """The lines ``pfmdyn spot`` prints."""
     d = result.to_dict()
-    lines = [f"frequency {d['frequency']:.6g} Hz (beta = {d['beta']:.6g})"]
+    lines = [f"drive frequency {d['drive_frequency']:.6g} Hz (beta = {d['beta']:.6g})"]
     if not d["certified"]:
         lines.append(f"blind spot: not certified ({d['reason']})")
     elif d["blind_spot"]:
@@ -69,14 +75,13 @@ def _read(args) -> dict:
 
 
 def _frequency(args, fields: dict) -> float:
-    """The drive frequency: ``--frequency``, else the one the file records."""
-    frequency = args.frequency if args.frequency is not None else fields.get("drive_frequency")
-    if frequency is None:
+    """The drive frequency: ``--drive-frequency``, else the one the file records."""
+    if args.drive_frequency is not None:
+        return checked("drive_frequency", args.drive_frequency, "--drive-frequency")
+    if fields.get("drive_frequency") is None:
         where = f" in {Path(args.file).name}" if args.file else ""
-        raise UserError(f"no drive frequency{where}: give --frequency")
-    if not (math.isfinite(frequency) and frequency > 0):
-        raise UserError(f"--frequency must be a positive number of Hz, got {frequency}")
-    return frequency
+        raise UserError(f"no drive frequency{where}: give --drive-frequency")
+    return checked("drive_frequency", fields["drive_frequency"], args.file)
 
 
 def _lever(args, found: dict, assumed: dict):
@@ -93,7 +98,7 @@ def run(args) -> int:
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    if args.frequency is not None:
+    if args.drive_frequency is not None:
         _frequency(args, {})                    # a bad flag before the file
     fields = _read(args)
     frequency = _frequency(args, fields)
@@ -106,7 +111,7 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     if assumed:
         print(flags.assumed_line(assumed, lever))
-    if args.frequency is None:
+    if args.drive_frequency is None:
         print(f"from the file: drive frequency {frequency:.6g} Hz")
     print(report(result))
     print(f"k2 policy: {policy}")
@@ -114,7 +119,7 @@ def run(args) -> int:
         from ..io import documents
 
         flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy,
-                                                    "frequency_from_file": args.frequency is None},
+                                                    "frequency_from_file": args.drive_frequency is None},
                                                    flags.given_names(args, (*flags.NAMES,)), list(found), args.file))
     if args.plot:
         import numpy as np

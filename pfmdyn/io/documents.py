@@ -687,7 +687,7 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     """The document of ``pfmdyn spot`` (kind ``spot``): blind spots, the slope ratio along the lever
     (dims position), the sensitivities and calibration factors (complex) at the lever's spot.
 
-    >>> d = {"frequency": 1e5, "beta": 2.24, "blind_spot": [0.62], "blind_spot_intervals": [[0.61, 0.63]],
+    >>> d = {"drive_frequency": 1e5, "beta": 2.24, "blind_spot": [0.62], "blind_spot_intervals": [[0.61, 0.63]],
     ...      "certified": True, "q0_to_d1_slope_ratio": {"spot_position": [0.5, 1.0], "re": [1e-5, 2e-5], "im": [0, 0]},
     ...      "free_sensitivity": 0.67, "contact_sensitivity": 0.74, "calibration_factor": {"re": 0.86, "im": 0.0},
     ...      "paper_calibration_factor": {"re": 0.78, "im": 0.0}, "d_eff_error_per_volt": None,
@@ -699,8 +699,9 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     """
     ratio = d["q0_to_d1_slope_ratio"]
     results = {
-        "frequency": (quantity("frequency", d["frequency"], status="file", why="the drive frequency the file records")
-                      if d.get("frequency_from_file") else quantity("frequency", d["frequency"], status="given")),
+        "drive_frequency": (quantity("drive_frequency", d["drive_frequency"], status="file",
+                                     why="the drive frequency the file records") if d.get("frequency_from_file")
+                            else quantity("drive_frequency", d["drive_frequency"], status="given")),
         "beta": quantity("beta", d["beta"], status="derived"),
         "blind_spot": quantity("blind_spot", d["blind_spot"], status="derived", dims=["blind_spot"]),
         "blind_spot_interval": quantity("blind_spot_interval", d["blind_spot_intervals"], status="derived",

@@ -16,7 +16,7 @@ __all__ = ["plot_spot"]
 
 
 def plot_spot(result: SpotResult, frequencies=None, ratio_map=None):
-    """Draw the ratio at ``result.frequency`` and, when given, its map over ``frequencies``.
+    """Draw the ratio at ``result.drive_frequency`` and, when given, its map over ``frequencies``.
 
     Parameters
     ----------
@@ -55,7 +55,7 @@ def plot_spot(result: SpotResult, frequencies=None, ratio_map=None):
     ax.set_xlabel("detection point $x_s/L$")
     ax.set_ylabel(r"$|\theta_{q0}/\theta_{d1}|$ (m$^2$/N)")
     spots = ", ".join(f"{p:.4f}" for p in result.blind_spot.positions) or "none"
-    ax.set_title(f"{result.frequency / 1e3:.4g} kHz: blind spot(s) {spots}", fontsize="medium")
+    ax.set_title(f"{result.drive_frequency / 1e3:.4g} kHz: blind spot(s) {spots}", fontsize="medium")
     if ratio_map is not None:
         ax2 = fig.add_subplot(1, 2, 2)
         f = np.asarray(frequencies, float) / 1e3
