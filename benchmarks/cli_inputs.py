@@ -61,7 +61,7 @@ PROBE = LEVER + ["--tip-height", "1e-5", "--k1", "100"]
 CSV = "frequency_hz,bias_v,x,y\n" + "".join(f"{f},{v},{1 + 0.1 * v},{0.1 * v}\n"
                                           for f in (1e5, 2e5, 3e5) for v in (-1, 0, 1))
 OWN = {   # each command's own number flags (besides the probe's quantities)
-    "resonances": ("--modes",), "spot": ("--frequency",),
+    "resonances": ("--modes",), "spot": ("--drive-frequency",),
     "stiffness": ("--contact", "--mode", "--free-resonance-uncertainty", "--spring-constant-uncertainty"),
     "diagram": ("--d-eff", "--local-force", "--surface-potential", "--fmin", "--fmax", "--vmin", "--vmax",
                 "--frequency-points", "--bias-points"),
@@ -83,7 +83,7 @@ def base_lines(tmp: Path) -> dict:
         _h5(tmp / "map.h5")
     return {
         "resonances": ["resonances", *PROBE, "--json", f"{out}/r.json"],
-        "spot": ["spot", *PROBE, "--frequency", "1e5", "--json", f"{out}/s.json", "--plot", f"{out}/s.png"],
+        "spot": ["spot", *PROBE, "--drive-frequency", "1e5", "--json", f"{out}/s.json", "--plot", f"{out}/s.png"],
         "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5",
                       "--length", "2e-4", "--json", f"{out}/k.json"],
         "diagram": ["diagram", "--plot", f"{out}/d.png", "--csv", f"{out}/d.csv", "--frequency-points", "20",

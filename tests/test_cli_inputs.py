@@ -174,7 +174,7 @@ def test_missing_required_option_is_one_line(command, missing, tmp_path, capsys)
 
 
 @pytest.mark.parametrize("argv, flags_named", [
-    (["spot", "--k1", "100", "--frequency", "1e5", "--spring-constant", "2"],     # the tip height: assumed
+    (["spot", "--k1", "100", "--drive-frequency", "1e5", "--spring-constant", "2"],     # the tip height: assumed
      ["--free-resonance", "--length"]),
     (["stiffness", "--contact", "3e5"], ["--free-resonance", "--spring-constant"]),
     (["roots", "elastic"], ["--k1-over-k", "--k2-ratio"]),
@@ -216,7 +216,7 @@ def test_deconvolve_malformed_csv(name, text, words, tmp_path, capsys):
 def test_valid_extremes_succeed(tmp_path, capsys):
     """Spot exactly at the free end, k1/k = 1e4 and a lever at the ends of the real ranges."""
     out = tmp_path / "r.json"
-    assert _run(["spot", *PROBE, "--frequency", "1e5", "--spot-position", "1", "--k1", "2e4"]) == 0
+    assert _run(["spot", *PROBE, "--drive-frequency", "1e5", "--spot-position", "1", "--k1", "2e4"]) == 0
     assert _run(["resonances", "--spring-constant", "0.05", "--free-resonance", "1.3e4", "--length", "5e-4",
                  "--k1", "500", "--tip-height", "1e-5", "--tilt", "15", "--poisson", "0.3", "--json", str(out)]) == 0
     modes = json.loads(out.read_text())["results"]
@@ -301,7 +301,7 @@ def test_error_is_not_a_catch_all(monkeypatch):
 
 
 def test_no_nan_printed_for_spot_at_free_end_in_stiff_contact(capsys):
-    assert _run(["spot", *LEVER, "--tip-height", "1e-5", "--k1", "2e4", "--frequency", "2e5"]) == 0
+    assert _run(["spot", *LEVER, "--tip-height", "1e-5", "--k1", "2e4", "--drive-frequency", "2e5"]) == 0
     assert not re.search(r"\bnan\b", capsys.readouterr().out, re.IGNORECASE)
 
 

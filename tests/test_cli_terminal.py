@@ -156,7 +156,7 @@ MAIN_PATHS = {
     "resonances": ["resonances", *PROBE[:-2], "--width", "4e-5", "--medium", "air", "--k1", "300", "--poisson", "0.3",
                    "--quality-factor", "50", "--json", "r.json"],
     "resonances overdamped": ["resonances", *LEVER, "--viscous-loss", "3"],
-    "spot": ["spot", *PROBE, "--frequency", "1e5", "--plot", "s.png"],
+    "spot": ["spot", *PROBE, "--drive-frequency", "1e5", "--plot", "s.png"],
     "stiffness": ["stiffness", "--spring-constant", "2", "--free-resonance", "7e4", "--contact", "3e5", "--contact",
                   "9e5", "--mode", "1", "--mode", "2", "--tip-position", "fit", "--contact-uncertainty", "100"],
     "diagram": ["diagram", "--plot", "d.png", "--frequency-points", "40", "--bias-points", "9", "--csv", "d.csv"],

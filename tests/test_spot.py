@@ -210,7 +210,7 @@ def test_the_probe_and_the_map_model_read_the_lever_at_the_spot():
 def test_a_real_calibration_factor_is_printed_as_a_real_number(capsys):
     """The lossless lever's factors are real: '+3.7', not '+3.7+0j'."""
     assert main(["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4",
-                 "--tip-height", "1e-5", "--k1", "100", "--frequency", "3e5"]) == 0
+                 "--tip-height", "1e-5", "--k1", "100", "--drive-frequency", "3e5"]) == 0
     [line] = [line for line in capsys.readouterr().out.splitlines() if "measured/true d_eff" in line]
     assert "j " not in line and "0j" not in line, line
 
