@@ -317,3 +317,17 @@ def test_the_library_is_quiet(capsys):
     s1, s2 = (1e-12 * deflection_signal(lever, Contact(), f, 120.0, 0.02) for f in (f1, f2))
     invert(f1, f2, s1, s2, lever, Contact(), 1.0)
     assert capsys.readouterr() == ("", "")
+
+
+def test_the_dart_figure_draws_real_drive_beside_determined():
+    """real_drive (where the drive's phase was fitted with the contact) is a map of the DART store, as determined
+    is, but map --plot drew determined and not it."""
+    import xarray
+
+    from pfmdyn.plots.maps import plot_dart
+
+    flag = np.array([[1, 0], [1, 1]], dtype=np.uint8)
+    ds = xarray.Dataset({"k1": (("y", "x"), np.full((2, 2), 100.0), {"units": "N/m"}),
+                         "determined": (("y", "x"), flag), "real_drive": (("y", "x"), flag[::-1])})
+    titles = [ax.get_title() for ax in plot_dart(ds).axes if ax.get_title()]      # not the colour bars
+    assert titles.index("real_drive") == titles.index("determined") + 1

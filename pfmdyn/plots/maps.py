@@ -47,13 +47,16 @@ def plot_maps(result) -> dict[str, Figure]:
 
 
 _DART = ("contact_resonance", "contact_quality_factor", "k1", "contact_loss", "d_eff", "oscillator_k1_error",
-         "oscillator_d_eff_error", "determined")
+         "oscillator_d_eff_error", "determined", "real_drive")
+"""The DART figure's panels, in order; the flags (``determined``, ``real_drive``: where the drive's phase was
+fitted with the contact) beside the values they qualify."""
 
 
 def plot_dart(result) -> Figure:
     """One figure of a DART image's maps (:func:`pfmdyn.maps.dart.invert`, read by
     :func:`pfmdyn.maps.open_result`): the oscillator's resonance and Q, the lever's k1, contact loss
-    and d_eff (a diverging scale: the domains' sign), and how far the oscillator is from the lever.
+    and d_eff (a diverging scale: the domains' sign), how far the oscillator is from the lever, and where each
+    pixel was determined and its drive taken real (``real_drive``).
 
     >>> import xarray
     >>> ds = xarray.Dataset({"d_eff": (("y", "x"), np.array([[1e-12, -1e-12]]), {"units": "m/V"})})
