@@ -5,7 +5,8 @@ before or beyond it, ``beta`` from 1e-3 to 200).
 
 The characteristic and its partials with the tip at the end take the same steps: 1e-12.  The
 read-outs take the written-out form's steps but invert the 4 x 4 of a set-back tip by their own LU
-(LAPACK's in NumPy) and divide where NumPy multiplies by a reciprocal: 1e-11 (the worst seen 5e-12),
+(LAPACK's in NumPy), divide where NumPy multiplies by a reciprocal and compile the tip's jump (its complex
+powers by products): 1e-11 (the worst seen 9e-12),
 the partials relative to the larger of themselves and ``|S / p|`` (as ``tests/test_fast_readouts.py``,
 which also holds both to the assembled system and the 70-digit beam).
 """
