@@ -102,15 +102,15 @@ def point_jump_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g, wrt=JACOBIAN_PA
 
 
 def _point_jump_d_beta(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (6*H*kvl/(L*beta**3*k), 3*H**2*kll/(L**2*beta**2*k) + 3*beta**2*mu*rho_g**2, -mu - 9*kvv/(beta**4*k), -6*H*kvl/(L*beta**3*k), -6*H*kvl/(L*beta**3*k), -6*H*kll/(L*beta**3*k), 0, -6/(L*beta**3*k), 9*kvv/(beta**4*k), 9*kvl/(beta**4*k), 9/(beta**4*k), 0)
+    return (6*H*kvl/(L*(beta*beta*beta)*k), 3*H**2*kll/(L**2*beta**2*k) + (3*mu*rho_g**2)*beta**2, -mu - 9*kvv/((beta*beta*beta*beta)*k), -6*H*kvl/(L*(beta*beta*beta)*k), -6*H*kvl/(L*(beta*beta*beta)*k), -6*H*kll/(L*(beta*beta*beta)*k), 0, -6/(L*(beta*beta*beta)*k), 9*kvv/((beta*beta*beta*beta)*k), 9*kvl/((beta*beta*beta*beta)*k), 9/((beta*beta*beta*beta)*k), 0)
 
 
 def _point_jump_d_k(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/(beta**3*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/(beta**3*k**2), 3*kvl/(beta**3*k**2), 3/(beta**3*k**2), 0)
+    return (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/((beta*beta*beta)*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/((beta*beta*beta)*k**2), 3*kvl/((beta*beta*beta)*k**2), 3/((beta*beta*beta)*k**2), 0)
 
 
 def _point_jump_d_kvv(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (0, 0, 3/(beta**3*k), 0, 0, 0, 0, 0, -3/(beta**3*k), 0, 0, 0)
+    return (0, 0, 3/((beta*beta*beta)*k), 0, 0, 0, 0, 0, -3/((beta*beta*beta)*k), 0, 0, 0)
 
 
 def _point_jump_d_kll(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
@@ -118,15 +118,15 @@ def _point_jump_d_kll(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
 
 
 def _point_jump_d_kvl(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/(beta**3*k), 0, 0)
+    return (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/((beta*beta*beta)*k), 0, 0)
 
 
 def _point_jump_d_mu(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (0, beta**3*rho_g**2, -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+    return (0, rho_g**2*(beta*beta*beta), -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0)
 
 
 def _point_jump_d_rho_g(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
-    return (0, 2*beta**3*mu*rho_g, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+    return (0, (2*mu*rho_g)*(beta*beta*beta), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
 
 
 POINT_JUMP_PARTIALS = (_point_jump_d_beta, _point_jump_d_k, _point_jump_d_kvv, _point_jump_d_kll, _point_jump_d_kvl, _point_jump_d_mu, _point_jump_d_rho_g)

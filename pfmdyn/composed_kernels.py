@@ -401,7 +401,7 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
 
 _point_jump = numba.njit(cache=True)(pieces.point_jump)
 _d_beta, _d_k, _d_kvv, _d_kll, _d_kvl, _d_mu, _d_rho_g = (numba.njit(cache=True)(f) for f in pieces.POINT_JUMP_PARTIALS)
-assert pieces.JACOBIAN_PARAMETERS == ("beta", "k", "kvv", "kll", "kvl", "mu", "rho_g")   # the branches of _jump_partial
+assert pieces.JACOBIAN_PARAMETERS == ("beta", "k", "kvv", "kll", "kvl", "mu", "rho_g")   # tip_point's branches
 
 
 @numba.njit(cache=True)
@@ -409,28 +409,6 @@ def _store(values, out):
     """The 12 pieces of a jump (a tuple of numbers and literal zeros) into ``out``."""
     out[0], out[1], out[2], out[3], out[4], out[5] = values[0], values[1], values[2], values[3], values[4], values[5]
     out[6], out[7], out[8], out[9], out[10], out[11] = values[6], values[7], values[8], values[9], values[10], values[11]
-
-
-@numba.njit(cache=True)
-def _jump_partial(code, b, k, kvv, kll, kvl, H, L, mu, rho_g, out):
-    """The jump's partial w.r.t. ``JACOBIAN_PARAMETERS[code]`` into ``out`` (zeros for ``code`` -1: a
-    parameter the tip does not hold)."""
-    if code == 0:
-        _store(_d_beta(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 1:
-        _store(_d_k(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 2:
-        _store(_d_kvv(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 3:
-        _store(_d_kll(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 4:
-        _store(_d_kvl(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 5:
-        _store(_d_mu(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    elif code == 6:
-        _store(_d_rho_g(b, k, kvv, kll, kvl, H, L, mu, rho_g), out)
-    else:
-        out[:] = 0.0
 
 
 @numba.njit(cache=True)
@@ -449,11 +427,34 @@ def tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g, codes, jump, djump):
     >>> bool(np.allclose(djump[0, 0], pieces.point_jump_partials(*point, wrt=("beta",))["beta"], rtol=1e-15, atol=0))
     True
     """
-    for i in range(beta.shape[0]):
-        at = (beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i])
-        _store(_point_jump(*at), jump[i])
-        for p in range(codes.shape[0]):
-            _jump_partial(codes[p], *at, djump[p, i])
+    n = beta.shape[0]
+    for i in range(n):
+        _store(_point_jump(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), jump[i])
+    for p in range(codes.shape[0]):     # a loop per partial: a branch per member would cost several times more
+        code, out = codes[p], djump[p]
+        if code == 0:
+            for i in range(n):
+                _store(_d_beta(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 1:
+            for i in range(n):
+                _store(_d_k(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 2:
+            for i in range(n):
+                _store(_d_kvv(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 3:
+            for i in range(n):
+                _store(_d_kll(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 4:
+            for i in range(n):
+                _store(_d_kvl(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 5:
+            for i in range(n):
+                _store(_d_mu(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 6:
+            for i in range(n):
+                _store(_d_rho_g(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        else:               # a parameter the tip does not hold
+            out[:, :] = 0.0
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 _PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
 _PAIR_ROWS = np.array(_PAIRS)
