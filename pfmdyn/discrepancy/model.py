@@ -141,8 +141,8 @@ class Model:
             spring = d.k1
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            T, J = module.slope_and_jacobian(d.beta, *at, *self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"])),
-                                             wrt=self._partials_needed(c, module))
+            lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
+            T, J = module.slope_and_jacobian(d.beta, *at, *lever, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
