@@ -407,9 +407,8 @@ assert pieces.JACOBIAN_PARAMETERS == ("beta", "k", "kvv", "kll", "kvl", "mu", "r
 @numba.njit(cache=True)
 def _store(values, out):
     """The 12 pieces of a jump (a tuple of numbers and literal zeros) into ``out``."""
-    out[0], out[1], out[2], out[3] = values[0], values[1], values[2], values[3]
-    out[4], out[5], out[6], out[7] = values[4], values[5], values[6], values[7]
-    out[8], out[9], out[10], out[11] = values[8], values[9], values[10], values[11]
+    out[0], out[1], out[2], out[3], out[4], out[5] = values[0], values[1], values[2], values[3], values[4], values[5]
+    out[6], out[7], out[8], out[9], out[10], out[11] = values[6], values[7], values[8], values[9], values[10], values[11]
 
 
 @numba.njit(cache=True)
