@@ -19,7 +19,10 @@ becomes a k1 map::
 
     pfmdyn stiffness dart.h5 --out result/      # result/maps.zarr: k1, k1_stderr
 
-``--reduced-modulus`` converts k1 to E* with the Hertz relation (``--tip-radius``, ``--normal-load``).
+Resonances given without an uncertainty (no flag, no ``frequency_uncertainty_hz`` in the table) take
+:data:`pfmdyn.constants.RESONANCE_RELATIVE_UNCERTAINTY` of each frequency, as ``discrepancy`` does, said as assumed
+beside its share of k1's.  ``--reduced-modulus`` converts k1 to E* with the Hertz relation (``--tip-radius``,
+``--normal-load``).
 ``--free``, ``--free-uncertainty`` and ``--load`` are the old spellings of ``--free-resonance``,
 ``--free-resonance-uncertainty`` and ``--normal-load`` (hidden, still read).
 """
