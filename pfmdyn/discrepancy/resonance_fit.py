@@ -31,7 +31,8 @@ from scipy.optimize import least_squares
 
 from ..cantilever import DEFAULT_POISSON, Contact
 from ..fitting.projection import jacobian_covariance
-from ..io.tables import Q_RELATIVE_UNCERTAINTY, ResonanceData
+from ..constants import Q_RELATIVE_UNCERTAINTY, RESONANCE_RELATIVE_UNCERTAINTY
+from ..io.tables import ResonanceData
 from .effects import spring_grid
 from .quality import loss_and_roots, loss_factors
 from .model import FitResult, Model, bounds
@@ -62,7 +63,7 @@ def frequency_sigma(data: ResonanceData) -> np.ndarray:
     [54.553, 260.0]
     """
     u = data.metadata.frequency_uncertainty_hz
-    sigma = np.full(len(data.frequency_hz), u) if u else 1e-3 * data.frequency_hz
+    sigma = np.full(len(data.frequency_hz), u) if u else RESONANCE_RELATIVE_UNCERTAINTY * data.frequency_hz
     if data.quality_factor is None:
         return sigma
     q = np.where(rows_with_q(data), data.quality_factor, np.inf)
@@ -84,7 +85,7 @@ def rows_with_q(data: ResonanceData) -> np.ndarray:
 
 
 def _q_sigma(data: ResonanceData) -> np.ndarray:
-    """Uncertainty of each given ``1/Q`` (relative: :data:`pfmdyn.io.tables.Q_RELATIVE_UNCERTAINTY`;
+    """Uncertainty of each given ``1/Q`` (relative: :data:`pfmdyn.constants.Q_RELATIVE_UNCERTAINTY`;
     at least that of Q = 1e4, so that an undamped mode, Q = inf, has one too)."""
     rel = data.metadata.quality_factor_uncertainty or Q_RELATIVE_UNCERTAINTY
     return rel * np.maximum(1 / data.quality_factor[rows_with_q(data)], 1e-4)

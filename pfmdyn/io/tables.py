@@ -48,7 +48,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..constants import Q_RELATIVE_UNCERTAINTY  # noqa: F401  (its old home: resonance_fit reads it here)
 from ..errors import UserError
 from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
