@@ -282,9 +282,11 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
                            "lever's first mode and k follow (Sader's hydrodynamic function)")
     elif tune.unit == "m" or invols is not None:
         log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
+        scatter = peak.stderr(log_mean_square, "fit")      # the profile where the bins, not the data, set the area
+        fit = {"fit": scatter} if scatter >= peak.area_profile else {"fit (profile over Q)": peak.area_profile}
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
-                           {"fit": peak.stderr(log_mean_square, "fit"), "peak shape": peak.stderr(log_mean_square, "shape"),
-                            "temperature": temperature_uncertainty / temperature})
+                           dict(fit, **{"peak shape": peak.stderr(log_mean_square, "shape"),
+                                        "temperature": temperature_uncertainty / temperature}))
     # Sader.
     rebuild = medium_factory or (lambda t: medium)
 
@@ -344,4 +346,5 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
                        plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
                        else plausible_factors(u_length / length, u_width / width, temperature),
-                       "fluid-loaded lever" if lever else "damped oscillator", lever.fit if lever else None)
+                       "fluid-loaded lever" if lever else "damped oscillator" + (f", {peak.sampling}" if peak.sampling else ""),
+                       lever.fit if lever else None)
