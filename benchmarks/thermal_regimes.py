@@ -12,6 +12,8 @@ tunes above are point-sampled at the bins' centres; a real one is a Welch/FFT es
 the power in it (``tests/test_thermal_fit.bin_averaged``: the exact PSD averaged over sub-points an eighth
 of a linewidth apart).  Bin-averaged: ``air-binned`` and ``vacuum-binned`` (as air and vacuum), and
 ``sub-bin``, near vacuum at Q ~ 1,000-5,000 with the linewidth 0.25-0.9 of a bin (the point count follows).
+``two-modes``: air over 8 f_vac, a loss falling with frequency (mode 2's Q 2.5-10 times mode 1's near
+vacuum), mode 1 on a 1/f rise 0.5-5 times the floor: mode 2 may stand out more than mode 1.
 
 Per tune: the thermal k within 5 % of the truth (8 % in water), the truth within 3 stated standard
 errors, the first resonance (the root of the fluid-loaded beam's real dynamic stiffness) within 0.5 %,
@@ -20,7 +22,7 @@ within 3 of it, of ``calibrate`` (``f covered``) and of the whole lever's fit th
 TUNE`` states (``lever f covered``: :func:`~pfmdyn.discrepancy.thermal.fit_thermal` at the true k).  Each
 criterion is counted on its own, per regime.
 
-    python benchmarks/thermal_regimes.py [--cases 20] [--regimes air water vacuum drifting air-binned vacuum-binned sub-bin]
+    python benchmarks/thermal_regimes.py [--cases 20] [--regimes air water vacuum drifting air-binned vacuum-binned sub-bin two-modes]
 
 Results: ``benchmarks/results/thermal_regimes.md``.
 """
@@ -49,10 +51,12 @@ VACUUM = lambda t: Medium(1e-6, 1e-9, "near vacuum")  # noqa: E731
 REGIMES = {"air": (Medium.air, (-3.5, -2), 0.05), "water": (Medium.water, (-3.5, -2), 0.08),
            "vacuum": (VACUUM, (-4, -2.3), 0.05), "drifting": (Medium.air, (-3.5, -2), 0.05),
            "air-binned": (Medium.air, (-3.5, -2), 0.05), "vacuum-binned": (VACUUM, (-4, -2.3), 0.05),
-           "sub-bin": (VACUUM, (-3.7, -3), 0.05)}
+           "sub-bin": (VACUUM, (-3.7, -3), 0.05), "two-modes": (Medium.air, (-3.5, -2.5), 0.05)}
 """Per regime: the medium at a temperature, log10 bounds of the internal loss, the tolerance on k."""
 DRIFT = (-4, -2)
 """The drifting regime's spread of the resonance over the averages: log10 bounds of its relative standard deviation."""
+Q_RATIO = (2.5, 10.0)
+"""The two-modes regime: mode 2's Q over mode 1's near vacuum (the loss ``g r**p``, ``p`` to give it)."""
 SUB_BIN = (0.25, 0.9)
 """The sub-bin regime's linewidth in bins (near vacuum, Q ~ 1/loss 1,000-5,000): the point count follows."""
 
@@ -68,9 +72,13 @@ def draw(seed: int, regime: str):
     mpl = mass_per_length(k, L, f_vac)
     resonance = f_vac * brentq(lambda r: r**2 * (1 + load_ratio(case["medium"], r * f_vac, w, mpl).real) - 1, 1e-3, 1.0)
     span, points = rng.choice([2.5, 8.0]), int(rng.choice([2000, 6000, 20000]))
+    if regime == "two-modes":
+        span = 8.0
     if regime == "sub-bin":      # Q ~ 1/g: the linewidth f_vac g is a drawn fraction of a bin
         points = int(span * rng.uniform(*SUB_BIN) / case["g"])
     f = np.linspace(0, span * f_vac, points)[1:]
+    if regime == "two-modes":       # a loss falling with frequency: mode 2 may stand out more than mode 1
+        case["g"] = case["g"] * (f / f_vac) ** (1 - math.log(rng.uniform(*Q_RATIO)) / math.log(6.27))
     if regime == "drifting":        # the averages' mean over a normal spread of f_vac (Gauss-Hermite nodes)
         spread = 10 ** rng.uniform(*DRIFT)
         nodes, weights = np.polynomial.hermite_e.hermegauss(15)
@@ -82,6 +90,8 @@ def draw(seed: int, regime: str):
         psd = (2 * L / 3) ** 2 * end_slope_psd(f, **case)
     floor = np.sqrt(psd.max()) / 10 ** rng.uniform(math.log10(2), math.log10(300))
     pink = floor**2 * rng.uniform(0, 3) * f[len(f) // 50] / f if rng.random() < 0.5 else 0.0
+    if regime == "two-modes":       # mode 1 on a 1/f rise 0.5-5 times the floor at f_vac
+        pink = floor**2 * rng.uniform(0.5, 5) * f_vac / f
     asd = np.sqrt(psd + floor**2 + pink) * (1 + 0.016 * rng.standard_normal(len(f)))
     return case, resonance, ThermalTune(f"{regime} seed {seed}", f, asd, "m", {}, {})
 

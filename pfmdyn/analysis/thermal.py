@@ -33,7 +33,7 @@ from ..io.instruments import read_instrument, resonance_table
 from ..io.tables import check_resonance_rows
 
 __all__ = ["ThermalPeak", "oscillator_asd", "oscillator_bin_power", "fit_oscillator", "tallest_peak", "half_power_run", "broad_mode",
-           "fit_thermal_peaks", "instrument_resonances"]
+           "fit_thermal_peaks", "first_mode_index", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
@@ -273,9 +273,10 @@ def half_power_run(y, i: int) -> tuple[int, int]:
     return (int(left[-1]) + 1 if left.size else 0), (i + int(right[0]) if right.size else len(below) - 1)
 
 
-def _quality_start(f, y, i: int) -> float:
-    """A starting Q from the half-power run (at least two bins wide)."""
-    lo, hi = half_power_run(y, i)
+def _quality_start(f, y, i: int, floor: float = 0.0) -> float:
+    """A starting Q from the half-power run (at least two bins wide); of the power above ``floor`` (an ASD)
+    for a peak not twice its floor, which never falls to half its power otherwise."""
+    lo, hi = half_power_run(np.sqrt(np.maximum(y**2 - floor**2, 0.0)) if y[i] < 2 * floor else y, i)
     step = f[1] - f[0]
     return f[i] / max((hi - lo + 1) * step, 2 * step)
 
@@ -328,21 +329,69 @@ def _peaks(x, minimum: float):
 
 
 def _flexural_modes(candidates, max_modes):
-    """Mode number of each candidate peak (tallest first), 0 for a peak that is no flexural mode."""
+    """Mode number of each candidate peak (most prominent first), 0 for a peak that is no flexural mode.
+
+    Mode 1 is the most prominent peak unless a lower candidate has it as a higher mode (its frequency
+    ratio within 25 % of the free beam's ``(z_n/z_1)**2``, the fluid's load shifting it): then the most
+    prominent such lower one.  Mode 2 can stand out more than mode 1 (a Q 8-10 times mode 1's, mode 1 on
+    a 1/f rise) and was taken for it, k then read 2-3 times too high.
+
+    >>> _flexural_modes([6.3e5, 1.0e5, 5e4], 5)      # the tallest is mode 2 of the second
+    [2, 1, 0]
+    """
     from ..roots.core import family_roots
 
     if len(candidates) == 0:
         return []
     z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
     ratios = formulas.frequency_from_beta(z, 1.0, z[0])
-    out, taken = [1], {1}
-    for f in candidates[1:]:
-        r = f / candidates[0]
+
+    def mode_of(f, first):
+        r = f / first
         n = int(np.argmin(np.abs(r / ratios - 1))) + 1
-        ok = abs(r / ratios[n - 1] - 1) < 0.25 and n not in taken
-        out.append(n if ok else 0)
-        taken.add(n if ok else 0)
+        return n if abs(r / ratios[n - 1] - 1) < 0.25 else 0
+
+    first = next((c for c in candidates[1:] if c < candidates[0] and mode_of(candidates[0], c) > 1), candidates[0])
+    out, taken = [], set()
+    for f in candidates:
+        n = mode_of(f, first)
+        n = n if n not in taken else 0
+        out.append(n)
+        taken.add(n)
     return out
+
+
+def _candidates(f, y, min_prominence: float, max_peaks: int) -> list[tuple[int, int, float]]:
+    """``(mode, index, floor)`` of the flexural modes among a spectrum's peaks (:func:`_flexural_modes`),
+    lowest mode first: peaks of the log ASD above a median-smoothed floor by at least ``min_prominence``
+    (the floor's ASD there the third)."""
+    start = _low_bins(f.size)
+    logy = np.log10(np.maximum(y, np.finfo(float).tiny))
+    # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
+    # smoothing until a peak stands out.  The spectrum's own median over 5 bins hides a single-bin spike,
+    # and with it a peak narrower than a bin (near vacuum, Q in the thousands): unsmoothed, last.
+    for share, smoothing in ((50, 5), (10, 5), (4, 5), (50, 1)):
+        floor = _smooth(logy, max(11, f.size // share))
+        peaks, prominence = _peaks(_smooth(logy, smoothing)[start:] - floor[start:], np.log10(min_prominence))
+        if peaks.size:
+            break
+    order = np.argsort(prominence)[::-1]
+    modes = _flexural_modes(f[peaks[order] + start], max_peaks)
+    return sorted((m, int(peaks[j] + start), float(10 ** floor[peaks[j] + start])) for m, j in zip(modes, order) if m)
+
+
+def first_mode_index(f, y) -> int:
+    """Index of the first flexural mode's peak in a thermal spectrum (equally spaced from near 0): the
+    lowest mode among its peaks (:func:`_candidates`), else :func:`tallest_peak`.
+
+    >>> f = np.linspace(0, 8e5, 8000)
+    >>> y = np.hypot(oscillator_asd(f, 1e5, 30.0, 1e-12, 1e-13), oscillator_asd(f, 6.3e5, 300.0, 2e-13, 0.0))
+    >>> round(float(f[first_mode_index(f, y)]), -3), round(float(f[tallest_peak(y)]), -3)
+    (100000.0, 630000.0)
+    """
+    f, y = np.asarray(f, dtype=float), np.asarray(y, dtype=float)
+    found = _candidates(f, y, 1.5, 5)
+    return found[0][1] if found and found[0][0] == 1 else tallest_peak(y)
 
 
 def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_peaks: int = 5) -> list[ThermalPeak]:
@@ -371,22 +420,10 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_pea
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(y)) and np.all(np.diff(f) > 0)):
         raise UserError("a thermal spectrum needs finite values and increasing frequencies")
     step = f[1] - f[0]
-    start = _low_bins(f.size)
-    logy = np.log10(np.maximum(y, np.finfo(float).tiny))
-    # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
-    # smoothing until a peak stands out.  The spectrum's own median over 5 bins hides a single-bin spike,
-    # and with it a peak narrower than a bin (near vacuum, Q in the thousands): unsmoothed, last.
-    for share, smoothing in ((50, 5), (10, 5), (4, 5), (50, 1)):
-        floor = _smooth(logy, max(11, f.size // share))
-        peaks, prominence = _peaks(_smooth(logy, smoothing)[start:] - floor[start:], np.log10(min_prominence))
-        if peaks.size:
-            break
-    order = np.argsort(prominence)[::-1]
-    modes = _flexural_modes(f[peaks[order] + start], max_peaks)
     out = []
-    for mode, i in sorted((m, peaks[j] + start) for m, j in zip(modes, order) if m):
-        f0, top, base = f[i], y[i], 10 ** floor[i]
-        q0 = _quality_start(f, y, i)
+    for mode, i, base in _candidates(f, y, min_prominence, max_peaks):
+        f0, top = f[i], y[i]
+        q0 = _quality_start(f, y, i, base)
         half = max(6 * f0 / q0, 20 * step)
         window = (f > f0 - half) & (f < f0 + half)
         peak = fit_oscillator(f[window], y[window], (f0, q0, top / q0, base), mode)
