@@ -1,7 +1,8 @@
 """The spring constant of a free lever from its thermal tune, two independent ways.
 
 * **Thermal** (equipartition): the first mode is fitted as a damped oscillator over a white floor
-  (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`); its mean square ``pi A**2 f0 Q / 2`` (generated
+  (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`; bin-averaged where the peak is narrower than a few
+  bins and that fits, said in :attr:`Calibration.model`); its mean square ``pi A**2 f0 Q / 2`` (generated
   ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``invols``) gives
   ``k = chi kB T / <d*^2>`` with the first-mode factor ``chi`` of the optical lever read at the spot
   through a static InvOLS measured with the tip at ``tip_position`` (generated

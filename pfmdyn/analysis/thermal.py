@@ -9,10 +9,13 @@ that of a damped harmonic oscillator over a white floor,
 ``1/Q`` reduce to it near each root; derived in ``derivations/formulas.py``, evaluated by
 the generated ``formulas.oscillator_asd``).  Peaks are located on the logarithm of the median-
 smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
-that the floor and the peak weigh alike.
+that the floor and the peak weigh alike.  A spectrum estimate (Welch, FFT) holds in each bin the
+power in it: a peak narrower than a few bins is fitted bin-averaged too (:func:`oscillator_bin_power`)
+and the better kept (:func:`fit_oscillator`).
 
-Which peaks are flexural modes: the tallest peak is mode 1 (in a displacement spectrum the
-fundamental dominates); a higher peak is mode ``n`` when its ratio to mode 1 lies within
+Which peaks are flexural modes: the most prominent peak is mode 1 (in a displacement spectrum the
+fundamental dominates) unless a lower peak makes it a higher mode (mode 2 of a much higher Q than
+mode 1's, mode 1 on a 1/f rise); a peak is mode ``n`` when its ratio to mode 1 lies within
 25 % of the free beam's ``(z_n/z_1)**2`` (certified free roots, :mod:`pfmdyn.roots.core`);
 other peaks (electrical pick-up, torsion, the stage) are left out.
 
@@ -188,7 +191,10 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
 
     The covariance comes from the Jacobian, scaled by the residual's variance; a parameter the window
     does not constrain (the floor, when the window stays above it) is held, its variance zero.  The fit
-    is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.
+    is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.  A peak
+    narrower than :data:`NARROW` bins is fitted bin-averaged too, the default unless the point-sampled
+    one fits better by :data:`POSITIVE`; its area's error is also read from the profile over Q
+    (:func:`_area_profile`), where the bins, not the data, may set it.
 
     >>> f = np.linspace(9e4, 11e4, 400)
     >>> p = fit_oscillator(f, oscillator_asd(f, 1e5, 200.0, 1e-12, 1e-13), (1.001e5, 150.0, 1.5e-12, 2e-13))
