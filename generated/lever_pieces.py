@@ -9,7 +9,7 @@ State ``z = [u, u_xi/beta, u_xixi/beta**2, u_xixixi/beta**3]`` (``xi = x/L``); a
 import numpy as np
 
 __all__ = ['KD_SERIES_LIMIT', 'KD_SERIES', 'KD_WEIGHTS', 'PARAMETERS', 'JACOBIAN_PARAMETERS', 'krylov_duncan', 'krylov_duncan_closed',
-           'bounded_basis', 'load_constant', 'point_jump', 'point_jump_partials']
+           'bounded_basis', 'load_constant', 'point_jump', 'point_jump_partials', 'POINT_JUMP_PARTIALS']
 
 KD_SERIES_LIMIT = 1.0
 """``|s|`` up to which :func:`krylov_duncan` is accurate to rounding (its series' first omitted term is below 1e-30)."""
@@ -98,13 +98,37 @@ def point_jump(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
 
 def point_jump_partials(beta, k, kvv, kll, kvl, H, L, mu, rho_g, wrt=JACOBIAN_PARAMETERS):
     """Partials of :func:`point_jump` w.r.t. ``wrt`` (of ``JACOBIAN_PARAMETERS``; only those evaluated): a dict of 12-tuples."""
-    partials = {
-        'beta': lambda: (6*H*kvl/(L*beta**3*k), 3*H**2*kll/(L**2*beta**2*k) + 3*beta**2*mu*rho_g**2, -mu - 9*kvv/(beta**4*k), -6*H*kvl/(L*beta**3*k), -6*H*kvl/(L*beta**3*k), -6*H*kll/(L*beta**3*k), 0, -6/(L*beta**3*k), 9*kvv/(beta**4*k), 9*kvl/(beta**4*k), 9/(beta**4*k), 0),
-        'k': lambda: (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/(beta**3*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/(beta**3*k**2), 3*kvl/(beta**3*k**2), 3/(beta**3*k**2), 0),
-        'kvv': lambda: (0, 0, 3/(beta**3*k), 0, 0, 0, 0, 0, -3/(beta**3*k), 0, 0, 0),
-        'kll': lambda: (0, -3*H**2/(L**2*beta*k), 0, 0, 0, 3*H/(L*beta**2*k), 0, 0, 0, 0, 0, 0),
-        'kvl': lambda: (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/(beta**3*k), 0, 0),
-        'mu': lambda: (0, beta**3*rho_g**2, -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0),
-        'rho_g': lambda: (0, 2*beta**3*mu*rho_g, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0),
-    }
-    return {name: partials[name]() for name in wrt}
+    return {name: POINT_JUMP_PARTIALS[JACOBIAN_PARAMETERS.index(name)](beta, k, kvv, kll, kvl, H, L, mu, rho_g) for name in wrt}
+
+
+def _point_jump_d_beta(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (6*H*kvl/(L*(beta*beta*beta)*k), 3*H**2*kll/(L**2*beta**2*k) + (3*mu*rho_g**2)*beta**2, -mu - 9*kvv/((beta*beta*beta*beta)*k), -6*H*kvl/(L*(beta*beta*beta)*k), -6*H*kvl/(L*(beta*beta*beta)*k), -6*H*kll/(L*(beta*beta*beta)*k), 0, -6/(L*(beta*beta*beta)*k), 9*kvv/((beta*beta*beta*beta)*k), 9*kvl/((beta*beta*beta*beta)*k), 9/((beta*beta*beta*beta)*k), 0)
+
+
+def _point_jump_d_k(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (3*H*kvl/(L*beta**2*k**2), 3*H**2*kll/(L**2*beta*k**2), -3*kvv/((beta*beta*beta)*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kvl/(L*beta**2*k**2), -3*H*kll/(L*beta**2*k**2), 0, -3/(L*beta**2*k**2), 3*kvv/((beta*beta*beta)*k**2), 3*kvl/((beta*beta*beta)*k**2), 3/((beta*beta*beta)*k**2), 0)
+
+
+def _point_jump_d_kvv(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (0, 0, 3/((beta*beta*beta)*k), 0, 0, 0, 0, 0, -3/((beta*beta*beta)*k), 0, 0, 0)
+
+
+def _point_jump_d_kll(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (0, -3*H**2/(L**2*beta*k), 0, 0, 0, 3*H/(L*beta**2*k), 0, 0, 0, 0, 0, 0)
+
+
+def _point_jump_d_kvl(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (-3*H/(L*beta**2*k), 0, 0, 3*H/(L*beta**2*k), 3*H/(L*beta**2*k), 0, 0, 0, 0, -3/((beta*beta*beta)*k), 0, 0)
+
+
+def _point_jump_d_mu(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (0, rho_g**2*(beta*beta*beta), -beta, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+
+
+def _point_jump_d_rho_g(beta, k, kvv, kll, kvl, H, L, mu, rho_g):
+    return (0, (2*mu*rho_g)*(beta*beta*beta), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+
+
+POINT_JUMP_PARTIALS = (_point_jump_d_beta, _point_jump_d_k, _point_jump_d_kvv, _point_jump_d_kll, _point_jump_d_kvl, _point_jump_d_mu, _point_jump_d_rho_g)
+"""The partials of :func:`point_jump` as functions of its parameters, one per ``JACOBIAN_PARAMETERS`` (plain
+expressions: a compiler takes them as they are)."""

@@ -226,8 +226,8 @@ class Cantilever:
     def vacuum_resonance(self) -> float:
         """The first free resonance in vacuum (Hz): ``free_resonance`` itself without a medium; in one,
         from Sader's first-mode relation ``f = f_vac / sqrt(1 + T Re Gamma(f))`` with the fluid's mass
-        ratio ``T`` (its load over the lever's mass per length ``k beta1**4 / (3 L omega_vac**2)``),
-        solved for ``f_vac`` in closed form.
+        ratio ``T`` (its load over the lever's mass per length ``k beta1**4 / (3 L omega_vac**2)``, times
+        :meth:`beam_share`: a tip's mass is none of the fluid's), solved for ``f_vac`` in closed form.
 
         >>> from pfmdyn.medium import Medium
         >>> lever = Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
@@ -239,12 +239,22 @@ class Cantilever:
         # the load ratio is proportional to 1 / mass per length, i.e. to omega_vac**2: evaluate it
         # for the mass per length a lever of vacuum resonance f would have, then scale
         at_f = load_ratio(self.medium, self.free_resonance, self.width,
-                          self.beam_mass_per_length(self.free_resonance)).real
+                          self.beam_mass_per_length(self.free_resonance)).real * self.beam_share()
         denominator = 1.0 - at_f
         if not denominator > 0:
             raise UserError(f"the medium's load exceeds the lever's inertia at {self.free_resonance:g} Hz "
                             "(check the spring constant, length and width)")
         return self.free_resonance / math.sqrt(denominator)
+
+    def beam_share(self) -> float:
+        """The share of the first free mode's inertia that is the beam's, ``(beta_1 / 1.8751)**4`` (Rayleigh's
+        quotient, the mode's shape taken unchanged); the rest is the tip's, which a fluid does not load: Sader's
+        relation (:attr:`vacuum_resonance`) scales the fluid's mass ratio by it.
+
+        >>> Cantilever(2.0, 7e4, 2e-4).beam_share(), round(Cantilever(2.0, 7e4, 2e-4, tip_mass_ratio=0.25).beam_share(), 4)
+        (1.0, 0.4962)
+        """
+        return (self.free_root() / BETA1_FREE)**4 if self.tip_mass_ratio else 1.0
 
     def beam_mass_per_length(self, vacuum_resonance: float) -> float:
         """The lever's own mass per length (kg/m) if its first vacuum resonance, *with its tip*, is
@@ -277,7 +287,7 @@ class Cantilever:
         f = f_vac
         for _ in range(100):
             # Sader's relation forward, f = f_vac / sqrt(1 + T Re Gamma(f)), with the lever's own mass
-            f_next = f_vac / math.sqrt(1.0 + load_ratio(medium, f, lever.width, mass).real)
+            f_next = f_vac / math.sqrt(1.0 + load_ratio(medium, f, lever.width, mass).real * self.beam_share())
             if abs(f_next / f - 1) < 1e-14:
                 return replace(lever, free_resonance=f_next)
             f = f_next

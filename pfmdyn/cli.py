@@ -111,6 +111,7 @@ def _run(argv: list[str]) -> int:
     try:
         from .commands import flags
         flags.check_medium(args)
+        flags.check_distinct_paths(args)
         module = importlib.import_module(args._module)
         with flags.lever_forms(getattr(module, "ONE_LEVER", False)):
             quiet = getattr(args, "quiet", False) and args.command != "verify"

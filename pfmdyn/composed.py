@@ -766,24 +766,6 @@ KERNELS = True
 the NumPy forms (:class:`_WrittenOut`, :class:`_Lever`), the reference the tests hold it to."""
 
 
-def _flat(a, shape, dtype) -> np.ndarray:
-    """``a`` broadcast to ``shape``, flat, in a fresh array of ``dtype``."""
-    out = np.empty(shape, dtype)
-    out[...] = a
-    return out.reshape(-1)
-
-
-def _point_columns(values, shape, out=None) -> np.ndarray:
-    """The tip's 12 pieces (:func:`pfmdyn.generated.lever_pieces.point_jump`, arrays or numbers
-    broadcasting to ``shape``) as the rows of ``out`` ``(12, *shape)`` flattened to ``(12, n)``
-    (zeros where a piece is the literal 0)."""
-    out = np.zeros((12,) + shape, complex) if out is None else out
-    for i, v in enumerate(values):
-        if not (isinstance(v, int) and v == 0):
-            out[i] = v
-    return out.reshape(12, -1)
-
-
 class _Compiled:
     """The read-out of :mod:`pfmdyn.composed_kernels` with :class:`_WrittenOut`'s interface: ``z`` and
     :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
@@ -803,30 +785,27 @@ class _Compiled:
         self.shape = np.broadcast(*args).shape
         n = math.prod(self.shape)
         real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
-        self.beta = _flat(args[0], self.shape, np.result_type(args[0], float))
-        self.k, self.L = _flat(args[2], self.shape, args[2].dtype), _flat(args[7], self.shape, args[7].dtype)
-        # fresh (writable) arrays: a read-only view (a broadcast) would be another specialisation to compile
-        beta = _flat(args[0], self.shape, complex)
-        g = _flat(np.real(args[9]), self.shape, float)
-        two = bool(np.any(np.real(args[9]) != 1.0)) or "gamma" in names
-        # the tip's pieces on the arguments as given: a scalar stays one number, not n equal ones
-        point = (args[0].astype(complex), *args[2:9], args[10])
-        uc = _flat(pieces.load_constant(point[0], args[2], args[7]), self.shape, complex)
-        # C order (a Fortran-ordered jump would be another specialisation, 8 s to compile)
-        jump = np.ascontiguousarray(_point_columns(pieces.point_jump(*point), self.shape).T)
-        at_tip = [p for p in names if p in _POINT]
-        partials = pieces.point_jump_partials(*point, wrt=at_tip)
-        djump = np.zeros((len(names), 12) + self.shape, complex)
-        for i, name in enumerate(names):
-            if name in partials:
-                _point_columns(partials[name], self.shape, djump[i])
-        djump = np.ascontiguousarray(djump.reshape(len(names), 12, n).transpose(0, 2, 1))
+        # each argument per member as a row of one complex block (the lever's: beta, the tip's springs,
+        # stiffness and mass) or one real block (the lengths): fresh, C-ordered rows (a read-only or
+        # strided view would be another specialisation to compile)
+        lever, lengths = np.empty((6, n), complex), np.empty((5, n))
+        for block, at, part in ((lever, (0, 2, 3, 4, 5, 8), np.asarray), (lengths, (1, 9, 6, 7, 10), np.real)):
+            for row, i in zip(block, at):
+                row.reshape(self.shape)[...] = part(args[i])
+        beta, k, kvv, kll, kvl, mu = lever
+        sigma, g, H, L, rho_g = lengths
+        self.beta, self.L = (beta if np.iscomplexobj(args[0]) else beta.real), L
+        two = bool(np.any(g != 1.0)) or "gamma" in names
+        jump, djump = np.empty((n, 12), complex), np.empty((len(names), n, 12), complex)
+        kernels.tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
+                          np.array([_POINT.index(p) if p in _POINT else -1 for p in names], np.int64), jump, djump)
+        # the load's constant by NumPy's powers: the q0 column's cancellations amplify their last digits
+        uc = pieces.load_constant(beta, k, L)
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
         z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
         use = _drive_columns(drives, DRIVES)
-        kernels.read_out(beta, _flat(np.real(args[1]), self.shape, float), g, uc, _flat(args[2], self.shape, complex),
-                         jump, djump, kinds, two, np.array(use, np.int64), z, dz)
+        kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, np.array(use, np.int64), z, dz)
         z, dz = z[..., use], dz[..., use]
         self.z = z.real if real else z
         dz = dz.real if real else dz

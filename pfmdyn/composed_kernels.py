@@ -18,7 +18,7 @@ import numpy as np
 from .generated import lever_pieces as pieces
 from .roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "characteristic", "characteristic_roots",
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "tip_point", "characteristic", "characteristic_roots",
            "characteristic_partials"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
@@ -400,6 +400,61 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
 
 
 _point_jump = numba.njit(cache=True)(pieces.point_jump)
+_d_beta, _d_k, _d_kvv, _d_kll, _d_kvl, _d_mu, _d_rho_g = (numba.njit(cache=True)(f) for f in pieces.POINT_JUMP_PARTIALS)
+assert pieces.JACOBIAN_PARAMETERS == ("beta", "k", "kvv", "kll", "kvl", "mu", "rho_g")   # tip_point's branches
+
+
+@numba.njit(cache=True)
+def _store(values, out):
+    """The 12 pieces of a jump (a tuple of numbers and literal zeros) into ``out``."""
+    out[0], out[1], out[2], out[3], out[4], out[5] = values[0], values[1], values[2], values[3], values[4], values[5]
+    out[6], out[7], out[8], out[9], out[10], out[11] = values[6], values[7], values[8], values[9], values[10], values[11]
+
+
+@numba.njit(cache=True)
+def tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g, codes, jump, djump):
+    """The tip's point per member as :func:`read_out` takes it: the jump ``jump[n, 12]``
+    (:func:`pfmdyn.generated.lever_pieces.point_jump`) and its partials ``djump[p, n, 12]`` w.r.t.
+    ``JACOBIAN_PARAMETERS[codes[p]]`` (zeros for -1), the generated expressions compiled; every argument
+    an array (n): ``beta``, ``k``, ``kvv``, ``kll``, ``kvl``, ``mu`` complex, ``H``, ``L``, ``rho_g`` real.
+
+    >>> point = (2.5 + 0j, 2.0 + 0j, 98.0 + 0j, 52.0 + 0j, 9.0 + 0j, 1e-5, 2e-4, 0.1 + 0j, 0.05)
+    >>> arrays = [np.array([v]) for v in point]
+    >>> jump, djump = np.empty((1, 12), complex), np.empty((2, 1, 12), complex)
+    >>> tip_point(*arrays, np.array([0, -1]), jump, djump)
+    >>> bool(np.allclose(jump[0], pieces.point_jump(*point), rtol=1e-15, atol=0)), bool(np.all(djump[1] == 0))
+    (True, True)
+    >>> bool(np.allclose(djump[0, 0], pieces.point_jump_partials(*point, wrt=("beta",))["beta"], rtol=1e-15, atol=0))
+    True
+    """
+    n = beta.shape[0]
+    for i in range(n):
+        _store(_point_jump(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), jump[i])
+    for p in range(codes.shape[0]):     # a loop per partial: a branch per member would cost several times more
+        code, out = codes[p], djump[p]
+        if code == 0:
+            for i in range(n):
+                _store(_d_beta(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 1:
+            for i in range(n):
+                _store(_d_k(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 2:
+            for i in range(n):
+                _store(_d_kvv(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 3:
+            for i in range(n):
+                _store(_d_kll(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 4:
+            for i in range(n):
+                _store(_d_kvl(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 5:
+            for i in range(n):
+                _store(_d_mu(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        elif code == 6:
+            for i in range(n):
+                _store(_d_rho_g(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
+        else:               # a parameter the tip does not hold
+            out[:, :] = 0.0
 _BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
 _PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
 _PAIR_ROWS = np.array(_PAIRS)

@@ -164,6 +164,11 @@ QUANTITIES: tuple[Quantity, ...] = (
              label="oscillator d_eff"),
     Quantity("oscillator_d_eff_error", "d_eff,osc/d_eff - 1", "1", "relative difference of the oscillator's d_eff "
              "from the lever's (-2: the sign flipped)", -1e9, 1e9, option=False, label="oscillator d_eff error"),
+    Quantity("real_drive", "real", "1", "1 where a DART pixel's drive is taken at its domain's phase (one of two per "
+             "image: in phase or in antiphase with the bias, but for the lock-ins' offset and a background): its "
+             "phases' sum fits the contact beside their ratio; 0 where that misfits by over five standard deviations "
+             "(the ratio's contact alone)", 0.0, 1.0,
+             open_low=False, option=False),
     # The electrostatic drive of vertical PFM (``pfmdyn diagram``, ``deconvolve``, ``map``).
     Quantity("surface_potential", "V_surf", "V", "surface potential of the sample: the electrostatic drives scale "
              "with V_dc - V_surf", -1e3, 1e3, open_low=False, default=0.0,

@@ -142,6 +142,12 @@ REFUSED = [
     ("diagram", ["--medium", "water", "--temperature", "0"], "did you mean 273.15 K (0 C)?"),
     ("diagram", ["--medium", "water", "--temperature", "400"], "--temperature: water is liquid"),
     ("stiffness", ["--temperature", "120"], "did you mean 393.15 K"),
+    # an output over an input or another output (the data were overwritten by the report, one output by the other)
+    ("deconvolve", ["--json", "{tmp}/data.csv"], "--json would overwrite INPUT"),
+    ("inspect", ["--json", "{tmp}/data.csv"], "--json would overwrite INPUT"),
+    ("spot", ["--json", "{tmp}/out.png"], "--json and --plot name the same file"),
+    ("diagram", ["--csv", "{tmp}/out.png"], "--plot and --csv name the same file"),
+    ("branches", ["--json", "{tmp}/./out.png"], "--json and --plot name the same file"),
 ]
 
 
@@ -389,3 +395,174 @@ def test_the_temperature_used_is_printed(extra, words, capsys):
     """Before, resonances printed "air at -248.15 C" for --temperature 25 and never the kelvin."""
     assert _run(["resonances", *LEVER, "--width", "4e-5", "--medium", "air", *extra]) == 0
     assert capsys.readouterr().out.splitlines()[0] == words
+
+
+def test_a_resonance_table_without_metadata_takes_the_flags_and_its_free_row(tmp_path, capsys):
+    """stiffness refused a table whose lever came in flags ('missing metadata key(s) spring_constant, length, ...'),
+    and both commands asked for the free resonance the table's free mode 1 row holds."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    lever = ["--spring-constant", "0.46538", "--length", "240e-6", "--tip-height", "13e-6"]
+    assert _run(["stiffness", str(table), *lever, "--json", str(tmp_path / "file.json")]) == 0
+    assert _run(["stiffness", "--free-resonance", "72969", "--contact", "368990", *lever,
+                 "--json", str(tmp_path / "flags.json")]) == 0
+    k1 = [json.loads((tmp_path / f"{name}.json").read_text())["results"]["k1"] for name in ("file", "flags")]
+    assert k1[0]["value"] == pytest.approx(k1[1]["value"], rel=1e-12) and k1[0]["stderr"] > 0
+    assert _run(["discrepancy", str(table), *lever, "--json", str(tmp_path / "d.json")]) == 0
+    assert json.loads((tmp_path / "d.json").read_text())["lever"]["free_resonance"]["value"] == 72969.0
+    capsys.readouterr()
+    table.write_text("mode,condition,frequency_hz\n1,contact,368990\n")
+    assert _run(["discrepancy", str(table), *lever]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "table.csv" in err[0] and "--free-resonance" in err[0], err
+
+
+def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monkeypatch):
+    """spot FILE required --frequency though the image's note records the drive (DriveFrequency)."""
+    import numpy as np
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    from igor_files import asylum_note, igor_wave
+
+    image = igor_wave(tmp_path / "scan.ibw", np.ones((8, 8, 2), "f4"), "scan", [(0.0, 1e-8, "m")] * 2, "m",
+                      {2: ["HeightRetrace", "AmplitudeRetrace"]},
+                      asylum_note({"SpringConstant": 2.0, "ThermalFrequency": 7e4, "CustomLeverLength": 2e-4,
+                                   "DriveFrequency": 3.1e5}))
+    out = tmp_path / "spot.json"
+    assert _run(["spot", str(image), "--k1", "100", "--json", str(out)]) == 0
+    frequency = json.loads(out.read_text())["results"]["frequency"]
+    assert frequency["value"] == 3.1e5 and frequency["status"] == "file"
+    assert "from the file: drive frequency 310000 Hz" in capsys.readouterr().out
+    assert _run(["spot", str(image), "--k1", "100", "--frequency", "2e5", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
+                                                                   "status": "given"}
+
+
+@pytest.mark.parametrize("rows", [1, 30])
+def test_calibrate_names_the_file_of_a_spectrum_too_short(rows, tmp_path, capsys):
+    """The line named no file ('a thermal spectrum needs ... at least 50 points')."""
+    tune = tmp_path / "short tune.csv"
+    tune.write_text("frequency_hz,asd_m_per_sqrthz\n" + "".join(f"{1e3 * (i + 1)},1e-12\n" for i in range(rows)))
+    assert _run(["calibrate", str(tune), "--json", str(tmp_path / "out.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"pfmdyn calibrate: error: {tune}: {rows} ASD values"), err
+    assert _outputs(tmp_path) == []
+
+
+def test_deconvolve_reads_the_unit_its_columns_name(tmp_path, capsys):
+    """diagram's own CSV (amplitude_m_per_v) was deconvolved in 'a.u.'; a column '(pm)' too."""
+    table = tmp_path / "diagram.csv"
+    assert _run(["diagram", "--plot", str(tmp_path / "d.png"), "--csv", str(table), "--frequency-points", "5",
+                 "--bias-points", "3"]) == 0
+    capsys.readouterr()
+    assert _run(["deconvolve", str(table), "--out", str(tmp_path / "dec"), "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out
+    assert " m/V (V_surf" in out and "a.u." not in out
+    assert "data in m/V" in json.loads((tmp_path / "d.json").read_text())["notes"]
+    pm = tmp_path / "pm.csv"
+    pm.write_text(CSV.replace("x,y", "X (pm),Y (pm)"))
+    assert _run(["deconvolve", str(pm), "--out", str(tmp_path / "dec2")]) == 0
+    out = capsys.readouterr().out
+    assert " pm " in out and "a.u." not in out
+
+
+def test_stiffness_states_the_uncertainty_of_k1_over_k(tmp_path, capsys):
+    """k1/k was printed and written with no uncertainty; it has k1's from every input but the spring constant,
+    which k1 scales with."""
+    out = tmp_path / "k1.json"
+    base = ["stiffness", "--free-resonance", "7e4", "--contact", "3e5", "--spring-constant", "2", "--k2", "0",
+            "--json", str(out)]
+    assert _run([*base, "--contact-uncertainty", "300"]) == 0
+    results = json.loads(out.read_text())["results"]
+    k1, ratio = results["k1"], results["k1_over_k"]
+    assert k1["stderr"] > 0 and ratio["stderr"] == pytest.approx(k1["stderr"] / 2.0, rel=1e-12)
+    assert f"(k1/k = {round(ratio['value'], 1)} +- {ratio['stderr']:.2g})" in capsys.readouterr().out
+    assert _run([*base, "--spring-constant-uncertainty", "0.2"]) == 0
+    results = json.loads(out.read_text())["results"]
+    assert results["k1"]["stderr"] == pytest.approx(0.1 * results["k1"]["value"], rel=1e-6)
+    assert results["k1_over_k"]["stderr"] == 0.0
+
+
+def test_discrepancy_prints_a_tables_rows_beside_the_model(tmp_path, capsys):
+    """The text gave the fitted parameters alone: the measured resonances and Qs (an instrument's fits) stood
+    beside the model's only in the JSON."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    assert _run(["discrepancy", str(table), "--spring-constant", "0.46538", "--length", "240e-6", "--tip-height",
+                 "13e-6", "--json", str(tmp_path / "d.json")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    results = json.loads((tmp_path / "d.json").read_text())["results"]
+    head = out.index(next(line for line in out if line.startswith("condition  mode")))
+    for line, c, f, p, q, qp in zip(out[head + 1:], results["condition"]["value"],
+                                     results["measured_resonance"]["value"], results["predicted_resonance"]["value"],
+                                     results["measured_quality_factor"]["value"],
+                                     results["predicted_quality_factor"]["value"]):
+        words = line.split()
+        assert words[0] == c and float(words[2]) == f and float(words[5]) == pytest.approx(p, rel=1e-5)
+        assert float(words[6]) == pytest.approx(q, rel=1e-3) and float(words[7]) == pytest.approx(qp, rel=1e-3)
+
+
+@pytest.mark.parametrize("tip_mass_ratio", [0.3, 1.0])
+def test_a_heavy_tip_in_water_keeps_its_measured_resonance(tip_mass_ratio, tmp_path):
+    """Sader's relation took the fluid's mass ratio over the beam alone, as though the fluid loaded the tip's mass
+    too: a heavy tip in water was refused ('the medium's load exceeds the lever's inertia'), a light one placed
+    the resonance in water 1 % off (tests/test_sweeps_fit.py: the exact massed beam)."""
+    lever = ["--spring-constant", "2", "--free-resonance", "2e4", "--length", "225e-6", "--width", "40e-6",
+             "--medium", "water", "--modes", "1", "--tip-height", "13e-6"]
+    damped = []
+    for extra in ([], ["--tip-mass-ratio", str(tip_mass_ratio)]):
+        out = tmp_path / "r.json"
+        assert _run(["resonances", *lever, *extra, "--json", str(out)]) == 0
+        damped.append(json.loads(out.read_text())["results"]["free"]["damped_resonance"]["value"][0])
+    assert damped[1] == pytest.approx(damped[0], rel=0.005) and damped[0] == pytest.approx(2e4, rel=0.03)
+
+
+def test_inspect_shows_the_resonances_a_tables_rows_hold(tmp_path):
+    """inspect said 'cantilever fields found: none' of a resonance table whose rows stiffness and discrepancy read."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor\n"
+                     "2,free,457000,\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    out = tmp_path / "i.json"
+    assert _run(["inspect", str(table), "--json", str(out)]) == 0
+    results = json.loads(out.read_text())["results"]
+    assert {name: r["value"] for name, r in results.items()} == {
+        "spring_constant": 0.46538, "free_resonance": 72969.0, "free_quality_factor": 138.63,
+        "contact_resonance": 368990.0, "contact_quality_factor": 213.46}
+    assert {r["status"] for r in results.values()} == {"file"}
+
+
+def test_resonances_json_says_which_frequency_is_in_vacuum(tmp_path, capsys):
+    """In a medium the certified 'resonance' is the lever's in vacuum (above the measured one it was given); the text
+    said so, the JSON's results.free.resonance stood unexplained."""
+    out = tmp_path / "r.json"
+    assert _run(["resonances", *LEVER, "--medium", "air", "--width", "3e-5", "--modes", "1", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    line = next(line for line in capsys.readouterr().out.splitlines() if "undamped lever's in vacuum" in line)
+    assert line in doc["notes"] and doc["results"]["free"]["resonance"]["value"][0] > 7e4
+    assert doc["results"]["free"]["damped_resonance"]["value"][0] == pytest.approx(7e4, rel=1e-3)
+
+
+def test_discrepancy_prints_values_to_the_digits_their_uncertainty_leaves(tmp_path, capsys):
+    """discrepancy printed 'k1 = 258.49 +- 85 N/m' where stiffness (and README) state 258 +- 85."""
+    table = tmp_path / "table.csv"
+    table.write_text("mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,138.63\n")
+    assert _run(["discrepancy", str(table), "--spring-constant", "0.46538", "--length", "240e-6", "--tip-height",
+                 "13e-6"]) == 0
+    printed = re.findall(r"^  (\w+) = ([-\d.e+]+) \+- ([\d.e+-]+)", capsys.readouterr().out, re.MULTILINE)
+    assert {name for name, _, _ in printed} >= {"k1", "quality_factor"}, printed
+    for name, value, sigma in printed:
+        decimals = len(value.partition(".")[2])
+        assert 10 ** -decimals >= float(sigma) / 100, (name, value, sigma)     # no digit below u's second
+
+
+def test_a_contact_map_says_why_some_pixels_have_no_k1(tmp_path, capsys):
+    """stiffness FILE --out on a contact-frequency map said 'k1 at 35.0 % of pixels' and nothing of the rest (it
+    said why only when no pixel had a k1)."""
+    h5py = pytest.importorskip("h5py")
+    path = tmp_path / "cr.h5"
+    with h5py.File(path, "w") as h:
+        h["contact_frequency_hz"] = [[3.0e5, 3.05e5], [3.1e5, 3.2e5]]      # f1 70 kHz: the pinned limit 4.385 f1
+        h.attrs.update(spring_constant=2.0, free_resonance=7e4)
+    assert _run(["stiffness", str(path), "--out", str(tmp_path / "o"), "--json", str(tmp_path / "s.json")]) == 0
+    line = "k1 undetermined at 2 of 4 pixels: their contact/free ratio (4.429 to 4.571) lies outside mode 1's limits"
+    assert line in capsys.readouterr().out
+    assert any(note.startswith(line) for note in json.loads((tmp_path / "s.json").read_text())["notes"])

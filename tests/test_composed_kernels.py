@@ -5,7 +5,9 @@ before or beyond it, ``beta`` from 1e-3 to 200).
 
 The characteristic and its partials with the tip at the end take the same steps: 1e-12.  The
 read-outs take the written-out form's steps but invert the 4 x 4 of a set-back tip by their own LU
-(LAPACK's in NumPy) and divide where NumPy multiplies by a reciprocal: 1e-11 (the worst seen 5e-12),
+(LAPACK's in NumPy), divide where NumPy multiplies by a reciprocal and compile the tip's jump (numba's
+``beta**3`` and NumPy's differ in the last digit, which the load's column amplifies where its terms
+cancel): 2e-11 (the worst seen 1.3e-11, 5e-12 with NumPy's jump),
 the partials relative to the larger of themselves and ``|S / p|`` (as ``tests/test_fast_readouts.py``,
 which also holds both to the assembled system and the 70-digit beam).
 """
@@ -58,11 +60,11 @@ def test_read_outs_and_partials_agree_with_the_written_out_form(seed):
         (values, jac), (want, want_jac) = _both(lambda: composed.slope_and_jacobian(*args, wrt=wrt,
                                                                                       drives=composed.DRIVES))
         for i, value in enumerate(want):
-            assert np.max(np.abs(values[i] - value) / np.abs(value)) <= 1e-11, (i, args[1:])
+            assert np.max(np.abs(values[i] - value) / np.abs(value)) <= 2e-11, (i, args[1:])
             for j, name in enumerate(composed.SPOT_JACOBIAN_PARAMETERS):
                 if name in wrt:
                     scale = np.maximum(np.abs(want_jac[i][j]), np.abs(value) / np.where(at[name] == 0, 1.0, np.abs(at[name])))
-                    assert np.max(np.abs(jac[i][j] - want_jac[i][j]) / scale) <= 1e-11, (i, name, args[1:])
+                    assert np.max(np.abs(jac[i][j] - want_jac[i][j]) / scale) <= 2e-11, (i, name, args[1:])
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -41,24 +41,51 @@ def beam_slope(f, *, k, L, w, f_vac, g, medium, mass_ratio=0.0, x_m=1.0):
     beta = (B1**4 * r**2 * (1 + load - 1j * g / r)) ** 0.25
     out = []
     for b, r_i in zip(np.atleast_1d(beta), np.atleast_1d(r)):
-        # segment 1 on [0, x_m], segment 2 on [x_m, 1] (unit length), both in (cos, sin, cosh, sinh) of b s
-        def rows(s):
-            c, sn, ch, sh = np.cos(b * s), np.sin(b * s), np.cosh(b * s), np.sinh(b * s)
-            return np.array([[c, sn, ch, sh], [-sn * b, c * b, sh * b, ch * b], [-c * b**2, -sn * b**2, ch * b**2, sh * b**2],
-                             [sn * b**3, -c * b**3, sh * b**3, ch * b**3]])
-        A, rhs = np.zeros((8, 8), complex), np.zeros(8, complex)
-        A[0, :4], rhs[0] = rows(0.0)[0], 1.0                 # u(0) = y0 = 1
-        A[1, :4] = rows(0.0)[1]                               # u'(0) = 0
-        left, right = rows(x_m), rows(x_m)
-        A[2:5, :4], A[2:5, 4:] = left[:3], -right[:3]         # u, u', u'' continuous
-        # shear jump from the mass's inertia (no fluid on it): EI [u'''] = M omega**2 u, i.e.
-        # u'''(+) - u'''(-) = mass_ratio B1**4 r**2 u at unit length
-        A[5, :4] = left[3] + mass_ratio * B1**4 * r_i**2 * left[0]
-        A[5, 4:] = -right[3]
-        A[6, 4:], A[7, 4:] = rows(1.0)[2], rows(1.0)[3]        # free end
+        A, rows = _beam_system(b, r_i, mass_ratio, x_m)
+        rhs = np.zeros(8, complex)
+        rhs[0] = 1.0                                            # u(0) = y0 = 1
         c = np.linalg.solve(A, rhs)
         out.append((rows(1.0)[1] @ c[4:]) / L)
     return np.array(out)
+
+
+def _beam_system(b, r_i, mass_ratio, x_m):
+    """The beam's 8 x 8 system at dimensionless frequency ``b`` (``r_i`` = f / f_vac) and its rows of u, u', u'',
+    u''' at x/L: segment 1 on [0, x_m], segment 2 on [x_m, 1] (unit length), both in (cos, sin, cosh, sinh) of b s."""
+    def rows(s):
+        c, sn, ch, sh = np.cos(b * s), np.sin(b * s), np.cosh(b * s), np.sinh(b * s)
+        return np.array([[c, sn, ch, sh], [-sn * b, c * b, sh * b, ch * b], [-c * b**2, -sn * b**2, ch * b**2, sh * b**2],
+                         [sn * b**3, -c * b**3, sh * b**3, ch * b**3]])
+    A = np.zeros((8, 8), complex)
+    A[0, :4] = rows(0.0)[0]                               # u(0) = y0
+    A[1, :4] = rows(0.0)[1]                               # u'(0) = 0
+    left, right = rows(x_m), rows(x_m)
+    A[2:5, :4], A[2:5, 4:] = left[:3], -right[:3]         # u, u', u'' continuous
+    # shear jump from the mass's inertia (no fluid on it): EI [u'''] = M omega**2 u, i.e.
+    # u'''(+) - u'''(-) = mass_ratio B1**4 r**2 u at unit length
+    A[5, :4] = left[3] + mass_ratio * B1**4 * r_i**2 * left[0]
+    A[5, 4:] = -right[3]
+    A[6, 4:], A[7, 4:] = rows(1.0)[2], rows(1.0)[3]        # free end
+    return A, rows
+
+
+def resonance_with_mass(case, mass_ratio, x_m):
+    """The first resonance in the medium of the lever with a point mass: where the undamped beam under the fluid's
+    added mass (the real part of its load at that frequency) vibrates freely (a root of the system's determinant),
+    as :func:`in_medium` defines it for the bare lever."""
+    from scipy.optimize import brentq
+
+    mass = mass_per_length(case["k"], case["L"], case["f_vac"])
+
+    def determinant(f):
+        r = f / case["f_vac"]
+        beta = (B1**4 * r**2 * (1 + load_ratio(case["medium"], f, case["w"], mass).real)) ** 0.25
+        return np.linalg.det(_beam_system(beta, r, mass_ratio, x_m)[0]).real
+    f0 = in_medium(case)[0]
+    grid = np.linspace(0.5 * f0, 1.05 * f0, 200)
+    values = [determinant(f) for f in grid]
+    i = next(i for i in range(len(grid) - 1) if values[i] * values[i + 1] < 0)
+    return brentq(determinant, grid[i], grid[i + 1], xtol=1e-9 * f0)
 
 
 def write_sweep(path, f, y, rng, phase=True):
@@ -156,6 +183,10 @@ def test_added_mass_named_and_measured(seed, position, tmp_path):
     # the after-sweep's header (a peak and a Q) beside the after-model's peak and Q
     assert {c["name"] for c in out["instrument_comparison"]} == {"amplitude_peak", "free_quality_factor"}
     assert out["from_file"] == ["amplitude_peak", "free_quality_factor"] and "(ours " in out.report()
+    # the after-sweep's resonance with its uncertainty (it had none), holding the massed beam's
+    after, sigma = out["resonance_after"], out["resonance_stderr"][1]
+    assert 0 < sigma < 0.01 * after and abs(after - resonance_with_mass(case, **mass)) < 3 * sigma
+    assert out["resonance_stderr"][0] == before["parameters"]["free_resonance"]["stderr"]
 
 
 def test_a_misfit_left_unexplained_leaves_the_mass_unsettled(tmp_path):

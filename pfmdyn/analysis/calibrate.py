@@ -158,9 +158,12 @@ def first_mode(tune: ThermalTune) -> ThermalPeak:
     >>> round(first_mode(ThermalTune("t", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1e-15, 3e-14), "m", {}, {})).quality_factor)
     440
     """
-    peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
-        [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p] or \
-        [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd, min_prominence=FAINT) if p.mode == 1]
+    try:
+        peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
+            [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p] or \
+            [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd, min_prominence=FAINT) if p.mode == 1]
+    except UserError as exc:                # a spectrum too short, unsorted...: the message names the file
+        raise UserError(f"{tune.path}: {exc}", exc.quantity) from None
     if not peaks:
         raise UserError(f"{tune.path}: no resonance peak found in the thermal spectrum")
     return peaks[0]

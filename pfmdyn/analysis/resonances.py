@@ -101,6 +101,8 @@ class ResonanceResult:
             out.update(k1=self.contact.k1, k2=self.contact.k2_of(self.contact.k1),
                        contact_loss=self.contact.contact_loss)
         out["certified"] = self.certified
+        if self.medium_note:
+            out["medium_note"] = self.medium_note
         if not self.certified:
             out["reason"] = self.reason
             return out
@@ -143,10 +145,18 @@ class ResonanceResult:
         proof = [f"{m.complete_below_hz:.1f} Hz ({label})" for label, m in (("free", self.free),
                                                                            ("contact", self.in_contact)) if m.hz]
         lines.append("certified: no resonance missed or counted twice below " + " and ".join(proof))
-        if self.lever.medium is not None:
-            lines.append(f"in {self.lever.medium.name}: 'resonance' is the undamped lever's in vacuum, the others "
-                         "are in the medium")
+        if self.medium_note:
+            lines.append(self.medium_note)
         return "\n".join(lines)
+
+    @property
+    def medium_note(self) -> str | None:
+        """What each frequency is in a medium (None in vacuum): the certified resonance is the undamped lever's in
+        vacuum, the damped and peak frequencies the medium's."""
+        if self.lever.medium is None:
+            return None
+        return (f"in {self.lever.medium.name}: 'resonance' is the undamped lever's in vacuum, the others are in the "
+                "medium")
 
 
 def _damped(lever: Cantilever, contact: Contact | None) -> bool:

@@ -35,7 +35,7 @@ from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
+__all__ = ["TIP_POSITION_LOW", "rounded", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
            "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
@@ -109,11 +109,23 @@ class Solution:
             out.update(reduced_modulus=self.reduced_modulus, reduced_modulus_stderr=self.reduced_modulus_stderr)
         return out
 
+    def k1_over_k_stderr(self, spring_constant: float) -> float:
+        """k1/k's standard uncertainty: k1's from every input but the spring constant, which k1 scales with.
+
+        >>> Solution(300.0, 0.0, 1.0, ("k1",), {"k1": 5.0}, sources={"spring_constant_uncertainty": {"k1": 4.0},
+        ...     "tip_height_uncertainty": {"k1": 3.0}}).k1_over_k_stderr(3.0)
+        1.0
+        """
+        if not self.sources:
+            return self.stderr.get("k1", 0.0) / spring_constant
+        return math.hypot(*(parts.get("k1", 0.0) for source, parts in self.sources.items()
+                            if source != "spring_constant_uncertainty")) / spring_constant
+
     def lines(self, spring_constant: float) -> list[str]:
         """The solution as printed lines.
 
         >>> Solution(300.0, 0.0, 0.93, ("k1", "tip_position"), {"k1": 1.0, "tip_position": 1e-4}).lines(3.0)[0]
-        'k1 = 300.0 +- 1 N/m  (k1/k = 100.00)'
+        'k1 = 300.0 +- 1 N/m  (k1/k = 100.00 +- 0.33)'
         """
         def pm(name):
             sigma = self.stderr.get(name, 0.0)
@@ -121,8 +133,10 @@ class Solution:
 
         def value(name, v):         # to the second significant digit of its uncertainty (k1's, relative), else six digits
             rel = self.stderr.get(name, 0.0) / abs(self.k1 if name == "k1" else v) if v else 0.0
-            return _rounded(v, rel * abs(v))
-        out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {value('k1', self.k1 / spring_constant)})"]
+            return rounded(v, rel * abs(v))
+        ratio, ratio_stderr = self.k1 / spring_constant, self.k1_over_k_stderr(spring_constant)
+        out = [f"k1 = {value('k1', self.k1)}{pm('k1')} N/m  (k1/k = {rounded(ratio, ratio_stderr)}"
+               + (f" +- {ratio_stderr:.2g})" if ratio_stderr > 0 else ")")]
         shares = {source: parts["k1"] / self.k1 for source, parts in self.sources.items() if parts.get("k1", 0) > 0}
         if len(shares) > 1 or any(name in shares for name in ("tip_height_uncertainty", "k2_policy_uncertainty")):
             out.append("  k1's uncertainty, input by input: " + ", ".join(
@@ -138,10 +152,10 @@ class Solution:
         return out
 
 
-def _rounded(value: float, sigma: float) -> str:
+def rounded(value: float, sigma: float) -> str:
     """``value`` to the second significant digit of its standard uncertainty ``sigma`` (six digits without one).
 
-    >>> _rounded(204.067, 23.0), _rounded(300.0, 1.0), _rounded(0.0012345, 2e-6), _rounded(2.5e8, 1e6), _rounded(3.14159, 0.0)
+    >>> rounded(204.067, 23.0), rounded(300.0, 1.0), rounded(0.0012345, 2e-6), rounded(2.5e8, 1e6), rounded(3.14159, 0.0)
     ('204', '300.0', '0.0012345', '2.500e+08', '3.14159')
     """
     if not (sigma > 0 and math.isfinite(sigma)) or value == 0:
@@ -195,6 +209,7 @@ class StiffnessReport:
         if self.unique:
             out.update(self.solution.to_dict())
             out["k1_over_k"] = self.solution.k1 / self.lever.spring_constant
+            out["k1_over_k_stderr"] = self.solution.k1_over_k_stderr(self.lever.spring_constant)
         out.update(unique=self.unique, k2_policy=self.k2_policy, proof=list(self.proof), notes=list(self.notes),
                    solutions=[s.to_dict() for s in self.solutions])
         inputs = {k: _finite(v) for k, v in self.lever.to_dict().items()}

@@ -161,7 +161,7 @@ def run(args) -> int:
     probe = _probe(args, assumed)
     data = read_spectra(args.data)
     result = deconvolve(data.frequency_hz, data.bias_v, data.response, surface_potential)
-    unit = data.metadata.get("response_unit", "a.u.")
+    unit = data.response_unit or "a.u."
     surface = None if probe is None else surface_displacement(result, *probe)
 
     from ..plots import deconvolution as plotting  # matplotlib is imported only when plots are written

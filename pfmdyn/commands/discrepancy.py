@@ -4,6 +4,8 @@ from __future__ import annotations
 import argparse
 from contextlib import contextmanager
 
+import numpy as np
+
 from ..errors import UserError, listed
 from ..io import documents
 from . import flags
@@ -34,6 +36,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the drive sweep before the change: lever, fluid, gain and background calibrated on it, "
                              "DATA explained from them (an added mass, a gain or background change, or nothing)")
     flags.add(sweeps, ("added_mass_position",))
+
+
+def resonance_rows(data, report: dict) -> str:
+    """A resonance table's rows as measured (the file's, the instrument's fits) beside the final model's.
+
+    >>> from types import SimpleNamespace as NS
+    >>> data = NS(condition=np.array(["free", "contact"]), mode=np.array([1, 1]), quality_factor=np.array([138.6, np.nan]))
+    >>> print(resonance_rows(data, {"measured_hz": [72969.0, 368990.0], "predicted_hz": [72969.0, 368992.05],
+    ...                             "frequency_uncertainty_hz": [73.0, 369.0], "predicted_quality_factor": [155.71]}))
+    condition  mode       measured (Hz)    model (Hz)  measured Q  model Q
+    free          1         72969 +- 73         72969       138.6    155.7
+    contact       1       368990 +- 369        368992           -        -
+    """
+    q = data.quality_factor if data.quality_factor is not None else np.full(len(data.mode), np.nan)
+    with_q = ~np.isnan(q)
+    model_q = np.full(len(q), np.nan)
+    model_q[with_q] = [np.nan if v is None else v for v in report.get("predicted_quality_factor", [])]
+    lines = [f"{'condition':9}  mode  {'measured (Hz)':>18}  {'model (Hz)':>12}  {'measured Q':>10}  {'model Q':>7}"]
+    for c, m, f, sigma, p, qm, qp in zip(data.condition, data.mode, report["measured_hz"],
+                                          report["frequency_uncertainty_hz"], report["predicted_hz"], q, model_q):
+        measured = f"{f:.6g} +- {sigma:.3g}"
+        lines.append(f"{c:9}  {m:4d}  {measured:>18}  {p:>12.6g}  {_q(qm):>10}  {_q(qp):>7}")
+    return "\n".join(lines)
+
+
+def _q(value: float) -> str:
+    return "-" if np.isnan(value) else f"{value:.4g}"
 
 
 OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance")
@@ -244,6 +273,8 @@ def run(args: argparse.Namespace) -> int:
     if args.medium:
         report = report.updated(medium=medium_comparison(report.to_dict(), _lever_in_medium(data, args)))
     print(report.report())
+    if not isinstance(data, SpectrumData):
+        print(resonance_rows(data, report.to_dict()))
     if args.medium:
         m = report.to_dict()["medium"]
         fitted = "no free-mode damping fitted" if m["fitted_quality_factor"] is None else \

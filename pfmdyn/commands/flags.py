@@ -280,6 +280,38 @@ def require(values: dict, names, file=None) -> None:
                         f"give {listed(NAMES[name].flag for name in missing)}")
 
 
+PATHS = (("file", "INPUT"), ("data", "INPUT"), ("reference", "--reference"), ("json", "--json"), ("plot", "--plot"),
+         ("csv", "--csv"), ("errata", "--errata"))
+"""The files a command reads (the first three) and writes, and how its command line names them."""
+
+
+def check_distinct_paths(args) -> None:
+    """Refuse an output that names an input or another output: the one written last would be all that is left
+    (a data file overwritten by its own report).
+
+    >>> check_distinct_paths(argparse.Namespace(file="t.csv", json="-", plot="t.png"))
+    >>> check_distinct_paths(argparse.Namespace(data="t.csv", json="./t.csv"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --json would overwrite INPUT ./t.csv: give it a path of its own
+    >>> check_distinct_paths(argparse.Namespace(json="out.png", plot="out.png"))
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: --json and --plot name the same file out.png: give each its own
+    """
+    seen = {}
+    for dest, flag in PATHS:
+        value = getattr(args, dest, None)
+        if value is None or str(value) == "-":
+            continue
+        path = Path(value).expanduser().resolve()
+        if path in seen and dest in ("json", "plot", "csv", "errata"):
+            other, inputs = seen[path], ("INPUT", "--reference")
+            raise UserError(f"{flag} would overwrite {other} {value}: give it a path of its own" if other in inputs
+                            else f"{other} and {flag} name the same file {value}: give each its own")
+        seen.setdefault(path, flag)
+
+
 def check_medium(args) -> None:
     """Refuse a bad ``--medium`` or ``--temperature`` even where the command would not use it (a
     lever in vacuum): a value given is a value meant.

@@ -80,9 +80,9 @@ def add_arguments(parser) -> None:
     flags.add(parser, ("surface_potential",), defaults={"surface_potential": (
         None, "fitted with +distributed, else 0, the intercept; for maps with a bias axis d_eff is the response at "
               "this bias, the electrostatic term and the nulling bias do not depend on it")})
-    parser.add_argument("--pool", type=int, default=3, metavar="R",
+    parser.add_argument("--pool", type=int, default=5, metavar="R",
                         help="DART images: fit each pixel's contact (k1, contact loss, hence the contact resonance and "
-                             "Q) to its own and its alike neighbours' signals within R pixels (default 3; 0: each "
+                             "Q) to its own and its alike neighbours' signals within R pixels (default 5; 0: each "
                              "pixel alone)")
     parser.add_argument("--phase-offset", type=float, default=0.0, metavar="DEG",
                         help="DART images: the lock-ins' phase offset (degrees), taken off Phase1 and Phase2 (default "

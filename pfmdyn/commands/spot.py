@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from ..errors import UserError
 from ..names import LEVER
@@ -19,7 +20,8 @@ def add_arguments(parser) -> None:
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
-    parser.add_argument("--frequency", type=float, required=True, help="drive frequency, Hz")
+    parser.add_argument("--frequency", type=float, help="drive frequency, Hz (default: the drive frequency INPUT "
+                        "records)")
     flags.add_json(parser)
     parser.add_argument("--plot", metavar="PATH", help="write the figure (ratio along the lever and over frequency)")
 
@@ -55,16 +57,31 @@ def _signed(z: dict) -> str:
     return f"{z['re']:+.6g}" + (f"{z['im']:+.3g}j" if z["im"] else "")
 
 
-def _lever(args, assumed: dict):
-    """The lever from the instrument file (when given) with the flags over it; the defaults it took into
+def _read(args) -> dict:
+    """What the instrument file (when given) records (names -> SI), its notes of what it left out printed."""
+    if not args.file:
+        return {}
+    from ..io.instruments import read_instrument
+    record = read_instrument(args.file)
+    for note in record.left_out():
+        print(f"note: {note}")
+    return record.fields
+
+
+def _frequency(args, fields: dict) -> float:
+    """The drive frequency: ``--frequency``, else the one the file records."""
+    frequency = args.frequency if args.frequency is not None else fields.get("drive_frequency")
+    if frequency is None:
+        where = f" in {Path(args.file).name}" if args.file else ""
+        raise UserError(f"no drive frequency{where}: give --frequency")
+    if not (math.isfinite(frequency) and frequency > 0):
+        raise UserError(f"--frequency must be a positive number of Hz, got {frequency}")
+    return frequency
+
+
+def _lever(args, found: dict, assumed: dict):
+    """The lever from the file's values ``found`` with the flags over them; the defaults it took into
     ``assumed`` (name -> why)."""
-    found = {}
-    if args.file:
-        from ..io.instruments import read_instrument
-        record = read_instrument(args.file)
-        for note in record.left_out():
-            print(f"note: {note}")
-        found = {key: value for key, value in record.fields.items() if key in LEVER}
     given = {**found, **flags.given(args, LEVER)}
     flags.require(given, ("spring_constant", "free_resonance", "length"), args.file)
     return flags.cantilever(args, found, assumed)
@@ -76,32 +93,35 @@ def run(args) -> int:
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
-    if not (math.isfinite(args.frequency) and args.frequency > 0):
-        raise UserError(f"--frequency must be a positive number of Hz, got {args.frequency}")
+    if args.frequency is not None:
+        _frequency(args, {})                    # a bad flag before the file
+    fields = _read(args)
+    frequency = _frequency(args, fields)
+    found = {key: value for key, value in fields.items() if key in LEVER}
     assumed = {}
-    lever = _lever(args, assumed)
+    lever = _lever(args, found, assumed)
     contact, policy = flags.contact(args).policy(lever)
-    result = spot_analysis(lever, contact, args.frequency)
+    result = spot_analysis(lever, contact, frequency)
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     if assumed:
         print(flags.assumed_line(assumed, lever))
+    if args.frequency is None:
+        print(f"from the file: drive frequency {frequency:.6g} Hz")
     print(report(result))
     print(f"k2 policy: {policy}")
     if args.json:
         from ..io import documents
 
-        from ..io.instruments import read_instrument
-
-        taken = [key for key in read_instrument(args.file).fields if key in LEVER] if args.file else ()
-        flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy},
-                                                   flags.given_names(args, (*flags.NAMES,)), taken, args.file))
+        flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy,
+                                                    "frequency_from_file": args.frequency is None},
+                                                   flags.given_names(args, (*flags.NAMES,)), list(found), args.file))
     if args.plot:
         import numpy as np
 
         from ..analysis.spot import ratio_map
         from ..plots.spot import plot_spot
-        fmax = max(2.0 * args.frequency, 8.0 * lever.free_resonance)
+        fmax = max(2.0 * frequency, 8.0 * lever.free_resonance)
         frequencies = np.linspace(fmax / 400, fmax, 400)
         flags.save_figure(plot_spot(result, frequencies, ratio_map(lever, contact, frequencies, result.positions)),
                           args.plot)

@@ -88,14 +88,14 @@ def _from_file(path: str) -> tuple[dict, list, list]:
     # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
     if file_kind(path) in CSV_KINDS | {"text table"}:
         from ..io.tables import ResonanceData, read
-        data = read(path)
+        data = read(path, required=())          # the lever's flags and defaults fill what the table lacks
         if not isinstance(data, ResonanceData):
             raise UserError(f"{path}: a resonance table (mode, condition, frequency_hz) is needed, not a spectrum")
         contact = data.condition == "contact"
         if not contact.any():
             raise UserError(f"{path}: no contact resonance in the table")
         free = [f for m, c, f in zip(data.mode, data.condition, data.frequency_hz) if c == "free" and m == 1]
-        found = {name: value for name, value in vars(data.metadata).items() if name in LEVER}
+        found = {name: value for name, value in vars(data.metadata).items() if name in LEVER and value is not None}
         if free:
             found["free_resonance"] = free[0]
         return found, data.frequency_hz[contact].tolist(), data.mode[contact].tolist()

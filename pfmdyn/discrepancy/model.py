@@ -116,9 +116,8 @@ class Model:
         with np.errstate(all="ignore"):
             d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                      c["inv_q"], drag(c, r), c["x"])
-            kvv, kll, kvl = rotated(d.k1, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            return module.slope(d.beta, *at, d.k, kvv, kll, kvl, m.tip_height, m.length, d.mu, c["gamma"], 0.0)
+            return module.slope(d.beta, *at, *self.lever_parameters(c, d, rotated(d.k1, c["k2"], c["alpha"])))
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -140,11 +139,10 @@ class Model:
             root_r = formulas.beta_from_frequency(r, 1.0, b1)
             d = damping_substitution(r, root_r, m.spring_constant, c["k1"], c["mu"], *loss)
             spring = d.k1
-            kvv, kll, kvl = rotated(spring, c["k2"], c["alpha"])
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             module, at = self._reading(c)
-            T, J = module.slope_and_jacobian(d.beta, *at, d.k, kvv, kll, kvl, m.tip_height, m.length,
-                                             d.mu, c["gamma"], 0.0, wrt=self._partials_needed(c, module))
+            lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
+            T, J = module.slope_and_jacobian(d.beta, *at, *lever, wrt=self._partials_needed(c, module))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
@@ -157,6 +155,23 @@ class Model:
             for j, term in enumerate(terms):
                 out[:, j] = term
         return T, out
+
+    def lever_parameters(self, c, d, springs) -> composed.Parameters:
+        """The composed lever's parameters at coordinates ``c`` (:meth:`coords`): the damped stiffness and
+        mass of ``d`` (:func:`pfmdyn.cantilever.damping_substitution`), the contact ``springs``
+        ``(kvv, kll, kvl)`` in the lever's axes, the probe's tip height and length, no rotary inertia.
+
+        >>> from types import SimpleNamespace
+        >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
+        >>> model = Model(meta)
+        >>> d = damping_substitution(1.0, 1.9, 1.0, 100.0, 0.0, 0.0, 0.0, 0.0)
+        >>> p = model.lever_parameters(model.coords([2.0, 2.0]), d, (100.0, 100.0, 0.0))
+        >>> complex(p.k), p.kvv, p.H, p.gamma       # undamped: k as it was (complex, the substitution's)
+        ((1+0j), 100.0, 1e-05, 1.0)
+        """
+        m = self.meta
+        return composed.Parameters(k=d.k, kvv=springs[0], kll=springs[1], kvl=springs[2], H=m.tip_height, L=m.length,
+                                   mu=d.mu, gamma=c["gamma"], rho_g=0.0)
 
     def _reading(self, c):
         """The generated slope the model reads and its arguments after ``beta``: the free end

@@ -145,13 +145,13 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
             fit = solve_from_starts(residual, _starts(before, refit, shifted[x_mass]), *_bounds(before, refit, params))
         k = len(params) + len(_free_reals(before, refit))
         residual, amplitudes = solve(fit.internal)
-        fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual)
+        fits[name] = (fit, params, amplitudes, lever_of(fit.internal), residual, lever_of)
         rows.append({"effect": name, "refitted": list(refit), "parameters": k, "chi2": fit.chi2,
                      "bic": fit.chi2 + k * math.log(count), "gap": float(gap(fit.chi2, n))})
     rise = _resonance_factor(before, frequency, y, sigma)
     # resonances that rose are no added mass's: then the best explanation without one
     best = min((r for r in rows if not (_order_notes(rise) and "added_mass" in r["refitted"])), key=lambda r: r["bic"])
-    fit, params, amplitudes, lever, _ = fits[best["effect"]]
+    fit, params, amplitudes, lever, _, lever_of = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
     lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
     parameters = {}
@@ -211,6 +211,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
               "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
               "parameters": parameters, "lever_mass": lever_mass,
               "resonance_before": before.lever.free_resonance, "resonance_after": lever.free_resonance,
+              "resonance_stderr": [before["parameters"]["free_resonance"]["stderr"],
+                                   _resonance_stderr(before, fit, lever_of, len(params))],
               "gap_before": rows[0]["gap"], "gap_after": best["gap"], "steps": rows,
               "gain_after": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
               "background_after": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
@@ -227,6 +229,22 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
                   float(np.median(np.diff(frequency)))), frequency, np.abs(y)),
               "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
+
+
+def _resonance_stderr(before: SweepFit, fit: StartsFit, lever_of, count: int) -> float:
+    """The standard error of the first resonance of the lever ``lever_of(fit.internal)``: the reference's, scaled
+    with it, and that of the first ``count`` refitted parameters (their covariance, through the lever)."""
+    x = np.asarray(fit.internal, dtype=float)
+    resonance = lever_of(x).free_resonance
+    gradient = np.zeros(count)
+    for i in range(count):
+        step = 1e-6 * max(abs(x[i]), 1e-6)
+        shifted = x.copy()
+        shifted[i] -= step if i == 0 and x[i] > step else -step       # a mass stays non-negative
+        gradient[i] = (lever_of(shifted).free_resonance - resonance) / (shifted[i] - x[i])
+    scaled = resonance / before.lever.free_resonance * before["parameters"]["free_resonance"]["stderr"]
+    variance = float(gradient @ np.asarray(fit.covariance)[:count, :count] @ gradient) + scaled ** 2
+    return math.sqrt(variance) if math.isfinite(variance) else math.nan
 
 
 SWAPPED = 3.0
@@ -559,7 +577,9 @@ class SweepComparison(Result):
         if "viscous_loss" in p:
             lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
                          f"{plus_minus(p['viscous_loss'], '')}")
-        lines.append(f"  resonance in the medium {d['resonance_before']:.6g} -> {d['resonance_after']:.6g} Hz; "
+        before_hz, after_hz = ({"value": d[f"resonance_{when}"], "stderr": d["resonance_stderr"][i]}
+                               for i, when in enumerate(("before", "after")))
+        lines.append(f"  resonance in the medium {plus_minus(before_hz, '')} -> {plus_minus(after_hz, 'Hz')}; "
                      f"instrument: {instrument_text(d['reference_fit']['instrument_fit'], d['reference_fit'].get('instrument_comparison'))} -> {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}")
         lines.append(f"  gap {d['gap_before']:.3g} (before's model as is) -> "
                      + gap_text(d["gap_after"], d.get("worst_region"))[4:])

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..analysis.stiffness_report import rounded
 from ..fitting.result import Result
 from . import select
 from .effects import public_name
@@ -127,7 +128,8 @@ def summary(report) -> str:
         else:
             err = "" if p["stderr"] is None else f" +- {p['stderr']:.2g}"
             note = "" if p.get("determined", True) else " (not determined by these data)"
-            lines.append(f"  {name} = {p['value']:.5g}{err} {p['unit']}{note}".rstrip())
+            value = rounded(p["value"], p["stderr"] or 0.0) if p["stderr"] else f"{p['value']:.5g}"
+            lines.append(f"  {name} = {value}{err} {p['unit']}{note}".rstrip())
             if p.get("budget") and p["value"]:
                 words = report.get("uncertainty_inputs") or {}
                 lines.append(f"    {name}'s uncertainty, input by input: " + ", ".join(

@@ -114,7 +114,8 @@ def characteristic_args(model: Model, internal, contact: bool) -> tuple:
     c = model.coords(internal)
     m = model.meta
     kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-    return (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
+    return composed.Parameters(k=m.spring_constant, kvv=kvv, kll=kll, kvl=kvl, H=m.tip_height, L=m.length, mu=c["mu"],
+                               gamma=c["gamma"], rho_g=0.0)
 
 
 def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -> np.ndarray:

@@ -206,7 +206,7 @@ def column(name: str) -> tuple[str, float, str] | None:
     >>> column("Frequency / MHz"), column("Tip bias [V]"), column("Phase / rad")[1] == 180 / math.pi
     (('frequency_hz', 1000000.0, 'mhz'), ('bias_v', 1.0, 'v'), True)
     >>> column("amplitude_m_per_v"), column("x_pm_per_v")
-    (('amplitude', 1.0, 'm'), ('x', 1.0, 'pm'))
+    (('amplitude', 1.0, 'm/v'), ('x', 1.0, 'pm/v'))
     """
     text = name.strip().strip('"').strip().lower()
     unit = None
@@ -220,10 +220,11 @@ def column(name: str) -> tuple[str, float, str] | None:
         if key == canonical and unit is None:
             return canonical, 1.0, canonical.rpartition("_")[2] if units else ""
         stem, _, suffix = key.rpartition("_")
-        if units is None and key.endswith("_per_v"):    # a response per volt of drive (pfmdyn diagram --csv)
+        per_volt = units is None and key.endswith("_per_v")     # a response per volt of drive (pfmdyn diagram --csv)
+        if per_volt:
             stem, _, suffix = key.removesuffix("_per_v").rpartition("_")
         if unit is None and key not in names and stem in names and suffix in (units or _RESPONSE_UNITS):
-            key, unit = stem, suffix
+            key, unit = stem, suffix + "/v" * per_volt
         if key not in names:
             continue
         if units is None:

@@ -391,7 +391,7 @@ def sweep_comparison(out: dict, given=()) -> dict:
     results = records_of(out["parameters"])
     results["lever_mass"] = quantity("lever_mass", out["lever_mass"], status="derived")
     results["free_resonance"] = quantity("free_resonance", [out["resonance_before"], out["resonance_after"]],
-                                         status="fitted", dims=["sweep"])
+                                         out.get("resonance_stderr"), status="fitted", dims=["sweep"])
     results["gain"] = quantity("gain", _complex(out["gain_after"]), status="fitted")
     results["background"] = quantity("background", _complex(out["background_after"]), status="fitted",
                                      dims=["coefficient"])
@@ -555,7 +555,7 @@ def stiffness(doc: dict, path=None, given=(), from_file=(), assumed: dict | None
     solutions = [_solution(s, lever, doc["k2_policy"]) for s in doc["solutions"]]
     if doc["unique"]:
         results.update(solutions[0])
-        results["k1_over_k"] = quantity("k1_over_k", doc["k1_over_k"], status="derived")
+        results["k1_over_k"] = quantity("k1_over_k", doc["k1_over_k"], doc.get("k1_over_k_stderr"), status="derived")
         budget = (doc["solutions"][0].get("stderr_sources") or {})
         k1 = doc["k1"]
         shares = {source: parts["k1"] / k1 for source, parts in budget.items() if parts.get("k1", 0) > 0}
@@ -614,7 +614,8 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
            for name in ("blocks_run", "blocks_done", "blocks_total", "pixels_fitted") if name in summary}
     if "pixels_per_s" in summary:
         fit["pixels_per_second"] = statistic("pixels_per_second", summary["pixels_per_s"])
-    notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings)
+    notes = ([f"model: {summary['model']}"] if "model" in summary else []) + list(settings) + (
+        [summary["left_out"]] if summary.get("left_out") else [])
     assumed = assumed or {}
     lever = lever_records({**{name: value for name, (value, _) in assumed.items()}, **(given or {})},
                           given=list(given or {}), assumed={name: why for name, (_, why) in assumed.items()})
@@ -667,6 +668,8 @@ def resonances(d: dict, given=()) -> dict:
                     notes.append(f"{prefix} mode {i}: {why}")
     if d.get("k2_policy"):
         notes.append(f"k2 policy: {d['k2_policy']}")
+    if d.get("medium_note"):
+        notes.append(d["medium_note"])
     return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
 
 
@@ -690,7 +693,8 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     """
     ratio = d["q0_to_d1_slope_ratio"]
     results = {
-        "frequency": quantity("frequency", d["frequency"], status="given"),
+        "frequency": (quantity("frequency", d["frequency"], status="file", why="the drive frequency the file records")
+                      if d.get("frequency_from_file") else quantity("frequency", d["frequency"], status="given")),
         "beta": quantity("beta", d["beta"], status="derived"),
         "blind_spot": quantity("blind_spot", d["blind_spot"], status="derived", dims=["blind_spot"]),
         "blind_spot_interval": quantity("blind_spot_interval", d["blind_spot_intervals"], status="derived",

@@ -69,6 +69,30 @@ _CSV_UNITS = {"_hz": "Hz", "_m_per_sqrthz": "m/sqrt(Hz)", "_n_per_m": "N/m", "_d
               "_v": "V", "_m": "m"}
 
 
+def _table_rows(path: Path) -> dict:
+    """The first free and contact resonance (and their Q) a resonance table's rows hold, as the fields an
+    instrument's note would give them (discrepancy and stiffness read them there).
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "t.csv")
+    ...     _ = open(name, "w").write("mode,condition,frequency_hz,q\\n1,contact,368990,213.5\\n1,free,72969,\\n")
+    ...     _table_rows(Path(name))
+    {'free_resonance': 72969.0, 'contact_resonance': 368990.0, 'contact_quality_factor': 213.5}
+    """
+    from .tables import read
+
+    data, found = read(path, required=()), {}
+    for condition, resonance in (("free", "free_resonance"), ("contact", "contact_resonance")):
+        row = np.flatnonzero((data.condition == condition) & (data.mode == 1))
+        if len(row):
+            found[resonance] = float(data.frequency_hz[row[0]])
+            q = np.nan if data.quality_factor is None else float(data.quality_factor[row[0]])
+            if not np.isnan(q):
+                found[f"{condition}_quality_factor"] = q
+    return found
+
+
 def _read_csv(path: Path) -> InstrumentRecord:
     """A CSV table (:func:`pfmdyn.io.columns.read_table`): columns with the units their names
     end in, ``# key: value`` metadata; every row as long as the header, a number under each unit."""
@@ -96,6 +120,8 @@ def _read_csv(path: Path) -> InstrumentRecord:
             except ValueError:
                 pass
     kind = "resonance metadata" if {"mode", "condition"} <= set(table.header) else "spectrum"
+    if kind == "resonance metadata":
+        found.update(_table_rows(path))
     if not any(unit == "Hz" or (column(c) or ("",))[0] == "frequency_hz" for c, unit in zip(table.header, units)):
         raise UserError(f"{path}: not a table pfmdyn reads: no frequency column (frequency_hz; a drive sweep "
                         "has a 'Sweep data' or '[DATA]' line before its table)")

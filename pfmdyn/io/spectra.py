@@ -3,7 +3,7 @@
 The format, shared by every command that reads measured spectra::
 
     # spring_constant: 4.5              <- optional metadata, "# key: value", before the header
-    # response_unit: pm                 <- other comment lines are allowed there too
+    # response_unit: pm                 <- else the response columns' unit (X (pm), amplitude_m_per_v); other comment lines too
     frequency_hz,bias_v,x,y             <- or amplitude,phase_deg instead of x,y
     10000,-5,1.2,-0.3
     10000,-4,1.1,-0.2
@@ -60,6 +60,9 @@ class Spectra:
         ``("x", "y")`` or ``("amplitude", "phase_deg")``: which pair the file used.
     metadata : dict of str to str
         The ``# key: value`` lines before the header, values as written (stripped).
+    response_unit : str or None
+        The response's unit: the metadata's ``response_unit``, else what the response columns' names
+        say (``amplitude_m_per_v``: m/V), else None (arbitrary units).
     """
 
     path: str
@@ -68,6 +71,7 @@ class Spectra:
     response: np.ndarray
     response_columns: tuple[str, str]
     metadata: dict[str, str] = field(default_factory=dict)
+    response_unit: str | None = None
 
 
 def frequency_group_starts(frequency_hz):
@@ -163,7 +167,21 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
         response = first + 1j * second
     else:
         response = first * np.exp(1j * np.deg2rad(second))
-    return Spectra(where, table[:, 0], table[:, 1], response, response_columns, source.metadata)
+    written = {found[i][2] for i in indices[2:4 if response_columns == ("x", "y") else 3]}
+    return Spectra(where, table[:, 0], table[:, 1], response, response_columns, source.metadata,
+                   _response_unit(source.metadata, written))
+
+
+def _response_unit(metadata: dict, written: set) -> str | None:
+    """The response's unit: the metadata's ``response_unit``, else the one the response columns' names agree on
+    (``amplitude_m_per_v``: m/V; ``X (pm)``: pm), else None.
+
+    >>> _response_unit({}, {"m/v"}), _response_unit({}, {"pm", ""}), _response_unit({"response_unit": "nm"}, {"v"})
+    ('m/V', None, 'nm')
+    """
+    if "response_unit" in metadata:
+        return metadata["response_unit"]
+    return next(iter(written)).replace("v", "V") if len(written) == 1 and next(iter(written)) else None
 
 
 def _check_header(where: str, number: int, names: list[str]) -> tuple[str, str]:

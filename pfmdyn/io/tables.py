@@ -6,7 +6,7 @@ Format (SI units)::
     # length: 223e-6
     # width: 24e-6                  <- optional: no resonance depends on it
     # tip_height: 1e-5
-    # free_resonance: 63200         <- first free flexural resonance
+    # free_resonance: 63200         <- first free flexural resonance (a table's free mode 1 row gives it too)
     # description: optional text
     frequency_hz,bias_v,x,y             <- spectrum (or amplitude,phase_deg), several biases
     ...
@@ -43,6 +43,7 @@ problem is one :class:`~pfmdyn.errors.UserError` line.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -80,13 +81,11 @@ MIN_RESONANCES = 1
 discrepancy report says which parameters so few rows leave undetermined."""
 
 
-def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata:
+def _metadata(where: str, meta: dict, overrides: dict | None = None, required=REQUIRED_KEYS) -> Metadata:
+    """The file's metadata with ``overrides`` over it, checked; a key not ``required`` and not given is None."""
     meta = {canonical(key) or key: value for key, value in meta.items()}
     meta.update({canonical(key) or key: value for key, value in (overrides or {}).items() if value is not None})
-    missing = [key for key in REQUIRED_KEYS if key not in meta]
-    if missing:
-        raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
-                        f" (lines '# key: value' before the header)")
+    _require(where, [key for key in required if key not in meta])
     values = {}
     for key in REQUIRED_KEYS + OPTIONAL_KEYS:
         if key not in meta:
@@ -98,6 +97,12 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None) -> Metadata
             raise UserError(f"{where}: metadata '{key}' must be positive and finite")
     return Metadata(**{key: values.get(key) for key in REQUIRED_KEYS + OPTIONAL_KEYS},
                     description=meta.get("description", ""))
+
+
+def _require(where: str, missing) -> None:
+    if missing:
+        raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
+                        f" (lines '# key: value' before the header)", tuple(missing))
 
 
 def _plausible(where: str, key: str, value: float) -> float:
@@ -116,11 +121,13 @@ def _plausible(where: str, key: str, value: float) -> float:
         raise UserError(f"{exc}; give it in {unit} (or with its unit, e.g. '{key}: 223 um')", exc.quantity) from None
 
 
-def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
+def read(path, overrides: dict | None = None, required=REQUIRED_KEYS) -> SpectrumData | ResonanceData:
     """Read a discrepancy input file (format in the module docstring).
 
     ``overrides``: metadata keys (:data:`REQUIRED_KEYS`) given on the command line,
-    applied over the file's values.
+    applied over the file's values; ``required``: the keys that must then be known (a caller with
+    defaults of its own asks fewer; the rest are None when not given).  A resonances table's free
+    mode 1 row is its free resonance when the metadata holds none.
 
     >>> import tempfile, os
     >>> text = ("# spring_constant: 2.4\\n# length: 2e-4\\n# width: 3e-5\\n"
@@ -141,7 +148,9 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
     meta, header = table.metadata, table.header
     names = [_column(c) for c in header]
     if {"mode", "condition"} & set(names):
-        return _resonances(path, _metadata(str(path), meta, overrides), names, table.rows)
+        free_row = tuple(key for key in required if key != "free_resonance")
+        return _resonances(path, _metadata(str(path), meta, overrides, free_row), names, table.rows,
+                           "free_resonance" in required)
     unknown = [c for c in header if column(c) is None]
     if unknown:
         # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
@@ -150,7 +159,7 @@ def read(path, overrides: dict | None = None) -> SpectrumData | ResonanceData:
         raise UserError(f"{path}: not a PFM spectrum or resonances table: unknown column(s) "
                         f"{', '.join(repr(c) for c in unknown)}{hint}; expected frequency_hz, bias_v and x, y or "
                         "amplitude, phase_deg (or mode, condition, frequency_hz)")
-    metadata = _metadata(str(path), meta, overrides)
+    metadata = _metadata(str(path), meta, overrides, required)
     spectra = read_spectra(path, biases_per_frequency=1)
     if len(spectra.frequency_hz) < MIN_SPECTRUM_ROWS:
         raise UserError(f"{path}: {len(spectra.frequency_hz)} data rows; at least "
@@ -185,7 +194,7 @@ def _column(name: str) -> str:
     return COLUMN_ALIASES.get(key, key)
 
 
-def _resonances(path, metadata, header, rows) -> ResonanceData:
+def _resonances(path, metadata, header, rows, free_required: bool = True) -> ResonanceData:
     freq_cols = [c for c in header if c in FREQUENCY_UNITS]
     allowed = ("mode", "condition") + tuple(FREQUENCY_UNITS) + OPTIONAL_RESONANCE_COLUMNS
     unknown = [c for c in header if c not in allowed]
@@ -228,7 +237,13 @@ def _resonances(path, metadata, header, rows) -> ResonanceData:
                             f"(or blank), got '{cells[q_idx]}'")
         conds.append(cond)
     modes, conds, freqs, qs = np.array(modes), np.array(conds), np.array(freqs), np.array(qs)
-    if len(freqs):
+    if metadata.free_resonance is None:
+        first = freqs[(conds == "free") & (modes == 1)]
+        if len(first):
+            metadata = replace(metadata, free_resonance=_plausible(str(path), "free_resonance", float(first[0])))
+        elif free_required:
+            _require(str(path), ["free_resonance"])
+    if len(freqs) and metadata.free_resonance is not None:
         check_band(str(path), freqs, metadata.free_resonance, TABLE_BAND)
     order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],

@@ -63,18 +63,20 @@ def contact_map(path: str, out_dir: str, overrides: dict | None = None) -> dict:
     # a new map each time (nothing to resume): whatever was at out is replaced
     write_maps(out, {name: (np.broadcast_to(value, fc.shape).astype(float), "N/m", f"{name} from the contact resonance")
                      for name, value in (("k1", result.k1), ("k1_stderr", result.k1_stderr))})
-    k1 = np.asarray(result.k1)
+    k1 = np.broadcast_to(np.asarray(result.k1), fc.shape)
     summary = {"explained_fraction": float(np.mean(np.isfinite(k1))), "out": out}
-    if np.isfinite(k1).any():
-        return summary | {"median_k1": float(np.nanmedian(k1))}
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = fc / f1
-    ratio = ratio[np.isfinite(ratio)]
-    seen = f"{ratio.min():.4g} to {ratio.max():.4g}" if ratio.size else "none finite"
-    return summary | {"median_k1": None, "why": (
-        f"no pixel's contact/free ratio ({seen}) lies between mode {int(mode)}'s limits "
-        f"{result.proof.soft_ratio:.4g} (k1 = 0) and {result.proof.stiff_ratio:.4g} (k1 -> inf) of the "
-        "paper's lever (tip at the free end, no k2)")}
+    unexplained = ratio[~np.isfinite(k1) & np.isfinite(ratio)]
+    seen = f"{unexplained.min():.4g} to {unexplained.max():.4g}" if unexplained.size else "none finite"
+    limits = (f"mode {int(mode)}'s limits {result.proof.soft_ratio:.4g} (k1 = 0) and "
+              f"{result.proof.stiff_ratio:.4g} (k1 -> inf) of the paper's lever (tip at the free end, no k2)")
+    if np.isfinite(k1).any():
+        left = int(np.sum(~np.isfinite(k1)))
+        return summary | {"median_k1": float(np.nanmedian(k1))} | ({"left_out": (
+            f"k1 undetermined at {left} of {k1.size} pixels: their contact/free ratio ({seen}) lies outside {limits}"
+            if unexplained.size else f"k1 undetermined at {left} of {k1.size} pixels: no finite frequency")} if left else {})
+    return summary | {"median_k1": None, "why": f"no pixel's contact/free ratio ({seen}) lies between {limits}"}
 
 
 def describe(summary: dict) -> str:
@@ -88,4 +90,5 @@ def describe(summary: dict) -> str:
     if summary["median_k1"] is None:
         return f"contact-frequency map: k1 undetermined at every pixel: {summary['why']}; maps in {summary['out']}"
     return (f"contact-frequency map: k1 at {100 * summary['explained_fraction']:.1f} % of pixels, "
-            f"median k1 {summary['median_k1']:.4g} N/m; maps in {summary['out']}")
+            f"median k1 {summary['median_k1']:.4g} N/m; maps in {summary['out']}"
+            + (f"\n{summary['left_out']}" if summary.get("left_out") else ""))

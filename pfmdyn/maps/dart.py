@@ -21,17 +21,25 @@ convention: a lag is a negative argument).  Four reals per pixel fix four unknow
   where Newton does not converge or the contact would supply energy (its loss below zero by more
   than three standard errors).
 
+The lever knows one thing more than the oscillator: ``d_eff`` is real, the domain's phase 0 or 180
+degrees, so a pixel's four numbers hold three unknowns (``k1``, ``contact_loss``, ``|d_eff|``), not four.
+The phases' sum ``arg(s1 s2)`` then fixes the contact too: it is ``arg(T(f1) T(f2))`` plus twice the
+domain's phase, which the lock-ins' offset and a background (the electrostatic force's) move, one phase
+per image for each side of the drives' axis (:func:`domain_phases`, from all the pixels' drives).  :func:`pooled_contact` fits that row beside the ratio's two (:func:`real_drive_phase`), which narrows
+one pixel's contact resonance below the oscillator's Cramér-Rao bound (``sigma / 2Q`` relative: four
+numbers, four unknowns); where a pixel's rows misfit its contact by more than five standard deviations (a
+drive not real there: a background, a tilted domain), the ratio's contact stands alone (``real_drive`` 0).
+
 **The contact resonance and Q** reported are the two-frequency oscillator's through the lever's response
 at the pixel's own drives (for the contact found), or where no oscillator goes through it (a negative Q:
 an anti-resonance of the slope at the spot near the peak) the lever's damped complex pole
-(:func:`lever_pole`).  For a pixel alone that is the oscillator through its measured signals: both
-inversions explain the same four numbers, so one pixel's lock-in noise reaches the resonance alike
-(``sigma / 2Q`` relative, the Cramér-Rao bound of four numbers for four unknowns).  The contact,
-though, is a grain's, alike at its pixels: :func:`pooled_contact` fits each pixel's ``k1`` and contact
-loss to its own and its alike neighbours' signals (within ``pool`` pixels, a grain boundary parting
-them; each neighbour read at its own drives), and the resonance and Q follow from that contact at the
-pixel's drives, as far from the noise as the pool is large.  The oscillator's resonance and Q through
-the measured signals, which need no lever, stand where the lever's inversion fails.
+(:func:`lever_pole`).  The contact, moreover, is a grain's, alike at its pixels: :func:`pooled_contact` fits
+each pixel's ``k1`` and contact loss to its own and its alike neighbours' signals (within ``pool`` pixels, a
+grain boundary parting them; each neighbour read at its own drives), and the resonance and Q follow from
+that contact at the pixel's drives, as far from the noise as the pool is large.  ``d_eff`` is the pixel's own
+signals over that contact's response (their geometric mean), signed by the side of the image's drive axis
+it is on.  The oscillator's resonance and Q through the measured signals, which need no lever, stand where
+the lever's inversion fails.
 
 ``T`` is the deflection signal per unit surface displacement ``d1`` (along ``k1``, toward the
 lever): the slope at the laser spot times ``2L/3``, as a static InvOLS reads it.  So ``d_eff > 0``
@@ -40,8 +48,8 @@ anti-resonance the drive is on (the oscillator's drive phase flips above the slo
 anti-resonance; the lever's ``d_eff`` does not).
 
 Uncertainties: the lock-in noise is taken as circular complex noise of relative size ``sigma``
-on both signals (each ``s_j (1 + e_j)``, ``E|e_j|**2 = sigma**2``), propagated to first order;
-``sigma`` is estimated from the image itself (:func:`channel_noise`).
+on both signals (each ``s_j (1 + e_j)``, ``E|e_j|**2 = sigma**2``), propagated to first order through
+the pooled fit's covariance; ``sigma`` is estimated from the image itself (:func:`channel_noise`).
 """
 from __future__ import annotations
 
@@ -62,9 +70,10 @@ from ..io.results import quantity
 from ..names import NAMES
 from .store import write_maps
 
-__all__ = ["Oscillator", "LeverFit", "oscillator", "oscillator_sensitivity", "channel_noise", "alike_sums", "deflection_signal",
-           "lever_inversion", "pooled_contact", "lever_pole", "point_mass_k1", "start_k1", "drive_axis",
-           "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
+__all__ = ["Oscillator", "LeverFit", "PooledContact", "oscillator", "oscillator_sensitivity", "channel_noise",
+           "alike_sums", "deflection_signal", "lever_inversion", "pooled_contact", "real_drive_phase", "domain_phases",
+           "lever_pole",
+           "point_mass_k1", "start_k1", "drive_axis", "MAPS", "OSCILLATOR_MAPS", "invert", "write_dart", "document"]
 
 _NEWTON_STEPS = 30
 _STEP = 1e-6          # finite-difference step in log k1 and in the contact loss
@@ -308,15 +317,23 @@ def _log_ratios(lever, contact, f1, f2, points):
         return [(np.log(t[j, 1] / t[j, 0]), t[j, 0]) for j in range(m)]
 
 
-def _linearised(lever, contact, f1, f2, target, k1, loss):
+def _linearised(lever, contact, f1, f2, target, k1, loss, phase=None):
     """The residual ``log(T(f2)/T(f1)) - target`` as ``(re, im)`` (the phase modulo 2 pi) and its Jacobian
-    in ``(log k1, loss)`` by forward differences, ``(n, 2)`` and ``(n, 2, 2)``."""
-    (g, _), (gk, _), (gx, _) = _log_ratios(lever, contact, f1, f2, [
+    in ``(log k1, loss)`` by forward differences, ``(n, 2)`` and ``(n, 2, 2)``; with ``phase`` (the
+    signals' summed phase, a real drive's, :func:`real_drive_phase`), a third row: ``arg(T(f1) T(f2)) - phase``
+    (modulo 2 pi), ``(n, 3)`` and ``(n, 3, 2)``."""
+    (g, t), (gk, tk), (gx, tx) = _log_ratios(lever, contact, f1, f2, [
         (k1, loss), (k1 * math.exp(_STEP), loss), (k1, loss + _STEP)])
     r = g - target
-    jac = np.stack([np.stack([((gk - g) / _STEP).real, ((gx - g) / _STEP).real], -1),
-                    np.stack([((gk - g) / _STEP).imag, ((gx - g) / _STEP).imag], -1)], -2)
-    return np.stack([r.real, np.angle(np.exp(1j * r.imag))], -1), jac
+    rows = [r.real, np.angle(np.exp(1j * r.imag))]
+    dk, dx = (gk - g) / _STEP, (gx - g) / _STEP
+    jac = [np.stack([dk.real, dx.real], -1), np.stack([dk.imag, dx.imag], -1)]
+    if phase is not None:
+        with np.errstate(all="ignore"):     # arg(T1 T2) = 2 arg T1 + arg(T2 / T1)
+            rows.append(np.angle(t * t * np.exp(1j * (g.imag - phase))))
+            jac.append(np.stack([2 * np.log(tk / t).imag / _STEP + dk.imag,
+                                 2 * np.log(tx / t).imag / _STEP + dx.imag], -1))
+    return np.stack(rows, -1), np.stack(jac, -2)
 
 
 def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, loss, drive_amplitude: float,
@@ -388,52 +405,95 @@ def lever_inversion(lever: Cantilever, contact: Contact, f1, f2, s1, s2, k1, los
                     nan(np.sqrt(covariance[:, 1, 1])), nan(np.sqrt(drive_variance)), ok)
 
 
+class PooledContact(NamedTuple):
+    """:func:`pooled_contact`'s answer at each pixel: ``k1`` (N/m), ``contact_loss``, their covariance per
+    unit ``sigma**2`` (``(n, 2, 2)`` in ``(log k1, contact_loss)``), the ratio of ``k1``'s standard deviation to
+    the pixel's own (:class:`LeverFit`), the pixel's own misfit (the sum of its rows' squared residuals
+    per ``sigma**2``, linearised) and whether its phase row was fitted (its drive taken as real)."""
+
+    k1: np.ndarray
+    contact_loss: np.ndarray
+    covariance: np.ndarray
+    narrowed: np.ndarray
+    misfit: np.ndarray
+    real: np.ndarray
+
+
 def pooled_contact(lever: Cantilever, contact: Contact, f1, f2, s1, s2, fit: LeverFit, sigma: float, shape,
-                   radius: int, steps: int = 1):
+                   radius: int, phase=None, misfit_limit: float = math.inf) -> PooledContact:
     """Each pixel's contact (``k1``, ``contact_loss``) fitted to its own and its alike neighbours' signals
-    (:func:`alike_sums` within ``radius``, alike by :func:`lever_inversion`'s ``fit`` and its spread at
-    noise ``sigma``): least squares on ``log(s2/s1)``, whose noise is the same at every pixel (relative
-    lock-in noise), each neighbour read at its own drives.  Gauss-Newton from the inverse-variance mean of
-    the pixels' own contacts; a pixel's own Newton step is linear from there, so the nonlinear inversion's
-    bias at each pixel does not add up in the pool.  Returns ``k1``, ``contact_loss``, their standard
-    deviations per unit ``sigma`` (relative in ``k1``) and the ratio of the pooled ``k1``'s to the pixel's own.
+    (:func:`alike_sums` within ``radius``, 0 for the pixel alone; alike by :func:`lever_inversion`'s ``fit``
+    and its spread at noise ``sigma``): least squares on ``log(s2/s1)`` and, with ``phase`` (:func:`real_drive_phase`),
+    on ``arg(s1 s2)`` too, the phase of a real drive's signals, except at the pixels whose own rows misfit the
+    contact found by more than ``misfit_limit`` (fitted again without theirs, twice at most); each row's noise is
+    ``sigma`` at every pixel (relative lock-in noise), each neighbour read at its own drives.  One Gauss-Newton
+    step from the inverse-variance mean of the pixels' own contacts (a pixel's own Newton step is linear from
+    there, so the nonlinear inversion's bias at each pixel does not add up in the pool).
 
     >>> lever = Cantilever(2.0, 75e3, 2e-4, quality_factor=300.0)
     >>> rng = np.random.default_rng(3)
     >>> f1 = 3.10e5 + 2e3 * rng.uniform(size=(6, 6)); f2 = f1 + 6e3
     >>> noise = lambda s: s * (1 + 0.01 * (rng.standard_normal(s.shape) + 1j * rng.standard_normal(s.shape)) / 2**0.5)
-    >>> s1, s2 = (noise(deflection_signal(lever, Contact(), f, 120.0, 0.02)) for f in (f1, f2))
+    >>> s1, s2 = (noise(-2e-12 * deflection_signal(lever, Contact(), f, 120.0, 0.02)) for f in (f1, f2))
     >>> fit = lever_inversion(lever, Contact(), f1, f2, s1, s2, np.full(36, 120.0), np.full(36, 0.02), 1.0)
-    >>> k1, loss, k1_sd, loss_sd, narrowed = pooled_contact(lever, Contact(), f1.ravel(), f2.ravel(), s1.ravel(),
-    ...                                                     s2.ravel(), fit, 0.01, (6, 6), 2)
-    >>> bool(np.std(k1 / 120 - 1) < np.std(fit.k1 / 120 - 1) / 2), bool(np.all(narrowed < 0.6))
+    >>> args = (lever, Contact(), f1.ravel(), f2.ravel(), s1.ravel(), s2.ravel(), fit, 0.01, (6, 6))
+    >>> pooled = pooled_contact(*args, 2)
+    >>> bool(np.std(pooled.k1 / 120 - 1) < np.std(fit.k1 / 120 - 1) / 2), bool(np.all(pooled.narrowed < 0.6))
+    (True, True)
+    >>> alone = pooled_contact(*args, 0, phase=real_drive_phase(s1.ravel(), s2.ravel(), 0.0))   # a real drive's phases
+    >>> bool(np.std(alone.contact_loss - 0.02) < np.std(fit.contact_loss - 0.02) / 1.5), bool(np.all(alone.misfit < 16))
     (True, True)
     """
     grid = tuple(shape) if len(shape) == 2 else (1, len(f1))
     gate_values = np.stack([np.log(fit.k1), fit.contact_loss]).reshape(2, *grid)
     gate_variances = (sigma * np.stack([fit.k1_sensitivity, fit.loss_sensitivity])).reshape(2, *grid) ** 2
+    misfit = np.full(len(f1), np.nan)
+    real = np.full(len(f1), phase is not None)
     with np.errstate(all="ignore"):
         weights = 1 / gate_variances
         sums = alike_sums(gate_values, gate_variances, np.concatenate([weights, weights * gate_values]), radius)
         theta = (sums[2:] / sums[:2]).reshape(2, -1)
-        target = np.log(s2 / s1)
-        information = np.full((len(f1), 2, 2), np.nan)
-        for _ in range(steps):
-            i = np.flatnonzero(np.all(np.isfinite(theta), 0))
-            r, jac = _linearised(lever, contact, f1[i], f2[i], target[i], np.exp(theta[0, i]), theta[1, i])
-            own = np.einsum("nki,nkj->nij", jac, jac)
+        i = np.flatnonzero(np.all(np.isfinite(theta), 0))
+        r, jac = _linearised(lever, contact, f1[i], f2[i], np.log(s2[i] / s1[i]), np.exp(theta[0, i]), theta[1, i],
+                             None if phase is None else phase[i])
+        def solve(real):
+            """The pooled contact, its information and the pixels' rows' residuals there, the phase rows of the
+            pixels ``real`` in the fit."""
+            weight = np.ones(r.shape)
+            weight[~real[i], 2:] = 0.0        # a pixel whose drive is not taken as real gives no phase row to the fit
+            own = np.einsum("nki,nkj->nij", weight[..., None] * jac, jac)
             # each pixel's normal equations J^T J (theta - theta_own) = -J^T r, summed over its alike neighbours
-            rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, r)
+            rhs = np.einsum("nij,jn->ni", own, theta[:, i]) - np.einsum("nki,nk->ni", jac, weight * r)
             parts = np.full((5, len(f1)), np.nan)
             parts[:, i] = np.stack([own[:, 0, 0], own[:, 0, 1], own[:, 1, 1], rhs[:, 0], rhs[:, 1]])
             # alike now means: near the pool's estimate, not the pixel's own noisy one
             pooled = alike_sums(gate_values, gate_variances, parts.reshape(5, *grid), radius,
                                 centre=theta.reshape(2, *grid)).reshape(5, -1)
             information = np.stack([np.stack([pooled[0], pooled[1]], -1), np.stack([pooled[1], pooled[2]], -1)], -2)
-            theta = np.einsum("nij,jn->in", _inverse(information), pooled[3:])
+            moved = np.einsum("nij,jn->in", _inverse(information), pooled[3:])
+            return moved, information, r + np.einsum("nkj,jn->nk", jac, moved[:, i] - theta[:, i])
+
+        for attempt in range(3):    # the misfits' neighbours fit again once those are out of their pools
+            moved, information, residual = solve(real)
+            misfit[i] = np.sum(residual**2, -1) / sigma**2
+            fits = (phase is not None) & ~(misfit > misfit_limit)
+            if attempt == 2 or np.array_equal(fits, real):
+                break
+            real = fits
         covariance = _inverse(information)
-        k1_sd = np.sqrt(covariance[:, 0, 0])
-        return np.exp(theta[0]), theta[1], k1_sd, np.sqrt(covariance[:, 1, 1]), k1_sd / fit.k1_sensitivity
+        return PooledContact(np.exp(moved[0]), moved[1], covariance, np.sqrt(covariance[:, 0, 0]) / fit.k1_sensitivity,
+                             misfit, real)
+
+
+def real_drive_phase(s1, s2, axis):
+    """``arg(s1 s2)`` less twice the drive's phase ``axis`` (radians; per pixel, :func:`domain_phases`): what
+    ``arg(T(f1) T(f2))`` is where the drive's phase is that (or that plus 180 degrees, squared away), the row
+    :func:`pooled_contact` adds to the ratio's two.
+
+    >>> round(float(real_drive_phase(-2j, 3 + 0j, 0.25)), 6)      # -90 deg less 2 x 0.25 rad
+    -2.070796
+    """
+    return np.angle(np.asarray(s1) * np.asarray(s2) * np.exp(-2j * axis))
 
 
 def _neighbours_contact(fit: LeverFit, shape, radius: int = 2):
@@ -482,9 +542,44 @@ def drive_axis(lever: Cantilever, contact: Contact, f1, s1, k1, loss) -> float:
     -28.64789
     """
     with np.errstate(all="ignore"):
-        drive = np.ravel(np.asarray(s1) / deflection_signal(lever, contact, f1, k1, loss))
+        return _axis(np.asarray(s1) / deflection_signal(lever, contact, f1, k1, loss))
+
+
+def domain_phases(drive, axis: float, least: int = 16):
+    """Each pixel's domain phase (radians): the median argument of the drives ``drive`` (complex) on its side of
+    ``axis`` (radians, :func:`drive_axis`), that side's ``axis`` (or ``axis + pi``) where it has fewer than
+    ``least`` pixels.  The domains' drive is in phase or in antiphase with the bias, but for the lock-ins' offset
+    (one per image) and a background (the electrostatic force's, one per image): two phases, not always 180
+    degrees apart.
+
+    >>> drive = np.exp(1j * np.radians([10.0, 11.0, 12.0, 185.0, 186.0, 187.0]))
+    >>> np.round(np.degrees(domain_phases(drive, 0.0, least=3)), 6).tolist()
+    [11.0, 11.0, 11.0, -174.0, -174.0, -174.0]
+    """
+    drive = np.asarray(drive)
+    with np.errstate(all="ignore"):
+        turned = drive * np.exp(-1j * axis)
+        negative = turned.real < 0
+        phases = np.full(drive.shape, np.nan)
+        for side, flip in ((~negative, 1.0), (negative, -1.0)):
+            angles = np.angle(flip * turned[side & np.isfinite(drive)])
+            offset = np.median(angles) if angles.size >= least else 0.0
+            phases[side] = np.angle(np.exp(1j * (axis + offset + (0.0 if flip > 0 else math.pi))))
+    return phases
+
+
+def _axis(drive) -> float:
+    """:func:`drive_axis` of the drives ``drive`` (complex): the mean's axis, then moved by the median of the
+    drives' angles from it (modulo 180 degrees): a patch whose drive is not real does not turn the image's."""
+    with np.errstate(all="ignore"):
+        drive = np.ravel(drive)
         drive = drive[np.isfinite(drive) & (drive != 0)]
-        axis = math.degrees(np.angle(np.mean((drive / np.abs(drive)) ** 2))) / 2 if drive.size else math.nan
+        if not drive.size:
+            return math.nan
+        squared = (drive / np.abs(drive)) ** 2
+        axis = np.angle(np.mean(squared)) / 2
+        axis = math.degrees(axis + np.median(np.angle(squared * np.exp(-2j * axis))) / 2)
+    axis = (axis + 90.0) % 180.0 - 90.0
     return 90.0 if axis == -90.0 else axis
 
 
@@ -498,14 +593,16 @@ def _signed(drive):
     return np.abs(drive) * np.where(np.cos(np.angle(drive)) < 0, -1.0, 1.0)
 
 
-POOL = 3
+POOL = 5
+MISFIT = 25.0
+"""A pixel's misfit (:class:`PooledContact`) above which its drive is not taken as real: five standard deviations."""
 """Radius (pixels) over which :func:`invert` pools a pixel's contact with its alike neighbours."""
 
 
 def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude: float, *, pool: int = POOL,
            block: int = 4096, progress=None, tip_height_uncertainty: float = 0.0) -> tuple[dict, float]:
     """Every pixel of a DART image both ways: maps (name -> array of the signals' shape; :data:`MAPS`
-    with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``determined``) and ``sigma`` (:func:`channel_noise`).
+    with ``_stderr``, :data:`OSCILLATOR_MAPS`, ``real_drive``, ``determined``) and ``sigma`` (:func:`channel_noise`).
 
     ``s1``, ``s2``: the deflection signals (m, complex, ``A exp(-i phi)``) at ``f1``, ``f2`` (Hz);
     ``contact``: the k2 policy (:meth:`pfmdyn.Contact.policy`); ``pool``: the radius (pixels) of
@@ -571,38 +668,59 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
     # nothing: phases the lever's resonance cannot give (an upper drive leading the lower one)
     passive = fit.contact_loss + 3 * u * fit.loss_sensitivity >= 0
     fit = LeverFit(*(np.where(passive, v, np.nan) for v in fit[:6]), fit.converged & passive)
-    d_eff = _signed(fit.drive)
     with np.errstate(all="ignore"):
         k1_pm = point_mass_k1(sho.resonance, lever)
         # the oscillator's static gain read as the point-mass lever's: tip deflection d k1 / (k + k1)
         d_pm = _signed(sho.drive / drive_amplitude / point_mass_static_gain(lever.spring_constant, k1_pm))
-        if pool > 0 and u > 0:
-            # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives
-            k1, loss, k1_sd, loss_sd, narrowed = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool)
-            k1_sd, loss_sd = u * k1_sd, u * loss_sd
+        axis = math.radians(_axis(fit.drive)) if fit.converged.any() else 0.0
+        if u > 0:
+            # each pixel's contact fitted to its and its alike neighbours' signals (a grain's), read at its own drives,
+            # its drive at its domain's phase (the ratio's contact alone where the phases misfit)
+            pooled = pooled_contact(lever, contact, f1, f2, s1, s2, fit, u, shape, pool,
+                                    phase=real_drive_phase(s1, s2, domain_phases(fit.drive, axis)),
+                                    misfit_limit=MISFIT)
         else:
-            k1, loss, k1_sd, loss_sd = fit.k1, fit.contact_loss, u * fit.k1_sensitivity, u * fit.loss_sensitivity
-            narrowed = np.ones(len(f1))
-        # the contact resonance and Q: the oscillator through the lever's response at the pixel's drives (the
-        # measured signals' own where the contact is the pixel's alone), or the lever's pole where none goes
-        # through it (an anti-resonance of the slope at the spot near the peak); the oscillator through the
-        # measured signals where the lever's inversion fails
-        lever_sho = oscillator(f1, f2, deflection_signal(lever, contact, f1, k1, loss),
-                               deflection_signal(lever, contact, f2, k1, loss))
+            covariance = np.zeros((len(f1), 2, 2))
+            covariance[:, 0, 0], covariance[:, 1, 1] = fit.k1_sensitivity**2, fit.loss_sensitivity**2
+            pooled = PooledContact(fit.k1, fit.contact_loss, covariance, np.ones(len(f1)), np.zeros(len(f1)),
+                                   np.ones(len(f1), bool))
+        k1, loss, covariance = pooled.k1, pooled.contact_loss, pooled.covariance
+        # the lever's response at the pixel's drives, and moved by each of the contact's two numbers
+        responses = [(t1, t1 * np.exp(g)) for g, t1 in _log_ratios(lever, contact, f1, f2, [
+            (k1, loss), (k1 * math.exp(_STEP), loss), (k1, loss + _STEP)])]
+        # the contact resonance and Q: the oscillator through the lever's response at the pixel's drives, or
+        # the lever's pole where none goes through it (an anti-resonance of the slope at the spot near the
+        # peak); the oscillator through the measured signals where the lever's inversion fails
+        lever_sho, *moved = (oscillator(f1, f2, *t) for t in responses)
         resonance = np.where(fit.converged, lever_sho.resonance, sho.resonance)
         quality = np.where(fit.converged, lever_sho.quality_factor, sho.quality_factor)
         pole = fit.converged & ~lever_sho.determined
         if pole.any():
             resonance[pole], quality[pole] = lever_pole(lever, contact, k1[pole], loss[pole], (f1[pole] + f2[pole]) / 2)
-        narrowed = np.where(fit.converged, narrowed, 1.0)
+        spreads = {}
+        for name in ("resonance", "quality_factor"):
+            gradient = np.stack([(getattr(m, name) - getattr(lever_sho, name)) / _STEP for m in moved], -1)
+            through = np.sqrt(np.einsum("ni,nij,nj->n", gradient, covariance, gradient))
+            # the pole's (or the oscillator's where the lever fails) as one pixel's, narrowed as k1 is
+            spreads[name] = np.where(np.isfinite(through) & lever_sho.determined, through,
+                                     getattr(spread, name) * np.where(fit.converged, pooled.narrowed, 1.0))
+        # the drive: the signals over the lever's responses (their geometric mean), signed by its side of the axis
+        t1, t2 = responses[0]
+        drives = (s1 / t1, s2 / t2)
+        d_eff = np.sqrt(np.abs(drives[0] * drives[1])) / drive_amplitude * \
+            np.where(((drives[0] + drives[1]) * np.exp(-1j * axis)).real < 0, -1.0, 1.0)
+        # log|d| = mean of log|s_j| (noise sigma**2 / 4, apart from the contact's rows) less mean log|T_j|
+        gradient = np.stack([(np.log(np.abs(m1 * m2 / (t1 * t2))) / (2 * _STEP)) for m1, m2 in responses[1:]], -1)
+        drive_sd = np.sqrt(0.25 + np.einsum("ni,nij,nj->n", gradient, covariance, gradient))
         height_k1, height_loss = _height_shares(lever, contact, f1, f2, k1, loss, tip_height_uncertainty)
-        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spread.resonance * narrowed,
-                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spread.quality_factor * narrowed,
-                "k1": k1, "k1_stderr": np.hypot(k1 * k1_sd, height_k1), "contact_loss": loss,
-                "contact_loss_stderr": np.hypot(loss_sd, height_loss),
-                "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * fit.drive_sensitivity,
+        maps = {"contact_resonance": resonance, "contact_resonance_stderr": u * spreads["resonance"],
+                "contact_quality_factor": quality, "contact_quality_factor_stderr": u * spreads["quality_factor"],
+                "k1": k1, "k1_stderr": np.hypot(k1 * u * np.sqrt(covariance[:, 0, 0]), height_k1), "contact_loss": loss,
+                "contact_loss_stderr": np.hypot(u * np.sqrt(covariance[:, 1, 1]), height_loss),
+                "d_eff": d_eff, "d_eff_stderr": u * np.abs(d_eff) * drive_sd,
                 "oscillator_k1": k1_pm, "oscillator_k1_error": k1_pm / k1 - 1,
                 "oscillator_d_eff": d_pm, "oscillator_d_eff_error": d_pm / d_eff - 1,
+                "real_drive": (pooled.real & fit.converged).astype(np.uint8),
                 "determined": fit.converged.astype(np.uint8)}
     return {name: value.reshape(shape) for name, value in maps.items()}, sigma
 
@@ -685,6 +803,9 @@ def document(maps: dict, sigma: float, lever: dict, settings: dict, source: str,
            **as_records(settings)}
     pooling = (f"contact (k1, contact_loss, contact resonance and Q): each pixel's fitted to its and its alike "
                f"neighbours' signals within {pool} pixels" if pool > 0 else "contact: each pixel's alone")
+    if "real_drive" in maps and ok.any():
+        pooling += (f"; the drive real (its phases' sum fitted with the contact) at {maps['real_drive'][ok].mean():.1%} "
+                    "of the determined pixels, the ratio's contact alone at the others (real_drive)")
     return envelope("map", "dart", {"path": source, "store": store}, as_records(lever), results, fit,
-                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: its sign is in the map), "
-                     "each stderr the median pixel's"])
+                    [k2_policy, pooling, phases, "results: medians over the determined pixels (of d_eff's magnitude: "
+                     "its sign is in the map), each stderr the median pixel's"])
