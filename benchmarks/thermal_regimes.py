@@ -7,7 +7,13 @@ loss ``10**U(-3.5, -2)`` (``10**U(-4, -2.3)`` in vacuum, Q up to ~7,000); spans 
 two (8 f1); 2,000-20,000 points (linewidths from under one bin); peak over a white floor 2-300 in ASD,
 half the tunes with a 1/f rise; the 1.6 % scatter of 1000 averages.  A fourth regime, drifting, is air
 with the resonance drifting over the averages (the spectrum averaged over a normal spread of the lever's
-resonance, 0.01-1 % of it): a peak that is no oscillator's and no lever's, as the shared tune's.
+resonance, 0.01-1 % of it): a peak that is no oscillator's and no lever's, as the shared tune's.  The
+tunes above are point-sampled at the bins' centres; a real one is a Welch/FFT estimate, each bin holding
+the power in it (``tests/test_thermal_fit.bin_averaged``: the exact PSD averaged over sub-points an eighth
+of a linewidth apart).  Bin-averaged: ``air-binned`` and ``vacuum-binned`` (as air and vacuum), and
+``sub-bin``, near vacuum at Q ~ 1,000-5,000 with the linewidth 0.25-0.9 of a bin (the point count follows).
+``two-modes``: air over 8 f_vac, a loss falling with frequency (mode 2's Q 2.5-10 times mode 1's near
+vacuum), mode 1 on a 1/f rise 0.5-5 times the floor: mode 2 may stand out more than mode 1.
 
 Per tune: the thermal k within 5 % of the truth (8 % in water), the truth within 3 stated standard
 errors, the first resonance (the root of the fluid-loaded beam's real dynamic stiffness) within 0.5 %,
@@ -16,7 +22,7 @@ within 3 of it, of ``calibrate`` (``f covered``) and of the whole lever's fit th
 TUNE`` states (``lever f covered``: :func:`~pfmdyn.discrepancy.thermal.fit_thermal` at the true k).  Each
 criterion is counted on its own, per regime.
 
-    python benchmarks/thermal_regimes.py [--cases 20] [--regimes air water vacuum drifting]
+    python benchmarks/thermal_regimes.py [--cases 20] [--regimes air water vacuum drifting air-binned vacuum-binned sub-bin two-modes]
 
 Results: ``benchmarks/results/thermal_regimes.md``.
 """
@@ -35,17 +41,24 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from recording import recorded, tally  # noqa: E402
-from test_thermal_fit import end_slope_psd, silicon_lever  # noqa: E402
+from test_thermal_fit import bin_averaged, end_slope_psd, silicon_lever  # noqa: E402
 
 from pfmdyn.discrepancy.thermal import calibrate_tune, fit_thermal  # noqa: E402
 from pfmdyn.io.thermal_tune import ThermalTune  # noqa: E402
 from pfmdyn.medium import Medium, load_ratio, mass_per_length  # noqa: E402
 
+VACUUM = lambda t: Medium(1e-6, 1e-9, "near vacuum")  # noqa: E731
 REGIMES = {"air": (Medium.air, (-3.5, -2), 0.05), "water": (Medium.water, (-3.5, -2), 0.08),
-           "vacuum": (lambda t: Medium(1e-6, 1e-9, "near vacuum"), (-4, -2.3), 0.05),
-           "drifting": (Medium.air, (-3.5, -2), 0.05)}
+           "vacuum": (VACUUM, (-4, -2.3), 0.05), "drifting": (Medium.air, (-3.5, -2), 0.05),
+           "air-binned": (Medium.air, (-3.5, -2), 0.05), "vacuum-binned": (VACUUM, (-4, -2.3), 0.05),
+           "sub-bin": (VACUUM, (-3.7, -3), 0.05), "two-modes": (Medium.air, (-3.5, -2.5), 0.05)}
+"""Per regime: the medium at a temperature, log10 bounds of the internal loss, the tolerance on k."""
 DRIFT = (-4, -2)
 """The drifting regime's spread of the resonance over the averages: log10 bounds of its relative standard deviation."""
+Q_RATIO = (2.5, 10.0)
+"""The two-modes regime: mode 2's Q over mode 1's near vacuum (the loss ``g r**p``, ``p`` to give it)."""
+SUB_BIN = (0.25, 0.9)
+"""The sub-bin regime's linewidth in bins (near vacuum, Q ~ 1/loss 1,000-5,000): the point count follows."""
 
 
 def draw(seed: int, regime: str):
@@ -58,16 +71,27 @@ def draw(seed: int, regime: str):
                 temperature=temperature)
     mpl = mass_per_length(k, L, f_vac)
     resonance = f_vac * brentq(lambda r: r**2 * (1 + load_ratio(case["medium"], r * f_vac, w, mpl).real) - 1, 1e-3, 1.0)
-    f = np.linspace(0, rng.choice([2.5, 8.0]) * f_vac, int(rng.choice([2000, 6000, 20000])))[1:]
+    span, points = rng.choice([2.5, 8.0]), int(rng.choice([2000, 6000, 20000]))
+    if regime == "two-modes":
+        span = 8.0
+    if regime == "sub-bin":      # Q ~ 1/g: the linewidth f_vac g is a drawn fraction of a bin
+        points = int(span * rng.uniform(*SUB_BIN) / case["g"])
+    f = np.linspace(0, span * f_vac, points)[1:]
+    if regime == "two-modes":       # a loss falling with frequency: mode 2 may stand out more than mode 1
+        case["g"] = case["g"] * (f / f_vac) ** (1 - math.log(rng.uniform(*Q_RATIO)) / math.log(6.27))
     if regime == "drifting":        # the averages' mean over a normal spread of f_vac (Gauss-Hermite nodes)
         spread = 10 ** rng.uniform(*DRIFT)
         nodes, weights = np.polynomial.hermite_e.hermegauss(15)
         psd = sum(w_n * (2 * L / 3) ** 2 * end_slope_psd(f, **dict(case, f_vac=f_vac * (1 + spread * x_n)))
                   for x_n, w_n in zip(nodes, weights / weights.sum()))
+    elif regime.endswith("binned") or regime == "sub-bin":
+        psd = bin_averaged(f, lambda x: (2 * L / 3) ** 2 * end_slope_psd(x, **case), f_vac * case["g"])
     else:
         psd = (2 * L / 3) ** 2 * end_slope_psd(f, **case)
     floor = np.sqrt(psd.max()) / 10 ** rng.uniform(math.log10(2), math.log10(300))
     pink = floor**2 * rng.uniform(0, 3) * f[len(f) // 50] / f if rng.random() < 0.5 else 0.0
+    if regime == "two-modes":       # mode 1 on a 1/f rise 0.5-5 times the floor at f_vac
+        pink = floor**2 * rng.uniform(0.5, 5) * f_vac / f
     asd = np.sqrt(psd + floor**2 + pink) * (1 + 0.016 * rng.standard_normal(len(f)))
     return case, resonance, ThermalTune(f"{regime} seed {seed}", f, asd, "m", {}, {})
 

@@ -556,3 +556,23 @@ def test_a_mass_beside_the_node_of_mode_2_or_at_the_clamp_is_stated_as_the_data_
     found = [(where["value"], mass["value"])] + [(s["added_mass_position"], s["added_mass"])
                                                  for s in where.get("solutions", [])[1:]]
     assert any(abs(x - x_m) <= 0.03 and abs(value - truth) <= 2 * mass["stderr"] for x, value in found), (found, truth)
+
+
+def test_a_start_on_a_bound_is_refined_off_it():
+    """A start at the damping's null (its lower bound, as every sweep and tune fit has one) where the data
+    have damping 0.02: SciPy's least squares, started on a bound, zeroes that parameter's Jacobian and
+    stops where it began (chi2 ~3e4, the damping "fitted" 1e-10 with no error); refined off the bound, the
+    fit finds the damping, and its error is a number from the fit's own Jacobian."""
+    from pfmdyn.discrepancy.sweep import solve_from_starts
+
+    rng = np.random.default_rng(7)
+    f = np.linspace(0.9e5, 1.1e5, 200)
+    response = 1 / np.abs(1 - (f / 1e5) ** 2 + 1j * 0.02 * f / 1e5)        # an oscillator, 1/Q = 0.02
+    data = np.log(response) + 1e-3 * rng.standard_normal(f.size)
+
+    def residual(x):
+        return (np.log(1 / np.abs(1 - (f / 10 ** x[0]) ** 2 + 1j * x[1] * f / 10 ** x[0])) - data) / 1e-3
+
+    fit = solve_from_starts(residual, [np.array([5.0, 0.0])], np.array([4.0, 0.0]), np.array([6.0, 1.0]), keep=1)
+    assert fit.internal[1] == pytest.approx(0.02, rel=1e-3)
+    assert 0 < fit.covariance[1, 1] < 1e-8

@@ -1,7 +1,8 @@
 """The spring constant of a free lever from its thermal tune, two independent ways.
 
 * **Thermal** (equipartition): the first mode is fitted as a damped oscillator over a white floor
-  (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`); its mean square ``pi A**2 f0 Q / 2`` (generated
+  (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`; bin-averaged where the peak is narrower than a few
+  bins and that fits, said in :attr:`Calibration.model`); its mean square ``pi A**2 f0 Q / 2`` (generated
   ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``invols``) gives
   ``k = chi kB T / <d*^2>`` with the first-mode factor ``chi`` of the optical lever read at the spot
   through a static InvOLS measured with the tip at ``tip_position`` (generated
@@ -143,9 +144,15 @@ class Calibration:
                 "assumptions": list(self.assumptions), "inputs": dict(self.inputs), "instrument": dict(self.instrument)}
 
 
+FAINT = 1.1
+"""The least prominence of a first mode looked for when none stands out 1.5 times (a stiff lever's peak twice
+its white floor on a 1/f rise several times that floor: 1.3 over its surroundings; the median over 5 bins
+of a spectrum of 1,000 averages scatters by ~0.7 %)."""
+
+
 def first_mode(tune: ThermalTune) -> ThermalPeak:
     """The first mode as a damped oscillator over a white floor (:func:`~pfmdyn.analysis.thermal.fit_thermal_peaks`,
-    or one over the whole band for a mode too wide for their windows).
+    or one over the whole band for a mode too wide for their windows, or among fainter peaks (:data:`FAINT`)).
 
     >>> f = np.linspace(0, 4e5, 8001)
     >>> round(first_mode(ThermalTune("t", f, formulas.oscillator_asd(f, 1.8e5, 440.0, 1e-15, 3e-14), "m", {}, {})).quality_factor)
@@ -153,7 +160,8 @@ def first_mode(tune: ThermalTune) -> ThermalPeak:
     """
     try:
         peaks = [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd) if p.mode == 1] or \
-            [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p]
+            [p for p in (broad_mode(tune.frequency_hz, tune.asd),) if p] or \
+            [p for p in fit_thermal_peaks(tune.frequency_hz, tune.asd, min_prominence=FAINT) if p.mode == 1]
     except UserError as exc:                # a spectrum too short, unsorted...: the message names the file
         raise UserError(f"{tune.path}: {exc}", exc.quantity) from None
     if not peaks:
@@ -285,9 +293,11 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
                            "lever's first mode and k follow (Sader's hydrodynamic function)")
     elif tune.unit == "m" or invols is not None:
         log_mean_square = (1 / f0, 1 / q, 2 / amp, 0.0)       # d log <d^2> / d (f0, Q, A, w)
+        scatter = peak.stderr(log_mean_square, "fit")      # the profile where the bins, not the data, set the area
+        fit = {"fit": scatter} if scatter >= peak.area_profile else {"fit (profile over Q)": peak.area_profile}
         thermal = _combine(thermal_spring_constant(mean_square, temperature, spot_position, tip_position),
-                           {"fit": peak.stderr(log_mean_square, "fit"), "peak shape": peak.stderr(log_mean_square, "shape"),
-                            "temperature": temperature_uncertainty / temperature})
+                           dict(fit, **{"peak shape": peak.stderr(log_mean_square, "shape"),
+                                        "temperature": temperature_uncertainty / temperature}))
     # Sader.
     rebuild = medium_factory or (lambda t: medium)
 
@@ -347,4 +357,5 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
                        plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
                        else plausible_factors(u_length / length, u_width / width, temperature),
-                       "fluid-loaded lever" if lever else "damped oscillator", lever.fit if lever else None)
+                       "fluid-loaded lever" if lever else "damped oscillator" + (f", {peak.sampling}" if peak.sampling else ""),
+                       lever.fit if lever else None)

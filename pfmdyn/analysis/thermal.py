@@ -9,10 +9,13 @@ that of a damped harmonic oscillator over a white floor,
 ``1/Q`` reduce to it near each root; derived in ``derivations/formulas.py``, evaluated by
 the generated ``formulas.oscillator_asd``).  Peaks are located on the logarithm of the median-
 smoothed spectrum, then each is fitted on a window of a few linewidths, in log space, so
-that the floor and the peak weigh alike.
+that the floor and the peak weigh alike.  A spectrum estimate (Welch, FFT) holds in each bin the
+power in it: a peak narrower than a few bins is fitted bin-averaged too (:func:`oscillator_bin_power`)
+and the better kept (:func:`fit_oscillator`).
 
-Which peaks are flexural modes: the tallest peak is mode 1 (in a displacement spectrum the
-fundamental dominates); a higher peak is mode ``n`` when its ratio to mode 1 lies within
+Which peaks are flexural modes: the most prominent peak is mode 1 (in a displacement spectrum the
+fundamental dominates) unless a lower peak makes it a higher mode (mode 2 of a much higher Q than
+mode 1's, mode 1 on a 1/f rise); a peak is mode ``n`` when its ratio to mode 1 lies within
 25 % of the free beam's ``(z_n/z_1)**2`` (certified free roots, :mod:`pfmdyn.roots.core`);
 other peaks (electrical pick-up, torsion, the stage) are left out.
 
@@ -32,8 +35,8 @@ from ..io.discrepancy_data import ResonanceData
 from ..io.instruments import read_instrument, resonance_table
 from ..io.tables import check_resonance_rows
 
-__all__ = ["ThermalPeak", "oscillator_asd", "fit_oscillator", "tallest_peak", "half_power_run", "broad_mode",
-           "fit_thermal_peaks", "instrument_resonances"]
+__all__ = ["ThermalPeak", "oscillator_asd", "oscillator_bin_power", "fit_oscillator", "tallest_peak", "half_power_run", "broad_mode",
+           "fit_thermal_peaks", "first_mode_index", "instrument_resonances"]
 
 
 @dataclass(frozen=True)
@@ -44,7 +47,11 @@ class ThermalPeak:
     spectrum is weighted in power instead of in log (:func:`fit_oscillator`): a peak that is an oscillator
     over a white floor gives the same parameters either way, one that is not (a fluid-loaded mode, a
     drifting resonance, leakage of the FFT's window) does not, and that spread is part of each uncertainty.
-    A floor that the window does not reach is undetermined and carries no variance into the others."""
+    A floor that the window does not reach is undetermined and carries no variance into the others.
+    ``bin_width`` (Hz): the oscillator was fitted bin-averaged (:func:`oscillator_bin_power`), else None
+    (point-sampled); ``sampling`` which of the two a peak narrower than :data:`NARROW` bins took (by BIC),
+    "" for a wider one (the two agree); ``area_profile``: the relative standard error of its mean square
+    from the fit's profile over Q (:func:`fit_oscillator`), 0 for a wide peak (the covariance holds it)."""
 
     mode: int
     frequency_hz: float
@@ -53,6 +60,9 @@ class ThermalPeak:
     white: float
     covariance: tuple
     shape: tuple = (0.0, 0.0, 0.0, 0.0)
+    bin_width: float | None = None
+    sampling: str = ""
+    area_profile: float = 0.0
 
     def stderr(self, gradient, part: str = "total") -> float:
         """Standard error of a quantity whose partials w.r.t. (f0, Q, A, w) are ``gradient``: from the
@@ -88,6 +98,30 @@ def oscillator_asd(f, f0, q, amplitude, white):
     return formulas.oscillator_asd(np.asarray(f, dtype=float), f0, q, amplitude, white)
 
 
+def oscillator_bin_power(f, bin_width: float, f0, q, amplitude, white):
+    """Each bin's mean of :func:`oscillator_asd` squared over ``[f - bin_width/2, f + bin_width/2]``: what a
+    Welch/FFT estimate holds (the power in the bin, whatever the linewidth), where a peak narrower than a
+    bin or two is no point sample.  Exact, for ``Q > 1/2``: ``(f0**2 - f**2)**2 + (f f0/Q)**2`` is
+    ``(f**2 - p)(f**2 - conj p)``, ``p = f0**2 (1 - 1/(2Q**2) + i sqrt(1 - 1/(4Q**2)) / Q)``, so the
+    oscillator's PSD is ``A**2 f0**4 Im(1/(f**2 - p)) / Im p`` and ``1/(f**2 - s**2)``, ``s = sqrt p``,
+    integrates to ``(log(f - s) - log(f + s)) / (2 s)`` (continuous on the real line: ``Im s > 0``).
+
+    >>> f = np.array([1e5 - 40.0, 1e5, 1e5 + 55.0])
+    >>> fine = [np.mean(oscillator_asd(np.linspace(x - 50, x + 50, 200001), 1e5, 3000.0, 1.0, 0.1) ** 2) for x in f]
+    >>> np.allclose(oscillator_bin_power(f, 100.0, 1e5, 3000.0, 1.0, 0.1), fine, rtol=1e-4)
+    True
+    """
+    f = np.asarray(f, dtype=float)
+    p = f0**2 * (1 - 1 / (2 * q**2) + 1j * np.sqrt(1 - 1 / (4 * q**2)) / q)
+    s = np.sqrt(p)
+
+    def antiderivative(x):
+        return ((np.log(x - s) - np.log(x + s)) / (2 * s)).imag
+
+    area = antiderivative(f + bin_width / 2) - antiderivative(f - bin_width / 2)
+    return amplitude**2 * f0**4 * area / (p.imag * bin_width) + white**2
+
+
 SMOOTH_ELEMENTS = 2**24
 """The most window values :func:`_smooth` holds at once (128 MB): beyond, a wide window runs over block medians."""
 
@@ -113,20 +147,59 @@ def _smooth(y, width):
     return np.median(windows, axis=-1)
 
 
-def _log_fit(f, y, start, weight_in_power: bool):
+def _oscillator_power(f, parameters, bin_width: float | None):
+    """The oscillator's power spectral density, point-sampled (``bin_width`` None) or bin-averaged."""
+    if bin_width is None:
+        return oscillator_asd(f, *parameters) ** 2
+    return oscillator_bin_power(f, bin_width, *parameters)
+
+
+def _log_fit(f, y, start, weight_in_power: bool, bin_width: float | None = None, fixed_quality=None):
     """Least squares of one oscillator over a white floor in log parameters (all positive, no sign
-    folding), residuals in log ASD or, ``weight_in_power``, in power relative to the data's peak power."""
+    folding), residuals in log ASD or, ``weight_in_power``, in power relative to the data's peak power;
+    point-sampled or bin-averaged (``bin_width``); ``fixed_quality``: Q held there (start without it)."""
     from scipy.optimize import least_squares
 
     log_y, top = np.log(y), float(np.max(y)) ** 2
 
     def residual(p):
+        parameters = np.exp(p if fixed_quality is None else np.insert(p, 1, math.log(fixed_quality)))
         with np.errstate(all="ignore"):      # a trial step far out: a large residual, not a warning
-            model = oscillator_asd(f, *np.exp(p))
-            r = (model**2 - y**2) / top if weight_in_power else np.log(model) - log_y
+            power = _oscillator_power(f, parameters, bin_width)
+            r = (power - y**2) / top if weight_in_power else 0.5 * np.log(power) - log_y
         return np.where(np.isfinite(r), r, 1e30)
 
     return least_squares(residual, np.log(start), method="trf", x_scale=1.0, max_nfev=2000)
+
+
+NARROW = 5.0
+"""Bins per linewidth below which the bin-averaged oscillator is fitted beside the point-sampled one."""
+POSITIVE = 2.0
+"""The BIC difference (chi2 in noise units: both have four parameters) by which the point-sampled oscillator
+must fit a narrow peak better to be taken: a spectrum estimate holds each bin's power (Welch, FFT), so the
+bin-averaged one is the default; over a sub-bin peak the two differ in a handful of bins, where noise alone
+can favour either (a Q-1,900 peak fitted point-sampled at Q 5,300, its area off 70 %)."""
+
+
+def _area_profile(f, y, values, bin_width: float | None, variance: float) -> float:
+    """The relative standard error of the oscillator's mean square (``A**2 f0 Q``) from the profile of the
+    fit over Q (f0, A and the floor refitted at each Q, stepping out from the fitted one by ``2**(1/4)`` up
+    to 16 times, each way until chi2 is more than one scaled unit above its least): half the spread of the
+    log mean square within that unit.  Where the linewidth is under a bin or two, a point-sampled
+    oscillator's area is set by where the bins fall, not by the data (chi2 flat over Q 2,500-8,000 while the
+    area moves 27-49 %): the local covariance does not see it."""
+    best = 2 * _log_fit(f, y, values, False, bin_width).cost
+    area = [math.log(values[2] ** 2 * values[0] * values[1])]
+    for direction in (1, -1):
+        start = np.delete(values, 1)
+        for step in range(1, 17):
+            q = values[1] * 2 ** (direction * step / 4)
+            fit = _log_fit(f, y, start, False, bin_width, fixed_quality=q)
+            if 2 * fit.cost - best > variance:
+                break
+            start = np.exp(fit.x)
+            area.append(math.log(start[1] ** 2 * start[0] * q))
+    return (max(area) - min(area)) / 2
 
 
 def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
@@ -136,7 +209,10 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
 
     The covariance comes from the Jacobian, scaled by the residual's variance; a parameter the window
     does not constrain (the floor, when the window stays above it) is held, its variance zero.  The fit
-    is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.
+    is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.  A peak
+    narrower than :data:`NARROW` bins is fitted bin-averaged too, the default unless the point-sampled
+    one fits better by :data:`POSITIVE`; its area's error is also read from the profile over Q
+    (:func:`_area_profile`), where the bins, not the data, may set it.
 
     >>> f = np.linspace(9e4, 11e4, 400)
     >>> p = fit_oscillator(f, oscillator_asd(f, 1e5, 200.0, 1e-12, 1e-13), (1.001e5, 150.0, 1.5e-12, 2e-13))
@@ -151,7 +227,14 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
     f, y = f[keep], y[keep]
     if f.size < 6:
         return None
-    first = _log_fit(f, y, np.maximum(np.abs(np.asarray(guess, dtype=float)), np.finfo(float).tiny), False)
+    start = np.maximum(np.abs(np.asarray(guess, dtype=float)), np.finfo(float).tiny)
+    first, bin_width = _log_fit(f, y, start, False), None
+    step = float(np.median(np.diff(f)))
+    if np.exp(first.x[0] - first.x[1]) < NARROW * step:     # a narrow peak: bin-averaged too, the better kept
+        binned = min((_log_fit(f, y, x, False, step) for x in (start, np.exp(first.x))), key=lambda b: b.cost)
+        noise = 2 * min(binned.cost, first.cost) / max(f.size - 4, 1)
+        if 2 * (binned.cost - first.cost) < POSITIVE * noise:
+            first, bin_width = binned, step
     values = np.exp(first.x)
     if not (f[0] < values[0] < f[-1]):
         return None
@@ -164,11 +247,14 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
     free = np.flatnonzero(~held)
     covariance[np.ix_(free, free)] = np.linalg.pinv(J[:, free].T @ J[:, free]) * variance
     covariance *= np.outer(values, values)          # d x = x d log x
-    second = _log_fit(f, y, values, True)
+    second = _log_fit(f, y, values, True, bin_width)
     shape = np.where(held, 0.0, np.exp(second.x) - values)
     if not np.all(np.isfinite(shape)):
         shape = np.zeros(4)
-    return ThermalPeak(mode, *map(float, values), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)))
+    narrow = values[0] / values[1] < NARROW * step
+    return ThermalPeak(mode, *map(float, values), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)),
+                       bin_width, ("bin-averaged" if bin_width else "point-sampled") if narrow else "",
+                       _area_profile(f, y, values, bin_width, variance) if narrow else 0.0)
 
 
 def _low_bins(size: int) -> int:
@@ -211,9 +297,10 @@ def half_power_run(y, i: int) -> tuple[int, int]:
     return (int(left[-1]) + 1 if left.size else 0), (i + int(right[0]) if right.size else len(below) - 1)
 
 
-def _quality_start(f, y, i: int) -> float:
-    """A starting Q from the half-power run (at least two bins wide)."""
-    lo, hi = half_power_run(y, i)
+def _quality_start(f, y, i: int, floor: float = 0.0) -> float:
+    """A starting Q from the half-power run (at least two bins wide); of the power above ``floor`` (an ASD)
+    for a peak not twice its floor, which never falls to half its power otherwise."""
+    lo, hi = half_power_run(np.sqrt(np.maximum(y**2 - floor**2, 0.0)) if y[i] < 2 * floor else y, i)
     step = f[1] - f[0]
     return f[i] / max((hi - lo + 1) * step, 2 * step)
 
@@ -266,21 +353,69 @@ def _peaks(x, minimum: float):
 
 
 def _flexural_modes(candidates, max_modes):
-    """Mode number of each candidate peak (tallest first), 0 for a peak that is no flexural mode."""
+    """Mode number of each candidate peak (most prominent first), 0 for a peak that is no flexural mode.
+
+    Mode 1 is the most prominent peak unless a lower candidate has it as a higher mode (its frequency
+    ratio within 25 % of the free beam's ``(z_n/z_1)**2``, the fluid's load shifting it): then the most
+    prominent such lower one.  Mode 2 can stand out more than mode 1 (a Q 8-10 times mode 1's, mode 1 on
+    a 1/f rise) and was taken for it, k then read 2-3 times too high.
+
+    >>> _flexural_modes([6.3e5, 1.0e5, 5e4], 5)      # the tallest is mode 2 of the second
+    [2, 1, 0]
+    """
     from ..roots.core import family_roots
 
     if len(candidates) == 0:
         return []
     z = np.array([float(r) for r in family_roots("free", max_modes, 17).roots])
     ratios = formulas.frequency_from_beta(z, 1.0, z[0])
-    out, taken = [1], {1}
-    for f in candidates[1:]:
-        r = f / candidates[0]
+
+    def mode_of(f, first):
+        r = f / first
         n = int(np.argmin(np.abs(r / ratios - 1))) + 1
-        ok = abs(r / ratios[n - 1] - 1) < 0.25 and n not in taken
-        out.append(n if ok else 0)
-        taken.add(n if ok else 0)
+        return n if abs(r / ratios[n - 1] - 1) < 0.25 else 0
+
+    first = next((c for c in candidates[1:] if c < candidates[0] and mode_of(candidates[0], c) > 1), candidates[0])
+    out, taken = [], set()
+    for f in candidates:
+        n = mode_of(f, first)
+        n = n if n not in taken else 0
+        out.append(n)
+        taken.add(n)
     return out
+
+
+def _candidates(f, y, min_prominence: float, max_peaks: int) -> list[tuple[int, int, float]]:
+    """``(mode, index, floor)`` of the flexural modes among a spectrum's peaks (:func:`_flexural_modes`),
+    lowest mode first: peaks of the log ASD above a median-smoothed floor by at least ``min_prominence``
+    (the floor's ASD there the third)."""
+    start = _low_bins(f.size)
+    logy = np.log10(np.maximum(y, np.finfo(float).tiny))
+    # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
+    # smoothing until a peak stands out.  The spectrum's own median over 5 bins hides a single-bin spike,
+    # and with it a peak narrower than a bin (near vacuum, Q in the thousands): unsmoothed, last.
+    for share, smoothing in ((50, 5), (10, 5), (4, 5), (50, 1)):
+        floor = _smooth(logy, max(11, f.size // share))
+        peaks, prominence = _peaks(_smooth(logy, smoothing)[start:] - floor[start:], np.log10(min_prominence))
+        if peaks.size:
+            break
+    order = np.argsort(prominence)[::-1]
+    modes = _flexural_modes(f[peaks[order] + start], max_peaks)
+    return sorted((m, int(peaks[j] + start), float(10 ** floor[peaks[j] + start])) for m, j in zip(modes, order) if m)
+
+
+def first_mode_index(f, y) -> int:
+    """Index of the first flexural mode's peak in a thermal spectrum (equally spaced from near 0): the
+    lowest mode among its peaks (:func:`_candidates`), else :func:`tallest_peak`.
+
+    >>> f = np.linspace(0, 8e5, 8000)
+    >>> y = np.hypot(oscillator_asd(f, 1e5, 30.0, 1e-12, 1e-13), oscillator_asd(f, 6.3e5, 300.0, 2e-13, 0.0))
+    >>> round(float(f[first_mode_index(f, y)]), -3), round(float(f[tallest_peak(y)]), -3)
+    (100000.0, 630000.0)
+    """
+    f, y = np.asarray(f, dtype=float), np.asarray(y, dtype=float)
+    found = _candidates(f, y, 1.5, 5)
+    return found[0][1] if found and found[0][0] == 1 else tallest_peak(y)
 
 
 def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_peaks: int = 5) -> list[ThermalPeak]:
@@ -310,21 +445,10 @@ def fit_thermal_peaks(frequency_hz, asd, *, min_prominence: float = 1.5, max_pea
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(y)) and np.all(np.diff(f) > 0)):
         raise UserError("a thermal spectrum needs finite values and increasing frequencies")
     step = f[1] - f[0]
-    start = _low_bins(f.size)
-    logy = np.log10(np.maximum(y, np.finfo(float).tiny))
-    # A floor smoothed over 2 % of the span misses a peak wider than that (low Q, fine bins): wider
-    # smoothing until a peak stands out.
-    for share in (50, 10, 4):
-        floor = _smooth(logy, max(11, f.size // share))
-        peaks, prominence = _peaks(_smooth(logy, 5)[start:] - floor[start:], np.log10(min_prominence))
-        if peaks.size:
-            break
-    order = np.argsort(prominence)[::-1]
-    modes = _flexural_modes(f[peaks[order] + start], max_peaks)
     out = []
-    for mode, i in sorted((m, peaks[j] + start) for m, j in zip(modes, order) if m):
-        f0, top, base = f[i], y[i], 10 ** floor[i]
-        q0 = _quality_start(f, y, i)
+    for mode, i, base in _candidates(f, y, min_prominence, max_peaks):
+        f0, top = f[i], y[i]
+        q0 = _quality_start(f, y, i, base)
         half = max(6 * f0 / q0, 20 * step)
         window = (f > f0 - half) & (f < f0 + half)
         peak = fit_oscillator(f[window], y[window], (f0, q0, top / q0, base), mode)

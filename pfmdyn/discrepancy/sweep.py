@@ -111,18 +111,57 @@ def sweep_model(columns, amplitudes, amplitude_only: bool, coherent: bool = True
     return np.abs(columns[:, 0]) * amplitudes[0].real + (columns[:, 1:].real @ np.real(amplitudes[1:]))
 
 
+OFF_BOUND = 1e-6
+"""How far inside its bounds a start is moved, as a share of the range (a bound at infinity: of 1)."""
+
+
+def _inside(x, lower, upper) -> np.ndarray:
+    """``x`` at least :data:`OFF_BOUND` of the range inside the bounds.  SciPy's trf moves a start on a bound
+    only 1e-10 inside, scales that parameter's step by its distance to the bound, and stops there (the
+    gradient it sees is ~0) though the data ask for it to move.
+
+    >>> _inside(np.array([0.0, 5.0]), np.array([0.0, 4.0]), np.array([10.0, np.inf])).round(9).tolist()
+    [1e-05, 5.0]
+    """
+    span = np.where(np.isfinite(upper - lower), upper - lower, 1.0) * OFF_BOUND
+    return np.clip(x, lower + span, upper - span)
+
+
+def own_jacobian(residual, x, lower, upper, step: float = 1e-7) -> np.ndarray:
+    """The residual's Jacobian at ``x`` by one-sided differences (``step`` relative; backwards at the upper
+    bound): SciPy's at a bound has that parameter's column zeroed (its variance, and everything it
+    correlates with, undetermined).
+
+    >>> own_jacobian(lambda x: np.array([x[0] - 0.5, x[1] ** 2]), np.array([0.0, 0.5]), np.zeros(2), np.ones(2)).round(6).tolist()
+    [[1.0, 0.0], [0.0, 1.0]]
+    """
+    x = np.asarray(x, dtype=float)
+    r = residual(x)
+    columns = []
+    for i in range(x.size):
+        h = step * max(1.0, abs(x[i]))
+        h = -h if x[i] + h > upper[i] else h
+        moved = x.copy()
+        moved[i] += h
+        columns.append((residual(moved) - r) / h)
+    return np.stack(columns, axis=-1)
+
+
 def solve_from_starts(residual, starts, lower, upper, keep: int = 3) -> StartsFit:
-    """Least squares refined from the ``keep`` cheapest of ``starts`` (internal coordinates); the best,
-    with its covariance scaled by the reduced chi2 (a misfit widens the uncertainties)."""
+    """Least squares refined from the ``keep`` cheapest of ``starts`` (internal coordinates; a start on a
+    bound moved just inside it, :func:`_inside`); the best, with its covariance from the residual's own
+    Jacobian (:func:`own_jacobian`) scaled by the reduced chi2 (a misfit widens the uncertainties)."""
     if not len(starts[0]):
         r = residual(np.zeros(0))
         return StartsFit(np.zeros(0), np.zeros((0, 0)), float(r @ r))
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     costs = [float(np.sum(residual(x)**2)) for x in starts]
-    outs = sorted((least_squares(residual, np.clip(starts[i], lower, upper), bounds=(lower, upper), x_scale="jac",
-                                 diff_step=1e-7, max_nfev=200) for i in np.argsort(costs)[:keep]),
-                  key=lambda out: out.cost)
+    outs = sorted((least_squares(residual, _inside(np.asarray(starts[i], dtype=float), lower, upper),
+                                 bounds=(lower, upper), x_scale="jac", diff_step=1e-7, max_nfev=200)
+                   for i in np.argsort(costs)[:keep]), key=lambda out: out.cost)
     best, r = outs[0], outs[0].fun
-    covariance = jacobian_covariance(best.jac, max(float(r @ r) / max(r.size - len(best.x), 1), 1.0))
+    covariance = jacobian_covariance(own_jacobian(residual, best.x, lower, upper),
+                                     max(float(r @ r) / max(r.size - len(best.x), 1), 1.0))
     return StartsFit(best.x, covariance, float(r @ r), tuple((o.x, 2 * o.cost) for o in outs[1:]))
 
 

@@ -11,7 +11,7 @@ the lever's Brownian motion as the instrument converted it to a deflection.  Its
 hydrodynamic function), ``g`` the factor that turned slope into deflection and ``w`` a white detection
 floor.  ``g`` and ``w`` are solved out of the fit (weighted linear least squares in power at each step);
 fitted are the first resonance *in the medium* and a viscous damping beyond the fluid's, as for a
-drive sweep (:mod:`pfmdyn.discrepancy.sweep`), over a band around the tallest peak.  The residual is
+drive sweep (:mod:`pfmdyn.discrepancy.sweep`), over a band around the first mode's peak.  The residual is
 taken in ``log ASD`` (an averaged spectrum's scatter is relative), in units of its noise.
 
 ``g`` over the static end-load factor ``2L/3`` (:func:`pfmdyn.generated.formulas.height_per_slope`) is ``detection_scale``: 1 when the spring constant and the
@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..analysis.thermal import tallest_peak
+from ..analysis.thermal import first_mode_index
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..fitting.projection import jacobian_covariance
@@ -43,7 +43,7 @@ from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE
 __all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
 
 BAND = (0.3, 3.0)
-"""The band fitted, as multiples of the tallest peak's frequency (clipped to the measured span)."""
+"""The band fitted, as multiples of the first mode's peak frequency (clipped to the measured span)."""
 
 
 class ThermalFit(Result):
@@ -75,13 +75,14 @@ class ThermalFit(Result):
 
 
 def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
-    """The points fitted and the tallest peak's frequency (the first mode's start)."""
+    """The points fitted and the first mode's peak frequency (:func:`~pfmdyn.analysis.thermal.first_mode_index`:
+    not the tallest peak where that is mode 2)."""
     ok = (tune.frequency_hz > 0) & np.isfinite(tune.asd) & (tune.asd > 0)
     order = np.argsort(tune.frequency_hz[ok], kind="stable")        # a table's rows in any order
     f, asd = tune.frequency_hz[ok][order], tune.asd[ok][order]
     if len(f) < 5 * MIN_POINTS:
         raise UserError(f"{tune.path}: {len(f)} usable points; a thermal fit needs at least {5 * MIN_POINTS}")
-    peak = f[tallest_peak(asd)]
+    peak = f[first_mode_index(f, asd)]
     inside = (f >= BAND[0] * peak) & (f <= BAND[1] * peak)
     if inside.sum() < MIN_POINTS:
         raise UserError(f"{tune.path}: {inside.sum()} points around the peak; a thermal fit needs at least {MIN_POINTS}")
@@ -115,7 +116,7 @@ def quality_factor_in_medium(lever: Cantilever) -> float:
 
 def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium: Medium, temperature: float,
                 width: float | None = None, *, start=None) -> ThermalFit:
-    """Fit a thermal tune over the band around its tallest peak (see the module): the lever's resonance in
+    """Fit a thermal tune over the band around its first mode's peak (see the module): the lever's resonance in
     ``medium`` at ``temperature`` (K) and a damping beyond the fluid's; ``width`` None: assumed; ``start``
     (the ``internal`` of an earlier fit) the only start.  Attribute ``scale_stderr``: the relative standard
     error of ``g**2``, the fit's scatter with the resonance and damping free.
