@@ -84,9 +84,9 @@ def test_errors_name_the_quantity_not_the_flag():
     # a bad value found by the analysis, not by the flag's check
     (["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--tip-height", "1e-5",
       "--k1", "0", "--frequency", "1e4"], "--k1"),
-    # a quantity whose flag is not its name with dashes (--frequency sets drive_frequency)
+    # a bad value found by the analysis, the flag named from the quantity's name (drive_frequency)
     (["spot", "--spring-constant", "2", "--free-resonance", "7e4", "--length", "2e-4", "--tip-height", "1e-5",
-      "--k1", "100", "--frequency", "1e10"], "--frequency"),
+      "--k1", "100", "--drive-frequency", "1e10"], "--drive-frequency"),
     (["stiffness", "--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tip-position",
       "fit"], "--contact"),
     (["stiffness", "--free-resonance", "60e3", "--contact", "2e5", "--spring-constant", "2", "--tilt", "12"],

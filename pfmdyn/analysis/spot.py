@@ -273,7 +273,7 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
     (0.9965, 0.6944)
     """
     if not (math.isfinite(frequency) and frequency > 0):
-        raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}")
+        raise UserError(f"frequency must be a positive number of Hz, got {frequency!r}", quantity="drive_frequency")
     if not (contact.k1 or 0.0) > 0:
         # With no contact spring the surface does not drive the tip: no d1 response, no force curve.
         raise UserError(f"the spot analysis needs a contact: k1 must be > 0 N/m, got {contact.k1}", quantity="k1")
@@ -282,7 +282,7 @@ def spot_analysis(lever: Cantilever, contact: Contact, frequency: float, *,
         top = frequency * (MAX_BETA / beta) ** 2
         raise UserError(f"frequency {frequency:g} Hz is beyond what the beam model is evaluated for here "
                         f"(beta = {beta:.4g} > {MAX_BETA:g}, about mode {MAX_BETA / math.pi:.0f}): at most {top:.4g} Hz "
-                        "for this lever", quantity="frequency")
+                        "for this lever", quantity="drive_frequency")
     grid = np.linspace(0, 1, positions + 1)[1:] if np.isscalar(positions) else np.asarray(positions, float)
     theta = slope_along(lever, contact, beta, grid)
     spot = lever.spot_position
