@@ -36,7 +36,8 @@ from ..medium import Medium
 from ..fitting.noise import gap
 from .regions import gap_text, lever_resonances, regions, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
-                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, quality_text,
+                    UNDETERMINED_ERROR, derived_text, error_entry, instrument_text, noise_level, parameter_entry,
+                    plus_minus, propagated, provenance_lines, quality_text,
                     solve_from_starts,
                     unexplained_entry, unexplained_line)
 
@@ -56,20 +57,19 @@ class ThermalFit(Result):
         d = self._fields
         p = d["parameters"]
         low, high = d["band_hz"]
-        scale = d["detection_scale"]
         lines = [f"thermal tune {d['path']}: {d['points']} points ({low / 1e3:.4g}-{high / 1e3:.4g} kHz) fitted as a "
                  f"thermally driven free lever in {d['medium']} "
                  f"(k {d['spring_constant']:g} N/m, L {d['length']:g} m, T {d['temperature']:.2f} K)",
-                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {quality_text(d['quality_factor'])}",
+                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {derived_text(d, 'vacuum_resonance', 'Hz')}, "
+                 f"Q {quality_text(d['quality_factor'], d['uncertainties']['quality_factor'])}",
                  f"  width {plus_minus(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(p['viscous_loss'], '')}",
-                 f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "
-                 f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
-                 f"{d['white_floor']:.3g} {d['unit']}",
+                 f"  detection: slope-to-deflection factor {derived_text(d, 'detection_scale', '')} x 2L/3 (1: k and "
+                 f"the sensitivity agree; the k that makes it 1: {derived_text(d, 'matching_spring_constant', 'N/m')}), "
+                 f"white floor {derived_text(d, 'white_floor', d['unit'])}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m (ours, where the detection factor is 1: "
-                    f"{d['spring_constant'] / scale**2:.4g} N/m)" if "spring_constant" in d["instrument_fit"] else ""),
+                    f"{derived_text(d, 'matching_spring_constant', 'N/m')})" if "spring_constant" in d["instrument_fit"] else ""),
                  f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
@@ -162,7 +162,7 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     try:
         lever = lever_of(fit.internal)
         fitted, (a, b, c) = model(fit.internal)
-        covariance = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
+        covariance, floors = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
     except UserError:
         raise UserError(f"{tune.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the peak (check them)") from None
@@ -174,6 +174,19 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
     q = quality_factor_in_medium(lever)
+    lever_covariance = covariance[:2, :2] * inflation
+    scale = float(np.sqrt(a) / formulas.height_per_slope(length))
+    log_scale_sd = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan     # of log g**2
+    errors = {"vacuum_resonance": error_entry(propagated(lambda x: lever_of(x).vacuum_resonance, fit.internal,
+                                                         lever_covariance, lower), UNDETERMINED_ERROR),
+              "quality_factor": error_entry(propagated(lambda x: quality_factor_in_medium(lever_of(x)), fit.internal,
+                                                       lever_covariance, lower), UNDETERMINED_ERROR),
+              "detection_scale": error_entry(0.5 * scale * log_scale_sd, UNDETERMINED_ERROR),
+              "matching_spring_constant": error_entry(spring_constant / scale**2 * log_scale_sd, UNDETERMINED_ERROR),
+              # the floor's column is in the covariance only where it adds to the spectrum somewhere
+              "white_floor": error_entry(0.5 * math.sqrt(b) * math.sqrt(covariance[3, 3]) if floors[0] else math.nan,
+                                         "the white floor adds under 0.1% of the power anywhere in the band: "
+                                         "the data do not determine it")}
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
         unexplained["largest_residual"] = float(np.expm1(np.max(np.abs(r))))
@@ -182,8 +195,8 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "band_hz": [float(frequency.min()), float(frequency.max())], "medium": medium.name,
               "temperature": temperature, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": q,
-              "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
-              "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
+              "parameters": parameters, "detection_scale": scale, "matching_spring_constant": spring_constant / scale**2,
+              "white_floor": float(np.sqrt(b)), "uncertainties": errors, "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
               "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
@@ -221,7 +234,7 @@ def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
 
 
 def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> np.ndarray:
-    """Covariance of (x, log g**2, log w**2, log p**2), all free: the Jacobian of the log residual (a floor
+    """Covariance of (x, log g**2, log w**2, log p**2), all free, and which floors it holds: the Jacobian of the log residual (a floor
     that adds next to nothing held), scaled by the reduced chi2 when above 1.  Its own Jacobian, not the
     least-squares solver's, which zeroes the column of a parameter at its bound (no damping beyond the
     fluid's, as in water: its variance, and Q's with it, undetermined)."""
@@ -232,10 +245,11 @@ def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -
         moved[i] += 1e-6
         columns.append(coefficients[0] * (slope_psd(moved) - psd) / 1e-6)
     floors = [value * shape for value, shape in zip(coefficients[1:], (np.ones_like(psd), frequency[0] / frequency))]
-    columns += [coefficients[0] * psd] + [floor for floor in floors if np.max(floor / fitted**2) > 1e-3]
+    kept = [bool(np.max(floor / fitted**2) > 1e-3) for floor in floors]
+    columns += [coefficients[0] * psd] + [floor for floor, keep in zip(floors, kept) if keep]
     J = np.stack(columns, axis=-1) / (2 * fitted[:, None] ** 2 * sigma)
     r = (np.log(fitted) - log_asd) / sigma
-    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
+    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0)), kept
 
 
 def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, temperature: float,
