@@ -45,7 +45,7 @@ __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter
            "sweep_model", "plus_minus", "quality_text", "error_text", "derived_text", "instrument_text", "compare_with_instrument", "explain_header", "disagreement_lines",
            "provenance_lines", "amplitude_peak", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
            "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios", "propagated",
-           "joint_covariance", "amplitude_stderr", "error_entry", "parts", "UNDETERMINED_ERROR"]
+           "joint_covariance", "amplitude_stderr", "error_entry", "parts", "with_parts", "UNDETERMINED_ERROR"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
                       description="first free resonance in the medium")
@@ -211,6 +211,18 @@ def propagated(function, internal, covariance, lower=None) -> float:
     return math.sqrt(variance) if math.isfinite(variance) and variance >= 0 else math.nan
 
 
+def with_parts(amplitudes, values, reals) -> np.ndarray:
+    """``amplitudes`` (complex) with the parts ``reals`` (``(index, imaginary)``) set to ``values``.
+
+    >>> with_parts(np.array([1 + 2j, 3j]), [5.0, 7.0], [(0, True), (1, False)]).tolist()
+    [(1+5j), (7+3j)]
+    """
+    a = np.array(amplitudes, dtype=complex)
+    for value, (i, imaginary) in zip(values, reals):
+        a[i] = a[i].real + 1j * value if imaginary else value + 1j * a[i].imag
+    return a
+
+
 def joint_covariance(residual_of, internal, amplitudes, reals) -> np.ndarray:
     """The covariance of the lever's parameters ``internal`` and the amplitudes' ``reals`` (``(index,
     imaginary)``: the parts fitted) together, from the noise-scaled ``residual_of(internal, amplitudes)``'s
@@ -219,10 +231,7 @@ def joint_covariance(residual_of, internal, amplitudes, reals) -> np.ndarray:
     n = len(internal)
 
     def residual(z):
-        a = np.array(amplitudes, dtype=complex)
-        for value, (i, imaginary) in zip(z[n:], reals):
-            a[i] = a[i].real + 1j * value if imaginary else value + 1j * a[i].imag
-        return residual_of(z[:n], a)
+        return residual_of(z[:n], with_parts(amplitudes, z[n:], reals))
 
     z = np.r_[internal, [np.imag(amplitudes[i]) if imaginary else np.real(amplitudes[i]) for i, imaginary in reals]]
     if not z.size:              # nothing refitted
@@ -598,9 +607,7 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     amplitude_errors = amplitude_stderr(joint, n, reals)
 
     def peak_of(z):
-        a = np.array(amplitudes, dtype=complex)
-        for value, (i, imaginary) in zip(z[n:], reals):
-            a[i] = a[i].real + 1j * value if imaginary else value + 1j * a[i].imag
+        a = with_parts(amplitudes, z[n:], reals)
         return amplitude_peak(lambda f: sweep_model(base_driven_columns(lever_of(z[:n]), f, centre), a,
                                                     amplitude_only, coherent), frequency)
 
