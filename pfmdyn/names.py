@@ -211,6 +211,7 @@ QUANTITIES: tuple[Quantity, ...] = (
         ("phase_reversed", "phase reversed", "1", "true when the instrument's phase runs the other way"),
         ("detection_scale", "s_det", "1", "measured over predicted thermal spectrum: the detection's calibration"),
         ("white_floor", "S_white", "m/sqrt(Hz)", "white noise floor of a thermal spectrum"),
+        ("matching_spring_constant", "k_det", "N/m", "the spring constant at which a thermal tune's detection_scale is 1"),
         # calibration
         ("thermal_spring_constant", "k_th", "N/m", "spring constant from the thermal tune (equipartition)"),
         ("sader_spring_constant", "k_Sader", "N/m", "spring constant from Sader's hydrodynamic method"),

@@ -33,7 +33,7 @@ from ..fitting.projection import project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from .regions import gap_text, lever_resonances, worst_region
-from .sweep import (EXTRA_LOSS, StartsFit, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
+from .sweep import (EXTRA_LOSS, UNDETERMINED_ERROR, StartsFit, amplitude_stderr, error_entry, joint_covariance, parts, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
                     explain_header, instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
 __all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "mode2_node", "CANDIDATES"]
@@ -154,6 +154,10 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
     fit, params, amplitudes, lever, _, lever_of = fits[best["effect"]]
     named = "added_mass" if "added_mass" in best["refitted"] else best["effect"]
     lever_mass = before.lever.beam_mass_per_length(before.lever.vacuum_resonance) * before.lever.length
+    # m ~ k / f_vac**2: twice the reference's vacuum resonance's relative error
+    f_vac_error = before["uncertainties"]["vacuum_resonance"]
+    mass_error = error_entry(2 * lever_mass * f_vac_error["stderr"] / before.lever.vacuum_resonance
+                             if f_vac_error["stderr"] is not None else math.nan, UNDETERMINED_ERROR)
     parameters = {}
     mass_fit = fits["added_mass+gain+background"][0] if named != "added_mass" else fit
     ratio = parameter_entry(ADDED_MASS, mass_fit.internal[0], mass_fit.covariance[0, 0])
@@ -209,7 +213,8 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
 
     fields = {"kind": "drive sweep comparison", "path": after.path, "reference": before["path"],
               "effect": named, "nuisances": [r for r in best["refitted"] if r != "added_mass"],
-              "parameters": parameters, "lever_mass": lever_mass,
+              "parameters": parameters, "lever_mass": lever_mass, "uncertainties": {"lever_mass": mass_error},
+              **_amplitude_errors(before, best["refitted"], fit, amplitudes, lever_of, len(params), frequency, y, sigma),
               "resonance_before": before.lever.free_resonance, "resonance_after": lever.free_resonance,
               "resonance_stderr": [before["parameters"]["free_resonance"]["stderr"],
                                    _resonance_stderr(before, fit, lever_of, len(params))],
@@ -229,6 +234,26 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
                   float(np.median(np.diff(frequency)))), frequency, np.abs(y)),
               "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
+
+
+def _amplitude_errors(before: SweepFit, refit, fit: StartsFit, amplitudes, lever_of, count: int, frequency, y,
+                      sigma) -> dict:
+    """``gain_after_stderr`` and ``background_after_stderr`` (``[re, im]`` each): a refitted amplitude's from
+    the fit's covariance (with its lever's parameters; an amplitude solved out, through
+    :func:`~pfmdyn.discrepancy.sweep.joint_covariance`), one kept at the reference's its standard error there."""
+    reals = _free_reals(before, refit)
+    if before.amplitude_only:       # the refitted parts are parameters after the lever's
+        errors = amplitude_stderr(fit.covariance, count, reals)
+    else:
+        def residual_of(x, a):
+            return stacked(sweep_model(base_driven_columns(lever_of(x), frequency, before.centre_hz), a, False) - y) / sigma
+
+        errors = amplitude_stderr(joint_covariance(residual_of, fit.internal[:count], amplitudes, reals), count, reals)
+    kept = [complex(*(v if v is not None else math.nan for v in pair))
+            for pair in [before["gain"]["stderr"], *before["background"]["stderr"]]]
+    refitted = {i for i, _ in reals}
+    errors = [errors[i] if i in refitted else kept[i] for i in range(3)]
+    return {"gain_after_stderr": parts(errors[0]), "background_after_stderr": [parts(e) for e in errors[1:]]}
 
 
 def _resonance_stderr(before: SweepFit, fit: StartsFit, lever_of, count: int) -> float:

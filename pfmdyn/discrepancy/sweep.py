@@ -42,9 +42,10 @@ from ..names import NAMES
 from .regions import gap_text, lever_resonances, worst_region
 
 __all__ = ["SweepFit", "fit_sweep", "StartsFit", "solve_from_starts", "parameter_entry", "base_driven_columns",
-           "sweep_model", "plus_minus", "instrument_text", "compare_with_instrument", "explain_header", "disagreement_lines",
+           "sweep_model", "plus_minus", "quality_text", "error_text", "derived_text", "instrument_text", "compare_with_instrument", "explain_header", "disagreement_lines",
            "provenance_lines", "amplitude_peak", "unexplained_entry", "unexplained_line", "noise_level", "penalty", "stacked",
-           "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios"]
+           "RESONANCE", "EXTRA_LOSS", "ASSUMED_WIDTH", "WIDTH_NOTE", "MIN_POINTS", "mode_ratios", "propagated",
+           "joint_covariance", "amplitude_stderr", "error_entry", "parts", "with_parts", "UNDETERMINED_ERROR"]
 
 RESONANCE = Parameter("free_resonance", "Hz", 2.7, 8.0, transform="log10",
                       description="first free resonance in the medium")
@@ -181,6 +182,93 @@ def parameter_entry(parameter: Parameter, internal: float, variance: float) -> d
     return entry
 
 
+def propagated(function, internal, covariance, lower=None) -> float:
+    """The standard error of ``function(internal)``, a quantity derived from fitted parameters, through their
+    ``covariance``: its gradient by central differences a tenth of each parameter's standard error wide
+    (forward at a ``lower`` bound); NaN where the covariance or the function does not determine it.
+
+    >>> round(propagated(lambda x: x[0] * x[1], np.array([2.0, 3.0]), np.diag([0.01, 0.04])), 6)
+    0.5
+    """
+    x = np.asarray(internal, dtype=float)
+    covariance = np.asarray(covariance, dtype=float)
+    if not np.all(np.isfinite(covariance)):
+        return math.nan
+    sd = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    gradient = np.zeros(x.size)
+    try:
+        for i in range(x.size):
+            if sd[i] == 0.0:
+                continue
+            h = 0.1 * sd[i]
+            up, down = x.copy(), x.copy()
+            up[i] += h
+            down[i] = x[i] if lower is not None and x[i] - h < lower[i] else x[i] - h
+            gradient[i] = (function(up) - function(down)) / (up[i] - down[i])
+    except UserError:           # a lever the fluid cannot carry one tenth of an error away
+        return math.nan
+    variance = float(gradient @ covariance @ gradient)
+    return math.sqrt(variance) if math.isfinite(variance) and variance >= 0 else math.nan
+
+
+def with_parts(amplitudes, values, reals) -> np.ndarray:
+    """``amplitudes`` (complex) with the parts ``reals`` (``(index, imaginary)``) set to ``values``.
+
+    >>> with_parts(np.array([1 + 2j, 3j]), [5.0, 7.0], [(0, True), (1, False)]).tolist()
+    [(1+5j), (7+3j)]
+    """
+    a = np.array(amplitudes, dtype=complex)
+    for value, (i, imaginary) in zip(values, reals):
+        a[i] = a[i].real + 1j * value if imaginary else value + 1j * a[i].imag
+    return a
+
+
+def joint_covariance(residual_of, internal, amplitudes, reals) -> np.ndarray:
+    """The covariance of the lever's parameters ``internal`` and the amplitudes' ``reals`` (``(index,
+    imaginary)``: the parts fitted) together, from the noise-scaled ``residual_of(internal, amplitudes)``'s
+    Jacobian (the amplitudes' uncertainty as well as what the lever's adds to it), scaled by the reduced
+    chi2 when above 1."""
+    n = len(internal)
+
+    def residual(z):
+        return residual_of(z[:n], with_parts(amplitudes, z[n:], reals))
+
+    z = np.r_[internal, [np.imag(amplitudes[i]) if imaginary else np.real(amplitudes[i]) for i, imaginary in reals]]
+    if not z.size:              # nothing refitted
+        return np.zeros((0, 0))
+    free = np.full(z.size, np.inf)
+    r = residual(z)
+    return jacobian_covariance(own_jacobian(residual, z, -free, free), max(float(r @ r) / max(r.size - z.size, 1), 1.0))
+
+
+def amplitude_stderr(covariance, offset: int, reals, count: int = 3) -> list[complex]:
+    """The standard errors of ``count`` amplitudes (real and imaginary parts) from the joint covariance
+    (:func:`joint_covariance`), their fitted ``reals`` from ``offset`` on; a part not fitted has none (0).
+
+    >>> amplitude_stderr(np.diag([1.0, 4.0, 9.0]), 1, [(0, False), (0, True)], 2)
+    [(2+3j), 0j]
+    """
+    out = [0j] * count
+    for j, (i, imaginary) in enumerate(reals):
+        sd = math.sqrt(covariance[offset + j, offset + j]) if covariance[offset + j, offset + j] >= 0 else math.nan
+        out[i] += 1j * sd if imaginary else sd
+    return out
+
+
+def error_entry(stderr: float, why: str) -> dict:
+    """A derived quantity's uncertainty as the JSON carries it: ``{"stderr": x}``, or ``{"stderr": None,
+    "why": why}`` where it is not a finite number.
+
+    >>> error_entry(2.0, "no covariance"), error_entry(float("nan"), "no covariance")
+    ({'stderr': 2.0}, {'stderr': None, 'why': 'no covariance'})
+    """
+    return {"stderr": float(stderr)} if math.isfinite(stderr) else {"stderr": None, "why": why}
+
+
+UNDETERMINED_ERROR = "the fit's covariance does not determine it (a parameter the data leave free)"
+"""Why a derived quantity has no standard error."""
+
+
 class SweepFit(Result):
     """One sweep fitted (:func:`fit_sweep`): ``to_dict()`` the JSON fields, ``report()`` the summary;
     attributes ``lever`` (the fitted :class:`~pfmdyn.Cantilever`), ``gain``, ``background`` (``b0,
@@ -208,8 +296,9 @@ class SweepFit(Result):
         extra = p["viscous_loss"]
         lines = [f"sweep {d['path']}: {d['points']} measured points fitted as a base-driven free lever in "
                  f"{d['medium']} (k {d['spring_constant']:g} N/m, L {d['length']:g} m)",
-                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {quality_text(d['quality_factor'])}, amplitude peak {d['peak_hz']:.6g} Hz",
+                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {derived_text(d, 'vacuum_resonance', 'Hz')}, "
+                 f"Q {quality_text(d['quality_factor'], d['uncertainties']['quality_factor'])}, "
+                 f"amplitude peak {derived_text(d, 'peak_hz', 'Hz')}",
                  f"  width {plus_minus(width, 'm')}" + (" (given)" if width["given"] else f" ({width['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(extra, '')}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}",
@@ -217,13 +306,34 @@ class SweepFit(Result):
         return "\n".join(lines + provenance_lines(d))
 
 
-def quality_text(q: float) -> str:
-    """The first mode's Q as a report prints it: undetermined, with why, where the mode is overdamped.
+def quality_text(q: float, error: dict | None = None) -> str:
+    """The first mode's Q as a report prints it, with its ``error`` (:func:`error_entry`): undetermined, with
+    why, where the mode is overdamped.
 
-    >>> quality_text(3.1234), quality_text(float("nan"))
-    ('3.12', 'undetermined (the first mode in the medium is overdamped: no damped resonance, no Q)')
+    >>> quality_text(3.1234, {"stderr": 0.05}), quality_text(float("nan"))
+    ('3.12 +- 0.05', 'undetermined (the first mode in the medium is overdamped: no damped resonance, no Q)')
     """
-    return f"{q:.3g}" if math.isfinite(q) else f"undetermined ({OVERDAMPED})"
+    if not math.isfinite(q):
+        return f"undetermined ({OVERDAMPED})"
+    return f"{q:.3g}" + (error_text(error) if error else "")
+
+
+def error_text(error: dict) -> str:
+    """`` +- x`` of an :func:`error_entry`, or `` +- undetermined (why)``.
+
+    >>> error_text({"stderr": 12.345}), error_text({"stderr": None, "why": "a bound"})
+    (' +- 12', ' +- undetermined (a bound)')
+    """
+    return f" +- {error['stderr']:.2g}" if error["stderr"] is not None else f" +- undetermined ({error['why']})"
+
+
+def derived_text(d: dict, name: str, unit: str) -> str:
+    """A report's derived quantity ``d[name]`` with its error (``d["uncertainties"][name]``) and unit.
+
+    >>> derived_text({"f": 71234.5, "uncertainties": {"f": {"stderr": 40.0}}}, "f", "Hz")
+    '71234.5 +- 40 Hz'
+    """
+    return f"{d[name]:.6g}{error_text(d['uncertainties'][name])} {unit}".rstrip()
 
 
 def plus_minus(entry: dict, unit: str) -> str:
@@ -381,8 +491,16 @@ def amplitude_peak(model, frequency) -> float:
     >>> round(7e4 * (1 - 0.3**2 / 2) ** 0.5)       # the oscillator's own peak, to the grid's 15 Hz
     68407
     """
+    from scipy.optimize import minimize_scalar
+
     grid = np.linspace(frequency.min(), frequency.max(), 4001)
-    return float(grid[np.argmax(np.abs(model(grid)))])
+    i = int(np.argmax(np.abs(model(grid))))
+    if i in (0, grid.size - 1):        # at an end of the sweep: the end
+        return float(grid[i])
+    # refined between the grid's neighbours: a smooth function of the fitted parameters (its error propagates)
+    out = minimize_scalar(lambda f: -abs(model(np.array([f]))[0]), bounds=(grid[i - 1], grid[i + 1]),
+                          method="bounded", options={"xatol": 1e-9 * grid[i]})
+    return float(out.x)
 
 
 def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: Medium,
@@ -476,17 +594,44 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
     modes = resonances(lever, None, modes=1).free
     peak = amplitude_peak(lambda f: sweep_model(base_driven_columns(lever, f, centre), amplitudes, amplitude_only,
                                                 coherent), frequency)
+    # the derived quantities' errors through the lever's and the amplitudes' joint covariance
+    reals = [(i, False) for i in range(3)] + [(i, True) for i in range(3)
+                                              if not amplitude_only or (coherent and i > 0)]
+    n = len(params)
+
+    def residual_of(x, a):
+        return stacked(sweep_model(base_driven_columns(lever_of(x), frequency, centre), a, amplitude_only, coherent)
+                       - y) / sigma
+
+    joint = joint_covariance(residual_of, fit.internal, amplitudes, reals)
+    amplitude_errors = amplitude_stderr(joint, n, reals)
+
+    def peak_of(z):
+        a = with_parts(amplitudes, z[n:], reals)
+        return amplitude_peak(lambda f: sweep_model(base_driven_columns(lever_of(z[:n]), f, centre), a,
+                                                    amplitude_only, coherent), frequency)
+
+    z = np.r_[fit.internal, [np.imag(amplitudes[i]) if im else np.real(amplitudes[i]) for i, im in reals]]
+    lever_covariance = joint[:n, :n]
+    errors = {"vacuum_resonance": error_entry(propagated(lambda x: lever_of(x).vacuum_resonance, fit.internal,
+                                                         lever_covariance, lower), UNDETERMINED_ERROR),
+              "quality_factor": error_entry(propagated(lambda x: float(resonances(lever_of(x), None, modes=1).free.q[0]),
+                                                       fit.internal, lever_covariance, lower), UNDETERMINED_ERROR),
+              "peak_hz": error_entry(propagated(peak_of, z, joint, np.r_[lower, np.full(len(reals), -np.inf)]),
+                                     UNDETERMINED_ERROR)}
     comparison = compare_with_instrument(table.fields, {
-        "amplitude_peak": (peak, None), "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
+        "amplitude_peak": (peak, errors["peak_hz"]["stderr"]), "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
         "free_quality_factor": (float(modes.q[0]), None)}, float(np.median(np.diff(frequency))))
     explain_header(comparison, frequency, np.abs(y))
     fields = {"kind": "drive sweep", "path": table.path, "instrument": table.instrument, "points": len(frequency),
               "medium": medium.name, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": float(modes.q[0]),
               "peak_hz": peak, "parameters": parameters,
+              "uncertainties": errors,
               "gain": {"value": [float(np.real(amplitudes[0])), float(np.imag(amplitudes[0]))],
-                       "unit": f"{table.unit or '1'}/rad"},
+                       "stderr": parts(amplitude_errors[0]), "unit": f"{table.unit or '1'}/rad"},
               "background": {"value": [[float(np.real(a)), float(np.imag(a))] for a in amplitudes[1:]],
+                             "stderr": [parts(e) for e in amplitude_errors[1:]],
                              "unit": table.unit or "1", "adds_to": "response" if coherent else "amplitude"},
               "amplitude_only": amplitude_only, "phase_reversed": conjugate,
               "instrument_fit": dict(table.fields), "noise": sigma, "gap": float(gap(fit.chi2, len(y))),
@@ -497,6 +642,15 @@ def fit_sweep(table: SweepTable, spring_constant: float, length: float, medium: 
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return SweepFit(fields, lever=lever, gain=amplitudes[0], background=tuple(amplitudes[1:]), centre_hz=centre,
                     amplitude_only=amplitude_only, coherent=coherent, conjugate=conjugate, sigma=sigma, chi2=fit.chi2)
+
+
+def parts(value: complex) -> list:
+    """``[re, im]`` of a complex number, a non-finite part None (JSON has no NaN).
+
+    >>> parts(complex(1.5, float("nan")))
+    [1.5, None]
+    """
+    return [float(v) if math.isfinite(v) else None for v in (value.real, value.imag)]
 
 
 def _amplitude_columns(columns) -> np.ndarray:

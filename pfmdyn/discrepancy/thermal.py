@@ -36,11 +36,13 @@ from ..medium import Medium
 from ..fitting.noise import gap
 from .regions import gap_text, lever_resonances, regions, worst_region
 from .sweep import (ASSUMED_WIDTH, EXTRA_LOSS, MIN_POINTS, RESONANCE, WIDTH_NOTE, compare_with_instrument,
-                    instrument_text, noise_level, parameter_entry, plus_minus, provenance_lines, quality_text,
+                    UNDETERMINED_ERROR, derived_text, error_entry, instrument_text, noise_level, parameter_entry,
+                    plus_minus, propagated, provenance_lines, quality_text,
                     solve_from_starts,
                     unexplained_entry, unexplained_line)
 
-__all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "BAND"]
+__all__ = ["ThermalFit", "fit_thermal", "quality_factor_in_medium", "lever_mode", "calibrate_tune", "bin_nodes", "coarse_bins", "BAND",
+           "BINS_PER_LINEWIDTH", "COARSE_SHARE", "COARSE_ABOVE"]
 
 BAND = (0.3, 3.0)
 """The band fitted, as multiples of the first mode's peak frequency (clipped to the measured span)."""
@@ -56,20 +58,19 @@ class ThermalFit(Result):
         d = self._fields
         p = d["parameters"]
         low, high = d["band_hz"]
-        scale = d["detection_scale"]
         lines = [f"thermal tune {d['path']}: {d['points']} points ({low / 1e3:.4g}-{high / 1e3:.4g} kHz) fitted as a "
                  f"thermally driven free lever in {d['medium']} "
                  f"(k {d['spring_constant']:g} N/m, L {d['length']:g} m, T {d['temperature']:.2f} K)",
-                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {d['vacuum_resonance']:.6g} Hz, "
-                 f"Q {quality_text(d['quality_factor'])}",
+                 f"  resonance in the medium {plus_minus(p['free_resonance'], 'Hz')}, vacuum {derived_text(d, 'vacuum_resonance', 'Hz')}, "
+                 f"Q {quality_text(d['quality_factor'], d['uncertainties']['quality_factor'])}",
                  f"  width {plus_minus(p['width'], 'm')}" + (" (given)" if p["width"]["given"] else f" ({p['width']['why']})"),
                  f"  damping beyond the fluid's: viscous_loss {plus_minus(p['viscous_loss'], '')}",
-                 f"  detection: slope-to-deflection factor {scale:.4g} x 2L/3 (1: k and the sensitivity agree; "
-                 f"the k that makes it 1: {d['spring_constant'] / scale**2:.4g} N/m), white floor "
-                 f"{d['white_floor']:.3g} {d['unit']}",
+                 f"  detection: slope-to-deflection factor {derived_text(d, 'detection_scale', '')} x 2L/3 (1: k and "
+                 f"the sensitivity agree; the k that makes it 1: {derived_text(d, 'matching_spring_constant', 'N/m')}), "
+                 f"white floor {derived_text(d, 'white_floor', d['unit'])}",
                  f"  instrument: {instrument_text(d['instrument_fit'], d.get('instrument_comparison'))}"
                  + (f", k {d['instrument_fit']['spring_constant']:g} N/m (ours, where the detection factor is 1: "
-                    f"{d['spring_constant'] / scale**2:.4g} N/m)" if "spring_constant" in d["instrument_fit"] else ""),
+                    f"{derived_text(d, 'matching_spring_constant', 'N/m')})" if "spring_constant" in d["instrument_fit"] else ""),
                  f"  {gap_text(d['gap'], d.get('worst_region'))}"]
         return "\n".join(lines + unexplained_line(d.get("unexplained")) + provenance_lines(d))
 
@@ -89,14 +90,16 @@ def _band(tune: ThermalTune) -> tuple[np.ndarray, np.ndarray, float]:
     return f[inside], asd[inside], peak
 
 
-def _floor_and_scale(slope_psd, power, frequency) -> np.ndarray:
-    """``(g**2, w**2, p**2)``, all >= 0, minimising ``sum ((g**2 S + w**2 + p**2 f0/f) / P - 1)**2``
-    (``f0`` the band's lowest frequency: ``p`` the 1/f floor there)."""
+def _floor_and_scale(slope_psd, power, frequency, weights=1.0) -> np.ndarray:
+    """``(g**2, w**2, p**2)``, all >= 0, minimising ``sum (weights ((g**2 S + w**2 + p**2 f0/f) / P - 1))**2``
+    (``f0`` the band's lowest frequency: ``p`` the 1/f floor there; ``weights`` each point's inverse relative
+    scatter, more for a mean of more bins)."""
     from scipy.optimize import nnls
 
-    design = np.stack([slope_psd, np.ones(len(power)), frequency[0] / frequency], axis=-1) / power[:, None]
+    weights = np.broadcast_to(weights, power.shape)
+    design = np.stack([slope_psd, np.ones(len(power)), frequency[0] / frequency], axis=-1) * (weights / power)[:, None]
     norms = np.linalg.norm(design, axis=0)       # the columns differ by many decades
-    return nnls(design / norms, np.ones(len(power)))[0] / norms
+    return nnls(design / norms, weights)[0] / norms
 
 
 def quality_factor_in_medium(lever: Cantilever) -> float:
@@ -129,23 +132,35 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     (70000, 1.0)
     """
     frequency, asd, peak = _band(tune)
+    measured_points = len(frequency)
     given = width is not None
     width = width if given else ASSUMED_WIDTH * length
-    power = asd**2
+    noise = noise_level(frequency, np.log(asd))
+    step = float(np.median(np.diff(frequency)))
+    frequency, power, spans = coarse_bins(frequency, asd**2, peak, step) if measured_points > COARSE_ABOVE else \
+        (frequency, asd**2, np.full(measured_points, step))
+    asd = np.sqrt(power)
     log_asd = np.log(asd)
-    sigma = noise_level(frequency, log_asd)
+    sigma = noise * np.sqrt(step / spans)      # a mean of m bins scatters 1/sqrt(m) as much
     params = (RESONANCE, EXTRA_LOSS)
     lower, upper = np.array([p.lower for p in params]), np.array([p.upper for p in params])
 
     def lever_of(x) -> Cantilever:
         return Cantilever(spring_constant, 10.0**x[0], length, width=width, medium=medium, viscous_loss=x[1])
 
+    averaged = None         # (points near the peak, offsets across a bin): see below
+
     def slope_psd(x) -> np.ndarray:
-        return lever_of(x).thermal_noise(frequency, temperature).slope
+        lever = lever_of(x)
+        psd = lever.thermal_noise(frequency, temperature).slope
+        if averaged is not None:
+            near, nodes = averaged
+            psd[near] = lever.thermal_noise(nodes.ravel(), temperature).slope.reshape(nodes.shape).mean(axis=1)
+        return psd
 
     def model(x) -> tuple[np.ndarray, np.ndarray]:
         psd = slope_psd(x)
-        coefficients = _floor_and_scale(psd, power, frequency)
+        coefficients = _floor_and_scale(psd, power, frequency, sigma.min() / sigma)
         return np.sqrt(coefficients[0] * psd + coefficients[1] + coefficients[2] * frequency[0] / frequency), coefficients
 
     def residual(x) -> np.ndarray:
@@ -159,10 +174,13 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     grid = [np.asarray(start, dtype=float)] if start is not None else \
         [np.array([np.log10(peak * s), loss]) for s in (0.999, 1.0, 1.001) for loss in EXTRA_LOSS.seeds]
     fit = solve_from_starts(residual, grid, lower, upper, keep=1 if start is not None else 3)
+    averaged = bin_nodes(frequency, spans, lever_of(fit.internal))
+    if averaged is not None:    # a peak a few bins wide or narrower: refitted as each bin's mean, as measured
+        fit = solve_from_starts(residual, [fit.internal], lower, upper, keep=1)
     try:
         lever = lever_of(fit.internal)
         fitted, (a, b, c) = model(fit.internal)
-        covariance = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
+        covariance, floors = _covariance(fit.internal, slope_psd, (a, b, c), frequency, fitted, log_asd, sigma)
     except UserError:
         raise UserError(f"{tune.path}: no lever of this spring constant, length and width carries {medium.name}'s "
                         "load at a resonance near the peak (check them)") from None
@@ -174,17 +192,30 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
     q = quality_factor_in_medium(lever)
+    lever_covariance = covariance[:2, :2] * inflation
+    scale = float(np.sqrt(a) / formulas.height_per_slope(length))
+    log_scale_sd = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan     # of log g**2
+    errors = {"vacuum_resonance": error_entry(propagated(lambda x: lever_of(x).vacuum_resonance, fit.internal,
+                                                         lever_covariance, lower), UNDETERMINED_ERROR),
+              "quality_factor": error_entry(propagated(lambda x: quality_factor_in_medium(lever_of(x)), fit.internal,
+                                                       lever_covariance, lower), UNDETERMINED_ERROR),
+              "detection_scale": error_entry(0.5 * scale * log_scale_sd, UNDETERMINED_ERROR),
+              "matching_spring_constant": error_entry(spring_constant / scale**2 * log_scale_sd, UNDETERMINED_ERROR),
+              # the floor's column is in the covariance only where it adds to the spectrum somewhere
+              "white_floor": error_entry(0.5 * math.sqrt(b) * math.sqrt(covariance[3, 3]) if floors[0] else math.nan,
+                                         "the white floor adds under 0.1% of the power anywhere in the band: "
+                                         "the data do not determine it")}
     unexplained = unexplained_entry(frequency, r, r, sigma)
     if unexplained:     # the residual is relative: its largest share is of the value there
         unexplained["largest_residual"] = float(np.expm1(np.max(np.abs(r))))
         unexplained["relative"] = True
-    fields = {"kind": "thermal tune", "path": tune.path, "points": len(frequency),
+    fields = {"kind": "thermal tune", "path": tune.path, "points": measured_points,
               "band_hz": [float(frequency.min()), float(frequency.max())], "medium": medium.name,
               "temperature": temperature, "spring_constant": spring_constant, "length": length,
               "vacuum_resonance": lever.vacuum_resonance, "quality_factor": q,
-              "parameters": parameters, "detection_scale": float(np.sqrt(a) / formulas.height_per_slope(length)),
-              "white_floor": float(np.sqrt(b)), "unit": f"{tune.unit}/sqrt(Hz)",
-              "instrument_fit": dict(tune.instrument), "noise": sigma, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
+              "parameters": parameters, "detection_scale": scale, "matching_spring_constant": spring_constant / scale**2,
+              "white_floor": float(np.sqrt(b)), "uncertainties": errors, "unit": f"{tune.unit}/sqrt(Hz)",
+              "instrument_fit": dict(tune.instrument), "noise": noise, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
               "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
               "instrument_comparison": compare_with_instrument(tune.instrument, {
@@ -195,6 +226,62 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
     return ThermalFit(fields, lever=lever, frequency_hz=frequency, asd=asd, model_asd=fitted, internal=fit.internal,
                       one_over_f_floor=float(np.sqrt(c)), scale_stderr=float(np.sqrt(covariance[2, 2])))
+
+
+BINS_PER_LINEWIDTH = 5.0
+"""A peak narrower than this many bins is fitted as each bin's mean (as ``calibrate``'s oscillator,
+:func:`pfmdyn.analysis.thermal.oscillator_bin_power`): point-sampled, its resonance's error missed the truth by
+3-8 of itself in 2/20 vacuum and 7/20 sub-bin tunes of ``benchmarks/thermal_regimes.py``."""
+
+
+def bin_nodes(frequency, spans, lever: Cantilever):
+    """Where a tune's spectrum is read as each bin's mean, not a point: ``(near, nodes)``, the points within
+    20 linewidths and 5 bins of ``lever``'s first resonance and, for each, the midpoint rule's nodes across
+    its bin (``spans``, Hz; at least 4 a linewidth, 5 a bin, at most 401); None where the linewidth spans
+    :data:`BINS_PER_LINEWIDTH` bins or more.
+
+    >>> lever = Cantilever(27.0, 1.8e5, 225e-6, width=40e-6, medium=Medium.air(313.15))
+    >>> f = np.arange(1.7e5, 1.9e5, 250.0)
+    >>> near, nodes = bin_nodes(f, np.full(f.size, 250.0), lever)     # linewidth 380 Hz: 1.5 bins
+    >>> int(near.sum()), (nodes[0] - f[near][0]).round(1).tolist()
+    (61, [-100.0, -50.0, 0.0, 50.0, 100.0])
+    """
+    step = float(np.min(spans))
+    q = quality_factor_in_medium(lever)
+    linewidth = lever.free_resonance / q if math.isfinite(q) else 0.0
+    if not linewidth < BINS_PER_LINEWIDTH * step:
+        return None
+    count = int(min(max(math.ceil(4 * step / linewidth) if linewidth > 0 else 401, 5), 401))
+    near = np.abs(frequency - lever.free_resonance) < max(20 * linewidth, 5 * step)
+    offsets = (np.arange(count) + 0.5) / count - 0.5
+    return near, frequency[near][:, None] + spans[near][:, None] * offsets
+
+
+COARSE_ABOVE = 20_000
+"""A band of more points than this is fitted over coarser bins away from the peak (:func:`coarse_bins`): the
+whole-lever model costs ~20 us a point and a call (100,000 points: ~90 s a fit); fewer are fitted as measured."""
+
+COARSE_SHARE = 0.01
+"""Away from the peak a tune's bins are averaged over spans of this share of their distance from it (each
+bin's own near it): ~100 points per decade of distance, whatever the tune's length."""
+
+
+def coarse_bins(frequency, power, peak: float, step: float):
+    """``(frequency, power, spans)`` of a tune with its bins away from the ``peak`` averaged in groups a
+    :data:`COARSE_SHARE` of their distance from it wide (a Welch spectrum's mean over bins is the power in
+    the wider bin, the model's bin mean; far from the peak the spectrum is straight across it): a
+    1,000,000-point tune fitted over ~2,500 points.  ``spans`` the Hz each point covers.
+
+    >>> f = np.arange(1.0, 100001.0)
+    >>> coarse, p, spans = coarse_bins(f, np.ones_like(f), 5e4, 1.0)
+    >>> coarse.size < 3000, float(spans.sum()), bool(np.all(p == 1.0)), float(spans[np.argmin(abs(coarse - 5e4))])
+    (True, 100000.0, True, 1.0)
+    """
+    distance = np.abs(frequency - peak) / step          # in bins
+    group = np.floor(np.log1p(COARSE_SHARE * distance) / np.log1p(COARSE_SHARE)) * np.sign(frequency - peak)
+    _, inverse, counts = np.unique(group, return_inverse=True, return_counts=True)
+    mean = lambda v: np.bincount(inverse, weights=v) / counts       # noqa: E731
+    return mean(frequency), mean(power), counts * step
 
 
 def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
@@ -221,7 +308,7 @@ def peak_misfit(frequency, normalised_residual, lever: Cantilever) -> float:
 
 
 def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -> np.ndarray:
-    """Covariance of (x, log g**2, log w**2, log p**2), all free: the Jacobian of the log residual (a floor
+    """Covariance of (x, log g**2, log w**2, log p**2), all free, and which floors it holds: the Jacobian of the log residual (a floor
     that adds next to nothing held), scaled by the reduced chi2 when above 1.  Its own Jacobian, not the
     least-squares solver's, which zeroes the column of a parameter at its bound (no damping beyond the
     fluid's, as in water: its variance, and Q's with it, undetermined)."""
@@ -232,10 +319,11 @@ def _covariance(x, slope_psd, coefficients, frequency, fitted, log_asd, sigma) -
         moved[i] += 1e-6
         columns.append(coefficients[0] * (slope_psd(moved) - psd) / 1e-6)
     floors = [value * shape for value, shape in zip(coefficients[1:], (np.ones_like(psd), frequency[0] / frequency))]
-    columns += [coefficients[0] * psd] + [floor for floor in floors if np.max(floor / fitted**2) > 1e-3]
-    J = np.stack(columns, axis=-1) / (2 * fitted[:, None] ** 2 * sigma)
+    kept = [bool(np.max(floor / fitted**2) > 1e-3) for floor in floors]
+    columns += [coefficients[0] * psd] + [floor for floor, keep in zip(floors, kept) if keep]
+    J = np.stack(columns, axis=-1) / (2 * fitted**2 * sigma)[:, None]
     r = (np.log(fitted) - log_asd) / sigma
-    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0))
+    return jacobian_covariance(J, max(float(r @ r) / max(r.size - J.shape[1], 1), 1.0)), kept
 
 
 def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, temperature: float,

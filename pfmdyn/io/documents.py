@@ -330,11 +330,25 @@ def _sweep_results(fit: dict) -> dict:
     results = records_of(fit["parameters"])
     if "width" in (fit.get("from_file") or ()) and results["width"]["status"] == "given":
         results["width"] = quantity("width", results["width"]["value"], status="file", why="read from the input file")
-    results["vacuum_resonance"] = quantity("vacuum_resonance", fit["vacuum_resonance"], status="derived")
+    errors = fit.get("uncertainties", {})
+    results["vacuum_resonance"] = derived("vacuum_resonance", fit["vacuum_resonance"], errors.get("vacuum_resonance"))
     q = fit["quality_factor"]
-    results["free_quality_factor"] = quantity("free_quality_factor", q, status="derived") if math.isfinite(q) else \
-        quantity("free_quality_factor", None, status="undetermined", why=OVERDAMPED)
+    results["free_quality_factor"] = derived("free_quality_factor", q, errors.get("quality_factor")) \
+        if math.isfinite(q) else quantity("free_quality_factor", None, status="undetermined", why=OVERDAMPED)
     return results
+
+
+def derived(name: str, value, error: dict | None) -> dict:
+    """The record of a derived ``value`` with its ``error`` (``{"stderr"[, "why"]}``): undetermined, with the
+    error's why, where the fit's covariance does not give the stderr (a value without its uncertainty is
+    not reported as known).
+
+    >>> derived("white_floor", 1e-13, {"stderr": 2e-15})["stderr"], derived("white_floor", 1e-13, {"stderr": None, "why": "x"})["status"]
+    (2e-15, 'undetermined')
+    """
+    if error is not None and error.get("stderr") is None:
+        return quantity(name, None, status="undetermined", why=error["why"])
+    return quantity(name, value, None if error is None else error["stderr"], status="derived")
 
 
 def sweep_fit(fit: dict, given=()) -> dict:
@@ -353,10 +367,11 @@ def sweep_fit(fit: dict, given=()) -> dict:
     ({'real': 1e-09, 'imag': 9e-08}, 'assumed', [])
     """
     results = _sweep_results(fit)
-    results["amplitude_peak"] = quantity("amplitude_peak", fit["peak_hz"], status="derived")
-    results["gain"] = quantity("gain", _complex(fit["gain"]["value"]), status="fitted")
-    results["background"] = quantity("background", _complex(fit["background"]["value"]), status="fitted",
-                                     dims=["coefficient"])
+    results["amplitude_peak"] = derived("amplitude_peak", fit["peak_hz"], fit.get("uncertainties", {}).get("peak_hz"))
+    results["gain"] = quantity("gain", _complex(fit["gain"]["value"]), _complex(fit["gain"].get("stderr")),
+                               status="fitted")
+    results["background"] = quantity("background", _complex(fit["background"]["value"]),
+                                     _complex(fit["background"].get("stderr")), status="fitted", dims=["coefficient"])
     results["amplitude_only"] = quantity("amplitude_only", bool(fit["amplitude_only"]), status="file",
                                          why="the columns of the file")
     results["phase_reversed"] = quantity("phase_reversed", bool(fit["phase_reversed"]), status="derived")
@@ -368,10 +383,14 @@ def sweep_fit(fit: dict, given=()) -> dict:
 
 
 def _complex(pairs):
-    """``[re, im]`` (or a list of them) as a complex number (or list)."""
+    """``[re, im]`` (or a list of them) as a complex number (or list); None stays None, as does a pair
+    with a part None (not determined)."""
+    if pairs is None:
+        return None
     if pairs and isinstance(pairs[0], (list, tuple)):
-        return [complex(*p) for p in pairs]
-    return complex(*pairs)
+        items = [_complex(p) for p in pairs]
+        return None if None in items else items
+    return None if None in pairs else complex(*pairs)
 
 
 def sweep_comparison(out: dict, given=()) -> dict:
@@ -390,11 +409,13 @@ def sweep_comparison(out: dict, given=()) -> dict:
     []
     """
     results = records_of(out["parameters"])
-    results["lever_mass"] = quantity("lever_mass", out["lever_mass"], status="derived")
+    results["lever_mass"] = derived("lever_mass", out["lever_mass"], out.get("uncertainties", {}).get("lever_mass"))
     results["free_resonance"] = quantity("free_resonance", [out["resonance_before"], out["resonance_after"]],
                                          out.get("resonance_stderr"), status="fitted", dims=["sweep"])
-    results["gain"] = quantity("gain", _complex(out["gain_after"]), status="fitted")
-    results["background"] = quantity("background", _complex(out["background_after"]), status="fitted",
+    results["gain"] = quantity("gain", _complex(out["gain_after"]), _complex(out.get("gain_after_stderr")),
+                               status="fitted")
+    results["background"] = quantity("background", _complex(out["background_after"]),
+                                     _complex(out.get("background_after_stderr")), status="fitted",
                                      dims=["coefficient"])
     recorded, notes = _instrument(out)
     reference = sweep_fit(out["reference_fit"], given)
@@ -435,8 +456,10 @@ def thermal_fit(fit: dict, given=()) -> dict:
     ('file', 398.0)
     """
     results = _sweep_results(fit)
-    results["detection_scale"] = quantity("detection_scale", fit["detection_scale"], status="derived")
-    results["white_floor"] = quantity("white_floor", fit["white_floor"], status="derived")
+    errors = fit.get("uncertainties", {})
+    for name in ("detection_scale", "white_floor", "matching_spring_constant"):
+        if name in fit:
+            results[name] = derived(name, fit[name], errors.get(name))
     out, notes = _fit_records(fit)
     notes.append(f"the spectrum in {fit['unit']}; the fit's residual and noise are of its logarithm")
     return document("discrepancy", "thermal", {"path": str(fit["path"])}, _free_lever(fit, given), results, out,
