@@ -28,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..analysis.stiffness_report import rounded
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, misfit_band
@@ -311,10 +312,12 @@ def quality_text(q: float, error: dict | None = None) -> str:
     why, where the mode is overdamped.
 
     >>> quality_text(3.1234, {"stderr": 0.05}), quality_text(float("nan"))
-    ('3.12 +- 0.05', 'undetermined (the first mode in the medium is overdamped: no damped resonance, no Q)')
+    ('3.123 +- 0.05', 'undetermined (the first mode in the medium is overdamped: no damped resonance, no Q)')
     """
     if not math.isfinite(q):
         return f"undetermined ({OVERDAMPED})"
+    if error and error["stderr"]:
+        return rounded(q, error["stderr"]) + error_text(error)
     return f"{q:.3g}" + (error_text(error) if error else "")
 
 
@@ -330,15 +333,17 @@ def error_text(error: dict) -> str:
 def derived_text(d: dict, name: str, unit: str) -> str:
     """A report's derived quantity ``d[name]`` with its error (``d["uncertainties"][name]``) and unit.
 
-    >>> derived_text({"f": 71234.5, "uncertainties": {"f": {"stderr": 40.0}}}, "f", "Hz")
-    '71234.5 +- 40 Hz'
+    >>> derived_text({"f": 71234.4, "uncertainties": {"f": {"stderr": 40.0}}}, "f", "Hz")
+    '71234 +- 40 Hz'
     """
-    return f"{d[name]:.6g}{error_text(d['uncertainties'][name])} {unit}".rstrip()
+    error = d["uncertainties"][name]
+    return f"{rounded(d[name], error['stderr'] or 0.0)}{error_text(error)} {unit}".rstrip()
 
 
 def plus_minus(entry: dict, unit: str) -> str:
     value, err = entry["value"], entry.get("stderr")
-    text = f"{value:.6g}" + (f" +- {err:.2g}" if err is not None and math.isfinite(err) and err > 0 else "")
+    known = err is not None and math.isfinite(err) and err > 0
+    text = rounded(value, err if known else 0.0) + (f" +- {err:.2g}" if known else "")
     return text + (f" {unit}" if unit else "") + (" (not told from none)" if entry.get("determined") is False else "")
 
 
