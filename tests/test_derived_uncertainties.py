@@ -12,7 +12,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from schema_check import validate  # noqa: E402
-from test_sweeps_fit import beam_slope, in_medium, lever_case, sweep_of, write_sweep  # noqa: E402
+from test_sweeps_fit import beam_slope, in_medium, lever_case, mass_at_the_end_pair, sweep_of, write_sweep  # noqa: E402
 from test_thermal_fit import tune_case  # noqa: E402
 
 from pfmdyn.discrepancy.reference import compare_sweeps  # noqa: E402
@@ -90,13 +90,7 @@ def test_a_tunes_derived_results_carry_errors_that_hold_the_truth():
 
 
 def test_a_comparisons_lever_mass_gain_and_background_carry_errors(tmp_path):
-    rng, case = lever_case(21)
-    case["g"] = 0.05
-    f, y0 = sweep_of(rng, case)
-    before = fit_sweep(read_sweep_table(write_sweep(tmp_path / "b.txt", f, y0, rng)), case["k"], case["L"],
-                       case["medium"], width=case["w"])
-    rng2, _ = lever_case(21)
-    f1, y1 = sweep_of(rng2, case, mass_ratio=0.01, x_m=1.0)
+    case, before, f1, y1, rng = mass_at_the_end_pair(tmp_path)
     out = compare_sweeps(read_sweep_table(write_sweep(tmp_path / "a.txt", f1, y1, rng)), before, 1.0)
     truth = mass_per_length(case["k"], case["L"], case["f_vac"]) * case["L"]
     _covers(out["lever_mass"], out["uncertainties"]["lever_mass"]["stderr"], truth)
