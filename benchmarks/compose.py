@@ -54,7 +54,7 @@ FORWARD = """
 import os, sys, time, numpy as np
 import pfmdyn
 # (by file: an editable install of the current tree would answer an import the baseline lacks)
-if os.path.exists(os.path.join(os.path.dirname(pfmdyn.__file__), "composed.py")):
+if any(os.path.exists(os.path.join(os.path.dirname(pfmdyn.__file__), n)) for n in ("composed.py", "composed")):
     from pfmdyn import composed
     spot = composed.slope_and_jacobian
     char = composed.characteristic

@@ -1,4 +1,4 @@
-"""pfmdyn.composed_balls against the composed lever in NumPy (``pfmdyn.composed``) and the
+"""pfmdyn.composed.balls against the composed lever in NumPy (``pfmdyn.composed``) and the
 independent two-segment beam solved in mpmath (``tests/segment_beam.py``: textbook basis, no
 ``derivations/`` or ``generated/``): the same resonances, certified balls holding the exact
 beam's roots, the same blind spots."""
@@ -16,7 +16,7 @@ from pfmdyn import composed
 from pfmdyn.derivations.certify import certify
 from pfmdyn.generated.characteristic import FLINT
 from pfmdyn.generated.lever_pieces import point_jump
-from pfmdyn.composed_balls import PAIRS, _field, _field_minors, characteristic_balls, q0_slope, q0_slope_coefficients
+from pfmdyn.composed.balls import PAIRS, _field, _field_minors, characteristic_balls, q0_slope, q0_slope_coefficients
 
 # The independent reference lives beside the tests (importlib mode: not on sys.path).
 sys.path.insert(0, str(Path(__file__).parent))

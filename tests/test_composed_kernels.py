@@ -1,4 +1,4 @@
-"""The compiled kernels of the composed lever (:mod:`pfmdyn.composed_kernels`) against the NumPy forms
+"""The compiled kernels of the composed lever (:mod:`pfmdyn.composed.kernels`) against the NumPy forms
 of :mod:`pfmdyn.composed`, their reference, over drawn levers (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4,
 Q 5-500 with complex ``beta`` and springs, the tip at the end or set back to 0.7-0.99 L, the spot
 before or beyond it, ``beta`` from 1e-3 to 200).
@@ -93,10 +93,10 @@ def test_characteristic_partials_with_the_tip_at_the_end_agree_with_numpy():
 
 
 def test_resonances_agree_with_the_numpy_root_search():
-    """The compiled root search (:func:`pfmdyn.composed_kernels.characteristic_roots`) takes
+    """The compiled root search (:func:`pfmdyn.composed.kernels.characteristic_roots`) takes
     :func:`pfmdyn.roots.bracket.grid_roots`' steps: the same roots to an ulp or two (the Chebyshev
     coefficients summed in another order), refined or interpolated, the tip at the end or set back."""
-    from pfmdyn.composed_kernels import characteristic_roots
+    from pfmdyn.composed.kernels import characteristic_roots
     from pfmdyn.roots.bracket import grid_roots
 
     for args in _levers(3, 8):
@@ -109,7 +109,7 @@ def test_resonances_agree_with_the_numpy_root_search():
 
 
 def test_characteristic_partials_by_complex_steps_agree_with_the_assembled_system():
-    """The complex steps of :func:`pfmdyn.composed_kernels.characteristic_partials` against the
+    """The complex steps of :func:`pfmdyn.composed.kernels.characteristic_partials` against the
     assembled system's adjugate (the set-back tip's partials, ``gamma``'s at the end too) where the
     resonances are (``beta`` > 0.3): 1e-9 (the adjugate from the SVD loses a few digits; below, in the
     quasi-static range, many: there central differences side with the complex steps)."""

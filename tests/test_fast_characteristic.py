@@ -1,5 +1,5 @@
-"""The characteristic written out from the segments (``composed._transferred``, no assembly), against
-the assembled system's determinant (``composed._scaled_det``, the general path).
+"""The characteristic written out from the segments (``composed.determinant._transferred``, no assembly), against
+the assembled system's determinant (``composed.assembly._scaled_det``, the general path).
 
 Random levers over the real ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
 k2/k1 0-1, tilt 0-15 deg, tip mass 0-0.5, r_g/L 0-0.05, the tip at the end or set back to
@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import composed
+from pfmdyn.composed import assembly
 
 TOLERANCE = 1e-10
 BETAS = np.concatenate([np.logspace(-3, math.log10(200), 60), [1.0 - 1e-12, 1.0, 1.0 + 1e-12]])
@@ -41,8 +42,8 @@ def _damped(rng, p, beta):
 
 
 def _general(beta, p):
-    lever = composed._Lever(beta, *(p[n] for n in composed.PARAMETERS))
-    return lever.out(composed._scaled_det(lever)[0])
+    lever = assembly._Lever(beta, *(p[n] for n in composed.PARAMETERS))
+    return lever.out(assembly._scaled_det(lever)[0])
 
 
 @pytest.mark.parametrize("seed", range(40))

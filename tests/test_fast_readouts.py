@@ -1,5 +1,5 @@
-"""The fast read-outs, compiled (``composed._Compiled``: the system assembled and solved per member in
-:mod:`pfmdyn.composed_kernels`) and written out (``composed._WrittenOut``: the clamp and, beyond a
+"""The fast read-outs, compiled (``composed.readout._Compiled``: the system assembled and solved per member in
+:mod:`pfmdyn.composed.kernels`) and written out (``composed.written_out._WrittenOut``: the clamp and, beyond a
 set-back tip, the free end eliminated, the tip's 2 x 2 or 4 x 4 solved, no assembly), against the
 assembled system in NumPy (the general path).
 
@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import composed
+from pfmdyn.composed import readout
 
 sys.path.insert(0, str(Path(__file__).parent))
 from segment_beam import DRIVES as MP_DRIVES, spot_response_mp  # noqa: E402
@@ -49,18 +50,18 @@ SEEDS = [*range(24), *range(100, 124)]
 
 @pytest.fixture(autouse=True, params=["compiled", "written out"])
 def fast(request, monkeypatch):
-    """Each test for both fast paths: the compiled kernel (:mod:`pfmdyn.composed_kernels`) and the
+    """Each test for both fast paths: the compiled kernel (:mod:`pfmdyn.composed.kernels`) and the
     NumPy written-out forms."""
     monkeypatch.setattr(composed, "KERNELS", request.param == "compiled")
 
 
 def _general(f, *args, **kwargs):
-    before = composed._written_out, composed.KERNELS
-    composed._written_out, composed.KERNELS = (lambda *args, **kwargs: False), False
+    before = readout._written_out, composed.KERNELS
+    readout._written_out, composed.KERNELS = (lambda *args, **kwargs: False), False
     try:
         return f(*args, **kwargs)
     finally:
-        composed._written_out, composed.KERNELS = before
+        readout._written_out, composed.KERNELS = before
 
 
 def _relative(got, want, scale=0.0):

@@ -2,7 +2,7 @@
 
 The optical lever reads the slope ``u0'(x_s)`` wherever the spot was put; the paper reads it
 at ``x_s = L`` (Section II).  From the composed lever (:mod:`pfmdyn.composed`, certified in
-:mod:`pfmdyn.composed_balls`, both assembled from ``derivations/pieces.py``) this module
+:mod:`pfmdyn.composed.balls`, both assembled from ``derivations/pieces.py``) this module
 gives, for one lever in contact at one frequency:
 
 * the **electrostatic blind spots**: every ``x_s/L`` in ``(0, 1]`` where the slope response
@@ -31,7 +31,8 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from .. import composed, composed_balls
+from .. import composed
+from ..composed import balls as composed_balls
 from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in

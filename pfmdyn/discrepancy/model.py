@@ -259,7 +259,7 @@ def characteristic_partials(beta, args, wrt) -> np.ndarray:
     after ``beta``) at real ``beta`` w.r.t. the names ``wrt`` (of :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`),
     one row each.  The tip at the end and ``gamma`` fixed: :func:`pfmdyn.composed.characteristic_and_jacobian`
     (compiled, the product rule); otherwise compiled complex steps
-    (:func:`pfmdyn.composed_kernels.characteristic_partials`, 100x the assembled system's adjugate, which
+    (:func:`pfmdyn.composed.kernels.characteristic_partials`, 100x the assembled system's adjugate, which
     is the reference with :data:`pfmdyn.composed.KERNELS` off: both agree to 1e-9).
 
     >>> args = (1.0, 0.0, 0.0, 0.0, 1e-5, 1e-4, 0.0, 0.9, 0.0)
@@ -272,7 +272,7 @@ def characteristic_partials(beta, args, wrt) -> np.ndarray:
     """
     names = composed.JACOBIAN_PARAMETERS
     if composed.KERNELS and ("gamma" in wrt or args[7] != 1.0):
-        from ..composed_kernels import characteristic_partials as compiled
+        from ..composed.kernels import characteristic_partials as compiled
 
         beta = np.asarray(beta, float)
         at = np.array([-1 if p == "beta" else composed.PARAMETERS.index(p) for p in wrt], np.int64)

@@ -43,7 +43,7 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     if composed.KERNELS:       # the same steps compiled (one call, not one per iteration)
-        from ..composed_kernels import characteristic_roots
+        from ..composed.kernels import characteristic_roots
         roots = characteristic_roots(grid, np.array([args], float), refine_roots, 1e-13)
     else:
         roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)

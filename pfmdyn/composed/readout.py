@@ -1,0 +1,239 @@
+"""The lever read at the spot ``x_s = sigma L``: :func:`response`, :func:`slope`, :func:`deflection`,
+:func:`slope_and_jacobian`, and the two readings an engine chooses between (:data:`at_end`, :data:`at_spot`).
+
+Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
+:data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
+(:class:`pfmdyn.composed.written_out._WrittenOut`, through the kept read-out :class:`_LastReadOut`),
+or assembled (:class:`pfmdyn.composed.assembly._Lever`: a probe's drives, the ``gamma`` partial).
+Separate from the forms because it only chooses among them and scales their states to slopes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import composed
+from ..generated import lever_pieces as pieces
+from .assembly import _Lever
+from .parameters import _POINT, DRIVES, JACOBIAN_PARAMETERS, SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, _drive_columns
+from .written_out import _WrittenOut
+
+
+_KEPT_SIZE = 1 << 14
+"""Batches up to this size are kept (some megabytes; a map's block is not held after its fit)."""
+
+
+class _LastReadOut:
+    """``_WrittenOut(*args, drives)``, the last one again when the arguments are the same to the bit: a
+    least-squares fit asks for the values at a point, then for their partials at the same point, which
+    need the same solution.
+
+    >>> args = (np.linspace(1, 3, 4), 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> read = _LastReadOut()
+    >>> read(*args) is read(*args), read(*args) is read(args[0] + 1e-9, *args[1:])
+    (True, False)
+    """
+
+    def __init__(self):
+        self.key, self.lever = None, None
+
+    def __call__(self, *args, drives=DRIVES) -> _WrittenOut:
+        arrays = [np.asarray(a) for a in args]
+        key = (tuple(drives),) + tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays)
+        if self.lever is not None and self.key == key:
+            return self.lever
+        lever = _WrittenOut(*arrays, drives=tuple(drives))
+        if lever.beta.size <= _KEPT_SIZE:
+            self.key, self.lever = key, lever
+        return lever
+
+
+_read_out = _LastReadOut()
+"""The NumPy read-out of :func:`response` and :func:`slope_and_jacobian` (one kept, module-wide)."""
+
+
+class _Compiled:
+    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s interface: ``z`` and
+    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
+    values when ``names`` are given.
+
+    Examples
+    --------
+    >>> args = (2.5, 0.95, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_Compiled(*args).z, _WrittenOut(*args).z, rtol=1e-13, atol=0))
+    True
+    """
+
+    def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=DRIVES, names=()):
+        from . import kernels
+
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast(*args).shape
+        n = math.prod(self.shape)
+        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
+        # each argument per member as a row of one complex block (the lever's: beta, the tip's springs,
+        # stiffness and mass) or one real block (the lengths): fresh, C-ordered rows (a read-only or
+        # strided view would be another specialisation to compile)
+        lever, lengths = np.empty((6, n), complex), np.empty((5, n))
+        for block, at, part in ((lever, (0, 2, 3, 4, 5, 8), np.asarray), (lengths, (1, 9, 6, 7, 10), np.real)):
+            for row, i in zip(block, at):
+                row.reshape(self.shape)[...] = part(args[i])
+        beta, k, kvv, kll, kvl, mu = lever
+        sigma, g, H, L, rho_g = lengths
+        self.beta, self.L = (beta if np.iscomplexobj(args[0]) else beta.real), L
+        two = bool(np.any(g != 1.0)) or "gamma" in names
+        jump, djump = np.empty((n, 12), complex), np.empty((len(names), n, 12), complex)
+        kernels.tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
+                          np.array([_POINT.index(p) if p in _POINT else -1 for p in names], np.int64), jump, djump)
+        # the load's constant by NumPy's powers: the q0 column's cancellations amplify their last digits
+        uc = pieces.load_constant(beta, k, L)
+        codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
+        kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
+        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
+        use = _drive_columns(drives, DRIVES)
+        kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, np.array(use, np.int64), z, dz)
+        z, dz = z[..., use], dz[..., use]
+        self.z = z.real if real else z
+        dz = dz.real if real else dz
+        self._partials = {name: dz[:, i] for i, name in enumerate(names)}
+
+    def partials(self, names):
+        return {name: self._partials[name] for name in names}
+
+    out = _Lever.out
+
+
+def _written_out(names=(), probe=None) -> bool:
+    """Whether a read-out is written out (:class:`_WrittenOut`, no assembly): all but a probe's and
+    the partial w.r.t. ``gamma``, which the assembled system gives."""
+    return probe is None and "gamma" not in names
+
+
+def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES, probe=None):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
+    (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L`` when ``probe`` is given).
+    The deflection is absolute: driven by the base (``y0``), the deflection relative to the base
+    is this minus one.
+
+    Examples
+    --------
+    >>> slopes, deflections = response(2.5, 1.0, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> [f"{v:.8g}" for v in slopes]
+    ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
+    >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
+    [1.0]
+    """
+    if probe is None and composed.KERNELS:
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        z = lever.z
+    elif _written_out(probe=probe):
+        lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        z = lever.z
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
+        z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
+    theta = (lever.beta / lever.L)[:, None] * z[:, 1]
+    # a copy: the kept read-out (:func:`_read_out`) must not change with what a caller does to it
+    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0].copy()), -1, 0))
+
+
+def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``).
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
+    """
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[0]
+
+
+def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+    """Deflection ``u(sigma L)`` per unit drive (a tuple of arrays over ``drives``; absolute).
+
+    Examples
+    --------
+    >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
+    """
+    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[1]
+
+
+def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS,
+                       drives=TIP_DRIVES):
+    """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
+
+    Returns
+    -------
+    values : tuple of ndarray, as :func:`slope`
+    jacobian : ``jacobian[i][j]``, the derivative of ``values[i]`` w.r.t. ``SPOT_JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> values, jacobian = slope_and_jacobian(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05,
+    ...                                       wrt=('sigma',))
+    >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
+    ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
+    """
+    names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
+    use = _drive_columns(drives, DRIVES)
+    if composed.KERNELS:      # every partial, gamma's too
+        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives, names=tuple(names))
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    elif _written_out(names):
+        lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
+        reader = lever.reader(sigma)
+        z1 = lever.state(reader)[:, 1]
+        dc = lever.d_system([p for p in names if p != "sigma"])
+        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c))) for name in names}
+    scale = (lever.beta / lever.L)[:, None]
+    columns = {}
+    for name in names:
+        d = scale * dz[name][:, 1]
+        columns[name] = lever.out(d + z1 / lever.L[..., None] if name == "beta" else d)
+    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
+    jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
+                for i in use)
+    return values, jac
+
+
+class Reading:
+    """Where an engine reads the lever: at the free end (``at_end``: arguments as the
+    characteristic's) or at a laser spot (``at_spot``: ``sigma`` after ``beta``).  One forward
+    model, :func:`slope_and_jacobian`, behind both.
+
+    Examples
+    --------
+    >>> args = (2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(at_end.slope(2.5, *args)[0] == at_spot.slope(2.5, 1.0, *args)[0])
+    True
+    """
+
+    def __init__(self, spot: bool):
+        self.spot = spot
+        self.JACOBIAN_PARAMETERS = SPOT_JACOBIAN_PARAMETERS if spot else JACOBIAN_PARAMETERS
+
+    def _split(self, beta, args):
+        return (args[0], args[1:]) if self.spot else (1.0, args)
+
+    def slope(self, beta, *args):
+        sigma, params = self._split(beta, args)
+        return slope(beta, sigma, *params)
+
+    def slope_and_jacobian(self, beta, *args, wrt=None):
+        sigma, params = self._split(beta, args)
+        wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
+        values, jac = slope_and_jacobian(beta, sigma, *params, wrt=wrt)
+        keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
+        return values, tuple(tuple(row[j] for j in keep) for row in jac)
+
+
+at_end, at_spot = Reading(False), Reading(True)
