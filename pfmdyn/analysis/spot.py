@@ -83,8 +83,8 @@ def slope_along(lever: Cantilever, contact: Contact, beta, sigma) -> tuple:
     >>> bool(abs(a - b) < 1e-5 * abs(a))
     True
     """
-    return composed.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
-                            **parameters(lever, contact))
+    return composed.slope(np.asarray(beta, dtype=float), composed.Parameters(**parameters(lever, contact)),
+                          np.asarray(sigma, dtype=float))
 
 
 def static_limit(fn, *args, **kwargs):
@@ -198,10 +198,11 @@ def sensitivities(lever: Cantilever, contact: Contact, sigma) -> dict:
     0.666667
     """
     L, gamma = lever.length, lever.tip_position
-    params = {**parameters(lever, contact), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
-    theta = static_limit(lambda b: composed.slope(b, sigma, **params)[2])
-    tip = static_limit(lambda b: composed.deflection(b, gamma, **params)[2])
-    touching = static_limit(lambda b: composed.slope(b, sigma, **parameters(lever, contact))[0])
+    touching_lever = composed.Parameters(**parameters(lever, contact))
+    free = touching_lever._replace(kvv=0.0, kll=0.0, kvl=0.0)
+    theta = static_limit(lambda b: composed.slope(b, free, sigma)[2])
+    tip = static_limit(lambda b: composed.deflection(b, free, gamma)[2])
+    touching = static_limit(lambda b: composed.slope(b, touching_lever, sigma)[0])
     return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * touching))}
 
 

@@ -21,9 +21,10 @@ The written-out forms and the assembled one share the choice of basis per segmen
 and the determinant's sign (a root bracket reads the sign); the tests hold each written-out form and
 each compiled kernel to the assembled system.
 
-Arguments are those of the paper's variables: ``beta`` (complex for a damped lever), ``k`` the
-lever's spring constant, ``kvv, kll, kvl`` the contact springs in beam axes, ``H, L``, ``mu`` the
-tip mass over the lever's, ``gamma = x_tip / L``, ``rho_g = r_g / L``, ``sigma = x_s / L``.
+Every function takes ``beta`` (complex for a damped lever) and the lever's :class:`Parameters`, built in
+one place from a probe (:meth:`pfmdyn.cantilever.Cantilever.model_parameters`; the discrepancy model's
+:meth:`pfmdyn.discrepancy.model.Model.lever_parameters`), then where it has them the spot
+``sigma = x_s / L``, the drives, the partials asked (``wrt``) and a probe's position.
 """
 from __future__ import annotations
 
@@ -35,8 +36,8 @@ Read per call by :mod:`.readout` and :mod:`.determinant` (set it here)."""
 from .parameters import (DRIVES, JACOBIAN_PARAMETERS, PARAMETERS, PROBE_DRIVES,  # noqa: E402  (after KERNELS)
                          SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, Parameters)
 from .determinant import characteristic, characteristic_and_jacobian  # noqa: E402
-from .readout import Reading, at_end, at_spot, deflection, response, slope, slope_and_jacobian  # noqa: E402
+from .readout import Reading, at_end, deflection, response, slope, slope_and_jacobian  # noqa: E402
 
 __all__ = ["Parameters", "PARAMETERS", "JACOBIAN_PARAMETERS", "SPOT_JACOBIAN_PARAMETERS", "DRIVES", "TIP_DRIVES",
            "PROBE_DRIVES", "KERNELS", "slope", "deflection", "response", "slope_and_jacobian", "characteristic",
-           "characteristic_and_jacobian", "Reading", "at_end", "at_spot"]
+           "characteristic_and_jacobian", "Reading", "at_end"]

@@ -17,7 +17,7 @@ import numpy as np
 from .. import composed
 from ..generated import lever_pieces as pieces
 from .assembly import _adjugate, _Lever, _scaled_det
-from .parameters import _POINT, JACOBIAN_PARAMETERS
+from .parameters import _POINT, JACOBIAN_PARAMETERS, Parameters
 from .segments import _BOUNDED_AT_START, _CIRCULANT, _columns
 
 
@@ -138,7 +138,7 @@ def _transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     return (T[2][0] * T[3][1] - T[2][1] * T[3][0]) * factor
 
 
-def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
+def characteristic(beta, parameters: Parameters):
     """The composed lever's characteristic: its zeros in ``beta`` are the resonances.
 
     The determinant of the assembled system, scaled (by ``e^{-beta l}`` per short segment) so that it
@@ -148,13 +148,14 @@ def characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g):
     Examples
     --------
     >>> from scipy.optimize import brentq
-    >>> f = lambda b: characteristic(b, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0)
+    >>> free = Parameters(k=2.0, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=2e-4, mu=0.0, gamma=1.0, rho_g=0.0)
+    >>> f = lambda b: characteristic(b, free)
     >>> round(brentq(f, 1.5, 2.5), 10)          # the free lever's first root
     1.8751040687
     """
     if composed.KERNELS:
-        return _compiled_characteristic(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)
-    return _shaped(_transferred(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g), gamma)
+        return _compiled_characteristic(beta, *parameters)
+    return _shaped(_transferred(beta, *parameters), parameters.gamma)
 
 
 def _compiled_characteristic(*args):
@@ -250,17 +251,19 @@ def _compiled_tip_at_end(beta, k, kvv, kll, kvl, H, L, mu, rho_g, names):
     return out.reshape(beta.shape), {p: d[i].reshape(beta.shape) for i, p in enumerate(names)}
 
 
-def characteristic_and_jacobian(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=JACOBIAN_PARAMETERS):
+def characteristic_and_jacobian(beta, parameters: Parameters, wrt=JACOBIAN_PARAMETERS):
     """:func:`characteristic` and its partials w.r.t. :data:`JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     At a zero only their ratios matter: a resonance moves with ``p`` as ``d beta/d p = -D_p / D_beta``.
 
     Examples
     --------
-    >>> value, partials = characteristic_and_jacobian(1.8751040687, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0)
+    >>> free = Parameters(k=2.0, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=2e-4, mu=0.0, gamma=1.0, rho_g=0.0)
+    >>> value, partials = characteristic_and_jacobian(1.8751040687, free)
     >>> round(float(-partials[5] / partials[0]), 6)     # d beta1 / d mu of a free lever: -beta1
     -1.875104
     """
+    k, kvv, kll, kvl, H, L, mu, gamma, rho_g = parameters
     if "gamma" not in wrt and _tip_at_end(gamma):
         tip_at_end = _compiled_tip_at_end if composed.KERNELS and all(np.ndim(a) == 0 for a in (k, kvv, kll, kvl, H, L, mu, rho_g)) \
             else _tip_at_end_and_partials

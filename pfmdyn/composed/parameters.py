@@ -13,9 +13,9 @@ from ..generated import lever_pieces as pieces
 
 
 class Parameters(NamedTuple):
-    """The lever's parameters after ``beta`` (and the spot's ``sigma``) of every function here, typed and
-    named; a tuple, so ``f(beta, *parameters)`` is the positional call.  Built from a probe in one place,
-    :meth:`pfmdyn.cantilever.Cantilever.model_parameters`; each may be an array (broadcast with ``beta``).
+    """The lever's parameters, the one argument after ``beta`` of every function of :mod:`pfmdyn.composed`,
+    typed and named.  Built from a probe in one place, :meth:`pfmdyn.cantilever.Cantilever.model_parameters`
+    (damped with :meth:`~typing.NamedTuple._replace`); each may be an array (broadcast with ``beta``).
 
     The tip point's parameters are the generated pieces' (``beta`` aside); ``gamma`` places the point:
 

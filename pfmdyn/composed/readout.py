@@ -1,5 +1,5 @@
 """The lever read at the spot ``x_s = sigma L``: :func:`response`, :func:`slope`, :func:`deflection`,
-:func:`slope_and_jacobian`, and the two readings an engine chooses between (:data:`at_end`, :data:`at_spot`).
+:func:`slope_and_jacobian`, and where an engine reads them (:class:`Reading`: :data:`at_end` or at a spot).
 
 Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
 :data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
@@ -16,7 +16,8 @@ import numpy as np
 from .. import composed
 from ..generated import lever_pieces as pieces
 from .assembly import _Lever
-from .parameters import _POINT, DRIVES, JACOBIAN_PARAMETERS, SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, _drive_columns
+from .parameters import (_POINT, DRIVES, JACOBIAN_PARAMETERS, SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, Parameters,
+                         _drive_columns)
 from .written_out import _WrittenOut
 
 
@@ -110,59 +111,62 @@ def _written_out(names=(), probe=None) -> bool:
     return probe is None and "gamma" not in names
 
 
-def response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES, probe=None):
-    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` per unit drive: two tuples over ``drives``
-    (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L`` when ``probe`` is given).
-    The deflection is absolute: driven by the base (``y0``), the deflection relative to the base
-    is this minus one.
+def response(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, probe=None):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` at ``x_s = sigma L`` (the free end by default) per unit
+    drive: two tuples over ``drives`` (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L``
+    when ``probe`` is given).  The deflection is absolute: driven by the base (``y0``), the deflection
+    relative to the base is this minus one.
 
     Examples
     --------
-    >>> slopes, deflections = response(2.5, 1.0, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> slopes, deflections = response(2.5, lever)
     >>> [f"{v:.8g}" for v in slopes]
     ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
-    >>> [round(float(v), 9) for v in response(1e-3, 0.7, 2.0, 0.0, 0.0, 0.0, 1e-5, 2e-4, 0.0, 1.0, 0.0, ("y0",))[1]]
+    >>> free = Parameters(k=2.0, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=2e-4, mu=0.0, gamma=1.0, rho_g=0.0)
+    >>> [round(float(v), 9) for v in response(1e-3, free, 0.7, ("y0",))[1]]
     [1.0]
     """
     if probe is None and composed.KERNELS:
-        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        lever = _Compiled(beta, sigma, *parameters, drives=drives)
         z = lever.z
     elif _written_out(probe=probe):
-        lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        lever = _read_out(beta, sigma, *parameters, drives=drives)
         z = lever.z
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, probe=probe)
+        lever = _Lever(beta, *parameters, probe=probe)
         z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
     # a copy: the kept read-out (:func:`_read_out`) must not change with what a caller does to it
     return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0].copy()), -1, 0))
 
 
-def slope(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+def slope(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
     """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``).
 
     Examples
     --------
-    >>> [f"{v:.8g}" for v in slope(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> [f"{v:.8g}" for v in slope(2.5, lever, 0.8)]
     ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[0]
+    return response(beta, parameters, sigma, drives)[0]
 
 
-def deflection(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=TIP_DRIVES):
+def deflection(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
     """Deflection ``u(sigma L)`` per unit drive (a tuple of arrays over ``drives``; absolute).
 
     Examples
     --------
-    >>> [f"{v:.7g}" for v in deflection(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)]
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> [f"{v:.7g}" for v in deflection(2.5, lever, 0.8)]
     ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
     """
-    return response(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives)[1]
+    return response(beta, parameters, sigma, drives)[1]
 
 
-def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wrt=SPOT_JACOBIAN_PARAMETERS,
-                       drives=TIP_DRIVES):
+def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIAN_PARAMETERS, drives=TIP_DRIVES):
     """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     Returns
@@ -172,24 +176,24 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
 
     Examples
     --------
-    >>> values, jacobian = slope_and_jacobian(2.5, 0.8, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05,
-    ...                                       wrt=('sigma',))
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> values, jacobian = slope_and_jacobian(2.5, lever, 0.8, wrt=('sigma',))
     >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
     ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
     """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     use = _drive_columns(drives, DRIVES)
     if composed.KERNELS:      # every partial, gamma's too
-        lever = _Compiled(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives, names=tuple(names))
+        lever = _Compiled(beta, sigma, *parameters, drives=drives, names=tuple(names))
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
     elif _written_out(names):
-        lever = _read_out(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=drives)
+        lever = _read_out(beta, sigma, *parameters, drives=drives)
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
-        lever = _Lever(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, split="gamma" in names, derivatives=True)
+        lever = _Lever(beta, *parameters, split="gamma" in names, derivatives=True)
         reader = lever.reader(sigma)
         z1 = lever.state(reader)[:, 1]
         dc = lever.d_system([p for p in names if p != "sigma"])
@@ -206,34 +210,34 @@ def slope_and_jacobian(beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, wr
 
 
 class Reading:
-    """Where an engine reads the lever: at the free end (``at_end``: arguments as the
-    characteristic's) or at a laser spot (``at_spot``: ``sigma`` after ``beta``).  One forward
-    model, :func:`slope_and_jacobian`, behind both.
+    """Where an engine reads the lever: at the free end (:data:`at_end`: its partials are those of
+    :data:`JACOBIAN_PARAMETERS`, the characteristic's) or at a laser spot ``sigma`` (its partial too,
+    :data:`SPOT_JACOBIAN_PARAMETERS`).  One forward model, :func:`slope_and_jacobian`, behind both.
 
     Examples
     --------
-    >>> args = (2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
-    >>> bool(at_end.slope(2.5, *args)[0] == at_spot.slope(2.5, 1.0, *args)[0])
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> bool(at_end.slope(2.5, lever)[0] == Reading(1.0).slope(2.5, lever)[0])
     True
     """
 
-    def __init__(self, spot: bool):
-        self.spot = spot
-        self.JACOBIAN_PARAMETERS = SPOT_JACOBIAN_PARAMETERS if spot else JACOBIAN_PARAMETERS
+    def __init__(self, sigma=None):
+        self.sigma = sigma
+        self.JACOBIAN_PARAMETERS = JACOBIAN_PARAMETERS if sigma is None else SPOT_JACOBIAN_PARAMETERS
 
-    def _split(self, beta, args):
-        return (args[0], args[1:]) if self.spot else (1.0, args)
+    @property
+    def _at(self):
+        return 1.0 if self.sigma is None else self.sigma
 
-    def slope(self, beta, *args):
-        sigma, params = self._split(beta, args)
-        return slope(beta, sigma, *params)
+    def slope(self, beta, parameters: Parameters):
+        return slope(beta, parameters, self._at)
 
-    def slope_and_jacobian(self, beta, *args, wrt=None):
-        sigma, params = self._split(beta, args)
+    def slope_and_jacobian(self, beta, parameters: Parameters, wrt=None):
         wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
-        values, jac = slope_and_jacobian(beta, sigma, *params, wrt=wrt)
+        values, jac = slope_and_jacobian(beta, parameters, self._at, wrt=wrt)
         keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
         return values, tuple(tuple(row[j] for j in keep) for row in jac)
 
 
-at_end, at_spot = Reading(False), Reading(True)
+at_end = Reading()
+"""The reading at the free end."""
