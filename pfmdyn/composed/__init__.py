@@ -36,8 +36,8 @@ Read per call by :mod:`.readout` and :mod:`.determinant` (set it here)."""
 from .parameters import (DRIVES, JACOBIAN_PARAMETERS, PARAMETERS, PROBE_DRIVES,  # noqa: E402  (after KERNELS)
                          SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, Parameters)
 from .determinant import characteristic, characteristic_and_jacobian  # noqa: E402
-from .readout import LastReadOut, Reading, at_end, deflection, response, slope, slope_and_jacobian  # noqa: E402
+from .readout import Reading, at_end, deflection, response, slope, slope_and_jacobian  # noqa: E402
 
 __all__ = ["Parameters", "PARAMETERS", "JACOBIAN_PARAMETERS", "SPOT_JACOBIAN_PARAMETERS", "DRIVES", "TIP_DRIVES",
            "PROBE_DRIVES", "KERNELS", "slope", "deflection", "response", "slope_and_jacobian", "characteristic",
-           "characteristic_and_jacobian", "Reading", "at_end", "LastReadOut"]
+           "characteristic_and_jacobian", "Reading", "at_end"]

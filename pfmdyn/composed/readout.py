@@ -3,7 +3,7 @@
 
 Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
 :data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
-(:class:`pfmdyn.composed.written_out._WrittenOut`, kept by a fit's :class:`LastReadOut`),
+(:class:`pfmdyn.composed.written_out._WrittenOut`),
 or assembled (:class:`pfmdyn.composed.assembly._Lever`: a probe's drives, the ``gamma`` partial).
 Separate from the forms because it only chooses among them and scales their states to slopes.
 """
@@ -19,47 +19,6 @@ from .assembly import _Lever
 from .parameters import (_POINT, DRIVES, JACOBIAN_PARAMETERS, SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, Parameters,
                          _drive_columns)
 from .written_out import _WrittenOut
-
-
-_KEPT_SIZE = 1 << 14
-"""Batches up to this size are kept (some megabytes; a map's block is not held after its fit)."""
-
-
-class LastReadOut:
-    """The last NumPy read-out (:class:`_WrittenOut`), kept by its owner: a least-squares fit asks for the
-    values at a point, then for their partials at the same point, which need the same solution.
-
-    Given as ``kept`` to :func:`response` and :func:`slope_and_jacobian` (or a :class:`Reading`'s), it gives
-    the kept read-out again when the arguments are the same to the bit; without one each call solves
-    afresh.  The owner is the fit's model (:class:`pfmdyn.discrepancy.model.Model`), so that no read-out
-    outlives it.  The compiled read-outs (:data:`pfmdyn.composed.KERNELS`) compute the values and the
-    partials in one pass and keep nothing.
-
-    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
-    >>> beta, kept = np.linspace(1, 3, 4), LastReadOut()
-    >>> kept(beta, lever, 0.8) is kept(beta, lever, 0.8), kept(beta, lever, 0.8) is kept(beta + 1e-9, lever, 0.8)
-    (True, False)
-    """
-
-    def __init__(self):
-        self.key, self.lever = None, None
-
-    def __call__(self, beta, parameters: Parameters, sigma, drives=DRIVES) -> _WrittenOut:
-        arrays = [np.asarray(a) for a in (beta, sigma, *parameters)]
-        key = (tuple(drives),) + tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays)
-        if self.lever is not None and self.key == key:
-            return self.lever
-        lever = _WrittenOut(*arrays, drives=tuple(drives))
-        if lever.beta.size <= _KEPT_SIZE:
-            self.key, self.lever = key, lever
-        return lever
-
-
-def _numpy_read_out(beta, parameters, sigma, drives, kept: LastReadOut | None) -> _WrittenOut:
-    """The written-out NumPy read-out: ``kept``'s, or solved afresh without one."""
-    if kept is not None:
-        return kept(beta, parameters, sigma, drives)
-    return _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
 
 
 class _Compiled:
@@ -119,12 +78,11 @@ def _written_out(names=(), probe=None) -> bool:
     return probe is None and "gamma" not in names
 
 
-def response(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, probe=None,
-             kept: LastReadOut | None = None):
+def response(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, probe=None):
     """Slope ``u'(x_s)`` and deflection ``u(x_s)`` at ``x_s = sigma L`` (the free end by default) per unit
     drive: two tuples over ``drives`` (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L``
     when ``probe`` is given).  The deflection is absolute: driven by the base (``y0``), the deflection
-    relative to the base is this minus one.  ``kept``: a fit's last read-out (:class:`LastReadOut`).
+    relative to the base is this minus one.
 
     Examples
     --------
@@ -140,20 +98,18 @@ def response(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, probe=N
         lever = _Compiled(beta, sigma, *parameters, drives=drives)
         z = lever.z
     elif _written_out(probe=probe):
-        lever = _numpy_read_out(beta, parameters, sigma, drives, kept)
+        lever = _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
         z = lever.z
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
         lever = _Lever(beta, *parameters, probe=probe)
         z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
     theta = (lever.beta / lever.L)[:, None] * z[:, 1]
-    # a copy: a kept read-out (:class:`LastReadOut`) must not change with what a caller does to it
-    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0].copy()), -1, 0))
+    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0]), -1, 0))
 
 
-def slope(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, kept: LastReadOut | None = None):
-    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``;
-    ``kept`` as :func:`response`'s).
+def slope(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
+    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``).
 
     Examples
     --------
@@ -161,7 +117,7 @@ def slope(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, kept: Last
     >>> [f"{v:.8g}" for v in slope(2.5, lever, 0.8)]
     ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
     """
-    return response(beta, parameters, sigma, drives, kept=kept)[0]
+    return response(beta, parameters, sigma, drives)[0]
 
 
 def deflection(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
@@ -176,10 +132,8 @@ def deflection(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
     return response(beta, parameters, sigma, drives)[1]
 
 
-def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIAN_PARAMETERS, drives=TIP_DRIVES,
-                       kept: LastReadOut | None = None):
-    """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``;
-    ``kept`` as :func:`response`'s: the values' read-out serves the partials).
+def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIAN_PARAMETERS, drives=TIP_DRIVES):
+    """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``).
 
     Returns
     -------
@@ -200,7 +154,7 @@ def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIA
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
     elif _written_out(names):
-        lever = _numpy_read_out(beta, parameters, sigma, drives, kept)
+        lever = _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
         use = list(range(len(drives)))
         z1, dz = lever.z[:, 1], lever.partials(names)
     else:
@@ -241,12 +195,12 @@ class Reading:
     def _at(self):
         return 1.0 if self.sigma is None else self.sigma
 
-    def slope(self, beta, parameters: Parameters, kept: LastReadOut | None = None):
-        return slope(beta, parameters, self._at, kept=kept)
+    def slope(self, beta, parameters: Parameters):
+        return slope(beta, parameters, self._at)
 
-    def slope_and_jacobian(self, beta, parameters: Parameters, wrt=None, kept: LastReadOut | None = None):
+    def slope_and_jacobian(self, beta, parameters: Parameters, wrt=None):
         wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
-        values, jac = slope_and_jacobian(beta, parameters, self._at, wrt=wrt, kept=kept)
+        values, jac = slope_and_jacobian(beta, parameters, self._at, wrt=wrt)
         keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
         return values, tuple(tuple(row[j] for j in keep) for row in jac)
 

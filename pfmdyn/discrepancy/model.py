@@ -76,11 +76,6 @@ class Model:
         return {p.name: _coordinate(p, p.null) for p in every if p.null is not None}
 
     @cached_property
-    def _kept(self) -> composed.LastReadOut:
-        """The model's last NumPy read-out: a fit asks for the slopes, then their partials, at one point."""
-        return composed.LastReadOut()
-
-    @cached_property
     def columns(self) -> tuple[tuple[int, bool], ...]:
         """The design columns as ``(source, per volt)`` (:data:`pfmdyn.discrepancy.effects.BASE_COLUMNS`), the
         components' in the library's order after the baseline's."""
@@ -122,7 +117,7 @@ class Model:
             d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                      c["inv_q"], drag(c, r), c["x"])
             lever = self.lever_parameters(c, d, rotated(d.k1, c["k2"], c["alpha"]))
-            return self._reading(c).slope(d.beta, lever, kept=self._kept)
+            return self._reading(c).slope(d.beta, lever)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -147,7 +142,7 @@ class Model:
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             reading = self._reading(c)
             lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
-            T, J = reading.slope_and_jacobian(d.beta, lever, wrt=self._partials_needed(c, reading), kept=self._kept)
+            T, J = reading.slope_and_jacobian(d.beta, lever, wrt=self._partials_needed(c, reading))
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
