@@ -7,6 +7,7 @@ ranges (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4, tip at 0.7-1 L, tip mass ratio 
 0-15 deg) with fixed seeds.
 """
 import json
+import shlex
 import sys
 from pathlib import Path
 
@@ -73,6 +74,13 @@ def test_issue_example_two_modes_alone_are_not_unique(example_hz, tmp_path, caps
     assert abs(doc["tip_position"]["value"] - 0.93) < 1e-6
     assert doc["k2"]["value"] == 0.0 and doc["k1"]["stderr"] > 0 and doc["tip_position"]["stderr"] > 0
     assert "L1/L" in notes[0] and "cross 1 time" in notes[1]
+    # the printed resonances command carries the L1/L method's k2 = 0 (resonances alone would tie k2 to k1)
+    command = next(line.partition("): ")[2] for line in capsys.readouterr().out.splitlines()
+                   if line.startswith("the same lever in resonances"))
+    argv = shlex.split(command)
+    assert argv[argv.index("--k2") + 1] == "0" and float(argv[argv.index("--tip-position") + 1]) == pytest.approx(0.93)
+    assert cli.main([*argv[1:], "--modes", "2", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["contact"]["resonance"]["value"] == pytest.approx(example_hz, rel=1e-6)
 
 
 def test_k1_and_tip_position_from_two_exact_modes_over_real_levers():
@@ -206,19 +214,22 @@ def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_pa
     assert cli.main(["stiffness", str(path), *height, *(length if height else []), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     k1 = doc["results"]["k1"]["value"]
+    text = capsys.readouterr().out
     if tip_height is None:
         assert doc["lever"]["tip_height"]["status"] == "assumed" and "PFM probe" in doc["lever"]["tip_height"]["why"]
         budget = doc["fit"]["budget"]
         share = dict(zip(budget["uncertainty_source"]["value"], budget["relative_uncertainty"]["value"]))
         assert share["tip_height_uncertainty"] > 0.1 and doc["results"]["k1"]["stderr"] >= share[
             "tip_height_uncertainty"] * k1
-        text = capsys.readouterr().out
         # what came from the file, with the contact resonance the k1 rests on (stiffness printed neither)
         assert "assumed: tip height" in text and \
             f"from the file: contact_resonance {fields['contact_resonance']:.6g} Hz (mode 1), " in text
-    lever = [*length, *height]
-    assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
-                     repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
+    # what stiffness prints is enough (its k1 line is rounded to the uncertainty): the resonances command it names
+    command = next(line.partition("): ")[2] for line in text.splitlines()
+                   if line.startswith("the same lever in resonances"))
+    argv = shlex.split(command)
+    assert argv[:2] == ["pfmdyn", "resonances"] and float(argv[argv.index("--k1") + 1]) == pytest.approx(k1, rel=1e-9)
+    assert cli.main([*argv[1:], "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["results"]["contact"]["resonance"]["value"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
     assert doc["lever"]["k2"]["status"] == "tied" and "Mindlin" in doc["lever"]["k2"]["why"]

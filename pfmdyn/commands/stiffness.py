@@ -205,6 +205,44 @@ def _taken_line(found: dict, given: list, contacts) -> str:
     return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
 
 
+def _resonances_command(args, lever, solution, modes, assumed: dict) -> str:
+    """The ``pfmdyn resonances`` command that puts the contact resonances back (the round trip): this lever with
+    what the file gave, the flags given, k1 unrounded (the printed one is rounded to its uncertainty) and k2 by the
+    same policy (its value when solved, or tied by the tip-position fit's k2 = 0, which no flag of resonances says).
+
+    >>> import argparse
+    >>> from pfmdyn.analysis.stiffness_report import Solution
+    >>> from pfmdyn.cantilever import Cantilever
+    >>> args = argparse.Namespace(k2=None, k2_over_k1=None, poisson="0.25", medium=None, temperature=None, tip_height=None)
+    >>> lever = Cantilever(0.46538, 72969.0, 2.4e-4, tip_height=13e-6)
+    >>> _resonances_command(args, lever, Solution(258.48086225838, 213.0, 1.0, ("k1",), {}), [1], {"tip_height": ""})
+    'pfmdyn resonances --spring-constant 0.46538 --free-resonance 72969 --length 0.00024 --k1 258.4808623 --poisson 0.25'
+    """
+    import dataclasses
+    import shlex
+
+    def number(x):
+        return f"{x:.10g}"
+    defaults = {f.name: f.default for f in dataclasses.fields(lever)}
+    argv = ["pfmdyn", "resonances"]
+    for name in ("spring_constant", "free_resonance", "length", "width", "tip_height", "tip_position",
+                 "tip_mass_ratio", "tip_gyration_radius", "tilt"):
+        value = solution.tip_position if name == "tip_position" else getattr(lever, name)
+        if name == "length" or (value is not None and value != defaults[name] and name not in assumed):
+            argv += [NAMES[name].flag, number(value)]
+    argv += [flag for name in ("medium", "temperature") if getattr(args, name) is not None
+             for flag in (NAMES[name].flag, str(getattr(args, name)))]
+    argv += ["--k1", number(solution.k1)]
+    policy = [(NAMES[n].flag, str(getattr(args, n))) for n in ("k2", "k2_over_k1", "poisson") if getattr(args, n)
+              is not None]
+    if "k2" in solution.unknowns or ("tip_position" in solution.unknowns and not policy):
+        policy = [("--k2", number(solution.k2 or 0.0))]
+    argv += [word for pair in policy for word in pair]
+    if max(modes or [1]) > 3:
+        argv += ["--modes", str(max(modes))]
+    return shlex.join(argv)
+
+
 def _mode(text) -> int:
     """A flexural mode number, 1 to :data:`_MAX_MODE` (a count, not a quantity of :mod:`pfmdyn.names`).
 
@@ -280,6 +318,9 @@ def run(args) -> int:
     if args.file:
         print(_taken_line(found, given, None if args.contact else (contacts, modes)))
     print(report.report())
+    if report.unique:
+        print("the same lever in resonances (k1 unrounded): "
+              + _resonances_command(args, lever, report.solution, modes, assumed))
     if args.json:
         from ..io import documents
 
