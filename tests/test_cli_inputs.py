@@ -418,7 +418,8 @@ def test_a_resonance_table_without_metadata_takes_the_flags_and_its_free_row(tmp
 
 
 def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monkeypatch):
-    """spot FILE required --frequency though the image's note records the drive (DriveFrequency)."""
+    """spot FILE required --frequency though the image's note records the drive (DriveFrequency); its 'from the
+    file' line named the drive alone, not the lever it read there."""
     import numpy as np
     monkeypatch.syspath_prepend(str(Path(__file__).parent))
     from igor_files import asylum_note, igor_wave
@@ -431,8 +432,11 @@ def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monke
     assert _run(["spot", str(image), "--k1", "100", "--json", str(out)]) == 0
     frequency = json.loads(out.read_text())["results"]["drive_frequency"]
     assert frequency["value"] == 3.1e5 and frequency["status"] == "file"
-    assert "from the file: drive frequency 310000 Hz" in capsys.readouterr().out
-    assert _run(["spot", str(image), "--k1", "100", "--drive-frequency", "2e5", "--json", str(out)]) == 0
+    assert ("from the file: drive_frequency 310000 Hz, free_resonance 70000 Hz, length 0.0002 m, spring_constant 2 N/m"
+            in capsys.readouterr().out.splitlines())
+    assert _run(["spot", str(image), "--k1", "100", "--drive-frequency", "2e5", "--spring-constant", "3", "--json",
+                 str(out)]) == 0
+    assert "from the file: free_resonance 70000 Hz, length 0.0002 m" in capsys.readouterr().out.splitlines()
     assert json.loads(out.read_text())["results"]["drive_frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
                                                                    "status": "given"}
 

@@ -18,7 +18,7 @@ from ..errors import UserError, listed
 from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked, fill_defaults
 
-__all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
+__all__ = ["add", "taken_line", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
            "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
            "assumed_line", "cantilever", "contact", "progress_shown",
            "option_hint"]
@@ -325,6 +325,18 @@ def check_medium(args) -> None:
     if getattr(args, "medium", None) is not None or getattr(args, "temperature", None) is not None:
         medium_from_args(args)
         temperature(args)       # also where the medium's own numbers do not depend on it
+
+
+def taken_line(found: dict, given, first=()) -> str:
+    """The line a command prints of the values it took from the input file (``found``, names -> SI) that no flag
+    (``given``) replaced, after the parts ``first`` (already worded).
+
+    >>> taken_line({"spring_constant": 0.46538, "length": 2.4e-4, "drive_frequency": 380740.0}, ["length"])
+    'from the file: drive_frequency 380740 Hz, spring_constant 0.46538 N/m'
+    """
+    parts = [*first, *(f"{name} {value:.6g}" + (f" {NAMES[name].unit}" if NAMES[name].unit != "1" else "")
+                       for name, value in sorted(found.items()) if name not in given)]
+    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
 
 
 def assumed_line(assumed: dict, lever: Cantilever) -> str:

@@ -111,8 +111,9 @@ def run(args) -> int:
         print(flags.medium_line(lever.medium, args))
     if assumed:
         print(flags.assumed_line(assumed, lever))
-    if args.drive_frequency is None:
-        print(f"from the file: drive frequency {frequency:.6g} Hz")
+    if args.file:
+        print(flags.taken_line({**found, **({} if args.drive_frequency else {"drive_frequency": frequency})},
+                               flags.given_names(args, LEVER)))
     print(report(result))
     print(f"k2 policy: {policy}")
     if args.json:

@@ -194,15 +194,14 @@ def _contact_map(args) -> int:
 
 
 def _taken_line(found: dict, given: list, contacts) -> str:
-    """What the file gave and no flag replaced, with the contact resonances (and their modes) when they came
-    from it.
+    """What the file gave and no flag replaced (:func:`pfmdyn.commands.flags.taken_line`), the contact resonances
+    (and their modes) first when they came from it.
 
     >>> print(_taken_line({"spring_constant": 0.46538, "length": 2.4e-4}, ["length"], ([368990.0], [1])))
     from the file: contact_resonance 368990 Hz (mode 1), spring_constant 0.46538 N/m
     """
     parts = [f"contact_resonance {f:.6g} Hz (mode {m})" for f, m in zip(*contacts)] if contacts else []
-    parts += [f"{name} {value:.6g} {NAMES[name].unit}" for name, value in sorted(found.items()) if name not in given]
-    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
+    return flags.taken_line(found, given, parts)
 
 
 def _resonances_command(args, lever, solution, modes, assumed: dict) -> str:
