@@ -581,3 +581,26 @@ def test_diagram_json_writes_no_negative_zero(tmp_path):
                  "--bias-points", "5"]) == 0
     text = out.read_text()
     assert "-0.0," not in text and "-0.0]" not in text and json.loads(text)["results"]
+
+
+def test_spot_states_how_far_its_results_move_with_the_assumed_tip_height_and_tie(tmp_path, capsys):
+    """spot printed the blind spot, the contact sensitivity and the calibration factor to six figures with no
+    uncertainty, though they rest on a tip height and a k2 tie it assumed (the BTFO image's calibration factor is 14,
+    31 and 1669 at a tip height of 10.5, 13 and 15.5 um).  Each now carries its spread over the assumed inputs, and
+    the value at a tip height one standard uncertainty off lies within about it."""
+    lever = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2.25e-4", "--width", "3e-5", "--k1", "200",
+             "--drive-frequency", "2e5", "--spot-position", "0.8"]
+    out = tmp_path / "s.json"
+    assert _run(["spot", *lever, "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "uncertainties from the assumed inputs, each moved by its own: tip height, k2 policy" in text
+    assert re.search(r"blind spot x_s/L: [\d.]+ \+- [\d.e+-]+ ", text) and re.search(r"in contact [\d.]+ \+- ", text)
+    assumed = json.loads(out.read_text())["results"]
+    assert _run(["spot", *lever, "--tip-height", "10.5e-6", "--poisson", "0.3", "--json", str(out)]) == 0
+    moved = json.loads(out.read_text())["results"]
+    for name in ("blind_spot", "contact_sensitivity", "calibration_factor"):
+        value, stderr = assumed[name]["value"], assumed[name]["stderr"]
+        value, stderr, other = (value[0], stderr[0], moved[name]["value"][0]) if name == "blind_spot" else (
+            (value["real"], stderr, moved[name]["value"]["real"]) if isinstance(value, dict) else
+            (value, stderr, moved[name]["value"]))
+        assert 0 < abs(other - value) < 1.5 * stderr, (name, value, stderr, other)
