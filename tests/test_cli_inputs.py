@@ -604,3 +604,23 @@ def test_spot_states_how_far_its_results_move_with_the_assumed_tip_height_and_ti
             (value["real"], stderr, moved[name]["value"]["real"]) if isinstance(value, dict) else
             (value, stderr, moved[name]["value"]))
         assert 0 < abs(other - value) < 1.5 * stderr, (name, value, stderr, other)
+
+
+def test_resonances_state_how_far_the_contact_resonances_move_with_the_assumed_inputs(tmp_path, capsys):
+    """resonances printed each contact resonance to 0.1 Hz with no uncertainty, though it rests on a tip height
+    and a k2 tie it assumed (the BTFO lever's first moves by 12 kHz over the tip height's spread).  Each contact
+    resonance now has its standard uncertainty over them; with k2 = 0 and no tilt the tip height does not act and
+    none is stated."""
+    lever = ["--spring-constant", "0.46538", "--free-resonance", "72969", "--length", "2.4e-4", "--k1", "258.48"]
+    out = tmp_path / "r.json"
+    assert _run(["resonances", *lever, "--json", str(out)]) == 0
+    assert "each moved by its own: tip height, k2 policy" in capsys.readouterr().out
+    assumed = json.loads(out.read_text())["results"]["contact"]["resonance"]
+    assert _run(["resonances", *lever, "--tip-height", "10.5e-6", "--poisson", "0.3", "--json", str(out)]) == 0
+    moved = json.loads(out.read_text())["results"]["contact"]["resonance"]["value"]
+    for value, stderr, other in zip(assumed["value"], assumed["stderr"], moved):
+        assert 0 < abs(other - value) < 1.5 * stderr, (value, stderr, other)
+    capsys.readouterr()
+    assert _run(["resonances", *lever, "--k2", "0", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["contact"]["resonance"]["stderr"] is None
+    assert " +- " not in capsys.readouterr().out

@@ -121,29 +121,10 @@ def _lever(args, found: dict, assumed: dict):
     return flags.cantilever(args, found, assumed)
 
 
-def _assumed_variations(lever, stated, contact, assumed: dict) -> dict:
-    """The inputs of :func:`pfmdyn.analysis.spot.spread` each moved down and up by its standard uncertainty: the tip
-    height (an assumed one's spread, else 10 % of a given one, as ``stiffness`` takes it) and an assumed k2 tie
-    (Mindlin over Poisson's ratios 0.2-0.4)."""
-    from dataclasses import replace
-
-    from ..analysis.stiffness_report import assumed_tie_uncertainty, tip_height_spread
-    from ..cantilever import Contact
-    out = {}
-    if lever.tip_height is not None:
-        u = tip_height_spread(lever.tip_height, "tip_height" in assumed)
-        out["tip_height_uncertainty"] = tuple((replace(lever, tip_height=lever.tip_height + s * u), contact)
-                                              for s in (-1, 1))
-    if stated.k2 is None and stated.ratio is None and contact.ratio is not None:       # the tie assumed
-        u = assumed_tie_uncertainty()
-        out["k2_policy_uncertainty"] = tuple((lever, Contact(k1=contact.k1, k2_over_k1=contact.ratio + s * u,
-                                                             contact_loss=contact.contact_loss)) for s in (-1, 1))
-    return out
-
-
 def run(args) -> int:
     """Analyse, print, write what was asked."""
     from ..analysis.spot import spot_analysis, spread
+    from ..analysis.stiffness_report import assumed_variations
     from ..io.results import check_writable
     check_writable(args.json)
     check_writable(args.plot, figure=True)
@@ -157,7 +138,7 @@ def run(args) -> int:
     stated = flags.contact(args)
     contact, policy = stated.policy(lever)
     result = spot_analysis(lever, contact, frequency)
-    stderr, shares = spread(lever, contact, frequency, _assumed_variations(lever, stated, contact, assumed))
+    stderr, shares = spread(lever, contact, frequency, assumed_variations(lever, stated, contact, assumed))
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     if assumed:

@@ -663,7 +663,10 @@ def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None) -
 
 def _mode_records(d: dict, prefix: str) -> dict:
     """The modes of one condition (``free`` or ``contact``) of :meth:`Resonances.to_dict`."""
-    modes = {"resonance": quantity("resonance", d[f"{prefix}_hz"], status="derived", dims=["mode"]),
+    stderr = d.get(f"{prefix}_stderr")
+    if stderr is not None and not any(u != 0 for u in stderr):
+        stderr = None
+    modes = {"resonance": quantity("resonance", d[f"{prefix}_hz"], stderr, status="derived", dims=["mode"]),
              "resonance_interval": quantity("resonance_interval", d[f"{prefix}_intervals_hz"], status="derived",
                                             dims=["mode", "bound"])}
     if d.get(f"{prefix}_complete_below_hz") is not None:
