@@ -624,3 +624,18 @@ def test_resonances_state_how_far_the_contact_resonances_move_with_the_assumed_i
     assert _run(["resonances", *lever, "--k2", "0", "--json", str(out)]) == 0
     assert json.loads(out.read_text())["results"]["contact"]["resonance"]["stderr"] is None
     assert " +- " not in capsys.readouterr().out
+
+
+def test_discrepancy_on_a_resonance_table_assumes_the_tip_height_as_stiffness_does(tmp_path, capsys):
+    """stiffness TABLE took the typical PFM probe's tip height; discrepancy on the same table refused ('missing
+    metadata key(s) tip_height'), though it assumes it for an instrument file holding the same two rows."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\n# length: 240e-6\nmode,condition,frequency_hz,quality_factor\n"
+                     "1,contact,368990,213.46\n1,free,72969,138.63\n")
+    out = tmp_path / "d.json"
+    assert _run(["discrepancy", str(table), "--json", str(out)]) == 0
+    assert "assumed: tip height 1.3e-05 m" in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert doc["lever"]["tip_height"]["status"] == "assumed"
+    assert _run(["stiffness", str(table), "--json", str(out)]) == 0
+    assert doc["results"]["k1"]["value"] == pytest.approx(json.loads(out.read_text())["results"]["k1"]["value"], rel=1e-3)

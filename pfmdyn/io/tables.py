@@ -5,7 +5,7 @@ Format (SI units)::
     # spring_constant: 2.4
     # length: 223e-6
     # width: 24e-6                  <- optional: no resonance depends on it
-    # tip_height: 1e-5
+    # tip_height: 1e-5               <- commands assume a typical PFM probe's when none is given
     # free_resonance: 63200         <- first free flexural resonance (a table's free mode 1 row gives it too)
     # description: optional text
     frequency_hz,bias_v,x,y             <- spectrum (or amplitude,phase_deg), several biases
@@ -52,6 +52,7 @@ from ..errors import UserError
 from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
+from .record import MissingFieldError
 from .spectra import read_spectra
 from .kinds import INSTRUMENT_KINDS, file_kind
 
@@ -98,9 +99,11 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None, required=RE
 
 
 def _require(where: str, missing) -> None:
+    """A :class:`~pfmdyn.io.record.MissingFieldError` naming the ``missing`` keys (a command may fill its defaults
+    and read again, as for an instrument file)."""
     if missing:
-        raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
-                        f" (lines '# key: value' before the header)", tuple(missing))
+        raise MissingFieldError(f"{where}: missing metadata key(s) {', '.join(missing)}"
+                                f" (lines '# key: value' before the header)", tuple(missing))
 
 
 def _plausible(where: str, key: str, value: float) -> float:
