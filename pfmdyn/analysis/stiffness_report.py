@@ -193,7 +193,7 @@ def rounded(value: float, sigma: float) -> str:
 
 _SOURCE_WORDS = {"contact_uncertainty": "contact resonances", "free_resonance_uncertainty": "free resonance",
                  "spring_constant_uncertainty": "spring constant", "tip_height_uncertainty": "tip height",
-                 "k2_policy_uncertainty": "k2 policy"}
+                 "k2_policy_uncertainty": "k2 policy", "mode_disagreement": "the modes' disagreement"}
 
 
 def _finite(value):
@@ -419,6 +419,20 @@ def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=Non
     return Solution(k1, k2, gamma, tuple(values), sigma, rms, tuple(k1_by_mode), e_star, e_sigma, sources)
 
 
+def _with_mode_disagreement(solution: Solution) -> Solution:
+    """``solution`` with the modes' disagreement, which no propagated input explains, in k1's uncertainty: the
+    standard error of the mean of each mode's own k1 (``mode_disagreement`` in the budget).
+
+    >>> s = _with_mode_disagreement(Solution(222.0, 0.0, 1.0, ("k1",), {"k1": 1.1}, k1_by_mode=(101.0, 227.0)))
+    >>> round(s.stderr["k1"], 1), round(s.sources["mode_disagreement"]["k1"], 1)
+    (63.0, 63.0)
+    """
+    k1s = np.asarray(solution.k1_by_mode, float)
+    spread = float(np.std(k1s, ddof=1) / math.sqrt(len(k1s)))
+    return replace(solution, stderr={**solution.stderr, "k1": math.hypot(solution.stderr.get("k1", 0.0), spread)},
+                   sources={**solution.sources, "mode_disagreement": {"k1": spread}})
+
+
 def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_tip_position: bool = False,
             tip_position_stated: bool = True, contact_uncertainty=0.0,
             free_resonance_uncertainty: float = 0.0, spring_constant_uncertainty: float = 0.0,
@@ -495,6 +509,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
                         f"{modes}: check the mode numbers, the free resonance and the lever (tip position, tip mass, "
                         "tilt)")
     solutions = tuple(_solution(lever, lateral, fc, v, rms, stderrs, k1_by_mode, hertz) for v, rms in found)
+    if k1_by_mode and found[0][1] > max(3 * noise, 1e-9):
+        solutions = tuple(_with_mode_disagreement(s) for s in solutions)
     unique = len(solutions) == 1 and settled
     return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, unique, tuple(proof),
                            tuple(notes), stderrs, tuple(assumed))
