@@ -639,3 +639,27 @@ def test_discrepancy_on_a_resonance_table_assumes_the_tip_height_as_stiffness_do
     assert doc["lever"]["tip_height"]["status"] == "assumed"
     assert _run(["stiffness", str(table), "--json", str(out)]) == 0
     assert doc["results"]["k1"]["value"] == pytest.approx(json.loads(out.read_text())["results"]["k1"]["value"], rel=1e-3)
+
+
+def test_a_tables_extra_column_is_left_out_and_said(tmp_path, capsys):
+    """A resonance table or spectrum with a column of its own (a note, the instrument's fit) was refused ('unknown
+    column(s)'); its columns are read, the extra one left out with a note, the result that of the table without it."""
+    rows = "1,contact,368990,213.46,{}\n1,free,72969,138.63,{}\n"
+    plain, extra = tmp_path / "plain.csv", tmp_path / "extra.csv"
+    plain.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor\n"
+                     + rows.replace(",{}", ""))
+    extra.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor,operator\n"
+                     + rows.format("A", "B"))
+    out = tmp_path / "s.json"
+    k1 = []
+    for path in (plain, extra):
+        assert _run(["stiffness", str(path), "--json", str(out)]) == 0
+        k1.append(json.loads(out.read_text())["results"]["k1"]["value"])
+    assert k1[0] == k1[1]
+    assert f"note: {extra}: column 'operator' not read" in capsys.readouterr().out
+    spectrum = tmp_path / "spectrum.csv"
+    spectrum.write_text("# spring_constant: 2\n# length: 2e-4\n# tip_height: 1e-5\n# free_resonance: 7e4\n"
+                        "frequency_hz,bias_v,x,y,comment\n" + "".join(
+                            f"{1e5 + 8e3 * i:g},{v},{1 + 0.1 * v},{0.1 * v},ok\n" for i in range(25) for v in (-1, 0, 1)))
+    assert _run(["discrepancy", str(spectrum), "--json", str(out)]) in (0, 1)
+    assert f"note: {spectrum}: column 'comment' not read" in capsys.readouterr().out

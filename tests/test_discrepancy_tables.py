@@ -51,7 +51,6 @@ def test_column_layouts_read_alike(tmp_path):
 
 
 @pytest.mark.parametrize("header, rows, message", [
-    ("mode,condition,frequency_hz,temperature_k", "1,free,6e4,300", "'temperature_k'"),
     ("mode,condition,frequency_hz,frequency_khz", "1,free,6e4,60", "frequency_khz given more than once"),
     ("mode,condition,quality_factor", "1,free,100", "lacks the column(s) frequency_hz"),
     ("mode,condition,frequency_hz,quality_factor", "1,free,6e4,-3", "quality_factor must be"),

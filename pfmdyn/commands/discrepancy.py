@@ -241,7 +241,7 @@ def run(args: argparse.Namespace) -> int:
     from ..discrepancy.report import medium_comparison
     from ..io.record import MissingFieldError
     from ..io.results import check_writable
-    from ..io.tables import SpectrumData
+    from ..io.tables import SpectrumData, ignored_note
 
     check_writable(args.json)
     check_writable(args.plot, figure=True)
@@ -260,6 +260,8 @@ def run(args: argparse.Namespace) -> int:
         assumed = flags.fill_defaults(overrides, ("tip_height",))
         data = read(args.data, overrides)       # what else is missing, without the tip height
     _check_something_to_compare(data, args.data)
+    if ignored_note(data):
+        print(f"note: {args.data}: {ignored_note(data)}")
     if assumed:
         print(flags.assumed_line(assumed, data.metadata))
     stride = 1

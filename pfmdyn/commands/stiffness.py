@@ -91,10 +91,12 @@ def _from_file(path: str) -> tuple[dict, list, list]:
 
     # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
     if file_kind(path) in CSV_KINDS | {"text table"}:
-        from ..io.tables import ResonanceData, read
+        from ..io.tables import ResonanceData, ignored_note, read
         data = read(path, required=())          # the lever's flags and defaults fill what the table lacks
         if not isinstance(data, ResonanceData):
             raise UserError(f"{path}: a resonance table (mode, condition, frequency_hz) is needed, not a spectrum")
+        if ignored_note(data):
+            print(f"note: {path}: {ignored_note(data)}")
         contact = data.condition == "contact"
         if not contact.any():
             raise UserError(f"{path}: no contact resonance in the table")
