@@ -663,3 +663,25 @@ def test_a_tables_extra_column_is_left_out_and_said(tmp_path, capsys):
                             f"{1e5 + 8e3 * i:g},{v},{1 + 0.1 * v},{0.1 * v},ok\n" for i in range(25) for v in (-1, 0, 1)))
     assert _run(["discrepancy", str(spectrum), "--json", str(out)]) in (0, 1)
     assert f"note: {spectrum}: column 'comment' not read" in capsys.readouterr().out
+
+
+def test_discrepancy_on_a_file_without_length_assumes_it_as_stiffness_does(tmp_path, capsys, monkeypatch):
+    """stiffness on an image without the lever length (as the shared PMN28 file) takes a typical PFM lever's, since
+    only the assumed tip height over it acts; discrepancy refused it ('lever length not in ...: give --length')."""
+    import numpy as np
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    from igor_files import asylum_note, igor_wave
+
+    image = igor_wave(tmp_path / "scan.ibw", np.ones((8, 8, 2), "f4"), "scan", [(0.0, 1e-8, "m")] * 2, "m",
+                      {2: ["HeightRetrace", "AmplitudeRetrace"]},
+                      asylum_note({"SpringConstant": 1.0, "ThermalFrequency": 74369, "ThermalQ": 20,
+                                   "TuneFreqResult": 348400, "TuneQResult": 218.47}))
+    out = tmp_path / "d.json"
+    assert _run(["discrepancy", str(image), "--json", str(out)]) == 0
+    assert "assumed: lever length 0.000225 m (a typical PFM lever's" in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert doc["lever"]["length"]["status"] == "assumed"
+    assert _run(["stiffness", str(image), "--json", str(out)]) == 0
+    k1 = json.loads(out.read_text())["results"]["k1"]      # discrepancy fits the damped lever: 0.1 % apart
+    assert doc["results"]["k1"]["value"] == pytest.approx(k1["value"], rel=5e-3)
+    assert doc["results"]["k1"]["stderr"] == pytest.approx(k1["stderr"], rel=0.05)

@@ -72,7 +72,6 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 def _analyse(data, args, assumed: dict):
     """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone); a resonance
     table's with the tip height's uncertainty in each parameter's (the assumed one's spread, else 10 %)."""
-    from ..analysis.stiffness_report import tip_height_spread
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
@@ -81,7 +80,7 @@ def _analyse(data, args, assumed: dict):
     options = dict(vertical_only=args.vertical_only, progress=flags.progress_shown(args), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
         return analyse(data, **options)
-    spread = tip_height_spread(data.metadata.tip_height, "tip_height" in assumed)
+    spread = flags.assumed_tip_height_uncertainty(data.metadata.tip_height, assumed)
     return analyse_resonances(data, tip_height_uncertainty=spread, **options)
 
 
@@ -255,9 +254,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         data = read(args.data, overrides)
     except MissingFieldError as exc:        # no instrument file records a tip height: the default, as every command
-        if "tip_height" not in ((exc.field,) if isinstance(exc.field, str) else exc.field):
+        missing = (exc.field,) if isinstance(exc.field, str) else exc.field
+        if "tip_height" not in missing:
             raise
         assumed = flags.fill_defaults(overrides, ("tip_height",))
+        if "length" in missing:         # only the assumed tip height over it acts, as in stiffness
+            flags.assume_length(overrides, assumed)
         data = read(args.data, overrides)       # what else is missing, without the tip height
     _check_something_to_compare(data, args.data)
     if ignored_note(data):

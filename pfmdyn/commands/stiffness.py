@@ -32,7 +32,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD, RESONANCE_RELATIVE_UNCERTAINTY
+from ..constants import LEVER_LENGTH, RESONANCE_RELATIVE_UNCERTAINTY
 from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
@@ -131,9 +131,7 @@ def _lever(args, found: dict):
     elif values.get("length") is None:
         if "tip_height" not in assumed or values.get("tilt"):
             raise UserError("the tip height and the tilt act through the lever length: give --length")
-        values["length"] = LEVER_LENGTH
-        assumed["length"] = (f"a typical PFM lever's, {LEVER_LENGTH * 1e6:g} um +/- {LEVER_LENGTH_SPREAD:.0%}: only "
-                             "the assumed tip height over it acts")
+        flags.assume_length(values, assumed)
         notes.append(f"length not given: the assumed tip height acts as a ratio to a typical PFM lever's length "
                      f"({values['tip_height'] / LEVER_LENGTH:.3g}), its uncertainty with the length's")
     if args.tip_position is not None:
@@ -148,10 +146,7 @@ def _tip_height_uncertainty(args, lever, assumed: dict) -> dict:
     of a given tip height)."""
     if args.tip_height_uncertainty is not None or "tip_height" not in assumed:
         return {}
-    relative = NAMES["tip_height_uncertainty"].default / lever.tip_height
-    if "length" in assumed:
-        relative = math.hypot(relative, LEVER_LENGTH_SPREAD)
-    return {"tip_height_uncertainty": relative * lever.tip_height}
+    return {"tip_height_uncertainty": flags.assumed_tip_height_uncertainty(lever.tip_height, assumed)}
 
 
 def _assumed_resonance_uncertainties(contacts, free_resonance: float, assumed: dict) -> dict:
