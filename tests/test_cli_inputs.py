@@ -685,3 +685,15 @@ def test_discrepancy_on_a_file_without_length_assumes_it_as_stiffness_does(tmp_p
                       asylum_note({"SpringConstant": 1.0, "ThermalFrequency": 74369, "ThermalQ": 20,
                                    "TuneFreqResult": 348400, "TuneQResult": 218.47}))
     _discrepancy_beside_stiffness(image, tmp_path, capsys, "length", "assumed: lever length 0.000225 m (a typical")
+
+
+def test_discrepancy_on_a_table_says_what_it_took_from_the_file(tmp_path, capsys):
+    """discrepancy on a resonance table or an image's resonances said what it assumed but not what it took from
+    the file (its sweeps and tunes did): the rows and the lever values no flag replaced, the free resonance once."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\n# length: 240e-6\n# tip_height: 13e-6\n"
+                     "mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,\n")
+    assert _run(["discrepancy", str(table), "--length", "2.3e-4"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("from the file: "))
+    assert line == ("from the file: free mode 1 72969 Hz, contact mode 1 368990 Hz (Q 213.46), spring_constant 0.46538 "
+                    "N/m, tip_height 1.3e-05 m")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from contextlib import contextmanager
 
 import numpy as np
@@ -82,6 +83,20 @@ def _analyse(data, args, assumed: dict):
         return analyse(data, **options)
     spread = flags.assumed_tip_height_uncertainty(data.metadata.tip_height, assumed)
     return analyse_resonances(data, tip_height_uncertainty=spread, **options)
+
+
+def _rows_taken(data) -> str:
+    """A resonance table's rows as the 'from the file' line names them.
+
+    >>> import numpy as np
+    >>> from pfmdyn.io.discrepancy_data import ResonanceData
+    >>> _rows_taken(ResonanceData(None, np.array([1, 1]), np.array(["free", "contact"]), np.array([72969.0, 368990.0]),
+    ...                           quality_factor=np.array([138.63, np.nan])))
+    'free mode 1 72969 Hz (Q 138.63), contact mode 1 368990 Hz'
+    """
+    qs = data.quality_factor if data.quality_factor is not None else [math.nan] * len(data.mode)
+    return ", ".join(f"{c} mode {m} {f:.6g} Hz" + (f" (Q {q:.6g})" if not math.isnan(q) else "")
+                     for c, m, f, q in zip(data.condition, data.mode, data.frequency_hz, qs))
 
 
 def _lever_in_medium(data, args):
@@ -266,6 +281,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {args.data}: {ignored_note(data)}")
     if assumed:
         print(flags.assumed_line(assumed, data.metadata))
+    given = flags.given_names(args, OVERRIDES)
+    found = {name: getattr(data.metadata, name) for name in OVERRIDES        # f1 said once, as the free row's
+             if getattr(data.metadata, name, None) is not None and name not in assumed
+             and not (name == "free_resonance" and not isinstance(data, SpectrumData)
+                      and data.metadata.free_resonance in data.frequency_hz[(data.condition == "free") & (data.mode == 1)])}
+    print(flags.taken_line(found, given, [f"{len(data.frequency_hz)} spectrum rows" if isinstance(data, SpectrumData)
+                                          else _rows_taken(data)]))
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
@@ -287,7 +309,6 @@ def run(args: argparse.Namespace) -> int:
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    given = flags.given_names(args, OVERRIDES)
     lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
                                     from_file=OVERRIDES, assumed=assumed)
     rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]
