@@ -325,6 +325,18 @@ def test_the_printed_medians_carry_the_median_pixels_uncertainty(tmp_path, capsy
     assert float(k1[1]) == pytest.approx(results["k1"]["value"], abs=results["k1"]["stderr"] / 10)
 
 
+def test_map_says_what_it_took_from_the_note(tmp_path, capsys):
+    """map printed the lever and the DART settings it read from the image's note without saying so (stiffness,
+    spot and discrepancy say what they took from the file); a flag's value is not the file's."""
+    case = dart_case(17, 3, 4)
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "a"), "--no-progress", "--pool", "0",
+                 "--spring-constant", "2"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("from the file: "))
+    assert f"free_resonance {case.lever['free_resonance']:.6g} Hz" in line and "drive_amplitude" in line
+    assert "spring_constant" not in line
+
+
 def test_the_library_is_quiet(capsys):
     from pfmdyn import Cantilever, Contact
     from pfmdyn.maps.dart import deflection_signal, invert

@@ -312,6 +312,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
           f"df {settings['frequency_width'][0]:.6g} Hz; {k2_policy}")
     for note in image.notes:
         print(note)
+    print(flags.taken_line({name: entry[0] for name, entry in {**found, **settings}.items() if entry[1] == "file"
+                            and name in NAMES}, ()))
     f1, f2 = image.frequencies(settings["frequency_width"][0])
     # a lag less by the offset: s = A exp(-i (phi - offset))
     s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
