@@ -51,13 +51,16 @@ def best(f, repeat: int) -> float:
 
 # Run in a fresh interpreter in either tree; it times with the source of best above, so both designs are timed alike.
 FORWARD = """
-import os, sys, time, numpy as np
+import inspect, os, sys, time, numpy as np
 import pfmdyn
 # (by file: an editable install of the current tree would answer an import the baseline lacks)
-if os.path.exists(os.path.join(os.path.dirname(pfmdyn.__file__), "composed.py")):
+if any(os.path.exists(os.path.join(os.path.dirname(pfmdyn.__file__), n)) for n in ("composed.py", "composed")):
     from pfmdyn import composed
-    spot = composed.slope_and_jacobian
-    char = composed.characteristic
+    spot, char = composed.slope_and_jacobian, composed.characteristic
+    if "parameters" in inspect.signature(char).parameters:      # one typed argument (after 606812a)
+        lever = composed.Parameters(2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+        spot = lambda beta, sigma, *args, **kwargs: composed.slope_and_jacobian(beta, lever, sigma, **kwargs)
+        char = lambda beta, *args: composed.characteristic(beta, lever)
 else:
     from pfmdyn.generated import detection, tip_setback
     spot = detection.slope_and_jacobian

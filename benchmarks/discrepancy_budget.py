@@ -10,7 +10,7 @@ entry points wrapped by CPU-second counters (a few microseconds per call added).
   by the fits' purpose, read from their evaluation budgets: the trials that rank candidates (30 per
   start; those of the models the loop went on with apart), the baseline's (40, 80), the polish (200)
   and the refits of the prune, the alternatives and the shares (100);
-* one evaluation's cost split into the compiled read-out (:func:`pfmdyn.composed_kernels.read_out`), the
+* one evaluation's cost split into the compiled read-out (:func:`pfmdyn.composed.kernels.read_out`), the
   other compiled kernels (the tip's point, the design, the projected residual and Jacobian) and the
   rest (NumPy and Python between them: the damping substitution, the chain rule, the eigenvalues);
 * ``scipy.optimize.least_squares``'s own time per evaluation (the model fits' time less their
@@ -67,7 +67,7 @@ from numba.core.registry import cpu_target
 cpu_target.target_context.refresh()
 cpu["numba set-up"] = time.process_time() - started
 from numba.core.dispatcher import Dispatcher
-from pfmdyn import composed_kernels
+from pfmdyn.composed import kernels as composed_kernels
 from pfmdyn.discrepancy import fit_kernel
 counted(Dispatcher, "_compile_for_args", "kernel loads")
 counted(composed_kernels, "read_out", "read-out")

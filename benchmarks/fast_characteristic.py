@@ -36,18 +36,19 @@ from compose import BASELINE, ROOT, SHARED, WORKLOADS, _baseline_tree, _timed, b
 from recording import recorded
 
 from pfmdyn import composed
+from pfmdyn.composed import assembly, determinant, readout
 
 ARGS = (2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
 """``benchmarks/compose.py``'s lever."""
 WORKLOAD = "discrepancy, spot away from the end"
 GENERAL = """
-def general(beta, *args):
-    lever = composed._Lever(beta, *args)
-    return lever.out(composed._scaled_det(lever)[0])
+def general(beta, parameters):
+    lever = assembly._Lever(beta, *parameters)
+    return lever.out(assembly._scaled_det(lever)[0])
 """
 exec(GENERAL)
-SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed" + GENERAL + "composed.characteristic = general; "
-                "composed._tip_at_end = lambda gamma: False; composed._written_out = lambda *a, **k: False; "
+SWITCHED_OFF = ("import sys, pytest; from pfmdyn import composed; from pfmdyn.composed import assembly, determinant, readout" + GENERAL + "composed.characteristic = general; "
+                "determinant._tip_at_end = lambda gamma: False; readout._written_out = lambda *a, **k: False; "
                 "sys.exit(pytest.main(sys.argv[1:]))")
 """The workload with every characteristic, its partials and the read-outs from the assembled system."""
 
@@ -71,19 +72,21 @@ def per_call() -> None:
                  "400-point grid, 0.3-30": (np.linspace(0.3, 30.0, 400), args),
                  "start grid: 200 springs x 150 points": (np.linspace(0.3, 20.0, 150), columns)}
         for label, (beta, a) in cases.items():
-            assert np.allclose(composed.characteristic(beta, *a), general(beta, *a), rtol=1e-10, atol=0)
+            a = composed.Parameters(*a)
+            assert np.allclose(composed.characteristic(beta, a), general(beta, a), rtol=1e-10, atol=0)
             fast, slow = [], []
             for _ in range(2):
-                fast.append(_best(lambda: composed.characteristic(beta, *a)))
-                slow.append(_best(lambda: general(beta, *a)))
+                fast.append(_best(lambda: composed.characteristic(beta, a)))
+                slow.append(_best(lambda: general(beta, a)))
             new, old = min(fast), min(slow)
             print(f"| {label} | {gamma:g} L | {new * 1e6:.1f} | {old * 1e6:.1f} | {new / old:.2f} |")
     # the partials at the roots, as resonance_sensitivity asks them (the tip at the end, no gamma)
     beta, wrt = np.array([1.9, 4.7, 7.9, 11.0]), ("beta", "kvv", "kll", "kvl", "mu")
-    fast = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
-    composed._tip_at_end, before = (lambda gamma: False), composed._tip_at_end
-    slow = _best(lambda: composed.characteristic_and_jacobian(beta, *ARGS[:7], 1.0, ARGS[8], wrt=wrt))
-    composed._tip_at_end = before
+    at_end = composed.Parameters(*ARGS[:7], 1.0, ARGS[8])
+    fast = _best(lambda: composed.characteristic_and_jacobian(beta, at_end, wrt=wrt))
+    determinant._tip_at_end, before = (lambda gamma: False), determinant._tip_at_end
+    slow = _best(lambda: composed.characteristic_and_jacobian(beta, at_end, wrt=wrt))
+    determinant._tip_at_end = before
     print(f"| its partials (beta and 4 more) at 4 points | 1 L | {fast * 1e6:.1f} | {slow * 1e6:.1f} | "
           f"{fast / slow:.2f} |")
 
@@ -97,17 +100,17 @@ def read_outs() -> None:
              ("slope and a map fit's partials", 64, 0.9, 1.0, fit), ("response", 64, 0.9, 1.0, None)]
     print("\n| read-out | damped frequencies | tip at | spot at | fast (ms) | general (ms) | fast / general |\n"
           "|---|---|---|---|---|---|---|")
-    before = composed._written_out
+    before = readout._written_out
     for label, n, gamma, sigma, wrt in cases:
-        args = (np.linspace(0.5, 30, n) * (1 + 0.01j), sigma, *ARGS[:7], gamma, ARGS[8])
+        args = (np.linspace(0.5, 30, n) * (1 + 0.01j), composed.Parameters(*ARGS[:7], gamma, ARGS[8]), sigma)
         f = (lambda: composed.response(*args)) if wrt is None else (lambda: composed.slope_and_jacobian(*args, wrt=wrt))
         fast, slow = [], []
         for _ in range(2):
-            composed._written_out = before
+            readout._written_out = before
             fast.append(_best(f))
-            composed._written_out = lambda *args, **kwargs: False
+            readout._written_out = lambda *args, **kwargs: False
             slow.append(_best(f))
-        composed._written_out = before
+        readout._written_out = before
         new, old = min(fast), min(slow)
         print(f"| {label} | {n:,} | {gamma:g} L | {sigma:g} L | {new * 1e3:.2f} | {old * 1e3:.2f} | {new / old:.2f} |")
 

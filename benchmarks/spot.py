@@ -33,7 +33,7 @@ TOLERANCE = 5e-5
 def _first_contact_beta(p) -> float:
     """First zero of the composed characteristic above 0.3 (on a grid; a bound only)."""
     grid = np.linspace(0.31, 12.0, 2000)
-    values = composed.characteristic(grid, *(p[n] for n in composed.PARAMETERS))
+    values = composed.characteristic(grid, composed.Parameters(**p))
     i = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0]
     return float(grid[i])
 

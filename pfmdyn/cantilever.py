@@ -322,23 +322,24 @@ class Cantilever:
                                     self.spring_constant, k1, self.tip_mass_ratio,
                                     1.0 / self.quality_factor, drag, loss)
 
-    def model_arguments(self, frequency, contact: "Contact | None" = None, fluid: float = 1.0) -> tuple:
-        """The composed model's arguments ``(beta, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)``
-        (:mod:`pfmdyn.composed`) at ``frequency`` in Hz, with the damping substituted.
+    def model_arguments(self, frequency, contact: "Contact | None" = None,
+                        fluid: float = 1.0) -> tuple[complex, composed.Parameters]:
+        """The composed model's arguments ``(beta, parameters)`` (:mod:`pfmdyn.composed`) at ``frequency``
+        in Hz, with the damping substituted.
 
         The frequency may be complex (a damped mode's root); ``contact=None`` is the free lever.
         :meth:`response` and the damped modes of :mod:`pfmdyn.analysis.resonances` both read the
         model through this one substitution.
 
         >>> c = Cantilever(2.0, 7e4, 2e-4, quality_factor=100.0, tilt=10.0, tip_height=1e-5)
-        >>> args = c.model_arguments(7e4, Contact(k1=50.0))
-        >>> round(float(abs(args[0])), 4), [round(float(np.real(x)), 3) for x in args[2:5]]   # |beta|; kvv, kll, kvl
+        >>> beta, p = c.model_arguments(7e4, Contact(k1=50.0))
+        >>> round(float(abs(beta)), 4), [round(float(np.real(x)), 3) for x in (p.kvv, p.kll, p.kvl)]
         (1.8751, [48.492, 1.508, -8.551])
-        >>> c.model_arguments(7e4)[2:6]                                           # free: no springs
+        >>> c.model_arguments(7e4)[1][1:5]                                        # free: no springs
         (0.0, 0.0, 0.0, 1e-05)
         """
         damped = self._damped(frequency, contact, fluid)
-        return (damped.beta, *self.model_parameters(contact, k1=damped.k1)._replace(k=damped.k, mu=damped.mu))
+        return damped.beta, self.model_parameters(contact, k1=damped.k1)._replace(k=damped.k, mu=damped.mu)
 
     def model_parameters(self, contact: "Contact | None" = None, *, k1=None) -> composed.Parameters:
         """The composed model's parameters (:class:`pfmdyn.composed.Parameters`: ``k, kvv, kll, kvl, H, L,
@@ -375,9 +376,9 @@ class Cantilever:
         """
         if contact.k1 is None:
             raise UserError("the contact needs k1", quantity="k1")
-        beta, *rest = self.model_arguments(_positive(frequency), contact)
+        beta, parameters = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
-            slopes = composed.slope(beta, self.spot_position, *rest)
+            slopes = composed.slope(beta, parameters, self.spot_position)
         return transfer.ElasticTransfer(*(np.asarray(s, dtype=complex) for s in slopes))
 
     def base_driven(self, frequency, contact: "Contact | None" = None) -> transfer.BaseTransfer:
@@ -390,9 +391,9 @@ class Cantilever:
         >>> round(float(abs(r.deflection[0])), 6), round(float(abs(r.deflection[1])), 1)   # beta**4 / 8; 1.566 Q
         (0.000155, 78.3)
         """
-        beta, *rest = self.model_arguments(_positive(frequency), contact)
+        beta, parameters = self.model_arguments(_positive(frequency), contact)
         with np.errstate(all="ignore"):
-            (slope,), (deflection,) = composed.response(beta, self.spot_position, *rest, drives=("y0",))
+            (slope,), (deflection,) = composed.response(beta, parameters, self.spot_position, drives=("y0",))
         return transfer.BaseTransfer(np.asarray(slope, dtype=complex), np.asarray(deflection - 1.0, dtype=complex))
 
     def thermal_noise(self, frequency, temperature: float, contact: "Contact | None" = None) -> transfer.ThermalNoise:
@@ -413,9 +414,9 @@ class Cantilever:
         f = _positive(frequency)
         if not temperature > 0:
             raise UserError(f"the temperature must be above 0 K, got {temperature!r}")
-        beta, *rest = self.model_arguments(f, contact)
+        beta, parameters = self.model_arguments(f, contact)
         with np.errstate(all="ignore"):
-            (_, per_couple), (per_force, _) = composed.response(beta, self.spot_position, *rest,
+            (_, per_couple), (per_force, _) = composed.response(beta, parameters, self.spot_position,
                                                                 drives=composed.PROBE_DRIVES, probe=self.spot_position)
         scale = -2.0 * BOLTZMANN * temperature / (np.pi * f)
         return transfer.ThermalNoise(scale * np.imag(per_couple), scale * np.imag(per_force))
@@ -473,7 +474,8 @@ def free_root(k, H, L, mu, gamma, rho_g=0.0) -> float:
     """
     if mu == 0.0:
         return BETA1_FREE
-    char = lambda b: composed.characteristic(b, k, 0.0, 0.0, 0.0, H, L, mu, gamma, rho_g)  # noqa: E731
+    free = composed.Parameters(k=k, kvv=0.0, kll=0.0, kvl=0.0, H=H, L=L, mu=mu, gamma=gamma, rho_g=rho_g)
+    char = lambda b: composed.characteristic(b, free)  # noqa: E731
     grid = np.linspace(0.3, BETA1_FREE + 1e-9, 65)
     with np.errstate(all="ignore"):
         vals = char(grid)

@@ -58,7 +58,8 @@ def _spots(rng, gamma):
 
 def _worst(p, beta, sigma):
     """Largest relative difference (and where) of composed's slope and deflection to the reference."""
-    slopes, deflections = composed.response(beta, sigma, **{n: p[n] for n in composed.PARAMETERS}, drives=DRIVES)
+    lever = composed.Parameters(**{n: p[n] for n in composed.PARAMETERS})
+    slopes, deflections = composed.response(beta, lever, sigma, drives=DRIVES)
     reference = spot_response_mp(beta, sigma, **p)
     worst = (0.0, None)
     for i, (ref_slope, ref_deflection) in enumerate(reference):

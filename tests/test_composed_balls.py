@@ -1,4 +1,4 @@
-"""pfmdyn.composed_balls against the composed lever in NumPy (``pfmdyn.composed``) and the
+"""pfmdyn.composed.balls against the composed lever in NumPy (``pfmdyn.composed``) and the
 independent two-segment beam solved in mpmath (``tests/segment_beam.py``: textbook basis, no
 ``derivations/`` or ``generated/``): the same resonances, certified balls holding the exact
 beam's roots, the same blind spots."""
@@ -16,7 +16,7 @@ from pfmdyn import composed
 from pfmdyn.derivations.certify import certify
 from pfmdyn.generated.characteristic import FLINT
 from pfmdyn.generated.lever_pieces import point_jump
-from pfmdyn.composed_balls import PAIRS, _field, _field_minors, characteristic_balls, q0_slope, q0_slope_coefficients
+from pfmdyn.composed.balls import PAIRS, _field, _field_minors, characteristic_balls, q0_slope, q0_slope_coefficients
 
 # The independent reference lives beside the tests (importlib mode: not on sys.path).
 sys.path.insert(0, str(Path(__file__).parent))
@@ -86,7 +86,7 @@ def test_real_zeros_are_those_of_the_composed_characteristic(lever):
     p = _params(*lever)
     mpmath.mp.dps = 40
     mine = _roots(lambda b: float(characteristic_balls(mpmath.mpf(b), mpmath, *map(mpmath.mpf, p))), 0.3, 20)
-    theirs = _roots(lambda b: float(composed.characteristic(b, *p)), 0.3, 20)
+    theirs = _roots(lambda b: float(composed.characteristic(b, composed.Parameters(*p))), 0.3, 20)
     assert len(mine) == len(theirs) >= 4
     assert np.allclose(mine, theirs, rtol=1e-13, atol=0)
     exact = np.array([float(_exact_root(p, b)) for b in mine])
@@ -115,7 +115,8 @@ def test_certified_roots_hold_the_exact_beams(lever):
         assert abs(float(a.mid()) / float(root) - 1) < 1e-13
         lo, hi = (float(v) for v in (a.lower(), a.upper()))
         h = 1e-12 * float(root)
-        assert composed.characteristic(lo - h, *p) * composed.characteristic(hi + h, *p) < 0
+        assert composed.characteristic(lo - h, composed.Parameters(*p)) * \
+            composed.characteristic(hi + h, composed.Parameters(*p)) < 0
     assert float(top.mid()) >= float(mine[-1].mid())       # complete up to there
 
 
@@ -148,13 +149,13 @@ def test_q0_slope_has_the_composed_blind_spots(lever, beta):
         if hi - lo < 1e-9:
             continue
         f = lambda x: float(q0_slope(mpmath.mpf(x), mpmath, mine[branch], mpmath.mpf(beta)))   # noqa: E731
-        g = lambda x: float(composed.slope(beta, x, *p)[3])                                     # noqa: E731
+        g = lambda x: float(composed.slope(beta, composed.Parameters(*p), x)[3])                 # noqa: E731
         zm, zt = _roots(f, lo, hi, 600), _roots(g, lo, hi, 600)
         assert len(zm) == len(zt) and np.allclose(zm, zt, atol=1e-12)
         exact = [_exact_blind_spot(beta, p, z) for z in zm]
         assert np.allclose(zm, exact, atol=1e-13)
         sigma = np.linspace(lo + 0.05 * (hi - lo), hi, 5)
-        ratio = [f(s) / composed.slope(beta, s, *p)[3] for s in sigma]
+        ratio = [f(s) / composed.slope(beta, composed.Parameters(*p), s)[3] for s in sigma]
         assert np.ptp(ratio) < 1e-10 * abs(np.mean(ratio))
     at_tip = [q0_slope(mpmath.mpf(gamma), mpmath, mine[b], mpmath.mpf(beta)) for b in ("before", "beyond")]
     assert abs(at_tip[0] - at_tip[1]) < 1e-30 * abs(at_tip[0])

@@ -57,7 +57,7 @@ def test_generated_composite_against_finite_elements(damping, component, interna
 def test_composite_reduces_to_eq5():
     b = np.array([0.5, 2.0, 7.0, 30.0])
     e = elastic_contact.slope(b, 2.4, 120.0, 100.0, 1e-5, 223e-6)
-    s = composed.at_end.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.0, 1.0, 0.0)
+    s = composed.at_end.slope(b, composed.Parameters(2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.0, 1.0, 0.0))
     np.testing.assert_allclose(np.array(s), np.array(e), rtol=1e-10)
 
 

@@ -85,8 +85,9 @@ def test_the_probe_reads_the_static_compliance_anywhere():
     """A force at a bare point x deflects it by x**3 / (3 EI); a couple turns it by x / EI."""
     k, L = 2.0, 2e-4
     for sigma in (0.3, 0.8, 1.0):
-        (s_force, s_couple), (d_force, d_couple) = composed.response(
-            1e-3, sigma, k, 0.0, 0.0, 0.0, 1e-5, L, 0.0, 1.0, 0.0, drives=composed.PROBE_DRIVES, probe=sigma)
+        free = composed.Parameters(k=k, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=L, mu=0.0, gamma=1.0, rho_g=0.0)
+        (s_force, s_couple), (d_force, d_couple) = composed.response(1e-3, free, sigma, drives=composed.PROBE_DRIVES,
+                                                                     probe=sigma)
         assert float(d_force) * k == pytest.approx(sigma**3, rel=1e-9)
         assert float(s_couple) * k * L**2 == pytest.approx(3 * sigma, rel=1e-9)
         assert float(s_force) == pytest.approx(float(d_couple), rel=1e-9)     # Maxwell's reciprocity

@@ -29,19 +29,20 @@ def test_generated_families_agree():
     e = np.array(elastic_contact.slope(B, *ARGS))
     np.testing.assert_allclose(np.array(tip_mass.slope(B, *ARGS, 0.0)), e, rtol=1e-10)
     np.testing.assert_allclose(np.array(tilt.slope(B, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6)), e, rtol=1e-10)
-    composite = composed.at_end.slope(B, 2.4, 120.0, 100.0, 30.0, 1e-5, 223e-6, 0.3, 1.0, 0.0)
+    tilted = composed.Parameters(2.4, 120.0, 100.0, 30.0, 1e-5, 223e-6, 0.0, 1.0, 0.0)
+    composite = composed.at_end.slope(B, tilted._replace(mu=0.3))
     separate = tip_mass.slope(B, *ARGS, 0.3)
     assert np.allclose(np.array(tilt.slope(B, 2.4, 120.0, 100.0, 30.0, 1e-5, 223e-6)),
-                       np.array(composed.at_end.slope(B, 2.4, 120.0, 100.0, 30.0, 1e-5, 223e-6, 0.0, 1.0, 0.0)),
+                       np.array(composed.at_end.slope(B, tilted)),
                        rtol=1e-10)
     assert not np.allclose(np.array(composite), np.array(separate))   # tilt matters
     np.testing.assert_allclose(
-        np.array(composed.at_end.slope(B, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.3, 1.0, 0.0)),
+        np.array(composed.at_end.slope(B, tilted._replace(kvl=0.0, mu=0.3))),
         np.array(separate), rtol=1e-10)
 
 
 def test_setback_numerics_are_finite_at_large_beta():
     with np.errstate(all="raise", under="ignore"):
         out = composed.at_end.slope(np.array([50.0, 400.0, 900.0]) * (1 - 1e-3j),
-                                    2.4, 120.0, 100.0, 5.0, 1e-5, 223e-6, 0.2, 0.8, 0.0)
+                                    composed.Parameters(2.4, 120.0, 100.0, 5.0, 1e-5, 223e-6, 0.2, 0.8, 0.0))
     assert all(np.isfinite(o).all() for o in out)

@@ -1,5 +1,5 @@
-"""The characteristic written out from the segments (``composed._transferred``, no assembly), against
-the assembled system's determinant (``composed._scaled_det``, the general path).
+"""The characteristic written out from the segments (``composed.determinant._transferred``, no assembly), against
+the assembled system's determinant (``composed.assembly._scaled_det``, the general path).
 
 Random levers over the real ranges (k 0.05-50 N/m, L 100-500 um, H 3-20 um, k1/k 1-1e4,
 k2/k1 0-1, tilt 0-15 deg, tip mass 0-0.5, r_g/L 0-0.05, the tip at the end or set back to
@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import composed
+from pfmdyn.composed import assembly
 
 TOLERANCE = 1e-10
 BETAS = np.concatenate([np.logspace(-3, math.log10(200), 60), [1.0 - 1e-12, 1.0, 1.0 + 1e-12]])
@@ -41,8 +42,8 @@ def _damped(rng, p, beta):
 
 
 def _general(beta, p):
-    lever = composed._Lever(beta, *(p[n] for n in composed.PARAMETERS))
-    return lever.out(composed._scaled_det(lever)[0])
+    lever = assembly._Lever(beta, *composed.Parameters(**p))
+    return lever.out(assembly._scaled_det(lever)[0])
 
 
 @pytest.mark.parametrize("seed", range(40))
@@ -55,7 +56,7 @@ def test_matches_the_assembled_system(seed, damping):
     beta = BETAS
     if damping == "damped":
         p, beta = _damped(rng, p, beta)
-    got = composed.characteristic(beta, *(p[n] for n in composed.PARAMETERS))
+    got = composed.characteristic(beta, composed.Parameters(**p))
     want = _general(beta, p)
     err = np.abs(got - want) / np.abs(want)
     assert err.max() <= TOLERANCE, (err.max(), beta[np.argmax(err)], p)
@@ -69,17 +70,17 @@ def test_broadcasts_as_the_general_path(gamma):
     springs = np.array([0.0, 1.0, 30.0])[:, None] * p["kvv"]
     beta = np.linspace(0.3, 30.0, 50)
     args = {**p, "kvv": springs}
-    got = composed.characteristic(beta, *(args[n] for n in composed.PARAMETERS))
+    got = composed.characteristic(beta, composed.Parameters(**args))
     assert got.shape == (3, 50)
     np.testing.assert_allclose(got, _general(beta, args), rtol=TOLERANCE, atol=0)
-    scalar = composed.characteristic(2.5, *(p[n] for n in composed.PARAMETERS))
+    scalar = composed.characteristic(2.5, composed.Parameters(**p))
     assert np.shape(scalar) == () and scalar == pytest.approx(float(_general(2.5, p)), rel=TOLERANCE)
     wide = {**p, "gamma": np.full((2, 1), gamma)}
-    got = composed.characteristic(beta, *(wide[n] for n in composed.PARAMETERS))
+    got = composed.characteristic(beta, composed.Parameters(**wide))
     assert got.shape == (2, 50)
     np.testing.assert_allclose(got, _general(beta, wide), rtol=TOLERANCE, atol=0)
     varying = {**p, "gamma": np.array([[1.0], [0.7], [0.999]])}
-    got = composed.characteristic(beta, *(varying[n] for n in composed.PARAMETERS))
+    got = composed.characteristic(beta, composed.Parameters(**varying))
     np.testing.assert_allclose(got, _general(beta, varying), rtol=TOLERANCE, atol=0)
 
 
@@ -99,14 +100,15 @@ def test_partials_with_the_tip_at_the_end(seed, damping):
     beta = BETAS
     if damping == "damped":
         p, beta = _damped(rng, p, beta)
-    value, partials = composed.characteristic_and_jacobian(beta, **p, wrt=WRT)
+    value, partials = composed.characteristic_and_jacobian(beta, composed.Parameters(**p), wrt=WRT)
     assert partials[composed.JACOBIAN_PARAMETERS.index("gamma")] is None
-    general_value, general = composed.characteristic_and_jacobian(beta, **p)
+    general_value, general = composed.characteristic_and_jacobian(beta, composed.Parameters(**p))
     np.testing.assert_allclose(value, general_value, rtol=TOLERANCE, atol=0)
     fair = (np.abs(beta) >= 0.9) & (np.abs(beta) <= 110)
     for name, got, want in zip(composed.JACOBIAN_PARAMETERS, partials, general):
         if name in WRT:
             np.testing.assert_allclose(got[fair], want[fair], rtol=TOLERANCE, atol=0, err_msg=name)
     h = 1e-6 * beta
-    differences = (composed.characteristic(beta + h, **p) - composed.characteristic(beta - h, **p)) / (2 * h)
+    lever = composed.Parameters(**p)
+    differences = (composed.characteristic(beta + h, lever) - composed.characteristic(beta - h, lever)) / (2 * h)
     np.testing.assert_allclose(partials[0], differences, rtol=2e-5, atol=0)

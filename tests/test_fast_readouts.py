@@ -1,5 +1,5 @@
-"""The fast read-outs, compiled (``composed._Compiled``: the system assembled and solved per member in
-:mod:`pfmdyn.composed_kernels`) and written out (``composed._WrittenOut``: the clamp and, beyond a
+"""The fast read-outs, compiled (``composed.readout._Compiled``: the system assembled and solved per member in
+:mod:`pfmdyn.composed.kernels`) and written out (``composed.written_out._WrittenOut``: the clamp and, beyond a
 set-back tip, the free end eliminated, the tip's 2 x 2 or 4 x 4 solved, no assembly), against the
 assembled system in NumPy (the general path).
 
@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 from pfmdyn import composed
+from pfmdyn.composed import readout
 
 sys.path.insert(0, str(Path(__file__).parent))
 from segment_beam import DRIVES as MP_DRIVES, spot_response_mp  # noqa: E402
@@ -49,18 +50,18 @@ SEEDS = [*range(24), *range(100, 124)]
 
 @pytest.fixture(autouse=True, params=["compiled", "written out"])
 def fast(request, monkeypatch):
-    """Each test for both fast paths: the compiled kernel (:mod:`pfmdyn.composed_kernels`) and the
+    """Each test for both fast paths: the compiled kernel (:mod:`pfmdyn.composed.kernels`) and the
     NumPy written-out forms."""
     monkeypatch.setattr(composed, "KERNELS", request.param == "compiled")
 
 
 def _general(f, *args, **kwargs):
-    before = composed._written_out, composed.KERNELS
-    composed._written_out, composed.KERNELS = (lambda *args, **kwargs: False), False
+    before = readout._written_out, composed.KERNELS
+    readout._written_out, composed.KERNELS = (lambda *args, **kwargs: False), False
     try:
         return f(*args, **kwargs)
     finally:
-        composed._written_out, composed.KERNELS = before
+        readout._written_out, composed.KERNELS = before
 
 
 def _relative(got, want, scale=0.0):
@@ -89,7 +90,7 @@ def _assert_close(got, want, scale, exact, exact_value, want_value):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_response_matches_the_assembled_system(seed):
     p, beta, sigma = _case(seed)
-    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta, composed.Parameters(**p), sigma)
     got = composed.response(*args, drives=composed.DRIVES)
     want = _general(composed.response, *args, drives=composed.DRIVES)
     for part in (0, 1):
@@ -101,7 +102,7 @@ def test_response_matches_the_assembled_system(seed):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_partials_match_the_assembled_system(seed):
     p, beta, sigma = _case(seed)
-    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta, composed.Parameters(**p), sigma)
     values, jac = composed.slope_and_jacobian(*args, wrt=WRT, drives=composed.DRIVES)
     want_values, want_jac = _general(composed.slope_and_jacobian, *args, wrt=WRT, drives=composed.DRIVES)
     at = dict(p, beta=beta, sigma=sigma)
@@ -123,7 +124,7 @@ def test_tip_position_partial_matches_the_assembled_system(seed):
     if not composed.KERNELS:
         pytest.skip("the NumPy forms' gamma partial is the general path's")
     p, beta, sigma = _case(seed)
-    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta, composed.Parameters(**p), sigma)
     values, jac = composed.slope_and_jacobian(*args, wrt=("gamma", "beta"), drives=composed.DRIVES)
     want_values, want_jac = _general(composed.slope_and_jacobian, *args, wrt=("gamma", "beta"),
                                      drives=composed.DRIVES)
@@ -156,7 +157,7 @@ def test_cancelling_partials_are_as_good_as_the_general_path(seed, index, drive,
     """Where the partial is far below ``|S / p|``, both paths lose digits alike: the fast one within
     1e-10 ``|S / p|`` of the exact partial, as is the general one."""
     p, beta, sigma = _case(seed)
-    args = (beta[index:index + 1], sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta[index:index + 1], composed.Parameters(**p), sigma)
     i, j = composed.DRIVES.index(drive), composed.SPOT_JACOBIAN_PARAMETERS.index(name)
     exact = _mp_partial(beta[index], sigma, p, name, drive)
     scale = abs(composed.slope(*args, drives=(drive,))[0][0]) / abs(dict(p, beta=beta[index])[name])
@@ -172,7 +173,7 @@ def test_set_back_against_the_exact_beam(seed, index, sigma):
     of the slope, within 1e-10 of the 70-digit solution (the partials relative to ``|S / p|``)."""
     p, beta, drawn = _case(seed)
     sigma, beta = drawn if sigma is None else sigma, beta[index]
-    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta, composed.Parameters(**p), sigma)
     got = composed.response(*args, drives=composed.DRIVES)
     exact = spot_response_mp(beta, [sigma], dps=70, **p)[0]
     for part in (0, 1):
@@ -195,7 +196,7 @@ def test_shapes_as_the_general_path(gamma, sigma):
     back for some members, the spot before and beyond the tip in one batch."""
     at = dict(beta=np.linspace(0.5, 20.0, 7) * (1 + 0.01j), sigma=sigma, k=2.0, kvv=np.array([[0.0], [50.0], [400.0]]),
               kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=gamma, rho_g=0.05)
-    args = [at[n] for n in ("beta", "sigma", *composed.PARAMETERS)]
+    args = [at["beta"], composed.Parameters(**{n: at[n] for n in composed.PARAMETERS}), at["sigma"]]
     shape = np.broadcast_shapes(np.shape(gamma), (3, 7))
     got, want = composed.slope_and_jacobian(*args, wrt=WRT), _general(composed.slope_and_jacobian, *args, wrt=WRT)
     for i, value in enumerate(want[0]):
@@ -210,9 +211,9 @@ def test_shapes_as_the_general_path(gamma, sigma):
 @pytest.mark.parametrize("seed", [3, 104, 119])
 def test_drives_asked_and_the_kept_read_out_change_nothing(seed):
     """A subset of the drives, in any order, gives the full set's columns bit for bit; a read-out
-    asked again at the same point (the kept lever) or after another point equals a fresh one."""
+    asked again at the same point (a fit's kept lever) or after another point equals a fresh one."""
     p, beta, sigma = _case(seed)
-    args = (beta, sigma, *(p[n] for n in composed.PARAMETERS))
+    args = (beta, composed.Parameters(**p), sigma)
     full, full_jac = composed.slope_and_jacobian(*args, wrt=WRT, drives=composed.DRIVES)
     for drives in (("y0",), ("q0", "d1"), ("f0", "m0", "d2")):
         got, jac = composed.slope_and_jacobian(*args, wrt=WRT, drives=drives)
@@ -220,16 +221,18 @@ def test_drives_asked_and_the_kept_read_out_change_nothing(seed):
             k = composed.DRIVES.index(drive)
             assert np.array_equal(got[i], full[k], equal_nan=True)
             assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(jac[i], full_jac[k]) if a is not None)
-    other = (beta * 1.01, *args[1:])
-    first = composed.slope(*args)
-    composed.slope(*other)
-    again = composed.slope(*args)
-    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(first, again))
-    values, _ = composed.slope_and_jacobian(*args, wrt=("beta",))
+    other, kept = (beta * 1.01, *args[1:]), composed.LastReadOut()
+    first = composed.slope(*args, kept=kept)
+    composed.slope(*other, kept=kept)
+    again = composed.slope(*args, kept=kept)
+    fresh = composed.slope(*args)
+    assert all(np.array_equal(a, b, equal_nan=True) and np.array_equal(a, c, equal_nan=True)
+               for a, b, c in zip(first, again, fresh))
+    values, _ = composed.slope_and_jacobian(*args, wrt=("beta",), kept=kept)
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(values, first))
     # what a caller does to the results does not reach the kept read-out
-    slopes, deflections = composed.response(*args)
+    slopes, deflections = composed.response(*args, kept=kept)
     want = [d.copy() for d in deflections]
     for a in (*slopes, *deflections):
         a -= 1.0
-    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(composed.response(*args)[1], want))
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(composed.response(*args, kept=kept)[1], want))

@@ -24,12 +24,13 @@ N = 200
 # The composed lever behind the generated families' interface (arguments by name).
 AT_END = SimpleNamespace(
     __name__="composed.at_end", PARAMETERS=composed.PARAMETERS, JACOBIAN_PARAMETERS=composed.JACOBIAN_PARAMETERS,
-    slope=lambda beta, **p: composed.at_end.slope(beta, *(p[n] for n in composed.PARAMETERS)),
-    slope_and_jacobian=lambda beta, **p: composed.at_end.slope_and_jacobian(beta, *(p[n] for n in composed.PARAMETERS)))
+    slope=lambda beta, **p: composed.at_end.slope(beta, composed.Parameters(**p)),
+    slope_and_jacobian=lambda beta, **p: composed.at_end.slope_and_jacobian(beta, composed.Parameters(**p)))
 AT_SPOT = SimpleNamespace(
-    __name__="composed.at_spot", PARAMETERS=("sigma",) + composed.PARAMETERS,
-    JACOBIAN_PARAMETERS=composed.SPOT_JACOBIAN_PARAMETERS, slope=composed.slope,
-    slope_and_jacobian=composed.slope_and_jacobian)
+    __name__="composed.slope", PARAMETERS=("sigma",) + composed.PARAMETERS,
+    JACOBIAN_PARAMETERS=composed.SPOT_JACOBIAN_PARAMETERS,
+    slope=lambda beta, sigma, **p: composed.slope(beta, composed.Parameters(**p), sigma),
+    slope_and_jacobian=lambda beta, sigma, **p: composed.slope_and_jacobian(beta, composed.Parameters(**p), sigma))
 COMPOSED = (AT_END, AT_SPOT)
 
 
@@ -89,12 +90,12 @@ def test_characteristic_jacobian_moves_resonances():
     """-D_p / D_beta at a root is the root's motion: compare with re-solved roots."""
     from pfmdyn.roots.bracket import refine
     args = {"k": 2.0, "kvv": 150.0, "kll": 40.0, "kvl": 3.0, "H": 1e-5, "L": 2.2e-4, "mu": 0.2, "gamma": 0.9, "rho_g": 0.02}
-    F = lambda b, **kw: composed.characteristic(b, **{**args, **kw})  # noqa: E731
+    F = lambda b, **kw: composed.characteristic(b, composed.Parameters(**{**args, **kw}))  # noqa: E731
     grid = np.linspace(0.5, 12, 2000)
     vals = F(grid)
     i = int(np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[1])
     root = float(refine(F, grid[i], grid[i + 1], rtol=1e-14))
-    _, d = composed.characteristic_and_jacobian(root, **args)
+    _, d = composed.characteristic_and_jacobian(root, composed.Parameters(**args))
     names = composed.JACOBIAN_PARAMETERS
     for j, name in enumerate(names[1:], 1):
         h = 1e-6 * max(abs(args[name]), 1.0)

@@ -26,11 +26,11 @@ N_ELEMENTS = 100   # Hermite cubics: about 1e-7 on the first three modes; more e
 
 def _roots(args, count=3):
     """First ``count`` zeros in beta of the composed characteristic (grid + Brent)."""
-    grid = np.linspace(0.3, 40.0, 8000)
+    grid, lever = np.linspace(0.3, 40.0, 8000), composed.Parameters(*args)
     with np.errstate(all="ignore"):
-        vals = composed.characteristic(grid, *args)
+        vals = composed.characteristic(grid, lever)
     change = np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[:count]
-    return np.array([brentq(lambda b: composed.characteristic(b, *args), grid[i], grid[i + 1], xtol=1e-15,
+    return np.array([brentq(lambda b: composed.characteristic(b, lever), grid[i], grid[i + 1], xtol=1e-15,
                             rtol=1e-15) for i in change])
 
 
@@ -47,9 +47,10 @@ def _lever(rng, n=N_ELEMENTS):
 def test_zero_gyration_radius_is_the_point_mass_tip():
     b = np.array([0.7, 1.9, 4.0, 7.5, 12.0]) * (1 - 0.01j)
     point = np.array(tip_mass.slope(b, 2.4, 120.0, 100.0, 1e-5, 223e-6, 0.3))
-    at_end = np.array(composed.at_end.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.3, 1.0, 0.0))
+    lever = composed.Parameters(2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.3, 1.0, 0.0)
+    at_end = np.array(composed.at_end.slope(b, lever))
     np.testing.assert_allclose(at_end, point, rtol=1e-10)
-    turning = np.array(composed.at_end.slope(b, 2.4, 120.0, 100.0, 0.0, 1e-5, 223e-6, 0.3, 1.0, 0.02))
+    turning = np.array(composed.at_end.slope(b, lever._replace(rho_g=0.02)))
     assert np.max(np.abs(turning / point - 1)) > 1e-3
 
 
@@ -79,8 +80,9 @@ def test_damped_slope_matches_finite_elements():
     r = f / p["f1"]
     beta_f, k_f, k1_f, mu_f = damping.factors(r, 1 / 80.0, 1 / 30, 2 * math.pi * p["f1"] * beam.eta / p["k1"])
     kvv, kll, kvl = rotated(p["k1"] * k1_f, p["k2"], p["alpha"])
-    ours = composed.at_end.slope(BETA1 * np.sqrt(r) * beta_f, p["k"] * k_f, kvv, kll, kvl, p["H"], p["L"],
-                                 p["mu"] * mu_f, p["gamma"], p["gyration_radius"] / p["L"])
+    lever = composed.Parameters(p["k"] * k_f, kvv, kll, kvl, p["H"], p["L"], p["mu"] * mu_f, p["gamma"],
+                                p["gyration_radius"] / p["L"])
+    ours = composed.at_end.slope(BETA1 * np.sqrt(r) * beta_f, lever)
     fe = beam.slope(f)
     for j in range(4):            # d1, d2, f0, q0; without the rotary term they differ by ~0.1
         assert np.max(np.abs(ours[j] - fe[:, j])) < 2e-6 * np.max(np.abs(fe[:, j])), j

@@ -44,7 +44,8 @@ def test_slope_and_deflection_match_the_segment_beam(seed):
     p = _random_lever(rng)
     sigma = np.sort(rng.uniform(0.3, 1.0, 25))
     for beta in (0.5, 1.7, 3.3, 6.1):
-        got = composed.slope(beta, sigma, **p), composed.deflection(beta, sigma, **p)
+        lever = composed.Parameters(**p)
+        got = composed.slope(beta, lever, sigma), composed.deflection(beta, lever, sigma)
         for i, drive in enumerate(DRIVES):
             ref = np.array([spot_response(beta, s, **p, **{drive: 1.0}) for s in sigma]).T
             for g, r in zip((got[0][i], got[1][i]), ref):
@@ -55,7 +56,7 @@ def test_jacobian_in_the_spot_position_is_the_slope_derivative():
     """d(slope)/d(sigma) of the composed lever against a central difference of the reference."""
     p = _random_lever(np.random.default_rng(7))
     sigma, h = np.array([0.45, 0.7, 0.93]), 1e-6
-    _, jac = composed.slope_and_jacobian(2.2, sigma, **p, wrt=("sigma",))
+    _, jac = composed.slope_and_jacobian(2.2, composed.Parameters(**p), sigma, wrt=("sigma",))
     column = composed.SPOT_JACOBIAN_PARAMETERS.index("sigma")
     for i, drive in enumerate(DRIVES):
         ref = [(spot_response(2.2, s + h, **p, **{drive: 1.0})[0] - spot_response(2.2, s - h, **p, **{drive: 1.0})[0])
@@ -124,7 +125,7 @@ def test_local_force_reads_as_d1_over_k1_everywhere():
     p = {**_random_lever(np.random.default_rng(3)), "kvl": 0.0}
     sigma = np.linspace(0.3, 1, 11)
     for beta in (0.8, 4.0):
-        s = composed.slope(beta, sigma, **p)
+        s = composed.slope(beta, composed.Parameters(**p), sigma)
         np.testing.assert_allclose(s[2] * p["kvv"], s[0], rtol=1e-9)
 
 

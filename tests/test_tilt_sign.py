@@ -22,9 +22,10 @@ def _contact_hz(lever: Cantilever, k1, k2, alpha, count=3):
     kvv, kll, kvl = rotated(k1, k2, alpha)
     args = (lever.spring_constant, kvv, kll, kvl, lever.tip_height, lever.length, 0.0, 1.0, 0.0)
     grid = np.linspace(0.5, 30.0, 6000)
-    vals = composed.characteristic(grid, *args)
+    parameters = composed.Parameters(*args)
+    vals = composed.characteristic(grid, parameters)
     change = np.flatnonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[:count]
-    roots = np.array([brentq(lambda b: composed.characteristic(b, *args), grid[i], grid[i + 1], xtol=1e-14)
+    roots = np.array([brentq(lambda b: composed.characteristic(b, parameters), grid[i], grid[i + 1], xtol=1e-14)
                       for i in change])
     return lever.free_resonance * (roots / BETA1) ** 2
 

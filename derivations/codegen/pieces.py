@@ -88,7 +88,7 @@ def render() -> str:
         series=s_minus, closed=[_in_namespace(e) for e in K], weights=krylov_duncan_weights(K),
         bounded=cse_lines(list(B)),
         load=code(pieces.load_constant()), parameters=[str(p) for p in POINT_PARAMETERS],
-        # the partials' powers of beta as products: compiled (pfmdyn.composed_kernels.tip_point), a complex
+        # the partials' powers of beta as products: compiled (pfmdyn.composed.kernels.tip_point), a complex
         # power is a general pow, some hundred times a product
         jump=cse_lines(jump), partials={p: [code(e, {beta}) for e in v] for p, v in partials.items()},
         point_example=point_example, kd_example=kd_example, closed_example=closed_example)

@@ -70,7 +70,7 @@ def characteristic(beta, lever: Cantilever, k1, k2, tip_position):
     # the free lever's parameters (its tip height, the tip's mass and inertia), the springs and tip here
     parameters = lever.model_parameters(None)._replace(kvv=kvv, kll=kll, kvl=kvl, gamma=tip_position)
     with np.errstate(all="ignore"):
-        return composed.characteristic(beta, *parameters)
+        return composed.characteristic(beta, parameters)
 
 
 def _free_root(lever: Cantilever, tip_position: float) -> float:

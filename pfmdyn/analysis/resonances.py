@@ -1,7 +1,7 @@
 """Where a probe's resonances are: certified undamped free and contact modes, and with damping
 each mode's Q, damped frequency and amplitude-peak frequency.
 
-The model is the composed lever (:mod:`pfmdyn.composed`; certified in :mod:`pfmdyn.composed_balls`):
+The model is the composed lever (:mod:`pfmdyn.composed`; certified in :mod:`pfmdyn.composed.balls`):
 the tip at ``x_tip = tip_position L`` with its mass and rotary inertia, the contact springs
 ``k1`` (along the sample normal) and ``k2`` (along the surface) rotated into the lever's axes by
 the tilt, the three damping mechanisms of ``derivations/damping.py``.
@@ -40,7 +40,8 @@ import flint
 import numpy as np
 
 from ..cantilever import Cantilever, Contact
-from .. import composed, composed_balls
+from .. import composed
+from ..composed import balls as composed_balls
 from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, certify

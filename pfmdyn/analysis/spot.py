@@ -2,7 +2,7 @@
 
 The optical lever reads the slope ``u0'(x_s)`` wherever the spot was put; the paper reads it
 at ``x_s = L`` (Section II).  From the composed lever (:mod:`pfmdyn.composed`, certified in
-:mod:`pfmdyn.composed_balls`, both assembled from ``derivations/pieces.py``) this module
+:mod:`pfmdyn.composed.balls`, both assembled from ``derivations/pieces.py``) this module
 gives, for one lever in contact at one frequency:
 
 * the **electrostatic blind spots**: every ``x_s/L`` in ``(0, 1]`` where the slope response
@@ -31,7 +31,8 @@ import numpy as np
 
 from ..cantilever import Cantilever, Contact
 from ..errors import UserError
-from .. import composed, composed_balls
+from .. import composed
+from ..composed import balls as composed_balls
 from ..generated import formulas
 from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in
@@ -83,8 +84,8 @@ def slope_along(lever: Cantilever, contact: Contact, beta, sigma) -> tuple:
     >>> bool(abs(a - b) < 1e-5 * abs(a))
     True
     """
-    return composed.slope(np.asarray(beta, dtype=float), np.asarray(sigma, dtype=float),
-                            **parameters(lever, contact))
+    return composed.slope(np.asarray(beta, dtype=float), composed.Parameters(**parameters(lever, contact)),
+                          np.asarray(sigma, dtype=float))
 
 
 def static_limit(fn, *args, **kwargs):
@@ -198,10 +199,11 @@ def sensitivities(lever: Cantilever, contact: Contact, sigma) -> dict:
     0.666667
     """
     L, gamma = lever.length, lever.tip_position
-    params = {**parameters(lever, contact), "kvv": 0.0, "kll": 0.0, "kvl": 0.0}
-    theta = static_limit(lambda b: composed.slope(b, sigma, **params)[2])
-    tip = static_limit(lambda b: composed.deflection(b, gamma, **params)[2])
-    touching = static_limit(lambda b: composed.slope(b, sigma, **parameters(lever, contact))[0])
+    touching_lever = composed.Parameters(**parameters(lever, contact))
+    free = touching_lever._replace(kvv=0.0, kll=0.0, kvl=0.0)
+    theta = static_limit(lambda b: composed.slope(b, free, sigma)[2])
+    tip = static_limit(lambda b: composed.deflection(b, free, gamma)[2])
+    touching = static_limit(lambda b: composed.slope(b, touching_lever, sigma)[0])
     return {"free": np.real(tip / (L * theta)), "contact": np.real(1.0 / (L * touching))}
 
 

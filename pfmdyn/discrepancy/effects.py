@@ -145,7 +145,7 @@ class Effect:
 
     def reading(self, coords):
         """Where the model reads the slope when the effect is present: None (the free end,
-        :data:`pfmdyn.composed.at_end`) or a reading of :mod:`pfmdyn.composed` and its arguments after ``beta``."""
+        :data:`pfmdyn.composed.at_end`) or another :class:`pfmdyn.composed.Reading`."""
         return None
 
     def jacobian(self, chain: Chain) -> tuple:
@@ -275,12 +275,12 @@ class Background(Effect):
 
 @dataclass(frozen=True)
 class SpotPosition(Effect):
-    """The slope read at the laser spot ``x_s = spot_position L`` (:data:`pfmdyn.composed.at_spot`)
+    """The slope read at the laser spot ``x_s = spot_position L`` (a :class:`pfmdyn.composed.Reading`)
     instead of the free end: it reweights the modes (and can put a zero between them) but moves
     no resonance, so its Jacobian term has no free-root part."""
 
     def reading(self, coords):
-        return composed.at_spot, (coords["spot_position"],)
+        return composed.Reading(coords["spot_position"])
 
     def partials(self, coords) -> set[str]:
         return {"sigma"}        # the generated module's symbol for x_s / L (pfmdyn.composed)

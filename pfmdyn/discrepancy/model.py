@@ -17,7 +17,7 @@ compose; damping enters as the generated substitution (:func:`pfmdyn.cantilever.
 complex ``beta``, ``k`` and ``k1``), tilt as the rotation of the spring tensor
 (:mod:`pfmdyn.derivations.tilt`), background as two linear columns
 ``(b0 + b1 V) f / f_max``, and the laser spot (``spot_position``) by reading the same
-lever at ``x_s = spot_position L`` instead of the free end (:data:`pfmdyn.composed.at_spot`).
+lever at ``x_s = spot_position L`` instead of the free end (a :class:`pfmdyn.composed.Reading`).
 
 The solver's Jacobian comes from the derivations too: the partials of the slopes
 (:func:`pfmdyn.composed.slope_and_jacobian`, from the same assembled system), of the damping substitution and
@@ -76,6 +76,11 @@ class Model:
         return {p.name: _coordinate(p, p.null) for p in every if p.null is not None}
 
     @cached_property
+    def _kept(self) -> composed.LastReadOut:
+        """The model's last NumPy read-out: a fit asks for the slopes, then their partials, at one point."""
+        return composed.LastReadOut()
+
+    @cached_property
     def columns(self) -> tuple[tuple[int, bool], ...]:
         """The design columns as ``(source, per volt)`` (:data:`pfmdyn.discrepancy.effects.BASE_COLUMNS`), the
         components' in the library's order after the baseline's."""
@@ -116,8 +121,8 @@ class Model:
         with np.errstate(all="ignore"):
             d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                      c["inv_q"], drag(c, r), c["x"])
-            module, at = self._reading(c)
-            return module.slope(d.beta, *at, *self.lever_parameters(c, d, rotated(d.k1, c["k2"], c["alpha"])))
+            lever = self.lever_parameters(c, d, rotated(d.k1, c["k2"], c["alpha"]))
+            return self._reading(c).slope(d.beta, lever, kept=self._kept)
 
     def slopes_and_jacobian(self, frequency_hz, internal):
         """:meth:`slopes` and their derivatives w.r.t. the internal parameters.
@@ -140,13 +145,13 @@ class Model:
             d = damping_substitution(r, root_r, m.spring_constant, c["k1"], c["mu"], *loss)
             spring = d.k1
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
-            module, at = self._reading(c)
+            reading = self._reading(c)
             lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
-            T, J = module.slope_and_jacobian(d.beta, *at, *lever, wrt=self._partials_needed(c, module))
+            T, J = reading.slope_and_jacobian(d.beta, lever, wrt=self._partials_needed(c, reading), kept=self._kept)
             T = np.array(T)
             # Partials not computed (None) have a zero multiplier below.
             part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
-                    for j, p in enumerate(module.JACOBIAN_PARAMETERS)}
+                    for j, p in enumerate(reading.JACOBIAN_PARAMETERS)}
             chain = Chain(part, rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [chain.rotation(j) * (v * LN10) for j, v in enumerate((spring, c["k2"])[:len(self.springs)])]
@@ -173,22 +178,21 @@ class Model:
         return composed.Parameters(k=d.k, kvv=springs[0], kll=springs[1], kvl=springs[2], H=m.tip_height, L=m.length,
                                    mu=d.mu, gamma=c["gamma"], rho_g=0.0)
 
-    def _reading(self, c):
-        """The generated slope the model reads and its arguments after ``beta``: the free end
-        (:data:`pfmdyn.composed.at_end`) unless a component reads elsewhere (the laser spot)."""
+    def _reading(self, c) -> composed.Reading:
+        """Where the model reads the slope: the free end (:data:`pfmdyn.composed.at_end`) unless a
+        component reads elsewhere (the laser spot)."""
         for e in self.components:
             reading = e.reading(c)
             if reading is not None:
                 return reading
-        return composed.at_end, ()
+        return composed.at_end
 
-    def _partials_needed(self, c, module=composed.at_end) -> tuple[str, ...]:
-        """The generated partials of ``module`` the chain rule uses at coordinates ``c`` (others
-        multiply zero)."""
+    def _partials_needed(self, c, reading=composed.at_end) -> tuple[str, ...]:
+        """The partials of ``reading`` the chain rule uses at coordinates ``c`` (others multiply zero)."""
         need = {"kvv", "kll"} | ({"kvl"} if c["alpha"] != 0.0 else set())
         for e in self.components:
             need |= e.partials(c)
-        return tuple(p for p in module.JACOBIAN_PARAMETERS if p in need)
+        return tuple(p for p in reading.JACOBIAN_PARAMETERS if p in need)
 
     @property
     def n_linear(self) -> int:
@@ -249,37 +253,37 @@ def free_root_and_jacobian(k, H, L, mu, gamma) -> tuple[float, tuple[float, floa
     (1.875104, True)
     """
     b1 = free_root(k, H, L, mu, gamma)
-    d_beta, d_mu, d_gamma = characteristic_partials(b1, (k, 0.0, 0.0, 0.0, H, L, mu, gamma, 0.0),
-                                                    ("beta", "mu", "gamma"))
+    free = composed.Parameters(k=k, kvv=0.0, kll=0.0, kvl=0.0, H=H, L=L, mu=mu, gamma=gamma, rho_g=0.0)
+    d_beta, d_mu, d_gamma = characteristic_partials(b1, free, ("beta", "mu", "gamma"))
     return b1, (-float(d_mu / d_beta), -float(d_gamma / d_beta))
 
 
-def characteristic_partials(beta, args, wrt) -> np.ndarray:
-    """Partials of :func:`pfmdyn.composed.characteristic` of an undamped lever (``args``: its parameters
-    after ``beta``) at real ``beta`` w.r.t. the names ``wrt`` (of :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`),
+def characteristic_partials(beta, parameters: composed.Parameters, wrt) -> np.ndarray:
+    """Partials of :func:`pfmdyn.composed.characteristic` of an undamped lever (real ``parameters``)
+    at real ``beta`` w.r.t. the names ``wrt`` (of :data:`pfmdyn.composed.JACOBIAN_PARAMETERS`),
     one row each.  The tip at the end and ``gamma`` fixed: :func:`pfmdyn.composed.characteristic_and_jacobian`
     (compiled, the product rule); otherwise compiled complex steps
-    (:func:`pfmdyn.composed_kernels.characteristic_partials`, 100x the assembled system's adjugate, which
+    (:func:`pfmdyn.composed.kernels.characteristic_partials`, 100x the assembled system's adjugate, which
     is the reference with :data:`pfmdyn.composed.KERNELS` off: both agree to 1e-9).
 
-    >>> args = (1.0, 0.0, 0.0, 0.0, 1e-5, 1e-4, 0.0, 0.9, 0.0)
-    >>> d_beta, d_mu = characteristic_partials(np.array([1.9]), args, ("beta", "mu"))
+    >>> lever = composed.Parameters(k=1.0, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=1e-4, mu=0.0, gamma=0.9, rho_g=0.0)
+    >>> d_beta, d_mu = characteristic_partials(np.array([1.9]), lever, ("beta", "mu"))
     >>> composed.KERNELS = False
-    >>> want = composed.characteristic_and_jacobian(np.array([1.9]), *args, wrt=("beta", "mu"))[1]
+    >>> want = composed.characteristic_and_jacobian(np.array([1.9]), lever, wrt=("beta", "mu"))[1]
     >>> composed.KERNELS = True
     >>> bool(np.allclose([d_beta, d_mu], [want[0], want[5]], rtol=1e-10, atol=0))
     True
     """
     names = composed.JACOBIAN_PARAMETERS
-    if composed.KERNELS and ("gamma" in wrt or args[7] != 1.0):
-        from ..composed_kernels import characteristic_partials as compiled
+    if composed.KERNELS and ("gamma" in wrt or parameters.gamma != 1.0):
+        from ..composed.kernels import characteristic_partials as compiled
 
         beta = np.asarray(beta, float)
         at = np.array([-1 if p == "beta" else composed.PARAMETERS.index(p) for p in wrt], np.int64)
         out = np.empty((len(wrt), beta.size))
-        compiled(beta.reshape(-1), np.array(args, float), at, out)
+        compiled(beta.reshape(-1), np.array(parameters, float), at, out)
         return out.reshape((len(wrt),) + beta.shape)
-    d = composed.characteristic_and_jacobian(beta, *args, wrt=wrt)[1]
+    d = composed.characteristic_and_jacobian(beta, parameters, wrt=wrt)[1]
     return np.array([d[names.index(p)] for p in wrt])
 
 

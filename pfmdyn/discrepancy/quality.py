@@ -52,7 +52,7 @@ def _characteristic(model: Model, internal, contact: bool):
         d = damping_substitution(r, formulas.beta_from_frequency(r, 1.0, b1), m.spring_constant, c["k1"], c["mu"],
                                  s * c["inv_q"], s * drag(c, r), s * c["x"])
         springs = rotated(d.k1, c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
-        return composed.characteristic(d.beta, *model.lever_parameters(c, d, springs))
+        return composed.characteristic(d.beta, model.lever_parameters(c, d, springs))
     return f
 
 

@@ -431,8 +431,7 @@ def _two_free_roots(lever: Cantilever, ratio: float, position: float) -> np.ndar
     from ..roots.bracket import refine
 
     def char(b):
-        return composed.characteristic(b, lever.spring_constant, 0.0, 0.0, 0.0, lever.tip_height or 0.0,
-                                       lever.length, ratio, position, 0.0)
+        return composed.characteristic(b, lever.model_parameters(None)._replace(mu=ratio, gamma=position, rho_g=0.0))
     grid = np.linspace(0.3, 5.0, 95)
     with np.errstate(all="ignore"):
         values = char(grid)

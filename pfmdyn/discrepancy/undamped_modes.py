@@ -37,16 +37,15 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     """
     c = model.coords(internal)
     m = model.meta
-    kvv, kll, kvl = rotated(c["k1"], c["k2"], c["alpha"]) if contact else (0.0, 0.0, 0.0)
     b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
-    args = (m.spring_constant, kvv, kll, kvl, m.tip_height, m.length, c["mu"], c["gamma"], 0.0)
+    lever = characteristic_args(model, internal, contact)
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
     if composed.KERNELS:       # the same steps compiled (one call, not one per iteration)
-        from ..composed_kernels import characteristic_roots
-        roots = characteristic_roots(grid, np.array([args], float), refine_roots, 1e-13)
+        from ..composed.kernels import characteristic_roots
+        roots = characteristic_roots(grid, np.array([lever], float), refine_roots, 1e-13)
     else:
-        roots = grid_roots(lambda b: composed.characteristic(b, *args), grid, refine_roots)
+        roots = grid_roots(lambda b: composed.characteristic(b, lever), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.free_resonance, b1)
 
 
@@ -69,7 +68,8 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
         grid = np.linspace(0.3, top, max(150, int(12 * top)))
         with np.errstate(all="ignore"):
-            vals = composed.characteristic(grid, *(args[rows, j, None] for j in range(args.shape[1])))
+            levers = composed.Parameters(*(args[rows, j, None] for j in range(args.shape[1])))     # a column
+            vals = composed.characteristic(grid, levers)
         row, idx = np.nonzero(np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) < 0)
         lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
         with np.errstate(all="ignore"):
@@ -157,7 +157,7 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     rows = np.flatnonzero(per_unit.any(axis=1))
     wrt = ("beta",) + tuple(moved[i] for i in rows)
     with np.errstate(all="ignore"):
-        d = characteristic_partials(beta, tuple(a0), wrt)
+        d = characteristic_partials(beta, composed.Parameters(*a0), wrt)
         ratio = (d[1:] / d[0]).reshape(len(rows), len(f))
         d_beta = -(ratio.T @ per_unit[rows])
         d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp

@@ -234,17 +234,17 @@ class BeamMapModel:
         alpha = lever.alpha
         # read at the laser spot or, by default, at the free end
         spot = lever.spot_position
-        module, at = (composed.at_end, ()) if spot == 1.0 else (composed.at_spot, (spot,))
+        reading = composed.at_end if spot == 1.0 else composed.Reading(spot)
         kvv, kll, kvl = rotated(k1e, k2e, alpha)
-        args = (beta, *at, *lever.model_parameters(None)._replace(kvv=kvv, kll=kll, kvl=kvl, mu=mu))
+        parameters = lever.model_parameters(None)._replace(kvv=kvv, kll=kll, kvl=kvl, mu=mu)
         if not jacobian:
-            return module.slope(*args), None
+            return reading.slope(beta, parameters), None
         wanted = ("beta", "kvv", "kll", "kvl", "mu")
         # the tip mass moves with drag only (mu_factor); otherwise its partial multiplies zero
         moving_mass = self.lever.tip_mass_ratio and "viscous" in self.mechanisms
-        values, partials = module.slope_and_jacobian(*args, wrt=wanted if moving_mass else wanted[:4])
+        values, partials = reading.slope_and_jacobian(beta, parameters, wrt=wanted if moving_mass else wanted[:4])
         c, s = math.cos(alpha), math.sin(alpha)
-        index = {name: module.JACOBIAN_PARAMETERS.index(name) for name in wanted}
+        index = {name: reading.JACOBIAN_PARAMETERS.index(name) for name in wanted}
         out = []
         for p in partials:
             d_vv, d_ll, d_vl = (p[index[n]] for n in ("kvv", "kll", "kvl"))

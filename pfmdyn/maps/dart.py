@@ -231,7 +231,7 @@ def deflection_signal(lever: Cantilever, contact: Contact, frequency, k1, loss):
     frequency, k1, loss = np.broadcast_arrays(*(np.asarray(v, float) for v in (frequency, k1, loss)))
     beta, parameters = _arguments(lever, contact, k1, loss, frequency)
     with np.errstate(all="ignore"):
-        (slope,) = composed.slope(beta, lever.spot_position, *parameters, drives=("d1",))
+        (slope,) = composed.slope(beta, parameters, lever.spot_position, drives=("d1",))
     return np.asarray(slope, complex).reshape(frequency.shape) * (2 * lever.length / 3)
 
 
@@ -252,7 +252,7 @@ def lever_pole(lever: Cantilever, contact: Contact, k1, loss, start, steps: int 
 
     def characteristic(frequency):
         beta, parameters = _arguments(lever, contact, k1, loss, frequency)
-        return composed.characteristic(beta, *parameters)
+        return composed.characteristic(beta, parameters)
 
     with np.errstate(all="ignore"):
         for _ in range(steps):

@@ -1,22 +1,26 @@
-"""Compiled kernels of the composed lever (:mod:`pfmdyn.composed`): the read-out per frequency.
+"""Compiled kernels of the composed lever (:mod:`pfmdyn.composed`): the read-out per frequency, the
+tip point, the characteristic, its roots and its partials.
 
-The written-out read-out of :class:`pfmdyn.composed._WrittenOut` (each segment's outer rows
+The written-out read-out of :class:`pfmdyn.composed.written_out._WrittenOut` (each segment's outer rows
 eliminated, the tip's 2 x 2 or 4 x 4 solved: well conditioned from the quasi-static ``beta`` up, where
 the assembled system is not), step for step per member in a compiled loop (numba), with its partials
 (those of ``gamma`` too, which the NumPy forms take from the assembled system): no NumPy call and no
 allocation per member.  The NumPy forms are the reference: ``tests/test_fast_readouts.py`` holds
 both fast paths to the assembled system and, where both lose digits alike, to the 70-digit beam.
 
-Imported lazily by :mod:`pfmdyn.composed` (numba's import and the on-disk cache's load stay out of
-the command line's start-up).
+Imported lazily by :mod:`pfmdyn.composed.readout` and :mod:`pfmdyn.composed.determinant` (numba's
+import and the on-disk cache's load stay out of the command line's start-up).  One file, not one per
+kernel: the kernels call shared compiled steps (:func:`_segment`, :func:`_inverse`, :func:`_product`),
+and numba's on-disk cache is keyed on the caller's file alone, so a step edited in another file would
+leave its callers' cached machine code stale.
 """
 from __future__ import annotations
 
 import numba
 import numpy as np
 
-from .generated import lever_pieces as pieces
-from .roots.bracket import _LOBATTO, _TO_CHEBYSHEV
+from ..generated import lever_pieces as pieces
+from ..roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 
 __all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "tip_point", "characteristic", "characteristic_roots",
            "characteristic_partials"]
@@ -52,7 +56,7 @@ def _krylov_duncan(s):
 @numba.njit(cache=True)
 def _segment(beta, t, ell, uc, rows, load):
     """A segment of length ``ell`` read at ``t``: ``rows[n, j]`` the basis' ``d**n/ds**n`` (n = 0..4),
-    ``load[n]`` the load's, per unit q0 (as :class:`pfmdyn.composed._Segment`).  Returns whether it
+    ``load[n]`` the load's, per unit q0 (as :class:`pfmdyn.composed.segments._Segment`).  Returns whether it
     is short (the Krylov-Duncan field matrix; else the bounded basis)."""
     s = beta * t
     if abs(beta * ell) <= _LIMIT:
@@ -75,7 +79,7 @@ def _segment(beta, t, ell, uc, rows, load):
 
 @numba.njit(cache=True)
 def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, k, short, rows, load, dE, dP):
-    """``(dE, dP)`` (rows 0..3) w.r.t. a parameter of ``kind`` (:meth:`pfmdyn.composed._Segment.derivative`,
+    """``(dE, dP)`` (rows 0..3) w.r.t. a parameter of ``kind`` (:meth:`pfmdyn.composed.segments._Segment.derivative`,
     and the load's ``-P/k``); ``moves_end``, ``moves_start``: ``d ell/d gamma``, ``d t/d gamma``."""
     for m in range(4):
         dP[m] = 0.0
@@ -109,7 +113,7 @@ def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, k, short, ro
 @numba.njit(cache=True)
 def _inverse(M, out, work, pivots):
     """``M^-1`` into ``out`` (2 x 2 by the adjugate, larger by LU with partial pivoting, as
-    :func:`pfmdyn.composed._small_inverse`); False where ``M`` is singular."""
+    :func:`pfmdyn.composed.written_out._small_inverse`); False where ``M`` is singular."""
     n = M.shape[0]
     if n == 2:
         det = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
@@ -166,7 +170,7 @@ def _product(A, B, out):
 
 @numba.njit(cache=True)
 def _across(V, J, two, out):
-    """What the tip's rows ask of a state ``V`` (4 x drives) left of it (:meth:`pfmdyn.composed._WrittenOut._across`):
+    """What the tip's rows ask of a state ``V`` (4 x drives) left of it (:meth:`pfmdyn.composed.written_out._WrittenOut._across`):
     the jump's ``V[2:] - J V[:2]``, after continuity's ``V[:2]`` when a segment lies beyond."""
     first = 2 if two else 0
     for d in range(V.shape[1]):
@@ -182,7 +186,7 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
     ``dz[n, p, 2, 6]`` w.r.t. parameters of ``kinds`` (:data:`BETA` ...), per member ``n``, of the drives
     ``drives`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns are solved alone, so the others
     are neither formed nor written): the
-    written-out form of :class:`pfmdyn.composed._WrittenOut` (each segment's outer rows eliminated,
+    written-out form of :class:`pfmdyn.composed.written_out._WrittenOut` (each segment's outer rows eliminated,
     the tip's 2 x 2 or 4 x 4 solved), step for step.
 
     ``jump[n, 12]`` the tip's point (:func:`pfmdyn.generated.lever_pieces.point_jump`), ``djump[p, n, 12]``
@@ -575,7 +579,7 @@ def _joined(b, p, g, R, T, v, factor, beyond):
 
 @numba.njit(cache=True)
 def tip_at_end_and_partials(beta, jump, djump, at_beta, out, partials):
-    """``pfmdyn.composed._tip_at_end_and_partials`` per member, step for step: the clamp's segment per
+    """``pfmdyn.composed.determinant._tip_at_end_and_partials`` per member, step for step: the clamp's segment per
     unit of its two unknowns ``R`` and ``dR/ds``, the tip's jump ``jump[n]`` across, ``det T[2:]`` times
     the factor (``out[n]``), and by the product rule its partials ``partials[p, n]`` from the jump's
     ``djump[p, n]`` (``at_beta``: the row of ``beta``, which also moves the segment; -1: none).

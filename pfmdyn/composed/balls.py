@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import flint
 
-from .generated.lever_pieces import KD_WEIGHTS, krylov_duncan_closed, point_jump
+from ..generated.lever_pieces import KD_WEIGHTS, krylov_duncan_closed, point_jump
 
 __all__ = ["characteristic_balls", "q0_slope_coefficients", "q0_slope"]
 

@@ -1,0 +1,255 @@
+"""The lever read at the spot ``x_s = sigma L``: :func:`response`, :func:`slope`, :func:`deflection`,
+:func:`slope_and_jacobian`, and where an engine reads them (:class:`Reading`: :data:`at_end` or at a spot).
+
+Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
+:data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
+(:class:`pfmdyn.composed.written_out._WrittenOut`, kept by a fit's :class:`LastReadOut`),
+or assembled (:class:`pfmdyn.composed.assembly._Lever`: a probe's drives, the ``gamma`` partial).
+Separate from the forms because it only chooses among them and scales their states to slopes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import composed
+from ..generated import lever_pieces as pieces
+from .assembly import _Lever
+from .parameters import (_POINT, DRIVES, JACOBIAN_PARAMETERS, SPOT_JACOBIAN_PARAMETERS, TIP_DRIVES, Parameters,
+                         _drive_columns)
+from .written_out import _WrittenOut
+
+
+_KEPT_SIZE = 1 << 14
+"""Batches up to this size are kept (some megabytes; a map's block is not held after its fit)."""
+
+
+class LastReadOut:
+    """The last NumPy read-out (:class:`_WrittenOut`), kept by its owner: a least-squares fit asks for the
+    values at a point, then for their partials at the same point, which need the same solution.
+
+    Given as ``kept`` to :func:`response` and :func:`slope_and_jacobian` (or a :class:`Reading`'s), it gives
+    the kept read-out again when the arguments are the same to the bit; without one each call solves
+    afresh.  The owner is the fit's model (:class:`pfmdyn.discrepancy.model.Model`), so that no read-out
+    outlives it.  The compiled read-outs (:data:`pfmdyn.composed.KERNELS`) compute the values and the
+    partials in one pass and keep nothing.
+
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> beta, kept = np.linspace(1, 3, 4), LastReadOut()
+    >>> kept(beta, lever, 0.8) is kept(beta, lever, 0.8), kept(beta, lever, 0.8) is kept(beta + 1e-9, lever, 0.8)
+    (True, False)
+    """
+
+    def __init__(self):
+        self.key, self.lever = None, None
+
+    def __call__(self, beta, parameters: Parameters, sigma, drives=DRIVES) -> _WrittenOut:
+        arrays = [np.asarray(a) for a in (beta, sigma, *parameters)]
+        key = (tuple(drives),) + tuple((a.dtype.str, a.shape, a.tobytes()) for a in arrays)
+        if self.lever is not None and self.key == key:
+            return self.lever
+        lever = _WrittenOut(*arrays, drives=tuple(drives))
+        if lever.beta.size <= _KEPT_SIZE:
+            self.key, self.lever = key, lever
+        return lever
+
+
+def _numpy_read_out(beta, parameters, sigma, drives, kept: LastReadOut | None) -> _WrittenOut:
+    """The written-out NumPy read-out: ``kept``'s, or solved afresh without one."""
+    if kept is not None:
+        return kept(beta, parameters, sigma, drives)
+    return _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
+
+
+class _Compiled:
+    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s interface: ``z`` and
+    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
+    values when ``names`` are given.
+
+    Examples
+    --------
+    >>> args = (2.5, 0.95, 2.0, 98.0, 52.0, 9.0, 1e-05, 0.0002, 0.1, 0.9, 0.05)
+    >>> bool(np.allclose(_Compiled(*args).z, _WrittenOut(*args).z, rtol=1e-13, atol=0))
+    True
+    """
+
+    def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=DRIVES, names=()):
+        from . import kernels
+
+        args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
+        self.shape = np.broadcast(*args).shape
+        n = math.prod(self.shape)
+        real = not any(np.iscomplexobj(a) for a in args)       # real arguments, real results (as NumPy's)
+        # each argument per member as a row of one complex block (the lever's: beta, the tip's springs,
+        # stiffness and mass) or one real block (the lengths): fresh, C-ordered rows (a read-only or
+        # strided view would be another specialisation to compile)
+        lever, lengths = np.empty((6, n), complex), np.empty((5, n))
+        for block, at, part in ((lever, (0, 2, 3, 4, 5, 8), np.asarray), (lengths, (1, 9, 6, 7, 10), np.real)):
+            for row, i in zip(block, at):
+                row.reshape(self.shape)[...] = part(args[i])
+        beta, k, kvv, kll, kvl, mu = lever
+        sigma, g, H, L, rho_g = lengths
+        self.beta, self.L = (beta if np.iscomplexobj(args[0]) else beta.real), L
+        two = bool(np.any(g != 1.0)) or "gamma" in names
+        jump, djump = np.empty((n, 12), complex), np.empty((len(names), n, 12), complex)
+        kernels.tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
+                          np.array([_POINT.index(p) if p in _POINT else -1 for p in names], np.int64), jump, djump)
+        # the load's constant by NumPy's powers: the q0 column's cancellations amplify their last digits
+        uc = pieces.load_constant(beta, k, L)
+        codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
+        kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
+        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
+        use = _drive_columns(drives, DRIVES)
+        kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, np.array(use, np.int64), z, dz)
+        z, dz = z[..., use], dz[..., use]
+        self.z = z.real if real else z
+        dz = dz.real if real else dz
+        self._partials = {name: dz[:, i] for i, name in enumerate(names)}
+
+    def partials(self, names):
+        return {name: self._partials[name] for name in names}
+
+    out = _Lever.out
+
+
+def _written_out(names=(), probe=None) -> bool:
+    """Whether a read-out is written out (:class:`_WrittenOut`, no assembly): all but a probe's and
+    the partial w.r.t. ``gamma``, which the assembled system gives."""
+    return probe is None and "gamma" not in names
+
+
+def response(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, probe=None,
+             kept: LastReadOut | None = None):
+    """Slope ``u'(x_s)`` and deflection ``u(x_s)`` at ``x_s = sigma L`` (the free end by default) per unit
+    drive: two tuples over ``drives`` (of :data:`DRIVES`, and of :data:`PROBE_DRIVES` at ``x = probe L``
+    when ``probe`` is given).  The deflection is absolute: driven by the base (``y0``), the deflection
+    relative to the base is this minus one.  ``kept``: a fit's last read-out (:class:`LastReadOut`).
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> slopes, deflections = response(2.5, lever)
+    >>> [f"{v:.8g}" for v in slopes]
+    ['7346.2326', '5310.5162', '66.641964', '-0.016021027']
+    >>> free = Parameters(k=2.0, kvv=0.0, kll=0.0, kvl=0.0, H=1e-5, L=2e-4, mu=0.0, gamma=1.0, rho_g=0.0)
+    >>> [round(float(v), 9) for v in response(1e-3, free, 0.7, ("y0",))[1]]
+    [1.0]
+    """
+    if probe is None and composed.KERNELS:
+        lever = _Compiled(beta, sigma, *parameters, drives=drives)
+        z = lever.z
+    elif _written_out(probe=probe):
+        lever = _numpy_read_out(beta, parameters, sigma, drives, kept)
+        z = lever.z
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, *parameters, probe=probe)
+        z = lever.state(lever.reader(sigma))[:, :, _drive_columns(drives, lever.drives)]
+    theta = (lever.beta / lever.L)[:, None] * z[:, 1]
+    # a copy: a kept read-out (:class:`LastReadOut`) must not change with what a caller does to it
+    return tuple(np.moveaxis(lever.out(theta), -1, 0)), tuple(np.moveaxis(lever.out(z[:, 0].copy()), -1, 0))
+
+
+def slope(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES, kept: LastReadOut | None = None):
+    """Slope ``u'(sigma L)`` per unit drive (a tuple of arrays over ``drives``, by default ``d1, d2, f0, q0``;
+    ``kept`` as :func:`response`'s).
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> [f"{v:.8g}" for v in slope(2.5, lever, 0.8)]
+    ['7446.7015', '3613.9492', '70.728402', '-0.01440258']
+    """
+    return response(beta, parameters, sigma, drives, kept=kept)[0]
+
+
+def deflection(beta, parameters: Parameters, sigma=1.0, drives=TIP_DRIVES):
+    """Deflection ``u(sigma L)`` per unit drive (a tuple of arrays over ``drives``; absolute).
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> [f"{v:.7g}" for v in deflection(2.5, lever, 0.8)]
+    ['0.9396194', '0.04499747', '0.00966206', '1.391756e-06']
+    """
+    return response(beta, parameters, sigma, drives)[1]
+
+
+def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIAN_PARAMETERS, drives=TIP_DRIVES,
+                       kept: LastReadOut | None = None):
+    """:func:`slope` and its partials w.r.t. :data:`SPOT_JACOBIAN_PARAMETERS` (None where not in ``wrt``;
+    ``kept`` as :func:`response`'s: the values' read-out serves the partials).
+
+    Returns
+    -------
+    values : tuple of ndarray, as :func:`slope`
+    jacobian : ``jacobian[i][j]``, the derivative of ``values[i]`` w.r.t. ``SPOT_JACOBIAN_PARAMETERS[j]``
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> values, jacobian = slope_and_jacobian(2.5, lever, 0.8, wrt=('sigma',))
+    >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
+    ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
+    """
+    names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
+    use = _drive_columns(drives, DRIVES)
+    if composed.KERNELS:      # every partial, gamma's too
+        lever = _Compiled(beta, sigma, *parameters, drives=drives, names=tuple(names))
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    elif _written_out(names):
+        lever = _numpy_read_out(beta, parameters, sigma, drives, kept)
+        use = list(range(len(drives)))
+        z1, dz = lever.z[:, 1], lever.partials(names)
+    else:
+        beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
+        lever = _Lever(beta, *parameters, split="gamma" in names, derivatives=True)
+        reader = lever.reader(sigma)
+        z1 = lever.state(reader)[:, 1]
+        dc = lever.d_system([p for p in names if p != "sigma"])
+        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c))) for name in names}
+    scale = (lever.beta / lever.L)[:, None]
+    columns = {}
+    for name in names:
+        d = scale * dz[name][:, 1]
+        columns[name] = lever.out(d + z1 / lever.L[..., None] if name == "beta" else d)
+    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
+    jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
+                for i in use)
+    return values, jac
+
+
+class Reading:
+    """Where an engine reads the lever: at the free end (:data:`at_end`: its partials are those of
+    :data:`JACOBIAN_PARAMETERS`, the characteristic's) or at a laser spot ``sigma`` (its partial too,
+    :data:`SPOT_JACOBIAN_PARAMETERS`).  One forward model, :func:`slope_and_jacobian`, behind both.
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> bool(at_end.slope(2.5, lever)[0] == Reading(1.0).slope(2.5, lever)[0])
+    True
+    """
+
+    def __init__(self, sigma=None):
+        self.sigma = sigma
+        self.JACOBIAN_PARAMETERS = JACOBIAN_PARAMETERS if sigma is None else SPOT_JACOBIAN_PARAMETERS
+
+    @property
+    def _at(self):
+        return 1.0 if self.sigma is None else self.sigma
+
+    def slope(self, beta, parameters: Parameters, kept: LastReadOut | None = None):
+        return slope(beta, parameters, self._at, kept=kept)
+
+    def slope_and_jacobian(self, beta, parameters: Parameters, wrt=None, kept: LastReadOut | None = None):
+        wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
+        values, jac = slope_and_jacobian(beta, parameters, self._at, wrt=wrt, kept=kept)
+        keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
+        return values, tuple(tuple(row[j] for j in keep) for row in jac)
+
+
+at_end = Reading()
+"""The reading at the free end."""
