@@ -418,7 +418,8 @@ def test_a_resonance_table_without_metadata_takes_the_flags_and_its_free_row(tmp
 
 
 def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monkeypatch):
-    """spot FILE required --frequency though the image's note records the drive (DriveFrequency)."""
+    """spot FILE required --frequency though the image's note records the drive (DriveFrequency); its 'from the
+    file' line named the drive alone, not the lever it read there."""
     import numpy as np
     monkeypatch.syspath_prepend(str(Path(__file__).parent))
     from igor_files import asylum_note, igor_wave
@@ -431,8 +432,11 @@ def test_spot_takes_the_drive_frequency_its_file_records(tmp_path, capsys, monke
     assert _run(["spot", str(image), "--k1", "100", "--json", str(out)]) == 0
     frequency = json.loads(out.read_text())["results"]["drive_frequency"]
     assert frequency["value"] == 3.1e5 and frequency["status"] == "file"
-    assert "from the file: drive frequency 310000 Hz" in capsys.readouterr().out
-    assert _run(["spot", str(image), "--k1", "100", "--drive-frequency", "2e5", "--json", str(out)]) == 0
+    assert ("from the file: drive_frequency 310000 Hz, free_resonance 70000 Hz, length 0.0002 m, spring_constant 2 N/m"
+            in capsys.readouterr().out.splitlines())
+    assert _run(["spot", str(image), "--k1", "100", "--drive-frequency", "2e5", "--spring-constant", "3", "--json",
+                 str(out)]) == 0
+    assert "from the file: free_resonance 70000 Hz, length 0.0002 m" in capsys.readouterr().out.splitlines()
     assert json.loads(out.read_text())["results"]["drive_frequency"] == {"value": 2e5, "stderr": None, "unit": "Hz",
                                                                    "status": "given"}
 
@@ -577,3 +581,119 @@ def test_diagram_json_writes_no_negative_zero(tmp_path):
                  "--bias-points", "5"]) == 0
     text = out.read_text()
     assert "-0.0," not in text and "-0.0]" not in text and json.loads(text)["results"]
+
+
+def test_spot_states_how_far_its_results_move_with_the_assumed_tip_height_and_tie(tmp_path, capsys):
+    """spot printed the blind spot, the contact sensitivity and the calibration factor to six figures with no
+    uncertainty, though they rest on a tip height and a k2 tie it assumed (the BTFO image's calibration factor is 14,
+    31 and 1669 at a tip height of 10.5, 13 and 15.5 um).  Each now carries its spread over the assumed inputs, and
+    the value at a tip height one standard uncertainty off lies within about it."""
+    lever = ["--spring-constant", "2", "--free-resonance", "7e4", "--length", "2.25e-4", "--width", "3e-5", "--k1", "200",
+             "--drive-frequency", "2e5", "--spot-position", "0.8"]
+    out = tmp_path / "s.json"
+    assert _run(["spot", *lever, "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "uncertainties from the assumed inputs, each moved by its own: tip height, k2 policy" in text
+    assert re.search(r"blind spot x_s/L: [\d.]+ \+- [\d.e+-]+ ", text) and re.search(r"in contact [\d.]+ \+- ", text)
+    assumed = json.loads(out.read_text())["results"]
+    assert _run(["spot", *lever, "--tip-height", "10.5e-6", "--poisson", "0.3", "--json", str(out)]) == 0
+    moved = json.loads(out.read_text())["results"]
+    for name in ("blind_spot", "contact_sensitivity", "calibration_factor"):
+        value, stderr = assumed[name]["value"], assumed[name]["stderr"]
+        value, stderr, other = (value[0], stderr[0], moved[name]["value"][0]) if name == "blind_spot" else (
+            (value["real"], stderr, moved[name]["value"]["real"]) if isinstance(value, dict) else
+            (value, stderr, moved[name]["value"]))
+        assert 0 < abs(other - value) < 1.5 * stderr, (name, value, stderr, other)
+
+
+def test_resonances_state_how_far_the_contact_resonances_move_with_the_assumed_inputs(tmp_path, capsys):
+    """resonances printed each contact resonance to 0.1 Hz with no uncertainty, though it rests on a tip height
+    and a k2 tie it assumed (the BTFO lever's first moves by 12 kHz over the tip height's spread).  Each contact
+    resonance now has its standard uncertainty over them; with k2 = 0 and no tilt the tip height does not act and
+    none is stated."""
+    lever = ["--spring-constant", "0.46538", "--free-resonance", "72969", "--length", "2.4e-4", "--k1", "258.48"]
+    out = tmp_path / "r.json"
+    assert _run(["resonances", *lever, "--json", str(out)]) == 0
+    assert "each moved by its own: tip height, k2 policy" in capsys.readouterr().out
+    assumed = json.loads(out.read_text())["results"]["contact"]["resonance"]
+    assert _run(["resonances", *lever, "--tip-height", "10.5e-6", "--poisson", "0.3", "--json", str(out)]) == 0
+    moved = json.loads(out.read_text())["results"]["contact"]["resonance"]["value"]
+    for value, stderr, other in zip(assumed["value"], assumed["stderr"], moved):
+        assert 0 < abs(other - value) < 1.5 * stderr, (value, stderr, other)
+    capsys.readouterr()
+    assert _run(["resonances", *lever, "--k2", "0", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["contact"]["resonance"]["stderr"] is None
+    assert " +- " not in capsys.readouterr().out
+
+
+def test_discrepancy_on_a_resonance_table_assumes_the_tip_height_as_stiffness_does(tmp_path, capsys):
+    """stiffness TABLE took the typical PFM probe's tip height; discrepancy on the same table refused ('missing
+    metadata key(s) tip_height'), though it assumes it for an instrument file holding the same two rows."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\n# length: 240e-6\nmode,condition,frequency_hz,quality_factor\n"
+                     "1,contact,368990,213.46\n1,free,72969,138.63\n")
+    _discrepancy_beside_stiffness(table, tmp_path, capsys, "tip_height", "assumed: tip height 1.3e-05 m")
+
+
+def _discrepancy_beside_stiffness(path, tmp_path, capsys, name: str, line: str) -> None:
+    """discrepancy on ``path`` assumes ``name`` (printing ``line``, its record marked so) and finds the k1 of
+    stiffness on the same file, with its uncertainty (discrepancy fits the damped lever: 0.1 % apart)."""
+    out = tmp_path / "d.json"
+    assert _run(["discrepancy", str(path), "--json", str(out)]) == 0
+    assert line in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert doc["lever"][name]["status"] == "assumed"
+    assert _run(["stiffness", str(path), "--json", str(out)]) == 0
+    k1 = json.loads(out.read_text())["results"]["k1"]
+    assert doc["results"]["k1"]["value"] == pytest.approx(k1["value"], rel=5e-3)
+    assert doc["results"]["k1"]["stderr"] == pytest.approx(k1["stderr"], rel=0.05)
+
+
+def test_a_tables_extra_column_is_left_out_and_said(tmp_path, capsys):
+    """A resonance table or spectrum with a column of its own (a note, the instrument's fit) was refused ('unknown
+    column(s)'); its columns are read, the extra one left out with a note, the result that of the table without it."""
+    rows = "1,contact,368990,213.46,{}\n1,free,72969,138.63,{}\n"
+    plain, extra = tmp_path / "plain.csv", tmp_path / "extra.csv"
+    plain.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor\n"
+                     + rows.replace(",{}", ""))
+    extra.write_text("# spring_constant: 0.46538\nmode,condition,frequency_hz,quality_factor,operator\n"
+                     + rows.format("A", "B"))
+    out = tmp_path / "s.json"
+    k1 = []
+    for path in (plain, extra):
+        assert _run(["stiffness", str(path), "--json", str(out)]) == 0
+        k1.append(json.loads(out.read_text())["results"]["k1"]["value"])
+    assert k1[0] == k1[1]
+    assert f"note: {extra}: column 'operator' not read" in capsys.readouterr().out
+    spectrum = tmp_path / "spectrum.csv"
+    spectrum.write_text("# spring_constant: 2\n# length: 2e-4\n# tip_height: 1e-5\n# free_resonance: 7e4\n"
+                        "frequency_hz,bias_v,x,y,comment\n" + "".join(
+                            f"{1e5 + 8e3 * i:g},{v},{1 + 0.1 * v},{0.1 * v},ok\n" for i in range(25) for v in (-1, 0, 1)))
+    assert _run(["discrepancy", str(spectrum), "--json", str(out)]) in (0, 1)
+    assert f"note: {spectrum}: column 'comment' not read" in capsys.readouterr().out
+
+
+def test_discrepancy_on_a_file_without_length_assumes_it_as_stiffness_does(tmp_path, capsys, monkeypatch):
+    """stiffness on an image without the lever length (as the shared PMN28 file) takes a typical PFM lever's, since
+    only the assumed tip height over it acts; discrepancy refused it ('lever length not in ...: give --length')."""
+    import numpy as np
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    from igor_files import asylum_note, igor_wave
+
+    image = igor_wave(tmp_path / "scan.ibw", np.ones((8, 8, 2), "f4"), "scan", [(0.0, 1e-8, "m")] * 2, "m",
+                      {2: ["HeightRetrace", "AmplitudeRetrace"]},
+                      asylum_note({"SpringConstant": 1.0, "ThermalFrequency": 74369, "ThermalQ": 20,
+                                   "TuneFreqResult": 348400, "TuneQResult": 218.47}))
+    _discrepancy_beside_stiffness(image, tmp_path, capsys, "length", "assumed: lever length 0.000225 m (a typical")
+
+
+def test_discrepancy_on_a_table_says_what_it_took_from_the_file(tmp_path, capsys):
+    """discrepancy on a resonance table or an image's resonances said what it assumed but not what it took from
+    the file (its sweeps and tunes did): the rows and the lever values no flag replaced, the free resonance once."""
+    table = tmp_path / "table.csv"
+    table.write_text("# spring_constant: 0.46538\n# length: 240e-6\n# tip_height: 13e-6\n"
+                     "mode,condition,frequency_hz,quality_factor\n1,contact,368990,213.46\n1,free,72969,\n")
+    assert _run(["discrepancy", str(table), "--length", "2.3e-4"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("from the file: "))
+    assert line == ("from the file: free mode 1 72969 Hz, contact mode 1 368990 Hz (Q 213.46), spring_constant 0.46538 "
+                    "N/m, tip_height 1.3e-05 m")

@@ -64,10 +64,12 @@ def test_real_files_state_dof_and_name_no_untestable_mechanism(tmp_path, capsys,
 
 
 @pytest.mark.skipif(not ASYLUM.is_dir(), reason="real data absent")
-def test_a_file_without_length_asks_for_the_length_alone(capsys):
-    """The tip height has its default in every command: a file that records neither it nor the length
-    asks for the length only (it asked for both, though with the length alone the run goes through)."""
-    assert cli.main(["discrepancy", str(ASYLUM / "PMN28Pt0000.h5")]) == 2
+def test_a_file_without_length_asks_for_it_only_with_a_given_tip_height(capsys):
+    """The tip height has its default in every command: a file that records neither it nor the length takes a
+    typical PFM lever's length too, as stiffness does (only their ratio acts); a tip height given needs the length."""
+    assert cli.main(["discrepancy", str(ASYLUM / "PMN28Pt0000.h5")]) == 0
+    assert "assumed: lever length 0.000225 m" in capsys.readouterr().out
+    assert cli.main(["discrepancy", str(ASYLUM / "PMN28Pt0000.h5"), "--tip-height", "13e-6"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].endswith("lever length not in PMN28Pt0000.h5: give --length"), err
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -51,7 +52,6 @@ def test_column_layouts_read_alike(tmp_path):
 
 
 @pytest.mark.parametrize("header, rows, message", [
-    ("mode,condition,frequency_hz,temperature_k", "1,free,6e4,300", "'temperature_k'"),
     ("mode,condition,frequency_hz,frequency_khz", "1,free,6e4,60", "frequency_khz given more than once"),
     ("mode,condition,quality_factor", "1,free,100", "lacks the column(s) frequency_hz"),
     ("mode,condition,frequency_hz,quality_factor", "1,free,6e4,-3", "quality_factor must be"),
@@ -133,3 +133,17 @@ def test_the_first_free_resonance_alone_is_nothing_to_compare(tmp_path, capsys):
     assert err.count("\n") == 1 and "one.csv: only the first free resonance" in err
     path.write_text(HEAD + "mode,condition,frequency_hz,quality_factor\n1,free,60000,300\n")
     assert cli.main(["discrepancy", str(path)]) == 0       # its Q is a value to compare
+
+
+def test_the_viscous_width_carries_the_uncertainty_of_the_loss_it_is_made_of(tmp_path, capsys):
+    """The half-power width of viscous drag was printed bare ('viscous_width_hz = 1924.8 Hz') beside its loss
+    0.02588 +- 0.00099 (the shared PMN28 image's two rows): the width is f1 times the loss, so is its uncertainty."""
+    path = tmp_path / "t.csv"
+    path.write_text("# spring_constant: 1\n# length: 225e-6\n# tip_height: 13e-6\n"
+                    "mode,condition,frequency_hz,quality_factor\n1,free,74369,20\n1,contact,348400,218.47\n")
+    out = tmp_path / "d.json"
+    assert cli.main(["discrepancy", str(path), "--json", str(out)]) == 0
+    results = json.loads(out.read_text())["results"]
+    loss, width = results["viscous_loss"], results["viscous_width"]
+    assert width["stderr"] == pytest.approx(74369 * loss["stderr"], rel=1e-9) and width["stderr"] > 0
+    assert re.search(r"viscous_width_hz = \d+ \+- \d+ Hz", capsys.readouterr().out)

@@ -187,7 +187,7 @@ def test_sweep_columns_and_header_in_khz(tmp_path):
     path.write_text("Q factor:\t3.1\nPeak amplitude frequency (kHz):\t72.5\nSweep data\n"
                     f"Frequency (kHz)\tAmplitude (mV)\tPhase (deg)\n{rows}\n")
     record = read_instrument(path)
-    assert record.fields == {"free_resonance": 72500.0, "free_quality_factor": 3.1}
+    assert record.fields == {"amplitude_peak": 72500.0, "free_quality_factor": 3.1}
     freq, values, unit = record.spectrum
     assert unit == "V" and freq[0] == 70000.0 and values.max() == pytest.approx(1.0)
 

@@ -309,6 +309,34 @@ def test_an_assumed_tip_height_has_its_share_in_k1s_standard_error(tmp_path):
     assert np.all(assumed["contact_loss_stderr"].values[ok] > exact["contact_loss_stderr"].values[ok])
 
 
+def test_the_printed_medians_carry_the_median_pixels_uncertainty(tmp_path, capsys):
+    """map printed the medians bare ('contact resonance 405277 Hz, ..., k1 318.6 N/m'), six figures with no
+    uncertainty, though the JSON holds each median pixel's (k1's with the assumed tip height's share)."""
+    path = write_ibw(dart_case(17, 3, 4), tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "a"), "--json", str(tmp_path / "a.json"), "--no-progress",
+                 "--pool", "0"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("DART: "))
+    results = json.loads((tmp_path / "a.json").read_text())["results"]
+    for name, unit in (("contact resonance", "Hz"), ("Q", ","), ("k1", "N/m"), ("contact loss", ","), ("|d_eff|", "pm/V")):
+        printed = re.search(re.escape(f" {name} ") + r"([-\d.e+]+) \+- ([\d.]+(?:e[+-]\d+)?) ?" + re.escape(unit), line)
+        assert printed, (name, line)
+    k1 = re.search(r" k1 ([\d.]+) \+- ([\d.e+-]+) N/m", line)
+    assert float(k1[2]) == pytest.approx(results["k1"]["stderr"], rel=0.05)
+    assert float(k1[1]) == pytest.approx(results["k1"]["value"], abs=results["k1"]["stderr"] / 10)
+
+
+def test_map_says_what_it_took_from_the_note(tmp_path, capsys):
+    """map printed the lever and the DART settings it read from the image's note without saying so (stiffness,
+    spot and discrepancy say what they took from the file); a flag's value is not the file's."""
+    case = dart_case(17, 3, 4)
+    path = write_ibw(case, tmp_path / "dart.ibw")
+    assert main(["map", str(path), "--out", str(tmp_path / "a"), "--no-progress", "--pool", "0",
+                 "--spring-constant", "2"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("from the file: "))
+    assert f"free_resonance {case.lever['free_resonance']:.6g} Hz" in line and "drive_amplitude" in line
+    assert "spring_constant" not in line
+
+
 def test_the_library_is_quiet(capsys):
     from pfmdyn import Cantilever, Contact
     from pfmdyn.maps.dart import deflection_signal, invert

@@ -7,6 +7,8 @@ ranges (k 0.05-50 N/m, L 100-500 um, k1/k 1-1e4, tip at 0.7-1 L, tip mass ratio 
 0-15 deg) with fixed seeds.
 """
 import json
+import re
+import shlex
 import sys
 from pathlib import Path
 
@@ -73,6 +75,13 @@ def test_issue_example_two_modes_alone_are_not_unique(example_hz, tmp_path, caps
     assert abs(doc["tip_position"]["value"] - 0.93) < 1e-6
     assert doc["k2"]["value"] == 0.0 and doc["k1"]["stderr"] > 0 and doc["tip_position"]["stderr"] > 0
     assert "L1/L" in notes[0] and "cross 1 time" in notes[1]
+    # the printed resonances command carries the L1/L method's k2 = 0 (resonances alone would tie k2 to k1)
+    command = next(line.partition("): ")[2] for line in capsys.readouterr().out.splitlines()
+                   if line.startswith("the same lever in resonances"))
+    argv = shlex.split(command)
+    assert argv[argv.index("--k2") + 1] == "0" and float(argv[argv.index("--tip-position") + 1]) == pytest.approx(0.93)
+    assert cli.main([*argv[1:], "--modes", "2", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["results"]["contact"]["resonance"]["value"] == pytest.approx(example_hz, rel=1e-6)
 
 
 def test_k1_and_tip_position_from_two_exact_modes_over_real_levers():
@@ -206,19 +215,22 @@ def test_stiffness_then_resonances_gives_back_the_files_contact_resonance(tmp_pa
     assert cli.main(["stiffness", str(path), *height, *(length if height else []), "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     k1 = doc["results"]["k1"]["value"]
+    text = capsys.readouterr().out
     if tip_height is None:
         assert doc["lever"]["tip_height"]["status"] == "assumed" and "PFM probe" in doc["lever"]["tip_height"]["why"]
         budget = doc["fit"]["budget"]
         share = dict(zip(budget["uncertainty_source"]["value"], budget["relative_uncertainty"]["value"]))
         assert share["tip_height_uncertainty"] > 0.1 and doc["results"]["k1"]["stderr"] >= share[
             "tip_height_uncertainty"] * k1
-        text = capsys.readouterr().out
         # what came from the file, with the contact resonance the k1 rests on (stiffness printed neither)
         assert "assumed: tip height" in text and \
             f"from the file: contact_resonance {fields['contact_resonance']:.6g} Hz (mode 1), " in text
-    lever = [*length, *height]
-    assert cli.main(["resonances", "--spring-constant", repr(fields["spring_constant"]), "--free-resonance",
-                     repr(fields["free_resonance"]), *lever, "--k1", repr(k1), "--json", str(out)]) == 0
+    # what stiffness prints is enough (its k1 line is rounded to the uncertainty): the resonances command it names
+    command = next(line.partition("): ")[2] for line in text.splitlines()
+                   if line.startswith("the same lever in resonances"))
+    argv = shlex.split(command)
+    assert argv[:2] == ["pfmdyn", "resonances"] and float(argv[argv.index("--k1") + 1]) == pytest.approx(k1, rel=1e-9)
+    assert cli.main([*argv[1:], "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["results"]["contact"]["resonance"]["value"][0] == pytest.approx(fields["contact_resonance"], rel=1e-6)
     assert doc["lever"]["k2"]["status"] == "tied" and "Mindlin" in doc["lever"]["k2"]["why"]
@@ -248,3 +260,19 @@ def test_discrepancy_states_every_assumed_input_of_k1_as_stiffness_does(tmp_path
     reference = json.loads(out.read_text())["results"]["k1"]
     assert k1["value"] == pytest.approx(reference["value"], rel=1e-3)
     assert k1["stderr"] == pytest.approx(reference["stderr"], rel=0.05)
+
+
+def test_modes_that_disagree_widen_k1s_uncertainty_by_their_spread(capsys):
+    """Two modes of a lever whose tip sits at 0.95 L (k1 = 100 N/m) read with the tip stated at the end: each mode's
+    own k1 is 171 and 71 N/m, yet k1 was stated +- 0.5 % (the frequencies' uncertainty alone).  The modes'
+    disagreement is now in k1's uncertainty, named, and the truth within two of it."""
+    exact = ExactLever(spring_constant=3.0, free_resonance=70e3, length=225e-6, tip_height=15e-6, k1=100.0,
+                       tip_position=0.95)
+    argv = ["stiffness", "--free-resonance", "70e3", "--spring-constant", "3", "--length", "225e-6", "--tip-height",
+            "15e-6", "--k2", "0", *[a for f in exact.contact_resonances(2) for a in ("--contact", repr(f))]]
+    assert cli.main(argv) == 0
+    text = capsys.readouterr().out
+    k1, sigma = (float(x) for x in re.search(r"^k1 = ([\d.]+) \+- ([\d.e+]+) N/m", text, re.MULTILINE).groups())
+    by_mode = [float(x) for x in re.search(r"k1 from each mode alone: ([\d.]+), ([\d.]+)", text).groups()]
+    assert sigma >= abs(by_mode[0] - by_mode[1]) / 2 * 0.99 and abs(k1 - 100) < 2 * sigma
+    assert "the modes' disagreement" in text

@@ -47,7 +47,7 @@ from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, certify
 from ..roots.damped import follow
 
-__all__ = ["Modes", "ResonanceResult", "resonances"]
+__all__ = ["Modes", "ResonanceResult", "resonances", "contact_spread"]
 
 _DIGITS = 15
 """Significant digits of each certified root in ``beta`` (the Hz values are floats)."""
@@ -120,8 +120,9 @@ class ResonanceResult:
                 out[f"{prefix}_undetermined"] = [why or None for why in modes.undetermined]
         return out
 
-    def report(self) -> str:
-        """A readable table of the modes.
+    def report(self, contact_stderr=None) -> str:
+        """A readable table of the modes; with ``contact_stderr`` (Hz, per contact mode: :func:`contact_spread`)
+        each contact resonance beside its standard uncertainty over the inputs that were assumed.
 
         >>> print(resonances(Cantilever(2.0, 7e4, 2e-4), None, modes=2).report())
         mode  condition  resonance (Hz)
@@ -132,11 +133,15 @@ class ResonanceResult:
         if not self.certified:
             return f"not certified: {self.reason}"
         damped = self.damped
-        head = "mode  condition  resonance (Hz)" + ("   damped (Hz)      peak (Hz)        Q" if damped else "")
-        lines = [head]
+        spread = contact_stderr is not None and any(u != 0 for u in contact_stderr)
+        width = 24 if spread else 14
+        head = f"mode  condition  {'resonance (Hz)':<{width}}" + ("   damped (Hz)      peak (Hz)        Q" if damped else "")
+        lines = [head.rstrip()]
         for label, modes in (("free", self.free), ("contact", self.in_contact)):
             for i, f in enumerate(modes.hz):
-                row = f"{i + 1:4d}  {label:9s}  {f:<14.1f}"
+                u = contact_stderr[i] if spread and label == "contact" else 0.0
+                cell = f"{f:.1f}" + ("" if u == 0 else f" +- {u:.2g}" if math.isfinite(u) else " +- undetermined")
+                row = f"{i + 1:4d}  {label:9s}  {cell:<{width}}"
                 if damped:
                     values = (modes.damped_hz[i], modes.peak_hz[i])
                     row += "".join(f"   {v:<14.1f}" if math.isfinite(v) else f"   {'-':<14}" for v in values)
@@ -238,6 +243,36 @@ def resonances(lever: Cantilever, contact: Contact | None = None, modes: int = 3
     return ResonanceResult(lever, contact, condition(free_balls, free_top, None),
                            condition(contact_balls, contact_top, contact) if contact is not None else Modes(),
                            certified=True)
+
+
+def contact_spread(lever: Cantilever, contact: Contact, modes: int, variations: dict) -> tuple[list, dict]:
+    """Standard uncertainty (Hz) of each of the first ``modes`` contact resonances over the inputs that were assumed:
+    the certified (undamped) resonances with each input moved down and up by its standard uncertainty
+    (``variations``: input -> ``((lever, contact), (lever, contact))``), half their difference, added in quadrature
+    over the inputs; NaN where a proof fails.  Returns ``(stderr, shares)``, shares: input -> its part per mode.
+
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=13e-6)
+    >>> moved = {"tip_height_uncertainty": tuple((replace(lever, tip_height=h), Contact(k1=100.0, k2=80.0))
+    ...                                          for h in (10.5e-6, 15.5e-6))}
+    >>> stderr, shares = contact_spread(lever, Contact(k1=100.0, k2=80.0), 2, moved)
+    >>> [round(u) for u in stderr], shares["tip_height_uncertainty"] == stderr
+    ([1756, 523], True)
+    """
+    def undamped(lever, contact):       # the certified resonances alone, in contact (free mode 1 scales them)
+        old = flint.ctx.prec
+        try:
+            beta1 = _certified_roots(lever.model_parameters(None), 1)[0][0]
+            balls = _certified_roots(lever.model_parameters(contact), modes)[0]
+        except CertificationError:
+            return (math.nan,) * modes
+        finally:
+            flint.ctx.prec = old
+        f1 = flint.arb(_fmpq(lever.vacuum_resonance))
+        return [float(formulas.frequency_from_beta(ball, f1, beta1).mid()) for ball in balls]
+    shares = {}
+    for source, (down, up) in variations.items():
+        shares[source] = [abs(b - a) / 2 for a, b in zip(undamped(*down), undamped(*up))]
+    return [math.hypot(*column) for column in zip(*shares.values())] if shares else [0.0] * modes, shares
 
 
 def _damped_characteristic(lever: Cantilever, contact: Contact | None, r, fluid: float = 1.0):

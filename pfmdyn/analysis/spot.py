@@ -38,7 +38,8 @@ from ..generated.characteristic import FLINT
 from ..derivations.certify import CertificationError, zeros_in
 
 __all__ = ["SpotResult", "BlindSpots", "parameters", "dimensionless", "lossless_beta", "blind_spots", "slope_along",
-           "static_limit", "sensitivities", "calibration", "spot_analysis", "ratio_map", "EPSILON_0"]
+           "static_limit", "sensitivities", "calibration", "spot_analysis", "ratio_map", "EPSILON_0", "SPREAD_RESULTS",
+           "spread"]
 
 EPSILON_0 = 8.8541878128e-12
 """Vacuum permittivity (F/m), for the capacitive load per volt."""
@@ -351,3 +352,55 @@ def ratio_map(lever: Cantilever, contact: Contact, frequencies, positions) -> np
     beta = lossless_beta(lever, np.asarray(frequencies, float))[:, None]
     theta = slope_along(lever, contact, beta, np.asarray(positions, float)[None, :])
     return theta[3] / theta[0]
+
+
+SPREAD_RESULTS = ("blind_spot", "contact_sensitivity", "calibration_factor", "paper_calibration_factor",
+                  "d_eff_error_per_volt")
+"""The results of :func:`spot_analysis` that move with the contact and the tip height (the free sensitivity does
+not: it is the free lever's)."""
+
+
+def _at_spot(lever: Cantilever, contact: Contact, frequency: float) -> dict:
+    """:data:`SPREAD_RESULTS` of one lever (real parts: the lossless lever's are real); a list of blind spots."""
+    r = spot_analysis(lever, contact, frequency, positions=[lever.spot_position])
+    out = {"blind_spot": list(r.blind_spot.positions), "contact_sensitivity": r.contact_sensitivity,
+           "calibration_factor": r.calibration_factor.real, "paper_calibration_factor": r.paper_calibration_factor.real}
+    if r.d_eff_error_per_volt is not None:
+        out["d_eff_error_per_volt"] = r.d_eff_error_per_volt.real
+    return out
+
+
+def spread(lever: Cantilever, contact: Contact, frequency: float, variations: dict) -> tuple[dict, dict]:
+    """Standard uncertainty of each of :data:`SPREAD_RESULTS` over the inputs that were assumed, and each input's
+    share: the results with each input moved down and up by its standard uncertainty (``variations``: input ->
+    ``((lever, contact), (lever, contact))``), half their difference, added in quadrature over the inputs.  Where a
+    blind spot appears or goes within an input's spread, the blind spots' uncertainties are NaN.
+
+    Returns ``(stderr, shares)``: result -> standard uncertainty (a list for the blind spots), and input ->
+    result -> its part.
+
+    >>> lever = Cantilever(2.0, 7e4, 2.25e-4, tip_height=1.5e-5, spot_position=0.8)
+    >>> moved = {"tip_height_uncertainty": tuple((replace(lever, tip_height=h), Contact(k1=200.0, k2=100.0))
+    ...                                          for h in (1.4e-5, 1.6e-5))}
+    >>> stderr, shares = spread(lever, Contact(k1=200.0, k2=100.0), 20e3, moved)
+    >>> 0 < stderr["contact_sensitivity"] < 0.1, shares["tip_height_uncertainty"]["blind_spot"] == stderr["blind_spot"]
+    (True, True)
+    """
+    nominal = _at_spot(lever, contact, frequency)
+    shares = {}
+    for source, (down, up) in variations.items():
+        low, high = _at_spot(*down, frequency), _at_spot(*up, frequency)
+        shares[source] = {}
+        for name, value in nominal.items():
+            if name == "blind_spot":
+                same = len(low[name]) == len(high[name]) == len(value)
+                shares[source][name] = ([abs(b - a) / 2 for a, b in zip(low[name], high[name])] if same
+                                        else [math.nan] * len(value))
+            else:
+                shares[source][name] = abs(high[name] - low[name]) / 2
+    stderr = {}
+    for name, value in nominal.items():
+        parts = [shares[source][name] for source in shares]
+        stderr[name] = ([math.hypot(*column) for column in zip(*parts)] if parts else [0.0] * len(value)) \
+            if name == "blind_spot" else math.hypot(*parts)
+    return stderr, shares

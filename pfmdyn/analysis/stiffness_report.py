@@ -35,7 +35,7 @@ from . import contact_resonance as cr
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "rounded", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
+__all__ = ["TIP_POSITION_LOW", "rounded", "assumed_variations", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
            "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
@@ -65,6 +65,30 @@ def tip_height_spread(tip_height: float, assumed: bool) -> float:
     (2.5e-06, 2e-06)
     """
     return TIP_HEIGHT_SPREAD if assumed else TIP_HEIGHT_TOLERANCE * tip_height
+
+
+def assumed_variations(lever: Cantilever, stated: Contact, contact: Contact, assumed) -> dict:
+    """The inputs a command assumed, each moved down and up by its standard uncertainty (input ->
+    ``((lever, contact), (lever, contact))``), for the spread of a result over them: the tip height (an assumed one's
+    spread, else :data:`TIP_HEIGHT_TOLERANCE` of a given one, as ``stiffness`` takes it; ``assumed`` names what was
+    assumed) and a k2 tie that ``contact`` has and the ``stated`` contact had not (Mindlin over
+    :data:`ASSUMED_POISSON`).
+
+    >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=13e-6)
+    >>> moved = assumed_variations(lever, Contact(k1=100.0), Contact(k1=100.0, poisson=0.3), ["tip_height"])
+    >>> [round(l.tip_height * 1e6, 1) for l, _ in moved["tip_height_uncertainty"]], sorted(moved)
+    ([10.5, 15.5], ['k2_policy_uncertainty', 'tip_height_uncertainty'])
+    """
+    out = {}
+    if lever.tip_height is not None:
+        u = tip_height_spread(lever.tip_height, "tip_height" in assumed)
+        out["tip_height_uncertainty"] = tuple((replace(lever, tip_height=lever.tip_height + s * u), contact)
+                                              for s in (-1, 1))
+    if stated.k2 is None and stated.ratio is None and contact.ratio is not None:
+        u = assumed_tie_uncertainty()
+        out["k2_policy_uncertainty"] = tuple((lever, Contact(k1=contact.k1, k2_over_k1=contact.ratio + s * u,
+                                                             contact_loss=contact.contact_loss)) for s in (-1, 1))
+    return out
 
 
 _SAME = 1e-7           # relative difference below which two solutions are one
@@ -169,7 +193,7 @@ def rounded(value: float, sigma: float) -> str:
 
 _SOURCE_WORDS = {"contact_uncertainty": "contact resonances", "free_resonance_uncertainty": "free resonance",
                  "spring_constant_uncertainty": "spring constant", "tip_height_uncertainty": "tip height",
-                 "k2_policy_uncertainty": "k2 policy"}
+                 "k2_policy_uncertainty": "k2 policy", "mode_disagreement": "the modes' disagreement"}
 
 
 def _finite(value):
@@ -395,6 +419,20 @@ def _solution(lever, lateral, fc, values, rms, stderrs, k1_by_mode=(), hertz=Non
     return Solution(k1, k2, gamma, tuple(values), sigma, rms, tuple(k1_by_mode), e_star, e_sigma, sources)
 
 
+def _with_mode_disagreement(solution: Solution) -> Solution:
+    """``solution`` with the modes' disagreement, which no propagated input explains, in k1's uncertainty: the
+    standard error of the mean of each mode's own k1 (``mode_disagreement`` in the budget).
+
+    >>> s = _with_mode_disagreement(Solution(222.0, 0.0, 1.0, ("k1",), {"k1": 1.1}, k1_by_mode=(101.0, 227.0)))
+    >>> round(s.stderr["k1"], 1), round(s.sources["mode_disagreement"]["k1"], 1)
+    (63.0, 63.0)
+    """
+    k1s = np.asarray(solution.k1_by_mode, float)
+    spread = float(np.std(k1s, ddof=1) / math.sqrt(len(k1s)))
+    return replace(solution, stderr={**solution.stderr, "k1": math.hypot(solution.stderr.get("k1", 0.0), spread)},
+                   sources={**solution.sources, "mode_disagreement": {"k1": spread}})
+
+
 def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_tip_position: bool = False,
             tip_position_stated: bool = True, contact_uncertainty=0.0,
             free_resonance_uncertainty: float = 0.0, spring_constant_uncertainty: float = 0.0,
@@ -471,6 +509,8 @@ def analyse(lever: Cantilever, contact: Contact, contact_hz, modes=None, *, fit_
                         f"{modes}: check the mode numbers, the free resonance and the lever (tip position, tip mass, "
                         "tilt)")
     solutions = tuple(_solution(lever, lateral, fc, v, rms, stderrs, k1_by_mode, hertz) for v, rms in found)
+    if k1_by_mode and found[0][1] > max(3 * noise, 1e-9):
+        solutions = tuple(_with_mode_disagreement(s) for s in solutions)
     unique = len(solutions) == 1 and settled
     return StiffnessReport(lever, tuple(map(float, fc)), tuple(modes), words, solutions, unique, tuple(proof),
                            tuple(notes), stderrs, tuple(assumed))

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from contextlib import contextmanager
 
 import numpy as np
@@ -72,7 +73,6 @@ OVERRIDES = ("spring_constant", "length", "width", "tip_height", "free_resonance
 def _analyse(data, args, assumed: dict):
     """The analysis, its progress shown on a terminal only (a log or a pipe gets the report alone); a resonance
     table's with the tip height's uncertainty in each parameter's (the assumed one's spread, else 10 %)."""
-    from ..analysis.stiffness_report import tip_height_spread
     from ..discrepancy.resonances import analyse_resonances
     from ..discrepancy.select import TIME_BUDGET_S
     from ..discrepancy.spectrum import analyse
@@ -81,8 +81,22 @@ def _analyse(data, args, assumed: dict):
     options = dict(vertical_only=args.vertical_only, progress=flags.progress_shown(args), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
         return analyse(data, **options)
-    spread = tip_height_spread(data.metadata.tip_height, "tip_height" in assumed)
+    spread = flags.assumed_tip_height_uncertainty(data.metadata.tip_height, assumed)
     return analyse_resonances(data, tip_height_uncertainty=spread, **options)
+
+
+def _rows_taken(data) -> str:
+    """A resonance table's rows as the 'from the file' line names them.
+
+    >>> import numpy as np
+    >>> from pfmdyn.io.discrepancy_data import ResonanceData
+    >>> _rows_taken(ResonanceData(None, np.array([1, 1]), np.array(["free", "contact"]), np.array([72969.0, 368990.0]),
+    ...                           quality_factor=np.array([138.63, np.nan])))
+    'free mode 1 72969 Hz (Q 138.63), contact mode 1 368990 Hz'
+    """
+    qs = data.quality_factor if data.quality_factor is not None else [math.nan] * len(data.mode)
+    return ", ".join(f"{c} mode {m} {f:.6g} Hz" + (f" (Q {q:.6g})" if not math.isnan(q) else "")
+                     for c, m, f, q in zip(data.condition, data.mode, data.frequency_hz, qs))
 
 
 def _lever_in_medium(data, args):
@@ -241,7 +255,7 @@ def run(args: argparse.Namespace) -> int:
     from ..discrepancy.report import medium_comparison
     from ..io.record import MissingFieldError
     from ..io.results import check_writable
-    from ..io.tables import SpectrumData
+    from ..io.tables import SpectrumData, ignored_note
 
     check_writable(args.json)
     check_writable(args.plot, figure=True)
@@ -255,13 +269,25 @@ def run(args: argparse.Namespace) -> int:
     try:
         data = read(args.data, overrides)
     except MissingFieldError as exc:        # no instrument file records a tip height: the default, as every command
-        if "tip_height" not in ((exc.field,) if isinstance(exc.field, str) else exc.field):
+        missing = (exc.field,) if isinstance(exc.field, str) else exc.field
+        if "tip_height" not in missing:
             raise
         assumed = flags.fill_defaults(overrides, ("tip_height",))
+        if "length" in missing:         # only the assumed tip height over it acts, as in stiffness
+            flags.assume_length(overrides, assumed)
         data = read(args.data, overrides)       # what else is missing, without the tip height
     _check_something_to_compare(data, args.data)
+    if ignored_note(data):
+        print(f"note: {args.data}: {ignored_note(data)}")
     if assumed:
         print(flags.assumed_line(assumed, data.metadata))
+    given = flags.given_names(args, OVERRIDES)
+    found = {name: getattr(data.metadata, name) for name in OVERRIDES        # f1 said once, as the free row's
+             if getattr(data.metadata, name, None) is not None and name not in assumed
+             and not (name == "free_resonance" and not isinstance(data, SpectrumData)
+                      and data.metadata.free_resonance in data.frequency_hz[(data.condition == "free") & (data.mode == 1)])}
+    print(flags.taken_line(found, given, [f"{len(data.frequency_hz)} spectrum rows" if isinstance(data, SpectrumData)
+                                          else _rows_taken(data)]))
     stride = 1
     if isinstance(data, SpectrumData):
         rows = len(data.frequency_hz)
@@ -283,7 +309,6 @@ def run(args: argparse.Namespace) -> int:
               f"(lever width {m['width']:g} m); {fitted}")
     if stride > 1:
         print(f"note: {rows} rows; one frequency in {stride} analysed (at most {spectrum.MAX_ROWS} rows)")
-    given = flags.given_names(args, OVERRIDES)
     lever = documents.lever_records({name: getattr(data.metadata, name, None) for name in OVERRIDES}, given=given,
                                     from_file=OVERRIDES, assumed=assumed)
     rows = None if isinstance(data, SpectrumData) else [(str(c), int(m)) for c, m in zip(data.condition, data.mode)]

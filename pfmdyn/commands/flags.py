@@ -18,7 +18,7 @@ from ..errors import UserError, listed
 from ..medium import Medium
 from ..names import CONTACT, DAMPING, LEVER, NAMES, checked, fill_defaults
 
-__all__ = ["add", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
+__all__ = ["add", "taken_line", "assume_length", "assumed_tip_height_uncertainty", "add_lever", "add_contact", "add_damping", "add_medium_arguments", "medium_from_args", "check_medium",
            "temperature", "medium_line", "add_json", "write_json", "save_figure", "given", "require", "fill_defaults",
            "assumed_line", "cantilever", "contact", "progress_shown",
            "option_hint"]
@@ -325,6 +325,44 @@ def check_medium(args) -> None:
     if getattr(args, "medium", None) is not None or getattr(args, "temperature", None) is not None:
         medium_from_args(args)
         temperature(args)       # also where the medium's own numbers do not depend on it
+
+
+def assume_length(values: dict, assumed: dict) -> None:
+    """Put a typical PFM lever's length (:data:`pfmdyn.constants.LEVER_LENGTH`) into ``values`` and why into
+    ``assumed``: for a file without the length whose tip height is assumed too, only their ratio acts.
+
+    >>> values, why = {}, {}; assume_length(values, why); values["length"], why["length"].split(":")[0]
+    (0.000225, "a typical PFM lever's, 225 um +/- 10%")
+    """
+    from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD
+    values["length"] = LEVER_LENGTH
+    assumed["length"] = (f"a typical PFM lever's, {LEVER_LENGTH * 1e6:g} um +/- {LEVER_LENGTH_SPREAD:.0%}: only the "
+                         "assumed tip height over it acts")
+
+
+def assumed_tip_height_uncertainty(tip_height: float, assumed) -> float:
+    """The standard uncertainty (m) of a tip height whose own is not given: an assumed one's spread (with an
+    assumed length's, relative, when only their ratio acts: :func:`assume_length`), else 10 % of a given one.
+
+    >>> assumed_tip_height_uncertainty(13e-6, ["tip_height"]), round(assumed_tip_height_uncertainty(13e-6, ["tip_height", "length"]), 8)
+    (2.5e-06, 2.82e-06)
+    """
+    from ..analysis.stiffness_report import tip_height_spread
+    from ..constants import LEVER_LENGTH_SPREAD
+    spread = tip_height_spread(tip_height, "tip_height" in assumed)
+    return math.hypot(spread / tip_height, LEVER_LENGTH_SPREAD) * tip_height if "length" in assumed else spread
+
+
+def taken_line(found: dict, given, first=()) -> str:
+    """The line a command prints of the values it took from the input file (``found``, names -> SI) that no flag
+    (``given``) replaced, after the parts ``first`` (already worded).
+
+    >>> taken_line({"spring_constant": 0.46538, "length": 2.4e-4, "drive_frequency": 380740.0}, ["length"])
+    'from the file: drive_frequency 380740 Hz, spring_constant 0.46538 N/m'
+    """
+    parts = [*first, *(f"{name} {value:.6g}" + (f" {NAMES[name].unit}" if NAMES[name].unit != "1" else "")
+                       for name, value in sorted(found.items()) if name not in given)]
+    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
 
 
 def assumed_line(assumed: dict, lever: Cantilever) -> str:

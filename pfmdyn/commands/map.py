@@ -312,6 +312,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
           f"df {settings['frequency_width'][0]:.6g} Hz; {k2_policy}")
     for note in image.notes:
         print(note)
+    print(flags.taken_line({name: entry[0] for name, entry in {**found, **settings}.items() if entry[1] == "file"
+                            and name in NAMES}, ()))
     f1, f2 = image.frequencies(settings["frequency_width"][0])
     # a lag less by the offset: s = A exp(-i (phi - offset))
     s1, s2 = (s * np.exp(1j * math.radians(args.phase_offset)) for s in image.signals)
@@ -338,21 +340,24 @@ def _dart(args, overrides: dict, given: dict) -> int:
                            "tip_height_uncertainty": found["tip_height_uncertainty"][0],
                            "assumed": {name: entry[2] for name, entry in found.items() if entry[1] == "assumed"}})
     _draw(args, dart=True)
-    with np.errstate(all="ignore"):
-        ok = maps["determined"].astype(bool)
-        median = {name: float(np.median(np.abs(maps[name][ok]) if "d_eff" in name else maps[name][ok]))
-                  if ok.any() else math.nan for name in maps}
+    doc = document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool, phases)
+    ok = maps["determined"].astype(bool)
     if ok.any():
-        print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians: contact resonance "
-              f"{median['contact_resonance']:.6g} Hz, Q {median['contact_quality_factor']:.3g}, k1 {median['k1']:.4g} N/m, "
-              f"contact loss {median['contact_loss']:.3g}, |d_eff| {1e12 * median['d_eff']:.3g} pm/V; the oscillator's "
-              f"point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
+        median = {name: record["value"] for name, record in doc["results"].items()}
+
+        def pm(name, scale=1.0):        # the median and the median pixel's uncertainty, to the digits it leaves
+            from ..analysis.stiffness_report import rounded
+            value, stderr = doc["results"][name]["value"] * scale, (doc["results"][name]["stderr"] or 0.0) * scale
+            return rounded(value, stderr) + (f" +- {stderr:.2g}" if stderr else "")
+        print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians (+- the median "
+              f"pixel's uncertainty): contact resonance {pm('contact_resonance')} Hz, Q {pm('contact_quality_factor')}, "
+              f"k1 {pm('k1')} N/m, contact loss {pm('contact_loss')}, |d_eff| {pm('d_eff', 1e12)} pm/V; the "
+              f"oscillator's point-mass k1 {100 * median['oscillator_k1_error']:+.1f} %, its d_eff "
               f"{100 * median['oscillator_d_eff_error']:+.1f} %; maps in {out}")
     else:
         noise = f"noise {100 * sigma:.2g} %" if math.isfinite(sigma) else "noise undetermined"
         print(f"DART: no pixel determined (of {ok.size}; {noise}): the two drives' amplitudes and "
               f"phases fix no contact anywhere (both drives on one side of the peak, or no resonance between them); "
               f"maps (undetermined) in {out}")
-    flags.write_json(args.json, document(maps, sigma, found, settings, str(args.data), out, k2_policy, args.pool,
-                                         phases))
+    flags.write_json(args.json, doc)
     return 0

@@ -55,16 +55,30 @@ def run(args) -> int:
         contact, words = contact.policy(lever)
         policy = {"k2_policy": words}
     result = resonances(lever, contact if contact.k1 is not None else None, modes)
+    stderr, shares = None, {}
+    if contact.k1 is not None and result.certified:
+        from ..analysis.resonances import contact_spread
+        from ..analysis.stiffness_report import assumed_variations
+        stderr, shares = contact_spread(lever, contact, modes, assumed_variations(lever, flags.contact(args), contact,
+                                                                                  assumed))
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     if assumed and contact.k1 is not None:
         print(flags.assumed_line(assumed, lever))
-    print(result.report())
+    print(result.report(stderr))
+    moved = [words for name, words in (("tip_height_uncertainty", "tip height"), ("k2_policy_uncertainty",
+                                                                                   "k2 policy"))
+             if any(u != 0 for u in shares.get(name, ()))]
+    if moved:
+        print("contact resonances +- their standard uncertainty (their damped and peak frequencies move with them) over "
+              "the inputs assumed or without one of their own, "
+              f"each moved by its own: {', '.join(moved)} (k1 as given, exact)")
     if policy:
         print(f"k2 policy: {policy['k2_policy']}")
     if args.json:
         from ..io import documents
 
         given = flags.given_names(args, (*flags.NAMES,))
-        flags.write_json(args.json, documents.resonances({**result.to_dict(), **policy}, given))
+        flags.write_json(args.json, documents.resonances({**result.to_dict(), **policy, "contact_stderr": stderr},
+                                                         given))
     return 0 if result.certified else 1

@@ -32,7 +32,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..constants import LEVER_LENGTH, LEVER_LENGTH_SPREAD, RESONANCE_RELATIVE_UNCERTAINTY
+from ..constants import LEVER_LENGTH, RESONANCE_RELATIVE_UNCERTAINTY
 from ..errors import UserError, listed
 from ..io.kinds import CONTACT_MAP_KINDS, CSV_KINDS, file_kind
 from ..names import LEVER, NAMES, checked
@@ -91,10 +91,12 @@ def _from_file(path: str) -> tuple[dict, list, list]:
 
     # pfmdyn's table under a .txt or .dat name too, as discrepancy reads it
     if file_kind(path) in CSV_KINDS | {"text table"}:
-        from ..io.tables import ResonanceData, read
+        from ..io.tables import ResonanceData, ignored_note, read
         data = read(path, required=())          # the lever's flags and defaults fill what the table lacks
         if not isinstance(data, ResonanceData):
             raise UserError(f"{path}: a resonance table (mode, condition, frequency_hz) is needed, not a spectrum")
+        if ignored_note(data):
+            print(f"note: {path}: {ignored_note(data)}")
         contact = data.condition == "contact"
         if not contact.any():
             raise UserError(f"{path}: no contact resonance in the table")
@@ -129,9 +131,7 @@ def _lever(args, found: dict):
     elif values.get("length") is None:
         if "tip_height" not in assumed or values.get("tilt"):
             raise UserError("the tip height and the tilt act through the lever length: give --length")
-        values["length"] = LEVER_LENGTH
-        assumed["length"] = (f"a typical PFM lever's, {LEVER_LENGTH * 1e6:g} um +/- {LEVER_LENGTH_SPREAD:.0%}: only "
-                             "the assumed tip height over it acts")
+        flags.assume_length(values, assumed)
         notes.append(f"length not given: the assumed tip height acts as a ratio to a typical PFM lever's length "
                      f"({values['tip_height'] / LEVER_LENGTH:.3g}), its uncertainty with the length's")
     if args.tip_position is not None:
@@ -146,10 +146,7 @@ def _tip_height_uncertainty(args, lever, assumed: dict) -> dict:
     of a given tip height)."""
     if args.tip_height_uncertainty is not None or "tip_height" not in assumed:
         return {}
-    relative = NAMES["tip_height_uncertainty"].default / lever.tip_height
-    if "length" in assumed:
-        relative = math.hypot(relative, LEVER_LENGTH_SPREAD)
-    return {"tip_height_uncertainty": relative * lever.tip_height}
+    return {"tip_height_uncertainty": flags.assumed_tip_height_uncertainty(lever.tip_height, assumed)}
 
 
 def _assumed_resonance_uncertainties(contacts, free_resonance: float, assumed: dict) -> dict:
@@ -194,15 +191,52 @@ def _contact_map(args) -> int:
 
 
 def _taken_line(found: dict, given: list, contacts) -> str:
-    """What the file gave and no flag replaced, with the contact resonances (and their modes) when they came
-    from it.
+    """What the file gave and no flag replaced (:func:`pfmdyn.commands.flags.taken_line`), the contact resonances
+    (and their modes) first when they came from it.
 
     >>> print(_taken_line({"spring_constant": 0.46538, "length": 2.4e-4}, ["length"], ([368990.0], [1])))
     from the file: contact_resonance 368990 Hz (mode 1), spring_constant 0.46538 N/m
     """
     parts = [f"contact_resonance {f:.6g} Hz (mode {m})" for f, m in zip(*contacts)] if contacts else []
-    parts += [f"{name} {value:.6g} {NAMES[name].unit}" for name, value in sorted(found.items()) if name not in given]
-    return "from the file: " + (", ".join(parts) or "nothing the flags did not replace")
+    return flags.taken_line(found, given, parts)
+
+
+def _resonances_command(args, lever, solution, modes, assumed: dict) -> str:
+    """The ``pfmdyn resonances`` command that puts the contact resonances back (the round trip): this lever with
+    what the file gave, the flags given, k1 unrounded (the printed one is rounded to its uncertainty) and k2 by the
+    same policy (its value when solved, or tied by the tip-position fit's k2 = 0, which no flag of resonances says).
+
+    >>> import argparse
+    >>> from pfmdyn.analysis.stiffness_report import Solution
+    >>> from pfmdyn.cantilever import Cantilever
+    >>> args = argparse.Namespace(k2=None, k2_over_k1=None, poisson="0.25", medium=None, temperature=None, tip_height=None)
+    >>> lever = Cantilever(0.46538, 72969.0, 2.4e-4, tip_height=13e-6)
+    >>> _resonances_command(args, lever, Solution(258.48086225838, 213.0, 1.0, ("k1",), {}), [1], {"tip_height": ""})
+    'pfmdyn resonances --spring-constant 0.46538 --free-resonance 72969 --length 0.00024 --k1 258.4808623 --poisson 0.25'
+    """
+    import dataclasses
+    import shlex
+
+    def number(x):
+        return f"{x:.10g}"
+    defaults = {f.name: f.default for f in dataclasses.fields(lever)}
+    argv = ["pfmdyn", "resonances"]
+    for name in ("spring_constant", "free_resonance", "length", "width", "tip_height", "tip_position",
+                 "tip_mass_ratio", "tip_gyration_radius", "tilt"):
+        value = solution.tip_position if name == "tip_position" else getattr(lever, name)
+        if name == "length" or (value is not None and value != defaults[name] and name not in assumed):
+            argv += [NAMES[name].flag, number(value)]
+    argv += [flag for name in ("medium", "temperature") if getattr(args, name) is not None
+             for flag in (NAMES[name].flag, str(getattr(args, name)))]
+    argv += ["--k1", number(solution.k1)]
+    policy = [(NAMES[n].flag, str(getattr(args, n))) for n in ("k2", "k2_over_k1", "poisson") if getattr(args, n)
+              is not None]
+    if "k2" in solution.unknowns or ("tip_position" in solution.unknowns and not policy):
+        policy = [("--k2", number(solution.k2 or 0.0))]
+    argv += [word for pair in policy for word in pair]
+    if max(modes or [1]) > 3:
+        argv += ["--modes", str(max(modes))]
+    return shlex.join(argv)
 
 
 def _mode(text) -> int:
@@ -280,6 +314,9 @@ def run(args) -> int:
     if args.file:
         print(_taken_line(found, given, None if args.contact else (contacts, modes)))
     print(report.report())
+    if report.unique:
+        print("the same lever in resonances (k1 unrounded): "
+              + _resonances_command(args, lever, report.solution, modes, assumed))
     if args.json:
         from ..io import documents
 

@@ -188,7 +188,8 @@ class ViscousDamping(Damping):
         if loss["value"] is None:
             return {}
         width = formulas.viscous_width(loss["value"], meta.free_resonance)
-        return {"viscous_width_hz": {"value": float(width), "stderr": None, "unit": "Hz",
+        stderr = None if loss.get("stderr") is None else float(formulas.viscous_width(loss["stderr"], meta.free_resonance))
+        return {"viscous_width_hz": {"value": float(width), "stderr": stderr, "unit": "Hz",     # linear in the loss
                                      "determined": loss["determined"]}}
 
 

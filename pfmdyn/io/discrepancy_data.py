@@ -42,6 +42,8 @@ class SpectrumData:
     bias_v: np.ndarray
     response: np.ndarray
     kind: str = "spectrum"
+    ignored_columns: tuple = ()
+    """Header columns that are none of a spectrum's (a note, a fit of the instrument's): not read."""
 
 
 @dataclass(frozen=True)
@@ -58,3 +60,5 @@ class ResonanceData:
     frequency_hz: np.ndarray
     kind: str = "resonances"
     quality_factor: np.ndarray | None = None
+    ignored_columns: tuple = ()
+    """Header columns that are none of a table's: not read."""

@@ -663,7 +663,10 @@ def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None) -
 
 def _mode_records(d: dict, prefix: str) -> dict:
     """The modes of one condition (``free`` or ``contact``) of :meth:`Resonances.to_dict`."""
-    modes = {"resonance": quantity("resonance", d[f"{prefix}_hz"], status="derived", dims=["mode"]),
+    stderr = d.get(f"{prefix}_stderr")
+    if stderr is not None and not any(u != 0 for u in stderr):
+        stderr = None
+    modes = {"resonance": quantity("resonance", d[f"{prefix}_hz"], stderr, status="derived", dims=["mode"]),
              "resonance_interval": quantity("resonance_interval", d[f"{prefix}_intervals_hz"], status="derived",
                                             dims=["mode", "bound"])}
     if d.get(f"{prefix}_complete_below_hz") is not None:
@@ -702,8 +705,8 @@ def resonances(d: dict, given=()) -> dict:
     return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
 
 
-def _complex_record(name: str, z: dict | None, why: str) -> dict:
-    return quantity(name, complex(z["re"], z["im"]), status="derived") if z else quantity(name, None, why=why)
+def _complex_record(name: str, z: dict | None, why: str, stderr: float | None = None) -> dict:
+    return quantity(name, complex(z["re"], z["im"]), stderr, status="derived") if z else quantity(name, None, why=why)
 
 
 def spot(d: dict, given=(), from_file=(), path=None) -> dict:
@@ -721,12 +724,15 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     ('needs the lever width', {'real': 0.86, 'imag': 0.0})
     """
     ratio = d["q0_to_d1_slope_ratio"]
+    stderr = {name: value for name, value in d.get("stderr", {}).items()
+              if not (name == "blind_spot" and any(math.isnan(v) for v in value))}
     results = {
         "drive_frequency": (quantity("drive_frequency", d["drive_frequency"], status="file",
                                      why="the drive frequency the file records") if d.get("frequency_from_file")
                             else quantity("drive_frequency", d["drive_frequency"], status="given")),
         "beta": quantity("beta", d["beta"], status="derived"),
-        "blind_spot": quantity("blind_spot", d["blind_spot"], status="derived", dims=["blind_spot"]),
+        "blind_spot": quantity("blind_spot", d["blind_spot"], stderr.get("blind_spot"), status="derived",
+                               dims=["blind_spot"]),
         "blind_spot_interval": quantity("blind_spot_interval", d["blind_spot_intervals"], status="derived",
                                         dims=["blind_spot", "bound"]),
         "certified": quantity("certified", bool(d["certified"]), status="derived"),
@@ -734,12 +740,15 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
         "slope_ratio": quantity("slope_ratio", [complex(a, b) for a, b in zip(ratio["re"], ratio["im"])],
                                 status="derived", dims=["position"]),
         "free_sensitivity": quantity("free_sensitivity", d["free_sensitivity"], status="derived"),
-        "contact_sensitivity": quantity("contact_sensitivity", d["contact_sensitivity"], status="derived"),
-        "calibration_factor": _complex_record("calibration_factor", d["calibration_factor"], "undetermined"),
+        "contact_sensitivity": quantity("contact_sensitivity", d["contact_sensitivity"],
+                                        stderr.get("contact_sensitivity"), status="derived"),
+        "calibration_factor": _complex_record("calibration_factor", d["calibration_factor"], "undetermined",
+                                              stderr.get("calibration_factor")),
         "paper_calibration_factor": _complex_record("paper_calibration_factor", d["paper_calibration_factor"],
-                                                    "undetermined"),
+                                                    "undetermined", stderr.get("paper_calibration_factor")),
         "d_eff_error_per_volt": _complex_record("d_eff_error_per_volt", d["d_eff_error_per_volt"],
-                                                d.get("d_eff_error_per_volt_undetermined", "undetermined"))}
+                                                d.get("d_eff_error_per_volt_undetermined", "undetermined"),
+                                                stderr.get("d_eff_error_per_volt"))}
     lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"))
     notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
     notes += [f"not certified: {d['reason']}"] if not d["certified"] else []

@@ -18,9 +18,13 @@ __all__ = ["FIELDS", "KINDS", "MissingFieldError", "Channel", "InstrumentRecord"
 
 FIELDS = {name: (NAMES[name].label, "" if NAMES[name].unit == "1" else NAMES[name].unit)
           for name in ("spring_constant", "free_resonance", "free_quality_factor", "contact_resonance",
-                       "contact_quality_factor", "length", "width", "tip_height", "drive_frequency", "tip_bias")}
+                       "contact_quality_factor", "length", "width", "tip_height", "drive_frequency", "tip_bias",
+                       "amplitude_peak")}
 """Cantilever field (its name in :mod:`pfmdyn.names`) -> (what it is, SI unit; '' for a pure
-number), both from :mod:`pfmdyn.names`.  Every record lists each as found or missing."""
+number), both from :mod:`pfmdyn.names`.  Every record lists each as found or missing, but those of
+:data:`SWEEP_FIELDS`."""
+SWEEP_FIELDS = ("amplitude_peak",)
+"""Fields only a drive sweep's header holds (where its amplitude peaked, which is no resonance): never missing."""
 
 KINDS = ("image", "spectrum", "thermal spectrum", "resonance metadata", "curve")
 
@@ -130,7 +134,7 @@ def make_record(path, kind, instrument, channels, found: dict, notes=(), spectru
         except UserError as exc:
             notes = (*notes, f"{FIELDS[name][0]} {value:g}{' ' + FIELDS[name][1] if FIELDS[name][1] else ''} in the "
                              f"file left out: {exc}")
-    missing = tuple(name for name in FIELDS if name not in fields)
+    missing = tuple(name for name in FIELDS if name not in fields and name not in SWEEP_FIELDS)
     # A unit pfmdyn cannot convert is kept as written; say so rather than let it pass as SI.
     notes = list(notes) + [f"{c.name}: unit '{c.unit}' is not an SI unit pfmdyn knows; values left as stored"
                            for c in channels if c.unit and si_unit(c.unit) is None]

@@ -35,10 +35,10 @@ from .record import (
 __all__ = ["read_sweep", "read_sweep_table", "SweepTable", "split_unit"]
 
 # Header key (colon and unit stripped) -> pfmdyn field.  The resonance is the free lever's (in liquid).
-_KEYS = {"Peak amplitude frequency": "free_resonance", "Q factor": "free_quality_factor",
+_KEYS = {"Peak amplitude frequency": "amplitude_peak", "Q factor": "free_quality_factor",
          "f_res": "free_resonance", "Q": "free_quality_factor"}
-# Cytomass's peak-amplitude frequency is where the measured amplitude peaks, not the resonance: a drive
-# sweep's table reports it as ``amplitude_peak`` (the instrument record keeps it as its resonance field).
+# Cytomass's peak-amplitude frequency is where the measured amplitude peaks, not the resonance: read as
+# ``amplitude_peak``, beside which a fit's peak is put (never its resonance).
 _PEAK_KEY = "Peak amplitude frequency"
 # Nanonis's input calibration: the amplitude column is in metres only through it; 1 m/V means volts as read.
 _CALIBRATION_KEY = "Oscillation Control>Input Calibration"
@@ -185,8 +185,8 @@ def read_sweep(path) -> InstrumentRecord:
     if others:          # the amplitude: the first column after the frequencies
         units[0] = _uncalibrated(header, units[0], notes)
     channels = [make_channel(names[i][0], unit, (len(table),)) for i, unit in zip(others, units)]
-    if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
-        notes.append(f"free resonance: the header's '{_PEAK_KEY}', where the amplitude peaks, not the resonance "
+    if "amplitude_peak" in found:
+        notes.append(f"amplitude peak: the header's '{_PEAK_KEY}', where the amplitude peaks, not the resonance "
                      "(at a Q of a few they differ by per cents); pfmdyn discrepancy fits the resonance")
     spectrum = si_spectrum(path, frequency, "Hz", table[:, others[0]], units[0]) if others else None
     return make_record(path, "spectrum", instrument, channels, found, notes, spectrum)
@@ -224,8 +224,6 @@ def read_sweep_table(path) -> SweepTable:
         raise UserError(f"{path}: the sweep repeats a drive frequency")
     medium = next((header[k] for k in _MEDIUM_KEYS if header.get(k)), None)
     phase = table[order, phases[0]] if phases else None
-    if any(split_unit(k)[0] == _PEAK_KEY for k in header) and "free_resonance" in found:
-        found["amplitude_peak"] = found.pop("free_resonance")
     unit = _uncalibrated(header, unit, notes)
     return SweepTable(str(path), frequency[order], amplitude[order], unit, phase, found, medium, instrument,
                       tuple(notes))

@@ -5,7 +5,7 @@ Format (SI units)::
     # spring_constant: 2.4
     # length: 223e-6
     # width: 24e-6                  <- optional: no resonance depends on it
-    # tip_height: 1e-5
+    # tip_height: 1e-5               <- commands assume a typical PFM probe's when none is given
     # free_resonance: 63200         <- first free flexural resonance (a table's free mode 1 row gives it too)
     # description: optional text
     frequency_hz,bias_v,x,y             <- spectrum (or amplitude,phase_deg), several biases
@@ -21,7 +21,8 @@ different frequency is an error. Columns may come in any order; the frequency co
 carry its unit (``frequency_hz``, ``frequency_khz``, ``frequency_mhz``), an optional
 ``quality_factor`` (or ``q``) column gives each mode's Q (blank where unknown, ``inf`` for a
 mode measured without damping), and an optional ``quality_factor_uncertainty`` metadata key
-its relative uncertainty (default 5 %). Any other column is an error naming it.
+its relative uncertainty (default 5 %). Any other column is left out, and the commands say so
+(:func:`ignored_note`); so is one beside a spectrum's columns.
 
 Spellings are forgiven as for spectra (:mod:`pfmdyn.io.columns`): separators, ``%`` comments,
 ``key = value``, values with their unit (``length: 223 um``, ``f1: 63.2 kHz``), the older
@@ -52,10 +53,11 @@ from ..errors import UserError
 from ..names import NAMES, canonical, checked
 from .discrepancy_data import Metadata, ResonanceData, SpectrumData
 from .columns import column, metadata_number, read_table
+from .record import MissingFieldError
 from .spectra import read_spectra
 from .kinds import INSTRUMENT_KINDS, file_kind
 
-__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows"]
+__all__ = ["REQUIRED_KEYS", "Metadata", "SpectrumData", "ResonanceData", "read", "check_resonance_rows", "ignored_note"]
 
 REQUIRED_KEYS = ("spring_constant", "length", "tip_height", "free_resonance")
 OPTIONAL_KEYS = ("width", "frequency_uncertainty_hz", "quality_factor_uncertainty")
@@ -98,9 +100,11 @@ def _metadata(where: str, meta: dict, overrides: dict | None = None, required=RE
 
 
 def _require(where: str, missing) -> None:
+    """A :class:`~pfmdyn.io.record.MissingFieldError` naming the ``missing`` keys (a command may fill its defaults
+    and read again, as for an instrument file)."""
     if missing:
-        raise UserError(f"{where}: missing metadata key(s) {', '.join(missing)}"
-                        f" (lines '# key: value' before the header)", tuple(missing))
+        raise MissingFieldError(f"{where}: missing metadata key(s) {', '.join(missing)}"
+                                f" (lines '# key: value' before the header)", tuple(missing))
 
 
 def _plausible(where: str, key: str, value: float) -> float:
@@ -150,7 +154,9 @@ def read(path, overrides: dict | None = None, required=REQUIRED_KEYS) -> Spectru
         return _resonances(path, _metadata(str(path), meta, overrides, free_row), names, table.rows,
                            "free_resonance" in required)
     unknown = [c for c in header if column(c) is None]
-    if unknown:
+    known = {found[0] for found in map(column, header) if found}
+    if unknown and not ({"frequency_hz", "bias_v"} <= known and ({"x", "y"} <= known or {"amplitude", "phase_deg"}
+                                                                 <= known)):
         # Checked before the metadata: a file of another kind (e.g. a thermal ASD) is told so.
         hint = ("; give frequencies as 'frequency_hz' (or frequency_khz, frequency_mhz)"
                 if any(c.lower().startswith("frequency") for c in unknown) else "")
@@ -169,7 +175,23 @@ def read(path, overrides: dict | None = None, required=REQUIRED_KEYS) -> Spectru
     if not np.any(spectra.response):
         raise UserError(f"{path}: the response ({', '.join(spectra.response_columns)}) is zero in every row")
     check_band(str(path), spectra.frequency_hz, metadata.free_resonance, SPECTRUM_BAND)
-    return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response)
+    return SpectrumData(metadata, spectra.frequency_hz, spectra.bias_v, spectra.response,
+                        ignored_columns=tuple(unknown))
+
+
+def ignored_note(data) -> str | None:
+    """The note a command prints of the columns of a table it did not read (None: every column read).
+
+    >>> ignored_note(SpectrumData(None, None, None, None, ignored_columns=("note",)))
+    "column 'note' not read (none of the table's: frequency_hz, bias_v and x, y or amplitude, phase_deg)"
+    """
+    columns = getattr(data, "ignored_columns", ())
+    if not columns:
+        return None
+    expected = ("frequency_hz, bias_v and x, y or amplitude, phase_deg" if data.kind == "spectrum" else
+                "mode, condition, frequency_hz and quality_factor")
+    return (f"column{'s' * (len(columns) > 1)} {', '.join(repr(c) for c in columns)} not read (none of the "
+            f"table's: {expected})")
 
 
 def check_band(where: str, frequency_hz, f1: float, band: tuple[float, float]) -> None:
@@ -196,10 +218,6 @@ def _resonances(path, metadata, header, rows, free_required: bool = True) -> Res
     freq_cols = [c for c in header if c in FREQUENCY_UNITS]
     allowed = ("mode", "condition") + tuple(FREQUENCY_UNITS) + OPTIONAL_RESONANCE_COLUMNS
     unknown = [c for c in header if c not in allowed]
-    if unknown:
-        raise UserError(f"{path}: unknown column(s) {', '.join(repr(c) for c in unknown)} in a resonances "
-                        "table; expected mode, condition, frequency_hz (or frequency_khz, frequency_mhz) "
-                        "and optionally quality_factor")
     missing = [c for c in ("mode", "condition") if c not in header] + ([] if freq_cols else ["frequency_hz"])
     if missing:
         raise UserError(f"{path}: resonances table lacks the column(s) {', '.join(missing)}")
@@ -245,7 +263,7 @@ def _resonances(path, metadata, header, rows, free_required: bool = True) -> Res
         check_band(str(path), freqs, metadata.free_resonance, TABLE_BAND)
     order = check_resonance_rows(str(path), modes, conds, freqs, MIN_RESONANCES, qs if q_idx is not None else None)
     return ResonanceData(metadata, modes[order], conds[order], freqs[order],
-                         quality_factor=qs[order] if q_idx is not None else None)
+                         quality_factor=qs[order] if q_idx is not None else None, ignored_columns=tuple(unknown))
 
 
 def check_resonance_rows(where, modes, conds, freqs, minimum, qs=None) -> np.ndarray:
