@@ -197,6 +197,8 @@ def _log_fit(f, y, start, weight_in_power: bool, bin_width: float | None = None,
 
 DRIFT_START = 0.5
 """The drifting oscillator's start: its resonance spread over half a linewidth."""
+DRIFT_BINS = 2.0
+"""Bins a peak must span for its drift to be told from its damping: a narrower one's shape is the bins'."""
 
 NARROW = 5.0
 """Bins per linewidth below which the bin-averaged oscillator is fitted beside the point-sampled one."""
@@ -240,7 +242,8 @@ def fit_oscillator(f, y, guess, mode: int = 1, drifting: bool = True) -> Thermal
     one fits better by :data:`POSITIVE`; its area's error is also read from the profile over Q
     (:func:`_area_profile`), where the bins, not the data, may set it.  ``drifting``: the oscillator whose
     resonance drifted over the averages (:func:`_oscillator_power`) is fitted too and kept where it fits
-    better by BIC (``ln n`` in chi2 units, one parameter more): a plain one fits such a peak's core and
+    better by BIC (``ln n`` in chi2 units, one parameter more), on a peak :data:`DRIFT_BINS` bins wide or
+    more: a plain one fits such a peak's core and
     flanks with one Q and misses its mean square by up to 10 % (``benchmarks/thermal_regimes.py``,
     ``drifting``); its Q is then the lever's own, the spread the peak's extra width.
 
@@ -265,7 +268,7 @@ def fit_oscillator(f, y, guess, mode: int = 1, drifting: bool = True) -> Thermal
         noise = 2 * min(binned.cost, first.cost) / max(f.size - 4, 1)
         if 2 * (binned.cost - first.cost) < POSITIVE * noise:
             first, bin_width = binned, step
-    if drifting:
+    if drifting and np.exp(first.x[0] - first.x[1]) >= DRIFT_BINS * step:
         drifted = _log_fit(f, y, np.r_[np.exp(first.x), DRIFT_START / np.exp(first.x[1])], False, bin_width)
         if 2 * (first.cost - drifted.cost) > math.log(f.size) * 2 * drifted.cost / max(f.size - 5, 1):
             first = drifted

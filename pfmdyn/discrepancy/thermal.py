@@ -225,7 +225,8 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "parameters": parameters, "detection_scale": scale, "matching_spring_constant": spring_constant / scale**2,
               "white_floor": float(np.sqrt(b)), "uncertainties": errors, "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": noise, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
-              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
+              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever),
+                                           bands=measured_points <= COARSE_ABOVE),     # coarse bins: no bands
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
               "instrument_comparison": compare_with_instrument(tune.instrument, {
                   "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
