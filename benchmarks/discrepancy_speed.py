@@ -9,7 +9,10 @@ alternating, the best of :data:`REPEAT` runs kept (spectrum generation and impor
 one BLAS thread as the command runs; the process's CPU seconds, which a shared machine's load
 changes less than the wall clock, and the wall clock beside them).  Every report's JSON is compared with the baseline's: the
 named effects, mechanisms and verdicts identical, every number within :data:`RTOL` (the fits' tolerance,
-:data:`FIT_TOLERANCE`, times a hundred), or equal to the bit.
+:data:`FIT_TOLERANCE`, times a hundred), or equal to the bit; and by the scientist's rule (:func:`judged`):
+a value with a stated standard error within a tenth of it (the standard error within
+:data:`STDERR_RTOL` of itself), the BIC and gap of the candidates a step did
+not select (unconverged trials) free to move, listed.
 
 Run ``python benchmarks/discrepancy_speed.py [--repeat N] [--cases a,b]``; results:
 ``benchmarks/results/discrepancy_speed.md``.  Ratios are baseline / current (above 1: faster
@@ -112,6 +115,66 @@ def differences(new, old, where: str = "", rtol: float = RTOL) -> list[str]:
     return [] if new == old else [f"{where}: {new!r} != {old!r}"]
 
 
+STDERR_SHARE = 0.1
+"""The scientist's rule (issue 38): a reported value with a stated standard error may move by this share of
+the baseline's standard error; every other number by :data:`RTOL`; names, mechanisms, verdicts and the
+effect selected at each step exactly."""
+STDERR_RTOL = 1e-3
+"""A standard error's own tolerance, relative: it is an estimate, uncertain by ``1 / sqrt(2 dof)`` (above 1 %
+for spectra of a few thousand values), and moves with the fitted point (a few 1e-6 of itself where an
+undetermined parameter's fit stops a step apart)."""
+
+
+def judged(new, old, where: str = "") -> tuple[list[str], list[str], float]:
+    """The scientist's rule on two reports (parsed JSON): the differences that break it, the numbers it lets
+    move more (the BIC and gap of a candidate a step did not select: a trial stopped after a few evaluations
+    to rank it, never converged), and the largest move of a value with a standard error, in its standard
+    errors.
+
+    >>> p = lambda v, e: {"value": v, "stderr": e, "unit": "N/m"}
+    >>> broken, _, worst = judged({"k1": p(10.005, 0.1), "gap": 1.0}, {"k1": p(10.0, 0.1), "gap": 1.0})
+    >>> broken, round(worst, 3)
+    ([], 0.05)
+    >>> judged({"k1": p(10.02, 0.1), "gap": 1.1}, {"k1": p(10.0, 0.1), "gap": 1.0})[0]
+    ['k1.value: 10.02 != 10.0 (0.2 stderr)', 'gap: 1.1 != 1.0']
+    >>> step = lambda bic: {"effect": "damping", "candidates": [{"effect": "tilt", "bic": bic}]}
+    >>> judged(step(5.0), step(4.0))
+    ([], ['candidates[0].bic: 5.0 != 4.0'], 0.0)
+    """
+    if isinstance(new, dict) and isinstance(old, dict):
+        if {"value", "stderr"} <= old.keys() and {"value", "stderr"} <= new.keys():
+            value, err = old["value"], old["stderr"]
+            if isinstance(value, float) and isinstance(new["value"], float) and isinstance(err, float) and err > 0:
+                moved = abs(new["value"] - value) / err
+                rest = judged({k: v for k, v in new.items() if k not in ("value", "stderr")},
+                              {k: v for k, v in old.items() if k not in ("value", "stderr")}, where)
+                broken = [f"{where}.value: {new['value']!r} != {value!r} ({moved:.2g} stderr)"] \
+                    if moved > STDERR_SHARE else []
+                broken += differences(new["stderr"], err, f"{where}.stderr", STDERR_RTOL)
+                return broken + rest[0], rest[1], max(rest[2], moved)
+        if old.keys() - new.keys():
+            return [f"{where}: keys {sorted(old.keys() - new.keys())} missing"], [], 0.0
+        if "candidates" in old and "effect" in old:
+            # a step: the candidates it did not select may move (their trials are not converged)
+            out = judged({k: v for k, v in new.items() if k != "candidates"},
+                         {k: v for k, v in old.items() if k != "candidates"}, where)
+            free = []
+            for i, (a, b) in enumerate(zip(new["candidates"], old["candidates"])):
+                at = f"{where}.candidates[{i}]".lstrip(".")
+                fixed = {k: v for k, v in b.items() if b.get("effect") == old["effect"] or k not in ("bic", "delta_bic", "gap")}
+                out[0].extend(differences({k: a.get(k) for k in fixed}, fixed, at))
+                free += differences({k: a.get(k) for k in b if k not in fixed}, {k: b[k] for k in b if k not in fixed}, at)
+            if len(new["candidates"]) != len(old["candidates"]):
+                out[0].append(f"{where}.candidates: {len(new['candidates'])} != {len(old['candidates'])} items")
+            return out[0], out[1] + free, out[2]
+        parts = [judged(new[k], old[k], f"{where}.{k}".lstrip(".")) for k in old]
+    elif isinstance(new, list) and isinstance(old, list) and len(new) == len(old):
+        parts = [judged(a, b, f"{where}[{i}]") for i, (a, b) in enumerate(zip(new, old))]
+    else:
+        return differences(new, old, where), [], 0.0
+    return ([d for p in parts for d in p[0]], [d for p in parts for d in p[1]], max([p[2] for p in parts], default=0.0))
+
+
 def additions(new, old) -> set[str]:
     """The names of the fields the new report has and the old one has not (anywhere in it).
 
@@ -136,6 +199,10 @@ def main() -> None:
           f"({RTOL / FIT_TOLERANCE:g} x the fits' tolerance {FIT_TOLERANCE:g}) or {ATOL:g} absolute; "
           "'to the bit' when every number is equal (or within 1e-12 at zero); fields the baseline's reports lack "
           "are listed, not compared")
+    print(f"scientist's rule (issue 38): names, mechanisms, verdicts and each step's selection exactly; a value "
+          f"with a stated standard error within {STDERR_SHARE:g} of it, that standard error within {STDERR_RTOL:g} of "
+          f"itself, other numbers within {RTOL:g}; the BIC and "
+          "gap of a step's unselected candidates (unconverged trials) may move, listed")
     with tempfile.TemporaryDirectory() as tmp:
         base, base_env = _baseline_tree(args.baseline, Path(tmp))
         now_env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
@@ -156,10 +223,14 @@ def main() -> None:
                 diff = differences(reports["current"], reports["baseline"])
                 added = additions(reports["current"], reports["baseline"])
                 exact = not differences(reports["current"], reports["baseline"], rtol=0.0)
+                broken, free, worst = judged(reports["current"], reports["baseline"])
                 (old, old_wall), (new, new_wall) = times["baseline"], times["current"]
                 ratios.append(old / new)
                 verdict = ("unchanged to the bit" if exact else f"unchanged within {RTOL:g}" if not diff
                            else f"CHANGED beyond {RTOL:g}: {'; '.join(diff[:4])}")
+                verdict += (f"; scientist's rule: {'FAILS: ' + '; '.join(broken[:4]) if broken else 'passes'} "
+                            f"(values within {worst:.2g} of their stderr; unselected candidates moved: "
+                            f"{'; '.join(free) if free else 'none'})")
                 verdict += f" (fields added since: {', '.join(sorted(added))})" if added else ""
                 print(f"| {case} | {rows} | {old:.1f} ({old_wall:.1f}) | {new:.1f} ({new_wall:.1f}) | {old / new:.2f} "
                       f"({old_wall / new_wall:.2f}) | {os.getloadavg()[0]:.1f} | {verdict} |")
