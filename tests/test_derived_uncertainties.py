@@ -98,3 +98,7 @@ def test_a_comparisons_lever_mass_gain_and_background_carry_errors(tmp_path):
     validate(doc)
     for name in ("lever_mass", "gain", "background"):
         assert doc["results"][name]["stderr"] is not None, name
+    # the text as the JSON: each with its error
+    line = next(text for text in out.report().splitlines() if text.startswith("  lever mass"))
+    assert f"+- {out['uncertainties']['lever_mass']['stderr']:.2g} kg" in line
+    assert line.count(" +- ") == 1 + 2 + 4 and "undetermined" not in line

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -187,6 +188,11 @@ def test_the_shared_tune_needs_no_tip_height(tmp_path, capsys):
     assert set(fit["fit"]["instrument"]) >= {"free_resonance", "free_quality_factor"}
     assert "from the file: " in text
     assert fit["fit"]["gap"]["value"] < 3
+    # the peak is no lever's: its Q within 2 stated errors of an oscillator's over the instrument's window,
+    # in log (392) or in power (439), and printed with its error beside the instrument's
+    q = fit["results"]["free_quality_factor"]
+    assert all(abs(q["value"] - sho) < 2 * q["stderr"] for sho in (392.0, 439.0))
+    assert re.search(r"Q 442 \(ours \d+ \+- \d+\)", text)
 
 
 def test_a_csv_tune_is_fitted_and_needs_its_spring_constant(tmp_path, capsys):

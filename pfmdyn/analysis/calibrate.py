@@ -2,7 +2,8 @@
 
 * **Thermal** (equipartition): the first mode is fitted as a damped oscillator over a white floor
   (:func:`pfmdyn.analysis.thermal.fit_thermal_peaks`; bin-averaged where the peak is narrower than a few
-  bins and that fits, said in :attr:`Calibration.model`); its mean square ``pi A**2 f0 Q / 2`` (generated
+  bins and that fits, or with a resonance that drifted over the averages where that fits better, said in
+  :attr:`Calibration.model`); its mean square ``pi A**2 f0 Q / 2`` (generated
   ``formulas.oscillator_mean_square``) in metres (an ASD in volts times ``invols``) gives
   ``k = chi kB T / <d*^2>`` with the first-mode factor ``chi`` of the optical lever read at the spot
   through a static InvOLS measured with the tip at ``tip_position`` (generated
@@ -357,5 +358,7 @@ def calibrate(tune: ThermalTune, *, length: float | None = None, width: float | 
     return Calibration(peak, thermal, sader_estimate, consistent, reconcile, assumptions, inputs, instrument,
                        plausible_factors(LENGTH_TOLERANCE, WIDTH_TOLERANCE, temperature) if length is None or width is None
                        else plausible_factors(u_length / length, u_width / width, temperature),
-                       "fluid-loaded lever" if lever else "damped oscillator" + (f", {peak.sampling}" if peak.sampling else ""),
+                       "fluid-loaded lever" if lever else "damped oscillator" + (f", {peak.sampling}" if peak.sampling else "")
+                       + (f", its resonance drifting by {peak.drift * f0:.3g} Hz (standard deviation) over the averages"
+                          if not lever and peak.drift else ""),
                        lever.fit if lever else None)

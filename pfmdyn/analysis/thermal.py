@@ -51,7 +51,8 @@ class ThermalPeak:
     ``bin_width`` (Hz): the oscillator was fitted bin-averaged (:func:`oscillator_bin_power`), else None
     (point-sampled); ``sampling`` which of the two a peak narrower than :data:`NARROW` bins took (by BIC),
     "" for a wider one (the two agree); ``area_profile``: the relative standard error of its mean square
-    from the fit's profile over Q (:func:`fit_oscillator`), 0 for a wide peak (the covariance holds it)."""
+    from the fit's profile over Q (:func:`fit_oscillator`), 0 for a wide peak (the covariance holds it);
+    ``drift`` the resonance's relative standard deviation over the averages, 0 where none was fitted."""
 
     mode: int
     frequency_hz: float
@@ -63,6 +64,7 @@ class ThermalPeak:
     bin_width: float | None = None
     sampling: str = ""
     area_profile: float = 0.0
+    drift: float = 0.0
 
     def stderr(self, gradient, part: str = "total") -> float:
         """Standard error of a quantity whose partials w.r.t. (f0, Q, A, w) are ``gradient``: from the
@@ -147,8 +149,28 @@ def _smooth(y, width):
     return np.median(windows, axis=-1)
 
 
+DRIFT_NODES = 15
+"""Gauss-Hermite nodes over a drifting resonance's normal spread (:func:`_oscillator_power`)."""
+
+
 def _oscillator_power(f, parameters, bin_width: float | None):
-    """The oscillator's power spectral density, point-sampled (``bin_width`` None) or bin-averaged."""
+    """The oscillator's power spectral density, point-sampled (``bin_width`` None) or bin-averaged;
+    ``parameters`` (f0, Q, A, w), or with a fifth, the resonance's relative standard deviation over the
+    averages: the mean of oscillators at ``f0 (1 + spread x)``, ``x`` normal, each of the same mean square
+    (``A**2 f0 Q``: equipartition does not care where the resonance is), over the floor.
+
+    >>> f = np.linspace(9.9e4, 10.1e4, 2001)
+    >>> drifted = _oscillator_power(f, (1e5, 1000.0, 1.0, 0.0, 2e-3), None)
+    >>> plain = _oscillator_power(f, (1e5, 1000.0, 1.0, 0.0), None)
+    >>> round(float(drifted.max() / plain.max()), 2), round(float(drifted.sum() / plain.sum()), 3)   # lower, the same area
+    (0.36, 0.998)
+    """
+    if len(parameters) == 5:
+        f0, q, amplitude, white, spread = parameters
+        x, weight = np.polynomial.hermite_e.hermegauss(DRIFT_NODES)
+        return sum(w_n / weight.sum() * _oscillator_power(f, (f0 * (1 + spread * x_n), q,
+                                                               amplitude / np.sqrt(1 + spread * x_n), 0.0), bin_width)
+                   for x_n, w_n in zip(x, weight)) + white**2
     if bin_width is None:
         return oscillator_asd(f, *parameters) ** 2
     return oscillator_bin_power(f, bin_width, *parameters)
@@ -157,7 +179,8 @@ def _oscillator_power(f, parameters, bin_width: float | None):
 def _log_fit(f, y, start, weight_in_power: bool, bin_width: float | None = None, fixed_quality=None):
     """Least squares of one oscillator over a white floor in log parameters (all positive, no sign
     folding), residuals in log ASD or, ``weight_in_power``, in power relative to the data's peak power;
-    point-sampled or bin-averaged (``bin_width``); ``fixed_quality``: Q held there (start without it)."""
+    point-sampled or bin-averaged (``bin_width``), drifting with a fifth parameter (:func:`_oscillator_power`);
+    ``fixed_quality``: Q held there (start without it)."""
     from scipy.optimize import least_squares
 
     log_y, top = np.log(y), float(np.max(y)) ** 2
@@ -171,6 +194,11 @@ def _log_fit(f, y, start, weight_in_power: bool, bin_width: float | None = None,
 
     return least_squares(residual, np.log(start), method="trf", x_scale=1.0, max_nfev=2000)
 
+
+DRIFT_START = 0.5
+"""The drifting oscillator's start: its resonance spread over half a linewidth."""
+DRIFT_BINS = 2.0
+"""Bins a peak must span for its drift to be told from its damping: a narrower one's shape is the bins'."""
 
 NARROW = 5.0
 """Bins per linewidth below which the bin-averaged oscillator is fitted beside the point-sampled one."""
@@ -202,7 +230,7 @@ def _area_profile(f, y, values, bin_width: float | None, variance: float) -> flo
     return (max(area) - min(area)) / 2
 
 
-def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
+def fit_oscillator(f, y, guess, mode: int = 1, drifting: bool = True) -> ThermalPeak | None:
     """One mode of a thermal spectrum: :func:`oscillator_asd` fitted to ``y`` (ASD, positive) on ``f`` from
     ``guess`` (f0, Q, A, w), in log ASD (an averaged spectrum's scatter is relative); None when the fit
     leaves the window.
@@ -212,7 +240,12 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
     is repeated weighted in power, from the first one; the change is :attr:`ThermalPeak.shape`.  A peak
     narrower than :data:`NARROW` bins is fitted bin-averaged too, the default unless the point-sampled
     one fits better by :data:`POSITIVE`; its area's error is also read from the profile over Q
-    (:func:`_area_profile`), where the bins, not the data, may set it.
+    (:func:`_area_profile`), where the bins, not the data, may set it.  ``drifting``: the oscillator whose
+    resonance drifted over the averages (:func:`_oscillator_power`) is fitted too and kept where it fits
+    better by BIC (``ln n`` in chi2 units, one parameter more), on a peak :data:`DRIFT_BINS` bins wide or
+    more: a plain one fits such a peak's core and
+    flanks with one Q and misses its mean square by up to 10 % (``benchmarks/thermal_regimes.py``,
+    ``drifting``); its Q is then the lever's own, the spread the peak's extra width.
 
     >>> f = np.linspace(9e4, 11e4, 400)
     >>> p = fit_oscillator(f, oscillator_asd(f, 1e5, 200.0, 1e-12, 1e-13), (1.001e5, 150.0, 1.5e-12, 2e-13))
@@ -235,6 +268,10 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
         noise = 2 * min(binned.cost, first.cost) / max(f.size - 4, 1)
         if 2 * (binned.cost - first.cost) < POSITIVE * noise:
             first, bin_width = binned, step
+    if drifting and np.exp(first.x[0] - first.x[1]) >= DRIFT_BINS * step:
+        drifted = _log_fit(f, y, np.r_[np.exp(first.x), DRIFT_START / np.exp(first.x[1])], False, bin_width)
+        if 2 * (first.cost - drifted.cost) > math.log(f.size) * 2 * drifted.cost / max(f.size - 5, 1):
+            first = drifted
     values = np.exp(first.x)
     if not (f[0] < values[0] < f[-1]):
         return None
@@ -243,18 +280,19 @@ def fit_oscillator(f, y, guess, mode: int = 1) -> ThermalPeak | None:
     held = norms <= 1e-6 * norms.max()
     dof = max(f.size - int(np.sum(~held)), 1)
     variance = float(np.sum(first.fun**2)) / dof
-    covariance = np.zeros((4, 4))
+    covariance = np.zeros((values.size, values.size))
     free = np.flatnonzero(~held)
     covariance[np.ix_(free, free)] = np.linalg.pinv(J[:, free].T @ J[:, free]) * variance
-    covariance *= np.outer(values, values)          # d x = x d log x
+    covariance = (covariance * np.outer(values, values))[:4, :4]         # d x = x d log x; the drift's share held
     second = _log_fit(f, y, values, True, bin_width)
-    shape = np.where(held, 0.0, np.exp(second.x) - values)
+    shape = np.where(held, 0.0, np.exp(second.x) - values)[:4]
     if not np.all(np.isfinite(shape)):
         shape = np.zeros(4)
     narrow = values[0] / values[1] < NARROW * step
-    return ThermalPeak(mode, *map(float, values), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)),
+    return ThermalPeak(mode, *map(float, values[:4]), tuple(map(tuple, covariance.tolist())), tuple(map(float, shape)),
                        bin_width, ("bin-averaged" if bin_width else "point-sampled") if narrow else "",
-                       _area_profile(f, y, values, bin_width, variance) if narrow else 0.0)
+                       _area_profile(f, y, values, bin_width, variance) if narrow else 0.0,
+                       float(values[4]) if values.size == 5 else 0.0)
 
 
 def _low_bins(size: int) -> int:
@@ -318,7 +356,7 @@ def broad_mode(f, y) -> ThermalPeak | None:
     i = tallest_peak(y)
     q0 = max(_quality_start(f, y, i), 0.5)
     band = (f > f[_low_bins(f.size)]) & (y > 0)
-    return fit_oscillator(f[band], y[band], (f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])))
+    return fit_oscillator(f[band], y[band], (f[i], q0, y[i] / max(q0, 1.0), np.min(y[band])), drifting=False)
 
 
 def _peaks(x, minimum: float):

@@ -25,6 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..analysis.stiffness_report import rounded
 from ..cantilever import BETA1_FREE, Cantilever
 from ..errors import UserError
 from ..fitting.noise import gap
@@ -33,7 +34,7 @@ from ..fitting.projection import project
 from ..fitting.result import Result
 from ..io.sweeps import SweepTable
 from .regions import gap_text, lever_resonances, worst_region
-from .sweep import (EXTRA_LOSS, UNDETERMINED_ERROR, StartsFit, amplitude_stderr, error_entry, joint_covariance, parts, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
+from .sweep import (EXTRA_LOSS, UNDETERMINED_ERROR, StartsFit, amplitude_stderr, derived_text, error_entry, joint_covariance, parts, SweepFit, amplitude_peak, base_driven_columns, compare_with_instrument,
                     explain_header, instrument_text, mode_ratios, noise_level, parameter_entry, penalty, provenance_lines, plus_minus, solve_from_starts, stacked, sweep_model, unexplained_entry, unexplained_line)
 
 __all__ = ["SweepComparison", "compare_sweeps", "with_added_mass", "mode2_node", "CANDIDATES"]
@@ -234,6 +235,16 @@ def compare_sweeps(after: SweepTable, before: SweepFit, position: float | None =
                   float(np.median(np.diff(frequency)))), frequency, np.abs(y)),
               "from_file": sorted(after.fields), "assumed": list(before["assumed"])}
     return SweepComparison(fields, lever=lever)
+
+
+def _complex_text(value: list, stderr: list) -> str:
+    """A complex amplitude ``[re, im]`` and its standard errors ``[re, im]`` (None: undetermined) as a report prints it.
+
+    >>> _complex_text([1.2345e-3, -2e-5], [3e-6, None])
+    '(0.0012345 +- 3e-06) + (-2e-05 +- undetermined)i'
+    """
+    return " + ".join(f"({rounded(v, e or 0.0)} +- {f'{e:.2g}' if e is not None else 'undetermined'})" for v, e in
+                      zip(value, stderr)) + "i"
 
 
 def _amplitude_errors(before: SweepFit, refit, fit: StartsFit, amplitudes, lever_of, count: int, frequency, y,
@@ -601,6 +612,9 @@ class SweepComparison(Result):
         if "viscous_loss" in p:
             lines.append(f"  damping beyond the fluid's: viscous_loss {p['viscous_loss']['before']:.4g} -> "
                          f"{plus_minus(p['viscous_loss'], '')}")
+        lines.append(f"  lever mass {derived_text(d, 'lever_mass', 'kg')} (the reference's); after: gain "
+                     f"{_complex_text(d['gain_after'], d['gain_after_stderr'])}, background "
+                     + ", ".join(_complex_text(b, e) for b, e in zip(d["background_after"], d["background_after_stderr"])))
         before_hz, after_hz = ({"value": d[f"resonance_{when}"], "stderr": d["resonance_stderr"][i]}
                                for i, when in enumerate(("before", "after")))
         lines.append(f"  resonance in the medium {plus_minus(before_hz, '')} -> {plus_minus(after_hz, 'Hz')}; "

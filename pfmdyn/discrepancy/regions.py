@@ -29,11 +29,12 @@ def _kilohertz(low: float, high: float) -> str:
     return f"{low / 1e3:.6g}-{high / 1e3:.6g} kHz"
 
 
-def regions(frequency_hz, resonances=()) -> list[dict]:
+def regions(frequency_hz, resonances=(), bands: bool = True) -> list[dict]:
     """The regions of a spectrum measured at ``frequency_hz`` (one value per entry, repeats allowed:
     the biases of a spectrum): each resonance ``(centre_hz, half_power_width_hz)`` inside the span and
-    the rest away from them, then each band when there are several.  Each is ``{"region", "band_hz",
-    "mask"}`` (``mask`` selects the values).
+    the rest away from them, then each band when there are several (``bands`` False: one spectrum whose
+    steps widen by design, a long tune's bins averaged away from its peak).  Each is ``{"region",
+    "band_hz", "mask"}`` (``mask`` selects the values).
 
     >>> f = np.r_[np.linspace(90.0, 110.0, 41), np.linspace(290.0, 310.0, 41)]
     >>> for r in regions(f, [(100.0, 2.0)]):
@@ -44,6 +45,8 @@ def regions(frequency_hz, resonances=()) -> list[dict]:
     band 0.29-0.31 kHz
     >>> int(regions(f, [(100.0, 2.0)])[0]["mask"].sum())         # 99-101 Hz, at 0.5 Hz steps
     5
+    >>> len(regions(f, [(100.0, 2.0)], bands=False))             # the resonance and the rest only
+    2
     """
     f = np.asarray(frequency_hz, float)
     unique = np.unique(f)
@@ -62,7 +65,7 @@ def regions(frequency_hz, resonances=()) -> list[dict]:
         if rest.any():
             out.append({"region": "rest of the spectrum (away from the resonances)",
                         "band_hz": [float(f[rest].min()), float(f[rest].max())], "mask": rest})
-    if len(unique) > 2:
+    if bands and len(unique) > 2:
         steps = np.diff(unique)
         breaks = np.flatnonzero(steps > BAND_BREAK * np.median(steps))
         if len(breaks):
@@ -88,8 +91,8 @@ def lever_resonances(lever, modes: int = 3) -> list[tuple[float, float]]:
     return [(float(f), float(f / q)) for f, q in zip(free.damped_hz, free.q) if np.isfinite(f) and q > 0]
 
 
-def worst_region(frequency_hz, energy, resonances=()) -> dict | None:
-    """The region (:func:`regions`) of the largest gap, ``energy`` the squared noise-normalised residual
+def worst_region(frequency_hz, energy, resonances=(), bands: bool = True) -> dict | None:
+    """The region (:func:`regions`, ``bands`` as there) of the largest gap, ``energy`` the squared noise-normalised residual
     of each value (``|r / sigma|**2``): ``{"region", "band_hz", "values", "gap"}``; None when the
     spectrum has no region.
 
@@ -102,7 +105,7 @@ def worst_region(frequency_hz, energy, resonances=()) -> dict | None:
     energy = np.asarray(energy, float)
     found = [dict(band_hz=r["band_hz"], region=r["region"], values=int(r["mask"].sum()),
                   gap=float(gap(np.sum(energy[r["mask"]]), r["mask"].sum())))
-             for r in regions(frequency_hz, resonances) if r["mask"].any()]
+             for r in regions(frequency_hz, resonances, bands) if r["mask"].any()]
     return max(found, key=lambda r: r["gap"]) if found else None
 
 

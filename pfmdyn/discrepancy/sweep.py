@@ -359,15 +359,27 @@ def instrument_text(fields: dict, comparison: list | None = None) -> str:
     'amplitude peak 71 789 Hz, Q 3.18'
     >>> instrument_text({"free_resonance": 8.8e4}, [{"name": "free_resonance", "ours": 8.79e4}])
     'resonance 88 000 Hz (ours 87 900 Hz)'
+    >>> instrument_text({"free_quality_factor": 442.0}, [{"name": "free_quality_factor", "ours": 396.2, "stderr": 41.0}])
+    'Q 442 (ours 396 +- 41)'
     """
-    ours = {c["name"]: c["ours"] for c in comparison or ()}
+    ours = {c["name"]: c for c in comparison or ()}
     shown = []
     for name, label in (("amplitude_peak", "amplitude peak "), ("free_resonance", "resonance "),
                         ("free_quality_factor", "Q ")):
         if fields.get(name):
             text = _hz if name != "free_quality_factor" else "{:.3g}".format
-            shown.append(label + text(fields[name]) + (f" (ours {text(ours[name])})" if name in ours else ""))
+            shown.append(label + text(fields[name]) + (f" (ours {_ours_text(ours[name], text)})" if name in ours else ""))
     return ", ".join(shown) or "no fit in the header"
+
+
+def _ours_text(comparison: dict, text) -> str:
+    """Our value of a :func:`compare_with_instrument` entry; a Q (a header's Q is often far from ours: a
+    fit over another window, another weighting) to the digits its standard error leaves, with it (a
+    frequency's is on the report's line above)."""
+    stderr = comparison.get("stderr")
+    if text is _hz or stderr is None or not math.isfinite(stderr) or stderr <= 0:
+        return text(comparison["ours"])
+    return rounded(comparison["ours"], stderr) + f" +- {stderr:.2g}"
 
 
 def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[dict]:
@@ -391,7 +403,7 @@ def compare_with_instrument(fields: dict, ours: dict, step_hz: float) -> list[di
         step = {"free_quality_factor": value**2 * step_hz / frequency if frequency else 0.0,
                 "free_resonance": step_hz, "amplitude_peak": step_hz}.get(name, 0.0)
         tolerance = 3.0 * math.hypot(stderr if stderr is not None and math.isfinite(stderr) else 0.0, step)
-        out.append({"name": name, "instrument": fields[name], "ours": value, "tolerance": tolerance,
+        out.append({"name": name, "instrument": fields[name], "ours": value, "stderr": stderr, "tolerance": tolerance,
                     "basis": "3x our uncertainty" + (" and the frequency step" if step else ""),
                     "relative_difference": (fields[name] - value) / value,
                     "disagrees": bool(abs(fields[name] - value) > tolerance)})

@@ -118,11 +118,13 @@ def quality_factor_in_medium(lever: Cantilever) -> float:
 
 
 def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium: Medium, temperature: float,
-                width: float | None = None, *, start=None) -> ThermalFit:
+                width: float | None = None, *, start=None, shape: bool = True) -> ThermalFit:
     """Fit a thermal tune over the band around its first mode's peak (see the module): the lever's resonance in
     ``medium`` at ``temperature`` (K) and a damping beyond the fluid's; ``width`` None: assumed; ``start``
-    (the ``internal`` of an earlier fit) the only start.  Attribute ``scale_stderr``: the relative standard
-    error of ``g**2``, the fit's scatter with the resonance and damping free.
+    (the ``internal`` of an earlier fit) the only start.  The resonance's and the damping's errors hold the
+    peak's shape too (how far they move when the fit is weighted in power: the peak's top, not its
+    flanks); ``shape`` False leaves it out (a step of an iteration).  Attribute ``scale_stderr``: the
+    relative standard error of ``g**2``, the fit's scatter with the resonance and damping free.
 
     >>> lever = Cantilever(2.0, 7e4, 2e-4, width=3e-5, medium=Medium.air())
     >>> f = np.linspace(100.0, 2e5, 4000)
@@ -158,18 +160,20 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
             psd[near] = lever.thermal_noise(nodes.ravel(), temperature).slope.reshape(nodes.shape).mean(axis=1)
         return psd
 
-    def model(x) -> tuple[np.ndarray, np.ndarray]:
+    def model(x, in_power: bool = False) -> tuple[np.ndarray, np.ndarray]:
         psd = slope_psd(x)
-        coefficients = _floor_and_scale(psd, power, frequency, sigma.min() / sigma)
+        weights = sigma.min() / sigma * (power / power.max() if in_power else 1.0)
+        coefficients = _floor_and_scale(psd, power, frequency, weights)
         return np.sqrt(coefficients[0] * psd + coefficients[1] + coefficients[2] * frequency[0] / frequency), coefficients
 
-    def residual(x) -> np.ndarray:
+    def residual(x, in_power: bool = False) -> np.ndarray:
         try:
-            fitted = model(x)[0]
+            fitted = model(x, in_power)[0]
         except UserError:       # a lever the fluid cannot carry
             return np.full(len(frequency), 1e6)
         with np.errstate(divide="ignore"):
-            return np.nan_to_num((np.log(fitted) - log_asd) / sigma, nan=1e6, posinf=1e6, neginf=1e6)
+            r = (fitted**2 - power) / power.max() * sigma.min() / sigma if in_power else (np.log(fitted) - log_asd) / sigma
+            return np.nan_to_num(r, nan=1e6, posinf=1e6, neginf=1e6)
 
     grid = [np.asarray(start, dtype=float)] if start is not None else \
         [np.array([np.log10(peak * s), loss]) for s in (0.999, 1.0, 1.001) for loss in EXTRA_LOSS.seeds]
@@ -186,13 +190,18 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
                         "load at a resonance near the peak (check them)") from None
     r = np.log(fitted) - log_asd
     inflation = peak_misfit(frequency, r / sigma, lever) ** 2
-    parameters = {p.key: parameter_entry(p, x, covariance[i, i] * inflation)
+    # the peak's shape: the same fit weighted in power (the peak's top) moves the resonance and damping where
+    # the peak is no lever's (a drifting resonance; the shared tune's Q 396 -> 436, as the SHO over the
+    # instrument's window, 392 in log and 439 in power); an exact spectrum's moves them by its noise
+    moved = solve_from_starts(lambda x: residual(x, True), [fit.internal], lower, upper, keep=1).internal - \
+        fit.internal if shape else np.zeros(2)
+    lever_covariance = covariance[:2, :2] * inflation + np.outer(moved, moved)
+    parameters = {p.key: parameter_entry(p, x, lever_covariance[i, i])
                   for i, (p, x) in enumerate(zip(params, fit.internal))}
     parameters["width"] = {"value": width, "stderr": None, "unit": "m", "given": given}
     if not given:
         parameters["width"]["why"] = WIDTH_NOTE
     q = quality_factor_in_medium(lever)
-    lever_covariance = covariance[:2, :2] * inflation
     scale = float(np.sqrt(a) / formulas.height_per_slope(length))
     log_scale_sd = math.sqrt(covariance[2, 2]) if covariance[2, 2] >= 0 else math.nan     # of log g**2
     errors = {"vacuum_resonance": error_entry(propagated(lambda x: lever_of(x).vacuum_resonance, fit.internal,
@@ -216,11 +225,12 @@ def fit_thermal(tune: ThermalTune, spring_constant: float, length: float, medium
               "parameters": parameters, "detection_scale": scale, "matching_spring_constant": spring_constant / scale**2,
               "white_floor": float(np.sqrt(b)), "uncertainties": errors, "unit": f"{tune.unit}/sqrt(Hz)",
               "instrument_fit": dict(tune.instrument), "noise": noise, "gap": float(np.sqrt(np.mean((r / sigma) ** 2))),
-              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever)),
+              "worst_region": worst_region(frequency, (r / sigma) ** 2, lever_resonances(lever),
+                                           bands=measured_points <= COARSE_ABOVE),     # coarse bins: no bands
               "unexplained": unexplained, "from_file": sorted(tune.instrument), "assumed": [],
               "instrument_comparison": compare_with_instrument(tune.instrument, {
                   "free_resonance": (lever.free_resonance, parameters["free_resonance"]["stderr"]),
-                  "free_quality_factor": (q, None)},
+                  "free_quality_factor": (q, errors["quality_factor"]["stderr"])},
                   float(np.median(np.diff(frequency))))}
     if not given:
         fields["assumed"].append(f"width {width:g} m (L/10: the width was not given)")
@@ -352,7 +362,7 @@ def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, t
     k, start, last, soft, fit = spring_constant, None, None, 0.0, None      # soft: the stiffest k too soft
     for _ in range(24):
         try:
-            trial = fit_thermal(tune, k, length, medium, temperature, width, start=start)
+            trial = fit_thermal(tune, k, length, medium, temperature, width, start=start, shape=False)
         except UserError:       # too soft to carry the fluid at the peak: back towards the last that did
             soft = max(soft, k)
             if last is not None and np.log(np.exp(last[0]) / k) < 1e-4:
@@ -372,11 +382,13 @@ def lever_mode(tune: ThermalTune, length: float, width: float, medium: Medium, t
         raise UserError(f"{tune.path}: no lever of this length and width in {medium.name} explains the tune "
                         "(check them)")
     fitted_k = float(np.exp(last[0]))
+    fit = fit_thermal(tune, fitted_k, length, medium, temperature, width, start=fit.internal)     # with its shape
     k = fitted_k / fit["detection_scale"] ** 2
 
     def moved(**change) -> float:        # k's relative change for one input one sigma lower (less load: a lever that floats)
         other = dict(dict(length=length, width=width), **change)
-        refit = fit_thermal(tune, fitted_k, other["length"], medium, temperature, other["width"], start=fit.internal)
+        refit = fit_thermal(tune, fitted_k, other["length"], medium, temperature, other["width"], start=fit.internal,
+                            shape=False)
         return abs(refit["detection_scale"] ** -2 / fit["detection_scale"] ** -2 - 1)
 
     sources = {"fit": fit.scale_stderr, "length": moved(length=length - length_uncertainty),
