@@ -32,6 +32,7 @@ from ..constants import TIP_HEIGHT_SPREAD
 from ..errors import UserError
 from ..generated import formulas
 from . import contact_resonance as cr
+from ..digits import rounded
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
@@ -175,20 +176,6 @@ class Solution:
         if self.reduced_modulus is not None:
             out.append(f"E* = {self.reduced_modulus:.6g} +- {self.reduced_modulus_stderr:.2g} Pa  (Hertz)")
         return out
-
-
-def rounded(value: float, sigma: float) -> str:
-    """``value`` to the second significant digit of its standard uncertainty ``sigma`` (six digits without one).
-
-    >>> rounded(204.067, 23.0), rounded(300.0, 1.0), rounded(0.0012345, 2e-6), rounded(2.5e8, 1e6), rounded(3.14159, 0.0)
-    ('204', '300.0', '0.0012345', '2.500e+08', '3.14159')
-    """
-    if not (sigma > 0 and math.isfinite(sigma)) or value == 0:
-        return f"{value:.6g}"
-    place = math.floor(math.log10(sigma)) - 1
-    if 1e-4 <= abs(value) < 1e7:
-        return f"{round(value, -place):.{max(0, -place)}f}"
-    return f"{value:.{max(1, math.floor(math.log10(abs(value))) - place)}e}"
 
 
 _SOURCE_WORDS = {"contact_uncertainty": "contact resonances", "free_resonance_uncertainty": "free resonance",

@@ -346,9 +346,8 @@ def _dart(args, overrides: dict, given: dict) -> int:
         median = {name: record["value"] for name, record in doc["results"].items()}
 
         def pm(name, scale=1.0):        # the median and the median pixel's uncertainty, to the digits it leaves
-            from ..analysis.stiffness_report import rounded
-            value, stderr = doc["results"][name]["value"] * scale, (doc["results"][name]["stderr"] or 0.0) * scale
-            return rounded(value, stderr) + (f" +- {stderr:.2g}" if stderr else "")
+            from ..digits import plus_minus
+            return plus_minus(doc["results"][name]["value"] * scale, (doc["results"][name]["stderr"] or 0.0) * scale)
         print(f"DART: {ok.sum()}/{ok.size} pixels determined, noise {100 * sigma:.2g} %; medians (+- the median "
               f"pixel's uncertainty): contact resonance {pm('contact_resonance')} Hz, Q {pm('contact_quality_factor')}, "
               f"k1 {pm('k1')} N/m, contact loss {pm('contact_loss')}, |d_eff| {pm('d_eff', 1e12)} pm/V; the "

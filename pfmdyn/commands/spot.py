@@ -75,7 +75,7 @@ def _pm(value: float, sigma: float | None, sign: str = "") -> str:
     >>> _pm(0.0012, 0.05)                      # an uncertainty above the value: the value to two digits
     '0.0012 +- 0.05'
     """
-    from ..analysis.stiffness_report import rounded
+    from ..digits import rounded
     if sigma is not None and math.isnan(sigma):
         return f"{value:{sign}.2g} (undetermined uncertainty: a blind spot appears or goes within the assumed inputs)"
     text = rounded(value, sigma or 0.0) if not sigma or sigma < abs(value) else f"{value:.2g}"

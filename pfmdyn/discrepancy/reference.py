@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..analysis.stiffness_report import rounded
+from ..digits import rounded
 from ..cantilever import BETA1_FREE, Cantilever
 from ..errors import UserError
 from ..fitting.noise import gap

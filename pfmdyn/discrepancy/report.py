@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..analysis.stiffness_report import rounded
+from ..digits import rounded
 from ..fitting.result import Result
 from . import select
 from .effects import public_name

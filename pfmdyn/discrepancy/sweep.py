@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..analysis.stiffness_report import rounded
+from ..digits import rounded
 from ..cantilever import Cantilever
 from ..errors import UserError
 from ..fitting.noise import GAP_LIMIT, gap, misfit_band
