@@ -472,7 +472,7 @@ def test_deconvolve_reads_the_unit_its_columns_name(tmp_path, capsys):
 def test_stiffness_states_the_uncertainty_of_k1_over_k(tmp_path, capsys):
     """k1/k was printed and written with no uncertainty; it has k1's from every input but the spring constant,
     which k1 scales with."""
-    from pfmdyn.analysis.stiffness_report import rounded
+    from pfmdyn.digits import rounded
     out = tmp_path / "k1.json"
     base = ["stiffness", "--free-resonance", "7e4", "--contact", "3e5", "--spring-constant", "2", "--k2", "0",
             "--json", str(out)]
