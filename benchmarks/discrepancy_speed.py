@@ -24,6 +24,7 @@ import argparse
 import json
 import math
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -142,6 +143,10 @@ def judged(new, old, where: str = "") -> tuple[list[str], list[str], float]:
     ([], ['candidates[0].bic: 5.0 != 4.0'], 0.0)
     """
     if isinstance(new, dict) and isinstance(old, dict):
+        if old.get("stderr", 0) is None and isinstance(new.get("stderr"), float) and "value" in old:
+            # an uncertainty stated since, where the baseline gave none: an addition, listed
+            broken, free, worst = judged({**new, "stderr": None}, old, where)
+            return broken, free + [f"{where}.stderr: stated now ({new['stderr']:.3g}), none before"], worst
         if {"value", "stderr"} <= old.keys() and {"value", "stderr"} <= new.keys():
             value, err = old["value"], old["stderr"]
             if isinstance(value, float) and isinstance(new["value"], float) and isinstance(err, float) and err > 0:
@@ -167,12 +172,23 @@ def judged(new, old, where: str = "") -> tuple[list[str], list[str], float]:
             if len(new["candidates"]) != len(old["candidates"]):
                 out[0].append(f"{where}.candidates: {len(new['candidates'])} != {len(old['candidates'])} items")
             return out[0], out[1] + free, out[2]
-        parts = [judged(new[k], old[k], f"{where}.{k}".lstrip(".")) for k in old]
+        parts = [judged(*(_numbers_only(new[k]), _numbers_only(old[k])) if k == "fit_report" else (new[k], old[k]),
+                        f"{where}.{k}".lstrip(".")) for k in old]
     elif isinstance(new, list) and isinstance(old, list) and len(new) == len(old):
         parts = [judged(a, b, f"{where}[{i}]") for i, (a, b) in enumerate(zip(new, old))]
     else:
         return differences(new, old, where), [], 0.0
     return ([d for p in parts for d in p[0]], [d for p in parts for d in p[1]], max([p[2] for p in parts], default=0.0))
+
+
+def _numbers_only(text):
+    r"""A fit report's text without its ``+/- error`` parts: the values it renders are judged in their records,
+    where an error stated since the baseline is an addition.
+
+    >>> print(_numbers_only("k1: 10.3 +/- 2.1e-05 N/m, width: 1449.09 +/- 0.12 Hz"))
+    k1: 10.3 N/m, width: 1449.09 Hz
+    """
+    return re.sub(r" \+/- \S+", "", text) if isinstance(text, str) else text
 
 
 def additions(new, old) -> set[str]:
