@@ -21,6 +21,7 @@ import numpy as np
 
 from ..generated import lever_pieces as pieces
 from ..roots.bracket import _LOBATTO, _TO_CHEBYSHEV
+from .segments import _BOUNDED_AT_START
 
 __all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "tip_point", "characteristic", "characteristic_roots",
            "characteristic_partials"]
@@ -459,7 +460,8 @@ def tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g, codes, jump, djump):
                 _store(_d_rho_g(beta[i], k[i], kvv[i], kll[i], kvl[i], H[i], L[i], mu[i], rho_g[i]), out[i])
         else:               # a parameter the tip does not hold
             out[:, :] = 0.0
-_BOUNDED_AT_START = float(np.linalg.det(np.array(pieces.bounded_basis(0.0, 0.0)[:16], dtype=float).reshape(4, 4)))
+
+
 _PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
 _PAIR_ROWS = np.array(_PAIRS)
 _PAIR_SIGNS = (-1.0) ** (_PAIR_ROWS.sum(1)[:, None] + _PAIR_ROWS.sum(1)[None, :])
