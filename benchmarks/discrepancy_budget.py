@@ -27,23 +27,12 @@ import subprocess
 import sys
 from collections import Counter
 
-from discrepancy_speed import CASES, ROOT
+from discrepancy_speed import CASE_DATA, CASES, ROOT
 from recording import recorded
 
-WORKER = """
-import collections, json, sys, tempfile, time
-from pathlib import Path
-sys.path.insert(0, {tests!r})
-from fe_beam import acquisition_case
-from threadpoolctl import threadpool_limits
-from pfmdyn.discrepancy.select import TIME_BUDGET_S
+WORKER = CASE_DATA + """
+import collections, json, time
 from pfmdyn.discrepancy import model, peaks, spectrum
-from pfmdyn.io.tables import read
-text, _ = acquisition_case({seed}, {kind!r}, spot={spot!r})
-with tempfile.TemporaryDirectory() as tmp:
-    path = Path(tmp) / "s.csv"
-    path.write_text(text)
-    data = read(path)
 cpu, calls, fits, inside = collections.Counter(), collections.Counter(), [], []
 
 def counted(owner, name, label):

@@ -55,21 +55,27 @@ CASES = {
 }
 """Name -> (class, seed, spot) of :func:`fe_beam.acquisition_case`."""
 
-# Run in a fresh interpreter in either tree: prints the seconds of the analysis, writes the report.
-WORKER = """
-import json, sys, tempfile, time
+CASE_DATA = """
+import sys, tempfile
 from pathlib import Path
 sys.path.insert(0, {tests!r})
 from fe_beam import acquisition_case
 from threadpoolctl import threadpool_limits
 from pfmdyn.discrepancy.select import TIME_BUDGET_S
-from pfmdyn.discrepancy.spectrum import analyse
 from pfmdyn.io.tables import read
 text, _ = acquisition_case({seed}, {kind!r}, spot={spot!r})
 with tempfile.TemporaryDirectory() as tmp:
     path = Path(tmp) / "s.csv"
     path.write_text(text)
     data = read(path)
+"""
+"""The start of a case's worker (a template for ``str.format``: ``tests``, ``seed``, ``kind``, ``spot``): the
+spectrum of :func:`fe_beam.acquisition_case` read as ``data``, and ``threadpool_limits``, ``TIME_BUDGET_S``."""
+
+# Run in a fresh interpreter in either tree: prints the seconds of the analysis, writes the report.
+WORKER = CASE_DATA + """
+import json, time
+from pfmdyn.discrepancy.spectrum import analyse
 started, cpu = time.perf_counter(), time.process_time()
 with threadpool_limits(1, user_api="blas"):
     report = analyse(data, time_budget_s=TIME_BUDGET_S)
