@@ -36,7 +36,7 @@ from ..digits import rounded
 from .stiffness import out_of_range_message, reduced_modulus, reduced_modulus_uncertainty
 from .tip_position import tip_position_scan
 
-__all__ = ["TIP_POSITION_LOW", "rounded", "assumed_variations", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
+__all__ = ["TIP_POSITION_LOW", "assumed_variations", "TIP_HEIGHT_TOLERANCE", "ASSUMED_POISSON", "assumed_tie_uncertainty", "tip_height_spread",
            "Solution", "StiffnessReport", "analyse"]
 
 TIP_POSITION_LOW = 0.7
