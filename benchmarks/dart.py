@@ -155,13 +155,15 @@ def accuracy(per_class: int) -> None:
         print(f"| {label} | " + " | ".join(f"{images[n]}/{per_class} images, {100 * np.mean(pixels[n]):.1f} % pixels"
                                           for n in images) + " |")
     print("\neach pixel's stated standard error (--pool at its default) against the truth: the pixels within 2 stated "
-          "sigma over all images (the least of an image), and the median |error| / stderr (a normal's: 0.67)")
+          "sigma over all images (the least of an image), the median |error| / stderr (a normal's: 0.67) and the "
+          "pixels whose stderr is NaN (counted as not within)")
     print("| class | " + " | ".join(TOLERANCES) + " |")
     print("|" + "---|" * (len(TOLERANCES) + 1))
     for label, row in coverage.items():
         print(f"| {label} | " + " | ".join(
             f"{100 * np.mean(row[n]['within']):.1f} % ({100 * np.min(row[n]['within']):.0f} %), "
-            f"{np.median(np.concatenate(row[n]['z'])):.2f}" for n in TOLERANCES) + " |")
+            f"{np.nanmedian(np.concatenate(row[n]['z'])):.2f}, {np.mean(np.isnan(np.concatenate(row[n]['z']))):.1%} "
+            "no stderr" for n in TOLERANCES) + " |")
     print("\ncontact_resonance pixel by pixel (--pool 0) against the one-pixel Cramér-Rao bounds: the oscillator's "
           "(four unknowns) and the lever's with a real drive (three)")
     print("| class | images' median contact Q | median abs(pole / truth - 1) | --pool 0: within 2e-4 | "
