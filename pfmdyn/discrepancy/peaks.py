@@ -172,9 +172,7 @@ def data_peaks(data) -> np.ndarray:
     >>> data_peaks(SimpleNamespace(frequency_hz=f, bias_v=np.tile([0, 1], 91), response=y)).round(6).tolist()
     [4.03]
     """
-    freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, freq_u)]
-    return poles(data, found).real if len(found) else found
+    return peak_widths(data)[0]
 
 
 def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
@@ -191,7 +189,7 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     found = freq_u[_maxima(size, freq_u)]
     if not len(found):
         return found, found
-    p = poles(data, found)
+    p = poles(data, found)      # (Re p is a number: where no pole is found, the guess)
     return np.where(np.isfinite(p.real), p.real, found), formulas.half_power_width_from_root(np.abs(p.imag))
 
 

@@ -61,7 +61,11 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     """
     m = model.meta
     args = _characteristic_args_many(model, np.asarray(internals, float), contact)
-    b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, a[6], a[7]) for a in args])
+    if not len(args):
+        return []
+    # the free root depends on the tip alone: once per tip (a start grid's rows share one)
+    tips, tip_of = np.unique(args[:, 6:8], axis=0, return_inverse=True)
+    b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, mu, gamma) for mu, gamma in tips])[tip_of]
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
         rows = np.flatnonzero(b1s == b1)
