@@ -240,9 +240,12 @@ def peak_scores(roots, peaks, band, unseen: bool = False) -> np.ndarray:
     has = count > 0
     if not has.any():
         return out
+    # the sets side by side, padded with NaN (each set's place: its row, then its order)
     R = np.full((int(has.sum()), int(count.max())), np.nan)
-    for row, r in enumerate(r for r in roots if len(r)):
-        R[row, :len(r)] = r
+    filled = count[has]
+    row = np.repeat(np.arange(len(filled)), filled)
+    R[row, np.arange(len(row)) - np.repeat(np.cumsum(filled) - filled, filled)] = np.concatenate(
+        [r for r in roots if len(r)])
     lp = np.log(peaks)
     with np.errstate(invalid="ignore"):
         lr = np.log(R)

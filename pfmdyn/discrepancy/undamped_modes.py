@@ -37,7 +37,8 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     """
     c = model.coords(internal)
     m = model.meta
-    b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
+    # free_root's value, kept (a fit asks the same tip again, and for the sensitivity its partials)
+    b1 = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])[0]
     lever = characteristic_args(model, internal, contact)
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
@@ -78,8 +79,9 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
         with np.errstate(all="ignore"):
             roots = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
-        for i, part in zip(rows, np.split(roots, np.cumsum(np.bincount(row, minlength=len(rows)))[:-1])):
-            out[i] = part
+        ends = np.cumsum(np.bincount(row, minlength=len(rows))).tolist()
+        for i, start, end in zip(rows, [0] + ends[:-1], ends):
+            out[i] = roots[start:end]
     return out
 
 
