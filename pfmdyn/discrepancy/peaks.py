@@ -25,7 +25,7 @@ from scipy.signal import peak_prominences
 
 from ..generated import formulas
 from .model import bounds
-from .undamped_modes import _characteristic_args_many, resonance_sensitivity, resonances, resonances_many
+from .undamped_modes import _characteristic_args_many, _resonances_of, resonance_sensitivity, resonances
 
 __all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "Matches", "match_starts"]
 
@@ -317,9 +317,10 @@ class Matches:
 
     def roots(self, model, grid, f_max: float) -> list[np.ndarray]:
         """:func:`pfmdyn.discrepancy.undamped_modes.resonances_many` of the grid's rows (contact modes)."""
-        key = (_characteristic_args_many(model, np.asarray(grid, float), True).tobytes(), f_max)
+        levers = _characteristic_args_many(model, np.asarray(grid, float), True)
+        key = (levers.tobytes(), f_max)
         if key not in self._roots:
-            self._roots[key] = resonances_many(model, grid, True, f_max)
+            self._roots[key] = _resonances_of(model.meta, levers, f_max)
         return self._roots[key]
 
     def peak_fit(self, model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):

@@ -60,8 +60,12 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     >>> [(f / 1e4).round(3).tolist() for f in resonances_many(Model(meta), [[-9.0, -9.0]] * 2, True, 7e4)]
     [[1.0, 6.267], [1.0, 6.267]]
     """
-    m = model.meta
-    args = _characteristic_args_many(model, np.asarray(internals, float), contact)
+    return _resonances_of(model.meta, _characteristic_args_many(model, np.asarray(internals, float), contact), f_max)
+
+
+def _resonances_of(m, args: np.ndarray, f_max: float) -> list[np.ndarray]:
+    """:func:`resonances_many` of the levers whose characteristic takes the rows of ``args`` (of
+    :func:`_characteristic_args_many`), the lever's metadata ``m``."""
     if not len(args):
         return []
     # the free root depends on the tip alone: once per tip (a start grid's rows share one)
