@@ -107,7 +107,7 @@ def _characteristic_args_many(model: Model, internals: np.ndarray, contact: bool
     k1, k2 = ([p.value(v) for v in internals[:, j]] if j < springs else [c[p.name]] * len(internals)
               for j, p in enumerate(spring_parameters(model.meta, False)))
     kvv, kll, kvl = np.broadcast_arrays(*rotated(np.array(k1), np.array(k2), c["alpha"]))
-    out = np.array([characteristic_args(model, internals[0], contact)] * len(internals), dtype=float)
+    out = np.tile(np.array(characteristic_args(model, internals[0], contact), float), (len(internals), 1))
     out[:, 1], out[:, 2], out[:, 3] = kvv, kll, kvl
     return out
 
