@@ -28,7 +28,7 @@ from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
 from .model import FitResult, Model, bounds, fit
-from .peaks import Matches, data_peaks, match_starts, peak_widths
+from .peaks import Matches, match_starts, peak_widths
 from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
@@ -119,8 +119,8 @@ class SpectrumProblem:
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             # Noise-free data: a floor far below the signal keeps the gap finite.
             self.sigma = 1e-12 * float(np.max(np.abs(data.response))) or 1e-300
-        self.peaks = data_peaks(data)
         self.widths = peak_widths(data)
+        self.peaks = self.widths[0]         # data_peaks(data): the same poles, found once
         # Peaks narrower than half a frequency step: a misfit landscape of needles (undamped).
         step = float(np.median(np.diff(np.unique(data.frequency_hz))))
         self.sharp = bool(np.any(self.widths[1] < 0.5 * step))
