@@ -187,7 +187,7 @@ INNER_RANKS = {
     "analysis": (("contact_resonance", "diagram", "domains", "resonances", "spot", "thermal"),
                  ("calibrate", "deconvolve", "stiffness", "tip_position"),
                  ("stiffness_report",)),
-    "discrepancy": (("regions", "fit_kernel"),                                        # where a misfit sits; a fit's compiled evaluation
+    "discrepancy": (("regions", "fit_kernel", "peak_kernel"),                         # where a misfit sits; a fit's and a peak fit's compiled evaluation
                     ("effects", "inputs", "sweep"),                        # the model's pieces, the inputs
                     ("model", "plausible", "reference", "thermal"),          # a model; the free lever's fits
                     ("quality", "select", "undamped_modes"),

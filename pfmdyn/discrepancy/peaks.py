@@ -23,9 +23,11 @@ import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 from scipy.signal import peak_prominences
 
+from .. import composed
 from ..generated import formulas
-from .model import bounds
-from .undamped_modes import _characteristic_args_many, _resonances_of, resonance_sensitivity, resonances
+from .model import bounds, free_root_and_jacobian
+from .undamped_modes import (_beta_grid, _characteristic_args_many, _resonances_of, parameter_changes,
+                             resonance_sensitivity, resonances)
 
 __all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "Matches", "match_starts"]
 
@@ -266,6 +268,12 @@ def peak_scores(roots, peaks, band, unseen: bool = False) -> np.ndarray:
     return out
 
 
+COMPILED_PEAK_FITS = True
+"""Whether a peak fit evaluates its steps compiled (:mod:`pfmdyn.discrepancy.peak_kernel`, with
+:data:`pfmdyn.composed.KERNELS`); NumPy's path is the reference, equal but for the last bits of the
+tip's jump and of a few sums (the reports within 1e-6: ``benchmarks/discrepancy_speed.py``)."""
+
+
 def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):
     """Least-squares match of the model's resonances to the peaks from ``start``, moving the
     parameters where ``moving`` is True; the Jacobian comes from the resonances'
@@ -276,6 +284,20 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
         x = start.copy()
         x[moving] = v
         return x
+
+    if COMPILED_PEAK_FITS and composed.KERNELS:
+        match = _compiled_match(model, moving, peaks, band, band[1] * 1.3, unseen)
+
+        def evaluated(v):
+            key = tuple(v)
+            if key not in last:
+                last.clear()
+                last[key] = match(full(v))
+            return last[key]
+
+        res = least_squares(lambda v: evaluated(v)[0], start[moving], jac=lambda v: evaluated(v)[1],
+                            bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
+        return full(res.x), 2 * res.cost
 
     def roots_at(v):
         key = tuple(v)
@@ -293,6 +315,43 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
     res = least_squares(lambda v: peak_match(roots_at(v), peaks, band, unseen=unseen), start[moving], jac=jac,
                         bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
     return full(res.x), 2 * res.cost
+
+
+def _compiled_match(model, moving, peaks, band, f_max, unseen):
+    """:func:`peak_match` of the model's contact resonances below ``f_max`` and its Jacobian w.r.t. the
+    parameters where ``moving``, as a function of the parameters: one compiled call
+    (:func:`pfmdyn.discrepancy.peak_kernel.match_and_jacobian`), the free root once per tip.
+
+    >>> from types import SimpleNamespace
+    >>> from .model import Model
+    >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4))
+    >>> x, peaks, band = np.array([2.0, 2.0]), np.array([1.1e4, 6e4]), (5e3, 7e4)
+    >>> out, jac = _compiled_match(model, np.array([True, False]), peaks, band, 9.1e4, False)(x)
+    >>> roots = resonances(model, x, True, 9.1e4)
+    >>> want = peak_match(roots, peaks, band, resonance_sensitivity(model, x, True, roots)[:, :1])
+    >>> bool(np.allclose(out, want[0], rtol=1e-12, atol=0) and np.allclose(jac, want[1], rtol=1e-12, atol=0))
+    True
+    """
+    from .peak_kernel import match_and_jacobian
+
+    m, tips = model.meta, {}
+    peaks, band = np.array(peaks, float), np.array(band, float)
+
+    def match(x):
+        c = model.coords(x)
+        tip = (c["mu"], c["gamma"])
+        if tip not in tips:
+            tips[tip] = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, *tip)
+        b1, d_b1_dp = tips[tip]
+        lever, moved, per_unit, d_b1 = parameter_changes(model, x, True, d_b1_dp)
+        tip_at_end = lever[7] == 1.0 and composed.PARAMETERS.index("gamma") not in moved
+        out, jac = np.empty(len(peaks) + 1), np.empty((len(peaks) + 1, int(np.sum(moving))))
+        match_and_jacobian(_beta_grid(m.free_resonance, b1, f_max), lever[None, :], b1, d_b1[moving],
+                           float(m.free_resonance), moved, np.ascontiguousarray(per_unit[:, moving]), tip_at_end,
+                           peaks, band, unseen, out, jac)
+        return out, jac
+
+    return match
 
 
 class Matches:

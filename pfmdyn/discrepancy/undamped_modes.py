@@ -17,7 +17,7 @@ from ..roots.bracket import grid_roots
 from .effects import spring_parameters
 from .model import Model, characteristic_partials, free_root_and_jacobian
 
-__all__ = ["characteristic_args", "resonance_sensitivity", "resonances", "resonances_many"]
+__all__ = ["characteristic_args", "parameter_changes", "resonance_sensitivity", "resonances", "resonances_many"]
 
 
 _CHARACTERISTIC = ("k1", "k2", "alpha", "mu", "gamma")
@@ -40,14 +40,24 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     # free_root's value, kept (a fit asks the same tip again, and for the sensitivity its partials)
     b1 = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])[0]
     lever = characteristic_args(model, internal, contact)
-    top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
-    grid = np.linspace(0.3, top, max(150, int(12 * top)))
+    grid = _beta_grid(m.free_resonance, b1, f_max)
     if composed.KERNELS:       # the same steps compiled (one call, not one per iteration)
         from ..composed.kernels import characteristic_roots
         roots = characteristic_roots(grid, np.array([lever], float), refine_roots, 1e-13)
     else:
         roots = grid_roots(lambda b: composed.characteristic(b, lever), grid, refine_roots)
     return formulas.frequency_from_beta(roots, m.free_resonance, b1)
+
+
+def _beta_grid(free_resonance: float, b1: float, f_max: float) -> np.ndarray:
+    """The grid in ``beta`` whose sign changes bracket the roots below ``f_max`` (12 points per unit,
+    150 at least).
+
+    >>> len(_beta_grid(1e4, 1.875, 7e4))
+    150
+    """
+    top = float(formulas.beta_from_frequency(f_max, free_resonance, b1))
+    return np.linspace(0.3, top, max(150, int(12 * top)))
 
 
 def resonances_many(model: Model, internals, contact: bool, f_max: float) -> list[np.ndarray]:
@@ -74,8 +84,7 @@ def _resonances_of(m, args: np.ndarray, f_max: float) -> list[np.ndarray]:
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
         rows = np.flatnonzero(b1s == b1)
-        top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
-        grid = np.linspace(0.3, top, max(150, int(12 * top)))
+        grid = _beta_grid(m.free_resonance, b1, f_max)
         with np.errstate(all="ignore"):
             levers = composed.Parameters(*(args[rows, j, None] for j in range(args.shape[1])))     # a column
             vals = composed.characteristic(grid, levers)
@@ -149,28 +158,48 @@ def resonance_sensitivity(model: Model, internal, contact: bool, frequency_hz) -
     c = model.coords(internal)
     b1, d_b1_dp = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
     beta = formulas.beta_from_frequency(f, m.free_resonance, b1)
-    moved = ("kvv", "kll", "kvl", "mu", "gamma")
-    at = [composed.PARAMETERS.index(p) for p in moved]
+    a0, moved, per_unit, d_b1 = parameter_changes(model, internal, contact, d_b1_dp)
+    wrt = ("beta",) + tuple(composed.PARAMETERS[i] for i in moved)
+    with np.errstate(all="ignore"):
+        d = characteristic_partials(beta, composed.Parameters(*a0), wrt)
+        ratio = (d[1:] / d[0]).reshape(len(moved), len(f))
+        d_beta = -(ratio.T @ per_unit)
+        out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
+    out[~np.isfinite(out)] = 0.0
+    return out
+
+
+_MOVED = ("kvv", "kll", "kvl", "mu", "gamma")
+"""The characteristic's parameters a model's parameters move (``k``, ``H`` and ``L`` are the lever's)."""
+
+
+def parameter_changes(model: Model, internal: np.ndarray, contact: bool, d_b1_dp) -> tuple:
+    """What :func:`resonance_sensitivity` needs beside the roots: the characteristic's parameters
+    (:func:`characteristic_args`, an array), the indices (in :data:`pfmdyn.composed.PARAMETERS`) of those
+    that move, their change per unit of each internal parameter (moving x internal), and the free
+    root's (from ``d_b1_dp``, its partials w.r.t. ``mu`` and ``gamma``).
+
+    >>> from types import SimpleNamespace
+    >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4))
+    >>> a0, moved, per_unit, d_b1 = parameter_changes(model, np.array([2.0, 2.0]), True, (0.0, 0.0))
+    >>> [composed.PARAMETERS[i] for i in moved], d_b1.tolist()       # no tilt: kvv from k1, kll from k2
+    (['kvv', 'kll'], [0.0, 0.0])
+    """
+    at = [composed.PARAMETERS.index(p) for p in _MOVED]
     a0 = np.array(characteristic_args(model, internal, contact), float)
     # the model's parameters are plain functions of the internal ones: their change per unit
     # of each internal one, by forward differences (columns j; none for a parameter the
     # characteristic does not take: a loss, the spot)
     steps = 1e-7 * np.maximum(1.0, np.abs(internal))
-    per_unit = np.zeros((len(moved), len(internal)))
+    per_unit = np.zeros((len(_MOVED), len(internal)))
     for j, h in enumerate(steps):
         if model.parameters[j].name not in _CHARACTERISTIC:
             continue
         xs = internal.copy()
         xs[j] += h
         per_unit[:, j] = (np.array(characteristic_args(model, xs, contact), float)[at] - a0[at]) / h
+    with np.errstate(all="ignore"):
+        d_b1 = np.array(d_b1_dp) @ per_unit[[_MOVED.index("mu"), _MOVED.index("gamma")]]    # already d beta1 / dp
     # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
     rows = np.flatnonzero(per_unit.any(axis=1))
-    wrt = ("beta",) + tuple(moved[i] for i in rows)
-    with np.errstate(all="ignore"):
-        d = characteristic_partials(beta, composed.Parameters(*a0), wrt)
-        ratio = (d[1:] / d[0]).reshape(len(rows), len(f))
-        d_beta = -(ratio.T @ per_unit[rows])
-        d_b1 = np.array(d_b1_dp) @ per_unit[[moved.index("mu"), moved.index("gamma")]]    # already d beta1 / dp
-        out = formulas.frequency_change(f[:, None], beta[:, None], d_beta, b1, d_b1[None, :])
-    out[~np.isfinite(out)] = 0.0
-    return out
+    return a0, np.array([at[i] for i in rows], np.int64), per_unit[rows], d_b1
