@@ -320,7 +320,9 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
 def _compiled_match(model, moving, peaks, band, f_max, unseen):
     """:func:`peak_match` of the model's contact resonances below ``f_max`` and its Jacobian w.r.t. the
     parameters where ``moving``, as a function of the parameters: one compiled call
-    (:func:`pfmdyn.discrepancy.peak_kernel.match_and_jacobian`), the free root once per tip.
+    (:func:`pfmdyn.discrepancy.peak_kernel.match_and_jacobian`), the free root and the grid in ``beta``
+    once per tip, the characteristic's parameters differentiated by the moving parameters alone (one that
+    moves none of them there adds zeros to the sensitivities).
 
     >>> from types import SimpleNamespace
     >>> from .model import Model
@@ -336,19 +338,21 @@ def _compiled_match(model, moving, peaks, band, f_max, unseen):
 
     m, tips = model.meta, {}
     peaks, band = np.array(peaks, float), np.array(band, float)
+    # the partials by complex steps where the tip may leave the end (resonance_sensitivity's gamma moves)
+    setback = any(p.name == "gamma" for p in model.parameters)
 
     def match(x):
         c = model.coords(x)
         tip = (c["mu"], c["gamma"])
         if tip not in tips:
-            tips[tip] = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, *tip)
-        b1, d_b1_dp = tips[tip]
-        lever, moved, per_unit, d_b1 = parameter_changes(model, x, True, d_b1_dp)
-        tip_at_end = lever[7] == 1.0 and composed.PARAMETERS.index("gamma") not in moved
-        out, jac = np.empty(len(peaks) + 1), np.empty((len(peaks) + 1, int(np.sum(moving))))
-        match_and_jacobian(_beta_grid(m.free_resonance, b1, f_max), lever[None, :], b1, d_b1[moving],
-                           float(m.free_resonance), moved, np.ascontiguousarray(per_unit[:, moving]), tip_at_end,
-                           peaks, band, unseen, out, jac)
+            b1, d_b1_dp = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, *tip)
+            tips[tip] = b1, d_b1_dp, _beta_grid(m.free_resonance, b1, f_max)
+        b1, d_b1_dp, grid = tips[tip]
+        lever, moved, per_unit, d_b1 = parameter_changes(model, x, True, d_b1_dp, moving)
+        out, jac = np.empty(len(peaks) + 1), np.empty((len(peaks) + 1, len(d_b1)))
+        match_and_jacobian(grid, lever[None, :], b1, d_b1, float(m.free_resonance), moved,
+                           np.ascontiguousarray(per_unit), lever[7] == 1.0 and not setback, peaks, band, unseen,
+                           out, jac)
         return out, jac
 
     return match

@@ -173,17 +173,20 @@ _MOVED = ("kvv", "kll", "kvl", "mu", "gamma")
 """The characteristic's parameters a model's parameters move (``k``, ``H`` and ``L`` are the lever's)."""
 
 
-def parameter_changes(model: Model, internal: np.ndarray, contact: bool, d_b1_dp) -> tuple:
+def parameter_changes(model: Model, internal: np.ndarray, contact: bool, d_b1_dp, columns=None) -> tuple:
     """What :func:`resonance_sensitivity` needs beside the roots: the characteristic's parameters
     (:func:`characteristic_args`, an array), the indices (in :data:`pfmdyn.composed.PARAMETERS`) of those
-    that move, their change per unit of each internal parameter (moving x internal), and the free
-    root's (from ``d_b1_dp``, its partials w.r.t. ``mu`` and ``gamma``).
+    that move, their change per unit of each internal parameter (moving x internal; with ``columns``,
+    a mask, of those alone: the parameters that move nothing there are left out), and the free root's
+    (from ``d_b1_dp``, its partials w.r.t. ``mu`` and ``gamma``).
 
     >>> from types import SimpleNamespace
     >>> model = Model(SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4))
     >>> a0, moved, per_unit, d_b1 = parameter_changes(model, np.array([2.0, 2.0]), True, (0.0, 0.0))
     >>> [composed.PARAMETERS[i] for i in moved], d_b1.tolist()       # no tilt: kvv from k1, kll from k2
     (['kvv', 'kll'], [0.0, 0.0])
+    >>> parameter_changes(model, np.array([2.0, 2.0]), True, (0.0, 0.0), np.array([True, False]))[2].round(1).tolist()
+    [[230.3]]
     """
     at = [composed.PARAMETERS.index(p) for p in _MOVED]
     a0 = np.array(characteristic_args(model, internal, contact), float)
@@ -191,9 +194,10 @@ def parameter_changes(model: Model, internal: np.ndarray, contact: bool, d_b1_dp
     # of each internal one, by forward differences (columns j; none for a parameter the
     # characteristic does not take: a loss, the spot)
     steps = 1e-7 * np.maximum(1.0, np.abs(internal))
+    asked = np.ones(len(internal), bool) if columns is None else np.asarray(columns, bool)
     per_unit = np.zeros((len(_MOVED), len(internal)))
     for j, h in enumerate(steps):
-        if model.parameters[j].name not in _CHARACTERISTIC:
+        if model.parameters[j].name not in _CHARACTERISTIC or not asked[j]:
             continue
         xs = internal.copy()
         xs[j] += h
@@ -202,4 +206,4 @@ def parameter_changes(model: Model, internal: np.ndarray, contact: bool, d_b1_dp
         d_b1 = np.array(d_b1_dp) @ per_unit[[_MOVED.index("mu"), _MOVED.index("gamma")]]    # already d beta1 / dp
     # only the partials of the parameters that move (the tip at the end: one segment, no gamma)
     rows = np.flatnonzero(per_unit.any(axis=1))
-    return a0, np.array([at[i] for i in rows], np.int64), per_unit[rows], d_b1
+    return a0, np.array([at[i] for i in rows], np.int64), per_unit[rows][:, asked], d_b1[asked]
