@@ -58,7 +58,7 @@ class _Compiled:
         uc = pieces.load_constant(beta, k, L)
         codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
         kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
-        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
+        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), len(DRIVES)), complex)
         use = _drive_columns(drives, DRIVES)
         kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, np.array(use, np.int64), z, dz)
         z, dz = z[..., use], dz[..., use]
@@ -156,18 +156,18 @@ def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIA
     elif _written_out(names):
         lever = _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
         use = list(range(len(drives)))
-        z1, dz = lever.z[:, 1], lever.partials(names)
+        z1, dz = lever.z[:, 1], {name: d[:, 1] for name, d in lever.partials(names).items()}
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
         lever = _Lever(beta, *parameters, split="gamma" in names, derivatives=True)
         reader = lever.reader(sigma)
         z1 = lever.state(reader)[:, 1]
         dc = lever.d_system([p for p in names if p != "sigma"])
-        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c))) for name in names}
+        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1] for name in names}
     scale = (lever.beta / lever.L)[:, None]
     columns = {}
     for name in names:
-        d = scale * dz[name][:, 1]
+        d = scale * dz[name]
         columns[name] = lever.out(d + z1 / lever.L[..., None] if name == "beta" else d)
     values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
     jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
