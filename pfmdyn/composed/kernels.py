@@ -177,11 +177,10 @@ def _across(V, J, two, out):
 
 @numba.njit(cache=True)
 def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
-    """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, 6]``, and the partials of
-    its slope ``z1``, ``dz[n, p, 6]`` (what the read-outs ask), w.r.t. parameters of ``kinds`` (:data:`BETA` ...),
-    per member ``n``, of the drives
-    ``drives`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns are solved alone, so the others
-    are neither formed nor written): the
+    """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, c]``, and the partials of
+    its slope ``z1``, ``dz[n, p, c]`` (what the read-outs ask), w.r.t. parameters of ``kinds`` (:data:`BETA` ...),
+    per member ``n``, of the drives ``drives[c]`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns
+    are solved alone, so the others are neither formed nor written): the
     written-out form of :class:`pfmdyn.composed.written_out._WrittenOut` (each segment's outer rows eliminated,
     the tip's 2 x 2 or 4 x 4 solved), step for step.
 
@@ -324,12 +323,13 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                     coef[seg, 2 + m, d] = u[2 * seg + m, d]
         on = 0 if before else 1
         for m in range(2):
-            for d in drives:
-                z[i, m, d] = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
+            for c in range(drives.shape[0]):
+                d = drives[c]
+                value = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
                     E[spot, m, 2] * coef[on, 2, d] + E[spot, m, 3] * coef[on, 3, d]
+                z[i, m, c] = value + P[spot, m] if d == _Q0 else value
                 z_tip[m, d] = E[1, m, 0] * coef[0, 0, d] + E[1, m, 1] * coef[0, 1, d] + \
                     E[1, m, 2] * coef[0, 2, d] + E[1, m, 3] * coef[0, 3, d]
-            z[i, m, _Q0] += P[spot, m]
             z_tip[m, _Q0] += P[1, m]
         if kinds.shape[0] == 0:
             continue
@@ -401,11 +401,12 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                             for m in range(4):
                                 for d in moving:
                                     q[m, d] += share[m, d]
-            for d in drives:
+            for c in range(drives.shape[0]):
+                d = drives[c]
                 v = 0j
                 for j in range(size):
                     v += spot_per_row[j] * q[j, d]
-                dz[i, p, d] = (at_spot[d] if moved else 0.0) + v
+                dz[i, p, c] = (at_spot[d] if moved else 0.0) + v
 
 
 _point_jump = numba.njit(cache=True)(pieces.point_jump)

@@ -142,11 +142,10 @@ class Model:
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             reading = self._reading(c)
             lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
-            T, J = reading.slope_and_jacobian(d.beta, lever, wrt=self._partials_needed(c, reading))
-            T = np.array(T)
-            # Partials not computed (None) have a zero multiplier below.
-            part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
-                    for j, p in enumerate(reading.JACOBIAN_PARAMETERS)}
+            T, computed = reading.slopes_and_partials(d.beta, lever, wrt=self._partials_needed(c, reading))
+            T = np.ascontiguousarray(T)
+            # Partials not computed have a zero multiplier below.
+            part = dict.fromkeys(reading.JACOBIAN_PARAMETERS, 0.0) | computed
             chain = Chain(part, rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [chain.rotation(j) * (v * LN10) for j, v in enumerate((spring, c["k2"])[:len(self.springs)])]
