@@ -126,7 +126,7 @@ class Model:
         lever's partials (:func:`pfmdyn.composed.slope_and_jacobian`, read at the free end or,
         with the effect ``spot_position``, at the spot) are composed by
         the chain rule with the generated damping factors' derivatives
-        (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
+        (:func:`pfmdyn.generated.damping.d_factors_wrt`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
         with ``mu`` and ``gamma`` (implicit differentiation of the generated characteristic).
         """
