@@ -23,9 +23,9 @@ from .written_out import _WrittenOut
 
 
 class _Compiled:
-    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s interface: ``z`` and
-    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
-    values when ``names`` are given.
+    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s ``z`` (batch first, flat; one
+    column per drive asked) and, computed with it, ``dz``: the slope's partials w.r.t. ``names`` (batch, partial,
+    drive).
 
     Examples
     --------
@@ -59,11 +59,7 @@ class _Compiled:
         z, dz = np.empty((n, 2, len(use)), complex), np.empty((n, len(names), len(use)), complex)
         kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, use, z, dz)
         self.z = z.real if real else z
-        dz = dz.real if real else dz
-        self._partials = {name: dz[:, i] for i, name in enumerate(names)}
-
-    def partials(self, names):
-        return {name: self._partials[name] for name in names}
+        self.dz = dz.real if real else dz
 
     out = _Lever.out
 
@@ -181,10 +177,10 @@ def slopes_and_partials(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBI
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
     if composed.KERNELS:      # every partial, gamma's too
         lever = _Compiled(beta, sigma, *parameters, drives=drives, names=tuple(names))
-        z1, dz = lever.z[:, 1], lever.partials(names)
+        z1, dz = lever.z[:, 1], lever.dz
     elif _written_out(names):
         lever = _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
-        z1, dz = lever.z[:, 1], {name: d[:, 1] for name, d in lever.partials(names).items()}
+        z1, dz = lever.z[:, 1], _by_partial([d[:, 1] for d in lever.partials(names).values()], lever.z[:, 1])
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
         lever = _Lever(beta, *parameters, split="gamma" in names, derivatives=True)
@@ -192,13 +188,18 @@ def slopes_and_partials(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBI
         use = _drive_columns(drives, lever.drives)
         z1 = lever.state(reader)[:, 1, use]
         dc = lever.d_system([p for p in names if p != "sigma"])
-        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1, use] for name in names}
+        dz = _by_partial([lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1, use]
+                          for name in names], z1)
     scale = (lever.beta / lever.L)[:, None]
-    partials = {}
-    for name in names:
-        d = scale * dz[name]
-        partials[name] = _drives_first(lever, d + z1 / lever.L[..., None] if name == "beta" else d)
-    return _drives_first(lever, scale * z1), partials
+    d = scale[:, None] * dz             # every partial's slope at once
+    if "beta" in names:                 # beta moves the scale too
+        d[:, names.index("beta")] += z1 / lever.L[..., None]
+    return _drives_first(lever, scale * z1), {name: _drives_first(lever, d[:, j]) for j, name in enumerate(names)}
+
+
+def _by_partial(columns, z1):
+    """The partials of the slope ``columns`` (each as ``z1``, (batch, drives)) as one array (batch, partial, drives)."""
+    return np.stack(columns, axis=1) if columns else np.empty(z1.shape[:1] + (0,) + z1.shape[1:], z1.dtype)
 
 
 def _drives_first(lever, x):
