@@ -100,7 +100,7 @@ class Chain:
             self._rotation[i] = part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i]
         return self._rotation[i]
 
-    def d_factors(self, q: int) -> tuple:
+    def d_factors_wrt(self, q: int) -> tuple:
         """The damping factors' derivatives w.r.t. the ``q``-th loss (:func:`pfmdyn.generated.damping.d_factors_wrt`),
         formed when a damping component asks (a model without one never does; one asks for its own loss's)."""
         if q not in self._d_factors:
@@ -171,7 +171,7 @@ class Damping(Effect):
         return set(self.uses)
 
     def jacobian(self, chain: Chain) -> tuple:
-        d_f, part, c = chain.d_factors(self.index), chain.part, chain.coords
+        d_f, part, c = chain.d_factors_wrt(self.index), chain.part, chain.coords
         return (part["beta"] * (chain.root_r * d_f[0]) + part["k"] * (chain.meta.spring_constant * d_f[1])
                 + chain.rotation(0) * (c["k1"] * d_f[2]) + part["mu"] * (c["mu"] * d_f[3]),)
 
@@ -199,7 +199,7 @@ class FluidDamping(ViscousDamping):
     """A fluid's drag growing as ``sqrt(f)`` (:func:`fluid_law`): the viscous term times the law."""
 
     def jacobian(self, chain: Chain) -> tuple:
-        d_f, part, c = chain.d_factors(1), chain.part, chain.coords
+        d_f, part, c = chain.d_factors_wrt(1), chain.part, chain.coords
         law = fluid_law((chain.root_r / chain.b1) ** 2)
         return (law * (part["beta"] * (chain.root_r * d_f[0]) + part["mu"] * (c["mu"] * d_f[3])),)
 
