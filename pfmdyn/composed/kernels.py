@@ -350,17 +350,19 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                         q[row, d] += djump[p, i, 4 + 4 * rr + d]
             moved = kind != TIP
             if moved:
-                # k moves the load alone (its column), sigma the spot alone; a spot read where the tip's
-                # row is (the free end) moves as it with beta and k
+                # k moves the load alone (its column), sigma the spot alone; a spot read where the tip or
+                # the free end is moves as it with beta and k (not with gamma: the spot stays)
                 moving = load_drive if kind == K else drives
-                read = 1 if (same_spot == 1 and (kind == BETA or kind == K)) else spot
+                read = same_spot if same_spot >= 0 and (kind == BETA or kind == K) else spot
                 for d in drives:
                     at_spot[d] = 0.0
                 for b in range(batches):
                     if (kind == SIGMA and b != spot) or (b == spot and read != spot):
                         continue
-                    # the rows read of each: the clamp's end and the free end's outer two, the spot's slope
-                    lo, hi = (1, 2) if b == spot else (0, 2) if b == 0 else (2, 4) if b == 3 else (0, 4)
+                    # the rows read of each: the clamp's end and the free end's outer two (and the free end's
+                    # slope where the spot reads it), the spot's slope
+                    lo = 1 if b == spot or (b == 3 and read == 3) else 2 if b == 3 else 0
+                    hi = 2 if b == spot or b == 0 else 4
                     c_seg = on if b == spot else b // 2
                     if kind == K:
                         for m in range(lo, hi):
@@ -391,7 +393,8 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                         b, seg = (1, 0) if role == 0 else (2, 1)
                         for m in range(4):
                             for d in moving:
-                                share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] + E[b, m, 1] * fixed[seg, 1, d])
+                                share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] +
+                                                            E[b, m, 1] * fixed[seg, 1, d])
                         if role == 0:
                             _across(share, J, two, across)
                             for m in range(size):
