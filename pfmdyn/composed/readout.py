@@ -1,5 +1,6 @@
 """The lever read at the spot ``x_s = sigma L``: :func:`response`, :func:`slope`, :func:`deflection`,
-:func:`slope_and_jacobian`, and where an engine reads them (:class:`Reading`: :data:`at_end` or at a spot).
+:func:`slope_and_jacobian` (as arrays, :func:`slopes_and_partials`), and where an engine reads them
+(:class:`Reading`: :data:`at_end` or at a spot).
 
 Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
 :data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
