@@ -411,8 +411,8 @@ class _Problem:
                              np.empty((m, m), complex), np.empty(m, complex))
 
     def _evaluated(self, x):
-        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`); fresh residual
-        and Jacobian arrays (the solver keeps them)."""
+        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`), and the slopes; fresh
+        residual and Jacobian arrays (the solver keeps them)."""
         from .fit_kernel import design_and_gram, residual_and_jacobian
 
         T, dT = self.model.slopes_and_jacobian(self.freq_u, x)
@@ -425,7 +425,7 @@ class _Problem:
         residual_and_jacobian(dT, self.inverse, self.bias, self.weight, *self._columns, self.y, float(self.sigma), A,
                               As, scale, Ay, w, V, CUTOFF, True, c, r[:2 * rows], J[:2 * rows])
         r[2 * rows:], J[2 * rows:] = self._tail, 0.0
-        return A, c, r, J
+        return A, c, r, J, T
 
     def _at(self, x):
         """Design matrix, amplitudes, projection (:func:`pfmdyn.fitting.projection.project`) and, for
@@ -481,12 +481,25 @@ class _Problem:
         out[~np.isfinite(out)] = 0.0
         return out
 
+    def prediction(self, x, frequency_hz, bias_v) -> np.ndarray:
+        """``A c`` at the measured rows ``(frequency_hz, bias_v)``, with the folded rows' amplitudes at ``x``
+        (compiled: from the slopes of that evaluation)."""
+        state = self._at(x)
+        inverse = np.unique(frequency_hz, return_inverse=True)[1]
+        if self.compiled:
+            A = self.model._columns(state[4], self.freq_u, inverse, bias_v)
+        else:
+            A = self.model.design(self.freq_u, inverse, bias_v, np.asarray(x, float))
+        return A @ state[1]
+
 
 def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
     """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
 
     Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
-    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`).
+    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`), on the rows
+    folded per frequency (:class:`_Problem`: the same cost and ``J^T J``, so the same covariance); the
+    residual and prediction are the measured rows'.
     """
     problem = _Problem(model, data, sigma)
     lower, upper = bounds(model)
@@ -503,7 +516,5 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     k = len(lower) + 2 * model.n_linear
     n = 2 * len(data.response)
     cov = jacobian_covariance(best.jac, 2 * best.cost / max(n - k, 1))
-    # the residual and prediction of every measured row, from the folded fit's amplitudes
-    pred = model.design(problem.freq_u, np.unique(data.frequency_hz, return_inverse=True)[1], data.bias_v,
-                        best.x) @ problem._at(best.x)[1]
+    pred = problem.prediction(best.x, data.frequency_hz, data.bias_v)       # every measured row's
     return FitResult(model, best.x, cov, data.response - pred, sigma, k, prediction=pred)
