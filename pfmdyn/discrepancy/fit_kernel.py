@@ -11,7 +11,8 @@ column a slope or the background's ramp, times the bias or not:
 :data:`pfmdyn.discrepancy.effects.BASE_COLUMNS`; its columns scaled to unit norm, their Gram matrix)
 and :func:`residual_and_jacobian` (the amplitudes with the same eigenvalue cutoff, the residual, the
 Jacobian).  Each row has a weight (the fit's rows are a spectrum's folded per frequency,
-:func:`pfmdyn.fitting.projection.bias_nodes`; 1 for rows as measured).  The NumPy path is the reference (``tests/test_discrepancy_kernel.py``).
+:func:`pfmdyn.fitting.projection.bias_nodes`; 1 for rows as measured).  The NumPy path is the reference
+(``tests/test_discrepancy_kernel.py``).
 
 Imported lazily (numba's import stays out of the command line's start-up).
 """

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .bias_line import _sums
+
 __all__ = ["Projection", "project", "normal_matrix", "covariance", "jacobian_covariance", "BiasNodes",
            "bias_nodes"]
 
@@ -212,7 +214,8 @@ def bias_nodes(frequency_hz, bias_v, response) -> BiasNodes:
     >>> nodes.inverse.tolist(), nodes.bias_v.round(6).tolist(), nodes.weight.round(6).tolist()
     ([0, 1, 1, 2], [1.0, 2.580552, 0.086114, 5.0], [1.414214, 1.224745, 1.224745, 1.0])
     >>> A = np.stack([np.ones(6), v * f], axis=1)            # columns g(f) = 1 and V g(f) = V f
-    >>> folded = np.stack([np.ones(4), nodes.bias_v * nodes.frequency_hz[nodes.inverse]], axis=1) * nodes.weight[:, None]
+    >>> u, w = nodes.inverse, nodes.weight[:, None]
+    >>> folded = np.stack([np.ones(4), nodes.bias_v * nodes.frequency_hz[u]], axis=1) * w
     >>> c = np.array([0.3 - 1j, 0.2j])
     >>> full, part = np.sum(np.abs(y - A @ c) ** 2), np.sum(np.abs(nodes.response - folded @ c) ** 2)
     >>> bool(np.isclose(full, part + nodes.constant, rtol=1e-14)), bool(np.allclose(A.T @ A, folded.T @ folded))
@@ -232,26 +235,19 @@ def bias_nodes(frequency_hz, bias_v, response) -> BiasNodes:
     mean = np.bincount(inverse, bias_v, n_u) / count
     centred = np.where(equal[inverse], 0.0, bias_v - mean[inverse])
     spread = np.bincount(inverse, centred**2, n_u)                   # sum (V - m)**2, 0 where all equal
-    total = _bincount(inverse, response, n_u)
-    moment = _bincount(inverse, centred * response, n_u)            # sum (V - m) y
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slope = np.where(equal, 0.0, moment / np.where(equal, 1.0, spread))
-        sd = np.sqrt(spread / count)
-        lean = np.where(equal, 0.0, moment / np.where(equal, 1.0, sd))
+    total = _sums(inverse, response, n_u)
+    moment = _sums(inverse, centred * response, n_u)                # sum (V - m) y
+    slope = np.where(equal, 0.0, moment / np.where(equal, 1.0, spread))
+    sd = np.sqrt(spread / count)
+    lean = np.where(equal, 0.0, moment / np.where(equal, 1.0, sd))
     line = total[inverse] / count[inverse] + centred * slope[inverse]
     constant = float(np.sum(np.abs(response - line) ** 2))
     rows = np.where(equal, 1, 2)
-    inverse_f = np.repeat(np.arange(n_u), rows)
-    second = np.zeros(len(inverse_f), bool)
+    u = np.repeat(np.arange(n_u), rows)                             # each folded row's frequency
+    second = np.zeros(len(u), bool)
     second[np.cumsum(rows)[~equal] - 1] = True                      # the node m - s of each unequal frequency
     sign = np.where(second, -1.0, 1.0)
-    u = inverse_f
     node = np.where(equal[u], bias_v[order][starts][u], mean[u] + sign * sd[u])
     weight = np.sqrt(count[u] / rows[u])
     folded = (total[u] + sign * lean[u]) / np.sqrt(rows[u] * count[u])
-    return BiasNodes(freq_u, inverse_f, node, weight, folded, constant, True)
-
-
-def _bincount(group, values, n) -> np.ndarray:
-    """Sums of complex ``values`` over each of ``n`` groups."""
-    return np.bincount(group, values.real, n) + 1j * np.bincount(group, values.imag, n)
+    return BiasNodes(freq_u, u, node, weight, folded, constant, True)
