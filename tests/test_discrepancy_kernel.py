@@ -4,7 +4,9 @@ its NumPy reference (:class:`pfmdyn.discrepancy.model._Problem` with ``COMPILED`
 A finite-element spectrum (:func:`fe_beam.acquisition_case`: three bands, four biases, viscous damping),
 models with each kind of design column (the baseline's, the contact dashpot's ``T_f``, the background's
 ramp) and effects that move the resonances or the reading, at springs k1/k 3-1e3 and other parameters
-drawn within their bounds (fixed seed).  The design is the same arithmetic: equal to the bit.  The
+drawn within their bounds (fixed seed), on the fit's rows (folded per frequency, two per frequency here;
+``tests/test_discrepancy_rows.py`` holds them to the measured rows).  The design is the same arithmetic:
+equal to the bit.  The
 projection sums in another order (loops, not BLAS), and near-dependent columns (the Gram matrix's
 condition reaches 1e5 at these points) multiply the rounding: residual and Jacobian agree within 1e-12
 of their largest entry or ten times what the NumPy path itself moves when the rows come in another
