@@ -220,6 +220,8 @@ def bias_nodes(frequency_hz, bias_v, response) -> BiasNodes:
     >>> full, part = np.sum(np.abs(y - A @ c) ** 2), np.sum(np.abs(nodes.response - folded @ c) ** 2)
     >>> bool(np.isclose(full, part + nodes.constant, rtol=1e-14)), bool(np.allclose(A.T @ A, folded.T @ folded))
     (True, True)
+    >>> bias_nodes(f, v, np.where(f == 3.0, np.nan, y)).folded         # a response not measured: rows as they are
+    False
     """
     frequency_hz, bias_v = np.asarray(frequency_hz, float), np.asarray(bias_v, float)
     response = np.asarray(response)
