@@ -218,7 +218,7 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     if np.any(lines.spread <= 0):       # the reader's rule (pfmdyn.io.spectra), for biases equal but for rounding
         at = np.flatnonzero(lines.spread <= 0)[0]
         low, high = np.min(bias_v[lines.group == at]), np.max(bias_v[lines.group == at])
-        shown = f"{low:.12g} V" if low == high else f"{low:.12g} to {high:.12g} V, one setpoint but for rounding"
+        shown = f"{low:.12g} V" if low == high else f"{low:.17g} to {high:.17g} V, one setpoint but for rounding"
         raise UserError(f"only one bias value at frequency {lines.frequency_hz[at]:.12g} Hz ({shown}); the linear fit"
                         " needs at least two distinct biases")
     n, mean_v, sxx = lines.count, lines.mean_bias, lines.spread
