@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BiasLines", "bias_lines", "BIAS_RESOLUTION"]
+__all__ = ["BiasLines", "bias_lines", "rounding_spread", "BIAS_RESOLUTION"]
 
 BIAS_RESOLUTION = 1e-6
 """Biases at one frequency whose RMS deviation from their mean is at most this fraction of the
@@ -22,6 +22,19 @@ data's largest ``|V|`` (of 1 V when all are smaller: biases all at 0 V but for r
 setpoint: no bias source sets a DC bias to a millionth of its range (a 16-bit converter: 1.5e-5),
 while rounding leaves such differences (``-0.3 + 3 * 0.1`` is ``5.6e-17``, and the mean of three
 biases of 0.1 V is not 0.1).  A line through one setpoint determines no slope."""
+
+
+def rounding_spread(bias_v) -> float:
+    """The largest ``sum (V - mean)**2`` per point of biases of one setpoint among ``bias_v``
+    (:data:`BIAS_RESOLUTION`): a spread no larger is rounding, not a second bias.
+
+    >>> v = np.array([0.0, -0.3 + 3 * 0.1, 5.0])               # 0 V, once as computed; and 5 V
+    >>> round(rounding_spread(v) ** 0.5, 12)                    # 1e-6 of 5 V
+    5e-06
+    >>> bool(np.sum((v[:2] - v[:2].mean())**2) <= 2 * rounding_spread(v))
+    True
+    """
+    return (BIAS_RESOLUTION * float(np.max(np.abs(bias_v), initial=1.0))) ** 2
 
 
 @dataclass(frozen=True)
@@ -89,7 +102,7 @@ def bias_lines(frequency_hz, bias_v, response) -> BiasLines:
     centred = bias_v - mean_bias[group]
     spread = _sums(group, centred**2, n)
     # rounding, not a second setpoint (the mean of equal biases may miss them by an ulp)
-    spread[spread <= count * (BIAS_RESOLUTION * np.max(np.abs(bias_v), initial=1.0)) ** 2] = 0.0
+    spread[spread <= count * rounding_spread(bias_v)] = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(spread > 0, _sums(group, centred * response, n) / np.where(spread > 0, spread, 1.0), np.nan)
     intercept = _sums(group, response, n) / count - slope * mean_bias
