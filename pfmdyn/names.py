@@ -94,6 +94,8 @@ QUANTITIES: tuple[Quantity, ...] = (
     # An isotropic solid has -1 < nu <= 1/2 (auxetic samples below 0); the Mindlin ratio holds over all of it.
     Quantity("poisson", "nu", "1", "k2 policy: k2/k1 of a Hertz-Mindlin contact on a sample of this "
              "Poisson's ratio", -1.0, 0.5, aliases=("poisson_ratio",)),
+    Quantity("k1_uncertainty", "u(k1)", "N/m", "standard uncertainty of a given k1 (e.g. pfmdyn stiffness's): the "
+             "results move by it (default 0: k1 as given, exact)", 0.0, 1e9, open_low=False),
     # What the contact-resonance analysis takes besides the probe (``pfmdyn stiffness``, contact maps).
     Quantity("contact_uncertainty", "u(f_c)", "Hz", "standard uncertainty of each contact resonance frequency",
              0.0, 1e9, open_low=False, aliases=("contact_uncertainty_hz",)),

@@ -140,6 +140,23 @@ def test_resonance_grid_and_sensitivity_follow_the_refined_resonances():
         np.testing.assert_allclose(got[:, j], diff, rtol=1e-4, atol=1e-6 * exact.max())
 
 
+def test_a_start_grids_rows_of_several_tips_get_each_their_own_resonances():
+    """:func:`resonances_many` of rows with different tips (the free root found once per tip) against each row
+    alone, to the bit, and against the refined resonances."""
+    from pfmdyn.discrepancy.model import Model
+    from pfmdyn.discrepancy.undamped_modes import resonances, resonances_many
+
+    lever = SimpleNamespace(spring_constant=0.8, tip_height=1.4e-5, length=3.1e-4, free_resonance=2.2e4)
+    model = Model(lever, ("tip_mass", "tip_setback"))
+    rng = np.random.default_rng(7)
+    tips = [(0.0, 1.0), (0.3, 1.0), (0.3, 0.85), (0.05, 0.95)]
+    rows = np.array([[rng.uniform(0.5, 3.5), rng.uniform(-1.0, 2.0), *tips[i % len(tips)]] for i in range(10)])
+    together = resonances_many(model, rows, True, 4e5)
+    for row, roots in zip(rows, together):
+        assert np.array_equal(roots, resonances_many(model, [row], True, 4e5)[0])
+        np.testing.assert_allclose(roots, resonances(model, row, True, 4e5), rtol=2e-3)
+
+
 def test_k2_ratio_is_the_group_the_elastic_characteristic_depends_on():
     """Contact resonances of the FE beam (k1, k2 in SI) are roots of the dimensionless
     characteristic at k1/k and k2_ratio(k2, k, H, L): a wrong group moves them."""

@@ -66,6 +66,19 @@ def test_dart_image_to_maps_within_the_issue_tolerances(tmp_path, seed, options)
         assert np.median(maps[name + "_stderr"].values / alone[name + "_stderr"].values) < 0.8, name
 
 
+def test_where_the_lever_reads_its_pole_the_resonance_keeps_a_standard_error_that_covers(tmp_path):
+    """A spot near a node of the contact mode puts an anti-resonance of the slope next to the peak: no
+    oscillator goes through the lever's response at many pixels' drives, and the lever's pole gives their
+    contact resonance and Q.  Their standard errors come through the pole's motion with the contact (they
+    were NaN, taken from an oscillator that does not exist) and hold the truth as the others do."""
+    case = dart_case(2001, 24, 24, spot=0.73)
+    maps, _ = _map(case, tmp_path)
+    for name in ("contact_resonance", "contact_quality_factor"):
+        value, stderr = maps[name].values, maps[name + "_stderr"].values
+        assert np.all(np.isfinite(stderr[np.isfinite(value)])), name
+        assert np.mean(np.abs(value - case.truth[name]) <= 2 * stderr) > 0.95, name
+
+
 def test_pooling_a_grains_pixels_beats_one_pixels_noise_and_keeps_the_boundary(tmp_path):
     """At 2 % noise one pixel's four numbers put the contact resonance well beyond 2e-4 (sigma/2Q, the
     oscillator's Cramér-Rao bound, narrowed a little by the drive being real); fitting each pixel's contact

@@ -121,3 +121,25 @@ def test_bad_input_is_one_line(capsys):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--length" in err[0]
+
+
+@pytest.mark.parametrize("seed", [20, 21])
+def test_a_given_k1_uncertainty_moves_each_contact_resonance_as_the_fe_lever_moves(seed, tmp_path):
+    """``--k1-uncertainty U``: each contact resonance's k1 part is half the FE lever's resonance change from
+    k1 - U to k1 + U (k2 tied at 0.85, moving with it), added in quadrature to the tip height's part."""
+    fe, p = random_probe(np.random.default_rng(seed), N_ELEMENTS)
+    u = 0.05 * p["k1"]
+    moved = [FEBeam(p["spring_constant"], p["length"], 1e5, p["tip_height"], k1=k1, k2=0.85 * k1, mu=fe.mu,
+                    gamma=fe.gamma, gyration_radius=fe.gyration_radius, tilt_deg=fe.tilt_deg,
+                    n_elements=N_ELEMENTS).contact_resonances(2) for k1 in (p["k1"] - u, p["k1"] + u)]
+    want = np.abs(moved[1] - moved[0]) / 2
+    common = ["resonances"] + [a for name in ("spring_constant", "free_resonance", "length", "tip_height",
+                                              "tip_position", "tip_mass_ratio", "tip_gyration_radius", "tilt", "k1")
+                               for a in (f"--{name.replace('_', '-')}", repr(p[name]))] + ["--k2-over-k1", "0.85",
+                                                                                          "--modes", "2", "--quiet"]
+    stderr = {}
+    for extra in ([], ["--k1-uncertainty", repr(u)]):
+        out = tmp_path / "r.json"
+        assert cli.main(common + extra + ["--json", str(out)]) == 0
+        stderr[bool(extra)] = np.array(json.loads(out.read_text())["results"]["contact"]["resonance"]["stderr"])
+    np.testing.assert_allclose(np.sqrt(stderr[True] ** 2 - stderr[False] ** 2), want, rtol=2e-3)

@@ -229,3 +229,24 @@ def test_drive_frequency_under_its_name_and_its_old_flag(tmp_path, capsys):
     assert docs["--frequency"] == docs["--drive-frequency"] and "frequency" not in docs["--frequency"]
     assert docs["--drive-frequency"]["drive_frequency"]["value"] == 3e4
     assert "drive frequency 30000 Hz" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("k, k1, spot", [(0.3, 40.0, 0.7), (12.0, 3000.0, 0.9)])
+def test_a_given_k1_uncertainty_moves_the_contact_sensitivity_as_the_independent_beam(tmp_path, k, k1, spot):
+    """``--k1-uncertainty U``: the contact sensitivity's k1 part is half the independent beam's change of
+    ``1 / (L theta_d1(x_s))`` (static) from k1 - U to k1 + U (k2 tied at 0.85, moving with it)."""
+    L, H, u = 225e-6, 12e-6, 0.1 * k1
+
+    def sensitivity(k1):
+        theta = spot_response(0.0, spot, k=k, L=L, H=H, kvv=k1, kll=0.85 * k1, d1=1.0)[0].real
+        return 1.0 / (L * theta)
+    want = abs(sensitivity(k1 + u) - sensitivity(k1 - u)) / 2
+    argv = ["spot", "--spring-constant", repr(k), "--free-resonance", "6e4", "--length", repr(L), "--tip-height",
+            repr(H), "--k1", repr(k1), "--k2-over-k1", "0.85", "--spot-position", repr(spot), "--drive-frequency",
+            "1e4", "--quiet"]
+    stderr = {}
+    for extra in ([], ["--k1-uncertainty", repr(u)]):
+        out = tmp_path / "s.json"
+        assert main(argv + extra + ["--json", str(out)]) == 0
+        stderr[bool(extra)] = json.loads(out.read_text())["results"]["contact_sensitivity"]["stderr"]
+    assert math.sqrt(stderr[True] ** 2 - stderr[False] ** 2) == pytest.approx(want, rel=1e-6)

@@ -68,17 +68,24 @@ def tip_height_spread(tip_height: float, assumed: bool) -> float:
     return TIP_HEIGHT_SPREAD if assumed else TIP_HEIGHT_TOLERANCE * tip_height
 
 
-def assumed_variations(lever: Cantilever, stated: Contact, contact: Contact, assumed) -> dict:
+def assumed_variations(lever: Cantilever, stated: Contact, contact: Contact, assumed,
+                       k1_uncertainty: float = 0.0) -> dict:
     """The inputs a command assumed, each moved down and up by its standard uncertainty (input ->
     ``((lever, contact), (lever, contact))``), for the spread of a result over them: the tip height (an assumed one's
     spread, else :data:`TIP_HEIGHT_TOLERANCE` of a given one, as ``stiffness`` takes it; ``assumed`` names what was
-    assumed) and a k2 tie that ``contact`` has and the ``stated`` contact had not (Mindlin over
-    :data:`ASSUMED_POISSON`).
+    assumed), a k2 tie that ``contact`` has and the ``stated`` contact had not (Mindlin over
+    :data:`ASSUMED_POISSON`), and k1 by its ``k1_uncertainty`` when one is given (a tied k2 moves with it).
 
     >>> lever = Cantilever(2.0, 7e4, 2e-4, tip_height=13e-6)
     >>> moved = assumed_variations(lever, Contact(k1=100.0), Contact(k1=100.0, poisson=0.3), ["tip_height"])
     >>> [round(l.tip_height * 1e6, 1) for l, _ in moved["tip_height_uncertainty"]], sorted(moved)
     ([10.5, 15.5], ['k2_policy_uncertainty', 'tip_height_uncertainty'])
+    >>> [c.k1 for _, c in assumed_variations(lever, Contact(k1=100.0), Contact(k1=100.0), [], 4.0)["k1_uncertainty"]]
+    [96.0, 104.0]
+    >>> assumed_variations(lever, Contact(k1=100.0), Contact(k1=100.0), [], 100.0)
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: k1's uncertainty (100 N/m) must be below k1 (100 N/m): a spread that reaches k1 = 0 is no standard uncertainty
     """
     out = {}
     if lever.tip_height is not None:
@@ -89,6 +96,11 @@ def assumed_variations(lever: Cantilever, stated: Contact, contact: Contact, ass
         u = assumed_tie_uncertainty()
         out["k2_policy_uncertainty"] = tuple((lever, Contact(k1=contact.k1, k2_over_k1=contact.ratio + s * u,
                                                              contact_loss=contact.contact_loss)) for s in (-1, 1))
+    if k1_uncertainty:
+        if not k1_uncertainty < contact.k1:
+            raise UserError(f"k1's uncertainty ({k1_uncertainty:g} N/m) must be below k1 ({contact.k1:g} N/m): a spread "
+                            "that reaches k1 = 0 is no standard uncertainty", quantity="k1_uncertainty")
+        out["k1_uncertainty"] = tuple((lever, replace(contact, k1=contact.k1 + s * k1_uncertainty)) for s in (-1, 1))
     return out
 
 

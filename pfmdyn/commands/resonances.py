@@ -32,6 +32,7 @@ def add_arguments(parser) -> None:
                      "13 um, as those commands assume.")
     flags.add_lever(parser, required=("spring_constant", "free_resonance", "length"))
     flags.add_contact(parser)
+    flags.add(parser, ("k1_uncertainty",))
     flags.add_damping(parser)
     parser.add_argument("--modes", default="3", help="number of modes of each condition (default 3)")
     flags.add_json(parser)
@@ -47,8 +48,9 @@ def run(args) -> int:
     assumed = {}
     lever = flags.cantilever(args, assumed=assumed)
     contact = flags.contact(args)
+    k1_uncertainty = flags.given(args, ("k1_uncertainty",)).get("k1_uncertainty", 0.0)
     if contact.k1 is None and (contact.k2 is not None or contact.k2_over_k1 is not None
-                               or contact.poisson is not None or contact.contact_loss):
+                               or contact.poisson is not None or contact.contact_loss or k1_uncertainty):
         raise UserError("a contact needs --k1")
     policy = {}
     if contact.k1 is not None:
@@ -60,19 +62,19 @@ def run(args) -> int:
         from ..analysis.resonances import contact_spread
         from ..analysis.stiffness_report import assumed_variations
         stderr, shares = contact_spread(lever, contact, modes, assumed_variations(lever, flags.contact(args), contact,
-                                                                                  assumed))
+                                                                                  assumed, k1_uncertainty))
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     if assumed and contact.k1 is not None:
         print(flags.assumed_line(assumed, lever))
     print(result.report(stderr))
     moved = [words for name, words in (("tip_height_uncertainty", "tip height"), ("k2_policy_uncertainty",
-                                                                                   "k2 policy"))
+                                                                                   "k2 policy"), ("k1_uncertainty", "k1"))
              if any(u != 0 for u in shares.get(name, ()))]
     if moved:
         print("contact resonances +- their standard uncertainty (their damped and peak frequencies move with them) over "
               "the inputs assumed or without one of their own, "
-              f"each moved by its own: {', '.join(moved)} (k1 as given, exact)")
+              f"each moved by its own: {', '.join(moved)}" + ("" if k1_uncertainty else " (k1 as given, exact)"))
     if policy:
         print(f"k2 policy: {policy['k2_policy']}")
     if args.json:

@@ -27,6 +27,7 @@ def add_arguments(parser) -> None:
                         "(.ibw, .h5, .nid, sweeps); flags override it")
     flags.add_lever(parser)
     flags.add_contact(parser, required=("k1",))
+    flags.add(parser, ("k1_uncertainty",))
     flags.add(parser, ("drive_frequency",), defaults={"drive_frequency": (None, "the one INPUT records")})
     parser.add_argument("--frequency", dest="drive_frequency", default=None, help=argparse.SUPPRESS)
     flags.add_json(parser)
@@ -57,12 +58,13 @@ def report(result, stderr: dict | None = None, shares: dict | None = None) -> st
     lines.append("  d_eff error from the distributed load: "
                  + (f"{_pm(e['re'] * 1e12, stderr.get('d_eff_error_per_volt', 0.0) * 1e12, '+')} pm/V per volt of "
                     "V_dc - V_surf" if e else "undetermined (needs --width)"))
-    words = {"tip_height_uncertainty": "tip height", "k2_policy_uncertainty": "k2 policy"}
+    words = {"tip_height_uncertainty": "tip height", "k2_policy_uncertainty": "k2 policy", "k1_uncertainty": "k1"}
     moved = [name for name in (shares or {}) if any(
         v > 0 for part in shares[name].values() for v in (part if isinstance(part, list) else [part]))]
     if moved:
         lines.append("  uncertainties from the assumed inputs, each moved by its own: " + ", ".join(
-            words[name] for name in moved) + "; k1 as given, without an uncertainty of its own")
+            words[name] for name in moved) + ("" if "k1_uncertainty" in moved
+                                              else "; k1 as given, without an uncertainty of its own"))
     return "\n".join(lines)
 
 
@@ -138,7 +140,9 @@ def run(args) -> int:
     stated = flags.contact(args)
     contact, policy = stated.policy(lever)
     result = spot_analysis(lever, contact, frequency)
-    stderr, shares = spread(lever, contact, frequency, assumed_variations(lever, stated, contact, assumed))
+    k1_uncertainty = flags.given(args, ("k1_uncertainty",)).get("k1_uncertainty", 0.0)
+    stderr, shares = spread(lever, contact, frequency, assumed_variations(lever, stated, contact, assumed,
+                                                                          k1_uncertainty))
     if lever.medium is not None:
         print(flags.medium_line(lever.medium, args))
     if assumed:

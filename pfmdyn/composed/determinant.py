@@ -187,11 +187,15 @@ def _compiled_characteristic(*args):
 
 def _tip_at_end(gamma) -> bool:
     """Whether the tip is at the free end throughout: one segment."""
+    if isinstance(gamma, float):            # one lever (a fit's): no array to build
+        return gamma == 1.0
     return bool(np.all(np.asarray(gamma) == 1.0))
 
 
 def _shaped(out, gamma):
     """``out`` as an array of the arguments' broadcast shape (``gamma`` may be wider than the rest)."""
+    if isinstance(gamma, float):            # a number widens nothing
+        return np.asarray(out)
     shape = np.broadcast_shapes(np.shape(out), np.shape(gamma))
     return np.asarray(out) if np.shape(out) == shape else np.broadcast_to(out, shape).copy()
 

@@ -25,7 +25,7 @@ from scipy.signal import peak_prominences
 
 from ..generated import formulas
 from .model import bounds
-from .undamped_modes import _characteristic_args_many, resonance_sensitivity, resonances, resonances_many
+from .undamped_modes import _characteristic_args_many, _resonances_of, resonance_sensitivity, resonances
 
 __all__ = ["bands", "data_peaks", "poles", "peak_widths", "peak_match", "peak_scores", "Matches", "match_starts"]
 
@@ -172,9 +172,7 @@ def data_peaks(data) -> np.ndarray:
     >>> data_peaks(SimpleNamespace(frequency_hz=f, bias_v=np.tile([0, 1], 91), response=y)).round(6).tolist()
     [4.03]
     """
-    freq_u, size = _summed(data)
-    found = freq_u[_maxima(size, freq_u)]
-    return poles(data, found).real if len(found) else found
+    return peak_widths(data)[0]
 
 
 def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
@@ -191,7 +189,7 @@ def peak_widths(data) -> tuple[np.ndarray, np.ndarray]:
     found = freq_u[_maxima(size, freq_u)]
     if not len(found):
         return found, found
-    p = poles(data, found)
+    p = poles(data, found)      # (Re p is a number: where no pole is found, the guess)
     return np.where(np.isfinite(p.real), p.real, found), formulas.half_power_width_from_root(np.abs(p.imag))
 
 
@@ -242,9 +240,12 @@ def peak_scores(roots, peaks, band, unseen: bool = False) -> np.ndarray:
     has = count > 0
     if not has.any():
         return out
+    # the sets side by side, padded with NaN (each set's place: its row, then its order)
     R = np.full((int(has.sum()), int(count.max())), np.nan)
-    for row, r in enumerate(r for r in roots if len(r)):
-        R[row, :len(r)] = r
+    filled = count[has]
+    row = np.repeat(np.arange(len(filled)), filled)
+    R[row, np.arange(len(row)) - np.repeat(np.cumsum(filled) - filled, filled)] = np.concatenate(
+        [r for r in roots if len(r)])
     lp = np.log(peaks)
     with np.errstate(invalid="ignore"):
         lr = np.log(R)
@@ -316,9 +317,10 @@ class Matches:
 
     def roots(self, model, grid, f_max: float) -> list[np.ndarray]:
         """:func:`pfmdyn.discrepancy.undamped_modes.resonances_many` of the grid's rows (contact modes)."""
-        key = (_characteristic_args_many(model, np.asarray(grid, float), True).tobytes(), f_max)
+        levers = _characteristic_args_many(model, np.asarray(grid, float), True)
+        key = (levers.tobytes(), f_max)
         if key not in self._roots:
-            self._roots[key] = resonances_many(model, grid, True, f_max)
+            self._roots[key] = _resonances_of(model.meta, levers, f_max)
         return self._roots[key]
 
     def peak_fit(self, model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):

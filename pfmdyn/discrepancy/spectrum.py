@@ -23,12 +23,12 @@ import math
 import numpy as np
 
 from ..fitting.noise import misfit_band, noise_sigma
-from ..fitting.projection import project
+from ..fitting.projection import bias_nodes, project
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
 from .model import FitResult, Model, bounds, fit
-from .peaks import Matches, data_peaks, match_starts, peak_widths
+from .peaks import Matches, match_starts, peak_widths
 from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
 __all__ = ["noise_sigma", "signature", "peak_widths", "SpectrumProblem", "analyse", "summary", "thin", "MAX_ROWS"]
@@ -119,8 +119,8 @@ class SpectrumProblem:
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             # Noise-free data: a floor far below the signal keeps the gap finite.
             self.sigma = 1e-12 * float(np.max(np.abs(data.response))) or 1e-300
-        self.peaks = data_peaks(data)
         self.widths = peak_widths(data)
+        self.peaks = self.widths[0]         # data_peaks(data): the same poles, found once
         # Peaks narrower than half a frequency step: a misfit landscape of needles (undamped).
         step = float(np.median(np.diff(np.unique(data.frequency_hz))))
         self.sharp = bool(np.any(self.widths[1] < 0.5 * step))
@@ -131,7 +131,7 @@ class SpectrumProblem:
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
         self.matches = Matches()
-        self._unique = np.unique(data.frequency_hz, return_inverse=True)
+        self._nodes = bias_nodes(data.frequency_hz, data.bias_v, data.response)   # the rows the costs fold
         self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
 
     # -- starts --------------------------------------------------------------------------
@@ -226,15 +226,17 @@ class SpectrumProblem:
         return fit(model, self.data, starts, self.sigma, max_nfev=80)
 
     def cost(self, model, internal) -> float:
-        """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
+        """RSS/sigma**2 at fixed nonlinear parameters (for start grids); on the rows folded per frequency
+        (:func:`pfmdyn.fitting.projection.bias_nodes`), plus the misfit they do not carry."""
         internal = np.asarray(internal)
         key = (model, internal.dtype.str, internal.tobytes())
         if key not in self._costs:
-            freq_u, inverse = self._unique
-            A = model.design(freq_u, inverse, self.data.bias_v, internal)
-            pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
-            r = np.abs(self.data.response - pred) ** 2
-            self._costs[key] = float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
+            n = self._nodes
+            A = model.design(n.frequency_hz, n.inverse, n.bias_v, internal) * n.weight[:, None]
+            pred = project(A[None], n.response[None, :, None]).prediction[0, :, 0]
+            r = np.abs(n.response - pred) ** 2
+            rss = np.sum(r[np.isfinite(r)]) + n.constant
+            self._costs[key] = float(rss / self.sigma**2) if np.isfinite(r).any() else math.inf
         return self._costs[key]
 
     def candidates(self, current: FitResult) -> list[str]:

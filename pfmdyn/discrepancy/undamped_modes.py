@@ -37,7 +37,8 @@ def resonances(model: Model, internal, contact: bool, f_max: float, refine_roots
     """
     c = model.coords(internal)
     m = model.meta
-    b1 = free_root(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])
+    # free_root's value, kept (a fit asks the same tip again, and for the sensitivity its partials)
+    b1 = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, c["mu"], c["gamma"])[0]
     lever = characteristic_args(model, internal, contact)
     top = float(formulas.beta_from_frequency(f_max, m.free_resonance, b1))
     grid = np.linspace(0.3, top, max(150, int(12 * top)))
@@ -59,9 +60,17 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
     >>> [(f / 1e4).round(3).tolist() for f in resonances_many(Model(meta), [[-9.0, -9.0]] * 2, True, 7e4)]
     [[1.0, 6.267], [1.0, 6.267]]
     """
-    m = model.meta
-    args = _characteristic_args_many(model, np.asarray(internals, float), contact)
-    b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, a[6], a[7]) for a in args])
+    return _resonances_of(model.meta, _characteristic_args_many(model, np.asarray(internals, float), contact), f_max)
+
+
+def _resonances_of(m, args: np.ndarray, f_max: float) -> list[np.ndarray]:
+    """:func:`resonances_many` of the levers whose characteristic takes the rows of ``args`` (of
+    :func:`_characteristic_args_many`), the lever's metadata ``m``."""
+    if not len(args):
+        return []
+    # the free root depends on the tip alone: once per tip (a start grid's rows share one)
+    tips, tip_of = np.unique(args[:, 6:8], axis=0, return_inverse=True)
+    b1s = np.array([free_root(m.spring_constant, m.tip_height, m.length, mu, gamma) for mu, gamma in tips])[tip_of]
     out: list[np.ndarray] = [np.empty(0)] * len(args)
     for b1 in np.unique(b1s):
         rows = np.flatnonzero(b1s == b1)
@@ -74,8 +83,9 @@ def resonances_many(model: Model, internals, contact: bool, f_max: float) -> lis
         lo, hi, flo, fhi = grid[idx], grid[idx + 1], vals[row, idx], vals[row, idx + 1]
         with np.errstate(all="ignore"):
             roots = formulas.frequency_from_beta(hi - fhi * (hi - lo) / (fhi - flo), m.free_resonance, b1)
-        for i, part in zip(rows, np.split(roots, np.cumsum(np.bincount(row, minlength=len(rows)))[:-1])):
-            out[i] = part
+        ends = np.cumsum(np.bincount(row, minlength=len(rows))).tolist()
+        for i, start, end in zip(rows, [0] + ends[:-1], ends):
+            out[i] = roots[start:end]
     return out
 
 
@@ -97,7 +107,7 @@ def _characteristic_args_many(model: Model, internals: np.ndarray, contact: bool
     k1, k2 = ([p.value(v) for v in internals[:, j]] if j < springs else [c[p.name]] * len(internals)
               for j, p in enumerate(spring_parameters(model.meta, False)))
     kvv, kll, kvl = np.broadcast_arrays(*rotated(np.array(k1), np.array(k2), c["alpha"]))
-    out = np.array([characteristic_args(model, internals[0], contact)] * len(internals), dtype=float)
+    out = np.tile(np.array(characteristic_args(model, internals[0], contact), float), (len(internals), 1))
     out[:, 1], out[:, 2], out[:, 3] = kvv, kll, kvl
     return out
 

@@ -722,6 +722,8 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     >>> doc = spot(d, given=["spring_constant", "k1"])
     >>> doc["results"]["d_eff_error_per_volt"]["why"], doc["results"]["calibration_factor"]["value"]
     ('needs the lever width', {'real': 0.86, 'imag': 0.0})
+    >>> spot({**d, "stderr": {"blind_spot": [float("nan")]}})["notes"][-1]
+    'blind_spot: uncertainty undetermined (a blind spot appears or goes within the assumed inputs)'
     """
     ratio = d["q0_to_d1_slope_ratio"]
     stderr = {name: value for name, value in d.get("stderr", {}).items()
@@ -752,6 +754,8 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
     lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"))
     notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
     notes += [f"not certified: {d['reason']}"] if not d["certified"] else []
+    if "blind_spot" in d.get("stderr", {}) and "blind_spot" not in stderr:
+        notes.append("blind_spot: uncertainty undetermined (a blind spot appears or goes within the assumed inputs)")
     return document("spot", "spot", {"path": None if path is None else str(path)}, lever, results, None, notes)
 
 

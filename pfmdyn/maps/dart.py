@@ -695,14 +695,24 @@ def invert(f1, f2, s1, s2, lever: Cantilever, contact: Contact, drive_amplitude:
         resonance = np.where(fit.converged, lever_sho.resonance, sho.resonance)
         quality = np.where(fit.converged, lever_sho.quality_factor, sho.quality_factor)
         pole = fit.converged & ~lever_sho.determined
+        at_pole = {}
         if pole.any():
             resonance[pole], quality[pole] = lever_pole(lever, contact, k1[pole], loss[pole], (f1[pole] + f2[pole]) / 2)
+            # the pole moved by each of the contact's two numbers, from where it is
+            moved_pole = [lever_pole(lever, contact, k, l, resonance[pole]) for k, l in (
+                (k1[pole] * math.exp(_STEP), loss[pole]), (k1[pole], loss[pole] + _STEP))]
+            at_pole = {"resonance": (resonance[pole], [m[0] for m in moved_pole]),
+                       "quality_factor": (quality[pole], [m[1] for m in moved_pole])}
         spreads = {}
         for name in ("resonance", "quality_factor"):
             gradient = np.stack([(getattr(m, name) - getattr(lever_sho, name)) / _STEP for m in moved], -1)
             through = np.sqrt(np.einsum("ni,nij,nj->n", gradient, covariance, gradient))
-            # the pole's (or the oscillator's where the lever fails) as one pixel's, narrowed as k1 is
-            spreads[name] = np.where(np.isfinite(through) & lever_sho.determined, through,
+            if name in at_pole:         # the pole's through the contact's covariance, as the oscillator's
+                value, shifted = at_pole[name]
+                gradient = np.stack([(m - value) / _STEP for m in shifted], -1)
+                through[pole] = np.sqrt(np.einsum("ni,nij,nj->n", gradient, covariance[pole], gradient))
+            # the oscillator's through the measured signals where the lever fails, as one pixel's, narrowed as k1 is
+            spreads[name] = np.where(np.isfinite(through) & (lever_sho.determined | pole), through,
                                      getattr(spread, name) * np.where(fit.converged, pooled.narrowed, 1.0))
         # the drive: the signals over the lever's responses (their geometric mean), signed by its side of the axis
         t1, t2 = responses[0]
