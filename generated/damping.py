@@ -12,7 +12,7 @@ tangent at f1).  All three at 0 give factors of exactly 1.
 """
 import numpy as np
 
-__all__ = ['PARAMETERS', 'OUTPUTS', 'factors', 'd_factors']
+__all__ = ['PARAMETERS', 'OUTPUTS', 'factors', 'd_factors', 'd_factors_wrt']
 
 PARAMETERS = ('inv_q', 'g', 'x')
 OUTPUTS = ('beta_factor', 'k_factor', 'k1_factor', 'mu_factor')
@@ -40,5 +40,21 @@ def d_factors(r, inv_q, g, x):
     >>> [f"{v:.8g}" for v in d_factors(1.5, 0.01, 0.02, 0.03)[0]]
     ['-0.003957855-0.2499586j', '0.0012498045-0.16664879j', '0']
     """
+    return tuple(zip(*(d_factors_wrt(r, inv_q, g, x, j) for j in range(3))))
+
+
+def d_factors_wrt(r, inv_q, g, x, j):
+    """Derivatives of each factor with respect to ``PARAMETERS[j]`` alone (column ``j`` of :func:`d_factors`):
+    a damping mechanism's term asks for its own loss's.
+
+    Examples
+    --------
+    >>> [f"{v:.8g}" for v in d_factors_wrt(1.5, 0.01, 0.02, 0.03, 1)]
+    ['0.0012498045-0.16664879j', '0', '0', '-0.017771458+0.66631122j']
+    """
     r = np.asarray(r, dtype=float)
-    return ((-0.25*(-(1j*g - r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(inv_q - 1j)), (0.25)*((-1j*g + r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(g + 1j*r)), 0), (1j, 0, 0), (0, 0, 1j*r), (0, 1j*r/(1j*g - r)**2, 0))
+    if j == 0:
+        return (-0.25*(-(1j*g - r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(inv_q - 1j)), 1j, 0, 0)
+    if j == 1:
+        return ((0.25)*((-1j*g + r)/(1j*inv_q + 1))**(0.25)/(r**(0.25)*(g + 1j*r)), 0, 0, 1j*r/(1j*g - r)**2)
+    return (0, 0, 1j*r, 0)

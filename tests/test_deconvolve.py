@@ -375,3 +375,50 @@ def test_a_response_the_bias_does_not_change_leaves_the_nulling_bias_undetermine
     assert "nan" not in out and "nulling bias: undetermined at every frequency" in out
     results = json.loads((tmp_path / "d.json").read_text())["results"]
     assert results["mean_nulling_bias"]["status"] == results["nulling_bias_spread"]["status"] == "undetermined"
+
+
+def _one_setpoint_rows(setpoints, frequencies, sigma, rng):
+    """Rows at frequencies measured at one bias only, once per value of ``setpoints`` (one setpoint
+    written as computed: e.g. ``-0.3 + 3 * 0.1`` beside 0), from the same truth and noise."""
+    f, v = np.repeat(frequencies, len(setpoints)), np.tile(setpoints, len(frequencies))
+    noise = rng.normal(0.0, sigma, (2, f.size))
+    return f, v, d_eff_true(f) + g_elec_true(f) * (v - V_SURF) + noise[0] + 1j * noise[1]
+
+
+@pytest.mark.parametrize("setpoints", [[0.1] * 3, [-2.7] * 3, [0.0, -0.3 + 3 * 0.1, 0.1 * 3 - 0.3]])
+def test_a_line_through_one_setpoint_has_no_slope(setpoints):
+    """Frequencies measured at one bias several times (the mean of equal biases off them by an ulp,
+    or one bias written as computed), beside frequencies measured at the 21 biases, rows shuffled:
+    the one-setpoint lines have no slope, nor intercept (NaN, no warning), the others are the
+    truth within the noise."""
+    from pfmdyn.fitting.bias_line import bias_lines
+    rng = np.random.default_rng(7)
+    extra = np.linspace(610e3, 700e3, 8)
+    one_setpoint = _one_setpoint_rows(setpoints, extra, 0.01, rng)
+    rows = [np.concatenate(pair) for pair in zip(synthetic(0.01, seed=6), one_setpoint)]
+    order = rng.permutation(rows[0].size)
+    with np.errstate(all="raise"):
+        lines = bias_lines(*(a[order] for a in rows))
+    one = np.isin(lines.frequency_hz, extra)
+    assert np.all(np.isnan(lines.slope[one])) and np.all(np.isnan(lines.intercept[one]))
+    assert np.all(lines.spread[one] == 0)
+    at = lines.frequency_hz[~one]
+    se = 0.01 / np.sqrt(np.sum((BIASES - BIASES.mean()) ** 2))      # of each part of the slope
+    assert np.max(np.abs(lines.slope[~one] - g_elec_true(at))) < 5 * 2**0.5 * se
+
+
+def test_cli_refuses_frequencies_at_one_setpoint_written_two_ways(tmp_path, capsys):
+    """A spectrum whose frequencies beyond the bias ladder were swept twice at 0 V, the bias written
+    as 0 and as computed (5.6e-17): one line naming the frequency, exit status 2, nothing written
+    (it was G_elec ~1e15 pm/V there, silently)."""
+    rng = np.random.default_rng(8)
+    extra = np.linspace(610e3, 700e3, 6)
+    rows = [np.concatenate(pair) for pair in zip(synthetic(0.05, seed=9),
+                                                 _one_setpoint_rows([0.0, -0.3 + 3 * 0.1], extra, 0.05, rng))]
+    order = rng.permutation(rows[0].size)
+    data_file = write_csv(tmp_path / "data.csv", *(a[order] for a in rows))
+    out = tmp_path / "out"
+    assert cli.main(["deconvolve", str(data_file), "--surface-potential", str(V_SURF), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "610000 Hz" in err and "two distinct biases" in err, err
+    assert not out.exists()

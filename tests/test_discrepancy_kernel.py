@@ -4,7 +4,9 @@ its NumPy reference (:class:`pfmdyn.discrepancy.model._Problem` with ``COMPILED`
 A finite-element spectrum (:func:`fe_beam.acquisition_case`: three bands, four biases, viscous damping),
 models with each kind of design column (the baseline's, the contact dashpot's ``T_f``, the background's
 ramp) and effects that move the resonances or the reading, at springs k1/k 3-1e3 and other parameters
-drawn within their bounds (fixed seed).  The design is the same arithmetic: equal to the bit.  The
+drawn within their bounds (fixed seed), on the fit's rows (folded per frequency, two per frequency here;
+``tests/test_discrepancy_rows.py`` holds them to the measured rows).  The design is the same arithmetic:
+equal to the bit.  The
 projection sums in another order (loops, not BLAS), and near-dependent columns (the Gram matrix's
 condition reaches 1e5 at these points) multiply the rounding: residual and Jacobian agree within 1e-12
 of their largest entry or ten times what the NumPy path itself moves when the rows come in another
@@ -12,7 +14,6 @@ order, whichever is larger (1e-11 at worst here; agreeing to 1e-12 where the con
 """
 from __future__ import annotations
 
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -25,6 +26,7 @@ from fe_beam import acquisition_case  # noqa: E402
 from pfmdyn.discrepancy import model as model_module  # noqa: E402
 from pfmdyn.discrepancy.model import Model, bounds  # noqa: E402
 from pfmdyn.fitting.noise import noise_sigma  # noqa: E402
+from pfmdyn.fitting.projection import bias_nodes  # noqa: E402
 from pfmdyn.io.tables import read  # noqa: E402
 
 MODELS = [(), ("damping_viscous",), ("damping_internal", "tip_setback", "spot_position"),
@@ -41,18 +43,19 @@ def spectrum(tmp_path_factory):
 
 
 def _evaluated(compiled, model, data, sigma, x, monkeypatch, order=None):
-    """Residual, Jacobian and design of ``model`` at ``x``; with ``order``, of the rows taken in that
-    order, returned in the original one."""
+    """Residual, Jacobian and design of ``model`` at ``x`` on the fit's rows (folded per frequency,
+    :func:`pfmdyn.fitting.projection.bias_nodes`); with ``order``, of those rows taken in that order,
+    returned in the original one."""
     monkeypatch.setattr(model_module, "COMPILED", compiled)
-    if order is not None:
-        data = dataclasses.replace(data, frequency_hz=data.frequency_hz[order], bias_v=data.bias_v[order],
-                                   response=data.response[order])
     problem = model_module._Problem(model, data, sigma)
+    if order is not None:
+        for name in ("inverse", "bias", "weight", "y"):
+            setattr(problem, name, getattr(problem, name)[order])
     r, J, A = problem.residual(x), problem.jacobian(x), problem._at(x)[0].copy()
     if order is None:
         return r, J, A
     back = np.argsort(order)
-    both = np.concatenate([back, back + len(back)])
+    both = np.concatenate([back, back + len(back), np.arange(2 * len(back), len(r))])   # then the folded misfit
     return r[both], J[both], A[back]
 
 
@@ -63,7 +66,7 @@ def test_compiled_evaluation_agrees_with_numpy(spectrum, effects, monkeypatch):
     lower, upper = bounds(model)
     rng = np.random.default_rng(len(effects))
     k = np.log10(data.metadata.spring_constant)
-    order = rng.permutation(len(data.response))
+    order = rng.permutation(len(bias_nodes(data.frequency_hz, data.bias_v, data.response).response))
     for _ in range(3):
         x = rng.uniform(np.maximum(lower, -3.0), np.minimum(upper, 3.0))
         x[:2] = k + rng.uniform(0.5, 3.0), k + rng.uniform(1.0, 4.0)

@@ -184,3 +184,23 @@ def test_noise_of_many_spectra_is_each_spectrum_s(n_bias):
         assert s == pytest.approx(noise_sigma(np.tile(f, n_bias), v, spectrum), rel=1e-12)
         assert s == pytest.approx(max(_reference_noise(np.tile(f, n_bias), v, spectrum),
                                       1e-15 * np.linalg.norm(spectrum)), rel=1e-12)
+
+
+@pytest.mark.parametrize("setpoints", [[0.1] * 3, [0.0, -0.3 + 3 * 0.1, 0.1 * 3 - 0.3]])
+def test_noise_leaves_out_frequencies_at_one_setpoint(setpoints):
+    """The line in bias at a frequency measured at one bias several times (equal biases whose mean
+    misses them by an ulp, or one bias written as computed) has no slope: the estimate from the
+    lines' residuals is that of the frequencies at three biases or more alone (the module's lines),
+    to 1e-12, without a warning, whatever the rows' order."""
+    from pfmdyn.fitting.noise import _bias_noise
+    rng = np.random.default_rng(12)
+    f = np.linspace(2.9e5, 3.1e5, 40)
+    line_f, line_v = np.repeat(f, 5), np.tile(np.linspace(-4.0, 6.0, 5), f.size)
+    one_f, one_v = np.repeat(f + 1e3, len(setpoints)), np.tile(setpoints, f.size)
+    F, V = np.r_[line_f, one_f], np.r_[line_v, one_v]
+    y = (1 + 0.3 * V) * 3e5**2 / (F**2 - 1j * F * 3e5 / 50 - 3e5**2) + 0.05 * _complex(rng, F.size)
+    order = rng.permutation(F.size)
+    with np.errstate(all="raise"):
+        mixed = _bias_noise(F[order], V[order], y[order][None])
+    alone = _bias_noise(line_f, line_v, y[None, :line_f.size])
+    assert mixed[0] == pytest.approx(alone[0], rel=1e-12)

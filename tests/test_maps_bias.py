@@ -205,6 +205,9 @@ def test_bias_axis_errors_are_one_line(tmp_path, capsys):
               "a bias axis needs a bias_v dataset"),
              ({"response": np.ones((2, 2, 2, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0], "bias_v": [1.0, 1.0]},
               "at least two distinct biases"),
+             # repeated sweeps at 0 V, the bias written as computed (-0.3 + 3 * 0.1): one setpoint, no slope
+             ({"response": np.ones((2, 2, 4, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0],
+               "bias_v": [0.0, -0.3 + 3 * 0.1, 0.1 * 3 - 0.3, 0.0]}, "at least two distinct biases"),
              ({"response": np.ones((2, 2, 3, 4), complex), "frequency_hz": [1.0, 2.0, 3.0, 4.0], "bias_v": [0, 1, 2, 3]},
               "(n_bias = len(bias_v))")]
     for data, message in cases:

@@ -30,13 +30,16 @@ def render_damping() -> str:
     factors = Example().tuple_of(f"factors({at})", [examples.evaluate(e, args) for e in outputs.values()])
     d_factors = Example().tuple_of(f"d_factors({at})[0]",
                                    [examples.evaluate(outputs["beta_factor"].diff(p), args) for p in params])
+    d_factors_wrt = Example().tuple_of(f"d_factors_wrt({at}, 1)",
+                                       [examples.evaluate(e.diff(params[1]), args) for e in outputs.values()])
     return templates.render(
         "damping.py.jinja",
         header=header("derivations/damping.py: substitution()", source_hash(list(outputs.values()))),
         outputs=tuple(outputs), parameters=tuple(map(str, params)),
         values=[_simplified(e) for e in outputs.values()],
         derivatives=[[_simplified(e.diff(p)) for p in params] for e in outputs.values()],
-        factors_example=factors, d_factors_example=d_factors)
+        factors_example=factors, d_factors_example=d_factors,
+        d_factors_wrt_example=d_factors_wrt)
 
 
 def render_rotation() -> str:

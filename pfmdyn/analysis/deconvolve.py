@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..cantilever import Cantilever, Contact
+from ..errors import UserError
 from ..generated import formulas
 from ..fitting.bias_line import bias_lines
 from .spot import calibration
@@ -190,7 +191,8 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     ----------
     frequency_hz, bias_v : array_like
         Point coordinates, in any order (:func:`pfmdyn.fitting.bias_line.bias_lines`), with at least
-        two distinct biases per frequency.
+        two distinct biases per frequency (biases that differ by rounding are one:
+        :data:`pfmdyn.fitting.bias_line.BIAS_RESOLUTION`; else a :class:`~pfmdyn.errors.UserError`).
     response : array_like of complex
         Measured response :math:`x + iy` at every point.
     surface_potential_v : float
@@ -213,8 +215,12 @@ def deconvolve(frequency_hz, bias_v, response, surface_potential_v) -> Deconvolu
     bias_v = np.asarray(bias_v, dtype=float)
     response = np.asarray(response, dtype=complex)
     lines = bias_lines(frequency_hz, bias_v, response)
-    if np.any(lines.spread <= 0):
-        raise ValueError("every frequency needs at least two distinct bias values")
+    if np.any(lines.spread <= 0):       # the reader's rule (pfmdyn.io.spectra), for biases equal but for rounding
+        at = np.flatnonzero(lines.spread <= 0)[0]
+        low, high = np.min(bias_v[lines.group == at]), np.max(bias_v[lines.group == at])
+        shown = f"{low:.12g} V" if low == high else f"{low:.17g} to {high:.17g} V, one setpoint but for rounding"
+        raise UserError(f"only one bias value at frequency {lines.frequency_hz[at]:.12g} Hz ({shown}); the linear fit"
+                        " needs at least two distinct biases")
     n, mean_v, sxx = lines.count, lines.mean_bias, lines.spread
     slope, intercept, residual = lines.slope, lines.intercept, lines.residual
 

@@ -79,15 +79,12 @@ def _segment(beta, t, ell, uc, rows, load):
 
 
 @numba.njit(cache=True)
-def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, k, short, rows, load, dE, dP):
-    """``(dE, dP)`` (rows 0..3) w.r.t. a parameter of ``kind`` (:meth:`pfmdyn.composed.segments._Segment.derivative`,
-    and the load's ``-P/k``); ``moves_end``, ``moves_start``: ``d ell/d gamma``, ``d t/d gamma``."""
-    for m in range(4):
-        dP[m] = 0.0
-        for j in range(4):
-            dE[m, j] = 0.0
+def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, short, rows, load, lo, hi, dE, dP):
+    """``(dE, dP)`` (rows ``lo`` to ``hi - 1``, those read) w.r.t. ``beta``, ``gamma`` or ``sigma`` (``kind``;
+    :meth:`pfmdyn.composed.segments._Segment.derivative`); ``moves_end``, ``moves_start``: ``d ell/d gamma``,
+    ``d t/d gamma``."""
     if kind == BETA:
-        for m in range(4):
+        for m in range(lo, hi):
             for j in range(4):
                 dE[m, j] = t * rows[m + 1, j]
             if not short:
@@ -95,20 +92,17 @@ def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, k, short, ro
             dP[m] = t * load[m + 1] - 4 * load[m] / beta
     elif kind == GAMMA:
         ds = moves_start * beta
-        for m in range(4):
+        for m in range(lo, hi):
             for j in range(4):
                 dE[m, j] = ds * rows[m + 1, j]
             if not short:
                 dE[m, 3] += moves_end * beta * -rows[m, 3]
             dP[m] = ds * load[m + 1]
-    elif kind == SIGMA:
-        for m in range(4):
+    else:
+        for m in range(lo, hi):
             for j in range(4):
                 dE[m, j] = beta * rows[m + 1, j]
             dP[m] = beta * load[m + 1]
-    elif kind == K:
-        for m in range(4):
-            dP[m] = -load[m] / k
 
 
 @numba.njit(cache=True)
@@ -183,10 +177,10 @@ def _across(V, J, two, out):
 
 @numba.njit(cache=True)
 def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
-    """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, 6]``, and its partials
-    ``dz[n, p, 2, 6]`` w.r.t. parameters of ``kinds`` (:data:`BETA` ...), per member ``n``, of the drives
-    ``drives`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns are solved alone, so the others
-    are neither formed nor written): the
+    """The state ``[u, z1]`` at ``x = sigma L`` per unit of each drive, ``z[n, 2, c]``, and the partials of
+    its slope ``z1``, ``dz[n, p, c]`` (what the read-outs ask), w.r.t. parameters of ``kinds`` (:data:`BETA` ...),
+    per member ``n``, of the drives ``drives[c]`` (indices of ``d1, d2, f0, m0, q0, y0``; each drive's columns
+    are solved alone, so the others are neither formed nor written): the
     written-out form of :class:`pfmdyn.composed.written_out._WrittenOut` (each segment's outer rows eliminated,
     the tip's 2 x 2 or 4 x 4 solved), step for step.
 
@@ -199,7 +193,7 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
     --------
     >>> beta, point = np.array([2.5 + 0j]), (2.5, 2.0, 98.0, 52.0, 9.0, 1e-5, 2e-4, 0.1, 0.05)
     >>> jump, uc = np.array([pieces.point_jump(*point)], complex), np.array([pieces.load_constant(2.5, 2.0, 2e-4)], complex)
-    >>> z, dz = np.empty((1, 2, 6), complex), np.empty((1, 0, 2, 6), complex)
+    >>> z, dz = np.empty((1, 2, 6), complex), np.empty((1, 0, 6), complex)
     >>> read_out(beta, np.array([1.0]), np.array([1.0]), uc, np.array([2.0 + 0j]), jump, np.zeros((0, 1, 12), complex),
     ...          np.zeros(0, np.int64), False, np.arange(6), z, dz)
     >>> f"{(2.5 / 2e-4 * z[0, 1, 0]).real:.8g}"       # the slope at the free end per unit d1
@@ -232,8 +226,11 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
     fixed = np.zeros((segments, 2, _DRIVES), np.complex128)
     share = np.zeros((4, _DRIVES), np.complex128)
     q, across = np.zeros((size, _DRIVES), np.complex128), np.zeros((size, _DRIVES), np.complex128)
-    spot_per_row = np.empty((2, size), np.complex128)
-    tmp2, tmp4 = np.empty((2, 2), np.complex128), np.empty((4, 2), np.complex128)
+    spot_row, spot_per_row = np.empty(2, np.complex128), np.empty(size, np.complex128)
+    at_spot = np.zeros(_DRIVES, np.complex128)
+    tmp2 = np.empty((2, 2), np.complex128)
+    load_drive = drives[drives == _Q0]
+    same_spot = -1
     for i in range(n):
         g = gamma[i] if two else 1.0
         before = (sigma[i] <= g) if two else True
@@ -252,6 +249,8 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                 for a in range(1, spot, 2):
                     if t_at[a] == t_at[b] and ell_at[a] == ell_at[b]:
                         same = a
+            if b == spot:
+                same_spot = same
             if same >= 0:
                 short[b] = short[same]
                 rows[b], load[b] = rows[same], load[same]
@@ -324,22 +323,21 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                     coef[seg, 2 + m, d] = u[2 * seg + m, d]
         on = 0 if before else 1
         for m in range(2):
-            for d in drives:
-                z[i, m, d] = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
+            for c in range(drives.shape[0]):
+                d = drives[c]
+                value = E[spot, m, 0] * coef[on, 0, d] + E[spot, m, 1] * coef[on, 1, d] + \
                     E[spot, m, 2] * coef[on, 2, d] + E[spot, m, 3] * coef[on, 3, d]
+                z[i, m, c] = value + P[spot, m] if d == _Q0 else value
                 z_tip[m, d] = E[1, m, 0] * coef[0, 0, d] + E[1, m, 1] * coef[0, 1, d] + \
                     E[1, m, 2] * coef[0, 2, d] + E[1, m, 3] * coef[0, 3, d]
-            z[i, m, _Q0] += P[spot, m]
             z_tip[m, _Q0] += P[1, m]
         if kinds.shape[0] == 0:
             continue
-        # the spot's state per unit of the tip's rows: R inverse (R of its segment)
-        for m in range(2):
-            for j in range(2):
-                tmp4[m, j] = E[spot, m, 2 + j] - (E[spot, m, 0] * B[on, 0, j] + E[spot, m, 1] * B[on, 1, j])
-        for m in range(2):
-            for j in range(size):
-                spot_per_row[m, j] = tmp4[m, 0] * inverse[2 * on, j] + tmp4[m, 1] * inverse[2 * on + 1, j]
+        # the spot's slope per unit of the tip's rows: R inverse (R of its segment)
+        for j in range(2):
+            spot_row[j] = E[spot, 1, 2 + j] - (E[spot, 1, 0] * B[on, 0, j] + E[spot, 1, 1] * B[on, 1, j])
+        for j in range(size):
+            spot_per_row[j] = spot_row[0] * inverse[2 * on, j] + spot_row[1] * inverse[2 * on + 1, j]
         for p in range(kinds.shape[0]):
             kind = kinds[p]
             q[:, :] = 0.0
@@ -352,56 +350,66 @@ def read_out(beta, sigma, gamma, uc, k, jump, djump, kinds, two, drives, z, dz):
                         q[row, d] += djump[p, i, 4 + 4 * rr + d]
             moved = kind != TIP
             if moved:
+                # k moves the load alone (its column), sigma the spot alone; a spot read where the tip or
+                # the free end is moves as it with beta and k (not with gamma: the spot stays)
+                moving = load_drive if kind == K else drives
+                read = same_spot if same_spot >= 0 and (kind == BETA or kind == K) else spot
+                for d in drives:
+                    at_spot[d] = 0.0
                 for b in range(batches):
-                    c_seg = on if b == spot else b // 2
-                    for m in range(4):
-                        for d in drives:
-                            e[b, m, d] = 0.0
-                    if kind == SIGMA and b != spot:
+                    if (kind == SIGMA and b != spot) or (b == spot and read != spot):
                         continue
-                    _segment_derivative(kind, beta[i], t_at[b], ell_at[b], moves_end[b], moves_start[b], k[i], short[b],
-                                        rows[b], load[b], dE, dP)
+                    # the rows read of each: the clamp's end and the free end's outer two (and the free end's
+                    # slope where the spot reads it), the spot's slope
+                    lo = 1 if b == spot or (b == 3 and read == 3) else 2 if b == 3 else 0
+                    hi = 2 if b == spot or b == 0 else 4
+                    c_seg = on if b == spot else b // 2
                     if kind == K:
-                        for m in range(4):
+                        for m in range(lo, hi):
                             e[b, m, _Q0] = -P[b, m] / k[i]
                         continue
-                    for m in range(4):
+                    _segment_derivative(kind, beta[i], t_at[b], ell_at[b], moves_end[b], moves_start[b], short[b],
+                                        rows[b], load[b], lo, hi, dE, dP)
+                    for m in range(lo, hi):
                         for d in drives:
                             e[b, m, d] = dE[m, 0] * coef[c_seg, 0, d] + dE[m, 1] * coef[c_seg, 1, d] + \
                                 dE[m, 2] * coef[c_seg, 2, d] + dE[m, 3] * coef[c_seg, 3, d]
                         e[b, m, _Q0] += uc[i] * dP[m]
-                # at fixed unknowns: less the eliminated rows' share
-                for m in range(2):
+                if kind == SIGMA:           # nothing else moves: the spot's own change
                     for d in drives:
-                        fixed[0, m, d] = e[0, m, d]
-                        if two:
-                            fixed[1, m, d] = Gp_inv[1, m, 0] * e[3, 2, d] + Gp_inv[1, m, 1] * e[3, 3, d]
-                for role in range(3):       # the tip from the left, from the right, the spot
-                    if role == 1 and not two:
-                        continue
-                    b, seg = (1, 0) if role == 0 else (2, 1) if role == 1 else (spot, on)
-                    for m in range(4):
-                        for d in drives:
-                            share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] + E[b, m, 1] * fixed[seg, 1, d])
-                    if role == 0:
-                        _across(share, J, two, across)
-                        for m in range(size):
-                            for d in drives:
-                                q[m, d] -= across[m, d]
-                    elif role == 1:
+                        at_spot[d] = e[spot, 1, d]
+                else:
+                    # at fixed unknowns: less the eliminated rows' share
+                    for m in range(2):
+                        for d in moving:
+                            fixed[0, m, d] = e[0, m, d]
+                            if two:
+                                fixed[1, m, d] = Gp_inv[1, m, 0] * e[3, 2, d] + Gp_inv[1, m, 1] * e[3, 3, d]
+                    for d in moving:        # the spot's slope
+                        at_spot[d] = e[read, 1, d] - (E[read, 1, 0] * fixed[on, 0, d] + E[read, 1, 1] * fixed[on, 1, d])
+                    for role in range(2):   # the tip from the left, from the right
+                        if role == 1 and not two:
+                            continue
+                        b, seg = (1, 0) if role == 0 else (2, 1)
                         for m in range(4):
-                            for d in drives:
-                                q[m, d] += share[m, d]
-                    else:
-                        for m in range(2):
-                            for d in drives:
-                                dz[i, p, m, d] = share[m, d]
-            for m in range(2):
-                for d in drives:
-                    v = 0j
-                    for j in range(size):
-                        v += spot_per_row[m, j] * q[j, d]
-                    dz[i, p, m, d] = (dz[i, p, m, d] if moved else 0.0) + v
+                            for d in moving:
+                                share[m, d] = e[b, m, d] - (E[b, m, 0] * fixed[seg, 0, d] +
+                                                            E[b, m, 1] * fixed[seg, 1, d])
+                        if role == 0:
+                            _across(share, J, two, across)
+                            for m in range(size):
+                                for d in moving:
+                                    q[m, d] -= across[m, d]
+                        else:
+                            for m in range(4):
+                                for d in moving:
+                                    q[m, d] += share[m, d]
+            for c in range(drives.shape[0]):
+                d = drives[c]
+                v = 0j
+                for j in range(size):
+                    v += spot_per_row[j] * q[j, d]
+                dz[i, p, c] = (at_spot[d] if moved else 0.0) + v
 
 
 _point_jump = numba.njit(cache=True)(pieces.point_jump)

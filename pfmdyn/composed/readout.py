@@ -1,5 +1,6 @@
 """The lever read at the spot ``x_s = sigma L``: :func:`response`, :func:`slope`, :func:`deflection`,
-:func:`slope_and_jacobian`, and where an engine reads them (:class:`Reading`: :data:`at_end` or at a spot).
+:func:`slope_and_jacobian` (as arrays, :func:`slopes_and_partials`), and where an engine reads them
+(:class:`Reading`: :data:`at_end` or at a spot).
 
 Each read-out takes one of three routes: compiled (:class:`_Compiled`, :mod:`.kernels`; when
 :data:`pfmdyn.composed.KERNELS` is on and there is no probe), written out in NumPy
@@ -9,6 +10,7 @@ Separate from the forms because it only chooses among them and scales their stat
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -22,9 +24,9 @@ from .written_out import _WrittenOut
 
 
 class _Compiled:
-    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s interface: ``z`` and
-    :meth:`partials` (batch first, flat; one column per drive asked), the partials computed with the
-    values when ``names`` are given.
+    """The read-out of :mod:`pfmdyn.composed.kernels` with :class:`_WrittenOut`'s ``z`` (batch first, flat; one
+    column per drive asked) and, computed with it, ``dz``: the slope's partials w.r.t. ``names`` (batch, partial,
+    drive).
 
     Examples
     --------
@@ -34,8 +36,7 @@ class _Compiled:
     """
 
     def __init__(self, beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g, drives=DRIVES, names=()):
-        from . import kernels
-
+        kernels = _kernels()
         args = [np.asarray(a) for a in (beta, sigma, k, kvv, kll, kvl, H, L, mu, gamma, rho_g)]
         self.shape = np.broadcast(*args).shape
         n = math.prod(self.shape)
@@ -50,26 +51,38 @@ class _Compiled:
         beta, k, kvv, kll, kvl, mu = lever
         sigma, g, H, L, rho_g = lengths
         self.beta, self.L = (beta if np.iscomplexobj(args[0]) else beta.real), L
-        two = bool(np.any(g != 1.0)) or "gamma" in names
+        two = bool((args[9].real != 1.0).any()) or "gamma" in names
+        point, kinds, use = _codes(tuple(names), tuple(drives))
         jump, djump = np.empty((n, 12), complex), np.empty((len(names), n, 12), complex)
-        kernels.tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g,
-                          np.array([_POINT.index(p) if p in _POINT else -1 for p in names], np.int64), jump, djump)
+        kernels.tip_point(beta, k, kvv, kll, kvl, H, L, mu, rho_g, point, jump, djump)
         # the load's constant by NumPy's powers: the q0 column's cancellations amplify their last digits
         uc = pieces.load_constant(beta, k, L)
-        codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
-        kinds = np.array([codes.get(p, kernels.TIP) for p in names], np.int64)
-        z, dz = np.empty((n, 2, len(DRIVES)), complex), np.empty((n, len(names), 2, len(DRIVES)), complex)
-        use = _drive_columns(drives, DRIVES)
-        kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, np.array(use, np.int64), z, dz)
-        z, dz = z[..., use], dz[..., use]
+        z, dz = np.empty((n, 2, len(use)), complex), np.empty((n, len(names), len(use)), complex)
+        kernels.read_out(beta, sigma, g, uc, k, jump, djump, kinds, two, use, z, dz)
         self.z = z.real if real else z
-        dz = dz.real if real else dz
-        self._partials = {name: dz[:, i] for i, name in enumerate(names)}
-
-    def partials(self, names):
-        return {name: self._partials[name] for name in names}
+        self.dz = dz.real if real else dz
 
     out = _Lever.out
+
+
+@functools.cache
+def _kernels():
+    """:mod:`pfmdyn.composed.kernels`, imported on first use (numba's import stays out of the start-up)."""
+    from . import kernels
+
+    return kernels
+
+
+@functools.lru_cache(maxsize=64)
+def _codes(names, drives):
+    """What :func:`pfmdyn.composed.kernels.tip_point` and :func:`~pfmdyn.composed.kernels.read_out` take for the
+    partials ``names`` and the ``drives``: each partial's row of the tip's point (-1: none), how it enters, and
+    the drives' columns."""
+    kernels = _kernels()
+    codes = {"beta": kernels.BETA, "sigma": kernels.SIGMA, "k": kernels.K, "gamma": kernels.GAMMA}
+    return (np.array([_POINT.index(p) if p in _POINT else -1 for p in names], np.int64),
+            np.array([codes.get(p, kernels.TIP) for p in names], np.int64),
+            np.array(_drive_columns(drives, DRIVES), np.int64))
 
 
 def _written_out(names=(), probe=None) -> bool:
@@ -147,32 +160,60 @@ def slope_and_jacobian(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIA
     >>> [f"{v:.8g}" for v in [row[1] for row in jacobian]]
     ['-1968.7118', '15554.443', '-48.327618', '-0.042736975']
     """
+    values, partials = slopes_and_partials(beta, parameters, sigma, wrt, drives)
+    return _tuples(values, partials, SPOT_JACOBIAN_PARAMETERS)
+
+
+def slopes_and_partials(beta, parameters: Parameters, sigma=1.0, wrt=SPOT_JACOBIAN_PARAMETERS, drives=TIP_DRIVES):
+    """:func:`slope_and_jacobian` as arrays, the drives first: the slopes ``values[i]`` per unit ``drives[i]``
+    and the partials ``partials[name][i]`` by name (those of ``wrt``), without the tuples.
+
+    Examples
+    --------
+    >>> lever = Parameters(k=2.0, kvv=98.0, kll=52.0, kvl=9.0, H=1e-5, L=2e-4, mu=0.1, gamma=0.9, rho_g=0.05)
+    >>> values, partials = slopes_and_partials(2.5, lever, 0.8, wrt=('sigma',))
+    >>> values.shape, list(partials), f"{partials['sigma'][1]:.8g}"
+    ((4,), ['sigma'], '15554.443')
+    """
     names = [p for p in SPOT_JACOBIAN_PARAMETERS if p in wrt]
-    use = _drive_columns(drives, DRIVES)
     if composed.KERNELS:      # every partial, gamma's too
         lever = _Compiled(beta, sigma, *parameters, drives=drives, names=tuple(names))
-        use = list(range(len(drives)))
-        z1, dz = lever.z[:, 1], lever.partials(names)
+        z1, dz = lever.z[:, 1], lever.dz
     elif _written_out(names):
         lever = _WrittenOut(beta, sigma, *parameters, drives=tuple(drives))
-        use = list(range(len(drives)))
-        z1, dz = lever.z[:, 1], lever.partials(names)
+        z1, dz = lever.z[:, 1], _by_partial([d[:, 1] for d in lever.partials(names).values()], lever.z[:, 1])
     else:
         beta, sigma = np.broadcast_arrays(np.asarray(beta), np.asarray(sigma, dtype=float))
         lever = _Lever(beta, *parameters, split="gamma" in names, derivatives=True)
         reader = lever.reader(sigma)
-        z1 = lever.state(reader)[:, 1]
+        use = _drive_columns(drives, lever.drives)
+        z1 = lever.state(reader)[:, 1, use]
         dc = lever.d_system([p for p in names if p != "sigma"])
-        dz = {name: lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c))) for name in names}
+        dz = _by_partial([lever.d_state(reader, name, dc.get(name, np.zeros_like(lever.c)))[:, 1, use]
+                          for name in names], z1)
     scale = (lever.beta / lever.L)[:, None]
-    columns = {}
-    for name in names:
-        d = scale * dz[name][:, 1]
-        columns[name] = lever.out(d + z1 / lever.L[..., None] if name == "beta" else d)
-    values = tuple(np.moveaxis(lever.out(scale * z1), -1, 0)[use])
-    jac = tuple(tuple(columns[p][..., i] if p in columns else None for p in SPOT_JACOBIAN_PARAMETERS)
-                for i in use)
-    return values, jac
+    d = scale[:, None] * dz             # every partial's slope at once
+    if "beta" in names:                 # beta moves the scale too
+        d[:, names.index("beta")] += z1 / lever.L[..., None]
+    return _drives_first(lever, scale * z1), {name: _drives_first(lever, d[:, j]) for j, name in enumerate(names)}
+
+
+def _by_partial(columns, z1):
+    """The partials of the slope ``columns`` (each as ``z1``, (batch, drives)) as one array (batch, partial, drives)."""
+    return np.stack(columns, axis=1) if columns else np.empty(z1.shape[:1] + (0,) + z1.shape[1:], z1.dtype)
+
+
+def _drives_first(lever, x):
+    """Flat results ``x`` (batch, drives) in the arguments' broadcast shape, the drives first."""
+    x = lever.out(x)
+    return x.transpose(x.ndim - 1, *range(x.ndim - 1))
+
+
+def _tuples(values, partials, names):
+    """The slopes and partials of :func:`slopes_and_partials` as :func:`slope_and_jacobian` gives them, the
+    partials' columns ``names`` (None where not computed)."""
+    return tuple(values), tuple(tuple(partials[p][i] if p in partials else None for p in names)
+                                for i in range(len(values)))
 
 
 class Reading:
@@ -199,10 +240,11 @@ class Reading:
         return slope(beta, parameters, self._at)
 
     def slope_and_jacobian(self, beta, parameters: Parameters, wrt=None):
-        wrt = self.JACOBIAN_PARAMETERS if wrt is None else wrt
-        values, jac = slope_and_jacobian(beta, parameters, self._at, wrt=wrt)
-        keep = [SPOT_JACOBIAN_PARAMETERS.index(p) for p in self.JACOBIAN_PARAMETERS]
-        return values, tuple(tuple(row[j] for j in keep) for row in jac)
+        return _tuples(*self.slopes_and_partials(beta, parameters, wrt), self.JACOBIAN_PARAMETERS)
+
+    def slopes_and_partials(self, beta, parameters: Parameters, wrt=None):
+        """:func:`slopes_and_partials` here, w.r.t. ``wrt`` (by default every one of :attr:`JACOBIAN_PARAMETERS`)."""
+        return slopes_and_partials(beta, parameters, self._at, self.JACOBIAN_PARAMETERS if wrt is None else wrt)
 
 
 at_end = Reading()

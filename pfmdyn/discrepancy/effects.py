@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
@@ -91,6 +90,7 @@ class Chain:
     loss: tuple
     spring: object
     _rotation: dict = field(default_factory=dict, repr=False)
+    _d_factors: dict = field(default_factory=dict, repr=False)
 
     def rotation(self, i: int):
         """d slopes / d (k1 in beam axes, k2, alpha)[i] through the rotated spring tensor, formed when
@@ -100,11 +100,12 @@ class Chain:
             self._rotation[i] = part["kvv"] * rot[0][i] + part["kll"] * rot[1][i] + part["kvl"] * rot[2][i]
         return self._rotation[i]
 
-    @cached_property
-    def d_factors(self) -> tuple:
-        """The damping factors' derivatives w.r.t. the losses (:func:`pfmdyn.generated.damping.d_factors`),
-        formed when a damping component asks (a model without one never does)."""
-        return damping.d_factors(self.r, *self.loss)
+    def d_factors_wrt(self, q: int) -> tuple:
+        """The damping factors' derivatives w.r.t. the ``q``-th loss (:func:`pfmdyn.generated.damping.d_factors_wrt`),
+        formed when a damping component asks (a model without one never does; one asks for its own loss's)."""
+        if q not in self._d_factors:
+            self._d_factors[q] = damping.d_factors_wrt(self.r, *self.loss, q)
+        return self._d_factors[q]
 
 
 @dataclass(frozen=True)
@@ -170,9 +171,9 @@ class Damping(Effect):
         return set(self.uses)
 
     def jacobian(self, chain: Chain) -> tuple:
-        q, d_f, part, c = self.index, chain.d_factors, chain.part, chain.coords
-        return (part["beta"] * (chain.root_r * d_f[0][q]) + part["k"] * (chain.meta.spring_constant * d_f[1][q])
-                + chain.rotation(0) * (c["k1"] * d_f[2][q]) + part["mu"] * (c["mu"] * d_f[3][q]),)
+        d_f, part, c = chain.d_factors_wrt(self.index), chain.part, chain.coords
+        return (part["beta"] * (chain.root_r * d_f[0]) + part["k"] * (chain.meta.spring_constant * d_f[1])
+                + chain.rotation(0) * (c["k1"] * d_f[2]) + part["mu"] * (c["mu"] * d_f[3]),)
 
 
 @dataclass(frozen=True)
@@ -198,9 +199,9 @@ class FluidDamping(ViscousDamping):
     """A fluid's drag growing as ``sqrt(f)`` (:func:`fluid_law`): the viscous term times the law."""
 
     def jacobian(self, chain: Chain) -> tuple:
-        d_f, part, c = chain.d_factors, chain.part, chain.coords
+        d_f, part, c = chain.d_factors_wrt(1), chain.part, chain.coords
         law = fluid_law((chain.root_r / chain.b1) ** 2)
-        return (law * (part["beta"] * (chain.root_r * d_f[0][1]) + part["mu"] * (c["mu"] * d_f[3][1])),)
+        return (law * (part["beta"] * (chain.root_r * d_f[0]) + part["mu"] * (c["mu"] * d_f[3])),)
 
     def derived(self, values: dict, meta) -> dict:
         return {}

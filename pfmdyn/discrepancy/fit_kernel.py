@@ -10,7 +10,9 @@ allocates once: :func:`design_and_gram` (the design from the slopes at the uniqu
 column a slope or the background's ramp, times the bias or not:
 :data:`pfmdyn.discrepancy.effects.BASE_COLUMNS`; its columns scaled to unit norm, their Gram matrix)
 and :func:`residual_and_jacobian` (the amplitudes with the same eigenvalue cutoff, the residual, the
-Jacobian).  The NumPy path is the reference (``tests/test_discrepancy_kernel.py``).
+Jacobian).  Each row has a weight (the fit's rows are a spectrum's folded per frequency,
+:func:`pfmdyn.fitting.projection.bias_nodes`; 1 for rows as measured).  The NumPy path is the reference
+(``tests/test_discrepancy_kernel.py``).
 
 Imported lazily (numba's import stays out of the command line's start-up).
 """
@@ -23,21 +25,21 @@ __all__ = ["design_and_gram", "residual_and_jacobian"]
 
 
 @numba.njit(cache=True)
-def design_and_gram(T, inverse, bias, ramp, source, per_volt, y, A, As, scale, G, Ay):
+def design_and_gram(T, inverse, bias, weight, ramp, source, per_volt, y, A, As, scale, G, Ay):
     """The design ``A`` (rows, columns) from the slopes ``T`` (4, unique frequencies), its columns over their
     norms ``As`` (``scale``: one over each norm, 0 for a column of zero or non-finite norm, as
     :func:`pfmdyn.fitting.projection.project`), their Gram matrix ``G = As^H As`` and ``Ay = As^H y``.
 
     Column ``j`` is slope ``source[j]`` (``-1``: ``ramp``) at each row's frequency ``inverse``, times the
-    row's ``bias`` where ``per_volt[j]``.
+    row's ``bias`` where ``per_volt[j]``, times the row's ``weight``.
 
     Examples
     --------
     >>> T = np.array([[1.0 + 1j, 2.0], [0.5, 1j], [0.1, 0.2], [3.0, 1.0]], complex)
     >>> A, As, scale, G, Ay = (np.empty((4, 2), complex), np.empty((4, 2), complex), np.empty(2),
     ...                        np.empty((2, 2), complex), np.empty(2, complex))
-    >>> design_and_gram(T, np.array([0, 1, 0, 1]), np.array([0.0, 0.0, 1.0, 1.0]), np.ones(4), np.array([0, 3]),
-    ...                 np.array([False, True]), np.ones(4, complex), A, As, scale, G, Ay)
+    >>> design_and_gram(T, np.array([0, 1, 0, 1]), np.array([0.0, 0.0, 1.0, 1.0]), np.ones(4), np.ones(4),
+    ...                 np.array([0, 3]), np.array([False, True]), np.ones(4, complex), A, As, scale, G, Ay)
     >>> A[:, 1].real.tolist(), bool(np.allclose(G.diagonal(), 1.0))       # V T_q; unit columns
     ([0.0, 0.0, 3.0, 1.0], True)
     """
@@ -48,7 +50,7 @@ def design_and_gram(T, inverse, bias, ramp, source, per_volt, y, A, As, scale, G
         u = inverse[i]
         for c in range(m):
             v = complex(ramp[i]) if source[c] < 0 else T[source[c], u]
-            a = bias[i] * v if per_volt[c] else v
+            a = weight[i] * (bias[i] * v if per_volt[c] else v)
             A[i, c] = a
             norms[c] += a.real * a.real + a.imag * a.imag
     for c in range(m):
@@ -69,11 +71,12 @@ def design_and_gram(T, inverse, bias, ramp, source, per_volt, y, A, As, scale, G
 
 
 @numba.njit(cache=True)
-def residual_and_jacobian(dT, inverse, bias, source, per_volt, y, sigma, A, As, scale, Ay, w, V, cutoff, jacobian,
-                          amplitudes, residual, J):
+def residual_and_jacobian(dT, inverse, bias, weight, source, per_volt, y, sigma, A, As, scale, Ay, w, V, cutoff,
+                          jacobian, amplitudes, residual, J):
     """From :func:`design_and_gram`'s arrays and the Gram matrix's eigenvalues ``w`` and vectors ``V``: the
     amplitudes (the pseudo-inverse, eigenvalues below ``cutoff`` of the largest dropped), the residual
-    ``(y - A c) / sigma`` as ``[Re, Im]`` (non-finite: 1e6) and, with ``jacobian``, Kaufman's
+    ``(y - A c) / sigma`` as ``[Re, Im]`` (non-finite: 1e6 times the row's weight, as the rows it stands for
+    would count) and, with ``jacobian``, Kaufman's
     ``-(I - P) (dA/dx_j) c / sigma`` from the slopes' partials ``dT`` (4, parameters, unique frequencies)
     into ``J`` (2 rows, parameters; non-finite: 0).
 
@@ -84,9 +87,9 @@ def residual_and_jacobian(dT, inverse, bias, source, per_volt, y, sigma, A, As, 
     >>> y = np.array([1.0 + 1j, 2.0, 1.0 + 1j, 2.0])
     >>> A, As, scale, G, Ay = (np.empty((4, 2), complex), np.empty((4, 2), complex), np.empty(2),
     ...                        np.empty((2, 2), complex), np.empty(2, complex))
-    >>> design_and_gram(T, rows, bias, np.ones(4), *columns, y, A, As, scale, G, Ay)
+    >>> design_and_gram(T, rows, bias, np.ones(4), np.ones(4), *columns, y, A, As, scale, G, Ay)
     >>> c, r, J = np.empty(2, complex), np.empty(8), np.empty((8, 0))
-    >>> residual_and_jacobian(np.empty((4, 0, 2), complex), rows, bias, *columns, y, 1.0, A, As, scale, Ay,
+    >>> residual_and_jacobian(np.empty((4, 0, 2), complex), rows, bias, np.ones(4), *columns, y, 1.0, A, As, scale, Ay,
     ...                       *np.linalg.eigh(G), 1e-13, False, c, r, J)
     >>> bool(np.allclose(c, [1.0, 0.0], rtol=0, atol=1e-12)), bool(np.abs(r).max() < 1e-12)  # y: the first column
     (True, True)
@@ -115,8 +118,8 @@ def residual_and_jacobian(dT, inverse, bias, source, per_volt, y, sigma, A, As, 
         for c in range(m):
             v -= A[i, c] * amplitudes[c]
         re, im = v.real * inv_sigma, v.imag * inv_sigma
-        residual[i] = re if np.isfinite(re) else 1e6
-        residual[rows + i] = im if np.isfinite(im) else 1e6
+        residual[i] = re if np.isfinite(re) else 1e6 * weight[i]
+        residual[rows + i] = im if np.isfinite(im) else 1e6 * weight[i]
     if not jacobian:
         return
     # (dA/dx_j) c per unique frequency: the bias-free and the per-volt parts
@@ -135,7 +138,7 @@ def residual_and_jacobian(dT, inverse, bias, source, per_volt, y, sigma, A, As, 
     AD = np.zeros((m, p), np.complex128)
     for i in range(rows):
         for j in range(p):
-            d = fixed[inverse[i], j] + bias[i] * per[inverse[i], j]
+            d = weight[i] * (fixed[inverse[i], j] + bias[i] * per[inverse[i], j])
             D[i, j] = d
             for a in range(m):
                 AD[a, j] += As[i, a].conjugate() * d

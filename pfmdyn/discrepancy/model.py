@@ -37,7 +37,7 @@ from scipy.optimize import least_squares
 from ..cantilever import damping_substitution, free_root
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
-from ..fitting.projection import CUTOFF, jacobian_covariance, project
+from ..fitting.projection import CUTOFF, bias_nodes, jacobian_covariance, project
 from .. import composed
 from ..generated import formulas
 from ..generated.tilt_rotation import rotated, rotated_jacobian
@@ -126,7 +126,7 @@ class Model:
         lever's partials (:func:`pfmdyn.composed.slope_and_jacobian`, read at the free end or,
         with the effect ``spot_position``, at the spot) are composed by
         the chain rule with the generated damping factors' derivatives
-        (:func:`pfmdyn.generated.damping.d_factors`), the rotation's
+        (:func:`pfmdyn.generated.damping.d_factors_wrt`), the rotation's
         (:func:`pfmdyn.generated.tilt_rotation.rotated_jacobian`) and the free root's motion
         with ``mu`` and ``gamma`` (implicit differentiation of the generated characteristic).
         """
@@ -142,11 +142,10 @@ class Model:
             rot = rotated_jacobian(spring, c["k2"], c["alpha"])
             reading = self._reading(c)
             lever = self.lever_parameters(c, d, rotated(spring, c["k2"], c["alpha"]))
-            T, J = reading.slope_and_jacobian(d.beta, lever, wrt=self._partials_needed(c, reading))
-            T = np.array(T)
-            # Partials not computed (None) have a zero multiplier below.
-            part = {p: 0.0 if J[0][j] is None else np.array([row[j] for row in J])
-                    for j, p in enumerate(reading.JACOBIAN_PARAMETERS)}
+            T, computed = reading.slopes_and_partials(d.beta, lever, wrt=self._partials_needed(c, reading))
+            T = np.ascontiguousarray(T)
+            # Partials not computed have a zero multiplier below.
+            part = dict.fromkeys(reading.JACOBIAN_PARAMETERS, 0.0) | computed
             chain = Chain(part, rot, c, m, root_r, b1, d_b1, d.factors, r, loss, spring)
             # the springs' terms (log10 coordinates), then each component's
             terms = [chain.rotation(j) * (v * LN10) for j, v in enumerate((spring, c["k2"])[:len(self.springs)])]
@@ -384,12 +383,21 @@ tests hold it to."""
 
 
 class _Problem:
-    """Residual and Jacobian of one model on one spectrum, with the last projection cached."""
+    """Residual and Jacobian of one model on one spectrum, with the last projection cached.
+
+    The rows are the spectrum's folded per frequency (:func:`pfmdyn.fitting.projection.bias_nodes`: every
+    design column is a slope, or the ramp, at the row's frequency, times its bias or not), at most two per
+    frequency, plus one residual element, ``sqrt(constant) / sigma`` with a zero Jacobian row: the cost,
+    ``J^T J`` and ``J^T r`` are the measured rows' (to rounding), so the solver takes the same steps on
+    fewer rows.  Both paths, compiled and NumPy, work on the folded rows."""
 
     def __init__(self, model, data, sigma):
         self.model, self.sigma = model, sigma
-        self.freq_u, self.inverse = np.unique(data.frequency_hz, return_inverse=True)
-        self.y, self.bias = data.response, data.bias_v
+        self.nodes = nodes = bias_nodes(data.frequency_hz, data.bias_v, data.response)
+        self.freq_u, self.inverse, self.bias, self.y = nodes.frequency_hz, nodes.inverse, nodes.bias_v, nodes.response
+        self.weight = nodes.weight
+        # the misfit the folded rows do not carry, one more residual element (none when nothing was folded)
+        self._tail = np.sqrt([nodes.constant]) / sigma if nodes.folded else np.empty(0)
         self._key, self._state = None, None
         self.compiled = COMPILED and JACOBIAN == "analytic"
         if self.compiled:
@@ -402,19 +410,21 @@ class _Problem:
                              np.empty((m, m), complex), np.empty(m, complex))
 
     def _evaluated(self, x):
-        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`); fresh residual
-        and Jacobian arrays (the solver keeps them)."""
+        """Design matrix, amplitudes, residual and Jacobian compiled (:data:`COMPILED`), and the slopes; fresh
+        residual and Jacobian arrays (the solver keeps them)."""
         from .fit_kernel import design_and_gram, residual_and_jacobian
 
         T, dT = self.model.slopes_and_jacobian(self.freq_u, x)
         A, As, scale, G, Ay = self._buffers
-        design_and_gram(T, self.inverse, self.bias, self._ramp, *self._columns, self.y, A, As, scale, G, Ay)
+        design_and_gram(T, self.inverse, self.bias, self.weight, self._ramp, *self._columns, self.y, A, As, scale, G,
+                        Ay)
         w, V = np.linalg.eigh(G)
-        rows, c = len(self.y), np.empty(self.model.n_linear, complex)
-        r, J = np.empty(2 * rows), np.empty((2 * rows, len(x)))
-        residual_and_jacobian(dT, self.inverse, self.bias, *self._columns, self.y, float(self.sigma), A, As, scale, Ay,
-                              w, V, CUTOFF, True, c, r, J)
-        return A, c, r, J
+        rows, c, tail = len(self.y), np.empty(self.model.n_linear, complex), len(self._tail)
+        r, J = np.empty(2 * rows + tail), np.empty((2 * rows + tail, len(x)))
+        residual_and_jacobian(dT, self.inverse, self.bias, self.weight, *self._columns, self.y, float(self.sigma), A,
+                              As, scale, Ay, w, V, CUTOFF, True, c, r[:2 * rows], J[:2 * rows])
+        r[2 * rows:], J[2 * rows:] = self._tail, 0.0
+        return A, c, r, J, T
 
     def _at(self, x):
         """Design matrix, amplitudes, projection (:func:`pfmdyn.fitting.projection.project`) and, for
@@ -431,6 +441,7 @@ class _Problem:
                 A, dT = self.model.design_and_partials(self.freq_u, self.inverse, self.bias, x)
             else:
                 A, dT = self.model.design(self.freq_u, self.inverse, self.bias, x), None
+            A = A * self.weight[:, None]
             projection = project(A[None], self.y[None, :, None])
             self._key, self._state = key, (A, projection.amplitudes[0, :, 0], projection, dT)
         return self._state
@@ -441,8 +452,9 @@ class _Problem:
         A, c = self._at(x)[:2]
         r = (self.y - A @ c) / self.sigma
         r = np.concatenate([r.real, r.imag])
-        r[~np.isfinite(r)] = 1e6
-        return r
+        bad = ~np.isfinite(r)
+        r[bad] = 1e6 * np.tile(self.weight, 2)[bad]          # a folded row stands for weight**2 rows
+        return np.concatenate([r, self._tail])
 
     def jacobian(self, x):
         if self.compiled:
@@ -450,7 +462,7 @@ class _Problem:
         A, c, projection, dT = self._at(x)
         x = np.asarray(x, float)
         if JACOBIAN == "analytic":
-            v = self.model.design_derivative_times(self.inverse, self.bias, dT, c)
+            v = self.model.design_derivative_times(self.inverse, self.bias, dT, c) * self.weight[:, None]
         else:
             upper = bounds(self.model)[1]
             v = np.empty((len(self.y), len(x)), complex)
@@ -459,20 +471,34 @@ class _Problem:
                 step = h if x[j] + h <= upper[j] else -h
                 xs = x.copy()
                 xs[j] += step
-                v[:, j] = (self.model.design(self.freq_u, self.inverse, self.bias, xs) - A) @ c / step
+                moved = self.model.design(self.freq_u, self.inverse, self.bias, xs) * self.weight[:, None]
+                v[:, j] = (moved - A) @ c / step
         # v = (d design / d x_j) c, shape (rows, parameters); Kaufman's -(I - P) dA c treats every
         # column alike, so the parameters go in as right-hand sides (one product for all)
         col = projection.jacobian(v[None, None])[0, 0] / self.sigma
-        out = np.concatenate([col.real, col.imag])
+        out = np.concatenate([col.real, col.imag, np.zeros((len(self._tail), len(x)))])
         out[~np.isfinite(out)] = 0.0
         return out
+
+    def prediction(self, x, frequency_hz, bias_v) -> np.ndarray:
+        """``A c`` at the measured rows ``(frequency_hz, bias_v)``, with the folded rows' amplitudes at ``x``
+        (compiled: from the slopes of that evaluation)."""
+        state = self._at(x)
+        inverse = np.unique(frequency_hz, return_inverse=True)[1]
+        if self.compiled:
+            A = self.model._columns(state[4], self.freq_u, inverse, bias_v)
+        else:
+            A = self.model.design(self.freq_u, inverse, bias_v, np.asarray(x, float))
+        return A @ state[1]
 
 
 def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
     """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
 
     Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
-    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`).
+    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`), on the rows
+    folded per frequency (:class:`_Problem`: the same cost and ``J^T J``, so the same covariance); the
+    residual and prediction are the measured rows'.
     """
     problem = _Problem(model, data, sigma)
     lower, upper = bounds(model)
@@ -487,8 +513,7 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     if best is None:
         raise FloatingPointError("no start gave a finite misfit")
     k = len(lower) + 2 * model.n_linear
-    n = 2 * len(problem.y)
+    n = 2 * len(data.response)
     cov = jacobian_covariance(best.jac, 2 * best.cost / max(n - k, 1))
-    A, c = problem._at(best.x)[:2]
-    pred = A @ c
-    return FitResult(model, best.x, cov, problem.y - pred, sigma, k, prediction=pred)
+    pred = problem.prediction(best.x, data.frequency_hz, data.bias_v)       # every measured row's
+    return FitResult(model, best.x, cov, data.response - pred, sigma, k, prediction=pred)

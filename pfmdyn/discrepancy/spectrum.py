@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from ..fitting.noise import misfit_band, noise_sigma
-from ..fitting.projection import project
+from ..fitting.projection import bias_nodes, project
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
@@ -131,7 +131,7 @@ class SpectrumProblem:
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
         self.matches = Matches()
-        self._unique = np.unique(data.frequency_hz, return_inverse=True)
+        self._nodes = bias_nodes(data.frequency_hz, data.bias_v, data.response)   # the rows the costs fold
         self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
 
     # -- starts --------------------------------------------------------------------------
@@ -226,15 +226,17 @@ class SpectrumProblem:
         return fit(model, self.data, starts, self.sigma, max_nfev=80)
 
     def cost(self, model, internal) -> float:
-        """RSS/sigma**2 at fixed nonlinear parameters (for start grids)."""
+        """RSS/sigma**2 at fixed nonlinear parameters (for start grids); on the rows folded per frequency
+        (:func:`pfmdyn.fitting.projection.bias_nodes`), plus the misfit they do not carry."""
         internal = np.asarray(internal)
         key = (model, internal.dtype.str, internal.tobytes())
         if key not in self._costs:
-            freq_u, inverse = self._unique
-            A = model.design(freq_u, inverse, self.data.bias_v, internal)
-            pred = project(A[None], self.data.response[None, :, None]).prediction[0, :, 0]
-            r = np.abs(self.data.response - pred) ** 2
-            self._costs[key] = float(np.sum(r[np.isfinite(r)]) / self.sigma**2) if np.isfinite(r).any() else math.inf
+            n = self._nodes
+            A = model.design(n.frequency_hz, n.inverse, n.bias_v, internal) * n.weight[:, None]
+            pred = project(A[None], n.response[None, :, None]).prediction[0, :, 0]
+            r = np.abs(n.response - pred) ** 2
+            rss = np.sum(r[np.isfinite(r)]) + n.constant
+            self._costs[key] = float(rss / self.sigma**2) if np.isfinite(r).any() else math.inf
         return self._costs[key]
 
     def candidates(self, current: FitResult) -> list[str]:

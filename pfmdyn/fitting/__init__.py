@@ -4,7 +4,8 @@
   transform, bounds, null value, seeds), in the spirit of lmfit's ``Parameter``;
 * :mod:`~pfmdyn.fitting.projection`: variable projection of complex linear amplitudes, the
   Jacobian of the projected residual and the covariance from a normal matrix, batched over
-  leading axes (a map block of pixels and a single spectrum run the same code);
+  leading axes (a map block of pixels and a single spectrum run the same code), and a spectrum's
+  rows folded per frequency for a design linear in the bias;
 * :mod:`~pfmdyn.fitting.batched`: a Levenberg-Marquardt iteration over variable projection that
   fits a block of spectra at once (``pfmdyn map``'s beam and SHO models), and their covariance;
 * :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS

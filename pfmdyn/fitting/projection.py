@@ -16,6 +16,10 @@ Everything is batched over leading axes: ``A`` of shape ``(..., n, m)`` and ``y`
 ``(..., n, q)`` (``q`` right-hand sides sharing the columns, e.g. the bias components of a map
 pixel), so a block of map pixels ``(pixels, n, m)`` and one spectrum ``(1, n, m)`` run the
 same code.
+
+A spectrum's rows that share a frequency enter such a design only through ``g(f)`` or ``V g(f)`` (a column
+independent of the bias ``V`` or per volt), so :func:`bias_nodes` folds them into at most two weighted rows
+with the same Gram matrix, the same products with the data and the same misfit up to a constant.
 """
 from __future__ import annotations
 
@@ -23,7 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Projection", "project", "normal_matrix", "covariance", "jacobian_covariance"]
+from .bias_line import _sums
+
+__all__ = ["Projection", "project", "normal_matrix", "covariance", "jacobian_covariance", "BiasNodes",
+           "bias_nodes"]
 
 CUTOFF = 1e-13
 """Eigenvalues of the column-scaled Gram matrix below this fraction of the largest get no weight:
@@ -170,3 +177,79 @@ def jacobian_covariance(jacobian, scale=1.0) -> np.ndarray:
         return np.zeros((J.shape[1], J.shape[1]))
     J = np.where(np.isfinite(J), J, 0.0)
     return covariance(J.T @ J, scale, equilibrate=False, cutoff=1e-16, undetermined=1e-3)
+
+
+@dataclass(frozen=True)
+class BiasNodes:
+    """A spectrum's rows folded per frequency (:func:`bias_nodes`): ``frequency_hz`` (the unique
+    frequencies, sorted), per folded row ``inverse`` (its frequency's index), ``bias_v`` (its node),
+    ``weight`` and ``response``; ``constant``, the misfit no design of such columns reaches, and
+    ``folded``, whether any rows were folded (else the rows are the spectrum's, in its order,
+    weight 1, constant 0)."""
+
+    frequency_hz: np.ndarray
+    inverse: np.ndarray
+    bias_v: np.ndarray
+    weight: np.ndarray
+    response: np.ndarray
+    constant: float
+    folded: bool
+
+
+def bias_nodes(frequency_hz, bias_v, response) -> BiasNodes:
+    """The rows of a spectrum for a design whose columns are ``g(f)`` or ``V g(f)``, at most two per frequency.
+
+    At a frequency with ``n`` rows of biases ``V_i`` (mean ``m``, standard deviation ``s``) the two
+    rows at the nodes ``m +- s``, each of weight ``sqrt(n / 2)`` (times the design's row), carry the
+    same bias Gram matrix ``sum [1, V_i]^T [1, V_i]``; their responses ``(sum y +- sum (V_i - m) y_i / s)
+    / sqrt(2 n)`` the same products ``sum y``, ``sum V y``.  Equal biases: one row at that bias,
+    weight ``sqrt(n)``, response ``sum y / sqrt(n)``.  For every such design ``A`` and amplitudes
+    ``c``, ``sum |y - A c|**2`` over the rows equals the folded rows' sum plus ``constant`` (the
+    residual of the straight line in bias at each frequency), and a row of weight ``w`` stands for
+    ``w**2`` rows.  Rows with a non-finite coordinate, or no two at one frequency: left as they are.
+
+    >>> f, v = np.array([2.0, 1.0, 2.0, 1.0, 2.0, 3.0]), np.array([0.0, 1.0, 1.0, 1.0, 3.0, 5.0])
+    >>> y = np.exp(1j * np.arange(6.0))
+    >>> nodes = bias_nodes(f, v, y)
+    >>> nodes.inverse.tolist(), nodes.bias_v.round(6).tolist(), nodes.weight.round(6).tolist()
+    ([0, 1, 1, 2], [1.0, 2.580552, 0.086114, 5.0], [1.414214, 1.224745, 1.224745, 1.0])
+    >>> A = np.stack([np.ones(6), v * f], axis=1)            # columns g(f) = 1 and V g(f) = V f
+    >>> u, w = nodes.inverse, nodes.weight[:, None]
+    >>> folded = np.stack([np.ones(4), nodes.bias_v * nodes.frequency_hz[u]], axis=1) * w
+    >>> c = np.array([0.3 - 1j, 0.2j])
+    >>> full, part = np.sum(np.abs(y - A @ c) ** 2), np.sum(np.abs(nodes.response - folded @ c) ** 2)
+    >>> bool(np.isclose(full, part + nodes.constant, rtol=1e-14)), bool(np.allclose(A.T @ A, folded.T @ folded))
+    (True, True)
+    >>> bias_nodes(f, v, np.where(f == 3.0, np.nan, y)).folded         # a response not measured: rows as they are
+    False
+    """
+    frequency_hz, bias_v = np.asarray(frequency_hz, float), np.asarray(bias_v, float)
+    response = np.asarray(response)
+    freq_u, inverse = np.unique(frequency_hz, return_inverse=True)
+    n_u = len(freq_u)
+    count = np.bincount(inverse, minlength=n_u)
+    finite = np.isfinite(frequency_hz).all() and np.isfinite(bias_v).all() and np.isfinite(response).all()
+    if not finite or count.max(initial=0) < 2:
+        return BiasNodes(freq_u, inverse, bias_v, np.ones(len(bias_v)), response, 0.0, False)
+    order = np.argsort(inverse, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(count)[:-1]])
+    equal = np.minimum.reduceat(bias_v[order], starts) == np.maximum.reduceat(bias_v[order], starts)
+    mean = np.bincount(inverse, bias_v, n_u) / count
+    centred = np.where(equal[inverse], 0.0, bias_v - mean[inverse])
+    spread = np.bincount(inverse, centred**2, n_u)                   # sum (V - m)**2, 0 where all equal
+    total = _sums(inverse, response, n_u)
+    moment = _sums(inverse, centred * response, n_u)                # sum (V - m) y
+    slope = np.where(equal, 0.0, moment / np.where(equal, 1.0, spread))
+    sd = np.sqrt(spread / count)
+    lean = np.where(equal, 0.0, moment / np.where(equal, 1.0, sd))
+    line = total[inverse] / count[inverse] + centred * slope[inverse]
+    constant = float(np.sum(np.abs(response - line) ** 2))
+    rows = np.where(equal, 1, 2)
+    u = np.repeat(np.arange(n_u), rows)                             # each folded row's frequency
+    second = np.zeros(len(u), bool)
+    second[np.cumsum(rows)[~equal] - 1] = True                      # the node m - s of each unequal frequency
+    sign = np.where(second, -1.0, 1.0)
+    node = np.where(equal[u], bias_v[order][starts][u], mean[u] + sign * sd[u])
+    weight = np.sqrt(count[u] / rows[u])
+    folded = (total[u] + sign * lean[u]) / np.sqrt(rows[u] * count[u])
+    return BiasNodes(freq_u, u, node, weight, folded, constant, True)

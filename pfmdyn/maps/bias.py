@@ -28,6 +28,7 @@ import numpy as np
 
 from ..analysis.deconvolve import nulling_bias, nulling_bias_gradient
 from ..errors import UserError
+from ..fitting.bias_line import rounding_spread
 
 __all__ = ["DISTRIBUTED", "QUANTITIES", "SURFACE", "BiasBasis", "basis", "linear_maps", "project"]
 
@@ -85,7 +86,7 @@ def basis(bias_v) -> BiasBasis:
     v = np.asarray(bias_v, float)
     if v.ndim != 1 or not np.all(np.isfinite(v)):
         raise UserError("bias_v must be a finite one-dimensional array")
-    if np.unique(v).size < 2:
+    if v.size < 2 or np.sum((v - v.mean()) ** 2) <= v.size * rounding_spread(v):     # one setpoint, rounding aside
         raise UserError(f"bias_v needs at least two distinct biases to separate the electrostatic term, got {v.tolist()}")
     q, r = np.linalg.qr(np.column_stack([np.ones_like(v), v]))
     return BiasBasis(q, np.linalg.inv(r))
