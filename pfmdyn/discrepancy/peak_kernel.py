@@ -20,8 +20,13 @@ import numba
 import numpy as np
 
 from ..composed.kernels import characteristic_partials, characteristic_roots, tip_at_end_and_partials, tip_point
+from ..generated import formulas
 
 __all__ = ["match_and_jacobian"]
+
+_frequency_from_beta, _beta_from_frequency, _frequency_change = (
+    numba.njit(cache=True)(f) for f in (formulas.frequency_from_beta, formulas.beta_from_frequency,
+                                        formulas.frequency_change))
 
 
 @numba.njit(cache=True)
@@ -72,8 +77,8 @@ def match_and_jacobian(grid, lever, b1, d_b1, f1, moved, per_unit, tip_at_end, p
         return
     f, beta = np.empty(n), np.empty(n)
     for i in range(n):
-        f[i] = roots[i] ** 2 * f1 / b1 ** 2
-        beta[i] = b1 * np.sqrt(f[i]) / np.sqrt(f1)
+        f[i] = _frequency_from_beta(roots[i], f1, b1)
+        beta[i] = _beta_from_frequency(f[i], f1, b1)
     # the characteristic's partials at the roots: beta first, then the parameters that move
     d = np.empty((r + 1, n))
     if tip_at_end:
@@ -98,7 +103,7 @@ def match_and_jacobian(grid, lever, b1, d_b1, f1, moved, per_unit, tip_at_end, p
             acc = 0.0
             for j in range(r):
                 acc += d[j + 1, i] / d[0, i] * per_unit[j, c]
-            value = -2 * f[i] * (beta[i] * d_b1[c] - b1 * -acc) / (beta[i] * b1)
+            value = _frequency_change(f[i], beta[i], -acc, b1, d_b1[c])
             sens[i, c] = value if np.isfinite(value) else 0.0
     lr = np.log(f)
     for k in range(count):
