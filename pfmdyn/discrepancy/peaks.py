@@ -17,7 +17,6 @@ of the spectrum, which the residues (mode shapes) decide.
 """
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -318,16 +317,12 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
     return full(res.x), 2 * res.cost
 
 
-_free_root = functools.lru_cache(maxsize=256)(free_root_and_jacobian)
-"""The free root and its partials of a lever and tip, kept: an analysis's peak fits (a hundred and more) ask
-a few tips again and again (a root search in Python each)."""
-
-
 def _compiled_match(model, moving, peaks, band, f_max, unseen):
     """:func:`peak_match` of the model's contact resonances below ``f_max`` and its Jacobian w.r.t. the
     parameters where ``moving``, as a function of the parameters: one compiled call
     (:func:`pfmdyn.discrepancy.peak_kernel.match_and_jacobian`), the free root once per lever and tip
-    (:func:`_free_root`), the grid in ``beta`` once per fit and tip, the characteristic's parameters
+    (:func:`pfmdyn.discrepancy.model.free_root_and_jacobian`, which keeps them: an analysis's hundred
+    peak fits ask a few tips again and again), the grid in ``beta`` once per fit and tip, the characteristic's parameters
     differentiated by the moving parameters alone (one that moves none of them there adds zeros to the
     sensitivities).
 
@@ -352,7 +347,7 @@ def _compiled_match(model, moving, peaks, band, f_max, unseen):
         c = model.coords(x)
         tip = (c["mu"], c["gamma"])
         if tip not in tips:
-            b1, d_b1_dp = _free_root(m.spring_constant, m.tip_height, m.length, *tip)
+            b1, d_b1_dp = free_root_and_jacobian(m.spring_constant, m.tip_height, m.length, *tip)
             tips[tip] = b1, d_b1_dp, _beta_grid(m.free_resonance, b1, f_max)
         b1, d_b1_dp, grid = tips[tip]
         lever, moved, per_unit, d_b1 = parameter_changes(model, x, True, d_b1_dp, moving)
