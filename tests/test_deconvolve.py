@@ -422,3 +422,20 @@ def test_cli_refuses_frequencies_at_one_setpoint_written_two_ways(tmp_path, caps
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "610000 Hz" in err and "two distinct biases" in err, err
     assert not out.exists()
+
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "asylum_pfm_images"
+
+
+@pytest.mark.parametrize("name", ["IgorIBWReader_P0089OP0027.ibw", "PMN28Pt0000.h5"])
+def test_cli_names_an_instrument_file_as_such(name, tmp_path, capsys):
+    """An Asylum image or a pycroscopy file given to deconvolve: one line naming the file and what it is
+    (it said 'not a UTF-8 text file'), exit 2, nothing written."""
+    path = REAL / name
+    if not path.exists():
+        pytest.skip("the shared real data are absent")
+    out = tmp_path / "out"
+    assert cli.main(["deconvolve", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and name in err[0] and "an instrument file" in err[0] and "frequency-bias table" in err[0]
+    assert not out.exists()

@@ -32,11 +32,13 @@ from __future__ import annotations
 import difflib
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
 from . import columns
+from .kinds import INSTRUMENT_KINDS, file_kind
 
 COORDINATE_COLUMNS = ("frequency_hz", "bias_v")
 RESPONSE_VARIANTS = (("x", "y"), ("amplitude", "phase_deg"))
@@ -127,7 +129,19 @@ def read_spectra(path, biases_per_frequency: int = 2) -> Spectra:
     ...     data = read_spectra(name)
     >>> data.response.tolist(), data.metadata
     ([(1+0j), (3+0j)], {'response_unit': 'pm'})
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     name = os.path.join(tmp, "scan.ibw")
+    ...     _ = open(name, "wb").write(bytes(8))
+    ...     read_spectra(name)                    # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    pfmdyn.errors.UserError: .../scan.ibw: an instrument file (asylum), not a frequency-bias table: a CSV of frequency_hz, bias_v and the response is read here (pfmdyn inspect shows what the file holds)
     """
+    kind = file_kind(path) if Path(path).is_file() else None
+    # a text drive sweep is a table too: its columns decide
+    if kind in INSTRUMENT_KINDS - {"text sweep"}:
+        raise UserError(f"{path}: an instrument file ({kind}), not a frequency-bias table: a CSV of frequency_hz, "
+                        "bias_v and the response is read here (pfmdyn inspect shows what the file holds)")
     source = columns.read_table(path)
     where, header_line = source.path, source.header_line
     written = list(source.header)
