@@ -24,7 +24,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-from recording import recorded, tally  # noqa: E402
+from recording import coverage, recorded  # noqa: E402
 from test_sweeps_fit import in_medium, lever_case, sweep_of, write_sweep  # noqa: E402
 
 from pfmdyn.discrepancy.sweep import fit_sweep  # noqa: E402
@@ -57,8 +57,7 @@ def main():
                                           f"{in_medium(case)[1]:.3g}): {p['value']:.6g} +- {p['stderr']:.2g}, truth "
                                           f"{truth[name]:.6g} ({z[name][-1]:+.1f} sigma)")
     for name in names:
-        tally(covered[name], args.cases, failures[name], f"{name} within 2 stated sigma: ")
-        print(f"median |z| {np.median(np.abs(z[name])):.2f} (a normal's: 0.67)")
+        coverage(covered[name], args.cases, failures[name], z[name], name)
 
 
 if __name__ == "__main__":

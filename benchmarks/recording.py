@@ -12,6 +12,7 @@ import contextlib
 import io
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import time
@@ -102,3 +103,17 @@ def tally(passed: int, cases: int, failures: list[str], label: str = "") -> None
     print(f"{label}passed {passed} of {cases} ({passed / cases:.0%})")
     for line in failures:
         print(f"- {line}")
+
+
+def coverage(covered: int, cases: int, failures: list[str], z, name: str) -> None:
+    """:func:`tally` of the cases whose truth lies within 2 stated sigma, then the median ``|z|`` of the
+    errors in stated sigma (a normal's is 0.67: far below, the uncertainties are generous; above, too narrow).
+
+    >>> coverage(2, 3, ["case 1: 5 +- 1, truth 8"], [0.5, -1.0, 3.0], "k1")
+    k1 within 2 stated sigma: passed 2 of 3 (67%)
+    - case 1: 5 +- 1, truth 8
+    median |z| 1.00 (a normal's: 0.67)
+    """
+    tally(covered, cases, failures, f"{name} within 2 stated sigma: ")
+    if len(z):
+        print(f"median |z| {statistics.median(abs(v) for v in z):.2f} (a normal's: 0.67)")

@@ -29,7 +29,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from exact_beam import random_lever  # noqa: E402
-from recording import recorded, tally  # noqa: E402
+from recording import coverage, recorded  # noqa: E402
 from stiffness_coverage import mindlin  # noqa: E402
 
 from pfmdyn import cli  # noqa: E402
@@ -64,8 +64,7 @@ def main():
                 failures.append(f"case {case}: {value:.6g} +- {stderr:.2g} Hz, truth {want:.6g} "
                                 f"(k1/k {truth.k1 / truth.spring_constant:.3g}, nu {nu:.2f}, "
                                 f"H {truth.tip_height * 1e6:.1f} um, tilt {truth.tilt:.1f} deg)")
-    tally(covered, args.cases, failures, "first contact resonance within 2 stated sigma: ")
-    print(f"median |z| {np.median(np.abs(z)):.2f} (a normal's: 0.67)")
+    coverage(covered, args.cases, failures, z, "first contact resonance")
 
 
 if __name__ == "__main__":

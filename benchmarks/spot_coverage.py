@@ -41,7 +41,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from exact_beam import random_lever  # noqa: E402
-from recording import recorded, tally  # noqa: E402
+from recording import coverage, recorded  # noqa: E402
 from segment_beam import spot_response  # noqa: E402
 from stiffness_coverage import mindlin  # noqa: E402
 
@@ -130,9 +130,7 @@ def main():
     for line in undetermined:
         print(f"- {line}")
     for name in RESULTS:
-        tally(covered[name], args.cases, failures[name], f"{name} within 2 stated sigma: ")
-        if z[name]:
-            print(f"  median |z| {np.median(np.abs(z[name])):.2f} (a normal's: 0.67)")
+        coverage(covered[name], args.cases, failures[name], z[name], name)
 
 
 if __name__ == "__main__":

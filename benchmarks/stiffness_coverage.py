@@ -28,7 +28,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 from exact_beam import random_lever  # noqa: E402
-from recording import recorded, tally  # noqa: E402
+from recording import coverage, recorded  # noqa: E402
 
 from pfmdyn import Cantilever, Contact  # noqa: E402
 from pfmdyn.analysis.stiffness_report import analyse  # noqa: E402
@@ -70,8 +70,7 @@ def main():
             failures.append(f"case {case}: k1 {s.k1:.4g} +- {s.stderr['k1']:.2g}, truth {truth.k1:.4g} "
                             f"(k1/k {truth.k1 / truth.spring_constant:.3g}, nu {nu:.2f}, H {truth.tip_height * 1e6:.1f} um "
                             f"stated {nominal * 1e6:.1f})")
-    tally(covered, args.cases, failures, "k1 within 2 stated sigma: ")
-    print(f"median |z| {np.median(np.abs(z)):.2f} (a normal's: 0.67)")
+    coverage(covered, args.cases, failures, z, "k1")
 
 
 if __name__ == "__main__":
