@@ -8,7 +8,7 @@ frequencies, the characteristic's partials there (the tip's jump compiled, where
 generated jump: the two differ in the last bit), the sensitivities
 (:func:`pfmdyn.discrepancy.undamped_modes.resonance_sensitivity`) and the match with its Jacobian
 (:func:`pfmdyn.discrepancy.peaks.peak_match`).  The NumPy path is the reference
-(``tests/test_discrepancy_peaks.py``).
+(``tests/test_formulas.py``).
 
 Imported lazily (numba's import stays out of the command line's start-up).
 """
