@@ -141,5 +141,7 @@ def test_a_given_k1_uncertainty_moves_each_contact_resonance_as_the_fe_lever_mov
     for extra in ([], ["--k1-uncertainty", repr(u)]):
         out = tmp_path / "r.json"
         assert cli.main(common + extra + ["--json", str(out)]) == 0
-        stderr[bool(extra)] = np.array(json.loads(out.read_text())["results"]["contact"]["resonance"]["stderr"])
+        doc = json.loads(out.read_text())
+        stderr[bool(extra)] = np.array(doc["results"]["contact"]["resonance"]["stderr"])
+        assert doc["lever"]["k1"]["stderr"] == (u if extra else None)      # the k1 taken, as given
     np.testing.assert_allclose(np.sqrt(stderr[True] ** 2 - stderr[False] ** 2), want, rtol=2e-3)

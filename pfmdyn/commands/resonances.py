@@ -81,6 +81,7 @@ def run(args) -> int:
         from ..io import documents
 
         given = flags.given_names(args, (*flags.NAMES,))
-        flags.write_json(args.json, documents.resonances({**result.to_dict(), **policy, "contact_stderr": stderr},
+        flags.write_json(args.json, documents.resonances({**result.to_dict(), **policy, "contact_stderr": stderr,
+                                                          "k1_uncertainty": k1_uncertainty},
                                                          given))
     return 0 if result.certified else 1

@@ -156,7 +156,8 @@ def run(args) -> int:
         from ..io import documents
 
         flags.write_json(args.json, documents.spot({**result.to_dict(), "k2_policy": policy, "stderr": stderr,
-                                                    "frequency_from_file": args.drive_frequency is None},
+                                                    "frequency_from_file": args.drive_frequency is None,
+                                                    "k1_uncertainty": k1_uncertainty},
                                                    flags.given_names(args, (*flags.NAMES,)), list(found), args.file))
     if args.plot:
         import numpy as np

@@ -651,13 +651,20 @@ def map_summary(summary: dict, path, shape, given: dict | None = None, settings=
     return document("map", "map", {"path": str(path), "store": str(summary["out"])}, lever, results, fit, notes)
 
 
-def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None) -> dict:
+def _probe(values: dict, given=(), from_file=(), k2_policy: str | None = None, k1_uncertainty: float = 0.0) -> dict:
     """The lever (and contact) a computation took: given, from a file, or the defaults; k2, when not given,
-    tied to k1 by ``k2_policy``."""
+    tied to k1 by ``k2_policy``; a given k1 with the standard uncertainty ``k1_uncertainty`` it was given with.
+
+    >>> _probe({"spring_constant": 2.0, "k1": 300.0}, ["spring_constant", "k1"], k1_uncertainty=20.0)["k1"]
+    {'value': 300.0, 'stderr': 20.0, 'unit': 'N/m', 'status': 'given'}
+    """
+    values = {k: v for k, v in values.items() if k != "k1_uncertainty"}
     out = lever_records({k: v for k, v in values.items() if isinstance(v, (int, float)) and not isinstance(v, bool)},
                         given=given, from_file=from_file)
     if k2_policy and "k2" in out and "k2" not in given:
         out["k2"] = quantity("k2", out["k2"]["value"], status="tied", why=k2_policy)
+    if k1_uncertainty and "k1" in out:
+        out["k1"]["stderr"] = float(k1_uncertainty)
     return out
 
 
@@ -702,7 +709,8 @@ def resonances(d: dict, given=()) -> dict:
         notes.append(f"k2 policy: {d['k2_policy']}")
     if d.get("medium_note"):
         notes.append(d["medium_note"])
-    return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy")), results, None, notes)
+    return document("resonances", "modes", {}, _probe(d, given, k2_policy=d.get("k2_policy"), k1_uncertainty=d.get("k1_uncertainty", 0.0)),
+                    results, None, notes)
 
 
 def _complex_record(name: str, z: dict | None, why: str, stderr: float | None = None) -> dict:
@@ -751,7 +759,8 @@ def spot(d: dict, given=(), from_file=(), path=None) -> dict:
         "d_eff_error_per_volt": _complex_record("d_eff_error_per_volt", d["d_eff_error_per_volt"],
                                                 d.get("d_eff_error_per_volt_undetermined", "undetermined"),
                                                 stderr.get("d_eff_error_per_volt"))}
-    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"))
+    lever = _probe({**d["lever"], "k1": d["k1"], "k2": d["k2"]}, given, from_file, d.get("k2_policy"),
+                   d.get("k1_uncertainty", 0.0))
     notes = [f"k2 policy: {d['k2_policy']}"] if d.get("k2_policy") else []
     notes += [f"not certified: {d['reason']}"] if not d["certified"] else []
     if "blind_spot" in d.get("stderr", {}) and "blind_spot" not in stderr:
