@@ -23,3 +23,17 @@ def all_verdicts(tmp_path_factory):
         if not path.exists():
             path.write_bytes(pickle.dumps(verify.compute(progress=False)))
         return pickle.loads(path.read_bytes())
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _one_process_per_test_worker():
+    """Under pytest-xdist every core already runs a test file: the discrepancy workflow's own worker
+    processes (one per core by default) would only share those cores.  Its report is the same with
+    any number (tests/test_workers.py runs both in a fresh interpreter)."""
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        yield
+        return
+    from pfmdyn.discrepancy import spectrum
+    cores, spectrum.cores = spectrum.cores, lambda: 1
+    yield
+    spectrum.cores = cores

@@ -101,12 +101,12 @@ def test_ctrl_c_ends_the_map_and_its_workers_and_the_map_resumes(tmp_path, monke
 def test_an_interrupt_while_the_workers_start_is_not_lost():
     """Ctrl-C in the instant the pool's workers are started (when SIGINT was ignored there, the map
     ran on and exited 0, in 2 of 5 fresh-clone CI runs): the parent still gets its KeyboardInterrupt."""
-    code = ("import os, signal, concurrent.futures as f; from pfmdyn.maps import driver\n"
+    code = ("import os, signal, concurrent.futures as f; from pfmdyn.fitting import workers\n"
             "start = f.ProcessPoolExecutor.__init__\n"
             "def interrupted(self, *a, **k):\n"
             "    os.kill(os.getpid(), signal.SIGINT); start(self, *a, **k)\n"
             "f.ProcessPoolExecutor.__init__ = interrupted\n"
-            "try:\n    driver._pool(1)\nexcept KeyboardInterrupt:\n    print('interrupted')\n")
+            "try:\n    workers.pool(1)\nexcept KeyboardInterrupt:\n    print('interrupted')\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert run.stdout == "interrupted\n" and not run.stderr, run.stdout + run.stderr
 

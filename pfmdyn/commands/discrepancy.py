@@ -31,6 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
               "resonance table")})
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="worker processes for a spectrum's candidate fits (default: all cores; the report is the "
+                             "same with any number)")
     sweeps = parser.add_argument_group("drive sweeps (.txt/.dat/.nid) and thermal tunes: the free lever in a fluid, "
                                        "driven at its base or by thermal noise")
     sweeps.add_argument("--reference", metavar="BEFORE",
@@ -80,7 +83,7 @@ def _analyse(data, args, assumed: dict):
 
     options = dict(vertical_only=args.vertical_only, progress=flags.progress_shown(args), time_budget_s=TIME_BUDGET_S)
     if isinstance(data, SpectrumData):
-        return analyse(data, **options)
+        return analyse(data, workers=args.workers, **options)
     spread = flags.assumed_tip_height_uncertainty(data.metadata.tip_height, assumed)
     return analyse_resonances(data, tip_height_uncertainty=spread, **options)
 
@@ -259,6 +262,8 @@ def run(args: argparse.Namespace) -> int:
 
     check_writable(args.json)
     check_writable(args.plot, figure=True)
+    if args.workers is not None and args.workers < 1:
+        raise UserError(f"--workers must be positive, got {args.workers}")
     if is_sweep(args.data) or args.reference:
         return _sweeps(args)
     if flags.given(args, ("added_mass_position",)):     # checked, then refused: it would be ignored

@@ -380,6 +380,10 @@ class Matches:
     def __init__(self):
         self._roots, self._springs = {}, {}
 
+    def caches(self) -> tuple[dict, dict]:
+        """The two tables (they only grow): a worker's additions are kept by the process that forked it."""
+        return self._roots, self._springs
+
     def roots(self, model, grid, f_max: float) -> list[np.ndarray]:
         """:func:`pfmdyn.discrepancy.undamped_modes.resonances_many` of the grid's rows (contact modes)."""
         levers = _characteristic_args_many(model, np.asarray(grid, float), True)

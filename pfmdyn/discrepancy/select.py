@@ -43,10 +43,9 @@ the misfit concentrates, and what was removed and why.
 """
 from __future__ import annotations
 
-import time
-
 from tqdm import tqdm
 
+from ..fitting.workers import cpu_seconds
 from .effects import public_name
 from .plausible import describe, implausible
 
@@ -65,10 +64,10 @@ stays above :data:`UNEXPLAINED`: a half, i.e. it explains at least as much as st
 TIME_BUDGET_S = 35.0
 """``pfmdyn discrepancy``'s budget: forward steps start only within this many seconds of the
 start (then prune and report), so that a hard file still ends in a report within about a
-minute.  The seconds are the process's CPU time, not the wall clock: on a loaded machine the
-same file gets the same report (a wall-clock budget stopped a large set-back spectrum after
-its first step when other jobs shared the cores).  Library calls have no budget unless given
-one."""
+minute.  The seconds are CPU time (the process's and its workers'), not the wall clock: on a
+loaded machine the same file gets the same report (a wall-clock budget stopped a large set-back
+spectrum after its first step when other jobs shared the cores).  Library calls have no budget
+unless given one."""
 
 CRITERION = (f"add the effect with the largest BIC gain among those with gain > {BIC_THRESHOLD:g} that shrink "
              f"the gap by >= {MIN_REDUCTION:.0%} (or to <= {NEAR_NOISE:g} x noise, by >= 5 %); while the final gap "
@@ -118,26 +117,25 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
     -> fit`` (the best fit with that effect added), ``without(fit, component) -> fit``
     (refit with one component removed), ``locate(fit) -> dict`` and optionally
-    ``polish(fit) -> fit`` (converge a trial that is accepted).
+    ``polish(fit) -> fit`` (converge a trial that is accepted) and ``each(method, calls) -> list``
+    (the method on each argument tuple, e.g. in worker processes; the same results as in turn).
     """
-    started = time.process_time()
+    started = cpu_seconds()
     problem = _Record(problem)
     current = problem.baseline()
     baseline, steps = current, []
     with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
         while True:
             where = problem.locate(current)
-            if time_budget_s is not None and time.process_time() - started > time_budget_s:
+            if time_budget_s is not None and cpu_seconds() - started > time_budget_s:
                 steps.append({"effect": None, "located": where, "candidates": [],
                               "decision": f"stop: time budget of {time_budget_s:g} s used"})
                 break
             names = problem.candidates(current)
             if not names:
                 break
-            trials = {}
-            for name in names:
-                trials[name] = problem.trial(current, name)
-                bar.update()
+            trials = dict(zip(names, problem.each("trial", [(current, name) for name in names])))
+            bar.update(len(names))
             table = [_row(n, current, t) for n, t in trials.items()]
             good = [n for n in names if material(current, trials[n])]
             if good:
@@ -262,13 +260,25 @@ class _Record:
             return attr
 
         def recorded(*args):
-            out = attr(*args)
-            for fit in out if isinstance(out, list) else [out]:
-                key = frozenset(fit.model.effects)
-                if key not in self.best or fit.gap < self.best[key].gap:
-                    self.best[key] = fit
-            return out
+            return self._keep(attr(*args))
         return recorded
+
+    def each(self, method: str, calls) -> list:
+        """The problem's ``method`` on each of ``calls``, by its ``each`` when it has one (worker processes),
+        recorded in order."""
+        calls = list(calls)
+        run = getattr(self.problem, "each", None)
+        outs = run(method, calls) if run else [getattr(self.problem, method)(*args) for args in calls]
+        for out in outs:
+            self._keep(out)
+        return outs
+
+    def _keep(self, out):
+        for fit in out if isinstance(out, list) else [out]:
+            key = frozenset(fit.model.effects)
+            if key not in self.best or fit.gap < self.best[key].gap:
+                self.best[key] = fit
+        return out
 
 
 def _drop_implausible(problem, current, steps):
@@ -307,7 +317,8 @@ def _prune(problem, current, steps):
                       f"{', '.join(best.model.effects)} (BIC lower by {current.bic - best.bic:.1f})"})
         current = best
     while len(current.model.effects) > 0:
-        trials = {c: problem.without(current, c) for c in current.model.effects}
+        effects = current.model.effects
+        trials = dict(zip(effects, problem.each("without", [(current, c) for c in effects])))
         spare = [c for c, t in trials.items() if t is not None and not material(t, current)]
         if not spare:
             return current
@@ -333,13 +344,10 @@ def _best_pair(problem, current, trials, bar):
     alone = getattr(problem, "alone", ())
     ranked = sorted((n for n in trials if not refusal(trials[n]) and n not in alone),
                     key=lambda n: current.bic - trials[n].bic, reverse=True)[:3]
+    pairs = [(a, b) for i, a in enumerate(ranked) for b in ranked[i + 1:] if b in problem.candidates(trials[a])]
     found = None
-    for i, a in enumerate(ranked):
-        for b in ranked[i + 1:]:
-            if b not in problem.candidates(trials[a]):
-                continue
-            fit = problem.trial(trials[a], b)
-            bar.update()
-            if material(current, fit) and (found is None or fit.bic < found[1].bic):
-                found = ((a, b), fit)
+    for pair, fit in zip(pairs, problem.each("trial", [(trials[a], b) for a, b in pairs])):
+        bar.update()
+        if material(current, fit) and (found is None or fit.bic < found[1].bic):
+            found = (pair, fit)
     return found

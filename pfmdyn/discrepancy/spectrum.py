@@ -19,11 +19,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from functools import partial
+from itertools import islice
 
 import numpy as np
 
 from ..fitting.noise import misfit_band, noise_sigma
 from ..fitting.projection import bias_nodes, project
+from ..fitting.workers import cores, forked_calls
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
@@ -113,8 +116,8 @@ class SpectrumProblem:
     with a set-back it absorbed such a misfit (band-limited air damping then also took a tilt
     and a tip mass, five effects where one was hidden)."""
 
-    def __init__(self, data: SpectrumData, vertical_only: bool = False):
-        self.data, self.vertical_only = data, vertical_only
+    def __init__(self, data: SpectrumData, vertical_only: bool = False, workers: int = 1):
+        self.data, self.vertical_only, self.workers = data, vertical_only, workers
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             # Noise-free data: a floor far below the signal keeps the gap finite.
@@ -133,6 +136,20 @@ class SpectrumProblem:
         self.matches = Matches()
         self._nodes = bias_nodes(data.frequency_hz, data.bias_v, data.response)   # the rows the costs fold
         self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
+
+    def each(self, method: str, calls) -> list:
+        """``method`` of this problem on each of ``calls`` (argument tuples), in order, in up to
+        :attr:`workers` worker processes (:func:`~pfmdyn.fitting.workers.forked_calls`): independent fits,
+        each computing what it would here.  What they add to the start grids' misfits and the peak
+        matches is kept here, as a call here would keep it (the next steps find the same numbers)."""
+        found = forked_calls(partial(_caching, self, method), calls, self.workers)
+        for _, added in found:
+            for cache, items in zip(self._caches(), added):
+                cache.update(items)
+        return [out for out, _ in found]
+
+    def _caches(self) -> tuple[dict, ...]:
+        return (self._costs, *self.matches.caches())
 
     # -- starts --------------------------------------------------------------------------
     def resonance_starts(self, model: Model, extra: list[np.ndarray], count: int = 2) -> list[np.ndarray]:
@@ -352,31 +369,27 @@ class SpectrumProblem:
             keep = [i for i, p in enumerate(current.model.parameters) if p.name != "k2"]
         effects = list(current.model.effects)
         effects.remove(component)
-        model = Model(current.model.meta, tuple(effects), current.model.vertical_only)
-        return fit(model, self.data, [current.internal[keep]], self.sigma, max_nfev=100)
+        return self.refit(Model(current.model.meta, tuple(effects), current.model.vertical_only), [current.internal[keep]])
 
     def alternatives(self, current: FitResult) -> list[FitResult]:
         """The final model with its damping mechanism(s) replaced by each single other one."""
-        out = self._moved_alternatives(current) if current.gap > select.NEAR_NOISE else []
+        refits = self._moved_alternatives(current) if current.gap > select.NEAR_NOISE else []
         present = [c for c in current.model.effects if c.startswith("damping_")]
-        if not present:
-            return out
         others = [c for c in current.model.effects if c not in present]
         keep = [i for i, p in enumerate(current.model.parameters)
                 if not any(p in EFFECTS[c].parameters for c in present)]
         seeds = self.damping_seeds()
         for mech, component in DAMPING.items():
-            if present == [component]:
+            if not present or present == [component]:
                 continue
             model = Model(current.model.meta, tuple(others) + (component,), current.model.vertical_only)
-            out.append(fit(model, self.data, [np.append(current.internal[keep], seeds[mech])], self.sigma,
-                           max_nfev=100))
-        return out
+            refits.append((model, [np.append(current.internal[keep], seeds[mech])]))
+        return self.each("refit", refits)
 
-    def _moved_alternatives(self, current: FitResult) -> list[FitResult]:
+    def _moved_alternatives(self, current: FitResult) -> list[tuple[Model, list[np.ndarray]]]:
         """When the gap stays far above the noise: each effect that moves resonances swapped
         for another one (a set-back and a tip mass shift the same two peaks alike, and the
-        greedy path may have taken the wrong one), from peak-matched starts."""
+        greedy path may have taken the wrong one), from peak-matched starts (model and starts)."""
         moving = ("tip_mass", "tip_setback", "tilt")
         out = []
         for old in [e for e in current.model.effects if e in moving]:
@@ -392,8 +405,12 @@ class SpectrumProblem:
                     extra.append(np.array(row, float))
                 starts = self.resonance_starts(model, extra, count=2)
                 if starts:
-                    out.append(fit(model, self.data, starts, self.sigma, max_nfev=100))
+                    out.append((model, starts))
         return out
+
+    def refit(self, model: Model, starts: list[np.ndarray]) -> FitResult:
+        """``model``'s fit from ``starts`` with a refit's budget (100 evaluations): the backward pass's."""
+        return fit(model, self.data, starts, self.sigma, max_nfev=100)
 
     def polish(self, trial: FitResult) -> FitResult:
         """Converge an accepted trial fully (trials stop early: they only rank candidates)."""
@@ -412,18 +429,28 @@ class SpectrumProblem:
 
 
 def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = False,
-            time_budget_s: float | None = None) -> DiscrepancyReport:
+            time_budget_s: float | None = None, workers: int | None = None) -> DiscrepancyReport:
     """Run the discrepancy loop on a spectrum; return its report (:class:`~pfmdyn.discrepancy.report.DiscrepancyReport`).
+
+    A step's candidate fits, and the refits of the backward pass, run in ``workers`` processes (default
+    one per core, :func:`~pfmdyn.fitting.workers.cores`); the report is the same with any number.
 
     Examples
     --------
     See ``tests/test_discrepancy.py`` (finite-element data with hidden effects).
     """
-    problem = SpectrumProblem(data, vertical_only)
+    problem = SpectrumProblem(data, vertical_only, workers or cores())
     result = select.run(problem, progress, time_budget_s)
     return report(result, problem.data.frequency_hz, list(zip(*problem.widths)),
                   gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
                   "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)
+
+
+def _caching(problem: SpectrumProblem, method: str, *args):
+    """``problem``'s ``method`` on ``args``, and what the call added to the problem's caches (dicts that only grow)."""
+    sizes = [len(cache) for cache in problem._caches()]
+    out = getattr(problem, method)(*args)
+    return out, [list(islice(cache.items(), n, None)) for cache, n in zip(problem._caches(), sizes)]
 
 
 def _lowest_valleys(values, count: int) -> list[int]:

@@ -17,14 +17,12 @@ from __future__ import annotations
 
 import math
 import os
-import signal
-import sys
-import threading
 import time
 
 import numpy as np
 
 from ..errors import UserError
+from ..fitting.workers import exit_with_parent, pool as _pool
 from .fit import fit_block
 from .outputs import quantities
 from .spec import MECHANISMS, model_name
@@ -40,43 +38,6 @@ __all__ = ["MapInput", "check_scheduler", "earlier_run", "exit_with_parent", "op
 def _blocks(shape, block):
     ny, nx = shape
     return [(by, bx) for by in range(math.ceil(ny / block)) for bx in range(math.ceil(nx / block))]
-
-
-def _worker_start(parent: int):
-    """Worker initialiser: exit with the process that started the pool, and one BLAS thread per
-    process (the processes are the parallelism)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)     # Ctrl-C is the parent's (:func:`_pool`)
-    exit_with_parent(parent)
-    from threadpoolctl import threadpool_limits
-    threadpool_limits(1)
-
-
-def exit_with_parent(parent: int, poll_s: float = 0.5) -> None:
-    """Make this process exit when ``parent`` (its parent's pid) dies, whatever the signal.
-
-    A parent killed by SIGKILL (an out-of-memory killer, a batch scheduler) runs no clean-up,
-    and its pool's workers would live on, reparented, holding their memory.  On Linux the
-    kernel sends the worker SIGKILL when its parent dies (``prctl(PR_SET_PDEATHSIG)``); a
-    daemon thread polling the parent's pid does the same elsewhere and covers a parent that
-    died before the ``prctl`` call.
-
-    In a child (here a separate interpreter, which goes on while its parent lives):
-
-    >>> import subprocess, sys
-    >>> code = "import os; from pfmdyn.maps.driver import exit_with_parent as e; e(os.getppid()); print('on')"
-    >>> subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip()
-    'on'
-    """
-    if sys.platform.startswith("linux"):
-        import ctypes
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)   # 1: PR_SET_PDEATHSIG
-
-    def watch():
-        while os.getppid() == parent:
-            time.sleep(poll_s)
-        os._exit(1)   # no clean-up to run: a half-written block is redone on the next run
-
-    threading.Thread(target=watch, name="pfmdyn-parent-watch", daemon=True).start()
 
 
 def _process(source: MapInput, out: str, by: int, bx: int, block: int, options: dict) -> int:
@@ -278,38 +239,6 @@ def _statistic(values, how=np.nanmedian) -> float:
     (``explained`` 0) pixels of finished blocks; NaN before any block is done."""
     values = np.asarray(values)
     return float(how(values)) if np.isfinite(values).any() else float("nan")
-
-
-def _pool(workers: int):
-    """A pool of worker processes, started now (before any progress-bar thread exists).
-
-    ``fork`` while this process runs no other thread (workers start in milliseconds and share
-    the imported modules; with other threads running a fork could copy a held lock), else
-    ``spawn`` as Dask does (then a calling script needs the usual ``if __name__ == "__main__":``).
-    """
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-    # tqdm's monitor thread (left by an earlier bar) only sleeps; workers never touch its lock
-    others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.name != "tqdm_monitor"]
-    method = "fork" if not others and "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    # Ctrl-C is the parent's (one line; the workers exit with it), and no worker prints a traceback for it.
-    # Forked workers inherit a handler that only takes note until their initialiser ignores SIGINT; the
-    # parent raises the noted interrupt once its pool exists (ignoring SIGINT here lost it: the map ran on
-    # to exit 0).  Spawned workers must start ignoring it (a disposition that survives exec, where a
-    # handler does not) since they import pfmdyn before their initialiser runs.
-    noted = []
-    previous = signal.signal(signal.SIGINT, (lambda *_: noted.append(1)) if method == "fork" else signal.SIG_IGN)
-    try:
-        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_worker_start,
-                                   initargs=(os.getpid(),))
-        started = [pool.submit(int) for _ in range(workers)]      # spawn starts one worker per waiting task
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    if noted:
-        raise KeyboardInterrupt
-    for worker in started:
-        worker.result()
-    return pool
 
 
 def check_scheduler(scheduler: str | None) -> None:

@@ -1,0 +1,80 @@
+"""Worker processes (:mod:`pfmdyn.fitting.workers`): calls run in forked workers, in order, and the
+discrepancy workflow's report does not depend on how many there are."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from pfmdyn.fitting.workers import forked_calls
+
+TESTS = Path(__file__).resolve().parent
+
+
+def _clean(code: str) -> str:
+    """``code``'s output in a fresh interpreter (no thread of pytest's: a fork is to be had there)."""
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                         cwd=TESTS, env={**os.environ, "PYTHONPATH": str(TESTS)})
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+def test_calls_run_in_workers_in_order_and_raise_here():
+    out = json.loads(_clean(
+        "import json, os\n"
+        "from pfmdyn.fitting.workers import forked_calls\n"
+        "def nested(i):\n"
+        "    return os.getpid(), forked_calls(lambda: os.getpid(), [()] * 3, 2)\n"
+        "done = forked_calls(lambda i: (i, os.getpid()), [(i,) for i in range(7)], 2)\n"
+        "inner = forked_calls(nested, [(0,), (1,)], 2)\n"
+        "try:\n"
+        "    forked_calls(int, [('1',), ('x',)], 2)\n"
+        "    raised = None\n"
+        "except ValueError as exc:\n"
+        "    raised = str(exc)\n"
+        "print(json.dumps({'me': os.getpid(), 'done': done, 'inner': inner, 'raised': raised}))\n"))
+    assert [i for i, _ in out["done"]] == list(range(7))
+    assert out["me"] not in {pid for _, pid in out["done"]}
+    # a worker asked for workers runs its calls itself
+    assert all(pids == [pid] * 3 for pid, pids in out["inner"])
+    assert "invalid literal" in out["raised"]
+
+
+def test_off_the_main_thread_calls_run_here():
+    found = []
+    thread = threading.Thread(target=lambda: found.extend(forked_calls(os.getpid, [()] * 3, 2)))
+    thread.start()
+    thread.join()
+    assert found == [os.getpid()] * 3
+
+
+@pytest.mark.parametrize("seed", [2])
+def test_workers_do_not_change_the_discrepancy_report(seed):
+    """One spectrum (finite-element lever, viscous damping, shuffled rows) analysed in turn and in two
+    workers: the same report to the bit, and the workers did run."""
+    out = _clean(
+        "import json, os, tempfile\n"
+        "from pathlib import Path\n"
+        "import numpy as np\n"
+        "from fe_beam import FEBeam, spectrum\n"
+        "from pfmdyn.io.tables import read\n"
+        "from pfmdyn.discrepancy.spectrum import analyse\n"
+        "beam = FEBeam(2.4, 223e-6, 63.2e3, 1e-5, k1=120.0, k2=100.0, n_elements=150, viscous_hz=1500.0)\n"
+        "path = Path(tempfile.mkdtemp()) / 's.csv'\n"
+        f"path.write_text(spectrum(beam, np.linspace(150e3, 1300e3, 120), (-1.0, 0.0, 2.0), seed={seed}, "
+        "order='shuffled'))\n"
+        "data = read(path)\n"
+        "reports = []\n"
+        "for workers in (1, 2):\n"
+        "    before = os.times().children_user\n"
+        "    reports.append(analyse(data, workers=workers).to_dict())\n"
+        "    print(workers, os.times().children_user - before)\n"
+        "print(json.dumps(reports[0], default=str) == json.dumps(reports[1], default=str), reports[0]['missing_effects'])\n")
+    serial, forked, same = out.strip().splitlines()
+    assert float(serial.split()[1]) == 0.0 and float(forked.split()[1]) > 0.5, out
+    assert same == "True ['damping']", out
