@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from pfmdyn.fitting.workers import forked_calls
+from pfmdyn.fitting.workers import Forked
 
 TESTS = Path(__file__).resolve().parent
 
@@ -27,27 +27,44 @@ def _clean(code: str) -> str:
 def test_calls_run_in_workers_in_order_and_raise_here():
     out = json.loads(_clean(
         "import json, os\n"
-        "from pfmdyn.fitting.workers import forked_calls\n"
-        "def nested(i):\n"
-        "    return os.getpid(), forked_calls(lambda: os.getpid(), [()] * 3, 2)\n"
-        "done = forked_calls(lambda i: (i, os.getpid()), [(i,) for i in range(7)], 2)\n"
-        "inner = forked_calls(nested, [(0,), (1,)], 2)\n"
-        "try:\n"
-        "    forked_calls(int, [('1',), ('x',)], 2)\n"
-        "    raised = None\n"
-        "except ValueError as exc:\n"
-        "    raised = str(exc)\n"
-        "print(json.dumps({'me': os.getpid(), 'done': done, 'inner': inner, 'raised': raised}))\n"))
-    assert [i for i, _ in out["done"]] == list(range(7))
-    assert out["me"] not in {pid for _, pid in out["done"]}
+        "from pfmdyn.fitting.workers import Forked\n"
+        "def where(state, i):\n"
+        "    state.append(i)\n"            # a worker's own copy of the state
+        "    return i, os.getpid(), len(state)\n"
+        "def nested(state, i):\n"
+        "    with Forked(2, state) as inner:\n"
+        "        return os.getpid(), inner.map(lambda s: os.getpid(), [()] * 3)\n"
+        "def fails(state, text):\n"
+        "    return int(text)\n"
+        "state = []\n"
+        "with Forked(2, state) as forked:\n"
+        "    done = forked.map(where, [(i,) for i in range(7)]) + forked.map(where, [(i,) for i in range(7, 9)])\n"
+        "    inner = forked.map(nested, [(0,), (1,)])\n"
+        "    try:\n"
+        "        forked.map(fails, [('1',), ('x',)])\n"
+        "        raised = None\n"
+        "    except ValueError as exc:\n"
+        "        raised = str(exc)\n"
+        "    seconds = forked.seconds\n"
+        "print(json.dumps({'me': os.getpid(), 'done': done, 'inner': inner, 'raised': raised, 'state': state,\n"
+        "                  'seconds': seconds}))\n"))
+    assert [i for i, _, _ in out["done"]] == list(range(9))
+    workers = {pid for _, pid, _ in out["done"]}
+    assert out["me"] not in workers and len(workers) <= 2
+    # each worker keeps its state between calls; this process's is untouched
+    assert out["state"] == [] and sum(1 for _, _, n in out["done"] if n == 1) == len(workers)
     # a worker asked for workers runs its calls itself
     assert all(pids == [pid] * 3 for pid, pids in out["inner"])
-    assert "invalid literal" in out["raised"]
+    assert "invalid literal" in out["raised"] and out["seconds"] >= 0.0
 
 
 def test_off_the_main_thread_calls_run_here():
     found = []
-    thread = threading.Thread(target=lambda: found.extend(forked_calls(os.getpid, [()] * 3, 2)))
+
+    def run():
+        with Forked(2, None) as forked:
+            found.extend(forked.map(lambda state: os.getpid(), [()] * 3))
+    thread = threading.Thread(target=run)
     thread.start()
     thread.join()
     assert found == [os.getpid()] * 3

@@ -117,8 +117,9 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
     ``problem`` provides ``baseline()``, ``candidates(fit) -> names``, ``trial(fit, name)
     -> fit`` (the best fit with that effect added), ``without(fit, component) -> fit``
     (refit with one component removed), ``locate(fit) -> dict`` and optionally
-    ``polish(fit) -> fit`` (converge a trial that is accepted) and ``each(method, calls) -> list``
-    (the method on each argument tuple, e.g. in worker processes; the same results as in turn).
+    ``polish(fit) -> fit`` (converge a trial that is accepted), ``each(method, calls) -> list``
+    (the method on each argument tuple, e.g. in worker processes; the same results as in turn) and
+    ``worker_seconds`` (the CPU seconds of those workers, which the budget counts).
     """
     started = cpu_seconds()
     problem = _Record(problem)
@@ -127,7 +128,8 @@ def run(problem, progress: bool = False, time_budget_s: float | None = None) -> 
     with tqdm(desc="discrepancy", unit="fit", disable=not progress) as bar:
         while True:
             where = problem.locate(current)
-            if time_budget_s is not None and cpu_seconds() - started > time_budget_s:
+            spent = cpu_seconds() - started + getattr(problem, "worker_seconds", 0.0)
+            if time_budget_s is not None and spent > time_budget_s:
                 steps.append({"effect": None, "located": where, "candidates": [],
                               "decision": f"stop: time budget of {time_budget_s:g} s used"})
                 break

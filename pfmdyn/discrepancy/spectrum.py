@@ -19,14 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from functools import partial
 from itertools import islice
 
 import numpy as np
 
 from ..fitting.noise import misfit_band, noise_sigma
 from ..fitting.projection import bias_nodes, project
-from ..fitting.workers import cores, forked_calls
+from ..fitting.workers import Forked, cores
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
@@ -117,7 +116,8 @@ class SpectrumProblem:
     and a tip mass, five effects where one was hidden)."""
 
     def __init__(self, data: SpectrumData, vertical_only: bool = False, workers: int = 1):
-        self.data, self.vertical_only, self.workers = data, vertical_only, workers
+        self.data, self.vertical_only = data, vertical_only
+        self.pool = Forked(workers, self)       # forked at the first step's candidates: they see its caches
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             # Noise-free data: a floor far below the signal keeps the gap finite.
@@ -138,15 +138,20 @@ class SpectrumProblem:
         self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
 
     def each(self, method: str, calls) -> list:
-        """``method`` of this problem on each of ``calls`` (argument tuples), in order, in up to
-        :attr:`workers` worker processes (:func:`~pfmdyn.fitting.workers.forked_calls`): independent fits,
-        each computing what it would here.  What they add to the start grids' misfits and the peak
-        matches is kept here, as a call here would keep it (the next steps find the same numbers)."""
-        found = forked_calls(partial(_caching, self, method), calls, self.workers)
+        """``method`` of this problem on each of ``calls`` (argument tuples), in order, in the worker
+        processes of :attr:`pool` (:class:`~pfmdyn.fitting.workers.Forked`, ``workers`` of them): independent
+        fits, each computing what it would here.  What they add to the start grids' misfits and the peak
+        matches is kept here too, as a call here would keep it."""
+        found = self.pool.map(_caching, [(method, *args) for args in calls])
         for _, added in found:
             for cache, items in zip(self._caches(), added):
                 cache.update(items)
         return [out for out, _ in found]
+
+    @property
+    def worker_seconds(self) -> float:
+        """CPU seconds the worker processes spent on this problem's calls."""
+        return self.pool.seconds
 
     def _caches(self) -> tuple[dict, ...]:
         return (self._costs, *self.matches.caches())
@@ -440,7 +445,8 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
     See ``tests/test_discrepancy.py`` (finite-element data with hidden effects).
     """
     problem = SpectrumProblem(data, vertical_only, workers or cores())
-    result = select.run(problem, progress, time_budget_s)
+    with problem.pool:
+        result = select.run(problem, progress, time_budget_s)
     return report(result, problem.data.frequency_hz, list(zip(*problem.widths)),
                   gap_definition="sqrt(mean |residual|^2) / sigma, sigma = RMS complex noise "
                   "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)

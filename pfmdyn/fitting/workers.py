@@ -3,9 +3,9 @@
 A pool's workers are forked from this process when it runs no other thread (they start in
 milliseconds and see its state as it is), each with one BLAS thread (the processes are the
 parallelism); they exit with the process that started them, and Ctrl-C is that process's.
-:func:`forked_calls` runs independent calls of one function in such workers and returns what
-each call returned, in order: nothing but the results is pickled; :func:`cpu_seconds` counts the
-CPU time of this process and of the workers it has seen end.
+:class:`Forked` keeps such workers for a series of independent calls, each returning what it would
+here, in order; :func:`cpu_seconds` counts the CPU time of this process and of the workers it has
+seen end.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import sys
 import threading
 import time
 
-__all__ = ["cores", "cpu_seconds", "exit_with_parent", "forked_calls", "pool"]
+__all__ = ["Forked", "cores", "cpu_seconds", "exit_with_parent", "pool"]
 
 
 def cores() -> int:
@@ -30,8 +30,8 @@ def cores() -> int:
         return os.cpu_count() or 1
 
 
-_CALLS = None
-"""(function, calls) of the running :func:`forked_calls`: its workers inherit it, nothing is pickled."""
+_STATE = None
+"""The ``state`` of the :class:`Forked` whose workers are being forked: they inherit it, nothing is pickled."""
 _IN_WORKER = False
 """True in a worker: a call it runs that asks for workers itself runs its calls in turn."""
 
@@ -110,42 +110,64 @@ def pool(workers: int, fork_only: bool = False):
     return executor
 
 
-def forked_calls(function, calls, workers: int) -> list:
-    """``[function(*args) for args in calls]``, in up to ``workers`` processes forked from this one.
+class Forked:
+    """Up to ``workers`` worker processes forked from this one when first asked (they inherit ``state``,
+    e.g. a problem with its data and caches, as it is then), kept for a series of :meth:`map` calls
+    until :meth:`close`.
 
-    The workers inherit this process as it is, ``function`` and its arguments included: only
-    the results are pickled, and each call computes what it would here.  The calls run in turn
-    here with one worker or one call, in a worker, off the main thread, or where ``fork`` is not to
-    be had (another thread running, or no ``fork`` on the platform).  A call's exception is raised
-    here.  The workers have ended when it returns: their CPU time is in :func:`cpu_seconds`.
+    Nothing but a call's arguments and result is pickled, and each call computes what it would here.
+    Without workers (one asked, or ``fork`` not to be had: another thread running, no ``fork`` on the
+    platform, off the main thread, in a worker) the calls run here in turn.  :attr:`seconds`: the
+    CPU seconds the workers spent on calls (:func:`cpu_seconds` counts the workers once they end).
 
-    >>> forked_calls(pow, [(2, 3), (3, 2), (10, 0)], 2)
-    [8, 9, 1]
+    >>> with Forked(2, 10) as forked:
+    ...     forked.map(pow, [(3,), (2,), (0,)])       # 10 ** 3, 10 ** 2, 10 ** 0
+    [1000, 100, 1]
     """
-    global _CALLS
-    calls = list(calls)
-    workers = min(workers, len(calls))
-    if workers < 2 or _IN_WORKER or threading.current_thread() is not threading.main_thread():
-        return [function(*args) for args in calls]
-    _CALLS = (function, calls)
-    try:
-        executor = pool(workers, fork_only=True)
-        if executor is None:
-            return [function(*args) for args in calls]
-        try:
-            done = list(executor.map(_call, range(len(calls))))
-        except BaseException:
-            executor.shutdown(wait=False, cancel_futures=True)
-            raise
-    finally:
-        _CALLS = None
-    executor.shutdown()
-    return done
+
+    def __init__(self, workers: int, state):
+        self.workers, self.state, self.seconds = workers, state, 0.0
+        self._executor, self._asked = None, False
+
+    def map(self, function, calls) -> list:
+        """``[function(state, *args) for args in calls]`` (``function`` a module's, to be named in a
+        worker), in the workers when there are any; a call's exception is raised here."""
+        global _STATE
+        calls = list(calls)
+        if not self._asked and len(calls) > 1:
+            self._asked = True
+            if self.workers > 1 and not _IN_WORKER and threading.current_thread() is threading.main_thread():
+                import gc
+                _STATE = self.state
+                gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
+                try:
+                    self._executor = pool(self.workers, fork_only=True)
+                finally:
+                    _STATE = None
+                    gc.unfreeze()
+        if self._executor is None or len(calls) < 2:
+            return [function(self.state, *args) for args in calls]
+        done = list(self._executor.map(_call, [function] * len(calls), calls))
+        self.seconds += sum(seconds for _, seconds in done)
+        return [out for out, _ in done]
+
+    def close(self) -> None:
+        """End the workers (a worker's calls finish first)."""
+        if self._executor is not None:
+            self._executor.shutdown(cancel_futures=True)
+            self._executor = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
-def _call(i: int):
-    function, calls = _CALLS
-    return function(*calls[i])
+def _call(function, args):
+    started = time.process_time()
+    out = function(_STATE, *args)
+    return out, time.process_time() - started
 
 
 def cpu_seconds() -> float:
