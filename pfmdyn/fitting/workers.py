@@ -34,6 +34,9 @@ _STATE = None
 """The ``state`` of the :class:`Forked` whose workers are being forked: they inherit it, nothing is pickled."""
 _IN_WORKER = False
 """True in a worker: a call it runs that asks for workers itself runs its calls in turn."""
+_FORK_SAFE = sys.platform.startswith("linux")
+"""Whether a process that has used BLAS may fork workers that use it too: on macOS, Accelerate's
+threads do not survive a fork (a child's first BLAS call can hang), and Windows has no fork."""
 
 
 def _started(parent: int):
@@ -116,8 +119,8 @@ class Forked:
     until :meth:`close`.
 
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
-    Without workers (one asked, or ``fork`` not to be had: another thread running, no ``fork`` on the
-    platform, off the main thread, in a worker) the calls run here in turn.  :attr:`seconds`: the
+    Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
+    (:data:`_FORK_SAFE`), off the main thread, in a worker) the calls run here in turn.  :attr:`seconds`: the
     CPU seconds the workers spent on calls (:func:`cpu_seconds` counts the workers once they end).
 
     >>> with Forked(2, 10) as forked:
@@ -136,7 +139,7 @@ class Forked:
         calls = list(calls)
         if not self._asked and len(calls) > 1:
             self._asked = True
-            if self.workers > 1 and not _IN_WORKER and threading.current_thread() is threading.main_thread():
+            if self.workers > 1 and _FORK_SAFE and not _IN_WORKER and threading.current_thread() is threading.main_thread():
                 import gc
                 _STATE = self.state
                 gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
