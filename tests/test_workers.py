@@ -95,3 +95,26 @@ def test_workers_do_not_change_the_discrepancy_report(seed):
     serial, forked, same = out.strip().splitlines()
     assert float(serial.split()[1]) == 0.0 and float(forked.split()[1]) > 0.5, out
     assert same == "True ['damping']", out
+
+
+def test_the_time_budget_counts_the_workers_seconds():
+    """A problem whose workers have spent the budget stops before its first step (this process alone
+    has spent next to nothing)."""
+    from types import SimpleNamespace as S
+
+    from pfmdyn.discrepancy import select
+
+    class Problem:
+        worker_seconds = 100.0
+
+        def baseline(self):
+            return S(gap=40.0, bic=0.0, model=S(effects=(), parameters=()), internal=[], extra={})
+
+        def locate(self, fit):
+            return {}
+
+        def candidates(self, fit):
+            raise AssertionError("a step started with the budget spent")
+
+    out = select.run(Problem(), time_budget_s=1.0)
+    assert out["steps"][0]["decision"] == "stop: time budget of 1 s used"
