@@ -26,7 +26,7 @@ def _clean(code: str) -> str:
 
 def test_calls_run_in_workers_in_order_and_raise_here():
     out = json.loads(_clean(
-        "import json, os\n"
+        "import json, multiprocessing, os\n"
         "from pfmdyn.fitting.workers import Forked\n"
         "def where(state, i):\n"
         "    state.append(i)\n"            # a worker's own copy of the state
@@ -46,8 +46,11 @@ def test_calls_run_in_workers_in_order_and_raise_here():
         "    except ValueError as exc:\n"
         "        raised = str(exc)\n"
         "    seconds = forked.seconds\n"
+        "with Forked(8, state) as many:\n"       # as many workers as the first calls, not eight
+        "    many.map(where, [(0,), (1,)]) + many.map(where, [(i,) for i in range(6)])\n"
+        "    few = len(multiprocessing.active_children())\n"
         "print(json.dumps({'me': os.getpid(), 'done': done, 'inner': inner, 'raised': raised, 'state': state,\n"
-        "                  'seconds': seconds}))\n"))
+        "                  'seconds': seconds, 'few': few}))\n"))
     assert [i for i, _, _ in out["done"]] == list(range(9))
     workers = {pid for _, pid, _ in out["done"]}
     assert out["me"] not in workers and len(workers) <= 2
@@ -56,6 +59,7 @@ def test_calls_run_in_workers_in_order_and_raise_here():
     # a worker asked for workers runs its calls itself
     assert all(pids == [pid] * 3 for pid, pids in out["inner"])
     assert "invalid literal" in out["raised"] and out["seconds"] >= 0.0
+    assert out["few"] == 2
 
 
 def test_off_the_main_thread_calls_run_here():

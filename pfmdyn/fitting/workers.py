@@ -114,9 +114,9 @@ def pool(workers: int, fork_only: bool = False):
 
 
 class Forked:
-    """Up to ``workers`` worker processes forked from this one when first asked (they inherit ``state``,
-    e.g. a problem with its data and caches, as it is then), kept for a series of :meth:`map` calls
-    until :meth:`close`.
+    """Up to ``workers`` worker processes forked from this one when first asked (as many as the first
+    calls, at most; they inherit ``state``, e.g. a problem with its data and caches, as it is then),
+    kept for a series of :meth:`map` calls until :meth:`close`.
 
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
     Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
@@ -144,7 +144,8 @@ class Forked:
                 _STATE = self.state
                 gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
                 try:
-                    self._executor = pool(self.workers, fork_only=True)
+                    # no more than the first calls can use: a step's candidates, not every core of a large machine
+                    self._executor = pool(min(self.workers, len(calls)), fork_only=True)
                 finally:
                     _STATE = None
                     gc.unfreeze()
