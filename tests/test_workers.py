@@ -122,3 +122,43 @@ def test_the_time_budget_counts_the_workers_seconds():
 
     out = select.run(Problem(), time_budget_s=1.0)
     assert out["steps"][0]["decision"] == "stop: time budget of 1 s used"
+
+
+def test_the_time_budget_leaves_out_compiling():
+    """A step that compiles a kernel, as a fresh install's first run does, goes on to the next step: the
+    seconds numba spends compiling are not the budget's (they stopped such a run after its baseline)."""
+    from types import SimpleNamespace as S
+
+    import numba
+    import numpy as np
+
+    from pfmdyn.discrepancy import select
+
+    numba.njit(lambda x: x + 1)(1)      # numba's own set-up, before the budget starts
+    fits = [S(gap=gap, bic=bic, model=S(effects=effects, parameters=()), internal=[], extra={}, parameters=dict)
+            for gap, bic, effects in ((40.0, 0.0, ()), (20.0, -100.0, ("background",)))]
+
+    class Problem:
+        steps = []
+
+        def baseline(self):
+            return fits[0]
+
+        def locate(self, fit):
+            return {}
+
+        def candidates(self, fit):
+            self.steps.append(fit)
+            return ["background"] if len(self.steps) == 1 else []
+
+        def trial(self, fit, name):
+            kernel = numba.njit(lambda a: np.linalg.solve(a @ a.T + np.eye(3), np.sin(a).sum(axis=1)))
+            kernel(np.ones((3, 3)))     # compiled now: a tenth of a second or more
+            return fits[1]
+
+        def without(self, fit, component):
+            return fits[0]
+
+    out = select.run(Problem(), time_budget_s=0.05)
+    assert len(Problem.steps) == 2 and out["steps"][0]["effect"] == "background"
+    assert all("time budget" not in step.get("decision", "") for step in out["steps"]), out["steps"]

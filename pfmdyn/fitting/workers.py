@@ -15,7 +15,7 @@ import sys
 import threading
 import time
 
-__all__ = ["Forked", "cores", "cpu_seconds", "exit_with_parent", "pool"]
+__all__ = ["Forked", "compiling_seconds", "cores", "count_compiling", "cpu_seconds", "exit_with_parent", "pool"]
 
 
 def cores() -> int:
@@ -121,7 +121,8 @@ class Forked:
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
     Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
     (:data:`_FORK_SAFE`), off the main thread, in a worker) the calls run here in turn.  :attr:`seconds`: the
-    CPU seconds the workers spent on calls (:func:`cpu_seconds` counts the workers once they end).
+    CPU seconds the workers spent on calls, less their compiling (:func:`cpu_seconds` counts the workers once
+    they end).
 
     >>> with Forked(2, 10) as forked:
     ...     forked.map(pow, [(3,), (2,), (0,)])       # 10 ** 3, 10 ** 2, 10 ** 0
@@ -169,16 +170,40 @@ class Forked:
 
 
 def _call(function, args):
-    started = time.process_time()
+    started = time.process_time() - compiling_seconds()
     out = function(_STATE, *args)
-    return out, time.process_time() - started
+    return out, time.process_time() - compiling_seconds() - started
+
+
+_COMPILING = None
+"""numba's timer of its compilations in this process (and in the workers forked from it), once counting."""
+
+
+def count_compiling() -> None:
+    """Count, from now on, the seconds numba spends compiling (:func:`compiling_seconds`); imports numba."""
+    global _COMPILING
+    if _COMPILING is None:
+        from numba.core import event
+        _COMPILING = event.TimingListener()
+        event.register("numba:compile", _COMPILING)
+
+
+def compiling_seconds() -> float:
+    """Seconds numba has spent compiling in this process since :func:`count_compiling` (0 before).
+
+    >>> count_compiling(); compiling_seconds() >= 0.0
+    True
+    """
+    return _COMPILING.duration if _COMPILING is not None and _COMPILING.done else 0.0
 
 
 def cpu_seconds() -> float:
-    """CPU seconds of this process and of the workers it has seen end (those of :func:`forked_calls`).
+    """CPU seconds of this process and of the workers it has seen end, less numba's compiling here
+    (:func:`compiling_seconds`): a budget of CPU seconds then gives a fresh install's first run, which
+    compiles the kernels, the report of the next.
 
     >>> cpu_seconds() > 0
     True
     """
     t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
+    return t.user + t.system + t.children_user + t.children_system - compiling_seconds()
