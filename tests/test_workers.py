@@ -101,6 +101,27 @@ def test_workers_do_not_change_the_discrepancy_report(seed):
     assert same == "True ['damping']", out
 
 
+@pytest.mark.parametrize("kind,seed,spot", [("band_spot", 0, 1.0)])
+def test_workers_do_not_change_a_drawn_levers_report(kind, seed, spot):
+    """A lever drawn over real ranges (a band-limited spectrum of the hidden-effect sweep, its spot
+    candidate fitted from many starts): the same report in turn and in two workers."""
+    out = _clean(
+        "import json, os, tempfile\n"
+        "from pathlib import Path\n"
+        "from fe_beam import acquisition_case\n"
+        "from pfmdyn.io.tables import read\n"
+        "from pfmdyn.discrepancy.spectrum import analyse\n"
+        f"text, _ = acquisition_case({seed}, {kind!r}, spot={spot!r})\n"
+        "path = Path(tempfile.mkdtemp()) / 's.csv'\n"
+        "path.write_text(text)\n"
+        "data = read(path)\n"
+        "before = os.times().children_user\n"
+        "one, two = (json.dumps(analyse(data, workers=w).to_dict(), default=str) for w in (1, 2))\n"
+        "print(one == two, os.times().children_user - before)\n")
+    same, worked = out.split()
+    assert same == "True" and float(worked) > 0.5, out
+
+
 def test_the_time_budget_counts_the_workers_seconds():
     """A problem whose workers have spent the budget stops before its first step (this process alone
     has spent next to nothing)."""
