@@ -11,7 +11,9 @@
 * :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS
   residual (1 = fitted to the noise).
 * :mod:`~pfmdyn.fitting.result`: a fit's result, JSON-ready fields (``to_dict()``) and a text
-  summary (``report()``).
+  summary (``report()``);
+* :mod:`~pfmdyn.fitting.workers`: worker processes for independent fits (the maps' blocks, a
+  spectrum's candidate effects) and the CPU seconds a budget counts.
 
 A compute layer below the engines: nothing here imports :mod:`pfmdyn.discrepancy` or
 :mod:`pfmdyn.maps`.
