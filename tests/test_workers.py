@@ -62,6 +62,28 @@ def test_calls_run_in_workers_in_order_and_raise_here():
     assert out["few"] == 2
 
 
+def test_what_a_map_shares_each_worker_takes_once_before_its_calls():
+    out = json.loads(_clean(
+        "import json, os, time\n"
+        "from pfmdyn.fitting.workers import Forked\n"
+        "def take(state, shared):\n"
+        "    state.append(shared)\n"
+        "def seen(state, i):\n"
+        "    time.sleep(0.05)\n"           # long enough for both workers to take calls
+        "    return os.getpid(), list(state)\n"
+        "state = []\n"
+        "with Forked(2, state, take) as forked:\n"
+        "    done = forked.map(seen, [(i,) for i in range(6)], shared='a') + forked.map(seen, [(i,) for i in range(6)], shared='b')\n"
+        "    here = forked.map(seen, [(0,)], shared='c')\n"        # one call runs here: nothing to share
+        "print(json.dumps({'done': done, 'here': here, 'state': state}))\n"))
+    first, second = out["done"][:6], out["done"][6:]
+    assert all(taken == ["a"] for _, taken in first)
+    # a worker took each map's share once, however many of its calls it ran
+    assert all(taken in (["a", "b"], ["b"]) for _, taken in second)
+    assert len({pid for pid, _ in first + second}) == 2
+    assert out["here"][0][1] == [] and out["state"] == []
+
+
 def test_off_the_main_thread_calls_run_here():
     found = []
 

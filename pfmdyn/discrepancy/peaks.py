@@ -17,6 +17,7 @@ of the spectrum, which the residues (mode shapes) decide.
 """
 from __future__ import annotations
 
+import hashlib
 import math
 
 import numpy as np
@@ -360,6 +361,25 @@ def _compiled_match(model, moving, peaks, band, f_max, unseen):
     return match
 
 
+class _RootSets(list):
+    """Resonance sets (arrays), pickled as one array and their lengths: hundreds of small arrays pickle
+    slowly, and a start grid's sets go to worker processes (:meth:`Matches.caches`).
+
+    >>> import pickle
+    >>> sets = pickle.loads(pickle.dumps(_RootSets([np.array([1.0, 2.0]), np.empty(0), np.array([3.0])])))
+    >>> type(sets).__name__, [r.tolist() for r in sets]
+    ('_RootSets', [[1.0, 2.0], [], [3.0]])
+    """
+
+    def __reduce__(self):
+        lengths = [len(r) for r in self]
+        return _unpacked_roots, (np.concatenate(self) if self else np.empty(0), lengths)
+
+
+def _unpacked_roots(values: np.ndarray, lengths: list[int]) -> _RootSets:
+    return _RootSets(np.split(values, np.cumsum(lengths)[:-1]) if lengths else [])
+
+
 class Matches:
     """What :func:`match_starts` found, kept for one analysis: a start grid's undamped resonances, and
     the springs matched to the peaks from a grid point, by what decides them (the characteristic's
@@ -387,9 +407,10 @@ class Matches:
     def roots(self, model, grid, f_max: float) -> list[np.ndarray]:
         """:func:`pfmdyn.discrepancy.undamped_modes.resonances_many` of the grid's rows (contact modes)."""
         levers = _characteristic_args_many(model, np.asarray(grid, float), True)
-        key = (levers.tobytes(), f_max)
+        # a digest of the grid's arguments (kilobytes each), not the arguments: the table goes to worker processes
+        key = (hashlib.blake2b(levers.tobytes(), digest_size=20).digest(), levers.shape, f_max)
         if key not in self._roots:
-            self._roots[key] = _resonances_of(model.meta, levers, f_max)
+            self._roots[key] = _RootSets(_resonances_of(model.meta, levers, f_max))
         return self._roots[key]
 
     def peak_fit(self, model, start, moving, peaks, band, lower, upper, max_nfev, unseen=False):

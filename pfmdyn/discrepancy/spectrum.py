@@ -117,7 +117,7 @@ class SpectrumProblem:
 
     def __init__(self, data: SpectrumData, vertical_only: bool = False, workers: int = 1):
         self.data, self.vertical_only = data, vertical_only
-        self.pool = Forked(workers, self)       # forked at the first step's candidates: they see its caches
+        self.pool = Forked(workers, self, _take)      # forked at the first step's candidates: they see its caches
         self._sent = None       # the caches' sizes when the workers were last sent what they lack
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
         if not (math.isfinite(self.sigma) and self.sigma > 0):
@@ -142,13 +142,13 @@ class SpectrumProblem:
         """``method`` of this problem on each of ``calls`` (argument tuples), in order, in the worker
         processes of :attr:`pool` (:class:`~pfmdyn.fitting.workers.Forked`, ``workers`` of them): independent
         fits, each computing what it would here.  The start grids' misfits and the peak matches found are
-        shared: a call returns what it added to the caches, kept here, and the next calls take what was
-        added here since the last ones (a worker would otherwise find again what another one found)."""
+        shared: a call returns what it added to the caches, kept here, and each worker takes what was added
+        here since the last calls, once (a worker would otherwise find again what another one found)."""
         caches = self._caches()
         sizes = [len(cache) for cache in caches]
         news = [list(islice(cache.items(), n, None)) for cache, n in zip(caches, self._sent or sizes)]
         self._sent = sizes
-        found = self.pool.map(_caching, [(news, method, *args) for args in calls])
+        found = self.pool.map(_caching, [(method, *args) for args in calls], shared=news)
         for _, added in found:
             for cache, items in zip(caches, added):
                 cache.update(items)
@@ -458,12 +458,15 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
                   "estimated from the data (pfmdyn.fitting.noise)", noise_sigma=problem.sigma)
 
 
-def _caching(problem: SpectrumProblem, news: list, method: str, *args):
-    """``problem``'s ``method`` on ``args`` after adding ``news`` to its caches (dicts that only grow), and
-    what the call added to them."""
-    caches = problem._caches()
-    for cache, items in zip(caches, news):
+def _take(problem: SpectrumProblem, news: list) -> None:
+    """Add ``news`` (items of each cache, :meth:`SpectrumProblem.each`) to ``problem``'s caches (dicts that only grow)."""
+    for cache, items in zip(problem._caches(), news):
         cache.update(items)
+
+
+def _caching(problem: SpectrumProblem, method: str, *args):
+    """``problem``'s ``method`` on ``args``, and what the call added to its caches."""
+    caches = problem._caches()
     sizes = [len(cache) for cache in caches]
     out = getattr(problem, method)(*args)
     return out, [list(islice(cache.items(), n, None)) for cache, n in zip(caches, sizes)]

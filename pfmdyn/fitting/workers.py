@@ -10,6 +10,7 @@ seen end.
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import sys
 import threading
@@ -32,6 +33,10 @@ def cores() -> int:
 
 _STATE = None
 """The ``state`` of the :class:`Forked` whose workers are being forked: they inherit it, nothing is pickled."""
+_RECEIVE = None
+"""Its ``receive``: how a worker takes what a :meth:`Forked.map` shares."""
+_TAKEN = None
+"""The token of what this worker last took of what a map shares (taken once per worker, not per call)."""
 _IN_WORKER = False
 """True in a worker: a call it runs that asks for workers itself runs its calls in turn."""
 _FORK_SAFE = sys.platform.startswith("linux")
@@ -116,7 +121,8 @@ def pool(workers: int, fork_only: bool = False):
 class Forked:
     """Up to ``workers`` worker processes forked from this one when first asked (as many as the first
     calls, at most; they inherit ``state``, e.g. a problem with its data and caches, as it is then),
-    kept for a series of :meth:`map` calls until :meth:`close`.
+    kept for a series of :meth:`map` calls until :meth:`close`; ``receive(state, shared)``: how a worker takes
+    what a map shares with every worker (e.g. what this process's caches gained).
 
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
     Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
@@ -129,30 +135,37 @@ class Forked:
     [1000, 100, 1]
     """
 
-    def __init__(self, workers: int, state):
-        self.workers, self.state, self.seconds = workers, state, 0.0
-        self._executor, self._asked = None, False
+    def __init__(self, workers: int, state, receive=None):
+        self.workers, self.state, self.receive, self.seconds = workers, state, receive, 0.0
+        self._executor, self._asked, self._shares = None, False, 0
 
-    def map(self, function, calls) -> list:
+    def map(self, function, calls, shared=None) -> list:
         """``[function(state, *args) for args in calls]`` (``function`` a module's, to be named in a
-        worker), in the workers when there are any; a call's exception is raised here."""
-        global _STATE
+        worker), in the workers when there are any; a call's exception is raised here.  ``shared``: what each
+        worker takes (``receive``) before its first call of this map: pickled once, however many calls,
+        and not needed here (the state is this process's)."""
+        global _STATE, _RECEIVE
         calls = list(calls)
         if not self._asked and len(calls) > 1:
             self._asked = True
             if self.workers > 1 and _FORK_SAFE and not _IN_WORKER and threading.current_thread() is threading.main_thread():
                 import gc
-                _STATE = self.state
+                _STATE, _RECEIVE = self.state, self.receive
                 gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
                 try:
                     # no more than the first calls can use: a step's candidates, not every core of a large machine
                     self._executor = pool(min(self.workers, len(calls)), fork_only=True)
                 finally:
-                    _STATE = None
+                    _STATE, _RECEIVE = None, None
                     gc.unfreeze()
         if self._executor is None or len(calls) < 2:
             return [function(self.state, *args) for args in calls]
-        done = list(self._executor.map(_call, [function] * len(calls), calls))
+        token, blob = None, None
+        if shared is not None:
+            self._shares += 1
+            token, blob = self._shares, pickle.dumps(shared, pickle.HIGHEST_PROTOCOL)
+        n = len(calls)
+        done = list(self._executor.map(_call, [function] * n, calls, [token] * n, [blob] * n))
         self.seconds += sum(seconds for _, seconds in done)
         return [out for out, _ in done]
 
@@ -169,8 +182,12 @@ class Forked:
         self.close()
 
 
-def _call(function, args):
+def _call(function, args, token, blob):
+    global _TAKEN
     started = time.process_time() - compiling_seconds()
+    if token is not None and token != _TAKEN:
+        _RECEIVE(_STATE, pickle.loads(blob))
+        _TAKEN = token
     out = function(_STATE, *args)
     return out, time.process_time() - compiling_seconds() - started
 
