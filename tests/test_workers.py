@@ -46,8 +46,8 @@ def test_calls_run_in_workers_in_order_and_raise_here():
         "    except ValueError as exc:\n"
         "        raised = str(exc)\n"
         "    seconds = forked.seconds\n"
-        "with Forked(8, state) as many:\n"       # as many workers as the first calls, not eight
-        "    many.map(where, [(0,), (1,)]) + many.map(where, [(i,) for i in range(6)])\n"
+        "with Forked(3, state) as three:\n"       # as many workers as asked, from the first calls on
+        "    three.map(where, [(0,), (1,)])\n"
         "    few = len(multiprocessing.active_children())\n"
         "print(json.dumps({'me': os.getpid(), 'done': done, 'inner': inner, 'raised': raised, 'state': state,\n"
         "                  'seconds': seconds, 'few': few}))\n"))
@@ -59,7 +59,7 @@ def test_calls_run_in_workers_in_order_and_raise_here():
     # a worker asked for workers runs its calls itself
     assert all(pids == [pid] * 3 for pid, pids in out["inner"])
     assert "invalid literal" in out["raised"] and out["seconds"] >= 0.0
-    assert out["few"] == 2
+    assert out["few"] == 3
 
 
 def test_what_a_map_shares_each_worker_takes_once_before_its_calls():

@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vertical-only", action="store_true",
                         help="start from the model without k2 (adds lateral_stiffness to the library)")
     parser.add_argument("--workers", type=int, default=None,
-                        help="worker processes for a spectrum's candidate fits, on Linux (default: all cores; the report "
+                        help="worker processes for a spectrum's fits, on Linux (default: all cores, up to its candidates; the report "
                              "is the same with any number)")
     sweeps = parser.add_argument_group("drive sweeps (.txt/.dat/.nid) and thermal tunes: the free lever in a fluid, "
                                        "driven at its base or by thermal noise")

@@ -492,22 +492,20 @@ class _Problem:
         return A @ state[1]
 
 
-def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100) -> FitResult:
+def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: int = 100,
+        solve_each=None) -> FitResult:
     """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
 
     Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
     the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`), on the rows
     folded per frequency (:class:`_Problem`: the same cost and ``J^T J``, so the same covariance); the
-    residual and prediction are the measured rows'.
+    residual and prediction are the measured rows'.  ``solve_each(model, starts, max_nfev)``: each start's
+    :func:`solve` (e.g. in worker processes), else they are solved here in turn.
     """
     problem = _Problem(model, data, sigma)
-    lower, upper = bounds(model)
-    jac = "2-point" if JACOBIAN == "finite-difference" else problem.jacobian
+    lower = bounds(model)[0]
     best = None
-    for start in starts:
-        x0 = np.clip(start, lower, upper)
-        res = least_squares(problem.residual, x0, jac=jac, bounds=(lower, upper), method="trf",
-                            diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
+    for res in solve_each(model, starts, max_nfev) if solve_each else (_solve(problem, s, max_nfev) for s in starts):
         if np.isfinite(res.cost) and (best is None or res.cost < best.cost):
             best = res
     if best is None:
@@ -517,3 +515,15 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
     cov = jacobian_covariance(best.jac, 2 * best.cost / max(n - k, 1))
     pred = problem.prediction(best.x, data.frequency_hz, data.bias_v)       # every measured row's
     return FitResult(model, best.x, cov, data.response - pred, sigma, k, prediction=pred)
+
+
+def solve(model: Model, data, start: np.ndarray, sigma: float, max_nfev: int):
+    """One start's least-squares solution in :func:`fit` (:func:`scipy.optimize.least_squares`'s result)."""
+    return _solve(_Problem(model, data, sigma), start, max_nfev)
+
+
+def _solve(problem: _Problem, start: np.ndarray, max_nfev: int):
+    lower, upper = bounds(problem.model)
+    jac = "2-point" if JACOBIAN == "finite-difference" else problem.jacobian
+    return least_squares(problem.residual, np.clip(start, lower, upper), jac=jac, bounds=(lower, upper), method="trf",
+                         diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)

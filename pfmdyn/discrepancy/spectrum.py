@@ -29,7 +29,7 @@ from ..fitting.workers import Forked, cores
 from ..io.tables import SpectrumData
 from . import select
 from .effects import DAMPING, EFFECTS, spring_grid
-from .model import FitResult, Model, bounds, fit
+from .model import FitResult, Model, bounds, fit, solve
 from .peaks import Matches, match_starts, peak_widths
 from .report import DiscrepancyReport, report, summary  # noqa: F401  (summary: public here too)
 
@@ -117,7 +117,6 @@ class SpectrumProblem:
 
     def __init__(self, data: SpectrumData, vertical_only: bool = False, workers: int = 1):
         self.data, self.vertical_only = data, vertical_only
-        self.pool = Forked(workers, self, _take)      # forked at the first step's candidates: they see its caches
         self._sent = None       # the caches' sizes when the workers were last sent what they lack
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
         if not (math.isfinite(self.sigma) and self.sigma > 0):
@@ -131,6 +130,9 @@ class SpectrumProblem:
         # Library order breaks ties between candidates the data do not tell apart.
         self.library = (["lateral_stiffness"] if vertical_only else []) + [
             "damping", "tip_mass", "tilt", "tip_setback", "background", "spot_position"]
+        # forked at the baseline's fits (they see its caches); no more than a step's candidates can use, not
+        # every core of a large machine
+        self.pool = Forked(min(workers, len(self.library)), self, _take)
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
@@ -249,9 +251,17 @@ class SpectrumProblem:
         a, b = spring_grid(self.data.metadata, 15, 6)
         grid = [np.array([x]) for x in a] if model.vertical_only else [np.array([x, y]) for x in a for y in b]
         quick = sorted((self.cost(smooth, np.append(g, 0.05)), i) for i, g in enumerate(grid))
-        damped = fit(smooth, self.data, [np.append(grid[i], 0.05) for _, i in quick[:2]], self.sigma, max_nfev=40)
+        damped = fit(smooth, self.data, [np.append(grid[i], 0.05) for _, i in quick[:2]], self.sigma, max_nfev=40,
+                     solve_each=self._solve_each)
         starts.append(damped.internal[:-1])
-        return fit(model, self.data, starts, self.sigma, max_nfev=80)
+        return fit(model, self.data, starts, self.sigma, max_nfev=80, solve_each=self._solve_each)
+
+    def solve(self, model: Model, start: np.ndarray, max_nfev: int):
+        """One start's solution of a fit of ``model`` (:func:`pfmdyn.discrepancy.model.solve`)."""
+        return solve(model, self.data, start, self.sigma, max_nfev)
+
+    def _solve_each(self, model: Model, starts, max_nfev: int) -> list:
+        return self.each("solve", [(model, start, max_nfev) for start in starts])
 
     def cost(self, model, internal) -> float:
         """RSS/sigma**2 at fixed nonlinear parameters (for start grids); on the rows folded per frequency
@@ -443,8 +453,9 @@ def analyse(data: SpectrumData, vertical_only: bool = False, progress: bool = Fa
             time_budget_s: float | None = None, workers: int | None = None) -> DiscrepancyReport:
     """Run the discrepancy loop on a spectrum; return its report (:class:`~pfmdyn.discrepancy.report.DiscrepancyReport`).
 
-    A step's candidate fits, and the refits of the backward pass, run in ``workers`` processes (default
-    one per core, :func:`~pfmdyn.fitting.workers.cores`); the report is the same with any number.
+    The baseline's starts, a step's candidate fits and the refits of the backward pass run in ``workers``
+    processes (default one per core, :func:`~pfmdyn.fitting.workers.cores`); the report is the same with any
+    number.
 
     Examples
     --------

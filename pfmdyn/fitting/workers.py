@@ -119,8 +119,8 @@ def pool(workers: int, fork_only: bool = False):
 
 
 class Forked:
-    """Up to ``workers`` worker processes forked from this one when first asked (as many as the first
-    calls, at most; they inherit ``state``, e.g. a problem with its data and caches, as it is then),
+    """``workers`` worker processes forked from this one when first asked (they inherit ``state``, e.g. a
+    problem with its data and caches, as it is then),
     kept for a series of :meth:`map` calls until :meth:`close`; ``receive(state, shared)``: how a worker takes
     what a map shares with every worker (e.g. what this process's caches gained).
 
@@ -153,8 +153,7 @@ class Forked:
                 _STATE, _RECEIVE = self.state, self.receive
                 gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
                 try:
-                    # no more than the first calls can use: a step's candidates, not every core of a large machine
-                    self._executor = pool(min(self.workers, len(calls)), fork_only=True)
+                    self._executor = pool(self.workers, fork_only=True)
                 finally:
                     _STATE, _RECEIVE = None, None
                     gc.unfreeze()
