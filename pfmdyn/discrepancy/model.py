@@ -518,7 +518,18 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
 
 
 def solve(model: Model, data, start: np.ndarray, sigma: float, max_nfev: int):
-    """One start's least-squares solution in :func:`fit` (:func:`scipy.optimize.least_squares`'s result)."""
+    """One start's least-squares solution in :func:`fit` (:func:`scipy.optimize.least_squares`'s result): a
+    fit's starts solved apart (in worker processes) give the fit it gives.
+
+    >>> from types import SimpleNamespace
+    >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
+    >>> f, v = np.repeat(np.linspace(3e4, 9e4, 40), 2), np.tile([-1.0, 1.0], 40)
+    >>> data = SimpleNamespace(frequency_hz=f, bias_v=v, response=(1 + v) / (1 - (f / 6e4) ** 2 + 0.05j))
+    >>> model, start = Model(meta, ("damping_internal",)), np.array([2.0, 2.0, -3.0])
+    >>> alone = solve(model, data, start, 1e-3, 10)
+    >>> bool((alone.x == fit(model, data, [start], 1e-3, 10).internal).all())
+    True
+    """
     return _solve(_Problem(model, data, sigma), start, max_nfev)
 
 
