@@ -84,6 +84,24 @@ def test_what_a_map_shares_each_worker_takes_once_before_its_calls():
     assert out["here"][0][1] == [] and out["state"] == []
 
 
+def test_the_dearest_calls_go_first_and_the_results_keep_the_calls_order():
+    out = json.loads(_clean(
+        "import json, time\n"
+        "from pfmdyn.fitting.workers import Forked\n"
+        "def stamp(state, i):\n"
+        "    started = time.perf_counter()\n"
+        "    time.sleep(0.1)\n"
+        "    return i, started\n"
+        "with Forked(2, None) as forked:\n"
+        "    done = forked.map(stamp, [(i,) for i in range(4)], costs=[1.0, 2.0, float('inf'), 3.0])\n"
+        "    took = forked.took\n"
+        "print(json.dumps({'done': done, 'took': took}))\n"))
+    assert [i for i, _ in out["done"]] == [0, 1, 2, 3] and len(out["took"]) == 4
+    started = {i: t for i, t in out["done"]}
+    # the untimed call (inf) and the dearest went first, the cheapest last
+    assert max(started[2], started[3]) < min(started[0], started[1]) and started[1] < started[0]
+
+
 def test_off_the_main_thread_calls_run_here():
     found = []
 

@@ -118,6 +118,7 @@ class SpectrumProblem:
     def __init__(self, data: SpectrumData, vertical_only: bool = False, workers: int = 1):
         self.data, self.vertical_only = data, vertical_only
         self._sent = None       # the caches' sizes when the workers were last sent what they lack
+        self._took = {}         # (method, names among its arguments) -> the seconds such a call last took
         self.sigma = noise_sigma(data.frequency_hz, data.bias_v, data.response)
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             # Noise-free data: a floor far below the signal keeps the gap finite.
@@ -145,12 +146,17 @@ class SpectrumProblem:
         processes of :attr:`pool` (:class:`~pfmdyn.fitting.workers.Forked`, ``workers`` of them): independent
         fits, each computing what it would here.  The start grids' misfits and the peak matches found are
         shared: a call returns what it added to the caches, kept here, and each worker takes what was added
-        here since the last calls, once (a worker would otherwise find again what another one found)."""
+        here since the last calls, once (a worker would otherwise find again what another one found).  The calls
+        the last step found dearest go first (those not timed yet before them, in order): one long trial sent
+        last kept the other worker waiting, up to 0.6 s."""
         caches = self._caches()
         sizes = [len(cache) for cache in caches]
         news = [list(islice(cache.items(), n, None)) for cache, n in zip(caches, self._sent or sizes)]
         self._sent = sizes
-        found = self.pool.map(_caching, [(method, *args) for args in calls], shared=news)
+        kinds = [(method, *(a for a in args if isinstance(a, str))) for args in calls]
+        found = self.pool.map(_caching, [(method, *args) for args in calls], shared=news,
+                              costs=[self._took.get(kind, math.inf) for kind in kinds])
+        self._took.update(zip(kinds, self.pool.took))
         for _, added in found:
             for cache, items in zip(caches, added):
                 cache.update(items)

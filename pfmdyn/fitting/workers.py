@@ -137,13 +137,15 @@ class Forked:
 
     def __init__(self, workers: int, state, receive=None):
         self.workers, self.state, self.receive, self.seconds = workers, state, receive, 0.0
-        self._executor, self._asked, self._shares = None, False, 0
+        self._executor, self._asked, self._shares, self.took = None, False, 0, []
 
-    def map(self, function, calls, shared=None) -> list:
+    def map(self, function, calls, shared=None, costs=None) -> list:
         """``[function(state, *args) for args in calls]`` (``function`` a module's, to be named in a
         worker), in the workers when there are any; a call's exception is raised here.  ``shared``: what each
         worker takes (``receive``) before its first call of this map: pickled once, however many calls,
-        and not needed here (the state is this process's)."""
+        and not needed here (the state is this process's).  ``costs``: each call's expected cost (any unit), the
+        dearest sent first, so that no worker is left waiting at the end for one long call; :attr:`took`: the CPU
+        seconds each call took in a worker (empty when they ran here)."""
         global _STATE, _RECEIVE
         calls = list(calls)
         if not self._asked and len(calls) > 1:
@@ -158,14 +160,20 @@ class Forked:
                     _STATE, _RECEIVE = None, None
                     gc.unfreeze()
         if self._executor is None or len(calls) < 2:
+            self.took = []
             return [function(self.state, *args) for args in calls]
         token, blob = None, None
         if shared is not None:
             self._shares += 1
             token, blob = self._shares, pickle.dumps(shared, pickle.HIGHEST_PROTOCOL)
         n = len(calls)
-        done = list(self._executor.map(_call, [function] * n, calls, [token] * n, [blob] * n))
-        self.seconds += sum(seconds for _, seconds in done)
+        first = sorted(range(n), key=lambda i: -costs[i]) if costs is not None else range(n)
+        done = [None] * n
+        for i, out in zip(first, self._executor.map(_call, [function] * n, [calls[i] for i in first], [token] * n,
+                                                    [blob] * n)):
+            done[i] = out
+        self.took = [seconds for _, seconds in done]
+        self.seconds += sum(self.took)
         return [out for out, _ in done]
 
     def close(self) -> None:
