@@ -120,9 +120,9 @@ def pool(workers: int, fork_only: bool = False):
 
 class Forked:
     """``workers`` worker processes forked from this one when first asked (they inherit ``state``, e.g. a
-    problem with its data and caches, as it is then),
-    kept for a series of :meth:`map` calls until :meth:`close`; ``receive(state, shared)``: how a worker takes
-    what a map shares with every worker (e.g. what this process's caches gained).
+    problem with its data and caches, as it is then), kept for a series of :meth:`map` calls until
+    :meth:`close`; ``receive(state, shared)``: how a worker takes what a map shares with every worker (e.g.
+    what this process's caches gained).
 
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
     Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
@@ -147,6 +147,8 @@ class Forked:
         dearest sent first, so that no worker is left waiting at the end for one long call; :attr:`took`: the CPU
         seconds each call took in a worker (empty when they ran here)."""
         global _STATE, _RECEIVE
+        if shared is not None and self.receive is None:
+            raise ValueError("a map shares only with a Forked given receive")
         calls = list(calls)
         if not self._asked and len(calls) > 1:
             self._asked = True
