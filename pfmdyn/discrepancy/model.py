@@ -35,6 +35,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..cantilever import damping_substitution, free_root
+from ..fitting import trust_region
 from ..fitting.noise import gap
 from ..fitting.parameters import LN10, Parameter
 from ..fitting.projection import CUTOFF, bias_nodes, jacobian_covariance, project
@@ -496,11 +497,12 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
         solve_each=None) -> FitResult:
     """Fit ``model`` to spectrum ``data`` from each start; keep the best (least RSS).
 
-    Nonlinear parameters by :func:`scipy.optimize.least_squares` (trust region, bounds),
-    the complex linear coefficients by projection at every evaluation (:data:`JACOBIAN`), on the rows
-    folded per frequency (:class:`_Problem`: the same cost and ``J^T J``, so the same covariance); the
-    residual and prediction are the measured rows'.  ``solve_each(model, starts, max_nfev)``: each start's
-    :func:`solve` (e.g. in worker processes), else they are solved here in turn.
+    Nonlinear parameters by the trust-region reflective method with bounds
+    (:func:`pfmdyn.fitting.trust_region.least_squares`: SciPy's steps, compiled; SciPy's own with the
+    finite-difference Jacobian), the complex linear coefficients by projection at every evaluation
+    (:data:`JACOBIAN`), on the rows folded per frequency (:class:`_Problem`: the same cost and ``J^T J``, so the
+    same covariance); the residual and prediction are the measured rows'.  ``solve_each(model, starts,
+    max_nfev)``: each start's :func:`solve` (e.g. in worker processes), else they are solved here in turn.
     """
     problem = _Problem(model, data, sigma)
     lower = bounds(model)[0]
@@ -518,8 +520,8 @@ def fit(model: Model, data, starts: list[np.ndarray], sigma: float, max_nfev: in
 
 
 def solve(model: Model, data, start: np.ndarray, sigma: float, max_nfev: int):
-    """One start's least-squares solution in :func:`fit` (:func:`scipy.optimize.least_squares`'s result): a
-    fit's starts solved apart (in worker processes) give the fit it gives.
+    """One start's least-squares solution in :func:`fit` (a :class:`pfmdyn.fitting.trust_region.Solution`): a fit's
+    starts solved apart (in worker processes) give the fit it gives.
 
     >>> from types import SimpleNamespace
     >>> meta = SimpleNamespace(spring_constant=1.0, tip_height=1e-5, length=1e-4, free_resonance=1e4)
@@ -535,6 +537,8 @@ def solve(model: Model, data, start: np.ndarray, sigma: float, max_nfev: int):
 
 def _solve(problem: _Problem, start: np.ndarray, max_nfev: int):
     lower, upper = bounds(problem.model)
-    jac = "2-point" if JACOBIAN == "finite-difference" else problem.jacobian
-    return least_squares(problem.residual, np.clip(start, lower, upper), jac=jac, bounds=(lower, upper), method="trf",
-                         diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
+    if JACOBIAN == "finite-difference":
+        return least_squares(problem.residual, np.clip(start, lower, upper), jac="2-point", bounds=(lower, upper),
+                             method="trf", diff_step=1e-7, max_nfev=max_nfev, x_scale=1.0)
+    return trust_region.least_squares(problem.residual, problem.jacobian, np.clip(start, lower, upper), (lower, upper),
+                                      max_nfev)

@@ -25,6 +25,7 @@ from scipy.optimize import least_squares, minimize_scalar
 from scipy.signal import peak_prominences
 
 from .. import composed
+from ..fitting import trust_region
 from ..generated import formulas
 from .model import bounds, free_root_and_jacobian
 from .undamped_modes import (_beta_grid, _characteristic_args_many, _resonances_of, parameter_changes,
@@ -296,8 +297,8 @@ def _peak_fit(model, start, moving, peaks, band, lower, upper, max_nfev, unseen=
                 last[key] = match(full(v))
             return last[key]
 
-        res = least_squares(lambda v: evaluated(v)[0], start[moving], jac=lambda v: evaluated(v)[1],
-                            bounds=(lower[moving], upper[moving]), max_nfev=max_nfev)
+        res = trust_region.least_squares(lambda v: evaluated(v)[0], lambda v: evaluated(v)[1], start[moving],
+                                         (lower[moving], upper[moving]), max_nfev)
         return full(res.x), 2 * res.cost
 
     def roots_at(v):

@@ -8,6 +8,8 @@
   rows folded per frequency for a design linear in the bias;
 * :mod:`~pfmdyn.fitting.batched`: a Levenberg-Marquardt iteration over variable projection that
   fits a block of spectra at once (``pfmdyn map``'s beam and SHO models), and their covariance;
+* :mod:`~pfmdyn.fitting.trust_region`: bounded nonlinear least squares by SciPy's trust-region reflective
+  steps, compiled (a discrepancy analysis's fits);
 * :mod:`~pfmdyn.fitting.noise`: the noise of a spectrum and the gap, the noise-normalised RMS
   residual (1 = fitted to the noise).
 * :mod:`~pfmdyn.fitting.result`: a fit's result, JSON-ready fields (``to_dict()``) and a text
