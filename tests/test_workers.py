@@ -105,6 +105,32 @@ def test_the_dearest_calls_go_first_and_the_results_keep_the_calls_order():
     assert max(started[2], started[3]) < min(started[0], started[1])
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forked workers and /proc: Linux")
+def test_workers_run_one_blas_thread_and_start_none_they_do_not_use():
+    """A worker runs one BLAS thread, and where the calling process already ran one it sets no limit itself:
+    OpenBLAS starts its thread pool to apply a limit, and new threads spin for a tenth of a second waiting
+    for work, on the cores the workers share (a worker's first fit took three times as long)."""
+    out = json.loads(_clean(
+        "import json, os\n"
+        "import numpy as np\n"
+        "from threadpoolctl import threadpool_info, threadpool_limits\n"
+        "from pfmdyn.fitting.workers import Forked\n"
+        "def threads(state):\n"
+        "    np.linalg.svd(np.ones((300, 40)))\n"
+        "    return len(os.listdir('/proc/self/task')), [pool['num_threads'] for pool in threadpool_info()]\n"
+        "np.ones((200, 200)) @ np.ones((200, 200))\n"
+        "with Forked(2, None) as forked:\n"
+        "    free = forked.map(threads, [(), ()])\n"
+        "with threadpool_limits(1, user_api='blas'):\n"
+        "    with Forked(2, None) as forked:\n"
+        "        limited = forked.map(threads, [(), ()])\n"
+        "print(json.dumps({'free': free, 'limited': limited}))\n"))
+    for tasks, blas in out["free"] + out["limited"]:
+        assert set(blas) == {1}
+    # the worker's own thread and the one that watches its parent, nothing of BLAS's
+    assert [tasks for tasks, _ in out["limited"]] == [2, 2]
+
+
 def test_off_the_main_thread_calls_run_here():
     found = []
 

@@ -46,13 +46,16 @@ threads do not survive a fork (a child's first BLAS call can hang), and Windows 
 
 def _started(parent: int):
     """Worker initialiser: exit with the process that started the pool, and one BLAS thread per
-    process (the processes are the parallelism)."""
+    process (the processes are the parallelism): set here only where the parent ran more, since setting a
+    limit starts OpenBLAS's thread pool, whose new threads spin a tenth of a second waiting for work, on the
+    cores the workers share (a worker's first fit took three times as long)."""
     global _IN_WORKER
     _IN_WORKER = True
     signal.signal(signal.SIGINT, signal.SIG_IGN)     # Ctrl-C is the parent's (:func:`pool`)
     exit_with_parent(parent)
-    from threadpoolctl import threadpool_limits
-    threadpool_limits(1)
+    from threadpoolctl import threadpool_info, threadpool_limits
+    if any(pool["num_threads"] > 1 for pool in threadpool_info()):
+        threadpool_limits(1)
 
 
 def exit_with_parent(parent: int, poll_s: float = 0.5) -> None:
