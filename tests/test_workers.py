@@ -105,6 +105,25 @@ def test_the_dearest_calls_go_first_and_the_results_keep_the_calls_order():
     assert max(started[2], started[3]) < min(started[0], started[1])
 
 
+def test_what_is_prepared_before_the_fork_is_done_once_and_the_workers_inherit_it():
+    out = json.loads(_clean(
+        "import json, os\n"
+        "from pfmdyn.fitting.workers import Forked\n"
+        "def prepare(state):\n"
+        "    state.append(os.getpid())\n"
+        "def seen(state, i):\n"
+        "    return list(state)\n"
+        "forked_state, alone_state = [], []\n"
+        "with Forked(2, forked_state, prepare=prepare) as forked:\n"
+        "    forked.map(seen, [(0,), (1,)])\n"
+        "    seen_forked = forked.map(seen, [(0,), (1,), (2,)])\n"
+        "with Forked(1, alone_state, prepare=prepare) as alone:\n"
+        "    alone.map(seen, [(0,), (1,)])\n"
+        "print(json.dumps({'parent': os.getpid(), 'forked': seen_forked, 'alone': alone_state}))\n"))
+    # run once, here, before the fork: every worker's calls see it; with no workers to fork, not at all
+    assert out["forked"] == [[out["parent"]]] * 3 and out["alone"] == []
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forked workers and /proc: Linux")
 def test_workers_run_one_blas_thread_and_start_none_they_do_not_use():
     """A worker runs one BLAS thread, and where the calling process already ran one it sets no limit itself:

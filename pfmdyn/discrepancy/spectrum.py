@@ -133,7 +133,7 @@ class SpectrumProblem:
             "damping", "tip_mass", "tilt", "tip_setback", "background", "spot_position"]
         # forked at the baseline's fits (they see its caches); no more than a step's candidates can use, not
         # every core of a large machine
-        self.pool = Forked(min(workers, len(self.library)), self, _take)
+        self.pool = Forked(min(workers, len(self.library)), self, _take, _before_fork)
         m = data.metadata
         self.band = (float(data.frequency_hz.min()), float(data.frequency_hz.max()))
         self.k1_grid, self.k2_grid = spring_grid(m, 23, 9)
@@ -479,6 +479,16 @@ def _take(problem: SpectrumProblem, news: list) -> None:
     """Add ``news`` (items of each cache, :meth:`SpectrumProblem.each`) to ``problem``'s caches (dicts that only grow)."""
     for cache, items in zip(problem._caches(), news):
         cache.update(items)
+
+
+def _before_fork(problem: SpectrumProblem) -> None:
+    """What each worker would load on its first fit, loaded once here before they fork (they inherit it): the
+    compiled kernels of a fit's residual and Jacobian (:mod:`pfmdyn.discrepancy.fit_kernel`; the baseline's
+    start grids have loaded the others), by one evaluation of the damped baseline at its grid's first point."""
+    model = Model(problem.data.metadata, ("damping_internal",), problem.vertical_only)
+    k1, k2 = spring_grid(problem.data.metadata, 15, 6)
+    start = [k1[0], 0.05] if model.vertical_only else [k1[0], k2[0], 0.05]
+    solve(model, problem.data, np.clip(start, *bounds(model)), problem.sigma, 1)
 
 
 def _caching(problem: SpectrumProblem, method: str, *args):

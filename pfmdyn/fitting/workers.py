@@ -125,7 +125,8 @@ class Forked:
     """``workers`` worker processes forked from this one when first asked (they inherit ``state``, e.g. a
     problem with its data and caches, as it is then), kept for a series of :meth:`map` calls until
     :meth:`close`; ``receive(state, shared)``: how a worker takes what a map shares with every worker (e.g.
-    what this process's caches gained).
+    what this process's caches gained); ``prepare(state)``: run here once, just before the workers fork, for
+    what each of them would otherwise do on its own (e.g. load compiled kernels: they inherit them).
 
     Nothing but a call's arguments and result is pickled, and each call computes what it would here.
     Without workers (one asked, or ``fork`` not to be had: another thread running, not on Linux
@@ -138,8 +139,8 @@ class Forked:
     [1000, 100, 1]
     """
 
-    def __init__(self, workers: int, state, receive=None):
-        self.workers, self.state, self.receive, self.seconds = workers, state, receive, 0.0
+    def __init__(self, workers: int, state, receive=None, prepare=None):
+        self.workers, self.state, self.receive, self.prepare, self.seconds = workers, state, receive, prepare, 0.0
         self._executor, self._asked, self._shares, self.took = None, False, 0, []
 
     def map(self, function, calls, shared=None, costs=None) -> list:
@@ -157,6 +158,8 @@ class Forked:
             self._asked = True
             if self.workers > 1 and _FORK_SAFE and not _IN_WORKER and threading.current_thread() is threading.main_thread():
                 import gc
+                if self.prepare is not None:
+                    self.prepare(self.state)
                 _STATE, _RECEIVE = self.state, self.receive
                 gc.freeze()     # a worker's collections leave the inherited objects (and their pages) alone
                 try:
