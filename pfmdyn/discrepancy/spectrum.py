@@ -141,8 +141,9 @@ class SpectrumProblem:
         self._nodes = bias_nodes(data.frequency_hz, data.bias_v, data.response)   # the rows the costs fold
         self._costs = {}      # (model, parameters) -> misfit: start grids and rankings ask again
 
-    def each(self, method: str, calls) -> list:
-        """``method`` of this problem on each of ``calls`` (argument tuples), in order, in the worker
+    def each(self, method: str | None, calls) -> list:
+        """``method`` of this problem on each of ``calls`` (argument tuples; with ``method`` None, pairs of a
+        method and its arguments), in order, in the worker
         processes of :attr:`pool` (:class:`~pfmdyn.fitting.workers.Forked`, ``workers`` of them): independent
         fits, each computing what it would here.  The start grids' misfits and the peak matches found are
         shared: a call returns what it added to the caches, kept here, and each worker takes what was added
@@ -153,8 +154,9 @@ class SpectrumProblem:
         sizes = [len(cache) for cache in caches]
         news = [list(islice(cache.items(), n, None)) for cache, n in zip(caches, self._sent or sizes)]
         self._sent = sizes
-        kinds = [(method, *(a for a in args if isinstance(a, str))) for args in calls]
-        found = self.pool.map(_caching, [(method, *args) for args in calls], shared=news,
+        pairs = [(method, args) for args in calls] if method else list(calls)
+        kinds = [(name, *(a for a in args if isinstance(a, str))) for name, args in pairs]
+        found = self.pool.map(_caching, [(name, *args) for name, args in pairs], shared=news,
                               costs=[self._took.get(kind, math.inf) for kind in kinds])
         self._took.update(zip(kinds, self.pool.took))
         for _, added in found:
@@ -252,12 +254,14 @@ class SpectrumProblem:
         damped fit (1/Q = 0.05, continuation).
         """
         model = Model(self.data.metadata, (), self.vertical_only)
-        starts = self.resonance_starts(model, [np.array([])], count=3)
         smooth = model.with_effect("damping_internal")
         a, b = spring_grid(self.data.metadata, 15, 6)
         grid = [np.array([x]) for x in a] if model.vertical_only else [np.array([x, y]) for x in a for y in b]
-        quick = sorted((self.cost(smooth, np.append(g, 0.05)), i) for i, g in enumerate(grid))
-        damped = fit(smooth, self.data, [np.append(grid[i], 0.05) for _, i in quick[:2]], self.sigma, max_nfev=40,
+        rows = [np.append(g, 0.05) for g in grid]
+        # the starts matched to the peaks and the damped grid's misfits, side by side in the workers
+        starts, costs = self.each(None, [("resonance_starts", (model, [np.array([])], 3)), ("costs", (smooth, rows))])
+        quick = sorted((c, i) for i, c in enumerate(costs))
+        damped = fit(smooth, self.data, [rows[i] for _, i in quick[:2]], self.sigma, max_nfev=40,
                      solve_each=self._solve_each)
         starts.append(damped.internal[:-1])
         return fit(model, self.data, starts, self.sigma, max_nfev=80, solve_each=self._solve_each)
@@ -282,6 +286,10 @@ class SpectrumProblem:
             rss = np.sum(r[np.isfinite(r)]) + n.constant
             self._costs[key] = float(rss / self.sigma**2) if np.isfinite(r).any() else math.inf
         return self._costs[key]
+
+    def costs(self, model, rows) -> list[float]:
+        """:meth:`cost` of each of ``rows``."""
+        return [self.cost(model, x) for x in rows]
 
     def candidates(self, current: FitResult) -> list[str]:
         """Effects not yet in the model (damping while a mechanism is left; the laser spot
