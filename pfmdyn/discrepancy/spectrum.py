@@ -491,12 +491,13 @@ def _take(problem: SpectrumProblem, news: list) -> None:
 
 def _before_fork(problem: SpectrumProblem) -> None:
     """What each worker would load on its first fit, loaded once here before they fork (they inherit it): the
-    compiled kernels of a fit's residual and Jacobian (:mod:`pfmdyn.discrepancy.fit_kernel`; the baseline's
-    start grids have loaded the others), by one evaluation of the damped baseline at its grid's first point."""
+    compiled kernels of a fit's residual and Jacobian (:mod:`pfmdyn.discrepancy.fit_kernel`) and of its steps
+    (:mod:`pfmdyn.fitting.trust_region_kernel`), by an iteration of the damped baseline from its grid's first
+    point (the composed lever's kernels with them); nothing is kept."""
     model = Model(problem.data.metadata, ("damping_internal",), problem.vertical_only)
     k1, k2 = spring_grid(problem.data.metadata, 15, 6)
     start = [k1[0], 0.05] if model.vertical_only else [k1[0], k2[0], 0.05]
-    solve(model, problem.data, np.clip(start, *bounds(model)), problem.sigma, 1)
+    solve(model, problem.data, np.clip(start, *bounds(model)), problem.sigma, 2)
 
 
 def _caching(problem: SpectrumProblem, method: str, *args):
