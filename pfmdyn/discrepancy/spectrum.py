@@ -254,10 +254,7 @@ class SpectrumProblem:
         damped fit (1/Q = 0.05, continuation).
         """
         model = Model(self.data.metadata, (), self.vertical_only)
-        smooth = model.with_effect("damping_internal")
-        a, b = spring_grid(self.data.metadata, 15, 6)
-        grid = [np.array([x]) for x in a] if model.vertical_only else [np.array([x, y]) for x in a for y in b]
-        rows = [np.append(g, 0.05) for g in grid]
+        smooth, rows = _damped_grid(self.data.metadata, self.vertical_only)
         # the starts matched to the peaks and the damped grid's misfits, side by side in the workers
         starts, costs = self.each(None, [("resonance_starts", (model, [np.array([])], 3)), ("costs", (smooth, rows))])
         quick = sorted((c, i) for i, c in enumerate(costs))
@@ -489,15 +486,22 @@ def _take(problem: SpectrumProblem, news: list) -> None:
         cache.update(items)
 
 
+def _damped_grid(meta, vertical_only: bool) -> tuple[Model, list[np.ndarray]]:
+    """The baseline with internal friction, and the grid of springs at ``1/Q = 0.05`` its damped start search
+    ranks (:meth:`SpectrumProblem.baseline`)."""
+    smooth = Model(meta, ("damping_internal",), vertical_only)
+    a, b = spring_grid(meta, 15, 6)
+    grid = [np.array([x]) for x in a] if vertical_only else [np.array([x, y]) for x in a for y in b]
+    return smooth, [np.append(g, 0.05) for g in grid]
+
+
 def _before_fork(problem: SpectrumProblem) -> None:
     """What each worker would load on its first fit, loaded once here before they fork (they inherit it): the
     compiled kernels of a fit's residual and Jacobian (:mod:`pfmdyn.discrepancy.fit_kernel`) and of its steps
     (:mod:`pfmdyn.fitting.trust_region_kernel`), by an iteration of the damped baseline from its grid's first
     point (the composed lever's kernels with them); nothing is kept."""
-    model = Model(problem.data.metadata, ("damping_internal",), problem.vertical_only)
-    k1, k2 = spring_grid(problem.data.metadata, 15, 6)
-    start = [k1[0], 0.05] if model.vertical_only else [k1[0], k2[0], 0.05]
-    solve(model, problem.data, np.clip(start, *bounds(model)), problem.sigma, 2)
+    smooth, rows = _damped_grid(problem.data.metadata, problem.vertical_only)
+    solve(smooth, problem.data, np.clip(rows[0], *bounds(smooth)), problem.sigma, 2)
 
 
 def _caching(problem: SpectrumProblem, method: str, *args):
