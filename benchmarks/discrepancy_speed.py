@@ -10,7 +10,9 @@ one BLAS thread per process as the command runs).  Three designs: the baseline; 
 the command runs it (a step's candidate fits in worker processes, one per core: the wall clock is what
 a user waits); and the current code in one process, whose CPU seconds (which a shared machine's load
 changes less than the wall clock) give the speed-up per core.  CPU seconds count the worker processes'.
-The wall clock needs a quiet machine: under load the workers wait for a core.  Every report's JSON is compared with the baseline's: the
+The wall clock needs a quiet machine: under load the workers wait for a core (the column ``cores free``,
+:func:`free_cores`, is what two CPU-bound processes found just before the kept run).  Every report's JSON is
+compared with the baseline's: the
 named effects, mechanisms and verdicts identical, every number within :data:`RTOL` (the fits' tolerance,
 :data:`FIT_TOLERANCE`, times a hundred), or equal to the bit; and by the scientist's rule (:func:`judged`):
 a value with a stated standard error within a tenth of it (the standard error within
@@ -92,6 +94,22 @@ seconds, cpu = time.perf_counter() - started, cpu() - cpu_started
 Path({out!r}).write_text(json.dumps(report.to_dict(), default=str))
 print(seconds, cpu, len(data.frequency_hz))
 """
+
+
+SPIN = "import time\nt = time.perf_counter()\nx = 0\nfor i in range(3_000_000):\n    x += i\nprint(time.perf_counter() - t)"
+"""A CPU-bound loop of a fraction of a second (:func:`free_cores`)."""
+
+
+def free_cores() -> float:
+    """How many cores two CPU-bound processes found just now: twice one loop's time alone (the faster of two) over
+    the mean time of two run side by side (2.0: two whole cores; 1.0: a shared one).  This machine's two cores are
+    shared with others: side by side, two such loops have taken 1.7 times as long as one alone, and a minute later
+    the same."""
+    def spin(count: int) -> list[float]:
+        runs = [subprocess.Popen([sys.executable, "-c", SPIN], stdout=subprocess.PIPE, text=True) for _ in range(count)]
+        return [float(run.communicate()[0]) for run in runs]
+
+    return 2 * min(spin(1)[0], spin(1)[0]) / statistics.mean(spin(2))
 
 
 def run_case(case: str, cwd: Path, env: dict, out: Path, workers: int | None = None) -> tuple[float, float, int]:
@@ -245,16 +263,19 @@ def main() -> None:
         try:
             print(f"\ncurrent: worker processes, one per core ({os.cpu_count()}); one worker: the same code in one process"
                   "\n\n| case | rows | baseline CPU s (wall) | current wall s (CPU) | one worker CPU s (wall) | "
-                  "speed-up, wall (current) | speed-up, CPU (one worker) | load | report |"
-                  "\n|---|---|---|---|---|---|---|---|---|")
+                  "speed-up, wall (current) | speed-up, CPU (one worker) | load | cores free | report |"
+                  "\n|---|---|---|---|---|---|---|---|---|---|")
             walls, cpus = [], []
             for case in args.cases.split(","):
                 times = {name: [math.inf, math.inf] for name in designs}
-                reports = {}
+                reports, cores = {}, math.nan
                 for _ in range(args.repeat):
                     for name, (cwd, env, workers) in designs.items():
                         out = Path(tmp) / f"{name}.json"
+                        probe = free_cores() if name == "current" else math.nan
                         seconds, cpu, rows = run_case(case, cwd, env, out, workers)
+                        if name == "current" and seconds < times[name][1]:
+                            cores = probe      # what the workers found before the run kept (the fastest)
                         times[name] = [min(times[name][0], cpu), min(times[name][1], seconds)]
                         reports[name] = json.loads(out.read_text())
                 diff = differences(reports["current"], reports["baseline"])
@@ -273,7 +294,7 @@ def main() -> None:
                 same = reports["one worker"] == reports["current"]
                 verdict += "; one worker: the same report to the bit" if same else "; one worker: ANOTHER REPORT"
                 print(f"| {case} | {rows} | {old:.1f} ({old_wall:.1f}) | {new_wall:.1f} ({new:.1f}) | {one:.1f} "
-                      f"({one_wall:.1f}) | {old_wall / new_wall:.2f} | {old / one:.2f} | {os.getloadavg()[0]:.1f} | {verdict} |")
+                      f"({one_wall:.1f}) | {old_wall / new_wall:.2f} | {old / one:.2f} | {os.getloadavg()[0]:.1f} | {cores:.2f} | {verdict} |")
             print(f"\nmedian speed-up: wall, as the command runs {statistics.median(walls):.2f} (target >= 6); "
                   f"CPU in one process {statistics.median(cpus):.2f}")
         finally:
