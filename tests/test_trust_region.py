@@ -47,15 +47,15 @@ def _same(fun, jac, x0, bounds, max_nfev):
     np.testing.assert_allclose(ours.x, ref.x, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(ours.cost, ref.cost, rtol=1e-10)
     np.testing.assert_allclose(ours.jac, ref.jac, rtol=1e-10, atol=1e-300)
-    return bool((ours.x == ref.x).all())
 
 
 @pytest.mark.parametrize("max_nfev", [4, 30, 200])
 def test_resonance_fits_take_scipys_steps(max_nfev):
-    identical = [_same(*_resonance(seed), max_nfev) for seed in range(30)]
-    # to the bit but where the step needs the Levenberg-Marquardt parameter and NumPy's vectorised power (SIMD,
-    # not the C library's) rounds a cube otherwise: then within the tolerances above
-    assert sum(identical) >= 27
+    # the same evaluations and stopping, and the same point within the tolerances of _same; here all 90 end on the
+    # same bits too, but that depends on the platform (NumPy's vectorised power and its BLAS against SciPy's),
+    # so it is not asserted
+    for seed in range(30):
+        _same(*_resonance(seed), max_nfev)
 
 
 def test_bounds_that_hold_the_solution():
