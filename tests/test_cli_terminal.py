@@ -249,3 +249,16 @@ def test_errata_dash_is_standard_output(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["verify", "--only", "eq6.Av", "--quiet", "--errata", "-"]) == 0
     assert "\n# Errata of " in capsys.readouterr().out and not Path("-").exists()
+
+
+def test_the_console_script_exits_without_a_full_collection():
+    """``pfmdyn`` is :func:`pfmdyn.cli.console`: the command, then its objects frozen, so that Python's exit skips
+    a full collection over them (0.2 s after a ``discrepancy``); ``main`` itself, which a caller in Python
+    uses, freezes nothing."""
+    from importlib.metadata import entry_points
+
+    assert [e.value for e in entry_points(group="console_scripts") if e.name == "pfmdyn"] == ["pfmdyn.cli:console"]
+    code = ("import gc, sys; from pfmdyn import cli; sys.argv = ['pfmdyn', 'roots', 'free', '--modes', '1'];"
+            " cli.main(); frozen = gc.get_freeze_count(); cli.console(); print(frozen, gc.get_freeze_count() > 1000)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split()[-2:] == ["0", "True"]
