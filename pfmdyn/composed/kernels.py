@@ -84,12 +84,13 @@ def _segment_derivative(kind, beta, t, ell, moves_end, moves_start, short, rows,
     :meth:`pfmdyn.composed.segments._Segment.derivative`); ``moves_end``, ``moves_start``: ``d ell/d gamma``,
     ``d t/d gamma``."""
     if kind == BETA:
+        four_over = 4.0 / beta
         for m in range(lo, hi):
             for j in range(4):
                 dE[m, j] = t * rows[m + 1, j]
             if not short:
                 dE[m, 3] += ell * -rows[m, 3]
-            dP[m] = t * load[m + 1] - 4 * load[m] / beta
+            dP[m] = t * load[m + 1] - load[m] * four_over
     elif kind == GAMMA:
         ds = moves_start * beta
         for m in range(lo, hi):
