@@ -19,11 +19,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..compiled import forget_when_changed
 from ..generated import lever_pieces as pieces
+from ..roots import bracket
 from ..roots.bracket import _LOBATTO, _TO_CHEBYSHEV
+from . import segments
 from .segments import _BOUNDED_AT_START
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "read_out", "tip_point", "characteristic", "characteristic_roots",
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "COMPILED_FROM", "read_out", "tip_point", "characteristic", "characteristic_roots",
            "characteristic_partials"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
@@ -810,3 +813,9 @@ def characteristic_partials(beta, params, wrt, partials):
             partials[j, i] = value.imag / h
             if w >= 0:
                 stepped[w] = params[w]
+
+
+COMPILED_FROM = (pieces, bracket, segments)
+"""The modules whose functions and constants these kernels compile in: a change to one drops their cached machine
+code (:func:`pfmdyn.compiled.forget_when_changed`), as a change to this file does."""
+forget_when_changed(__name__, *COMPILED_FROM)

@@ -19,6 +19,8 @@ import math
 import numba
 import numpy as np
 
+from ..compiled import forget_when_changed
+from ..composed import kernels
 from ..composed.kernels import characteristic_partials, characteristic_roots, tip_at_end_and_partials, tip_point
 from ..generated import formulas
 
@@ -136,3 +138,7 @@ def match_and_jacobian(grid, lever, b1, d_b1, f1, moved, per_unit, tip_at_end, p
             for q in range(m):
                 acc += gaps[q] * (sens[inside[q], c] / f[inside[q]])
             jac[count, c] = acc / back
+
+
+# the composed lever's kernels (and what they compile in) and the generated formulas are compiled in here
+forget_when_changed(__name__, kernels, *kernels.COMPILED_FROM, formulas)

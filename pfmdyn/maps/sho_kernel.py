@@ -21,6 +21,8 @@ import math
 import numba
 import numpy as np
 
+from ..compiled import forget_when_changed
+from ..fitting import noise, projection
 from ..fitting.noise import DIFFERENCE_ORDERS, MAX_REFINEMENT, PIXEL_FLOOR
 from ..fitting.projection import CUTOFF
 from ..generated import formulas
@@ -419,3 +421,7 @@ def _solve4(a, b):
         for m in range(j + 1, n):
             s -= a[j, m] * b[m]
         b[j] = s / a[j, j]
+
+
+# the generated SHO response and the fitting core's constants are compiled in here
+forget_when_changed(__name__, formulas, noise, projection)
