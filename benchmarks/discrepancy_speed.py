@@ -133,7 +133,8 @@ def command_seconds(case: str, cwd: Path, env: dict, tmp: Path) -> float:
     kind, seed, spot = CASES[case]
     path = tmp / f"{kind}_{seed}_{spot}.csv"
     if not path.exists():
-        code = CASE_DATA.format(tests=str(ROOT / "tests"), seed=seed, kind=kind, spot=spot) + f"Path({str(path)!r}).write_text(text)"
+        code = (CASE_DATA.format(tests=str(ROOT / "tests"), seed=seed, kind=kind, spot=spot)
+                + f"Path({str(path)!r}).write_text(text)")
         subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, capture_output=True)
     started = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "pfmdyn.cli", "discrepancy", str(path)], cwd=cwd, env=env,

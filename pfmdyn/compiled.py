@@ -31,7 +31,8 @@ def forget_when_changed(module: str, *sources) -> bool:
     from numba.core.dispatcher import Dispatcher
 
     kernels = [f for f in vars(sys.modules[module]).values()
-               if isinstance(f, Dispatcher) and f.py_func.__module__ == module and getattr(f, "_cache", None) is not None]
+               if isinstance(f, Dispatcher) and f.py_func.__module__ == module
+               and getattr(f, "_cache", None) is not None]
     if not kernels:
         return False
     digest = hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in sources)).hexdigest()

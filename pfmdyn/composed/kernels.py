@@ -26,8 +26,8 @@ from ..roots.bracket import _LOBATTO, _TO_CHEBYSHEV
 from . import segments
 from .segments import _BOUNDED_AT_START
 
-__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "COMPILED_FROM", "read_out", "tip_point", "characteristic", "characteristic_roots",
-           "characteristic_partials"]
+__all__ = ["BETA", "SIGMA", "K", "GAMMA", "TIP", "COMPILED_FROM", "read_out", "tip_point", "characteristic",
+           "characteristic_roots", "characteristic_partials"]
 
 BETA, SIGMA, K, GAMMA, TIP = range(5)
 """How a parameter enters (the codes of :func:`read_out`'s ``kinds``): ``beta`` moves every

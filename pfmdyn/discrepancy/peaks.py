@@ -30,7 +30,8 @@ from .model import bounds, free_root_and_jacobian
 from .undamped_modes import (_beta_grid, _characteristic_args_many, _resonances_of, parameter_changes,
                              resonance_sensitivity, resonances)
 
-__all__ = ["bands", "data_peaks", "prominences", "poles", "peak_widths", "peak_match", "peak_scores", "Matches", "match_starts"]
+__all__ = ["bands", "data_peaks", "prominences", "poles", "peak_widths", "peak_match", "peak_scores", "Matches",
+           "match_starts"]
 
 
 def _summed(data):
@@ -113,21 +114,10 @@ def prominences(x, peaks):
     """
     x, peaks = np.asarray(x, float), np.asarray(peaks, int)
     n = len(x)
-    # the nearest sample on each side that rises above (or is not comparable: NaN), by one pass with a stack
+    # the nearest sample on each side that rises above (or is not comparable: NaN)
     bound = np.where(np.isnan(x), np.inf, x).tolist()
-    higher_left, higher_right = [-1] * n, [n] * n
-    stack = []
-    for i, v in enumerate(bound):
-        while stack and bound[stack[-1]] <= v:
-            stack.pop()
-        higher_left[i] = stack[-1] if stack else -1
-        stack.append(i)
-    stack = []
-    for i in range(n - 1, -1, -1):
-        while stack and bound[stack[-1]] <= bound[i]:
-            stack.pop()
-        higher_right[i] = stack[-1] if stack else n
-        stack.append(i)
+    higher_left = _nearest_higher(bound)
+    higher_right = [n - 1 - i for i in reversed(_nearest_higher(bound[::-1]))]
     rise, left, right = np.zeros(len(peaks)), np.empty(len(peaks), int), np.empty(len(peaks), int)
     for j, p in enumerate(peaks.tolist()):
         span = x[higher_left[p] + 1:p + 1]
@@ -136,6 +126,21 @@ def prominences(x, peaks):
         right[j] = p + int(np.argmin(span))
         rise[j] = x[p] - max(x[left[j]], x[right[j]])
     return rise, left, right
+
+
+def _nearest_higher(values: list) -> list[int]:
+    """For each value, the index of the nearest earlier one above it (-1: none), by one pass with a stack.
+
+    >>> _nearest_higher([3.0, 1.0, 2.0, 5.0, 2.0])
+    [-1, 0, 0, -1, 3]
+    """
+    out, stack = [], []
+    for i, v in enumerate(values):
+        while stack and values[stack[-1]] <= v:
+            stack.pop()
+        out.append(stack[-1] if stack else -1)
+        stack.append(i)
+    return out
 
 
 def _half_power_span(size, i) -> tuple[int, int]:
